@@ -1,0 +1,50 @@
+"""The exception hierarchy: one root, a few specific kinds.
+
+Exceptions are for bad input. Solver outcomes (an unreachable IK target, an infeasible QP) are
+reported in result objects, not raised.
+"""
+
+from __future__ import annotations
+
+
+class SymkinError(Exception):
+    """Root of every error symkin raises on purpose."""
+
+
+class ETSParseError(SymkinError, ValueError):
+    """Malformed ETS text. ``position`` is the character offset of the offending token."""
+
+    def __init__(self, message: str, text: str = "", position: int | None = None) -> None:
+        self.text = text
+        self.position = position
+        if position is not None and text:
+            pointer = " " * position + "^"
+            message = f"{message}\n  {text}\n  {pointer}"
+        super().__init__(message)
+
+
+class RobotError(SymkinError, ValueError):
+    """An invalid robot description (DH table, PoE screws, joint limits, names)."""
+
+
+class URDFError(RobotError):
+    """A URDF that cannot be turned into a serial ETS (malformed XML, unsupported joints...)."""
+
+
+class UnknownRobotError(SymkinError, KeyError):
+    """A built-in robot name that does not exist."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; keep it readable
+        return str(self.args[0]) if self.args else ""
+
+
+class ConfigurationError(SymkinError, ValueError):
+    """A joint configuration q of the wrong shape, with NaN/inf, or outside the joint limits."""
+
+
+class PoseError(SymkinError, ValueError):
+    """A target pose that is not a valid SE(3) matrix."""
+
+
+class CompileError(SymkinError, RuntimeError):
+    """Generating or compiling code failed (missing C compiler, compiler error, template error)."""

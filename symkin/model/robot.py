@@ -1,0 +1,361 @@
+"""The robot model: an ETS with joint names, joint limits and named configurations.
+
+Numeric reference kinematics (numpy only) are methods of :class:`Robot`. Every method takes ``q``
+of shape (n,) or a batch (N, n); a batch gives results with a leading (N,) axis.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from symkin.errors import ConfigurationError, RobotError
+from symkin.model.ets import ETS
+from symkin.model.kinematics import NumericKinematics, cross
+
+__all__ = ["Robot", "as_batch", "AXES_ROWS"]
+
+Axes = Literal["all", "trans", "rot"]
+AXES_ROWS: dict[str, slice] = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
+_IDENT = "abcdefghijklmnopqrstuvwxyz0123456789_"
+
+
+def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.ndarray, bool]:
+    """Validate ``q`` (shape (n,) or (N, n), finite) -> ((N, n) float array, was_single)."""
+    try:
+        Q = np.asarray(q, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ConfigurationError(f"{what} must be an array of {n} numbers: {exc}") from None
+    single = Q.ndim == 1
+    if Q.ndim == 0 or Q.ndim > 2 or Q.shape[-1] != n:
+        raise ConfigurationError(
+            f"{what} must have shape ({n},) or (N, {n}) for {name} with {n} joints, got shape {Q.shape}"
+        )
+    if single:
+        Q = Q[None, :]
+    if not np.isfinite(Q).all():
+        bad = np.argwhere(~np.isfinite(Q))[0]
+        where = f"[{bad[1]}]" if single else f"[{bad[0]}, {bad[1]}]"
+        raise ConfigurationError(f"{what}{where} is {Q[tuple(bad)]}: joint values must be finite")
+    return Q, single
+
+
+def _axes_rows(axes: str) -> slice:
+    try:
+        return AXES_ROWS[axes]
+    except KeyError:
+        raise ValueError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """A serial manipulator described by an ETS.
+
+    Attributes:
+        ets: the elementary transform sequence, base to end effector.
+        name: a lowercase identifier-like name.
+        qlim: joint limits, shape (2, n): row 0 lower, row 1 upper (rad or m).
+        configs: named configurations (``qz``, ``qr``...), each shape (n,); also attributes.
+        joint_names: one name per joint (by joint index).
+        qd_max: joint speed limits, shape (n,), or None when unknown.
+        source: where the parameters come from.
+    """
+
+    ets: ETS
+    name: str = "robot"
+    qlim: np.ndarray = field(default=None)  # type: ignore[assignment]
+    configs: Mapping[str, np.ndarray] = field(default_factory=dict)
+    joint_names: tuple[str, ...] = ()
+    qd_max: np.ndarray | None = None
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.ets, ETS):
+            raise RobotError(f"ets must be an ETS, not {type(self.ets).__name__}")
+        n = self.ets.n
+        if not isinstance(self.name, str) or not self.name:
+            raise RobotError("a robot name must be a non-empty string")
+        if self.qlim is None:
+            lo = [-math.pi if e.is_revolute else -1.0 for e in self.ets.joints]
+            qlim = np.array([lo, [-v for v in lo]])
+        else:
+            qlim = np.asarray(self.qlim, dtype=float)
+            if qlim.shape != (2, n):
+                raise RobotError(f"qlim must have shape (2, {n}) (lower row, upper row), got {qlim.shape}")
+            if np.isnan(qlim).any():
+                raise RobotError("qlim contains NaN")
+            bad = np.nonzero(qlim[0] > qlim[1])[0]
+            if bad.size:
+                raise RobotError(f"qlim lower > upper for joint {int(bad[0])}: {qlim[:, bad[0]].tolist()}")
+        object.__setattr__(self, "qlim", _readonly(qlim))
+        names = tuple(self.joint_names) or tuple(f"q{j}" for j in range(n))
+        if len(names) != n:
+            raise RobotError(f"{len(names)} joint names given for {n} joints")
+        if len(set(names)) != n:
+            raise RobotError(f"joint names must be unique: {names}")
+        object.__setattr__(self, "joint_names", names)
+        configs = {"qz": np.zeros(n)}
+        for key, value in dict(self.configs).items():
+            if not key.isidentifier():
+                raise RobotError(f"configuration name {key!r} is not an identifier")
+            v = np.asarray(value, dtype=float)
+            if v.shape != (n,) or not np.isfinite(v).all():
+                raise RobotError(f"configuration {key!r} must be {n} finite numbers, got {value!r}")
+            configs[key] = v
+        object.__setattr__(self, "configs", {k: _readonly(v) for k, v in configs.items()})
+        if self.qd_max is not None:
+            qd = np.asarray(self.qd_max, dtype=float)
+            if qd.shape != (n,) or not (qd > 0).all():
+                raise RobotError(f"qd_max must be {n} positive numbers, got {self.qd_max!r}")
+            object.__setattr__(self, "qd_max", _readonly(qd))
+
+    # -- constructors ----------------------------------------------------------------------
+    @classmethod
+    def from_ets(
+        cls,
+        ets: ETS | str,
+        qlim: Sequence[Sequence[float]] | np.ndarray | None = None,
+        name: str | None = None,
+        **kwargs: Any,
+    ) -> Robot:
+        """A robot from an ETS or its text form (see :class:`symkin.ETS`)."""
+        if isinstance(ets, str):
+            ets = ETS.parse(ets)
+        return cls(ets, name=name or "robot", qlim=qlim, **kwargs)
+
+    @classmethod
+    def from_dh(cls, *args: Any, **kwargs: Any) -> Robot:
+        """A robot from standard or modified DH parameters; see :func:`symkin.model.dh.robot_from_dh`."""
+        from symkin.model.dh import robot_from_dh
+
+        return robot_from_dh(*args, **kwargs)
+
+    @classmethod
+    def from_urdf(
+        cls, path_or_xml: str | Path, base_link: str | None = None, end_link: str | None = None, **kwargs: Any
+    ) -> Robot:
+        """The serial chain of a URDF from ``base_link`` to ``end_link``; see :mod:`symkin.model.urdf`."""
+        from symkin.model.urdf import robot_from_urdf
+
+        return robot_from_urdf(path_or_xml, base_link=base_link, end_link=end_link, **kwargs)
+
+    @classmethod
+    def from_poe(cls, M: Any, screws: Any, frame: str = "space", **kwargs: Any) -> Robot:
+        """A robot from product-of-exponentials data (seed 002); see :mod:`symkin.model.poe`."""
+        from symkin.model.poe import robot_from_poe
+
+        return robot_from_poe(M, screws, frame=frame, **kwargs)
+
+    # -- plain attributes ------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.ets.n
+
+    def __getattr__(self, key: str) -> np.ndarray:
+        if key.startswith("_") or key == "configs":
+            raise AttributeError(key)
+        try:
+            return self.configs[key]
+        except KeyError:
+            raise AttributeError(
+                f"{type(self).__name__} {self.name!r} has no attribute or configuration {key!r}; "
+                f"configurations: {sorted(self.configs)}"
+            ) from None
+
+    def __repr__(self) -> str:
+        return f"Robot(name={self.name!r}, n={self.n}, ets={str(self.ets)!r})"
+
+    @property
+    def key(self) -> str:
+        """Structural hash of the kinematics (ETS text and name): the compile-cache key."""
+        return hashlib.sha256(f"{self.name}\n{self.ets}".encode()).hexdigest()
+
+    @property
+    def identifier(self) -> str:
+        """``name`` reduced to a safe C/Python identifier."""
+        text = "".join(c if c in _IDENT else "_" for c in self.name.lower())
+        if not text or text[0].isdigit():
+            text = "r_" + text
+        return text
+
+    @cached_property
+    def _num(self) -> NumericKinematics:
+        return NumericKinematics.of(self.ets)
+
+    def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
+        return as_batch(q, self.n, self.name)
+
+    def check_q(self, q: Any, limits: bool = False) -> np.ndarray:
+        """``q`` as a float array after validation; with ``limits``, reject values outside qlim."""
+        Q, single = self._batch(q)
+        if limits:
+            lo, hi = self.qlim
+            bad = np.argwhere((Q < lo - 1e-12) | (Q > hi + 1e-12))
+            if bad.size:
+                b, j = bad[0]
+                raise ConfigurationError(
+                    f"joint {j} ({self.joint_names[j]}) = {Q[b, j]:.6g} is outside its limits "
+                    f"[{lo[j]:.6g}, {hi[j]:.6g}]"
+                )
+        return Q[0] if single else Q
+
+    def within_limits(self, q: Any) -> np.ndarray | bool:
+        """True where every joint of q lies within qlim."""
+        Q, single = self._batch(q)
+        ok = ((Q >= self.qlim[0]) & (Q <= self.qlim[1])).all(axis=-1)
+        return bool(ok[0]) if single else ok
+
+    def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
+        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        rng = np.random.default_rng(seed)
+        lo, hi = self.qlim
+        if N is None:
+            return rng.uniform(lo, hi)
+        return rng.uniform(lo, hi, size=(N, self.n))
+
+    # -- numeric reference kinematics (eqs 1, 14-16, 31-34; seed 001 eq 11) -----------------
+    def fkine(self, q: Any) -> np.ndarray:
+        """End-effector pose in the base frame 0T_e (eq 1): (4, 4) or (N, 4, 4)."""
+        Q, single = self._batch(q)
+        T = self._num.fkine(Q)
+        return T[0] if single else T
+
+    def link_poses(self, q: Any) -> np.ndarray:
+        """Base-frame pose of each link frame (right after its joint, eq 5), (n, 4, 4) or (N, n, 4, 4).
+
+        Links are in chain order (the k-th joint met from the base).
+        """
+        Q, single = self._batch(q)
+        T = self._num.link_poses(Q)
+        return T[0] if single else T
+
+    def jacob0(self, q: Any) -> np.ndarray:
+        """Base-frame manipulator Jacobian (eqs 31-34): (6, n) or (N, 6, n), rows (v, omega).
+
+        v is the velocity of the end-effector origin expressed in the base frame. For the space
+        Jacobian of seed 002 (rows (omega, v), v of the point at the base origin) see :meth:`jacobs`.
+        """
+        Q, single = self._batch(q)
+        J = self._num.jacob0(Q)
+        return J[0] if single else J
+
+    def jacobe(self, q: Any) -> np.ndarray:
+        """End-effector-frame Jacobian (eq 16): ``blkdiag(R^T, R^T) J0``, rows (v, omega).
+
+        For the body Jacobian of seed 002 (rows (omega, v)) see :meth:`jacobb`.
+        """
+        Q, single = self._batch(q)
+        T, J = self._num.fkine_jacob0(Q)
+        Je = _rotate_rows(T, J)
+        return Je[0] if single else Je
+
+    def hessian0(self, q: Any) -> np.ndarray:
+        """Base-frame manipulator Hessian (seed 001 eq 20): (n, 6, n) or (N, n, 6, n), H[i] = dJ0/dq_i."""
+        Q, single = self._batch(q)
+        H = self._num.hessian0(Q)
+        return H[0] if single else H
+
+    def hessiane(self, q: Any) -> np.ndarray:
+        """End-effector-frame Hessian, ``He[i] = dJe/dq_i = blkdiag(R^T)(H0[i] - blkdiag([w_i]x) J0)``."""
+        Q, single = self._batch(q)
+        T, J, H = self._num.jacob0_hessian0(Q)
+        He = hessian_to_ee(T, J, H)
+        return He[0] if single else He
+
+    def manipulability(self, q: Any, axes: Axes = "all") -> np.ndarray | float:
+        """Yoshikawa manipulability ``sqrt(det(J J^T))`` (eq 52) of the chosen rows of J0."""
+        rows = _axes_rows(axes)
+        Q, single = self._batch(q)
+        m = manipulability_of(self._num.jacob0(Q)[:, rows])
+        return float(m[0]) if single else m
+
+    def jacobm(self, q: Any, axes: Axes = "all") -> np.ndarray:
+        """Manipulability Jacobian dm/dq (seed 001 eq 11): (n,) or (N, n)."""
+        rows = _axes_rows(axes)
+        Q, single = self._batch(q)
+        _, J, H = self._num.jacob0_hessian0(Q)
+        Jm = jacobm_of(J[:, rows], H[:, :, rows])
+        return Jm[0] if single else Jm
+
+    def cond(self, q: Any, axes: Axes = "all") -> np.ndarray | float:
+        """Condition number sigma_max / sigma_min of the chosen rows of J0 (eq 53); inf when singular."""
+        rows = _axes_rows(axes)
+        Q, single = self._batch(q)
+        s = np.linalg.svd(self._num.jacob0(Q)[:, rows], compute_uv=False)
+        with np.errstate(divide="ignore"):
+            c = np.where(s[:, -1] > 0, s[:, 0] / np.where(s[:, -1] > 0, s[:, -1], 1.0), np.inf)
+        if s.shape[-1] < rows.stop - rows.start:  # fewer joints than task rows: rank-deficient
+            c = np.full_like(c, np.inf)
+        return float(c[0]) if single else c
+
+    def jacobs(self, q: Any) -> np.ndarray:
+        """Space Jacobian of seed 002: (6, n) or (N, 6, n), rows (omega, v_s), v_s = v_e - omega x p_e."""
+        Q, single = self._batch(q)
+        T, J = self._num.fkine_jacob0(Q)
+        p = T[:, None, :3, 3]
+        Jv, Jw = np.swapaxes(J[:, :3], 1, 2), np.swapaxes(J[:, 3:], 1, 2)
+        vs = Jv - cross(Jw, p)
+        Js = np.concatenate((J[:, 3:], np.swapaxes(vs, 1, 2)), axis=1)
+        return Js[0] if single else Js
+
+    def jacobb(self, q: Any) -> np.ndarray:
+        """Body Jacobian of seed 002: (6, n) or (N, 6, n), rows (omega, v) in the end-effector frame."""
+        Je = self.jacobe(q)
+        return np.concatenate((Je[..., 3:, :], Je[..., :3, :]), axis=-2)
+
+
+def _rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """blkdiag(R^T, R^T) @ J for batches: T (N, 4, 4), J (N, 6, k) or (N, m, 6, k)."""
+    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
+    if J.ndim == 4:
+        Rt = Rt[:, None]
+    return np.concatenate((Rt @ J[..., :3, :], Rt @ J[..., 3:, :]), axis=-2)
+
+
+def hessian_to_ee(T: np.ndarray, J: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """End-effector-frame Hessian from base-frame T (N,4,4), J (N,6,n), H (N,n,6,n)."""
+    wi = np.swapaxes(J[:, 3:], 1, 2)[:, :, None, :]  # (N, i, 1, 3): omega_i
+    Jv = np.swapaxes(J[:, :3], 1, 2)[:, None]  # (N, 1, a, 3)
+    Jw = np.swapaxes(J[:, 3:], 1, 2)[:, None]
+    cv = np.swapaxes(cross(wi, Jv), 2, 3)  # (N, i, 3, a): omega_i x Jv_a
+    cw = np.swapaxes(cross(wi, Jw), 2, 3)
+    D = H - np.concatenate((cv, cw), axis=2)
+    return _rotate_rows(T, D)
+
+
+def manipulability_of(J: np.ndarray) -> np.ndarray:
+    """sqrt(det(J J^T)) per batch item of J (N, r, n); 0 where J J^T is singular (eq 52)."""
+    d = np.linalg.det(J @ np.swapaxes(J, 1, 2))
+    return np.sqrt(np.maximum(d, 0.0))
+
+
+def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """Manipulability Jacobian (seed 001 eq 11): J (N, r, n), H (N, n, r, n) -> (N, n).
+
+    ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)``; at a singular configuration (m = 0) the
+    pseudo-inverse keeps the result finite.
+    """
+    A = J @ np.swapaxes(J, 1, 2)
+    m = np.sqrt(np.maximum(np.linalg.det(A), 0.0))
+    try:
+        Ainv = np.linalg.inv(A)
+        if not np.isfinite(Ainv).all():
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:
+        Ainv = np.linalg.pinv(A, hermitian=True)
+    JH = np.einsum("Nrk,Nisk->Nirs", J, H)  # J H_i^T
+    return m[:, None] * np.einsum("Nirs,Nrs->Ni", JH, Ainv)
