@@ -220,7 +220,9 @@ def _parse_const(arg: str, text: str, pos: int) -> Const:
         if isinstance(node, ast.Constant) and type(node.value) in (int, float):
             if isinstance(node.value, float) and not math.isfinite(node.value):
                 raise fail("not finite")
-            return Const(Fraction(repr(node.value)) if isinstance(node.value, float) else Fraction(node.value))
+            return Const(
+                Fraction(repr(node.value)) if isinstance(node.value, float) else Fraction(node.value)
+            )
         if isinstance(node, ast.Name) and node.id == "pi":
             return Const(Fraction(0), Fraction(1))
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
@@ -316,7 +318,9 @@ class ET:
 
 # convenience constructors: tx(0.1), Rz(q=0), Rz(q=1, flip=True)
 def _maker(axis: Axis):  # noqa: ANN202
-    def make(value: float | int | Fraction | str | Const | None = None, *, q: int | None = None, flip: bool = False) -> ET:
+    def make(
+        value: float | int | Fraction | str | Const | None = None, *, q: int | None = None, flip: bool = False
+    ) -> ET:
         if q is not None:
             if value is not None:
                 raise ValueError("give a constant or q=, not both")
@@ -326,7 +330,9 @@ def _maker(axis: Axis):  # noqa: ANN202
         return ET(axis, const=Const.of(value))
 
     make.__name__ = axis.value
-    make.__doc__ = f"The elementary transform {axis.value}: a constant, or joint ``q`` (``flip`` for negative)."
+    make.__doc__ = (
+        f"The elementary transform {axis.value}: a constant, or joint ``q`` (``flip`` for negative)."
+    )
     return make
 
 
@@ -355,9 +361,7 @@ def _tokens(text: str) -> Iterator[tuple[str, str, int]]:
         if not m:
             bad = re.match(r"\S+", text[i:])
             word = bad.group(0) if bad else ch
-            raise ETSParseError(
-                f"unknown token '{word}': expected one of tx( ty( tz( Rx( Ry( Rz(", text, i
-            )
+            raise ETSParseError(f"unknown token '{word}': expected one of tx( ty( tz( Rx( Ry( Rz(", text, i)
         depth, j = 1, m.end()
         while j < n and depth:
             depth += {"(": 1, ")": -1}.get(text[j], 0)
@@ -391,9 +395,7 @@ class ETS:
                 raise TypeError(f"an ETS holds ET objects, not {type(e).__name__}")
         idx = sorted(e.joint for e in self.ets if e.joint is not None)
         if idx != list(range(len(idx))):
-            raise ValueError(
-                f"joint indices must be 0..{len(idx) - 1}, each once; got {idx}"
-            )
+            raise ValueError(f"joint indices must be 0..{len(idx) - 1}, each once; got {idx}")
 
     # -- text form ------------------------------------------------------------------------
     @classmethod
@@ -423,9 +425,10 @@ class ETS:
             raise ETSParseError("empty ETS: expected at least one transform", text, 0)
         if sorted(seen) != list(range(njoint)):
             missing = sorted(set(range(njoint)) - set(seen))
-            bad = max(seen, key=lambda k: k)
+            bad = max(seen)
             raise ETSParseError(
-                f"joint indices must be 0..{njoint - 1}, each once; q{missing[0]} is missing and q{bad} is out of range",
+                f"joint indices must be 0..{njoint - 1}, each once; "
+                f"q{missing[0]} is missing and q{bad} is out of range",
                 text,
                 seen[bad],
             )

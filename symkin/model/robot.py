@@ -204,7 +204,7 @@ class Robot:
         Q, single = self._batch(q)
         if limits:
             lo, hi = self.qlim
-            bad = np.argwhere((Q < lo - 1e-12) | (Q > hi + 1e-12))
+            bad = np.argwhere((lo - 1e-12 > Q) | (hi + 1e-12 < Q))
             if bad.size:
                 b, j = bad[0]
                 raise ConfigurationError(
@@ -216,7 +216,7 @@ class Robot:
     def within_limits(self, q: Any) -> np.ndarray | bool:
         """True where every joint of q lies within qlim."""
         Q, single = self._batch(q)
-        ok = ((Q >= self.qlim[0]) & (Q <= self.qlim[1])).all(axis=-1)
+        ok = ((self.qlim[0] <= Q) & (self.qlim[1] >= Q)).all(axis=-1)
         return bool(ok[0]) if single else ok
 
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:

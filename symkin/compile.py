@@ -1,0 +1,199 @@
+"""``symkin.compile``: robot -> symbolic derivation -> emitted code -> loaded :class:`Kinematics`.
+
+Generated sources are cached per user (``$SYMKIN_CACHE`` or ``~/.cache/symkin``) under a key made
+of the robot's structural hash, the backend, the symkin version and the templates, so a warm
+compile neither imports sympy nor re-derives anything.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import CompileError, SymkinError
+from symkin.model.robot import Robot, as_batch
+from symkin.runtime.kinematics import KIN_METHODS, Kinematics
+
+__all__ = ["compile", "generate", "write_generated", "BACKENDS", "cache_dir"]
+
+BACKENDS = ("c", "numpy", "casadi")
+_LOADED: dict[str, Kinematics] = {}
+
+
+def cache_dir() -> Path:
+    """The per-user cache folder: ``$SYMKIN_CACHE`` or ``~/.cache/symkin``."""
+    root = os.environ.get("SYMKIN_CACHE")
+    return Path(root) if root else Path.home() / ".cache" / "symkin"
+
+
+@lru_cache(maxsize=1)
+def _templates_digest() -> str:
+    from symkin.emit.templates import template_dir
+
+    h = hashlib.sha256()
+    root = template_dir()
+    for path in sorted(root.rglob("*.j2")):
+        h.update(path.relative_to(root).as_posix().encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def _check_backend(backend: str) -> None:
+    if backend not in BACKENDS:
+        raise SymkinError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+
+
+def generate(robot: Robot, backend: str, command: str | None = None) -> dict[str, str]:
+    """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy."""
+    _check_backend(backend)
+    if robot.n == 0:
+        raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
+    from symkin.symbolic.functions import kin_functions
+
+    command = command or f"symkin compile {robot.name} --backend {backend}"
+    functions = kin_functions(robot)
+    if backend == "c":
+        from symkin.emit.c.backend import render_c
+
+        return render_c(robot, functions, command)
+    if backend == "numpy":
+        from symkin.emit.numpy.backend import render_numpy
+
+        return render_numpy(robot, functions, command)
+    from symkin.emit.casadi.backend import render_casadi
+
+    return render_casadi(robot, functions, command)
+
+
+def write_generated(robot: Robot, backend: str, folder: str | Path, command: str | None = None) -> list[Path]:
+    """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths."""
+    files = generate(robot, backend, command)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for name, text in sorted(files.items()):
+        path = folder / name
+        path.write_text(text)
+        out.append(path)
+    return out
+
+
+def _cache_key(robot: Robot, backend: str) -> str:
+    from symkin import __version__
+
+    text = "\n".join((__version__, backend, robot.key, _templates_digest()))
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict[str, str]:
+    """Generated files from the cache (verified by checksum), else generate and store atomically."""
+    path = cache_dir() / "gen" / f"{key}.json"
+    if use_cache and path.exists():
+        try:
+            data = json.loads(path.read_text())
+            files = data["files"]
+            digest = hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
+            if data.get("sha256") == digest:
+                return files
+        except (OSError, ValueError, KeyError, TypeError):
+            pass  # corrupted entry: regenerate below
+    files = generate(robot, backend)
+    if use_cache:
+        digest = hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(json.dumps({"sha256": digest, "files": files}))
+            os.replace(tmp, path)
+        except OSError:
+            pass  # an unwritable cache only costs speed
+    return files
+
+
+def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinematics:  # noqa: A001
+    """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`.
+
+    ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
+    ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
+    for optimisation problems). Every backend has the numeric reference's methods and shapes.
+    """
+    _check_backend(backend)
+    if isinstance(robot, str):
+        from symkin.model.resolve import resolve_robot
+
+        robot = resolve_robot(robot)
+    if not isinstance(robot, Robot):
+        raise TypeError(
+            f"compile() needs a Robot, a built-in robot name or ETS text, not {type(robot).__name__}"
+        )
+    if robot.n == 0:
+        raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
+    key = _cache_key(robot, backend)
+    if cache and key in _LOADED:
+        return _LOADED[key]
+    files = _cached_files(robot, backend, key, cache)
+    if backend == "c":
+        from symkin.emit.c.backend import build_c
+
+        module, path = build_c(files)
+        functions = {name: getattr(module, name) for name in (*KIN_METHODS, "manipulability", "jacobm")}
+        kin = Kinematics(robot, backend, functions, files, path, module)
+    elif backend == "numpy":
+        from symkin.emit.numpy.backend import load_numpy
+
+        module = load_numpy(files, cache_dir() / "numpy")
+        functions = {name: getattr(module, name) for name in KIN_METHODS}
+        kin = Kinematics(robot, backend, functions, files, Path(module.__file__ or ""), module)
+    else:
+        kin = _casadi_kinematics(robot, files)
+    if cache:
+        _LOADED[key] = kin
+    return kin
+
+
+def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
+    from symkin.emit.numpy.backend import load_numpy
+
+    try:
+        module = load_numpy(files, cache_dir() / "casadi")
+    except ImportError as exc:  # pragma: no cover - casadi is a declared dependency
+        raise CompileError(f"the casadi backend needs casadi installed: {exc}") from exc
+    fns = module.functions()
+    n = robot.n
+    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
+
+    def wrap(f: Any) -> Any:
+        names = f.name_out()
+
+        def call(q: Any) -> Any:
+            Q, single = as_batch(q, n, robot.name)
+            if single:
+                res = f(Q[0])
+                res = res if isinstance(res, (list, tuple)) else [res]
+                outs = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]
+            else:
+                fm = f.map(Q.shape[0])
+                res = fm(Q.T)
+                res = res if isinstance(res, (list, tuple)) else [res]
+                outs = []
+                for k, r in zip(names, res):
+                    a = np.asarray(r)  # (rows, cols*N), column blocks per configuration
+                    rows, cols = a.shape[0], a.shape[1] // Q.shape[0]
+                    a = a.reshape(rows, Q.shape[0], cols).transpose(1, 0, 2)
+                    outs.append(a.reshape((Q.shape[0], *shapes[k])))
+            return outs[0] if len(outs) == 1 else tuple(outs)
+
+        call.__name__ = f.name()
+        call.__doc__ = f"{f.name()} through casadi.Function (see Kinematics.functions)."
+        return call
+
+    functions = {name: wrap(fns[name]) for name in KIN_METHODS}
+    kin = Kinematics(robot, "casadi", functions, files, Path(module.__file__ or ""), module)
+    kin.functions = fns  # type: ignore[attr-defined]
+    return kin

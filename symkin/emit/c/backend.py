@@ -1,0 +1,79 @@
+"""The C backend: a ``.c``/``.h`` pair per robot plus a CPython extension module around it.
+
+Call path, chosen by measurement (``symkin bench kin`` prints all three): a generated CPython
+extension (METH_O functions taking the ndarray directly) beats ctypes with cached pointers and
+cffi, because each ``ndarray.ctypes`` access and each foreign-call marshalling costs about as much
+as the arithmetic. The same shared library also exports the plain C entry points, so ctypes users
+(and the C IK solver) can call them directly.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.machinery
+import importlib.util
+import sysconfig
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from symkin.emit.printers import CPrinter
+from symkin.emit.templates import Header, c_string, identifier, render
+
+__all__ = ["render_c", "build_c", "c_prefix"]
+
+
+def c_prefix(robot: Any) -> str:
+    """The C symbol prefix of a robot: ``symkin_<identifier>``."""
+    return f"symkin_{identifier(robot.name)}"
+
+
+def render_c(robot: Any, functions: list, command: str) -> dict[str, str]:
+    """The generated ``<prefix>.h``, ``<prefix>.c`` and the extension module source."""
+    from symkin.emit.lowering import lower
+    from symkin.symbolic.cse import OpCounts
+
+    printer = CPrinter()
+    printed = [lower(f, printer) for f in functions]
+    total = sum((f.code.counts for f in functions), OpCounts())
+    prefix = c_prefix(robot)
+    header = Header.of(robot, f"{total} over {len(functions)} functions", command, c_string(robot.name))
+    context = {"prefix": prefix, "n": robot.n, "functions": printed, "header": header}
+    h = render("c/kinematics.h.j2", **context)
+    c = render("c/kinematics.c.j2", **context)
+    digest = hashlib.sha256((h + c).encode()).hexdigest()[:12]
+    module = f"_{prefix}_{digest}"
+    ext = render("c/module.c.j2", module=module, **context)
+    return {f"{prefix}.h": h, f"{prefix}.c": c, f"{module}.c": ext}
+
+
+def module_name(files: dict[str, str]) -> str:
+    """The extension module's name (its source file is the one starting with an underscore)."""
+    return next(name[:-2] for name in files if name.startswith("_") and name.endswith(".c"))
+
+
+def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:
+    """Compile the generated files (cached) and import the extension module."""
+    import numpy as np
+
+    from symkin.emit.c.build import compile_library
+
+    name = module_name(files)
+    flags = (f"-I{sysconfig.get_paths()['include']}", f"-I{np.get_include()}")
+    path = compile_library(files, name, extra_cflags=flags)
+    return load_extension(name, path), path
+
+
+def load_extension(name: str, path: Path) -> ModuleType:
+    """Import the extension module ``name`` from the shared library at ``path``."""
+    import sys
+
+    if name in sys.modules:
+        return sys.modules[name]
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
+    assert spec is not None
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    sys.modules[name] = module
+    return module

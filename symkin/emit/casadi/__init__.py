@@ -1,0 +1,1 @@
+"""The CasADi backend."""

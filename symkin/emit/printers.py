@@ -1,0 +1,91 @@
+"""Code printers for the backends (subclasses of sympy's printers).
+
+All printers write numbers as correctly rounded double literals (``repr(float(x))``) and small
+integer powers as products, so the emitted code does exactly the arithmetic that was counted.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+from sympy.printing.pycode import PythonCodePrinter
+
+__all__ = ["CPrinter", "NumPyPrinter", "CasADiPrinter", "float_literal"]
+
+
+def float_literal(x: float) -> str:
+    """A double literal that round-trips exactly: ``0.333``, ``2.0``, ``1e-20``."""
+    text = repr(float(x))
+    if text in ("inf", "-inf", "nan"):
+        raise ValueError(f"non-finite constant {text} in generated code")
+    if "." not in text and "e" not in text:
+        text += ".0"
+    return text
+
+
+def _pow(printer, expr: sp.Pow, sqrt: str, one: str = "1.0") -> str:  # noqa: ANN001
+    base, exp = expr.base, expr.exp
+    b = printer.parenthesize(base, 60) if not base.is_Atom else printer._print(base)
+    if exp.is_Integer and 1 <= int(exp) <= 4:
+        return "(" + "*".join([b] * int(exp)) + ")"
+    if exp.is_Integer and -4 <= int(exp) <= -1:
+        return f"({one}/(" + "*".join([b] * -int(exp)) + "))"
+    if exp == sp.Rational(1, 2):
+        return f"{sqrt}({printer._print(base)})"
+    raise ValueError(f"unsupported power {expr} in generated code")
+
+
+class CPrinter(C99CodePrinter):
+    """C99 with exact double literals and multiplications for small powers."""
+
+    def _print_Rational(self, expr: sp.Rational) -> str:
+        return float_literal(float(expr))
+
+    def _print_Integer(self, expr: sp.Integer) -> str:
+        return float_literal(int(expr))
+
+    def _print_Float(self, expr: sp.Float) -> str:
+        return float_literal(float(expr))
+
+    def _print_Pow(self, expr: sp.Pow) -> str:
+        return _pow(self, expr, "sqrt")
+
+    def _print_sin(self, expr: sp.sin) -> str:
+        return f"sk_sin({self._print(expr.args[0])})"
+
+    def _print_cos(self, expr: sp.cos) -> str:
+        return f"sk_cos({self._print(expr.args[0])})"
+
+
+class _PyLikePrinter(PythonCodePrinter):
+    module = "np"
+
+    def _print_Rational(self, expr: sp.Rational) -> str:
+        return float_literal(float(expr))
+
+    def _print_Integer(self, expr: sp.Integer) -> str:
+        return float_literal(int(expr))
+
+    def _print_Float(self, expr: sp.Float) -> str:
+        return float_literal(float(expr))
+
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        return _pow(self, expr, f"{self.module}.sqrt")
+
+    def _print_sin(self, expr: sp.sin) -> str:
+        return f"{self.module}.sin({self._print(expr.args[0])})"
+
+    def _print_cos(self, expr: sp.cos) -> str:
+        return f"{self.module}.cos({self._print(expr.args[0])})"
+
+
+class NumPyPrinter(_PyLikePrinter):
+    """Elementwise NumPy expressions (``np.cos``) for the batched Python backend."""
+
+    module = "np"
+
+
+class CasADiPrinter(_PyLikePrinter):
+    """CasADi SX expressions (``ca.cos``)."""
+
+    module = "ca"

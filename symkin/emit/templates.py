@@ -1,0 +1,95 @@
+"""The jinja2 environment shared by the emitters, and the header every generated file carries."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import jinja2
+
+from symkin.errors import CompileError
+
+__all__ = ["render", "template_dir", "Header", "comment_safe", "c_string", "identifier"]
+
+
+def template_dir() -> Path:
+    """``symkin/templates`` in an installed wheel, else the repository's top-level ``templates/``."""
+    here = Path(__file__).resolve().parent.parent
+    for candidate in (here / "templates", here.parent / "templates"):
+        if (candidate / "c").is_dir():
+            return candidate
+    raise CompileError(f"symkin's templates folder is missing (looked in {here / 'templates'})")
+
+
+@lru_cache(maxsize=1)
+def _env() -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(template_dir())),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )
+
+
+def render(name: str, **context: Any) -> str:
+    """Render template ``name`` (e.g. ``c/kinematics.c.j2``); errors name the template."""
+    try:
+        return _env().get_template(name).render(**context)
+    except Exception as exc:  # jinja2.TemplateError, or an error raised inside the template
+        raise CompileError(f"template {name} failed: {type(exc).__name__}: {exc}") from exc
+
+
+_UNSAFE = re.compile(r"[^\x20-\x7e]")
+
+
+def comment_safe(text: str, limit: int = 300) -> str:
+    """Text that cannot end or escape a C or Python comment: printable ASCII, no ``*/``."""
+    text = _UNSAFE.sub("?", text).replace("*/", "* /").replace("/*", "/ *").replace("\\", "/")
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def c_string(text: str) -> str:
+    """A C string literal for arbitrary text (every non-alphanumeric byte escaped as octal)."""
+    out = []
+    for b in text.encode("utf-8"):
+        ch = chr(b)
+        out.append(ch if ch.isalnum() or ch in " _-.,:;()[]=+" else f"\\{b:03o}")
+    return '"' + "".join(out) + '"'
+
+
+def identifier(text: str) -> str:
+    """A safe lowercase C/Python identifier derived from arbitrary text."""
+    ident = re.sub(r"[^a-z0-9_]", "_", text.lower())
+    if not ident or ident[0].isdigit():
+        ident = "r_" + ident
+    return ident
+
+
+@dataclass(frozen=True)
+class Header:
+    """What every generated file says about itself."""
+
+    robot: str  # comment-safe robot identifier
+    name_literal: str  # the robot's name as an escaped string literal (backend-specific quoting)
+    ets: str
+    version: str
+    command: str
+    counts: str
+
+    @classmethod
+    def of(cls, robot: Any, counts: str, command: str, literal: str) -> Header:
+        from symkin import __version__
+
+        return cls(
+            robot=identifier(robot.name),
+            name_literal=literal,
+            ets=comment_safe(str(robot.ets), limit=4000),
+            version=__version__,
+            command=comment_safe(command),
+            counts=counts,
+        )

@@ -1,0 +1,116 @@
+"""Compiled kinematics: the object :func:`symkin.compile` returns (no sympy here).
+
+It has the numeric reference's methods and shapes (``fkine``, ``link_poses``, ``jacob0``,
+``jacobe``, ``hessian0``, ``hessiane``, ``manipulability``, ``jacobm``) plus the fused
+``fkine_jacob0`` and ``jacob0_hessian0`` used by IK and control. On the C backend the methods are
+the extension module's functions themselves, so a call costs one C function call.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from symkin.model.robot import AXES_ROWS, Robot, as_batch, jacobm_of, manipulability_of
+
+__all__ = ["Kinematics", "KIN_METHODS"]
+
+KIN_METHODS = (
+    "fkine",
+    "link_poses",
+    "jacob0",
+    "jacobe",
+    "hessian0",
+    "hessiane",
+    "fkine_jacob0",
+    "jacob0_hessian0",
+)
+
+
+def _rows(axes: str) -> slice:
+    try:
+        return AXES_ROWS[axes]
+    except KeyError:
+        raise ValueError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
+
+
+class Kinematics:
+    """Generated kinematics of ``robot`` on one backend ("c", "numpy" or "casadi").
+
+    Attributes: ``robot``, ``backend``, ``n``, ``qlim``, ``qd_max``, ``name``, ``files`` (the
+    generated sources), ``path`` (the compiled library or module), ``module``.
+    """
+
+    fkine: Callable[[Any], np.ndarray]
+    link_poses: Callable[[Any], np.ndarray]
+    jacob0: Callable[[Any], np.ndarray]
+    jacobe: Callable[[Any], np.ndarray]
+    hessian0: Callable[[Any], np.ndarray]
+    hessiane: Callable[[Any], np.ndarray]
+    fkine_jacob0: Callable[[Any], tuple[np.ndarray, np.ndarray]]
+    jacob0_hessian0: Callable[[Any], tuple[np.ndarray, np.ndarray]]
+
+    def __init__(
+        self,
+        robot: Robot,
+        backend: str,
+        functions: dict[str, Callable[..., Any]],
+        files: dict[str, str],
+        path: Path | None = None,
+        module: ModuleType | None = None,
+    ) -> None:
+        self.robot = robot
+        self.backend = backend
+        self.files = files
+        self.path = path
+        self.module = module
+        for name in KIN_METHODS:
+            setattr(self, name, functions[name])
+        if "manipulability" in functions:
+            self.manipulability = functions["manipulability"]
+            self.jacobm = functions["jacobm"]
+
+    @property
+    def n(self) -> int:
+        return self.robot.n
+
+    @property
+    def name(self) -> str:
+        return self.robot.name
+
+    @property
+    def qlim(self) -> np.ndarray:
+        return self.robot.qlim
+
+    @property
+    def qd_max(self) -> np.ndarray | None:
+        return self.robot.qd_max
+
+    def __repr__(self) -> str:
+        return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
+
+    def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
+        """Yoshikawa manipulability of the chosen rows of J0 (eq 52)."""
+        rows = _rows(axes)
+        Q, single = as_batch(q, self.n, self.name)
+        J = self.jacob0(Q)
+        m = manipulability_of(J[:, rows])
+        return float(m[0]) if single else m
+
+    def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
+        """Manipulability Jacobian (seed 001 eq 11), (n,) or (N, n)."""
+        rows = _rows(axes)
+        Q, single = as_batch(q, self.n, self.name)
+        J, H = self.jacob0_hessian0(Q)
+        Jm = jacobm_of(J[:, rows], H[:, :, rows])
+        return Jm[0] if single else Jm
+
+    def ik(self, Tep: Any, **kwargs: Any) -> Any:
+        """Numerical inverse kinematics on this backend; see :func:`symkin.runtime.ik.ik`."""
+        from symkin.runtime.ik import ik
+
+        return ik(self, Tep, **kwargs)

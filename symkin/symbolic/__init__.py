@@ -1,0 +1,1 @@
+"""Symbolic kinematics (sympy): derivation, functions to emit, CSE."""

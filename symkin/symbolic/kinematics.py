@@ -1,0 +1,269 @@
+"""Exact symbolic kinematics of an ETS (sympy): pose, link frames, Jacobians and Hessians.
+
+Built the way that keeps the expressions small (see ``shared/notes/measurements.md``):
+
+- the pose is kept as three rotation columns and a translation; an elementary transform touches
+  only the columns it acts on, and a rotation by a multiple of pi/2 is a signed column swap;
+- consecutive rotations about the same axis, separated only by translations, are merged into one
+  rotation by the summed angle (``cos(q1 + q2)``, the ``c12`` of a planar arm), since translations
+  do not change the orientation;
+- Jacobian columns come from the frames before each joint (eqs 31-34):
+  ``J_a = (w_a x (p_e - p_a); w_a)`` for revolute and ``(w_a; 0)`` for prismatic joints;
+- Hessian blocks come from Jacobian columns (seed 001 eq 20, Appendix I): for b <= a (chain
+  order), ``dJ_a/dq_b = (w_b x Jv_a; w_b x Jw_a)`` when b is revolute and 0 when b is prismatic;
+  for b > a, ``dJ_a/dq_b = (w_a x Jv_b; 0)`` when a is revolute and 0 when a is prismatic.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import sympy as sp
+
+from symkin.model.ets import ETS, Const
+from symkin.model.robot import Robot
+
+__all__ = ["SymbolicKinematics", "derive", "const_to_sympy", "joint_symbols"]
+
+_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
+_HALF_PI = sp.pi / 2
+
+
+def const_to_sympy(c: Const) -> sp.Expr:
+    """The exact sympy value of an ETS constant."""
+    out = sp.Rational(c.a.numerator, c.a.denominator) + sp.Rational(c.b.numerator, c.b.denominator) * sp.pi
+    if c.atan2 is not None:
+
+        def surd(s):  # noqa: ANN001, ANN202
+            r = sp.Rational(abs(s.numerator), s.denominator)
+            return sp.sqrt(r) if s >= 0 else -sp.sqrt(r)
+
+        out += sp.atan2(surd(c.atan2[0]), surd(c.atan2[1]))
+    return out
+
+
+def joint_symbols(n: int) -> tuple[sp.Symbol, ...]:
+    """The real joint symbols q0 .. q{n-1}."""
+    return tuple(sp.Symbol(f"q{j}", real=True) for j in range(n))
+
+
+def _cos_sin(angle: sp.Expr) -> tuple[sp.Expr, sp.Expr]:
+    """cos and sin of an angle, exact (0, +-1) when it is a constant multiple of pi/2."""
+    if angle.is_number:
+        k = angle / _HALF_PI
+        if k.is_integer:
+            return ((1, 0), (0, 1), (-1, 0), (0, -1))[int(k) % 4]
+    return sp.cos(angle), sp.sin(angle)
+
+
+def _cross(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Expr]:
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+class _Pose:
+    """Running pose: accumulated rotation columns, translation, and a pending rotation."""
+
+    def __init__(self) -> None:
+        self.cols: list[list[sp.Expr]] = [[sp.Integer(int(i == j)) for i in range(3)] for j in range(3)]
+        self.p: list[sp.Expr] = [sp.Integer(0)] * 3
+        self.axis: int | None = None  # axis of the pending rotation
+        self.angle: sp.Expr = sp.Integer(0)
+
+    def effective(self) -> list[list[sp.Expr]]:
+        """The three rotation columns including the pending rotation."""
+        if self.axis is None:
+            return [list(c) for c in self.cols]
+        j, k = _MIX[self.axis]
+        c, s = _cos_sin(self.angle)
+        cols = [list(col) for col in self.cols]
+        cj, ck = self.cols[j], self.cols[k]
+        cols[j] = [c * x + s * y for x, y in zip(cj, ck)]
+        cols[k] = [c * y - s * x for x, y in zip(cj, ck)]
+        return cols
+
+    def column(self, i: int) -> list[sp.Expr]:
+        """Column i of the effective rotation (a rotation about i leaves column i unchanged)."""
+        if self.axis is None or self.axis == i:
+            return list(self.cols[i])
+        return self.effective()[i]
+
+    def flush(self) -> None:
+        if self.axis is not None:
+            self.cols = self.effective()
+            self.axis, self.angle = None, sp.Integer(0)
+
+    def rotate(self, i: int, angle: sp.Expr) -> None:
+        if self.axis is not None and self.axis != i:
+            self.flush()
+        self.axis = i
+        self.angle = self.angle + angle
+
+    def translate(self, i: int, d: sp.Expr) -> None:
+        col = self.column(i)
+        self.p = [p + d * x for p, x in zip(self.p, col)]
+
+    def matrix(self) -> sp.Matrix:
+        cols = self.effective()
+        return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], self.p[r]] for r in range(3)] + [[0, 0, 0, 1]])
+
+
+def _ee_frame(
+    ets: ETS, qs: Sequence[sp.Symbol], constant: Callable[[Const], sp.Expr]
+) -> tuple[sp.Matrix, list[sp.Matrix]]:
+    """End-effector-frame Jacobian and Hessian from the inverse chain walked from the end effector.
+
+    With u_a the joint axes and p'_a the joint origins in the end-effector frame (the inverse ETS
+    E_M^-1 ... E_1^-1), ``Je_a = (p'_a x u_a; u_a)`` (revolute) or ``(u_a; 0)`` (prismatic). For
+    b <= a (chain order) dJe_a/dq_b = 0; for b > a, with du = u_a x u_b and
+    dr = u_b x (p'_a - p'_b) when b is revolute (du = 0, dr = u_b when b is prismatic):
+    ``dJe_a/dq_b = (du x r_a + u_a x dr; du)`` for revolute a (r_a = -p'_a), ``(du; 0)`` for prismatic a.
+    """
+    n = ets.n
+    pose = _Pose()
+    frames: dict[int, tuple[int, bool, list[sp.Expr], list[sp.Expr]]] = {}
+    chain = list(ets)
+    for k in range(len(chain) - 1, -1, -1):
+        e = chain[k]
+        i = e.axis.index
+        if e.is_joint:
+            value = -qs[e.joint] * e.sign
+            u = [x * e.sign for x in pose.column(i)]
+            frames[k] = (e.joint, e.axis.is_rotation, u, list(pose.p))
+        else:
+            value = -constant(e.const)
+            if value == 0:
+                continue
+        if e.axis.is_rotation:
+            pose.rotate(i, value)
+        else:
+            pose.translate(i, value)
+    ordered = [frames[k] for k in sorted(frames)]  # chain order
+    zero3 = [sp.Integer(0)] * 3
+    Je = sp.zeros(6, n)
+    cols = []
+    for j, revolute, u, p in ordered:
+        r = [-x for x in p]
+        v = _cross(u, r) if revolute else u
+        w = u if revolute else zero3
+        cols.append((v, w, r))
+        for row in range(3):
+            Je[row, j] = v[row]
+            Je[row + 3, j] = w[row]
+    He = [sp.zeros(6, n) for _ in range(n)]
+    for kb, (jb, rev_b, ub, pb) in enumerate(ordered):
+        for ka, (ja, rev_a, ua, pa) in enumerate(ordered[:kb]):
+            if rev_b:
+                du = _cross(ua, ub)
+                dr = _cross(ub, [x - y for x, y in zip(pa, pb)])
+            else:
+                du, dr = zero3, ub
+            if rev_a:
+                r_a = cols[ka][2]
+                dv = [x + y for x, y in zip(_cross(du, r_a), _cross(ua, dr))]
+                dw = du
+            else:
+                dv, dw = du, zero3
+            for row in range(3):
+                He[jb][row, ja] = dv[row]
+                He[jb][row + 3, ja] = dw[row]
+    return Je, He
+
+
+@dataclass(frozen=True, eq=False)
+class SymbolicKinematics:
+    """Exact kinematics of a robot. Joint-indexed outputs; ``links`` in chain order.
+
+    Attributes:
+        q: the joint symbols, by joint index.
+        T: end-effector pose in the base frame, 4x4 (eq 1).
+        links: pose of each link frame right after its joint (eq 5), chain order.
+        J0, Je: base- and end-effector-frame Jacobians, 6xn, rows (v, omega).
+        H0, He: Hessians, n matrices 6xn, ``H[i] = dJ/dq_i``.
+    """
+
+    name: str
+    ets: ETS
+    q: tuple[sp.Symbol, ...]
+    T: sp.Matrix
+    links: tuple[sp.Matrix, ...]
+    J0: sp.Matrix
+    Je: sp.Matrix
+    H0: tuple[sp.Matrix, ...]
+    He: tuple[sp.Matrix, ...]
+
+    @property
+    def n(self) -> int:
+        return len(self.q)
+
+
+def derive(
+    robot: Robot | ETS,
+    constant: Callable[[Const], sp.Expr] = const_to_sympy,
+    q: Sequence[sp.Symbol] | None = None,
+) -> SymbolicKinematics:
+    """Derive the exact pose, link frames, Jacobians and Hessians of ``robot``.
+
+    ``constant`` maps each ETS constant to a sympy expression (exact by default; a teaching
+    derivation can map link lengths to named symbols instead).
+    """
+    ets = robot.ets if isinstance(robot, Robot) else robot
+    name = robot.name if isinstance(robot, Robot) else "robot"
+    n = ets.n
+    qs = tuple(q) if q is not None else joint_symbols(n)
+    pose = _Pose()
+    frames: list[tuple[int, bool, list[sp.Expr], list[sp.Expr]]] = []  # (joint, revolute, w, p)
+    links: list[sp.Matrix] = []
+    for e in ets:
+        i = e.axis.index
+        if e.is_joint:
+            value = qs[e.joint] * e.sign
+            w = [x * e.sign for x in pose.column(i)]
+            frames.append((e.joint, e.axis.is_rotation, w, list(pose.p)))
+        else:
+            value = constant(e.const)
+            if value == 0:
+                continue
+        if e.axis.is_rotation:
+            pose.rotate(i, value)
+        else:
+            pose.translate(i, value)
+        if e.is_joint:
+            links.append(pose.matrix())
+    T = pose.matrix()
+    pe = [T[r, 3] for r in range(3)]
+
+    zero3 = [sp.Integer(0)] * 3
+    Jv: list[list[sp.Expr]] = []
+    Jw: list[list[sp.Expr]] = []
+    for _, revolute, w, p in frames:
+        if revolute:
+            Jv.append(_cross(w, [a - b for a, b in zip(pe, p)]))
+            Jw.append(w)
+        else:
+            Jv.append(w)
+            Jw.append(zero3)
+    order = [f[0] for f in frames]
+    J0 = sp.zeros(6, n)
+    for k, j in enumerate(order):
+        for r in range(3):
+            J0[r, j] = Jv[k][r]
+            J0[r + 3, j] = Jw[k][r]
+
+    H0 = [sp.zeros(6, n) for _ in range(n)]
+    for kb, jb in enumerate(order):
+        for ka, ja in enumerate(order):
+            if kb <= ka:
+                if not frames[kb][1]:
+                    continue
+                dv, dw = _cross(Jw[kb], Jv[ka]), _cross(Jw[kb], Jw[ka])
+            else:
+                if not frames[ka][1]:
+                    continue
+                dv, dw = _cross(Jw[ka], Jv[kb]), zero3
+            for r in range(3):
+                H0[jb][r, ja] = dv[r]
+                H0[jb][r + 3, ja] = dw[r]
+
+    Je, He = _ee_frame(ets, qs, constant)
+    return SymbolicKinematics(name, ets, qs, T, tuple(links), J0, Je, tuple(H0), tuple(He))
