@@ -1,7 +1,54 @@
-"""symkin: a symbolic, code-generating kinematics compiler for robot manipulators."""
+"""symkin: a symbolic, code-generating kinematics compiler for robot manipulators.
 
-from symkin.errors import SymkinError
+Pipeline: model (ETS, Robot, DH/URDF/PoE importers, built-in robots) -> symbolic (sympy) ->
+emit (C, NumPy, CasADi from jinja2 templates) -> runtime (compiled kinematics, IK, control).
+"""
+
+from symkin.compile import BACKENDS, compile, generate, write_generated
+from symkin.errors import (
+    CompileError,
+    ConfigurationError,
+    ETSParseError,
+    PoseError,
+    RobotError,
+    SymkinError,
+    UnknownRobotError,
+    URDFError,
+)
+from symkin.model.dh import DHLink, load_dh_file
 from symkin.model.ets import ET, ETS, Axis, Const
+from symkin.model.poe import poe_of
+from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
+from symkin.model.robots import list_robots, load
+from symkin.runtime.kinematics import Kinematics
 
 __version__ = "0.1.0"
+
+__all__ = [
+    "BACKENDS",
+    "ET",
+    "ETS",
+    "Axis",
+    "CompileError",
+    "ConfigurationError",
+    "Const",
+    "DHLink",
+    "ETSParseError",
+    "Kinematics",
+    "PoseError",
+    "Robot",
+    "RobotError",
+    "SymkinError",
+    "URDFError",
+    "UnknownRobotError",
+    "__version__",
+    "compile",
+    "generate",
+    "list_robots",
+    "load",
+    "load_dh_file",
+    "poe_of",
+    "resolve_robot",
+    "write_generated",
+]

@@ -24,6 +24,7 @@ __all__ = ["compile", "generate", "write_generated", "BACKENDS", "cache_dir"]
 
 BACKENDS = ("c", "numpy", "casadi")
 _LOADED: dict[str, Kinematics] = {}
+_FUNCTIONS: dict[str, list] = {}  # derived and CSE'd functions by robot key, shared by the backends
 
 
 def cache_dir() -> Path:
@@ -56,8 +57,13 @@ def generate(robot: Robot, backend: str, command: str | None = None) -> dict[str
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
 
-    command = command or f"symkin compile {robot.name} --backend {backend}"
-    functions = kin_functions(robot)
+    command = command or f"symkin compile {robot.identifier} --backend {backend}"
+    functions = _FUNCTIONS.get(robot.key)
+    if functions is None:
+        functions = kin_functions(robot)
+        if len(_FUNCTIONS) > 32:
+            _FUNCTIONS.clear()
+        _FUNCTIONS[robot.key] = functions
     if backend == "c":
         from symkin.emit.c.backend import render_c
 

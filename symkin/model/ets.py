@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ast
 import math
+import numbers
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -109,11 +110,14 @@ class Const:
             return value
         if isinstance(value, str):
             return _parse_const(value, value, 0)
-        if isinstance(value, bool) or not isinstance(value, (int, float, Fraction)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise TypeError(f"a constant must be a number or text, not {type(value).__name__}")
-        if isinstance(value, float) and not math.isfinite(value):
+        if isinstance(value, (int, Fraction, numbers.Integral)):
+            return Const(Fraction(int(value)) if isinstance(value, numbers.Integral) else value)
+        x = float(value)
+        if not math.isfinite(x):
             raise ValueError(f"a constant must be finite, not {value}")
-        return Const(Fraction(repr(value)) if isinstance(value, float) else Fraction(value))
+        return Const(Fraction(repr(x)))
 
     @staticmethod
     def pi_times(b: Fraction | int) -> Const:

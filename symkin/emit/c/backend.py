@@ -17,7 +17,6 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.emit.printers import CPrinter
 from symkin.emit.templates import Header, c_string, identifier, render
 
 __all__ = ["render_c", "build_c", "c_prefix"]
@@ -31,6 +30,7 @@ def c_prefix(robot: Any) -> str:
 def render_c(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated ``<prefix>.h``, ``<prefix>.c`` and the extension module source."""
     from symkin.emit.lowering import lower
+    from symkin.emit.printers import CPrinter
     from symkin.symbolic.cse import OpCounts
 
     printer = CPrinter()
@@ -41,15 +41,16 @@ def render_c(robot: Any, functions: list, command: str) -> dict[str, str]:
     context = {"prefix": prefix, "n": robot.n, "functions": printed, "header": header}
     h = render("c/kinematics.h.j2", **context)
     c = render("c/kinematics.c.j2", **context)
-    digest = hashlib.sha256((h + c).encode()).hexdigest()[:12]
-    module = f"_{prefix}_{digest}"
-    ext = render("c/module.c.j2", module=module, **context)
-    return {f"{prefix}.h": h, f"{prefix}.c": c, f"{module}.c": ext}
+    files = {f"{prefix}.h": h, f"{prefix}.c": c}
+    ext = render("c/module.c.j2", module=module_name(files), **context)
+    return {**files, f"{prefix}_pymodule.c": ext}
 
 
 def module_name(files: dict[str, str]) -> str:
-    """The extension module's name (its source file is the one starting with an underscore)."""
-    return next(name[:-2] for name in files if name.startswith("_") and name.endswith(".c"))
+    """The extension module's import name: unique per kinematics source, so versions can coexist."""
+    prefix = next(name[:-2] for name in files if name.endswith(".h"))
+    digest = hashlib.sha256((files[f"{prefix}.h"] + files[f"{prefix}.c"]).encode()).hexdigest()[:12]
+    return f"_{prefix}_{digest}"
 
 
 def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:

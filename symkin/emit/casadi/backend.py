@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.emit.printers import CasADiPrinter
 from symkin.emit.templates import Header, identifier, render
 
 __all__ = ["render_casadi"]
@@ -17,6 +16,7 @@ __all__ = ["render_casadi"]
 def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>_casadi.py``."""
     from symkin.emit.lowering import lower
+    from symkin.emit.printers import CasADiPrinter
     from symkin.symbolic.cse import OpCounts
 
     printed = []

@@ -13,20 +13,19 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.emit.printers import NumPyPrinter
 from symkin.emit.templates import Header, identifier, render
 
 __all__ = ["render_numpy", "load_numpy"]
 
 
-class _MathPrinter(NumPyPrinter):
-    module = "math"
-
-
 def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>.py``."""
     from symkin.emit.lowering import lower
+    from symkin.emit.printers import NumPyPrinter
     from symkin.symbolic.cse import OpCounts
+
+    class _MathPrinter(NumPyPrinter):
+        module = "math"
 
     printed = []
     for f in functions:

@@ -1,0 +1,1 @@
+"""The C backend: generated kinematics, the C build layer."""

@@ -1,0 +1,219 @@
+"""Built-in robots with published kinematic parameters, joint limits and named configurations.
+
+Every robot has ``qz`` (all zeros); ``qr`` (a "ready" pose) and others where published. Each robot's
+``source`` says where its numbers come from. ``load(name)`` returns a cached, immutable Robot.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Callable
+from functools import cache
+
+import numpy as np
+
+from symkin.errors import UnknownRobotError
+from symkin.model.dh import DHLink, robot_from_dh
+from symkin.model.robot import Robot
+
+__all__ = ["load", "list_robots"]
+
+_DEG = math.pi / 180
+_PI = math.pi
+
+
+def _deg(*values: float) -> list[float]:
+    return [v * _DEG for v in values]
+
+
+def _panda() -> Robot:
+    # Seed 000 Fig. 1 (Haviland & Corke): E1..E15 with the flipped joints E7 and E11, then the tool
+    # point of the Franka hand: 0.1034 m along the flange z and -45 deg about it (as RTB's Panda ets()).
+    ets = (
+        "tz(0.333) Rz(q0) Ry(q1) tz(0.316) Rz(q2) tx(0.0825) Ry(-q3) tx(-0.0825) tz(0.384) Rz(q4) "
+        "Ry(-q5) tx(0.088) Rx(pi) tz(0.107) Rz(q6) tz(0.1034) Rz(-pi/4)"
+    )
+    return Robot.from_ets(
+        ets,
+        name="panda",
+        qlim=[
+            [-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973],
+            [2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973],
+        ],
+        configs={"qr": [0, -0.3, 0, -2.2, 0, 2.0, _PI / 4]},
+        joint_names=tuple(f"panda_joint{i}" for i in range(1, 8)),
+        qd_max=[2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61],
+        source=(
+            "ETS of seed 000 Fig. 1 (Haviland & Corke, 'Manipulator Differential Kinematics, Part 1'), "
+            "ending at the gripper tool point: flange tz(0.107) then tz(0.1034) Rz(-pi/4) as in Corke's "
+            "Robotics Toolbox Panda ets() (the "
+            "URDF's panda_hand frame lacks the 0.1034 m); joint and speed limits and qr from Franka Emika's "
+            "robot and interface specifications / RTB"
+        ),
+    )
+
+
+def _ur(
+    name: str, d1: float, a2: float, a3: float, d4: float, d5: float, d6: float, qd_deg: list[float]
+) -> Robot:
+    alpha = ["pi/2", 0, 0, "pi/2", "-pi/2", 0]
+    d = [d1, 0, 0, d4, d5, d6]
+    a = [0, a2, a3, 0, 0, 0]
+    links = [DHLink(d=d[j], a=a[j], alpha=alpha[j]) for j in range(6)]
+    return robot_from_dh(
+        links,
+        name=name,
+        qlim=np.array([[-2 * _PI] * 6, [2 * _PI] * 6]),
+        configs={"qr": _deg(180, 0, 0, 0, 90, 0)},
+        joint_names=("shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3"),
+        qd_max=_deg(*qd_deg),
+        source=(
+            f"Universal Robots, 'DH parameters for calculations of kinematics and dynamics' "
+            f"({name.upper()}, standard DH); joint range +-360 deg and joint speeds from the UR technical "
+            "specifications; qr from Corke's Robotics Toolbox"
+        ),
+    )
+
+
+def _ur3() -> Robot:
+    return _ur("ur3", 0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819, [180, 180, 180, 360, 360, 360])
+
+
+def _ur5() -> Robot:
+    return _ur("ur5", 0.089159, -0.425, -0.39225, 0.10915, 0.09465, 0.0823, [180] * 6)
+
+
+def _ur10() -> Robot:
+    return _ur("ur10", 0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922, [120, 120, 180, 180, 180, 180])
+
+
+def _puma560() -> Robot:
+    rows = [  # d, a, alpha, qlim (deg)
+        (0, 0, "pi/2", (-160, 160)),
+        (0, 0.4318, 0, (-45, 225)),
+        (0.15005, 0.0203, "-pi/2", (-225, 45)),
+        (0.4318, 0, "pi/2", (-110, 170)),
+        (0, 0, "-pi/2", (-100, 100)),
+        (0, 0, 0, (-266, 266)),
+    ]
+    links = [DHLink(d=d, a=a, alpha=al, qlim=tuple(_deg(*lim))) for d, a, al, lim in rows]
+    return robot_from_dh(
+        links,
+        name="puma560",
+        configs={
+            "qr": [0, _PI / 2, -_PI / 2, 0, 0, 0],
+            "qs": [0, 0, -_PI / 2, 0, 0, 0],
+            "qn": [0, _PI / 4, -_PI, 0, _PI / 4, 0],
+        },
+        source=(
+            "Corke's Puma 560 model (standard DH, Corke & Armstrong-Helouvry 1994; joint limits from Wang "
+            "& Chen 1991), as in the MATLAB Robotics Toolbox and 'Robotics, Vision and Control': the base "
+            "frame is at the shoulder (RTB-python >= 1.0 adds the 26.45 in pedestal as d1). qr, qs, qn as "
+            "in the toolbox, with qn's joint 3 written -pi (same pose as pi) to lie within its limits"
+        ),
+    )
+
+
+def _lbr_iiwa7() -> Robot:
+    d = [0.34, 0, 0.4, 0, 0.4, 0, 0.126]
+    alpha = ["-pi/2", "pi/2", "pi/2", "-pi/2", "-pi/2", "pi/2", 0]
+    lim = [170, 120, 170, 120, 170, 120, 175]
+    links = [DHLink(d=d[j], alpha=alpha[j], qlim=(-lim[j] * _DEG, lim[j] * _DEG)) for j in range(7)]
+    return robot_from_dh(
+        links,
+        name="lbr_iiwa7",
+        joint_names=tuple(f"A{i}" for i in range(1, 8)),
+        qd_max=_deg(98, 98, 100, 130, 140, 180, 180),
+        source=(
+            "KUKA LBR iiwa 7 R800 specification (link lengths 340/400/400/126 mm, axis ranges and "
+            "speeds), as standard DH with alternating +-pi/2 twists; zero pose is the arm straight up"
+        ),
+    )
+
+
+def _sawyer() -> Robot:
+    a = [0.081, 0, 0, 0, 0, 0, 0]
+    d = [0.317, 0.1925, 0.4, 0.1685, 0.4, 0.1363, 0.13375]
+    alpha = ["-pi/2"] * 6 + [0]
+    links = [DHLink(d=d[j], a=a[j], alpha=alpha[j]) for j in range(7)]
+    return robot_from_dh(
+        links,
+        name="sawyer",
+        joint_names=tuple(f"right_j{i}" for i in range(7)),
+        qd_max=[1.74, 1.328, 1.957, 1.957, 3.485, 3.485, 4.545],
+        source=(
+            "Rethink Sawyer standard DH as in Corke's Robotics Toolbox (after D. Layeghi, 'Dynamic and "
+            "kinematic modelling of the Sawyer arm', 2017); joint speeds from Rethink's sawyer URDF. The DH "
+            "joint zeros differ from the URDF's, so its joint limits are not used (default +-pi)"
+        ),
+    )
+
+
+def _planar(n: int) -> Robot:
+    return robot_from_dh(
+        [DHLink(a=1) for _ in range(n)],
+        name=f"planar{n}",
+        source=(
+            f"planar {n}-link arm with unit links (Corke's Robotics Toolbox mdl_planar{n}; seed 004 Lab 7: "
+            "x = l1 c1 + l2 c12 + l3 c123)"
+        ),
+    )
+
+
+def _stanford() -> Robot:
+    inch = 0.0254
+    links = [
+        DHLink(d=0.412, alpha="-pi/2", qlim=(-170 * _DEG, 170 * _DEG)),
+        DHLink(d=0.154, alpha="pi/2", qlim=(-170 * _DEG, 170 * _DEG)),
+        DHLink(theta="-pi/2", a=0.0203, prismatic=True, qlim=(12 * inch, 50 * inch)),
+        DHLink(alpha="-pi/2", qlim=(-170 * _DEG, 170 * _DEG)),
+        DHLink(alpha="pi/2", qlim=(-90 * _DEG, 90 * _DEG)),
+        DHLink(d=0.263, qlim=(-170 * _DEG, 170 * _DEG)),
+    ]
+    return robot_from_dh(
+        links,
+        name="stanford",
+        source=(
+            "Stanford arm, standard DH from Corke's Robotics Toolbox (Stanford AIM-177 Fig. 2.3; Paul 1981); "
+            "joint 3 is prismatic, 12 to 50 inches"
+        ),
+    )
+
+
+_BUILDERS: dict[str, Callable[[], Robot]] = {
+    "panda": _panda,
+    "ur3": _ur3,
+    "ur5": _ur5,
+    "ur10": _ur10,
+    "puma560": _puma560,
+    "lbr_iiwa7": _lbr_iiwa7,
+    "sawyer": _sawyer,
+    "planar2": lambda: _planar(2),
+    "planar3": lambda: _planar(3),
+    "stanford": _stanford,
+}
+
+
+def list_robots() -> list[str]:
+    """Names of the built-in robots, sorted."""
+    return sorted(_BUILDERS)
+
+
+@cache
+def _build(name: str) -> Robot:
+    return _BUILDERS[name]()
+
+
+def load(name: str) -> Robot:
+    """A built-in robot by name (case-insensitive, ``-`` and spaces read as ``_``), e.g. ``load("panda")``."""
+    if not isinstance(name, str):
+        raise UnknownRobotError(
+            f"a robot name must be a string, not {type(name).__name__}; available: {', '.join(list_robots())}"
+        )
+    key = "_".join(name.strip().lower().replace("-", " ").split())
+    if key not in _BUILDERS:
+        close = difflib.get_close_matches(key, list_robots(), n=3, cutoff=0.5)
+        hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        raise UnknownRobotError(f"unknown robot {name!r}{hint} Available: {', '.join(list_robots())}")
+    return _build(key)

@@ -1,0 +1,339 @@
+"""URDF to an exact ETS: the serial chain from ``base_link`` to ``end_link`` (xml.etree only).
+
+Each joint on the chain contributes its origin ``tx ty tz Rz(yaw) Ry(pitch) Rx(roll)`` (the URDF
+fixed-axis roll-pitch-yaw convention ``R = Rz(y) Ry(p) Rx(r)``, seed 004 "Analytical Jacobian")
+followed by the joint itself (seed 000, Fig. 2):
+
+- an axis along +-x, +-y or +-z is one ET (a negative axis gives a flipped joint, ``Rz(-q)``);
+- an axis ``u`` in a coordinate plane is conjugated by one exact rotation, e.g. ``u`` in the
+  xy-plane gives ``Rz(phi) Rx(q) Rz(-phi)`` with ``phi = atan2(uy, ux)``;
+- any other axis gives ``Rz(phi) Ry(theta) Rz(q) Ry(-theta) Rz(-phi)`` with ``phi = atan2(uy, ux)``,
+  ``theta = atan2(sqrt(ux^2 + uy^2), uz)``, kept exact as :class:`Const` atan2 terms of surds
+  (an angle within ``snap_tol`` of a multiple of pi/12 snaps to it: ``0 0.5 0.8660254`` gives pi/3).
+
+Numbers in the XML become exact rationals (the decimal as written). Angles within ``snap_tol`` of
+a multiple of pi/4 snap to it exactly (``1.5707963267949`` becomes ``pi/2``), and axis components
+within ``snap_tol * |u|`` of 0 become 0. Zero constants are dropped.
+
+Limits come from ``<limit lower upper velocity>``; a continuous joint gets ``[-pi, pi]`` (every
+angle once); a revolute or prismatic joint without lower/upper gets ``[-pi, pi]`` or
+``[-1, 1]`` m. ``qd_max`` is set when every moving joint on the chain gives a velocity.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Sequence
+from fractions import Fraction
+from pathlib import Path
+from xml.etree import ElementTree
+
+from symkin.errors import URDFError
+from symkin.model.ets import ET, ETS, Axis, Const, surd
+from symkin.model.robot import Robot
+
+__all__ = ["robot_from_urdf", "axis_ets", "translation_ets", "atan2_const", "snap_angle", "snap_atan2"]
+
+_KNOWN = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+_ROT = (Axis.Rx, Axis.Ry, Axis.Rz)
+_TRANS = (Axis.tx, Axis.ty, Axis.tz)
+
+
+# ---------------------------------------------------------------------------------------------
+# exact geometry helpers (shared with the PoE importer)
+
+
+def atan2_const(sy: Fraction, sx: Fraction) -> Const:
+    """Exact ``atan2(y, x)`` for surds ``sy``, ``sx`` (see :func:`surd`): multiples of pi/12 when
+    ``|y/x|`` is 0, 1, sqrt(3) or 1/sqrt(3), otherwise an atan2 term."""
+    if sy == 0 and sx == 0:
+        raise ValueError("atan2(0, 0) is undefined")
+    if sy == 0:
+        return Const() if sx > 0 else Const.pi_times(1)
+    if sx == 0:
+        return Const.pi_times(Fraction(1 if sy > 0 else -1, 2))
+    ratio = abs(sy / sx)  # (y/x)^2
+    base = {Fraction(1): Fraction(1, 4), Fraction(3): Fraction(1, 3), Fraction(1, 3): Fraction(1, 6)}.get(
+        ratio
+    )
+    if base is None:
+        return Const(atan2=(sy, sx))
+    b = base if sx > 0 else 1 - base  # first or second quadrant
+    return Const.pi_times(b if sy > 0 else -b)
+
+
+def translation_ets(p: Sequence[Const | Fraction]) -> list[ET]:
+    """``tx(px) ty(py) tz(pz)`` without the zero terms."""
+    out = []
+    for axis, v in zip(_TRANS, p):
+        c = v if isinstance(v, Const) else Const(Fraction(v))
+        if not c.is_zero:
+            out.append(ET(axis, const=c))
+    return out
+
+
+def axis_ets(u: Sequence[Fraction], joint: int, revolute: bool) -> list[ET]:
+    """The ETs of a joint about (revolute) or along (prismatic) the direction ``u`` (rationals).
+
+    One ET for a coordinate axis, three (one exact conjugating rotation) for an axis in a
+    coordinate plane, five otherwise (module docstring). ``u`` need not be unit length.
+    """
+    ux, uy, uz = (Fraction(c) for c in u)
+    kinds = _ROT if revolute else _TRANS
+    nonzero = [i for i, c in enumerate((ux, uy, uz)) if c != 0]
+    if not nonzero:
+        raise ValueError("the joint axis is the zero vector")
+    if len(nonzero) == 1:
+        i = nonzero[0]
+        return [ET(kinds[i], joint=joint, flip=(ux, uy, uz)[i] < 0)]
+    if len(nonzero) == 2:
+        if uz == 0:  # xy-plane: Rz(phi) maps x onto u
+            g, j = ET(Axis.Rz, const=atan2_const(surd(uy), surd(ux))), kinds[0]
+        elif ux == 0:  # yz-plane: Rx(alpha) maps y onto u
+            g, j = ET(Axis.Rx, const=atan2_const(surd(uz), surd(uy))), kinds[1]
+        else:  # zx-plane: Ry(beta) maps z onto u
+            g, j = ET(Axis.Ry, const=atan2_const(surd(ux), surd(uz))), kinds[2]
+        return [g, ET(j, joint=joint), ET(g.axis, const=-g.const)]
+    phi = atan2_const(surd(uy), surd(ux))
+    theta = atan2_const(ux * ux + uy * uy, surd(uz))
+    return [
+        ET(Axis.Rz, const=phi),
+        ET(Axis.Ry, const=theta),
+        ET(kinds[2], joint=joint),
+        ET(Axis.Ry, const=-theta),
+        ET(Axis.Rz, const=-phi),
+    ]
+
+
+def snap_atan2(e: ET, tol: float) -> ET:
+    """A constant rotation by an atan2 term within ``tol`` of ``k*pi/12`` (decimal noise) becomes exact."""
+    if e.is_joint or e.const.atan2 is None:
+        return e
+    v = e.const.value
+    k = round(v * 12 / math.pi)
+    return ET(e.axis, const=Const.pi_times(Fraction(k, 12))) if abs(v - k * math.pi / 12) <= tol else e
+
+
+def snap_angle(value: Fraction, tol: float) -> Const:
+    """``value`` (rad) as an exact Const, snapped to a multiple of pi/4 when within ``tol``."""
+    x = float(value)
+    k = round(x / (math.pi / 4))
+    if abs(x - k * math.pi / 4) <= tol:
+        return Const.pi_times(Fraction(k, 4))
+    return Const(value)
+
+
+# ---------------------------------------------------------------------------------------------
+# the importer
+
+
+def _numbers(text: str | None, count: int, what: str, default: str | None = None) -> list[Fraction]:
+    """``count`` exact numbers from a space-separated attribute."""
+    if text is None:
+        if default is None:
+            raise URDFError(f"{what} is missing")
+        text = default
+    cells = text.split()
+    if len(cells) != count:
+        raise URDFError(f"{what} must have {count} numbers, got {text!r}")
+    out = []
+    for c in cells:
+        low = c.lower().lstrip("+-")
+        if low in ("nan", "inf", "infinity"):
+            raise URDFError(f"{what} contains {c!r}: numbers must be finite")
+        try:
+            out.append(Fraction(c))
+        except (ValueError, ZeroDivisionError):
+            raise URDFError(f"{what} contains {c!r}, which is not a number") from None
+    return out
+
+
+def _suggest(name: str, options: Sequence[str]) -> str:
+    close = difflib.get_close_matches(name, options, n=3)
+    hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    return f"{hint} Links: {list(options)}"
+
+
+def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
+    """Parse a URDF file path or XML text -> (root element, description for messages)."""
+    if isinstance(path_or_xml, Path) or (
+        isinstance(path_or_xml, str) and not path_or_xml.lstrip().startswith("<")
+    ):
+        path = Path(path_or_xml)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise URDFError(f"cannot read URDF file {str(path)!r}: {exc.strerror or exc}") from None
+        where = f"URDF file {str(path)!r}"
+    elif isinstance(path_or_xml, str):
+        text, where = path_or_xml, "URDF text"
+    else:
+        raise URDFError(f"expected a URDF file path or XML text, not {type(path_or_xml).__name__}")
+    try:
+        root = ElementTree.fromstring(text)
+    except ElementTree.ParseError as exc:
+        raise URDFError(
+            f"malformed XML in {where}: {exc} (line, column as counted by the XML parser)"
+        ) from None
+    if root.tag != "robot":
+        raise URDFError(f"{where}: the root element must be <robot>, not <{root.tag}>")
+    return root, where
+
+
+def robot_from_urdf(
+    path_or_xml: str | Path,
+    base_link: str | None = None,
+    end_link: str | None = None,
+    name: str | None = None,
+    snap_tol: float = 1e-9,
+) -> Robot:
+    """The serial chain of a URDF (file path or XML text) from ``base_link`` to ``end_link``.
+
+    ``base_link`` defaults to the root link, ``end_link`` to the only leaf below ``base_link``
+    (a branching tree needs ``end_link``). Joints: revolute, continuous, prismatic, fixed.
+    """
+    root, where = _load(path_or_xml)
+    links = [el.get("name") for el in root.findall("link")]
+    if any(n is None for n in links):
+        raise URDFError(f"{where}: a <link> has no name attribute")
+    link_set = set(links)
+    parent_joint: dict[str, ElementTree.Element] = {}
+    children: dict[str, list[ElementTree.Element]] = {n: [] for n in links}
+    for jel in root.findall("joint"):
+        jname = jel.get("name") or "<unnamed>"
+        jtype = jel.get("type")
+        if jtype not in _KNOWN:
+            raise URDFError(
+                f"{where}: joint {jname!r} has unknown type {jtype!r}; valid types: {list(_KNOWN)}"
+            )
+        ends = []
+        for tag in ("parent", "child"):
+            el = jel.find(tag)
+            lname = el.get("link") if el is not None else None
+            if lname is None:
+                raise URDFError(f"{where}: joint {jname!r} has no <{tag} link=...>")
+            if lname not in link_set:
+                raise URDFError(
+                    f"{where}: joint {jname!r} names {tag} link {lname!r}, which is not declared"
+                    + _suggest(lname, links)
+                )
+            ends.append(lname)
+        parent, child = ends
+        if child in parent_joint:
+            other = parent_joint[child].get("name")
+            raise URDFError(
+                f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r}; "
+                "a URDF must be a tree"
+            )
+        parent_joint[child] = jel
+        children[parent].append(jel)
+
+    if base_link is None:
+        roots = [n for n in links if n not in parent_joint]
+        if len(roots) != 1:
+            raise URDFError(
+                f"{where} has {len(roots)} root links {roots}; name base_link, one of the links: {links}"
+            )
+        base_link = roots[0]
+    elif base_link not in link_set:
+        raise URDFError(f"{where}: base_link {base_link!r} is not a link" + _suggest(base_link, links))
+    if end_link is None:
+        leaves, stack, seen = [], [base_link], set()
+        while stack:
+            ln = stack.pop()
+            if ln in seen:
+                continue
+            seen.add(ln)
+            kids = [j.find("child").get("link") for j in children[ln]]
+            if not kids:
+                leaves.append(ln)
+            stack.extend(reversed(kids))
+        if len(leaves) != 1:
+            raise URDFError(
+                f"{where}: the tree below {base_link!r} branches; name end_link, one of the leaf "
+                f"links {leaves}"
+            )
+        end_link = leaves[0]
+    elif end_link not in link_set:
+        raise URDFError(f"{where}: end_link {end_link!r} is not a link" + _suggest(end_link, links))
+
+    path: list[ElementTree.Element] = []
+    ln, seen_links = end_link, {end_link}
+    while ln != base_link:
+        if ln not in parent_joint:
+            raise URDFError(
+                f"{where}: there is no path from base_link {base_link!r} down to end_link {end_link!r} "
+                f"(walking up from {end_link!r} reached the root {ln!r})"
+            )
+        jel = parent_joint[ln]
+        path.append(jel)
+        ln = jel.find("parent").get("link")
+        if ln in seen_links:
+            raise URDFError(f"{where}: the joints form a cycle through link {ln!r}")
+        seen_links.add(ln)
+    path.reverse()
+
+    chain: list[ET] = []
+    lower, upper, qd, names = [], [], [], []
+    for jel in path:
+        jname = jel.get("name") or "<unnamed>"
+        jtype = jel.get("type")
+        what = f"joint {jname!r}"
+        if jtype in ("floating", "planar"):
+            raise URDFError(
+                f"{where}: {what} between {base_link!r} and {end_link!r} is {jtype}; symkin supports "
+                "revolute, continuous, prismatic and fixed joints (choose base_link/end_link to avoid it)"
+            )
+        mimic = jel.find("mimic")
+        if mimic is not None:
+            raise URDFError(
+                f"{where}: {what} mimics joint {mimic.get('joint')!r}; mimic joints are not supported "
+                "(each joint must be independent): choose another end_link or edit the URDF"
+            )
+        origin = jel.find("origin")
+        xyz = _numbers(origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0")
+        rpy = _numbers(origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0")
+        chain += translation_ets(xyz)
+        for axis, ang in ((Axis.Rz, rpy[2]), (Axis.Ry, rpy[1]), (Axis.Rx, rpy[0])):
+            c = snap_angle(ang, snap_tol)
+            if not c.is_zero:
+                chain.append(ET(axis, const=c))
+        if jtype == "fixed":
+            continue
+        axis_el = jel.find("axis")
+        u = _numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
+        norm = math.sqrt(sum(float(c) ** 2 for c in u))
+        if norm == 0:
+            raise URDFError(f"{where}: {what} has the zero vector as its axis; give a direction like '0 0 1'")
+        u = [c if abs(float(c)) > snap_tol * norm else Fraction(0) for c in u]
+        chain += [snap_atan2(e, snap_tol) for e in axis_ets(u, len(names), revolute=jtype != "prismatic")]
+        names.append(jname)
+        lim = jel.find("limit")
+        default = math.pi if jtype != "prismatic" else 1.0
+        lo, hi = -default, default
+        if lim is not None and jtype != "continuous":
+            if lim.get("lower") is not None:
+                lo = float(_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
+            if lim.get("upper") is not None:
+                hi = float(_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
+            if lo > hi:
+                raise URDFError(f"{where}: {what} has limit lower {lo} > upper {hi}")
+        lower.append(lo)
+        upper.append(hi)
+        vel = lim.get("velocity") if lim is not None else None
+        qd.append(float(_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else None)
+    if not names:
+        raise URDFError(
+            f"{where}: no revolute, continuous or prismatic joint between {base_link!r} and {end_link!r}"
+        )
+    robot_name = name or root.get("name") or "robot"
+    qd_max = qd if all(v is not None and v > 0 for v in qd) else None
+    return Robot(
+        ETS(tuple(chain)),
+        name=robot_name,
+        qlim=[lower, upper],
+        joint_names=tuple(names),
+        qd_max=qd_max,
+        source=f"{where}, chain {base_link} -> {end_link}",
+    )
