@@ -302,6 +302,12 @@ class Robot:
             c = np.full_like(c, np.inf)
         return float(c[0]) if single else c
 
+    def ik(self, Tep: Any, **kwargs: Any) -> Any:
+        """Numerical IK on the numeric reference (slow; compile for speed): :func:`symkin.runtime.ik.ik`."""
+        from symkin.runtime.ik import ik
+
+        return ik(self, Tep, **kwargs)
+
     def jacobs(self, q: Any) -> np.ndarray:
         """Space Jacobian of seed 002: (6, n) or (N, 6, n), rows (omega, v_s), v_s = v_e - omega x p_e."""
         Q, single = self._batch(q)

@@ -9,6 +9,7 @@ the extension module's functions themselves, so a call costs one C function call
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import cached_property
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -109,8 +110,24 @@ class Kinematics:
         Jm = jacobm_of(J[:, rows], H[:, :, rows])
         return Jm[0] if single else Jm
 
+    @cached_property
+    def c_fkjac(self) -> Any:
+        """The C entry point ``fkine_jacob0(q, T, J)`` as a ctypes function (C backend only), for
+        the C IK solver."""
+        if self.backend != "c" or self.path is None:
+            raise AttributeError("c_fkjac exists only on the C backend")
+        from symkin.emit.c.backend import c_prefix
+        from symkin.emit.c.build import load_library
+
+        return getattr(load_library(self.path), f"{c_prefix(self.robot)}_fkine_jacob0")
+
     def ik(self, Tep: Any, **kwargs: Any) -> Any:
-        """Numerical inverse kinematics on this backend; see :func:`symkin.runtime.ik.ik`."""
+        """Numerical inverse kinematics (eqs 37-51); see :func:`symkin.runtime.ik.ik` for the options.
+
+        On the C backend the whole solver loop runs in C on the generated kinematics; on the
+        NumPy and CasADi backends the NumPy solver calls the generated functions.
+        """
         from symkin.runtime.ik import ik
 
+        kwargs.setdefault("backend", "c" if self.backend == "c" else "numpy")
         return ik(self, Tep, **kwargs)

@@ -1,0 +1,7 @@
+"""python -m symkin: the symkin command."""
+
+import sys
+
+from symkin.cli import main
+
+sys.exit(main())

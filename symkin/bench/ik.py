@@ -1,0 +1,287 @@
+"""Table 1 of seed 000: numerical IK methods compared over random reachable UR5 targets.
+
+The authors' protocol: ``np.random.seed(seed)``; ``n_problems`` target configurations uniform
+within the joint limits (targets are their poses), then one shared set of 100 start points;
+search s of every problem starts from ``starts[s]``. Settings (a) 1 search x 500 iterations and
+(b) 100 searches x 30 iterations; a problem is solved when ``E = 1/2 e^T e < 1e-6`` (the paper's
+criterion; ``tol_on="e"`` uses symkin's ``|e| < tol`` instead). Iterations count pose
+evaluations, failed searches included; their mean and median are over the solved problems (the
+paper's setting (a) figures are too: failures would add 500 each). The largest ``|e|`` among
+solved problems shows what ``E < 1e-6`` allows (up to 1.4e-3).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+__all__ = ["run_table1", "format_table1", "table1_problems", "TABLE1_METHODS", "PAPER_TABLE1", "SETTINGS"]
+
+SETTINGS: dict[str, tuple[int, int]] = {"a": (1, 500), "b": (100, 30)}  # (searches, iterations)
+
+TABLE1_METHODS: dict[str, dict[str, Any]] = {
+    "NR": {"method": "NR"},
+    "GN": {"method": "GN"},
+    "NR Pseudoinverse": {"method": "NR", "pinv": True},
+    "GN Pseudoinverse": {"method": "GN", "pinv": True},
+    "LM (Wampler lambda=1e-4)": {"method": "LM", "damping": "wampler", "lam": 1e-4},
+    "LM (Wampler lambda=1e-6)": {"method": "LM", "damping": "wampler", "lam": 1e-6},
+    "LM (Chan lambda=1.0)": {"method": "LM", "damping": "chan", "lam": 1.0},
+    "LM (Chan lambda=0.1)": {"method": "LM", "damping": "chan", "lam": 0.1},
+    "LM (Sugihara w_n=1e-3)": {"method": "LM", "damping": "sugihara", "lam": 1e-3},
+    "LM (Sugihara w_n=1e-4)": {"method": "LM", "damping": "sugihara", "lam": 1e-4},
+}
+
+# Seed 000 Table 1: (mean iterations, median iterations, infeasible count, infeasible %, mean
+# searches, max searches) per method and setting, 10 000 problems.
+PAPER_TABLE1: dict[tuple[str, str], tuple[float, float, int, float, float, float]] = {
+    ("NR", "a"): (21.34, 16.0, 1093, 10.93, 1.0, 1.0),
+    ("GN", "a"): (21.6, 16.0, 1078, 10.78, 1.0, 1.0),
+    ("NR Pseudoinverse", "a"): (21.24, 16.0, 1100, 11.0, 1.0, 1.0),
+    ("GN Pseudoinverse", "a"): (21.72, 16.0, 1090, 10.9, 1.0, 1.0),
+    ("LM (Wampler lambda=1e-4)", "a"): (20.1, 14.0, 934, 9.34, 1.0, 1.0),
+    ("LM (Wampler lambda=1e-6)", "a"): (29.84, 17.0, 529, 5.29, 1.0, 1.0),
+    ("LM (Chan lambda=1.0)", "a"): (16.58, 14.0, 1011, 10.11, 1.0, 1.0),
+    ("LM (Chan lambda=0.1)", "a"): (9.43, 9.0, 963, 9.63, 1.0, 1.0),
+    ("LM (Sugihara w_n=1e-3)", "a"): (20.54, 15.0, 1024, 10.24, 1.0, 1.0),
+    ("LM (Sugihara w_n=1e-4)", "a"): (17.01, 14.0, 1011, 10.11, 1.0, 1.0),
+    ("NR", "b"): (30.16, 18.0, 0, 0.0, 1.47, 25.0),
+    ("GN", "b"): (30.33, 18.0, 0, 0.0, 1.48, 23.0),
+    ("NR Pseudoinverse", "b"): (30.27, 18.0, 0, 0.0, 1.47, 20.0),
+    ("GN Pseudoinverse", "b"): (30.65, 18.0, 0, 0.0, 1.49, 20.0),
+    ("LM (Wampler lambda=1e-4)", "b"): (25.23, 15.0, 0, 0.0, 1.35, 17.0),
+    ("LM (Wampler lambda=1e-6)", "b"): (29.3, 18.0, 0, 0.0, 1.45, 24.0),
+    ("LM (Chan lambda=1.0)", "b"): (22.6, 15.0, 0, 0.0, 1.25, 18.0),
+    ("LM (Chan lambda=0.1)", "b"): (15.33, 9.0, 0, 0.0, 1.2, 18.0),
+    ("LM (Sugihara w_n=1e-3)", "b"): (26.49, 16.0, 0, 0.0, 1.35, 18.0),
+    ("LM (Sugihara w_n=1e-4)", "b"): (23.04, 15.0, 0, 0.0, 1.26, 18.0),
+}
+_PAPER_KEYS = (
+    "mean_iterations",
+    "median_iterations",
+    "infeasible",
+    "infeasible_pct",
+    "mean_searches",
+    "max_searches",
+)
+
+
+def table1_problems(
+    robot: Any, n_problems: int = 10000, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The authors' problems: (q_targets (N, n), Tep (N, 4, 4), starts (100, n)) from
+    ``np.random.seed(seed)`` (a private RandomState, same numbers)."""
+    rs = np.random.RandomState(seed)
+    lo, hi = np.asarray(robot.qlim, dtype=float)
+    q = rs.uniform(lo, hi, size=(int(n_problems), robot.n))
+    starts = rs.uniform(lo, hi, size=(100, robot.n))
+    return q, np.asarray(robot.fkine(q)), starts
+
+
+def _robot(robot: Any) -> Any:
+    if robot is None or isinstance(robot, str):
+        from symkin.model.robots import load
+
+        return load(robot or "ur5")
+    return robot
+
+
+def run_table1(
+    robot: Any = "ur5",
+    n_problems: int = 10000,
+    seed: int = 0,
+    methods: Iterable[str] | None = None,
+    progress: bool = True,
+    settings: Iterable[str] = ("a", "b"),
+    backend: str = "c",
+    tol: float = 1e-6,
+    tol_on: str = "E",
+    chunk: int = 1000,
+    rtb: bool = True,
+) -> dict[str, Any]:
+    """Reproduce Table 1 of seed 000 (module docstring) -> a dict with one entry per row.
+
+    Args:
+        robot: a Robot or built-in name (the paper uses the UR5).
+        methods: row labels of :data:`TABLE1_METHODS` (default all).
+        settings: ``"a"`` (1 x 500) and/or ``"b"`` (100 x 30).
+        backend: ``"c"`` (fast) or ``"numpy"`` (slow: use a few hundred problems).
+        tol, tol_on: the convergence test; the paper's is ``E < 1e-6`` (``tol_on="E"``).
+        rtb: also time roboticstoolbox-python's C++ ``ik_LM`` (Chan 0.1, setting b) if installed.
+
+    Returns:
+        ``{"robot", "n_problems", "seed", "tol", "tol_on", "backend", "rows": [...], "rtb"}``; each
+        row has method, setting, searches_allowed, iterations_allowed, mean/median_iterations
+        (solved problems), infeasible, infeasible_pct, mean/max_searches, us_per_solve,
+        max_error (largest |e| among solved problems) and ``paper`` (the published row or None).
+    """
+    from tqdm import tqdm
+
+    from symkin.runtime.ik import ik
+
+    robot = _robot(robot)
+    labels = list(TABLE1_METHODS) if methods is None else list(methods)
+    unknown = [m for m in labels if m not in TABLE1_METHODS]
+    if unknown:
+        raise ValueError(f"unknown Table 1 method(s) {unknown}; choose from {list(TABLE1_METHODS)}")
+    settings = list(settings)
+    bad = [s for s in settings if s not in SETTINGS]
+    if bad:
+        raise ValueError(f"settings must be among {list(SETTINGS)}, not {bad}")
+    _, Tep, starts = table1_problems(robot, n_problems, seed)
+    N = len(Tep)
+    rows = []
+    bar = tqdm(total=N * len(labels) * len(settings), desc="Table 1", unit="IK", disable=not progress)
+    for setting in settings:
+        slimit, ilimit = SETTINGS[setting]
+        for label in labels:
+            options = dict(TABLE1_METHODS[label], slimit=slimit, ilimit=ilimit, tol=tol, tol_on=tol_on)
+            if robot.n != 6 and options["method"] in ("NR", "GN") and not options.get("pinv"):
+                bar.update(N)
+                continue  # needs a square J
+            parts, elapsed = [], 0.0
+            ik(robot, Tep[:1], backend=backend, starts=starts, seed=seed, **options)  # build / warm up
+            for i in range(0, N, chunk):
+                t0 = time.perf_counter()
+                parts.append(
+                    ik(robot, Tep[i : i + chunk], backend=backend, starts=starts, seed=seed, **options)
+                )
+                elapsed += time.perf_counter() - t0
+                bar.update(len(Tep[i : i + chunk]))
+            rows.append(_row(robot, Tep, label, setting, parts, elapsed))
+    bar.close()
+    out = {
+        "robot": robot.name,
+        "n_problems": N,
+        "seed": seed,
+        "tol": tol,
+        "tol_on": tol_on,
+        "backend": backend,
+    }
+    out["rows"] = rows
+    out["rtb"] = _time_rtb(robot, n_problems, seed, tol) if rtb else None
+    return out
+
+
+def _row(
+    robot: Any, Tep: np.ndarray, label: str, setting: str, parts: list, elapsed: float
+) -> dict[str, Any]:
+    from symkin.runtime.ik import pose_error
+
+    q = np.concatenate([p.q for p in parts])
+    success = np.concatenate([p.success for p in parts])
+    iterations = np.concatenate([p.iterations for p in parts])
+    searches = np.concatenate([p.searches for p in parts])
+    N = len(success)
+    solved = iterations[success]
+    err = np.linalg.norm(pose_error(robot.fkine(q[success]), Tep[success]), axis=-1) if success.any() else []
+    slimit, ilimit = SETTINGS[setting]
+    paper = PAPER_TABLE1.get((label, setting))
+    return {
+        "method": label,
+        "setting": setting,
+        "searches_allowed": slimit,
+        "iterations_allowed": ilimit,
+        "mean_iterations": float(solved.mean()) if solved.size else float("nan"),
+        "median_iterations": float(np.median(solved)) if solved.size else float("nan"),
+        "infeasible": int(N - success.sum()),
+        "infeasible_pct": 100.0 * float(N - success.sum()) / N,
+        "mean_searches": float(searches.mean()),
+        "max_searches": int(searches.max()),
+        "us_per_solve": 1e6 * elapsed / N,
+        "max_error": float(np.max(err)) if len(err) else float("nan"),
+        "paper": dict(zip(_PAPER_KEYS, paper, strict=True)) if paper else None,
+    }
+
+
+def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, Any] | None:
+    """roboticstoolbox-python's C++ ``ik_LM`` (Chan, lambda 0.1, 100 x 30) on the same problems."""
+    try:
+        import roboticstoolbox as rtb  # optional; not a dependency
+    except ImportError:
+        return None
+    try:
+        ets = rtb.models.UR5().ets() if robot.name == "ur5" else None
+        if ets is None:
+            return {"error": f"no RTB model for {robot.name!r}"}
+        q, _, starts = table1_problems(robot, n_problems, seed)
+        Tep = [ets.eval(x) for x in q]
+        t0 = time.perf_counter()
+        out = [ets.ik_LM(T, q0=starts, ilimit=30, slimit=100, tol=tol, k=0.1, method="chan") for T in Tep]
+        elapsed = time.perf_counter() - t0
+        success = np.array([bool(o[1]) for o in out])
+        iterations = np.array([int(o[2]) for o in out])
+        return {
+            "method": "RTB ik_LM (Chan lambda=0.1), 100 x 30",
+            "mean_iterations": float(iterations[success].mean()) if success.any() else float("nan"),
+            "infeasible": int((~success).sum()),
+            "us_per_solve": 1e6 * elapsed / len(Tep),
+        }
+    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
+        return {"error": f"{type(exc).__name__}: {exc}"}
+
+
+def format_table1(result: dict[str, Any]) -> str:
+    """A plain-text table of :func:`run_table1`'s result, the paper's figures beside ours."""
+    crit = "E" if result["tol_on"] == "E" else "|e|"
+    head = (
+        f"Table 1 (seed 000): {result['n_problems']} problems on {result['robot']}, seed {result['seed']}, "
+        f"solved when {crit} < {result['tol']:g}, backend {result['backend']}"
+    )
+    cols = ["Method", "S", "I", "Mean it", "Med it", "Infeas", "Infeas %", "Mean S", "Max S", "us/solve",
+            "max|e|", "| paper:", "Mean it", "Med it", "Infeas %", "Mean S", "Max S"]  # fmt: skip
+    lines = []
+    for r in result["rows"]:
+        p = r["paper"]
+        paper = (
+            [
+                "",
+                f"{p['mean_iterations']:.2f}",
+                f"{p['median_iterations']:.0f}",
+                f"{p['infeasible_pct']:.2f}%",
+                f"{p['mean_searches']:.2f}",
+                f"{p['max_searches']:.0f}",
+            ]  # fmt: skip
+            if p
+            else ["", "-", "-", "-", "-", "-"]
+        )
+        lines.append(
+            [
+                r["method"],
+                str(r["searches_allowed"]),
+                str(r["iterations_allowed"]),
+                f"{r['mean_iterations']:.2f}",
+                f"{r['median_iterations']:.0f}",
+                str(r["infeasible"]),
+                f"{r['infeasible_pct']:.2f}%",
+                f"{r['mean_searches']:.2f}",
+                str(r["max_searches"]),
+                f"{r['us_per_solve']:.1f}",
+                f"{r['max_error']:.1e}",
+                *paper,
+            ]  # fmt: skip
+        )
+    widths = [max(len(c), *(len(x[i]) for x in lines)) if lines else len(c) for i, c in enumerate(cols)]
+
+    def fmt(cells: list[str]) -> str:
+        return "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
+
+    out = [head, fmt(cols), "-" * len(fmt(cols))]
+    for i, x in enumerate(lines):
+        if i and result["rows"][i]["setting"] != result["rows"][i - 1]["setting"]:
+            out.append("")
+        out.append(fmt(x))
+    out.append("S, I: searches and iterations allowed; iteration statistics over solved problems.")
+    rtb = result.get("rtb")
+    if rtb:
+        if "error" in rtb:
+            out.append(f"roboticstoolbox-python ik_LM: not timed ({rtb['error']})")
+        else:
+            out.append(
+                f"{rtb['method']}: {rtb['us_per_solve']:.1f} us/solve, mean iterations "
+                f"{rtb['mean_iterations']:.2f}, infeasible {rtb['infeasible']}"
+            )
+    return "\n".join(out)

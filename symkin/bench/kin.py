@@ -1,0 +1,237 @@
+"""``symkin bench kin``: kinematics per call and batched, for each backend and call path.
+
+Per call (one configuration from Python): the C backend's extension module, the same C functions
+through ctypes (pointers and output buffers cached) and cffi (when installed), the NumPy and
+CasADi backends and the numeric reference; roboticstoolbox-python and Pinocchio when installed
+(the ``compare`` extra), all measured in the same run, with ratios. Batched: throughput on N
+random configurations on one core.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+__all__ = ["run_kin", "format_kin", "per_call_us", "pinocchio_model"]
+
+FUNCS = ("fkine", "jacob0", "hessian0")
+
+
+def per_call_us(f: Callable[[], Any], budget: float = 0.25, repeats: int = 5) -> float:
+    """Best-of-``repeats`` mean time of one call of ``f`` in microseconds."""
+    f()
+    n, t = 1, 0.0
+    while t < budget / repeats / 4:
+        n *= 4
+        t0 = time.perf_counter()
+        for _ in range(n):
+            f()
+        t = time.perf_counter() - t0
+    best = t / n
+    for _ in range(repeats - 1):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            f()
+        best = min(best, (time.perf_counter() - t0) / n)
+    return best * 1e6
+
+
+def _ctypes_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]]:
+    """The C entry points through ctypes with cached pointers and buffers (the best ctypes can do)."""
+    from symkin.emit.c.backend import c_prefix
+
+    lib = ctypes.CDLL(str(kin.path))
+    prefix = c_prefix(kin.robot)
+    n = kin.n
+    qbuf = np.ascontiguousarray(q, dtype=float)
+    sizes = {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}
+    calls = {}
+    for name, size in sizes.items():
+        out = np.empty(size)
+        fn = getattr(lib, f"{prefix}_{name}")
+        fn.restype = None
+        fn.argtypes = (ctypes.c_void_p, ctypes.c_void_p)
+        qp, op = qbuf.ctypes.data, out.ctypes.data
+
+        def call(fn: Any = fn, qp: int = qp, op: int = op, out: np.ndarray = out) -> np.ndarray:
+            fn(qp, op)
+            return out
+
+        calls[name] = call
+    return calls
+
+
+def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
+    try:
+        import cffi
+    except ImportError:
+        return None
+    from symkin.emit.c.backend import c_prefix
+
+    ffi = cffi.FFI()
+    prefix = c_prefix(kin.robot)
+    ffi.cdef("".join(f"void {prefix}_{f}(const double *q, double *out);" for f in FUNCS))
+    lib = ffi.dlopen(str(kin.path))
+    n = kin.n
+    calls = {}
+    for name, size in {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}.items():
+        fn = getattr(lib, f"{prefix}_{name}")
+
+        def call(fn: Any = fn, size: int = size) -> np.ndarray:
+            out = np.empty(size)
+            fn(ffi.from_buffer("double[]", q), ffi.from_buffer("double[]", out))
+            return out
+
+        calls[name] = call
+    return calls
+
+
+def pinocchio_model(robot: Any) -> tuple[Any, Any, int] | None:
+    """A Pinocchio model of an ETS robot (joints along +-x/y/z), its data and the end-effector frame id."""
+    try:
+        import pinocchio as pin
+    except ImportError:
+        return None
+    from symkin.model.kinematics import const_matrix
+
+    model = pin.Model()
+    parent = 0
+    M = np.eye(4)
+    for e in robot.ets:
+        if not e.is_joint:
+            M = M @ const_matrix(e.axis, e.const)
+            continue
+        axis = np.zeros(3)
+        axis[e.axis.index] = e.sign
+        if e.axis.is_rotation:
+            joint = pin.JointModelRevoluteUnaligned(axis)
+        else:
+            joint = pin.JointModelPrismaticUnaligned(axis)
+        parent = model.addJoint(parent, joint, pin.SE3(M[:3, :3], M[:3, 3]), f"j{e.joint}")
+        M = np.eye(4)
+    frame = model.addFrame(pin.Frame("ee", parent, pin.SE3(M[:3, :3], M[:3, 3]), pin.FrameType.OP_FRAME))
+    return model, model.createData(), frame
+
+
+def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], Any]]]:
+    peers: dict[str, dict[str, Callable[[], Any]]] = {}
+    pm = pinocchio_model(robot)
+    if pm is not None:
+        import pinocchio as pin
+
+        model, data, fid = pm
+        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        pin.computeJointJacobians(model, data, q)
+
+        def fk() -> Any:
+            pin.framesForwardKinematics(model, data, q)
+            return data.oMf[fid]
+
+        def jac() -> Any:
+            pin.computeJointJacobians(model, data, q)
+            return pin.getFrameJacobian(model, data, fid, lwa)
+
+        def hess() -> Any:
+            pin.computeJointKinematicHessians(model, data, q)
+            return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
+
+        peers["pinocchio"] = {"fkine": fk, "jacob0": jac, "hessian0": hess}
+    try:
+        import roboticstoolbox as rtb
+    except ImportError:
+        rtb = None
+    if rtb is not None:
+        ets = _rtb_ets(rtb, robot)
+        peers["rtb"] = {
+            "fkine": lambda: ets.eval(q),
+            "jacob0": lambda: ets.jacob0(q),
+            "hessian0": lambda: ets.hessian0(q),
+        }
+    return peers
+
+
+def _rtb_ets(rtb: Any, robot: Any) -> Any:
+    """The same ETS in roboticstoolbox-python (flipped joints included)."""
+    out = []
+    for e in robot.ets:
+        make = getattr(rtb.ET, e.axis.value)
+        out.append(make(jindex=e.joint, flip=e.flip) if e.is_joint else make(e.const.value))
+    return rtb.ETS(out)
+
+
+def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, progress: bool = True) -> dict:
+    """Measure every backend and call path; returns a JSON-able dict (see :func:`format_kin`)."""
+    import symkin
+    from symkin.model.resolve import resolve_robot
+
+    robot = resolve_robot(robot_spec)
+    q = robot.random_q(seed=seed)
+    kins = {b: symkin.compile(robot, backend=b) for b in ("c", "numpy", "casadi")}
+    paths: dict[str, dict[str, Callable[[], Any]]] = {
+        "c (extension)": {f: (lambda f=f: getattr(kins["c"], f)(q)) for f in FUNCS},
+        "c (ctypes, cached)": _ctypes_calls(kins["c"], q),
+    }
+    cffi_calls = _cffi_calls(kins["c"], q)
+    if cffi_calls:
+        paths["c (cffi)"] = cffi_calls
+    for b in ("numpy", "casadi"):
+        paths[b] = {f: (lambda f=f, b=b: getattr(kins[b], f)(q)) for f in FUNCS}
+    paths["reference"] = {f: (lambda f=f: getattr(robot, f)(q)) for f in FUNCS}
+    paths.update(_peer_calls(robot, q))
+    from tqdm import tqdm
+
+    items = [(p, f) for p in paths for f in FUNCS]
+    per_call: dict[str, dict[str, float]] = {p: {} for p in paths}
+    for p, f in tqdm(items, desc="per call", disable=not progress, leave=False):
+        per_call[p][f] = per_call_us(paths[p][f])
+    Q = robot.random_q(batch, seed=seed + 1)
+    batched: dict[str, dict[str, float]] = {}
+    for b in ("c", "numpy"):
+        batched[b] = {}
+        for f in ("fkine", "jacob0", "fkine_jacob0", "hessian0"):
+            fn = getattr(kins[b], f)
+            fn(Q[:1000])
+            best = min(_timed(fn, Q) for _ in range(3))
+            batched[b][f] = batch / best / 1e6
+    ratios = {}
+    for peer in ("pinocchio", "rtb"):
+        if peer in per_call:
+            ratios[peer] = {f: per_call[peer][f] / per_call["c (extension)"][f] for f in FUNCS}
+    return {
+        "robot": robot.name,
+        "n": robot.n,
+        "batch": batch,
+        "per_call_us": per_call,
+        "batched_M_per_s": batched,
+        "speedup_of_c_over": ratios,
+    }
+
+
+def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:
+    t = time.perf_counter()
+    fn(Q)
+    return time.perf_counter() - t
+
+
+def format_kin(r: dict) -> str:
+    lines = [f"symkin bench kin: {r['robot']} ({r['n']} joints), one configuration per call from Python", ""]
+    lines.append(f"{'path':22} " + " ".join(f"{f + ' (us)':>14}" for f in FUNCS))
+    for path, row in r["per_call_us"].items():
+        lines.append(f"{path:22} " + " ".join(f"{row[f]:14.3f}" for f in FUNCS))
+    for peer, row in r["speedup_of_c_over"].items():
+        lines.append(f"{'c speed-up vs ' + peer:22} " + " ".join(f"{row[f]:13.1f}x" for f in FUNCS))
+    if not r["speedup_of_c_over"]:
+        lines.append(
+            "(install the compare extra, pip install 'symkin[compare]', to measure RTB and Pinocchio)"
+        )
+    lines.append("")
+    lines.append(f"batched, {r['batch']} configurations, one core (million per second)")
+    fs = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
+    lines.append(f"{'backend':22} " + " ".join(f"{f:>14}" for f in fs))
+    for b, row in r["batched_M_per_s"].items():
+        lines.append(f"{b:22} " + " ".join(f"{row[f]:14.2f}" for f in fs))
+    return "\n".join(lines)

@@ -1,0 +1,385 @@
+"""The ``symkin`` command.
+
+Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
+(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file. User mistakes print one line
+``symkin: error: ...`` and exit with status 2; a failed check or an unsolved problem exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["main"]
+
+ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
+
+
+class UserError(Exception):
+    """A mistake in the command line; printed as one line."""
+
+
+def _robot(spec: str) -> Any:
+    from symkin.model.resolve import resolve_robot
+
+    return resolve_robot(spec)
+
+
+def _floats(text: str, what: str, count: int | None = None) -> np.ndarray:
+    try:
+        values = np.array([float(x) for x in text.replace(",", " ").split()])
+    except ValueError:
+        raise UserError(f"{what} must be numbers separated by spaces or commas, got {text!r}") from None
+    if count is not None and values.size != count:
+        raise UserError(f"{what} needs {count} numbers, got {values.size}")
+    if not np.isfinite(values).all():
+        raise UserError(f"{what} must be finite numbers, got {text!r}")
+    return values
+
+
+def _fmt(a: np.ndarray) -> str:
+    return np.array2string(np.asarray(a), precision=5, suppress_small=True, max_line_width=110)
+
+
+# ----------------------------------------------------------------------------------------------
+def cmd_list(args: argparse.Namespace) -> int:
+    from symkin.model.robots import list_robots, load
+
+    rows = []
+    for name in list_robots():
+        r = load(name)
+        rows.append((name, r.n, r.ets.structure, r.source.split(";")[0][:70]))
+    if args.json:
+        print(json.dumps([{"name": a, "n": b, "joints": c, "source": d} for a, b, c, d in rows], indent=2))
+        return 0
+    print(f"{'robot':10} {'n':>2}  {'joints':8} source")
+    for name, n, s, src in rows:
+        print(f"{name:10} {n:>2}  {s:8} {src}")
+    return 0
+
+
+def cmd_compile(args: argparse.Namespace) -> int:
+    from symkin.compile import compile as compile_robot
+    from symkin.compile import generate
+
+    robot = _robot(args.robot)
+    t0 = time.perf_counter()
+    command = f"symkin compile {robot.identifier} --backend {args.backend}"
+    files = generate(robot, args.backend, command)
+    t_gen = time.perf_counter() - t0
+    if args.output:
+        out = Path(args.output)
+        out.mkdir(parents=True, exist_ok=True)
+        for name, text in sorted(files.items()):
+            (out / name).write_text(text)
+        print(f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}")
+    t1 = time.perf_counter()
+    kin = compile_robot(robot, backend=args.backend)
+    t_build = time.perf_counter() - t1
+    first = next(iter(files.values())).splitlines()
+    ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
+    print(f"{robot.name}: {robot.n} joints ({robot.ets.structure}), ETS {robot.ets}")
+    print(f"backend {args.backend}: derived + generated in {t_gen:.2f} s, built/loaded in {t_build:.2f} s")
+    if ops:
+        print(f"operations after CSE: {ops}")
+    q = robot.configs.get("qr", robot.configs["qz"])
+    qname = "qr" if "qr" in robot.configs else "qz"
+    print(f"\nat {qname} = {_fmt(q)}:")
+    print(f"fkine (4x4):\n{_fmt(kin.fkine(q))}")
+    print(f"jacob0 (6x{robot.n}, rows v, omega):\n{_fmt(kin.jacob0(q))}")
+    print(f"manipulability: {float(kin.manipulability(q)):.6g}")
+    err = float(np.abs(kin.jacob0(q) - robot.jacob0(q)).max())
+    print(f"max |jacob0 - numeric reference| = {err:.2e}")
+    reps = 2000
+    t = time.perf_counter()
+    for _ in range(reps):
+        kin.jacob0(q)
+    print(f"jacob0: {(time.perf_counter() - t) / reps * 1e6:.2f} us per call from Python")
+    return 0
+
+
+def cmd_generate(args: argparse.Namespace) -> int:
+    from symkin.emit.snapshot import compare_or_update
+
+    differ = compare_or_update(args.output, update=not args.check)
+    if args.check:
+        if differ:
+            print(f"{len(differ)} generated files are out of date in {args.output}/ (run `symkin generate`):")
+            for d in differ:
+                print(f"  {d}")
+            return 1
+        print(f"{args.output}/ is up to date")
+        return 0
+    print(f"updated {len(differ)} files in {args.output}/" if differ else f"{args.output}/ was up to date")
+    return 0
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from symkin.check import check
+
+    robot = _robot(args.robot)
+    report = check(
+        robot, backends=args.backend or ("c", "numpy", "casadi"), samples=args.samples, seed=args.seed
+    )
+    print(json.dumps(report.as_dict(), indent=2) if args.json else report.format())
+    return 0 if report.ok else 1
+
+
+def cmd_derive(args: argparse.Namespace) -> int:
+    from symkin.derivation import derivation
+
+    robot = _robot(args.robot)
+    text = derivation(robot, fmt=args.format, symbolic_constants=args.symbolic_constants)
+    if args.output:
+        Path(args.output).write_text(text)
+        print(f"wrote the derivation of {robot.name} to {args.output}")
+    else:
+        print(text)
+    return 0
+
+
+def _target(args: argparse.Namespace, robot: Any) -> np.ndarray:
+    """A target pose from --pose (x y z roll pitch yaw, rad), --matrix (16 numbers) or --from-q."""
+    given = [x is not None for x in (args.pose, args.matrix, args.from_q)]
+    if sum(given) != 1:
+        raise UserError(
+            "give exactly one of --pose 'x y z roll pitch yaw', --matrix '16 numbers', --from-q 'q...'"
+        )
+    if args.from_q is not None:
+        return robot.fkine(_floats(args.from_q, "--from-q", robot.n))
+    if args.matrix is not None:
+        return _floats(args.matrix, "--matrix", 16).reshape(4, 4)
+    x, y, z, r, p, yaw = _floats(args.pose, "--pose", 6)
+    cr, sr, cp, sp_, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(yaw), np.sin(yaw)
+    T = np.eye(4)
+    T[:3, :3] = [
+        [cy * cp, cy * sp_ * sr - sy * cr, cy * sp_ * cr + sy * sr],
+        [sy * cp, sy * sp_ * sr + cy * cr, sy * sp_ * cr - cy * sr],
+        [-sp_, cp * sr, cp * cr],
+    ]
+    T[:3, 3] = [x, y, z]
+    return T
+
+
+def cmd_ik(args: argparse.Namespace) -> int:
+    from symkin.compile import compile as compile_robot
+
+    robot = _robot(args.robot)
+    Tep = _target(args, robot)
+    kin = compile_robot(robot, backend=args.backend)
+    kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
+    if args.damping:
+        kwargs["damping"] = args.damping
+    if args.q0 is not None:
+        kwargs["q0"] = _floats(args.q0, "--q0", robot.n)
+    t = time.perf_counter()
+    res = kin.ik(Tep, **kwargs)
+    dt = time.perf_counter() - t
+    if args.json:
+        print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
+    else:
+        print(f"target:\n{_fmt(Tep)}")
+        status = "solved" if res.success else f"not solved: {res.reason}"
+        print(f"{status} in {res.iterations} iterations, {res.searches} searches, {dt * 1e3:.2f} ms")
+        print(f"q = {_fmt(res.q)}")
+        print(f"residual = {res.residual:.3e}")
+    return 0 if res.success else 1
+
+
+def _result_dict(res: Any) -> dict:
+    out = {}
+    for k, v in vars(res).items():
+        out[k] = v.tolist() if isinstance(v, np.ndarray) else v
+    return out
+
+
+def cmd_servo(args: argparse.Namespace) -> int:
+    from symkin.compile import compile as compile_robot
+    from symkin.runtime.loop import servo
+
+    robot = _robot(args.robot)
+    Tep = _target(args, robot)
+    kin = compile_robot(robot, backend=args.backend)
+    q0 = _floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
+    res = servo(
+        kin,
+        q0,
+        Tep,
+        controller=args.controller,
+        dt=args.dt,
+        max_steps=args.max_steps,
+        joint_limits=args.joint_limits,
+        progress=not args.json,
+    )
+    steps = len(res.q) - 1
+    summary = {
+        "arrived": bool(res.arrived),
+        "steps": steps,
+        "final_error": float(np.abs(res.e[-1]).sum()) if len(res.e) else None,
+        "mean_manipulability": float(np.mean(res.manipulability)),
+        "q_final": res.q[-1].tolist(),
+    }
+    if args.plot:
+        _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}")
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(
+            f"{args.controller}: {'arrived' if res.arrived else 'did not arrive'} after {steps} steps "
+            f"(dt {args.dt} s); mean manipulability {summary['mean_manipulability']:.4f}"
+        )
+        print(f"q final = {_fmt(res.q[-1])}")
+        if args.plot:
+            print(f"plot written to {args.plot}")
+    return 0 if res.arrived else 1
+
+
+def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
+    t = np.arange(len(res.manipulability)) * dt
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    a1.plot(t, res.manipulability)
+    a1.set_ylabel("manipulability")
+    a1.set_title(title)
+    a2.plot(np.arange(len(res.e)) * dt, np.abs(np.asarray(res.e)).sum(axis=1))
+    a2.set_ylabel("sum |e|")
+    a2.set_xlabel("time (s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    if args.what == "kin":
+        from symkin.bench.kin import format_kin, run_kin
+
+        result = run_kin(args.robot or "panda", batch=args.batch, progress=not args.json)
+        print(json.dumps(result, indent=2) if args.json else format_kin(result))
+        return 0
+    if args.what == "ik":
+        from symkin.bench.ik import cli_ik
+
+        return cli_ik(args)
+    from symkin.bench.mmc import cli_mmc
+
+    return cli_mmc(args)
+
+
+# ----------------------------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    from symkin import __version__
+
+    p = argparse.ArgumentParser(
+        prog="symkin",
+        description="symkin: a symbolic, code-generating kinematics compiler for robot manipulators.",
+        epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command.",
+    )
+    p.add_argument("--version", action="version", version=f"symkin {__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    s = sub.add_parser("list", help="list the built-in robots")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=cmd_list)
+
+    s = sub.add_parser("compile", help="generate (and build) the kinematics code of a robot")
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    s.add_argument(
+        "--backend", choices=("c", "numpy", "casadi"), default="c", help="code to generate (default c)"
+    )
+    s.add_argument("-o", "--output", metavar="DIR", help="write the generated files into DIR")
+    s.set_defaults(func=cmd_compile)
+
+    s = sub.add_parser(
+        "generate", help="regenerate the checked-in code of the built-in robots under generated/"
+    )
+    s.add_argument("-o", "--output", default="generated", metavar="DIR", help="folder (default generated)")
+    s.add_argument("--check", action="store_true", help="only report out-of-date files (exit 1 if any)")
+    s.set_defaults(func=cmd_generate)
+
+    s = sub.add_parser(
+        "check", help="compare every backend with the numeric reference and finite differences"
+    )
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    s.add_argument("--backend", action="append", choices=("c", "numpy", "casadi"), help="only this backend")
+    s.add_argument("--samples", type=int, default=20, help="random configurations (default 20)")
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--json", action="store_true", help="print the table as JSON")
+    s.set_defaults(func=cmd_check)
+
+    s = sub.add_parser("derive", help="write the derivation of FK, Jacobian and Hessian (Markdown or LaTeX)")
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    s.add_argument("--format", choices=("markdown", "latex"), default="markdown")
+    s.add_argument("--symbolic-constants", action="store_true", help="keep link lengths as named symbols")
+    s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
+    s.set_defaults(func=cmd_derive)
+
+    def target_options(s: argparse.ArgumentParser) -> None:
+        s.add_argument("--pose", metavar="'X Y Z R P Y'", help="target position (m) and roll pitch yaw (rad)")
+        s.add_argument("--matrix", metavar="'16 NUMBERS'", help="target pose as a row-major 4x4 matrix")
+        s.add_argument("--from-q", metavar="'Q...'", help="target = forward kinematics of these joint values")
+        s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c")
+        s.add_argument("--q0", metavar="'Q...'", help="start configuration")
+        s.add_argument("--json", action="store_true", help="print JSON")
+
+    s = sub.add_parser("ik", help="solve inverse kinematics for one target pose")
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    target_options(s)
+    s.add_argument("--method", choices=("NR", "GN", "LM"), default="LM")
+    s.add_argument("--damping", choices=("wampler", "chan", "sugihara"))
+    s.add_argument("--seed", type=int, default=0)
+    s.set_defaults(func=cmd_ik)
+
+    s = sub.add_parser("servo", help="servo to a target pose with RRMC or MMC, optionally plotting")
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    target_options(s)
+    s.add_argument("--controller", choices=("mmc", "rrmc"), default="mmc")
+    s.add_argument("--dt", type=float, default=0.05)
+    s.add_argument("--max-steps", type=int, default=500)
+    s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
+    s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
+    s.set_defaults(func=cmd_servo)
+
+    s = sub.add_parser("bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I)")
+    s.add_argument("what", choices=("kin", "ik", "mmc"))
+    s.add_argument("--robot", help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc)")
+    s.add_argument("--batch", type=int, default=100_000, help="kin: batch size (default 100000)")
+    s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--plot", metavar="PNG", help="mmc: write a Fig. 3 style plot of one task")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=cmd_bench)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from symkin.errors import SymkinError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (UserError, SymkinError, ValueError, FileNotFoundError) as exc:
+        message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        print(f"symkin: error: {message}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("symkin: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,220 @@
+"""Compile C sources into a cached shared library, safely under concurrency.
+
+A cache entry is a folder ``<cache>/<name>-<key>/`` holding the sources, ``lib<name>.so`` and
+``lib<name>.so.sha256`` (the library's checksum, written after it). ``key`` is a sha256 of the
+sources, the flags and the compiler's identity (resolved path, size, mtime; the host name too
+when the flags contain ``-march=native``). An entry is built in a temporary folder inside the
+cache and moved into place with one ``rename``, so readers never see a half-written entry and the
+first of several concurrent builders wins (the others use its entry). An entry whose library no
+longer matches its checksum (truncated, overwritten) is moved aside and rebuilt.
+
+Environment: ``SYMKIN_CACHE`` (cache folder, default ``~/.cache/symkin``), ``CC`` (compiler
+command, default ``cc``, then ``gcc``, then ``clang``), ``SYMKIN_CFLAGS`` (replaces the
+optimisation flags ``-O3 -march=native``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import hashlib
+import os
+import platform
+import re
+import shlex
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Mapping, Sequence
+from functools import lru_cache
+from pathlib import Path
+
+from symkin.errors import CompileError
+
+__all__ = ["compile_library", "load_library", "cache_dir", "find_compiler", "DEFAULT_OPT_FLAGS", "BASE_FLAGS"]
+
+DEFAULT_OPT_FLAGS: tuple[str, ...] = ("-O3", "-march=native")
+# -ffp-contract=off: no fused multiply-add, so results round like NumPy's (FMA changes them at 1e-16).
+BASE_FLAGS: tuple[str, ...] = ("-std=c11", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*\.(c|h)$")
+_NO_COMPILER_HINT = "The NumPy backend works without a C compiler (backend='numpy')."
+
+
+def cache_dir() -> Path:
+    """``$SYMKIN_CACHE`` or ``~/.cache/symkin`` (created on first use)."""
+    env = os.environ.get("SYMKIN_CACHE")
+    return Path(env).expanduser() if env else Path.home() / ".cache" / "symkin"
+
+
+def find_compiler() -> list[str]:
+    """The C compiler command as an argument list: ``$CC`` or the first of cc, gcc, clang on PATH.
+
+    Raises CompileError when there is none.
+    """
+    return list(_find_compiler(os.environ.get("CC", ""), os.environ.get("PATH", "")))
+
+
+@lru_cache(maxsize=16)
+def _find_compiler(cc_env: str, path_env: str) -> tuple[str, ...]:
+    if cc_env.strip():
+        argv = shlex.split(cc_env)
+        exe = shutil.which(argv[0], path=path_env)
+        if exe is None:
+            raise CompileError(
+                f"the C compiler CC={cc_env!r} was not found. Install gcc or clang, or point CC at one. "
+                + _NO_COMPILER_HINT
+            )
+        return (exe, *argv[1:])
+    for name in ("cc", "gcc", "clang"):
+        exe = shutil.which(name, path=path_env)
+        if exe:
+            return (exe,)
+    raise CompileError(
+        "no C compiler found (looked for cc, gcc, clang on PATH; set CC). " + _NO_COMPILER_HINT
+    )
+
+
+def _compiler_identity(argv: Sequence[str]) -> str:
+    real = os.path.realpath(argv[0])
+    try:
+        st = os.stat(real)
+    except OSError as exc:
+        raise CompileError(f"cannot use the C compiler {argv[0]}: {exc}. " + _NO_COMPILER_HINT) from None
+    return f"{real}:{st.st_size}:{st.st_mtime_ns}:{' '.join(argv[1:])}"
+
+
+def _flags(extra_cflags: Sequence[str]) -> list[str]:
+    env = os.environ.get("SYMKIN_CFLAGS")
+    opt = shlex.split(env) if env is not None else list(DEFAULT_OPT_FLAGS)
+    return [*BASE_FLAGS, *opt, *extra_cflags]
+
+
+def _check_inputs(sources: Mapping[str, str], name: str) -> None:
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise CompileError(f"library name {name!r} must be an identifier (letters, digits, underscores)")
+    if not sources:
+        raise CompileError("no sources to compile")
+    for fname, text in sources.items():
+        if not isinstance(fname, str) or not _FILE.match(fname) or ".." in fname:
+            raise CompileError(f"source file name {fname!r} must be a plain name ending in .c or .h")
+        if not isinstance(text, str):
+            raise CompileError(f"source {fname!r} must be text, not {type(text).__name__}")
+    if not any(f.endswith(".c") for f in sources):
+        raise CompileError(f"no .c file among the sources {sorted(sources)}")
+
+
+def _key(sources: Mapping[str, str], flags: Sequence[str], compiler: Sequence[str]) -> str:
+    h = hashlib.sha256()
+    for fname in sorted(sources):
+        data = sources[fname].encode()
+        h.update(f"{fname}\0{len(data)}\0".encode())
+        h.update(data)
+    h.update(("\0".join(flags) + "\0" + _compiler_identity(compiler)).encode())
+    if any("native" in f for f in flags):
+        h.update(f"\0{platform.node()}:{platform.machine()}".encode())
+    return h.hexdigest()
+
+
+def _sha256_file(path: Path) -> str:
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def _valid(entry: Path, lib: str) -> bool:
+    """True when the entry's library matches the checksum written after it."""
+    try:
+        expected = (entry / (lib + ".sha256")).read_text().strip()
+        return bool(expected) and _sha256_file(entry / lib) == expected
+    except OSError:
+        return False
+
+
+def _build(
+    tmp: Path, sources: Mapping[str, str], lib: str, flags: Sequence[str], compiler: Sequence[str]
+) -> None:
+    for fname, text in sources.items():
+        (tmp / fname).write_text(text)
+    cfiles = sorted(f for f in sources if f.endswith(".c"))
+    cmd = [*compiler, *flags, "-o", lib, *cfiles, "-lm"]
+    try:
+        proc = subprocess.run(cmd, cwd=tmp, capture_output=True, text=True, timeout=600)
+    except FileNotFoundError:
+        raise CompileError(f"the C compiler {compiler[0]} could not be run. " + _NO_COMPILER_HINT) from None
+    except subprocess.TimeoutExpired:
+        raise CompileError(f"compiling {', '.join(cfiles)} took more than 600 s") from None
+    if proc.returncode != 0 or not (tmp / lib).is_file():
+        lines = (proc.stderr or proc.stdout or "").strip().splitlines()
+        shown = "\n".join(lines[:25]) + (f"\n... ({len(lines) - 25} more lines)" if len(lines) > 25 else "")
+        raise CompileError(
+            f"the C compiler failed (exit {proc.returncode}) on {', '.join(cfiles)}:\n"
+            f"  {shlex.join(cmd)}\n{shown}"
+        )
+    checksum = tmp / (lib + ".sha256")
+    checksum.write_text(_sha256_file(tmp / lib) + "\n")
+
+
+def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequence[str] = ()) -> Path:
+    """Compile ``sources`` (file name -> text, ``.c`` and ``.h``) into a cached shared library.
+
+    Returns the path of ``lib<name>.so`` inside its cache entry. A cached, intact entry is
+    returned without compiling (about 0.1 ms). Raises CompileError when no compiler is found or
+    compilation fails (with the first lines of the compiler's output).
+    """
+    _check_inputs(sources, name)
+    compiler = find_compiler()
+    flags = _flags(extra_cflags)
+    key = _key(sources, flags, compiler)
+    root = cache_dir()
+    entry = root / f"{name}-{key[:24]}"
+    lib = f"lib{name}.so"
+    if _valid(entry, lib):
+        return entry / lib
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".tmp-{name}-", dir=root))
+    except OSError as exc:
+        raise CompileError(f"cannot write to the symkin cache {root} ({exc}); set SYMKIN_CACHE") from None
+    try:
+        _build(tmp, sources, lib, flags, compiler)
+        for _ in range(5):
+            try:
+                os.rename(tmp, entry)  # atomic; fails when another process placed the entry first
+                return entry / lib
+            except OSError:
+                if _valid(entry, lib):
+                    return entry / lib
+                _discard(entry, root)  # corrupt or half-removed entry: move it aside, then retry
+        raise CompileError(f"could not place the cache entry {entry} (another process keeps replacing it)")
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _discard(entry: Path, root: Path) -> None:
+    """Move a bad entry out of the way atomically (a no-op when someone else already did)."""
+    trash = Path(tempfile.mkdtemp(prefix=".trash-", dir=root))
+    with contextlib.suppress(OSError):
+        os.rename(entry, trash / "entry")
+    shutil.rmtree(trash, ignore_errors=True)
+
+
+_LOADED: dict[tuple[str, int, int], ctypes.CDLL] = {}
+
+
+def load_library(path: str | os.PathLike[str]) -> ctypes.CDLL:
+    """``ctypes.CDLL`` of a shared library, memoised per file (path, inode, mtime)."""
+    p = os.fspath(path)
+    try:
+        st = os.stat(p)
+    except OSError as exc:
+        raise CompileError(f"cannot load {p}: {exc}") from None
+    k = (p, st.st_ino, st.st_mtime_ns)
+    lib = _LOADED.get(k)
+    if lib is None:
+        try:
+            lib = ctypes.CDLL(p)
+        except OSError as exc:
+            raise CompileError(f"cannot load the compiled library {p}: {exc}") from None
+        _LOADED[k] = lib
+    return lib

@@ -1,0 +1,341 @@
+"""Numerical IK in C (``csrc/symkin_ik.c``) through ctypes: the loop of :mod:`symkin.runtime.ik`.
+
+One :class:`CIKSolver` holds a robot's kinematics and one set of options, with its C config,
+buffers and pointers built once, so a single solve from Python costs about a microsecond on top
+of the C work; a batch of targets is one C call. Kinematics come from either
+
+- the table-driven ETS interpreter in C (any object with ``n``, ``qlim`` and ``ets`` or
+  ``robot.ets``, such as a :class:`symkin.Robot`), or
+- a C function ``void fkjac(const double *q, double *T, double *J)`` (``symkin_fkjac_fn``: T
+  row-major 4x4, J row-major (6, n) base frame, rows (v, omega)) passed as ``fkjac=`` (a ctypes
+  function, or its address) or found as ``kin.c_fkjac``. Whoever passes it keeps its library
+  loaded.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import random
+import weakref
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import ConfigurationError, PoseError
+from symkin.runtime.ik import IKOptions, IKResult, check_pose, ets_of, failure_reason
+
+__all__ = ["CIKSolver", "ik_sources", "ik_library", "solver_for", "ets_table"]
+
+CSRC = Path(__file__).resolve().parent / "csrc"
+_P = ctypes.c_void_p
+_I32, _I64, _U64, _D = ctypes.c_int32, ctypes.c_int64, ctypes.c_uint64, ctypes.c_double
+FKJAC = ctypes.CFUNCTYPE(None, _P, _P, _P)  # symkin_fkjac_fn
+_METHOD = {"NR": 0, "GN": 1, "LM": 2}
+_DAMPING = {"wampler": 0, "chan": 1, "sugihara": 2}
+_AXES = ("tx", "ty", "tz", "Rx", "Ry", "Rz")
+
+
+class _Config(ctypes.Structure):
+    _fields_ = [
+        *(
+            (f, _I32)
+            for f in ("n", "method", "damping", "pinv", "ilimit", "slimit", "tol_on_E", "joint_limits")
+        ),
+        ("nstarts", _I32),
+        ("pad_", _I32),
+        ("tol", _D),
+        ("we", _D * 6),
+        *((f, _P) for f in ("lam", "qlo", "qhi", "slo", "shi", "revolute", "starts", "fkjac", "ets")),
+    ]
+
+
+class _Stats(ctypes.Structure):
+    _fields_ = [("residual", _D), *((f, _I32) for f in ("success", "iterations", "searches", "limit_rejects",
+                                                        "singular", "status"))]  # fmt: skip
+
+
+STATS_DTYPE = np.dtype(
+    [
+        ("residual", "f8"),
+        *((f, "i4") for f in ("success", "iterations", "searches", "limit_rejects", "singular", "status")),
+    ]  # fmt: skip
+)
+
+
+class _ET(ctypes.Structure):
+    _fields_ = [("axis", _I32), ("joint", _I32), ("sign", _D), ("c", _D), ("s", _D), ("d", _D)]
+
+
+class _ETS(ctypes.Structure):
+    _fields_ = [("n", _I32), ("len", _I32), ("et", _P)]
+
+
+def ik_sources() -> dict[str, str]:
+    """The C solver's sources (file name -> text): ``symkin_ik.h``, ``symkin_ik.c``, ``symkin_ets.c``.
+
+    Compile them together with generated kinematics to get one library exporting both.
+    """
+    return {name: (CSRC / name).read_text() for name in ("symkin_ik.h", "symkin_ik.c", "symkin_ets.c")}
+
+
+def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
+    """Set the argument types of the ``symkin_ik_*`` functions of ``lib`` (and check the layout)."""
+    sig = {
+        "symkin_ik_nmax": (_I32, []),
+        "symkin_ik_stats_size": (_I32, []),
+        "symkin_ik_config_size": (_I32, []),
+        "symkin_ik_check_pose": (_I32, [_P, _P]),
+        "symkin_ik_pose_error": (None, [_P, _P, _P]),
+        "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
+        "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+        "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
+        "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
+        "symkin_ets_fkjac": (None, [_P, _P, _P, _P]),
+    }
+    for name, (res, args) in sig.items():
+        fn = getattr(lib, name)
+        fn.restype, fn.argtypes = res, args
+    if lib.symkin_ik_stats_size() != ctypes.sizeof(_Stats) or lib.symkin_ik_config_size() != ctypes.sizeof(
+        _Config
+    ):
+        raise RuntimeError("symkin_ik struct layout differs between C and Python")
+    return lib
+
+
+@lru_cache(maxsize=1)
+def ik_library() -> ctypes.CDLL:
+    """The compiled C solver with the table-driven ETS kinematics (cached; see symkin.emit.c.build)."""
+    from symkin.emit.c.build import compile_library, load_library
+
+    return bind(load_library(compile_library(ik_sources(), "symkin_ik")))
+
+
+def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
+    """The ``symkin_et`` table of an ETS; constants of k*pi/2 rotations are exact (0, +-1)."""
+    from symkin.model.kinematics import _ROT_SLICES, const_matrix
+
+    rows = []
+    for e in ets:
+        code = _AXES.index(e.axis.value)
+        if e.is_joint:
+            rows.append((code, int(e.joint), float(e.sign), 1.0, 0.0, 0.0))
+        elif e.axis.is_rotation:
+            M = const_matrix(e.axis, e.const)
+            j, k = _ROT_SLICES[e.axis.index]
+            rows.append((code, -1, 1.0, float(M[j, j]), float(M[k, j]), 0.0))
+        else:
+            rows.append((code, -1, 1.0, 1.0, 0.0, float(e.const.value)))
+    table = (_ET * max(len(rows), 1))(*(_ET(*r) for r in rows))
+    return table, _ETS(int(ets.n), len(rows), ctypes.addressof(table))
+
+
+def _addr(a: np.ndarray) -> int:
+    return a.ctypes.data
+
+
+class CIKSolver:
+    """The C solver for one kinematics and one set of options (see :func:`symkin.runtime.ik.ik`).
+
+    Args:
+        kin: ``n``, ``qlim`` and either ``ets`` (table-driven kinematics) or ``c_fkjac``.
+        options: an :class:`IKOptions`, or keyword options of :func:`ik` (method, damping, lam...).
+        fkjac: a ``symkin_fkjac_fn`` (ctypes function or address) overriding ``kin``'s kinematics.
+        lib: a library exporting the ``symkin_ik_*`` functions (default: :func:`ik_library`).
+    """
+
+    def __init__(
+        self,
+        kin: Any,
+        options: IKOptions | None = None,
+        *,
+        fkjac: Any = None,
+        lib: ctypes.CDLL | None = None,
+        **kwargs: Any,
+    ) -> None:
+        opt = options if options is not None else IKOptions.of(kin, **kwargs)
+        if options is not None and kwargs:
+            raise TypeError("pass either options or keyword options, not both")
+        self.lib = bind(lib) if lib is not None else ik_library()
+        nmax = self.lib.symkin_ik_nmax()
+        if opt.n > nmax or opt.n < 1:
+            raise ConfigurationError(
+                f"the C IK solver handles 1..{nmax} joints, not {opt.n}; use backend='numpy'"
+            )
+        self.options, self.n, self.kin = opt, opt.n, kin
+        if fkjac is None:
+            fkjac = getattr(kin, "c_fkjac", None)
+        self._fkjac_ref = fkjac
+        self._fkjac_addr = (
+            0 if fkjac is None else (fkjac if isinstance(fkjac, int) else ctypes.cast(fkjac, _P).value)
+        )
+        self._table = self._ets = None
+        if not self._fkjac_addr:
+            ets = ets_of(kin)
+            if ets is None:
+                raise TypeError("CIKSolver needs kinematics: kin.ets (a Robot), kin.c_fkjac or fkjac=")
+            self._table, self._ets = ets_table(ets)
+        self._keep = {
+            "lam": np.ascontiguousarray(opt.lam, dtype=float),
+            "qlo": np.ascontiguousarray(opt.qlim[0], dtype=float),
+            "qhi": np.ascontiguousarray(opt.qlim[1], dtype=float),
+            "slo": np.ascontiguousarray(opt.sample[0], dtype=float),
+            "shi": np.ascontiguousarray(opt.sample[1], dtype=float),
+            "revolute": np.ascontiguousarray(opt.revolute, dtype=np.int32),
+            "starts": np.ascontiguousarray(opt.starts, dtype=float),
+        }
+        cfg = _Config()
+        cfg.n, cfg.method, cfg.damping = opt.n, _METHOD[opt.method], _DAMPING[opt.damping]
+        cfg.pinv, cfg.ilimit, cfg.slimit = int(opt.pinv), opt.ilimit, opt.slimit
+        cfg.tol_on_E, cfg.joint_limits, cfg.tol = int(opt.tol_on == "E"), int(opt.joint_limits), opt.tol
+        cfg.nstarts = len(opt.starts)
+        cfg.we[:] = [float(w) for w in opt.we]
+        for name, arr in self._keep.items():
+            setattr(cfg, name, _addr(arr) if arr.size else None)
+        cfg.fkjac = self._fkjac_addr or None
+        cfg.ets = ctypes.addressof(self._ets) if self._ets is not None else None
+        self._cfg = cfg
+        self._cfg_addr = ctypes.addressof(cfg)
+        # single-solve buffers and their addresses
+        self._T, self._q0, self._q = np.zeros((4, 4)), np.zeros(opt.n), np.zeros(opt.n)
+        self._shape = (opt.n,)
+        self._st = _Stats()
+        self._T_addr, self._q0_addr, self._q_addr = _addr(self._T), _addr(self._q0), _addr(self._q)
+        self._st_addr = ctypes.addressof(self._st)
+        self._solve = self.lib.symkin_ik_solve
+        self._seeds = random.Random(os.urandom(16))
+
+    def __repr__(self) -> str:
+        o = self.options
+        kin = "fkjac" if self._fkjac_addr else "ets table"
+        return f"CIKSolver(n={o.n}, method={o.method}, damping={o.damping}, lam={o.lam[0]:g}, kin={kin})"
+
+    # -- solving --------------------------------------------------------------------------
+    def solve(self, Tep: Any, q0: Any = None, seed: int | None = None) -> IKResult:
+        """Solve one target (4, 4) or a batch (N, 4, 4); same arguments and result as :func:`ik`."""
+        seed = self._seeds.getrandbits(64) if seed is None else int(seed) & 0xFFFFFFFFFFFFFFFF
+        try:
+            T = np.asarray(Tep, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise PoseError(f"a target pose must be a 4x4 array: {exc}") from None
+        if T.shape != (4, 4):
+            return self._solve_batch(T, q0, seed)
+        self._T[...] = T
+        q0_addr = None
+        if q0 is not None:
+            self._q0[...] = q0 if getattr(q0, "shape", None) == self._shape else self._check_q0(q0)
+            q0_addr = self._q0_addr
+        if self._solve(self._cfg_addr, self._T_addr, q0_addr, seed, self._q_addr, self._st_addr):
+            if self._st.status == 5:
+                raise ConfigurationError("q0 contains NaN or inf")
+            check_pose(T)  # raises the detailed PoseError
+            raise PoseError(f"invalid target pose (code {self._st.status})")
+        st = self._st
+        if st.success:
+            return IKResult(self._q.copy(), True, st.iterations, st.searches, st.residual, "success")
+        o = self.options
+        reason = failure_reason(False, st.residual, st.limit_rejects, st.singular, o.ilimit, o.slimit)
+        return IKResult(self._q.copy(), False, st.iterations, st.searches, st.residual, reason)
+
+    def _check_q0(self, q0: Any) -> np.ndarray:
+        try:
+            q = np.asarray(q0, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ConfigurationError(f"q0 must be an array of {self.n} numbers: {exc}") from None
+        if q.shape != (self.n,) or not np.isfinite(q).all():
+            raise ConfigurationError(f"q0 must be {self.n} finite numbers, got shape {q.shape}")
+        return q
+
+    def _solve_batch(self, T: np.ndarray, q0: Any, seed: int) -> IKResult:
+        if T.ndim != 3 or T.shape[1:] != (4, 4):
+            raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
+        T = np.ascontiguousarray(T, dtype=float)
+        N, n = len(T), self.n
+        stride, Q0 = 0, None
+        if q0 is not None:
+            Q0 = np.ascontiguousarray(np.asarray(q0, dtype=float))
+            if Q0.shape == (N, n) and (N != 1 or Q0.ndim == 2):
+                stride = n
+            elif Q0.shape != (n,):
+                raise ConfigurationError(f"q0 must have shape ({n},) or ({N}, {n}), got {Q0.shape}")
+            if not np.isfinite(Q0).all():
+                raise ConfigurationError("q0 contains NaN or inf")
+        q = np.empty((N, n))
+        st = np.zeros(N, dtype=STATS_DTYPE)
+        bad = self.lib.symkin_ik_solve_batch(
+            self._cfg_addr, N, _addr(T), None if Q0 is None else _addr(Q0), stride, seed, _addr(q), _addr(st)
+        )
+        if bad >= 0:
+            check_pose(T)
+            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        o = self.options
+        success = st["success"].astype(bool)
+        reason = tuple(
+            failure_reason(bool(s), float(r), int(lr), int(sg), o.ilimit, o.slimit)
+            for s, r, lr, sg in zip(success, st["residual"], st["limit_rejects"], st["singular"], strict=True)
+        )
+        return IKResult(
+            q, success, st["iterations"].copy(), st["searches"].copy(), st["residual"].copy(), reason
+        )
+
+    # -- inspection -----------------------------------------------------------------------
+    def trace(self, Tep: Any, q0: Any, steps: int) -> np.ndarray:
+        """Iterates q_0 .. q_steps of one search from q0 (like :func:`symkin.runtime.ik.ik_trace`)."""
+        T, single = check_pose(Tep)
+        if not single:
+            raise PoseError("trace takes one target pose (4, 4)")
+        T = np.ascontiguousarray(T[0])
+        q0 = np.ascontiguousarray(self._check_q0(q0))
+        out = np.zeros((int(steps) + 1, self.n))
+        k = self.lib.symkin_ik_trace(self._cfg_addr, _addr(T), _addr(q0), int(steps), _addr(out))
+        return out[:k]
+
+    def fkine_jacob0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The C kinematics the solver uses: T (4, 4) and J0 (6, n) at q (n,)."""
+        q = np.ascontiguousarray(self._check_q0(q))
+        T, J = np.zeros((4, 4)), np.zeros((6, self.n))
+        if self._fkjac_addr:
+            FKJAC(self._fkjac_addr)(_addr(q), _addr(T), _addr(J))
+        else:
+            self.lib.symkin_ets_fkjac(ctypes.addressof(self._ets), _addr(q), _addr(T), _addr(J))
+        return T, J
+
+    def pose_error(self, Te: Any, Tep: Any) -> np.ndarray:
+        """e of eq 37 computed by the C code, (6,)."""
+        a, b = (np.ascontiguousarray(np.asarray(x, dtype=float).reshape(4, 4)) for x in (Te, Tep))
+        e = np.zeros(6)
+        self.lib.symkin_ik_pose_error(_addr(a), _addr(b), _addr(e))
+        return e
+
+    def random_q(self, seed: int, count: int, stream: int = 0) -> np.ndarray:
+        """The first ``count`` random restarts of the stream (seed, stream), (count, n)."""
+        out = np.zeros((int(count), self.n))
+        self.lib.symkin_ik_random_q(self._cfg_addr, int(seed) & 0xFFFFFFFFFFFFFFFF, int(stream), int(count),
+                                    _addr(out))  # fmt: skip
+        return out
+
+
+_SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _options_key(opt: IKOptions) -> tuple:
+    arrays = (opt.lam, opt.we, opt.qlim, opt.starts)
+    return (opt.method, opt.damping, opt.pinv, opt.ilimit, opt.slimit, opt.tol, opt.tol_on, opt.joint_limits,
+            *(a.tobytes() for a in arrays), opt.starts.shape)  # fmt: skip
+
+
+def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
+    """A :class:`CIKSolver` for ``kin`` and ``opt``, memoised per kinematics object and options."""
+    try:
+        cache = _SOLVERS.setdefault(kin, {})
+    except TypeError:  # not weak-referenceable
+        return CIKSolver(kin, opt)
+    key = _options_key(opt)
+    solver = cache.get(key)
+    if solver is None:
+        if len(cache) > 64:
+            cache.clear()
+        solver = cache[key] = CIKSolver(kin, opt)
+    return solver

@@ -1,0 +1,411 @@
+"""Numerical IK (NumPy and C solvers) and the C build cache they compile through."""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symkin import Robot
+from symkin.emit.c.build import compile_library, load_library
+from symkin.errors import CompileError, ConfigurationError, PoseError
+from symkin.runtime.ik import SplitMix64, angle_axis, ik, ik_trace, pose_error
+from symkin.runtime.ik_c import CIKSolver
+from tests.conftest import assert_close
+
+PI = math.pi
+UR5 = Robot.from_ets(
+    "Rz(q0) tz(0.089159) Rx(pi/2) Rz(q1) tx(-0.425) Rz(q2) tx(-0.39225) Rz(q3) tz(0.10915) Rx(pi/2) "
+    "Rz(q4) tz(0.09465) Rx(-pi/2) Rz(q5) tz(0.0823)",
+    qlim=[[-2 * PI] * 6, [2 * PI] * 6],
+    name="ur5",
+)
+PANDA = Robot.from_ets(
+    "tz(0.333) Rz(q0) Ry(q1) tz(0.316) Rz(q2) tx(0.0825) Ry(-q3) tx(-0.0825) tz(0.384) Rz(q4) "
+    "Ry(-q5) tx(0.088) Rx(pi) tz(0.107) Rz(q6) tz(0.1034) Rz(-pi/4)",
+    qlim=[
+        [-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973],
+        [2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973],
+    ],
+    name="panda",
+)
+STANFORD = Robot.from_ets(  # joint 2 prismatic, joint 4 flipped
+    "tz(0.412) Rz(q0) Rx(-pi/2) tz(0.154) Rz(q1) Rx(pi/2) tx(0.0203) tz(q2) Rz(q3) Rx(-pi/2) Rz(-q4) "
+    "Rx(pi/2) Rz(q5) tz(0.263)",
+    qlim=[[-3.0, -3.0, 0.3, -3.0, -1.6, -3.0], [3.0, 3.0, 1.27, 3.0, 1.6, 3.0]],
+    name="stanford",
+)
+ROBOTS = {"ur5": UR5, "panda": PANDA, "stanford": STANFORD}
+METHODS = {  # name: options
+    "NR": {"method": "NR"},
+    "NR-pinv": {"method": "NR", "pinv": True},
+    "GN": {"method": "GN"},
+    "GN-pinv": {"method": "GN", "pinv": True},
+    "LM-wampler": {"method": "LM", "damping": "wampler", "lam": 1e-6},
+    "LM-chan": {"method": "LM", "damping": "chan", "lam": 0.1},
+    "LM-sugihara": {"method": "LM", "damping": "sugihara", "lam": 1e-6},
+}
+
+
+def _square_only(robot: Robot, options: dict) -> bool:
+    """NR and GN without pinv need a nonsingular square system: 6 joints."""
+    return robot.n != 6 and options["method"] in ("NR", "GN") and not options.get("pinv")
+
+
+def _assert_solved(robot: Robot, result, Tep: np.ndarray, tol: float = 1e-6) -> None:
+    assert result.success, result.reason
+    assert result.reason == "success"
+    e = pose_error(robot.fkine(result.q), Tep)
+    assert np.linalg.norm(e) < tol, f"|e| = {np.linalg.norm(e):.3g}"
+    assert robot.within_limits(result.q)
+
+
+# -- solving ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("name", ROBOTS)
+def test_c_solver_solves_reachable_targets_within_limits(name, method):
+    robot, options = ROBOTS[name], METHODS[method]
+    if _square_only(robot, options):
+        pytest.skip("needs 6 joints")
+    Q = robot.random_q(20, seed=1)
+    Tep = robot.fkine(Q)
+    res = ik(robot, Tep, backend="c", seed=2, **options)
+    assert res.q.shape == (20, robot.n) and res.success.shape == (20,)
+    for i in range(20):
+        _assert_solved(robot, res[i], Tep[i])
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("name", ROBOTS)
+def test_numpy_solver_solves_reachable_targets_within_limits(name, method):
+    robot, options = ROBOTS[name], METHODS[method]
+    if _square_only(robot, options):
+        pytest.skip("needs 6 joints")
+    for seed in range(2):
+        Tep = robot.fkine(robot.random_q(seed=10 + seed))
+        _assert_solved(robot, ik(robot, Tep, seed=seed, **options), Tep)
+
+
+def test_default_tolerance_bounds_the_error_norm_and_paper_criterion_bounds_E():
+    Tep = UR5.fkine(UR5.random_q(50, seed=3))
+    res = ik(UR5, Tep, backend="c", seed=0)
+    assert res.success.all() and (res.residual < 1e-6).all()
+    errs = np.linalg.norm(pose_error(UR5.fkine(res.q), Tep), axis=-1)
+    np.testing.assert_allclose(errs, res.residual, rtol=1e-6, atol=1e-12)
+    paper = ik(UR5, Tep, backend="c", seed=0, tol=1e-6, tol_on="E")
+    assert paper.success.all() and (0.5 * paper.residual**2 < 1e-6).all()
+
+
+def test_unreachable_target_fails_with_a_reason_on_both_backends():
+    Tep = np.eye(4)
+    Tep[:3, 3] = [5.0, 0.0, 0.0]  # 5 m away: the UR5 reaches about 1 m
+    for backend in ("numpy", "c"):
+        res = ik(UR5, Tep, backend=backend, slimit=3, ilimit=20, seed=0)
+        assert not res.success
+        assert "no solution within 3 search(es) x 20 iterations" in res.reason
+        assert res.iterations == 60 and res.searches == 3
+        assert np.isfinite(res.q).all() and res.residual > 3.0
+
+
+def test_solution_outside_joint_limits_is_rejected():
+    robot = Robot.from_ets("Rz(q0) tx(1)", qlim=[[0.0], [0.5]], name="arm1")
+    Tep = robot.fkine(np.array([1.0]))  # only q = 1 + 2 pi k reach it, all outside [0, 0.5]
+    for backend in ("numpy", "c"):
+        res = ik(robot, Tep, backend=backend, slimit=4, seed=1)
+        assert not res.success
+        assert "rejected for joint limits" in res.reason
+        free = ik(robot, Tep, backend=backend, slimit=4, seed=1, joint_limits=False)
+        assert free.success and abs(math.remainder(free.q[0] - 1.0, 2 * PI)) < 1e-6
+
+
+def test_revolute_solution_is_wrapped_into_the_limits():
+    robot = Robot.from_ets("Rz(q0) tx(1) Rz(q1) tx(1)", qlim=[[-PI, -PI], [PI, PI]], name="planar")
+    q_true = np.array([3.0, -2.5])
+    Tep = robot.fkine(q_true)
+    for backend in ("numpy", "c"):
+        res = ik(robot, Tep, backend=backend, q0=q_true + [2 * PI, -2 * PI], slimit=1, seed=0)
+        assert res.success and res.iterations == 1
+        np.testing.assert_allclose(res.q, q_true, atol=1e-12)
+
+
+def test_searches_start_from_q0_then_starts_then_random():
+    q_true = UR5.random_q(seed=4)
+    Tep = UR5.fkine(q_true)
+    far = q_true + 2.0
+    for backend in ("numpy", "c"):
+        res = ik(UR5, Tep, backend=backend, ilimit=1, slimit=3, starts=[far, far, q_true], seed=0)
+        assert res.success and res.searches == 3 and res.iterations == 3
+        res = ik(UR5, Tep, backend=backend, ilimit=1, slimit=2, q0=q_true, starts=[far], seed=0)
+        assert res.success and res.searches == 1
+
+
+def test_batch_results_and_per_target_q0():
+    Q = PANDA.random_q(4, seed=5)
+    Tep = PANDA.fkine(Q)
+    for backend in ("numpy", "c"):
+        res = ik(PANDA, Tep, backend=backend, q0=Q, seed=0)
+        assert res.success.all() and (res.iterations == 1).all() and len(res) == 4
+        assert isinstance(res.reason, tuple) and res[2].reason == "success"
+        np.testing.assert_allclose(res.q, Q, atol=1e-12)
+    with pytest.raises(TypeError):
+        len(ik(PANDA, Tep[0], q0=Q[0]))
+
+
+def test_same_seed_reproduces_results():
+    Tep = PANDA.fkine(PANDA.random_q(5, seed=6))
+    a = ik(PANDA, Tep, backend="c", seed=11)
+    b = ik(PANDA, Tep, backend="c", seed=11)
+    np.testing.assert_array_equal(a.q, b.q)
+    np.testing.assert_array_equal(a.iterations, b.iterations)
+
+
+# -- C against NumPy --------------------------------------------------------------------------
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("name", ROBOTS)
+def test_c_and_numpy_take_the_same_iterates(name, method):
+    robot, options = ROBOTS[name], METHODS[method]
+    if _square_only(robot, options):
+        pytest.skip("needs 6 joints")
+    solver = CIKSolver(robot, **options)
+    rng = np.random.default_rng(0)
+    for seed in range(3):
+        q_true = robot.random_q(seed=100 + seed)
+        Tep = robot.fkine(q_true)
+        near = q_true + rng.uniform(-0.2, 0.2, robot.n)  # converging: every iterate agrees
+        qs_py, qs_c = ik_trace(robot, Tep, near, 5, **options), solver.trace(Tep, near, 5)
+        # compare up to the first iterate with |e| < 1e-4: closer in, a redundant arm's null-space
+        # step is rounding noise amplified by the nearly singular J^T J + lam E I (Chan, E -> 0)
+        res = [np.linalg.norm(pose_error(robot.fkine(q), Tep)) for q in qs_py]
+        k = next((i for i, r in enumerate(res) if r < 1e-4), len(res) - 1) + 1
+        assert k >= 3 and len(qs_c) >= k
+        assert_close(qs_c[:k], qs_py[:k], 1e-9, "iterates from a nearby start")
+        # from a random start the first step agrees where J is well conditioned (later steps of
+        # NR/GN can be huge and chaotic, amplifying rounding differences)
+        far = robot.random_q(seed=200 + seed)
+        if np.linalg.cond(robot.jacob0(far)) < 1e3:
+            qs_py, qs_c = ik_trace(robot, Tep, far, 1, **options), solver.trace(Tep, far, 1)
+            assert_close(qs_c, qs_py, 1e-9, "first step from a random start")
+
+
+def test_c_and_numpy_give_the_same_solutions_and_restarts():
+    Tep = UR5.fkine(UR5.random_q(6, seed=7))
+    a = ik(UR5, Tep, backend="numpy", seed=3, slimit=20)
+    b = ik(UR5, Tep, backend="c", seed=3, slimit=20)
+    np.testing.assert_array_equal(a.iterations, b.iterations)
+    np.testing.assert_array_equal(a.searches, b.searches)
+    np.testing.assert_allclose(a.q, b.q, atol=1e-9)
+    solver = CIKSolver(UR5)
+    rng = SplitMix64(3, stream=4)
+    expected = np.array([rng.random_q(solver.options.sample) for _ in range(5)])
+    np.testing.assert_array_equal(solver.random_q(3, 5, stream=4), expected)
+
+
+class _DuckKinematics:
+    """Only what ik() needs: n, qlim, fkine, jacob0; optionally ``revolute`` (no ets)."""
+
+    def __init__(self, robot: Robot, revolute: bool = False) -> None:
+        self.n, self.qlim, self.fkine, self.jacob0 = robot.n, robot.qlim, robot.fkine, robot.jacob0
+        if revolute:  # which joints wrap by 2 pi
+            self.revolute = [e.is_revolute for e in robot.ets.joints]
+
+
+def test_any_object_with_n_qlim_fkine_jacob0_works():
+    Tep = UR5.fkine(UR5.random_q(seed=9))
+    res = ik(_DuckKinematics(UR5), Tep, seed=0)
+    _assert_solved(UR5, res, Tep)
+
+
+def test_c_solver_takes_a_kinematics_function_pointer():
+    import ctypes
+
+    from symkin.runtime.ik_c import FKJAC
+
+    n = UR5.n
+    dbl = ctypes.POINTER(ctypes.c_double)
+
+    def fkjac(q_ptr, T_ptr, J_ptr):  # symkin_fkjac_fn through the numeric reference
+        q = np.ctypeslib.as_array(ctypes.cast(q_ptr, dbl), (n,)).copy()
+        np.ctypeslib.as_array(ctypes.cast(T_ptr, dbl), (4, 4))[:] = UR5.fkine(q)
+        np.ctypeslib.as_array(ctypes.cast(J_ptr, dbl), (6, n))[:] = UR5.jacob0(q)
+
+    callback = FKJAC(fkjac)
+    by_pointer = CIKSolver(_DuckKinematics(UR5, revolute=True), fkjac=callback)
+    by_table = CIKSolver(UR5)
+    Tep = UR5.fkine(UR5.random_q(3, seed=10))
+    a, b = by_pointer.solve(Tep, seed=1), by_table.solve(Tep, seed=1)
+    assert a.success.all()
+    np.testing.assert_array_equal(a.iterations, b.iterations)
+    np.testing.assert_allclose(a.q, b.q, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_c_ets_kinematics_match_the_reference(name):
+    robot = ROBOTS[name]
+    solver = CIKSolver(robot)
+    for q in robot.random_q(5, seed=8):
+        T, J = solver.fkine_jacob0(q)
+        np.testing.assert_allclose(T, robot.fkine(q), atol=1e-14)
+        np.testing.assert_allclose(J, robot.jacob0(q), atol=1e-14)
+
+
+# -- pose error -------------------------------------------------------------------------------
+def _rot(axis, theta: float) -> np.ndarray:
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(theta) * K + (1 - math.cos(theta)) * K @ K
+
+
+@pytest.mark.parametrize(
+    ("axis", "theta"),
+    [((0, 0, 1), 0.3), ((1, 2, 3), 1e-9), ((1, -2, 0.5), 2.0), ((1, 1, 0), PI), ((0.3, -1, 2), PI - 1e-8)],
+)
+def test_angle_axis_is_the_euler_vector(axis, theta):
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    alpha = angle_axis(_rot(axis, theta))
+    if abs(theta - PI) < 1e-6:  # +-pi a describe the same rotation
+        alpha = alpha if alpha @ a > 0 else -alpha
+    np.testing.assert_allclose(alpha, theta * a, atol=1e-9)
+    T = np.eye(4)
+    T[:3, :3] = _rot(axis, theta)
+    e_c = CIKSolver(UR5).pose_error(np.eye(4), T)
+    np.testing.assert_allclose(e_c, pose_error(np.eye(4), T), atol=1e-15)
+
+
+def test_angle_axis_of_diagonal_matrices_follows_eq_40():
+    np.testing.assert_array_equal(angle_axis(np.eye(3)), [0, 0, 0])
+    np.testing.assert_allclose(angle_axis(np.diag([1.0, -1, -1])), [PI, 0, 0])
+    np.testing.assert_allclose(angle_axis(np.diag([-1.0, 1, -1])), [0, PI, 0])
+    np.testing.assert_allclose(angle_axis(np.diag([-1.0, -1, 1])), [0, 0, PI])
+
+
+def test_invalid_targets_raise_pose_error_on_both_backends():
+    good = UR5.fkine(UR5.qz)
+    nan = good.copy()
+    nan[0, 3] = np.nan
+    skew = good.copy()
+    skew[:3, :3] *= 1.001
+    bottom = good.copy()
+    bottom[3, 0] = 0.1
+    reflect = good.copy()
+    reflect[:3, 0] *= -1
+    cases = {"NaN": nan, "not orthonormal": skew, "bottom row": bottom, "reflection": reflect}
+    for backend in ("numpy", "c"):
+        for what, T in cases.items():
+            with pytest.raises(PoseError, match=what):
+                ik(UR5, T, backend=backend)
+        with pytest.raises(PoseError, match=r"target \[1\]"):
+            ik(UR5, np.stack((good, nan)), backend=backend)
+        with pytest.raises(PoseError, match="shape"):
+            ik(UR5, np.eye(3), backend=backend)
+        with pytest.raises(ConfigurationError):
+            ik(UR5, good, q0=[np.nan] * 6, backend=backend)
+
+
+def test_bad_options_are_rejected():
+    Tep = PANDA.fkine(PANDA.qz)
+    with pytest.raises(ValueError, match="square"):
+        ik(PANDA, Tep, method="NR")
+    with pytest.raises(ValueError, match="method"):
+        ik(UR5, Tep, method="XX")
+    with pytest.raises(ValueError, match="damping"):
+        ik(UR5, Tep, damping="foo")
+    with pytest.raises(ValueError, match="we"):
+        ik(UR5, Tep, we=[0] * 6)
+
+
+# -- the C build cache ------------------------------------------------------------------------
+_SRC = {
+    "add.h": "double add(double a, double b);\n",
+    "add.c": '#include "add.h"\ndouble add(double a, double b) { return a + b; }\n',
+}
+
+
+def _add(path: Path, a: float, b: float) -> float:
+    import ctypes
+
+    lib = load_library(path)
+    lib.add.restype, lib.add.argtypes = ctypes.c_double, [ctypes.c_double, ctypes.c_double]
+    return lib.add(a, b)
+
+
+def test_build_cache_is_reused_and_fast(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
+    path = compile_library(_SRC, "addlib")
+    assert _add(path, 1.5, 2.0) == 3.5
+    mtime = path.stat().st_mtime_ns
+    t0 = time.perf_counter()
+    again = compile_library(_SRC, "addlib")
+    assert time.perf_counter() - t0 < 0.005
+    assert again == path and path.stat().st_mtime_ns == mtime
+    assert (path.parent / (path.name + ".sha256")).is_file()
+    assert [p.name for p in tmp_path.iterdir()] == [path.parent.name]  # no temporary folders left
+
+
+def test_corrupted_cache_entry_is_rebuilt(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
+    path = compile_library(_SRC, "addlib2")
+    size = path.stat().st_size
+    with open(path, "r+b") as f:
+        f.truncate(size // 3)
+    rebuilt = compile_library(_SRC, "addlib2")
+    assert rebuilt == path and rebuilt.stat().st_size == size
+    assert _add(rebuilt, 2.0, 2.0) == 4.0
+
+
+def _compile_in_child(cache: str, barrier, queue) -> None:
+    os.environ["SYMKIN_CACHE"] = cache
+    barrier.wait()
+    try:
+        queue.put(str(compile_library(_SRC, "addlib_race")))
+    except Exception as exc:  # noqa: BLE001 - report any failure to the parent
+        queue.put(f"error: {exc!r}")
+
+
+def test_concurrent_builds_of_the_same_library_all_succeed(tmp_path):
+    ctx = multiprocessing.get_context("fork")
+    barrier, queue = ctx.Barrier(4), ctx.Queue()
+    procs = [ctx.Process(target=_compile_in_child, args=(str(tmp_path), barrier, queue)) for _ in range(4)]
+    for p in procs:
+        p.start()
+    results = [queue.get(timeout=120) for _ in procs]
+    for p in procs:
+        p.join(timeout=60)
+    assert len(set(results)) == 1, results
+    assert not results[0].startswith("error"), results[0]
+    assert _add(Path(results[0]), 1.0, 2.0) == 3.0
+    assert [p.name for p in tmp_path.iterdir()] == [Path(results[0]).parent.name]
+
+
+def test_missing_compiler_raises_compile_error(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    with pytest.raises(CompileError, match="NumPy backend"):
+        compile_library(_SRC, "addlib3")
+
+
+def test_compiler_error_is_reported(tmp_path, monkeypatch):
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
+    with pytest.raises(CompileError, match="error"):
+        compile_library({"bad.c": "int f(void) { return undefined_symbol; }\n"}, "badlib")
+    assert list(tmp_path.iterdir()) == []
+
+
+# -- Table 1 benchmark ------------------------------------------------------------------------
+def test_table1_benchmark_runs_and_formats():
+    from symkin.bench.ik import PAPER_TABLE1, format_table1, run_table1
+
+    methods = ["NR", "LM (Chan lambda=0.1)"]
+    result = run_table1(UR5, n_problems=40, seed=0, methods=methods, progress=False, rtb=False)
+    assert [(r["method"], r["setting"]) for r in result["rows"]] == [(m, s) for s in "ab" for m in methods]
+    for row in result["rows"]:
+        assert row["paper"]["infeasible_pct"] == PAPER_TABLE1[(row["method"], row["setting"])][3]
+        assert row["max_error"] < math.sqrt(2e-6)  # what E < 1e-6 allows
+        if row["setting"] == "b":
+            assert row["infeasible"] == 0 and row["max_searches"] <= 100
+    text = format_table1(result)
+    assert "LM (Chan lambda=0.1)" in text and "paper" in text
