@@ -1,0 +1,1 @@
+"""Runtime: numpy-only controllers and solvers that use compiled or reference kinematics."""
