@@ -194,9 +194,12 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
 
 def _result_dict(res: Any) -> dict:
+    import dataclasses
+
     out = {}
-    for k, v in vars(res).items():
-        out[k] = v.tolist() if isinstance(v, np.ndarray) else v
+    for f in dataclasses.fields(res):
+        v = getattr(res, f.name)
+        out[f.name] = v.tolist() if isinstance(v, (np.ndarray, np.generic)) else v
     return out
 
 
@@ -271,12 +274,36 @@ def cmd_bench(args: argparse.Namespace) -> int:
         print(json.dumps(result, indent=2) if args.json else format_kin(result))
         return 0
     if args.what == "ik":
-        from symkin.bench.ik import cli_ik
+        from symkin.bench.ik import format_table1, run_table1
 
-        return cli_ik(args)
-    from symkin.bench.mmc import cli_mmc
+        result = run_table1(
+            _robot(args.robot or "ur5"),
+            n_problems=args.problems or 10_000,
+            seed=args.seed,
+            progress=not args.json,
+        )
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_table1(result))
+        return 0
+    from symkin.bench.mmc import format_table1 as format_mmc
+    from symkin.bench.mmc import plot_task
+    from symkin.bench.mmc import run_table1 as run_mmc
 
-    return cli_mmc(args)
+    robots = (args.robot,) if args.robot else ("panda", "lbr_iiwa7", "sawyer")
+    result = run_mmc(robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json)
+    print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_mmc(result))
+    if args.plot:
+        plot_task(robots[0], args.plot, seed=args.seed)
+        if not args.json:
+            print(f"plot written to {args.plot}")
+    return 0
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(f"not JSON serialisable: {type(x).__name__}")
 
 
 # ----------------------------------------------------------------------------------------------

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["run_kin", "format_kin", "per_call_us", "pinocchio_model"]
+__all__ = ["run_kin", "format_kin", "per_call_us", "pinocchio_model", "rtb_ets"]
 
 FUNCS = ("fkine", "jacob0", "hessian0")
 
@@ -145,7 +145,7 @@ def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], A
     except ImportError:
         rtb = None
     if rtb is not None:
-        ets = _rtb_ets(rtb, robot)
+        ets = rtb_ets(rtb, robot)
         peers["rtb"] = {
             "fkine": lambda: ets.eval(q),
             "jacob0": lambda: ets.jacob0(q),
@@ -154,7 +154,7 @@ def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], A
     return peers
 
 
-def _rtb_ets(rtb: Any, robot: Any) -> Any:
+def rtb_ets(rtb: Any, robot: Any) -> Any:
     """The same ETS in roboticstoolbox-python (flipped joints included)."""
     out = []
     for e in robot.ets:

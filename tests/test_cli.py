@@ -1,0 +1,133 @@
+"""Every `symkin` command runs; user mistakes exit non-zero with a one-line message."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from symkin.cli import main
+from symkin.model.robots import list_robots, load
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_list(capsys):
+    code, out, _ = run(capsys, "list")
+    assert code == 0
+    for name in list_robots():
+        assert name in out
+    code, out, _ = run(capsys, "list", "--json")
+    assert {r["name"] for r in json.loads(out)} == set(list_robots())
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy", "casadi"])
+def test_compile_writes_files_and_shows_the_robot(capsys, tmp_path, backend):
+    code, out, _ = run(capsys, "compile", "planar3", "--backend", backend, "-o", str(tmp_path))
+    assert code == 0, out
+    assert "fkine" in out and "jacob0" in out and "us per call" in out
+    written = sorted(p.name for p in tmp_path.iterdir())
+    assert written and all("planar3" in name for name in written)
+
+
+def test_compile_accepts_an_ets_string_a_dh_file_and_a_urdf(capsys, tmp_path):
+    code, out, _ = run(capsys, "compile", "Rz(q) tx(0.5) Rz(q) tx(0.25)", "--backend", "numpy")
+    assert code == 0 and "2 joints" in out
+    dh = tmp_path / "arm.dh"
+    dh.write_text("# symkin dh: standard\n# name: twolink\ntype d a alpha\nR 0 1 0\nR 0 1 0\n")
+    code, out, _ = run(capsys, "compile", str(dh), "--backend", "numpy")
+    assert code == 0 and "twolink" in out
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(
+        "<robot name='onelink'><link name='a'/><link name='b'/>"
+        "<joint name='j' type='revolute'><parent link='a'/><child link='b'/><axis xyz='0 0 1'/>"
+        "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>"
+    )
+    code, out, _ = run(capsys, "compile", str(urdf), "--backend", "numpy")
+    assert code == 0 and "onelink" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["compile", "pandaa"], "panda"),  # unknown robot: suggests the close match
+        (["compile", "Rz(q) foo(1)"], "unknown token"),
+        (["compile", "/nonexistent/robot.urdf"], "robot.urdf"),
+        (["compile", "planar2", "--backend", "numpy", "-o", "/proc/forbidden/x"], ""),
+        (["ik", "ur5", "--pose", "1 2 3"], "6 numbers"),
+        (["ik", "ur5"], "exactly one of"),
+        (["ik", "ur5", "--from-q", "0 0 nan 0 0 0"], "finite"),
+        (["check", "nosuchrobot"], "nosuchrobot"),
+    ],
+)
+def test_user_errors_exit_2_with_one_line(capsys, argv, message):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("symkin: error:"), err
+    assert message in lines[0]
+
+
+def test_check_passes_and_reports_json(capsys):
+    code, out, _ = run(capsys, "check", "planar3", "--backend", "numpy", "--samples", "5")
+    assert code == 0 and "all ok" in out
+    code, out, _ = run(capsys, "check", "planar3", "--backend", "c", "--samples", "5", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["ok"] and data["rows"]
+
+
+def test_ik_solves_a_pose_given_on_the_command_line(capsys):
+    robot = load("ur5")
+    q = robot.random_q(seed=5)
+    code, out, _ = run(capsys, "ik", "ur5", "--from-q", " ".join(map(str, q)), "--json")
+    assert code == 0
+    res = json.loads(out)
+    assert res["success"]
+    np.testing.assert_allclose(robot.fkine(res["q"]), robot.fkine(q), atol=1e-6)
+    T = robot.fkine(q)
+    code, out, _ = run(capsys, "ik", "ur5", "--matrix", " ".join(map(str, T.ravel())), "--method", "GN")
+    assert code == 0 and "solved" in out
+
+
+def test_ik_unreachable_target_exits_1(capsys):
+    code, out, _ = run(capsys, "ik", "planar2", "--pose", "5 0 0 0 0 0", "--json")
+    assert code == 1 and json.loads(out)["success"] is False
+
+
+def test_generate_check_reports_stale_folder(capsys, tmp_path):
+    code, out, _ = run(capsys, "generate", "--check", "-o", str(tmp_path))
+    assert code == 1 and "out of date" in out
+
+
+def test_bench_kin_runs_small(capsys):
+    code, out, _ = run(capsys, "bench", "kin", "--robot", "planar2", "--batch", "1000", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["per_call_us"]["c (extension)"]["jacob0"] > 0
+    assert data["batched_M_per_s"]["c"]["fkine"] > 0
+
+
+def test_bench_ik_runs_small(capsys):
+    code, out, _ = run(capsys, "bench", "ik", "-n", "20")
+    assert code == 0 and "Table 1" in out and "LM (Chan lambda=0.1)" in out
+
+
+def test_python_m_symkin_and_help():
+    res = subprocess.run([sys.executable, "-m", "symkin", "--help"], capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0
+    for cmd in ("compile", "derive", "check", "ik", "servo", "bench", "list"):
+        assert cmd in res.stdout
+    res = subprocess.run(
+        [sys.executable, "-m", "symkin", "frobnicate"], capture_output=True, text=True, cwd=ROOT
+    )
+    assert res.returncode == 2
