@@ -21,7 +21,11 @@ from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load
+from symkin.runtime.control import MMC, StepInfo, rrmc
+from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
+from symkin.runtime.loop import ServoResult, servo
+from symkin.runtime.servo import p_servo
 
 __version__ = "0.1.0"
 
@@ -35,20 +39,29 @@ __all__ = [
     "Const",
     "DHLink",
     "ETSParseError",
+    "IKResult",
     "Kinematics",
+    "MMC",
     "PoseError",
     "Robot",
     "RobotError",
+    "ServoResult",
+    "StepInfo",
     "SymkinError",
     "URDFError",
     "UnknownRobotError",
     "__version__",
     "compile",
     "generate",
+    "ik",
     "list_robots",
     "load",
     "load_dh_file",
+    "p_servo",
     "poe_of",
+    "pose_error",
     "resolve_robot",
+    "rrmc",
+    "servo",
     "write_generated",
 ]

@@ -35,8 +35,8 @@ def _pow(printer, expr: sp.Pow, sqrt: str, one: str = "1.0") -> str:  # noqa: AN
     raise ValueError(f"unsupported power {expr} in generated code")
 
 
-class CPrinter(C99CodePrinter):
-    """C99 with exact double literals and multiplications for small powers."""
+class _DoubleLiterals:
+    """Numbers as correctly rounded double literals (mixed into each printer)."""
 
     def _print_Rational(self, expr: sp.Rational) -> str:
         return float_literal(float(expr))
@@ -46,6 +46,10 @@ class CPrinter(C99CodePrinter):
 
     def _print_Float(self, expr: sp.Float) -> str:
         return float_literal(float(expr))
+
+
+class CPrinter(_DoubleLiterals, C99CodePrinter):
+    """C99 with exact double literals and multiplications for small powers."""
 
     def _print_Pow(self, expr: sp.Pow) -> str:
         return _pow(self, expr, "sqrt")
@@ -57,17 +61,8 @@ class CPrinter(C99CodePrinter):
         return f"sk_cos({self._print(expr.args[0])})"
 
 
-class _PyLikePrinter(PythonCodePrinter):
+class _PyLikePrinter(_DoubleLiterals, PythonCodePrinter):
     module = "np"
-
-    def _print_Rational(self, expr: sp.Rational) -> str:
-        return float_literal(float(expr))
-
-    def _print_Integer(self, expr: sp.Integer) -> str:
-        return float_literal(int(expr))
-
-    def _print_Float(self, expr: sp.Float) -> str:
-        return float_literal(float(expr))
 
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
         return _pow(self, expr, f"{self.module}.sqrt")

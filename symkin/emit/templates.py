@@ -82,9 +82,13 @@ class Header:
     counts: str
 
     @classmethod
-    def of(cls, robot: Any, counts: str, command: str, literal: str) -> Header:
+    def of(cls, robot: Any, functions: list, command: str, literal: str) -> Header:
+        """The header for ``functions`` (KinFunction list) of ``robot``; ``literal`` quotes its name."""
         from symkin import __version__
+        from symkin.symbolic.cse import OpCounts
 
+        total = sum((f.code.counts for f in functions), OpCounts())
+        counts = f"{total} over {len(functions)} functions"
         return cls(
             robot=identifier(robot.name),
             name_literal=literal,

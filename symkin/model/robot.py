@@ -263,6 +263,18 @@ class Robot:
         Je = _rotate_rows(T, J)
         return Je[0] if single else Je
 
+    def fkine_jacob0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Pose and base-frame Jacobian from one pass: ((4, 4), (6, n)) or batched."""
+        Q, single = self._batch(q)
+        T, J = self._num.fkine_jacob0(Q)
+        return (T[0], J[0]) if single else (T, J)
+
+    def jacob0_hessian0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Base-frame Jacobian and Hessian from one pass: ((6, n), (n, 6, n)) or batched."""
+        Q, single = self._batch(q)
+        _, J, H = self._num.jacob0_hessian0(Q)
+        return (J[0], H[0]) if single else (J, H)
+
     def hessian0(self, q: Any) -> np.ndarray:
         """Base-frame manipulator Hessian (seed 001 eq 20): (n, 6, n) or (N, n, 6, n), H[i] = dJ0/dq_i."""
         Q, single = self._batch(q)

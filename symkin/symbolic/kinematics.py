@@ -16,12 +16,12 @@ Built the way that keeps the expressions small (see ``shared/notes/measurements.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import sympy as sp
 
-from symkin.model.ets import ETS, Const
+from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
 
 __all__ = ["SymbolicKinematics", "derive", "const_to_sympy", "joint_symbols"]
@@ -108,6 +108,38 @@ class _Pose:
         return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], self.p[r]] for r in range(3)] + [[0, 0, 0, 1]])
 
 
+Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, axis, origin)
+
+
+def _walk(
+    elements: Iterable[ET],
+    qs: Sequence[sp.Symbol],
+    constant: Callable[[Const], sp.Expr],
+    sign: int,
+    links: list[sp.Matrix] | None = None,
+) -> tuple[_Pose, list[Frame]]:
+    """Apply ``elements`` in order (``sign=-1``: their inverses), recording each joint's axis and
+    origin just before it, and (into ``links``) the pose right after it."""
+    pose = _Pose()
+    frames: list[Frame] = []
+    for e in elements:
+        i = e.axis.index
+        if e.is_joint:
+            value = sign * qs[e.joint] * e.sign
+            frames.append((e.joint, e.axis.is_rotation, [x * e.sign for x in pose.column(i)], list(pose.p)))
+        else:
+            value = sign * constant(e.const)
+            if value == 0:
+                continue
+        if e.axis.is_rotation:
+            pose.rotate(i, value)
+        else:
+            pose.translate(i, value)
+        if links is not None and e.is_joint:
+            links.append(pose.matrix())
+    return pose, frames
+
+
 def _ee_frame(
     ets: ETS, qs: Sequence[sp.Symbol], constant: Callable[[Const], sp.Expr]
 ) -> tuple[sp.Matrix, list[sp.Matrix]]:
@@ -120,25 +152,8 @@ def _ee_frame(
     ``dJe_a/dq_b = (du x r_a + u_a x dr; du)`` for revolute a (r_a = -p'_a), ``(du; 0)`` for prismatic a.
     """
     n = ets.n
-    pose = _Pose()
-    frames: dict[int, tuple[int, bool, list[sp.Expr], list[sp.Expr]]] = {}
-    chain = list(ets)
-    for k in range(len(chain) - 1, -1, -1):
-        e = chain[k]
-        i = e.axis.index
-        if e.is_joint:
-            value = -qs[e.joint] * e.sign
-            u = [x * e.sign for x in pose.column(i)]
-            frames[k] = (e.joint, e.axis.is_rotation, u, list(pose.p))
-        else:
-            value = -constant(e.const)
-            if value == 0:
-                continue
-        if e.axis.is_rotation:
-            pose.rotate(i, value)
-        else:
-            pose.translate(i, value)
-    ordered = [frames[k] for k in sorted(frames)]  # chain order
+    _, frames = _walk(reversed(tuple(ets)), qs, constant, -1)
+    ordered = frames[::-1]  # chain order
     zero3 = [sp.Integer(0)] * 3
     Je = sp.zeros(6, n)
     cols = []
@@ -211,25 +226,8 @@ def derive(
     name = robot.name if isinstance(robot, Robot) else "robot"
     n = ets.n
     qs = tuple(q) if q is not None else joint_symbols(n)
-    pose = _Pose()
-    frames: list[tuple[int, bool, list[sp.Expr], list[sp.Expr]]] = []  # (joint, revolute, w, p)
     links: list[sp.Matrix] = []
-    for e in ets:
-        i = e.axis.index
-        if e.is_joint:
-            value = qs[e.joint] * e.sign
-            w = [x * e.sign for x in pose.column(i)]
-            frames.append((e.joint, e.axis.is_rotation, w, list(pose.p)))
-        else:
-            value = constant(e.const)
-            if value == 0:
-                continue
-        if e.axis.is_rotation:
-            pose.rotate(i, value)
-        else:
-            pose.translate(i, value)
-        if e.is_joint:
-            links.append(pose.matrix())
+    pose, frames = _walk(ets, qs, constant, 1, links)
     T = pose.matrix()
     pe = [T[r, 3] for r in range(3)]
 

@@ -31,13 +31,11 @@ def render_c(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated ``<prefix>.h``, ``<prefix>.c`` and the extension module source."""
     from symkin.emit.lowering import lower
     from symkin.emit.printers import CPrinter
-    from symkin.symbolic.cse import OpCounts
 
     printer = CPrinter()
     printed = [lower(f, printer) for f in functions]
-    total = sum((f.code.counts for f in functions), OpCounts())
     prefix = c_prefix(robot)
-    header = Header.of(robot, f"{total} over {len(functions)} functions", command, c_string(robot.name))
+    header = Header.of(robot, functions, command, c_string(robot.name))
     context = {"prefix": prefix, "n": robot.n, "functions": printed, "header": header}
     h = render("c/kinematics.h.j2", **context)
     c = render("c/kinematics.c.j2", **context)

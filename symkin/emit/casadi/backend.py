@@ -17,7 +17,6 @@ def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>_casadi.py``."""
     from symkin.emit.lowering import lower
     from symkin.emit.printers import CasADiPrinter
-    from symkin.symbolic.cse import OpCounts
 
     printed = []
     for f in functions:
@@ -27,8 +26,7 @@ def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
             cols = o.shape[-1]
             outs.append({"name": o.name, "vals": o.values, "rows": o.size // max(cols, 1), "cols": cols})
         printed.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": outs})
-    total = sum((f.code.counts for f in functions), OpCounts())
-    header = Header.of(robot, f"{total} over {len(functions)} functions", command, repr(robot.name))
+    header = Header.of(robot, functions, command, repr(robot.name))
     module = f"symkin_{identifier(robot.name)}_casadi"
     text = render(
         "casadi/module.py.j2",

@@ -22,7 +22,6 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>.py``."""
     from symkin.emit.lowering import lower
     from symkin.emit.printers import NumPyPrinter
-    from symkin.symbolic.cse import OpCounts
 
     class _MathPrinter(NumPyPrinter):
         module = "math"
@@ -31,8 +30,7 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     for f in functions:
         vec, one = lower(f, NumPyPrinter()), lower(f, _MathPrinter())
         printed.append({**vec.__dict__, "scalar_lines": one.lines, "scalar_outs": one.outs})
-    total = sum((f.code.counts for f in functions), OpCounts())
-    header = Header.of(robot, f"{total} over {len(functions)} functions", command, repr(robot.name))
+    header = Header.of(robot, functions, command, repr(robot.name))
     module = f"symkin_{identifier(robot.name)}"
     text = render(
         "numpy/module.py.j2",
