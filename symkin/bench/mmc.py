@@ -1,0 +1,319 @@
+"""Table I of seed 001 (Haviland & Corke, "Maximising Manipulability During Resolved-Rate Motion Control").
+
+``run_table1`` servos each robot over random tasks with RRMC and with MMC and reports mean and final
+manipulability, arrivals, tasks leaving the joint limits and step times beside the paper's numbers.
+``format_table1`` prints it; ``plot_task`` draws one task in the style of the paper's Fig. 3.
+
+Run as ``python -m symkin.bench.mmc --tasks 100``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.runtime.control import MMC, rrmc
+from symkin.runtime.loop import ServoResult, servo
+
+__all__ = ["run_table1", "format_table1", "plot_task", "step_breakdown", "table1_tasks", "PAPER_TABLE1"]
+
+#: Table I of seed 001: mean and mean final manipulability, RRMC and MMC (lambda = 0.005, 1000 tasks)
+PAPER_TABLE1: dict[str, dict[str, float]] = {
+    "panda": {"mean_rrmc": 0.0742, "mean_mmc": 0.0880, "final_rrmc": 0.0782, "final_mmc": 0.0934},
+    "lbr_iiwa7": {"mean_rrmc": 0.0667, "mean_mmc": 0.0776, "final_rrmc": 0.0643, "final_mmc": 0.0761},
+    "sawyer": {"mean_rrmc": 0.2721, "mean_mmc": 0.3206, "final_rrmc": 0.2572, "final_mmc": 0.3263},
+}
+PROTOCOL_NOTE = (
+    "Protocol of seed 001 eq 14: start and target configurations uniform in [qmin + 50 deg, qmax - 50 deg], "
+    "target pose = FK of the target configuration; angle-axis base-frame error (seed 000 eq 37), gain 1, "
+    "dt 0.05 s, arrival at sum|e| < 0.1, at most 500 steps. The paper discards self-colliding "
+    "configurations; symkin has no collision model, so none are discarded here. Joint limits are not "
+    "enforced except in the 'mmc_jl' run (velocity dampers)."
+)
+_MARGIN = math.radians(50.0)
+
+
+def _robot(robot: Any) -> Any:
+    if isinstance(robot, str):
+        from symkin.model.robots import load
+
+        return load(robot)
+    return robot
+
+
+def table1_tasks(kin: Any, n_tasks: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Start configurations (n_tasks, n) and target poses (n_tasks, 4, 4) by eq 14 of seed 001."""
+    lo, hi = np.asarray(kin.qlim, dtype=float)
+    margin = np.minimum(_MARGIN, 0.45 * (hi - lo))
+    lo, hi = lo + margin, hi - margin
+    q0 = rng.uniform(lo, hi, size=(n_tasks, kin.n))
+    qt = rng.uniform(lo, hi, size=(n_tasks, kin.n))
+    Tep = np.array([kin.fkine(q) for q in qt])
+    return q0, Tep
+
+
+def _summary(runs: list[ServoResult]) -> dict[str, Any]:
+    times = np.concatenate([r.step_time for r in runs]) if runs else np.zeros(0)
+    infos = [i for r in runs for i in r.info]
+    methods: dict[str, int] = {}
+    statuses: dict[str, int] = {}
+    for i in infos:
+        key = i.method if i.fallback is None else f"fallback_{i.fallback}"
+        methods[key] = methods.get(key, 0) + 1
+        statuses[i.status] = statuses.get(i.status, 0) + 1
+    return {
+        "mean_manipulability": float(np.mean([r.mean_manipulability for r in runs])),
+        "final_manipulability": float(np.mean([r.final_manipulability for r in runs])),
+        "arrived": int(sum(r.arrived for r in runs)),
+        "left_limits": int(sum(r.left_limits for r in runs)),
+        "mean_steps": float(np.mean([r.steps for r in runs])),
+        "step_us_median": float(np.median(times) * 1e6) if times.size else float("nan"),
+        "step_methods": methods,
+        "step_status": statuses,
+        "max_slack": float(max((i.slack for i in infos), default=0.0)),
+    }
+
+
+def _pct(new: float, old: float) -> float:
+    return 100.0 * (new - old) / old if old else float("nan")
+
+
+def run_table1(
+    robots: tuple[Any, ...] | list[Any] = ("panda", "lbr_iiwa7", "sawyer"),
+    n_tasks: int = 1000,
+    seed: int = 0,
+    progress: bool = True,
+    joint_limits: bool = True,
+    lam: float = 0.005,
+    gain: float = 1.0,
+    dt: float = 0.05,
+    threshold: float = 0.1,
+    max_steps: int = 500,
+    qd_max: Any = np.inf,
+) -> dict[str, Any]:
+    """Reproduce Table I of seed 001 (protocol in :data:`PROTOCOL_NOTE`); returns a JSON-able dict.
+
+    ``robots`` are built-in names (``symkin.model.robots.load``) or robot objects. Each robot gets
+    ``n_tasks`` tasks from ``np.random.default_rng([seed, index])``; the same tasks go to RRMC, MMC
+    and, with ``joint_limits``, MMC with velocity dampers (``"mmc_jl"``). ``qd_max=np.inf`` (the
+    paper's setting) leaves joint speeds unbounded; ``None`` uses each robot's speed limits.
+    Step times are the controllers' (kinematics and solve) with whatever kinematics the robot
+    object provides.
+    """
+    out: dict[str, Any] = {
+        "protocol": {
+            "n_tasks": n_tasks,
+            "seed": seed,
+            "lam": lam,
+            "gain": gain,
+            "dt": dt,
+            "threshold": threshold,
+            "max_steps": max_steps,
+            "qd_max": None if qd_max is None else np.broadcast_to(qd_max, (1,)).tolist()[0],
+            "note": PROTOCOL_NOTE,
+        },
+        "robots": {},
+    }
+    for index, spec in enumerate(robots):
+        kin = _robot(spec)
+        name = getattr(kin, "name", str(spec))
+        rng = np.random.default_rng([seed, index])
+        q0s, Teps = table1_tasks(kin, n_tasks, rng)
+        controllers: dict[str, Any] = {
+            "rrmc": lambda q, nu, kin=kin: rrmc(kin, q, nu, qd_max=qd_max),
+            "mmc": MMC(kin, lam=lam, qd_max=qd_max),
+        }
+        if joint_limits:
+            controllers["mmc_jl"] = MMC(kin, lam=lam, qd_max=qd_max, joint_limits=True, dt=dt)
+        runs: dict[str, list[ServoResult]] = {k: [] for k in controllers}
+        tasks = range(n_tasks)
+        if progress:
+            from tqdm.auto import tqdm
+
+            tasks = tqdm(tasks, desc=f"Table I {name}", unit="task")
+        t0 = time.perf_counter()
+        for t in tasks:
+            for key, ctrl in controllers.items():
+                runs[key].append(
+                    servo(
+                        kin, q0s[t], Teps[t], ctrl, dt=dt, gain=gain, threshold=threshold, max_steps=max_steps
+                    )
+                )
+        res = {key: _summary(r) for key, r in runs.items()}
+        res["improvement_mean_pct"] = _pct(
+            res["mmc"]["mean_manipulability"], res["rrmc"]["mean_manipulability"]
+        )
+        res["improvement_final_pct"] = _pct(
+            res["mmc"]["final_manipulability"], res["rrmc"]["final_manipulability"]
+        )
+        res["mmc_not_below_rrmc_final"] = int(
+            sum(
+                m.final_manipulability >= r.final_manipulability - 1e-9
+                for m, r in zip(runs["mmc"], runs["rrmc"])
+            )
+        )
+        res["wall_s"] = time.perf_counter() - t0
+        if name in PAPER_TABLE1:
+            p = PAPER_TABLE1[name]
+            res["paper"] = {
+                **p,
+                "improvement_mean_pct": _pct(p["mean_mmc"], p["mean_rrmc"]),
+                "improvement_final_pct": _pct(p["final_mmc"], p["final_rrmc"]),
+            }
+        res["source"] = getattr(kin, "source", "")
+        out["robots"][name] = res
+    return out
+
+
+def format_table1(result: dict[str, Any]) -> str:
+    """Plain-text table of a :func:`run_table1` result, with the paper's numbers beside ours."""
+    pr = result["protocol"]
+    lines = [
+        f"Table I (seed 001), {pr['n_tasks']} tasks per robot, lambda = {pr['lam']}, seed {pr['seed']}",
+        "",
+        f"{'robot':<10} {'':<6} {'mean m RRMC':>11} {'MMC':>8} {'impr.':>7}   "
+        f"{'final m RRMC':>12} {'MMC':>8} {'impr.':>7}",
+    ]
+    for name, r in result["robots"].items():
+        lines.append(
+            f"{name:<10} {'symkin':<6} {r['rrmc']['mean_manipulability']:>11.4f} "
+            f"{r['mmc']['mean_manipulability']:>8.4f} {r['improvement_mean_pct']:>+6.1f}%   "
+            f"{r['rrmc']['final_manipulability']:>12.4f} {r['mmc']['final_manipulability']:>8.4f} "
+            f"{r['improvement_final_pct']:>+6.1f}%"
+        )
+        if "paper" in r:
+            p = r["paper"]
+            lines.append(
+                f"{'':<10} {'paper':<6} {p['mean_rrmc']:>11.4f} {p['mean_mmc']:>8.4f} "
+                f"{p['improvement_mean_pct']:>+6.1f}%   {p['final_rrmc']:>12.4f} {p['final_mmc']:>8.4f} "
+                f"{p['improvement_final_pct']:>+6.1f}%"
+            )
+    lines += [
+        "",
+        f"{'robot':<10} {'controller':<8} {'arrived':>8} {'left limits':>12} {'mean steps':>10} "
+        f"{'step us (median)':>17}  steps by method",
+    ]
+    n = pr["n_tasks"]
+    for name, r in result["robots"].items():
+        for key in ("rrmc", "mmc", "mmc_jl"):
+            if key not in r:
+                continue
+            s = r[key]
+            methods = ", ".join(f"{k} {v}" for k, v in sorted(s["step_methods"].items()))
+            left = f"{s['left_limits']} ({100 * s['left_limits'] / n:.0f}%)"
+            lines.append(
+                f"{name:<10} {key:<8} {s['arrived']:>4}/{n:<3} {left:>12} "
+                f"{s['mean_steps']:>10.1f} {s['step_us_median']:>17.1f}  {methods}"
+            )
+        lines.append(
+            f"{'':<10} MMC final manipulability >= RRMC's in {r['mmc_not_below_rrmc_final']}/{n} tasks"
+            + (f"; max slack (mmc_jl) {r['mmc_jl']['max_slack']:.3g}" if "mmc_jl" in r else "")
+        )
+    lines += ["", pr["note"]]
+    return "\n".join(lines)
+
+
+def step_breakdown(robot: Any, n_samples: int = 300, seed: int = 0, lam: float = 0.005) -> dict[str, float]:
+    """Median microseconds of the parts of one MMC step at random configurations (Table I protocol).
+
+    ``J_H`` (the robot's J0 and H0), ``J_H_Jm`` (plus the singularity check, Jm and m in numpy),
+    ``build`` (that + bounds + QP assembly), ``solve_closed_form``
+    (singularity check + closed form), ``solve_osqp`` (OSQP forced: update + solve + polish, no speed
+    limits) and ``solve_osqp_speed_limits`` (OSQP with the robot's speed limits, half of them, and
+    a nu large enough to make some bounds active).
+    """
+    kin = _robot(robot)
+    rng = np.random.default_rng(seed)
+    q0s, Teps = table1_tasks(kin, n_samples, rng)
+    nus = np.array([np.r_[T[:3, 3] - kin.fkine(q)[:3, 3], rng.normal(0, 0.5, 3)] for q, T in zip(q0s, Teps)])
+    cf = MMC(kin, lam=lam, qd_max=np.inf)
+    qpf = MMC(kin, lam=lam, qd_max=np.inf, closed_form=False)
+    half = getattr(kin, "qd_max", None)
+    qpl = MMC(kin, lam=lam, qd_max=None if half is None else 0.5 * np.asarray(half), closed_form=False)
+
+    def med(f: Any) -> float:
+        ts = []
+        for q, nu in zip(q0s, nus):
+            t0 = time.perf_counter()
+            f(q, nu)
+            ts.append(time.perf_counter() - t0)
+        return float(np.median(ts) * 1e6)
+
+    qps = {}
+
+    def build(q: np.ndarray, nu: np.ndarray) -> None:
+        qps[q.tobytes()] = cf.build(q, nu)
+
+    jh = getattr(kin, "jacob0_hessian0", None)
+    out = {
+        "J_H": med(lambda q, nu: jh(q) if jh is not None else (kin.jacob0(q), kin.hessian0(q))),
+        "J_H_Jm": med(lambda q, nu: cf.kinematics(q)),
+        "build": med(build),
+        "solve_closed_form": med(lambda q, nu: cf.solve(qps[q.tobytes()])),
+        "solve_osqp": med(lambda q, nu: qpf.solve(qps[q.tobytes()])),
+    }
+    qps_l = {q.tobytes(): qpl.build(q, nu) for q, nu in zip(q0s, nus)}
+    out["solve_osqp_speed_limits"] = med(lambda q, nu: qpl.solve(qps_l[q.tobytes()]))
+    out["step_total_closed_form"] = out["build"] + out["solve_closed_form"]
+    return out
+
+
+def plot_task(
+    robot: Any,
+    q0: Any,
+    Tep: Any,
+    path: str | Path,
+    title: str | None = None,
+    **servo_options: Any,
+) -> dict[str, ServoResult]:
+    """Servo one task with RRMC and MMC and write manipulability against time as a PNG (seed 001 Fig. 3).
+
+    ``servo_options`` go to :func:`symkin.runtime.loop.servo` (``lam``, ``dt``, ``qd_max``...).
+    Needs matplotlib (``pip install symkin[plot]``). Returns the two :class:`ServoResult`.
+    """
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as exc:  # pragma: no cover - optional dependency
+        raise ImportError("plot_task needs matplotlib: pip install 'symkin[plot]'") from exc
+    kin = _robot(robot)
+    results = {c: servo(kin, q0, Tep, c, **servo_options) for c in ("rrmc", "mmc")}
+    fig, ax = plt.subplots(figsize=(6.0, 3.2), dpi=150)
+    for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
+        r = results[key]
+        ax.plot(r.t, r.manipulability, style, label=label, linewidth=1.6)
+    ax.set_xlabel("Time (s)")
+    ax.set_ylabel("Manipulability")
+    ax.set_title(title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return results
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description="Reproduce Table I of seed 001 (MMC vs RRMC).")
+    ap.add_argument("--robots", nargs="+", default=["panda", "lbr_iiwa7", "sawyer"])
+    ap.add_argument("--tasks", type=int, default=1000)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--no-joint-limits", action="store_true", help="skip the MMC run with velocity dampers")
+    ap.add_argument("--json", type=Path, help="also write the result as JSON here")
+    args = ap.parse_args(argv)
+    res = run_table1(tuple(args.robots), args.tasks, args.seed, joint_limits=not args.no_joint_limits)
+    print(format_table1(res))
+    if args.json:
+        args.json.write_text(json.dumps(res, indent=1))
+
+
+if __name__ == "__main__":
+    main()

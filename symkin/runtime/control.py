@@ -1,0 +1,564 @@
+"""Resolved-rate motion control (seed 000, eqs 35-36) and the Manipulability Motion Controller (seed 001).
+
+numpy and OSQP only. ``kin`` is any object with ``n``, ``qlim`` (2, n), optionally ``qd_max`` (n,),
+and the base-frame ``jacob0(q)`` (6, n) and ``hessian0(q)`` (n, 6, n) (or ``jacobm(q, axes)``);
+a ``jacob0_hessian0(q) -> (J, H)`` method is used when present. :class:`symkin.Robot` is one.
+
+Solver outcomes are reported in a :class:`StepInfo`, never raised; the joint velocity returned is
+always finite.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+import osqp
+import scipy.sparse as sp
+
+from symkin.errors import ConfigurationError
+
+__all__ = [
+    "MMC",
+    "MMCQP",
+    "StepInfo",
+    "rrmc",
+    "mmc_qp",
+    "mmc_closed_form",
+    "joint_velocity_bounds",
+    "manipulability_jacobian",
+]
+
+_AXES = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
+_OSQP_STATUS = {
+    "OSQP_SOLVED": "solved",
+    "OSQP_SOLVED_INACCURATE": "inaccurate",
+    "OSQP_PRIMAL_INFEASIBLE": "infeasible",
+    "OSQP_PRIMAL_INFEASIBLE_INACCURATE": "infeasible",
+    "OSQP_DUAL_INFEASIBLE": "error",
+    "OSQP_DUAL_INFEASIBLE_INACCURATE": "error",
+    "OSQP_MAX_ITER_REACHED": "max_iter",
+    "OSQP_TIME_LIMIT_REACHED": "max_iter",
+}
+#: OSQP settings of :class:`MMC`: tight tolerances, and polishing, which usually makes J qd = nu hold to
+#: about 1e-14 (1e-7 when polishing fails); measured on Panda servo tasks with active bounds
+OSQP_SETTINGS: dict[str, Any] = {
+    "eps_abs": 1e-7,
+    "eps_rel": 1e-7,
+    "polishing": True,
+    "polish_refine_iter": 3,
+    "max_iter": 4000,
+    "verbose": False,
+    "warm_starting": True,
+}
+
+
+@dataclass(frozen=True)
+class StepInfo:
+    """How one control step went.
+
+    Attributes:
+        status: ``"solved"``; ``"singular"`` (J lost rank: damped step); ``"infeasible"`` (the QP has
+            no solution, e.g. velocity bounds too small for nu); ``"max_iter"``/``"inaccurate"`` (OSQP
+            stopped early); ``"error"`` (any other solver failure).
+        method: how qd was computed: ``"inverse"``/``"pinv"``/``"damped"`` (RRMC, eqs 35-36),
+            ``"closed_form"`` or ``"osqp"`` (MMC).
+        manipulability: m(q) of the chosen axes (seed 000 eq 52) at the configuration of the step.
+        iterations: OSQP iterations (0 when OSQP was not called).
+        fallback: ``None``, or ``"rrmc"``/``"zero"`` when the MMC answer was replaced.
+        residual: max |J qd - nu| of the returned qd.
+        slack: norm of the equality slack (MMC with ``slack``), else 0.
+        scale: factor (<= 1) by which qd was scaled down to respect the joint speed limits.
+    """
+
+    status: str
+    method: str
+    manipulability: float
+    iterations: int = 0
+    fallback: str | None = None
+    residual: float = 0.0
+    slack: float = 0.0
+    scale: float = 1.0
+
+    @property
+    def ok(self) -> bool:
+        """True when the step is the controller's own answer (no singularity, no fallback)."""
+        return self.status == "solved" and self.fallback is None
+
+
+def _axes(axes: str) -> slice:
+    try:
+        return _AXES[axes]
+    except KeyError:
+        raise ValueError(f"axes must be one of {sorted(_AXES)}, not {axes!r}") from None
+
+
+def _q(kin: Any, q: Any) -> np.ndarray:
+    q = np.asarray(q, dtype=float)
+    if q.shape != (kin.n,) or not np.isfinite(q).all():
+        raise ConfigurationError(f"q must be {kin.n} finite numbers, got {q!r}")
+    return q
+
+
+def _nu(nu: Any) -> np.ndarray:
+    nu = np.asarray(nu, dtype=float)
+    if nu.shape != (6,) or not np.isfinite(nu).all():
+        raise ValueError(f"nu must be 6 finite numbers (v, omega), got {nu!r}")
+    return nu
+
+
+def _speed_limits(kin: Any, n: int, qd_max: Any) -> np.ndarray:
+    """(n,) joint speed limits: the given ones, else ``kin.qd_max``, else inf."""
+    if qd_max is None:
+        qd_max = getattr(kin, "qd_max", None)
+    if qd_max is None:
+        return np.full(n, np.inf)
+    a = np.broadcast_to(np.asarray(qd_max, dtype=float), (n,)).copy()
+    if not (a > 0).all() or np.isnan(a).any():
+        raise ValueError(f"qd_max must be positive, got {a.tolist()}")
+    return a
+
+
+def scale_to_limits(qd: np.ndarray, qd_max: np.ndarray) -> tuple[np.ndarray, float]:
+    """Scale qd down proportionally (keeping its direction) so that |qd_i| <= qd_max_i (seed 004)."""
+    a = np.abs(qd)
+    over = a > qd_max
+    if not over.any():
+        return qd, 1.0
+    s = float((qd_max[over] / a[over]).min())
+    return qd * s, s
+
+
+# -- RRMC -----------------------------------------------------------------------------------------
+def rrmc(
+    kin: Any,
+    q: Any,
+    nu: Any,
+    qd_max: Any = None,
+    damping: float = 1e-2,
+    singular_tol: float = 1e-6,
+    axes: str = "all",
+) -> tuple[np.ndarray, StepInfo]:
+    """Resolved-rate motion control: qd = J0(q)^-1 nu (eq 35, 6 joints) or J0(q)^+ nu (eq 36, redundant).
+
+    ``nu`` is the base-frame spatial velocity (v, omega), shape (6,); returns (qd (n,), info).
+    When J0 has a singular value below ``singular_tol`` (or fewer than 6 joints), the damped
+    least-squares step ``J^T (J J^T + damping^2 I)^-1 nu`` is taken instead and the status is
+    ``"singular"``. If |qd_i| exceeds the joint speed limit (``qd_max``, else ``kin.qd_max``), all of qd
+    is scaled down by the same factor so its direction is kept (seed 004); ``info.scale`` says by how much.
+    ``axes`` only chooses which manipulability ``info`` reports.
+    """
+    q = _q(kin, q)
+    nu = _nu(nu)
+    J = np.asarray(kin.jacob0(q), dtype=float)
+    qd, status, method, m = _rrmc_step(J, nu, damping, singular_tol, _axes(axes))
+    qd, scale = scale_to_limits(qd, _speed_limits(kin, kin.n, qd_max))
+    res = float(np.abs(J @ qd - nu).max())
+    return qd, StepInfo(status, method, m, residual=res, scale=scale)
+
+
+def _rrmc_step(
+    J: np.ndarray, nu: np.ndarray, damping: float, singular_tol: float, rows: slice
+) -> tuple[np.ndarray, str, str, float]:
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    n = J.shape[1]
+    if rows == _AXES["all"]:
+        m = float(np.prod(s)) if n >= 6 else 0.0
+    else:
+        Jr = J[rows]
+        m = math.sqrt(max(float(np.linalg.det(Jr @ Jr.T)), 0.0))
+    x = U.T @ nu
+    if n < 6 or s[-1] < singular_tol:
+        qd = Vt.T @ (s / (s * s + damping * damping) * x)
+        return qd, "singular", "damped", m
+    return Vt.T @ (x / s), "solved", ("inverse" if n == 6 else "pinv"), m
+
+
+# -- MMC: kinematic quantities and the QP -----------------------------------------------------------
+def manipulability_jacobian(J: np.ndarray, H: np.ndarray, axes: str = "all") -> tuple[np.ndarray, float]:
+    """Manipulability Jacobian (seed 001 eq 11) and m (eq 8) from J (6, n) and H (n, 6, n): ((n,), m).
+
+    ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)`` over the rows chosen by ``axes``. At a singular
+    configuration (J J^T not invertible) Jm is returned as zeros and m as 0.
+    """
+    rows = _axes(axes)
+    Jr = J[rows]
+    A = Jr @ Jr.T
+    det = float(np.linalg.det(A))
+    n = J.shape[1]
+    if not det > 0.0:
+        return np.zeros(n), 0.0
+    m = math.sqrt(det)
+    try:
+        B = np.linalg.solve(A, Jr)  # (r, n) = (J J^T)^-1 J
+    except np.linalg.LinAlgError:
+        return np.zeros(n), 0.0
+    Jm = m * (H[:, rows, :].reshape(n, -1) @ B.ravel())
+    if not np.isfinite(Jm).all():
+        return np.zeros(n), 0.0
+    return Jm, m
+
+
+def joint_velocity_bounds(
+    q: np.ndarray,
+    qlim: np.ndarray,
+    qd_max: np.ndarray,
+    joint_limits: bool = False,
+    rho_i: float | np.ndarray = 0.9,
+    rho_s: float | np.ndarray = 0.05,
+    xi: float = 1.0,
+    dt: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds (lower, upper), each (n,), on qd: the speed limits -alpha <= qd <= alpha (seed 001) and,
+    with ``joint_limits``, velocity dampers.
+
+    A joint closer than ``rho_i`` (influence distance) to its upper limit gets
+    ``qd_i <= xi (q_max - q_i - rho_s) / (rho_i - rho_s)``, reaching 0 at the safety distance ``rho_s``;
+    symmetrically ``qd_i >= -xi (q_i - q_min - rho_s) / (rho_i - rho_s)`` near the lower limit.
+    Distances are in joint units (rad or m). The damper is a continuous-time constraint: a joint
+    faster than ``rho_i / dt`` can jump over the influence zone in one step of an integration with
+    time step ``dt``. Given ``dt``, every joint also gets ``|step| <= distance - rho_s``, i.e.
+    ``-(q_i - q_min - rho_s) / dt <= qd_i <= (q_max - q_i - rho_s) / dt``. Bounds are kept
+    consistent (lower <= upper).
+    """
+    lower, upper = -qd_max.copy(), qd_max.copy()
+    if joint_limits:
+        rho_i = np.broadcast_to(np.asarray(rho_i, dtype=float), q.shape)
+        rho_s = np.broadcast_to(np.asarray(rho_s, dtype=float), q.shape)
+        width = rho_i - rho_s
+        d_hi = qlim[1] - q
+        d_lo = q - qlim[0]
+        upper = np.where(d_hi < rho_i, np.minimum(upper, xi * (d_hi - rho_s) / width), upper)
+        lower = np.where(d_lo < rho_i, np.maximum(lower, -xi * (d_lo - rho_s) / width), lower)
+        if dt is not None:
+            upper = np.minimum(upper, (d_hi - rho_s) / dt)
+            lower = np.maximum(lower, -(d_lo - rho_s) / dt)
+        upper = np.maximum(upper, -qd_max)
+        lower = np.minimum(lower, qd_max)
+        bad = lower > upper
+        if bad.any():
+            mid = 0.5 * (lower + upper)
+            lower = np.where(bad, mid, lower)
+            upper = np.where(bad, mid, upper)
+    return lower, upper
+
+
+class MMCQP(NamedTuple):
+    """The MMC quadratic program (seed 001 eq 12 with bounds): min 0.5 x^T P x + c^T x, l <= A x <= u.
+
+    ``x = qd`` (n,), or ``(qd, s)`` (n + 6,) with an equality slack ``s``. The first 6 rows of A are
+    the equality ``J qd (+ s) = nu`` (l = u = nu); the next n rows are ``lower <= qd <= upper``.
+    """
+
+    P: np.ndarray  # (nx, nx) diagonal: lam I_n (and slack_weight I_6)
+    c: np.ndarray  # (nx,) -Jm (and 0)
+    A: np.ndarray  # (6 + n, nx): [[J, (I_6)], [I_n, (0)]]
+    l: np.ndarray  # (6 + n,)
+    u: np.ndarray  # (6 + n,)
+    J: np.ndarray  # (6, n) base-frame Jacobian
+    Jm: np.ndarray  # (n,) manipulability Jacobian
+    manipulability: float
+
+    @property
+    def n(self) -> int:
+        return self.J.shape[1]
+
+    @property
+    def has_slack(self) -> bool:
+        return self.P.shape[0] > self.J.shape[1]
+
+
+def mmc_qp(
+    J: np.ndarray,
+    Jm: np.ndarray,
+    nu: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    lam: float = 0.005,
+    slack_weight: float | None = None,
+    manipulability: float = float("nan"),
+) -> MMCQP:
+    """Assemble the MMC QP: min ``0.5 lam qd^T qd - Jm^T qd`` s.t. ``J qd = nu``, ``lower <= qd <= upper``.
+
+    With ``slack_weight`` w, the equality becomes ``J qd + s = nu`` and ``0.5 w s^T s`` is added to
+    the cost, so the QP stays feasible when the bounds cannot meet nu.
+    """
+    n = J.shape[1]
+    ns = 0 if slack_weight is None else 6
+    P = np.zeros((n + ns, n + ns))
+    P[np.arange(n), np.arange(n)] = lam
+    c = np.zeros(n + ns)
+    c[:n] = -Jm
+    A = np.zeros((6 + n, n + ns))
+    A[:6, :n] = J
+    A[6:, :n] = np.eye(n)
+    if ns:
+        P[np.arange(n, n + 6), np.arange(n, n + 6)] = slack_weight
+        A[:6, n:] = np.eye(6)
+    l = np.concatenate((nu, lower))
+    u = np.concatenate((nu, upper))
+    return MMCQP(P, c, A, l, u, J, Jm, manipulability)
+
+
+def mmc_closed_form(J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lam: float) -> np.ndarray:
+    """Solution of eq 12 without inequalities: ``J^+ nu + (I - J^+ J) Jm / lam`` (J of full row rank)."""
+    z = Jm / lam
+    return z + J.T @ np.linalg.solve(J @ J.T, nu - J @ z)
+
+
+# -- MMC: the controller ---------------------------------------------------------------------------
+class MMC:
+    """Manipulability Motion Controller (seed 001 eq 12), one OSQP problem per controller.
+
+    ``step(q, nu)`` returns joint velocities (n,) achieving the base-frame spatial velocity ``nu`` (6,)
+    while maximising the manipulability of ``axes``, within ``-alpha <= qd <= alpha`` (``qd_max``, else
+    ``kin.qd_max``, else unbounded; pass ``np.inf`` for none) and, with ``joint_limits``, velocity
+    dampers (see :func:`joint_velocity_bounds`; give the control period ``dt`` to also bound each
+    step's joint motion by the distance to the limit, which keeps fast joints inside).
+
+    The QP is built by :meth:`build` (an :class:`MMCQP`, testable on its own) and solved by
+    :meth:`solve`. When ``closed_form`` is true and the unconstrained-by-bounds solution
+    :func:`mmc_closed_form` lies within the bounds, it is the QP's solution and OSQP is skipped.
+    Otherwise OSQP, set up once and updated per step (warm-started), solves it.
+
+    ``slack`` (default: on with ``joint_limits``) adds a slack ``s`` on the equality, weighted by
+    ``slack_weight``, so the QP stays feasible when the dampers or speed limits cannot meet nu;
+    ``info.slack`` is |s|. Without it such a step is ``"infeasible"``. At a singular configuration
+    (smallest singular value of J below ``singular_tol``) and when OSQP fails, the RRMC step scaled
+    into the bounds is returned and ``info.fallback`` says so.
+    """
+
+    def __init__(
+        self,
+        kin: Any,
+        lam: float = 0.005,
+        qd_max: Any = None,
+        axes: str = "all",
+        joint_limits: bool = False,
+        rho_i: float | np.ndarray = 0.9,
+        rho_s: float | np.ndarray = 0.05,
+        xi: float = 1.0,
+        dt: float | None = None,
+        slack: bool | None = None,
+        slack_weight: float = 1e4,
+        closed_form: bool = True,
+        singular_tol: float = 1e-6,
+        osqp_settings: dict[str, Any] | None = None,
+    ) -> None:
+        if not lam > 0:
+            raise ValueError(f"lam must be positive, got {lam}")
+        if joint_limits and not np.all(np.asarray(rho_i) > np.asarray(rho_s)):
+            raise ValueError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s})")
+        self.kin = kin
+        self.n = int(kin.n)
+        self.lam = float(lam)
+        self.axes = axes
+        self._rows = _axes(axes)
+        self.qd_max = _speed_limits(kin, self.n, qd_max)
+        self._bounded = bool(joint_limits) or bool(np.isfinite(self.qd_max).any())
+        self.qlim = np.asarray(kin.qlim, dtype=float)
+        self.joint_limits = bool(joint_limits)
+        self.rho_i, self.rho_s, self.xi = rho_i, rho_s, float(xi)
+        self.dt = None if dt is None else float(dt)
+        self.slack = self.joint_limits if slack is None else bool(slack)
+        self.slack_weight = float(slack_weight)
+        self.closed_form = bool(closed_form)
+        self.singular_tol = float(singular_tol)
+        self.settings = {**OSQP_SETTINGS, **(osqp_settings or {})}
+        self._jh = getattr(kin, "jacob0_hessian0", None)
+        self._solver: osqp.OSQP | None = None
+        self._raw: Any = None
+        self._inf = float(osqp.constant("OSQP_INFTY"))
+        self._status_names = {int(s): _OSQP_STATUS.get(s.name, "error") for s in osqp.SolverStatus}
+
+    def __repr__(self) -> str:
+        return (
+            f"MMC(n={self.n}, lam={self.lam}, axes={self.axes!r}, joint_limits={self.joint_limits}, "
+            f"slack={self.slack})"
+        )
+
+    # -- build ----------------------------------------------------------------------------------
+    def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """(J0 (6, n), Jm (n,), m) at q."""
+        J, Jm, m, _, _ = self._terms(q)
+        return J, Jm, m
+
+    def _terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float, np.ndarray | None]:
+        """(J0, Jm, m, smallest singular value of J0, (J0 J0^T)^-1 J0 or None when singular)."""
+        kin = self.kin
+        H = None
+        if self._jh is not None:
+            J, H = self._jh(q)
+        elif hasattr(kin, "hessian0"):
+            J, H = kin.jacob0(q), kin.hessian0(q)
+        else:
+            J = kin.jacob0(q)
+        J = np.asarray(J, dtype=float)
+        n = self.n
+        B = None
+        if n >= 6:
+            w, V = np.linalg.eigh(J @ J.T)  # one decomposition: s_min, m and (J J^T)^-1
+            s_min = math.sqrt(max(float(w[0]), 0.0))
+            if s_min >= self.singular_tol:
+                B = V @ ((V.T @ J) / w[:, None])
+        else:
+            s_min = 0.0
+        if H is None:
+            Jm = np.asarray(kin.jacobm(q, axes=self.axes), dtype=float)
+            Jr = J[self._rows]
+            m = math.sqrt(max(float(np.linalg.det(Jr @ Jr.T)), 0.0))
+        elif B is not None and self.axes == "all":
+            m = math.sqrt(float(w.prod()))
+            Jm = m * (np.asarray(H, dtype=float).reshape(n, -1) @ B.ravel())  # eq 11
+        else:
+            Jm, m = manipulability_jacobian(J, np.asarray(H, dtype=float), self.axes)
+        return J, Jm, m, s_min, B
+
+    def bounds(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) bounds on qd at q, each (n,)."""
+        return joint_velocity_bounds(
+            q, self.qlim, self.qd_max, self.joint_limits, self.rho_i, self.rho_s, self.xi, self.dt
+        )
+
+    def build(self, q: Any, nu: Any) -> MMCQP:
+        """The QP of eq 12 at configuration q (n,) for the spatial velocity nu (6,)."""
+        q = _q(self.kin, q)
+        nu = _nu(nu)
+        J, Jm, m = self.kinematics(q)
+        lower, upper = self.bounds(q)
+        return mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m)
+
+    def step(self, q: Any, nu: Any) -> tuple[np.ndarray, StepInfo]:
+        """Joint velocity qd (n,) for the spatial velocity nu (6,) at q (n,), and how it was found.
+
+        Same answer as ``solve(build(q, nu))``; the QP matrices are only assembled when the closed
+        form does not settle the step.
+        """
+        q = _q(self.kin, q)
+        nu = _nu(nu)
+        J, Jm, m, s_min, B = self._terms(q)
+        lower, upper = self.bounds(q)
+        if self.closed_form and B is not None:
+            z = Jm / self.lam
+            qd = z + B.T @ (nu - J @ z)  # J^+ nu + (I - J^+ J) Jm / lam
+            inside = not self._bounded or ((qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all())
+            if inside and math.isfinite(qd.sum()):
+                return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(J @ qd - nu).max()))
+        qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m)
+        return self._solve(qp, s_min, try_closed_form=False)
+
+    def solve(self, qp: MMCQP) -> tuple[np.ndarray, StepInfo]:
+        """Solve a QP from :meth:`build`."""
+        w = np.linalg.eigvalsh(qp.J @ qp.J.T) if self.n >= 6 else np.zeros(1)
+        return self._solve(qp, math.sqrt(max(float(w[0]), 0.0)), self.closed_form)
+
+    def _solve(self, qp: MMCQP, s_min: float, try_closed_form: bool) -> tuple[np.ndarray, StepInfo]:
+        J, nu, m = qp.J, qp.l[:6], qp.manipulability
+        lower, upper = qp.l[6:], qp.u[6:]
+        if s_min < self.singular_tol:
+            return self._fallback(qp, "singular", "closed_form", 0)
+        if try_closed_form:
+            qd = mmc_closed_form(J, qp.Jm, nu, self.lam)
+            if np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
+                res = float(np.abs(J @ qd - nu).max())
+                return qd, StepInfo("solved", "closed_form", m, residual=res)
+        x, status, iters = self._osqp(qp)
+        n = self.n
+        if x is not None and status in ("solved", "inaccurate", "max_iter"):
+            qd = np.clip(x[:n], lower, upper)  # remove solver-tolerance overshoot of the bounds
+            res = float(np.abs(J @ qd - nu).max())
+            # an unfinished iterate, clipped into the bounds, is kept when the QP has a slack (the
+            # equality is soft anyway) or when it meets the equality; else the RRMC step is used
+            if status == "solved" or qp.has_slack or res <= 1e-6 * (1.0 + float(np.abs(nu).max())):
+                slack = float(np.linalg.norm(x[n:])) if qp.has_slack else 0.0
+                return qd, StepInfo(status, "osqp", m, iters, residual=res, slack=slack)
+        # infeasible, error, or an unusable iterate: the RRMC step, and restart the next solve from it
+        qd, info = self._fallback(qp, status if status != "solved" else "error", "osqp", iters)
+        self._warm_start(qd, qp)
+        return qd, info
+
+    def _warm_start(self, qd: np.ndarray, qp: MMCQP) -> None:
+        if self._solver is None:
+            return
+        x = np.zeros(qp.P.shape[0])
+        x[: self.n] = qd
+        if qp.has_slack:
+            x[self.n :] = qp.l[:6] - qp.J @ qd
+        with contextlib.suppress(ValueError, RuntimeError, osqp.interface.OSQPException):
+            self._solver.warm_start(x=x, y=np.zeros(qp.A.shape[0]))
+
+    def _osqp(self, qp: MMCQP) -> tuple[np.ndarray | None, str, int]:
+        """Update (q-dependent values, bounds) and solve the OSQP problem; (x, status, iterations)."""
+        l = np.maximum(qp.l, -self._inf)
+        u = np.minimum(qp.u, self._inf)
+        try:
+            if self._solver is None:
+                self._setup(qp, l, u)
+            else:
+                Ax = qp.A[self._A_rows, self._A_cols]
+                raw = self._raw
+                if raw is not None:
+                    raw.update_data_vec(q=qp.c, l=l, u=u)
+                    raw.update_data_mat(P_x=None, P_i=None, A_x=Ax, A_i=None)
+                else:  # pragma: no cover - other osqp builds
+                    self._solver.update(q=qp.c, l=l, u=u, Ax=Ax)
+            if self._raw is not None:
+                self._raw.solve()
+                info, x = self._raw.info, self._raw.solution.x
+            else:  # pragma: no cover
+                res = self._solver.solve(raise_error=False)
+                info, x = res.info, res.x
+        except (ValueError, RuntimeError, osqp.interface.OSQPException):  # pragma: no cover - defensive
+            self._solver = None
+            return None, "error", 0
+        status = self._status_names.get(int(info.status_val), "error")
+        iters = int(info.iter)
+        x = np.array(x, dtype=float)
+        if x.shape != (qp.P.shape[0],) or not np.isfinite(x).all():
+            return None, status if status != "solved" else "error", iters
+        return x, status, iters
+
+    def _setup(self, qp: MMCQP, l: np.ndarray, u: np.ndarray) -> None:
+        """Set up OSQP once with the fixed sparsity: P diagonal, A = [[J, I], [I, 0]] (J block dense)."""
+        pattern = qp.A != 0
+        pattern[:6, : self.n] = True  # the J block stays structurally dense whatever its values
+        self._A_rows, self._A_cols = _csc_order(pattern)
+        indptr = np.concatenate(([0], np.cumsum(pattern.sum(axis=0))))
+        A = sp.csc_matrix((qp.A[self._A_rows, self._A_cols], self._A_rows, indptr), shape=qp.A.shape)
+        nx = qp.P.shape[0]
+        P = sp.csc_matrix((np.diag(qp.P).copy(), np.arange(nx), np.arange(nx + 1)), shape=(nx, nx))
+        solver = osqp.OSQP()
+        solver.setup(P, qp.c, A, l, u, **self.settings)
+        self._solver = solver
+        # the compiled binding under osqp.OSQP: its update/solve skip the Python wrapper's copies and
+        # result namespace (about 16 us per step); the public calls are used if it is missing
+        raw = getattr(solver, "_solver", None)
+        ok = all(hasattr(raw, a) for a in ("update_data_vec", "update_data_mat", "solve", "info", "solution"))
+        self._raw = raw if ok else None
+
+    def _fallback(self, qp: MMCQP, status: str, method: str, iters: int) -> tuple[np.ndarray, StepInfo]:
+        """The RRMC step scaled into [lower, upper] (or zero), never NaN."""
+        J, nu = qp.J, qp.l[:6]
+        lower, upper = qp.l[6:], qp.u[6:]
+        qd, _, _, _ = _rrmc_step(J, nu, 1e-2, self.singular_tol, self._rows)
+        fallback = "rrmc"
+        if not np.isfinite(qd).all():
+            qd, fallback = np.zeros(self.n), "zero"
+        scale = 1.0
+        if (lower <= 0).all() and (upper >= 0).all():
+            with np.errstate(divide="ignore", invalid="ignore"):
+                r = np.where(qd > upper, upper / qd, np.where(qd < lower, lower / qd, 1.0))
+            scale = float(np.clip(r, 0.0, 1.0).min())
+            qd = qd * scale
+        qd = np.clip(qd, lower, upper)
+        res = float(np.abs(J @ qd - nu).max())
+        return qd, StepInfo(status, method, qp.manipulability, iters, fallback, res, scale=scale)
+
+
+def _csc_order(pattern: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of the nonzeros of a boolean pattern in CSC (column-major) order."""
+    cols, rows = np.nonzero(pattern.T)
+    return rows, cols

@@ -1,0 +1,188 @@
+"""The servo loop: position-based servoing (seed 000 eqs 37-43) driven by RRMC or MMC, integrated in time."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import ConfigurationError
+from symkin.runtime.control import MMC, StepInfo, rrmc
+from symkin.runtime.servo import pose_error_1, servo_gain, servo_velocity
+
+__all__ = ["servo", "ServoResult"]
+
+Controller = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, StepInfo]]
+
+
+@dataclass(frozen=True, eq=False)
+class ServoResult:
+    """A servo run of ``steps`` control steps.
+
+    Attributes:
+        q: (steps + 1, n) configurations, ``q[0] = q0``, ``q[k + 1] = q[k] + dt qd[k]``.
+        qd: (steps, n) joint velocities.
+        e: (steps + 1, 6) base-frame pose error (eq 37) at each configuration.
+        manipulability: (steps + 1,) manipulability of the controller's axes at each configuration.
+        info: per step, how the controller found qd (:class:`StepInfo`).
+        step_time: (steps,) seconds spent in the controller per step (kinematics and solve), perf_counter.
+        arrived: whether ``sum |e| < threshold`` was reached within ``max_steps``.
+        limit_violations: number of configurations ``q[1:]`` with a joint outside ``qlim``.
+        dt: the time step (s).
+        controller: ``"mmc"``, ``"rrmc"`` or the controller's name.
+    """
+
+    q: np.ndarray
+    qd: np.ndarray
+    e: np.ndarray
+    manipulability: np.ndarray
+    info: tuple[StepInfo, ...]
+    step_time: np.ndarray
+    arrived: bool
+    limit_violations: int
+    dt: float
+    controller: str
+
+    @property
+    def steps(self) -> int:
+        return self.qd.shape[0]
+
+    @property
+    def t(self) -> np.ndarray:
+        """(steps + 1,) time of each configuration (s)."""
+        return np.arange(self.steps + 1) * self.dt
+
+    @property
+    def status(self) -> tuple[str, ...]:
+        """Solver status of each step."""
+        return tuple(i.status for i in self.info)
+
+    @property
+    def left_limits(self) -> bool:
+        """True when some configuration left the joint limits."""
+        return self.limit_violations > 0
+
+    @property
+    def mean_manipulability(self) -> float:
+        return float(self.manipulability.mean())
+
+    @property
+    def final_manipulability(self) -> float:
+        return float(self.manipulability[-1])
+
+    def __repr__(self) -> str:
+        return (
+            f"ServoResult(controller={self.controller!r}, steps={self.steps}, arrived={self.arrived}, "
+            f"mean_manipulability={self.mean_manipulability:.4g}, limit_violations={self.limit_violations})"
+        )
+
+
+def servo(
+    kin: Any,
+    q0: Any,
+    Tep: Any,
+    controller: str | MMC | Controller = "mmc",
+    dt: float = 0.05,
+    gain: float | Any = 1.0,
+    threshold: float = 0.1,
+    max_steps: int = 500,
+    lam: float = 0.005,
+    qd_max: Any = None,
+    joint_limits: bool = False,
+    axes: str = "all",
+    nu_max: Any = None,
+    progress: bool = False,
+) -> ServoResult:
+    """Servo the end effector from configuration ``q0`` (n,) to the base-frame pose ``Tep`` (4, 4).
+
+    Each step: ``e`` from eq 37 at ``fkine(q)``; stop when ``sum |e| < threshold``; else
+    ``nu = k e`` (eq 41-42, ``gain`` a number, ``(k_t, k_r)`` or six values; capped by ``nu_max`` as in
+    :func:`symkin.runtime.servo.p_servo`), ``qd`` from the controller and ``q += dt qd``; at most
+    ``max_steps`` steps. The seed 001 protocol is the default: gain 1, dt 0.05 s, threshold 0.1.
+
+    ``controller`` is ``"mmc"`` (a new :class:`MMC` with ``lam``, ``qd_max``, ``joint_limits``,
+    ``axes`` and ``dt``), ``"rrmc"`` (:func:`rrmc` with ``qd_max``), an :class:`MMC` to reuse (its own
+    options apply), or any callable ``(q, nu) -> (qd, StepInfo)``; ``kin`` needs ``n``, ``qlim``,
+    ``fkine``, ``manipulability(q, axes)`` and what the controller uses. ``qd_max=None`` uses
+    ``kin.qd_max`` when the robot has it; pass ``np.inf`` for no speed limit.
+    """
+    n = int(kin.n)
+    q = np.array(q0, dtype=float)
+    if q.shape != (n,) or not np.isfinite(q).all():
+        raise ConfigurationError(f"q0 must be {n} finite numbers, got {q0!r}")
+    if not dt > 0:
+        raise ValueError(f"dt must be positive, got {dt}")
+    if max_steps < 0:
+        raise ValueError(f"max_steps must be >= 0, got {max_steps}")
+    Tep = np.asarray(Tep, dtype=float)
+    k = servo_gain(gain)
+    step, name = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
+    if isinstance(controller, MMC):
+        axes = controller.axes
+    qlo, qhi = np.asarray(kin.qlim, dtype=float)
+
+    Q, QD, E, M, infos, times = [q.copy()], [], [], [], [], []
+    arrived = False
+    bar = _progress(progress, max_steps, name)
+    try:
+        for _ in range(max_steps + 1):
+            e = pose_error_1(kin.fkine(q), Tep)
+            E.append(e)
+            nu, arrived = servo_velocity(e, k, threshold, nu_max)
+            if arrived or len(QD) == max_steps:
+                break
+            t0 = time.perf_counter()
+            qd, info = step(q, nu)
+            times.append(time.perf_counter() - t0)
+            M.append(info.manipulability)
+            QD.append(qd)
+            infos.append(info)
+            q = q + dt * qd
+            Q.append(q)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    M.append(float(kin.manipulability(q, axes=axes)))
+    Qa = np.array(Q)
+    viol = int((((Qa[1:] < qlo) | (Qa[1:] > qhi)).any(axis=1)).sum())
+    return ServoResult(
+        q=Qa,
+        qd=np.array(QD).reshape(len(QD), n),
+        e=np.array(E),
+        manipulability=np.array(M, dtype=float),
+        info=tuple(infos),
+        step_time=np.array(times),
+        arrived=arrived,
+        limit_violations=viol,
+        dt=float(dt),
+        controller=name,
+    )
+
+
+def _controller(
+    kin: Any, controller: Any, lam: float, qd_max: Any, joint_limits: bool, axes: str, dt: float
+) -> tuple[Controller, str]:
+    if isinstance(controller, MMC):
+        return controller.step, "mmc"
+    if controller == "mmc":
+        return MMC(kin, lam=lam, qd_max=qd_max, axes=axes, joint_limits=joint_limits, dt=dt).step, "mmc"
+    if controller == "rrmc":
+        if joint_limits:
+            raise ValueError("joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)")
+        return (lambda q, nu: rrmc(kin, q, nu, qd_max=qd_max, axes=axes)), "rrmc"
+    if callable(controller):
+        return controller, getattr(controller, "__name__", type(controller).__name__)
+    raise ValueError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
+
+
+def _progress(progress: bool, total: int, name: str) -> Any:
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=f"servo ({name})", leave=False)

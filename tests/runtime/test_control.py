@@ -1,0 +1,400 @@
+"""RRMC, MMC, position-based servoing and the Table I benchmark (seed 000 eqs 35-43, seed 001)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin.bench.mmc import format_table1, plot_task, run_table1, table1_tasks
+from symkin.errors import ConfigurationError, PoseError
+from symkin.runtime.control import (
+    MMC,
+    StepInfo,
+    joint_velocity_bounds,
+    manipulability_jacobian,
+    mmc_closed_form,
+    mmc_qp,
+    rrmc,
+)
+from symkin.runtime.loop import servo
+from symkin.runtime.servo import angle_axis_1, p_servo, pose_error_1, servo_velocity
+from tests.conftest import assert_close
+
+PANDA_ETS = (
+    "tz(0.333) Rz(q0) Rx(-pi/2) Rz(q1) Rx(pi/2) tz(0.316) Rz(q2) tx(0.0825) Rx(pi/2) Rz(q3) "
+    "tx(-0.0825) Rx(-pi/2) tz(0.384) Rz(q4) Rx(pi/2) Rz(q5) tx(0.088) Rx(pi/2) tz(0.107) Rz(q6) "
+    "tz(0.1034) Rz(-pi/4)"
+)
+PANDA_QLIM = [
+    [-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973],
+    [2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973],
+]
+PANDA_QD_MAX = [2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61]
+
+
+@pytest.fixture(scope="module")
+def panda() -> symkin.Robot:
+    """The Panda of seed 000 Fig. 1 with its datasheet limits (independent of the built-in robots)."""
+    return symkin.Robot.from_ets(
+        PANDA_ETS,
+        qlim=PANDA_QLIM,
+        name="panda",
+        qd_max=PANDA_QD_MAX,
+        configs={"qr": [0, -0.3, 0, -2.2, 0, 2.0, math.pi / 4]},
+    )
+
+
+@pytest.fixture(scope="module")
+def tasks(panda):
+    """Eight Table I tasks (seed 001 eq 14)."""
+    return table1_tasks(panda, 8, np.random.default_rng(7))
+
+
+def _rot(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _pose(R, t=(0, 0, 0)):
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
+# -- servo: pose error and velocity command (eqs 37-43) ------------------------------------------
+@pytest.mark.parametrize(
+    "axis, angle",
+    [
+        ([1, 0, 0], 0.3),
+        ([0, 1, 1], 2.0),
+        ([1, 2, 3], math.pi - 1e-9),
+        ([1, 1, 0], math.pi),
+        ([0, 0, 1], 1e-9),
+    ],
+)
+def test_angle_axis_recovers_the_rotation_vector(axis, angle):
+    a = angle_axis_1(_rot(axis, angle))
+    assert_close(a, angle * np.asarray(axis) / np.linalg.norm(axis), 1e-8, "alpha(R)")
+
+
+@pytest.mark.parametrize("diag", [(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)])
+def test_angle_axis_of_diagonal_rotations_is_eq_40(diag):
+    expected = np.zeros(3) if diag == (1, 1, 1) else math.pi / 2 * (np.array(diag) + 1.0)
+    assert_close(angle_axis_1(np.diag(diag).astype(float)), expected, 1e-15, "eq 40")
+
+
+def test_pose_error_matches_the_batched_ik_pose_error(panda):
+    ik = pytest.importorskip("symkin.runtime.ik")
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        Te, Tep = panda.fkine(panda.random_q(seed=rng)), panda.fkine(panda.random_q(seed=rng))
+        assert_close(pose_error_1(Te, Tep), ik.pose_error(Te, Tep), 1e-12, "eq 37")
+
+
+def test_pose_error_is_translation_and_base_frame_rotation():
+    Te = _pose(_rot([0, 0, 1], 0.5), (0.1, 0.2, 0.3))
+    Tep = _pose(_rot([1, 0, 0], 0.4) @ Te[:3, :3], (0.4, 0.2, 0.0))
+    assert_close(pose_error_1(Te, Tep), [0.3, 0.0, -0.3, 0.4, 0.0, 0.0], 1e-12, "e")
+
+
+def test_p_servo_gain_forms_arrival_and_caps():
+    Te, Tep = np.eye(4), _pose(_rot([0, 0, 1], 0.2), (0.3, 0.0, 0.0))
+    nu, arrived = p_servo(Te, Tep, gain=(2.0, 0.5))
+    assert not arrived
+    assert_close(nu, [0.6, 0, 0, 0, 0, 0.1], 1e-12, "k e")
+    nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=0.1)  # eq 43: |k e| capped, direction kept
+    assert_close(np.linalg.norm(nu), 0.1, 1e-12, "|nu|")
+    assert_close(nu / np.linalg.norm(nu), np.array([0.3, 0, 0, 0, 0, 0.2]) / math.hypot(0.3, 0.2), 1e-12)
+    nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=(0.1, 1.0))  # translation and rotation capped separately
+    assert_close(nu, [0.1, 0, 0, 0, 0, 0.2], 1e-12, "separate caps")
+    nu, arrived = p_servo(Te, Tep, threshold=0.6)
+    assert arrived and not nu.any()
+    with pytest.raises(ValueError):
+        servo_velocity(np.ones(6), gain=(1.0, 2.0, 3.0))
+    with pytest.raises(PoseError):
+        p_servo(np.eye(3), Tep)
+
+
+# -- the manipulability Jacobian and the QP -------------------------------------------------------
+@pytest.mark.parametrize("axes", ["all", "trans", "rot"])
+def test_manipulability_jacobian_matches_finite_differences(panda, axes):
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        q = panda.random_q(seed=rng)
+        Jm, m = manipulability_jacobian(panda.jacob0(q), panda.hessian0(q), axes)
+        h = 1e-6
+        fd = np.array(
+            [
+                (panda.manipulability(q + h * e, axes) - panda.manipulability(q - h * e, axes)) / (2 * h)
+                for e in np.eye(7)
+            ]
+        )
+        assert_close(m, panda.manipulability(q, axes), 1e-12, "m")
+        assert_close(Jm, fd, 1e-7, f"Jm ({axes})")
+        assert_close(Jm, panda.jacobm(q, axes), 1e-12, "Robot.jacobm")
+
+
+def test_qp_matrices_have_the_fixed_structure(panda):
+    q, nu = panda.qr, np.arange(6) / 10
+    J, H = panda.jacob0(q), panda.hessian0(q)
+    Jm, m = manipulability_jacobian(J, H)
+    lo, hi = -np.ones(7), np.ones(7)
+    qp = mmc_qp(J, Jm, nu, lo, hi, lam=0.01)
+    assert qp.P.shape == (7, 7) and qp.A.shape == (13, 7) and not qp.has_slack
+    assert_close(qp.P, 0.01 * np.eye(7), 0, "P")
+    assert_close(qp.c, -Jm, 0, "c")
+    assert_close(qp.A, np.vstack((J, np.eye(7))), 0, "A")
+    assert_close(qp.l, np.r_[nu, lo], 0, "l")
+    assert_close(qp.u, np.r_[nu, hi], 0, "u")
+    qs = mmc_qp(J, Jm, nu, lo, hi, lam=0.01, slack_weight=1e4)
+    assert qs.P.shape == (13, 13) and qs.has_slack
+    assert_close(qs.A[:6, 7:], np.eye(6), 0, "slack columns")
+    assert_close(np.diag(qs.P)[7:], np.full(6, 1e4), 0, "slack weight")
+    built = MMC(panda, lam=0.01, qd_max=1.0).build(q, nu)
+    assert_close(built.A, qp.A, 1e-14, "MMC.build A")
+    assert_close(built.c, qp.c, 1e-12, "MMC.build c")
+
+
+def test_closed_form_agrees_with_the_qp_without_active_inequalities(panda):
+    rng = np.random.default_rng(2)
+    ctrl = MMC(panda, qd_max=np.inf, closed_form=False)
+    for _ in range(10):
+        q, nu = panda.random_q(seed=rng), rng.normal(0, 0.2, 6)
+        qp = ctrl.build(q, nu)
+        qd, info = ctrl.solve(qp)
+        assert info.method == "osqp" and info.status == "solved", info
+        assert_close(qd, mmc_closed_form(qp.J, qp.Jm, nu, ctrl.lam), 1e-7, "QP vs closed form")
+
+
+def test_step_is_solve_of_build(panda):
+    rng = np.random.default_rng(5)
+    for kwargs in ({"qd_max": np.inf}, {"qd_max": 0.3}, {"qd_max": 0.3, "joint_limits": True, "dt": 0.05}):
+        a, b = MMC(panda, **kwargs), MMC(panda, **kwargs)
+        for _ in range(5):
+            q, nu = panda.random_q(seed=rng), rng.normal(0, 0.2, 6)
+            qd_a, info_a = a.step(q, nu)
+            qd_b, info_b = b.solve(b.build(q, nu))
+            assert info_a.status == info_b.status and info_a.method == info_b.method, kwargs
+            assert_close(qd_a, qd_b, 1e-9, f"step vs solve(build) {kwargs}")
+
+
+def test_mmc_raises_the_manipulability_rate_over_rrmc_at_every_step(panda):
+    # the QP optimum has lam/2|qd|^2 - Jm.qd <= that of J^+ nu (feasible, least norm),
+    # so Jm.qd_mmc >= Jm.qd_rrmc: MMC never lowers the manipulability rate below RRMC's
+    rng = np.random.default_rng(3)
+    ctrl = MMC(panda, qd_max=np.inf)
+    for _ in range(30):
+        q, nu = panda.random_q(seed=rng), rng.normal(0, 0.3, 6)
+        qd_m, _ = ctrl.step(q, nu)
+        qd_r, _ = rrmc(panda, q, nu, qd_max=np.inf)
+        Jm = panda.jacobm(q)
+        assert Jm @ qd_m >= Jm @ qd_r - 1e-9
+
+
+# -- servo runs ------------------------------------------------------------------------------------
+def test_equality_and_speed_limits_hold_on_every_osqp_step(panda, tasks):
+    q0s, Teps = tasks
+    ctrl = MMC(panda, closed_form=False)  # OSQP on every step, the Panda's speed limits
+    r = servo(panda, q0s[0], Teps[0], ctrl, nu_max=(0.2, 0.4), max_steps=60)
+    assert r.steps == 60 or r.arrived
+    qd_max = np.array(PANDA_QD_MAX)
+    for k, info in enumerate(r.info):
+        assert info.method == "osqp" and info.ok, info
+        J = panda.jacob0(r.q[k])
+        assert np.abs(J @ r.qd[k] - _nu_of(r, k)).max() < 1e-7, f"step {k}: J qd != nu"
+        assert (np.abs(r.qd[k]) <= qd_max + 1e-12).all()
+
+
+def _nu_of(result, k, cap=(0.2, 0.4)):
+    nu, _ = servo_velocity(result.e[k], 1.0, 0.1, cap)
+    return nu
+
+
+def test_small_speed_limits_hold_and_infeasible_steps_fall_back(panda, tasks):
+    q0s, Teps = tasks
+    alpha = np.full(7, 0.05)
+    r = servo(panda, q0s[1], Teps[1], "mmc", qd_max=alpha, max_steps=20)
+    assert np.isfinite(r.qd).all()
+    assert (np.abs(r.qd) <= alpha + 1e-12).all()
+    assert "infeasible" in r.status
+    bad = [i for i in r.info if i.status == "infeasible"]
+    assert all(i.fallback == "rrmc" for i in bad)
+
+
+def test_infeasible_velocity_bound_is_reported_not_raised(panda):
+    nu = np.array([0.5, 0, 0, 0, 0, 1.0])
+    qd, info = MMC(panda, qd_max=0.01).step(panda.qr, nu)
+    assert info.status == "infeasible" and info.fallback == "rrmc"
+    assert np.isfinite(qd).all() and (np.abs(qd) <= 0.01 + 1e-15).all()
+    qd_s, info_s = MMC(panda, qd_max=0.01, slack=True).step(panda.qr, nu)  # slack keeps it feasible
+    assert info_s.status == "solved" and info_s.fallback is None and info_s.slack > 0.1
+    assert (np.abs(qd_s) <= 0.01 + 1e-12).all()
+
+
+def test_singular_start_is_handled(panda, tasks):
+    q = panda.qz  # joints 1 and 3 aligned: J has rank 5
+    nu = np.array([0.1, 0.0, -0.1, 0.0, 0.2, 0.0])
+    qd, info = MMC(panda).step(q, nu)
+    assert info.status == "singular" and info.fallback == "rrmc" and np.isfinite(qd).all()
+    qd, info = rrmc(panda, q, nu)
+    assert info.status == "singular" and info.method == "damped" and np.isfinite(qd).all()
+    _, Teps = tasks
+    Tep = panda.fkine(panda.qr)
+    for c in ("rrmc", "mmc"):
+        r = servo(panda, q, Tep, c)
+        assert r.arrived and np.isfinite(r.q).all() and r.status[0] == "singular", c
+        assert r.status[-1] == "solved"
+
+
+def test_planar_arm_stretched_out_gives_finite_steps():
+    planar = symkin.Robot.from_ets("Rz(q0) tx(1) Rz(q1) tx(1) Rz(q2) tx(1)", name="planar3")
+    qd, info = rrmc(planar, np.zeros(3), np.array([0.1, 0.1, 0, 0, 0, 0.1]))
+    assert info.status == "singular" and np.isfinite(qd).all()
+    qd, info = MMC(planar).step(np.zeros(3), np.array([0.1, 0.1, 0, 0, 0, 0.1]))
+    assert info.fallback == "rrmc" and np.isfinite(qd).all()
+
+
+def test_both_controllers_arrive_at_reachable_targets(panda, tasks):
+    q0s, Teps = tasks
+    mmc = MMC(panda, qd_max=np.inf)
+    for q0, Tep in zip(q0s[:4], Teps[:4]):
+        for c in ("rrmc", mmc):
+            r = servo(panda, q0, Tep, c, qd_max=np.inf)
+            assert r.arrived and np.abs(r.e[-1]).sum() < 0.1
+            assert r.q.shape == (r.steps + 1, 7) and r.qd.shape == (r.steps, 7)
+            assert r.e.shape == (r.steps + 1, 6) and r.manipulability.shape == (r.steps + 1,)
+            assert r.step_time.shape == (r.steps,) and len(r.info) == r.steps
+            assert_close(r.q[1:], r.q[:-1] + 0.05 * r.qd, 1e-14, "integration")
+            assert np.isfinite(r.manipulability).all()
+
+
+def test_mmc_raises_manipulability_on_average(panda, tasks):
+    q0s, Teps = tasks
+    mmc = MMC(panda, qd_max=np.inf)
+    mean_r, mean_m, fin_r, fin_m = [], [], [], []
+    for q0, Tep in zip(q0s, Teps):
+        r = servo(panda, q0, Tep, "rrmc", qd_max=np.inf)
+        m = servo(panda, q0, Tep, mmc)
+        mean_r.append(r.mean_manipulability)
+        mean_m.append(m.mean_manipulability)
+        fin_r.append(r.final_manipulability)
+        fin_m.append(m.final_manipulability)
+    # MMC is greedy: a single task can end lower (about 1 in 20 Panda tasks), the average does not
+    assert np.mean(mean_m) > 1.1 * np.mean(mean_r)
+    assert np.mean(fin_m) > 1.1 * np.mean(fin_r)
+    assert_close(mean_m[0], servo(panda, q0s[0], Teps[0], mmc).mean_manipulability, 1e-9, "repeatable")
+
+
+def test_joint_limit_dampers_keep_joints_inside(panda):
+    q0s, Teps = table1_tasks(panda, 10, np.random.default_rng(0))
+    mmc = MMC(panda, qd_max=np.inf)
+    for q0, Tep in zip(q0s, Teps):
+        if servo(panda, q0, Tep, mmc, max_steps=150).left_limits:
+            break
+    else:
+        pytest.fail("no task left the joint limits with plain MMC")
+    r = servo(panda, q0, Tep, "mmc", qd_max=np.inf, joint_limits=True, max_steps=150)
+    assert r.limit_violations == 0 and panda.within_limits(r.q).all()
+    assert np.isfinite(r.qd).all()
+    assert all(i.slack >= 0 for i in r.info)
+
+
+def test_joint_velocity_bounds_dampers():
+    qlim = np.array([[-1.0, -1.0], [1.0, 1.0]])
+    alpha = np.array([2.0, 2.0])
+    lo, hi = joint_velocity_bounds(np.array([0.0, 0.5]), qlim, alpha, True, rho_i=0.6, rho_s=0.1, xi=1.0)
+    assert_close(lo, [-2.0, -2.0], 0, "far from lower limits")
+    assert_close(hi, [2.0, (0.5 - 0.1) / 0.5], 1e-15, "damper near the upper limit")
+    lo, hi = joint_velocity_bounds(np.array([0.95, 0.0]), qlim, alpha, True, rho_i=0.6, rho_s=0.1, dt=0.1)
+    # joint 0 is inside the safety distance: it must move away, by (0.05 - 0.1) / dt in one step
+    assert_close(hi, [(0.05 - 0.1) / 0.1, 2.0], 1e-12, "one-step position bound")
+    assert_close(lo, [-2.0, -2.0], 0, "lower")
+
+
+def test_rrmc_speed_scaling_keeps_direction(panda):
+    rng = np.random.default_rng(4)
+    qd_max = np.full(7, 0.3)
+    scaled_once = False
+    for _ in range(20):
+        q, nu = panda.random_q(seed=rng), rng.normal(0, 0.5, 6)
+        raw, info_raw = rrmc(panda, q, nu, qd_max=np.inf)
+        qd, info = rrmc(panda, q, nu, qd_max=qd_max)
+        assert (np.abs(qd) <= qd_max + 1e-12).all()
+        assert_close(qd, info.scale * raw, 1e-12, "same direction")
+        if info.scale < 1:
+            scaled_once = True
+            assert np.isclose(np.abs(qd).max(), 0.3)
+        else:
+            assert info_raw.residual < 1e-10
+    assert scaled_once
+
+
+def test_rrmc_inverts_a_six_joint_jacobian():
+    ur = symkin.Robot.from_ets(
+        "tz(0.089) Rz(q0) Rx(pi/2) Rz(q1) tx(-0.425) Rz(q2) tx(-0.392) Rz(q3) tz(0.109) Rx(pi/2) Rz(q4) "
+        "tz(0.095) Rx(-pi/2) Rz(q5) tz(0.082)",
+        name="ur5",
+    )
+    q = np.array([0.1, -1.0, 1.2, -0.5, 1.3, 0.2])
+    nu = np.array([0.1, -0.2, 0.05, 0.1, 0.0, -0.3])
+    qd, info = rrmc(ur, q, nu)
+    assert info.method == "inverse" and info.status == "solved"
+    assert_close(qd, np.linalg.solve(ur.jacob0(q), nu), 1e-10, "J^-1 nu")
+
+
+def test_kinematics_fallbacks_give_the_same_step(panda):
+    class JmOnly:  # no hessian0: Jm comes from kin.jacobm
+        n, qlim, qd_max = panda.n, panda.qlim, None
+        fkine, jacob0, jacobm, manipulability = panda.fkine, panda.jacob0, panda.jacobm, panda.manipulability
+
+    class Combined(JmOnly):  # one call for J and H
+        def jacob0_hessian0(self, q):
+            return panda.jacob0(q), panda.hessian0(q)
+
+    q, nu = panda.qr, np.array([0.1, 0, 0, 0, 0.1, 0])
+    ref, _ = MMC(panda, qd_max=np.inf).step(q, nu)
+    for kin in (JmOnly(), Combined()):
+        qd, info = MMC(kin).step(q, nu)
+        assert_close(qd, ref, 1e-10, type(kin).__name__)
+        assert info.ok
+
+
+def test_bad_input_raises():
+    kin = symkin.Robot.from_ets(PANDA_ETS)
+    with pytest.raises(ConfigurationError):
+        MMC(kin).step(np.zeros(6), np.zeros(6))
+    with pytest.raises(ValueError):
+        MMC(kin).step(np.zeros(7), np.full(6, np.nan))
+    with pytest.raises(ValueError):
+        MMC(kin, axes="xyz")
+    with pytest.raises(ValueError):
+        servo(kin, np.zeros(7), np.eye(4), controller="pid")
+    with pytest.raises(ValueError):
+        servo(kin, np.zeros(7), np.eye(4), controller="rrmc", joint_limits=True)
+
+
+def test_step_info_is_frozen():
+    info = StepInfo("solved", "osqp", 0.1)
+    with pytest.raises(AttributeError):
+        info.status = "x"  # type: ignore[misc]
+
+
+# -- the benchmark ---------------------------------------------------------------------------------
+def test_table1_benchmark_runs_and_formats(panda, tmp_path):
+    res = run_table1((panda,), n_tasks=2, progress=False, max_steps=100)
+    json.dumps(res)
+    r = res["robots"]["panda"]
+    assert {"rrmc", "mmc", "mmc_jl", "paper"} <= set(r)
+    assert r["mmc_jl"]["left_limits"] == 0
+    text = format_table1(res)
+    assert "paper" in text and "self-colliding" in text
+    pytest.importorskip("matplotlib")
+    q0s, Teps = table1_tasks(panda, 1, np.random.default_rng(0))
+    out = plot_task(panda, q0s[0], Teps[0], tmp_path / "fig3.png", qd_max=np.inf, max_steps=100)
+    assert (tmp_path / "fig3.png").stat().st_size > 1000
+    assert set(out) == {"rrmc", "mmc"}
