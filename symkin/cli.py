@@ -292,7 +292,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
     result = run_mmc(robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json)
     print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_mmc(result))
     if args.plot:
-        plot_task(robots[0], args.plot, seed=args.seed)
+        from symkin.bench.mmc import table1_tasks
+        from symkin.compile import compile as compile_robot
+
+        kin = compile_robot(_robot(robots[0]), backend="c")
+        q0, Tep = table1_tasks(kin, 1, np.random.default_rng(args.seed))
+        plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
         if not args.json:
             print(f"plot written to {args.plot}")
     return 0

@@ -131,3 +131,22 @@ def test_python_m_symkin_and_help():
         [sys.executable, "-m", "symkin", "frobnicate"], capture_output=True, text=True, cwd=ROOT
     )
     assert res.returncode == 2
+
+
+@pytest.mark.parametrize("controller", ["mmc", "rrmc"])
+def test_servo_arrives_and_plots(capsys, tmp_path, controller):
+    robot = load("panda")
+    target = robot.qr + np.array([0.2, -0.1, 0.1, 0.2, 0.0, 0.1, 0.0])
+    png = tmp_path / "servo.png"
+    argv = ["servo", "panda", "--from-q", " ".join(map(str, target)), "--controller", controller]
+    code, out, _ = run(capsys, *argv, "--plot", str(png), "--json")
+    data = json.loads(out)
+    assert code == 0 and data["arrived"], data
+    assert png.stat().st_size > 1000
+    np.testing.assert_allclose(robot.fkine(data["q_final"])[:3, 3], robot.fkine(target)[:3, 3], atol=0.05)
+
+
+def test_bench_mmc_runs_small(capsys, tmp_path):
+    png = tmp_path / "fig3.png"
+    code, out, _ = run(capsys, "bench", "mmc", "-n", "2", "--robot", "planar3", "--plot", str(png))
+    assert code == 0 and "Table I" in out and png.exists()
