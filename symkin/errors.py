@@ -19,7 +19,7 @@ class ETSParseError(SymkinError, ValueError):
         self.position = position
         if position is not None and text:
             pointer = " " * position + "^"
-            message = f"{message}\n  {text}\n  {pointer}"
+            message = f"{message} (column {position + 1})\n  {text}\n  {pointer}"
         super().__init__(message)
 
 

@@ -56,7 +56,12 @@ class Axis(Enum):
 
 
 def _fraction_text(r: Fraction) -> str:
-    """Shortest exact text for a rational: a decimal when it terminates, else ``n/d``."""
+    """Shortest exact text for a rational: a float's repr when that is exact (``0.333``, ``1e+300``),
+    else a terminating decimal, else ``n/d``."""
+    if abs(r) < 1e308:
+        short = repr(float(r))
+        if Fraction(short) == r:
+            return short[:-2] if short.endswith(".0") else short
     if r.denominator == 1:
         return str(r.numerator)
     d = r.denominator
