@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.emit.c.build import cache_dir
 from symkin.errors import CompileError, SymkinError
 from symkin.model.robot import Robot, as_batch
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
@@ -25,12 +26,6 @@ __all__ = ["compile", "generate", "write_generated", "BACKENDS", "cache_dir"]
 BACKENDS = ("c", "numpy", "casadi")
 _LOADED: dict[str, Kinematics] = {}
 _FUNCTIONS: dict[str, list] = {}  # derived and CSE'd functions by robot key, shared by the backends
-
-
-def cache_dir() -> Path:
-    """The per-user cache folder: ``$SYMKIN_CACHE`` or ``~/.cache/symkin``."""
-    root = os.environ.get("SYMKIN_CACHE")
-    return Path(root) if root else Path.home() / ".cache" / "symkin"
 
 
 @lru_cache(maxsize=1)

@@ -10,7 +10,7 @@ longer matches its checksum (truncated, overwritten) is moved aside and rebuilt.
 
 Environment: ``SYMKIN_CACHE`` (cache folder, default ``~/.cache/symkin``), ``CC`` (compiler
 command, default ``cc``, then ``gcc``, then ``clang``), ``SYMKIN_CFLAGS`` (replaces the
-optimisation flags ``-O3 -march=native``).
+optimisation flags ``-O2 -march=native``).
 """
 
 from __future__ import annotations
