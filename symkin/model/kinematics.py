@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -123,12 +124,16 @@ class NumericKinematics:
         )
 
     # -- core ------------------------------------------------------------------------------
-    @property
+    @cached_property
     def axvec(self) -> np.ndarray:
         """(n, 3) signed unit joint axes in each joint's own frame, chain order."""
         v = np.zeros((self.n, 3))
         v[np.arange(self.n), self.axis] = self.sign
         return v
+
+    @cached_property
+    def _axcol(self) -> np.ndarray:
+        return self.axvec[:, :, None]
 
     def _weights(self, Q: np.ndarray) -> np.ndarray:
         """(N, n, 3) segment weights (cos, sin, 1) or (q, 0, 1), chain order."""
@@ -143,12 +148,11 @@ class NumericKinematics:
         """Frames just before each joint (N, n, 4, 4), chain order, and the end pose (N, 4, 4)."""
         N = Q.shape[0]
         S = np.einsum("Nnk,nkij->Nnij", self._weights(Q), self.K)
-        P = np.empty((N, self.n, 4, 4))
-        T = np.broadcast_to(self.P0, (N, 4, 4))
+        P = np.empty((N, self.n + 1, 4, 4))
+        P[:, 0] = self.P0
         for k in range(self.n):
-            P[:, k] = T
-            T = T @ S[:, k]
-        return P, np.ascontiguousarray(T)
+            np.matmul(P[:, k], S[:, k], out=P[:, k + 1])
+        return P[:, : self.n], P[:, self.n]
 
     def fkine(self, Q: np.ndarray) -> np.ndarray:
         """End-effector pose 0T_e, (N, 4, 4) (eq 1)."""
@@ -162,7 +166,7 @@ class NumericKinematics:
 
     def _columns(self, P: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Base-frame (Jv, Jw), each (N, n, 3), chain order (eqs 31-34)."""
-        w = np.einsum("Nnij,nj->Nni", P[..., :3, :3], self.axvec)  # (N, n, 3) signed joint axes
+        w = (P[..., :3, :3] @ self._axcol)[..., 0]  # (N, n, 3) signed joint axes
         r = T[:, None, :3, 3] - P[:, :, :3, 3]
         rev = self.revolute[:, None]
         Jv = np.where(rev, cross(w, r), w)
