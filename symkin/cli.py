@@ -108,7 +108,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
 def cmd_generate(args: argparse.Namespace) -> int:
     from symkin.emit.snapshot import compare_or_update
 
-    differ = compare_or_update(args.output, update=not args.check)
+    differ = compare_or_update(args.output, update=not args.check, progress=sys.stderr.isatty())
     if args.check:
         if differ:
             print(f"{len(differ)} generated files are out of date in {args.output}/ (run `symkin generate`):")

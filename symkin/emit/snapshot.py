@@ -17,12 +17,16 @@ __all__ = ["snapshot_files", "compare_or_update", "COMMAND"]
 COMMAND = "symkin generate"
 
 
-def snapshot_files(robots: Iterable[str] | None = None, backends: Iterable[str] = BACKENDS) -> dict[str, str]:
+def snapshot_files(
+    robots: Iterable[str] | None = None, backends: Iterable[str] = BACKENDS, progress: bool = False
+) -> dict[str, str]:
     """Every generated file as ``"<robot>/<backend>/<file>" -> text``."""
+    from tqdm import tqdm
+
     from symkin.model.robots import list_robots, load
 
     out: dict[str, str] = {}
-    for name in robots or list_robots():
+    for name in tqdm(list(robots or list_robots()), desc="generating", disable=not progress, leave=False):
         robot = load(name)
         for backend in backends:
             for fname, text in generate(robot, backend, COMMAND).items():
@@ -31,14 +35,14 @@ def snapshot_files(robots: Iterable[str] | None = None, backends: Iterable[str] 
 
 
 def compare_or_update(
-    folder: str | Path, update: bool = False, robots: Iterable[str] | None = None
+    folder: str | Path, update: bool = False, robots: Iterable[str] | None = None, progress: bool = False
 ) -> list[str]:
     """Files under ``folder`` that differ from a fresh generation (missing, changed or stale).
 
     With ``update`` the folder is rewritten to match and the same list is returned.
     """
     folder = Path(folder)
-    fresh = snapshot_files(robots)
+    fresh = snapshot_files(robots, progress=progress)
     existing = {
         p.relative_to(folder).as_posix(): p
         for p in folder.rglob("*")
