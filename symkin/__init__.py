@@ -29,6 +29,22 @@ from symkin.runtime.servo import p_servo
 
 __version__ = "0.1.0"
 
+_LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
+    "derive": ("symkin.derivation", "derivation"),
+    "derive_steps": ("symkin.derivation", "derive_steps"),
+    "Derivation": ("symkin.derivation", "Derivation"),
+}
+
+
+def __getattr__(name: str):  # noqa: ANN202
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        return getattr(importlib.import_module(module), attr)
+    raise AttributeError(f"module 'symkin' has no attribute {name!r}")
+
+
 __all__ = [
     "BACKENDS",
     "ET",
@@ -37,6 +53,7 @@ __all__ = [
     "CompileError",
     "ConfigurationError",
     "Const",
+    "Derivation",
     "DHLink",
     "ETSParseError",
     "IKResult",
@@ -52,6 +69,8 @@ __all__ = [
     "UnknownRobotError",
     "__version__",
     "compile",
+    "derive",
+    "derive_steps",
     "generate",
     "ik",
     "list_robots",

@@ -136,7 +136,9 @@ def cmd_derive(args: argparse.Namespace) -> int:
     from symkin.derivation import derivation
 
     robot = _robot(args.robot)
-    text = derivation(robot, fmt=args.format, symbolic_constants=args.symbolic_constants)
+    text = derivation(
+        robot, fmt=args.format, symbolic_constants=args.symbolic_constants, simplify=not args.no_simplify
+    )
     if args.output:
         Path(args.output).write_text(text)
         print(f"wrote the derivation of {robot.name} to {args.output}")
@@ -356,6 +358,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     s.add_argument("--format", choices=("markdown", "latex"), default="markdown")
     s.add_argument("--symbolic-constants", action="store_true", help="keep link lengths as named symbols")
+    s.add_argument("--no-simplify", action="store_true", help="show the literal products of eqs 1, 5, 26-28")
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
     s.set_defaults(func=cmd_derive)
 

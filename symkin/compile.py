@@ -34,7 +34,7 @@ def _templates_digest() -> str:
 
     h = hashlib.sha256()
     root = template_dir()
-    for path in sorted(root.rglob("*.j2")):
+    for path in sorted(p for b in BACKENDS for p in (root / b).rglob("*.j2")):
         h.update(path.relative_to(root).as_posix().encode())
         h.update(path.read_bytes())
     return h.hexdigest()

@@ -150,3 +150,12 @@ def test_bench_mmc_runs_small(capsys, tmp_path):
     png = tmp_path / "fig3.png"
     code, out, _ = run(capsys, "bench", "mmc", "-n", "2", "--robot", "planar3", "--plot", str(png))
     assert code == 0 and "Table I" in out and png.exists()
+
+
+def test_derive_prints_markdown_and_writes_latex(capsys, tmp_path):
+    code, out, _ = run(capsys, "derive", "planar3", "--symbolic-constants")
+    assert code == 0 and "l_{1}" in out and "$$" in out
+    tex = tmp_path / "planar3.tex"
+    code, out, _ = run(capsys, "derive", "planar2", "--format", "latex", "-o", str(tex))
+    text = tex.read_text()
+    assert code == 0 and text.startswith("\\documentclass") and text.rstrip().endswith("\\end{document}")

@@ -28,7 +28,7 @@ from fractions import Fraction
 
 from symkin.errors import ETSParseError
 
-__all__ = ["Axis", "Const", "ET", "ETS", "surd", "tx", "ty", "tz", "Rx", "Ry", "Rz"]
+__all__ = ["Axis", "Const", "ET", "ETS", "rational_text", "surd", "tx", "ty", "tz", "Rx", "Ry", "Rz"]
 
 
 class Axis(Enum):
@@ -55,7 +55,7 @@ class Axis(Enum):
 # Exact constants
 
 
-def _fraction_text(r: Fraction) -> str:
+def rational_text(r: Fraction) -> str:
     """Shortest exact text for a rational: a float's repr when that is exact (``0.333``, ``1e+300``),
     else a terminating decimal, else ``n/d``."""
     if abs(r) < 1e308:
@@ -91,8 +91,8 @@ def _surd_text(s: Fraction) -> str:
     num, den = abs(s.numerator), s.denominator
     rn, rd = math.isqrt(num), math.isqrt(den)
     if rn * rn == num and rd * rd == den:
-        return _fraction_text(Fraction(rn, rd) * (1 if s >= 0 else -1))
-    return ("-" if s < 0 else "") + f"sqrt({_fraction_text(abs(s))})"
+        return rational_text(Fraction(rn, rd) * (1 if s >= 0 else -1))
+    return ("-" if s < 0 else "") + f"sqrt({rational_text(abs(s))})"
 
 
 @dataclass(frozen=True)
@@ -169,7 +169,7 @@ class Const:
                 text += f"/{den}"
             parts.append(("-" if self.b < 0 else "") + text)
         if self.a != 0 or not parts:
-            parts.append(_fraction_text(self.a))
+            parts.append(rational_text(self.a))
         out = parts[0]
         for p in parts[1:]:
             out += p if p.startswith("-") else "+" + p

@@ -179,6 +179,11 @@ class Robot:
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, ets={str(self.ets)!r})"
 
+    def _repr_latex_(self) -> str:
+        from symkin.model.latex import robot_latex
+
+        return robot_latex(self)
+
     @property
     def key(self) -> str:
         """Structural hash of the kinematics (ETS text and name): the compile-cache key."""

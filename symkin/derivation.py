@@ -1,0 +1,630 @@
+"""Step-by-step kinematic derivations for teaching (issue 6): Markdown with LaTeX math, or LaTeX.
+
+:func:`derivation` writes out what a student does by hand (seed 004) the way the ETS paper builds it
+(seed 000): the ETS (eq 1), each elementary transform as its 4x4 matrix (Fig. 2), the link frames
+(eq 5), the forward kinematics, the partial derivatives dT/dq_j (eq 26), every Jacobian column by
+eqs 27-28 and by the fast form (eqs 31-34), and the Hessian (seed 001 eq 20).
+:func:`derive_steps` returns the same results as sympy expressions in a :class:`Derivation`.
+
+Joints are numbered from 1 as in the seeds: the symbol ``q_1`` is symkin's joint ``q0``, and
+``Derivation.q[j]`` is the symbol of joint index ``j``. With ``symbolic_constants`` every nonzero
+translation constant of the ETS becomes its own positive symbol ``l_1, l_2, ...`` in chain order
+(a negative constant reads ``-l_k``); angle constants stay exact (``pi/2`` gives 0 and 1).
+
+Simplification: the literal results of the equations (products of cos and sin) are replaced by the
+compact forms of :func:`symkin.symbolic.kinematics.derive` (rotations about one axis merged, so
+``cos(q1 + q2)`` appears as such) once proved equal: the difference, with the trig functions of
+sums expanded, expands to 0; differences too large for that are checked at random points with 30
+digits instead, and the text says which check was used.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from typing import Any, Literal
+
+import mpmath
+import sympy as sp
+
+from symkin.emit.templates import render
+from symkin.errors import SymkinError
+from symkin.model.ets import ET, ETS, Axis, Const, rational_text
+from symkin.model.latex import et_latex, ets_latex, text_latex
+from symkin.model.robot import Robot
+from symkin.symbolic.kinematics import const_to_sympy, derive
+
+__all__ = ["Derivation", "derive_steps", "derivation"]
+
+Fmt = Literal["markdown", "latex"]
+FORMATS = ("markdown", "latex")
+SYMBOLIC_CHECK_MAX_OPS = 1500  # larger differences are checked at random points
+DISPLAY_MAX_OPS = 900  # larger expressions are not printed
+MATRIX_MAX_OPS = 160  # larger matrices are printed entry by entry
+FULL_MAX_N = 4  # dT/dq_j matrices and Hessian blocks are printed up to this many joints
+_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # a rotation about axis i mixes columns (j, k)
+_XYZ = "xyz"
+
+
+# ---------------------------------------------------------------------------------------------
+# Results
+
+
+@dataclass(frozen=True, eq=False)
+class Derivation:
+    """A robot's kinematics derived step by step. Matrices are sympy ``ImmutableMatrix``.
+
+    Attributes:
+        robot: the robot.
+        q: joint symbols ``q_1 .. q_n``; ``q[j]`` is symkin's joint ``j`` (0-based).
+        constants: symbol -> exact value of each symbolic link constant (empty unless
+            ``symbolic_constants``); :meth:`numeric` substitutes them.
+        E: the elementary transforms of the ETS as 4x4 matrices, in chain order (Fig. 2).
+        T: end-effector pose 0T_e, 4x4 (eq 1).
+        links: link frames 0T_j by joint index (eq 5).
+        ee: the end-effector pose in each link frame, jT_e, by joint index.
+        dT: dT/dq_j by joint index, 4x4 each (eq 26).
+        J0: base-frame Jacobian 6xn, rows (v, omega), by eqs 27-28.
+        J0_fast: the same by the fast form, eqs 31-34.
+        H0: Hessian blocks, ``H0[i] = dJ0/dq_i`` 6xn (seed 001 eq 20).
+        simplified: whether the results are the compact forms (else the literal products).
+        checks: how each equality was established: ``"symbolic"`` or ``"numeric"``.
+        fmt: the format of ``text``; text: the derivation as Markdown or a LaTeX document.
+    """
+
+    robot: Robot
+    q: tuple[sp.Symbol, ...]
+    constants: Mapping[sp.Symbol, sp.Expr]
+    E: tuple[sp.ImmutableMatrix, ...]
+    T: sp.ImmutableMatrix
+    links: tuple[sp.ImmutableMatrix, ...]
+    ee: tuple[sp.ImmutableMatrix, ...]
+    dT: tuple[sp.ImmutableMatrix, ...]
+    J0: sp.ImmutableMatrix
+    J0_fast: sp.ImmutableMatrix
+    H0: tuple[sp.ImmutableMatrix, ...]
+    simplified: bool
+    checks: Mapping[str, str]
+    fmt: str = "markdown"
+    text: str = ""
+    latex_summary: str = field(default="", repr=False)
+
+    def numeric(self, expr: Any) -> Any:
+        """``expr`` with the symbolic link constants replaced by their values."""
+        return sp.sympify(expr).xreplace(dict(self.constants))
+
+    def _repr_latex_(self) -> str:
+        return self.latex_summary
+
+
+# ---------------------------------------------------------------------------------------------
+# Constants and elementary transforms
+
+
+@dataclass(frozen=True, eq=False)
+class _Constants:
+    """The ETS handed to ``derive`` (symbolic translation constants replaced by unique
+    placeholder constants), the value of each factor, and the names shown in the ETS."""
+
+    ets: ETS
+    eta: tuple[sp.Expr | None, ...]  # value of each constant factor, by position (None: a joint)
+    names: dict[int, str]  # LaTeX argument by position, for symbolic constants
+    values: dict[sp.Symbol, sp.Expr]
+    factor: dict[sp.Symbol, int]  # the position of each symbol's factor in the ETS
+    placeholders: dict[Const, sp.Expr]
+
+    def constant(self, c: Const) -> sp.Expr:
+        return self.placeholders[c] if c in self.placeholders else const_to_sympy(c)
+
+
+def _constants(ets: ETS, symbolic: bool) -> _Constants:
+    if not symbolic:
+        eta = tuple(None if e.const is None else const_to_sympy(e.const) for e in ets)
+        return _Constants(ets, eta, {}, {}, {}, {})
+    used = {e.const for e in ets if e.const is not None}
+    scale = 10**40
+    while any(Const(Fraction(i + 1, scale)) in used for i in range(len(ets))):
+        scale += 1
+    out: list[ET] = []
+    eta: list[sp.Expr | None] = []
+    names: dict[int, str] = {}
+    values: dict[sp.Symbol, sp.Expr] = {}
+    factor: dict[sp.Symbol, int] = {}
+    placeholders: dict[Const, sp.Expr] = {}
+    for pos, e in enumerate(ets):
+        if e.const is None or e.axis.is_rotation or e.const.is_zero:
+            out.append(e)
+            eta.append(None if e.const is None else const_to_sympy(e.const))
+            continue
+        k = len(values) + 1
+        sym = sp.Symbol(f"l_{k}", positive=True)
+        value = const_to_sympy(e.const)
+        sign = -1 if value.is_negative else 1
+        values[sym] = sign * value
+        factor[sym] = pos
+        ph = Const(Fraction(pos + 1, scale))
+        placeholders[ph] = sign * sym
+        out.append(ET(e.axis, const=ph))
+        eta.append(sign * sym)
+        names[pos] = ("-" if sign < 0 else "") + f"l_{{{k}}}"
+    return _Constants(ETS(tuple(out)), tuple(eta), names, values, factor, placeholders)
+
+
+def _et_matrix(axis: Axis, eta: sp.Expr) -> sp.Matrix:
+    """The elementary transform of Fig. 2."""
+    M = sp.eye(4)
+    i = axis.index
+    if axis.is_rotation:
+        j, k = _MIX[i]
+        M[j, j] = M[k, k] = sp.cos(eta)
+        M[j, k], M[k, j] = -sp.sin(eta), sp.sin(eta)
+    else:
+        M[i, 3] = eta
+    return M
+
+
+def _generator(axis: Axis) -> sp.Matrix:
+    """[G] of eqs 20-25: dE/deta = [G] E."""
+    G = sp.zeros(4, 4)
+    i = axis.index
+    if axis.is_rotation:
+        j, k = _MIX[i]
+        G[k, j], G[j, k] = 1, -1
+    else:
+        G[i, 3] = 1
+    return G
+
+
+def _skew(w: Sequence[sp.Expr]) -> sp.Matrix:
+    return sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+
+
+def _vee(S: sp.Matrix) -> sp.Matrix:
+    return sp.Matrix([S[2, 1], S[0, 2], S[1, 0]])
+
+
+# ---------------------------------------------------------------------------------------------
+# Equality checks
+
+
+def _is_zero(x: sp.Expr) -> bool:
+    """Whether x is identically 0 as a polynomial in the sines and cosines of the joint angles:
+    trig functions of sums are expanded, then sin^2 = 1 - cos^2 gives a unique normal form."""
+    x = sp.expand(sp.expand_trig(x))
+    if x == 0:
+        return True
+    pairs: dict[sp.Expr, tuple[sp.Dummy, sp.Dummy]] = {}
+    for f in x.atoms(sp.sin, sp.cos):  # constant angles too (cos(1/10) is kept as such)
+        pairs.setdefault(f.args[0], (sp.Dummy(), sp.Dummy()))
+    subs = {}
+    for arg, (s, c) in pairs.items():
+        subs[sp.sin(arg)], subs[sp.cos(arg)] = s, c
+    cos_of = dict(pairs.values())
+    poly = sp.Poly(x.xreplace(subs), *cos_of, *cos_of.values())
+    out = sp.Integer(0)
+    for monom, coeff in poly.terms():
+        term = coeff
+        for g, e in zip(poly.gens, monom):
+            term *= g ** (e % 2) * (1 - cos_of[g] ** 2) ** (e // 2) if g in cos_of else g**e
+        out += term
+    return sp.expand(out) == 0
+
+
+def _check(a: sp.Matrix, b: sp.Matrix, symbols: Sequence[sp.Symbol]) -> str:
+    """How a = b holds: "symbolic" when a - b is identically 0 (:func:`_is_zero`), else "numeric"
+    when it vanishes at 3 random points to 30 digits (differences over ``SYMBOLIC_CHECK_MAX_OPS``
+    are not expanded; constant angles such as cos(1/10) may hide identities), else "failed"."""
+    d = sp.Matrix(a) - sp.Matrix(b)
+    if sp.count_ops(d) <= SYMBOLIC_CHECK_MAX_OPS and all(_is_zero(x) for x in d):
+        return "symbolic"
+    f = sp.lambdify(list(symbols), list(d), modules="mpmath")
+    rng = random.Random(1)
+    with mpmath.workdps(30):
+        for _ in range(3):
+            values = f(*[mpmath.mpf(rng.randint(100, 2000)) / 1000 for _ in symbols])
+            if max((abs(v) for v in values), default=0) > mpmath.mpf(10) ** -20:
+                return "failed"
+    return "numeric"
+
+
+def _suffix_pose(C: _Constants, start: int, q: Sequence[sp.Symbol]) -> sp.Matrix:
+    """The pose of the factors ``start..M`` of the ETS (jT_e for the frame before ``start``)."""
+    part = C.ets.ets[start:]
+    joints = sorted(e.joint for e in part if e.joint is not None)
+    new = {j: i for i, j in enumerate(joints)}
+    sub = tuple(e if e.joint is None else ET(e.axis, joint=new[e.joint], flip=e.flip) for e in part)
+    if not sub:
+        return sp.eye(4)
+    return derive(ETS(sub), constant=C.constant, q=[q[j] for j in joints]).T
+
+
+def _fast_column(e: ET, Tj: sp.Matrix, Tje: sp.Matrix) -> sp.Matrix:
+    """Eqs 32 and 34: the column from (n, o, a) = rho(0T_j) and (x_e, y_e, z_e) = tau(jT_e)."""
+    cols = [Tj[:3, c] for c in range(3)]
+    n, o, a = cols
+    xe, ye, ze = Tje[0, 3], Tje[1, 3], Tje[2, 3]
+    i = e.axis.index
+    if e.axis.is_rotation:
+        v = (a * ye - o * ze, n * ze - a * xe, o * xe - n * ye)[i]
+        w = cols[i]
+    else:
+        v, w = cols[i], sp.zeros(3, 1)
+    return e.sign * sp.Matrix.vstack(v, w)
+
+
+# ---------------------------------------------------------------------------------------------
+# The derivation
+
+
+def _steps(robot: Robot, symbolic_constants: bool, simplify: bool) -> Derivation:
+    ets = robot.ets
+    n = ets.n
+    if n == 0:
+        raise SymkinError(f"robot {robot.name!r} has no joints: nothing to derive")
+    q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(n))
+    C = _constants(ets, symbolic_constants)
+    eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
+    E = [_et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
+    mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
+    prefix, suffix = [sp.eye(4)], [sp.eye(4)]
+    for M in E:
+        prefix.append(prefix[-1] * M)
+    for M in reversed(E):
+        suffix.append(M * suffix[-1])
+    suffix.reverse()
+    T_raw = prefix[-1]
+    dT_raw = [prefix[mu[j]] * E[mu[j]].diff(q[j]) * suffix[mu[j] + 1] for j in range(n)]
+
+    kin = derive(C.ets, constant=C.constant, q=q)
+    symbols = list(q) + list(C.values)
+    checks: dict[str, str] = {}
+    if simplify:
+        order = [e.joint for e in ets if e.joint is not None]
+        links = [kin.links[order.index(j)] for j in range(n)]
+        jTe = [_suffix_pose(C, mu[j] + 1, q) for j in range(n)]
+        checks["eq 1: T"] = _check(T_raw, kin.T, symbols)
+        checks["eq 5: link frames 0T_j and jT_e"] = _worst(
+            _check(
+                sp.Matrix.vstack(prefix[mu[j] + 1], suffix[mu[j] + 1]),
+                sp.Matrix.vstack(links[j], jTe[j]),
+                symbols,
+            )
+            for j in range(n)
+        )
+        T = kin.T
+        dT = [T.diff(q[j]) for j in range(n)]
+        checks["eq 26: dT/dq_j"] = _worst(_check(dT_raw[j], dT[j], symbols) for j in range(n))
+        J = kin.J0
+        Jv = [min(dT[j][:3, 3], J[:3, j], key=sp.count_ops) for j in range(n)]  # the shorter form
+        J = sp.Matrix.hstack(*[sp.Matrix.vstack(Jv[j], J[3:, j]) for j in range(n)])
+        # eq 27 gives J_w when rho(dT/dq_j) = [J_w]x rho(T), since rho(T) rho(T)^T = 1
+        checks["eq 27: J_w"] = _worst(
+            _check(dT[j][:3, :3], _skew(J[3:, j]) * T[:3, :3], symbols) for j in range(n)
+        )
+        checks["eq 28: J_v"] = _worst(_check(dT[j][:3, 3], J[:3, j], symbols) for j in range(n))
+        Jfast = sp.Matrix.hstack(*[_fast_column(ets[mu[j]], links[j], jTe[j]) for j in range(n)])
+        checks["eqs 31-34"] = _check(Jfast, J, symbols)
+        checks["J0 = J0_fast"] = _worst(checks[k] for k in ("eq 27: J_w", "eq 28: J_v", "eqs 31-34"))
+        J27 = Jfast = J
+        bad = [k for k, v in checks.items() if v == "failed"]
+        if bad:
+            raise SymkinError(f"derivation of {robot.name!r}: the compact forms differ from {', '.join(bad)}")
+    else:
+        T, dT = T_raw, dT_raw
+        links = [prefix[mu[j] + 1] for j in range(n)]
+        jTe = [suffix[mu[j] + 1] for j in range(n)]
+        J27 = sp.Matrix.hstack(
+            *[sp.Matrix.vstack(dT[j][:3, 3], _vee(dT[j][:3, :3] * T[:3, :3].T)) for j in range(n)]
+        )
+        Jfast = sp.Matrix.hstack(*[_fast_column(ets[mu[j]], links[j], jTe[j]) for j in range(n)])
+        checks["J0 = J0_fast"] = _check(J27, Jfast, symbols)
+    im = sp.ImmutableMatrix
+    return Derivation(
+        robot,
+        q,
+        dict(C.values),
+        tuple(map(im, E)),
+        im(T),
+        tuple(map(im, links)),
+        tuple(map(im, jTe)),
+        tuple(map(im, dT)),
+        im(J27),
+        im(Jfast),
+        tuple(map(im, kin.H0)),
+        simplify,
+        checks,
+    )
+
+
+def _worst(results: Any) -> str:
+    results = list(results)
+    for level in ("failed", "numeric", "symbolic"):
+        if level in results:
+            return level
+    return "symbolic"
+
+
+# ---------------------------------------------------------------------------------------------
+# Printing expressions
+
+
+class _Printer:
+    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals."""
+
+    def __init__(self, q: Sequence[sp.Symbol]) -> None:
+        self.index = {s: j + 1 for j, s in enumerate(q)}
+        self.used: dict[sp.Symbol, tuple[str, str]] = {}  # abbreviation -> (latex, meaning)
+        self.names: dict[sp.Symbol, str] = {}
+
+    def _abbreviation(self, f: sp.Expr) -> sp.Symbol | None:
+        idx = []
+        for term, c in f.args[0].as_coefficients_dict().items():
+            if c != 1 or term not in self.index:
+                return None
+            idx.append(self.index[term])
+        idx.sort()
+        kind = "c" if isinstance(f, sp.cos) else "s"
+        sym = sp.Symbol(f"zz{kind}{'_'.join(map(str, idx))}")
+        sub = ("" if max(idx) < 10 else ",").join(map(str, idx))
+        tex = f"{kind}_{{{sub}}}"
+        arg = " + ".join(f"q_{{{i}}}" for i in idx)
+        fn = "\\cos" if kind == "c" else "\\sin"
+        meaning = f"{fn} {arg}" if len(idx) == 1 else f"{fn}({arg})"
+        self.used[sym] = (tex, meaning)
+        self.names[sym] = tex
+        return sym
+
+    def __call__(self, expr: Any) -> str:
+        expr = sp.sympify(expr)
+        ops = sp.count_ops(expr)
+        if ops > DISPLAY_MAX_OPS:
+            return f"\\text{{(an expression of {ops} operations, not shown)}}"
+        subs = {}
+        for f in expr.atoms(sp.cos, sp.sin):
+            a = self._abbreviation(f)
+            if a is not None:
+                subs[f] = a
+        for r in expr.atoms(sp.Rational):
+            den = r.q
+            while den % 2 == 0:
+                den //= 2
+            while den % 5 == 0:
+                den //= 5
+            if r.q > 4 and den == 1:
+                text = rational_text(Fraction(int(r.p), int(r.q)))
+                subs[r] = sp.Float(text, max(15, len(text)))
+        return sp.latex(expr.xreplace(subs), symbol_names=self.names)
+
+    def matrix(self, M: sp.Matrix) -> str:
+        rows = [" & ".join(self(M[r, c]) for c in range(M.cols)) for r in range(M.rows)]
+        return "\\begin{pmatrix} " + " \\\\ ".join(rows) + " \\end{pmatrix}"
+
+    def legend(self) -> str:
+        items = sorted(self.used.items(), key=lambda kv: (kv[0].name[2], len(kv[0].name), kv[0].name))
+        return ", ".join(f"${tex} = {meaning}$" for _, (tex, meaning) in items)
+
+
+# ---------------------------------------------------------------------------------------------
+# Markdown (from templates/derive/derivation.md.j2) and its LaTeX document
+
+_INLINE = re.compile(r"(\$[^$]*\$|`[^`]*`)")
+
+
+def _inline_latex(text: str) -> str:
+    """Markdown text -> LaTeX: ``$math$`` kept, backquoted code in typewriter, the rest escaped."""
+    out = []
+    for part in _INLINE.split(text):
+        if part.startswith("$"):
+            out.append(part)
+        elif part.startswith("`"):
+            out.append(f"\\texttt{{{text_latex(part[1:-1])}}}")
+        else:
+            out.append(text_latex(part))
+    return "".join(out)
+
+
+def _latex_document(markdown: str) -> str:
+    """The template's Markdown (``#`` title, ``##`` sections, paragraphs, ``$$`` blocks, pipe
+    tables) as a standalone LaTeX document (amsmath only)."""
+    body: list[str] = []
+    title = ""
+    table = False
+    lines = iter(markdown.splitlines())
+    for line in lines:
+        if table and not line.startswith("|"):
+            body += [r"\end{tabular}", r"\end{center}", ""]
+            table = False
+        if line.startswith("# "):
+            title = _inline_latex(line[2:])
+        elif line.startswith("## "):
+            body += [rf"\section{{{_inline_latex(line[3:])}}}", ""]
+        elif line == "$$":
+            body += [r"\[", *iter(lines.__next__, "$$"), r"\]", ""]
+        elif line.startswith("|") and not set(line) <= set("|-"):
+            cells = [_inline_latex(c.strip()) for c in line.strip().strip("|").split(" | ")]
+            if not table:
+                body += [r"\begin{center}", r"\begin{tabular}{" + "l" * len(cells) + "}"]
+                table = True
+            body.append(" & ".join(cells) + r" \\")
+        elif line.strip() and not line.startswith("|"):
+            body += [_inline_latex(line), ""]
+    head = [r"\documentclass[a4paper,10pt]{article}", r"\usepackage[margin=2cm]{geometry}",
+            r"\usepackage{amsmath,amssymb}", r"\setcounter{MaxMatrixCols}{40}", r"\allowdisplaybreaks",
+            rf"\title{{{title}}}", r"\date{}", r"\begin{document}", r"\maketitle", ""]  # fmt: skip
+    return "\n".join(head + body + [r"\end{document}"]) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing the derivation
+
+
+def _vec(P: _Printer, v: Sequence[sp.Expr]) -> str:
+    return P.matrix(sp.Matrix(list(v)))
+
+
+def _shown(M: sp.Matrix) -> bool:
+    return sp.count_ops(M) <= MATRIX_MAX_OPS
+
+
+def _pose_tex(P: _Printer, M: sp.Matrix, lhs: str) -> str:
+    """A pose as one matrix when short, else its columns n, o, a, t one per line."""
+    if _shown(M):
+        return f"{lhs} = {P.matrix(M)}"
+    lines = [
+        rf"{lhs} &= \begin{{pmatrix}} \mathbf{{n}} & \mathbf{{o}} & \mathbf{{a}} & \mathbf{{t}} \\ "
+        r"0 & 0 & 0 & 1 \end{pmatrix}"
+    ]
+    lines += [rf"\mathbf{{{name}}} &= {_vec(P, M[:3, c])}" for c, name in enumerate("noat")]
+    return r"\begin{aligned} " + r" \\ ".join(lines) + r" \end{aligned}"
+
+
+_CHECK_TEXT = {
+    "symbolic": "the difference simplifies to 0",
+    "numeric": "the difference vanishes at 3 random points to 30 digits (too large to expand symbolically)",
+    "failed": "NOT equal",
+}
+_FAST_RULE = {
+    Axis.Rz: r"\mathbf{o}_{#} x_e - \mathbf{n}_{#} y_e",
+    Axis.Rx: r"\mathbf{a}_{#} y_e - \mathbf{o}_{#} z_e",
+    Axis.Ry: r"\mathbf{n}_{#} z_e - \mathbf{a}_{#} x_e",
+    Axis.tx: r"\mathbf{n}_{#}",
+    Axis.ty: r"\mathbf{o}_{#}",
+    Axis.tz: r"\mathbf{a}_{#}",
+}
+
+
+def _context(D: Derivation) -> tuple[dict[str, Any], str]:
+    """The template's context (every math string ready-made) and the LaTeX summary for Jupyter."""
+    from symkin import __version__
+
+    robot, q, n, ets = D.robot, D.q, len(D.q), D.robot.ets
+    C = _constants(ets, bool(D.constants))
+    mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
+    P = _Printer(q)
+    full = n <= FULL_MAX_N
+    ctx: dict[str, Any] = {
+        "robot": robot.name,
+        "n": n,
+        "structure": ets.structure,
+        "M": len(ets),
+        "source": robot.source.rstrip(".") + ". " if robot.source else "",
+        "version": __version__,
+        "joint_map": ", ".join(f"$q_{{{j + 1}}}$ is `q{j}`" for j in range(n)),
+        "full": full,
+        "full_max_n": FULL_MAX_N,
+        "ets": ets_latex(ets, names=C.names),
+        "what": "compact forms, each proved equal to the literal products of the equations"
+        if D.simplified
+        else "the literal products of the equations, not simplified",
+        "checks": "; ".join(f"{k}: {_CHECK_TEXT[v]}" for k, v in D.checks.items()),
+        "same": _CHECK_TEXT[D.checks["J0 = J0_fast"]],
+        "jacobian": P.matrix(D.J0_fast),
+    }
+    kinds = {True: "revolute", False: "prismatic"}
+    ctx["joints"] = [
+        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{robot.joint_names[j]}`", kinds[ets[mu[j]].is_revolute],
+         f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
+        for j in range(n)
+    ]  # fmt: skip
+    ctx["constants"] = [
+        [f"${sp.latex(s)}$", f"$E_{{{C.factor[s] + 1}}}$", f"${P(v)}$"] for s, v in C.values.items()
+    ]
+    ctx["factors"] = [
+        f"E_{{{k + 1}}} = {et_latex(e, C.names.get(k))} = {P.matrix(D.E[k])}" for k, e in enumerate(ets)
+    ]
+    ctx["links"] = [_pose_tex(P, D.links[j], f"{{}}^{{0}}T_{{{j + 1}}}") for j in range(n)]
+    T = D.T
+    position = (
+        r"\begin{aligned} " + r" \\ ".join(f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3)) + r" \end{aligned}"
+    )
+    rotation = r" \\ ".join(f"r_{{{r + 1}{c + 1}}} &= {P(T[r, c])}" for r in range(3) for c in range(3))
+    ctx["pose"] = [f"{{}}^{{0}}T_{{e}} = {P.matrix(T)}", position] if _shown(T) else [
+        position, r"R = (r_{ij}), \quad \begin{aligned} " + rotation + r" \end{aligned}"
+    ]  # fmt: skip
+    ctx["derivatives"], ctx["columns27"], ctx["columns_fast"] = [], [], []
+    for j in range(n):
+        k, e, J = mu[j], ets[mu[j]], str(j + 1)
+        sign = "-" if e.flip else ""
+        ctx["derivatives"].append(
+            rf"\mu({J}) = {k + 1}, \quad \frac{{dE_{{{k + 1}}}}}{{dq_{{{J}}}}} = "
+            rf"{sign}{P.matrix(_generator(e.axis))}\, {et_latex(e)} = {P.matrix(D.E[k].diff(q[j]))}"
+        )
+        if full:
+            ctx["derivatives"].append(
+                rf"\frac{{\partial\, {{}}^0T_e}}{{\partial q_{{{J}}}}} = {P.matrix(D.dT[j])}"
+            )
+        skew = D.dT[j][:3, :3] * T[:3, :3].T if not D.simplified else _skew(D.J0[3:, j])
+        skew_tex = P.matrix(skew) if _shown(skew) else r"[\omega]_\times"
+        ctx["columns27"].append(
+            rf"\rho\Big(\frac{{\partial T}}{{\partial q_{{{J}}}}}\Big)\rho(T)^\top = {skew_tex} "
+            rf"\;\Rightarrow\; "
+            rf"J_{{\omega_{{{J}}}}} = {_vec(P, D.J0[3:, j])}, \quad J_{{v_{{{J}}}}} = {_vec(P, D.J0[:3, j])}"
+        )
+        rule = _FAST_RULE[e.axis].replace("#", J)
+        w = rf"{sign}\mathbf{{{'noa'[e.axis.index]}}}_{{{J}}}" if e.axis.is_rotation else "0"
+        ctx["columns_fast"].append(
+            rf"\tau({{}}^{{{J}}}T_e) = {_vec(P, D.ee[j][:3, 3])}, \quad J_{{v_{{{J}}}}} = "
+            rf"{f'-({rule})' if sign else rule} = {_vec(P, D.J0_fast[:3, j])}, \quad "
+            rf"J_{{\omega_{{{J}}}}} = {w} = {_vec(P, D.J0_fast[3:, j])}"
+        )
+    Jf = D.J0_fast
+    planar = all(Jf[r, c] == 0 for r in (2, 3, 4) for c in range(n))
+    ctx["planar"] = P.matrix(sp.Matrix.vstack(Jf[0:2, :], Jf[5:6, :])) if planar else ""
+    if full:
+        ctx["hessian"] = [
+            rf"H_{{{i + 1}}} = \frac{{\partial J}}{{\partial q_{{{i + 1}}}}} = {P.matrix(D.H0[i])}"
+            for i in range(n)
+        ]
+    else:
+        dot = sp.Symbol("zzbullet")
+        P.names[dot] = r"\bullet"
+        pattern = sp.Matrix(n, n, lambda i, c: 0 if D.H0[i][:, c].is_zero_matrix else dot)
+        ctx["hessian"] = [rf"\big(\partial J_j / \partial q_i \neq 0\big)_{{ij}} = {P.matrix(pattern)}"]
+    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3)]
+    if _shown(Jf):
+        summary.append(rf"{{}}^0J &= {P.matrix(Jf)}")
+    ctx["legend"] = P.legend()
+    return ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
+
+
+def derive_steps(
+    robot: Robot | ETS | str,
+    symbolic_constants: bool = False,
+    simplify: bool = True,
+    fmt: Fmt = "markdown",
+) -> Derivation:
+    """Derive ``robot``'s kinematics step by step: the results and the written derivation.
+
+    Args:
+        robot: a Robot, an ETS, or anything :func:`symkin.resolve_robot` takes (``"planar3"``).
+        symbolic_constants: name the translation constants ``l_1, l_2, ...`` (values in
+            ``Derivation.constants``).
+        simplify: compact forms proved equal to the literal products of the equations; ``False``
+            keeps the literal products (long beyond 3 joints; the text omits huge entries).
+        fmt: ``"markdown"`` (Markdown with ``$$`` math) or ``"latex"`` (a standalone document).
+    """
+    if fmt not in FORMATS:
+        raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
+    if isinstance(robot, ETS):
+        robot = Robot(robot, name="ets_robot")
+    elif not isinstance(robot, Robot):
+        from symkin.model.resolve import resolve_robot
+
+        robot = resolve_robot(robot)
+    D = _steps(robot, symbolic_constants, simplify)
+    ctx, summary = _context(D)
+    text = render("derive/derivation.md.j2", **ctx)
+    return replace(D, fmt=fmt, text=_latex_document(text) if fmt == "latex" else text, latex_summary=summary)
+
+
+def derivation(
+    robot: Robot | ETS | str,
+    fmt: Fmt = "markdown",
+    symbolic_constants: bool = False,
+    simplify: bool = True,
+) -> str:
+    """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`)."""
+    return derive_steps(robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt).text
