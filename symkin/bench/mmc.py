@@ -13,15 +13,26 @@ import argparse
 import json
 import math
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from symkin.runtime.control import MMC, rrmc
+from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
 
-__all__ = ["run_table1", "format_table1", "plot_task", "step_breakdown", "table1_tasks", "PAPER_TABLE1"]
+__all__ = [
+    "run_table1",
+    "format_table1",
+    "plot_task",
+    "step_breakdown",
+    "step_timing",
+    "format_step_timing",
+    "rtb_mmc",
+    "table1_tasks",
+    "PAPER_TABLE1",
+]
 
 #: Table I of seed 001: mean and mean final manipulability, RRMC and MMC (lambda = 0.005, 1000 tasks)
 PAPER_TABLE1: dict[str, dict[str, float]] = {
@@ -39,12 +50,24 @@ PROTOCOL_NOTE = (
 _MARGIN = math.radians(50.0)
 
 
-def _robot(robot: Any) -> Any:
-    if isinstance(robot, str):
-        from symkin.model.robots import load
+def _robot(robot: Any, backend: str | None = None) -> Any:
+    """A robot object as is; a built-in name loaded, and compiled on ``backend`` unless None (the
+    NumPy reference is used when C compilation is impossible)."""
+    if not isinstance(robot, str):
+        return robot
+    from symkin.model.robots import load
 
-        return load(robot)
-    return robot
+    model = load(robot)
+    if backend is None:
+        return model
+    import symkin
+    from symkin.errors import CompileError
+
+    try:
+        return symkin.compile(model, backend=backend)
+    except CompileError as exc:  # pragma: no cover - no C compiler
+        warnings.warn(f"{robot}: {exc}; using the NumPy reference kinematics", stacklevel=3)
+        return model
 
 
 def table1_tasks(kin: Any, n_tasks: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -96,10 +119,16 @@ def run_table1(
     threshold: float = 0.1,
     max_steps: int = 500,
     qd_max: Any = np.inf,
+    backend: str | None = "c",
+    timing: bool = True,
+    timing_tasks: int = 50,
 ) -> dict[str, Any]:
     """Reproduce Table I of seed 001 (protocol in :data:`PROTOCOL_NOTE`); returns a JSON-able dict.
 
-    ``robots`` are built-in names (``symkin.model.robots.load``) or robot objects. Each robot gets
+    ``robots`` are built-in names (``symkin.model.robots.load``, compiled with ``symkin.compile``
+    on ``backend``, or the NumPy reference with ``backend=None``) or robot objects. With ``timing``
+    each robot also gets :func:`step_timing` on its first ``timing_tasks`` tasks (C and Python
+    paths of :class:`MMC`, and RTB + qpsolvers when installed). Each robot gets
     ``n_tasks`` tasks from ``np.random.default_rng([seed, index])``; the same tasks go to RRMC, MMC
     and, with ``joint_limits``, MMC with velocity dampers (``"mmc_jl"``). ``qd_max=np.inf`` (the
     paper's setting) leaves joint speeds unbounded; ``None`` uses each robot's speed limits.
@@ -121,7 +150,7 @@ def run_table1(
         "robots": {},
     }
     for index, spec in enumerate(robots):
-        kin = _robot(spec)
+        kin = _robot(spec, backend)
         name = getattr(kin, "name", str(spec))
         rng = np.random.default_rng([seed, index])
         q0s, Teps = table1_tasks(kin, n_tasks, rng)
@@ -167,6 +196,11 @@ def run_table1(
                 "improvement_final_pct": _pct(p["final_mmc"], p["final_rrmc"]),
             }
         res["source"] = getattr(kin, "source", "")
+        if timing:
+            res["step_timing"] = step_timing(
+                kin, min(n_tasks, timing_tasks), seed=seed, index=index, lam=lam, dt=dt, gain=gain,
+                threshold=threshold, max_steps=max_steps,
+            )  # fmt: skip
         out["robots"][name] = res
     return out
 
@@ -215,6 +249,9 @@ def format_table1(result: dict[str, Any]) -> str:
             f"{'':<10} MMC final manipulability >= RRMC's in {r['mmc_not_below_rrmc_final']}/{n} tasks"
             + (f"; max slack (mmc_jl) {r['mmc_jl']['max_slack']:.3g}" if "mmc_jl" in r else "")
         )
+    for r in result["robots"].values():
+        if "step_timing" in r:
+            lines += ["", format_step_timing(r["step_timing"])]
     lines += ["", pr["note"]]
     return "\n".join(lines)
 
@@ -264,6 +301,184 @@ def step_breakdown(robot: Any, n_samples: int = 300, seed: int = 0, lam: float =
     return out
 
 
+#: configurations of :func:`step_timing`: MMC options (lam and dt added) beside the Table I protocol
+TIMING_CONFIGS: dict[str, dict[str, Any]] = {
+    "mmc": {"qd_max": np.inf},  # Table I: no bounds (the closed form settles every regular step)
+    "mmc_jl": {"qd_max": np.inf, "joint_limits": True},  # velocity dampers, slack
+    "mmc_jl_osqp": {"qd_max": np.inf, "joint_limits": True, "closed_form": False},  # OSQP every step
+}
+
+
+def rtb_mmc(rtb: Any, qpsolvers: Any, robot: Any, mmc: MMC) -> Any:
+    """The controller of ``mmc`` written with roboticstoolbox-python and qpsolvers (OSQP): RTB's
+    ``jacob0`` and ``jacobm`` (which computes J and H itself) on the robot's ETS, the same bounds,
+    ``qpsolvers.solve_qp(..., solver="osqp")`` with MMC's OSQP tolerances. Returns ``step(q, nu) ->
+    qd or None`` (None when OSQP finds no solution); ``step.kinematics(q, nu)`` is its RTB part alone."""
+    from symkin.bench.kin import rtb_ets
+
+    ets = rtb_ets(rtb, robot)
+    n, lam, w = mmc.n, mmc.lam, mmc.slack_weight
+    qlim, qd_max = np.asarray(mmc.qlim, dtype=float), mmc.qd_max
+    opts = {k: mmc.settings[k] for k in ("eps_abs", "eps_rel", "max_iter", "polishing") if k in mmc.settings}
+    ns = 6 if mmc.slack else 0
+    P = np.diag(np.r_[np.full(n, lam), np.full(ns, w)])
+    Aslack = np.eye(6)[:, :ns]
+    free = np.full(ns, np.inf)
+
+    def step(q: np.ndarray, nu: np.ndarray) -> np.ndarray | None:
+        J = ets.jacob0(q)
+        Jm = ets.jacobm(q).ravel()
+        lb = ub = None
+        if mmc._bounded:
+            lower, upper = joint_velocity_bounds(
+                q, qlim, qd_max, mmc.joint_limits, mmc.rho_i, mmc.rho_s, mmc.xi, mmc.dt
+            )
+            lb, ub = np.r_[lower, -free], np.r_[upper, free]
+        c = np.r_[-Jm, np.zeros(ns)]
+        x = qpsolvers.solve_qp(P, c, A=np.c_[J, Aslack], b=nu, lb=lb, ub=ub, solver="osqp", **opts)
+        return None if x is None else x[:n]
+
+    step.kinematics = lambda q, nu: (ets.jacob0(q), ets.jacobm(q))  # type: ignore[attr-defined]
+    return step
+
+
+def step_timing(
+    robot: Any = "panda",
+    n_tasks: int = 50,
+    seed: int = 0,
+    index: int = 0,
+    lam: float = 0.005,
+    dt: float = 0.05,
+    gain: float = 1.0,
+    threshold: float = 0.1,
+    max_steps: int = 500,
+    configs: tuple[str, ...] = ("mmc", "mmc_jl", "mmc_jl_osqp"),
+    rtb: bool = True,
+    max_states: int = 1500,
+    rounds: int = 2,
+) -> dict[str, Any]:
+    """Median microseconds of one MMC step on the C path, the Python path and, when
+    roboticstoolbox-python and qpsolvers import, the same controller in RTB + qpsolvers (OSQP).
+
+    ``robot`` is compiled with the C backend. For each configuration of :data:`TIMING_CONFIGS`
+    the states (q, nu) of the Table I tasks (``n_tasks``; rng ``[seed, index]`` as in
+    :func:`run_table1`) servoed by the C path (the first ``max_states``) are replayed in order
+    through a fresh controller of each kind, ``rounds`` times (the order of the kinds reversed
+    every other round), each call timed from Python. Also reports the steps' methods on the C
+    path and the largest difference of qd between the C path and the others (the first round).
+    """
+    import symkin
+
+    model = _robot(robot)
+    kin = (
+        model
+        if getattr(model, "backend", None) == "c"
+        else symkin.compile(getattr(model, "robot", model), "c")
+    )
+    peers = None
+    if rtb:
+        try:
+            import qpsolvers
+            import roboticstoolbox
+        except ImportError:
+            peers = None
+        else:
+            peers = (roboticstoolbox, qpsolvers)
+    rng = np.random.default_rng([seed, index])
+    q0s, Teps = table1_tasks(kin, n_tasks, rng)
+    out: dict[str, Any] = {"robot": kin.name, "n_tasks": n_tasks, "lam": lam, "configs": {}}
+    for name in configs:
+        options = {**TIMING_CONFIGS[name], "lam": lam, "dt": dt}
+        ctrl = MMC(kin, **options)
+        if ctrl.backend != "c":  # pragma: no cover - C path unavailable for this robot
+            raise RuntimeError(f"no C path for {kin.name}")
+        states: list[tuple[np.ndarray, np.ndarray]] = []
+
+        def record(q: np.ndarray, nu: np.ndarray, ctrl: MMC = ctrl, states: list = states) -> Any:
+            states.append((q.copy(), nu.copy()))
+            return ctrl.step(q, nu)
+
+        for q0, Tep in zip(q0s, Teps):
+            servo(kin, q0, Tep, record, dt=dt, gain=gain, threshold=threshold, max_steps=max_steps)
+        states = states[:max_states]
+        makers: dict[str, Any] = {
+            "c": lambda o=options: MMC(kin, **o).step,
+            "python": lambda o=options: MMC(kin, backend="python", **o).step,
+        }
+        if peers is not None:
+            makers["rtb_qpsolvers"] = lambda c=ctrl: rtb_mmc(*peers, kin.robot, c)
+            makers["rtb_kinematics"] = lambda c=ctrl: rtb_mmc(*peers, kin.robot, c).kinematics
+        times: dict[str, list[float]] = {k: [] for k in makers}
+        answers: dict[str, list[Any]] = {}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # qpsolvers warns on every unsolved QP
+            for r in range(rounds):
+                for key in makers if r % 2 == 0 else reversed(makers):
+                    fn, ts, got = makers[key](), times[key], []
+                    for q, nu in states:
+                        t0 = time.perf_counter()
+                        got.append(fn(q, nu))
+                        ts.append(time.perf_counter() - t0)
+                    answers.setdefault(key, got)
+        methods: dict[str, int] = {}
+        for _, info in answers["c"]:
+            label = info.method if info.fallback is None else f"fallback_{info.fallback}"
+            methods[label] = methods.get(label, 0) + 1
+        med = {k: float(np.median(v) * 1e6) for k, v in times.items()}
+        res_c = {
+            "steps": len(states),
+            "median_us": med,
+            "p90_us": {k: float(np.percentile(v, 90) * 1e6) for k, v in times.items()},
+            "c_methods": methods,
+            "speedup_vs_python": med["python"] / med["c"],
+            "max_abs_qd": float(max(np.abs(a[0]).max() for a in answers["c"])),
+        }
+        qd_c = [a[0] for a in answers["c"]]
+        res_c["max_diff_python"] = _max_diff(qd_c, [a[0] for a in answers["python"]])
+        if "rtb_qpsolvers" in answers:
+            res_c["speedup_vs_rtb"] = med["rtb_qpsolvers"] / med["c"]
+            pairs = [
+                (a, b) for a, b in zip(answers["c"], answers["rtb_qpsolvers"]) if b is not None and a[1].ok
+            ]
+            res_c["max_diff_rtb"] = _max_diff([a[0] for a, _ in pairs], [b for _, b in pairs])
+        out["configs"][name] = res_c
+    return out
+
+
+def _max_diff(a: list[np.ndarray], b: list[np.ndarray]) -> float:
+    return max((float(np.abs(x - y).max()) for x, y in zip(a, b)), default=float("nan"))
+
+
+def format_step_timing(timing: dict[str, Any]) -> str:
+    """Plain-text table of a :func:`step_timing` result."""
+    lines = [
+        f"MMC step, {timing['robot']} ({timing['n_tasks']} Table I tasks replayed; median (p90) us per step "
+        "from Python, same states for each)",
+        f"{'config':<12} {'steps':>6} {'C':>14} {'Python':>14} {'RTB+qpsolvers':>15} {'(RTB J, Jm)':>13} "
+        f"{'C vs RTB':>9} {'C vs Py':>8}  C path methods",
+    ]
+    for name, r in timing["configs"].items():
+        med, p90 = r["median_us"], r["p90_us"]
+
+        def cell(k: str, width: int, med: dict = med, p90: dict = p90) -> str:
+            return f"{med[k]:.1f} ({p90[k]:.0f})".rjust(width) if k in med else "-".rjust(width)
+
+        ratio = f"{r['speedup_vs_rtb']:.1f}x" if "speedup_vs_rtb" in r else "-"
+        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["c_methods"].items()))
+        lines.append(
+            f"{name:<12} {r['steps']:>6} {cell('c', 14)} {cell('python', 14)} {cell('rtb_qpsolvers', 15)} "
+            f"{cell('rtb_kinematics', 13)} {ratio:>9} {r['speedup_vs_python']:>7.1f}x  {methods}"
+        )
+    diffs = [
+        f"{name} {r['max_diff_python']:.1e}"
+        + (f" / {r['max_diff_rtb']:.1e}" if "max_diff_rtb" in r else "")
+        + f" (|qd| <= {r['max_abs_qd']:.2g})"
+        for name, r in timing["configs"].items()
+    ]
+    lines.append("max |qd_C - qd| (rad/s) vs Python / vs RTB: " + "; ".join(diffs))
+    return "\n".join(lines)
+
+
 def plot_task(
     robot: Any,
     q0: Any,
@@ -308,8 +523,19 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--no-joint-limits", action="store_true", help="skip the MMC run with velocity dampers")
     ap.add_argument("--json", type=Path, help="also write the result as JSON here")
+    ap.add_argument("--backend", default="c", help="kinematics backend ('c', 'numpy'; 'reference': none)")
+    ap.add_argument("--no-timing", action="store_true", help="skip the step timing (C, Python, RTB)")
+    ap.add_argument("--timing-tasks", type=int, default=50, help="tasks replayed by the step timing")
     args = ap.parse_args(argv)
-    res = run_table1(tuple(args.robots), args.tasks, args.seed, joint_limits=not args.no_joint_limits)
+    res = run_table1(
+        tuple(args.robots),
+        args.tasks,
+        args.seed,
+        joint_limits=not args.no_joint_limits,
+        backend=None if args.backend == "reference" else args.backend,
+        timing=not args.no_timing,
+        timing_tasks=args.timing_tasks,
+    )
     print(format_table1(res))
     if args.json:
         args.json.write_text(json.dumps(res, indent=1))

@@ -1,8 +1,10 @@
 """Resolved-rate motion control (seed 000, eqs 35-36) and the Manipulability Motion Controller (seed 001).
 
-numpy and OSQP only. ``kin`` is any object with ``n``, ``qlim`` (2, n), optionally ``qd_max`` (n,),
-and the base-frame ``jacob0(q)`` (6, n) and ``hessian0(q)`` (n, 6, n) (or ``jacobm(q, axes)``);
-a ``jacob0_hessian0(q) -> (J, H)`` method is used when present. :class:`symkin.Robot` is one.
+numpy and OSQP (the reference path). ``kin`` is any object with ``n``, ``qlim`` (2, n), optionally
+``qd_max`` (n,), and the base-frame ``jacob0(q)`` (6, n) and ``hessian0(q)`` (n, 6, n) (or
+``jacobm(q, axes)``); a ``jacob0_hessian0(q) -> (J, H)`` method is used when present.
+:class:`symkin.Robot` is one. For compiled C kinematics, :meth:`MMC.step` runs in C
+(:mod:`symkin.runtime.mmc_c`).
 
 Solver outcomes are reported in a :class:`StepInfo`, never raised; the joint velocity returned is
 always finite.
@@ -12,14 +14,27 @@ from __future__ import annotations
 
 import contextlib
 import math
+import warnings
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import osqp
 import scipy.sparse as sp
 
-from symkin.errors import ConfigurationError
+from symkin.errors import CompileError, ConfigurationError
+from symkin.runtime.mmc_qp import (
+    _AXES,
+    MMCQP,
+    _axes,
+    active_of,
+    active_of_osqp,
+    active_set_solve,
+    joint_velocity_bounds,
+    manipulability_jacobian,
+    mmc_closed_form,
+    mmc_qp,
+)
 
 __all__ = [
     "MMC",
@@ -32,7 +47,6 @@ __all__ = [
     "manipulability_jacobian",
 ]
 
-_AXES = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
 _OSQP_STATUS = {
     "OSQP_SOLVED": "solved",
     "OSQP_SOLVED_INACCURATE": "inaccurate",
@@ -43,8 +57,11 @@ _OSQP_STATUS = {
     "OSQP_MAX_ITER_REACHED": "max_iter",
     "OSQP_TIME_LIMIT_REACHED": "max_iter",
 }
-#: OSQP settings of :class:`MMC`: tight tolerances, and polishing, which usually makes J qd = nu hold to
-#: about 1e-14 (1e-7 when polishing fails); measured on Panda servo tasks with active bounds
+#: OSQP settings of :class:`MMC`: tight tolerances, and polishing. ``polishing`` is done by symkin,
+#: not OSQP: :func:`~symkin.runtime.mmc_qp.active_set_solve` from OSQP's active set, whose answer,
+#: when it settles, is the exact solution (J qd = nu to about 1e-14; OSQP's own polish left errors
+#: up to 1e-5 on ill-conditioned steps with the slack), also when OSQP stopped unfinished.
+#: ``polish_refine_iter`` is unused.
 OSQP_SETTINGS: dict[str, Any] = {
     "eps_abs": 1e-7,
     "eps_rel": 1e-7,
@@ -65,9 +82,9 @@ class StepInfo:
             no solution, e.g. velocity bounds too small for nu); ``"max_iter"``/``"inaccurate"`` (OSQP
             stopped early); ``"error"`` (any other solver failure).
         method: how qd was computed: ``"inverse"``/``"pinv"``/``"damped"`` (RRMC, eqs 35-36),
-            ``"closed_form"`` or ``"osqp"`` (MMC).
+            ``"closed_form"``, ``"active_set"`` or ``"osqp"`` (MMC).
         manipulability: m(q) of the chosen axes (seed 000 eq 52) at the configuration of the step.
-        iterations: OSQP iterations (0 when OSQP was not called).
+        iterations: OSQP iterations, or the active-set solves (0 for the closed form).
         fallback: ``None``, or ``"rrmc"``/``"zero"`` when the MMC answer was replaced.
         residual: max |J qd - nu| of the returned qd.
         slack: norm of the equality slack (MMC with ``slack``), else 0.
@@ -87,13 +104,6 @@ class StepInfo:
     def ok(self) -> bool:
         """True when the step is the controller's own answer (no singularity, no fallback)."""
         return self.status == "solved" and self.fallback is None
-
-
-def _axes(axes: str) -> slice:
-    try:
-        return _AXES[axes]
-    except KeyError:
-        raise ValueError(f"axes must be one of {sorted(_AXES)}, not {axes!r}") from None
 
 
 def _q(kin: Any, q: Any) -> np.ndarray:
@@ -177,138 +187,6 @@ def _rrmc_step(
     return Vt.T @ (x / s), "solved", ("inverse" if n == 6 else "pinv"), m
 
 
-# -- MMC: kinematic quantities and the QP -----------------------------------------------------------
-def manipulability_jacobian(J: np.ndarray, H: np.ndarray, axes: str = "all") -> tuple[np.ndarray, float]:
-    """Manipulability Jacobian (seed 001 eq 11) and m (eq 8) from J (6, n) and H (n, 6, n): ((n,), m).
-
-    ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)`` over the rows chosen by ``axes``. At a singular
-    configuration (J J^T not invertible) Jm is returned as zeros and m as 0.
-    """
-    rows = _axes(axes)
-    Jr = J[rows]
-    A = Jr @ Jr.T
-    det = float(np.linalg.det(A))
-    n = J.shape[1]
-    if not det > 0.0:
-        return np.zeros(n), 0.0
-    m = math.sqrt(det)
-    try:
-        B = np.linalg.solve(A, Jr)  # (r, n) = (J J^T)^-1 J
-    except np.linalg.LinAlgError:
-        return np.zeros(n), 0.0
-    Jm = m * (H[:, rows, :].reshape(n, -1) @ B.ravel())
-    if not np.isfinite(Jm).all():
-        return np.zeros(n), 0.0
-    return Jm, m
-
-
-def joint_velocity_bounds(
-    q: np.ndarray,
-    qlim: np.ndarray,
-    qd_max: np.ndarray,
-    joint_limits: bool = False,
-    rho_i: float | np.ndarray = 0.9,
-    rho_s: float | np.ndarray = 0.05,
-    xi: float = 1.0,
-    dt: float | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds (lower, upper), each (n,), on qd: the speed limits -alpha <= qd <= alpha (seed 001) and,
-    with ``joint_limits``, velocity dampers.
-
-    A joint closer than ``rho_i`` (influence distance) to its upper limit gets
-    ``qd_i <= xi (q_max - q_i - rho_s) / (rho_i - rho_s)``, reaching 0 at the safety distance ``rho_s``;
-    symmetrically ``qd_i >= -xi (q_i - q_min - rho_s) / (rho_i - rho_s)`` near the lower limit.
-    Distances are in joint units (rad or m). The damper is a continuous-time constraint: a joint
-    faster than ``rho_i / dt`` can jump over the influence zone in one step of an integration with
-    time step ``dt``. Given ``dt``, every joint also gets ``|step| <= distance - rho_s``, i.e.
-    ``-(q_i - q_min - rho_s) / dt <= qd_i <= (q_max - q_i - rho_s) / dt``. Bounds are kept
-    consistent (lower <= upper).
-    """
-    lower, upper = -qd_max.copy(), qd_max.copy()
-    if joint_limits:
-        rho_i = np.broadcast_to(np.asarray(rho_i, dtype=float), q.shape)
-        rho_s = np.broadcast_to(np.asarray(rho_s, dtype=float), q.shape)
-        width = rho_i - rho_s
-        d_hi = qlim[1] - q
-        d_lo = q - qlim[0]
-        upper = np.where(d_hi < rho_i, np.minimum(upper, xi * (d_hi - rho_s) / width), upper)
-        lower = np.where(d_lo < rho_i, np.maximum(lower, -xi * (d_lo - rho_s) / width), lower)
-        if dt is not None:
-            upper = np.minimum(upper, (d_hi - rho_s) / dt)
-            lower = np.maximum(lower, -(d_lo - rho_s) / dt)
-        upper = np.maximum(upper, -qd_max)
-        lower = np.minimum(lower, qd_max)
-        bad = lower > upper
-        if bad.any():
-            mid = 0.5 * (lower + upper)
-            lower = np.where(bad, mid, lower)
-            upper = np.where(bad, mid, upper)
-    return lower, upper
-
-
-class MMCQP(NamedTuple):
-    """The MMC quadratic program (seed 001 eq 12 with bounds): min 0.5 x^T P x + c^T x, l <= A x <= u.
-
-    ``x = qd`` (n,), or ``(qd, s)`` (n + 6,) with an equality slack ``s``. The first 6 rows of A are
-    the equality ``J qd (+ s) = nu`` (l = u = nu); the next n rows are ``lower <= qd <= upper``.
-    """
-
-    P: np.ndarray  # (nx, nx) diagonal: lam I_n (and slack_weight I_6)
-    c: np.ndarray  # (nx,) -Jm (and 0)
-    A: np.ndarray  # (6 + n, nx): [[J, (I_6)], [I_n, (0)]]
-    l: np.ndarray  # (6 + n,)
-    u: np.ndarray  # (6 + n,)
-    J: np.ndarray  # (6, n) base-frame Jacobian
-    Jm: np.ndarray  # (n,) manipulability Jacobian
-    manipulability: float
-
-    @property
-    def n(self) -> int:
-        return self.J.shape[1]
-
-    @property
-    def has_slack(self) -> bool:
-        return self.P.shape[0] > self.J.shape[1]
-
-
-def mmc_qp(
-    J: np.ndarray,
-    Jm: np.ndarray,
-    nu: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    lam: float = 0.005,
-    slack_weight: float | None = None,
-    manipulability: float = float("nan"),
-) -> MMCQP:
-    """Assemble the MMC QP: min ``0.5 lam qd^T qd - Jm^T qd`` s.t. ``J qd = nu``, ``lower <= qd <= upper``.
-
-    With ``slack_weight`` w, the equality becomes ``J qd + s = nu`` and ``0.5 w s^T s`` is added to
-    the cost, so the QP stays feasible when the bounds cannot meet nu.
-    """
-    n = J.shape[1]
-    ns = 0 if slack_weight is None else 6
-    P = np.zeros((n + ns, n + ns))
-    P[np.arange(n), np.arange(n)] = lam
-    c = np.zeros(n + ns)
-    c[:n] = -Jm
-    A = np.zeros((6 + n, n + ns))
-    A[:6, :n] = J
-    A[6:, :n] = np.eye(n)
-    if ns:
-        P[np.arange(n, n + 6), np.arange(n, n + 6)] = slack_weight
-        A[:6, n:] = np.eye(6)
-    l = np.concatenate((nu, lower))
-    u = np.concatenate((nu, upper))
-    return MMCQP(P, c, A, l, u, J, Jm, manipulability)
-
-
-def mmc_closed_form(J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lam: float) -> np.ndarray:
-    """Solution of eq 12 without inequalities: ``J^+ nu + (I - J^+ J) Jm / lam`` (J of full row rank)."""
-    z = Jm / lam
-    return z + J.T @ np.linalg.solve(J @ J.T, nu - J @ z)
-
-
 # -- MMC: the controller ---------------------------------------------------------------------------
 class MMC:
     """Manipulability Motion Controller (seed 001 eq 12), one OSQP problem per controller.
@@ -321,8 +199,18 @@ class MMC:
 
     The QP is built by :meth:`build` (an :class:`MMCQP`, testable on its own) and solved by
     :meth:`solve`. When ``closed_form`` is true and the unconstrained-by-bounds solution
-    :func:`mmc_closed_form` lies within the bounds, it is the QP's solution and OSQP is skipped.
-    Otherwise OSQP, set up once and updated per step (warm-started), solves it.
+    :func:`mmc_closed_form` (with the slack when there is one) lies within the bounds, it is the
+    QP's solution and OSQP is skipped.
+    When it does not and ``active_set`` is true, the bounds it crosses start an active-set solve
+    (:func:`~symkin.runtime.mmc_qp.active_set_solve`), whose answer, when it settles, is the QP's
+    exact solution (``method="active_set"``). Otherwise OSQP, set up once and updated per step (warm-started),
+    solves it; ``closed_form=False`` sends every step to OSQP.
+
+    ``backend``: ``"auto"`` (default) runs :meth:`step` in C when ``kin`` is compiled C kinematics
+    (``symkin.compile(robot, backend="c")``): kinematics, closed form, active set and an embedded
+    OSQP built for this QP (:mod:`symkin.runtime.mmc_c`), the same answers within solver
+    tolerance; ``"python"`` keeps this NumPy + OSQP path (the reference); ``"c"`` requires C.
+    :meth:`build` and :meth:`solve` always run in Python.
 
     ``slack`` (default: on with ``joint_limits``) adds a slack ``s`` on the equality, weighted by
     ``slack_weight``, so the QP stays feasible when the dampers or speed limits cannot meet nu;
@@ -345,9 +233,13 @@ class MMC:
         slack: bool | None = None,
         slack_weight: float = 1e4,
         closed_form: bool = True,
+        active_set: bool = True,
         singular_tol: float = 1e-6,
         osqp_settings: dict[str, Any] | None = None,
+        backend: str = "auto",
     ) -> None:
+        if backend not in ("auto", "c", "python"):
+            raise ValueError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         if not lam > 0:
             raise ValueError(f"lam must be positive, got {lam}")
         if joint_limits and not np.all(np.asarray(rho_i) > np.asarray(rho_s)):
@@ -366,18 +258,38 @@ class MMC:
         self.slack = self.joint_limits if slack is None else bool(slack)
         self.slack_weight = float(slack_weight)
         self.closed_form = bool(closed_form)
+        self.active_set = bool(active_set)
         self.singular_tol = float(singular_tol)
         self.settings = {**OSQP_SETTINGS, **(osqp_settings or {})}
         self._jh = getattr(kin, "jacob0_hessian0", None)
         self._solver: osqp.OSQP | None = None
         self._raw: Any = None
+        self._polish = bool(self.settings.get("polishing"))
         self._inf = float(osqp.constant("OSQP_INFTY"))
         self._status_names = {int(s): _OSQP_STATUS.get(s.name, "error") for s in osqp.SolverStatus}
+        self._c: Any = None
+        if backend != "python":
+            from symkin.runtime import mmc_c
+
+            if mmc_c.supports(kin):
+                try:
+                    self._c = mmc_c.CMMC(self)
+                except (CompileError, OSError, RuntimeError) as exc:
+                    if backend == "c":
+                        raise
+                    warnings.warn(f"MMC runs in Python: the C step is unavailable ({exc})", stacklevel=2)
+            elif backend == "c":
+                raise ConfigurationError("backend='c' needs C kinematics: symkin.compile(robot, backend='c')")
+
+    @property
+    def backend(self) -> str:
+        """``"c"`` when :meth:`step` runs in C (:mod:`symkin.runtime.mmc_c`), else ``"python"``."""
+        return "python" if self._c is None else "c"
 
     def __repr__(self) -> str:
         return (
             f"MMC(n={self.n}, lam={self.lam}, axes={self.axes!r}, joint_limits={self.joint_limits}, "
-            f"slack={self.slack})"
+            f"slack={self.slack}, backend={self.backend!r})"
         )
 
     # -- build ----------------------------------------------------------------------------------
@@ -435,20 +347,51 @@ class MMC:
         """Joint velocity qd (n,) for the spatial velocity nu (6,) at q (n,), and how it was found.
 
         Same answer as ``solve(build(q, nu))``; the QP matrices are only assembled when the closed
-        form does not settle the step.
+        form does not settle the step. On the C path (:attr:`backend`) the whole step is one C call.
         """
+        if self._c is not None:
+            return self._c.step(q, nu)
         q = _q(self.kin, q)
         nu = _nu(nu)
         J, Jm, m, s_min, B = self._terms(q)
         lower, upper = self.bounds(q)
         if self.closed_form and B is not None:
-            z = Jm / self.lam
-            qd = z + B.T @ (nu - J @ z)  # J^+ nu + (I - J^+ J) Jm / lam
+            if self.slack:
+                qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
+            else:
+                z = Jm / self.lam
+                qd = z + B.T @ (nu - J @ z)  # J^+ nu + (I - J^+ J) Jm / lam
             inside = not self._bounded or ((qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all())
             if inside and math.isfinite(qd.sum()):
-                return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(J @ qd - nu).max()))
+                return self._closed_form_info(J, qd, nu, m)
+            if self.active_set:
+                done = self._active_set(J, Jm, nu, lower, upper, m, qd)
+                if done is not None:
+                    return done
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m)
         return self._solve(qp, s_min, try_closed_form=False)
+
+    def _closed_form_info(
+        self, J: np.ndarray, qd: np.ndarray, nu: np.ndarray, m: float
+    ) -> tuple[np.ndarray, StepInfo]:
+        e = nu - J @ qd
+        slack = float(np.linalg.norm(e)) if self.slack else 0.0
+        return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(e).max()), slack=slack)
+
+    def _active_set(
+        self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
+        qd: np.ndarray,
+    ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
+        """The active-set solution started from the bounds the closed form ``qd`` crosses, or None."""
+        w = self.slack_weight if self.slack else None
+        found = active_set_solve(J, Jm, nu, lower, upper, self.lam, w, active_of(qd, lower, upper))
+        if found is None:
+            return None
+        x, solves = found
+        qd = np.clip(x[: self.n], lower, upper)
+        slack = float(np.linalg.norm(x[self.n :])) if w is not None else 0.0
+        res = float(np.abs(J @ qd - nu).max())
+        return qd, StepInfo("solved", "active_set", m, solves, residual=res, slack=slack)
 
     def solve(self, qp: MMCQP) -> tuple[np.ndarray, StepInfo]:
         """Solve a QP from :meth:`build`."""
@@ -461,12 +404,25 @@ class MMC:
         if s_min < self.singular_tol:
             return self._fallback(qp, "singular", "closed_form", 0)
         if try_closed_form:
-            qd = mmc_closed_form(J, qp.Jm, nu, self.lam)
+            qd = mmc_closed_form(J, qp.Jm, nu, self.lam, self.slack_weight if qp.has_slack else None)
             if np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
-                res = float(np.abs(J @ qd - nu).max())
-                return qd, StepInfo("solved", "closed_form", m, residual=res)
+                return self._closed_form_info(J, qd, nu, m)
+            if self.active_set:
+                done = self._active_set(J, qp.Jm, nu, lower, upper, m, qd)
+                if done is not None:
+                    return done
         x, status, iters = self._osqp(qp)
         n = self.n
+        if x is not None and status in ("solved", "inaccurate", "max_iter") and self._polish:
+            # polish: the active-set solve from OSQP's active set, which when it settles is the exact
+            # solution, also of a QP that OSQP left unfinished (see OSQP_SETTINGS)
+            y = self._raw.solution.y[6:] if self._raw is not None else np.zeros(n)
+            w = self.slack_weight if qp.has_slack else None
+            found = active_set_solve(
+                J, qp.Jm, nu, lower, upper, self.lam, w, active_of_osqp(x[:n], y, lower, upper)
+            )
+            if found is not None:
+                x, status = found[0], "solved"
         if x is not None and status in ("solved", "inaccurate", "max_iter"):
             qd = np.clip(x[:n], lower, upper)  # remove solver-tolerance overshoot of the bounds
             res = float(np.abs(J @ qd - nu).max())
@@ -516,6 +472,7 @@ class MMC:
             return None, "error", 0
         status = self._status_names.get(int(info.status_val), "error")
         iters = int(info.iter)
+
         x = np.array(x, dtype=float)
         if x.shape != (qp.P.shape[0],) or not np.isfinite(x).all():
             return None, status if status != "solved" else "error", iters
@@ -531,7 +488,7 @@ class MMC:
         nx = qp.P.shape[0]
         P = sp.csc_matrix((np.diag(qp.P).copy(), np.arange(nx), np.arange(nx + 1)), shape=(nx, nx))
         solver = osqp.OSQP()
-        solver.setup(P, qp.c, A, l, u, **self.settings)
+        solver.setup(P, qp.c, A, l, u, **{**self.settings, "polishing": False})  # see OSQP_SETTINGS
         self._solver = solver
         # the compiled binding under osqp.OSQP: its update/solve skip the Python wrapper's copies and
         # result namespace (about 16 us per step); the public calls are used if it is missing

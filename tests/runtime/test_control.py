@@ -9,7 +9,14 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.bench.mmc import format_table1, plot_task, run_table1, table1_tasks
+from symkin.bench.mmc import (
+    format_step_timing,
+    format_table1,
+    plot_task,
+    run_table1,
+    step_timing,
+    table1_tasks,
+)
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.control import (
     MMC,
@@ -169,6 +176,20 @@ def test_closed_form_agrees_with_the_qp_without_active_inequalities(panda):
         qd, info = ctrl.solve(qp)
         assert info.method == "osqp" and info.status == "solved", info
         assert_close(qd, mmc_closed_form(qp.J, qp.Jm, nu, ctrl.lam), 1e-7, "QP vs closed form")
+
+
+def test_closed_form_with_slack_is_the_slack_qp_solution(panda):
+    rng = np.random.default_rng(12)
+    cf = MMC(panda, qd_max=np.inf, slack=True)
+    qp_ = MMC(panda, qd_max=np.inf, slack=True, closed_form=False)
+    for _ in range(10):
+        q, nu = panda.random_q(seed=rng), rng.normal(0, 0.2, 6)
+        qd, info = cf.step(q, nu)
+        ref, info_ref = qp_.step(q, nu)
+        assert info.method == "closed_form" and info_ref.method == "osqp" and info_ref.ok
+        assert np.abs(qd - ref).max() <= 1e-9 * max(1.0, np.abs(ref).max())
+        assert_close(info.slack, info_ref.slack, 1e-9, "|s|")
+        assert info.slack > 0
 
 
 def test_step_is_solve_of_build(panda):
@@ -386,7 +407,7 @@ def test_step_info_is_frozen():
 
 # -- the benchmark ---------------------------------------------------------------------------------
 def test_table1_benchmark_runs_and_formats(panda, tmp_path):
-    res = run_table1((panda,), n_tasks=2, progress=False, max_steps=100)
+    res = run_table1((panda,), n_tasks=2, progress=False, max_steps=100, timing=False)
     json.dumps(res)
     r = res["robots"]["panda"]
     assert {"rrmc", "mmc", "mmc_jl", "paper"} <= set(r)
@@ -398,3 +419,165 @@ def test_table1_benchmark_runs_and_formats(panda, tmp_path):
     out = plot_task(panda, q0s[0], Teps[0], tmp_path / "fig3.png", qd_max=np.inf, max_steps=100)
     assert (tmp_path / "fig3.png").stat().st_size > 1000
     assert set(out) == {"rrmc", "mmc"}
+
+
+# -- the C path (symkin.runtime.mmc_c) -------------------------------------------------------------
+@pytest.fixture(scope="module")
+def cpanda():
+    """The built-in Panda compiled with the C backend (the MMC library is compiled on first use)."""
+    return symkin.compile(symkin.load("panda"), backend="c")
+
+
+def test_c_path_is_used_for_c_kinematics(cpanda, panda):
+    assert MMC(cpanda).backend == "c" and "backend='c'" in repr(MMC(cpanda))
+    assert MMC(cpanda, backend="python").backend == "python"
+    assert MMC(panda).backend == "python"
+    assert (
+        servo(cpanda, cpanda.robot.qr, cpanda.fkine(cpanda.robot.qz), "mmc", max_steps=2).info[0].method
+        == "closed_form"
+    )
+    with pytest.raises(ConfigurationError):
+        MMC(panda, backend="c")
+    with pytest.raises(ValueError):
+        MMC(cpanda, backend="cuda")
+
+
+def test_c_path_unavailable_falls_back_to_python(cpanda, monkeypatch):
+    from symkin.errors import CompileError
+    from symkin.runtime import mmc_c
+
+    def broken(mmc):
+        raise CompileError("no compiler")
+
+    monkeypatch.setattr(mmc_c, "CMMC", broken)
+    with pytest.warns(UserWarning, match="MMC runs in Python"):
+        assert MMC(cpanda).backend == "python"
+    with pytest.raises(CompileError):
+        MMC(cpanda, backend="c")
+
+
+C_CONFIGS = [
+    {"qd_max": np.inf},
+    {"qd_max": None},  # the Panda's speed limits: active set and OSQP steps
+    {"qd_max": 0.3},  # mostly infeasible: OSQP says so, the RRMC step is scaled into the bounds
+    {"qd_max": np.inf, "joint_limits": True, "dt": 0.05},  # dampers with the slack
+    {"qd_max": 0.5 * np.array(PANDA_QD_MAX), "closed_form": False},  # OSQP on every step
+    {"qd_max": 1.0, "joint_limits": True, "closed_form": False},  # OSQP with the slack
+    {"qd_max": None, "axes": "trans"},
+    {"qd_max": None, "axes": "rot", "active_set": False},
+]
+
+
+@pytest.mark.parametrize("kwargs", C_CONFIGS, ids=lambda k: ",".join(sorted(k)))
+def test_c_path_agrees_with_the_python_path_on_servo_runs(cpanda, kwargs):
+    q0s, Teps = table1_tasks(cpanda, 2, np.random.default_rng(7))
+    c, p = MMC(cpanda, **kwargs), MMC(cpanda, backend="python", **kwargs)
+    seen = set()
+    for q0, Tep in zip(q0s, Teps):
+        q = q0.copy()
+        for _ in range(60):
+            nu, arrived = p_servo(cpanda.fkine(q), Tep)
+            if arrived:
+                break
+            a, ia = c.step(q, nu)
+            b, ib = p.step(q, nu)
+            assert (ia.status, ia.method, ia.fallback) == (ib.status, ib.method, ib.fallback), (ia, ib)
+            assert np.abs(a - b).max() <= 1e-6 * max(1.0, np.abs(b).max()), (ia, a, b)
+            assert_close(ia.manipulability, ib.manipulability, 1e-12, "m")
+            assert ia.iterations == ib.iterations or ia.method == "osqp", (ia, ib)
+            lo, hi = c.bounds(q)
+            assert (a >= lo - 1e-12).all() and (a <= hi + 1e-12).all()
+            J = cpanda.jacob0(q)
+            assert_close(ia.residual, np.abs(J @ a - nu).max(), 1e-12, "residual")
+            if ia.ok and not c.slack:
+                assert ia.residual < 1e-9, ia
+            seen.add(ia.method if ia.fallback is None else ia.fallback)
+            q = q + 0.05 * b
+    assert seen
+
+
+def test_c_path_covers_every_outcome(cpanda):
+    methods = set()
+    for kwargs in C_CONFIGS:
+        c = MMC(cpanda, **kwargs)
+        for q0, Tep in zip(*table1_tasks(cpanda, 2, np.random.default_rng(7))):
+            methods |= {(i.method, i.status) for i in servo(cpanda, q0, Tep, c, max_steps=60).info}
+    assert {
+        ("closed_form", "solved"),
+        ("active_set", "solved"),
+        ("osqp", "solved"),
+        ("osqp", "infeasible"),
+    } <= methods
+
+
+def test_c_path_singular_start_and_infeasible_bound(cpanda):
+    q, nu = cpanda.robot.qz, np.array([0.1, 0.0, -0.1, 0.0, 0.2, 0.0])  # qz: J has rank 5
+    for kwargs in ({}, {"qd_max": 0.05}):
+        (a, ia), (b, ib) = (
+            MMC(cpanda, **kwargs).step(q, nu),
+            MMC(cpanda, backend="python", **kwargs).step(q, nu),
+        )
+        assert ia.status == ib.status == "singular" and ia.fallback == ib.fallback == "rrmc"
+        assert_close(a, b, 1e-9, "damped step")
+        assert_close(ia.scale, ib.scale, 1e-12, "scale")
+    nu = np.array([0.5, 0, 0, 0, 0, 1.0])
+    qd, info = MMC(cpanda, qd_max=0.01).step(cpanda.robot.qr, nu)
+    ref, _ = MMC(cpanda, qd_max=0.01, backend="python").step(cpanda.robot.qr, nu)
+    assert info.status == "infeasible" and info.fallback == "rrmc" and info.method == "osqp"
+    assert (np.abs(qd) <= 0.01 + 1e-15).all() and info.scale < 1
+    assert_close(qd, ref, 1e-12, "scaled RRMC step")
+    qd, info = MMC(cpanda, qd_max=0.01, slack=True).step(cpanda.robot.qr, nu)
+    assert info.ok and info.slack > 0.1 and (np.abs(qd) <= 0.01 + 1e-12).all()
+
+
+def test_c_controllers_sharing_a_solver_do_not_interfere(cpanda):
+    """Controllers of one library share its embedded OSQP; each keeps its own iterate and rho."""
+    q0s, Teps = table1_tasks(cpanda, 1, np.random.default_rng(3))
+    kwargs = {"qd_max": 0.5 * np.array(PANDA_QD_MAX), "closed_form": False}
+    alone = servo(cpanda, q0s[0], Teps[0], MMC(cpanda, **kwargs), max_steps=40)
+    a, b = MMC(cpanda, **kwargs), MMC(cpanda, lam=0.05, **kwargs)
+    for k in range(alone.steps):
+        nu, _ = p_servo(cpanda.fkine(alone.q[k]), Teps[0])
+        qd, info = a.step(alone.q[k], nu)
+        b.step(alone.q[k] + 0.01, -nu)  # another controller on the same solver in between
+        assert info.iterations == alone.info[k].iterations and info.status == alone.info[k].status
+        assert_close(qd, alone.qd[k], 1e-12, f"step {k}")
+
+
+def test_c_path_input_errors(cpanda):
+    ctrl = MMC(cpanda)
+    with pytest.raises(ConfigurationError):
+        ctrl.step(np.zeros(6), np.zeros(6))
+    with pytest.raises(ConfigurationError):
+        ctrl.step(np.full(7, np.nan), np.zeros(6))
+    with pytest.raises(ValueError):
+        ctrl.step(np.zeros(7), np.full(6, np.inf))
+    with pytest.raises(ValueError):
+        ctrl.step(np.zeros(7), np.zeros(5))
+    qd, info = ctrl.step([0.0, -0.3, 0, -2.2, 0, 2.0, 0.8], (0.01, 0, 0, 0, 0, 0))  # sequences work
+    assert qd.shape == (7,) and info.ok
+
+
+def test_active_set_answer_is_the_qp_solution(panda):
+    rng = np.random.default_rng(11)
+    n_as = 0
+    for slack in (False, True):
+        fast = MMC(panda, qd_max=0.6, slack=slack)
+        ref = MMC(panda, qd_max=0.6, slack=slack, closed_form=False, osqp_settings={"polishing": False})
+        for _ in range(30):
+            q, nu = panda.random_q(seed=rng), rng.normal(0, 0.1, 6)
+            qd, info = fast.step(q, nu)
+            qd_ref, info_ref = ref.step(q, nu)
+            if info.method == "active_set":
+                n_as += 1
+                assert info_ref.status == "solved", info_ref
+                assert np.abs(qd - qd_ref).max() < 1e-4  # OSQP unpolished: eps / lam
+    assert n_as > 10
+
+
+def test_step_timing_reports_both_paths(cpanda):
+    res = step_timing(cpanda, n_tasks=1, max_steps=20, configs=("mmc", "mmc_jl"), rtb=False, rounds=1)
+    for r in res["configs"].values():
+        assert {"c", "python"} <= set(r["median_us"]) and r["steps"] > 0
+        assert r["max_diff_python"] < 1e-6
+    assert "MMC step" in format_step_timing(res)

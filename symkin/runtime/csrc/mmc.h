@@ -1,0 +1,72 @@
+/*
+ * mmc.h: one step of the Manipulability Motion Controller (seed 001 eq 12) in C.
+ *
+ * A library for robots of MMC_N joints (mmc_config.h) holds the embedded OSQP sources emitted by
+ * osqp.OSQP.codegen for the MMC QP without slack (solver mmcqp0_solver) and with the equality
+ * slack (mmcqp6_solver), and mmc_impl.h compiled once for each (mmc_s0.c, mmc_s6.c, which define
+ * MMC_NS, MMC_SOLVER and MMC_FN). The robot's kinematics come as a function pointer to its
+ * generated jacob0_hessian0. See symkin/runtime/mmc_c.py; the Python reference is
+ * symkin.runtime.control.MMC.
+ */
+#ifndef SYMKIN_MMC_H
+#define SYMKIN_MMC_H
+
+#include <stdint.h>
+
+#include "mmc_config.h" /* MMC_N */
+
+#if defined(__GNUC__)
+#define MMC_API __attribute__((visibility("default")))
+#else
+#define MMC_API
+#endif
+
+#define MMC_NINFO 9 /* info values written after qd */
+
+/* Base-frame Jacobian J (6, n) and Hessian H (n, 6, n), row-major, at q (n): generated code. */
+typedef void (*symkin_mmc_jh_fn)(const double *q, double *J, double *H);
+
+/* Options and per-controller solver state; one per controller, owned by the caller. */
+typedef struct {
+    symkin_mmc_jh_fn jh;  /* the robot's kinematics */
+    int32_t axes;         /* manipulability rows: 0 all, 1 translation, 2 rotation */
+    int32_t closed_form;  /* try J+ nu + (I - J+ J) Jm / lam first */
+    int32_t active_set;   /* with closed_form: when the closed form leaves the bounds, an active-set
+                             solve from the bounds it crosses before OSQP */
+    int32_t joint_limits; /* velocity dampers (joint_velocity_bounds of control.py) */
+    int32_t bounded;      /* any finite bound: the closed form must be checked against them */
+    int32_t polish;       /* active-set polish of OSQP's solution (OSQP's own is not embedded) */
+    int32_t has_dt;       /* bound each step's joint motion by the distance to the limit */
+    int32_t fresh;        /* 1 until this controller's first OSQP solve: cold start */
+    double lam, slack_weight, xi, dt, singular_tol, damping, rho0;
+    double qlo[MMC_N], qhi[MMC_N], qd_max[MMC_N], rho_i[MMC_N], rho_s[MMC_N];
+    /* this controller's OSQP state, restored when another controller used the solver in between:
+       rho (adapted by OSQP) and the iterate (x, z, y as OSQP holds them, scaled) */
+    double rho;
+    double x[MMC_N + 6];
+    double z[6 + MMC_N];
+    double y[6 + MMC_N];
+} symkin_mmc_ctrl;
+
+/* info[0] status */
+enum { MMC_SOLVED, MMC_SINGULAR, MMC_INFEASIBLE, MMC_MAX_ITER, MMC_INACCURATE, MMC_ERROR };
+/* info[1] method */
+enum { MMC_CLOSED_FORM, MMC_OSQP, MMC_ACTIVE_SET };
+/* info[4] fallback */
+enum { MMC_NO_FALLBACK, MMC_FALLBACK_RRMC, MMC_FALLBACK_ZERO };
+
+/*
+ * One step (symkin_mmc0_step without slack, symkin_mmc6_step with): in = (q[n], nu[6]);
+ * out = (qd[n], status, method, manipulability, iterations, fallback, residual max|J qd - nu|,
+ * |slack|, scale, polished). Returns 0, or 1 when q is not finite, 2 when nu is not finite (out
+ * untouched). Not thread-safe: the controllers of a library share its two embedded solvers; each
+ * restores its own OSQP state (iterate and rho) when it takes a solver over, so a controller's
+ * answers do not depend on the others.
+ */
+MMC_API int symkin_mmc0_step(symkin_mmc_ctrl *c, const double *in, double *out);
+MMC_API int symkin_mmc6_step(symkin_mmc_ctrl *c, const double *in, double *out);
+
+/* n, sizeof(symkin_mmc_ctrl), MMC_NINFO (for layout checks). */
+MMC_API void symkin_mmc_layout(int32_t *out);
+
+#endif /* SYMKIN_MMC_H */

@@ -1,0 +1,613 @@
+/*
+ * mmc_impl.h: one step of the Manipulability Motion Controller in C (see mmc.h), included once
+ * per QP variant by a file that defines MMC_NS (0, or 6 with the equality slack), MMC_SOLVER (that
+ * variant's embedded OSQP solver) and MMC_FN(name) (its exported names) and includes its workspace.
+ *
+ * Mirrors symkin.runtime.control.MMC.step: J, H (generated), the singularity test, Jm (seed 001
+ * eq 11), the bounds (joint_velocity_bounds), the closed form J+ nu + (I - J+ J) Jm / lam when it
+ * lies within them, else the active-set solve from the bounds it crosses, else the QP (eq 12) on
+ * the embedded OSQP, then the same fallbacks (the RRMC step scaled into the bounds). OSQP's
+ * polishing is not part of its embedded code; when OSQP reports "solved", the active-set solve
+ * started from OSQP's active set replaces its answer when it verifies.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "mmc.h"
+#include "osqp.h"
+/* OSQP's private types (emitted with it): the iterate saved and restored per controller */
+#include "algebra_impl.h"
+#include "types.h"
+
+#define N MMC_N
+#define NS MMC_NS
+#define NX (MMC_N + MMC_NS) /* QP variables: qd (and the slack s) */
+#define NC (6 + MMC_N)      /* QP rows: J qd (+ s) = nu, lower <= qd <= upper */
+#define NNZ_A (7 * N + NS)  /* CSC of [[J, I6], [I_n, 0]]: per qd column 6 J entries and a 1 */
+
+static const symkin_mmc_ctrl *owner_ = 0; /* the controller whose iterate the solver holds */
+
+/* Cholesky factor L (lower, row-major r x r) of G + shift I; 1 on success. */
+static int chol_(const double *G, int r, double shift, double *L)
+{
+    for (int i = 0; i < r; ++i) {
+        for (int j = 0; j <= i; ++j) {
+            double s = G[i * r + j] + (i == j ? shift : 0.0);
+            for (int k = 0; k < j; ++k)
+                s -= L[i * r + k] * L[j * r + k];
+            if (i == j) {
+                if (!(s > 0.0))
+                    return 0;
+                L[i * r + i] = sqrt(s);
+            } else {
+                L[i * r + j] = s / L[j * r + j];
+            }
+        }
+        for (int j = i + 1; j < r; ++j)
+            L[i * r + j] = 0.0;
+    }
+    return 1;
+}
+
+/* b <- (L L^T)^-1 b */
+static void chol_solve_(const double *L, int r, double *b)
+{
+    for (int i = 0; i < r; ++i) {
+        double s = b[i];
+        for (int k = 0; k < i; ++k)
+            s -= L[i * r + k] * b[k];
+        b[i] = s / L[i * r + i];
+    }
+    for (int i = r - 1; i >= 0; --i) {
+        double s = b[i];
+        for (int k = i + 1; k < r; ++k)
+            s -= L[k * r + i] * b[k];
+        b[i] = s / L[i * r + i];
+    }
+}
+
+/* G = Jr Jr^T over rows r0 .. r0 + r - 1 of J (6, N) */
+static void gram_(const double *J, int r0, int r, double *G)
+{
+    for (int i = 0; i < r; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double s = 0.0;
+            for (int k = 0; k < N; ++k)
+                s += J[(r0 + i) * N + k] * J[(r0 + j) * N + k];
+            G[i * r + j] = G[j * r + i] = s;
+        }
+}
+
+/* B = (L L^T)^-1 Jr, (r, N) */
+static void solve_rows_(const double *L, int r, const double *J, int r0, double *B)
+{
+    for (int k = 0; k < N; ++k) {
+        double b[6];
+        for (int i = 0; i < r; ++i)
+            b[i] = J[(r0 + i) * N + k];
+        chol_solve_(L, r, b);
+        for (int i = 0; i < r; ++i)
+            B[i * N + k] = b[i];
+    }
+}
+
+/* Jm_i = m sum_{row, k} H_i[r0 + row][k] B[row][k] (eq 11) */
+static void jacobm_(const double *H, const double *B, int r0, int r, double m, double *Jm)
+{
+    for (int i = 0; i < N; ++i) {
+        double s = 0.0;
+        for (int row = 0; row < r; ++row)
+            for (int k = 0; k < N; ++k)
+                s += H[(i * 6 + r0 + row) * N + k] * B[row * N + k];
+        Jm[i] = m * s;
+    }
+}
+
+/* determinant of a 6x6 (or smaller) matrix by LU with partial pivoting */
+static double det_(const double *G, int r)
+{
+    double A[36], d = 1.0;
+    memcpy(A, G, sizeof(double) * (size_t)(r * r));
+    for (int j = 0; j < r; ++j) {
+        int p = j;
+        for (int i = j + 1; i < r; ++i)
+            if (fabs(A[i * r + j]) > fabs(A[p * r + j]))
+                p = i;
+        if (A[p * r + j] == 0.0)
+            return 0.0;
+        if (p != j) {
+            for (int k = 0; k < r; ++k) {
+                double t = A[j * r + k];
+                A[j * r + k] = A[p * r + k];
+                A[p * r + k] = t;
+            }
+            d = -d;
+        }
+        d *= A[j * r + j];
+        for (int i = j + 1; i < r; ++i) {
+            double f = A[i * r + j] / A[j * r + j];
+            for (int k = j + 1; k < r; ++k)
+                A[i * r + k] -= f * A[j * r + k];
+        }
+    }
+    return d;
+}
+
+static double residual_(const double *J, const double *qd, const double *nu)
+{
+    double res = 0.0;
+    for (int i = 0; i < 6; ++i) {
+        double s = -nu[i];
+        for (int k = 0; k < N; ++k)
+            s += J[i * N + k] * qd[k];
+        res = fmax(res, fabs(s));
+    }
+    return res;
+}
+
+/* joint_velocity_bounds of control.py */
+static void bounds_(const symkin_mmc_ctrl *c, const double *q, double *lo, double *hi)
+{
+    for (int i = 0; i < N; ++i) {
+        double a = c->qd_max[i], l = -a, u = a;
+        if (c->joint_limits) {
+            double width = c->rho_i[i] - c->rho_s[i];
+            double d_hi = c->qhi[i] - q[i], d_lo = q[i] - c->qlo[i];
+            if (d_hi < c->rho_i[i])
+                u = fmin(u, c->xi * (d_hi - c->rho_s[i]) / width);
+            if (d_lo < c->rho_i[i])
+                l = fmax(l, -c->xi * (d_lo - c->rho_s[i]) / width);
+            if (c->has_dt) {
+                u = fmin(u, (d_hi - c->rho_s[i]) / c->dt);
+                l = fmax(l, -(d_lo - c->rho_s[i]) / c->dt);
+            }
+            u = fmax(u, -a);
+            l = fmin(l, a);
+            if (l > u)
+                l = u = 0.5 * (l + u);
+        }
+        lo[i] = l;
+        hi[i] = u;
+    }
+}
+
+static void write_info_(double *out, int status, int method, double m, int iters, int fallback,
+                        double residual, double slack, double scale, int polished)
+{
+    double *info = out + N;
+    info[0] = status;
+    info[1] = method;
+    info[2] = m;
+    info[3] = iters;
+    info[4] = fallback;
+    info[5] = residual;
+    info[6] = slack;
+    info[7] = scale;
+    info[8] = polished;
+}
+
+/* MMC._fallback: the RRMC step (inverse/pinv, or damped when singular) scaled into the bounds */
+static void fallback_(const symkin_mmc_ctrl *c, const double *J, const double *G, const double *B,
+                      int have_b, const double *nu, const double *lo, const double *hi, double *qd,
+                      int *kind, double *scale)
+{
+    if (have_b) {
+        for (int k = 0; k < N; ++k) {
+            double s = 0.0;
+            for (int i = 0; i < 6; ++i)
+                s += B[i * N + k] * nu[i];
+            qd[k] = s;
+        }
+    } else { /* J^T (J J^T + d^2 I)^-1 nu, the damped least-squares step */
+        double L[36], y[6];
+        if (chol_(G, 6, c->damping * c->damping, L)) {
+            memcpy(y, nu, sizeof y);
+            chol_solve_(L, 6, y);
+        } else {
+            for (int i = 0; i < 6; ++i)
+                y[i] = NAN;
+        }
+        for (int k = 0; k < N; ++k) {
+            double s = 0.0;
+            for (int i = 0; i < 6; ++i)
+                s += J[i * N + k] * y[i];
+            qd[k] = s;
+        }
+    }
+    *kind = MMC_FALLBACK_RRMC;
+    for (int k = 0; k < N; ++k)
+        if (!isfinite(qd[k])) {
+            memset(qd, 0, sizeof(double) * N);
+            *kind = MMC_FALLBACK_ZERO;
+            break;
+        }
+    *scale = 1.0;
+    int contains_zero = 1;
+    for (int k = 0; k < N; ++k)
+        if (!(lo[k] <= 0.0 && hi[k] >= 0.0))
+            contains_zero = 0;
+    if (contains_zero) {
+        double s = 1.0;
+        for (int k = 0; k < N; ++k) {
+            double r = 1.0;
+            if (qd[k] > hi[k])
+                r = hi[k] / qd[k];
+            else if (qd[k] < lo[k])
+                r = lo[k] / qd[k];
+            s = fmin(s, r);
+        }
+        s = fmax(s, 0.0);
+        for (int k = 0; k < N; ++k)
+            qd[k] *= s;
+        *scale = s;
+    }
+    for (int k = 0; k < N; ++k)
+        qd[k] = fmin(fmax(qd[k], lo[k]), hi[k]);
+}
+
+/*
+ * Active-set solve of the QP's optimality conditions: with the bounds of `act` (-1 lower, 1 upper,
+ * 2 fixed, 0 free) as equalities, min 0.5 lam |qd|^2 (+ 0.5 w |s|^2) - Jm.qd s.t. J qd (+ s) = nu
+ * has the multiplier ye = M^-1 (J_F Jm_F / lam - r), M = J_F J_F^T / lam (+ I / w),
+ * r = nu - J_A b_A, and qd_F = (Jm_F - J_F^T ye) / lam, s = -ye / w. Bounds that the free joints
+ * cross join the active set, active bounds with a multiplier of the wrong sign leave it (a primal-
+ * dual active-set iteration); when nothing changes, the point satisfies the optimality conditions:
+ * it is the QP's unique solution, written to x (NX). Returns the number of linear solves, or 0
+ * when it did not settle within max_iter (or M is singular: no slack and J_F rank-deficient).
+ */
+static int active_set_(const double *J, const double *Jm, const double *nu, const double *lo,
+                       const double *hi, double lam, double w, int *act, int max_iter, double *x)
+{
+    double scale = 0.0;
+    for (int i = 0; i < N; ++i)
+        scale = fmax(scale, fabs(Jm[i]));
+    for (int iter = 1; iter <= max_iter; ++iter) {
+        double M[36], L[36], ye[6], xs[N];
+        int nfree = 0;
+        for (int k = 0; k < N; ++k)
+            nfree += !act[k];
+        if (!NS && nfree < 6) /* J_F J_F^T singular: the equality cannot be met with these bounds */
+            return 0;
+        for (int i = 0; i < 6; ++i) {
+            ye[i] = -nu[i];
+            for (int j = 0; j <= i; ++j)
+                M[i * 6 + j] = (NS && i == j) ? 1.0 / w : 0.0;
+        }
+        for (int k = 0; k < N; ++k) {
+            if (act[k]) {
+                xs[k] = act[k] > 0 ? hi[k] : lo[k];
+                for (int i = 0; i < 6; ++i)
+                    ye[i] += J[i * N + k] * xs[k];
+            } else {
+                double z = Jm[k] / lam;
+                for (int i = 0; i < 6; ++i) {
+                    ye[i] += J[i * N + k] * z;
+                    for (int j = 0; j <= i; ++j)
+                        M[i * 6 + j] += J[i * N + k] * J[j * N + k] / lam;
+                }
+            }
+        }
+        for (int i = 0; i < 6; ++i)
+            for (int j = 0; j < i; ++j)
+                M[j * 6 + i] = M[i * 6 + j];
+        if (!chol_(M, 6, 0.0, L))
+            return 0;
+        chol_solve_(L, 6, ye);
+        int changed = 0;
+        for (int k = 0; k < N; ++k) {
+            double jty = 0.0;
+            for (int i = 0; i < 6; ++i)
+                jty += J[i * N + k] * ye[i];
+            if (!act[k]) {
+                xs[k] = (Jm[k] - jty) / lam;
+                double tol = 1e-12 * (1.0 + fabs(xs[k]));
+                if (xs[k] < lo[k] - tol) {
+                    act[k] = -1;
+                    changed = 1;
+                } else if (xs[k] > hi[k] + tol) {
+                    act[k] = 1;
+                    changed = 1;
+                }
+            } else if (act[k] != 2) {
+                double mult = Jm[k] - lam * xs[k] - jty; /* >= 0 at an upper bound, <= 0 at a lower */
+                double tol = 1e-12 * (1.0 + scale + lam * fabs(xs[k]));
+                if (mult * act[k] < -tol) {
+                    act[k] = 0;
+                    changed = 1;
+                }
+            }
+        }
+        if (!changed) { /* verify the equality: M may be numerically singular (J_F rank-deficient) */
+            double xx[NX], numax = 0.0, res = 0.0;
+            memcpy(xx, xs, sizeof xs);
+            for (int i = 0; i < NS; ++i)
+                xx[N + i] = -ye[i] / w;
+            for (int i = 0; i < 6; ++i) {
+                double r = (NS ? xx[N + i] : 0.0) - nu[i];
+                for (int k = 0; k < N; ++k)
+                    r += J[i * N + k] * xx[k];
+                res = fmax(res, fabs(r));
+                numax = fmax(numax, fabs(nu[i]));
+            }
+            if (!(res <= 1e-9 * (1.0 + numax)))
+                return 0;
+            memcpy(x, xx, sizeof xx);
+            return iter;
+        }
+    }
+    return 0;
+}
+
+/* active set of a point: bounds that x violates or lies on (fixed when lower == upper) */
+static void active_of_(const double *x, const double *lo, const double *hi, int *act)
+{
+    for (int k = 0; k < N; ++k)
+        act[k] = lo[k] == hi[k] ? 2 : x[k] < lo[k] - 1e-12 ? -1 : x[k] > hi[k] + 1e-12 ? 1 : 0;
+}
+
+/* OSQP's polish guess of the active set: from the solution x and the multipliers y */
+static void osqp_active_(const double *x, const double *y, const double *lo, const double *hi, int *act)
+{
+    for (int k = 0; k < N; ++k) {
+        double yk = y[6 + k];
+        act[k] = lo[k] == hi[k] ? 2 : x[k] - lo[k] < -yk ? -1 : hi[k] - x[k] < yk ? 1 : 0;
+    }
+}
+
+static int status_of_(OSQPInt s)
+{
+    switch (s) {
+    case OSQP_SOLVED:
+        return MMC_SOLVED;
+    case OSQP_SOLVED_INACCURATE:
+        return MMC_INACCURATE;
+    case OSQP_PRIMAL_INFEASIBLE:
+    case OSQP_PRIMAL_INFEASIBLE_INACCURATE:
+        return MMC_INFEASIBLE;
+    case OSQP_MAX_ITER_REACHED:
+    case OSQP_TIME_LIMIT_REACHED:
+        return MMC_MAX_ITER;
+    default:
+        return MMC_ERROR;
+    }
+}
+
+/* the solver's iterate and rho, as this controller's */
+static void save_(symkin_mmc_ctrl *c, const OSQPSolver *S)
+{
+    memcpy(c->x, S->work->x->values, sizeof(double) * NX);
+    memcpy(c->z, S->work->z->values, sizeof(double) * NC);
+    memcpy(c->y, S->work->y->values, sizeof(double) * NC);
+    c->rho = S->settings->rho;
+}
+
+/* update the embedded OSQP problem, solve; the solution in x (NX) or -1 (status in *status) */
+static int osqp_step_(symkin_mmc_ctrl *c, const double *J, const double *Jm, const double *nu,
+                      const double *lo, const double *hi, double *x, int *status, int *iters)
+{
+    OSQPSolver *S = &MMC_SOLVER;
+    OSQPFloat qv[NX], l[NC], u[NC], Px[NX], Ax[NNZ_A];
+    for (int k = 0; k < NX; ++k) {
+        qv[k] = k < N ? -Jm[k] : 0.0;
+        Px[k] = k < N ? c->lam : c->slack_weight;
+    }
+    for (int i = 0; i < 6; ++i)
+        l[i] = u[i] = nu[i];
+    for (int k = 0; k < N; ++k) {
+        l[6 + k] = fmax(lo[k], -OSQP_INFTY);
+        u[6 + k] = fmin(hi[k], OSQP_INFTY);
+        for (int i = 0; i < 6; ++i)
+            Ax[7 * k + i] = J[i * N + k];
+        Ax[7 * k + 6] = 1.0;
+    }
+    for (int i = 0; i < NS; ++i)
+        Ax[7 * N + i] = 1.0;
+    *status = MMC_ERROR;
+    *iters = 0;
+    if (owner_ != c || c->fresh) { /* take the solver over: this controller's rho and iterate */
+        if (c->fresh) {
+            osqp_cold_start(S);
+            c->rho = c->rho0;
+        } else {
+            memcpy(S->work->x->values, c->x, sizeof(double) * NX);
+            memcpy(S->work->z->values, c->z, sizeof(double) * NC);
+            memcpy(S->work->y->values, c->y, sizeof(double) * NC);
+        }
+        if (S->settings->rho != c->rho && osqp_update_rho(S, c->rho)) {
+            owner_ = 0;
+            return -1;
+        }
+        owner_ = c;
+    }
+    if (osqp_update_data_vec(S, qv, l, u) || osqp_update_data_mat(S, Px, 0, NX, Ax, 0, NNZ_A) ||
+        osqp_solve(S)) {
+        c->fresh = 1; /* like control.py, which sets OSQP up again after an error */
+        return -1;
+    }
+    *status = status_of_(S->info->status_val);
+    *iters = (int)S->info->iter;
+    save_(c, S);
+    c->fresh = 0;
+    int finite = 1;
+    for (int k = 0; k < NX; ++k) {
+        x[k] = S->solution->x[k];
+        finite = finite && isfinite(x[k]);
+    }
+    return finite ? 0 : -1;
+}
+
+#if MMC_NS == 0
+void symkin_mmc_layout(int32_t *out)
+{
+    out[0] = N;
+    out[1] = (int32_t)sizeof(symkin_mmc_ctrl);
+    out[2] = MMC_NINFO;
+}
+#endif
+
+int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
+{
+    const double *q = in, *nu = in + N;
+    for (int k = 0; k < N; ++k)
+        if (!isfinite(q[k]))
+            return 1;
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(nu[i]))
+            return 2;
+    double J[6 * N], H[N * 6 * N], G[36], L[36], B[6 * N], Jm[N], lo[N], hi[N];
+    double *qd = out;
+    c->jh(q, J, H);
+    gram_(J, 0, 6, G);
+    /* singular when the smallest singular value of J is below singular_tol: J J^T - tol^2 I not PD */
+    double tol = c->singular_tol;
+    int have_b = N >= 6 && chol_(G, 6, -tol * tol, L) && chol_(G, 6, 0.0, L);
+    double m = 0.0;
+    if (have_b)
+        solve_rows_(L, 6, J, 0, B);
+    if (c->axes == 0) {
+        if (have_b) {
+            m = 1.0;
+            for (int i = 0; i < 6; ++i)
+                m *= L[i * 6 + i];
+            jacobm_(H, B, 0, 6, m, Jm);
+        } else { /* singular: only m is reported (the QP is not solved) */
+            double d = det_(G, 6);
+            m = d > 0.0 ? sqrt(d) : 0.0;
+            memset(Jm, 0, sizeof Jm);
+        }
+    } else {
+        int r0 = c->axes == 1 ? 0 : 3;
+        double G3[9], L3[9], B3[3 * N];
+        gram_(J, r0, 3, G3);
+        double d = det_(G3, 3);
+        memset(Jm, 0, sizeof Jm);
+        if (d > 0.0 && chol_(G3, 3, 0.0, L3)) {
+            m = sqrt(d);
+            solve_rows_(L3, 3, J, r0, B3);
+            jacobm_(H, B3, r0, 3, m, Jm);
+            for (int k = 0; k < N; ++k)
+                if (!isfinite(Jm[k])) {
+                    memset(Jm, 0, sizeof Jm);
+                    m = 0.0;
+                    break;
+                }
+        }
+    }
+    bounds_(c, q, lo, hi);
+    if (c->closed_form && have_b) {
+        /* z + J^+ (nu - J z), z = Jm / lam; with the slack z + J^T (J J^T + lam / w I)^-1 (nu - J z) */
+        double z[N], t[6], sum = 0.0;
+        int inside = 1;
+        for (int k = 0; k < N; ++k)
+            z[k] = Jm[k] / c->lam;
+        for (int i = 0; i < 6; ++i) {
+            double s = nu[i];
+            for (int k = 0; k < N; ++k)
+                s -= J[i * N + k] * z[k];
+            t[i] = s;
+        }
+        double y[6], Ls[36];
+        memcpy(y, t, sizeof y); /* y = (J J^T (+ lam / w I))^-1 t, qd = z + J^T y */
+        if (!NS)
+            chol_solve_(L, 6, y);
+        else if (chol_(G, 6, c->lam / c->slack_weight, Ls))
+            chol_solve_(Ls, 6, y);
+        else
+            y[0] = NAN;
+        for (int k = 0; k < N; ++k) {
+            double s = z[k];
+            for (int i = 0; i < 6; ++i)
+                s += J[i * N + k] * y[i];
+            qd[k] = s;
+            sum += s;
+            if (c->bounded && !(s >= lo[k] - 1e-12 && s <= hi[k] + 1e-12))
+                inside = 0;
+        }
+        if (inside && isfinite(sum)) {
+            double res = 0.0, slack = 0.0;
+            for (int i = 0; i < 6; ++i) {
+                double e = nu[i];
+                for (int k = 0; k < N; ++k)
+                    e -= J[i * N + k] * qd[k];
+                res = fmax(res, fabs(e));
+                slack += e * e;
+            }
+            write_info_(out, MMC_SOLVED, MMC_CLOSED_FORM, m, 0, MMC_NO_FALLBACK, res, NS ? sqrt(slack) : 0.0,
+                        1.0, 0);
+            return 0;
+        }
+        if (c->active_set) { /* the bounds the closed form crosses, as equalities, then corrected */
+            int act[N], its;
+            double x[NX];
+            active_of_(qd, lo, hi, act);
+            its = active_set_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, act, 2 * N + 2, x);
+            if (its) {
+                double slack = 0.0;
+                for (int k = 0; k < N; ++k)
+                    qd[k] = fmin(fmax(x[k], lo[k]), hi[k]);
+                for (int i = N; i < NX; ++i)
+                    slack += x[i] * x[i];
+                write_info_(out, MMC_SOLVED, MMC_ACTIVE_SET, m, its, MMC_NO_FALLBACK,
+                            residual_(J, qd, nu), sqrt(slack), 1.0, 0);
+                return 0;
+            }
+        }
+    }
+    int kind;
+    double scale;
+    if (!have_b) {
+        fallback_(c, J, G, B, 0, nu, lo, hi, qd, &kind, &scale);
+        write_info_(out, MMC_SINGULAR, MMC_CLOSED_FORM, m, 0, kind, residual_(J, qd, nu), 0.0, scale, 0);
+        return 0;
+    }
+    double x[NX];
+    int status, iters, polished = 0;
+    int ok = osqp_step_(c, J, Jm, nu, lo, hi, x, &status, &iters) == 0;
+    if (!ok && status == MMC_SOLVED)
+        status = MMC_ERROR;
+    if (ok && c->polish && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
+        /* OSQP's polish: the active-set solve from OSQP's active set; when it settles it is the
+           exact solution, also of a QP that OSQP left unfinished */
+        int act[N];
+        osqp_active_(x, MMC_SOLVER.solution->y, lo, hi, act);
+        polished = active_set_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, act, 2 * N + 2, x) > 0;
+        if (polished)
+            status = MMC_SOLVED;
+    }
+    if (ok && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
+        double numax = 0.0;
+        for (int i = 0; i < 6; ++i)
+            numax = fmax(numax, fabs(nu[i]));
+        for (int k = 0; k < N; ++k)
+            qd[k] = fmin(fmax(x[k], lo[k]), hi[k]);
+        double res = residual_(J, qd, nu);
+        if (status == MMC_SOLVED || NS || res <= 1e-6 * (1.0 + numax)) {
+            double slack = 0.0;
+            for (int i = N; i < NX; ++i)
+                slack += x[i] * x[i];
+            write_info_(out, status, MMC_OSQP, m, iters, MMC_NO_FALLBACK, res, sqrt(slack), 1.0,
+                        polished);
+            return 0;
+        }
+    }
+    /* infeasible, error or an unusable iterate: the RRMC step, and the next solve starts from it */
+    if (status == MMC_SOLVED)
+        status = MMC_ERROR;
+    fallback_(c, J, G, B, 1, nu, lo, hi, qd, &kind, &scale);
+    write_info_(out, status, MMC_OSQP, m, iters, kind, residual_(J, qd, nu), 0.0, scale, 0);
+    if (!c->fresh && owner_ == c) {
+        double xw[NX], yw[NC];
+        for (int k = 0; k < N; ++k)
+            xw[k] = qd[k];
+        for (int i = 0; i < NS; ++i) {
+            double s = nu[i];
+            for (int k = 0; k < N; ++k)
+                s -= J[i * N + k] * qd[k];
+            xw[N + i] = s;
+        }
+        memset(yw, 0, sizeof yw);
+        osqp_warm_start(&MMC_SOLVER, xw, yw);
+        save_(c, &MMC_SOLVER);
+    }
+    return 0;
+}

@@ -1,0 +1,249 @@
+"""The MMC quadratic program (seed 001 eq 12 with bounds): assembly, closed form, exact solution.
+
+NumPy only: the manipulability Jacobian (eq 11), the joint velocity bounds (speed limits and
+velocity dampers), the QP matrices, the solution without inequalities, and an active-set solver.
+
+The QP: min ``0.5 lam |qd|^2 - Jm.qd`` (``+ 0.5 w |s|^2`` with a slack) s.t. ``J qd (+ s) = nu``,
+``lower <= qd <= upper``. :func:`active_set_solve` is a primal-dual active-set iteration: with a
+guess of which bounds hold with equality, the optimality conditions are one 6x6 linear solve;
+bounds that the free joints cross join the set, bounds whose multiplier has the wrong sign leave
+it. When the set stops changing, the point satisfies all the optimality conditions of this strictly
+convex QP: it is its unique solution, exact to rounding. Started from the bounds the closed form
+crosses it usually settles in one to three solves. ``csrc/mmc_impl.h`` has the same in C.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "MMCQP",
+    "mmc_qp",
+    "mmc_closed_form",
+    "joint_velocity_bounds",
+    "manipulability_jacobian",
+    "active_set_solve",
+    "active_of",
+    "active_of_osqp",
+]
+
+_AXES = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
+
+
+def _axes(axes: str) -> slice:
+    try:
+        return _AXES[axes]
+    except KeyError:
+        raise ValueError(f"axes must be one of {sorted(_AXES)}, not {axes!r}") from None
+
+
+def manipulability_jacobian(J: np.ndarray, H: np.ndarray, axes: str = "all") -> tuple[np.ndarray, float]:
+    """Manipulability Jacobian (seed 001 eq 11) and m (eq 8) from J (6, n) and H (n, 6, n): ((n,), m).
+
+    ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)`` over the rows chosen by ``axes``. At a singular
+    configuration (J J^T not invertible) Jm is returned as zeros and m as 0.
+    """
+    rows = _axes(axes)
+    Jr = J[rows]
+    A = Jr @ Jr.T
+    det = float(np.linalg.det(A))
+    n = J.shape[1]
+    if not det > 0.0:
+        return np.zeros(n), 0.0
+    m = math.sqrt(det)
+    try:
+        B = np.linalg.solve(A, Jr)  # (r, n) = (J J^T)^-1 J
+    except np.linalg.LinAlgError:
+        return np.zeros(n), 0.0
+    Jm = m * (H[:, rows, :].reshape(n, -1) @ B.ravel())
+    if not np.isfinite(Jm).all():
+        return np.zeros(n), 0.0
+    return Jm, m
+
+
+def joint_velocity_bounds(
+    q: np.ndarray,
+    qlim: np.ndarray,
+    qd_max: np.ndarray,
+    joint_limits: bool = False,
+    rho_i: float | np.ndarray = 0.9,
+    rho_s: float | np.ndarray = 0.05,
+    xi: float = 1.0,
+    dt: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds (lower, upper), each (n,), on qd: the speed limits -alpha <= qd <= alpha (seed 001) and,
+    with ``joint_limits``, velocity dampers.
+
+    A joint closer than ``rho_i`` (influence distance) to its upper limit gets
+    ``qd_i <= xi (q_max - q_i - rho_s) / (rho_i - rho_s)``, reaching 0 at the safety distance ``rho_s``;
+    symmetrically ``qd_i >= -xi (q_i - q_min - rho_s) / (rho_i - rho_s)`` near the lower limit.
+    Distances are in joint units (rad or m). The damper is a continuous-time constraint: a joint
+    faster than ``rho_i / dt`` can jump over the influence zone in one step of an integration with
+    time step ``dt``. Given ``dt``, every joint also gets ``|step| <= distance - rho_s``, i.e.
+    ``-(q_i - q_min - rho_s) / dt <= qd_i <= (q_max - q_i - rho_s) / dt``. Bounds are kept
+    consistent (lower <= upper).
+    """
+    lower, upper = -qd_max.copy(), qd_max.copy()
+    if joint_limits:
+        rho_i = np.broadcast_to(np.asarray(rho_i, dtype=float), q.shape)
+        rho_s = np.broadcast_to(np.asarray(rho_s, dtype=float), q.shape)
+        width = rho_i - rho_s
+        d_hi = qlim[1] - q
+        d_lo = q - qlim[0]
+        upper = np.where(d_hi < rho_i, np.minimum(upper, xi * (d_hi - rho_s) / width), upper)
+        lower = np.where(d_lo < rho_i, np.maximum(lower, -xi * (d_lo - rho_s) / width), lower)
+        if dt is not None:
+            upper = np.minimum(upper, (d_hi - rho_s) / dt)
+            lower = np.maximum(lower, -(d_lo - rho_s) / dt)
+        upper = np.maximum(upper, -qd_max)
+        lower = np.minimum(lower, qd_max)
+        bad = lower > upper
+        if bad.any():
+            mid = 0.5 * (lower + upper)
+            lower = np.where(bad, mid, lower)
+            upper = np.where(bad, mid, upper)
+    return lower, upper
+
+
+class MMCQP(NamedTuple):
+    """The MMC quadratic program (seed 001 eq 12 with bounds): min 0.5 x^T P x + c^T x, l <= A x <= u.
+
+    ``x = qd`` (n,), or ``(qd, s)`` (n + 6,) with an equality slack ``s``. The first 6 rows of A are
+    the equality ``J qd (+ s) = nu`` (l = u = nu); the next n rows are ``lower <= qd <= upper``.
+    """
+
+    P: np.ndarray  # (nx, nx) diagonal: lam I_n (and slack_weight I_6)
+    c: np.ndarray  # (nx,) -Jm (and 0)
+    A: np.ndarray  # (6 + n, nx): [[J, (I_6)], [I_n, (0)]]
+    l: np.ndarray  # (6 + n,)
+    u: np.ndarray  # (6 + n,)
+    J: np.ndarray  # (6, n) base-frame Jacobian
+    Jm: np.ndarray  # (n,) manipulability Jacobian
+    manipulability: float
+
+    @property
+    def n(self) -> int:
+        return self.J.shape[1]
+
+    @property
+    def has_slack(self) -> bool:
+        return self.P.shape[0] > self.J.shape[1]
+
+
+def mmc_qp(
+    J: np.ndarray,
+    Jm: np.ndarray,
+    nu: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    lam: float = 0.005,
+    slack_weight: float | None = None,
+    manipulability: float = float("nan"),
+) -> MMCQP:
+    """Assemble the MMC QP: min ``0.5 lam qd^T qd - Jm^T qd`` s.t. ``J qd = nu``, ``lower <= qd <= upper``.
+
+    With ``slack_weight`` w, the equality becomes ``J qd + s = nu`` and ``0.5 w s^T s`` is added to
+    the cost, so the QP stays feasible when the bounds cannot meet nu.
+    """
+    n = J.shape[1]
+    ns = 0 if slack_weight is None else 6
+    P = np.zeros((n + ns, n + ns))
+    P[np.arange(n), np.arange(n)] = lam
+    c = np.zeros(n + ns)
+    c[:n] = -Jm
+    A = np.zeros((6 + n, n + ns))
+    A[:6, :n] = J
+    A[6:, :n] = np.eye(n)
+    if ns:
+        P[np.arange(n, n + 6), np.arange(n, n + 6)] = slack_weight
+        A[:6, n:] = np.eye(6)
+    l = np.concatenate((nu, lower))
+    u = np.concatenate((nu, upper))
+    return MMCQP(P, c, A, l, u, J, Jm, manipulability)
+
+
+def mmc_closed_form(
+    J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lam: float, slack_weight: float | None = None
+) -> np.ndarray:
+    """Solution of eq 12 without inequalities: ``J^+ nu + (I - J^+ J) Jm / lam`` (J of full row rank).
+
+    With ``slack_weight`` w (the equality ``J qd + s = nu``, ``0.5 w |s|^2`` in the cost), the solution
+    is ``z + J^T (J J^T + (lam / w) I)^-1 (nu - J z)``, ``z = Jm / lam``, and ``s = nu - J qd``.
+    """
+    z = Jm / lam
+    A = J @ J.T
+    if slack_weight is not None:
+        A[np.diag_indices(6)] += lam / slack_weight
+    return z + J.T @ np.linalg.solve(A, nu - J @ z)
+
+
+# -- the active-set solve ---------------------------------------------------------------------------
+def active_of(qd: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Active-set guess from a point: -1 at or below ``lower``, 1 above ``upper``, 2 where they are equal."""
+    act = np.where(qd < lower - 1e-12, -1, np.where(qd > upper + 1e-12, 1, 0))
+    return np.where(lower == upper, 2, act)
+
+
+def active_of_osqp(x: np.ndarray, y: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Active-set guess from OSQP's qd ``x`` and the multipliers ``y`` of its bound rows (OSQP's polish
+    rule): lower where ``x - lower < -y``, upper where ``upper - x < y``."""
+    act = np.where(x - lower < -y, -1, np.where(upper - x < y, 1, 0))
+    return np.where(lower == upper, 2, act)
+
+
+def active_set_solve(
+    J: np.ndarray,
+    Jm: np.ndarray,
+    nu: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    lam: float,
+    slack_weight: float | None,
+    act: np.ndarray,
+    max_iter: int | None = None,
+) -> tuple[np.ndarray, int] | None:
+    """Solve the MMC QP from the active-set guess ``act`` (see :func:`active_of`).
+
+    Returns ``(x, solves)`` with ``x = qd`` (n,) or ``(qd, s)`` (n + 6,), or None when the set did
+    not settle within ``max_iter`` (default 2n + 2) solves, or the equality cannot be met with the
+    bounds held (no slack and fewer than 6 free joints, or J of the free joints rank-deficient: the
+    answer is checked against the equality).
+    """
+    n = J.shape[1]
+    act = np.array(act, dtype=int)
+    has_slack = slack_weight is not None
+    scale = float(np.abs(Jm).max(initial=0.0))
+    nu_tol = 1e-9 * (1.0 + float(np.abs(nu).max()))
+    z = Jm / lam
+    for it in range(1, (2 * n + 2 if max_iter is None else max_iter) + 1):
+        free = act == 0
+        if not has_slack and np.count_nonzero(free) < 6:
+            return None
+        bound = np.where(act > 0, upper, lower)
+        JF = J[:, free]
+        M = JF @ JF.T
+        M /= lam
+        if has_slack:
+            M.flat[::7] += 1.0 / slack_weight
+        try:
+            ye = np.linalg.solve(M, J @ np.where(free, z, bound) - nu)  # J_F z_F + J_A b_A - nu
+        except np.linalg.LinAlgError:
+            return None
+        jty = ye @ J
+        x = np.where(free, z - jty / lam, bound)
+        tol = 1e-12 * (1.0 + np.abs(x))
+        below = free & (x < lower - tol)
+        above = free & (x > upper + tol)
+        # the multiplier Jm - lam x - J^T ye is >= 0 at an upper bound, <= 0 at a lower one
+        wrong = (act * (Jm - lam * x - jty) < -1e-12 * (1.0 + scale + lam * np.abs(x))) & (np.abs(act) == 1)
+        if below.any() or above.any() or wrong.any():
+            act = np.where(below, -1, np.where(above, 1, np.where(wrong, 0, act)))
+            continue
+        s = -ye / slack_weight if has_slack else 0.0
+        if not (np.abs(J @ x + s - nu).max() <= nu_tol and np.isfinite(x).all()):
+            return None
+        return (np.concatenate((x, s)) if has_slack else x), it
+    return None
