@@ -458,11 +458,14 @@ def ik(
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.
     """
-    opt = _options(kin, method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts)
+    args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts)
     if backend == "c":
-        from symkin.runtime.ik_c import solver_for
-
-        return solver_for(kin, opt).solve(Tep, q0=q0, seed=seed)
+        try:
+            solver = _C_SOLVERS[kin][args]
+        except (KeyError, TypeError):
+            solver = _c_solver(kin, args)
+        return solver.solve(Tep, q0, seed)
+    opt = _options(kin, *args)
     if backend != "numpy":
         raise ValueError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
@@ -480,6 +483,23 @@ def ik(
 
 
 _OPTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_C_SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _c_solver(kin: Any, args: tuple) -> Any:
+    """The C solver for ``ik(kin, ..., backend="c")``, memoised per kinematics object and the
+    arguments as passed when they are hashable, so a repeated call skips validating them."""
+    from symkin.runtime.ik_c import solver_for
+
+    solver = solver_for(kin, _options(kin, *args))
+    try:
+        cache = _C_SOLVERS.setdefault(kin, {})
+        if len(cache) > 64:
+            cache.clear()
+        cache[args] = solver
+    except TypeError:  # unhashable arguments (arrays) or an object without weak references
+        pass
+    return solver
 
 
 def _options(kin: Any, *args: Any) -> IKOptions:

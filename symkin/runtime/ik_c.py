@@ -1,8 +1,10 @@
 """Numerical IK in C (``csrc/symkin_ik.c``) through ctypes: the loop of :mod:`symkin.runtime.ik`.
 
 One :class:`CIKSolver` holds a robot's kinematics and one set of options, with its C config,
-buffers and pointers built once, so a single solve from Python costs about a microsecond on top
-of the C work; a batch of targets is one C call. Kinematics come from either
+buffers and pointers built once, so a single solve from Python costs about 1.5 us on top of the C
+work (the ctypes call included; ``ik(..., backend="c")`` adds about 0.5 us); a batch of targets is
+one C call, which runs LM on 4 targets side by side with the same results as one by one.
+Kinematics come from either
 
 - the table-driven ETS interpreter in C (any object with ``n``, ``qlim`` and ``ets`` or
   ``robot.ets``, such as a :class:`symkin.Robot`), or
@@ -65,6 +67,10 @@ STATS_DTYPE = np.dtype(
 )
 
 
+class _Job(ctypes.Structure):
+    _fields_ = [(f, _P) for f in ("cfg", "Tep", "q0", "q", "st")]
+
+
 class _ET(ctypes.Structure):
     _fields_ = [("axis", _I32), ("joint", _I32), ("sign", _D), ("c", _D), ("s", _D), ("d", _D)]
 
@@ -76,7 +82,8 @@ class _ETS(ctypes.Structure):
 def ik_sources() -> dict[str, str]:
     """The C solver's sources (file name -> text): ``symkin_ik.h``, ``symkin_ik.c``, ``symkin_ets.c``.
 
-    Compile them together with generated kinematics to get one library exporting both.
+    Compile them together with generated kinematics to get one library exporting both (with
+    :data:`IK_CFLAGS`).
     """
     return {name: (CSRC / name).read_text() for name in ("symkin_ik.h", "symkin_ik.c", "symkin_ets.c")}
 
@@ -90,6 +97,7 @@ def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
         "symkin_ik_check_pose": (_I32, [_P, _P]),
         "symkin_ik_pose_error": (None, [_P, _P, _P]),
         "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
+        "symkin_ik_solve_job": (_I32, [_P, _U64]),
         "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
         "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
         "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
@@ -105,12 +113,17 @@ def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
     return lib
 
 
+# GCC 12 turns some a*b + c*d / a*b - c*d pairs into vfmaddsub when SLP-vectorising, even under
+# -ffp-contract=off; the solver's hot loops are vectorised explicitly and lose nothing without it.
+IK_CFLAGS: tuple[str, ...] = ("-fno-tree-slp-vectorize",)
+
+
 @lru_cache(maxsize=1)
 def ik_library() -> ctypes.CDLL:
     """The compiled C solver with the table-driven ETS kinematics (cached; see symkin.emit.c.build)."""
     from symkin.emit.c.build import compile_library, load_library
 
-    return bind(load_library(compile_library(ik_sources(), "symkin_ik")))
+    return bind(load_library(compile_library(ik_sources(), "symkin_ik", IK_CFLAGS)))
 
 
 def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
@@ -134,6 +147,41 @@ def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
 
 def _addr(a: np.ndarray) -> int:
     return a.ctypes.data
+
+
+_M64 = 0xFFFFFFFFFFFFFFFF
+
+
+def _result_maker() -> Any:
+    """``IKResult(q, success, iterations, searches, residual, reason)``, faster for a single solve:
+    the frozen dataclass's __init__ costs more than the rest of the Python side of a solve."""
+    import dataclasses
+
+    names = [f.name for f in dataclasses.fields(IKResult)]
+    slots = [IKResult.__dict__.get(name) for name in names]
+    if names != ["q", "success", "iterations", "searches", "residual", "reason"] or not all(
+        type(s).__name__ == "member_descriptor" for s in slots
+    ):
+        return IKResult
+    sq, ss, si, se, sr, sn = (s.__set__ for s in slots)  # type: ignore[union-attr]
+    new = object.__new__
+
+    def make(
+        q: np.ndarray, success: bool, iterations: int, searches: int, residual: float, reason: str
+    ) -> Any:
+        r = new(IKResult)
+        sq(r, q)
+        ss(r, success)
+        si(r, iterations)
+        se(r, searches)
+        sr(r, residual)
+        sn(r, reason)
+        return r
+
+    return make
+
+
+_result = _result_maker()
 
 
 class CIKSolver:
@@ -204,7 +252,13 @@ class CIKSolver:
         self._st = _Stats()
         self._T_addr, self._q0_addr, self._q_addr = _addr(self._T), _addr(self._q0), _addr(self._q)
         self._st_addr = ctypes.addressof(self._st)
-        self._solve = self.lib.symkin_ik_solve
+        # one solve from q0 or not: the arguments of symkin_ik_solve as one block each
+        self._jobs = tuple(
+            _Job(self._cfg_addr, self._T_addr, q0, self._q_addr, self._st_addr)
+            for q0 in (None, self._q0_addr)
+        )
+        self._job_addr = tuple(ctypes.addressof(j) for j in self._jobs)
+        self._solve = self.lib.symkin_ik_solve_job
         self._seeds = random.Random(os.urandom(16))
 
     def __repr__(self) -> str:
@@ -215,29 +269,38 @@ class CIKSolver:
     # -- solving --------------------------------------------------------------------------
     def solve(self, Tep: Any, q0: Any = None, seed: int | None = None) -> IKResult:
         """Solve one target (4, 4) or a batch (N, 4, 4); same arguments and result as :func:`ik`."""
-        seed = self._seeds.getrandbits(64) if seed is None else int(seed) & 0xFFFFFFFFFFFFFFFF
+        if seed is None:
+            seed = self._seeds.getrandbits(64)
+        else:
+            seed = (seed if type(seed) is int else int(seed)) & _M64
+        if type(Tep) is np.ndarray and Tep.shape == (4, 4):
+            T = Tep
+        else:
+            try:
+                T = np.asarray(Tep, dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise PoseError(f"a target pose must be a 4x4 array: {exc}") from None
+            if T.shape != (4, 4):
+                return self._solve_batch(T, q0, seed)
         try:
-            T = np.asarray(Tep, dtype=float)
+            self._T[...] = T  # the C code checks the pose (SE(3), finite)
         except (TypeError, ValueError) as exc:
-            raise PoseError(f"a target pose must be a 4x4 array: {exc}") from None
-        if T.shape != (4, 4):
-            return self._solve_batch(T, q0, seed)
-        self._T[...] = T
-        q0_addr = None
+            raise PoseError(f"a target pose must be a 4x4 array of numbers: {exc}") from None
+        job = self._job_addr[0]
         if q0 is not None:
             self._q0[...] = q0 if getattr(q0, "shape", None) == self._shape else self._check_q0(q0)
-            q0_addr = self._q0_addr
-        if self._solve(self._cfg_addr, self._T_addr, q0_addr, seed, self._q_addr, self._st_addr):
+            job = self._job_addr[1]
+        if self._solve(job, seed):
             if self._st.status == 5:
                 raise ConfigurationError("q0 contains NaN or inf")
             check_pose(T)  # raises the detailed PoseError
             raise PoseError(f"invalid target pose (code {self._st.status})")
         st = self._st
         if st.success:
-            return IKResult(self._q.copy(), True, st.iterations, st.searches, st.residual, "success")
+            return _result(self._q.copy(), True, st.iterations, st.searches, st.residual, "success")
         o = self.options
         reason = failure_reason(False, st.residual, st.limit_rejects, st.singular, o.ilimit, o.slimit)
-        return IKResult(self._q.copy(), False, st.iterations, st.searches, st.residual, reason)
+        return _result(self._q.copy(), False, st.iterations, st.searches, st.residual, reason)
 
     def _check_q0(self, q0: Any) -> np.ndarray:
         try:
@@ -270,12 +333,20 @@ class CIKSolver:
         if bad >= 0:
             check_pose(T)
             raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
-        o = self.options
         success = st["success"].astype(bool)
-        reason = tuple(
-            failure_reason(bool(s), float(r), int(lr), int(sg), o.ilimit, o.slimit)
-            for s, r, lr, sg in zip(success, st["residual"], st["limit_rejects"], st["singular"], strict=True)
-        )
+        reason: tuple[str, ...] = ("success",) * N
+        failed = np.flatnonzero(~success)
+        if failed.size:
+            o, reasons = self.options, list(reason)
+            fs = st[failed]
+            for i, r, lr, sg in zip(
+                failed.tolist(),
+                fs["residual"].tolist(),
+                fs["limit_rejects"].tolist(),
+                fs["singular"].tolist(),
+            ):
+                reasons[i] = failure_reason(False, r, lr, sg, o.ilimit, o.slimit)
+            reason = tuple(reasons)
         return IKResult(
             q, success, st["iterations"].copy(), st["searches"].copy(), st["residual"].copy(), reason
         )
@@ -312,7 +383,7 @@ class CIKSolver:
     def random_q(self, seed: int, count: int, stream: int = 0) -> np.ndarray:
         """The first ``count`` random restarts of the stream (seed, stream), (count, n)."""
         out = np.zeros((int(count), self.n))
-        self.lib.symkin_ik_random_q(self._cfg_addr, int(seed) & 0xFFFFFFFFFFFFFFFF, int(stream), int(count),
+        self.lib.symkin_ik_random_q(self._cfg_addr, int(seed) & _M64, int(stream), int(count),
                                     _addr(out))  # fmt: skip
         return out
 

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from symkin.model.robot import AXES_ROWS, Robot, as_batch, jacobm_of, manipulability_of
+from symkin.runtime.ik import ik
 
 __all__ = ["Kinematics", "KIN_METHODS"]
 
@@ -127,7 +128,5 @@ class Kinematics:
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
         NumPy and CasADi backends the NumPy solver calls the generated functions.
         """
-        from symkin.runtime.ik import ik
-
         kwargs.setdefault("backend", "c" if self.backend == "c" else "numpy")
         return ik(self, Tep, **kwargs)

@@ -9,7 +9,14 @@
  *   arm, the n x n J^T We J); singular values <= SYMKIN_PINV_RCOND * the largest are dropped,
  *   like numpy.linalg.pinv(rcond=SYMKIN_PINV_RCOND). NR with pinv uses pinv(We^1/2 J) We^1/2 e,
  *   which is J^-1 e for a square invertible J.
- * Compile with -ffp-contract=off so the arithmetic rounds like NumPy's.
+ * Compile with -ffp-contract=off so the arithmetic rounds like NumPy's (and, with GCC, with
+ * -fno-tree-slp-vectorize: GCC 12 fuses some straight-line a*b + c*d / a*b - c*d pairs into
+ * vfmaddsub even under -ffp-contract=off).
+ *
+ * Speed: the LM step is compiled for n = 6 and n = 7 as constants (unrolled Cholesky) besides
+ * any n, and a batch of LM solves with 6 or 7 joints runs SYMKIN_LANES targets side by side with
+ * their steps in vector lanes (solve_batch_lm). Every variant does the same operations in the
+ * same order, so the numbers are the same to the bit as those of the plain loops.
  */
 #include "symkin_ik.h"
 
@@ -17,6 +24,16 @@
 #include <string.h>
 
 #define NM SYMKIN_IK_NMAX
+/* At (see chol_solve) has one spare row: GCC warns about dead code of the unrolled loops past the
+ * last row when n is not a compile-time constant */
+#define AT_SIZE ((NM + 1) * NM)
+#if defined(__GNUC__)
+#define SYMKIN_INLINE static inline __attribute__((always_inline))
+#define SYMKIN_UNROLL _Pragma("GCC unroll 12")
+#else
+#define SYMKIN_INLINE static inline
+#define SYMKIN_UNROLL
+#endif
 #define SYMKIN_PINV_RCOND 1e-12
 #define SYMKIN_NEAR_PI_L 1e-6
 #define SYMKIN_POSE_ATOL 1e-6
@@ -175,33 +192,6 @@ static int lu_solve(int n, double *A, double *b) {
     return 0;
 }
 
-static int chol_solve(int n, const double *A, double *b) {
-    double L[NM * NM];
-    for (int j = 0; j < n; j++) {
-        double d = A[j * n + j];
-        for (int k = 0; k < j; k++) d -= L[j * n + k] * L[j * n + k];
-        if (!(d > 0.0)) return -1;
-        double ljj = sqrt(d);
-        L[j * n + j] = ljj;
-        for (int i = j + 1; i < n; i++) {
-            double s = A[i * n + j];
-            for (int k = 0; k < j; k++) s -= L[i * n + k] * L[j * n + k];
-            L[i * n + j] = s / ljj;
-        }
-    }
-    for (int i = 0; i < n; i++) {
-        double s = b[i];
-        for (int k = 0; k < i; k++) s -= L[i * n + k] * b[k];
-        b[i] = s / L[i * n + i];
-    }
-    for (int i = n - 1; i >= 0; i--) {
-        double s = b[i];
-        for (int k = i + 1; k < n; k++) s -= L[k * n + i] * b[k];
-        b[i] = s / L[i * n + i];
-    }
-    return 0;
-}
-
 /* out (c) = pinv(A) x for A (m x c) row-major, x (m): one-sided Jacobi SVD of A (c <= m) or of
  * A^T (c > m). Orthogonalising the columns of B = M W (W accumulates the rotations) gives
  * columns b_i = sigma_i u_i, so pinv(A) x = sum_i w_i (b_i . x) / sigma_i^2 (tall) or
@@ -272,8 +262,91 @@ static int pinv_apply(int m, int c, const double *A, const double *x, double *ou
     return 0;
 }
 
+/* Solve A x = b for a symmetric positive definite A given by its lower triangle in transposed
+ * rows, A_ij = At[j * NM + i] for i >= j; -1 when A is not positive definite. */
+SYMKIN_INLINE int chol_solve(int n, const double *At, double *b) {
+    double L[NM * NM];
+    SYMKIN_UNROLL for (int j = 0; j < n; j++) {
+        double d = At[j * NM + j];
+        SYMKIN_UNROLL for (int k = 0; k < j; k++) d -= L[j * n + k] * L[j * n + k];
+        if (!(d > 0.0)) return -1;
+        double ljj = sqrt(d);
+        L[j * n + j] = ljj;
+        SYMKIN_UNROLL for (int i = j + 1; i < n; i++) {
+            double s = At[j * NM + i];
+            SYMKIN_UNROLL for (int k = 0; k < j; k++) s -= L[i * n + k] * L[j * n + k];
+            L[i * n + j] = s / ljj;
+        }
+    }
+    SYMKIN_UNROLL for (int i = 0; i < n; i++) {
+        double s = b[i];
+        SYMKIN_UNROLL for (int k = 0; k < i; k++) s -= L[i * n + k] * b[k];
+        b[i] = s / L[i * n + i];
+    }
+    SYMKIN_UNROLL for (int i = n - 1; i >= 0; i--) {
+        double s = b[i];
+        SYMKIN_UNROLL for (int k = i + 1; k < n; k++) s -= L[k * n + i] * b[k];
+        b[i] = s / L[i * n + i];
+    }
+    return 0;
+}
+
 /* ---- one step (eqs 45-51) ----------------------------------------------------------------- */
-static int ik_step(const symkin_ik_config *c, const double *J, const double *e, double r2, double *dq) {
+/* g = J^T We e and the lower triangle of A = J^T We J as transposed rows (see chol_solve):
+ * g_i = sum_r J_ri (we_r e_r) and At[j * NM + i] = sum_r J_rj (we_r J_ri) for i >= j, each
+ * summed over r in order from 0.0; we = NULL means We = I. */
+SYMKIN_INLINE void normal_equations(int n, const double *J, const double *e, const double *we, double *At,
+                                    double *g) {
+    double Jw[6 * NM], ew[6];
+    if (we) {
+        for (int r = 0; r < 6; r++) {
+            ew[r] = we[r] * e[r];
+            for (int i = 0; i < n; i++) Jw[r * n + i] = we[r] * J[r * n + i];
+        }
+        e = ew;
+    }
+    const double *W = we ? Jw : J;
+    for (int i = 0; i < n; i++) {
+        double s = 0.0;
+        for (int r = 0; r < 6; r++) s += J[r * n + i] * e[r];
+        g[i] = s;
+    }
+    for (int j = 0; j < n; j++)
+        for (int i = j; i < n; i++) {
+            double s = 0.0;
+            for (int r = 0; r < 6; r++) s += J[r * n + j] * W[r * n + i];
+            At[j * NM + i] = s;
+        }
+}
+
+/* The full symmetric A (row-major n x n) from At. */
+static void full_matrix(int n, const double *At, double *A) {
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) A[i * n + j] = i >= j ? At[j * NM + i] : At[i * NM + j];
+}
+
+/* LM (eqs 48-51): Cholesky of J^T We J + Wn, LU if it fails. */
+SYMKIN_INLINE int lm_step(int n, const symkin_ik_config *c, const double *we, const double *J, const double *e,
+                          double r2, double *dq) {
+    double At[AT_SIZE], g[NM];
+    normal_equations(n, J, e, we, At, g);
+    double E = 0.5 * r2;
+    SYMKIN_UNROLL for (int i = 0; i < n; i++) {
+        double wn = c->damping == SYMKIN_DAMP_WAMPLER ? c->lam[i]
+                    : c->damping == SYMKIN_DAMP_CHAN  ? c->lam[i] * E
+                                                      : E + c->lam[i];
+        At[i * NM + i] += wn;
+    }
+    memcpy(dq, g, sizeof(double) * (size_t)n);
+    if (chol_solve(n, At, dq) == 0) return 0;
+    double A[NM * NM];
+    full_matrix(n, At, A);
+    memcpy(dq, g, sizeof(double) * (size_t)n);
+    return lu_solve(n, A, dq);
+}
+
+/* NR and GN (eqs 45-47), and their pseudo-inverse variants. */
+static int nr_gn_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
     int n = c->n;
     if (c->method == SYMKIN_IK_NR) {
         if (c->pinv) {
@@ -290,37 +363,44 @@ static int ik_step(const symkin_ik_config *c, const double *J, const double *e, 
         memcpy(dq, e, sizeof(double) * 6);
         return lu_solve(6, A, dq);
     }
-    double A[NM * NM];
-    for (int i = 0; i < n; i++) {
-        double g = 0.0;
-        for (int r = 0; r < 6; r++) g += J[r * n + i] * (c->we[r] * e[r]);
-        dq[i] = g;
-        for (int j = i; j < n; j++) {
-            double s = 0.0;
-            for (int r = 0; r < 6; r++) s += J[r * n + i] * (c->we[r] * J[r * n + j]);
-            A[i * n + j] = A[j * n + i] = s;
-        }
-    }
-    if (c->method == SYMKIN_IK_GN) {
-        if (c->pinv) {
-            double g[NM];
-            memcpy(g, dq, sizeof(double) * (size_t)n);
-            return pinv_apply(n, n, A, g, dq);
-        }
-        return lu_solve(n, A, dq);
-    }
-    double E = 0.5 * r2;
-    for (int i = 0; i < n; i++) {
-        double wn = c->damping == SYMKIN_DAMP_WAMPLER ? c->lam[i]
-                    : c->damping == SYMKIN_DAMP_CHAN  ? c->lam[i] * E
-                                                      : E + c->lam[i];
-        A[i * n + i] += wn;
-    }
-    double g[NM];
-    memcpy(g, dq, sizeof(double) * (size_t)n);
-    if (chol_solve(n, A, dq) == 0) return 0;
+    double At[AT_SIZE], g[NM], A[NM * NM];
+    normal_equations(n, J, e, we, At, g);
+    full_matrix(n, At, A);
+    if (c->pinv) return pinv_apply(n, n, A, g, dq);
     memcpy(dq, g, sizeof(double) * (size_t)n);
     return lu_solve(n, A, dq);
+}
+
+static int lm_step6(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
+                    double *dq) {
+    return lm_step(6, c, we, J, e, r2, dq);
+}
+
+static int lm_step7(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
+                    double *dq) {
+    return lm_step(7, c, we, J, e, r2, dq);
+}
+
+static int lm_step_any(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
+                       double *dq) {
+    return lm_step(c->n, c, we, J, e, r2, dq);
+}
+
+static int ik_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
+                   double *dq) {
+    if (c->method == SYMKIN_IK_LM) {
+        if (c->n == 6) return lm_step6(c, we, J, e, r2, dq);
+        if (c->n == 7) return lm_step7(c, we, J, e, r2, dq);
+        return lm_step_any(c, we, J, e, r2, dq);
+    }
+    return nr_gn_step(c, we, J, e, dq);
+}
+
+/* The weights for the steps: NULL when We = I (multiplying by 1 changes nothing). */
+static const double *step_weights(const symkin_ik_config *c) {
+    for (int r = 0; r < 6; r++)
+        if (c->we[r] != 1.0) return c->we;
+    return 0;
 }
 
 static void kin_eval(const symkin_ik_config *c, const double *q, double *T, double *J) {
@@ -356,66 +436,287 @@ static double weighted_r2(const symkin_ik_config *c, const double *e) {
 }
 
 /* ---- the search loop ---------------------------------------------------------------------- */
-static void solve_one(const symkin_ik_config *c, const double *Tep, const double *q0, uint64_t rng, double *qout,
-                      symkin_ik_stats *st) {
-    int n = c->n;
-    double q[NM], dq[NM], best_q[NM], T[16], J[6 * NM], e[6];
-    double best = INFINITY;
-    int have_best = 0;
+/* One target's search as a state machine, so that a batch can run several side by side:
+ * start_target, then repeatedly evaluate the kinematics at t->q and judge the result, taking a
+ * step when asked to, until the target is done. */
+typedef struct {
+    const double *Tep, *q0;
+    double *qout;
+    symkin_ik_stats *st;
+    uint64_t rng;
+    int s, i; /* search and iteration within it */
+    int have_best;
+    double best;
+    double q[NM], best_q[NM];
+} ik_search;
+
+enum { SEARCH_DONE, SEARCH_EVAL, SEARCH_STEP }; /* what a target needs next */
+
+/* Start search t->s from q0, starts[s] or a random configuration. */
+static void start_search(const symkin_ik_config *c, ik_search *t) {
+    const int n = c->n;
+    if (t->s == 0 && t->q0)
+        memcpy(t->q, t->q0, sizeof(double) * (size_t)n);
+    else if (t->s < c->nstarts)
+        memcpy(t->q, c->starts + (int64_t)t->s * n, sizeof(double) * (size_t)n);
+    else
+        random_q(c, &t->rng, t->q);
+    t->st->searches = t->s + 1;
+    t->i = 0;
+}
+
+/* No search left: qout is the best iterate found. */
+static int give_up(const symkin_ik_config *c, ik_search *t) {
+    if (t->have_best) memcpy(t->q, t->best_q, sizeof(double) * (size_t)c->n);
+    wrap_into_limits(c, t->q);
+    memcpy(t->qout, t->q, sizeof(double) * (size_t)c->n);
+    t->st->residual = t->best;
+    return SEARCH_DONE;
+}
+
+/* The search t->s failed: start the next one, if any. */
+static int next_search(const symkin_ik_config *c, ik_search *t) {
+    t->s++;
+    if (t->s >= c->slimit) return give_up(c, t);
+    start_search(c, t);
+    return SEARCH_EVAL;
+}
+
+static int start_target(const symkin_ik_config *c, ik_search *t, const double *Tep, const double *q0,
+                        uint64_t rng, double *qout, symkin_ik_stats *st) {
+    t->Tep = Tep;
+    t->q0 = q0;
+    t->qout = qout;
+    t->st = st;
+    t->rng = rng;
+    t->have_best = 0;
+    t->best = INFINITY;
     st->success = 0;
     st->iterations = 0;
     st->searches = 0;
     st->limit_rejects = 0;
     st->singular = 0;
     st->status = SYMKIN_POSE_OK;
-    for (int s = 0; s < c->slimit; s++) {
-        if (s == 0 && q0)
-            memcpy(q, q0, sizeof(double) * (size_t)n);
-        else if (s < c->nstarts)
-            memcpy(q, c->starts + (int64_t)s * n, sizeof(double) * (size_t)n);
-        else
-            random_q(c, &rng, q);
-        st->searches = s + 1;
-        for (int i = 0; i < c->ilimit; i++) {
-            kin_eval(c, q, T, J);
-            symkin_ik_pose_error(T, Tep, e);
-            st->iterations++;
-            double r2 = weighted_r2(c, e);
-            double res = sqrt(r2);
-            if (!(res < INFINITY)) {
-                st->singular++;
-                break;
-            }
-            if (res < best) {
-                best = res;
-                have_best = 1;
-                memcpy(best_q, q, sizeof(double) * (size_t)n);
-            }
-            int converged = c->tol_on_E ? 0.5 * r2 < c->tol : res < c->tol;
-            if (converged) {
-                wrap_into_limits(c, q);
-                if (!c->joint_limits || within_limits(c, q)) {
-                    st->success = 1;
-                    st->residual = res;
-                    memcpy(qout, q, sizeof(double) * (size_t)n);
-                    return;
-                }
-                st->limit_rejects++;
-                break;
-            }
-            if (i + 1 == c->ilimit) break;
-            if (ik_step(c, J, e, r2, dq) != 0) {
-                st->singular++;
-                break;
-            }
-            for (int j = 0; j < n; j++) q[j] += dq[j];
+    memset(t->q, 0, sizeof t->q);
+    if (c->ilimit < 1) { /* searches that evaluate nothing */
+        for (t->s = 0; t->s < c->slimit; t->s++) start_search(c, t);
+        return give_up(c, t);
+    }
+    t->s = -1;
+    return next_search(c, t);
+}
+
+/* Judge the pose T (with J) at t->q: SEARCH_STEP when a step is to be taken from there (e and *r2
+ * set), SEARCH_EVAL when a new search starts, SEARCH_DONE when the target is solved or every
+ * search failed. */
+static int judge(const symkin_ik_config *c, ik_search *t, const double *T, double *e, double *r2) {
+    symkin_ik_stats *st = t->st;
+    symkin_ik_pose_error(T, t->Tep, e);
+    st->iterations++;
+    double rr = weighted_r2(c, e);
+    double res = sqrt(rr);
+    if (!(res < INFINITY)) {
+        st->singular++;
+        return next_search(c, t);
+    }
+    if (res < t->best) {
+        t->best = res;
+        t->have_best = 1;
+        memcpy(t->best_q, t->q, sizeof(double) * (size_t)c->n);
+    }
+    int converged = c->tol_on_E ? 0.5 * rr < c->tol : res < c->tol;
+    if (converged) {
+        wrap_into_limits(c, t->q);
+        if (!c->joint_limits || within_limits(c, t->q)) {
+            st->success = 1;
+            st->residual = res;
+            memcpy(t->qout, t->q, sizeof(double) * (size_t)c->n);
+            return SEARCH_DONE;
+        }
+        st->limit_rejects++;
+        return next_search(c, t);
+    }
+    if (t->i + 1 == c->ilimit) return next_search(c, t);
+    *r2 = rr;
+    return SEARCH_STEP;
+}
+
+/* Take the step dq, or abandon the search when the step failed. */
+static int take_step(const symkin_ik_config *c, ik_search *t, const double *dq, int failed) {
+    if (failed) {
+        t->st->singular++;
+        return next_search(c, t);
+    }
+    for (int j = 0; j < c->n; j++) t->q[j] += dq[j];
+    t->i++;
+    return SEARCH_EVAL;
+}
+
+static void solve_one(const symkin_ik_config *c, const double *Tep, const double *q0, uint64_t rng, double *qout,
+                      symkin_ik_stats *st) {
+    const double *we = step_weights(c);
+    double T[16], J[6 * NM], e[6], dq[NM], r2;
+    ik_search t;
+    int state = start_target(c, &t, Tep, q0, rng, qout, st);
+    while (state != SEARCH_DONE) {
+        kin_eval(c, t.q, T, J);
+        state = judge(c, &t, T, e, &r2);
+        if (state == SEARCH_STEP) state = take_step(c, &t, dq, ik_step(c, we, J, e, r2, dq) != 0);
+    }
+}
+
+#if defined(__GNUC__)
+/* ---- batches: LM on SYMKIN_LANES targets side by side ------------------------------------ */
+/* One LM step is a chain of dependent divisions and square roots (Cholesky, then two triangular
+ * solves), so a batch runs SYMKIN_LANES targets at once and takes their steps together, one
+ * target per vector lane: the chains overlap, and every lane does exactly the arithmetic of
+ * lm_step, so each target gets the same iterates as when solved alone. */
+#define SYMKIN_LANES 4 /* lane-wise code below is written out for 4 */
+typedef double symkin_v4 __attribute__((vector_size(SYMKIN_LANES * sizeof(double))));
+typedef int64_t symkin_m4 __attribute__((vector_size(SYMKIN_LANES * sizeof(int64_t))));
+
+/* x = sqrt(x) lane by lane (through a pointer: passing vectors by value warns without AVX) */
+#if defined(__AVX__)
+#include <immintrin.h>
+static inline void v4_sqrt(symkin_v4 *x) { *x = (symkin_v4)_mm256_sqrt_pd((__m256d)*x); }
+#else
+static inline void v4_sqrt(symkin_v4 *x) {
+    for (int l = 0; l < SYMKIN_LANES; l++) (*x)[l] = sqrt((*x)[l]);
+}
+#endif
+
+/* lm_step for the lanes with need[l] (the others' J and e are zeroed); failed[l] when that lane's
+ * step failed. */
+SYMKIN_INLINE void lm_step_lanes(int n, const symkin_ik_config *c, const double *we, double J[][6 * NM],
+                                 double e[][6], const double *r2, const int *need, double dq[][NM],
+                                 int *failed) {
+    symkin_v4 Jv[6][NM], Wv[6][NM], ev[6], g[NM], At[NM][NM], L[NM][NM], b[NM];
+    double rr[SYMKIN_LANES];
+    for (int l = 0; l < SYMKIN_LANES; l++) {
+        rr[l] = need[l] ? r2[l] : 0.0;
+        if (!need[l]) { /* an idle lane: harmless numbers */
+            memset(J[l], 0, sizeof(double) * 6 * (size_t)n);
+            memset(e[l], 0, sizeof(double) * 6);
         }
     }
-    if (have_best) memcpy(q, best_q, sizeof(double) * (size_t)n);
-    wrap_into_limits(c, q);
-    memcpy(qout, q, sizeof(double) * (size_t)n);
-    st->residual = best;
+    const symkin_v4 E = 0.5 * (symkin_v4){rr[0], rr[1], rr[2], rr[3]};
+    SYMKIN_UNROLL for (int r = 0; r < 6; r++) {
+        SYMKIN_UNROLL for (int i = 0; i < n; i++)
+            Jv[r][i] = (symkin_v4){J[0][r * n + i], J[1][r * n + i], J[2][r * n + i], J[3][r * n + i]};
+        ev[r] = (symkin_v4){e[0][r], e[1][r], e[2][r], e[3][r]};
+        if (we) ev[r] *= we[r];
+    }
+    SYMKIN_UNROLL for (int r = 0; r < 6; r++)
+        SYMKIN_UNROLL for (int i = 0; i < n; i++) Wv[r][i] = we ? Jv[r][i] * we[r] : Jv[r][i];
+    SYMKIN_UNROLL for (int i = 0; i < n; i++) {
+        symkin_v4 s = {0.0};
+        SYMKIN_UNROLL for (int r = 0; r < 6; r++) s += Jv[r][i] * ev[r];
+        g[i] = s;
+    }
+    SYMKIN_UNROLL for (int j = 0; j < n; j++)
+        SYMKIN_UNROLL for (int i = j; i < n; i++) {
+            symkin_v4 s = {0.0};
+            SYMKIN_UNROLL for (int r = 0; r < 6; r++) s += Jv[r][j] * Wv[r][i];
+            At[j][i] = s;
+        }
+    SYMKIN_UNROLL for (int i = 0; i < n; i++) {
+        if (c->damping == SYMKIN_DAMP_WAMPLER)
+            At[i][i] += c->lam[i];
+        else if (c->damping == SYMKIN_DAMP_CHAN)
+            At[i][i] += c->lam[i] * E;
+        else
+            At[i][i] += E + c->lam[i];
+    }
+    const symkin_v4 zero = {0.0};
+    symkin_m4 notpd = {0}; /* lanes whose matrix is not positive definite */
+    SYMKIN_UNROLL for (int j = 0; j < n; j++) {
+        symkin_v4 d = At[j][j];
+        SYMKIN_UNROLL for (int k = 0; k < j; k++) d -= L[j][k] * L[j][k];
+        notpd |= ~(d > zero);
+        symkin_v4 ljj = d;
+        v4_sqrt(&ljj);
+        L[j][j] = ljj;
+        SYMKIN_UNROLL for (int i = j + 1; i < n; i++) {
+            symkin_v4 s = At[j][i];
+            SYMKIN_UNROLL for (int k = 0; k < j; k++) s -= L[i][k] * L[j][k];
+            L[i][j] = s / ljj;
+        }
+    }
+    SYMKIN_UNROLL for (int i = 0; i < n; i++) {
+        symkin_v4 s = g[i];
+        SYMKIN_UNROLL for (int k = 0; k < i; k++) s -= L[i][k] * b[k];
+        b[i] = s / L[i][i];
+    }
+    SYMKIN_UNROLL for (int i = n - 1; i >= 0; i--) {
+        symkin_v4 s = b[i];
+        SYMKIN_UNROLL for (int k = i + 1; k < n; k++) s -= L[k][i] * b[k];
+        b[i] = s / L[i][i];
+    }
+    for (int l = 0; l < SYMKIN_LANES; l++) {
+        failed[l] = notpd[l] != 0;
+        if (!need[l]) continue;
+        if (!failed[l]) {
+            for (int i = 0; i < n; i++) dq[l][i] = b[i][l];
+            continue;
+        }
+        double A[NM * NM]; /* Cholesky failed: LU on the full matrix, as lm_step does */
+        for (int i = 0; i < n; i++) {
+            dq[l][i] = g[i][l];
+            for (int j = 0; j < n; j++) A[i * n + j] = i >= j ? At[j][i][l] : At[i][j][l];
+        }
+        failed[l] = lu_solve(n, A, dq[l]) != 0;
+    }
 }
+
+static void lm_step_lanes6(const symkin_ik_config *c, const double *we, double J[][6 * NM], double e[][6],
+                           const double *r2, const int *need, double dq[][NM], int *failed) {
+    lm_step_lanes(6, c, we, J, e, r2, need, dq, failed);
+}
+
+static void lm_step_lanes7(const symkin_ik_config *c, const double *we, double J[][6 * NM], double e[][6],
+                           const double *r2, const int *need, double dq[][NM], int *failed) {
+    lm_step_lanes(7, c, we, J, e, r2, need, dq, failed);
+}
+
+/* symkin_ik_solve_batch for LM with 6 or 7 joints (the targets' poses are valid). */
+static void solve_batch_lm(const symkin_ik_config *c, int64_t N, const double *Tep, const double *q0,
+                           int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st) {
+    const double *we = step_weights(c);
+    ik_search t[SYMKIN_LANES];
+    int state[SYMKIN_LANES], need[SYMKIN_LANES], failed[SYMKIN_LANES];
+    double T[SYMKIN_LANES][16], J[SYMKIN_LANES][6 * NM], e[SYMKIN_LANES][6], r2[SYMKIN_LANES];
+    double dq[SYMKIN_LANES][NM];
+    int64_t next = 0;
+    for (int l = 0; l < SYMKIN_LANES; l++) state[l] = SEARCH_DONE;
+    for (;;) {
+        int busy = 0, steps = 0;
+        for (int l = 0; l < SYMKIN_LANES; l++) {
+            while (state[l] == SEARCH_DONE && next < N) {
+                state[l] = start_target(c, &t[l], Tep + 16 * next, q0 ? q0 + q0_stride * next : 0,
+                                        stream_state(seed, (uint64_t)next), q + (int64_t)c->n * next, st + next);
+                next++;
+            }
+            busy |= state[l] == SEARCH_EVAL;
+        }
+        if (!busy) return;
+        for (int l = 0; l < SYMKIN_LANES; l++) {
+            need[l] = 0;
+            if (state[l] != SEARCH_EVAL) continue;
+            kin_eval(c, t[l].q, T[l], J[l]);
+            state[l] = judge(c, &t[l], T[l], e[l], &r2[l]);
+            need[l] = state[l] == SEARCH_STEP;
+            steps |= need[l];
+        }
+        if (!steps) continue;
+        if (c->n == 6)
+            lm_step_lanes6(c, we, J, e, r2, need, dq, failed);
+        else
+            lm_step_lanes7(c, we, J, e, r2, need, dq, failed);
+        for (int l = 0; l < SYMKIN_LANES; l++)
+            if (need[l]) state[l] = take_step(c, &t[l], dq[l], failed[l]);
+    }
+}
+#endif
 
 int32_t symkin_ik_solve(const symkin_ik_config *cfg, const double *Tep, const double *q0, uint64_t seed, double *q,
                         symkin_ik_stats *st) {
@@ -431,6 +732,10 @@ int32_t symkin_ik_solve(const symkin_ik_config *cfg, const double *Tep, const do
     return SYMKIN_POSE_OK;
 }
 
+int32_t symkin_ik_solve_job(const symkin_ik_job *job, uint64_t seed) {
+    return symkin_ik_solve(job->cfg, job->Tep, job->q0, seed, job->q, job->st);
+}
+
 int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const double *Tep, const double *q0,
                               int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st) {
     for (int64_t i = 0; i < N; i++) {
@@ -440,6 +745,12 @@ int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const doub
             return i;
         }
     }
+#if defined(__GNUC__)
+    if (cfg->method == SYMKIN_IK_LM && (cfg->n == 6 || cfg->n == 7)) {
+        solve_batch_lm(cfg, N, Tep, q0, q0_stride, seed, q, st);
+        return -1;
+    }
+#endif
     for (int64_t i = 0; i < N; i++)
         solve_one(cfg, Tep + 16 * i, q0 ? q0 + q0_stride * i : 0, stream_state(seed, (uint64_t)i),
                   q + (int64_t)cfg->n * i, st + i);
@@ -447,7 +758,8 @@ int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const doub
 }
 
 int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const double *q0, int32_t steps, double *qs) {
-    int n = cfg->n;
+    const int n = cfg->n;
+    const double *we = step_weights(cfg);
     double q[NM], dq[NM], T[16], J[6 * NM], e[6];
     memcpy(q, q0, sizeof(double) * (size_t)n);
     memcpy(qs, q, sizeof(double) * (size_t)n);
@@ -455,7 +767,7 @@ int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const do
         kin_eval(cfg, q, T, J);
         symkin_ik_pose_error(T, Tep, e);
         double r2 = weighted_r2(cfg, e);
-        if (!isfinite(r2) || ik_step(cfg, J, e, r2, dq) != 0) return k + 1;
+        if (!isfinite(r2) || ik_step(cfg, we, J, e, r2, dq) != 0) return k + 1;
         for (int j = 0; j < n; j++) q[j] += dq[j];
         memcpy(qs + (int64_t)(k + 1) * n, q, sizeof(double) * (size_t)n);
     }
