@@ -12,7 +12,15 @@ import jinja2
 
 from symkin.errors import CompileError
 
-__all__ = ["render", "template_dir", "Header", "comment_safe", "c_string", "identifier"]
+__all__ = [
+    "render",
+    "render_python_module",
+    "template_dir",
+    "Header",
+    "comment_safe",
+    "c_string",
+    "identifier",
+]
 
 
 def template_dir() -> Path:
@@ -42,6 +50,22 @@ def render(name: str, **context: Any) -> str:
         return _env().get_template(name).render(**context)
     except Exception as exc:  # jinja2.TemplateError, or an error raised inside the template
         raise CompileError(f"template {name} failed: {type(exc).__name__}: {exc}") from exc
+
+
+def render_python_module(
+    template: str, robot: Any, functions: list, printed: list, command: str, suffix: str = ""
+) -> dict[str, str]:
+    """Render a generated Python module ``symkin_<robot><suffix>.py`` (NumPy and CasADi backends)."""
+    module = f"symkin_{identifier(robot.name)}{suffix}"
+    text = render(
+        template,
+        module=module,
+        n=robot.n,
+        functions=printed,
+        header=Header.of(robot, functions, command, repr(robot.name)),
+        name_literal=repr(robot.name),
+    )
+    return {f"{module}.py": text}
 
 
 _UNSAFE = re.compile(r"[^\x20-\x7e]")

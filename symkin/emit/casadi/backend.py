@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.emit.templates import Header, identifier, render
+from symkin.emit.templates import render_python_module
 
 __all__ = ["render_casadi"]
 
@@ -26,14 +26,4 @@ def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
             cols = o.shape[-1]
             outs.append({"name": o.name, "vals": o.values, "rows": o.size // max(cols, 1), "cols": cols})
         printed.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": outs})
-    header = Header.of(robot, functions, command, repr(robot.name))
-    module = f"symkin_{identifier(robot.name)}_casadi"
-    text = render(
-        "casadi/module.py.j2",
-        module=module,
-        n=robot.n,
-        functions=printed,
-        header=header,
-        name_literal=repr(robot.name),
-    )
-    return {f"{module}.py": text}
+    return render_python_module("casadi/module.py.j2", robot, functions, printed, command, "_casadi")

@@ -13,7 +13,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.emit.templates import Header, identifier, render
+from symkin.emit.templates import render_python_module
 
 __all__ = ["render_numpy", "load_numpy"]
 
@@ -30,17 +30,7 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     for f in functions:
         vec, one = lower(f, NumPyPrinter()), lower(f, _MathPrinter())
         printed.append({**vec.__dict__, "scalar_lines": one.lines, "scalar_outs": one.outs})
-    header = Header.of(robot, functions, command, repr(robot.name))
-    module = f"symkin_{identifier(robot.name)}"
-    text = render(
-        "numpy/module.py.j2",
-        module=module,
-        n=robot.n,
-        functions=printed,
-        header=header,
-        name_literal=repr(robot.name),
-    )
-    return {f"{module}.py": text}
+    return render_python_module("numpy/module.py.j2", robot, functions, printed, command)
 
 
 def load_numpy(files: dict[str, str], folder: Path) -> ModuleType:
