@@ -333,10 +333,33 @@ def angle_axis(R: Any) -> np.ndarray:
     return np.where(diag[..., None], eq40, np.where(use_general[..., None], general, near_pi))
 
 
+def _angle_axis_one(R: np.ndarray) -> np.ndarray:
+    """:func:`angle_axis` of one (3, 3) matrix with scalar arithmetic (the same branches)."""
+    r = R.ravel().tolist()
+    l0, l1, l2 = r[7] - r[5], r[2] - r[6], r[3] - r[1]
+    tr = r[0] + r[4] + r[8]
+    if r[1] == 0.0 and r[2] == 0.0 and r[3] == 0.0 and r[5] == 0.0 and r[6] == 0.0 and r[7] == 0.0:
+        if tr > 0.0:
+            return np.zeros(3)
+        return math.pi / 2 * (np.array([r[0], r[4], r[8]]) + 1.0)  # eq 40
+    nl = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
+    if tr >= 0.0 or nl >= _NEAR_PI_L:  # eq 38
+        if nl == 0.0:
+            return np.zeros(3)
+        k = math.atan2(nl, tr - 1.0) / nl
+        return np.array([k * l0, k * l1, k * l2])
+    return angle_axis(R)  # near a half turn: the symmetric-part formula
+
+
 def pose_error(Te: Any, Tep: Any) -> np.ndarray:
     """e of eq 37 for poses Te, Tep (..., 4, 4) -> (..., 6): (t* - t, alpha(R* R^T)), base frame."""
     Te, Tep = np.asarray(Te, dtype=float), np.asarray(Tep, dtype=float)
     R = Tep[..., :3, :3] @ np.swapaxes(Te[..., :3, :3], -1, -2)
+    if R.ndim == 2:  # one pose pair: scalar arithmetic is several times faster
+        e = np.empty(6)
+        e[:3] = Tep[:3, 3] - Te[:3, 3]
+        e[3:] = _angle_axis_one(R)
+        return e
     return np.concatenate((Tep[..., :3, 3] - Te[..., :3, 3], angle_axis(R)), axis=-1)
 
 

@@ -9,9 +9,10 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError
+from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc
-from symkin.runtime.servo import pose_error_1, servo_gain, servo_velocity
+from symkin.runtime.ik import check_pose, pose_error
+from symkin.runtime.servo import servo_gain, servo_velocity
 
 __all__ = ["servo", "ServoResult"]
 
@@ -117,7 +118,10 @@ def servo(
         raise ValueError(f"dt must be positive, got {dt}")
     if max_steps < 0:
         raise ValueError(f"max_steps must be >= 0, got {max_steps}")
-    Tep = np.asarray(Tep, dtype=float)
+    T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
+    if not single:
+        raise PoseError(f"servo takes one target pose (4, 4), got shape {np.shape(Tep)}")
+    Tep = T_all[0]
     k = servo_gain(gain)
     step, name = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
     if isinstance(controller, MMC):
@@ -129,7 +133,7 @@ def servo(
     bar = _progress(progress, max_steps, name)
     try:
         for _ in range(max_steps + 1):
-            e = pose_error_1(kin.fkine(q), Tep)
+            e = pose_error(kin.fkine(q), Tep)
             E.append(e)
             nu, arrived = servo_velocity(e, k, threshold, nu_max)
             if arrived or len(QD) == max_steps:

@@ -2,64 +2,25 @@
 
 numpy only. All quantities are in the robot's base frame; spatial velocities and errors have rows
 (v, omega) like the base-frame Jacobian ``jacob0``. The pose error of eq 37 is
-:func:`symkin.runtime.ik.pose_error` (batched); this module has a single-pose form of it
-(:func:`pose_error_1`, 7x faster for one pose, tested to agree) for the control loop.
+:func:`symkin.runtime.ik.pose_error`.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from symkin.errors import PoseError
+from symkin.runtime.ik import pose_error
 
-__all__ = ["p_servo", "servo_velocity", "servo_gain", "pose_error_1", "angle_axis_1"]
-
-_SYM_TOL = 1e-6  # |l| below this (angle within ~1e-6 of 0 or pi): use the symmetric-matrix formulas
-
-
-def angle_axis_1(R: np.ndarray) -> np.ndarray:
-    """Euler vector ``alpha(R)`` (angle times unit axis) of a rotation matrix (eqs 38-40): (3,).
-
-    ``l = (r32 - r23, r13 - r31, r21 - r12)``; ``alpha = atan2(|l|, tr R - 1) l / |l|`` (eq 38-39).
-    When ``l`` vanishes, R is symmetric: the identity gives 0 and a half-turn gives pi times the axis
-    read off ``(R + I) / 2 = a a^T``, which for a diagonal R is eq 40, ``pi/2 (diag(R) + 1)``. The
-    half-turn formula is also used for a symmetric non-diagonal R (a half turn about a
-    non-coordinate axis), where eq 40 does not apply, and within 1e-6 of a half turn, where l / |l|
-    loses precision; its sign is then chosen to agree with l.
-    """
-    R = np.asarray(R, dtype=float)
-    lx, ly, lz = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
-    ln = math.sqrt(lx * lx + ly * ly + lz * lz)
-    tr = R[0, 0] + R[1, 1] + R[2, 2]
-    if ln > _SYM_TOL or tr > 1.0:  # eq 38 (tr > 1: angle below 90 deg, no precision problem)
-        if ln == 0.0:
-            return np.zeros(3)
-        return (math.atan2(ln, tr - 1.0) / ln) * np.array([lx, ly, lz])
-    # near a half turn: R ~ 2 a a^T - I, so (R + R^T)/2 + I ~ 2 a a^T
-    S = 0.5 * (R + R.T) + np.eye(3)
-    k = int(np.argmax(np.diag(S)))
-    a = S[:, k] / math.sqrt(max(S[k, k], 1e-300))
-    a /= np.linalg.norm(a)
-    if a @ np.array([lx, ly, lz]) < 0.0:
-        a = -a
-    return math.atan2(ln, tr - 1.0) * a
+__all__ = ["p_servo", "servo_velocity", "servo_gain", "pose_error_checked"]
 
 
-def pose_error_1(Te: np.ndarray, Tep: np.ndarray) -> np.ndarray:
-    """Pose error of eq 37, base frame, one pose pair: ``(t(Tep) - t(Te), alpha(R(Tep) R(Te)^T))``, (6,).
-
-    ``Te`` is the current end-effector pose 0T_e, ``Tep`` the desired one 0T_e*, both (4, 4).
-    """
-    Te = _pose(Te, "Te")
-    Tep = _pose(Tep, "Tep")
-    e = np.empty(6)
-    e[:3] = Tep[:3, 3] - Te[:3, 3]
-    e[3:] = angle_axis_1(Tep[:3, :3] @ Te[:3, :3].T)
-    return e
+def pose_error_checked(Te: Any, Tep: Any) -> np.ndarray:
+    """Pose error of eq 37 (:func:`symkin.runtime.ik.pose_error`) of one validated pose pair, (6,)."""
+    return pose_error(_pose(Te, "Te"), _pose(Tep, "Tep"))
 
 
 def servo_gain(gain: float | Sequence[float] | np.ndarray) -> np.ndarray:
@@ -87,10 +48,10 @@ def p_servo(
 ) -> tuple[np.ndarray, bool]:
     """Position-based servoing step from the current pose ``Te`` to ``Tep`` (both (4, 4), base frame).
 
-    ``servo_velocity(pose_error_1(Te, Tep), gain, threshold, nu_max)``: returns the end-effector
+    ``servo_velocity(pose_error_checked(Te, Tep), gain, threshold, nu_max)``: returns the end-effector
     velocity ``nu`` (6,) and whether the target is reached.
     """
-    return servo_velocity(pose_error_1(Te, Tep), gain, threshold, nu_max)
+    return servo_velocity(pose_error_checked(Te, Tep), gain, threshold, nu_max)
 
 
 def servo_velocity(

@@ -27,8 +27,9 @@ from symkin.runtime.control import (
     mmc_qp,
     rrmc,
 )
+from symkin.runtime.ik import angle_axis, pose_error
 from symkin.runtime.loop import servo
-from symkin.runtime.servo import angle_axis_1, p_servo, pose_error_1, servo_velocity
+from symkin.runtime.servo import p_servo, servo_velocity
 from tests.conftest import assert_close
 
 PANDA_ETS = (
@@ -85,28 +86,32 @@ def _pose(R, t=(0, 0, 0)):
     ],
 )
 def test_angle_axis_recovers_the_rotation_vector(axis, angle):
-    a = angle_axis_1(_rot(axis, angle))
+    R = _rot(axis, angle)
+    a = pose_error(np.eye(4), _pose(R, (0, 0, 0)))[3:]  # one pose: the scalar path
+    assert_close(angle_axis(R[None])[0], a, 1e-15, "batched path")
     assert_close(a, angle * np.asarray(axis) / np.linalg.norm(axis), 1e-8, "alpha(R)")
 
 
 @pytest.mark.parametrize("diag", [(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)])
 def test_angle_axis_of_diagonal_rotations_is_eq_40(diag):
     expected = np.zeros(3) if diag == (1, 1, 1) else math.pi / 2 * (np.array(diag) + 1.0)
-    assert_close(angle_axis_1(np.diag(diag).astype(float)), expected, 1e-15, "eq 40")
+    assert_close(angle_axis(np.diag(diag).astype(float)), expected, 1e-15, "eq 40")
+    T = _pose(np.diag(diag).astype(float), (0, 0, 0))
+    assert_close(pose_error(np.eye(4), T)[3:], expected, 1e-15, "eq 40, one pose")
 
 
-def test_pose_error_matches_the_batched_ik_pose_error(panda):
-    ik = pytest.importorskip("symkin.runtime.ik")
+def test_pose_error_of_one_pose_matches_the_batched_path(panda):
     rng = np.random.default_rng(0)
-    for _ in range(50):
-        Te, Tep = panda.fkine(panda.random_q(seed=rng)), panda.fkine(panda.random_q(seed=rng))
-        assert_close(pose_error_1(Te, Tep), ik.pose_error(Te, Tep), 1e-12, "eq 37")
+    Te, Tep = panda.fkine(panda.random_q(50, seed=rng)), panda.fkine(panda.random_q(50, seed=rng))
+    batched = pose_error(Te, Tep)
+    for i in range(50):
+        assert_close(pose_error(Te[i], Tep[i]), batched[i], 1e-14, "eq 37")
 
 
 def test_pose_error_is_translation_and_base_frame_rotation():
     Te = _pose(_rot([0, 0, 1], 0.5), (0.1, 0.2, 0.3))
     Tep = _pose(_rot([1, 0, 0], 0.4) @ Te[:3, :3], (0.4, 0.2, 0.0))
-    assert_close(pose_error_1(Te, Tep), [0.3, 0.0, -0.3, 0.4, 0.0, 0.0], 1e-12, "e")
+    assert_close(pose_error(Te, Tep), [0.3, 0.0, -0.3, 0.4, 0.0, 0.0], 1e-12, "e")
 
 
 def test_p_servo_gain_forms_arrival_and_caps():
@@ -581,3 +586,15 @@ def test_step_timing_reports_both_paths(cpanda):
         assert {"c", "python"} <= set(r["median_us"]) and r["steps"] > 0
         assert r["max_diff_python"] < 1e-6
     assert "MMC step" in format_step_timing(res)
+
+
+def test_servo_rejects_invalid_targets(panda):
+    T = panda.fkine(panda.qr)
+    bad = T.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(PoseError, match="NaN"):
+        servo(panda, panda.qr, bad)
+    skew = T.copy()
+    skew[0, 1] += 0.5
+    with pytest.raises(PoseError, match="orthonormal"):
+        servo(panda, panda.qr, skew)
