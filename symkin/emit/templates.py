@@ -11,6 +11,7 @@ from typing import Any
 import jinja2
 
 from symkin.errors import CompileError
+from symkin.model.robot import identifier
 
 __all__ = [
     "render",
@@ -84,14 +85,6 @@ def c_string(text: str) -> str:
         ch = chr(b)
         out.append(ch if ch.isalnum() or ch in " _-.,:;()[]=+" else f"\\{b:03o}")
     return '"' + "".join(out) + '"'
-
-
-def identifier(text: str) -> str:
-    """A safe lowercase C/Python identifier derived from arbitrary text."""
-    ident = re.sub(r"[^a-z0-9_]", "_", text.lower())
-    if not ident or ident[0].isdigit():
-        ident = "r_" + ident
-    return ident
 
 
 @dataclass(frozen=True)

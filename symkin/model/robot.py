@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -20,11 +21,18 @@ from symkin.errors import ConfigurationError, RobotError
 from symkin.model.ets import ETS
 from symkin.model.kinematics import NumericKinematics, cross
 
-__all__ = ["Robot", "as_batch", "AXES_ROWS"]
+__all__ = ["Robot", "as_batch", "identifier", "AXES_ROWS"]
 
 Axes = Literal["all", "trans", "rot"]
 AXES_ROWS: dict[str, slice] = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
-_IDENT = "abcdefghijklmnopqrstuvwxyz0123456789_"
+
+
+def identifier(text: str) -> str:
+    """A safe lowercase C/Python identifier derived from arbitrary text (robot names in code)."""
+    ident = re.sub(r"[^a-z0-9_]", "_", text.lower())
+    if not ident or ident[0].isdigit():
+        ident = "r_" + ident
+    return ident
 
 
 def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.ndarray, bool]:
@@ -192,10 +200,7 @@ class Robot:
     @property
     def identifier(self) -> str:
         """``name`` reduced to a safe C/Python identifier."""
-        text = "".join(c if c in _IDENT else "_" for c in self.name.lower())
-        if not text or text[0].isdigit():
-            text = "r_" + text
-        return text
+        return identifier(self.name)
 
     @cached_property
     def _num(self) -> NumericKinematics:
