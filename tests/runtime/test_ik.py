@@ -11,35 +11,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import symkin
 from symkin import Robot
 from symkin.emit.c.build import compile_library, load_library
 from symkin.errors import CompileError, ConfigurationError, PoseError
-from symkin.runtime.ik import SplitMix64, angle_axis, ik, ik_trace, pose_error
+from symkin.model.robots import load
+from symkin.runtime.ik import IKOptions, SplitMix64, angle_axis, ik, ik_trace, pose_error
 from symkin.runtime.ik_c import CIKSolver
 from tests.conftest import assert_close
 
 PI = math.pi
-UR5 = Robot.from_ets(
-    "Rz(q0) tz(0.089159) Rx(pi/2) Rz(q1) tx(-0.425) Rz(q2) tx(-0.39225) Rz(q3) tz(0.10915) Rx(pi/2) "
-    "Rz(q4) tz(0.09465) Rx(-pi/2) Rz(q5) tz(0.0823)",
-    qlim=[[-2 * PI] * 6, [2 * PI] * 6],
-    name="ur5",
-)
-PANDA = Robot.from_ets(
-    "tz(0.333) Rz(q0) Ry(q1) tz(0.316) Rz(q2) tx(0.0825) Ry(-q3) tx(-0.0825) tz(0.384) Rz(q4) "
-    "Ry(-q5) tx(0.088) Rx(pi) tz(0.107) Rz(q6) tz(0.1034) Rz(-pi/4)",
-    qlim=[
-        [-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973],
-        [2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973],
-    ],
-    name="panda",
-)
-STANFORD = Robot.from_ets(  # joint 2 prismatic, joint 4 flipped
-    "tz(0.412) Rz(q0) Rx(-pi/2) tz(0.154) Rz(q1) Rx(pi/2) tx(0.0203) tz(q2) Rz(q3) Rx(-pi/2) Rz(-q4) "
-    "Rx(pi/2) Rz(q5) tz(0.263)",
-    qlim=[[-3.0, -3.0, 0.3, -3.0, -1.6, -3.0], [3.0, 3.0, 1.27, 3.0, 1.6, 3.0]],
-    name="stanford",
-)
+UR5 = load("ur5")  # 6 DoF
+PANDA = load("panda")  # 7 DoF, flipped joints
+STANFORD = load("stanford")  # joint 2 prismatic
 ROBOTS = {"ur5": UR5, "panda": PANDA, "stanford": STANFORD}
 METHODS = {  # name: options
     "NR": {"method": "NR"},
@@ -89,6 +73,36 @@ def test_numpy_solver_solves_reachable_targets_within_limits(name, method):
     for seed in range(2):
         Tep = robot.fkine(robot.random_q(seed=10 + seed))
         _assert_solved(robot, ik(robot, Tep, seed=seed, **options), Tep)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("name", ROBOTS)
+def test_compiled_kinematics_solve_on_every_backend(name, method):
+    """kin.ik on generated code: the C loop on the C backend, the NumPy solver on the others;
+    solutions are checked with the numeric reference FK."""
+    robot, options = ROBOTS[name], METHODS[method]
+    if _square_only(robot, options):
+        pytest.skip("needs 6 joints")
+    Tep = robot.fkine(robot.random_q(8, seed=4))
+    for backend in ("c", "numpy"):
+        kin = symkin.compile(robot, backend=backend)
+        res = kin.ik(Tep if backend == "c" else Tep[0], seed=3, **options)
+        if backend == "c":
+            for i in range(len(Tep)):
+                _assert_solved(robot, res[i], Tep[i])
+        else:
+            _assert_solved(robot, res, Tep[0])
+
+
+def test_c_loop_on_generated_code_takes_the_reference_steps():
+    """Same start, same steps: the C solver on generated kinematics vs the NumPy solver on the reference."""
+    kin = symkin.compile(UR5, backend="c")
+    Tep = UR5.fkine(UR5.random_q(seed=7))
+    q0 = UR5.random_q(seed=8)
+    opt = IKOptions.of(kin)
+    c = CIKSolver(kin, opt).trace(Tep, q0, 5)
+    ref = ik_trace(UR5, Tep, q0, 5)
+    assert_close(c, ref, 1e-9, "iterates")
 
 
 def test_default_tolerance_bounds_the_error_norm_and_paper_criterion_bounds_E():
