@@ -21,6 +21,8 @@ from symkin.runtime.ik import ik
 
 __all__ = ["Kinematics", "KIN_METHODS"]
 
+C_IK_MAX_JOINTS = 12  # SYMKIN_IK_NMAX of the C solver; longer chains use the NumPy solver
+
 KIN_METHODS = (
     "fkine",
     "link_poses",
@@ -128,5 +130,6 @@ class Kinematics:
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
         NumPy and CasADi backends the NumPy solver calls the generated functions.
         """
-        kwargs.setdefault("backend", "c" if self.backend == "c" else "numpy")
+        c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
+        kwargs.setdefault("backend", "c" if c_loop else "numpy")
         return ik(self, Tep, **kwargs)
