@@ -46,5 +46,9 @@ class PoseError(SymkinError, ValueError):
     """A target pose that is not a valid SE(3) matrix."""
 
 
+class ParameterError(SymkinError, ValueError):
+    """An invalid solver or controller parameter (IK ``ilimit``/``tol``, MMC ``dt``/``xi``/``rho``...)."""
+
+
 class CompileError(SymkinError, RuntimeError):
     """Generating or compiling code failed (missing C compiler, compiler error, template error)."""

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ConfigurationError, PoseError
+from symkin.model.robot import real_array
 from symkin.runtime.ik import IKOptions, IKResult, check_pose, ets_of, failure_reason
 
 __all__ = ["CIKSolver", "ik_sources", "ik_library", "solver_for", "ets_table"]
@@ -273,13 +274,10 @@ class CIKSolver:
             seed = self._seeds.getrandbits(64)
         else:
             seed = (seed if type(seed) is int else int(seed)) & _M64
-        if type(Tep) is np.ndarray and Tep.shape == (4, 4):
+        if type(Tep) is np.ndarray and Tep.shape == (4, 4) and Tep.dtype.kind == "f":
             T = Tep
         else:
-            try:
-                T = np.asarray(Tep, dtype=float)
-            except (TypeError, ValueError) as exc:
-                raise PoseError(f"a target pose must be a 4x4 array: {exc}") from None
+            T = real_array(Tep, "a target pose", PoseError)  # no complex, strings...
             if T.shape != (4, 4):
                 return self._solve_batch(T, q0, seed)
         try:
@@ -288,7 +286,8 @@ class CIKSolver:
             raise PoseError(f"a target pose must be a 4x4 array of numbers: {exc}") from None
         job = self._job_addr[0]
         if q0 is not None:
-            self._q0[...] = q0 if getattr(q0, "shape", None) == self._shape else self._check_q0(q0)
+            fast = type(q0) is np.ndarray and q0.shape == self._shape and q0.dtype.kind == "f"
+            self._q0[...] = q0 if fast else self._check_q0(q0)
             job = self._job_addr[1]
         if self._solve(job, seed):
             if self._st.status == 5:
@@ -303,10 +302,7 @@ class CIKSolver:
         return _result(self._q.copy(), False, st.iterations, st.searches, st.residual, reason)
 
     def _check_q0(self, q0: Any) -> np.ndarray:
-        try:
-            q = np.asarray(q0, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ConfigurationError(f"q0 must be an array of {self.n} numbers: {exc}") from None
+        q = real_array(q0, "q0", items=f"{self.n} numbers")
         if q.shape != (self.n,) or not np.isfinite(q).all():
             raise ConfigurationError(f"q0 must be {self.n} finite numbers, got shape {q.shape}")
         return q
@@ -318,7 +314,7 @@ class CIKSolver:
         N, n = len(T), self.n
         stride, Q0 = 0, None
         if q0 is not None:
-            Q0 = np.ascontiguousarray(np.asarray(q0, dtype=float))
+            Q0 = np.ascontiguousarray(real_array(q0, "q0"))
             if Q0.shape == (N, n) and (N != 1 or Q0.ndim == 2):
                 stride = n
             elif Q0.shape != (n,):

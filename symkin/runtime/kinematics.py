@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.model.robot import AXES_ROWS, Robot, as_batch, jacobm_of, manipulability_of
+from symkin.model.robot import Robot, as_batch, axes_rows, cond_of, jacobm_of, manipulability_of
 from symkin.runtime.ik import ik
 
 __all__ = ["Kinematics", "KIN_METHODS"]
@@ -35,11 +35,7 @@ KIN_METHODS = (
 )
 
 
-def _rows(axes: str) -> slice:
-    try:
-        return AXES_ROWS[axes]
-    except KeyError:
-        raise ValueError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
+_rows = axes_rows
 
 
 class Kinematics:
@@ -112,6 +108,13 @@ class Kinematics:
         J, H = self.jacob0_hessian0(Q)
         Jm = jacobm_of(J[:, rows], H[:, :, rows])
         return Jm[0] if single else Jm
+
+    def cond(self, q: Any, axes: str = "all") -> np.ndarray | float:
+        """Condition number of the chosen rows of J0 (eq 53), inf at a singular configuration."""
+        rows = _rows(axes)
+        Q, single = as_batch(q, self.n, self.name)
+        c = cond_of(self.jacob0(Q)[:, rows])
+        return float(c[0]) if single else c
 
     @cached_property
     def c_fkjac(self) -> Any:

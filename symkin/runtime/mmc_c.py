@@ -20,6 +20,7 @@ others.
 from __future__ import annotations
 
 import ctypes
+import math
 import re
 import tempfile
 from functools import lru_cache
@@ -242,16 +243,20 @@ class CMMC:
         n = self.n
         buf = self._in
         try:
-            qa = q if type(q) is np.ndarray and q.shape == (n,) else np.asarray(q, dtype=float)
-            nua = nu if type(nu) is np.ndarray and nu.shape == (6,) else np.asarray(nu, dtype=float)
-            if qa.shape != (n,) or nua.shape != (6,):
+            qa = q if type(q) is np.ndarray and q.shape == (n,) else np.asarray(q)
+            nua = nu if type(nu) is np.ndarray and nu.shape == (6,) else np.asarray(nu)
+            if (
+                qa.shape != (n,)
+                or nua.shape != (6,)
+                or qa.dtype.kind not in "biuf"
+                or nua.dtype.kind not in "biuf"
+            ):
                 raise ValueError
             buf[:n] = qa
             buf[n:] = nua
-        except (ValueError, TypeError):
-            self._check_q(self.kin, q)
-            self._check_nu(nu)
-            raise
+        except (ValueError, TypeError):  # the Python path's conversion, or its errors
+            buf[:n] = self._check_q(self.kin, q)
+            buf[n:] = self._check_nu(nu)
         rc = self._fn(*self._args)
         if rc:
             self._check_q(self.kin, q)  # raise the errors of the Python path
@@ -259,7 +264,11 @@ class CMMC:
             raise RuntimeError(f"symkin_mmc_step returned {rc}")  # pragma: no cover
         out = self._out
         qd = out[:n].copy()
-        st, method, m, iters, fb, res, slack, scale, pol = out[n:].tolist()
+        vals = out.tolist()
+        st, method, m, iters, fb, res, slack, scale, pol = vals[n:]
+        if not math.isfinite(sum(vals[:n])):  # never "solved" with NaN or inf: stop the joints
+            qd[:], st, fb, slack, scale = 0.0, 5, 2, 0.0, 1.0
+            res = float(np.abs(buf[n:]).max())  # max |J 0 - nu|
         self.polished = bool(pol)
         info = _new(self._info)  # StepInfo without its frozen __setattr__ (half a microsecond)
         info.__dict__.update(
