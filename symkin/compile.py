@@ -1,22 +1,26 @@
 """``symkin.compile``: robot -> symbolic derivation -> emitted code -> loaded :class:`Kinematics`.
 
 Generated sources are cached per user (``$SYMKIN_CACHE`` or ``~/.cache/symkin``) under a key made
-of the robot's structural hash, the backend, the symkin version and the templates, so a warm
-compile neither imports sympy nor re-derives anything.
+of what they depend on: the robot's name and ETS (:attr:`Robot.key`), the backend, the symkin
+version, the templates, the compiler's own Python code (symbolic, emit and the model classes it
+prints) and the sympy version, so a warm compile neither imports sympy nor re-derives anything,
+and a changed derivation never serves stale code. Compiled :class:`Kinematics` objects are also
+kept in memory, keyed by that and by every attribute of the robot (:attr:`Robot.fingerprint`):
+robots differing only in limits, speeds or configurations get their own object.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
-import os
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from symkin.emit.c.build import cache_dir
+from symkin.emit.c.build import cache_dir, write_atomic
 from symkin.errors import CompileError, SymkinError
 from symkin.model.robot import Robot, as_batch
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
@@ -37,6 +41,34 @@ def _templates_digest() -> str:
     for path in sorted(p for b in BACKENDS for p in (root / b).rglob("*.j2")):
         h.update(path.relative_to(root).as_posix().encode())
         h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+# the compiler's own code: what it derives and prints depends on these files
+_COMPILER_SOURCES = ("symbolic", "emit", "model/ets.py", "model/robot.py", "compile.py")
+
+
+@lru_cache(maxsize=1)
+def _compiler_digest() -> str:
+    """sha256 of the compiler's Python sources (:data:`_COMPILER_SOURCES`) and the sympy version."""
+    from importlib import metadata
+
+    h = hashlib.sha256(_sources_digest(Path(__file__).resolve().parent).encode())
+    with contextlib.suppress(metadata.PackageNotFoundError):  # sympy is a declared dependency
+        h.update(metadata.version("sympy").encode())
+    return h.hexdigest()
+
+
+def _sources_digest(root: Path) -> str:
+    """sha256 of the :data:`_COMPILER_SOURCES` under the package folder ``root``."""
+    h = hashlib.sha256()
+    paths: list[Path] = []
+    for part in _COMPILER_SOURCES:
+        p = root / part
+        paths += sorted(p.rglob("*.py")) if p.is_dir() else [p]
+    for path in paths:
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
     return h.hexdigest()
 
 
@@ -88,7 +120,7 @@ def write_generated(robot: Robot, backend: str, folder: str | Path, command: str
 def _cache_key(robot: Robot, backend: str) -> str:
     from symkin import __version__
 
-    text = "\n".join((__version__, backend, robot.key, _templates_digest()))
+    text = "\n".join((__version__, backend, robot.key, _templates_digest(), _compiler_digest()))
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
@@ -107,13 +139,8 @@ def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict
     files = generate(robot, backend)
     if use_cache:
         digest = hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_text(json.dumps({"sha256": digest, "files": files}))
-            os.replace(tmp, path)
-        except OSError:
-            pass  # an unwritable cache only costs speed
+        with contextlib.suppress(OSError):  # an unwritable cache only costs speed
+            write_atomic(path, json.dumps({"sha256": digest, "files": files}))
     return files
 
 
@@ -136,8 +163,9 @@ def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinem
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     key = _cache_key(robot, backend)
-    if cache and key in _LOADED:
-        return _LOADED[key]
+    loaded_key = f"{key}:{robot.fingerprint}"  # limits etc. change behaviour, not the generated code
+    if cache and loaded_key in _LOADED:
+        return _LOADED[loaded_key]
     files = _cached_files(robot, backend, key, cache)
     if backend == "c":
         from symkin.emit.c.backend import build_c
@@ -150,12 +178,20 @@ def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinem
 
         module = load_numpy(files, cache_dir() / "numpy")
         functions = {name: getattr(module, name) for name in KIN_METHODS}
-        kin = Kinematics(robot, backend, functions, files, Path(module.__file__ or ""), module)
+        kin = Kinematics(robot, backend, functions, files, _module_path(module), module)
     else:
         kin = _casadi_kinematics(robot, files)
     if cache:
-        _LOADED[key] = kin
+        if len(_LOADED) > 256:
+            _LOADED.clear()
+        _LOADED[loaded_key] = kin
     return kin
+
+
+def _module_path(module: Any) -> Path | None:
+    """The file a generated module was loaded from; None when imported from memory."""
+    file = getattr(module, "__file__", None)
+    return Path(file) if file else None
 
 
 def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
@@ -174,7 +210,9 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
 
         def call(q: Any) -> Any:
             Q, single = as_batch(q, n, robot.name)
-            if single:
+            if Q.shape[0] == 0:  # casadi cannot map over 0 items
+                outs = [np.zeros((0, *shapes[k])) for k in names]
+            elif single:
                 res = f(Q[0])
                 res = res if isinstance(res, (list, tuple)) else [res]
                 outs = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]
@@ -195,6 +233,6 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
         return call
 
     functions = {name: wrap(fns[name]) for name in KIN_METHODS}
-    kin = Kinematics(robot, "casadi", functions, files, Path(module.__file__ or ""), module)
+    kin = Kinematics(robot, "casadi", functions, files, _module_path(module), module)
     kin.functions = fns  # type: ignore[attr-defined]
     return kin
