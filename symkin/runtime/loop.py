@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -9,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, PoseError
+from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.model.robot import real_array
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import check_pose, pose_error
 from symkin.runtime.servo import servo_gain, servo_velocity
@@ -111,13 +114,13 @@ def servo(
     ``kin.qd_max`` when the robot has it; pass ``np.inf`` for no speed limit.
     """
     n = int(kin.n)
-    q = np.array(q0, dtype=float)
+    q = real_array(q0, "q0").copy()
     if q.shape != (n,) or not np.isfinite(q).all():
         raise ConfigurationError(f"q0 must be {n} finite numbers, got {q0!r}")
-    if not dt > 0:
-        raise ValueError(f"dt must be positive, got {dt}")
-    if max_steps < 0:
-        raise ValueError(f"max_steps must be >= 0, got {max_steps}")
+    if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
+        raise ParameterError(f"dt must be a positive finite number, got {dt!r}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 0:
+        raise ParameterError(f"max_steps must be an integer >= 0, got {max_steps!r}")
     T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
     if not single:
         raise PoseError(f"servo takes one target pose (4, 4), got shape {np.shape(Tep)}")
@@ -177,11 +180,13 @@ def _controller(
         return MMC(kin, lam=lam, qd_max=qd_max, axes=axes, joint_limits=joint_limits, dt=dt).step, "mmc"
     if controller == "rrmc":
         if joint_limits:
-            raise ValueError("joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)")
+            raise ParameterError(
+                "joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)"
+            )
         return (lambda q, nu: rrmc(kin, q, nu, qd_max=qd_max, axes=axes)), "rrmc"
     if callable(controller):
         return controller, getattr(controller, "__name__", type(controller).__name__)
-    raise ValueError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
+    raise ParameterError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:
