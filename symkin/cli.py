@@ -2,7 +2,9 @@
 
 Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
 (``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file. User mistakes print one line
-``symkin: error: ...`` and exit with status 2; a failed check or an unsolved problem exits 1.
+``symkin: error: ...`` and exit with status 2, checked before any long work starts where they can
+be; a failed check or an unsolved problem exits 1. When the reader of the output goes away
+(``symkin list | head -1``), symkin stops quietly with status 141 (128 + SIGPIPE).
 """
 
 from __future__ import annotations
@@ -24,6 +26,71 @@ ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a 
 
 class UserError(Exception):
     """A mistake in the command line; printed as one line."""
+
+
+# -- argument types and checks done before any long work -------------------------------------
+def _int_at_least(minimum: int) -> Any:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
+    return value
+
+
+_positive_float.__name__ = "number"
+
+
+def _output_dir(path: str) -> Path:
+    """``-o DIR``: an existing folder or one that can be created (checked before the work)."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"-o {path}: exists and is not a folder")
+    return out
+
+
+def _output_file(path: str | None, what: str) -> None:
+    """A file to write after the work (``--plot``, ``-o FILE``): its folder must exist."""
+    if path is None:
+        return
+    p = Path(path)
+    if p.is_dir():
+        raise UserError(f"{what} {path}: is a folder; give a file name")
+    if not p.absolute().parent.is_dir():
+        raise UserError(f"{what} {path}: the folder {str(p.absolute().parent)!r} does not exist")
+
+
+def _need_matplotlib(path: str | None) -> None:
+    if path is None:
+        return
+    _output_file(path, "--plot")
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
+
+
+def _check_cflags(backend: str) -> None:
+    """Reject a SYMKIN_CFLAGS the C compiler cannot use before generating anything."""
+    if backend == "c":
+        from symkin.emit.c.build import check_cflags
+
+        check_cflags()
 
 
 def _robot(spec: str) -> Any:
@@ -70,12 +137,13 @@ def cmd_compile(args: argparse.Namespace) -> int:
     from symkin.compile import generate
 
     robot = _robot(args.robot)
+    out = _output_dir(args.output) if args.output else None
+    _check_cflags(args.backend)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
     files = generate(robot, args.backend, command)
     t_gen = time.perf_counter() - t0
-    if args.output:
-        out = Path(args.output)
+    if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         for name, text in sorted(files.items()):
             (out / name).write_text(text)
@@ -108,6 +176,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
 def cmd_generate(args: argparse.Namespace) -> int:
     from symkin.emit.snapshot import compare_or_update
 
+    _output_dir(args.output)
     differ = compare_or_update(args.output, update=not args.check, progress=sys.stderr.isatty())
     if args.check:
         if differ:
@@ -125,6 +194,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     from symkin.check import check
 
     robot = _robot(args.robot)
+    for b in args.backend or ("c",):
+        _check_cflags(b)
     report = check(
         robot, backends=args.backend or ("c", "numpy", "casadi"), samples=args.samples, seed=args.seed
     )
@@ -136,6 +207,7 @@ def cmd_derive(args: argparse.Namespace) -> int:
     from symkin.derivation import derivation
 
     robot = _robot(args.robot)
+    _output_file(args.output, "-o")
     text = derivation(
         robot, fmt=args.format, symbolic_constants=args.symbolic_constants, simplify=not args.no_simplify
     )
@@ -175,6 +247,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
     robot = _robot(args.robot)
     Tep = _target(args, robot)
+    _check_cflags(args.backend)
     kin = compile_robot(robot, backend=args.backend)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
     if args.damping:
@@ -211,8 +284,10 @@ def cmd_servo(args: argparse.Namespace) -> int:
 
     robot = _robot(args.robot)
     Tep = _target(args, robot)
-    kin = compile_robot(robot, backend=args.backend)
+    _need_matplotlib(args.plot)
+    _check_cflags(args.backend)
     q0 = _floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
+    kin = compile_robot(robot, backend=args.backend)
     res = servo(
         kin,
         q0,
@@ -269,6 +344,11 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    _check_cflags("c")
+    if args.what == "mmc":
+        _need_matplotlib(args.plot)
+    elif args.plot:
+        raise UserError(f"--plot is for `symkin bench mmc`, not `symkin bench {args.what}`")
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -314,10 +394,19 @@ def _jsonable(x: Any) -> Any:
 
 
 # ----------------------------------------------------------------------------------------------
+class _Parser(argparse.ArgumentParser):
+    """argparse with symkin's one-line errors (``symkin: error: ...``, exit 2)."""
+
+    def error(self, message: str) -> Any:  # type: ignore[override]
+        self.exit(
+            2, f"symkin: error: {self.prog.split(' ', 1)[-1] + ': ' if ' ' in self.prog else ''}{message}\n"
+        )
+
+
 def build_parser() -> argparse.ArgumentParser:
     from symkin import __version__
 
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="symkin",
         description="symkin: a symbolic, code-generating kinematics compiler for robot manipulators.",
         epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command.",
@@ -349,7 +438,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     s.add_argument("--backend", action="append", choices=("c", "numpy", "casadi"), help="only this backend")
-    s.add_argument("--samples", type=int, default=20, help="random configurations (default 20)")
+    s.add_argument("--samples", type=_int_at_least(1), default=20, help="random configurations (default 20)")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--json", action="store_true", help="print the table as JSON")
     s.set_defaults(func=cmd_check)
@@ -382,8 +471,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     target_options(s)
     s.add_argument("--controller", choices=("mmc", "rrmc"), default="mmc")
-    s.add_argument("--dt", type=float, default=0.05)
-    s.add_argument("--max-steps", type=int, default=500)
+    s.add_argument("--dt", type=_positive_float, default=0.05, help="control period in s (default 0.05)")
+    s.add_argument("--max-steps", type=_int_at_least(0), default=500)
     s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
     s.set_defaults(func=cmd_servo)
@@ -391,8 +480,10 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I)")
     s.add_argument("what", choices=("kin", "ik", "mmc"))
     s.add_argument("--robot", help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc)")
-    s.add_argument("--batch", type=int, default=100_000, help="kin: batch size (default 100000)")
-    s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
+    s.add_argument("--batch", type=_int_at_least(1), default=100_000, help="kin: batch size (default 100000)")
+    s.add_argument(
+        "-n", "--problems", type=_int_at_least(1), help="ik: problems (default 10000); mmc: tasks per robot"
+    )
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--plot", metavar="PNG", help="mmc: write a Fig. 3 style plot of one task")
     s.add_argument("--json", action="store_true", help="print JSON")
@@ -407,13 +498,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (UserError, SymkinError, ValueError, FileNotFoundError) as exc:
+    except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
+        _silence_stdout()
+        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+    except (UserError, SymkinError, ValueError, OSError) as exc:
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         print(f"symkin: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("symkin: interrupted", file=sys.stderr)
         return 130
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout without a file descriptor (captured)
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover
