@@ -164,7 +164,7 @@ class Robot:
             lo = [-math.pi if e.is_revolute else -1.0 for e in self.ets.joints]
             qlim = np.array([lo, [-v for v in lo]])
         else:
-            qlim = np.asarray(self.qlim, dtype=float)
+            qlim = real_array(self.qlim, "qlim", RobotError)
             if qlim.shape != (2, n):
                 raise RobotError(f"qlim must have shape (2, {n}) (lower row, upper row), got {qlim.shape}")
             if np.isnan(qlim).any():
@@ -174,6 +174,8 @@ class Robot:
                 raise RobotError(f"qlim lower > upper for joint {int(bad[0])}: {qlim[:, bad[0]].tolist()}")
         object.__setattr__(self, "qlim", _readonly(qlim))
         names = tuple(self.joint_names) or tuple(f"q{j}" for j in range(n))
+        if not all(isinstance(x, str) and x for x in names):
+            raise RobotError(f"joint names must be non-empty strings, got {names!r}")
         if len(names) != n:
             raise RobotError(f"{len(names)} joint names given for {n} joints")
         if len(set(names)) != n:
@@ -183,13 +185,13 @@ class Robot:
         for key, value in dict(self.configs).items():
             if not key.isidentifier():
                 raise RobotError(f"configuration name {key!r} is not an identifier")
-            v = np.asarray(value, dtype=float)
-            if v.shape != (n,) or not np.isfinite(v).all():
+            v = real_array(value, f"configuration {key!r}", RobotError)
+            if v.shape != (n,) or not (np.abs(v) <= MAX_JOINT_VALUE).all():
                 raise RobotError(f"configuration {key!r} must be {n} finite numbers, got {value!r}")
             configs[key] = v
         object.__setattr__(self, "configs", {k: _readonly(v) for k, v in configs.items()})
         if self.qd_max is not None:
-            qd = np.asarray(self.qd_max, dtype=float)
+            qd = real_array(self.qd_max, "qd_max", RobotError)
             if qd.shape != (n,) or not (qd > 0).all():
                 raise RobotError(f"qd_max must be {n} positive numbers, got {self.qd_max!r}")
             object.__setattr__(self, "qd_max", _readonly(qd))
@@ -309,9 +311,15 @@ class Robot:
         return bool(ok[0]) if single else ok
 
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
-        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        """Uniform random configurations within qlim: (n,) or (N, n). An infinite bound is replaced
+        by one turn (revolute) or 2 m (prismatic) beyond the other bound, or +-pi / +-1 m around 0."""
         rng = np.random.default_rng(seed)
         lo, hi = self.qlim
+        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+            half = np.array([math.pi if e.is_revolute else 1.0 for e in self.ets.joints])
+            lo_inf, hi_inf = ~np.isfinite(lo), ~np.isfinite(hi)
+            lo = np.where(lo_inf, np.where(hi_inf, -half, hi - 2 * half), lo)
+            hi = np.where(hi_inf, lo + 2 * half, hi)
         if N is None:
             return rng.uniform(lo, hi)
         return rng.uniform(lo, hi, size=(N, self.n))

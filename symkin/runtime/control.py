@@ -272,6 +272,8 @@ class MMC:
             raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin = kin
         self.n = int(kin.n)
+        if self.n < 1:
+            raise ParameterError("MMC needs a robot with at least one joint")
         self.lam = _number(lam, "lam")
         self.axes = axes
         self._rows = _axes(axes)

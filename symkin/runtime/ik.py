@@ -163,6 +163,8 @@ class IKOptions:
         starts: Any = None,
     ) -> IKOptions:
         n = int(kin.n)
+        if n < 1:
+            raise ParameterError("inverse kinematics needs a robot with at least one joint")
         method = str(method).upper()
         if method not in METHODS:
             raise ParameterError(f"method must be one of {METHODS}, not {method!r}")

@@ -150,3 +150,32 @@ def test_urdf_tiny_numbers_and_files_that_are_not_utf8(tmp_path):
     bad.write_bytes(_urdf(name="caf\xe9").encode("latin-1"))
     with pytest.raises(URDFError, match="not UTF-8"):
         Robot.from_urdf(bad)
+
+
+def test_robot_attributes_are_validated_with_robot_errors():
+    import numpy as np
+
+    for kwargs in (
+        {"qlim": [["a"], [1]]},
+        {"qlim": [[1j], [1]]},
+        {"configs": {"home": ["x"]}},
+        {"configs": {"home": [1e300]}},  # compiled kinematics refuse |q| > 1e15
+        {"qd_max": ["fast"]},
+        {"joint_names": [1]},
+    ):
+        with pytest.raises(RobotError):
+            Robot.from_ets("Rz(q)", **kwargs)
+    with pytest.raises(RobotError, match="within"):
+        Robot.from_poe(np.eye(4), [[0, 0, 1, 1e300, 0, 0]])  # raw OverflowError before
+    with pytest.raises(RobotError, match="too large"):
+        Robot.from_poe(np.eye(4), [[0, 0, 1, 10**400, 0, 0]])
+
+
+def test_random_configurations_with_infinite_limits():
+    import numpy as np
+
+    robot = Robot.from_ets("Rz(q) tx(1) tz(q)", qlim=[[-np.inf, 0.5], [np.inf, np.inf]])
+    Q = robot.random_q(500, seed=0)  # raised OverflowError ("Range exceeds valid bounds")
+    assert np.isfinite(Q).all() and (Q[:, 0] >= -np.pi).all() and (Q[:, 0] <= np.pi).all()
+    assert (Q[:, 1] >= 0.5).all() and (Q[:, 1] <= 2.5).all()
+    assert robot.within_limits(Q).all()

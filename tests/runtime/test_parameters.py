@@ -180,3 +180,11 @@ def test_servo_velocity_rejects_invalid_threshold_and_caps():
     for kwargs in ({"threshold": NAN}, {"threshold": -1.0}, {"nu_max": NAN}, {"gain": 1j}):
         with pytest.raises(ParameterError):
             servo_velocity(e, **kwargs)
+
+
+def test_ik_and_mmc_need_joints():
+    robot = symkin.Robot.from_ets("tx(1)")  # a valid robot without joints
+    with pytest.raises(ParameterError, match="at least one joint"):
+        robot.ik(np.eye(4))  # raw ValueError from a reshape before
+    with pytest.raises(ParameterError, match="at least one joint"):
+        MMC(robot)
