@@ -35,9 +35,6 @@ KIN_METHODS = (
 )
 
 
-_rows = axes_rows
-
-
 class Kinematics:
     """Generated kinematics of ``robot`` on one backend ("c", "numpy" or "casadi").
 
@@ -95,7 +92,7 @@ class Kinematics:
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
         """Yoshikawa manipulability of the chosen rows of J0 (eq 52)."""
-        rows = _rows(axes)
+        rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
         J = self.jacob0(Q)
         m = manipulability_of(J[:, rows])
@@ -103,7 +100,7 @@ class Kinematics:
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
         """Manipulability Jacobian (seed 001 eq 11), (n,) or (N, n)."""
-        rows = _rows(axes)
+        rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
         J, H = self.jacob0_hessian0(Q)
         Jm = jacobm_of(J[:, rows], H[:, :, rows])
@@ -111,7 +108,7 @@ class Kinematics:
 
     def cond(self, q: Any, axes: str = "all") -> np.ndarray | float:
         """Condition number of the chosen rows of J0 (eq 53), inf at a singular configuration."""
-        rows = _rows(axes)
+        rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
         c = cond_of(self.jacob0(Q)[:, rows])
         return float(c[0]) if single else c
