@@ -32,7 +32,7 @@ def _angles() -> np.ndarray:
             rng.uniform(-INLINE_MAX, INLINE_MAX, 800),
             rng.uniform(-4.0, 4.0, 800),
             10.0 ** rng.uniform(-300, 0, 100) * rng.choice([-1, 1], 100),
-            10.0 ** rng.uniform(6.3, 300, 200) * rng.choice([-1, 1], 200),  # libm
+            10.0 ** rng.uniform(6.3, 15, 200) * rng.choice([-1, 1], 200),  # libm, up to MAX_JOINT_VALUE
             [0.0, -0.0, 5e-324, -5e-324, INLINE_MAX, -INLINE_MAX, np.nextafter(INLINE_MAX, np.inf)],
         ]
     )
