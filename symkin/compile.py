@@ -19,13 +19,14 @@ import numpy as np
 from symkin.emit.c.build import cache_dir
 from symkin.errors import CompileError, SymkinError
 from symkin.model.robot import Robot, as_batch
+from symkin.runtime.frames import ChainTables, frame_index, frame_jacobian
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
-__all__ = ["compile", "generate", "write_generated", "BACKENDS", "cache_dir"]
+__all__ = ["compile", "generate", "write_generated", "BACKENDS", "STRATEGIES", "cache_dir"]
 
 BACKENDS = ("c", "numpy", "casadi")
 _LOADED: dict[str, Kinematics] = {}
-_FUNCTIONS: dict[str, list] = {}  # derived and CSE'd functions by robot key, shared by the backends
+_FUNCTIONS: dict[tuple[str, str | None], list] = {}  # functions by (robot key, strategy), shared by backends
 
 
 @lru_cache(maxsize=1)
@@ -45,20 +46,37 @@ def _check_backend(backend: str) -> None:
         raise SymkinError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
 
 
-def generate(robot: Robot, backend: str, command: str | None = None) -> dict[str, str]:
-    """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy."""
+STRATEGIES = ("expanded", "program")
+
+
+def _check_strategy(strategy: str | None) -> None:
+    if strategy is not None and strategy not in STRATEGIES:
+        raise SymkinError(f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)} (or None: by size)")
+
+
+def generate(
+    robot: Robot, backend: str, command: str | None = None, strategy: str | None = None
+) -> dict[str, str]:
+    """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy.
+
+    ``strategy``: ``"expanded"`` (one exact expression per output, then CSE: the smallest, most
+    readable code for arms of up to about 7 joints), ``"program"`` (named link frames, Hessians as
+    loops: linear in the number of joints), or None to choose by size (the generated header says
+    which was used).
+    """
     _check_backend(backend)
+    _check_strategy(strategy)
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
 
     command = command or f"symkin compile {robot.identifier} --backend {backend}"
-    functions = _FUNCTIONS.get(robot.key)
+    functions = _FUNCTIONS.get((robot.key, strategy))
     if functions is None:
-        functions = kin_functions(robot)
+        functions = kin_functions(robot, strategy=strategy)
         if len(_FUNCTIONS) > 32:
             _FUNCTIONS.clear()
-        _FUNCTIONS[robot.key] = functions
+        _FUNCTIONS[(robot.key, strategy)] = functions
     if backend == "c":
         from symkin.emit.c.backend import render_c
 
@@ -72,9 +90,11 @@ def generate(robot: Robot, backend: str, command: str | None = None) -> dict[str
     return render_casadi(robot, functions, command)
 
 
-def write_generated(robot: Robot, backend: str, folder: str | Path, command: str | None = None) -> list[Path]:
+def write_generated(
+    robot: Robot, backend: str, folder: str | Path, command: str | None = None, strategy: str | None = None
+) -> list[Path]:
     """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths."""
-    files = generate(robot, backend, command)
+    files = generate(robot, backend, command, strategy)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = []
@@ -85,14 +105,16 @@ def write_generated(robot: Robot, backend: str, folder: str | Path, command: str
     return out
 
 
-def _cache_key(robot: Robot, backend: str) -> str:
+def _cache_key(robot: Robot, backend: str, strategy: str | None = None) -> str:
     from symkin import __version__
 
-    text = "\n".join((__version__, backend, robot.key, _templates_digest()))
+    text = "\n".join((__version__, backend, robot.key, str(strategy), _templates_digest()))
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
-def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict[str, str]:
+def _cached_files(
+    robot: Robot, backend: str, key: str, use_cache: bool, strategy: str | None = None
+) -> dict[str, str]:
     """Generated files from the cache (verified by checksum), else generate and store atomically."""
     path = cache_dir() / "gen" / f"{key}.json"
     if use_cache and path.exists():
@@ -104,7 +126,7 @@ def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict
                 return files
         except (OSError, ValueError, KeyError, TypeError):
             pass  # corrupted entry: regenerate below
-    files = generate(robot, backend)
+    files = generate(robot, backend, strategy=strategy)
     if use_cache:
         digest = hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
         try:
@@ -117,14 +139,18 @@ def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict
     return files
 
 
-def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinematics:  # noqa: A001
+def compile(  # noqa: A001
+    robot: Robot | str, backend: str = "c", cache: bool = True, strategy: str | None = None
+) -> Kinematics:
     """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`.
 
     ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
     ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
     for optimisation problems). Every backend has the numeric reference's methods and shapes.
+    ``strategy`` chooses how the code is derived (see :func:`generate`; default by size).
     """
     _check_backend(backend)
+    _check_strategy(strategy)
     if isinstance(robot, str):
         from symkin.model.resolve import resolve_robot
 
@@ -135,10 +161,10 @@ def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinem
         )
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
-    key = _cache_key(robot, backend)
+    key = _cache_key(robot, backend, strategy)
     if cache and key in _LOADED:
         return _LOADED[key]
-    files = _cached_files(robot, backend, key, cache)
+    files = _cached_files(robot, backend, key, cache, strategy)
     if backend == "c":
         from symkin.emit.c.backend import build_c
 
@@ -195,6 +221,28 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
         return call
 
     functions = {name: wrap(fns[name]) for name in KIN_METHODS}
+    link_poses = functions["link_poses"]
+
+    def framed(name: str) -> Any:
+        plain = functions[name]
+
+        def call(q: Any, frame: Any = None) -> Any:
+            if frame is None:
+                return plain(q)
+            k = frame_index(frame, n, robot.name)
+            L = link_poses(q)
+            if name == "fkine":
+                return L[..., k, :, :]
+            Lb = L[None] if L.ndim == 3 else L
+            J = frame_jacobian(Lb, k, chain, ee=name == "jacobe")
+            return J[0] if L.ndim == 3 else J
+
+        call.__name__, call.__doc__ = plain.__name__, plain.__doc__
+        return call
+
+    chain = ChainTables.of(robot.ets)
+    for name in ("fkine", "jacob0", "jacobe"):
+        functions[name] = framed(name)
     kin = Kinematics(robot, "casadi", functions, files, Path(module.__file__ or ""), module)
     kin.functions = fns  # type: ignore[attr-defined]
     return kin

@@ -21,6 +21,7 @@ __all__ = [
     "comment_safe",
     "c_string",
     "identifier",
+    "chain_tables",
 ]
 
 
@@ -54,7 +55,13 @@ def render(name: str, **context: Any) -> str:
 
 
 def render_python_module(
-    template: str, robot: Any, functions: list, printed: list, command: str, suffix: str = ""
+    template: str,
+    robot: Any,
+    functions: list,
+    printed: list,
+    command: str,
+    suffix: str = "",
+    **context: Any,
 ) -> dict[str, str]:
     """Render a generated Python module ``symkin_<robot><suffix>.py`` (NumPy and CasADi backends)."""
     module = f"symkin_{identifier(robot.name)}{suffix}"
@@ -65,8 +72,20 @@ def render_python_module(
         functions=printed,
         header=Header.of(robot, functions, command, repr(robot.name)),
         name_literal=repr(robot.name),
+        **context,
     )
     return {f"{module}.py": text}
+
+
+def chain_tables(robot: Any) -> dict[str, list[str]]:
+    """Per joint along the chain: joint index, axis index, sign literal, revolute flag (as text)."""
+    joints = [e for e in robot.ets if e.is_joint]
+    return {
+        "order": [str(e.joint) for e in joints],
+        "axis": [str(e.axis.index) for e in joints],
+        "sign": ["-1.0" if e.flip else "1.0" for e in joints],
+        "revolute": [str(int(e.is_revolute)) for e in joints],
+    }
 
 
 _UNSAFE = re.compile(r"[^\x20-\x7e]")
@@ -97,6 +116,7 @@ class Header:
     version: str
     command: str
     counts: str
+    strategy: str
 
     @classmethod
     def of(cls, robot: Any, functions: list, command: str, literal: str) -> Header:
@@ -107,6 +127,7 @@ class Header:
         total = sum((f.code.counts for f in functions), OpCounts())
         counts = f"{total} over {len(functions)} functions"
         return cls(
+            strategy=strategy_text(functions),
             robot=identifier(robot.name),
             name_literal=literal,
             ets=comment_safe(str(robot.ets), limit=4000),
@@ -114,3 +135,12 @@ class Header:
             command=comment_safe(command),
             counts=counts,
         )
+
+
+def strategy_text(functions: list) -> str:
+    """How the functions' code was derived, for the generated headers."""
+    if functions[0].code.strategy == "expanded":
+        return "expanded (one exact expression per output, then common-subexpression elimination)"
+    loops = any(f.code.hessians for f in functions)
+    hessians = "Hessians as loops over the Jacobian columns" if loops else "Hessians written out"
+    return f"straight-line program (named link frames and Jacobian columns; {hessians})"

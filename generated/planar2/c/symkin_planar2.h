@@ -4,6 +4,7 @@
  * Command: symkin generate
  * ETS: Rz(q0) tx(1) Rz(q1) tx(1)
  * Operations (after CSE): 45 ops (0 mul, 17 add, 28 trig, 0 other) over 8 functions
+ * Derivation: expanded (one exact expression per output, then common-subexpression elimination)
  *
  * All arrays are row-major doubles. Single entry points take one configuration q[2];
  * *_batch entry points take N configurations q[N*2] and write N outputs back to back.
@@ -30,7 +31,7 @@ void symkin_planar2_jacob0_batch(const double *q, double *J, long N);
 /* End-effector-frame Jacobian, (6, n), rows (v, omega) (eq 16). */
 void symkin_planar2_jacobe(const double *q, double *J);
 void symkin_planar2_jacobe_batch(const double *q, double *J, long N);
-/* Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (seed 001 eq 20). */
+/* Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC paper eq 20). */
 void symkin_planar2_hessian0(const double *q, double *H);
 void symkin_planar2_hessian0_batch(const double *q, double *H, long N);
 /* End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. */
@@ -42,9 +43,16 @@ void symkin_planar2_fkine_jacob0_batch(const double *q, double *T, double *J, lo
 /* Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. */
 void symkin_planar2_jacob0_hessian0(const double *q, double *J, double *H);
 void symkin_planar2_jacob0_hessian0_batch(const double *q, double *J, double *H, long N);
+/* Pose 4x4 of link frame k (0 <= k < 2): the frame right after the k-th joint along the chain
+ * (link_poses[k]); k is not checked. */
+void symkin_planar2_fkine_frame(const double *q, int k, double *T);
+/* Jacobian 6x2 of link frame k in the base frame / in frame k, rows (v, omega); columns of
+ * joints after the frame are 0; k is not checked. */
+void symkin_planar2_jacob0_frame(const double *q, int k, double *J);
+void symkin_planar2_jacobe_frame(const double *q, int k, double *J);
 /* Manipulability sqrt(det(J J^T)) of the rows of J0 chosen by axes (0 all, 1 trans, 2 rot) (eq 52). */
 double symkin_planar2_manipulability(const double *q, int axes);
-/* Manipulability Jacobian dm/dq, n values (seed 001 eq 11); returns m. */
+/* Manipulability Jacobian dm/dq, n values (Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 11); returns m. */
 double symkin_planar2_jacobm(const double *q, int axes, double *Jm);
 
 #ifdef __cplusplus

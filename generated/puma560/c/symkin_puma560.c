@@ -4,6 +4,7 @@
  * Command: symkin generate
  * ETS: Rz(q0) Rx(pi/2) Rz(q1) tx(0.4318) Rz(q2) tz(0.15005) tx(0.0203) Rx(-pi/2) Rz(q3) tz(0.4318) Rx(pi/2) Rz(q4) Rx(-pi/2) Rz(q5)
  * Operations (after CSE): 1082 ops (665 mul, 331 add, 86 trig, 0 other) over 8 functions
+ * Derivation: expanded (one exact expression per output, then common-subexpression elimination)
  */
 #include <math.h>
 #include <string.h>
@@ -60,6 +61,13 @@ static inline double sk_cos(double x)
     const double s = sk_ksin_(r), c = sk_kcos_(r);
     return k == 0 ? c : k == 1 ? -s : k == 2 ? -c : s;
 }
+
+/* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
+ * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
+static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
+static const int axis_[6] = { 2, 2, 2, 2, 2, 2 };
+static const double sign_[6] = { 1.0, 1.0, 1.0, 1.0, 1.0, 1.0 };
+static const int revolute_[6] = { 1, 1, 1, 1, 1, 1 };
 
 /* End-effector pose in the base frame, 4x4 (eq 1). 89 ops (52 mul, 25 add, 12 trig, 0 other) */
 static inline void fkine_(const double *restrict q, double *restrict T)
@@ -463,7 +471,7 @@ void symkin_puma560_jacobe_batch(const double *q, double *J, long N)
         jacobe_(q + i * 6, J + i * 36);
 }
 
-/* Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (seed 001 eq 20). 122 ops (80 mul, 32 add, 10 trig, 0 other) */
+/* Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC paper eq 20). 122 ops (80 mul, 32 add, 10 trig, 0 other) */
 static inline void hessian0_(const double *restrict q, double *restrict H)
 {
     const double q0 = q[0];
@@ -1530,6 +1538,63 @@ void symkin_puma560_jacob0_hessian0_batch(const double *q, double *J, double *H,
 {
     for (long i = 0; i < N; ++i)
         jacob0_hessian0_(q + i * 6, J + i * 36, H + i * 216);
+}
+
+/*
+ * Pose and Jacobians of link frame k (0 <= k < n): the frame right after the k-th joint along the
+ * chain, link_poses[k]. Column a of the base-frame Jacobian, for a joint at or before the frame,
+ * is (w_a x (p_k - p_a) ; w_a) (revolute) or (w_a ; 0) (prismatic), w_a the joint's signed axis and
+ * p_a its origin (a column and the origin of link_poses[a]); columns of later joints are 0 (eqs
+ * 31-34 with the frame in place of the end effector). ee: rows rotated into the frame (eq 16).
+ */
+static void frame_jacobian_(const double *restrict L, int k, int ee, double *restrict J)
+{
+    enum { N = 6 };
+    const double *Lk = L + 16 * k;
+    memset(J, 0, sizeof(double) * 6 * N);
+    for (int a = 0; a <= k; ++a) {
+        const double *La = L + 16 * a;
+        const int c = axis_[a], j = order_[a];
+        const double w0 = sign_[a] * La[c], w1 = sign_[a] * La[4 + c], w2 = sign_[a] * La[8 + c];
+        double v0 = w0, v1 = w1, v2 = w2, o0 = 0.0, o1 = 0.0, o2 = 0.0;
+        if (revolute_[a]) {
+            const double r0 = Lk[3] - La[3], r1 = Lk[7] - La[7], r2 = Lk[11] - La[11];
+            v0 = w1 * r2 - w2 * r1;
+            v1 = w2 * r0 - w0 * r2;
+            v2 = w0 * r1 - w1 * r0;
+            o0 = w0, o1 = w1, o2 = w2;
+        }
+        if (ee) { /* R_k^T (v ; omega) */
+            const double x0 = Lk[0] * v0 + Lk[4] * v1 + Lk[8] * v2, x1 = Lk[1] * v0 + Lk[5] * v1 + Lk[9] * v2;
+            const double x2 = Lk[2] * v0 + Lk[6] * v1 + Lk[10] * v2;
+            const double y0 = Lk[0] * o0 + Lk[4] * o1 + Lk[8] * o2, y1 = Lk[1] * o0 + Lk[5] * o1 + Lk[9] * o2;
+            const double y2 = Lk[2] * o0 + Lk[6] * o1 + Lk[10] * o2;
+            v0 = x0, v1 = x1, v2 = x2, o0 = y0, o1 = y1, o2 = y2;
+        }
+        J[j] = v0, J[N + j] = v1, J[2 * N + j] = v2;
+        J[3 * N + j] = o0, J[4 * N + j] = o1, J[5 * N + j] = o2;
+    }
+}
+
+void symkin_puma560_fkine_frame(const double *q, int k, double *T)
+{
+    double L[16 * 6];
+    link_poses_(q, L);
+    memcpy(T, L + 16 * k, sizeof(double) * 16);
+}
+
+void symkin_puma560_jacob0_frame(const double *q, int k, double *J)
+{
+    double L[16 * 6];
+    link_poses_(q, L);
+    frame_jacobian_(L, k, 0, J);
+}
+
+void symkin_puma560_jacobe_frame(const double *q, int k, double *J)
+{
+    double L[16 * 6];
+    link_poses_(q, L);
+    frame_jacobian_(L, k, 1, J);
 }
 
 /* Cholesky of the r x r SPD matrix A (row-major, r <= 6) in place; returns 0 if not positive. */

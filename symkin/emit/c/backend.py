@@ -17,9 +17,9 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.emit.templates import Header, c_string, identifier, render
+from symkin.emit.templates import Header, c_string, chain_tables, identifier, render
 
-__all__ = ["render_c", "build_c", "c_prefix"]
+__all__ = ["render_c", "build_c", "compile_c", "load_extension", "c_prefix"]
 
 
 def c_prefix(robot: Any) -> str:
@@ -36,7 +36,14 @@ def render_c(robot: Any, functions: list, command: str) -> dict[str, str]:
     printed = [lower(f, printer) for f in functions]
     prefix = c_prefix(robot)
     header = Header.of(robot, functions, command, c_string(robot.name))
-    context = {"prefix": prefix, "n": robot.n, "functions": printed, "header": header}
+    context = {
+        "prefix": prefix,
+        "n": robot.n,
+        "functions": printed,
+        "header": header,
+        "chain": chain_tables(robot),
+        "hessian_frames": sorted({h.frame for f in printed for h in f.hessians}),
+    }
     h = render("c/kinematics.h.j2", **context)
     c = render("c/kinematics.c.j2", **context)
     files = {f"{prefix}.h": h, f"{prefix}.c": c}
@@ -51,15 +58,24 @@ def module_name(files: dict[str, str]) -> str:
     return f"_{prefix}_{digest}"
 
 
-def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:
-    """Compile the generated files (cached) and import the extension module."""
+def extension_cflags() -> tuple[str, ...]:
+    """Include paths of the Python and NumPy headers the extension module needs."""
     import numpy as np
 
+    return (f"-I{sysconfig.get_paths()['include']}", f"-I{np.get_include()}")
+
+
+def compile_c(files: dict[str, str]) -> tuple[str, Path]:
+    """Compile the generated files (cached): the extension module's name and library path."""
     from symkin.emit.c.build import compile_library
 
     name = module_name(files)
-    flags = (f"-I{sysconfig.get_paths()['include']}", f"-I{np.get_include()}")
-    path = compile_library(files, name, extra_cflags=flags)
+    return name, compile_library(files, name, extra_cflags=extension_cflags())
+
+
+def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:
+    """Compile the generated files (cached) and import the extension module."""
+    name, path = compile_c(files)
     return load_extension(name, path), path
 
 
