@@ -136,9 +136,14 @@ def cmd_derive(args: argparse.Namespace) -> int:
     from symkin.derivation import derivation
 
     robot = _robot(args.robot)
-    text = derivation(
-        robot, fmt=args.format, symbolic_constants=args.symbolic_constants, simplify=not args.no_simplify
-    )
+    if args.ik:
+        from symkin.derivation_ik import ik_derivation
+
+        text = ik_derivation(robot, fmt=args.format)
+    else:
+        text = derivation(
+            robot, fmt=args.format, symbolic_constants=args.symbolic_constants, simplify=not args.no_simplify
+        )
     if args.output:
         Path(args.output).write_text(text)
         print(f"wrote the derivation of {robot.name} to {args.output}")
@@ -176,6 +181,8 @@ def cmd_ik(args: argparse.Namespace) -> int:
     robot = _robot(args.robot)
     Tep = _target(args, robot)
     kin = compile_robot(robot, backend=args.backend)
+    if args.all or args.method == "analytic":
+        return _ik_analytic(args, kin, Tep)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
     if args.damping:
         kwargs["damping"] = args.damping
@@ -193,6 +200,36 @@ def cmd_ik(args: argparse.Namespace) -> int:
         print(f"q = {_fmt(res.q)}")
         print(f"residual = {res.residual:.3e}")
     return 0 if res.success else 1
+
+
+def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
+    """``symkin ik --all`` (every closed-form solution) or ``--method analytic`` (the nearest)."""
+    q0 = _floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
+    t = time.perf_counter()
+    if not args.all:
+        res = kin.ik(Tep, method="analytic", q0=q0)
+        dt = time.perf_counter() - t
+        if args.json:
+            print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
+        else:
+            status = "solved" if res.success else f"not solved: {res.reason}"
+            print(
+                f"{status} (closed form) in {dt * 1e3:.3f} ms\n"
+                f"q = {_fmt(res.q)}\nresidual = {res.residual:.3e}"
+            )
+        return 0 if res.success else 1
+    sols = kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits)
+    dt = time.perf_counter() - t
+    errors = [float(np.abs(kin.robot.fkine(q) - Tep).max()) for q in sols]
+    if args.json:
+        print(json.dumps({"solutions": sols.tolist(), "fk_error": errors, "seconds": dt}, indent=2))
+    else:
+        print(f"target:\n{_fmt(Tep)}")
+        where = "" if args.no_limits else " within the joint limits"
+        print(f"{len(sols)} solution(s){where} (closed form, {kin.analytic.kind}) in {dt * 1e3:.3f} ms")
+        for i, (q, e) in enumerate(zip(sols, errors)):
+            print(f"  {i + 1}: q = {_fmt(q)}  |T(q) - T| = {e:.1e}")
+    return 0 if len(sols) else 1
 
 
 def _result_dict(res: Any) -> dict:
@@ -274,6 +311,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
         result = run_kin(args.robot or "panda", batch=args.batch, progress=not args.json)
         print(json.dumps(result, indent=2) if args.json else format_kin(result))
+        return 0
+    if args.what == "ik" and args.analytic:
+        from symkin.bench.analytic_ik import format_analytic, run_analytic
+
+        robots = (args.robot,) if args.robot else ("ur5", "ur10", "puma560", "stanford")
+        result = run_analytic(robots, n=args.problems or 1000, starts=args.starts, seed=args.seed)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_analytic(result))
         return 0
     if args.what == "ik":
         from symkin.bench.ik import format_table1, run_table1
@@ -359,6 +403,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--format", choices=("markdown", "latex"), default="markdown")
     s.add_argument("--symbolic-constants", action="store_true", help="keep link lengths as named symbols")
     s.add_argument("--no-simplify", action="store_true", help="show the literal products of eqs 1, 5, 26-28")
+    s.add_argument(
+        "--ik", action="store_true", help="write the closed-form inverse kinematics derivation instead"
+    )
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
     s.set_defaults(func=cmd_derive)
 
@@ -373,7 +420,11 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("ik", help="solve inverse kinematics for one target pose")
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     target_options(s)
-    s.add_argument("--method", choices=("NR", "GN", "LM"), default="LM")
+    s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM")
+    s.add_argument(
+        "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"
+    )
+    s.add_argument("--no-limits", action="store_true", help="--all: keep solutions outside the joint limits")
     s.add_argument("--damping", choices=("wampler", "chan", "sugihara"))
     s.add_argument("--seed", type=int, default=0)
     s.set_defaults(func=cmd_ik)
@@ -395,6 +446,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--plot", metavar="PNG", help="mmc: write a Fig. 3 style plot of one task")
+    s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
+    s.add_argument("--starts", type=int, default=32, help="ik --analytic: LM searches per pose for sampling")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench)
     return p

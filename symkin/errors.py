@@ -52,3 +52,8 @@ class PoseError(SymkinError, ValueError):
 
 class CompileError(SymkinError, RuntimeError):
     """Generating or compiling code failed (missing C compiler, compiler error, template error)."""
+
+
+class NoAnalyticIKError(SymkinError, ValueError):
+    """The arm has no closed-form inverse kinematics that symkin derives (the message says why and
+    points at the numerical IK)."""

@@ -159,3 +159,25 @@ def test_derive_prints_markdown_and_writes_latex(capsys, tmp_path):
     code, out, _ = run(capsys, "derive", "planar2", "--format", "latex", "-o", str(tex))
     text = tex.read_text()
     assert code == 0 and text.startswith("\\documentclass") and text.rstrip().endswith("\\end{document}")
+
+
+def test_ik_all_prints_every_closed_form_solution(capsys):
+    code, out, _ = run(capsys, "ik", "puma560", "--from-q", "0.3 0.7 -0.9 0.4 0.6 -0.2", "--all")
+    assert code == 0 and "solution(s)" in out
+    code, out, _ = run(capsys, "ik", "ur5", "--pose", "0.4 0.2 0.3 0 3.14159 0", "--all", "--json")
+    data = json.loads(out)
+    assert code == 0 and len(data["solutions"]) == 8 and max(data["fk_error"]) < 1e-10
+    code, out, _ = run(capsys, "ik", "ur5", "--pose", "3 0 0 0 0 0", "--method", "analytic")
+    assert code == 1 and "out of reach" in out
+
+
+def test_ik_all_refuses_a_redundant_arm(capsys):
+    code, _, err = run(capsys, "ik", "panda", "--pose", "0.4 0.2 0.3 0 3.14159 0", "--all")
+    assert code == 2 and "numerical IK" in err and len(err.strip().splitlines()) == 1
+
+
+def test_derive_ik(capsys):
+    code, out, _ = run(capsys, "derive", "ur5", "--ik")
+    assert code == 0 and "Subproblem 4" in out and "Branches" in out
+    code, out, _ = run(capsys, "derive", "stanford", "--ik", "--format", "latex")
+    assert code == 0 and out.lstrip().startswith("\\documentclass") and "\\[" in out

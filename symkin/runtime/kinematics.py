@@ -129,7 +129,44 @@ class Kinematics:
 
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
         NumPy and CasADi backends the NumPy solver calls the generated functions.
+
+        ``method="analytic"``: the closed form (:meth:`ik_all`), returning the solution nearest
+        ``q0`` (options ``q0``, ``weights``, ``joint_limits``, ``tol``); ``success=False`` with a
+        reason when the pose is out of reach or every solution is outside the joint limits.
         """
+        if kwargs.get("method") == "analytic":
+            options = {k: v for k, v in kwargs.items() if k != "method"}
+            unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol"})
+            if unknown:
+                raise TypeError(f"method='analytic' takes q0, weights, joint_limits, tol; not {unknown}")
+            return self.analytic.ik(Tep, fkine=self.fkine, **options)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
         return ik(self, Tep, **kwargs)
+
+    # -- closed-form inverse kinematics (symkin.compile_ik) -------------------------------------
+    @cached_property
+    def analytic(self) -> Any:
+        """The closed-form solver of this robot on this backend (compiled on first use); raises
+        NoAnalyticIKError naming what the arm lacks."""
+        from symkin.compile_ik import compile_analytic
+
+        return compile_analytic(self.robot, self.backend)
+
+    @property
+    def has_analytic_ik(self) -> bool:
+        """Whether symkin derives a closed-form IK for this arm (cached; see :meth:`ik_all`)."""
+        from symkin.compile_ik import analytic_refusal
+
+        return analytic_refusal(self.robot, self.backend) is None
+
+    def ik_all(self, T: Any, q0: Any = None, joint_limits: bool = True, weights: Any = None) -> np.ndarray:
+        """Every distinct closed-form solution of the pose ``T`` (base frame).
+
+        ``T`` (4, 4) -> (k, n), ordered by ``sum_j weights_j (q_j - q0_j)^2`` when ``q0`` is given;
+        ``T`` (N, 4, 4) -> (N, S, n) with NaN rows after each pose's solutions (S: the arm's
+        maximum, 8 for a 6R arm). Revolute joints are wrapped by 2 pi into the joint limits where a
+        shift allows; with ``joint_limits`` rows outside them are dropped. See
+        :mod:`symkin.runtime.analytic_ik`.
+        """
+        return self.analytic.ik_all(T, q0, joint_limits, weights)
