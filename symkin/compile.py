@@ -19,7 +19,7 @@ import numpy as np
 from symkin.emit.c.build import cache_dir
 from symkin.errors import CompileError, SymkinError
 from symkin.model.robot import Robot, as_batch
-from symkin.runtime.frames import ChainTables, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
 __all__ = ["compile", "generate", "write_generated", "BACKENDS", "STRATEGIES", "cache_dir"]
