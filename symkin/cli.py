@@ -482,7 +482,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_servo)
 
     s = sub.add_parser(
-        "bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), compile (cold, by length)"
+        "bench",
+        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), compile (cold, by length)",
     )
     s.add_argument("what", choices=("kin", "ik", "mmc", "compile"))
     s.add_argument(
@@ -498,7 +499,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument(
-        "--plot", metavar="PNG", help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints"
+        "--plot",
+        metavar="PNG",
+        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints",
     )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
     s.add_argument("--starts", type=int, default=32, help="ik --analytic: LM searches per pose for sampling")

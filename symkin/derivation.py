@@ -678,4 +678,6 @@ def derivation(
     form: Form = "auto",
 ) -> str:
     """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`)."""
-    return derive_steps(robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form).text
+    return derive_steps(
+        robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form
+    ).text

@@ -139,11 +139,14 @@ def _checks(
             got = f(*qv, *cvals)
             T = prefix[-1]
             k = 16
-            worst["eq 1: T"] = max(worst["eq 1: T"], _diff(got[:16], [T[r, c] for r in range(4) for c in range(4)]))
+            worst["eq 1: T"] = max(
+                worst["eq 1: T"], _diff(got[:16], [T[r, c] for r in range(4) for c in range(4)])
+            )
             for j in kp.order:  # chain order
                 P = prefix[mu[j] + 1]
                 worst["eq 5: link frames"] = max(
-                    worst["eq 5: link frames"], _diff(got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)])
+                    worst["eq 5: link frames"],
+                    _diff(got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)]),
                 )
                 k += 16
             J = got[k : k + 6 * n]

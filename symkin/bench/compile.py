@@ -128,7 +128,10 @@ def measure(spec: str, seed: int = 0, timeout: float = 1800) -> dict[str, Any]:
 
 
 def run_compile(
-    joints: Sequence[int] = DEFAULT_JOINTS, seed: int = 0, reference: str | None = "panda", progress: bool = False
+    joints: Sequence[int] = DEFAULT_JOINTS,
+    seed: int = 0,
+    reference: str | None = "panda",
+    progress: bool = False,
 ) -> list[dict[str, Any]]:
     """One cold compile per chain length (and of ``reference``), each in its own process."""
     from tqdm import tqdm
@@ -172,7 +175,12 @@ def plot_compile(rows: list[dict[str, Any]], path: str) -> None:
     n = [r["n"] for r in chains]
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
     bottom = np.zeros(len(chains))
-    for key, label in (("derive_s", "derive"), ("cse_s", "code"), ("render_c_s", "C source"), ("gcc_s", "gcc")):
+    for key, label in (
+        ("derive_s", "derive"),
+        ("cse_s", "code"),
+        ("render_c_s", "C source"),
+        ("gcc_s", "gcc"),
+    ):
         v = np.array([r[key] for r in chains])
         a.bar([str(x) for x in n], v, bottom=bottom, label=label)
         bottom += v

@@ -40,9 +40,7 @@ def _is_cheap(e: sp.Expr) -> bool:
     """Values used in place rather than named: numbers (exact constants), symbols, negated symbols."""
     if e.is_Atom or e.is_number:
         return True
-    if e.is_Mul and len(e.args) == 2 and e.args[0] == -1 and e.args[1].is_Atom:
-        return True
-    return False
+    return bool(e.is_Mul and len(e.args) == 2 and e.args[0] == -1 and e.args[1].is_Atom)
 
 
 class Program:
