@@ -69,6 +69,7 @@ class Kinematics:
     ) -> None:
         self.robot = robot
         self.backend = backend
+        self._ik_default: Callable[[Any], Any] | None = None
         self.files = files
         self.path = path
         self.module = module
@@ -128,8 +129,17 @@ class Kinematics:
         """Numerical inverse kinematics (eqs 37-51); see :func:`symkin.runtime.ik.ik` for the options.
 
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
-        NumPy and CasADi backends the NumPy solver calls the generated functions.
+        NumPy and CasADi backends the NumPy solver calls the generated functions. A call with the
+        default options goes straight to the C solver (one target costs little more than the
+        solve itself); it is thread-safe.
         """
+        if not kwargs and self._ik_default is not None:
+            return self._ik_default(Tep)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
+        if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
+            from symkin.runtime.ik import default_c_solver
+
+            self._ik_default = default_c_solver(self).solve
+            return self._ik_default(Tep)
         return ik(self, Tep, **kwargs)
