@@ -78,12 +78,14 @@ class _ETS(ctypes.Structure):
 
 
 def ik_sources() -> dict[str, str]:
-    """The C solver's sources (file name -> text): ``symkin_ik.h``, ``symkin_ik.c``, ``symkin_ets.c``.
+    """The C solver's sources (file name -> text): ``symkin_ik.h``, ``symkin_pose.h``, ``symkin_ik.c``,
+    ``symkin_ets.c``.
 
     Compile them together with generated kinematics to get one library exporting both (with
     :data:`IK_CFLAGS`).
     """
-    return {name: (CSRC / name).read_text() for name in ("symkin_ik.h", "symkin_ik.c", "symkin_ets.c")}
+    names = ("symkin_ik.h", "symkin_pose.h", "symkin_ik.c", "symkin_ets.c")
+    return {name: (CSRC / name).read_text() for name in names}
 
 
 def bind(lib: ctypes.CDLL) -> ctypes.CDLL:

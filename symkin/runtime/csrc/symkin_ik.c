@@ -25,6 +25,7 @@
  * Thread safety: the functions keep their state on the stack; a config is only read.
  */
 #include "symkin_ik.h"
+#include "symkin_pose.h"
 
 #include <math.h>
 #include <string.h>
@@ -46,12 +47,8 @@ typedef int64_t symkin_m4 __attribute__((vector_size(SYMKIN_LANES * sizeof(int64
 #define SYMKIN_UNROLL
 #endif
 #define SYMKIN_PINV_RCOND 1e-12
-#define SYMKIN_NEAR_PI_L 1e-6
-#define SYMKIN_POSE_ATOL 1e-6
-#define SYMKIN_BOTTOM_ATOL 1e-12
 
 static const double TWO_PI = 6.283185307179586;
-static const double HALF_PI = 1.5707963267948966;
 
 int32_t symkin_ik_nmax(void) { return NM; }
 int32_t symkin_ik_stats_size(void) { return (int32_t)sizeof(symkin_ik_stats); }
@@ -84,87 +81,9 @@ void symkin_ik_random_q(const symkin_ik_config *cfg, uint64_t seed, int64_t stre
 }
 
 /* ---- pose check and error (eqs 37-40) ----------------------------------------------------- */
-int32_t symkin_ik_check_pose(const double *T, double *deviation) {
-    if (deviation) *deviation = 0.0;
-    for (int i = 0; i < 16; i++)
-        if (!isfinite(T[i])) return SYMKIN_POSE_NONFINITE;
-    if (fabs(T[12]) > SYMKIN_BOTTOM_ATOL || fabs(T[13]) > SYMKIN_BOTTOM_ATOL || fabs(T[14]) > SYMKIN_BOTTOM_ATOL ||
-        fabs(T[15] - 1.0) > SYMKIN_BOTTOM_ATOL)
-        return SYMKIN_POSE_BOTTOM_ROW;
-    double dev = 0.0;
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++) {
-            double s = T[a] * T[b] + T[4 + a] * T[4 + b] + T[8 + a] * T[8 + b];
-            double d = fabs(s - (a == b ? 1.0 : 0.0));
-            if (d > dev) dev = d;
-        }
-    if (deviation) *deviation = dev;
-    if (!(dev <= SYMKIN_POSE_ATOL)) return SYMKIN_POSE_NOT_ORTHONORMAL;
-    double det = T[0] * (T[5] * T[10] - T[6] * T[9]) - T[1] * (T[4] * T[10] - T[6] * T[8]) +
-                 T[2] * (T[4] * T[9] - T[5] * T[8]);
-    if (!(det > 0.0)) return SYMKIN_POSE_REFLECTION;
-    return SYMKIN_POSE_OK;
-}
+int32_t symkin_ik_check_pose(const double *T, double *deviation) { return symkin_pose_check(T, deviation); }
 
-/* alpha(R) of eqs 38-40, R row-major 3x3. */
-static void angle_axis(const double *R, double *a) {
-    double tr = R[0] + R[4] + R[8];
-    if (R[1] == 0.0 && R[2] == 0.0 && R[3] == 0.0 && R[5] == 0.0 && R[6] == 0.0 && R[7] == 0.0) {
-        if (tr > 0.0) { /* (1 1 1) */
-            a[0] = a[1] = a[2] = 0.0;
-        } else { /* eq 40 */
-            a[0] = HALF_PI * (R[0] + 1.0);
-            a[1] = HALF_PI * (R[4] + 1.0);
-            a[2] = HALF_PI * (R[8] + 1.0);
-        }
-        return;
-    }
-    double l0 = R[7] - R[5], l1 = R[2] - R[6], l2 = R[3] - R[1];
-    double nl = sqrt(l0 * l0 + l1 * l1 + l2 * l2);
-    if (tr >= 0.0 || nl >= SYMKIN_NEAR_PI_L) { /* eq 38 */
-        if (nl == 0.0) {
-            a[0] = a[1] = a[2] = 0.0;
-            return;
-        }
-        double k = atan2(nl, tr - 1.0) / nl;
-        a[0] = k * l0;
-        a[1] = k * l1;
-        a[2] = k * l2;
-        return;
-    }
-    /* near pi and not diagonal: l is rounding noise; the axis comes from the symmetric part,
-     * a a^T = ((R + R^T) / 2 - cos(theta) I) / (1 - cos(theta)), its sign from l. */
-    double theta = atan2(nl, tr - 1.0);
-    double ct = (tr - 1.0) / 2.0;
-    double M[9];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) M[3 * i + j] = ((R[3 * i + j] + R[3 * j + i]) / 2.0 - (i == j ? ct : 0.0)) / (1.0 - ct);
-    int k = 0;
-    if (M[4] > M[0]) k = 1;
-    if (M[8] > M[3 * k + k]) k = 2;
-    double ak = sqrt(M[3 * k + k] > 0.0 ? M[3 * k + k] : 0.0);
-    double ax[3];
-    for (int j = 0; j < 3; j++) ax[j] = j == k ? ak : M[3 * j + k] / ak;
-    if (ax[0] * l0 + ax[1] * l1 + ax[2] * l2 < 0.0) {
-        ax[0] = -ax[0];
-        ax[1] = -ax[1];
-        ax[2] = -ax[2];
-    }
-    a[0] = theta * ax[0];
-    a[1] = theta * ax[1];
-    a[2] = theta * ax[2];
-}
-
-void symkin_ik_pose_error(const double *T, const double *Tep, double *e) {
-    e[0] = Tep[3] - T[3];
-    e[1] = Tep[7] - T[7];
-    e[2] = Tep[11] - T[11];
-    double R[9]; /* Tep_R T_R^T */
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            R[3 * i + j] = Tep[4 * i] * T[4 * j] + Tep[4 * i + 1] * T[4 * j + 1] + Tep[4 * i + 2] * T[4 * j + 2];
-    angle_axis(R, e + 3);
-}
+void symkin_ik_pose_error(const double *T, const double *Tep, double *e) { symkin_pose_error(T, Tep, e); }
 
 /* ---- small dense solvers (row-major, n <= NM) --------------------------------------------- */
 static int lu_solve(int n, double *A, double *b) {
@@ -643,7 +562,7 @@ static int start_target(const symkin_ik_config *c, ik_search *t, const double *T
  * search failed. */
 static int judge(const symkin_ik_config *c, ik_search *t, const double *T, double *e, double *r2) {
     symkin_ik_stats *st = t->st;
-    symkin_ik_pose_error(T, t->Tep, e);
+    symkin_pose_error(T, t->Tep, e);
     st->iterations++;
     double rr = weighted_r2(c, e);
     double res = sqrt(rr);
@@ -890,7 +809,7 @@ int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const do
     memcpy(qs, q, sizeof(double) * (size_t)n);
     for (int32_t k = 0; k < steps; k++) {
         kin_eval(cfg, q, T, J);
-        symkin_ik_pose_error(T, Tep, e);
+        symkin_pose_error(T, Tep, e);
         double r2 = weighted_r2(cfg, e);
         if (!isfinite(r2) || ik_step(cfg, we, J, e, r2, dq) != 0) return k + 1;
         for (int j = 0; j < n; j++) q[j] += dq[j];
