@@ -164,12 +164,12 @@ def rrmc(
     kinematics object and options); elsewhere J0 comes from ``kin.jacob0`` and the step from NumPy.
     Both solve with the Cholesky factor of J J^T, no SVD.
     """
-    try:
-        c = _RRMC[kin][(qd_max, damping, singular_tol, axes)]
-    except (KeyError, TypeError):
+    try:  # compiled kinematics keep their C controllers (by options) in kin._c_rrmc
+        c = kin._c_rrmc[(qd_max, damping, singular_tol, axes)]
+    except (AttributeError, KeyError, TypeError):
         c = rrmc_controller(kin, qd_max, damping, singular_tol, axes)
     if c is not None:
-        return c.step(q, nu)
+        return c.fast(q, nu) or c.step(q, nu)  # fast: None for invalid input; step raises the error
     q = _q(kin, q)
     nu = _nu(nu)
     J = np.asarray(kin.jacob0(q), dtype=float)
@@ -179,7 +179,7 @@ def rrmc(
     return qd, StepInfo(status, method, m, residual=res, scale=scale)
 
 
-_RRMC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # kin -> {options: CRRMC}
+_RRMC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # kin -> {options: CRRMC}, if no kin._c_rrmc
 
 
 def rrmc_controller(
@@ -190,9 +190,12 @@ def rrmc_controller(
     from symkin.runtime import mmc_c
 
     key = (qd_max, damping, singular_tol, axes)
+    cache = getattr(kin, "_c_rrmc", None)
     try:
-        return _RRMC[kin][key]
-    except (KeyError, TypeError):
+        if not isinstance(cache, dict):
+            cache = _RRMC.setdefault(kin, {})
+        return cache[key]
+    except (KeyError, TypeError):  # new options; unhashable options or kin
         pass
     if not mmc_c.supports(kin):
         return None
@@ -201,10 +204,10 @@ def rrmc_controller(
         raise ValueError(f"damping and singular_tol must be >= 0, got {damping}, {singular_tol}")
     c = mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), damping, singular_tol, axes)
     try:
-        cache = _RRMC.setdefault(kin, {})
-        if len(cache) > 64:
-            cache.clear()
-        cache[key] = c
+        if isinstance(cache, dict):
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = c
     except TypeError:  # unhashable options (an array qd_max): a new C controller per call
         pass
     return c
@@ -402,7 +405,7 @@ class MMC:
         form does not settle the step. On the C path (:attr:`backend`) the whole step is one C call.
         """
         if self._c is not None:
-            return self._c.step(q, nu)
+            return self._c.fast(q, nu) or self._c.step(q, nu)  # fast: None for invalid input
         q = _q(self.kin, q)
         nu = _nu(nu)
         J, Jm, m, s_min, B = self._terms(q)

@@ -70,6 +70,7 @@ class Kinematics:
         self.robot = robot
         self.backend = backend
         self._ik_default: Callable[[Any], Any] | None = None
+        self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
         self.files = files
         self.path = path
         self.module = module

@@ -23,6 +23,7 @@ and rho) when it takes the solver over, so its answers do not depend on the othe
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import json
 import os
@@ -294,6 +295,7 @@ class _CController:
         self._ctrl = c
         self._addr = ctypes.addressof(c)
         self.n, self.kin, self.axes = n, kin, axes
+        self.fast: Any = None  # set by the subclass: step(q, nu) or None when q or nu is invalid
         self._check_q, self._check_nu = _q, _nu
 
     @property
@@ -352,6 +354,7 @@ class CMMC(_CController):
         c.rho_i[:] = np.broadcast_to(np.asarray(mmc.rho_i, dtype=float), (n,)).tolist()
         c.rho_s[:] = np.broadcast_to(np.asarray(mmc.rho_s, dtype=float), (n,)).tolist()
         self.kind = _KIND_MMC6 if mmc.slack else _KIND_MMC0
+        self.fast = functools.partial(self._ext.step, self._addr, self.kind)
 
 
 class CRRMC(_CController):
@@ -366,3 +369,4 @@ class CRRMC(_CController):
 
         super().__init__(kin, int(kin.n), OSQP_SETTINGS, axes, qd_max)
         self._ctrl.damping, self._ctrl.singular_tol = float(damping), float(singular_tol)
+        self.fast = functools.partial(self._ext.step, self._addr, self.kind)
