@@ -18,6 +18,7 @@ import numpy as np
 
 from symkin.model.robot import AXES_ROWS, Robot, as_batch, jacobm_of, manipulability_of
 from symkin.runtime.ik import ik
+from symkin.runtime.manip import jacobm_one, manipulability_one
 
 __all__ = ["Kinematics", "KIN_METHODS"]
 
@@ -100,20 +101,27 @@ class Kinematics:
         return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
-        """Yoshikawa manipulability of the chosen rows of J0 (eq 52)."""
+        """Yoshikawa manipulability of the chosen rows of J0 (eq 52): float, or (N,) for a batch.
+
+        One configuration takes the backend's single-configuration J0 and no determinant routine
+        (:func:`symkin.runtime.manip.manipulability_one`)."""
         rows = _rows(axes)
+        if type(q) is np.ndarray and q.ndim == 1:  # jacob0 checks q
+            return manipulability_one(self.jacob0(q)[rows])
         Q, single = as_batch(q, self.n, self.name)
-        J = self.jacob0(Q)
-        m = manipulability_of(J[:, rows])
-        return float(m[0]) if single else m
+        if single:
+            return manipulability_one(self.jacob0(Q[0])[rows])
+        return manipulability_of(self.jacob0(Q)[:, rows])
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
         """Manipulability Jacobian (seed 001 eq 11), (n,) or (N, n)."""
         rows = _rows(axes)
         Q, single = as_batch(q, self.n, self.name)
+        if single:
+            J, H = self.jacob0_hessian0(Q[0])
+            return jacobm_one(J[rows], H[:, rows])
         J, H = self.jacob0_hessian0(Q)
-        Jm = jacobm_of(J[:, rows], H[:, :, rows])
-        return Jm[0] if single else Jm
+        return jacobm_of(J[:, rows], H[:, :, rows])
 
     @cached_property
     def c_fkjac(self) -> Any:

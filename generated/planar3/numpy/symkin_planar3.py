@@ -18,6 +18,9 @@ from symkin.model.robot import as_batch
 
 ROBOT_NAME = 'planar3'
 N_JOINTS = 3
+_F8 = np.dtype(float)
+_SHAPE = (N_JOINTS,)
+_isfinite = math.isfinite
 
 
 def _fkine_one(q):
@@ -64,6 +67,10 @@ def _fkine_batch(Q):
 
 def fkine(q):
     """End-effector pose in the base frame, 4x4 (eq 1)."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _fkine_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
     return out[0]
@@ -153,6 +160,10 @@ def _link_poses_batch(Q):
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint (eq 5), (n, 4, 4), chain order."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _link_poses_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
     return out[0]
@@ -208,6 +219,10 @@ def _jacob0_batch(Q):
 
 def jacob0(q):
     """Base-frame Jacobian, (6, n), rows (v, omega) (eqs 31-34)."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _jacob0_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
     return out[0]
@@ -255,6 +270,10 @@ def _jacobe_batch(Q):
 
 def jacobe(q):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (eq 16)."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _jacobe_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
     return out[0]
@@ -354,6 +373,10 @@ def _hessian0_batch(Q):
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (seed 001 eq 20)."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _hessian0_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
     return out[0]
@@ -441,6 +464,10 @@ def _hessiane_batch(Q):
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _hessiane_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
     return out[0]
@@ -520,6 +547,10 @@ def _fkine_jacob0_batch(Q):
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
     return out
@@ -643,6 +674,10 @@ def _jacob0_hessian0_batch(Q):
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
     return out
