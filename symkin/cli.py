@@ -269,6 +269,13 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    if args.what == "calls":
+        from symkin.bench.calls import format_calls, run_calls
+
+        robot = args.robot or "ur5"
+        result = run_calls(robot, args.robot or "panda", seed=args.seed, progress=not args.json)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -388,9 +395,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
     s.set_defaults(func=cmd_servo)
 
-    s = sub.add_parser("bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I)")
-    s.add_argument("what", choices=("kin", "ik", "mmc"))
-    s.add_argument("--robot", help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc)")
+    s = sub.add_parser(
+        "bench",
+        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time)",
+    )
+    s.add_argument("what", choices=("kin", "ik", "mmc", "calls"))
+    s.add_argument(
+        "--robot",
+        help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc, ur5 and panda for calls)",
+    )
     s.add_argument("--batch", type=int, default=100_000, help="kin: batch size (default 100000)")
     s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
     s.add_argument("--seed", type=int, default=0)

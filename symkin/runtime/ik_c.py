@@ -19,6 +19,7 @@ Kinematics come from either
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import random
 import weakref
@@ -279,7 +280,10 @@ class CIKSolver:
         self._cfg_addr = ctypes.addressof(cfg)
         # one target: the extension's solve when the library is the default one (it has it), else
         # symkin_ik_solve through ctypes; either way with buffers per call (thread-safe)
-        self._fast = ik_extension().solve if lib is None else None
+        # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
+        self.fast = (
+            functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if lib is None else None
+        )
         self._seeds = random.Random(os.urandom(16))
 
     def __repr__(self) -> str:
@@ -293,8 +297,8 @@ class CIKSolver:
 
         Thread-safe: one target is solved without the GIL, with buffers of its own.
         """
-        if self._fast is not None:
-            res = self._fast(self._cfg_addr, Tep, q0, seed, self._reason)
+        if self.fast is not None:
+            res = self.fast(Tep, q0, seed)
             if res is not None:
                 return res
         return self._solve_checked(Tep, q0, seed)
@@ -317,8 +321,8 @@ class CIKSolver:
             return self._solve_batch(T, q0, seed)
         check_pose(T)  # the detailed PoseError
         Q0 = None if q0 is None else np.ascontiguousarray(self._check_q0(q0))
-        if self._fast is not None:
-            res = self._fast(self._cfg_addr, T, Q0, seed, self._reason)
+        if self.fast is not None:
+            res = self.fast(T, Q0, seed)
             if res is not None:
                 return res
         q, st = np.empty(self.n), _Stats()

@@ -70,7 +70,8 @@ class Kinematics:
     ) -> None:
         self.robot = robot
         self.backend = backend
-        self._ik_default: Callable[[Any], Any] | None = None
+        self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
+        self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
         self.files = files
         self.path = path
@@ -142,13 +143,15 @@ class Kinematics:
         default options goes straight to the C solver (one target costs little more than the
         solve itself); it is thread-safe.
         """
-        if not kwargs and self._ik_default is not None:
-            return self._ik_default(Tep)
+        if not kwargs and self._ik_fast is not None:
+            res = self._ik_fast(Tep)
+            return res if res is not None else self._ik_solver.solve(Tep)  # None: Tep needs checking
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
         if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
             from symkin.runtime.ik import default_c_solver
 
-            self._ik_default = default_c_solver(self).solve
-            return self._ik_default(Tep)
+            self._ik_solver = solver = default_c_solver(self)
+            self._ik_fast = solver.fast
+            return solver.solve(Tep)
         return ik(self, Tep, **kwargs)

@@ -268,6 +268,36 @@ def test_pinv_steps_at_singularities_are_the_pseudo_inverse_steps(name):
                 assert np.abs(step).max() < 10.0
 
 
+def test_one_target_call_takes_any_array_and_checks_it():
+    # kin.ik(T) with the default options goes straight to the C entry point; whatever it does not
+    # take directly (lists, big-endian, batches, bad values) goes through the checked path
+    kin = symkin.compile(UR5, backend="c")
+    q = UR5.random_q(seed=21)
+    T = UR5.fkine(q)
+    first = kin.ik(T)
+    for variant in (T.tolist(), T.astype(">f8"), np.asfortranarray(T)):
+        res = kin.ik(variant)
+        _assert_solved(UR5, res, T)
+    assert kin.ik(T[None]).q.shape == (1, 6)  # a batch of one
+    a, b = symkin.ik(kin, T, backend="c", seed=5), symkin.ik(kin, T, backend="c", seed=np.int64(5))
+    assert a.q.tobytes() == b.q.tobytes() and a.iterations == b.iterations
+    far = T.copy()
+    far[:3, 3] += 5.0
+    res = kin.ik(far)
+    assert not res.success and "no solution" in res.reason and res.q.shape == (6,)
+    bad = T.copy()
+    bad[1, 1] = np.nan
+    with pytest.raises(PoseError, match="NaN"):
+        kin.ik(bad)
+    with pytest.raises(PoseError, match="orthonormal"):
+        kin.ik(T + np.diag([0.1, 0, 0, 0]))
+    with pytest.raises(ConfigurationError):
+        symkin.ik(kin, T, backend="c", q0=np.full(6, np.inf))
+    with pytest.raises(ConfigurationError):
+        symkin.ik(kin, T, backend="c", q0=np.zeros(5))
+    assert first.success and kin.ik(T).success
+
+
 # -- threads ----------------------------------------------------------------------------------
 def test_ik_from_two_threads_returns_each_thread_its_own_solutions():
     # one compiled robot, one default solver, two threads solving different targets at once (the

@@ -115,16 +115,18 @@ static PyArrayObject *as_doubles_(PyObject *arg, int nd, npy_intp d0, npy_intp d
     return a;
 }
 
-/* solve(config_address, Tep, q0, seed, reason) -> IKResult, or None when the arguments are not
- * one valid (4, 4) target, an (n,) finite q0 or None, and an int seed or None (the caller then
- * validates them, raising the detailed error, or solves a batch). reason(residual, limit_rejects,
- * singular) gives the text of a failure. */
-static PyObject *py_solve(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+/* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
+ * are not one valid (4, 4) target, an (n,) finite q0 or None, and an int seed or None (the caller
+ * then validates them, raising the detailed error, or solves a batch). reason(residual,
+ * limit_rejects, singular) gives the text of a failure. */
+static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
 {
-    if (nargs != 5) {
-        PyErr_SetString(PyExc_TypeError, "solve(config, Tep, q0, seed, reason)");
+    if (nargs < 3 || nargs > 5) {
+        PyErr_SetString(PyExc_TypeError, "solve(config, reason, Tep, q0=None, seed=None)");
         return NULL;
     }
+    /* args: config, Tep, q0, seed, reason */
+    PyObject *args[5] = {argv[0], argv[2], nargs > 3 ? argv[3] : Py_None, nargs > 4 ? argv[4] : Py_None, argv[1]};
     if (!result_type_) {
         PyErr_SetString(PyExc_RuntimeError, "setup() was not called");
         return NULL;
@@ -189,7 +191,7 @@ static PyObject *py_solve(PyObject *self, PyObject *const *args, Py_ssize_t narg
 static PyMethodDef methods_[] = {
     {"setup", (PyCFunction)py_setup, METH_VARARGS, "setup(IKResult, entropy) -> bool (fast result path)"},
     {"solve", (PyCFunction)(void (*)(void))py_solve, METH_FASTCALL,
-     "solve(config_address, Tep, q0, seed, reason) -> IKResult or None"},
+     "solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult or None"},
     {NULL, NULL, 0, NULL},
 };
 
