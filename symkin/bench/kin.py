@@ -3,8 +3,10 @@
 Per call (one configuration from Python): the C backend's extension module, the same C functions
 through ctypes (pointers and output buffers cached) and cffi (when installed), the NumPy and
 CasADi backends and the numeric reference; roboticstoolbox-python and Pinocchio when installed
-(the ``compare`` extra), all measured in the same run, with ratios. Batched: throughput on N
-random configurations on one core.
+(the ``compare`` extra), all measured in the same run, with ratios; Pinocchio's FK is that of one
+frame (``forwardKinematics`` + ``updateFramePlacement``). Batched: throughput on N random
+configurations on one core. Times are CPU times of the calling thread (``time.thread_time``), so
+that other processes of a shared machine do not count.
 """
 
 from __future__ import annotations
@@ -134,9 +136,9 @@ def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], A
         lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         pin.computeJointJacobians(model, data, q)
 
-        def fk() -> Any:
-            pin.framesForwardKinematics(model, data, q)
-            return data.oMf[fid]
+        def fk() -> Any:  # the pose of one frame: joint placements, then that frame's
+            pin.forwardKinematics(model, data, q)
+            return pin.updateFramePlacement(model, data, fid)
 
         def jac() -> Any:
             pin.computeJointJacobians(model, data, q)
@@ -194,7 +196,7 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
     items = [(p, f) for p in paths for f in FUNCS]
     per_call: dict[str, dict[str, float]] = {p: {} for p in paths}
     for p, f in tqdm(items, desc="per call", disable=not progress, leave=False):
-        per_call[p][f] = per_call_us(paths[p][f])
+        per_call[p][f] = per_call_us(paths[p][f], clock=time.thread_time)
     Q = robot.random_q(batch, seed=seed + 1)
     batched: dict[str, dict[str, float]] = {}
     for b in ("c", "numpy"):
@@ -219,9 +221,9 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
 
 
 def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:
-    t = time.perf_counter()
+    t = time.thread_time()
     fn(Q)
-    return time.perf_counter() - t
+    return time.thread_time() - t
 
 
 def format_kin(r: dict) -> str:

@@ -69,6 +69,7 @@ class Kinematics:
         module: ModuleType | None = None,
     ) -> None:
         self.robot = robot
+        self._n = int(robot.n)
         self.backend = backend
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
         self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
@@ -84,7 +85,8 @@ class Kinematics:
 
     @property
     def n(self) -> int:
-        return self.robot.n
+        """Number of joints (kept: ``robot.n`` counts the joints of the ETS on every call)."""
+        return self._n
 
     @property
     def name(self) -> str:
