@@ -58,9 +58,10 @@ GOALS: dict[str, tuple[str, float]] = {
 }
 
 
-def _us(f: Callable[[], Any]) -> float:
-    """Microseconds per call of f (best of several rounds, CPU time of this thread)."""
-    return per_call_us(f, clock=CLOCK)
+def _us(f: Callable[[], Any], budget: float) -> float:
+    """Microseconds per call of f (best of several rounds within about ``budget`` seconds, CPU time
+    of this thread)."""
+    return per_call_us(f, budget=budget, clock=CLOCK)
 
 
 def _best_of(f: Callable[[], Any], rounds: int) -> float:
@@ -156,7 +157,7 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
 
 
 # -- control -------------------------------------------------------------------------------------
-def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int) -> dict[str, Any]:
+def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float = 0.25) -> dict[str, Any]:
     """RRMC and MMC steps from Python (C backend) and servo steps per second, Table I tasks (seed 001
     eq 14, joint speeds unbounded as in the paper), loop in C and in Python."""
     from symkin.bench.mmc import table1_tasks
@@ -169,10 +170,10 @@ def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int) -> dict[str, A
     nu = rng.normal(0.0, 0.1, 6)
     mmc = MMC(kin, qd_max=np.inf)
     steps = {
-        "jacob0 (yardstick)": _us(lambda: kin.jacob0(q)),
-        "rrmc (C)": _us(lambda: rrmc(kin, q, nu, qd_max=np.inf)),
-        "MMC.step (C)": _us(lambda: mmc.step(q, nu)),
-        "rrmc (NumPy, reference kinematics)": _us(lambda: rrmc(robot, q, nu, qd_max=np.inf)),
+        "jacob0 (yardstick)": _us(lambda: kin.jacob0(q), budget),
+        "rrmc (C)": _us(lambda: rrmc(kin, q, nu, qd_max=np.inf), budget),
+        "MMC.step (C)": _us(lambda: mmc.step(q, nu), budget),
+        "rrmc (NumPy, reference kinematics)": _us(lambda: rrmc(robot, q, nu, qd_max=np.inf), budget),
     }
     q0s, Teps = table1_tasks(kin, n_tasks, np.random.default_rng([seed, 1]))
     tasks = list(zip(q0s, Teps))
@@ -191,7 +192,7 @@ def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int) -> dict[str, A
 
 
 # -- backends ------------------------------------------------------------------------------------
-def numpy_vs_pinocchio(robot: Any, q: np.ndarray) -> dict[str, Any]:
+def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
     """One configuration per call: the NumPy backend, the C backend and Pinocchio (FK of one frame
     by ``forwardKinematics`` + ``updateFramePlacement``; ``computeFrameJacobian``, LOCAL_WORLD_ALIGNED;
     manipulability as sqrt(det(J J^T)) of that Jacobian through numpy)."""
@@ -201,9 +202,9 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray) -> dict[str, Any]:
     rows: dict[str, dict[str, float]] = {}
     for label, k in (("numpy", kn), ("c", kc)):
         rows[label] = {
-            "fkine": _us(lambda k=k: k.fkine(q)),
-            "jacob0": _us(lambda k=k: k.jacob0(q)),
-            "manipulability": _us(lambda k=k: k.manipulability(q)),
+            "fkine": _us(lambda k=k: k.fkine(q), budget),
+            "jacob0": _us(lambda k=k: k.jacob0(q), budget),
+            "manipulability": _us(lambda k=k: k.manipulability(q), budget),
         }
     pm = pinocchio_model(robot)
     if pm is not None:
@@ -223,15 +224,20 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray) -> dict[str, Any]:
             J = pin.computeFrameJacobian(model, data, q, fid, lwa)
             return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
 
+        def fk_all() -> Any:
+            pin.framesForwardKinematics(model, data, q)
+            return data.oMf[fid]
+
         rows["pinocchio"] = {
-            "fkine": _us(fk),
-            "jacob0": _us(jac),
-            "manipulability": _us(manip),
+            "fkine": _us(fk, budget),
+            "jacob0": _us(jac, budget),
+            "manipulability": _us(manip, budget),
         }
+        rows["pinocchio (all frames)"] = {"fkine": _us(fk_all, budget)}
     return rows
 
 
-def casadi_vs_raw(robot: Any, q: np.ndarray) -> dict[str, Any]:
+def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
     """One configuration per call: the CasADi backend's methods against calling its raw
     ``casadi.Function`` with the same numpy array (which returns a DM)."""
     import symkin
@@ -244,7 +250,7 @@ def casadi_vs_raw(robot: Any, q: np.ndarray) -> dict[str, Any]:
         "hessian0": (lambda: ka.hessian0(q), lambda: raw["hessian0"](q)),
         "manipulability": (lambda: ka.manipulability(q), lambda: raw["manipulability_all"](q)),
     }
-    return {k: {"backend": _us(a), "raw": _us(b)} for k, (a, b) in pairs.items()}
+    return {k: {"backend": _us(a, budget), "raw": _us(b, budget)} for k, (a, b) in pairs.items()}
 
 
 # -- start-up ------------------------------------------------------------------------------------
@@ -290,9 +296,11 @@ def run_calls(
     rounds: int = 5,
     startup_runs: int = 7,
     progress: bool = True,
+    budget: float = 0.25,
 ) -> dict[str, Any]:
     """Every section (module docstring); returns a JSON-able dict with ``checks``: each goal of
-    :data:`GOALS` with the measured figure and whether it meets the bar."""
+    :data:`GOALS` with the measured figure and whether it meets the bar. ``budget``: seconds per
+    timed call path (about)."""
     import symkin
     from symkin.model.resolve import resolve_robot
 
@@ -303,9 +311,12 @@ def run_calls(
     sections: list[tuple[str, Callable[[], Any]]] = [
         ("ik", lambda: ik_calls(robot, kin, n_targets, seed, rounds, rtb=True)),
         ("pinv", lambda: pinv_per_iteration(robot, kin, n_targets, seed, max(2, rounds // 2))),
-        ("control", lambda: control_calls(symkin.compile(crobot, backend="c"), seed, n_tasks, rounds)),
-        ("numpy", lambda: numpy_vs_pinocchio(robot, q)),
-        ("casadi", lambda: casadi_vs_raw(robot, q)),
+        (
+            "control",
+            lambda: control_calls(symkin.compile(crobot, backend="c"), seed, n_tasks, rounds, budget),
+        ),
+        ("numpy", lambda: numpy_vs_pinocchio(robot, q, budget)),
+        ("casadi", lambda: casadi_vs_raw(robot, q, budget)),
         ("startup", lambda: startup(robot_spec if isinstance(robot_spec, str) else robot.name, startup_runs)),
     ]
     from tqdm import tqdm
@@ -331,8 +342,8 @@ def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
         "rrmc_step_us": ctl["step_us"]["rrmc (C)"],
         "servo_rrmc_steps_per_s": ctl["servo_steps_per_s"]["rrmc"]["c"],
         "servo_mmc_steps_per_s": ctl["servo_steps_per_s"]["mmc"]["c"],
-        "import_s": st["import_s"]["median"],
-        "first_jacob0_s": st["first_jacob0_s"]["median"],
+        "import_s": st["import_s"]["min"],
+        "first_jacob0_s": st["first_jacob0_s"]["min"],
     }
     for f in ("fkine", "jacob0", "manipulability"):
         pin_row = npy.get("pinocchio")
@@ -388,14 +399,15 @@ def format_calls(r: dict[str, Any]) -> str:
     lines.append("")
     lines.append("One configuration per call (us):")
     funcs = ("fkine", "jacob0", "manipulability")
-    lines.append(f"  {'path':12}" + "".join(f"{f:>16}" for f in funcs))
+    lines.append(f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs))
     for label, row in r["numpy"].items():
-        lines.append(f"  {label:12}" + "".join(f"{row[f]:16.2f}" for f in funcs))
+        lines.append(f"  {label:24}" + "".join(f"{row[f]:16.2f}" if f in row else " " * 16 for f in funcs))
     if "pinocchio" in r["numpy"]:
-        p = r["numpy"]["pinocchio"]
-        lines.append(
-            f"  {'numpy/pin':12}" + "".join(f"{r['numpy']['numpy'][f] / p[f]:15.2f}x" for f in funcs)
-        )
+        p, npy, c = r["numpy"]["pinocchio"], r["numpy"]["numpy"], r["numpy"]["c"]
+        lines.append(f"  {'numpy / pinocchio':24}" + "".join(f"{npy[f] / p[f]:15.2f}x" for f in funcs))
+        lines.append(f"  {'pinocchio / c':24}" + "".join(f"{p[f] / c[f]:15.2f}x" for f in funcs))
+        pa = r["numpy"]["pinocchio (all frames)"]["fkine"]
+        lines.append(f"  {'numpy / pinocchio all fr.':24}{npy['fkine'] / pa:15.2f}x")
     else:
         lines.append("  (install the compare extra for Pinocchio)")
     lines.append("  CasADi backend vs its raw casadi.Function:")
@@ -405,7 +417,7 @@ def format_calls(r: dict[str, Any]) -> str:
         )
     lines.append("")
     st = r["startup"]
-    lines.append("Fresh interpreter (s, min / median):")
+    lines.append("Fresh interpreter, wall time (s, fastest / median):")
     for key, label in (
         ("import_numpy_s", "import numpy"),
         ("import_s", "import symkin"),
