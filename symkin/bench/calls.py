@@ -263,7 +263,7 @@ _FIRST = (
 
 def startup(robot: str, runs: int) -> dict[str, Any]:
     """Seconds for ``import numpy``, ``import symkin`` and import + compile (warm cache) + the first
-    ``kin.jacob0``, each in ``runs`` fresh interpreters (min and median)."""
+    ``kin.jacob0``, each in ``runs`` fresh interpreters after one warm-up (min and median)."""
     import symkin
 
     symkin.compile(robot)  # warm the cache
@@ -275,13 +275,14 @@ def startup(robot: str, runs: int) -> dict[str, Any]:
         ("first_jacob0_s", _FIRST.format(robot=robot)),
     ):
         times = []
-        for _ in range(runs):
+        for k in range(runs + 1):  # the first run is a warm-up (page cache, byte code)
             res = subprocess.run(
                 [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
             )
             if res.returncode != 0:
                 raise RuntimeError(f"{code!r} failed: {res.stderr.strip()[-400:]}")
-            times.append(float(res.stdout.strip().splitlines()[-1]))
+            if k:
+                times.append(float(res.stdout.strip().splitlines()[-1]))
         out[key] = {"min": min(times), "median": float(np.median(times))}
     return out
 

@@ -322,46 +322,54 @@ SYMKIN_INLINE int lm_step(int n, const symkin_ik_config *c, const double *we, co
 #define SYMKIN_PINV_FAST_COND 1e8
 
 /* b <- G^-1 b for the m x m SPD G (row-major, m <= 6) when kappa <= SYMKIN_PINV_FAST_COND (see above);
- * else -1 and b unchanged. X = L^-1 gives (G^-1)_ii = sum_k X_ki^2 and G^-1 b = X^T (X b). */
-static int gram_solve(int m, const double *G, double *b) {
-    double L[36], X[36], y[6], gmax = 0.0, ginv = 0.0;
-    for (int j = 0; j < m; j++) {
+ * else -1 and b unchanged. X = L^-1 gives (G^-1)_ii = sum_k X_ki^2 and G^-1 b = X^T (X b); divisions
+ * only for the reciprocals of the diagonal of L. Unrolled for m = 6 (gram_solve6). */
+SYMKIN_INLINE int gram_solve_m(int m, const double *G, double *b) {
+    double L[36], X[36], inv[6], y[6], gmax = 0.0, ginv = 0.0;
+    SYMKIN_UNROLL for (int j = 0; j < m; j++) {
         double d = G[j * m + j];
         if (d > gmax) gmax = d; /* not fmax (a slow libm call, see the top); NaN: caught below */
-        for (int k = 0; k < j; k++) d -= L[j * m + k] * L[j * m + k];
+        SYMKIN_UNROLL for (int k = 0; k < j; k++) d -= L[j * m + k] * L[j * m + k];
         if (!(d > 0.0)) return -1;
         double ljj = sqrt(d);
         L[j * m + j] = ljj;
-        for (int i = j + 1; i < m; i++) {
+        inv[j] = 1.0 / ljj;
+        SYMKIN_UNROLL for (int i = j + 1; i < m; i++) {
             double s = G[i * m + j];
-            for (int k = 0; k < j; k++) s -= L[i * m + k] * L[j * m + k];
-            L[i * m + j] = s / ljj;
+            SYMKIN_UNROLL for (int k = 0; k < j; k++) s -= L[i * m + k] * L[j * m + k];
+            L[i * m + j] = s * inv[j];
         }
     }
-    for (int i = 0; i < m; i++) {
-        double x = 1.0 / L[i * m + i], c = x * x;
+    SYMKIN_UNROLL for (int i = 0; i < m; i++) {
+        double x = inv[i], c = x * x;
         X[i * m + i] = x;
-        for (int k = i + 1; k < m; k++) {
+        SYMKIN_UNROLL for (int k = i + 1; k < m; k++) {
             double s = 0.0;
-            for (int j = i; j < k; j++) s += L[k * m + j] * X[j * m + i];
-            x = -s / L[k * m + k];
+            SYMKIN_UNROLL for (int j = i; j < k; j++) s += L[k * m + j] * X[j * m + i];
+            x = -s * inv[k];
             X[k * m + i] = x;
             c += x * x;
         }
         if (!(c <= ginv)) ginv = c; /* NaN propagates */
     }
     if (!(gmax * ginv <= SYMKIN_PINV_FAST_COND)) return -1;
-    for (int k = 0; k < m; k++) {
+    SYMKIN_UNROLL for (int k = 0; k < m; k++) {
         double s = 0.0;
-        for (int i = 0; i <= k; i++) s += X[k * m + i] * b[i];
+        SYMKIN_UNROLL for (int i = 0; i <= k; i++) s += X[k * m + i] * b[i];
         y[k] = s;
     }
-    for (int i = 0; i < m; i++) {
+    SYMKIN_UNROLL for (int i = 0; i < m; i++) {
         double s = 0.0;
-        for (int k = i; k < m; k++) s += X[k * m + i] * y[k];
+        SYMKIN_UNROLL for (int k = i; k < m; k++) s += X[k * m + i] * y[k];
         b[i] = s;
     }
     return 0;
+}
+
+static int gram_solve6(const double *G, double *b) { return gram_solve_m(6, G, b); }
+
+static int gram_solve(int m, const double *G, double *b) {
+    return m == 6 ? gram_solve6(G, b) : gram_solve_m(m, G, b);
 }
 
 /* NR and GN with pinv (eqs 45-47): gram_solve, or the SVD of pinv_apply when J is (nearly) singular:
