@@ -536,16 +536,6 @@ def _c_solver(kin: Any, args: tuple) -> Any:
     return solver
 
 
-def default_c_solver(kin: Any) -> Any:
-    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default."""
-    import inspect
-
-    defaults = inspect.signature(ik).parameters
-    names = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
-             "starts")  # fmt: skip
-    return _c_solver(kin, tuple(defaults[k].default for k in names))
-
-
 def _options(kin: Any, *args: Any) -> IKOptions:
     """IKOptions.of, memoised per kinematics object for hashable arguments (validation costs
     tens of microseconds, more than a C solve)."""

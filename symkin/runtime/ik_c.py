@@ -32,7 +32,15 @@ import numpy as np
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik import IKOptions, IKResult, check_pose, ets_of, failure_reason
 
-__all__ = ["CIKSolver", "ik_sources", "ik_library", "solver_for", "ets_table"]
+__all__ = [
+    "CIKSolver",
+    "ik_sources",
+    "ik_library",
+    "ik_extension",
+    "solver_for",
+    "default_c_solver",
+    "ets_table",
+]
 
 CSRC = Path(__file__).resolve().parent / "csrc"
 _P = ctypes.c_void_p
@@ -442,3 +450,16 @@ def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
             cache.clear()
         solver = cache[key] = CIKSolver(kin, opt)
     return solver
+
+
+def default_c_solver(kin: Any) -> CIKSolver:
+    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default
+    (memoised like any other: per kinematics object and options)."""
+    import inspect
+
+    from symkin.runtime.ik import _c_solver, ik
+
+    defaults = inspect.signature(ik).parameters
+    names = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
+             "starts")  # fmt: skip
+    return _c_solver(kin, tuple(defaults[k].default for k in names))

@@ -151,7 +151,7 @@ class Kinematics:
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
         if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
-            from symkin.runtime.ik import default_c_solver
+            from symkin.runtime.ik_c import default_c_solver
 
             self._ik_solver = solver = default_c_solver(self)
             self._ik_fast = solver.fast

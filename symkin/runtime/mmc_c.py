@@ -80,13 +80,6 @@ def _address(fn: Any) -> int:
     return int(ctypes.cast(fn, _P).value or 0)
 
 
-def jacob0_hessian0_address(kin: Any) -> tuple[int, Any]:
-    """Address of the generated ``<prefix>_jacob0_hessian0`` of C kinematics, and its ctypes function
-    (keep it: it keeps the library loaded)."""
-    fn = kinematics_functions(kin)["jacob0_hessian0"]
-    return _address(fn), fn
-
-
 def _settings_key(settings: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
     return tuple(sorted((k, v) for k, v in settings.items() if k not in _PYTHON_ONLY))
 
