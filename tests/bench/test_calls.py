@@ -9,7 +9,9 @@ from symkin.bench.calls import GOALS, format_calls, run_calls
 
 
 def test_bench_calls_runs_small_and_reports_every_goal():
-    r = run_calls("ur5", "ur5", n_targets=12, n_tasks=3, rounds=1, startup_runs=1, progress=False, budget=0.005)
+    r = run_calls(
+        "ur5", "ur5", n_targets=12, n_tasks=3, rounds=1, startup_runs=1, progress=False, budget=0.005
+    )
     json.dumps(r)  # JSON-able
     assert set(r["checks"]) == set(GOALS)
     for key, check in r["checks"].items():
