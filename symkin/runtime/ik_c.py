@@ -162,7 +162,13 @@ def ik_extension() -> Any:
 
     path, name = _ik_build()
     module = load_extension(name, path)
-    module.setup(IKResult, int.from_bytes(os.urandom(8), "little"))
+
+    def seed() -> None:  # fresh seeds (seed=None) differ between processes, forked ones included
+        module.setup(IKResult, int.from_bytes(os.urandom(8), "little"))
+
+    seed()
+    if hasattr(os, "register_at_fork"):
+        os.register_at_fork(after_in_child=seed)
     return module
 
 
