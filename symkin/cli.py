@@ -341,6 +341,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
             if not args.json:
                 print(f"plot written to {args.plot}")
         return 0
+    if args.what == "calls":
+        from symkin.bench.calls import format_calls, run_calls
+
+        robot = args.robot or "ur5"
+        result = run_calls(robot, args.robot or "panda", seed=args.seed, progress=not args.json)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -483,12 +490,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser(
         "bench",
-        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), compile (cold, by length)",
+        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
+        "compile (cold, by chain length)",
     )
-    s.add_argument("what", choices=("kin", "ik", "mmc", "compile"))
+    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile"))
     s.add_argument(
         "--robot",
-        help="robot (default: panda for kin and compile, ur5 for ik, the paper's three for mmc)",
+        help="robot (default: panda for kin and compile, ur5 for ik, the paper's three for mmc, ur5 and "
+        "panda for calls)",
     )
     s.add_argument(
         "--joints",

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from functools import lru_cache
 from pathlib import Path
@@ -195,34 +196,7 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
         raise CompileError(f"the casadi backend needs casadi installed: {exc}") from exc
     fns = module.functions()
     n = robot.n
-    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
-
-    def wrap(f: Any) -> Any:
-        names = f.name_out()
-
-        def call(q: Any) -> Any:
-            Q, single = as_batch(q, n, robot.name)
-            if single:
-                res = f(Q[0])
-                res = res if isinstance(res, (list, tuple)) else [res]
-                outs = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]
-            else:
-                fm = f.map(Q.shape[0])
-                res = fm(Q.T)
-                res = res if isinstance(res, (list, tuple)) else [res]
-                outs = []
-                for k, r in zip(names, res):
-                    a = np.asarray(r)  # (rows, cols*N), column blocks per configuration
-                    rows, cols = a.shape[0], a.shape[1] // Q.shape[0]
-                    a = a.reshape(rows, Q.shape[0], cols).transpose(1, 0, 2)
-                    outs.append(a.reshape((Q.shape[0], *shapes[k])))
-            return outs[0] if len(outs) == 1 else tuple(outs)
-
-        call.__name__ = f.name()
-        call.__doc__ = f"{f.name()} through casadi.Function (see Kinematics.functions)."
-        return call
-
-    functions = {name: wrap(fns[name]) for name in KIN_METHODS}
+    functions = {name: _casadi_method(fns[name], robot) for name in KIN_METHODS}
     link_poses = functions["link_poses"]
 
     def framed(name: str) -> Any:
@@ -248,3 +222,57 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
     kin = Kinematics(robot, "casadi", functions, files, Path(module.__file__ or ""), module)
     kin.functions = fns  # type: ignore[attr-defined]
     return kin
+
+
+def _casadi_method(f: Any, robot: Robot) -> Any:
+    """A Kinematics method calling the casadi.Function ``f``: one configuration through a
+    ``Function.buffer()`` bound once to arrays (no DM conversion; a lock keeps it thread-safe), a
+    batch through ``f.map``."""
+    import threading
+
+    n, name = robot.n, robot.name
+    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
+    names = f.name_out()
+    dense = f.sparsity_in(0).is_dense() and all(f.sparsity_out(i).is_dense() for i in range(f.n_out()))
+    buf = evaluate = None
+    if dense and hasattr(f, "buffer"):
+        qbuf = np.zeros(n)
+        outs = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        buf, evaluate = f.buffer()
+        buf.set_arg(0, memoryview(qbuf))
+        for i, out in enumerate(outs):
+            buf.set_res(i, memoryview(out))
+        sizes = [f.size_out(i) for i in range(f.n_out())]  # (rows, cols); nonzeros column-major
+        lock = threading.Lock()
+    f64 = np.dtype(float)
+
+    def call(q: Any) -> Any:
+        fast = evaluate is not None and type(q) is np.ndarray and q.dtype is f64 and q.shape == (n,)
+        if fast and math.isfinite(sum(q.tolist())):  # else as_batch below raises the error
+            with lock:
+                np.copyto(qbuf, q)
+                evaluate()
+                ok = buf.ret() == 0
+                res = [o.reshape(c, r).T.reshape(shapes[k]) for o, (r, c), k in zip(outs, sizes, names)]
+            if ok:
+                return res[0] if len(res) == 1 else tuple(res)
+        Q, single = as_batch(q, n, name)
+        if single:
+            res = f(Q[0])
+            res = res if isinstance(res, (list, tuple)) else [res]
+            outs1 = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]
+        else:
+            fm = f.map(Q.shape[0])
+            res = fm(Q.T)
+            res = res if isinstance(res, (list, tuple)) else [res]
+            outs1 = []
+            for k, r in zip(names, res):
+                a = np.asarray(r)  # (rows, cols*N), column blocks per configuration
+                rows, cols = a.shape[0], a.shape[1] // Q.shape[0]
+                a = a.reshape(rows, Q.shape[0], cols).transpose(1, 0, 2)
+                outs1.append(a.reshape((Q.shape[0], *shapes[k])))
+        return outs1[0] if len(outs1) == 1 else tuple(outs1)
+
+    call.__name__ = f.name()
+    call.__doc__ = f"{f.name()} through casadi.Function (see Kinematics.functions)."
+    return call

@@ -6,12 +6,13 @@ import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
-
-import jinja2
+from typing import TYPE_CHECKING, Any
 
 from symkin.errors import CompileError
 from symkin.model.robot import identifier
+
+if TYPE_CHECKING:
+    import jinja2
 
 __all__ = [
     "render",
@@ -36,6 +37,8 @@ def template_dir() -> Path:
 
 @lru_cache(maxsize=1)
 def _env() -> jinja2.Environment:
+    import jinja2  # here: a warm compile (template_dir for the cache key) does without it
+
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(template_dir())),
         undefined=jinja2.StrictUndefined,

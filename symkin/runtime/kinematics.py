@@ -18,6 +18,7 @@ import numpy as np
 
 from symkin.model.robot import AXES_ROWS, Robot, as_batch, jacobm_of, manipulability_of
 from symkin.runtime.ik import ik
+from symkin.runtime.manip import jacobm_one, manipulability_one
 
 __all__ = ["Kinematics", "KIN_METHODS"]
 
@@ -68,7 +69,11 @@ class Kinematics:
         module: ModuleType | None = None,
     ) -> None:
         self.robot = robot
+        self._n = int(robot.n)
         self.backend = backend
+        self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
+        self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
+        self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
         self.files = files
         self.path = path
         self.module = module
@@ -80,7 +85,8 @@ class Kinematics:
 
     @property
     def n(self) -> int:
-        return self.robot.n
+        """Number of joints (kept: ``robot.n`` counts the joints of the ETS on every call)."""
+        return self._n
 
     @property
     def name(self) -> str:
@@ -98,20 +104,27 @@ class Kinematics:
         return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
-        """Yoshikawa manipulability of the chosen rows of J0 (eq 52)."""
+        """Yoshikawa manipulability of the chosen rows of J0 (eq 52): float, or (N,) for a batch.
+
+        One configuration takes the backend's single-configuration J0 and no determinant routine
+        (:func:`symkin.runtime.manip.manipulability_one`)."""
         rows = _rows(axes)
+        if type(q) is np.ndarray and q.ndim == 1:  # jacob0 checks q
+            return manipulability_one(self.jacob0(q)[rows])
         Q, single = as_batch(q, self.n, self.name)
-        J = self.jacob0(Q)
-        m = manipulability_of(J[:, rows])
-        return float(m[0]) if single else m
+        if single:
+            return manipulability_one(self.jacob0(Q[0])[rows])
+        return manipulability_of(self.jacob0(Q)[:, rows])
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
         """Manipulability Jacobian (seed 001 eq 11), (n,) or (N, n)."""
         rows = _rows(axes)
         Q, single = as_batch(q, self.n, self.name)
+        if single:
+            J, H = self.jacob0_hessian0(Q[0])
+            return jacobm_one(J[rows], H[:, rows])
         J, H = self.jacob0_hessian0(Q)
-        Jm = jacobm_of(J[:, rows], H[:, :, rows])
-        return Jm[0] if single else Jm
+        return jacobm_of(J[:, rows], H[:, :, rows])
 
     @cached_property
     def c_fkjac(self) -> Any:
@@ -128,12 +141,17 @@ class Kinematics:
         """Numerical inverse kinematics (eqs 37-51); see :func:`symkin.runtime.ik.ik` for the options.
 
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
-        NumPy and CasADi backends the NumPy solver calls the generated functions.
+        NumPy and CasADi backends the NumPy solver calls the generated functions. A call with the
+        default options goes straight to the C solver (one target costs little more than the
+        solve itself); it is thread-safe.
 
         ``method="analytic"``: the closed form (:meth:`ik_all`), returning the solution nearest
         ``q0`` (options ``q0``, ``weights``, ``joint_limits``, ``tol``); ``success=False`` with a
         reason when the pose is out of reach or every solution is outside the joint limits.
         """
+        if not kwargs and self._ik_fast is not None:
+            res = self._ik_fast(Tep)
+            return res if res is not None else self._ik_solver.solve(Tep)  # None: Tep needs checking
         if kwargs.get("method") == "analytic":
             options = {k: v for k, v in kwargs.items() if k != "method"}
             unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol"})
@@ -142,6 +160,12 @@ class Kinematics:
             return self.analytic.ik(Tep, fkine=self.fkine, **options)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
+        if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
+            from symkin.runtime.ik_c import default_c_solver
+
+            self._ik_solver = solver = default_c_solver(self)
+            self._ik_fast = solver.fast
+            return solver.solve(Tep)
         return ik(self, Tep, **kwargs)
 
     # -- closed-form inverse kinematics (symkin.compile_ik) -------------------------------------

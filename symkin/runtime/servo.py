@@ -7,6 +7,7 @@ numpy only. All quantities are in the robot's base frame; spatial velocities and
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -90,7 +91,10 @@ def servo_velocity(
 def _cap(nu: np.ndarray, rows: slice, limit: float) -> None:
     if not limit > 0:
         raise ValueError(f"velocity caps must be positive, got {limit}")
-    norm = float(np.linalg.norm(nu[rows]))
+    s = 0.0
+    for v in nu[rows].tolist():  # summed in order, as the C servo loop does
+        s += v * v
+    norm = math.sqrt(s)
     if norm > limit:
         nu[rows] *= limit / norm
 

@@ -22,6 +22,9 @@ from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 
 ROBOT_NAME = 'planar2'
 N_JOINTS = 2
+_F8 = np.dtype(float)
+_SHAPE = (N_JOINTS,)
+_isfinite = math.isfinite
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1,),
@@ -70,6 +73,10 @@ def _fkine_batch(Q):
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (eq 1). frame=k: link frame k (chain order, as link_poses)."""
+    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _fkine_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
@@ -139,6 +146,10 @@ def _link_poses_batch(Q):
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint (eq 5), (n, 4, 4), chain order."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _link_poses_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
     return out[0]
@@ -179,6 +190,10 @@ def _jacob0_batch(Q):
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
+    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _jacob0_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
@@ -216,6 +231,10 @@ def _jacobe_batch(Q):
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (eq 16). frame=k: link frame k (chain order, as link_poses)."""
+    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _jacobe_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
@@ -277,6 +296,10 @@ def _hessian0_batch(Q):
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC paper eq 20)."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _hessian0_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
     return out[0]
@@ -321,6 +344,10 @@ def _hessiane_batch(Q):
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _hessiane_one(v)[0]
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
     return out[0]
@@ -385,6 +412,10 @@ def _fkine_jacob0_batch(Q):
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
     return out
@@ -459,6 +490,10 @@ def _jacob0_hessian0_batch(Q):
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        v = q.tolist()
+        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
+            return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
     return out

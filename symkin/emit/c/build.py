@@ -19,12 +19,8 @@ import contextlib
 import ctypes
 import hashlib
 import os
-import platform
 import re
 import shlex
-import shutil
-import subprocess
-import tempfile
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from pathlib import Path
@@ -66,6 +62,8 @@ def find_compiler() -> list[str]:
 
 @lru_cache(maxsize=16)
 def _find_compiler(cc_env: str, path_env: str) -> tuple[str, ...]:
+    import shutil
+
     if cc_env.strip():
         argv = shlex.split(cc_env)
         exe = shutil.which(argv[0], path=path_env)
@@ -114,6 +112,8 @@ def _check_inputs(sources: Mapping[str, str], name: str) -> None:
 
 
 def _key(sources: Mapping[str, str], flags: Sequence[str], compiler: Sequence[str]) -> str:
+    import platform
+
     h = hashlib.sha256()
     for fname in sorted(sources):
         data = sources[fname].encode()
@@ -142,6 +142,8 @@ def _valid(entry: Path, lib: str) -> bool:
 def _build(
     tmp: Path, sources: Mapping[str, str], lib: str, flags: Sequence[str], compiler: Sequence[str]
 ) -> None:
+    import subprocess
+
     for fname, text in sources.items():
         (tmp / fname).write_text(text)
     cfiles = sorted(f for f in sources if f.endswith(".c"))
@@ -170,6 +172,9 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     returned without compiling (about 0.1 ms). Raises CompileError when no compiler is found or
     compilation fails (with the first lines of the compiler's output).
     """
+    import shutil
+    import tempfile
+
     _check_inputs(sources, name)
     compiler = find_compiler()
     flags = _flags(extra_cflags)
@@ -202,6 +207,9 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
 
 def _discard(entry: Path, root: Path) -> None:
     """Move a bad entry out of the way atomically (a no-op when someone else already did)."""
+    import shutil
+    import tempfile
+
     trash = Path(tempfile.mkdtemp(prefix=".trash-", dir=root))
     with contextlib.suppress(OSError):
         os.rename(entry, trash / "entry")
