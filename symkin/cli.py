@@ -72,7 +72,13 @@ def cmd_compile(args: argparse.Namespace) -> int:
     robot = _robot(args.robot)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
-    files = generate(robot, args.backend, command)
+    if args.prefix:
+        if args.backend != "c":
+            raise UserError("--prefix applies to the C backend only")
+        if not args.output:
+            raise UserError("--prefix names the files written with -o DIR; give -o too")
+        command += f" --prefix {args.prefix}"
+    files = generate(robot, args.backend, command, prefix=args.prefix)
     t_gen = time.perf_counter() - t0
     if args.output:
         out = Path(args.output)
@@ -421,6 +427,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--backend", choices=("c", "numpy", "casadi"), default="c", help="code to generate (default c)"
     )
     s.add_argument("-o", "--output", metavar="DIR", help="write the generated files into DIR")
+    s.add_argument(
+        "--prefix",
+        "--name",
+        metavar="PREFIX",
+        help="C: start every exported symbol and file name with PREFIX (default symkin_<robot>), so the "
+        "code of several robots links into one program",
+    )
     s.set_defaults(func=cmd_compile)
 
     s = sub.add_parser(

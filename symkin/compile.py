@@ -58,17 +58,24 @@ def _check_strategy(strategy: str | None) -> None:
 
 
 def generate(
-    robot: Robot, backend: str, command: str | None = None, strategy: str | None = None
+    robot: Robot,
+    backend: str,
+    command: str | None = None,
+    strategy: str | None = None,
+    prefix: str | None = None,
 ) -> dict[str, str]:
     """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy.
 
     ``strategy``: ``"expanded"`` (one exact expression per output, then CSE: the smallest, most
     readable code for arms of up to about 7 joints), ``"program"`` (named link frames, Hessians as
     loops: linear in the number of joints), or None to choose by size (the generated header says
-    which was used).
+    which was used). ``prefix`` (C backend): the prefix of every exported symbol and file name
+    instead of ``symkin_<robot>``, so several robots link into one program.
     """
     _check_backend(backend)
     _check_strategy(strategy)
+    if prefix is not None and backend != "c":
+        raise SymkinError(f"a symbol prefix applies to the C backend only, not {backend!r}")
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
@@ -83,7 +90,7 @@ def generate(
     if backend == "c":
         from symkin.emit.c.backend import render_c
 
-        return render_c(robot, functions, command)
+        return render_c(robot, functions, command, prefix)
     if backend == "numpy":
         from symkin.emit.numpy.backend import render_numpy
 
@@ -94,10 +101,15 @@ def generate(
 
 
 def write_generated(
-    robot: Robot, backend: str, folder: str | Path, command: str | None = None, strategy: str | None = None
+    robot: Robot,
+    backend: str,
+    folder: str | Path,
+    command: str | None = None,
+    strategy: str | None = None,
+    prefix: str | None = None,
 ) -> list[Path]:
     """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths."""
-    files = generate(robot, backend, command, strategy)
+    files = generate(robot, backend, command, strategy, prefix)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = []

@@ -120,17 +120,20 @@ class Header:
     command: str
     counts: str
     strategy: str
+    references: str
 
     @classmethod
     def of(cls, robot: Any, functions: list, command: str, literal: str) -> Header:
         """The header for ``functions`` (KinFunction list) of ``robot``; ``literal`` quotes its name."""
         from symkin import __version__
         from symkin.symbolic.cse import OpCounts
+        from symkin.symbolic.functions import REFERENCES
 
         total = sum((f.code.counts for f in functions), OpCounts())
         counts = f"{total} over {len(functions)} functions"
         return cls(
             strategy=strategy_text(functions),
+            references=REFERENCES,
             robot=identifier(robot.name),
             name_literal=literal,
             ets=comment_safe(str(robot.ets), limit=4000),

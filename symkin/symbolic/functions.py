@@ -28,6 +28,7 @@ from symkin.symbolic.program import HessianLoop, KinematicProgram, derive_progra
 __all__ = [
     "KinFunction",
     "FUNCTION_DOCS",
+    "REFERENCES",
     "STRATEGIES",
     "EXPANDED_MAX_NODES",
     "UNROLL_MAX_JOINTS",
@@ -40,16 +41,22 @@ __all__ = [
     "fk_j_h_counts",
 ]
 
-FUNCTION_DOCS: dict[str, str] = {
-    "fkine": "End-effector pose in the base frame, 4x4 (eq 1).",
-    "link_poses": "Base-frame pose of each link frame right after its joint (eq 5), (n, 4, 4), chain order.",
-    "jacob0": "Base-frame Jacobian, (6, n), rows (v, omega) (eqs 31-34).",
-    "jacobe": "End-effector-frame Jacobian, (6, n), rows (v, omega) (eq 16).",
-    "hessian0": "Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC paper eq 20).",
+FUNCTION_DOCS: dict[str, str] = {  # "Part 1": Haviland and Corke 2023; "MMC": Haviland and Corke 2020
+    "fkine": "End-effector pose in the base frame, 4x4 (Part 1 eq 1).",
+    "link_poses": "Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order "
+    "(Part 1 eq 5).",
+    "jacob0": "Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34).",
+    "jacobe": "End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16).",
+    "hessian0": "Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20).",
     "hessiane": "End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i.",
     "fkine_jacob0": "Pose (4, 4) and base-frame Jacobian (6, n) together.",
     "jacob0_hessian0": "Base-frame Jacobian (6, n) and Hessian (n, 6, n) together.",
 }
+REFERENCES = (
+    "Part 1 = Haviland and Corke, Manipulator Differential Kinematics, Part 1, IEEE Robotics and "
+    "Automation Magazine, 2023; MMC = Haviland and Corke, Maximising Manipulability During "
+    "Resolved-Rate Motion Control, 2020"
+)
 STRATEGIES = ("expanded", "program")
 # Expanded trees of T, J0 and H0 above this many nodes use the program strategy: the Panda has
 # 8.8e4, a generic 8-joint chain 1.1e5; CSE time and code size of the expanded form grow about
