@@ -131,11 +131,14 @@ def _perp(h: Vec) -> Vec:
 
 
 def _norm2(v: Vec) -> sp.Expr:
-    return sp.expand(dot(v, v))
+    return dot(v, v)
 
 
 def _tidy(x: sp.Expr) -> sp.Expr:
-    return sp.expand(x)
+    """``x`` as derived (nested dot products: about half the arithmetic of the expanded sum and
+    no cancellation between its terms), exactly 0 or a single number when it expands to one."""
+    e = sp.expand(x)
+    return e if e == 0 or not e.free_symbols else x
 
 
 class _Builder:
