@@ -66,6 +66,9 @@ class AnalyticIK:
         self._rev = np.array([e.is_revolute for e in robot.ets.joints], dtype=bool)
         self._qlim = np.ascontiguousarray(robot.qlim, dtype=float)
         self._c = getattr(module, "ik_all", None) if backend == "c" else None
+        if backend == "c" and hasattr(module, "Solver"):
+            # the C method has ik_all's signature and the limits bound: no Python frame per call
+            self.ik_all = module.Solver(self._qlim, VERIFY_TOL).ik_all  # type: ignore[method-assign]
 
     def __repr__(self) -> str:
         return (

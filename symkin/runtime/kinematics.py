@@ -167,6 +167,10 @@ class Kinematics:
         ``T`` (N, 4, 4) -> (N, S, n) with NaN rows after each pose's solutions (S: the arm's
         maximum, 8 for a 6R arm). Revolute joints are wrapped by 2 pi into the joint limits where a
         shift allows; with ``joint_limits`` rows outside them are dropped. See
-        :mod:`symkin.runtime.analytic_ik`.
+        :mod:`symkin.runtime.analytic_ik`. On the C backend later calls go straight to the compiled
+        solver (the same signature, plus ``tol``): no Python frame per pose.
         """
-        return self.analytic.ik_all(T, q0, joint_limits, weights)
+        solver = self.analytic
+        if self.backend == "c":
+            self.__dict__["ik_all"] = solver.ik_all
+        return solver.ik_all(T, q0, joint_limits, weights)
