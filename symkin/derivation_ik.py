@@ -69,6 +69,12 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
         "planar3": "All three axes are parallel (planar arm): the summed angle, then a two-link problem. ",
         "planar2": "Both axes are parallel (planar arm): a two-link problem; the orientation is checked. ",
     }[s.kind]
+    if s.reversed:
+        text = (
+            "Read from the tool: the chain reversed, $T^{-1} = e^{[S'_n] q_n} \\cdots e^{[S'_1] q_1} M^{-1}$ "
+            "with $h'_k = -R_M^T h_k$ through $R_M^T (p_k - t_M)$, solved for the target $T^{-1}$ "
+            "(the table above and the axis numbers below are those of the reversed chain). " + text
+        )
     if s.position == "parallel23":
         text += "Axes 2 and 3 are parallel."
     elif s.position == "intersect12" and s.shoulder is not None:

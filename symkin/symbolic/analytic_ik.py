@@ -22,7 +22,7 @@ needs. Branches: each subproblem 4 and each prismatic quadratic doubles them (at
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import sympy as sp
 
@@ -38,6 +38,7 @@ from symkin.symbolic.ik_geometry import (
     dot,
     geometry,
     is_zero,
+    reverse,
     scale,
     snap,
     sub,
@@ -533,11 +534,27 @@ def _fk(b: _Builder) -> tuple[sp.Expr, ...]:
 
 
 def derive_analytic(robot: Robot) -> AnalyticIK:
-    """Detect the arm's structure and derive its closed form; NoAnalyticIKError when there is none."""
-    g = geometry(snap(robot.ets))
-    s = classify(g)
+    """Detect the arm's structure and derive its closed form; NoAnalyticIKError when there is none.
+
+    A 6-joint arm whose structure only shows when the chain is read from the tool (three first
+    axes meeting in a point: a spherical shoulder) is solved reversed, for the target ``T^{-1}``."""
+    g0 = geometry(snap(robot.ets))
+    g = g0
+    try:
+        s = classify(g)
+    except NoAnalyticIKError as forward:
+        if g0.n != 6:
+            raise
+        g = reverse(g0)
+        try:
+            s = classify(g)
+        except NoAnalyticIKError:
+            raise forward from None
+        s = replace(s, reversed=True, summary=s.summary + " (chain read from the tool)")
     b = _Builder(g)
     R, pvec = pose_symbols()
+    if s.reversed:
+        R, pvec = R.T, -R.T * pvec
     RM = g.M[:3, :3]
     tM = (g.M[0, 3], g.M[1, 3], g.M[2, 3])
     R0n = R * RM.T
@@ -560,4 +577,5 @@ def derive_analytic(robot: Robot) -> AnalyticIK:
     rev = [False] * g.n
     for k, j in enumerate(g.joint):
         rev[j] = g.revolute[k]
-    return AnalyticIK(robot.name, g.n, s, g, tuple(b.steps), tuple(outputs), g.n < 6, _fk(b), tuple(rev))
+    fk = _fk(_Builder(g0))
+    return AnalyticIK(robot.name, g.n, s, g, tuple(b.steps), tuple(outputs), g.n < 6, fk, tuple(rev))
