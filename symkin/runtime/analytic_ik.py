@@ -38,6 +38,11 @@ def invalid_input(what: str, value: Any, n: int) -> None:
     if what == "pose":
         check_pose(value)
         raise ConfigurationError("invalid target pose")
+    if what == "free_joint":
+        raise ConfigurationError(
+            f"free_joint= is for redundant arms (7 joints or more); this arm has {n} and a closed form: "
+            "use ik_all(T) without it"
+        )
     raise ConfigurationError(
         f"{what} must be {n} finite numbers{' (>= 0)' if what == 'weights' else ''}"
         f"{' per target, (n,) or (N, n)' if what == 'q0' else ''}; got {np.asarray(value).shape!r} {value!r}"[
