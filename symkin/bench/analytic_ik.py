@@ -4,10 +4,10 @@ For each robot: ``n`` random poses (forward kinematics of configurations uniform
 limits). Measured in one run: the derivation time (sympy, cold), the C solver per pose batched
 and one call at a time from Python, the NumPy backend batched, and, when the ``compare`` extra is
 installed, EAIK (Ostermeier et al., 2024; subproblem decomposition after IK-Geo, C++) one call at
-a time and batched on one thread, with the ratio. Times are per pose, each chunk of CHUNK poses
-timed best of 5 (:func:`_per_pose`), the same way for symkin and EAIK. Solution counts and the
-largest forward-kinematics error (numeric reference ``Robot.fkine``) of every returned solution,
-for both.
+a time and batched on one thread, with the ratio. Times are per pose: the least process CPU time
+of 5 passes over all poses (:func:`_best`), the same way for symkin and EAIK. Solution counts and
+the largest forward-kinematics error (numeric reference ``Robot.fkine``) of every returned
+solution, for both.
 
 Branch completeness: per pose, ``starts`` numerical LM searches (C solver, one search each, from
 random configurations, no joint limits) sample the solution set; a pose agrees when every sampled
@@ -31,26 +31,14 @@ EXACT_TOL = 1e-10  # FK error of a returned solution
 
 
 def _best(f: Any, repeat: int = 5) -> float:
+    """The least CPU time of the process (``time.process_time``: time the shared machine gives to
+    other jobs is not counted, threads of a peer library are) over ``repeat`` runs of ``f``."""
     best = math.inf
     for _ in range(repeat):
-        t = time.perf_counter()
+        t = time.process_time()
         f()
-        best = min(best, time.perf_counter() - t)
+        best = min(best, time.process_time() - t)
     return best
-
-
-CHUNK = 250  # poses per timed chunk
-
-
-def _per_pose(f: Any, n: int, repeat: int = 5) -> float:
-    """Seconds per pose of ``f(a, b)`` (poses a..b-1): the best of ``repeat`` runs of each chunk of
-    CHUNK poses, summed over the chunks, so a burst of load on the shared machine spoils one chunk's
-    run, not the figure. The same for every solver measured."""
-    total = 0.0
-    for a in range(0, n, CHUNK):
-        b = min(n, a + CHUNK)
-        total += _best(lambda a=a, b=b: f(a, b), repeat)
-    return total / n
 
 
 def _wrap(d: np.ndarray, rev: np.ndarray) -> np.ndarray:
@@ -130,11 +118,10 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
     rev = np.array([e.is_revolute for e in robot.ets.joints])
     row: dict[str, Any] = {"derive_s": t_derive, "kind": solver.kind, "S": solver.max_solutions}
     batch = solver.ik_all(T, joint_limits=False)
-    chunks = [np.ascontiguousarray(T[a : a + CHUNK]) for a in range(0, n, CHUNK)]
-    row["c_batch_us"] = _per_pose(lambda a, b: solver.ik_all(chunks[a // CHUNK], joint_limits=False), n) * 1e6
+    row["c_batch_us"] = _best(lambda: solver.ik_all(T, joint_limits=False)) / n * 1e6
     one = [T[i] for i in range(n)]
     kin.ik_all(one[0], None, False)
-    row["c_one_us"] = _per_pose(lambda a, b: [kin.ik_all(x, None, False) for x in one[a:b]], n) * 1e6
+    row["c_one_us"] = _best(lambda: [kin.ik_all(x, None, False) for x in one]) / n * 1e6
     m = min(n, 200)
     row["numpy_batch_us"] = _best(lambda: kin_np.ik_all(T[:m], joint_limits=False), 2) / m * 1e6
     sols = [b[~np.isnan(b[:, 0])] for b in batch]
@@ -152,9 +139,9 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
     bot = _eaik_robot(robot)
     if bot is not None:
         res = [bot.calculate_IK(T[i]) for i in range(n)]
-        row["eaik_one_us"] = _per_pose(lambda a, b: [bot.calculate_IK(x) for x in one[a:b]], n) * 1e6
+        row["eaik_one_us"] = _best(lambda: [bot.calculate_IK(x) for x in one]) / n * 1e6
         with contextlib.suppress(AttributeError, TypeError):
-            row["eaik_batch_us"] = _per_pose(lambda a, b: bot.calculate_IK_batched(one[a:b], 1), n) * 1e6
+            row["eaik_batch_us"] = _best(lambda: bot.calculate_IK_batched(one, 1)) / n * 1e6
         exact = [np.array([q for q, ls in zip(r.Q, r.is_LS) if not ls]).reshape(-1, robot.n) for r in res]
         row["eaik_mean_solutions"] = float(np.mean([len(e) for e in exact]))
         row["eaik_max_fk_error"] = max(
