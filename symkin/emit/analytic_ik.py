@@ -111,6 +111,8 @@ def _body(plan: AnalyticIK, dialect: str) -> str:
             out.emit(f"{v}, {cn}, {sn}, {v}_f = _sp1({args[0]}, {args[1]}, {free})")
             out.emit(f"fl_{v} = {flag} | {v}_f")
             flag = f"fl_{v}"
+        elif st.kind == "sum":
+            out.emit(f"{cn}, {sn} = {args[0]}, {args[1]}")
         else:  # lin
             out.emit(f"{v} = {args[0]}")
             if need_cs:

@@ -189,6 +189,8 @@ def body_c(plan: AnalyticIK) -> str:
                 out.emit(f"const double {cn} = {v}_.c, {sn} = {v}_.s;")
             out.emit(f"const int fl_{v} = {flag} | {v}_.flag;")
             flag = f"fl_{v}"
+        elif st.kind == "sum":
+            out.emit(f"const double {cn} = {args[0]}, {sn} = {args[1]};")
         else:  # lin
             out.emit(f"const double {v} = {args[0]};")
             if need_cs:
