@@ -183,7 +183,7 @@ def body_c(plan: AnalyticIK) -> str:
             continue
         if st.kind == "sp1":
             out.emit(f"sk_ang_t {v}_;")
-            out.emit(f"sk_sp1({args[0]}, {args[1]}, {_free(st)}, &{v}_);")
+            out.emit(f"{'sk_sp1' if need_cs else 'sk_sp1a'}({args[0]}, {args[1]}, {_free(st)}, &{v}_);")
             out.emit(f"const double {v} = {v}_.t;")
             if need_cs:
                 out.emit(f"const double {cn} = {v}_.c, {sn} = {v}_.s;")
@@ -259,9 +259,10 @@ def _emit_region(
         for sym, e in temps:
             out.emit(f"const double {sym} = {pr.doprint(e)};")
         args = [pr.doprint(e) for e in values]
-        out.emit(f"sk_ang_t {st.var}_;")
-        out.emit(f"sk_sp1({args[0]}, {args[1]}, {_free(st)}, &{st.var}_);")
         names = _names(st, later[m])
+        out.emit(f"sk_ang_t {st.var}_;")
+        call = "sk_sp1" if len(names) == 3 else "sk_sp1a"
+        out.emit(f"{call}({args[0]}, {args[1]}, {_free(st)}, &{st.var}_);")
         out.emit(f"{st.var} = {st.var}_.t, {st.var}_fl = {st.var}_.flag;")
         if len(names) == 3:
             out.emit(f"{names[1]} = {st.var}_.c, {names[2]} = {st.var}_.s;")
