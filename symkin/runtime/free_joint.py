@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, NoAnalyticIKError
+from symkin.errors import ConfigurationError, NoAnalyticIKError, SymkinError
 from symkin.model.ets import ET, ETS
 from symkin.model.kinematics import const_matrix
 from symkin.model.robot import Robot
@@ -102,7 +102,16 @@ class FreeJointIK:
                 f"{robot.name} with joint {joint} given: the remaining {self.sub.n}-joint arm has no closed "
                 f"form ({exc}); try the other end joint or the numerical IK: kin.ik(T)"
             ) from None
-        self._side_inv = np.linalg.inv(self._side)
+        side_inv = np.linalg.inv(self._side)
+        a = self._et.axis
+        K = np.zeros((4, 4))
+        if a.is_rotation:  # d/dx of the rotation about axis a: the skew matrix of e_a
+            i, k = ((1, 2), (2, 0), (0, 1))[a.index]
+            K[k, i], K[i, k] = 1.0, -1.0
+        else:
+            K[a.index, 3] = 1.0
+        P, Pi = (self._side, side_inv) if self.end == "first" else (side_inv, self._side)
+        self._gen = (P @ K @ Pi, P @ K @ K @ Pi)
         self._rev = np.array([e.is_revolute for e in robot.ets.joints], dtype=bool)
         self._qlim = np.asarray(robot.qlim, dtype=float)
         self.max_solutions = self.solver.max_solutions
@@ -112,20 +121,19 @@ class FreeJointIK:
         return f"FreeJointIK(robot={self.robot.name!r}, joint={self.joint}, rest={self.solver.kind!r})"
 
     def targets(self, T: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """The sub-robot's target poses, (N, V, 4, 4), for poses T (N, 4, 4) and values (V,)."""
-        E = np.broadcast_to(np.eye(4), (len(values), 4, 4)).copy()
-        a, x = self._et.axis, -self._et.sign * np.asarray(values, dtype=float)
-        if a.is_rotation:
-            i, k = ((1, 2), (2, 0), (0, 1))[a.index]
-            c, s = np.cos(x), np.sin(x)
-            E[:, i, i], E[:, i, k], E[:, k, i], E[:, k, k] = c, -s, s, c
+        """The sub-robot's target poses, (N, V, 4, 4), for poses T (N, 4, 4) and values (V,):
+        ``G(v) T`` (first joint) or ``T G(v)`` (last) with ``G(v) = I + sin(x) K1 + (1 - cos x) K2``
+        (revolute) or ``I + x K1`` (prismatic), ``x = -v`` (the joint's sign folded in) and
+        ``K1, K2`` the joint's generator and its square conjugated by the constant side."""
+        x = -self._et.sign * np.asarray(values, dtype=float)
+        K1, K2 = self._gen
+        if self._et.axis.is_rotation:
+            G = np.eye(4) + np.sin(x)[:, None, None] * K1 + (1.0 - np.cos(x))[:, None, None] * K2
         else:
-            E[:, a.index, 3] = x
+            G = np.eye(4) + x[:, None, None] * K1
         if self.end == "first":
-            L = self._side @ E @ self._side_inv  # (V, 4, 4)
-            return np.einsum("vab,nbc->nvac", L, T)
-        Rr = self._side_inv @ E @ self._side
-        return np.einsum("nab,vbc->nvac", T, Rr)
+            return np.matmul(G[None], T[:, None])
+        return np.matmul(T[:, None], G[None])
 
     def values(self, values: Any) -> np.ndarray:
         """``values`` as a 1-D array without repeats (within DUPLICATE_TOL, mod 2 pi for a revolute
@@ -164,7 +172,7 @@ class FreeJointIK:
         """Every distinct solution with ``q[joint]`` one of ``values``: T (4, 4) -> (k, n); T
         (N, 4, 4) -> (N, V * S, n) with NaN rows after each pose's k_i solutions (V values, S the
         sub-robot's maximum)."""
-        Tb, single = check_pose(T)
+        Tb, single = _poses(T)
         v = self.values(values)
         N, V, n, j = len(Tb), len(v), self._n, self.joint
         Q0 = _rows(q0, N, single, n, "q0")
@@ -177,28 +185,31 @@ class FreeJointIK:
         Tv = np.ascontiguousarray(self.targets(Tb, v).reshape(N * V, 4, 4))
         q0s = None if Q0 is None else np.ascontiguousarray(np.repeat(Q0[:, keep], V, axis=0))
         ws = None if w is None else np.ascontiguousarray(w[keep])
-        sub = np.asarray(self.solver.ik_all(Tv, q0s, joint_limits, ws))  # (N*V, S, n-1)
+        try:  # the C solver checks each target pose; a bad one is reported as the pose given
+            sub = np.asarray(self.solver.ik_all(Tv, q0s, joint_limits, ws))  # (N*V, S, n-1)
+        except SymkinError:
+            check_pose(T)
+            raise
         S = sub.shape[1]
-        full = np.full((N, V, S, n), np.nan)
-        full[..., keep] = sub.reshape(N, V, S, n - 1)
-        vj = np.broadcast_to(v[None, :, None], (N, V, S))
-        full[..., j] = np.where(np.isnan(full[..., 0 if j else 1]), np.nan, vj)  # the given values as given
+        full = np.empty((N, V * S, n))
+        full[..., keep] = sub.reshape(N, V * S, n - 1)
+        full[..., j] = np.repeat(v, S)[None, :]  # the given values as given
+        ok = ~np.isnan(full[..., keep[0]])
         if joint_limits:
             lo, hi = self._qlim[:, j]
-            out = (full[..., j] < lo) | (full[..., j] > hi)
-            full[out] = np.nan
-        rows = full.reshape(N, V * S, n)
-        out = np.full((N, V * S, n), np.nan)
-        for i in range(N):
-            ok = rows[i][~np.isnan(rows[i, :, 0])]  # distinct: the values are, and per value the rows
-            if Q0 is not None and len(ok):
-                d = ((1.0 if w is None else w) * (ok - Q0[i]) ** 2).sum(axis=1)
-                ok = ok[np.argsort(d, kind="stable")]
-            out[i, : len(ok)] = ok
+            ok &= (full[..., j] >= lo) & (full[..., j] <= hi)
+        # rows of one value are distinct (the sub-robot's filter merged them) and so are the values
+        if Q0 is not None:
+            d = ((1.0 if w is None else w) * (full - Q0[:, None, :]) ** 2).sum(axis=2)
+            order = np.argsort(np.where(ok, d, np.inf), axis=1, kind="stable")
+        else:
+            order = np.argsort(~ok, axis=1, kind="stable")
+        full = np.take_along_axis(full, order[..., None], axis=1)
+        k = ok.sum(axis=1)
+        full[np.arange(V * S)[None, :] >= k[:, None]] = np.nan
         if single:
-            k = int((~np.isnan(out[0, :, 0])).sum())
-            return out[0, :k]
-        return out
+            return full[0, : int(k[0])]
+        return full
 
     def sweep(self, q0: np.ndarray | None, count: int = FREE_SWEEP) -> np.ndarray:
         """The default values of the given joint: ``count`` evenly over its limits (a revolute joint
@@ -272,6 +283,17 @@ class FreeJointIK:
         return IKResult(
             np.array(qs), np.array(ok), np.zeros(N, int), np.ones(N, int), np.array(res), tuple(why)
         )
+
+
+def _poses(T: Any) -> tuple[np.ndarray, bool]:
+    """T as (N, 4, 4) floats and whether it was one pose; the full check (check_pose) only when the
+    shape is wrong, the values are checked by the solver."""
+    Tb = np.asarray(T, dtype=float)
+    if Tb.shape == (4, 4):
+        return Tb[None], True
+    if Tb.ndim == 3 and Tb.shape[1:] == (4, 4):
+        return Tb, False
+    return check_pose(T)
 
 
 def _rows(q0: Any, N: int, single: bool, n: int, what: str) -> np.ndarray | None:
