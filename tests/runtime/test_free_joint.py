@@ -112,3 +112,23 @@ def test_errors_name_what_is_wrong():
         with pytest.raises(ConfigurationError, match="redundant arms"):
             ur5.ik_all(Tu, free_joint=(0, 0.3))
         assert len(ur5.ik_all(Tu))
+
+
+def test_reversed_arm_on_every_backend_agrees_with_c():
+    """The remaining arm of the Panda (solved reversed) gives the same rows on the NumPy and plain
+    Python backends as in C."""
+    robot = symkin.load("panda")
+    sub = free_joint_solver(robot, 6).sub
+    c = symkin.compile(sub)
+    q = sub.random_q(3, seed=9)
+    T = sub.fkine(q)
+    a = c.ik_all(T, joint_limits=False)
+    for backend in ("numpy", "casadi"):
+        b = symkin.compile(sub, backend=backend).ik_all(T, joint_limits=False)
+        np.testing.assert_allclose(np.nan_to_num(a, nan=9.0), np.nan_to_num(b, nan=9.0), atol=1e-12)
+    rows = a.reshape(-1, 6)
+    rows = rows[~np.isnan(rows[:, 0])]
+    assert (
+        len(rows)
+        and np.abs(sub.fkine(rows) - np.repeat(T, 8, 0)[~np.isnan(a.reshape(-1, 6)[:, 0])]).max() < 1e-10
+    )
