@@ -142,7 +142,11 @@ def cmd_derive(args: argparse.Namespace) -> int:
         text = ik_derivation(robot, fmt=args.format)
     else:
         text = derivation(
-            robot, fmt=args.format, symbolic_constants=args.symbolic_constants, simplify=not args.no_simplify
+            robot,
+            fmt=args.format,
+            symbolic_constants=args.symbolic_constants,
+            simplify=not args.no_simplify,
+            form=args.form,
         )
     if args.output:
         Path(args.output).write_text(text)
@@ -305,7 +309,38 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
     plt.close(fig)
 
 
+def _need_matplotlib() -> None:
+    """Fail before a long run when a plot was asked for and matplotlib is missing."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
+
+
+def _joint_counts(text: str) -> tuple[int, ...]:
+    try:
+        counts = tuple(int(x) for x in text.replace(",", " ").split())
+    except ValueError:
+        counts = ()
+    if not counts or any(c < 1 or c > 200 for c in counts):
+        raise UserError(f"--joints must be joint counts between 1 and 200 like '6,12,24,36', not {text!r}")
+    return counts
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
+    if args.what == "compile":
+        from symkin.bench.compile import format_compile, plot_compile, run_compile
+
+        joints = _joint_counts(args.joints)
+        if args.plot:
+            _need_matplotlib()
+        rows = run_compile(joints, seed=args.seed, reference=args.robot or "panda", progress=not args.json)
+        print(json.dumps(rows, indent=2) if args.json else format_compile(rows))
+        if args.plot:
+            plot_compile(rows, args.plot)
+            if not args.json:
+                print(f"plot written to {args.plot}")
+        return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -406,6 +441,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument(
         "--ik", action="store_true", help="write the closed-form inverse kinematics derivation instead"
     )
+    s.add_argument(
+        "--form",
+        choices=("auto", "expanded", "program"),
+        default="auto",
+        help="expanded: every result multiplied out; program: link frame by link frame with named "
+        "intermediates; auto (default): program when the expanded form is too large to read",
+    )
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
     s.set_defaults(func=cmd_derive)
 
@@ -439,13 +481,28 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
     s.set_defaults(func=cmd_servo)
 
-    s = sub.add_parser("bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I)")
-    s.add_argument("what", choices=("kin", "ik", "mmc"))
-    s.add_argument("--robot", help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc)")
+    s = sub.add_parser(
+        "bench",
+        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), compile (cold, by length)",
+    )
+    s.add_argument("what", choices=("kin", "ik", "mmc", "compile"))
+    s.add_argument(
+        "--robot",
+        help="robot (default: panda for kin and compile, ur5 for ik, the paper's three for mmc)",
+    )
+    s.add_argument(
+        "--joints",
+        default="6,12,24,36",
+        help="compile: joint counts of the random chains (default 6,12,24,36)",
+    )
     s.add_argument("--batch", type=int, default=100_000, help="kin: batch size (default 100000)")
     s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
     s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--plot", metavar="PNG", help="mmc: write a Fig. 3 style plot of one task")
+    s.add_argument(
+        "--plot",
+        metavar="PNG",
+        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints",
+    )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
     s.add_argument("--starts", type=int, default=32, help="ik --analytic: LM searches per pose for sampling")
     s.add_argument("--json", action="store_true", help="print JSON")

@@ -18,8 +18,8 @@ import numpy as np
 
 from symkin.emit.c.build import cache_dir
 from symkin.errors import CompileError, SymkinError
+from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.model.robot import Robot, as_batch
-from symkin.runtime.frames import ChainTables, frame_index, frame_jacobian
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
 __all__ = ["compile", "generate", "write_generated", "BACKENDS", "STRATEGIES", "cache_dir"]
@@ -51,7 +51,9 @@ STRATEGIES = ("expanded", "program")
 
 def _check_strategy(strategy: str | None) -> None:
     if strategy is not None and strategy not in STRATEGIES:
-        raise SymkinError(f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)} (or None: by size)")
+        raise SymkinError(
+            f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)} (or None: by size)"
+        )
 
 
 def generate(

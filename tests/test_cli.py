@@ -181,3 +181,24 @@ def test_derive_ik(capsys):
     assert code == 0 and "Subproblem 4" in out and "Branches" in out
     code, out, _ = run(capsys, "derive", "stanford", "--ik", "--format", "latex")
     assert code == 0 and out.lstrip().startswith("\\documentclass") and "\\[" in out
+
+
+def test_derive_long_chain_shows_named_intermediates(capsys):
+    ets = " ".join(f"R{'xyz'[j % 3]}(q{j}) tx(0.1) tz(0.05)" for j in range(10))
+    code, out, _ = run(capsys, "derive", ets)
+    assert code == 0 and "\\zeta_{" in out and "one from the previous" in out
+    code, out, _ = run(capsys, "derive", "planar3", "--form", "program")
+    assert code == 0 and "\\zeta_{" in out
+
+
+def test_bench_compile_runs_small(capsys, tmp_path):
+    pytest.importorskip("matplotlib")
+    plot = tmp_path / "compile.png"
+    code, out, _ = run(
+        capsys, "bench", "compile", "--robot", "planar2", "--joints", "3,11", "--plot", str(plot)
+    )
+    assert code == 0, out
+    assert "planar2" in out and "chain3_0" in out and "chain11_0" in out and "program" in out
+    assert plot.stat().st_size > 1000
+    code, out, err = run(capsys, "bench", "compile", "--joints", "6,x")
+    assert code == 2 and "--joints" in err

@@ -42,6 +42,12 @@ def random_chain(n: int, seed: int = 0, name: str | None = None) -> Any:
     return Robot.from_ets(" ".join(parts), name=name or f"chain{n}_{seed}")
 
 
+def _cpu_s() -> float:
+    """CPU seconds of this process and its finished children (the compiler)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 def _peak_mb() -> tuple[float, float]:
     """Peak resident memory (MB) of this process and of the largest child it waited for."""
     scale = 1 / 1024 if sys.platform != "darwin" else 1 / 1024**2
@@ -61,6 +67,7 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
 
     robot = random_chain(int(spec), seed) if spec.isdigit() else resolve_robot(spec)
     out: dict[str, Any] = {"robot": robot.name, "n": robot.n}
+    cpu0 = _cpu_s()
     t0 = time.perf_counter()
     derived = derive_kinematics(robot)
     t1 = time.perf_counter()
@@ -68,15 +75,18 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     t2 = time.perf_counter()
     files = render_c(robot, functions, "symkin bench compile")
     t3 = time.perf_counter()
+    cpu3 = _cpu_s()
     render_numpy(robot, functions, "symkin bench compile")
     render_casadi(robot, functions, "symkin bench compile")
     t4 = time.perf_counter()
+    cpu4 = _cpu_s()
     name, path = compile_c(files)
     t5 = time.perf_counter()
     module = load_extension(name, path)
     q = robot.random_q(seed=1)
     err = float(np.abs(module.jacob0(q) - robot.jacob0(q)).max())
     t6 = time.perf_counter()
+    cpu6 = _cpu_s()
     by_name = {f.name: f.code.counts for f in functions}
     own, child = _peak_mb()
     out.update(
@@ -88,6 +98,7 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
         gcc_s=t5 - t4,
         load_s=t6 - t5,
         total_c_s=(t3 - t0) + (t6 - t4),
+        cpu_c_s=(cpu6 - cpu0) - (cpu4 - cpu3),
         ops_fk_j_h=fk_j_h_counts(derived).total,
         ops_fk_j=fk_j_h_counts(derived, hessian=False).total,
         ops_all=sum((c for c in by_name.values()), OpCounts()).total,
@@ -117,7 +128,10 @@ def measure(spec: str, seed: int = 0, timeout: float = 1800) -> dict[str, Any]:
 
 
 def run_compile(
-    joints: Sequence[int] = DEFAULT_JOINTS, seed: int = 0, reference: str | None = "panda", progress: bool = False
+    joints: Sequence[int] = DEFAULT_JOINTS,
+    seed: int = 0,
+    reference: str | None = "panda",
+    progress: bool = False,
 ) -> list[dict[str, Any]]:
     """One cold compile per chain length (and of ``reference``), each in its own process."""
     from tqdm import tqdm
@@ -129,21 +143,23 @@ def run_compile(
 def format_compile(rows: list[dict[str, Any]]) -> str:
     head = (
         "| robot | joints | strategy | derive s | code s | C source s | gcc s | load s | total (to C) s "
-        "| ops FK+J+H | ops/joint | ops FK+J | peak MB (python / gcc) |"
+        "| CPU s | ops FK+J+H | ops/joint | ops FK+J | peak MB (python / gcc) |"
     )
-    lines = [head, "|" + "---|" * 13]
+    lines = [head, "|" + "---|" * 14]
     for r in rows:
         lines.append(
             f"| {r['robot']} | {r['n']} | {r['strategy']} | {r['derive_s']:.2f} | {r['cse_s']:.2f} | "
             f"{r['render_c_s']:.2f} | {r['gcc_s']:.2f} | {r['load_s']:.2f} | **{r['total_c_s']:.2f}** | "
+            f"{r['cpu_c_s']:.2f} | "
             f"{r['ops_fk_j_h']} | {r['ops_fk_j_h'] / r['n']:.0f} | {r['ops_fk_j']} | "
             f"{r['peak_mb']:.0f} / {r['gcc_peak_mb']:.0f} |"
         )
     lines.append("")
     lines.append(
-        "Cold cache, each robot in a fresh process. total = derive + code + C source + gcc + load (what "
-        "`symkin.compile(robot, 'c')` costs the first time); the NumPy and CasADi sources take a "
-        "further " + ", ".join(f"{r['render_py_s']:.2f}" for r in rows) + " s."
+        "Cold cache, each robot in a fresh process. total = derive + code + C source + gcc + load, wall "
+        "clock (what `symkin.compile(robot, 'c')` costs the first time); CPU s = the same in CPU time of "
+        "Python and the compiler, which a loaded machine inflates less. Rendering the NumPy and "
+        "CasADi sources as well takes a further " + ", ".join(f"{r['render_py_s']:.2f}" for r in rows) + " s."
     )
     return "\n".join(lines)
 
@@ -159,7 +175,12 @@ def plot_compile(rows: list[dict[str, Any]], path: str) -> None:
     n = [r["n"] for r in chains]
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
     bottom = np.zeros(len(chains))
-    for key, label in (("derive_s", "derive"), ("cse_s", "code"), ("render_c_s", "C source"), ("gcc_s", "gcc")):
+    for key, label in (
+        ("derive_s", "derive"),
+        ("cse_s", "code"),
+        ("render_c_s", "C source"),
+        ("gcc_s", "gcc"),
+    ):
         v = np.array([r[key] for r in chains])
         a.bar([str(x) for x in n], v, bottom=bottom, label=label)
         bottom += v

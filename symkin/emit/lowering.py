@@ -44,6 +44,9 @@ class PrintedFunction:
     scratch: tuple[PrintedOutput, ...] = ()  # local arrays written by lines, read by loops
     hessians: tuple[PrintedHessian, ...] = ()
     strategy: str = "expanded"
+    delegate: str = ""  # the function this one calls instead of having code of its own
+    delegate_outs: tuple[str, ...] = ()  # that function's outputs, in order
+    delegate_pick: tuple[int, ...] = ()  # positions of this function's outputs among them
 
 
 def _print(printer: CodePrinter, e: sp.Expr) -> str:
@@ -63,6 +66,8 @@ def _size(shape: tuple[int, ...]) -> int:
 def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
     """Print every intermediate and output of ``f``; inputs limited to the joints used."""
     code = f.code
+    if f.delegate:
+        return _lower_delegate(f)
     used: set[sp.Symbol] = set()
     for _, e in code.intermediates:
         used |= e.free_symbols
@@ -92,4 +97,28 @@ def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
         tuple(scratch),
         tuple(hessians),
         code.strategy,
+    )
+
+
+def _lower_delegate(f: KinFunction) -> PrintedFunction:
+    """A function that calls ``f.delegate``: its outputs and the callee's others as local arrays."""
+    code = f.code
+    n = len(code.inputs)
+    shapes = [(name, shape) for name, (shape, _) in code.outputs.items()]
+    shapes += [(h.out, (n, 6, n)) for h in code.hessians]
+    every = [PrintedOutput(name, shape, _size(shape), ()) for name, shape in shapes]
+    outs = tuple(o for o in every if o.name not in code.scratch)
+    return PrintedFunction(
+        f.name,
+        f.doc,
+        str(code.counts),
+        (),
+        (),
+        outs,
+        tuple(o for o in every if o.name in code.scratch),
+        (),
+        code.strategy,
+        delegate=f.delegate or "",
+        delegate_outs=tuple(o.name for o in every),
+        delegate_pick=tuple(i for i, o in enumerate(every) if o.name not in code.scratch),
     )

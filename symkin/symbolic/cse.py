@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 if TYPE_CHECKING:
     from symkin.symbolic.program import HessianLoop
@@ -104,16 +105,22 @@ def floatify(expr: sp.Expr, memo: dict[sp.Basic, sp.Expr] | None = None) -> sp.E
     memo = {} if memo is None else memo
     if expr in memo:
         return memo[expr]
+    numeric: dict[sp.Basic, bool] = {}  # sympy's is_number recurses: computed bottom-up instead
     for e in _postorder([expr]):
+        if e.is_Atom or not e.args:
+            numeric[e] = bool(e.is_number)
+        else:
+            numeric[e] = all(numeric.get(a, False) for a in e.args) and not isinstance(e, AppliedUndef)
         if e in memo:
             continue
-        if e.is_number:
+        if numeric[e]:
             memo[e] = e if e.is_Rational else sp.Float(float(sp.N(e, 30)), 17)
         elif e.is_Atom or not e.args:
             memo[e] = e
         else:
             args = tuple(memo[a] for a in e.args)
-            memo[e] = e if args == e.args else e.func(*args, evaluate=False)
+            same = all(a is b for a, b in zip(args, e.args))  # == would recurse on deep arguments
+            memo[e] = e if same else e.func(*args, evaluate=False)
     return memo[expr]
 
 

@@ -40,9 +40,7 @@ def _is_cheap(e: sp.Expr) -> bool:
     """Values used in place rather than named: numbers (exact constants), symbols, negated symbols."""
     if e.is_Atom or e.is_number:
         return True
-    if e.is_Mul and len(e.args) == 2 and e.args[0] == -1 and e.args[1].is_Atom:
-        return True
-    return False
+    return bool(e.is_Mul and len(e.args) == 2 and e.args[0] == -1 and e.args[1].is_Atom)
 
 
 class Program:
@@ -149,6 +147,7 @@ def _walk(
     constant: Callable[[Const], sp.Expr],
     inverse: bool,
     links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] | None = None,
+    marks: list[tuple[str, int]] | None = None,
 ) -> tuple[_Walk, list[Frame]]:
     """Walk the chain (or, ``inverse``, the inverse chain from the end effector), recording each
     joint's axis and origin just before it and (into ``links``) the pose right after it."""
@@ -171,6 +170,8 @@ def _walk(
             W.translate(i, value)
         if links is not None and e.is_joint:
             links.append(W.pose())
+            if marks is not None:
+                marks.append((f"link {len(links) - 1}", len(P.lines)))
     return W, frames
 
 
@@ -188,7 +189,8 @@ class KinematicProgram:
     ``Je`` (6xn, rows (v, omega), eqs 31-34 and eq 16). ``order`` lists the joint index of each
     joint along the chain and ``revolute`` its kind. ``H0`` and ``He`` (n matrices 6xn,
     ``H[i] = dJ/dq_i``) are the Hessians written out by the rules of :class:`HessianLoop`, or None
-    when they are left to loops.
+    when they are left to loops. ``marks`` ends each section of ``lines``: ``("link k", end)``
+    for each link frame, then ``"T"``, ``"J0"``, ``"Je"`` and ``"H"``.
     """
 
     name: str
@@ -203,6 +205,7 @@ class KinematicProgram:
     revolute: tuple[bool, ...]
     H0: tuple[sp.Matrix, ...] | None = None
     He: tuple[sp.Matrix, ...] | None = None
+    marks: tuple[tuple[str, int], ...] = ()
 
     @property
     def n(self) -> int:
@@ -222,14 +225,17 @@ def derive_program(
     n = ets.n
     P = Program()
     links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] = []
-    W, frames = _walk(P, ets, qs, constant, False, links)
+    marks: list[tuple[str, int]] = []
+    W, frames = _walk(P, ets, qs, constant, False, links, marks)
     cols, pe = W.pose()
+    marks.append(("T", len(P.lines)))
     zero3 = [sp.Integer(0)] * 3
     J0 = sp.zeros(6, n)
     for j, revolute, w, p in frames:
         v = _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])) if revolute else w
         J0[:3, j] = sp.Matrix(v)
         J0[3:, j] = sp.Matrix(w if revolute else zero3)
+    marks.append(("J0", len(P.lines)))
     # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
     _, inv = _walk(P, ets, qs, constant, True)
     Je = sp.zeros(6, n)
@@ -237,10 +243,12 @@ def derive_program(
         v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'
         Je[:3, j] = sp.Matrix(v)
         Je[3:, j] = sp.Matrix(u if revolute else zero3)
+    marks.append(("Je", len(P.lines)))
     order = tuple(f[0] for f in frames)
     H0 = He = None
     if hessians:
         H0, He = _hessians(P, J0, Je, order)
+    marks.append(("H", len(P.lines)))
     return KinematicProgram(
         name=name,
         ets=ets,
@@ -254,6 +262,7 @@ def derive_program(
         revolute=tuple(f[1] for f in frames),
         H0=H0,
         He=He,
+        marks=tuple(marks),
     )
 
 

@@ -92,7 +92,7 @@ static int opt_arg_(PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, 
     return 1;
 }
 
-static PyObject *frame_index_ = NULL; /* symkin.runtime.frames.frame_index */
+static PyObject *frame_index_ = NULL; /* symkin.model.frames.frame_index */
 
 /* A link frame index in [0, NQ), -1 for the end effector (None), -2 with an exception set. */
 static int frame_arg_(PyObject *obj)
@@ -481,7 +481,7 @@ PyMODINIT_FUNC PyInit__symkin_ur3_1749278891ad(void)
     Py_DECREF(robot);
     if (!as_batch_)
         return NULL;
-    PyObject *frames = PyImport_ImportModule("symkin.runtime.frames");
+    PyObject *frames = PyImport_ImportModule("symkin.model.frames");
     if (!frames)
         return NULL;
     frame_index_ = PyObject_GetAttrString(frames, "frame_index");

@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.runtime.frames import ChainTables, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 
 ROBOT_NAME = 'ur3'
 N_JOINTS = 6

@@ -36,6 +36,8 @@ def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
                 "outs": table(p.outs),
                 "scratch": table(p.scratch),
                 "hessians": p.hessians,
+                "delegate": p.delegate,
+                "delegate_pick": p.delegate_pick,
             }
         )
     return render_python_module(
