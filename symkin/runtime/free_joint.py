@@ -13,9 +13,10 @@ Panda -- a geometrical solver for 7-DOF manipulators with unconventional design,
 KUKA LBR iiwa 7 with ``q1`` or ``q7`` given. A middle joint is refused: held at ``v`` it changes the
 geometry of the rest with ``v`` (for example it makes two axes parallel only at ``v = 0``).
 
-The returned rows are full configurations (the given value in column ``j``), verified, wrapped and
-filtered as in :mod:`symkin.runtime.analytic_ik`, duplicates across values merged, ordered by the
-weighted distance to ``q0`` when given (else by value, then branch). No sympy here.
+The returned rows are full configurations (the given value in column ``j``, as given), verified,
+wrapped and filtered as in :mod:`symkin.runtime.analytic_ik`; values equal mod 2 pi count once (so
+the rows are distinct); ordered by the weighted distance to ``q0`` when given (else by value, then
+branch). No sympy here.
 """
 
 from __future__ import annotations
@@ -48,7 +49,8 @@ def _const(ets: tuple[ET, ...]) -> np.ndarray:
 def sub_robot(robot: Robot, j: int) -> tuple[Robot, str, np.ndarray, ET]:
     """The arm without joint ``j`` (joints after it renumbered down by one), which end of the chain
     ``j`` is (``"first"`` or ``"last"``), the constant transform on that side (``P`` or ``S``) and
-    the joint's ET. ConfigurationError for a joint in the middle of the chain."""
+    the joint's ET. ConfigurationError for a bad index, NoAnalyticIKError for a joint in the middle
+    of the chain."""
     if not isinstance(j, (int, np.integer)) or isinstance(j, bool) or not 0 <= j < robot.n:
         raise ConfigurationError(f"free_joint must be a joint index 0..{robot.n - 1}, not {j!r}")
     j = int(j)
