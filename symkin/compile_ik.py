@@ -28,7 +28,12 @@ _TEMPLATES = (
     "numpy/analytic_ik.py.j2",
     "python/analytic_ik.py.j2",
 )
-_SOURCES = ("symbolic/ik_geometry.py", "symbolic/analytic_ik.py", "emit/analytic_ik.py")
+_SOURCES = (
+    "symbolic/ik_geometry.py",
+    "symbolic/analytic_ik.py",
+    "emit/analytic_ik.py",
+    "emit/analytic_ik_c.py",
+)
 _LOADED: dict[str, Any] = {}
 
 

@@ -18,7 +18,18 @@ from symkin.symbolic.analytic_ik import derive_analytic
 __all__ = ["ik_derivation"]
 
 DISPLAY_MAX_OPS = 400  # larger coefficients are summarised by their size
-_NAMES = {"A": "A", "B": "B", "C": "C", "y": "y", "x": "x", "b": "b", "D": "D", "value": r"\text{value}"}
+_NAMES = {
+    "A": "A",
+    "B": "B",
+    "C": "C",
+    "y": "y",
+    "x": "x",
+    "b": "b",
+    "D": "D",
+    "value": r"\text{value}",
+    "c": r"\cos",
+    "s": r"\sin",
+}
 
 
 def _latex(x: sp.Expr) -> str:
@@ -37,6 +48,7 @@ _RESULT = {
     "sp1": "${v} = \\operatorname{{atan2}}(y, x)$; free (a singularity) when $x = y = 0$.",
     "quad": "Two branches: ${v} = -b \\pm \\sqrt{{D}}$ (no solution when $D < 0$).",
     "lin": "",
+    "sum": "",
 }
 
 
@@ -55,6 +67,8 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
         label = (
             f"q_{{{st.joint + 1}}}" if st.joint is not None else (r"\theta" if st.var == "th" else r"\varphi")
         )
+        if st.kind == "sum":
+            label = st.var
         exprs = [(_NAMES[k], _latex(v)) for k, v in st.exprs]
         steps.append({"title": st.title.replace("$", ""), "statement": st.statement, "exprs": exprs,
                       "result": _RESULT[st.kind].format(v=label)})  # fmt: skip
@@ -69,6 +83,12 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
         "planar3": "All three axes are parallel (planar arm): the summed angle, then a two-link problem. ",
         "planar2": "Both axes are parallel (planar arm): a two-link problem; the orientation is checked. ",
     }[s.kind]
+    if s.reversed:
+        text = (
+            "Read from the tool: the chain reversed, $T^{-1} = e^{[S'_n] q_n} \\cdots e^{[S'_1] q_1} M^{-1}$ "
+            "with $h'_k = -R_M^T h_k$ through $R_M^T (p_k - t_M)$, solved for the target $T^{-1}$ "
+            "(the table above and the axis numbers below are those of the reversed chain). " + text
+        )
     if s.position == "parallel23":
         text += "Axes 2 and 3 are parallel."
     elif s.position == "intersect12" and s.shoulder is not None:

@@ -4,8 +4,9 @@ plain Python through the templates ``templates/{c,numpy,python}/analytic_ik*.j2`
 The body is a nest of blocks, one per step: the step's coefficients (CSE'd), then the angle, its
 cosine and sine (from the subproblem's own atan2/acos arguments, no extra trig calls), and, for a
 two-branch step, a loop over the sign. Each leaf writes one candidate row into its fixed slot
-(``sum_k i_k 2^k`` over the branch indices) with a flag saying whether a subproblem was clamped or
-singular (such rows are verified against the pose before they are returned).
+(``sum_k i_k 2^(B-1-k)`` over the B branch indices, so leaves come in slot order) with a flag
+saying whether a subproblem was clamped or singular (such rows are verified against the pose
+before they are returned). The C body is :mod:`symkin.emit.analytic_ik_c`.
 """
 
 from __future__ import annotations
@@ -66,98 +67,59 @@ def _cs_names(var: str) -> tuple[str, str]:
 
 
 def _body(plan: AnalyticIK, dialect: str) -> str:
-    c = dialect == "c"
-    pr = CPrinter() if c else (NumPyPrinter() if dialect == "numpy" else _MathPrinter())
+    """The NumPy or plain-Python body: every step in order, a loop per two-branch step."""
+    pr = NumPyPrinter() if dialect == "numpy" else _MathPrinter()
     out = _Out([], 1)
     later = _used_later(plan)
     flag = "0"
     slot_terms: list[str] = []
     bit = 0
-    closers = 0
     for st, used in zip(plan.steps, later):
         v = st.var
         temps, values = _cse([e for _, e in st.exprs], f"{v}_x")
         for sym, e in temps:
-            out.emit(f"const double {sym} = {pr.doprint(e)};" if c else f"{sym} = {pr.doprint(e)}")
+            out.emit(f"{sym} = {pr.doprint(e)}")
         args = [pr.doprint(e) for e in values]
         free = (
-            (f"qf[{st.joint}]" if c else f"qf[..., {st.joint}]" if dialect == "numpy" else f"qf[{st.joint}]")
-            if st.joint is not None
-            else "0.0"
+            "0.0"
+            if st.joint is None
+            else (f"qf[..., {st.joint}]" if dialect == "numpy" else f"qf[{st.joint}]")
         )
         cn, sn = _cs_names(v)
         need_cs = st.revolute and (cn in used or sn in used)
         if st.kind in ("sp4", "quad"):
-            if c:
-                if st.kind == "sp4":
-                    out.emit(f"sk_sp4_t {v}_;")
-                    out.emit(f"if (sk_sp4({args[0]}, {args[1]}, {args[2]}, {free}, &{v}_)) {{")
-                else:
-                    out.emit(f"sk_quad_t {v}_;")
-                    out.emit(f"if (sk_quad({args[0]}, {args[1]}, &{v}_)) {{")
-                out.depth += 1
-                out.emit(f"for (int {v}_i = 0; {v}_i < 2; ++{v}_i) {{")
-                out.depth += 1
-                out.emit(f"const double {v}_sg = {v}_i ? -1.0 : 1.0;")
-                if st.kind == "sp4":
-                    out.emit(f"const double {v} = {v}_.b + {v}_sg * {v}_.d;")
-                    if need_cs:
-                        out.emit(f"const double {cn} = {v}_.cb * {v}_.cd - {v}_sg * {v}_.sb * {v}_.sd;")
-                        out.emit(f"const double {sn} = {v}_.sb * {v}_.cd + {v}_sg * {v}_.cb * {v}_.sd;")
-                else:
-                    out.emit(f"const double {v} = -{v}_.b + {v}_sg * {v}_.r;")
-                out.emit(f"const int fl_{v} = {flag} | {v}_.flag;")
-                closers += 2
+            if st.kind == "sp4":
+                names = ", ".join(f"{v}_{x}" for x in ("b", "d", "cb", "sb", "cd", "sd", "f"))
+                out.emit(f"{names} = _sp4({args[0]}, {args[1]}, {args[2]}, {free})")
             else:
-                if st.kind == "sp4":
-                    names = ", ".join(f"{v}_{x}" for x in ("b", "d", "cb", "sb", "cd", "sd", "f"))
-                    out.emit(f"{names} = _sp4({args[0]}, {args[1]}, {args[2]}, {free})")
-                else:
-                    out.emit(f"{v}_b, {v}_r, {v}_f = _quad({args[0]}, {args[1]})")
-                out.emit(f"for {v}_i in (0, 1):")
-                out.depth += 1
-                out.emit(f"{v}_sg = 1.0 - 2.0 * {v}_i")
-                if st.kind == "sp4":
-                    out.emit(f"{v} = {v}_b + {v}_sg * {v}_d")
-                    if need_cs:
-                        out.emit(f"{cn} = {v}_cb * {v}_cd - {v}_sg * {v}_sb * {v}_sd")
-                        out.emit(f"{sn} = {v}_sb * {v}_cd + {v}_sg * {v}_cb * {v}_sd")
-                else:
-                    out.emit(f"{v} = -{v}_b + {v}_sg * {v}_r")
-                out.emit(f"fl_{v} = {flag} | {v}_f")
-            slot_terms.append(f"{v}_i * {1 << bit}")
+                out.emit(f"{v}_b, {v}_r, {v}_f = _quad({args[0]}, {args[1]})")
+            out.emit(f"for {v}_i in (0, 1):")
+            out.depth += 1
+            out.emit(f"{v}_sg = 1.0 - 2.0 * {v}_i")
+            if st.kind == "sp4":
+                out.emit(f"{v} = {v}_b + {v}_sg * {v}_d")
+                if need_cs:
+                    out.emit(f"{cn} = {v}_cb * {v}_cd - {v}_sg * {v}_sb * {v}_sd")
+                    out.emit(f"{sn} = {v}_sb * {v}_cd + {v}_sg * {v}_cb * {v}_sd")
+            else:
+                out.emit(f"{v} = -{v}_b + {v}_sg * {v}_r")
+            out.emit(f"fl_{v} = {flag} | {v}_f")
+            slot_terms.append(f"{v}_i")
             bit += 1
             flag = f"fl_{v}"
         elif st.kind == "sp1":
-            if c:
-                out.emit(f"sk_ang_t {v}_;")
-                out.emit(f"sk_sp1({args[0]}, {args[1]}, {free}, &{v}_);")
-                out.emit(f"const double {v} = {v}_.t;")
-                if need_cs:
-                    out.emit(f"const double {cn} = {v}_.c, {sn} = {v}_.s;")
-                out.emit(f"const int fl_{v} = {flag} | {v}_.flag;")
-            else:
-                out.emit(f"{v}, {cn}, {sn}, {v}_f = _sp1({args[0]}, {args[1]}, {free})")
-                out.emit(f"fl_{v} = {flag} | {v}_f")
+            out.emit(f"{v}, {cn}, {sn}, {v}_f = _sp1({args[0]}, {args[1]}, {free})")
+            out.emit(f"fl_{v} = {flag} | {v}_f")
             flag = f"fl_{v}"
+        elif st.kind == "sum":
+            out.emit(f"{cn}, {sn} = {args[0]}, {args[1]}")
         else:  # lin
-            out.emit(f"const double {v} = {args[0]};" if c else f"{v} = {args[0]}")
+            out.emit(f"{v} = {args[0]}")
             if need_cs:
-                fn = "" if c else ("np." if dialect == "numpy" else "math.")
-                out.emit(
-                    f"const double {cn} = cos({v}), {sn} = sin({v});"
-                    if c
-                    else f"{cn}, {sn} = {fn}cos({v}), {fn}sin({v})"
-                )
-    slot = " + ".join(slot_terms) or "0"
-    qs = ", ".join(plan.outputs)
-    if c:
-        out.emit(f"sk_put_(Q, F, {slot}, {flag}, (const double[NQ]){{{qs}}});")
-        for _ in range(closers):
-            out.depth -= 1
-            out.emit("}")
-    else:
-        out.emit(f"_put(Q, F, {slot}, {flag}, ({qs},))")
+                fn = "np." if dialect == "numpy" else "math."
+                out.emit(f"{cn}, {sn} = {fn}cos({v}), {fn}sin({v})")
+    slot = " + ".join(f"{t} * {1 << (bit - 1 - b)}" for b, t in enumerate(slot_terms)) or "0"
+    out.emit(f"_put(Q, F, {slot}, {flag}, ({', '.join(plan.outputs)},))")
     return "\n".join(out.lines)
 
 
@@ -177,6 +139,7 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
     """The generated files of the closed form for ``backend`` ("c", "numpy" or "casadi", the last
     rendered as plain Python)."""
     from symkin import __version__
+    from symkin.emit.analytic_ik_c import body_c
 
     dialect = BACKEND_DIALECT[backend]
     name = getattr(robot, "name", plan.name)
@@ -194,7 +157,7 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         "check": plan.check,
         "revolute": [int(r) for r in plan.revolute],
         "pose": pose,
-        "body": _body(plan, dialect),
+        "body": body_c(plan) if dialect == "c" else _body(plan, dialect),
         "fk_lines": fk_lines,
         "fk_values": fk_values,
         "joints": joints,

@@ -38,6 +38,11 @@ def invalid_input(what: str, value: Any, n: int) -> None:
     if what == "pose":
         check_pose(value)
         raise ConfigurationError("invalid target pose")
+    if what == "free_joint":
+        raise ConfigurationError(
+            f"free_joint= is for redundant arms (7 joints or more); this arm has {n} and a closed form: "
+            "use ik_all(T) without it"
+        )
     raise ConfigurationError(
         f"{what} must be {n} finite numbers{' (>= 0)' if what == 'weights' else ''}"
         f"{' per target, (n,) or (N, n)' if what == 'q0' else ''}; got {np.asarray(value).shape!r} {value!r}"[
@@ -66,6 +71,9 @@ class AnalyticIK:
         self._rev = np.array([e.is_revolute for e in robot.ets.joints], dtype=bool)
         self._qlim = np.ascontiguousarray(robot.qlim, dtype=float)
         self._c = getattr(module, "ik_all", None) if backend == "c" else None
+        if backend == "c" and hasattr(module, "Solver"):
+            # the C method has ik_all's signature and the limits bound: no Python frame per call
+            self.ik_all = module.Solver(self._qlim, VERIFY_TOL).ik_all  # type: ignore[method-assign]
 
     def __repr__(self) -> str:
         return (

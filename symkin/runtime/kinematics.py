@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.errors import ConfigurationError
 from symkin.model.robot import AXES_ROWS, Robot, as_batch, jacobm_of, manipulability_of
 from symkin.runtime.ik import ik
 from symkin.runtime.manip import jacobm_one, manipulability_one
@@ -147,16 +148,26 @@ class Kinematics:
 
         ``method="analytic"``: the closed form (:meth:`ik_all`), returning the solution nearest
         ``q0`` (options ``q0``, ``weights``, ``joint_limits``, ``tol``); ``success=False`` with a
-        reason when the pose is out of reach or every solution is outside the joint limits.
+        reason when the pose is out of reach or every solution is outside the joint limits. For a
+        redundant arm ``free_joint=j`` sweeps joint ``j`` (64 values over its limits, or one turn,
+        plus ``q0[j]``) and ``free_joint=(j, values)`` tries the given values; see :meth:`ik_all`.
         """
         if not kwargs and self._ik_fast is not None:
             res = self._ik_fast(Tep)
             return res if res is not None else self._ik_solver.solve(Tep)  # None: Tep needs checking
         if kwargs.get("method") == "analytic":
             options = {k: v for k, v in kwargs.items() if k != "method"}
-            unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol"})
+            unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol", "free_joint"})
             if unknown:
-                raise TypeError(f"method='analytic' takes q0, weights, joint_limits, tol; not {unknown}")
+                raise TypeError(
+                    f"method='analytic' takes q0, weights, joint_limits, tol, free_joint; not {unknown}"
+                )
+            free = options.pop("free_joint", None)
+            if free is not None:
+                from symkin.runtime.free_joint import free_joint_solver, parse_free_joint
+
+                j, values = parse_free_joint(free)
+                return free_joint_solver(self.robot, j, self.backend).ik(Tep, values, **options)
             return self.analytic.ik(Tep, fkine=self.fkine, **options)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
@@ -184,13 +195,30 @@ class Kinematics:
 
         return analytic_refusal(self.robot, self.backend) is None
 
-    def ik_all(self, T: Any, q0: Any = None, joint_limits: bool = True, weights: Any = None) -> np.ndarray:
+    def ik_all(
+        self, T: Any, q0: Any = None, joint_limits: bool = True, weights: Any = None, free_joint: Any = None
+    ) -> np.ndarray:
         """Every distinct closed-form solution of the pose ``T`` (base frame).
 
         ``T`` (4, 4) -> (k, n), ordered by ``sum_j weights_j (q_j - q0_j)^2`` when ``q0`` is given;
         ``T`` (N, 4, 4) -> (N, S, n) with NaN rows after each pose's solutions (S: the arm's
         maximum, 8 for a 6R arm). Revolute joints are wrapped by 2 pi into the joint limits where a
         shift allows; with ``joint_limits`` rows outside them are dropped. See
-        :mod:`symkin.runtime.analytic_ik`.
+        :mod:`symkin.runtime.analytic_ik`. On the C backend later calls go straight to the compiled
+        solver (the same signature, plus ``tol``): no Python frame per pose.
+
+        ``free_joint=(j, values)`` (redundant arms): joint ``j``, the first or the last of the chain,
+        takes each of ``values`` (a number or a 1-D array) and the other joints are solved in closed
+        form; (N, 4, 4) -> (N, V * S, n). See :mod:`symkin.runtime.free_joint`.
         """
-        return self.analytic.ik_all(T, q0, joint_limits, weights)
+        if free_joint is not None:
+            from symkin.runtime.free_joint import free_joint_solver, parse_free_joint
+
+            j, values = parse_free_joint(free_joint)
+            if values is None:
+                raise ConfigurationError("ik_all needs the values of the free joint: free_joint=(j, values)")
+            return free_joint_solver(self.robot, j, self.backend).ik_all(T, values, q0, joint_limits, weights)
+        solver = self.analytic
+        if self.backend == "c":
+            self.__dict__["ik_all"] = solver.ik_all
+        return solver.ik_all(T, q0, joint_limits, weights)

@@ -22,7 +22,7 @@ needs. Branches: each subproblem 4 and each prismatic quadratic doubles them (at
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import sympy as sp
 
@@ -38,6 +38,8 @@ from symkin.symbolic.ik_geometry import (
     dot,
     geometry,
     is_zero,
+    parallel,
+    reverse,
     scale,
     snap,
     sub,
@@ -51,7 +53,8 @@ class Step:
     """One step of the solution.
 
     ``kind``: ``"sp4"`` (exprs A, B, C; two branches), ``"sp1"`` (exprs y, x), ``"quad"``
-    (exprs b, D: ``var = -b +- sqrt(D)``; two branches) or ``"lin"`` (expr value).
+    (exprs b, D: ``var = -b +- sqrt(D)``; two branches), ``"lin"`` (expr value) or ``"sum"`` (exprs
+    c, s: the cosine and sine of a summed angle by the addition formulas; no angle is formed).
     ``var`` is the solved variable (``q<j>`` for joint index j, or an auxiliary angle such as
     ``th``); ``joint`` its joint index (None for an auxiliary angle); ``revolute`` whether cos/sin
     of it are formed for later steps. ``title`` and ``statement`` (LaTeX) describe the step.
@@ -131,11 +134,14 @@ def _perp(h: Vec) -> Vec:
 
 
 def _norm2(v: Vec) -> sp.Expr:
-    return sp.expand(dot(v, v))
+    return dot(v, v)
 
 
 def _tidy(x: sp.Expr) -> sp.Expr:
-    return sp.expand(x)
+    """``x`` as derived (nested dot products: about half the arithmetic of the expanded sum and
+    no cancellation between its terms), exactly 0 or a single number when it expands to one."""
+    e = sp.expand(x)
+    return e if e == 0 or not e.free_symbols else x
 
 
 class _Builder:
@@ -334,11 +340,36 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
     )
 
 
+def _summed_rot(b: _Builder, k1: int, k2: int) -> sp.Matrix:
+    """``R(h_k1, q_k1) R(h_k2, q_k2) = R(h_k1, q_k1 + sigma q_k2)`` for parallel axes (sigma = +-1 as
+    they point the same way or not), with the summed angle's cosine and sine formed once by the
+    addition formulas (a step ``"sum"``): the wrist coefficients then use two symbols, not four."""
+    g = b.g
+    sigma = _same(g.h[k1], g.h[k2])
+    c1, s1 = b.cos_sin(b.name(k1))
+    c2, s2 = b.cos_sin(b.name(k2))
+    var = f"{g.joint[k1]}_{g.joint[k2]}"
+    sign = "+" if sigma > 0 else "-"
+    b.add(
+        "sum",
+        var,
+        None,
+        {"c": c1 * c2 - sigma * s1 * s2, "s": s1 * c2 + sigma * c1 * s2},
+        f"The summed angle {b.label(k1)} {sign} {b.label(k2)} of the parallel axes {k1 + 1} and {k2 + 1}",
+        rf"R(h_{k1 + 1}, {b.label(k1)})\, R(h_{k2 + 1}, {b.label(k2)}) = "
+        rf"R(h_{k1 + 1}, {b.label(k1)} {sign} {b.label(k2)})",
+    )
+    return b.rot(g.h[k1], var)
+
+
 def _wrist(b: _Builder, R0n: sp.Matrix) -> None:
     """Steps for the spherical wrist, joints 3, 4, 5 (chain order), given joints 0-2."""
     h = b.g.h
     L = b.label
-    R03 = b.joint_rot(0) * b.joint_rot(1) * b.joint_rot(2)
+    if b.g.revolute[1] and b.g.revolute[2] and parallel(h[1], h[2]):
+        R03 = b.joint_rot(0) * _summed_rot(b, 1, 2)
+    else:
+        R03 = b.joint_rot(0) * b.joint_rot(1) * b.joint_rot(2)
     v = _vec(R03.T * (R0n * _mat(h[5])))
     b.sp4(
         b.name(3),
@@ -530,11 +561,27 @@ def _fk(b: _Builder) -> tuple[sp.Expr, ...]:
 
 
 def derive_analytic(robot: Robot) -> AnalyticIK:
-    """Detect the arm's structure and derive its closed form; NoAnalyticIKError when there is none."""
-    g = geometry(snap(robot.ets))
-    s = classify(g)
+    """Detect the arm's structure and derive its closed form; NoAnalyticIKError when there is none.
+
+    A 6-joint arm whose structure only shows when the chain is read from the tool (three first
+    axes meeting in a point: a spherical shoulder) is solved reversed, for the target ``T^{-1}``."""
+    g0 = geometry(snap(robot.ets))
+    g = g0
+    try:
+        s = classify(g)
+    except NoAnalyticIKError as forward:
+        if g0.n != 6:
+            raise
+        g = reverse(g0)
+        try:
+            s = classify(g)
+        except NoAnalyticIKError:
+            raise forward from None
+        s = replace(s, reversed=True, summary=s.summary + " (chain read from the tool)")
     b = _Builder(g)
     R, pvec = pose_symbols()
+    if s.reversed:
+        R, pvec = R.T, -R.T * pvec
     RM = g.M[:3, :3]
     tM = (g.M[0, 3], g.M[1, 3], g.M[2, 3])
     R0n = R * RM.T
@@ -557,4 +604,5 @@ def derive_analytic(robot: Robot) -> AnalyticIK:
     rev = [False] * g.n
     for k, j in enumerate(g.joint):
         rev[j] = g.revolute[k]
-    return AnalyticIK(robot.name, g.n, s, g, tuple(b.steps), tuple(outputs), g.n < 6, _fk(b), tuple(rev))
+    fk = _fk(_Builder(g0))
+    return AnalyticIK(robot.name, g.n, s, g, tuple(b.steps), tuple(outputs), g.n < 6, fk, tuple(rev))

@@ -27,7 +27,16 @@ from symkin.errors import NoAnalyticIKError
 from symkin.model.ets import ET, ETS, Const
 from symkin.symbolic.kinematics import const_to_sympy
 
-__all__ = ["SNAP_TOL", "NoAnalyticIKError", "Geometry", "Structure", "geometry", "classify", "snap"]
+__all__ = [
+    "SNAP_TOL",
+    "NoAnalyticIKError",
+    "Geometry",
+    "Structure",
+    "geometry",
+    "classify",
+    "snap",
+    "reverse",
+]
 
 SNAP_TOL = 1e-10  # rad or m: floating-point constants this close to k*pi/2 or to 0 are snapped
 _ZERO = sp.Float("1e-25", 40)  # |x| below this (40-digit evaluation of an exact value) counts as 0
@@ -105,6 +114,27 @@ def geometry(ets: ETS) -> Geometry:
     return Geometry(tuple(joint), tuple(rev), tuple(hs), tuple(ps), M)
 
 
+def reverse(g: Geometry) -> Geometry:
+    """The chain read from the tool: ``T(q)^{-1} = M^{-1} e^{-[S_n] q_n} ... e^{-[S_1] q_1}
+    = e^{[S'_n] q_n} ... e^{[S'_1] q_1} M'`` with ``S' = -Ad_{M^{-1}} S`` (Lynch and Park, Modern
+    Robotics, 2017, eq 3.83): axes ``h' = -R_M^T h`` through ``p' = R_M^T (p - t_M)``, ``M' = M^{-1}``,
+    the joints in reverse order with the same variables. A spherical shoulder becomes a spherical wrist."""
+    RM = g.M[:3, :3]
+    tM = g.M[:3, 3]
+    hs = tuple(tuple(-(RM.T * sp.Matrix(h))) for h in reversed(g.h))
+    ps = tuple(tuple(sp.simplify(x) for x in RM.T * (sp.Matrix(p) - tM)) for p in reversed(g.p))
+    M = sp.eye(4)
+    M[:3, :3] = RM.T
+    M[:3, 3] = -RM.T * tM
+    return Geometry(
+        tuple(reversed(g.joint)),
+        tuple(reversed(g.revolute)),
+        hs,  # type: ignore[arg-type]
+        ps,  # type: ignore[arg-type]
+        M.applyfunc(sp.simplify),
+    )
+
+
 # -- exact tests ------------------------------------------------------------------------------
 def is_zero(x: sp.Expr) -> bool:
     """True when the exact value ``x`` is 0 (evaluated to 40 digits)."""
@@ -163,7 +193,9 @@ class Structure:
     ``"planar3"`` (3R, all axes parallel), ``"planar2"`` (2R, parallel axes).
     ``position`` (for spherical_wrist and position3): ``"parallel23"`` (axes 2, 3 parallel),
     ``"intersect12"`` (axes 1, 2 meet at ``shoulder``; joint 3 may be prismatic) or
-    ``"intersect23"`` (axes 2, 3 meet at ``elbow``).
+    ``"intersect23"`` (axes 2, 3 meet at ``elbow``). ``reversed``: the structure is that of the
+    chain read from the tool (:func:`reverse`; e.g. a spherical shoulder), and the axes, points and
+    numbers above refer to the reversed chain.
     """
 
     kind: str
@@ -172,6 +204,7 @@ class Structure:
     shoulder: Vec | None = None
     elbow: Vec | None = None
     summary: str = ""
+    reversed: bool = False
 
 
 def _position(g: Geometry, k0: int) -> tuple[str, Vec | None, Vec | None] | None:

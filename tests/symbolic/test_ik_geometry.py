@@ -69,3 +69,39 @@ def test_ets_and_dh_sources_agree():
     ets = "Rz(q) tz(0.5) Ry(q) tz(0.4) Ry(q) tz(0.3) Rz(q) Ry(q) Rz(q) tz(0.1)"
     plan = derive_analytic(Robot.from_ets(ets, name="e"))
     assert plan.structure.kind == "spherical_wrist"
+
+
+def test_reversed_chain_is_the_inverse_and_solves_a_spherical_shoulder():
+    """reverse() reads the chain from the tool: applied twice it gives the chain back, and a 6-joint
+    arm whose first three axes meet (the Panda without q7) is solved on the reversed chain."""
+    import numpy as np
+    import sympy as sp
+
+    from symkin.runtime.free_joint import sub_robot
+    from symkin.symbolic.ik_geometry import reverse
+
+    g = geometry(snap(load("puma560").ets))
+    back = reverse(reverse(g))
+    assert back.joint == g.joint and back.revolute == g.revolute
+    assert all(sp.simplify(a - b) == 0 for u, v in zip(back.h + back.p, g.h + g.p) for a, b in zip(u, v))
+    assert sp.simplify(back.M - g.M) == sp.zeros(4, 4)
+    sub = sub_robot(load("panda"), 6)[0]
+    with pytest.raises(NoAnalyticIKError):
+        classify(geometry(snap(sub.ets)))
+    plan = derive_analytic(sub)
+    assert plan.structure.reversed and plan.structure.kind == "spherical_wrist" and plan.max_solutions == 8
+    # the reversed chain's pose at q is the inverse of the arm's (the geometry the steps are built on)
+    q = np.array([0.3, -0.5, 0.8, -1.9, 0.4, 1.2])
+    T = sub.fkine(q)
+    r = plan.geometry
+    Tr = np.eye(4)
+    for k, j in enumerate(r.joint):
+        h = np.array([float(x) for x in r.h[k]])
+        p = np.array([float(x) for x in r.p[k]])
+        K = np.array([[0, -h[2], h[1]], [h[2], 0, -h[0]], [-h[1], h[0], 0]])
+        R = np.eye(3) + np.sin(q[j]) * K + (1 - np.cos(q[j])) * K @ K
+        G = np.eye(4)
+        G[:3, :3], G[:3, 3] = R, p - R @ p
+        Tr = Tr @ G
+    Tr = Tr @ np.array(r.M.evalf(), dtype=float)
+    np.testing.assert_allclose(Tr, np.linalg.inv(T), atol=1e-12)
