@@ -78,7 +78,9 @@ def cmd_compile(args: argparse.Namespace) -> int:
         if not args.output:
             raise UserError("--prefix names the files written with -o DIR; give -o too")
         command += f" --prefix {args.prefix}"
-    files = generate(robot, args.backend, command, prefix=args.prefix)
+    if args.strategy:
+        command += f" --strategy {args.strategy}"
+    files = generate(robot, args.backend, command, strategy=args.strategy, prefix=args.prefix)
     t_gen = time.perf_counter() - t0
     if args.output:
         out = Path(args.output)
@@ -87,7 +89,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
             (out / name).write_text(text)
         print(f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}")
     t1 = time.perf_counter()
-    kin = compile_robot(robot, backend=args.backend)
+    kin = compile_robot(robot, backend=args.backend, strategy=args.strategy)
     t_build = time.perf_counter() - t1
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
@@ -433,6 +435,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PREFIX",
         help="C: start every exported symbol and file name with PREFIX (default symkin_<robot>), so the "
         "code of several robots links into one program",
+    )
+    s.add_argument(
+        "--strategy",
+        choices=("expanded", "program"),
+        help="how the code is derived: expanded (one expression per output, then CSE) or program "
+        "(named link frames, linear in the chain); default: chosen by size",
     )
     s.set_defaults(func=cmd_compile)
 
