@@ -141,7 +141,15 @@ def cmd_compile(args: argparse.Namespace) -> int:
     _check_cflags(args.backend)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
-    files = generate(robot, args.backend, command)
+    if args.prefix:
+        if args.backend != "c":
+            raise UserError("--prefix applies to the C backend only")
+        if not args.output:
+            raise UserError("--prefix names the files written with -o DIR; give -o too")
+        command += f" --prefix {args.prefix}"
+    if args.strategy:
+        command += f" --strategy {args.strategy}"
+    files = generate(robot, args.backend, command, strategy=args.strategy, prefix=args.prefix)
     t_gen = time.perf_counter() - t0
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
@@ -149,7 +157,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
             (out / name).write_text(text)
         print(f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}")
     t1 = time.perf_counter()
-    kin = compile_robot(robot, backend=args.backend)
+    kin = compile_robot(robot, backend=args.backend, strategy=args.strategy)
     t_build = time.perf_counter() - t1
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
@@ -208,9 +216,18 @@ def cmd_derive(args: argparse.Namespace) -> int:
 
     robot = _robot(args.robot)
     _output_file(args.output, "-o")
-    text = derivation(
-        robot, fmt=args.format, symbolic_constants=args.symbolic_constants, simplify=not args.no_simplify
-    )
+    if args.ik:
+        from symkin.derivation_ik import ik_derivation
+
+        text = ik_derivation(robot, fmt=args.format)
+    else:
+        text = derivation(
+            robot,
+            fmt=args.format,
+            symbolic_constants=args.symbolic_constants,
+            simplify=not args.no_simplify,
+            form=args.form,
+        )
     if args.output:
         Path(args.output).write_text(text)
         print(f"wrote the derivation of {robot.name} to {args.output}")
@@ -249,6 +266,8 @@ def cmd_ik(args: argparse.Namespace) -> int:
     Tep = _target(args, robot)
     _check_cflags(args.backend)
     kin = compile_robot(robot, backend=args.backend)
+    if args.all or args.method == "analytic":
+        return _ik_analytic(args, kin, Tep)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
     if args.damping:
         kwargs["damping"] = args.damping
@@ -266,6 +285,36 @@ def cmd_ik(args: argparse.Namespace) -> int:
         print(f"q = {_fmt(res.q)}")
         print(f"residual = {res.residual:.3e}")
     return 0 if res.success else 1
+
+
+def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
+    """``symkin ik --all`` (every closed-form solution) or ``--method analytic`` (the nearest)."""
+    q0 = _floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
+    t = time.perf_counter()
+    if not args.all:
+        res = kin.ik(Tep, method="analytic", q0=q0)
+        dt = time.perf_counter() - t
+        if args.json:
+            print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
+        else:
+            status = "solved" if res.success else f"not solved: {res.reason}"
+            print(
+                f"{status} (closed form) in {dt * 1e3:.3f} ms\n"
+                f"q = {_fmt(res.q)}\nresidual = {res.residual:.3e}"
+            )
+        return 0 if res.success else 1
+    sols = kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits)
+    dt = time.perf_counter() - t
+    errors = [float(np.abs(kin.robot.fkine(q) - Tep).max()) for q in sols]
+    if args.json:
+        print(json.dumps({"solutions": sols.tolist(), "fk_error": errors, "seconds": dt}, indent=2))
+    else:
+        print(f"target:\n{_fmt(Tep)}")
+        where = "" if args.no_limits else " within the joint limits"
+        print(f"{len(sols)} solution(s){where} (closed form, {kin.analytic.kind}) in {dt * 1e3:.3f} ms")
+        for i, (q, e) in enumerate(zip(sols, errors)):
+            print(f"  {i + 1}: q = {_fmt(q)}  |T(q) - T| = {e:.1e}")
+    return 0 if len(sols) else 1
 
 
 def _result_dict(res: Any) -> dict:
@@ -343,17 +392,51 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
     plt.close(fig)
 
 
+def _joint_counts(text: str) -> tuple[int, ...]:
+    try:
+        counts = tuple(int(x) for x in text.replace(",", " ").split())
+    except ValueError:
+        counts = ()
+    if not counts or any(c < 1 or c > 200 for c in counts):
+        raise UserError(f"--joints must be joint counts between 1 and 200 like '6,12,24,36', not {text!r}")
+    return counts
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     _check_cflags("c")
-    if args.what == "mmc":
-        _need_matplotlib(args.plot)
-    elif args.plot:
-        raise UserError(f"--plot is for `symkin bench mmc`, not `symkin bench {args.what}`")
+    if args.plot and args.what not in ("mmc", "compile"):
+        raise UserError(f"--plot is for `symkin bench mmc` and `symkin bench compile`, not `{args.what}`")
+    _need_matplotlib(args.plot)
+    if args.what == "compile":
+        from symkin.bench.compile import format_compile, plot_compile, run_compile
+
+        joints = _joint_counts(args.joints)
+        rows = run_compile(joints, seed=args.seed, reference=args.robot or "panda", progress=not args.json)
+        print(json.dumps(rows, indent=2) if args.json else format_compile(rows))
+        if args.plot:
+            plot_compile(rows, args.plot)
+            if not args.json:
+                print(f"plot written to {args.plot}")
+        return 0
+    if args.what == "calls":
+        from symkin.bench.calls import format_calls, run_calls
+
+        robot = args.robot or "ur5"
+        result = run_calls(robot, args.robot or "panda", seed=args.seed, progress=not args.json)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
         result = run_kin(args.robot or "panda", batch=args.batch, progress=not args.json)
         print(json.dumps(result, indent=2) if args.json else format_kin(result))
+        return 0
+    if args.what == "ik" and args.analytic:
+        from symkin.bench.analytic_ik import format_analytic, run_analytic
+
+        robots = (args.robot,) if args.robot else ("ur5", "ur10", "puma560", "stanford")
+        result = run_analytic(robots, n=args.problems or 1000, starts=args.starts, seed=args.seed)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_analytic(result))
         return 0
     if args.what == "ik":
         from symkin.bench.ik import format_table1, run_table1
@@ -424,6 +507,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--backend", choices=("c", "numpy", "casadi"), default="c", help="code to generate (default c)"
     )
     s.add_argument("-o", "--output", metavar="DIR", help="write the generated files into DIR")
+    s.add_argument(
+        "--prefix",
+        "--name",
+        metavar="PREFIX",
+        help="C: start every exported symbol and file name with PREFIX (default symkin_<robot>), so the "
+        "code of several robots links into one program",
+    )
+    s.add_argument(
+        "--strategy",
+        choices=("expanded", "program"),
+        help="how the code is derived: expanded (one expression per output, then CSE) or program "
+        "(named link frames, linear in the chain); default: chosen by size",
+    )
     s.set_defaults(func=cmd_compile)
 
     s = sub.add_parser(
@@ -448,6 +544,16 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--format", choices=("markdown", "latex"), default="markdown")
     s.add_argument("--symbolic-constants", action="store_true", help="keep link lengths as named symbols")
     s.add_argument("--no-simplify", action="store_true", help="show the literal products of eqs 1, 5, 26-28")
+    s.add_argument(
+        "--ik", action="store_true", help="write the closed-form inverse kinematics derivation instead"
+    )
+    s.add_argument(
+        "--form",
+        choices=("auto", "expanded", "program"),
+        default="auto",
+        help="expanded: every result multiplied out; program: link frame by link frame with named "
+        "intermediates; auto (default): program when the expanded form is too large to read",
+    )
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
     s.set_defaults(func=cmd_derive)
 
@@ -462,7 +568,11 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("ik", help="solve inverse kinematics for one target pose")
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     target_options(s)
-    s.add_argument("--method", choices=("NR", "GN", "LM"), default="LM")
+    s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM")
+    s.add_argument(
+        "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"
+    )
+    s.add_argument("--no-limits", action="store_true", help="--all: keep solutions outside the joint limits")
     s.add_argument("--damping", choices=("wampler", "chan", "sugihara"))
     s.add_argument("--seed", type=int, default=0)
     s.set_defaults(func=cmd_ik)
@@ -477,15 +587,36 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
     s.set_defaults(func=cmd_servo)
 
-    s = sub.add_parser("bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I)")
-    s.add_argument("what", choices=("kin", "ik", "mmc"))
-    s.add_argument("--robot", help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc)")
+    s = sub.add_parser(
+        "bench",
+        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
+        "compile (cold, by chain length)",
+    )
+    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile"))
+    s.add_argument(
+        "--robot",
+        help="robot (default: panda for kin and compile, ur5 for ik, the paper's three for mmc, ur5 and "
+        "panda for calls)",
+    )
+    s.add_argument(
+        "--joints",
+        default="6,12,24,36",
+        help="compile: joint counts of the random chains (default 6,12,24,36)",
+    )
     s.add_argument("--batch", type=_int_at_least(1), default=100_000, help="kin: batch size (default 100000)")
     s.add_argument(
         "-n", "--problems", type=_int_at_least(1), help="ik: problems (default 10000); mmc: tasks per robot"
     )
     s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--plot", metavar="PNG", help="mmc: write a Fig. 3 style plot of one task")
+    s.add_argument(
+        "--plot",
+        metavar="PNG",
+        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints",
+    )
+    s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
+    s.add_argument(
+        "--starts", type=_int_at_least(1), default=32, help="ik --analytic: LM searches per pose for sampling"
+    )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench)
     return p

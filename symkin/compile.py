@@ -1,12 +1,13 @@
 """``symkin.compile``: robot -> symbolic derivation -> emitted code -> loaded :class:`Kinematics`.
 
 Generated sources are cached per user (``$SYMKIN_CACHE`` or ``~/.cache/symkin``) under a key made
-of what they depend on: the robot's name and ETS (:attr:`Robot.key`), the backend, the symkin
-version, the templates, the compiler's own Python code (symbolic, emit and the model classes it
-prints) and the sympy version, so a warm compile neither imports sympy nor re-derives anything,
-and a changed derivation never serves stale code. Compiled :class:`Kinematics` objects are also
-kept in memory, keyed by that and by every attribute of the robot (:attr:`Robot.fingerprint`):
-robots differing only in limits, speeds or configurations get their own object.
+of everything they depend on: every attribute of the robot (:attr:`Robot.fingerprint`: name, ETS,
+limits, speed limits, joint names, configurations, source; the C header lists the limits), the
+backend and strategy, the symkin version, the templates, the compiler's own Python code
+(symbolic, emit and the model classes it prints) and the sympy version. So a warm compile
+neither imports sympy nor re-derives anything, a changed derivation never serves stale code, and
+robots differing only in limits get their own files and their own in-memory :class:`Kinematics`
+(the derivation itself, which depends on the name and ETS only, is shared).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -22,14 +24,15 @@ import numpy as np
 
 from symkin.emit.c.build import cache_dir, write_atomic
 from symkin.errors import CompileError, SymkinError
-from symkin.model.robot import Robot, as_batch
+from symkin.model.frames import ChainTables, frame_index, frame_jacobian
+from symkin.model.robot import MAX_JOINT_VALUE, Robot, as_batch
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
-__all__ = ["compile", "generate", "write_generated", "BACKENDS", "cache_dir"]
+__all__ = ["compile", "generate", "write_generated", "BACKENDS", "STRATEGIES", "cache_dir"]
 
 BACKENDS = ("c", "numpy", "casadi")
 _LOADED: dict[str, Kinematics] = {}
-_FUNCTIONS: dict[str, list] = {}  # derived and CSE'd functions by robot key, shared by the backends
+_FUNCTIONS: dict[tuple[str, str | None], list] = {}  # functions by (robot key, strategy), shared by backends
 
 
 @lru_cache(maxsize=1)
@@ -77,24 +80,50 @@ def _check_backend(backend: str) -> None:
         raise SymkinError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
 
 
-def generate(robot: Robot, backend: str, command: str | None = None) -> dict[str, str]:
-    """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy."""
+STRATEGIES = ("expanded", "program")
+
+
+def _check_strategy(strategy: str | None) -> None:
+    if strategy is not None and strategy not in STRATEGIES:
+        raise SymkinError(
+            f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)} (or None: by size)"
+        )
+
+
+def generate(
+    robot: Robot,
+    backend: str,
+    command: str | None = None,
+    strategy: str | None = None,
+    prefix: str | None = None,
+) -> dict[str, str]:
+    """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy.
+
+    ``strategy``: ``"expanded"`` (one exact expression per output, then CSE: the smallest, most
+    readable code for arms of up to about 7 joints), ``"program"`` (named link frames, Hessians as
+    loops: linear in the number of joints), or None to choose by size (the generated header says
+    which was used). ``prefix`` (C backend): the prefix of every exported symbol and file name
+    instead of ``symkin_<robot>``, so several robots link into one program.
+    """
     _check_backend(backend)
+    _check_strategy(strategy)
+    if prefix is not None and backend != "c":
+        raise SymkinError(f"a symbol prefix applies to the C backend only, not {backend!r}")
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
 
     command = command or f"symkin compile {robot.identifier} --backend {backend}"
-    functions = _FUNCTIONS.get(robot.key)
+    functions = _FUNCTIONS.get((robot.key, strategy))
     if functions is None:
-        functions = kin_functions(robot)
+        functions = kin_functions(robot, strategy=strategy)
         if len(_FUNCTIONS) > 32:
             _FUNCTIONS.clear()
-        _FUNCTIONS[robot.key] = functions
+        _FUNCTIONS[(robot.key, strategy)] = functions
     if backend == "c":
         from symkin.emit.c.backend import render_c
 
-        return render_c(robot, functions, command)
+        return render_c(robot, functions, command, prefix)
     if backend == "numpy":
         from symkin.emit.numpy.backend import render_numpy
 
@@ -104,9 +133,16 @@ def generate(robot: Robot, backend: str, command: str | None = None) -> dict[str
     return render_casadi(robot, functions, command)
 
 
-def write_generated(robot: Robot, backend: str, folder: str | Path, command: str | None = None) -> list[Path]:
+def write_generated(
+    robot: Robot,
+    backend: str,
+    folder: str | Path,
+    command: str | None = None,
+    strategy: str | None = None,
+    prefix: str | None = None,
+) -> list[Path]:
     """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths."""
-    files = generate(robot, backend, command)
+    files = generate(robot, backend, command, strategy, prefix)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = []
@@ -117,14 +153,17 @@ def write_generated(robot: Robot, backend: str, folder: str | Path, command: str
     return out
 
 
-def _cache_key(robot: Robot, backend: str) -> str:
+def _cache_key(robot: Robot, backend: str, strategy: str | None = None) -> str:
     from symkin import __version__
 
-    text = "\n".join((__version__, backend, robot.key, _templates_digest(), _compiler_digest()))
+    parts = (__version__, backend, robot.fingerprint, str(strategy), _templates_digest(), _compiler_digest())
+    text = "\n".join(parts)
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
-def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict[str, str]:
+def _cached_files(
+    robot: Robot, backend: str, key: str, use_cache: bool, strategy: str | None = None
+) -> dict[str, str]:
     """Generated files from the cache (verified by checksum), else generate and store atomically."""
     path = cache_dir() / "gen" / f"{key}.json"
     if use_cache and path.exists():
@@ -136,7 +175,7 @@ def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict
                 return files
         except (OSError, ValueError, KeyError, TypeError):
             pass  # corrupted entry: regenerate below
-    files = generate(robot, backend)
+    files = generate(robot, backend, strategy=strategy)
     if use_cache:
         digest = hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
         with contextlib.suppress(OSError):  # an unwritable cache only costs speed
@@ -144,14 +183,18 @@ def _cached_files(robot: Robot, backend: str, key: str, use_cache: bool) -> dict
     return files
 
 
-def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinematics:  # noqa: A001
+def compile(  # noqa: A001
+    robot: Robot | str, backend: str = "c", cache: bool = True, strategy: str | None = None
+) -> Kinematics:
     """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`.
 
     ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
     ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
     for optimisation problems). Every backend has the numeric reference's methods and shapes.
+    ``strategy`` chooses how the code is derived (see :func:`generate`; default by size).
     """
     _check_backend(backend)
+    _check_strategy(strategy)
     if isinstance(robot, str):
         from symkin.model.resolve import resolve_robot
 
@@ -162,11 +205,10 @@ def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinem
         )
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
-    key = _cache_key(robot, backend)
-    loaded_key = f"{key}:{robot.fingerprint}"  # limits etc. change behaviour, not the generated code
-    if cache and loaded_key in _LOADED:
-        return _LOADED[loaded_key]
-    files = _cached_files(robot, backend, key, cache)
+    key = _cache_key(robot, backend, strategy)  # every attribute of the robot: see the module docstring
+    if cache and key in _LOADED:
+        return _LOADED[key]
+    files = _cached_files(robot, backend, key, cache, strategy)
     if backend == "c":
         from symkin.emit.c.backend import build_c
 
@@ -184,7 +226,7 @@ def compile(robot: Robot | str, backend: str = "c", cache: bool = True) -> Kinem
     if cache:
         if len(_LOADED) > 256:
             _LOADED.clear()
-        _LOADED[loaded_key] = kin
+        _LOADED[key] = kin
     return kin
 
 
@@ -203,36 +245,85 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
         raise CompileError(f"the casadi backend needs casadi installed: {exc}") from exc
     fns = module.functions()
     n = robot.n
-    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
+    functions = {name: _casadi_method(fns[name], robot) for name in KIN_METHODS}
+    link_poses = functions["link_poses"]
 
-    def wrap(f: Any) -> Any:
-        names = f.name_out()
+    def framed(name: str) -> Any:
+        plain = functions[name]
 
-        def call(q: Any) -> Any:
-            Q, single = as_batch(q, n, robot.name)
-            if Q.shape[0] == 0:  # casadi cannot map over 0 items
-                outs = [np.zeros((0, *shapes[k])) for k in names]
-            elif single:
-                res = f(Q[0])
-                res = res if isinstance(res, (list, tuple)) else [res]
-                outs = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]
-            else:
-                fm = f.map(Q.shape[0])
-                res = fm(Q.T)
-                res = res if isinstance(res, (list, tuple)) else [res]
-                outs = []
-                for k, r in zip(names, res):
-                    a = np.asarray(r)  # (rows, cols*N), column blocks per configuration
-                    rows, cols = a.shape[0], a.shape[1] // Q.shape[0]
-                    a = a.reshape(rows, Q.shape[0], cols).transpose(1, 0, 2)
-                    outs.append(a.reshape((Q.shape[0], *shapes[k])))
-            return outs[0] if len(outs) == 1 else tuple(outs)
+        def call(q: Any, frame: Any = None) -> Any:
+            if frame is None:
+                return plain(q)
+            k = frame_index(frame, n, robot.name)
+            L = link_poses(q)
+            if name == "fkine":
+                return L[..., k, :, :]
+            Lb = L[None] if L.ndim == 3 else L
+            J = frame_jacobian(Lb, k, chain, ee=name == "jacobe")
+            return J[0] if L.ndim == 3 else J
 
-        call.__name__ = f.name()
-        call.__doc__ = f"{f.name()} through casadi.Function (see Kinematics.functions)."
+        call.__name__, call.__doc__ = plain.__name__, plain.__doc__
         return call
 
-    functions = {name: wrap(fns[name]) for name in KIN_METHODS}
+    chain = ChainTables.of(robot.ets)
+    for name in ("fkine", "jacob0", "jacobe"):
+        functions[name] = framed(name)
     kin = Kinematics(robot, "casadi", functions, files, _module_path(module), module)
     kin.functions = fns  # type: ignore[attr-defined]
     return kin
+
+
+def _casadi_method(f: Any, robot: Robot) -> Any:
+    """A Kinematics method calling the casadi.Function ``f``: one configuration through a
+    ``Function.buffer()`` bound once to arrays (no DM conversion; a lock keeps it thread-safe), a
+    batch through ``f.map``."""
+    import threading
+
+    n, name = robot.n, robot.name
+    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
+    names = f.name_out()
+    dense = f.sparsity_in(0).is_dense() and all(f.sparsity_out(i).is_dense() for i in range(f.n_out()))
+    buf = evaluate = None
+    if dense and hasattr(f, "buffer"):
+        qbuf = np.zeros(n)
+        outs = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
+        buf, evaluate = f.buffer()
+        buf.set_arg(0, memoryview(qbuf))
+        for i, out in enumerate(outs):
+            buf.set_res(i, memoryview(out))
+        sizes = [f.size_out(i) for i in range(f.n_out())]  # (rows, cols); nonzeros column-major
+        lock = threading.Lock()
+    f64 = np.dtype(float)
+
+    def call(q: Any) -> Any:
+        fast = evaluate is not None and type(q) is np.ndarray and q.dtype is f64 and q.shape == (n,)
+        if fast and math.isfinite(sum(ql := q.tolist())) and max(map(abs, ql)) <= MAX_JOINT_VALUE:
+            with lock:
+                np.copyto(qbuf, q)
+                evaluate()
+                ok = buf.ret() == 0
+                res = [o.reshape(c, r).T.reshape(shapes[k]) for o, (r, c), k in zip(outs, sizes, names)]
+            if ok:
+                return res[0] if len(res) == 1 else tuple(res)
+        Q, single = as_batch(q, n, name)  # raises the reference's error for invalid q
+        if Q.shape[0] == 0:  # casadi cannot map over 0 items
+            outs1 = [np.zeros((0, *shapes[k])) for k in names]
+        elif single:
+            res = f(Q[0])
+            res = res if isinstance(res, (list, tuple)) else [res]
+            outs1 = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]
+        else:
+            fm = f.map(Q.shape[0])
+            res = fm(Q.T)
+            res = res if isinstance(res, (list, tuple)) else [res]
+            outs1 = []
+            for k, r in zip(names, res):
+                a = np.asarray(r)  # (rows, cols*N), column blocks per configuration
+                rows, cols = a.shape[0], a.shape[1] // Q.shape[0]
+                a = a.reshape(rows, Q.shape[0], cols).transpose(1, 0, 2)
+                outs1.append(a.reshape((Q.shape[0], *shapes[k])))
+        return outs1[0] if len(outs1) == 1 else tuple(outs1)
+
+    call.__name__ = f.name()
+    call.__doc__ = f"{f.name()} through casadi.Function (see Kinematics.functions)."
+    return call

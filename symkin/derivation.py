@@ -35,12 +35,15 @@ from symkin.errors import SymkinError
 from symkin.model.ets import ET, ETS, Axis, Const, rational_text
 from symkin.model.latex import et_latex, ets_latex, text_latex
 from symkin.model.robot import Robot
+from symkin.symbolic.cse import count_ops
 from symkin.symbolic.kinematics import const_to_sympy, derive
 
 __all__ = ["Derivation", "derive_steps", "derivation"]
 
 Fmt = Literal["markdown", "latex"]
 FORMATS = ("markdown", "latex")
+Form = Literal["auto", "expanded", "program"]
+FORMS = ("auto", "expanded", "program")
 SYMBOLIC_CHECK_MAX_OPS = 1500  # larger differences are checked at random points
 DISPLAY_MAX_OPS = 900  # larger expressions are not printed
 MATRIX_MAX_OPS = 160  # larger matrices are printed entry by entry
@@ -73,6 +76,12 @@ class Derivation:
         simplified: whether the results are the compact forms (else the literal products).
         checks: how each equality was established: ``"symbolic"`` or ``"numeric"``.
         fmt: the format of ``text``; text: the derivation as Markdown or a LaTeX document.
+        form: ``"expanded"`` (every result multiplied out) or ``"program"`` (long chains: the
+            results are matrices over named intermediates, ``intermediates`` lists their
+            definitions in order and :meth:`expand` substitutes them back; ``dT`` and ``ee`` are
+            empty).
+        intermediates: (symbol, expression) of each named intermediate (program form).
+        sections: where each link frame's, the pose's and the Jacobians' intermediates end.
     """
 
     robot: Robot
@@ -91,10 +100,22 @@ class Derivation:
     fmt: str = "markdown"
     text: str = ""
     latex_summary: str = field(default="", repr=False)
+    form: str = "expanded"
+    intermediates: tuple[tuple[sp.Symbol, sp.Expr], ...] = field(default=(), repr=False)
+    sections: tuple[tuple[str, int], ...] = field(default=(), repr=False)
 
     def numeric(self, expr: Any) -> Any:
         """``expr`` with the symbolic link constants replaced by their values."""
         return sp.sympify(expr).xreplace(dict(self.constants))
+
+    def expand(self, expr: Any) -> Any:
+        """``expr`` with the named intermediates of the program form substituted back, in terms of
+        the joint symbols (large for long chains: that is why they are named)."""
+        expr = sp.sympify(expr)
+        for s, e in reversed(self.intermediates):
+            if expr.has(s):
+                expr = expr.xreplace({s: e})
+        return expr
 
     def _repr_latex_(self) -> str:
         return self.latex_summary
@@ -218,7 +239,7 @@ def _check(a: sp.Matrix, b: sp.Matrix, symbols: Sequence[sp.Symbol]) -> str:
     when it vanishes at 3 random points to 30 digits (differences over ``SYMBOLIC_CHECK_MAX_OPS``
     are not expanded; constant angles such as cos(1/10) may hide identities), else "failed"."""
     d = sp.Matrix(a) - sp.Matrix(b)
-    if sp.count_ops(d) <= SYMBOLIC_CHECK_MAX_OPS and all(_is_zero(x) for x in d):
+    if sum(_ops(x) for x in d) <= SYMBOLIC_CHECK_MAX_OPS and all(_is_zero(x) for x in d):
         return "symbolic"
     f = sp.lambdify(list(symbols), list(d), modules="mpmath")
     rng = random.Random(1)
@@ -298,7 +319,7 @@ def _steps(robot: Robot, symbolic_constants: bool, simplify: bool) -> Derivation
         dT = [T.diff(q[j]) for j in range(n)]
         checks["eq 26: dT/dq_j"] = _worst(_check(dT_raw[j], dT[j], symbols) for j in range(n))
         J = kin.J0
-        Jv = [min(dT[j][:3, 3], J[:3, j], key=sp.count_ops) for j in range(n)]  # the shorter form
+        Jv = [min(dT[j][:3, 3], J[:3, j], key=_matrix_ops) for j in range(n)]  # the shorter form
         J = sp.Matrix.hstack(*[sp.Matrix.vstack(Jv[j], J[3:, j]) for j in range(n)])
         # eq 27 gives J_w when rho(dT/dq_j) = [J_w]x rho(T), since rho(T) rho(T)^T = 1
         checks["eq 27: J_w"] = _worst(
@@ -337,6 +358,15 @@ def _steps(robot: Robot, symbolic_constants: bool, simplify: bool) -> Derivation
         simplify,
         checks,
     )
+
+
+def _ops(expr: Any) -> int:
+    """Operations of an expression, memoised over shared subexpressions (no recursion)."""
+    return count_ops(sp.sympify(expr)).total
+
+
+def _matrix_ops(M: sp.Matrix) -> int:
+    return sum(_ops(x) for x in M)
 
 
 def _worst(results: Any) -> str:
@@ -379,7 +409,7 @@ class _Printer:
 
     def __call__(self, expr: Any) -> str:
         expr = sp.sympify(expr)
-        ops = sp.count_ops(expr)
+        ops = _ops(expr)
         if ops > DISPLAY_MAX_OPS:
             return f"\\text{{(an expression of {ops} operations, not shown)}}"
         subs = {}
@@ -466,7 +496,7 @@ def _vec(P: _Printer, v: Sequence[sp.Expr]) -> str:
 
 
 def _shown(M: sp.Matrix) -> bool:
-    return sp.count_ops(M) <= MATRIX_MAX_OPS
+    return _matrix_ops(M) <= MATRIX_MAX_OPS
 
 
 def _pose_tex(P: _Printer, M: sp.Matrix, lhs: str) -> str:
@@ -595,6 +625,7 @@ def derive_steps(
     symbolic_constants: bool = False,
     simplify: bool = True,
     fmt: Fmt = "markdown",
+    form: Form = "auto",
 ) -> Derivation:
     """Derive ``robot``'s kinematics step by step: the results and the written derivation.
 
@@ -605,18 +636,37 @@ def derive_steps(
         simplify: compact forms proved equal to the literal products of the equations; ``False``
             keeps the literal products (long beyond 3 joints; the text omits huge entries).
         fmt: ``"markdown"`` (Markdown with ``$$`` math) or ``"latex"`` (a standalone document).
+        form: ``"expanded"`` (every result multiplied out), ``"program"`` (link frame by link
+            frame, new quantities named: :mod:`symkin.derivation_program`), or ``"auto"``: the
+            program form when the expanded one would be too large to read or to check
+            symbolically (the same size rule as the compiler's, about 8 joints and more).
     """
     if fmt not in FORMATS:
         raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
+    if form not in FORMS:
+        raise SymkinError(f"unknown form {form!r}: choose one of {', '.join(FORMS)}")
     if isinstance(robot, ETS):
         robot = Robot(robot, name="ets_robot")
     elif not isinstance(robot, Robot):
         from symkin.model.resolve import resolve_robot
 
         robot = resolve_robot(robot)
-    D = _steps(robot, symbolic_constants, simplify)
-    ctx, summary = _context(D)
-    text = render("derive/derivation.md.j2", **ctx)
+    if robot.n == 0:
+        raise SymkinError(f"robot {robot.name!r} has no joints: nothing to derive")
+    if form == "auto":
+        from symkin.symbolic.functions import expanded_if_small
+
+        form = "expanded" if expanded_if_small(robot) is not None else "program"
+    if form == "program":
+        from symkin.derivation_program import program_context, program_derivation
+
+        D = program_derivation(robot, symbolic_constants)
+        ctx, summary = program_context(D)
+        text = render("derive/program.md.j2", **ctx)
+    else:
+        D = _steps(robot, symbolic_constants, simplify)
+        ctx, summary = _context(D)
+        text = render("derive/derivation.md.j2", **ctx)
     return replace(D, fmt=fmt, text=_latex_document(text) if fmt == "latex" else text, latex_summary=summary)
 
 
@@ -625,6 +675,9 @@ def derivation(
     fmt: Fmt = "markdown",
     symbolic_constants: bool = False,
     simplify: bool = True,
+    form: Form = "auto",
 ) -> str:
     """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`)."""
-    return derive_steps(robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt).text
+    return derive_steps(
+        robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form
+    ).text

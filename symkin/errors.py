@@ -42,6 +42,10 @@ class ConfigurationError(SymkinError, ValueError):
     """A joint configuration q of the wrong shape, with NaN/inf, or outside the joint limits."""
 
 
+class FrameError(SymkinError, ValueError):
+    """A frame that does not exist: a link frame index out of range, an unknown frame name."""
+
+
 class PoseError(SymkinError, ValueError):
     """A target pose that is not a valid SE(3) matrix."""
 
@@ -52,3 +56,8 @@ class ParameterError(SymkinError, ValueError):
 
 class CompileError(SymkinError, RuntimeError):
     """Generating or compiling code failed (missing C compiler, compiler error, template error)."""
+
+
+class NoAnalyticIKError(SymkinError, ValueError):
+    """The arm has no closed-form inverse kinematics that symkin derives (the message says why and
+    points at the numerical IK)."""

@@ -159,3 +159,46 @@ def test_derive_prints_markdown_and_writes_latex(capsys, tmp_path):
     code, out, _ = run(capsys, "derive", "planar2", "--format", "latex", "-o", str(tex))
     text = tex.read_text()
     assert code == 0 and text.startswith("\\documentclass") and text.rstrip().endswith("\\end{document}")
+
+
+def test_ik_all_prints_every_closed_form_solution(capsys):
+    code, out, _ = run(capsys, "ik", "puma560", "--from-q", "0.3 0.7 -0.9 0.4 0.6 -0.2", "--all")
+    assert code == 0 and "solution(s)" in out
+    code, out, _ = run(capsys, "ik", "ur5", "--pose", "0.4 0.2 0.3 0 3.14159 0", "--all", "--json")
+    data = json.loads(out)
+    assert code == 0 and len(data["solutions"]) == 8 and max(data["fk_error"]) < 1e-10
+    code, out, _ = run(capsys, "ik", "ur5", "--pose", "3 0 0 0 0 0", "--method", "analytic")
+    assert code == 1 and "out of reach" in out
+
+
+def test_ik_all_refuses_a_redundant_arm(capsys):
+    code, _, err = run(capsys, "ik", "panda", "--pose", "0.4 0.2 0.3 0 3.14159 0", "--all")
+    assert code == 2 and "numerical IK" in err and len(err.strip().splitlines()) == 1
+
+
+def test_derive_ik(capsys):
+    code, out, _ = run(capsys, "derive", "ur5", "--ik")
+    assert code == 0 and "Subproblem 4" in out and "Branches" in out
+    code, out, _ = run(capsys, "derive", "stanford", "--ik", "--format", "latex")
+    assert code == 0 and out.lstrip().startswith("\\documentclass") and "\\[" in out
+
+
+def test_derive_long_chain_shows_named_intermediates(capsys):
+    ets = " ".join(f"R{'xyz'[j % 3]}(q{j}) tx(0.1) tz(0.05)" for j in range(10))
+    code, out, _ = run(capsys, "derive", ets)
+    assert code == 0 and "\\zeta_{" in out and "one from the previous" in out
+    code, out, _ = run(capsys, "derive", "planar3", "--form", "program")
+    assert code == 0 and "\\zeta_{" in out
+
+
+def test_bench_compile_runs_small(capsys, tmp_path):
+    pytest.importorskip("matplotlib")
+    plot = tmp_path / "compile.png"
+    code, out, _ = run(
+        capsys, "bench", "compile", "--robot", "planar2", "--joints", "3,11", "--plot", str(plot)
+    )
+    assert code == 0, out
+    assert "planar2" in out and "chain3_0" in out and "chain11_0" in out and "program" in out
+    assert plot.stat().st_size > 1000
+    code, out, err = run(capsys, "bench", "compile", "--joints", "6,x")
+    assert code == 2 and "--joints" in err

@@ -58,12 +58,16 @@ def test_equal_robots_share_one_compiled_object_and_every_attribute_counts():
         assert other is not kin and other.robot is robot
 
 
-@pytest.mark.parametrize("backend", ["c", "numpy", "casadi"])
-def test_generated_code_depends_only_on_name_and_ets(backend):
-    """What the on-disk cache key (name, ETS, backend, code digests) leaves out is not in the code."""
+def test_generated_files_on_disk_are_per_robot_attributes():
+    """The C header lists the joint limits: a robot differing only in them gets its own files,
+    also from the on-disk cache (a fresh process would otherwise be served the other's)."""
     A = _arm()
-    B = _arm(qlim=[[-0.2] * 3, [0.2] * 3], qd_max=[0.1] * 3, configs={"qr": [1, 2, 3]}, joint_names="abc")
-    assert symkin.generate(A, backend) == symkin.generate(B, backend)
+    B = _arm(qlim=[[-0.2] * 3, [0.2] * 3], qd_max=[0.1] * 3, joint_names="abc")
+    assert compile_mod._cache_key(A, "c") != compile_mod._cache_key(B, "c")
+    assert compile_mod._cache_key(A, "c") == compile_mod._cache_key(_arm(), "c")
+    files = compile_mod._cached_files(B, "c", compile_mod._cache_key(B, "c"), True)
+    header = next(text for name, text in files.items() if name.endswith(".h"))
+    assert "[-0.2, 0.2]" in header and "QMAX" in header
 
 
 def test_disk_cache_key_covers_the_compiler_code(tmp_path, monkeypatch):

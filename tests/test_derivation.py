@@ -6,14 +6,13 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
-import time
 
 import numpy as np
 import pytest
 import sympy as sp
 
 import symkin
-from symkin.derivation import Derivation, derivation, derive_steps
+from symkin.derivation import DISPLAY_MAX_OPS, Derivation, _ops, derivation, derive_steps
 from symkin.errors import SymkinError
 from symkin.model.latex import const_latex, ets_latex, robot_latex
 from tests.conftest import assert_close
@@ -43,10 +42,8 @@ def planar_sym() -> Derivation:
 
 
 @pytest.fixture(scope="module")
-def panda() -> tuple[Derivation, float]:
-    t0 = time.perf_counter()
-    d = derive_steps("panda", fmt="latex")
-    return d, time.perf_counter() - t0
+def panda() -> tuple[Derivation, None]:
+    return derive_steps("panda", fmt="latex"), None
 
 
 def numeric_fn(d: Derivation, M: sp.Matrix):  # noqa: ANN201
@@ -138,7 +135,7 @@ def test_every_equality_was_proved(planar_sym: Derivation) -> None:
 # -- numbers: agree with the numeric reference --------------------------------------------------
 
 
-def test_panda_jacobians_match_the_numeric_reference(panda: tuple[Derivation, float]) -> None:
+def test_panda_jacobians_match_the_numeric_reference(panda: tuple[Derivation, None]) -> None:
     d, _ = panda
     robot = symkin.load("panda")
     assert robot.n == 7 and len(d.q) == 7
@@ -152,9 +149,14 @@ def test_panda_jacobians_match_the_numeric_reference(panda: tuple[Derivation, fl
     assert "failed" not in d.checks.values()
 
 
-def test_seven_dof_derivation_is_fast_and_says_what_it_skipped(panda: tuple[Derivation, float]) -> None:
-    d, elapsed = panda
-    assert elapsed < 10.0
+def test_seven_dof_derivation_stays_small_and_says_what_it_skipped(panda: tuple[Derivation, None]) -> None:
+    """A size bound instead of wall time (which flakes on a loaded machine): the text of the Panda
+    (63 KB, longest display 9.8 KB when this was written) and what was expanded symbolically."""
+    d, _ = panda
+    assert d.form == "expanded"
+    assert len(d.text) < 120_000
+    assert max(len(block) for block in d.text.split("\\[")) < 20_000
+    assert sum(_ops(x) for x in d.T) <= 3 * DISPLAY_MAX_OPS
     assert "not printed for more than 4 joints" in d.text
     assert "random points" in d.text  # checks too large to expand are done numerically and said so
 
@@ -209,7 +211,7 @@ def check_latex_structure(text: str) -> None:
     assert len(re.findall(r"(?<!\\)\$", text)) % 2 == 0
 
 
-def test_latex_is_a_complete_document(panda: tuple[Derivation, float], tmp_path) -> None:  # noqa: ANN001
+def test_latex_is_a_complete_document(panda: tuple[Derivation, None], tmp_path) -> None:  # noqa: ANN001
     for text in (panda[0].text, derivation("planar3", fmt="latex", symbolic_constants=True)):
         assert text.startswith("\\documentclass")
         assert "\\begin{document}" in text and text.rstrip().endswith("\\end{document}")
@@ -257,3 +259,64 @@ def test_ets_latex() -> None:
     assert robot_latex(symkin.load("lbr_iiwa7")).startswith(
         "$\\text{lbr\\_iiwa7}:\\; {}^{0}T_{e} = R_z(q_{1})"
     )
+
+
+# -- long chains: named intermediates, link frame by link frame --------------------------------
+
+
+@pytest.fixture(scope="module")
+def chain12() -> Derivation:
+    from symkin.bench.compile import random_chain
+
+    return derive_steps(random_chain(12, seed=1))
+
+
+def test_long_chain_derivation_uses_named_intermediates(chain12: Derivation) -> None:
+    d = chain12
+    assert d.form == "program" and len(d.intermediates) > 100
+    assert set(d.checks.values()) == {"numeric"}
+    assert "\\zeta_{" in d.text and "one from the previous" in d.text
+    assert "an expression of" not in d.text  # nothing had to be elided
+    # every displayed formula is short: one named step
+    assert max(_ops(e) for _, e in d.intermediates) <= 12
+    assert len(d.text) < 60_000
+
+
+def test_long_chain_results_expand_to_the_reference(chain12: Derivation) -> None:
+    from symkin.bench.compile import random_chain
+
+    robot = random_chain(12, seed=1)
+    q_syms = chain12.q
+    f = sp.lambdify(q_syms, chain12.expand(chain12.J0), "numpy")
+    g = sp.lambdify(q_syms, chain12.expand(chain12.T), "numpy")
+    for q in robot.random_q(3, seed=2):
+        assert_close(f(*q), robot.jacob0(q), 1e-12, "J0")
+        assert_close(g(*q), robot.fkine(q), 1e-12, "T")
+    links = sp.lambdify(q_syms, chain12.expand(chain12.links[5]), "numpy")
+    q = robot.random_q(seed=3)
+    assert_close(links(*q), robot.link_poses(q)[5], 1e-12, "link 5")
+
+
+def test_long_chain_checks_catch_a_wrong_step(monkeypatch) -> None:
+    """The 30-digit checks compare with the literal products: a program with one wrong sign fails."""
+    import symkin.derivation_program as dp
+    from symkin.bench.compile import random_chain
+
+    real = dp.derive_program
+
+    def broken(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        kp = real(*args, **kwargs)
+        s, e = kp.lines[40]
+        lines = (*kp.lines[:40], (s, -e), *kp.lines[41:])
+        return type(kp)(**{**kp.__dict__, "lines": lines})
+
+    monkeypatch.setattr(dp, "derive_program", broken)
+    d = dp.program_derivation(random_chain(9, seed=4), False)
+    assert "failed" in d.checks.values()
+
+
+def test_form_can_be_chosen() -> None:
+    d = derive_steps("planar3", form="program")
+    assert d.form == "program" and set(d.checks.values()) == {"numeric"}
+    with pytest.raises(symkin.SymkinError, match="unknown form"):
+        derive_steps("planar3", form="short")

@@ -325,9 +325,17 @@ def rtb_mmc(rtb: Any, qpsolvers: Any, robot: Any, mmc: MMC) -> Any:
     Aslack = np.eye(6)[:, :ns]
     free = np.full(ns, np.inf)
 
+    def kinematics(q: np.ndarray, nu: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        try:
+            return ets.jacob0(q), ets.jacobm(q)
+        except np.linalg.LinAlgError:  # RTB's jacobm inverts J J^T, singular for a planar arm
+            return None
+
     def step(q: np.ndarray, nu: np.ndarray) -> np.ndarray | None:
-        J = ets.jacob0(q)
-        Jm = ets.jacobm(q).ravel()
+        JJm = kinematics(q, nu)
+        if JJm is None:
+            return None
+        J, Jm = JJm[0], JJm[1].ravel()
         lb = ub = None
         if mmc._bounded:
             lower, upper = joint_velocity_bounds(
@@ -338,7 +346,7 @@ def rtb_mmc(rtb: Any, qpsolvers: Any, robot: Any, mmc: MMC) -> Any:
         x = qpsolvers.solve_qp(P, c, A=np.c_[J, Aslack], b=nu, lb=lb, ub=ub, solver="osqp", **opts)
         return None if x is None else x[:n]
 
-    step.kinematics = lambda q, nu: (ets.jacob0(q), ets.jacobm(q))  # type: ignore[attr-defined]
+    step.kinematics = kinematics  # type: ignore[attr-defined]
     return step
 
 

@@ -6,12 +6,13 @@ import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
-
-import jinja2
+from typing import TYPE_CHECKING, Any
 
 from symkin.errors import CompileError
 from symkin.model.robot import identifier
+
+if TYPE_CHECKING:
+    import jinja2
 
 __all__ = [
     "render",
@@ -21,6 +22,7 @@ __all__ = [
     "comment_safe",
     "c_string",
     "identifier",
+    "chain_tables",
 ]
 
 
@@ -35,6 +37,8 @@ def template_dir() -> Path:
 
 @lru_cache(maxsize=1)
 def _env() -> jinja2.Environment:
+    import jinja2  # here: a warm compile (template_dir for the cache key) does without it
+
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(template_dir())),
         undefined=jinja2.StrictUndefined,
@@ -54,7 +58,13 @@ def render(name: str, **context: Any) -> str:
 
 
 def render_python_module(
-    template: str, robot: Any, functions: list, printed: list, command: str, suffix: str = ""
+    template: str,
+    robot: Any,
+    functions: list,
+    printed: list,
+    command: str,
+    suffix: str = "",
+    **context: Any,
 ) -> dict[str, str]:
     """Render a generated Python module ``symkin_<robot><suffix>.py`` (NumPy and CasADi backends)."""
     module = f"symkin_{identifier(robot.name)}{suffix}"
@@ -65,8 +75,20 @@ def render_python_module(
         functions=printed,
         header=Header.of(robot, functions, command, ascii(robot.name)),
         name_literal=ascii(robot.name),
+        **context,
     )
     return {f"{module}.py": text}
+
+
+def chain_tables(robot: Any) -> dict[str, list[str]]:
+    """Per joint along the chain: joint index, axis index, sign literal, revolute flag (as text)."""
+    joints = [e for e in robot.ets if e.is_joint]
+    return {
+        "order": [str(e.joint) for e in joints],
+        "axis": [str(e.axis.index) for e in joints],
+        "sign": ["-1.0" if e.flip else "1.0" for e in joints],
+        "revolute": [str(int(e.is_revolute)) for e in joints],
+    }
 
 
 _UNSAFE = re.compile(r"[^\x20-\x7e]")
@@ -99,16 +121,21 @@ class Header:
     version: str
     command: str
     counts: str
+    strategy: str
+    references: str
 
     @classmethod
     def of(cls, robot: Any, functions: list, command: str, literal: str) -> Header:
         """The header for ``functions`` (KinFunction list) of ``robot``; ``literal`` quotes its name."""
         from symkin import __version__
         from symkin.symbolic.cse import OpCounts
+        from symkin.symbolic.functions import REFERENCES
 
         total = sum((f.code.counts for f in functions), OpCounts())
         counts = f"{total} over {len(functions)} functions"
         return cls(
+            strategy=strategy_text(functions),
+            references=REFERENCES,
             robot=identifier(robot.name),
             name_literal=literal,
             ets=comment_safe(str(robot.ets), limit=4000),
@@ -116,3 +143,12 @@ class Header:
             command=comment_safe(command),
             counts=counts,
         )
+
+
+def strategy_text(functions: list) -> str:
+    """How the functions' code was derived, for the generated headers."""
+    if functions[0].code.strategy == "expanded":
+        return "expanded (one exact expression per output, then common-subexpression elimination)"
+    loops = any(f.code.hessians for f in functions)
+    hessians = "Hessians as loops over the Jacobian columns" if loops else "Hessians written out"
+    return f"straight-line program (named link frames and Jacobian columns; {hessians})"

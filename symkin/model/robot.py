@@ -20,6 +20,7 @@ import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError, RobotError, SymkinError
 from symkin.model.ets import ETS
+from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.model.kinematics import NumericKinematics, cross
 
 __all__ = [
@@ -260,16 +261,14 @@ class Robot:
 
     @property
     def key(self) -> str:
-        """Hash of what the generated code depends on (name and ETS text): the on-disk cache key.
-
-        Limits, configurations and joint names are not in the generated code; see :attr:`fingerprint`.
-        """
+        """Structural hash (name and ETS text): what the derivation depends on. The compile caches
+        use :attr:`fingerprint`."""
         return hashlib.sha256(f"{self.name}\n{self.ets}".encode()).hexdigest()
 
     @property
     def fingerprint(self) -> str:
         """Hash of every attribute (name, ETS, qlim, qd_max, configurations, joint names, source):
-        two robots with equal fingerprints behave identically. The in-process compile-cache key."""
+        two robots with equal fingerprints behave identically. Part of the compile-cache keys."""
         h = hashlib.sha256(f"{self.name}\0{self.ets}\0{self.source}\0".encode())
         h.update("\0".join(self.joint_names).encode() + b"\0\0")
         h.update(np.ascontiguousarray(self.qlim, dtype="<f8").tobytes())
@@ -286,6 +285,10 @@ class Robot:
     @cached_property
     def _num(self) -> NumericKinematics:
         return NumericKinematics.of(self.ets)
+
+    @cached_property
+    def _chain(self) -> ChainTables:
+        return ChainTables.of(self.ets)
 
     def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
         return as_batch(q, self.n, self.name)
@@ -325,10 +328,18 @@ class Robot:
         return rng.uniform(lo, hi, size=(N, self.n))
 
     # -- numeric reference kinematics (eqs 1, 14-16, 31-34; seed 001 eq 11) -----------------
-    def fkine(self, q: Any) -> np.ndarray:
-        """End-effector pose in the base frame 0T_e (eq 1): (4, 4) or (N, 4, 4)."""
+    def fkine(self, q: Any, frame: int | None = None) -> np.ndarray:
+        """End-effector pose in the base frame 0T_e (eq 1): (4, 4) or (N, 4, 4).
+
+        ``frame=k``: the pose of link frame k instead (``link_poses(q)[k]``, the frame right after
+        the k-th joint along the chain).
+        """
         Q, single = self._batch(q)
-        T = self._num.fkine(Q)
+        if frame is not None:
+            k = frame_index(frame, self.n, self.name)
+            T = self._num.link_poses(Q)[:, k]
+        else:
+            T = self._num.fkine(Q)
         return T[0] if single else T
 
     def link_poses(self, q: Any) -> np.ndarray:
@@ -340,24 +351,35 @@ class Robot:
         T = self._num.link_poses(Q)
         return T[0] if single else T
 
-    def jacob0(self, q: Any) -> np.ndarray:
+    def jacob0(self, q: Any, frame: int | None = None) -> np.ndarray:
         """Base-frame manipulator Jacobian (eqs 31-34): (6, n) or (N, 6, n), rows (v, omega).
 
         v is the velocity of the end-effector origin expressed in the base frame. For the space
-        Jacobian of seed 002 (rows (omega, v), v of the point at the base origin) see :meth:`jacobs`.
+        Jacobian of Lynch and Park's Modern Robotics (rows (omega, v), v of the point at the base
+        origin) see :meth:`jacobs`. ``frame=k``: the Jacobian of link frame k (the frame right after
+        the k-th joint along the chain, as :meth:`link_poses`); columns of later joints are 0.
         """
         Q, single = self._batch(q)
-        J = self._num.jacob0(Q)
+        if frame is not None:
+            k = frame_index(frame, self.n, self.name)
+            J = frame_jacobian(self._num.link_poses(Q), k, self._chain)
+        else:
+            J = self._num.jacob0(Q)
         return J[0] if single else J
 
-    def jacobe(self, q: Any) -> np.ndarray:
+    def jacobe(self, q: Any, frame: int | None = None) -> np.ndarray:
         """End-effector-frame Jacobian (eq 16): ``blkdiag(R^T, R^T) J0``, rows (v, omega).
 
-        For the body Jacobian of seed 002 (rows (omega, v)) see :meth:`jacobb`.
+        For the body Jacobian of Modern Robotics (rows (omega, v)) see :meth:`jacobb`. ``frame=k``:
+        the Jacobian of link frame k expressed in that frame.
         """
         Q, single = self._batch(q)
-        T, J = self._num.fkine_jacob0(Q)
-        Je = _rotate_rows(T, J)
+        if frame is not None:
+            k = frame_index(frame, self.n, self.name)
+            Je = frame_jacobian(self._num.link_poses(Q), k, self._chain, ee=True)
+        else:
+            T, J = self._num.fkine_jacob0(Q)
+            Je = _rotate_rows(T, J)
         return Je[0] if single else Je
 
     def fkine_jacob0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -204,20 +204,23 @@ def _refuse_doctype(text: str, where: str) -> None:
 def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     """Parse a URDF file path or XML text -> (root element, description for messages)."""
     if isinstance(path_or_xml, Path) or (
-        isinstance(path_or_xml, str) and not path_or_xml.lstrip().startswith("<")
+        isinstance(path_or_xml, str) and not path_or_xml.lstrip().lstrip("\ufeff").lstrip().startswith("<")
     ):
         path = Path(path_or_xml)
+        shown = repr(str(path)) if len(str(path)) <= 200 else repr(str(path)[:197] + "...")
         try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise URDFError(f"cannot read URDF file {str(path)!r}: {exc.strerror or exc}") from None
+            text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is allowed
         except UnicodeDecodeError as exc:
             raise URDFError(
-                f"URDF file {str(path)!r} is not UTF-8 text: {exc.reason} at byte {exc.start}"
+                f"URDF file {shown} is not UTF-8 text: {exc.reason} at byte {exc.start}"
             ) from None
-        where = f"URDF file {str(path)!r}"
+        except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+            raise URDFError(
+                f"cannot read URDF file {shown}: {getattr(exc, 'strerror', None) or exc}"
+            ) from None
+        where = f"URDF file {shown}"
     elif isinstance(path_or_xml, str):
-        text, where = path_or_xml, "URDF text"
+        text, where = path_or_xml.lstrip().lstrip("\ufeff"), "URDF text"
     else:
         raise URDFError(f"expected a URDF file path or XML text, not {type(path_or_xml).__name__}")
     _refuse_doctype(text, where)

@@ -15,12 +15,11 @@ from __future__ import annotations
 import contextlib
 import math
 import warnings
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import osqp
-import scipy.sparse as sp
 
 from symkin.errors import CompileError, ConfigurationError, ParameterError
 from symkin.model.robot import MAX_JOINT_VALUE, real_array
@@ -74,7 +73,7 @@ OSQP_SETTINGS: dict[str, Any] = {
 }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StepInfo:
     """How one control step went.
 
@@ -188,10 +187,20 @@ def rrmc(
     ``"singular"``. If |qd_i| exceeds the joint speed limit (``qd_max``, else ``kin.qd_max``), all of qd
     is scaled down by the same factor so its direction is kept (seed 004); ``info.scale`` says by how much.
     ``axes`` only chooses which manipulability ``info`` reports.
+
+    On compiled C kinematics the step is one C call (:class:`symkin.runtime.mmc_c.CRRMC`, kept per
+    kinematics object and options); elsewhere J0 comes from ``kin.jacob0`` and the step from NumPy.
+    Both solve with the Cholesky factor of J J^T, no SVD.
     """
+    try:  # compiled kinematics keep their C controllers (by options) in kin._c_rrmc
+        c = kin._c_rrmc[(qd_max, damping, singular_tol, axes)]
+    except (AttributeError, KeyError, TypeError):
+        c = rrmc_controller(kin, qd_max, damping, singular_tol, axes)
+    if c is not None:
+        return c.fast(q, nu) or c.step(q, nu)  # fast: None for invalid input; step raises the error
     q = _q(kin, q)
     nu = _nu(nu)
-    damping = _number(damping, "damping")
+    damping = _number(damping, "damping", strict=False)
     singular_tol = _number(singular_tol, "singular_tol", strict=False)
     J = np.asarray(kin.jacob0(q), dtype=float)
     qd, status, method, m = _rrmc_step(J, nu, damping, singular_tol, _axes(axes))
@@ -200,21 +209,69 @@ def rrmc(
     return qd, StepInfo(status, method, m, residual=res, scale=scale)
 
 
+_RRMC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # kin -> {options: CRRMC}, if no kin._c_rrmc
+
+
+def rrmc_controller(
+    kin: Any, qd_max: Any = None, damping: float = 1e-2, singular_tol: float = 1e-6, axes: str = "all"
+) -> Any:
+    """The C controller (:class:`symkin.runtime.mmc_c.CRRMC`) of ``rrmc(kin, ..., options)``, memoised
+    per kinematics object and hashable options, or None when ``kin`` is not compiled C kinematics."""
+    from symkin.runtime import mmc_c
+
+    key = (qd_max, damping, singular_tol, axes)
+    cache = getattr(kin, "_c_rrmc", None)
+    try:
+        if not isinstance(cache, dict):
+            cache = _RRMC.setdefault(kin, {})
+        return cache[key]
+    except (KeyError, TypeError):  # new options; unhashable options or kin
+        pass
+    if not mmc_c.supports(kin):
+        return None
+    _axes(axes)
+    damping = _number(damping, "damping", strict=False)
+    singular_tol = _number(singular_tol, "singular_tol", strict=False)
+    c = mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), damping, singular_tol, axes)
+    try:
+        if isinstance(cache, dict):
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = c
+    except TypeError:  # unhashable options (an array qd_max): a new C controller per call
+        pass
+    return c
+
+
 def _rrmc_step(
     J: np.ndarray, nu: np.ndarray, damping: float, singular_tol: float, rows: slice
 ) -> tuple[np.ndarray, str, str, float]:
-    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    """(qd, status, method, m) of eqs 35-36 from the Cholesky factor of G = J J^T (no SVD): J is
+    regular when G - singular_tol^2 I is positive definite (its smallest singular value is at least
+    singular_tol); then qd = J^T G^-1 nu (J^-1 nu for a square J) and m = prod diag(L) = sqrt(det G),
+    else the damped step J^T (G + damping^2 I)^-1 nu."""
     n = J.shape[1]
+    G = J @ J.T
+    L = None
+    if n >= 6:
+        with contextlib.suppress(np.linalg.LinAlgError):
+            np.linalg.cholesky(G - singular_tol**2 * np.eye(6))
+            L = np.linalg.cholesky(G)
     if rows == _AXES["all"]:
-        m = float(np.prod(s)) if n >= 6 else 0.0
+        if L is not None:
+            m = float(np.prod(np.diagonal(L)))
+        else:
+            m = math.sqrt(max(float(np.linalg.det(G)), 0.0)) if n >= 6 else 0.0
     else:
-        Jr = J[rows]
-        m = math.sqrt(max(float(np.linalg.det(Jr @ Jr.T)), 0.0))
-    x = U.T @ nu
-    if n < 6 or s[-1] < singular_tol:
-        qd = Vt.T @ (s / (s * s + damping * damping) * x)
-        return qd, "singular", "damped", m
-    return Vt.T @ (x / s), "solved", ("inverse" if n == 6 else "pinv"), m
+        Gr = G[rows, rows]
+        m = math.sqrt(max(float(np.linalg.det(Gr)), 0.0))
+    if L is not None:
+        return J.T @ np.linalg.solve(G, nu), "solved", ("inverse" if n == 6 else "pinv"), m
+    try:
+        y = np.linalg.solve(G + damping * damping * np.eye(6), nu)
+    except np.linalg.LinAlgError:  # no damping at a singular J: no step
+        y = np.zeros(6)
+    return J.T @ y, "singular", "damped", m
 
 
 # -- MMC: the controller ---------------------------------------------------------------------------
@@ -293,11 +350,9 @@ class MMC:
         self.singular_tol = _number(singular_tol, "singular_tol", strict=False)
         self.settings = {**OSQP_SETTINGS, **(osqp_settings or {})}
         self._jh = getattr(kin, "jacob0_hessian0", None)
-        self._solver: osqp.OSQP | None = None
+        self._solver: Any = None  # osqp.OSQP, set up on the first step that needs it (osqp imported then)
         self._raw: Any = None
         self._polish = bool(self.settings.get("polishing"))
-        self._inf = float(osqp.constant("OSQP_INFTY"))
-        self._status_names = {int(s): _OSQP_STATUS.get(s.name, "error") for s in osqp.SolverStatus}
         self._c: Any = None
         if backend != "python":
             from symkin.runtime import mmc_c
@@ -381,7 +436,7 @@ class MMC:
         form does not settle the step. On the C path (:attr:`backend`) the whole step is one C call.
         """
         if self._c is not None:
-            return self._c.step(q, nu)
+            return self._c.fast(q, nu) or self._c.step(q, nu)  # fast: None for invalid input
         nu = _nu(nu)
         try:
             qd, info = self._step(_q(self.kin, q), nu)
@@ -479,6 +534,8 @@ class MMC:
     def _warm_start(self, qd: np.ndarray, qp: MMCQP) -> None:
         if self._solver is None:
             return
+        import osqp
+
         x = np.zeros(qp.P.shape[0])
         x[: self.n] = qd
         if qp.has_slack:
@@ -488,6 +545,11 @@ class MMC:
 
     def _osqp(self, qp: MMCQP) -> tuple[np.ndarray | None, str, int]:
         """Update (q-dependent values, bounds) and solve the OSQP problem; (x, status, iterations)."""
+        import osqp  # only here (and in _setup): `import symkin` and the C path do without it
+
+        if self._solver is None:
+            self._inf = float(osqp.constant("OSQP_INFTY"))
+            self._status_names = {int(s): _OSQP_STATUS.get(s.name, "error") for s in osqp.SolverStatus}
         l = np.maximum(qp.l, -self._inf)
         u = np.minimum(qp.u, self._inf)
         try:
@@ -520,6 +582,9 @@ class MMC:
 
     def _setup(self, qp: MMCQP, l: np.ndarray, u: np.ndarray) -> None:
         """Set up OSQP once with the fixed sparsity: P diagonal, A = [[J, I], [I, 0]] (J block dense)."""
+        import osqp
+        import scipy.sparse as sp
+
         pattern = qp.A != 0
         pattern[:6, : self.n] = True  # the J block stays structurally dense whatever its values
         self._A_rows, self._A_cols = _csc_order(pattern)

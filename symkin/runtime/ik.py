@@ -379,14 +379,25 @@ def _angle_axis_one(R: np.ndarray) -> np.ndarray:
 
 
 def pose_error(Te: Any, Tep: Any) -> np.ndarray:
-    """e of eq 37 for poses Te, Tep (..., 4, 4) -> (..., 6): (t* - t, alpha(R* R^T)), base frame."""
+    """e of eq 37 for poses Te, Tep (..., 4, 4) -> (..., 6): (t* - t, alpha(R* R^T)), base frame.
+
+    One pose pair is computed with scalar arithmetic in the order of the C code (``csrc/symkin_pose.h``),
+    so both give the same numbers to the bit: the C and Python servo loops take the same steps."""
     Te, Tep = np.asarray(Te, dtype=float), np.asarray(Tep, dtype=float)
-    R = Tep[..., :3, :3] @ np.swapaxes(Te[..., :3, :3], -1, -2)
-    if R.ndim == 2:  # one pose pair: scalar arithmetic is several times faster
+    if Te.shape == Tep.shape == (4, 4):
+        a, b = Te.ravel().tolist(), Tep.ravel().tolist()
+        R = np.array(
+            [
+                b[4 * i] * a[4 * j] + b[4 * i + 1] * a[4 * j + 1] + b[4 * i + 2] * a[4 * j + 2]
+                for i in range(3)
+                for j in range(3)
+            ]  # fmt: skip
+        ).reshape(3, 3)
         e = np.empty(6)
-        e[:3] = Tep[:3, 3] - Te[:3, 3]
+        e[:3] = (b[3] - a[3], b[7] - a[7], b[11] - a[11])
         e[3:] = _angle_axis_one(R)
         return e
+    R = Tep[..., :3, :3] @ np.swapaxes(Te[..., :3, :3], -1, -2)
     return np.concatenate((Tep[..., :3, 3] - Te[..., :3, 3], angle_axis(R)), axis=-1)
 
 

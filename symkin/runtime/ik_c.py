@@ -1,9 +1,11 @@
 """Numerical IK in C (``csrc/symkin_ik.c``) through ctypes: the loop of :mod:`symkin.runtime.ik`.
 
-One :class:`CIKSolver` holds a robot's kinematics and one set of options, with its C config,
-buffers and pointers built once, so a single solve from Python costs about 1.5 us on top of the C
-work (the ctypes call included; ``ik(..., backend="c")`` adds about 0.5 us); a batch of targets is
-one C call, which runs LM on 4 targets side by side with the same results as one by one.
+One :class:`CIKSolver` holds a robot's kinematics and one set of options, with its C config built
+once. A single target is one call of a small CPython extension compiled into the solver's library
+(``csrc/symkin_ik_py.c``): it takes the ndarray directly, releases the GIL while it solves and
+keeps its buffers per call, so several threads can share a solver, and it costs well under a
+microsecond on top of the C work. A batch of targets is one ctypes call, which runs LM on 4
+targets side by side with the same results as one by one.
 Kinematics come from either
 
 - the table-driven ETS interpreter in C (any object with ``n``, ``qlim`` and ``ets`` or
@@ -17,6 +19,7 @@ Kinematics come from either
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import random
 import weakref
@@ -30,7 +33,15 @@ from symkin.errors import ConfigurationError, PoseError
 from symkin.model.robot import real_array
 from symkin.runtime.ik import IKOptions, IKResult, check_pose, ets_of, failure_reason
 
-__all__ = ["CIKSolver", "ik_sources", "ik_library", "solver_for", "ets_table"]
+__all__ = [
+    "CIKSolver",
+    "ik_sources",
+    "ik_library",
+    "ik_extension",
+    "solver_for",
+    "default_c_solver",
+    "ets_table",
+]
 
 CSRC = Path(__file__).resolve().parent / "csrc"
 _P = ctypes.c_void_p
@@ -68,10 +79,6 @@ STATS_DTYPE = np.dtype(
 )
 
 
-class _Job(ctypes.Structure):
-    _fields_ = [(f, _P) for f in ("cfg", "Tep", "q0", "q", "st")]
-
-
 class _ET(ctypes.Structure):
     _fields_ = [("axis", _I32), ("joint", _I32), ("sign", _D), ("c", _D), ("s", _D), ("d", _D)]
 
@@ -81,12 +88,14 @@ class _ETS(ctypes.Structure):
 
 
 def ik_sources() -> dict[str, str]:
-    """The C solver's sources (file name -> text): ``symkin_ik.h``, ``symkin_ik.c``, ``symkin_ets.c``.
+    """The C solver's sources (file name -> text): ``symkin_ik.h``, ``symkin_pose.h``, ``symkin_ik.c``,
+    ``symkin_ets.c``.
 
     Compile them together with generated kinematics to get one library exporting both (with
     :data:`IK_CFLAGS`).
     """
-    return {name: (CSRC / name).read_text() for name in ("symkin_ik.h", "symkin_ik.c", "symkin_ets.c")}
+    names = ("symkin_ik.h", "symkin_pose.h", "symkin_ik.c", "symkin_ets.c")
+    return {name: (CSRC / name).read_text() for name in names}
 
 
 def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
@@ -98,7 +107,6 @@ def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
         "symkin_ik_check_pose": (_I32, [_P, _P]),
         "symkin_ik_pose_error": (None, [_P, _P, _P]),
         "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
-        "symkin_ik_solve_job": (_I32, [_P, _U64]),
         "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
         "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
         "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
@@ -120,11 +128,49 @@ IK_CFLAGS: tuple[str, ...] = ("-fno-tree-slp-vectorize",)
 
 
 @lru_cache(maxsize=1)
+def _ik_build() -> tuple[Path, str]:
+    """(path of the compiled solver library, name of the extension module inside it)."""
+    import hashlib
+    import sysconfig
+
+    from symkin.emit.c.build import compile_library
+
+    sources = {**ik_sources(), "symkin_ik_py.c": (CSRC / "symkin_ik_py.c").read_text()}
+    digest = hashlib.sha256("\0".join(sources[k] for k in sorted(sources)).encode()).hexdigest()[:12]
+    module = f"_symkin_ik_{digest}"
+    flags = (
+        *IK_CFLAGS,
+        f"-DSYMKIN_IK_MODULE={module}",
+        f"-I{sysconfig.get_paths()['include']}",
+        f"-I{np.get_include()}",
+    )
+    return compile_library(sources, "symkin_ik", flags), module
+
+
+@lru_cache(maxsize=1)
 def ik_library() -> ctypes.CDLL:
     """The compiled C solver with the table-driven ETS kinematics (cached; see symkin.emit.c.build)."""
-    from symkin.emit.c.build import compile_library, load_library
+    from symkin.emit.c.build import load_library
 
-    return bind(load_library(compile_library(ik_sources(), "symkin_ik", IK_CFLAGS)))
+    return bind(load_library(_ik_build()[0]))
+
+
+@lru_cache(maxsize=1)
+def ik_extension() -> Any:
+    """The extension module of :func:`ik_library`'s library: ``solve`` of one target (see
+    ``csrc/symkin_ik_py.c``)."""
+    from symkin.emit.c.backend import load_extension
+
+    path, name = _ik_build()
+    module = load_extension(name, path)
+
+    def seed() -> None:  # fresh seeds (seed=None) differ between processes, forked ones included
+        module.setup(IKResult, int.from_bytes(os.urandom(8), "little"))
+
+    seed()
+    if hasattr(os, "register_at_fork"):
+        os.register_at_fork(after_in_child=seed)
+    return module
 
 
 def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
@@ -247,19 +293,12 @@ class CIKSolver:
         cfg.ets = ctypes.addressof(self._ets) if self._ets is not None else None
         self._cfg = cfg
         self._cfg_addr = ctypes.addressof(cfg)
-        # single-solve buffers and their addresses
-        self._T, self._q0, self._q = np.zeros((4, 4)), np.zeros(opt.n), np.zeros(opt.n)
-        self._shape = (opt.n,)
-        self._st = _Stats()
-        self._T_addr, self._q0_addr, self._q_addr = _addr(self._T), _addr(self._q0), _addr(self._q)
-        self._st_addr = ctypes.addressof(self._st)
-        # one solve from q0 or not: the arguments of symkin_ik_solve as one block each
-        self._jobs = tuple(
-            _Job(self._cfg_addr, self._T_addr, q0, self._q_addr, self._st_addr)
-            for q0 in (None, self._q0_addr)
+        # one target: the extension's solve when the library is the default one (it has it), else
+        # symkin_ik_solve through ctypes; either way with buffers per call (thread-safe)
+        # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
+        self.fast = (
+            functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if lib is None else None
         )
-        self._job_addr = tuple(ctypes.addressof(j) for j in self._jobs)
-        self._solve = self.lib.symkin_ik_solve_job
         self._seeds = random.Random(os.urandom(16))
 
     def __repr__(self) -> str:
@@ -269,37 +308,43 @@ class CIKSolver:
 
     # -- solving --------------------------------------------------------------------------
     def solve(self, Tep: Any, q0: Any = None, seed: int | None = None) -> IKResult:
-        """Solve one target (4, 4) or a batch (N, 4, 4); same arguments and result as :func:`ik`."""
+        """Solve one target (4, 4) or a batch (N, 4, 4); same arguments and result as :func:`ik`.
+
+        Thread-safe: one target is solved without the GIL, with buffers of its own.
+        """
+        if self.fast is not None:
+            res = self.fast(Tep, q0, seed)
+            if res is not None:
+                return res
+        return self._solve_checked(Tep, q0, seed)
+
+    def _reason(self, residual: float, limit_rejects: int, singular: int) -> str:
+        o = self.options
+        return failure_reason(False, residual, limit_rejects, singular, o.ilimit, o.slimit)
+
+    def _solve_checked(self, Tep: Any, q0: Any, seed: Any) -> IKResult:
+        """:meth:`solve` with every argument validated first (detailed errors) and batches."""
         if seed is None:
             seed = self._seeds.getrandbits(64)
         else:
-            seed = (seed if type(seed) is int else int(seed)) & _M64
-        if type(Tep) is np.ndarray and Tep.shape == (4, 4) and Tep.dtype.kind == "f":
-            T = Tep
-        else:
-            T = real_array(Tep, "a target pose", PoseError)  # no complex, strings...
-            if T.shape != (4, 4):
-                return self._solve_batch(T, q0, seed)
-        try:
-            self._T[...] = T  # the C code checks the pose (SE(3), finite)
-        except (TypeError, ValueError) as exc:
-            raise PoseError(f"a target pose must be a 4x4 array of numbers: {exc}") from None
-        job = self._job_addr[0]
-        if q0 is not None:
-            fast = type(q0) is np.ndarray and q0.shape == self._shape and q0.dtype.kind == "f"
-            self._q0[...] = q0 if fast else self._check_q0(q0)
-            job = self._job_addr[1]
-        if self._solve(job, seed):
-            if self._st.status == 5:
-                raise ConfigurationError("q0 contains NaN or inf")
-            check_pose(T)  # raises the detailed PoseError
-            raise PoseError(f"invalid target pose (code {self._st.status})")
-        st = self._st
-        if st.success:
-            return _result(self._q.copy(), True, st.iterations, st.searches, st.residual, "success")
-        o = self.options
-        reason = failure_reason(False, st.residual, st.limit_rejects, st.singular, o.ilimit, o.slimit)
-        return _result(self._q.copy(), False, st.iterations, st.searches, st.residual, reason)
+            seed = int(seed) & _M64
+        T = np.ascontiguousarray(real_array(Tep, "a target pose", PoseError))  # no complex, strings...
+        if T.shape != (4, 4):
+            return self._solve_batch(T, q0, seed)
+        check_pose(T)  # the detailed PoseError
+        Q0 = None if q0 is None else np.ascontiguousarray(self._check_q0(q0))
+        if self.fast is not None:
+            res = self.fast(T, Q0, seed)
+            if res is not None:
+                return res
+        q, st = np.empty(self.n), _Stats()
+        status = self.lib.symkin_ik_solve(
+            self._cfg_addr, _addr(T), None if Q0 is None else _addr(Q0), seed, _addr(q), ctypes.addressof(st)
+        )
+        if status:
+            raise PoseError(f"invalid target pose (code {status})")
+        reason = "success" if st.success else self._reason(st.residual, st.limit_rejects, st.singular)
+        return _result(q, bool(st.success), st.iterations, st.searches, st.residual, reason)
 
     def _check_q0(self, q0: Any) -> np.ndarray:
         q = real_array(q0, "q0", items=f"{self.n} numbers")
@@ -406,3 +451,16 @@ def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
             cache.clear()
         solver = cache[key] = CIKSolver(kin, opt)
     return solver
+
+
+def default_c_solver(kin: Any) -> CIKSolver:
+    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default
+    (memoised like any other: per kinematics object and options)."""
+    import inspect
+
+    from symkin.runtime.ik import _c_solver, ik
+
+    defaults = inspect.signature(ik).parameters
+    names = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
+             "starts")  # fmt: skip
+    return _c_solver(kin, tuple(defaults[k].default for k in names))

@@ -16,8 +16,10 @@ from typing import Any
 
 import numpy as np
 
+from symkin.errors import ConfigurationError
 from symkin.model.robot import Robot, as_batch, axes_rows, cond_of, jacobm_of, manipulability_of
 from symkin.runtime.ik import ik
+from symkin.runtime.manip import jacobm_one, manipulability_one
 
 __all__ = ["Kinematics", "KIN_METHODS"]
 
@@ -61,7 +63,11 @@ class Kinematics:
         module: ModuleType | None = None,
     ) -> None:
         self.robot = robot
+        self._n = int(robot.n)
         self.backend = backend
+        self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
+        self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
+        self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
         self.files = files
         self.path = path
         self.module = module
@@ -73,7 +79,8 @@ class Kinematics:
 
     @property
     def n(self) -> int:
-        return self.robot.n
+        """Number of joints (kept: ``robot.n`` counts the joints of the ETS on every call)."""
+        return self._n
 
     @property
     def name(self) -> str:
@@ -91,20 +98,27 @@ class Kinematics:
         return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
-        """Yoshikawa manipulability of the chosen rows of J0 (eq 52)."""
+        """Yoshikawa manipulability of the chosen rows of J0 (eq 52): float, or (N,) for a batch.
+
+        One configuration takes the backend's single-configuration J0 and no determinant routine
+        (:func:`symkin.runtime.manip.manipulability_one`)."""
         rows = axes_rows(axes)
+        if type(q) is np.ndarray and q.ndim == 1:  # jacob0 checks q
+            return manipulability_one(self.jacob0(q)[rows])
         Q, single = as_batch(q, self.n, self.name)
-        J = self.jacob0(Q)
-        m = manipulability_of(J[:, rows])
-        return float(m[0]) if single else m
+        if single:
+            return manipulability_one(self.jacob0(Q[0])[rows])
+        return manipulability_of(self.jacob0(Q)[:, rows])
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
         """Manipulability Jacobian (seed 001 eq 11), (n,) or (N, n)."""
         rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
+        if single:
+            J, H = self.jacob0_hessian0(Q[0])
+            return jacobm_one(J[rows], H[:, rows])
         J, H = self.jacob0_hessian0(Q)
-        Jm = jacobm_of(J[:, rows], H[:, :, rows])
-        return Jm[0] if single else Jm
+        return jacobm_of(J[:, rows], H[:, :, rows])
 
     def cond(self, q: Any, axes: str = "all") -> np.ndarray | float:
         """Condition number of the chosen rows of J0 (eq 53), inf at a singular configuration."""
@@ -128,8 +142,83 @@ class Kinematics:
         """Numerical inverse kinematics (eqs 37-51); see :func:`symkin.runtime.ik.ik` for the options.
 
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
-        NumPy and CasADi backends the NumPy solver calls the generated functions.
+        NumPy and CasADi backends the NumPy solver calls the generated functions. A call with the
+        default options goes straight to the C solver (one target costs little more than the
+        solve itself); it is thread-safe.
+
+        ``method="analytic"``: the closed form (:meth:`ik_all`), returning the solution nearest
+        ``q0`` (options ``q0``, ``weights``, ``joint_limits``, ``tol``); ``success=False`` with a
+        reason when the pose is out of reach or every solution is outside the joint limits. For a
+        redundant arm ``free_joint=j`` sweeps joint ``j`` (64 values over its limits, or one turn,
+        plus ``q0[j]``) and ``free_joint=(j, values)`` tries the given values; see :meth:`ik_all`.
         """
+        if not kwargs and self._ik_fast is not None:
+            res = self._ik_fast(Tep)
+            return res if res is not None else self._ik_solver.solve(Tep)  # None: Tep needs checking
+        if kwargs.get("method") == "analytic":
+            options = {k: v for k, v in kwargs.items() if k != "method"}
+            unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol", "free_joint"})
+            if unknown:
+                raise TypeError(
+                    f"method='analytic' takes q0, weights, joint_limits, tol, free_joint; not {unknown}"
+                )
+            free = options.pop("free_joint", None)
+            if free is not None:
+                from symkin.runtime.free_joint import free_joint_solver, parse_free_joint
+
+                j, values = parse_free_joint(free)
+                return free_joint_solver(self.robot, j, self.backend).ik(Tep, values, **options)
+            return self.analytic.ik(Tep, fkine=self.fkine, **options)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
+        if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
+            from symkin.runtime.ik_c import default_c_solver
+
+            self._ik_solver = solver = default_c_solver(self)
+            self._ik_fast = solver.fast
+            return solver.solve(Tep)
         return ik(self, Tep, **kwargs)
+
+    # -- closed-form inverse kinematics (symkin.compile_ik) -------------------------------------
+    @cached_property
+    def analytic(self) -> Any:
+        """The closed-form solver of this robot on this backend (compiled on first use); raises
+        NoAnalyticIKError naming what the arm lacks."""
+        from symkin.compile_ik import compile_analytic
+
+        return compile_analytic(self.robot, self.backend)
+
+    @property
+    def has_analytic_ik(self) -> bool:
+        """Whether symkin derives a closed-form IK for this arm (cached; see :meth:`ik_all`)."""
+        from symkin.compile_ik import analytic_refusal
+
+        return analytic_refusal(self.robot, self.backend) is None
+
+    def ik_all(
+        self, T: Any, q0: Any = None, joint_limits: bool = True, weights: Any = None, free_joint: Any = None
+    ) -> np.ndarray:
+        """Every distinct closed-form solution of the pose ``T`` (base frame).
+
+        ``T`` (4, 4) -> (k, n), ordered by ``sum_j weights_j (q_j - q0_j)^2`` when ``q0`` is given;
+        ``T`` (N, 4, 4) -> (N, S, n) with NaN rows after each pose's solutions (S: the arm's
+        maximum, 8 for a 6R arm). Revolute joints are wrapped by 2 pi into the joint limits where a
+        shift allows; with ``joint_limits`` rows outside them are dropped. See
+        :mod:`symkin.runtime.analytic_ik`. On the C backend later calls go straight to the compiled
+        solver (the same signature, plus ``tol``): no Python frame per pose.
+
+        ``free_joint=(j, values)`` (redundant arms): joint ``j``, the first or the last of the chain,
+        takes each of ``values`` (a number or a 1-D array) and the other joints are solved in closed
+        form; (N, 4, 4) -> (N, V * S, n). See :mod:`symkin.runtime.free_joint`.
+        """
+        if free_joint is not None:
+            from symkin.runtime.free_joint import free_joint_solver, parse_free_joint
+
+            j, values = parse_free_joint(free_joint)
+            if values is None:
+                raise ConfigurationError("ik_all needs the values of the free joint: free_joint=(j, values)")
+            return free_joint_solver(self.robot, j, self.backend).ik_all(T, values, q0, joint_limits, weights)
+        solver = self.analytic
+        if self.backend == "c":
+            self.__dict__["ik_all"] = solver.ik_all
+        return solver.ik_all(T, q0, joint_limits, weights)

@@ -13,7 +13,7 @@ import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.model.robot import real_array
-from symkin.runtime.control import MMC, StepInfo, rrmc
+from symkin.runtime.control import MMC, StepInfo, rrmc, rrmc_controller
 from symkin.runtime.ik import check_pose, pose_error
 from symkin.runtime.servo import servo_gain, servo_velocity
 
@@ -99,6 +99,7 @@ def servo(
     axes: str = "all",
     nu_max: Any = None,
     progress: bool = False,
+    backend: str = "auto",
 ) -> ServoResult:
     """Servo the end effector from configuration ``q0`` (n,) to the base-frame pose ``Tep`` (4, 4).
 
@@ -112,7 +113,15 @@ def servo(
     options apply), or any callable ``(q, nu) -> (qd, StepInfo)``; ``kin`` needs ``n``, ``qlim``,
     ``fkine``, ``manipulability(q, axes)`` and what the controller uses. ``qd_max=None`` uses
     ``kin.qd_max`` when the robot has it; pass ``np.inf`` for no speed limit.
+
+    ``backend``: ``"auto"`` (default) runs the whole loop in C (``csrc/mmc_py.c``: kinematics, pose
+    error, velocity command and the controller's C step, with the same arithmetic) when ``kin`` is
+    compiled C kinematics and the controller is ``"rrmc"`` or an MMC whose step runs in C; ``"python"``
+    runs this loop in Python around the same step; ``"c"`` requires the C loop. ``step_time`` is then
+    the time of the C step alone.
     """
+    if backend not in ("auto", "c", "python"):
+        raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
     n = int(kin.n)
     q = real_array(q0, "q0").copy()
     if q.shape != (n,) or not np.isfinite(q).all():
@@ -121,14 +130,37 @@ def servo(
         raise ParameterError(f"dt must be a positive finite number, got {dt!r}")
     if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 0:
         raise ParameterError(f"max_steps must be an integer >= 0, got {max_steps!r}")
-    T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
-    if not single:
-        raise PoseError(f"servo takes one target pose (4, 4), got shape {np.shape(Tep)}")
-    Tep = T_all[0]
-    k = servo_gain(gain)
-    step, name = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
+    T = real_array(Tep, "the target pose", PoseError) if isinstance(Tep, np.ndarray) else None
+    if T is None or T.shape != (4, 4):  # the C loop checks the pose itself
+        T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
+        if not single:
+            raise PoseError(f"servo takes one target pose (4, 4), got shape {np.shape(Tep)}")
+        T = T_all[0]
+    k = [float(gain)] * 6 if type(gain) in (int, float) and 0 <= gain < math.inf else servo_gain(gain)
+    if not (isinstance(threshold, numbers.Real) and math.isfinite(threshold) and threshold >= 0):
+        raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
+    _check_cap(nu_max)
+    step, name, cstep = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
     if isinstance(controller, MMC):
         axes = controller.axes
+    if backend == "c" and cstep is None:
+        raise ConfigurationError(
+            "backend='c' needs compiled C kinematics and controller 'rrmc', 'mmc' or an MMC running in C"
+        )
+    if cstep is not None and backend != "python":
+        bar = _progress(progress, max_steps, name)
+        out = cstep.servo(T, q, k, threshold, dt, nu_max, axes, max_steps)
+        if out is None:  # not a valid pose
+            check_pose(T)  # the detailed PoseError
+            raise PoseError("invalid target pose")  # pragma: no cover - check_pose raised
+        Qa, QDa, Ea, Ma, infos_c, times_c, arrived, viol = out
+        if bar is not None:
+            bar.update(len(QDa))
+            bar.close()
+        return ServoResult(Qa, QDa, Ea, Ma, infos_c, times_c, bool(arrived), int(viol), float(dt), name)
+    check_pose(T)
+    Tep = T
+    k = np.asarray(k)
     qlo, qhi = np.asarray(kin.qlim, dtype=float)
 
     Q, QD, E, M, infos, times = [q.copy()], [], [], [], [], []
@@ -173,20 +205,37 @@ def servo(
 
 def _controller(
     kin: Any, controller: Any, lam: float, qd_max: Any, joint_limits: bool, axes: str, dt: float
-) -> tuple[Controller, str]:
+) -> tuple[Controller, str, Any]:
+    """(step, name, the C controller whose servo loop runs in C, or None)."""
+    if isinstance(controller, str) and controller == "mmc":
+        controller = MMC(kin, lam=lam, qd_max=qd_max, axes=axes, joint_limits=joint_limits, dt=dt)
     if isinstance(controller, MMC):
-        return controller.step, "mmc"
-    if controller == "mmc":
-        return MMC(kin, lam=lam, qd_max=qd_max, axes=axes, joint_limits=joint_limits, dt=dt).step, "mmc"
-    if controller == "rrmc":
+        cstep = controller._c if controller.kin is kin else None
+        return controller.step, "mmc", cstep
+    if isinstance(controller, str) and controller == "rrmc":
         if joint_limits:
             raise ParameterError(
                 "joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)"
             )
-        return (lambda q, nu: rrmc(kin, q, nu, qd_max=qd_max, axes=axes)), "rrmc"
+        return (
+            (lambda q, nu: rrmc(kin, q, nu, qd_max=qd_max, axes=axes)),
+            "rrmc",
+            rrmc_controller(kin, qd_max, axes=axes),
+        )
     if callable(controller):
-        return controller, getattr(controller, "__name__", type(controller).__name__)
+        return controller, getattr(controller, "__name__", type(controller).__name__), None
     raise ParameterError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
+
+
+def _check_cap(nu_max: Any) -> None:
+    """The checks of servo_velocity's nu_max, made before the loop starts."""
+    if nu_max is None:
+        return
+    cap = real_array(nu_max, "nu_max", ParameterError)
+    if cap.ndim != 0 and cap.shape != (2,):
+        raise ParameterError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
+    if not (cap > 0).all():
+        raise ParameterError(f"velocity caps must be positive, got {cap.tolist()}")
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:

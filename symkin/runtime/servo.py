@@ -93,7 +93,10 @@ def servo_velocity(
 def _cap(nu: np.ndarray, rows: slice, limit: float) -> None:
     if not limit > 0:
         raise ParameterError(f"velocity caps must be positive, got {limit}")
-    norm = float(np.linalg.norm(nu[rows]))
+    s = 0.0
+    for v in nu[rows].tolist():  # summed in order, as the C servo loop does
+        s += v * v
+    norm = math.sqrt(s)
     if norm > limit:
         nu[rows] *= limit / norm
 

@@ -9,10 +9,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
-__all__ = ["OpCounts", "CSEResult", "count_ops", "cse_outputs", "floatify"]
+if TYPE_CHECKING:
+    from symkin.symbolic.program import HessianLoop
+
+__all__ = ["OpCounts", "CSEResult", "count_ops", "cse_outputs", "floatify", "tree_size", "depth"]
 
 
 @dataclass(frozen=True)
@@ -35,51 +40,105 @@ class OpCounts:
         return f"{self.total} ops ({self.mul} mul, {self.add} add, {self.trig} trig, {self.other} other)"
 
 
-def count_ops(expr: sp.Expr) -> OpCounts:
-    """Count the operations of one expression as a C compiler would emit them (no sharing)."""
-    mul = add = trig = other = 0
-    stack = [expr]
-    while stack:
-        e = stack.pop()
-        if e.is_Atom:
+def _postorder(roots: list[sp.Basic]) -> list[sp.Basic]:
+    """Every distinct node under ``roots``, children before parents (iterative: no recursion limit)."""
+    seen: set[sp.Basic] = set()
+    out: list[sp.Basic] = []
+    for root in roots:
+        if root in seen:
             continue
-        args = e.args
-        if e.is_Add:
-            add += len(args) - 1
-        elif e.is_Mul:
-            coeff, rest = e.as_coeff_mul()
-            k = len(rest) - 1 + (0 if coeff in (1, -1) else 1)
-            mul += max(k, 0)
-            if coeff == -1 and len(rest) >= 1:
-                add += 0  # a negation folds into the surrounding add/sub
-            args = rest
-        elif e.is_Pow:
-            exp = e.exp
-            if exp.is_Integer and abs(int(exp)) <= 4:
-                mul += abs(int(exp)) - 1 + (1 if exp < 0 else 0)
-            else:
-                other += 1
-            args = (e.base,)
-        elif isinstance(e, (sp.sin, sp.cos)):
-            trig += 1
-        else:
-            other += 1
-        stack.extend(args)
-    return OpCounts(mul, add, trig, other)
+        stack: list[tuple[sp.Basic, bool]] = [(root, False)]
+        while stack:
+            e, expanded = stack.pop()
+            if expanded:
+                out.append(e)
+                continue
+            if e in seen:
+                continue
+            seen.add(e)
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in seen)
+    return out
 
 
-def floatify(expr: sp.Expr) -> sp.Expr:
+def _own_ops(e: sp.Basic) -> tuple[OpCounts, tuple[sp.Basic, ...]]:
+    """The operations of node ``e`` itself and the arguments that carry further operations."""
+    if e.is_Atom:
+        return OpCounts(), ()
+    args = e.args
+    if e.is_Add:
+        return OpCounts(add=len(args) - 1), args
+    if e.is_Mul:
+        coeff, rest = e.as_coeff_mul()
+        k = len(rest) - 1 + (0 if coeff in (1, -1) else 1)  # a negation folds into an add/sub
+        return OpCounts(mul=max(k, 0)), rest
+    if e.is_Pow:
+        exp = e.exp
+        if exp.is_Integer and abs(int(exp)) <= 4:
+            return OpCounts(mul=abs(int(exp)) - 1 + (1 if exp < 0 else 0)), (e.base,)
+        return OpCounts(other=1), (e.base,)
+    if isinstance(e, (sp.sin, sp.cos)):
+        return OpCounts(trig=1), args
+    return OpCounts(other=1), args
+
+
+def count_ops(expr: sp.Expr) -> OpCounts:
+    """Count the operations of one expression as a C compiler would emit it (no sharing: a
+    subexpression used twice counts twice). Memoised over the distinct subexpressions, so a
+    deeply shared expression is counted in time linear in its distinct nodes."""
+    memo: dict[sp.Basic, OpCounts] = {}
+    for e in _postorder([expr]):
+        own, args = _own_ops(e)
+        for a in args:
+            own = own + memo.get(a, OpCounts())
+        memo[e] = own
+    return memo[expr]
+
+
+def floatify(expr: sp.Expr, memo: dict[sp.Basic, sp.Expr] | None = None) -> sp.Expr:
     """Replace irrational numeric subexpressions (sqrt(2)/2, cos(1/3)...) by 17-digit Floats.
 
-    Rationals are kept: the printers write them as correctly rounded doubles.
+    Rationals are kept: the printers write them as correctly rounded doubles. Each distinct
+    subexpression is rebuilt once (``memo`` may be shared between calls), bottom-up without
+    recursion, so shared subtrees stay shared.
     """
-    if expr.is_number:
-        if expr.is_Rational:
-            return expr
-        return sp.Float(float(sp.N(expr, 30)), 17)
-    if expr.is_Atom:
-        return expr
-    return expr.func(*(floatify(a) for a in expr.args), evaluate=False)
+    memo = {} if memo is None else memo
+    if expr in memo:
+        return memo[expr]
+    numeric: dict[sp.Basic, bool] = {}  # sympy's is_number recurses: computed bottom-up instead
+    for e in _postorder([expr]):
+        if e.is_Atom or not e.args:
+            numeric[e] = bool(e.is_number)
+        else:
+            numeric[e] = all(numeric.get(a, False) for a in e.args) and not isinstance(e, AppliedUndef)
+        if e in memo:
+            continue
+        if numeric[e]:
+            memo[e] = e if e.is_Rational else sp.Float(float(sp.N(e, 30)), 17)
+        elif e.is_Atom or not e.args:
+            memo[e] = e
+        else:
+            args = tuple(memo[a] for a in e.args)
+            same = all(a is b for a, b in zip(args, e.args))  # == would recurse on deep arguments
+            memo[e] = e if same else e.func(*args, evaluate=False)
+    return memo[expr]
+
+
+def tree_size(exprs: list[sp.Expr]) -> int:
+    """The number of nodes of ``exprs`` written out as trees (what a printer emits without
+    sharing), computed over the distinct subexpressions."""
+    memo: dict[sp.Basic, int] = {}
+    for e in _postorder(list(exprs)):
+        memo[e] = 1 + sum(memo[a] for a in e.args)
+    return sum(memo[e] for e in exprs)
+
+
+def depth(expr: sp.Expr) -> int:
+    """The nesting depth of ``expr`` (an atom has depth 0), without recursion."""
+    memo: dict[sp.Basic, int] = {}
+    for e in _postorder([expr]):
+        memo[e] = 1 + max((memo[a] for a in e.args), default=-1)
+    return memo[expr]
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,12 +146,20 @@ class CSEResult:
     """Straight-line code: ``intermediates`` (symbol, expr) in order, then the named outputs.
 
     ``outputs[name]`` is ``(shape, exprs)`` with the expressions flattened in row-major order.
+    Outputs named in ``scratch`` are local arrays, not results (a Jacobian a Hessian loop reads);
+    ``hessians`` are Hessian outputs written by loops after the straight-line part
+    (:class:`symkin.symbolic.program.HessianLoop`). ``strategy`` says how the code was derived:
+    ``"expanded"`` (one expression per output, then CSE) or ``"program"`` (a straight-line
+    program of named link frames, :mod:`symkin.symbolic.program`).
     """
 
     intermediates: tuple[tuple[sp.Symbol, sp.Expr], ...]
     outputs: dict[str, tuple[tuple[int, ...], tuple[sp.Expr, ...]]]
     counts: OpCounts
     inputs: tuple[sp.Symbol, ...]
+    scratch: tuple[str, ...] = ()
+    hessians: tuple[HessianLoop, ...] = ()
+    strategy: str = "expanded"
 
 
 def cse_outputs(
@@ -103,12 +170,13 @@ def cse_outputs(
     """One CSE over all ``outputs`` (a matrix, or a tuple of equal-shape matrices for a 3-D array)."""
     flat: list[sp.Expr] = []
     shapes: dict[str, tuple[tuple[int, ...], int, int]] = {}
+    memo: dict[sp.Basic, sp.Expr] = {}
     for name, value in outputs.items():
         mats = value if isinstance(value, tuple) else (value,)
         shape = mats[0].shape if not isinstance(value, tuple) else (len(mats), *mats[0].shape)
         start = len(flat)
         for m in mats:
-            flat.extend(floatify(x) for x in m)
+            flat.extend(floatify(x, memo) for x in m)
         shapes[name] = (tuple(shape), start, len(flat))
     symbols = sp.numbered_symbols(prefix)
     repl, reduced = sp.cse(flat, symbols=symbols, order="none", optimizations=None)

@@ -9,7 +9,8 @@ Built the way that keeps the expressions small (see ``shared/notes/measurements.
   do not change the orientation;
 - Jacobian columns come from the frames before each joint (eqs 31-34):
   ``J_a = (w_a x (p_e - p_a); w_a)`` for revolute and ``(w_a; 0)`` for prismatic joints;
-- Hessian blocks come from Jacobian columns (seed 001 eq 20, Appendix I): for b <= a (chain
+- Hessian blocks come from Jacobian columns (eq 20 and Appendix I of Haviland and Corke, Maximising
+  Manipulability During Resolved-Rate Motion Control, 2020): for b <= a (chain
   order), ``dJ_a/dq_b = (w_b x Jv_a; w_b x Jw_a)`` when b is revolute and 0 when b is prismatic;
   for b > a, ``dJ_a/dq_b = (w_a x Jv_b; 0)`` when a is revolute and 0 when a is prismatic.
 """

@@ -179,3 +179,10 @@ def test_random_configurations_with_infinite_limits():
     assert np.isfinite(Q).all() and (Q[:, 0] >= -np.pi).all() and (Q[:, 0] <= np.pi).all()
     assert (Q[:, 1] >= 0.5).all() and (Q[:, 1] <= 2.5).all()
     assert robot.within_limits(Q).all()
+
+
+def test_urdf_text_with_a_byte_order_mark_and_paths_with_nul():
+    """Found by the fuzz suite: a BOM made XML text look like a path; a NUL in a path raised ValueError."""
+    assert Robot.from_urdf("\ufeff" + _urdf()).n == 1
+    with pytest.raises(URDFError, match="cannot read"):
+        Robot.from_urdf("robot\x00.urdf")

@@ -598,3 +598,88 @@ def test_servo_rejects_invalid_targets(panda):
     skew[0, 1] += 0.5
     with pytest.raises(PoseError, match="orthonormal"):
         servo(panda, panda.qr, skew)
+
+
+# -- RRMC and the servo loop in C -------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["panda", "ur5", "planar3"])
+def test_c_rrmc_agrees_with_the_numpy_rrmc_on_the_reference(name):
+    # the C step (generated J, Cholesky of J J^T) against the NumPy step on the numeric reference
+    robot = symkin.load(name)
+    kin = symkin.compile(robot, backend="c")
+    rng = np.random.default_rng(5)
+    configs = [robot.qz, *robot.random_q(6, seed=rng)]
+    for qd_max in (None, np.inf, 0.3):
+        for axes in ("all", "trans", "rot"):
+            for q in configs:
+                nu = rng.normal(0, 0.3, 6)
+                a, ia = rrmc(kin, q, nu, qd_max=qd_max, axes=axes)
+                b, ib = rrmc(robot, q, nu, qd_max=qd_max, axes=axes)
+                assert (ia.status, ia.method, ia.fallback) == (ib.status, ib.method, ib.fallback), (ia, ib)
+                assert_close(a, b, 1e-8, f"qd at {q}")
+                assert_close(ia.manipulability, ib.manipulability, 1e-9, "m")
+                assert_close(ia.scale, ib.scale, 1e-9, "scale")
+                assert_close(ia.residual, np.abs(robot.jacob0(q) @ a - nu).max(), 1e-9, "residual")
+    assert rrmc(kin, robot.qz, np.ones(6))[1].method == "damped"  # stretched out: singular
+
+
+def test_rrmc_is_the_pseudo_inverse_step_away_from_singularities(panda):
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        q, nu = panda.random_q(seed=rng), rng.normal(0, 0.3, 6)
+        qd, info = rrmc(panda, q, nu, qd_max=np.inf)
+        assert info.method == "pinv" and info.status == "solved"
+        assert_close(qd, np.linalg.pinv(panda.jacob0(q)) @ nu, 1e-10, "J^+ nu")
+        assert_close(info.manipulability, panda.manipulability(q), 1e-12, "m")
+
+
+SERVO_CASES = [
+    ("rrmc", {}),
+    ("rrmc", {"qd_max": 0.4, "gain": (2.0, 1.0), "nu_max": (0.3, 0.6)}),
+    ("mmc", {"qd_max": np.inf}),
+    ("mmc", {"joint_limits": True, "nu_max": 0.5}),
+]
+
+
+@pytest.mark.parametrize("controller,kwargs", SERVO_CASES, ids=lambda c: str(c))
+def test_servo_loop_in_c_gives_the_python_loop_s_run(cpanda, controller, kwargs):
+    # the same step function, the pose error and velocity command with the same arithmetic: the
+    # same run to the bit (MMC runs near the joint limits are chaotic: any rounding difference
+    # would grow to radians within a few hundred steps)
+    for q0, Tep in zip(*table1_tasks(cpanda, 2, np.random.default_rng(9))):
+        a = servo(cpanda, q0, Tep, controller, backend="c", **kwargs)
+        b = servo(cpanda, q0, Tep, controller, backend="python", **kwargs)
+        assert (a.steps, a.arrived, a.limit_violations, a.controller) == (
+            b.steps,
+            b.arrived,
+            b.limit_violations,
+            b.controller,
+        )
+        for x, y in ((a.q, b.q), (a.qd, b.qd), (a.e, b.e), (a.manipulability, b.manipulability)):
+            np.testing.assert_array_equal(x, y)
+        assert a.info == b.info
+        assert a.step_time.shape == (a.steps,) and (a.step_time >= 0).all()
+        default = servo(cpanda, q0, Tep, controller, **kwargs)  # the C loop by default
+        np.testing.assert_array_equal(default.q, a.q)
+
+
+def test_servo_loop_in_c_checks_its_inputs(cpanda, panda):
+    q0, T = cpanda.robot.qr, cpanda.fkine(cpanda.robot.qz)
+    bad = T.copy()
+    bad[0, 1] += 0.5
+    with pytest.raises(PoseError, match="orthonormal"):
+        servo(cpanda, q0, bad, "rrmc")
+    with pytest.raises(PoseError, match="one target"):
+        servo(cpanda, q0, T[None], "mmc")
+    with pytest.raises(ValueError, match="positive"):
+        servo(cpanda, q0, T, "rrmc", nu_max=0.0)
+    with pytest.raises(ValueError, match="threshold"):
+        servo(cpanda, q0, T, "rrmc", threshold=-1.0)
+    with pytest.raises(ConfigurationError, match="backend='c'"):
+        servo(panda, panda.qr, T, "rrmc", backend="c")
+    with pytest.raises(ConfigurationError, match="backend='c'"):
+        servo(cpanda, q0, T, lambda q, nu: rrmc(cpanda, q, nu), backend="c")
+    with pytest.raises(ValueError, match="backend"):
+        servo(cpanda, q0, T, backend="gpu")
+    res = servo(cpanda, q0, T, "mmc", max_steps=0)
+    assert res.steps == 0 and res.q.shape == (1, 7) and res.e.shape == (1, 6)
+    assert res.manipulability.shape == (1,)

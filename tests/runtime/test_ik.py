@@ -249,6 +249,85 @@ def test_c_and_numpy_give_the_same_solutions_and_restarts():
     np.testing.assert_array_equal(solver.random_q(3, 5, stream=4), expected)
 
 
+@pytest.mark.parametrize("name", ["ur5", "panda", "puma560", "planar3"])
+def test_pinv_steps_at_singularities_are_the_pseudo_inverse_steps(name):
+    # the C pseudo-inverse steps solve with a Cholesky factor when J is well conditioned; at and
+    # near a singularity they must still be pinv's (numpy.linalg.pinv, rcond 1e-12), which drops
+    # the lost directions: for GN those with sigma < 1e-6 sigma_max (pinv of J^T J), so at qz + 1e-7
+    # a plain solve would step ~1e7 rad where pinv steps ~1
+    robot = load(name)
+    Tep = robot.fkine(robot.random_q(seed=1))
+    for method in ("NR", "GN"):
+        solver = CIKSolver(robot, method=method, pinv=True)
+        starts = [robot.qz, robot.qz + 1e-7] if method == "GN" else [robot.qz]
+        for q0 in [*starts, robot.random_q(seed=2)]:
+            ref = ik_trace(robot, Tep, q0, 1, method=method, pinv=True)
+            step = ref[1] - ref[0]
+            assert_close(solver.trace(Tep, q0, 1)[1] - q0, step, 1e-9, f"{method} step at {q0}")
+            if method == "GN" and q0 is starts[1]:
+                assert np.abs(step).max() < 10.0
+
+
+def test_one_target_call_takes_any_array_and_checks_it():
+    # kin.ik(T) with the default options goes straight to the C entry point; whatever it does not
+    # take directly (lists, big-endian, batches, bad values) goes through the checked path
+    kin = symkin.compile(UR5, backend="c")
+    q = UR5.random_q(seed=21)
+    T = UR5.fkine(q)
+    first = kin.ik(T)
+    for variant in (T.tolist(), T.astype(">f8"), np.asfortranarray(T)):
+        res = kin.ik(variant)
+        _assert_solved(UR5, res, T)
+    assert kin.ik(T[None]).q.shape == (1, 6)  # a batch of one
+    a, b = symkin.ik(kin, T, backend="c", seed=5), symkin.ik(kin, T, backend="c", seed=np.int64(5))
+    assert a.q.tobytes() == b.q.tobytes() and a.iterations == b.iterations
+    far = T.copy()
+    far[:3, 3] += 5.0
+    res = kin.ik(far)
+    assert not res.success and "no solution" in res.reason and res.q.shape == (6,)
+    bad = T.copy()
+    bad[1, 1] = np.nan
+    with pytest.raises(PoseError, match="NaN"):
+        kin.ik(bad)
+    with pytest.raises(PoseError, match="orthonormal"):
+        kin.ik(T + np.diag([0.1, 0, 0, 0]))
+    with pytest.raises(ConfigurationError):
+        symkin.ik(kin, T, backend="c", q0=np.full(6, np.inf))
+    with pytest.raises(ConfigurationError):
+        symkin.ik(kin, T, backend="c", q0=np.zeros(5))
+    assert first.success and kin.ik(T).success
+
+
+# -- threads ----------------------------------------------------------------------------------
+def test_ik_from_two_threads_returns_each_thread_its_own_solutions():
+    # one compiled robot, one default solver, two threads solving different targets at once (the
+    # solve releases the GIL): every success must solve its own target, checked with the reference
+    import threading
+
+    kin = symkin.compile(UR5, backend="c")
+    count = 1500
+    targets = [UR5.fkine(UR5.random_q(count, seed=40 + t)) for t in range(2)]
+    results: list[list] = [[], []]
+    barrier = threading.Barrier(2)
+
+    def work(t: int) -> None:
+        barrier.wait()
+        results[t] = [kin.ik(T) for T in targets[t]]
+
+    threads = [threading.Thread(target=work, args=(t,)) for t in range(2)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    for t in range(2):
+        assert len(results[t]) == count
+        ok = np.array([r.success for r in results[t]])
+        assert ok.mean() > 0.99
+        q = np.array([r.q for r in results[t]])[ok]
+        e = np.linalg.norm(pose_error(UR5.fkine(q), targets[t][ok]), axis=-1)
+        assert e.max() < 1e-6, f"thread {t}: {(e >= 1e-6).sum()} successes do not solve their target"
+
+
 class _DuckKinematics:
     """Only what ik() needs: n, qlim, fkine, jacob0; optionally ``revolute`` (no ets)."""
 

@@ -63,11 +63,12 @@ def test_mmc_rejects_invalid_parameters(panda, cpanda, kwargs, backend):
 
 
 @pytest.mark.parametrize(
-    "kwargs", [{"damping": NAN}, {"damping": 0.0}, {"singular_tol": NAN}, {"qd_max": -1}]
+    "kwargs", [{"damping": NAN}, {"damping": INF}, {"damping": -0.1}, {"singular_tol": NAN}, {"qd_max": -1}]
 )
-def test_rrmc_rejects_invalid_parameters(panda, kwargs):
+@pytest.mark.parametrize("backend", ["python", "c"])
+def test_rrmc_rejects_invalid_parameters(panda, cpanda, kwargs, backend):
     with pytest.raises(ParameterError):
-        rrmc(panda, panda.qr, NU, **kwargs)
+        rrmc(cpanda if backend == "c" else panda, panda.qr, NU, **kwargs)
 
 
 @pytest.mark.parametrize("backend", ["python", "auto"])

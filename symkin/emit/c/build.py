@@ -16,17 +16,12 @@ optimisation flags ``-O2 -march=native``).
 
 from __future__ import annotations
 
-import atexit
 import contextlib
 import ctypes
 import hashlib
 import os
-import platform
 import re
 import shlex
-import shutil
-import subprocess
-import tempfile
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from pathlib import Path
@@ -81,6 +76,8 @@ def cache_dir() -> Path:
 
 def write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to a unique temporary file beside ``path``, then rename it over ``path``."""
+    import tempfile
+
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".tmp", dir=path.parent)
     try:
@@ -102,6 +99,8 @@ def find_compiler() -> list[str]:
 
 @lru_cache(maxsize=16)
 def _find_compiler(cc_env: str, path_env: str) -> tuple[str, ...]:
+    import shutil
+
     if cc_env.strip():
         argv = shlex.split(cc_env)
         exe = shutil.which(argv[0], path=path_env)
@@ -165,6 +164,9 @@ def check_cflags() -> None:
 @lru_cache(maxsize=8)
 def _probe(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
     """'' when ``compiler`` builds a tiny shared library with ``flags``, else its first error line."""
+    import subprocess
+    import tempfile
+
     with tempfile.TemporaryDirectory(prefix="symkin-cflags-") as tmp:
         (Path(tmp) / "probe.c").write_text("double symkin_probe(double x) { return x + 1.0; }\n")
         try:
@@ -202,6 +204,8 @@ def _check_inputs(sources: Mapping[str, str], name: str) -> None:
 def _build_key(sources: Mapping[str, str], flags: Sequence[str]) -> str:
     """Hash of what a build depends on apart from the compiler: sources, flags (and the host when
     the flags tune for it). Stored in each entry, so a warm cache works without a compiler."""
+    import platform
+
     h = hashlib.sha256()
     for fname in sorted(sources):
         data = sources[fname].encode()
@@ -252,6 +256,8 @@ def _without_compiler(root: Path, name: str, lib: str, build_key: str) -> Path |
 def _build(
     tmp: Path, sources: Mapping[str, str], lib: str, flags: Sequence[str], compiler: Sequence[str]
 ) -> None:
+    import subprocess
+
     for fname, text in sources.items():
         (tmp / fname).write_text(text)
     cfiles = sorted(f for f in sources if f.endswith(".c"))
@@ -284,6 +290,9 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     no compiler is found (and nothing is cached) or compilation fails (with the first lines of the
     compiler's output).
     """
+    import shutil
+    import tempfile
+
     _check_inputs(sources, name)
     flags = _flags(extra_cflags)
     root = cache_dir()
@@ -327,6 +336,9 @@ def _build_uncached(
     sources: Mapping[str, str], name: str, lib: str, flags: Sequence[str], compiler: Sequence[str]
 ) -> Path:
     """Build in a private temporary folder (the cache is not writable); removed at exit."""
+    import atexit
+    import tempfile
+
     try:
         tmp = Path(tempfile.mkdtemp(prefix=f"symkin-{name}-"))
     except OSError as exc:
@@ -341,12 +353,17 @@ def _build_uncached(
 
 
 def _remove_uncached() -> None:
+    import shutil
+
     for path in _UNCACHED:
         shutil.rmtree(path, ignore_errors=True)
 
 
 def _discard(entry: Path, root: Path) -> None:
     """Move a bad entry out of the way atomically (a no-op when someone else already did)."""
+    import shutil
+    import tempfile
+
     trash = Path(tempfile.mkdtemp(prefix=".trash-", dir=root))
     with contextlib.suppress(OSError):
         os.rename(entry, trash / "entry")

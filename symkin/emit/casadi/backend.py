@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.emit.templates import render_python_module
+from symkin.emit.templates import chain_tables, render_python_module
 
 __all__ = ["render_casadi"]
 
@@ -21,9 +21,32 @@ def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
     printed = []
     for f in functions:
         p = lower(f, CasADiPrinter())
-        outs = []
-        for o in p.outs:
-            cols = o.shape[-1]
-            outs.append({"name": o.name, "vals": o.values, "rows": o.size // max(cols, 1), "cols": cols})
-        printed.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": outs})
-    return render_python_module("casadi/module.py.j2", robot, functions, printed, command, "_casadi")
+
+        def table(outs):  # noqa: ANN001, ANN202
+            return [
+                {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
+                for o in outs
+            ]
+
+        printed.append(
+            {
+                "name": p.name,
+                "inputs": p.inputs,
+                "lines": p.lines,
+                "outs": table(p.outs),
+                "scratch": table(p.scratch),
+                "hessians": p.hessians,
+                "delegate": p.delegate,
+                "delegate_pick": p.delegate_pick,
+            }
+        )
+    return render_python_module(
+        "casadi/module.py.j2",
+        robot,
+        functions,
+        printed,
+        command,
+        "_casadi",
+        chain=chain_tables(robot),
+        hessian_frames=sorted({h.frame for f in printed for h in f["hessians"]}),
+    )

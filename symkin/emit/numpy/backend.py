@@ -15,7 +15,7 @@ from types import ModuleType
 from typing import Any
 
 from symkin.emit.c.build import write_atomic
-from symkin.emit.templates import render_python_module
+from symkin.emit.templates import chain_tables, render_python_module
 
 __all__ = ["render_numpy", "load_numpy"]
 
@@ -31,8 +31,23 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     printed = []
     for f in functions:
         vec, one = lower(f, NumPyPrinter()), lower(f, _MathPrinter())
-        printed.append({**vec.__dict__, "scalar_lines": one.lines, "scalar_outs": one.outs})
-    return render_python_module("numpy/module.py.j2", robot, functions, printed, command)
+        printed.append(
+            {
+                **vec.__dict__,
+                "scalar_lines": one.lines,
+                "scalar_outs": one.outs,
+                "scalar_scratch": one.scratch,
+            }
+        )
+    return render_python_module(
+        "numpy/module.py.j2",
+        robot,
+        functions,
+        printed,
+        command,
+        chain=chain_tables(robot),
+        hessian_frames=sorted({h.frame for f in printed for h in f["hessians"]}),
+    )
 
 
 def load_numpy(files: dict[str, str], folder: Path) -> ModuleType:

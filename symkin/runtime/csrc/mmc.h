@@ -25,10 +25,18 @@
 
 /* Base-frame Jacobian J (6, n) and Hessian H (n, 6, n), row-major, at q (n): generated code. */
 typedef void (*symkin_mmc_jh_fn)(const double *q, double *J, double *H);
+/* One output at q: the base-frame Jacobian J (6, n) or the pose T (4, 4), row-major (generated). */
+typedef void (*symkin_mmc_kin_fn)(const double *q, double *out);
+/* Manipulability of the rows of J0 chosen by axes (0 all, 1 trans, 2 rot) at q (generated). */
+typedef double (*symkin_mmc_m_fn)(const double *q, int axes);
 
-/* Options and per-controller solver state; one per controller, owned by the caller. */
+/* Options and per-controller solver state; one per controller, owned by the caller. An RRMC
+ * controller (symkin_rrmc_step) uses j0, axes, singular_tol, damping and qd_max only. */
 typedef struct {
     symkin_mmc_jh_fn jh;  /* the robot's kinematics */
+    symkin_mmc_kin_fn j0; /* its jacob0 (RRMC) */
+    symkin_mmc_kin_fn fk; /* its fkine (servo loop) */
+    symkin_mmc_m_fn manip; /* its manipulability (servo loop: the last configuration) */
     int32_t axes;         /* manipulability rows: 0 all, 1 translation, 2 rotation */
     int32_t closed_form;  /* try J+ nu + (I - J+ J) Jm / lam first */
     int32_t active_set;   /* with closed_form: when the closed form leaves the bounds, an active-set
@@ -38,6 +46,8 @@ typedef struct {
     int32_t polish;       /* active-set polish of OSQP's solution (OSQP's own is not embedded) */
     int32_t has_dt;       /* bound each step's joint motion by the distance to the limit */
     int32_t fresh;        /* 1 until this controller's first OSQP solve: cold start */
+    int32_t polished;     /* out: the last step's OSQP answer was replaced by the active-set one */
+    int32_t pad_;
     double lam, slack_weight, xi, dt, singular_tol, damping, rho0;
     double qlo[MMC_N], qhi[MMC_N], qd_max[MMC_N], rho_i[MMC_N], rho_s[MMC_N];
     /* this controller's OSQP state, restored when another controller used the solver in between:
@@ -50,8 +60,8 @@ typedef struct {
 
 /* info[0] status */
 enum { MMC_SOLVED, MMC_SINGULAR, MMC_INFEASIBLE, MMC_MAX_ITER, MMC_INACCURATE, MMC_ERROR };
-/* info[1] method */
-enum { MMC_CLOSED_FORM, MMC_OSQP, MMC_ACTIVE_SET };
+/* info[1] method (MMC; RRMC: inverse, pinv or damped) */
+enum { MMC_CLOSED_FORM, MMC_OSQP, MMC_ACTIVE_SET, MMC_INVERSE, MMC_PINV, MMC_DAMPED };
 /* info[4] fallback */
 enum { MMC_NO_FALLBACK, MMC_FALLBACK_RRMC, MMC_FALLBACK_ZERO };
 
@@ -65,6 +75,14 @@ enum { MMC_NO_FALLBACK, MMC_FALLBACK_RRMC, MMC_FALLBACK_ZERO };
  */
 MMC_API int symkin_mmc0_step(symkin_mmc_ctrl *c, const double *in, double *out);
 MMC_API int symkin_mmc6_step(symkin_mmc_ctrl *c, const double *in, double *out);
+
+/*
+ * One resolved-rate step (seed 000 eqs 35-36; symkin.runtime.control.rrmc): qd = J^T (J J^T)^-1 nu
+ * (J^-1 nu for 6 joints), or J^T (J J^T + damping^2 I)^-1 nu when the smallest singular value of J
+ * is below singular_tol or n < 6 (status singular, method damped); then scaled down as a whole to
+ * |qd_i| <= qd_max_i. Same in and out as symkin_mmc0_step (iterations 0, no fallback, no slack).
+ */
+MMC_API int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out);
 
 /* n, sizeof(symkin_mmc_ctrl), MMC_NINFO (for layout checks). */
 MMC_API void symkin_mmc_layout(int32_t *out);

@@ -27,6 +27,18 @@
 
 static const symkin_mmc_ctrl *owner_ = 0; /* the controller whose iterate the solver holds */
 
+/* fmin and fmax (a NaN argument loses) without calling libm: between AVX code such a call cost
+   about 0.3 us on the development machine (SSE/AVX transitions) */
+static inline double fmin_(double a, double b)
+{
+    return (b < a || a != a) ? b : a;
+}
+
+static inline double fmax_(double a, double b)
+{
+    return (b > a || a != a) ? b : a;
+}
+
 /* Cholesky factor L (lower, row-major r x r) of G + shift I; 1 on success. */
 static int chol_(const double *G, int r, double shift, double *L)
 {
@@ -140,7 +152,7 @@ static double residual_(const double *J, const double *qd, const double *nu)
         double s = -nu[i];
         for (int k = 0; k < N; ++k)
             s += J[i * N + k] * qd[k];
-        res = fmax(res, fabs(s));
+        res = fmax_(res, fabs(s));
     }
     return res;
 }
@@ -154,15 +166,15 @@ static void bounds_(const symkin_mmc_ctrl *c, const double *q, double *lo, doubl
             double width = c->rho_i[i] - c->rho_s[i];
             double d_hi = c->qhi[i] - q[i], d_lo = q[i] - c->qlo[i];
             if (d_hi < c->rho_i[i])
-                u = fmin(u, c->xi * (d_hi - c->rho_s[i]) / width);
+                u = fmin_(u, c->xi * (d_hi - c->rho_s[i]) / width);
             if (d_lo < c->rho_i[i])
-                l = fmax(l, -c->xi * (d_lo - c->rho_s[i]) / width);
+                l = fmax_(l, -c->xi * (d_lo - c->rho_s[i]) / width);
             if (c->has_dt) {
-                u = fmin(u, (d_hi - c->rho_s[i]) / c->dt);
-                l = fmax(l, -(d_lo - c->rho_s[i]) / c->dt);
+                u = fmin_(u, (d_hi - c->rho_s[i]) / c->dt);
+                l = fmax_(l, -(d_lo - c->rho_s[i]) / c->dt);
             }
-            u = fmax(u, -a);
-            l = fmin(l, a);
+            u = fmax_(u, -a);
+            l = fmin_(l, a);
             if (l > u)
                 l = u = 0.5 * (l + u);
         }
@@ -234,15 +246,15 @@ static void fallback_(const symkin_mmc_ctrl *c, const double *J, const double *G
                 r = hi[k] / qd[k];
             else if (qd[k] < lo[k])
                 r = lo[k] / qd[k];
-            s = fmin(s, r);
+            s = fmin_(s, r);
         }
-        s = fmax(s, 0.0);
+        s = fmax_(s, 0.0);
         for (int k = 0; k < N; ++k)
             qd[k] *= s;
         *scale = s;
     }
     for (int k = 0; k < N; ++k)
-        qd[k] = fmin(fmax(qd[k], lo[k]), hi[k]);
+        qd[k] = fmin_(fmax_(qd[k], lo[k]), hi[k]);
 }
 
 /*
@@ -260,7 +272,7 @@ static int active_set_(const double *J, const double *Jm, const double *nu, cons
 {
     double scale = 0.0;
     for (int i = 0; i < N; ++i)
-        scale = fmax(scale, fabs(Jm[i]));
+        scale = fmax_(scale, fabs(Jm[i]));
     for (int iter = 1; iter <= max_iter; ++iter) {
         double M[36], L[36], ye[6], xs[N];
         int nfree = 0;
@@ -326,8 +338,8 @@ static int active_set_(const double *J, const double *Jm, const double *nu, cons
                 double r = (NS ? xx[N + i] : 0.0) - nu[i];
                 for (int k = 0; k < N; ++k)
                     r += J[i * N + k] * xx[k];
-                res = fmax(res, fabs(r));
-                numax = fmax(numax, fabs(nu[i]));
+                res = fmax_(res, fabs(r));
+                numax = fmax_(numax, fabs(nu[i]));
             }
             if (!(res <= 1e-9 * (1.0 + numax)))
                 return 0;
@@ -394,8 +406,8 @@ static int osqp_step_(symkin_mmc_ctrl *c, const double *J, const double *Jm, con
     for (int i = 0; i < 6; ++i)
         l[i] = u[i] = nu[i];
     for (int k = 0; k < N; ++k) {
-        l[6 + k] = fmax(lo[k], -OSQP_INFTY);
-        u[6 + k] = fmin(hi[k], OSQP_INFTY);
+        l[6 + k] = fmax_(lo[k], -OSQP_INFTY);
+        u[6 + k] = fmin_(hi[k], OSQP_INFTY);
         for (int i = 0; i < 6; ++i)
             Ax[7 * k + i] = J[i * N + k];
         Ax[7 * k + 6] = 1.0;
@@ -443,6 +455,74 @@ void symkin_mmc_layout(int32_t *out)
     out[1] = (int32_t)sizeof(symkin_mmc_ctrl);
     out[2] = MMC_NINFO;
 }
+
+/* determinant of a symmetric 3x3 matrix */
+static double det3_(const double *G)
+{
+    return G[0] * (G[4] * G[8] - G[5] * G[7]) - G[1] * (G[3] * G[8] - G[5] * G[6]) +
+           G[2] * (G[3] * G[7] - G[4] * G[6]);
+}
+
+/* RRMC (see mmc.h); symkin.runtime.control.rrmc is the reference */
+int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
+{
+    const double *q = in, *nu = in + N;
+    for (int k = 0; k < N; ++k)
+        if (!isfinite(q[k]))
+            return 1;
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(nu[i]))
+            return 2;
+    double J[6 * N], G[36], L[36], y[6], m = 0.0, *qd = out;
+    c->polished = 0;
+    c->j0(q, J);
+    gram_(J, 0, 6, G);
+    /* regular when the smallest singular value of J is at least singular_tol: J J^T - tol^2 I is PD */
+    double tol = c->singular_tol;
+    int regular = N >= 6 && chol_(G, 6, -tol * tol, L) && chol_(G, 6, 0.0, L);
+    if (c->axes == 0) {
+        if (regular) {
+            m = 1.0;
+            for (int i = 0; i < 6; ++i)
+                m *= L[i * 6 + i];
+        } else if (N >= 6) {
+            double d = det_(G, 6);
+            m = d > 0.0 ? sqrt(d) : 0.0;
+        }
+    } else {
+        double G3[9];
+        gram_(J, c->axes == 1 ? 0 : 3, 3, G3);
+        double d = det3_(G3);
+        m = d > 0.0 ? sqrt(d) : 0.0;
+    }
+    int status = MMC_SOLVED, method = N == 6 ? MMC_INVERSE : MMC_PINV;
+    memcpy(y, nu, sizeof y);
+    if (regular) {
+        chol_solve_(L, 6, y);
+    } else {
+        status = MMC_SINGULAR;
+        method = MMC_DAMPED;
+        if (chol_(G, 6, c->damping * c->damping, L))
+            chol_solve_(L, 6, y);
+        else /* no damping at a singular J: no step */
+            memset(y, 0, sizeof y);
+    }
+    double scale = 1.0;
+    for (int k = 0; k < N; ++k) {
+        double s = 0.0;
+        for (int i = 0; i < 6; ++i)
+            s += J[i * N + k] * y[i];
+        qd[k] = s;
+        double a = fabs(s);
+        if (a > c->qd_max[k] && c->qd_max[k] / a < scale)
+            scale = c->qd_max[k] / a;
+    }
+    if (scale < 1.0)
+        for (int k = 0; k < N; ++k)
+            qd[k] *= scale;
+    write_info_(out, status, method, m, 0, MMC_NO_FALLBACK, residual_(J, qd, nu), 0.0, scale, 0);
+    return 0;
+}
 #endif
 
 int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
@@ -456,6 +536,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
             return 2;
     double J[6 * N], H[N * 6 * N], G[36], L[36], B[6 * N], Jm[N], lo[N], hi[N];
     double *qd = out;
+    c->polished = 0;
     c->jh(q, J, H);
     gram_(J, 0, 6, G);
     /* singular when the smallest singular value of J is below singular_tol: J J^T - tol^2 I not PD */
@@ -529,7 +610,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
                 double e = nu[i];
                 for (int k = 0; k < N; ++k)
                     e -= J[i * N + k] * qd[k];
-                res = fmax(res, fabs(e));
+                res = fmax_(res, fabs(e));
                 slack += e * e;
             }
             write_info_(out, MMC_SOLVED, MMC_CLOSED_FORM, m, 0, MMC_NO_FALLBACK, res, NS ? sqrt(slack) : 0.0,
@@ -544,7 +625,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
             if (its) {
                 double slack = 0.0;
                 for (int k = 0; k < N; ++k)
-                    qd[k] = fmin(fmax(x[k], lo[k]), hi[k]);
+                    qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
                 for (int i = N; i < NX; ++i)
                     slack += x[i] * x[i];
                 write_info_(out, MMC_SOLVED, MMC_ACTIVE_SET, m, its, MMC_NO_FALLBACK,
@@ -577,9 +658,9 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     if (ok && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
         double numax = 0.0;
         for (int i = 0; i < 6; ++i)
-            numax = fmax(numax, fabs(nu[i]));
+            numax = fmax_(numax, fabs(nu[i]));
         for (int k = 0; k < N; ++k)
-            qd[k] = fmin(fmax(x[k], lo[k]), hi[k]);
+            qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
         double res = residual_(J, qd, nu);
         if (status == MMC_SOLVED || NS || res <= 1e-6 * (1.0 + numax)) {
             double slack = 0.0;
@@ -587,6 +668,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
                 slack += x[i] * x[i];
             write_info_(out, status, MMC_OSQP, m, iters, MMC_NO_FALLBACK, res, sqrt(slack), 1.0,
                         polished);
+            c->polished = polished;
             return 0;
         }
     }

@@ -4,21 +4,28 @@
  * - NR (eq 45): LU with partial pivoting of the square J (n = 6);
  * - GN (eqs 46-47): LU of J^T We J;
  * - LM (eqs 48-51): Cholesky of J^T We J + Wn (positive definite), LU if Cholesky fails;
- * - pseudo-inverse (NR and GN with pinv): one-sided Jacobi SVD (Hestenes) of the matrix, or of its
- *   transpose when it is wide, so it works for any n (6x7 J of a redundant arm, 6x5 J of a 5-DoF
- *   arm, the n x n J^T We J); singular values <= SYMKIN_PINV_RCOND * the largest are dropped,
- *   like numpy.linalg.pinv(rcond=SYMKIN_PINV_RCOND). NR with pinv uses pinv(We^1/2 J) We^1/2 e,
- *   which is J^-1 e for a square invertible J.
+ * - pseudo-inverse (NR and GN with pinv): for a well-conditioned J, the Cholesky factor of the at
+ *   most 6 x 6 Gram matrix J^T We J (n <= 6) or We^1/2 J J^T We^1/2 (n > 6) with a guaranteed
+ *   bound on its condition number (gram_solve); near a singularity, one-sided Jacobi SVD
+ *   (Hestenes) of the matrix, or of its transpose when it is wide, so it works for any n (6x7 J of
+ *   a redundant arm, 6x5 J of a 5-DoF arm, the n x n J^T We J); singular values
+ *   <= SYMKIN_PINV_RCOND * the largest are dropped, like numpy.linalg.pinv(rcond=SYMKIN_PINV_RCOND).
+ *   NR with pinv uses pinv(We^1/2 J) We^1/2 e, which is J^-1 e for a square invertible J.
  * Compile with -ffp-contract=off so the arithmetic rounds like NumPy's (and, with GCC, with
  * -fno-tree-slp-vectorize: GCC 12 fuses some straight-line a*b + c*d / a*b - c*d pairs into
  * vfmaddsub even under -ffp-contract=off).
  *
  * Speed: the LM step is compiled for n = 6 and n = 7 as constants (unrolled Cholesky) besides
- * any n, and a batch of LM solves with 6 or 7 joints runs SYMKIN_LANES targets side by side with
- * their steps in vector lanes (solve_batch_lm). Every variant does the same operations in the
- * same order, so the numbers are the same to the bit as those of the plain loops.
+ * any n, the normal equations are vectorised over the columns of J, and a batch of LM solves with
+ * 6 or 7 joints runs SYMKIN_LANES targets side by side with their steps in vector lanes
+ * (solve_batch_lm). Every variant does the same operations in the same order, so the numbers are
+ * the same to the bit as those of the plain loops. Hot paths call no libm function for min/max:
+ * between AVX code such a call cost about 0.3 us on the development machine (SSE/AVX transitions).
+ *
+ * Thread safety: the functions keep their state on the stack; a config is only read.
  */
 #include "symkin_ik.h"
+#include "symkin_pose.h"
 
 #include <math.h>
 #include <string.h>
@@ -30,17 +37,18 @@
 #if defined(__GNUC__)
 #define SYMKIN_INLINE static inline __attribute__((always_inline))
 #define SYMKIN_UNROLL _Pragma("GCC unroll 12")
+#define SYMKIN_VECTORS 1
+#define SYMKIN_LANES 4 /* doubles per vector; the lane-wise code below is written out for 4 */
+typedef double symkin_v4 __attribute__((vector_size(SYMKIN_LANES * sizeof(double))));
+typedef int64_t symkin_m4 __attribute__((vector_size(SYMKIN_LANES * sizeof(int64_t))));
+#define NV ((NM + SYMKIN_LANES - 1) / SYMKIN_LANES) /* vectors per padded row of n <= NM values */
 #else
 #define SYMKIN_INLINE static inline
 #define SYMKIN_UNROLL
 #endif
 #define SYMKIN_PINV_RCOND 1e-12
-#define SYMKIN_NEAR_PI_L 1e-6
-#define SYMKIN_POSE_ATOL 1e-6
-#define SYMKIN_BOTTOM_ATOL 1e-12
 
 static const double TWO_PI = 6.283185307179586;
-static const double HALF_PI = 1.5707963267948966;
 
 int32_t symkin_ik_nmax(void) { return NM; }
 int32_t symkin_ik_stats_size(void) { return (int32_t)sizeof(symkin_ik_stats); }
@@ -73,87 +81,9 @@ void symkin_ik_random_q(const symkin_ik_config *cfg, uint64_t seed, int64_t stre
 }
 
 /* ---- pose check and error (eqs 37-40) ----------------------------------------------------- */
-int32_t symkin_ik_check_pose(const double *T, double *deviation) {
-    if (deviation) *deviation = 0.0;
-    for (int i = 0; i < 16; i++)
-        if (!isfinite(T[i])) return SYMKIN_POSE_NONFINITE;
-    if (fabs(T[12]) > SYMKIN_BOTTOM_ATOL || fabs(T[13]) > SYMKIN_BOTTOM_ATOL || fabs(T[14]) > SYMKIN_BOTTOM_ATOL ||
-        fabs(T[15] - 1.0) > SYMKIN_BOTTOM_ATOL)
-        return SYMKIN_POSE_BOTTOM_ROW;
-    double dev = 0.0;
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++) {
-            double s = T[a] * T[b] + T[4 + a] * T[4 + b] + T[8 + a] * T[8 + b];
-            double d = fabs(s - (a == b ? 1.0 : 0.0));
-            if (d > dev) dev = d;
-        }
-    if (deviation) *deviation = dev;
-    if (!(dev <= SYMKIN_POSE_ATOL)) return SYMKIN_POSE_NOT_ORTHONORMAL;
-    double det = T[0] * (T[5] * T[10] - T[6] * T[9]) - T[1] * (T[4] * T[10] - T[6] * T[8]) +
-                 T[2] * (T[4] * T[9] - T[5] * T[8]);
-    if (!(det > 0.0)) return SYMKIN_POSE_REFLECTION;
-    return SYMKIN_POSE_OK;
-}
+int32_t symkin_ik_check_pose(const double *T, double *deviation) { return symkin_pose_check(T, deviation); }
 
-/* alpha(R) of eqs 38-40, R row-major 3x3. */
-static void angle_axis(const double *R, double *a) {
-    double tr = R[0] + R[4] + R[8];
-    if (R[1] == 0.0 && R[2] == 0.0 && R[3] == 0.0 && R[5] == 0.0 && R[6] == 0.0 && R[7] == 0.0) {
-        if (tr > 0.0) { /* (1 1 1) */
-            a[0] = a[1] = a[2] = 0.0;
-        } else { /* eq 40 */
-            a[0] = HALF_PI * (R[0] + 1.0);
-            a[1] = HALF_PI * (R[4] + 1.0);
-            a[2] = HALF_PI * (R[8] + 1.0);
-        }
-        return;
-    }
-    double l0 = R[7] - R[5], l1 = R[2] - R[6], l2 = R[3] - R[1];
-    double nl = sqrt(l0 * l0 + l1 * l1 + l2 * l2);
-    if (tr >= 0.0 || nl >= SYMKIN_NEAR_PI_L) { /* eq 38 */
-        if (nl == 0.0) {
-            a[0] = a[1] = a[2] = 0.0;
-            return;
-        }
-        double k = atan2(nl, tr - 1.0) / nl;
-        a[0] = k * l0;
-        a[1] = k * l1;
-        a[2] = k * l2;
-        return;
-    }
-    /* near pi and not diagonal: l is rounding noise; the axis comes from the symmetric part,
-     * a a^T = ((R + R^T) / 2 - cos(theta) I) / (1 - cos(theta)), its sign from l. */
-    double theta = atan2(nl, tr - 1.0);
-    double ct = (tr - 1.0) / 2.0;
-    double M[9];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) M[3 * i + j] = ((R[3 * i + j] + R[3 * j + i]) / 2.0 - (i == j ? ct : 0.0)) / (1.0 - ct);
-    int k = 0;
-    if (M[4] > M[0]) k = 1;
-    if (M[8] > M[3 * k + k]) k = 2;
-    double ak = sqrt(M[3 * k + k] > 0.0 ? M[3 * k + k] : 0.0);
-    double ax[3];
-    for (int j = 0; j < 3; j++) ax[j] = j == k ? ak : M[3 * j + k] / ak;
-    if (ax[0] * l0 + ax[1] * l1 + ax[2] * l2 < 0.0) {
-        ax[0] = -ax[0];
-        ax[1] = -ax[1];
-        ax[2] = -ax[2];
-    }
-    a[0] = theta * ax[0];
-    a[1] = theta * ax[1];
-    a[2] = theta * ax[2];
-}
-
-void symkin_ik_pose_error(const double *T, const double *Tep, double *e) {
-    e[0] = Tep[3] - T[3];
-    e[1] = Tep[7] - T[7];
-    e[2] = Tep[11] - T[11];
-    double R[9]; /* Tep_R T_R^T */
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            R[3 * i + j] = Tep[4 * i] * T[4 * j] + Tep[4 * i + 1] * T[4 * j + 1] + Tep[4 * i + 2] * T[4 * j + 2];
-    angle_axis(R, e + 3);
-}
+void symkin_ik_pose_error(const double *T, const double *Tep, double *e) { symkin_pose_error(T, Tep, e); }
 
 /* ---- small dense solvers (row-major, n <= NM) --------------------------------------------- */
 static int lu_solve(int n, double *A, double *b) {
@@ -295,6 +225,38 @@ SYMKIN_INLINE int chol_solve(int n, const double *At, double *b) {
 /* g = J^T We e and the lower triangle of A = J^T We J as transposed rows (see chol_solve):
  * g_i = sum_r J_ri (we_r e_r) and At[j * NM + i] = sum_r J_rj (we_r J_ri) for i >= j, each
  * summed over r in order from 0.0; we = NULL means We = I. */
+#if defined(SYMKIN_VECTORS)
+/* Vectorised over i (rows of A, and g): rank-one updates row by row of J, each entry still summed
+ * over r in order from 0.0 with the same products, so the numbers are those of the scalar loops.
+ * The whole row j of A is written to At[j * NM + 0 .. 4 NV - 1] (the entries i < j are unused). */
+SYMKIN_INLINE void normal_equations(int n, const double *J, const double *e, const double *we, double *At,
+                                    double *g) {
+    const int nv = (n + SYMKIN_LANES - 1) / SYMKIN_LANES;
+    symkin_v4 Jr[6][NV], Wr[6][NV], gv[NV];
+    double ew[6];
+    memset(Jr, 0, sizeof Jr);
+    for (int r = 0; r < 6; r++) {
+        memcpy(Jr[r], J + r * n, sizeof(double) * (size_t)n);
+        ew[r] = we ? we[r] * e[r] : e[r];
+        SYMKIN_UNROLL for (int c = 0; c < nv; c++) Wr[r][c] = we ? we[r] * Jr[r][c] : Jr[r][c];
+    }
+    SYMKIN_UNROLL for (int c = 0; c < nv; c++) {
+        symkin_v4 s = {0.0};
+        SYMKIN_UNROLL for (int r = 0; r < 6; r++) s += Jr[r][c] * ew[r];
+        gv[c] = s;
+    }
+    memcpy(g, gv, sizeof(double) * (size_t)n);
+    SYMKIN_UNROLL for (int j = 0; j < n; j++) {
+        symkin_v4 row[NV];
+        SYMKIN_UNROLL for (int c = 0; c < nv; c++) {
+            symkin_v4 s = {0.0};
+            SYMKIN_UNROLL for (int r = 0; r < 6; r++) s += J[r * n + j] * Wr[r][c];
+            row[c] = s;
+        }
+        memcpy(At + j * NM, row, sizeof(symkin_v4) * (size_t)nv);
+    }
+}
+#else
 SYMKIN_INLINE void normal_equations(int n, const double *J, const double *e, const double *we, double *At,
                                     double *g) {
     double Jw[6 * NM], ew[6];
@@ -318,6 +280,7 @@ SYMKIN_INLINE void normal_equations(int n, const double *J, const double *e, con
             At[j * NM + i] = s;
         }
 }
+#endif
 
 /* The full symmetric A (row-major n x n) from At. */
 static void full_matrix(int n, const double *At, double *A) {
@@ -345,19 +308,116 @@ SYMKIN_INLINE int lm_step(int n, const symkin_ik_config *c, const double *we, co
     return lu_solve(n, A, dq);
 }
 
+/* ---- pseudo-inverse steps without an SVD -------------------------------------------------- */
+/* For a full-rank, well-conditioned J the pseudo-inverse steps of NR and GN are plain solves with
+ * the Cholesky factor of a Gram matrix G (at most 6 x 6):
+ *   n <= 6: pinv(Jw) ew = pinv(A) g = A^-1 g with A = J^T We J, g = J^T We e (G = A);
+ *   n > 6:  pinv(Jw) ew = pinv(A) g = Jw^T (Jw Jw^T)^-1 ew (G = Jw Jw^T, 6 x 6),
+ * Jw = We^1/2 J, ew = We^1/2 e. For an SPD m x m matrix G, max_i G_ii <= lambda_max <= m max_i G_ii
+ * and max_i (G^-1)_ii <= 1 / lambda_min <= m max_i (G^-1)_ii, so kappa = max_i G_ii max_i (G^-1)_ii
+ * lies between cond(G) / m^2 and cond(G). gram_solve takes the fast path only when
+ * kappa <= SYMKIN_PINV_FAST_COND: then cond(G) <= 36e8, well below the 1e12 at which pinv of
+ * J^T We J (GN) starts dropping directions, and cond(Jw) <= 6e4, far from NR's 1e12, so the step is
+ * the pseudo-inverse's. Otherwise (singular or nearly so) the SVD of pinv_apply decides. */
+#define SYMKIN_PINV_FAST_COND 1e8
+
+/* b <- G^-1 b for the m x m SPD G (row-major, m <= 6) when kappa <= SYMKIN_PINV_FAST_COND (see above);
+ * else -1 and b unchanged. X = L^-1 gives (G^-1)_ii = sum_k X_ki^2 and G^-1 b = X^T (X b); divisions
+ * only for the reciprocals of the diagonal of L. Unrolled for m = 6 (gram_solve6). */
+SYMKIN_INLINE int gram_solve_m(int m, const double *G, double *b) {
+    double L[36], X[36], inv[6], y[6], gmax = 0.0, ginv = 0.0;
+    SYMKIN_UNROLL for (int j = 0; j < m; j++) {
+        double d = G[j * m + j];
+        if (d > gmax) gmax = d; /* not fmax (a slow libm call, see the top); NaN: caught below */
+        SYMKIN_UNROLL for (int k = 0; k < j; k++) d -= L[j * m + k] * L[j * m + k];
+        if (!(d > 0.0)) return -1;
+        double ljj = sqrt(d);
+        L[j * m + j] = ljj;
+        inv[j] = 1.0 / ljj;
+        SYMKIN_UNROLL for (int i = j + 1; i < m; i++) {
+            double s = G[i * m + j];
+            SYMKIN_UNROLL for (int k = 0; k < j; k++) s -= L[i * m + k] * L[j * m + k];
+            L[i * m + j] = s * inv[j];
+        }
+    }
+    SYMKIN_UNROLL for (int i = 0; i < m; i++) {
+        double x = inv[i], c = x * x;
+        X[i * m + i] = x;
+        SYMKIN_UNROLL for (int k = i + 1; k < m; k++) {
+            double s = 0.0;
+            SYMKIN_UNROLL for (int j = i; j < k; j++) s += L[k * m + j] * X[j * m + i];
+            x = -s * inv[k];
+            X[k * m + i] = x;
+            c += x * x;
+        }
+        if (!(c <= ginv)) ginv = c; /* NaN propagates */
+    }
+    if (!(gmax * ginv <= SYMKIN_PINV_FAST_COND)) return -1;
+    SYMKIN_UNROLL for (int k = 0; k < m; k++) {
+        double s = 0.0;
+        SYMKIN_UNROLL for (int i = 0; i <= k; i++) s += X[k * m + i] * b[i];
+        y[k] = s;
+    }
+    SYMKIN_UNROLL for (int i = 0; i < m; i++) {
+        double s = 0.0;
+        SYMKIN_UNROLL for (int k = i; k < m; k++) s += X[k * m + i] * y[k];
+        b[i] = s;
+    }
+    return 0;
+}
+
+static int gram_solve6(const double *G, double *b) { return gram_solve_m(6, G, b); }
+
+static int gram_solve(int m, const double *G, double *b) {
+    return m == 6 ? gram_solve6(G, b) : gram_solve_m(m, G, b);
+}
+
+/* NR and GN with pinv (eqs 45-47): gram_solve, or the SVD of pinv_apply when J is (nearly) singular:
+ * of We^1/2 J (NR) or of J^T We J (GN), as numpy.linalg.pinv(rcond=SYMKIN_PINV_RCOND). */
+static int pinv_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
+    const int n = c->n;
+    double At[AT_SIZE], g[NM], A[NM * NM], Jw[6 * NM], ew[6];
+    if (n <= 6 || c->method == SYMKIN_IK_GN) {
+        normal_equations(n, J, e, we, At, g);
+        full_matrix(n, At, A);
+    }
+    if (n <= 6) {
+        memcpy(dq, g, sizeof(double) * (size_t)n);
+        if (gram_solve(n, A, dq) == 0) return 0;
+    }
+    for (int r = 0; r < 6; r++) {
+        double s = sqrt(c->we[r]);
+        ew[r] = s * e[r];
+        for (int j = 0; j < n; j++) Jw[r * n + j] = s * J[r * n + j];
+    }
+    if (n > 6) {
+        double G[36], y[6];
+        SYMKIN_UNROLL for (int a = 0; a < 6; a++)
+            SYMKIN_UNROLL for (int b = 0; b <= a; b++) G[a * 6 + b] = 0.0;
+        for (int k = 0; k < n; k++)
+            SYMKIN_UNROLL for (int a = 0; a < 6; a++)
+                SYMKIN_UNROLL for (int b = 0; b <= a; b++) G[a * 6 + b] += Jw[a * n + k] * Jw[b * n + k];
+        SYMKIN_UNROLL for (int a = 0; a < 6; a++)
+            SYMKIN_UNROLL for (int b = a + 1; b < 6; b++) G[a * 6 + b] = G[b * 6 + a];
+        memcpy(y, ew, sizeof y);
+        if (gram_solve(6, G, y) == 0) {
+            for (int j = 0; j < n; j++) {
+                double s = 0.0;
+                for (int r = 0; r < 6; r++) s += Jw[r * n + j] * y[r];
+                dq[j] = s;
+            }
+            return 0;
+        }
+    }
+    if (c->method == SYMKIN_IK_GN) return pinv_apply(n, n, A, g, dq);
+    return pinv_apply(6, n, Jw, ew, dq);
+}
+
 /* NR and GN (eqs 45-47), and their pseudo-inverse variants. */
 static int nr_gn_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
     int n = c->n;
+    if (c->pinv) return pinv_step(c, we, J, e, dq);
     if (c->method == SYMKIN_IK_NR) {
-        if (c->pinv) {
-            double Jw[6 * NM], ew[6];
-            for (int r = 0; r < 6; r++) {
-                double s = sqrt(c->we[r]);
-                ew[r] = s * e[r];
-                for (int j = 0; j < n; j++) Jw[r * n + j] = s * J[r * n + j];
-            }
-            return pinv_apply(6, n, Jw, ew, dq);
-        }
         double A[36];
         memcpy(A, J, sizeof(double) * 36);
         memcpy(dq, e, sizeof(double) * 6);
@@ -366,7 +426,6 @@ static int nr_gn_step(const symkin_ik_config *c, const double *we, const double 
     double At[AT_SIZE], g[NM], A[NM * NM];
     normal_equations(n, J, e, we, At, g);
     full_matrix(n, At, A);
-    if (c->pinv) return pinv_apply(n, n, A, g, dq);
     memcpy(dq, g, sizeof(double) * (size_t)n);
     return lu_solve(n, A, dq);
 }
@@ -511,7 +570,7 @@ static int start_target(const symkin_ik_config *c, ik_search *t, const double *T
  * search failed. */
 static int judge(const symkin_ik_config *c, ik_search *t, const double *T, double *e, double *r2) {
     symkin_ik_stats *st = t->st;
-    symkin_ik_pose_error(T, t->Tep, e);
+    symkin_pose_error(T, t->Tep, e);
     st->iterations++;
     double rr = weighted_r2(c, e);
     double res = sqrt(rr);
@@ -571,9 +630,6 @@ static void solve_one(const symkin_ik_config *c, const double *Tep, const double
  * solves), so a batch runs SYMKIN_LANES targets at once and takes their steps together, one
  * target per vector lane: the chains overlap, and every lane does exactly the arithmetic of
  * lm_step, so each target gets the same iterates as when solved alone. */
-#define SYMKIN_LANES 4 /* lane-wise code below is written out for 4 */
-typedef double symkin_v4 __attribute__((vector_size(SYMKIN_LANES * sizeof(double))));
-typedef int64_t symkin_m4 __attribute__((vector_size(SYMKIN_LANES * sizeof(int64_t))));
 
 /* x = sqrt(x) lane by lane (through a pointer: passing vectors by value warns without AVX) */
 #if defined(__AVX__)
@@ -732,10 +788,6 @@ int32_t symkin_ik_solve(const symkin_ik_config *cfg, const double *Tep, const do
     return SYMKIN_POSE_OK;
 }
 
-int32_t symkin_ik_solve_job(const symkin_ik_job *job, uint64_t seed) {
-    return symkin_ik_solve(job->cfg, job->Tep, job->q0, seed, job->q, job->st);
-}
-
 int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const double *Tep, const double *q0,
                               int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st) {
     for (int64_t i = 0; i < N; i++) {
@@ -765,7 +817,7 @@ int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const do
     memcpy(qs, q, sizeof(double) * (size_t)n);
     for (int32_t k = 0; k < steps; k++) {
         kin_eval(cfg, q, T, J);
-        symkin_ik_pose_error(T, Tep, e);
+        symkin_pose_error(T, Tep, e);
         double r2 = weighted_r2(cfg, e);
         if (!isfinite(r2) || ik_step(cfg, we, J, e, r2, dq) != 0) return k + 1;
         for (int j = 0; j < n; j++) q[j] += dq[j];

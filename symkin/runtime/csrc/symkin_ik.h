@@ -109,17 +109,6 @@ void symkin_ik_pose_error(const double *T, const double *Tep, double *e);
 int32_t symkin_ik_solve(const symkin_ik_config *cfg, const double *Tep, const double *q0, uint64_t seed,
                         double *q, symkin_ik_stats *st);
 
-/* symkin_ik_solve with its arguments in one block, for callers that pay per argument (ctypes). */
-typedef struct {
-    const symkin_ik_config *cfg;
-    const double *Tep;
-    const double *q0; /* may be NULL */
-    double *q;
-    symkin_ik_stats *st;
-} symkin_ik_job;
-
-int32_t symkin_ik_solve_job(const symkin_ik_job *job, uint64_t seed);
-
 /* Solve N targets (N x 16). q0: NULL, one (n,) start for all (q0_stride 0) or one row per target
  * (q0_stride n). Target i uses the stream (seed, i). Every pose is checked first: returns -1 when
  * all are valid, else the index of the first invalid one (its st[i].status says why) and solves

@@ -1,0 +1,444 @@
+"""``symkin bench calls``: the paths a user calls one thing at a time, each beside its baseline.
+
+Every figure is measured in the same run as the figure it is compared with, and printed as a
+ratio next to the goal it answers (issue 14):
+
+- IK: one ``kin.ik(T)`` per target against the batched per-solve time on the same targets, and
+  against roboticstoolbox-python's C++ ``ik_LM`` (when installed);
+- NR and GN with the pseudo-inverse against LM, per iteration;
+- an RRMC and an MMC step from Python on the C backend, and ``servo`` steps per second with the
+  loop in C and in Python;
+- the NumPy backend against Pinocchio (when installed) and the CasADi backend against calling its
+  raw ``casadi.Function``, one configuration per call;
+- ``import symkin`` and the first ``kin.jacob0`` on a warm cache, each in fresh processes, beside
+  ``import numpy``.
+
+Times are CPU times of the calling thread (``time.thread_time``), so that other processes on a
+shared machine do not count, best of several rounds (:func:`symkin.bench.kin.per_call_us`); loops
+over many targets or tasks take the best of a few rounds too. Start-up figures are wall times in
+fresh interpreters (the fastest and the median of several). Trust the ratios.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from symkin.bench.kin import per_call_us, pinocchio_model, rtb_ets
+
+__all__ = ["run_calls", "format_calls", "GOALS"]
+
+CLOCK = time.thread_time  # see the module docstring
+
+#: the bars of issue 14 (a ratio or an absolute figure), by check
+GOALS: dict[str, tuple[str, float]] = {
+    "ik_single_over_batch": ("<=", 1.5),
+    "ik_rtb_over_single": (">=", 10.0),
+    "pinv_nr_over_lm_per_iteration": ("<=", 2.0),
+    "pinv_gn_over_lm_per_iteration": ("<=", 2.0),
+    "rrmc_step_us": ("<=", 3.0),
+    "servo_rrmc_steps_per_s": (">=", 200_000.0),
+    "servo_mmc_steps_per_s": (">=", 200_000.0),
+    "numpy_over_pinocchio_fkine": ("<=", 3.0),
+    "numpy_over_pinocchio_jacob0": ("<=", 3.0),
+    "numpy_over_pinocchio_manipulability": ("<=", 3.0),
+    "casadi_over_raw_fkine": ("<=", 1.2),
+    "casadi_over_raw_jacob0": ("<=", 1.2),
+    "casadi_over_raw_hessian0": ("<=", 1.2),
+    "casadi_over_raw_manipulability": ("<=", 1.2),
+    "import_s": ("<=", 0.3),
+    "first_jacob0_s": ("<=", 0.5),
+}
+
+
+def _us(f: Callable[[], Any], budget: float) -> float:
+    """Microseconds per call of f (best of several rounds within about ``budget`` seconds, CPU time
+    of this thread)."""
+    return per_call_us(f, budget=budget, clock=CLOCK)
+
+
+def _best_of(f: Callable[[], Any], rounds: int) -> float:
+    """Best wall time (s) of ``rounds`` calls of f."""
+    best = math.inf
+    for _ in range(rounds):
+        t0 = CLOCK()
+        f()
+        best = min(best, CLOCK() - t0)
+    return best
+
+
+# -- IK ----------------------------------------------------------------------------------------
+def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: bool) -> dict[str, Any]:
+    """One target per ``kin.ik(T)`` call against the batch ``kin.ik(T_all)`` (default options: LM
+    Chan lambda 0.1, 100 x 30, |e| < 1e-6) and RTB's C++ ``ik_LM`` with the same options (its
+    tolerance is on E = |e|^2 / 2: 5e-13)."""
+    Tep = np.asarray(robot.fkine(robot.random_q(n_targets, seed=seed)))
+    targets = list(Tep)
+    kin.ik(Tep[:4])
+    kin.ik(targets[0])
+    out: dict[str, Any] = {"targets": n_targets}
+    batch = single = math.inf
+    results: list[Any] = []
+    for _ in range(rounds):  # interleaved, so both see the same machine
+        t0 = CLOCK()
+        res = kin.ik(Tep)
+        batch = min(batch, CLOCK() - t0)
+        t0 = CLOCK()
+        results = [kin.ik(T) for T in targets]
+        single = min(single, CLOCK() - t0)
+    out["batch_us"] = 1e6 * batch / n_targets
+    out["single_us"] = 1e6 * single / n_targets
+    out["batch_success"] = float(np.mean(res.success))
+    out["single_success"] = float(np.mean([r.success for r in results]))
+    out["mean_iterations"] = float(np.mean([r.iterations for r in results]))
+    out["rtb"] = _rtb_ik(robot, targets) if rtb else None
+    return out
+
+
+def _rtb_ik(robot: Any, targets: list[np.ndarray]) -> dict[str, Any] | None:
+    try:
+        import roboticstoolbox as rtb
+    except ImportError:
+        return None
+    try:
+        ets = rtb_ets(rtb, robot)
+        solve = [
+            lambda T=T: ets.ik_LM(T, ilimit=30, slimit=100, tol=5e-13, k=0.1, method="chan") for T in targets
+        ]
+        solve[0]()
+        t0 = CLOCK()
+        sols = [s() for s in solve]
+        elapsed = CLOCK() - t0
+        return {
+            "us": 1e6 * elapsed / len(targets),
+            "success": float(np.mean([bool(s.success) for s in sols])),
+        }
+    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
+        return {"error": f"{type(exc).__name__}: {exc}"}
+
+
+def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int) -> dict[str, Any]:
+    """Microseconds per iteration (pose evaluation) of LM, NR and GN with the pseudo-inverse, over the
+    same targets, batched (as Table 1 runs them) and one target per call."""
+    Tep = np.asarray(robot.fkine(robot.random_q(n_targets, seed=seed + 1)))
+    methods = {
+        "LM": {},
+        "NR pinv": {"method": "NR", "pinv": True},
+        "GN pinv": {"method": "GN", "pinv": True},
+    }
+    out: dict[str, Any] = {}
+    for label, options in methods.items():
+        kin.ik(Tep[:2], seed=seed, **options)
+        row: dict[str, float] = {}
+        its = 0
+        best = math.inf
+        for _ in range(rounds):
+            t0 = CLOCK()
+            res = kin.ik(Tep, seed=seed, **options)
+            best = min(best, CLOCK() - t0)
+            its = int(np.sum(res.iterations))
+        row["batch_us_per_iteration"] = 1e6 * best / its
+        row["success"] = float(np.mean(res.success))
+        best = math.inf
+        for _ in range(rounds):
+            t0 = CLOCK()
+            sols = [kin.ik(T, seed=seed, **options) for T in Tep]
+            best = min(best, CLOCK() - t0)
+        row["single_us_per_iteration"] = 1e6 * best / sum(int(s.iterations) for s in sols)
+        out[label] = row
+    return out
+
+
+# -- control -------------------------------------------------------------------------------------
+def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float = 0.25) -> dict[str, Any]:
+    """RRMC and MMC steps from Python (C backend) and servo steps per second, Table I tasks (seed 001
+    eq 14, joint speeds unbounded as in the paper), loop in C and in Python."""
+    from symkin.bench.mmc import table1_tasks
+    from symkin.runtime.control import MMC, rrmc
+    from symkin.runtime.loop import servo
+
+    robot = kin.robot
+    rng = np.random.default_rng(seed)
+    q = robot.random_q(seed=rng)
+    nu = rng.normal(0.0, 0.1, 6)
+    mmc = MMC(kin, qd_max=np.inf)
+    steps = {
+        "jacob0 (yardstick)": _us(lambda: kin.jacob0(q), budget),
+        "rrmc (C)": _us(lambda: rrmc(kin, q, nu, qd_max=np.inf), budget),
+        "MMC.step (C)": _us(lambda: mmc.step(q, nu), budget),
+        "rrmc (NumPy, reference kinematics)": _us(lambda: rrmc(robot, q, nu, qd_max=np.inf), budget),
+    }
+    q0s, Teps = table1_tasks(kin, n_tasks, np.random.default_rng([seed, 1]))
+    tasks = list(zip(q0s, Teps))
+    loops: dict[str, dict[str, float]] = {}
+    for name in ("rrmc", "mmc"):
+        loops[name] = {}
+        for backend, subset in (("c", tasks), ("python", tasks[: max(1, n_tasks // 10)])):
+
+            def run(backend: str = backend, subset: list = subset, name: str = name) -> int:
+                return sum(servo(kin, q0, T, name, qd_max=np.inf, backend=backend).steps for q0, T in subset)
+
+            total = run()
+            loops[name][backend] = total / _best_of(run, rounds)
+            loops[name][f"{backend}_steps"] = total
+    return {"step_us": steps, "servo_steps_per_s": loops, "tasks": n_tasks}
+
+
+# -- backends ------------------------------------------------------------------------------------
+def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
+    """One configuration per call: the NumPy backend, the C backend and Pinocchio (FK of one frame
+    by ``forwardKinematics`` + ``updateFramePlacement``; ``computeFrameJacobian``, LOCAL_WORLD_ALIGNED;
+    manipulability as sqrt(det(J J^T)) of that Jacobian through numpy)."""
+    import symkin
+
+    kn, kc = symkin.compile(robot, backend="numpy"), symkin.compile(robot, backend="c")
+    rows: dict[str, dict[str, float]] = {}
+    for label, k in (("numpy", kn), ("c", kc)):
+        rows[label] = {
+            "fkine": _us(lambda k=k: k.fkine(q), budget),
+            "jacob0": _us(lambda k=k: k.jacob0(q), budget),
+            "manipulability": _us(lambda k=k: k.manipulability(q), budget),
+        }
+    pm = pinocchio_model(robot)
+    if pm is not None:
+        import pinocchio as pin
+
+        model, data, fid = pm
+        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+        def fk() -> Any:
+            pin.forwardKinematics(model, data, q)
+            return pin.updateFramePlacement(model, data, fid)
+
+        def jac() -> Any:
+            return pin.computeFrameJacobian(model, data, q, fid, lwa)
+
+        def manip() -> float:
+            J = pin.computeFrameJacobian(model, data, q, fid, lwa)
+            return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
+
+        def fk_all() -> Any:
+            pin.framesForwardKinematics(model, data, q)
+            return data.oMf[fid]
+
+        rows["pinocchio"] = {
+            "fkine": _us(fk, budget),
+            "jacob0": _us(jac, budget),
+            "manipulability": _us(manip, budget),
+        }
+        rows["pinocchio (all frames)"] = {"fkine": _us(fk_all, budget)}
+    return rows
+
+
+def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
+    """One configuration per call: the CasADi backend's methods against calling its raw
+    ``casadi.Function`` with the same numpy array (which returns a DM)."""
+    import symkin
+
+    ka = symkin.compile(robot, backend="casadi")
+    raw = ka.functions  # type: ignore[attr-defined]
+    pairs = {
+        "fkine": (lambda: ka.fkine(q), lambda: raw["fkine"](q)),
+        "jacob0": (lambda: ka.jacob0(q), lambda: raw["jacob0"](q)),
+        "hessian0": (lambda: ka.hessian0(q), lambda: raw["hessian0"](q)),
+        "manipulability": (lambda: ka.manipulability(q), lambda: raw["manipulability_all"](q)),
+    }
+    return {k: {"backend": _us(a, budget), "raw": _us(b, budget)} for k, (a, b) in pairs.items()}
+
+
+# -- start-up ------------------------------------------------------------------------------------
+_IMPORT = "import time; t = time.perf_counter(); import {m}; print(time.perf_counter() - t)"
+_FIRST = (
+    "import time; t = time.perf_counter(); import symkin; kin = symkin.compile({robot!r}); "
+    "kin.jacob0(kin.robot.qz); print(time.perf_counter() - t)"
+)
+
+
+def startup(robot: str, runs: int) -> dict[str, Any]:
+    """Seconds for ``import numpy``, ``import symkin`` and import + compile (warm cache) + the first
+    ``kin.jacob0``, each in ``runs`` fresh interpreters after one warm-up (min and median).
+
+    The interpreters keep byte code as an installed package does (``pip install`` compiles it): in
+    a temporary ``PYTHONPYCACHEPREFIX``, also when ``PYTHONDONTWRITEBYTECODE`` is set (without byte
+    code every import compiles symkin's sources, about 0.15 s)."""
+    import tempfile
+
+    import symkin
+
+    symkin.compile(robot)  # warm the cache
+    pycache = tempfile.TemporaryDirectory(prefix="symkin-bench-pycache-")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = pycache.name
+    out: dict[str, Any] = {}
+    for key, code in (
+        ("import_numpy_s", _IMPORT.format(m="numpy")),
+        ("import_s", _IMPORT.format(m="symkin")),
+        ("first_jacob0_s", _FIRST.format(robot=robot)),
+    ):
+        times = []
+        for k in range(runs + 1):  # the first run is a warm-up (page cache, byte code)
+            res = subprocess.run(
+                [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
+            )
+            if res.returncode != 0:
+                raise RuntimeError(f"{code!r} failed: {res.stderr.strip()[-400:]}")
+            if k:
+                times.append(float(res.stdout.strip().splitlines()[-1]))
+        out[key] = {"min": min(times), "median": float(np.median(times))}
+    pycache.cleanup()
+    return out
+
+
+# -- all -----------------------------------------------------------------------------------------
+def run_calls(
+    robot_spec: Any = "ur5",
+    control_robot: Any = "panda",
+    n_targets: int = 500,
+    n_tasks: int = 100,
+    seed: int = 0,
+    rounds: int = 5,
+    startup_runs: int = 7,
+    progress: bool = True,
+    budget: float = 0.25,
+) -> dict[str, Any]:
+    """Every section (module docstring); returns a JSON-able dict with ``checks``: each goal of
+    :data:`GOALS` with the measured figure and whether it meets the bar. ``budget``: seconds per
+    timed call path (about)."""
+    import symkin
+    from symkin.model.resolve import resolve_robot
+
+    robot = resolve_robot(robot_spec)
+    crobot = resolve_robot(control_robot)
+    kin = symkin.compile(robot, backend="c")
+    q = robot.random_q(seed=seed)
+    sections: list[tuple[str, Callable[[], Any]]] = [
+        ("ik", lambda: ik_calls(robot, kin, n_targets, seed, rounds, rtb=True)),
+        ("pinv", lambda: pinv_per_iteration(robot, kin, n_targets, seed, max(2, rounds // 2))),
+        (
+            "control",
+            lambda: control_calls(symkin.compile(crobot, backend="c"), seed, n_tasks, rounds, budget),
+        ),
+        ("numpy", lambda: numpy_vs_pinocchio(robot, q, budget)),
+        ("casadi", lambda: casadi_vs_raw(robot, q, budget)),
+        ("startup", lambda: startup(robot_spec if isinstance(robot_spec, str) else robot.name, startup_runs)),
+    ]
+    from tqdm import tqdm
+
+    out: dict[str, Any] = {"robot": robot.name, "control_robot": crobot.name}
+    for name, run in tqdm(sections, desc="bench calls", disable=not progress, leave=False):
+        out[name] = run()
+    out["checks"] = _checks(out)
+    return out
+
+
+def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    ik, pinv, ctl, npy, cas, st = (r[k] for k in ("ik", "pinv", "control", "numpy", "casadi", "startup"))
+    fig: dict[str, float | None] = {
+        "ik_single_over_batch": ik["single_us"] / ik["batch_us"],
+        "ik_rtb_over_single": (ik["rtb"]["us"] / ik["single_us"])
+        if ik.get("rtb") and "us" in ik["rtb"]
+        else None,
+        "pinv_nr_over_lm_per_iteration": pinv["NR pinv"]["single_us_per_iteration"]
+        / pinv["LM"]["single_us_per_iteration"],
+        "pinv_gn_over_lm_per_iteration": pinv["GN pinv"]["single_us_per_iteration"]
+        / pinv["LM"]["single_us_per_iteration"],
+        "rrmc_step_us": ctl["step_us"]["rrmc (C)"],
+        "servo_rrmc_steps_per_s": ctl["servo_steps_per_s"]["rrmc"]["c"],
+        "servo_mmc_steps_per_s": ctl["servo_steps_per_s"]["mmc"]["c"],
+        "import_s": st["import_s"]["min"],
+        "first_jacob0_s": st["first_jacob0_s"]["min"],
+    }
+    for f in ("fkine", "jacob0", "manipulability"):
+        pin_row = npy.get("pinocchio")
+        fig[f"numpy_over_pinocchio_{f}"] = npy["numpy"][f] / pin_row[f] if pin_row else None
+    for f, row in cas.items():
+        fig[f"casadi_over_raw_{f}"] = row["backend"] / row["raw"]
+    checks = {}
+    for key, (op, bar) in GOALS.items():
+        v = fig.get(key)
+        ok = None if v is None else (v <= bar if op == "<=" else v >= bar)
+        checks[key] = {"value": v, "goal": f"{op} {bar:g}", "met": ok}
+    return checks
+
+
+def format_calls(r: dict[str, Any]) -> str:
+    """Plain text of :func:`run_calls`'s result."""
+    ik, pinv, ctl = r["ik"], r["pinv"], r["control"]
+    lines = [f"symkin bench calls: {r['robot']} (IK, backends, start-up), {r['control_robot']} (control)", ""]
+    lines.append(f"IK, {ik['targets']} targets, LM Chan lambda 0.1, 100 x 30, |e| < 1e-6 (us per solve):")
+    lines.append(f"  batched kin.ik(T_all)      {ik['batch_us']:8.2f}   success {ik['batch_success']:.3f}")
+    lines.append(
+        f"  one kin.ik(T) per target   {ik['single_us']:8.2f}   success {ik['single_success']:.3f}   "
+        f"({ik['single_us'] / ik['batch_us']:.2f}x batched; mean iterations {ik['mean_iterations']:.1f})"
+    )
+    rtb = ik.get("rtb")
+    if rtb and "us" in rtb:
+        lines.append(
+            f"  RTB C++ ik_LM, same options {rtb['us']:6.1f}   success {rtb['success']:.3f}   "
+            f"(one symkin call is {rtb['us'] / ik['single_us']:.1f}x faster)"
+        )
+    elif rtb:
+        lines.append(f"  RTB ik_LM: not timed ({rtb['error']})")
+    lines.append("")
+    lines.append("IK per iteration (us): batched / one target per call")
+    lm = pinv["LM"]
+    for label, row in pinv.items():
+        lines.append(
+            f"  {label:8} {row['batch_us_per_iteration']:7.3f} / {row['single_us_per_iteration']:7.3f}   "
+            f"({row['batch_us_per_iteration'] / lm['batch_us_per_iteration']:.2f}x / "
+            f"{row['single_us_per_iteration'] / lm['single_us_per_iteration']:.2f}x LM)   "
+            f"success {row['success']:.3f}"
+        )
+    lines.append("")
+    lines.append("Control steps from Python (us):")
+    for label, us in ctl["step_us"].items():
+        lines.append(f"  {label:36} {us:8.2f}")
+    lines.append(f"servo, {ctl['tasks']} Table I tasks (steps per second):")
+    for name, row in ctl["servo_steps_per_s"].items():
+        lines.append(
+            f"  {name:5} loop in C {row['c']:10.0f}   loop in Python {row['python']:8.0f}   "
+            f"({row['c'] / row['python']:.1f}x)"
+        )
+    lines.append("")
+    lines.append("One configuration per call (us):")
+    funcs = ("fkine", "jacob0", "manipulability")
+    lines.append(f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs))
+    for label, row in r["numpy"].items():
+        lines.append(f"  {label:24}" + "".join(f"{row[f]:16.2f}" if f in row else " " * 16 for f in funcs))
+    if "pinocchio" in r["numpy"]:
+        p, npy, c = r["numpy"]["pinocchio"], r["numpy"]["numpy"], r["numpy"]["c"]
+        lines.append(f"  {'numpy / pinocchio':24}" + "".join(f"{npy[f] / p[f]:15.2f}x" for f in funcs))
+        lines.append(f"  {'pinocchio / c':24}" + "".join(f"{p[f] / c[f]:15.2f}x" for f in funcs))
+        pa = r["numpy"]["pinocchio (all frames)"]["fkine"]
+        lines.append(f"  {'numpy / pinocchio all fr.':24}{npy['fkine'] / pa:15.2f}x")
+    else:
+        lines.append("  (install the compare extra for Pinocchio)")
+    lines.append("  CasADi backend vs its raw casadi.Function:")
+    for f, row in r["casadi"].items():
+        lines.append(
+            f"    {f:16} {row['backend']:8.2f} vs {row['raw']:8.2f}   ({row['backend'] / row['raw']:.2f}x)"
+        )
+    lines.append("")
+    st = r["startup"]
+    lines.append("Fresh interpreter, wall time (s, fastest / median):")
+    for key, label in (
+        ("import_numpy_s", "import numpy"),
+        ("import_s", "import symkin"),
+        ("first_jacob0_s", "import, compile (warm), first jacob0"),
+    ):
+        lines.append(f"  {label:38} {st[key]['min']:.3f} / {st[key]['median']:.3f}")
+    lines.append("")
+    lines.append("Goals (issue 14):")
+    for key, c in r["checks"].items():
+        v = c["value"]
+        shown = "n/a" if v is None else (f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}")
+        verdict = "n/a" if c["met"] is None else ("met" if c["met"] else "MISSED")
+        lines.append(f"  {key:40} {shown:>10}   goal {c['goal']:>10}   {verdict}")
+    return "\n".join(lines)

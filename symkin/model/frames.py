@@ -1,0 +1,84 @@
+"""Link frames of a serial chain at run time (NumPy only): validating a ``frame`` argument and the
+Jacobian of a link frame from the link poses.
+
+Link frame ``k`` is the frame right after the k-th joint along the chain, ``link_poses(q)[k]``
+(chain order; for every built-in and imported robot the k-th joint along the chain is joint k).
+"""
+
+from __future__ import annotations
+
+import operator
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import FrameError
+
+__all__ = ["frame_index", "ChainTables", "frame_jacobian"]
+
+
+def frame_index(frame: Any, n: int, name: str = "robot") -> int:
+    """``frame`` as a link frame index in [0, n); raises FrameError naming the valid range."""
+    if isinstance(frame, (bool, np.bool_)):
+        raise FrameError(f"frame must be a link frame index 0..{n - 1} or None, not {frame!r}")
+    try:
+        k = operator.index(frame)
+    except TypeError:
+        raise FrameError(
+            f"frame must be a link frame index 0..{n - 1} (chain order, as link_poses) or None "
+            f"(the end effector) for {name}, not {type(frame).__name__} {frame!r}"
+        ) from None
+    if not 0 <= k < n:
+        raise FrameError(f"{name} has link frames 0..{n - 1} (one after each joint), not frame {k}")
+    return k
+
+
+class ChainTables:
+    """Per joint along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute."""
+
+    def __init__(self, order: Any, axis: Any, sign: Any, revolute: Any) -> None:
+        self.order = np.asarray(order, dtype=int)
+        self.axis = np.asarray(axis, dtype=int)
+        self.sign = np.asarray(sign, dtype=float)
+        self.revolute = np.asarray(revolute, dtype=bool)
+
+    @classmethod
+    def of(cls, ets: Any) -> ChainTables:
+        joints = [e for e in ets if e.is_joint]
+        return cls(
+            [e.joint for e in joints], [e.axis.index for e in joints], [e.sign for e in joints],
+            [e.is_revolute for e in joints],
+        )  # fmt: skip
+
+
+def frame_jacobian(L: np.ndarray, k: int, chain: ChainTables, ee: bool = False) -> np.ndarray:
+    """Jacobian (N, 6, n) of link frame ``k`` from the link poses ``L`` (N, n, 4, 4), rows (v, omega).
+
+    Column a (a joint at or before the frame along the chain) is ``(w_a x (p_k - p_a) ; w_a)``
+    for a revolute and ``(w_a ; 0)`` for a prismatic joint, with ``w_a`` the joint's signed axis
+    (a column of ``L[a]``) and ``p_a`` its origin (eqs 31-34 of Haviland and Corke, Manipulator
+    Differential Kinematics, Part 1, 2023, with frame k in place of the end effector); later
+    joints' columns are 0. ``ee``: both row blocks expressed in frame k (eq 16).
+    """
+    N, n = L.shape[0], L.shape[1]
+    a = np.arange(k + 1)
+    columns = np.swapaxes(L[:, : k + 1, :3, :3], -1, -2)  # (N, k+1, column, row)
+    w = columns[:, a, chain.axis[a], :] * chain.sign[a][:, None]  # (N, k+1, 3) signed joint axes
+    r = L[:, k, None, :3, 3] - L[:, : k + 1, :3, 3]
+    rev = chain.revolute[a][:, None]
+    cross = np.stack(
+        (w[..., 1] * r[..., 2] - w[..., 2] * r[..., 1],
+         w[..., 2] * r[..., 0] - w[..., 0] * r[..., 2],
+         w[..., 0] * r[..., 1] - w[..., 1] * r[..., 0]), axis=-1,
+    )  # fmt: skip
+    v = np.where(rev, cross, w)
+    o = np.where(rev, w, 0.0)
+    if ee:
+        R = L[:, k, :3, :3]
+        v = np.einsum("Nji,Naj->Nai", R, v)
+        o = np.einsum("Nji,Naj->Nai", R, o)
+    J = np.zeros((N, 6, n))
+    cols = chain.order[a]
+    J[:, :3, cols] = np.swapaxes(v, 1, 2)
+    J[:, 3:, cols] = np.swapaxes(o, 1, 2)
+    return J

@@ -1,0 +1,231 @@
+"""Closed-form inverse kinematics at run time: every solution of a pose from the generated code.
+
+:class:`AnalyticIK` wraps one generated module (C extension, NumPy or plain Python, see
+:mod:`symkin.emit.analytic_ik`). The generated code computes every branch; what is returned is
+filtered the same way on every backend (the C version does it in C):
+
+1. a candidate flagged by its subproblems (clamped ``acos`` argument, singular, free joint) or of
+   an arm with fewer than 6 joints is verified: ``max |T(q) - T| <= tol`` over the top 3x4 block;
+2. each revolute joint is wrapped by 2 pi to the value nearest ``q0`` (0 without q0), then, if
+   that is outside ``qlim``, to the value inside it when a 2 pi shift allows;
+3. with ``joint_limits=True`` rows still outside ``qlim`` are dropped;
+4. rows within 1e-6 of a kept one (every joint, angles mod 2 pi) are merged;
+5. with ``q0`` the rows are ordered by ``sum_j w_j (q_j - q0_j)^2``.
+
+No sympy here.
+"""
+
+from __future__ import annotations
+
+import math
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import ConfigurationError
+from symkin.runtime.ik import IKResult, check_pose, pose_error
+
+__all__ = ["AnalyticIK", "invalid_input", "VERIFY_TOL", "DUPLICATE_TOL"]
+
+VERIFY_TOL = 1e-8  # max |T(q) - T| of a flagged candidate that is kept
+DUPLICATE_TOL = 1e-6  # rows closer than this in every joint are one solution
+_TWO_PI = 2 * math.pi
+
+
+def invalid_input(what: str, value: Any, n: int) -> None:
+    """Raise symkin's error for an invalid argument of ``ik_all`` (called by the C extension)."""
+    if what == "pose":
+        check_pose(value)
+        raise ConfigurationError("invalid target pose")
+    if what == "free_joint":
+        raise ConfigurationError(
+            f"free_joint= is for redundant arms (7 joints or more); this arm has {n} and a closed form: "
+            "use ik_all(T) without it"
+        )
+    raise ConfigurationError(
+        f"{what} must be {n} finite numbers{' (>= 0)' if what == 'weights' else ''}"
+        f"{' per target, (n,) or (N, n)' if what == 'q0' else ''}; got {np.asarray(value).shape!r} {value!r}"[
+            :300
+        ]
+    )
+
+
+class AnalyticIK:
+    """The closed-form solver of one robot on one backend (``kin.ik_all`` calls it).
+
+    Attributes: ``robot``, ``backend``, ``n``, ``max_solutions`` (S), ``kind`` (the structure
+    found), ``files`` (generated sources), ``module``.
+    """
+
+    def __init__(
+        self, robot: Any, backend: str, module: ModuleType, files: dict[str, str], kind: str, S: int
+    ) -> None:
+        self.robot = robot
+        self.backend = backend
+        self.module = module
+        self.files = files
+        self.kind = kind
+        self.max_solutions = int(S)
+        self.n = int(robot.n)
+        self._rev = np.array([e.is_revolute for e in robot.ets.joints], dtype=bool)
+        self._qlim = np.ascontiguousarray(robot.qlim, dtype=float)
+        self._c = getattr(module, "ik_all", None) if backend == "c" else None
+        if backend == "c" and hasattr(module, "Solver"):
+            # the C method has ik_all's signature and the limits bound: no Python frame per call
+            self.ik_all = module.Solver(self._qlim, VERIFY_TOL).ik_all  # type: ignore[method-assign]
+
+    def __repr__(self) -> str:
+        return (
+            f"AnalyticIK(robot={self.robot.name!r}, kind={self.kind!r}, S={self.max_solutions}, "
+            f"backend={self.backend!r})"
+        )
+
+    # -- all solutions ------------------------------------------------------------------------
+    def ik_all(
+        self,
+        T: Any,
+        q0: Any = None,
+        joint_limits: bool = True,
+        weights: Any = None,
+        tol: float = VERIFY_TOL,
+    ) -> np.ndarray:
+        """Every distinct solution of pose ``T`` (4, 4): (k, n), k <= S, ordered by distance to
+        ``q0`` when given; for ``T`` (N, 4, 4): (N, S, n) with NaN rows after the k_i solutions."""
+        if self._c is not None:
+            return self._c(T, q0, weights, self._qlim, joint_limits, tol)
+        Tb, single = check_pose(T)
+        N = len(Tb)
+        Q0 = self._rows(q0, N, single, "q0")
+        w = None
+        if weights is not None:
+            w = np.asarray(weights, dtype=float)
+            if w.shape != (self.n,) or not np.isfinite(w).all() or (w < 0).any():
+                invalid_input("weights", weights, self.n)
+        qf = np.zeros((N, self.n)) if Q0 is None else Q0
+        if self.backend == "numpy":
+            Q, F = self.module.raw(Tb, qf)
+        else:
+            pairs = [self.module.raw(Tb[i].tolist(), qf[i].tolist()) for i in range(N)]
+            Q = np.array([p[0] for p in pairs], dtype=float).reshape(N, self.max_solutions, self.n)
+            F = np.array([p[1] for p in pairs], dtype=int).reshape(N, self.max_solutions)
+        out = np.full((N, self.max_solutions, self.n), np.nan)
+        for i in range(N):
+            rows = self._finish(Tb[i], Q[i], F[i], None if Q0 is None else Q0[i], w, joint_limits, tol)
+            out[i, : len(rows)] = rows
+        if single:
+            k = int((~np.isnan(out[0, :, 0])).sum())
+            return out[0, :k]
+        return out
+
+    def _rows(self, q0: Any, N: int, single: bool, what: str) -> np.ndarray | None:
+        if q0 is None:
+            return None
+        Q = np.asarray(q0, dtype=float) if not isinstance(q0, np.ndarray) else q0.astype(float)
+        if Q.shape == (self.n,):
+            Q = np.broadcast_to(Q, (N, self.n))
+        elif single or Q.shape != (N, self.n):
+            invalid_input(what, q0, self.n)
+        if not np.isfinite(Q).all():
+            invalid_input(what, q0, self.n)
+        return Q
+
+    def _fk12(self, q: np.ndarray) -> np.ndarray:
+        if self.backend == "numpy":
+            return np.asarray(self.module.fk(q[None]))[0]
+        return np.asarray(self.module.fk(q.tolist()), dtype=float)
+
+    def _finish(
+        self,
+        T: np.ndarray,
+        Q: np.ndarray,
+        F: np.ndarray,
+        q0: np.ndarray | None,
+        w: np.ndarray | None,
+        drop: bool,
+        tol: float,
+    ) -> np.ndarray:
+        """Steps 1-5 of the module docstring for one pose (the C code does the same)."""
+        lo, hi = self._qlim
+        kept: list[np.ndarray] = []
+        dist: list[float] = []
+        target = T[:3].ravel()
+        for q, flag in zip(Q, F):
+            if flag < 0 or not np.isfinite(q).all():
+                continue
+            q = q.copy()
+            if (self.module.CHECK_ALL or flag) and not np.abs(self._fk12(q) - target).max() <= tol:
+                continue
+            for j in np.flatnonzero(self._rev):
+                ref = 0.0 if q0 is None else float(q0[j])
+                x = ref + math.remainder(float(q[j]) - ref, _TWO_PI)
+                y = x
+                if y < lo[j]:
+                    y += _TWO_PI * math.ceil((lo[j] - y) / _TWO_PI)
+                elif y > hi[j]:
+                    y -= _TWO_PI * math.ceil((y - hi[j]) / _TWO_PI)
+                q[j] = y if lo[j] <= y <= hi[j] else x
+            if drop and ((q < lo) | (q > hi)).any():
+                continue
+            if any(self._same(q, k) for k in kept):
+                continue
+            d = 0.0 if q0 is None else float(((1.0 if w is None else w) * (q - q0) ** 2).sum())
+            at = len(kept)
+            while at > 0 and dist[at - 1] > d:
+                at -= 1
+            kept.insert(at, q)
+            dist.insert(at, d)
+        return np.array(kept).reshape(len(kept), self.n)
+
+    def _same(self, a: np.ndarray, b: np.ndarray) -> bool:
+        d = a - b
+        d = np.where(self._rev, np.remainder(d + math.pi, _TWO_PI) - math.pi, d)
+        return bool((np.abs(d) <= DUPLICATE_TOL).all())
+
+    # -- one solution as an IK result ---------------------------------------------------------
+    def ik(
+        self,
+        Tep: Any,
+        q0: Any = None,
+        weights: Any = None,
+        joint_limits: bool = True,
+        tol: float = 1e-6,
+        fkine: Any = None,
+    ) -> IKResult:
+        """The solution nearest ``q0`` (weighted) as an :class:`IKResult`: ``success=False`` with a
+        reason when the pose is out of reach or every solution is outside the joint limits."""
+        T, single = check_pose(Tep)
+        N = len(T)
+        Q0 = self._rows(q0, N, single, "q0")
+        allq = self.ik_all(T, Q0, joint_limits, weights)
+        fk = fkine or self.robot.fkine
+        qs, ok, res, why = [], [], [], []
+        for i in range(N):
+            rows = allq[i]
+            rows = rows[~np.isnan(rows[:, 0])] if rows.size else rows
+            if len(rows):
+                q = rows[0]
+                r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), T[i])))
+                success = r < tol
+                reason = "success" if success else f"closed-form solution has residual {r:.3g} >= tol {tol:g}"
+            else:
+                q = np.zeros(self.n) if Q0 is None else np.array(Q0[i])
+                r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), T[i])))
+                success = False
+                reason = self._why(T[i], joint_limits)
+            qs.append(q)
+            ok.append(success)
+            res.append(r)
+            why.append(reason)
+        if single:
+            return IKResult(qs[0], ok[0], 0, 1, res[0], why[0])
+        return IKResult(
+            np.array(qs), np.array(ok), np.zeros(N, int), np.ones(N, int), np.array(res), tuple(why)
+        )
+
+    def _why(self, T: np.ndarray, joint_limits: bool) -> str:
+        if joint_limits:
+            free = self.ik_all(T, joint_limits=False)
+            if len(free):
+                return f"all {len(free)} closed-form solution(s) lie outside the joint limits"
+        return "the pose is out of reach: no closed-form solution exists"

@@ -1,0 +1,209 @@
+/* CPython entry point of the C IK solver: one target solved in one call from Python.
+ *
+ * Compiled into the same library as symkin_ik.c (see symkin/runtime/ik_c.py, which also reaches
+ * the library through ctypes for batches) with -DSYMKIN_IK_MODULE=<module name>. The call takes
+ * the ndarray directly, releases the GIL while it solves and keeps every buffer on the stack or in
+ * new arrays, so threads can solve with one solver at the same time. It builds the IKResult itself
+ * (the frozen dataclass's __init__ would cost more than the Python side of the rest).
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
+#include <numpy/arrayobject.h>
+#include <math.h>
+
+#include "symkin_ik.h"
+
+#ifndef SYMKIN_IK_MODULE
+#error "compile with -DSYMKIN_IK_MODULE=<module name>"
+#endif
+#define SK_STR2_(x) #x
+#define SK_STR_(x) SK_STR2_(x)
+#define SK_CAT2_(a, b) a##b
+#define SK_CAT_(a, b) SK_CAT2_(a, b)
+
+#define SK_NFIELDS 6 /* IKResult: q, success, iterations, searches, residual, reason */
+static PyObject *result_type_ = NULL;
+static PyObject *slots_[SK_NFIELDS]; /* member descriptors of IKResult's slots, or NULL */
+static PyObject *success_ = NULL;    /* "success" */
+static uint64_t seed_state_ = 0;     /* fresh seeds (splitmix64), advanced with the GIL held */
+
+static uint64_t next_seed_(void)
+{
+    uint64_t z = (seed_state_ += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+}
+
+/* setup(IKResult, entropy): the result type (its slot descriptors are used when they are plain
+ * member descriptors, else the type is called) and 64 bits of entropy for fresh seeds. */
+static PyObject *py_setup(PyObject *self, PyObject *args)
+{
+    static const char *names[SK_NFIELDS] = {"q", "success", "iterations", "searches", "residual", "reason"};
+    PyObject *type;
+    unsigned long long entropy;
+    if (!PyArg_ParseTuple(args, "OK", &type, &entropy))
+        return NULL;
+    if (!PyType_Check(type)) {
+        PyErr_SetString(PyExc_TypeError, "setup() needs the IKResult type");
+        return NULL;
+    }
+    Py_XDECREF(result_type_);
+    Py_INCREF(type);
+    result_type_ = type;
+    int fast = 1;
+    for (int i = 0; i < SK_NFIELDS; ++i) {
+        Py_CLEAR(slots_[i]);
+        PyObject *d = PyDict_GetItemString(((PyTypeObject *)type)->tp_dict, names[i]); /* borrowed */
+        if (d && Py_IS_TYPE(d, &PyMemberDescr_Type)) {
+            Py_INCREF(d);
+            slots_[i] = d;
+        } else {
+            fast = 0;
+        }
+    }
+    if (!fast)
+        for (int i = 0; i < SK_NFIELDS; ++i)
+            Py_CLEAR(slots_[i]);
+    seed_state_ = (uint64_t)entropy;
+    return PyBool_FromLong(fast);
+}
+
+/* IKResult(q, success, iterations, searches, residual, reason); steals the references of values */
+static PyObject *make_result_(PyObject **values)
+{
+    PyObject *r = NULL;
+    for (int i = 0; i < SK_NFIELDS; ++i)
+        if (!values[i])
+            goto done;
+    if (slots_[0]) {
+        PyTypeObject *t = (PyTypeObject *)result_type_;
+        r = t->tp_alloc(t, 0);
+        for (int i = 0; r && i < SK_NFIELDS; ++i)
+            if (Py_TYPE(slots_[i])->tp_descr_set(slots_[i], r, values[i]) < 0)
+                Py_CLEAR(r);
+    } else {
+        r = PyObject_Vectorcall(result_type_, values, SK_NFIELDS, NULL);
+    }
+done:
+    for (int i = 0; i < SK_NFIELDS; ++i)
+        Py_XDECREF(values[i]);
+    return r;
+}
+
+/* arg as a C-contiguous native float64 array of shape (d0,) (nd 1) or (d0, d1) (nd 2), or NULL
+ * without an error set when it is anything else */
+static PyArrayObject *as_doubles_(PyObject *arg, int nd, npy_intp d0, npy_intp d1)
+{
+    PyArrayObject *a;
+    if (PyArray_CheckExact(arg) && PyArray_TYPE((PyArrayObject *)arg) == NPY_DOUBLE &&
+        PyArray_IS_C_CONTIGUOUS((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
+        a = (PyArrayObject *)arg;
+        Py_INCREF(a);
+    } else {
+        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY);
+        if (!a) {
+            PyErr_Clear();
+            return NULL;
+        }
+    }
+    if (PyArray_NDIM(a) != nd || PyArray_DIM(a, 0) != d0 || (nd == 2 && PyArray_DIM(a, 1) != d1)) {
+        Py_DECREF(a);
+        return NULL;
+    }
+    return a;
+}
+
+/* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
+ * are not one valid (4, 4) target, an (n,) finite q0 or None, and an int seed or None (the caller
+ * then validates them, raising the detailed error, or solves a batch). reason(residual,
+ * limit_rejects, singular) gives the text of a failure. */
+static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
+{
+    if (nargs < 3 || nargs > 5) {
+        PyErr_SetString(PyExc_TypeError, "solve(config, reason, Tep, q0=None, seed=None)");
+        return NULL;
+    }
+    /* args: config, Tep, q0, seed, reason */
+    PyObject *args[5] = {argv[0], argv[2], nargs > 3 ? argv[3] : Py_None, nargs > 4 ? argv[4] : Py_None, argv[1]};
+    if (!result_type_) {
+        PyErr_SetString(PyExc_RuntimeError, "setup() was not called");
+        return NULL;
+    }
+    const symkin_ik_config *cfg = (const symkin_ik_config *)PyLong_AsVoidPtr(args[0]);
+    if (!cfg)
+        return PyErr_Occurred() ? NULL : Py_NewRef(Py_None);
+    const int n = cfg->n;
+    uint64_t seed;
+    if (args[3] == Py_None) {
+        seed = next_seed_();
+    } else if (PyLong_CheckExact(args[3])) {
+        seed = (uint64_t)PyLong_AsUnsignedLongLongMask(args[3]);
+        if (PyErr_Occurred())
+            return NULL;
+    } else {
+        Py_RETURN_NONE;
+    }
+    PyArrayObject *T = as_doubles_(args[1], 2, 4, 4), *q0 = NULL;
+    if (!T)
+        Py_RETURN_NONE;
+    if (args[2] != Py_None) {
+        q0 = as_doubles_(args[2], 1, n, 0);
+        if (!q0) {
+            Py_DECREF(T);
+            Py_RETURN_NONE;
+        }
+    }
+    npy_intp dim = n;
+    PyArrayObject *q = (PyArrayObject *)PyArray_SimpleNew(1, &dim, NPY_DOUBLE);
+    if (!q) {
+        Py_DECREF(T);
+        Py_XDECREF(q0);
+        return NULL;
+    }
+    symkin_ik_stats st;
+    int32_t status;
+    const double *Tp = (const double *)PyArray_DATA(T), *q0p = q0 ? (const double *)PyArray_DATA(q0) : NULL;
+    double *qp = (double *)PyArray_DATA(q);
+    Py_BEGIN_ALLOW_THREADS
+    status = symkin_ik_solve(cfg, Tp, q0p, seed, qp, &st);
+    Py_END_ALLOW_THREADS
+    Py_DECREF(T);
+    Py_XDECREF(q0);
+    if (status != SYMKIN_POSE_OK) { /* invalid target or q0: the caller raises the detailed error */
+        Py_DECREF(q);
+        Py_RETURN_NONE;
+    }
+    PyObject *values[SK_NFIELDS];
+    values[0] = (PyObject *)q;
+    values[1] = PyBool_FromLong(st.success);
+    values[2] = PyLong_FromLong(st.iterations);
+    values[3] = PyLong_FromLong(st.searches);
+    values[4] = PyFloat_FromDouble(st.residual);
+    if (st.success)
+        values[5] = Py_NewRef(success_);
+    else
+        values[5] = PyObject_CallFunction(args[4], "dii", st.residual, (int)st.limit_rejects, (int)st.singular);
+    return make_result_(values);
+}
+
+static PyMethodDef methods_[] = {
+    {"setup", (PyCFunction)py_setup, METH_VARARGS, "setup(IKResult, entropy) -> bool (fast result path)"},
+    {"solve", (PyCFunction)(void (*)(void))py_solve, METH_FASTCALL,
+     "solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult or None"},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module_ = {
+    PyModuleDef_HEAD_INIT, SK_STR_(SYMKIN_IK_MODULE), "symkin's C IK solver, one target per call", -1, methods_,
+};
+
+PyMODINIT_FUNC SK_CAT_(PyInit_, SYMKIN_IK_MODULE)(void)
+{
+    import_array();
+    success_ = PyUnicode_InternFromString("success");
+    if (!success_)
+        return NULL;
+    return PyModule_Create(&module_);
+}

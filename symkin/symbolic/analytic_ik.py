@@ -1,0 +1,608 @@
+"""Closed-form inverse kinematics derived with sympy from the exact model, as a list of subproblems.
+
+The solution is a sequence of steps, each solving one angle (or a prismatic joint) from the
+target pose and the angles solved before it, using the Paden-Kahan subproblems in the form of
+IK-Geo (Elias and Wen, IK-Geo: Unified robot inverse kinematics using subproblem decomposition,
+Mechanism and Machine Theory, 2025, Sec. 3):
+
+- subproblem 1, ``rot(k, t) p1 = p2``: ``t = atan2(k . (p1 x p2), p1 . p2 - (k . p1)(k . p2))``;
+- subproblem 4, ``h . rot(k, t) p = d``: with ``A = h . (k x p)``, ``B = h . (p - k (k . p))``,
+  ``C = d - (h . k)(k . p)``, ``A sin t + B cos t = C``, so ``t = atan2(A, B) +- acos(C / sqrt(A^2 + B^2))``
+  (two branches);
+- subproblem 3, ``|rot(k, t) p1 - p2| = d``, is subproblem 4 with ``h = p2`` and
+  ``d' = (|p1|^2 + |p2|^2 - d^2) / 2``; subproblem 2, ``rot(k1, t1) p1 = rot(k2, t2) p2``, is
+  subproblem 4 for t1 (``k2 . rot(k1, t1) p1 = k2 . p2``) then subproblem 1 for t2;
+- a prismatic joint along a line: ``|c + q h| = r``, ``q = -h.c +- sqrt((h.c)^2 - |c|^2 + r^2)``.
+
+Every coefficient (A, B, C, ...) is an exact sympy expression in the target pose (``r11 .. r33``,
+``px, py, pz``) and the cosines and sines of the angles already solved (``c0, s0, ...``): the
+arm's constants are substituted exactly, so the emitted code does only the arithmetic this arm
+needs. Branches: each subproblem 4 and each prismatic quadratic doubles them (at most 8 for 6R).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import sympy as sp
+
+from symkin.model.robot import Robot
+from symkin.symbolic.ik_geometry import (
+    Geometry,
+    NoAnalyticIKError,
+    Structure,
+    Vec,
+    add,
+    classify,
+    cross,
+    dot,
+    geometry,
+    is_zero,
+    parallel,
+    reverse,
+    scale,
+    snap,
+    sub,
+)
+
+__all__ = ["Step", "AnalyticIK", "derive_analytic", "pose_symbols"]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of the solution.
+
+    ``kind``: ``"sp4"`` (exprs A, B, C; two branches), ``"sp1"`` (exprs y, x), ``"quad"``
+    (exprs b, D: ``var = -b +- sqrt(D)``; two branches), ``"lin"`` (expr value) or ``"sum"`` (exprs
+    c, s: the cosine and sine of a summed angle by the addition formulas; no angle is formed).
+    ``var`` is the solved variable (``q<j>`` for joint index j, or an auxiliary angle such as
+    ``th``); ``joint`` its joint index (None for an auxiliary angle); ``revolute`` whether cos/sin
+    of it are formed for later steps. ``title`` and ``statement`` (LaTeX) describe the step.
+    """
+
+    kind: str
+    var: str
+    joint: int | None
+    revolute: bool
+    exprs: tuple[tuple[str, sp.Expr], ...]
+    title: str
+    statement: str
+
+    @property
+    def branches(self) -> int:
+        return 2 if self.kind in ("sp4", "quad") else 1
+
+
+@dataclass(frozen=True, eq=False)
+class AnalyticIK:
+    """The derived closed form of one robot (see the module docstring).
+
+    ``steps`` run in order, each nested in the branches of the ones before; ``outputs[j]`` is the
+    variable holding joint index j; ``check`` is True when solutions must be verified against the
+    full pose (arms with fewer than 6 joints solve only part of it); ``fk`` is the pose of the
+    solved joints as 12 expressions (rows of the top 3x4 block) in ``c<j>, s<j>`` (revolute) or
+    ``q<j>`` (prismatic), used to verify.
+    """
+
+    name: str
+    n: int
+    structure: Structure
+    geometry: Geometry
+    steps: tuple[Step, ...]
+    outputs: tuple[str, ...]
+    check: bool
+    fk: tuple[sp.Expr, ...]
+    revolute: tuple[bool, ...]
+
+    @property
+    def max_solutions(self) -> int:
+        s = 1
+        for st in self.steps:
+            s *= st.branches
+        return s
+
+
+def pose_symbols() -> tuple[sp.Matrix, sp.Matrix]:
+    """The target pose symbols: rotation ``r11 .. r33`` (3x3) and position ``px, py, pz`` (3x1)."""
+    R = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"r{i + 1}{j + 1}", real=True))
+    p = sp.Matrix([sp.Symbol(f"p{a}", real=True) for a in "xyz"])
+    return R, p
+
+
+def _mat(v: Vec) -> sp.Matrix:
+    return sp.Matrix(v)
+
+
+def _vec(m: sp.Matrix) -> Vec:
+    return (m[0], m[1], m[2])
+
+
+def _rot(h: Vec, c: sp.Expr, s: sp.Expr) -> sp.Matrix:
+    """rot(h, t) = c I + s [h]x + (1 - c) h h^T with c = cos t, s = sin t (h a unit vector)."""
+    H = _mat(h)
+    K = sp.Matrix([[0, -h[2], h[1]], [h[2], 0, -h[0]], [-h[1], h[0], 0]])
+    return c * sp.eye(3) + s * K + (1 - c) * (H * H.T)
+
+
+def _perp(h: Vec) -> Vec:
+    """An exact vector perpendicular to the unit vector h."""
+    for e in ((1, 0, 0), (0, 1, 0), (0, 0, 1)):
+        v = cross(h, e)
+        if not all(is_zero(x) for x in v):
+            return v
+    raise AssertionError("zero axis")
+
+
+def _norm2(v: Vec) -> sp.Expr:
+    return dot(v, v)
+
+
+def _tidy(x: sp.Expr) -> sp.Expr:
+    """``x`` as derived (nested dot products: about half the arithmetic of the expanded sum and
+    no cancellation between its terms), exactly 0 or a single number when it expands to one."""
+    e = sp.expand(x)
+    return e if e == 0 or not e.free_symbols else x
+
+
+class _Builder:
+    """Collects steps while the solution is derived."""
+
+    def __init__(self, g: Geometry) -> None:
+        self.g = g
+        self.steps: list[Step] = []
+        self.cs: dict[str, tuple[sp.Symbol, sp.Symbol]] = {}
+
+    def name(self, k: int) -> str:
+        return f"q{self.g.joint[k]}"
+
+    def label(self, k: int) -> str:
+        return f"q_{{{self.g.joint[k] + 1}}}"
+
+    def cos_sin(self, var: str) -> tuple[sp.Symbol, sp.Symbol]:
+        if var not in self.cs:
+            suffix = var[1:] if var.startswith("q") else var
+            self.cs[var] = (sp.Symbol(f"c{suffix}", real=True), sp.Symbol(f"s{suffix}", real=True))
+        return self.cs[var]
+
+    def rot(self, h: Vec, var: str, sign: int = 1) -> sp.Matrix:
+        c, s = self.cos_sin(var)
+        return _rot(h, c, sign * s)
+
+    def joint_rot(self, k: int, sign: int = 1) -> sp.Matrix:
+        """rot(h_k, +-q_k) for a revolute joint, the identity for a prismatic one."""
+        return self.rot(self.g.h[k], self.name(k), sign) if self.g.revolute[k] else sp.eye(3)
+
+    def add(
+        self, kind: str, var: str, k: int | None, exprs: dict[str, sp.Expr], title: str, statement: str
+    ) -> None:
+        exprs = {key: _tidy(v) for key, v in exprs.items()}
+        constant = (
+            not (exprs.get("A", 1).free_symbols | exprs.get("B", 1).free_symbols) if kind == "sp4" else False
+        )
+        if constant and is_zero(exprs["A"]) and is_zero(exprs["B"]):
+            raise NoAnalyticIKError(
+                f"{title}: the equation does not depend on the angle (degenerate geometry); "
+                "use the numerical IK instead: kin.ik(T)"
+            )
+        joint = None if k is None else self.g.joint[k]
+        revolute = True if k is None else self.g.revolute[k]
+        self.steps.append(Step(kind, var, joint, revolute, tuple(exprs.items()), title, statement))
+
+    # -- subproblems ---------------------------------------------------------------------------
+    def sp4(
+        self, var: str, k: int | None, h: Vec, p: Vec, axis: Vec, d: sp.Expr, title: str, st: str
+    ) -> None:
+        A = dot(h, cross(axis, p))
+        B = dot(h, sub(p, scale(dot(axis, p), axis)))
+        C = d - dot(h, axis) * dot(axis, p)
+        self.add("sp4", var, k, {"A": A, "B": B, "C": C}, title, st)
+
+    def sp3(
+        self, var: str, k: int | None, p1: Vec, p2: Vec, axis: Vec, d2: sp.Expr, title: str, st: str
+    ) -> None:
+        """|rot(axis, t) p1 - p2|^2 = d2."""
+        self.sp4(var, k, p2, p1, axis, (_norm2(p1) + _norm2(p2) - d2) / 2, title, st)
+
+    def sp1(self, var: str, k: int | None, axis: Vec, p1: Vec, p2: Vec, title: str, st: str) -> None:
+        y = dot(axis, cross(p1, p2))
+        x = dot(p1, p2) - dot(axis, p1) * dot(axis, p2)
+        self.add("sp1", var, k, {"y": y, "x": x}, title, st)
+
+
+def _neg(v: Vec) -> Vec:
+    return (-v[0], -v[1], -v[2])
+
+
+def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
+    """Steps for joints 0, 1, 2 (chain order) placing the point at ``w0`` (q = 0) onto ``w``."""
+    g = b.g
+    h, p = g.h, g.p
+    L = b.label
+    if s.position == "parallel23":
+        u = sub(w, p[0])
+        p12, p23, p34 = sub(p[1], p[0]), sub(p[2], p[1]), sub(w0, p[2])
+        b.sp4(
+            b.name(0),
+            0,
+            h[1],
+            u,
+            _neg(h[0]),
+            dot(h[1], add(add(p12, p23), p34)),
+            f"Subproblem 4 for {L(0)}: axes 2 and 3 are parallel",
+            rf"h_2^T R(h_1, -{L(0)})\,(w - p_1) = h_2^T (p_{{12}} + p_{{23}} + p_{{34}})",
+        )
+        v = sub(_vec(b.joint_rot(0, -1) * _mat(u)), p12)
+        b.sp3(
+            b.name(2),
+            2,
+            p34,
+            _neg(p23),
+            h[2],
+            _norm2(v),
+            f"Subproblem 3 for {L(2)} (elbow)",
+            rf"\| R(h_3, {L(2)})\, p_{{34}} + p_{{23}} \| = \| v \|,\quad "
+            rf"v = R(h_1, -{L(0)})(w - p_1) - p_{{12}}",
+        )
+        inner = add(p23, _vec(b.joint_rot(2) * _mat(p34)))
+        b.sp1(
+            b.name(1),
+            1,
+            h[1],
+            inner,
+            v,
+            f"Subproblem 1 for {L(1)}",
+            rf"R(h_2, {L(1)})\,(p_{{23}} + R(h_3, {L(2)})\, p_{{34}}) = v",
+        )
+        return
+    if s.position == "intersect12":
+        o = s.shoulder
+        assert o is not None
+        u = sub(w, o)
+        p23, p34 = sub(p[2], o), sub(w0, p[2])
+        if g.revolute[2]:
+            b.sp3(
+                b.name(2),
+                2,
+                p34,
+                _neg(p23),
+                h[2],
+                _norm2(u),
+                f"Subproblem 3 for {L(2)}: axes 1 and 2 meet at the shoulder o",
+                rf"\| R(h_3, {L(2)})\, p_{{34}} + p_{{o3}} \| = \| w - o \|",
+            )
+            v = add(p23, _vec(b.joint_rot(2) * _mat(p34)))
+        else:
+            q2 = sp.Symbol(b.name(2), real=True)
+            c = add(p23, p34)
+            bb = dot(h[2], c)
+            b.add(
+                "quad",
+                b.name(2),
+                2,
+                {"b": bb, "D": bb * bb - _norm2(c) + _norm2(u)},
+                f"Prismatic {L(2)} from the distance to the shoulder o (axes 1 and 2 meet there)",
+                rf"\| p_{{o3}} + {L(2)}\, h_3 + p_{{34}} \| = \| w - o \|",
+            )
+            v = add(c, scale(q2, h[2]))
+        b.sp4(
+            b.name(0),
+            0,
+            h[1],
+            u,
+            _neg(h[0]),
+            dot(h[1], v),
+            f"Subproblem 2 (4 then 1) for {L(0)}",
+            rf"h_2^T R(h_1, -{L(0)})\,(w - o) = h_2^T v",
+        )
+        b.sp1(
+            b.name(1),
+            1,
+            h[1],
+            v,
+            _vec(b.joint_rot(0, -1) * _mat(u)),
+            f"Subproblem 1 for {L(1)}",
+            rf"R(h_2, {L(1)})\, v = R(h_1, -{L(0)})\,(w - o)",
+        )
+        return
+    o = s.elbow
+    assert o is not None and s.position == "intersect23"
+    u = sub(w, p[0])
+    p12, p34 = sub(o, p[0]), sub(w0, o)
+    b.sp3(
+        b.name(0),
+        0,
+        u,
+        p12,
+        _neg(h[0]),
+        _norm2(p34),
+        f"Subproblem 3 for {L(0)}: axes 2 and 3 meet at the elbow o",
+        rf"\| R(h_1, -{L(0)})\,(w - p_1) - p_{{1o}} \| = \| p_{{o4}} \|",
+    )
+    v = sub(_vec(b.joint_rot(0, -1) * _mat(u)), p12)
+    b.sp4(
+        b.name(1),
+        1,
+        h[2],
+        v,
+        _neg(h[1]),
+        dot(h[2], p34),
+        f"Subproblem 2 (4 then 1) for {L(1)}",
+        rf"h_3^T R(h_2, -{L(1)})\, v = h_3^T p_{{o4}}",
+    )
+    b.sp1(
+        b.name(2),
+        2,
+        h[2],
+        p34,
+        _vec(b.joint_rot(1, -1) * _mat(v)),
+        f"Subproblem 1 for {L(2)}",
+        rf"R(h_3, {L(2)})\, p_{{o4}} = R(h_2, -{L(1)})\, v",
+    )
+
+
+def _summed_rot(b: _Builder, k1: int, k2: int) -> sp.Matrix:
+    """``R(h_k1, q_k1) R(h_k2, q_k2) = R(h_k1, q_k1 + sigma q_k2)`` for parallel axes (sigma = +-1 as
+    they point the same way or not), with the summed angle's cosine and sine formed once by the
+    addition formulas (a step ``"sum"``): the wrist coefficients then use two symbols, not four."""
+    g = b.g
+    sigma = _same(g.h[k1], g.h[k2])
+    c1, s1 = b.cos_sin(b.name(k1))
+    c2, s2 = b.cos_sin(b.name(k2))
+    var = f"{g.joint[k1]}_{g.joint[k2]}"
+    sign = "+" if sigma > 0 else "-"
+    b.add(
+        "sum",
+        var,
+        None,
+        {"c": c1 * c2 - sigma * s1 * s2, "s": s1 * c2 + sigma * c1 * s2},
+        f"The summed angle {b.label(k1)} {sign} {b.label(k2)} of the parallel axes {k1 + 1} and {k2 + 1}",
+        rf"R(h_{k1 + 1}, {b.label(k1)})\, R(h_{k2 + 1}, {b.label(k2)}) = "
+        rf"R(h_{k1 + 1}, {b.label(k1)} {sign} {b.label(k2)})",
+    )
+    return b.rot(g.h[k1], var)
+
+
+def _wrist(b: _Builder, R0n: sp.Matrix) -> None:
+    """Steps for the spherical wrist, joints 3, 4, 5 (chain order), given joints 0-2."""
+    h = b.g.h
+    L = b.label
+    if b.g.revolute[1] and b.g.revolute[2] and parallel(h[1], h[2]):
+        R03 = b.joint_rot(0) * _summed_rot(b, 1, 2)
+    else:
+        R03 = b.joint_rot(0) * b.joint_rot(1) * b.joint_rot(2)
+    v = _vec(R03.T * (R0n * _mat(h[5])))
+    b.sp4(
+        b.name(3),
+        3,
+        h[4],
+        v,
+        _neg(h[3]),
+        dot(h[4], h[5]),
+        f"Subproblem 2 (4 then 1) for {L(3)}",
+        rf"h_5^T R(h_4, -{L(3)})\, R_{{03}}^T R_{{06}} h_6 = h_5^T h_6",
+    )
+    rv = _vec(b.joint_rot(3, -1) * _mat(v))
+    b.sp1(
+        b.name(4),
+        4,
+        h[4],
+        h[5],
+        rv,
+        f"Subproblem 1 for {L(4)}",
+        rf"R(h_5, {L(4)})\, h_6 = R(h_4, -{L(3)})\, R_{{03}}^T R_{{06}} h_6",
+    )
+    e = _perp(h[5])
+    r56e = _vec(b.joint_rot(4, -1) * (b.joint_rot(3, -1) * (R03.T * (R0n * _mat(e)))))
+    b.sp1(
+        b.name(5),
+        5,
+        h[5],
+        e,
+        r56e,
+        f"Subproblem 1 for {L(5)}",
+        rf"R(h_6, {L(5)})\, e = R_{{56}} e,\quad e \perp h_6",
+    )
+
+
+def _same(a: Vec, b_: Vec) -> int:
+    return 1 if is_zero(dot(a, b_) - 1) else -1
+
+
+def _three_parallel(b: _Builder, s: Structure, R0n: sp.Matrix, pt: Vec, tM: Vec) -> None:
+    g = b.g
+    h, p = g.h, g.p
+    L = b.label
+    o = s.wrist
+    assert o is not None
+    p12, p23, p34, p45, p6T = sub(p[1], p[0]), sub(p[2], p[1]), sub(p[3], p[2]), sub(o, p[3]), sub(tM, o)
+    p06 = sub(sub(pt, p[0]), _vec(R0n * _mat(p6T)))
+    b.sp4(
+        b.name(0),
+        0,
+        h[1],
+        p06,
+        _neg(h[0]),
+        dot(h[1], add(add(p12, p23), add(p34, p45))),
+        f"Subproblem 4 for {L(0)}: axes 2, 3, 4 are parallel",
+        rf"h_2^T R(h_1, -{L(0)})\, p_{{16}} = h_2^T (p_{{12}} + p_{{23}} + p_{{34}} + p_{{45}})",
+    )
+    R10 = b.joint_rot(0, -1)
+    b.sp4(
+        b.name(4),
+        4,
+        h[1],
+        h[5],
+        h[4],
+        dot(h[1], _vec(R10 * (R0n * _mat(h[5])))),
+        f"Subproblem 4 for {L(4)}",
+        rf"h_2^T R(h_5, {L(4)})\, h_6 = h_2^T R(h_1, -{L(0)})\, R_{{06}} h_6",
+    )
+    b.sp1(
+        "th",
+        None,
+        h[1],
+        _vec(b.joint_rot(4) * _mat(h[5])),
+        _vec(R10 * (R0n * _mat(h[5]))),
+        r"Subproblem 1 for $\theta$, the summed rotation of the parallel axes 2, 3, 4",
+        rf"R(h_2, \theta)\, R(h_5, {L(4)})\, h_6 = R(h_1, -{L(0)})\, R_{{06}} h_6",
+    )
+    e = _perp(h[5])
+    r56e = _vec(b.joint_rot(4, -1) * (b.rot(h[1], "th", -1) * (R10 * (R0n * _mat(e)))))
+    b.sp1(
+        b.name(5),
+        5,
+        h[5],
+        e,
+        r56e,
+        f"Subproblem 1 for {L(5)}",
+        rf"R(h_6, {L(5)})\, e = R_{{56}} e,\quad e \perp h_6",
+    )
+    d_inner = sub(sub(_vec(R10 * _mat(p06)), p12), _vec(b.rot(h[1], "th") * _mat(p45)))
+    b.sp3(
+        b.name(2),
+        2,
+        p34,
+        _neg(p23),
+        h[2],
+        _norm2(d_inner),
+        f"Subproblem 3 for {L(2)} (elbow)",
+        rf"\| R(h_3, {L(2)})\, p_{{34}} + p_{{23}} \| = \| d \|,\quad "
+        rf"d = R(h_1, -{L(0)}) p_{{16}} - p_{{12}} - R(h_2, \theta)\, p_{{45}}",
+    )
+    b.sp1(
+        b.name(1),
+        1,
+        h[1],
+        add(p23, _vec(b.joint_rot(2) * _mat(p34))),
+        d_inner,
+        f"Subproblem 1 for {L(1)}",
+        rf"R(h_2, {L(1)})\,(p_{{23}} + R(h_3, {L(2)})\, p_{{34}}) = d",
+    )
+    s2, s3 = _same(h[1], h[2]), _same(h[1], h[3])
+    th, q1, q2 = (sp.Symbol(x, real=True) for x in ("th", b.name(1), b.name(2)))
+    b.add(
+        "lin",
+        b.name(3),
+        3,
+        {"value": s3 * (th - q1 - s2 * q2)},
+        f"{L(3)} from the summed angle",
+        rf"{L(3)} = \sigma_4 (\theta - {L(1)} - \sigma_3 {L(2)})",
+    )
+
+
+def _planar(b: _Builder, R0n: sp.Matrix, pt: Vec, tM: Vec) -> None:
+    g = b.g
+    h, p = g.h, g.p
+    L = b.label
+    if g.n == 3:
+        e = _perp(h[0])
+        b.sp1(
+            "phi",
+            None,
+            h[0],
+            e,
+            _vec(R0n * _mat(e)),
+            r"Subproblem 1 for the summed angle $\varphi$",
+            r"R(h_1, \varphi)\, e = R_{0T} R_M^T e,\quad e \perp h_1",
+        )
+        u = sub(sub(pt, p[0]), _vec(R0n * _mat(sub(tM, p[2]))))
+        tip = p[2]
+    else:
+        u = sub(pt, p[0])
+        tip = tM
+    p12, p2t = sub(p[1], p[0]), sub(tip, p[1])
+    b.sp3(
+        b.name(1),
+        1,
+        p2t,
+        _neg(p12),
+        h[1],
+        _norm2(u),
+        f"Subproblem 3 for {L(1)} (elbow)",
+        rf"\| R(h_2, {L(1)})\, p_{{2t}} + p_{{12}} \| = \| u \|",
+    )
+    b.sp1(
+        b.name(0),
+        0,
+        h[0],
+        add(p12, _vec(b.joint_rot(1) * _mat(p2t))),
+        u,
+        f"Subproblem 1 for {L(0)}",
+        rf"R(h_1, {L(0)})\,(p_{{12}} + R(h_2, {L(1)})\, p_{{2t}}) = u",
+    )
+    if g.n == 3:
+        s1, s2 = _same(h[0], h[1]), _same(h[0], h[2])
+        phi, q0, q1 = (sp.Symbol(x, real=True) for x in ("phi", b.name(0), b.name(1)))
+        b.add(
+            "lin",
+            b.name(2),
+            2,
+            {"value": s2 * (phi - q0 - s1 * q1)},
+            f"{L(2)} from the summed angle",
+            rf"{L(2)} = \sigma_3 (\varphi - {L(0)} - \sigma_2 {L(1)})",
+        )
+
+
+def _fk(b: _Builder) -> tuple[sp.Expr, ...]:
+    """The top 3x4 block of T(q) = G_1 ... G_n M (product of exponentials)."""
+    g = b.g
+    T = sp.eye(4)
+    for k in range(g.n):
+        G = sp.eye(4)
+        if g.revolute[k]:
+            R = b.joint_rot(k)
+            G[:3, :3] = R
+            G[:3, 3] = _mat(g.p[k]) - R * _mat(g.p[k])
+        else:
+            G[:3, 3] = sp.Symbol(b.name(k), real=True) * _mat(g.h[k])
+        T = T * G
+    T = T * g.M
+    return tuple(T[i, j] for i in range(3) for j in range(4))
+
+
+def derive_analytic(robot: Robot) -> AnalyticIK:
+    """Detect the arm's structure and derive its closed form; NoAnalyticIKError when there is none.
+
+    A 6-joint arm whose structure only shows when the chain is read from the tool (three first
+    axes meeting in a point: a spherical shoulder) is solved reversed, for the target ``T^{-1}``."""
+    g0 = geometry(snap(robot.ets))
+    g = g0
+    try:
+        s = classify(g)
+    except NoAnalyticIKError as forward:
+        if g0.n != 6:
+            raise
+        g = reverse(g0)
+        try:
+            s = classify(g)
+        except NoAnalyticIKError:
+            raise forward from None
+        s = replace(s, reversed=True, summary=s.summary + " (chain read from the tool)")
+    b = _Builder(g)
+    R, pvec = pose_symbols()
+    if s.reversed:
+        R, pvec = R.T, -R.T * pvec
+    RM = g.M[:3, :3]
+    tM = (g.M[0, 3], g.M[1, 3], g.M[2, 3])
+    R0n = R * RM.T
+    pt = _vec(pvec)
+    if s.kind == "spherical_wrist":
+        assert s.wrist is not None
+        w = sub(pt, _vec(R0n * _mat(sub(tM, s.wrist))))
+        _position(b, s, w, s.wrist)
+        _wrist(b, R0n)
+    elif s.kind == "three_parallel":
+        _three_parallel(b, s, R0n, pt, tM)
+    elif s.kind == "position3":
+        _position(b, s, pt, tM)
+    else:
+        _planar(b, R0n, pt, tM)
+    outputs = [""] * g.n
+    for st in b.steps:
+        if st.joint is not None:
+            outputs[st.joint] = st.var
+    rev = [False] * g.n
+    for k, j in enumerate(g.joint):
+        rev[j] = g.revolute[k]
+    fk = _fk(_Builder(g0))
+    return AnalyticIK(robot.name, g.n, s, g, tuple(b.steps), tuple(outputs), g.n < 6, fk, tuple(rev))

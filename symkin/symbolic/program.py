@@ -1,0 +1,367 @@
+"""Kinematics as a straight-line program: link frames and Jacobian columns as named intermediates.
+
+The derivation of :mod:`symkin.symbolic.kinematics` multiplies the chain out into one expression
+per output; its trees grow about 2x per joint, and common-subexpression elimination then has to
+find the sharing again. This module builds the same quantities the way the O(n) algorithm of
+Haviland and Corke (Manipulator Differential Kinematics, Part 1, IEEE RAM 2023, eqs 31-34)
+computes them: one walk along the chain that names every rotation column and origin it produces,
+so each assignment is a small local expression (a rotation of two columns, a translation along
+one, a cross product) and the program grows linearly with the number of joints.
+
+The local rules are the same as the expanded derivation's: exact constants, a rotation by a
+multiple of pi/2 is a signed column swap (no assignment), rotations about one axis separated by
+translations are merged into one rotation by the summed angle, and an assignment whose value is
+a number, a symbol or a negated symbol is not materialised. Identical right-hand sides share one
+name (value numbering), so nothing is computed twice and no CSE pass is needed afterwards.
+
+Hessians are not expanded: ``H0`` and ``He`` are written from the Jacobian columns by the
+pairwise cross products of :class:`HessianLoop` (eq 20 and Appendix I of Haviland and Corke,
+Maximising Manipulability During Resolved-Rate Motion Control, 2020), which the emitters turn
+into loops.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import sympy as sp
+
+from symkin.model.ets import ETS, Const
+from symkin.symbolic.cse import CSEResult, OpCounts, count_ops, floatify
+
+__all__ = ["Program", "KinematicProgram", "derive_program", "HessianLoop", "program_code"]
+
+_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
+_HALF_PI = sp.pi / 2
+
+
+def _is_cheap(e: sp.Expr) -> bool:
+    """Values used in place rather than named: numbers (exact constants), symbols, negated symbols."""
+    if e.is_Atom or e.is_number:
+        return True
+    return bool(e.is_Mul and len(e.args) == 2 and e.args[0] == -1 and e.args[1].is_Atom)
+
+
+class Program:
+    """Straight-line code under construction: ``lines`` of (symbol, expression), in order.
+
+    :meth:`let` names an expression (or returns the name it already has) and keeps numbers,
+    symbols and negated symbols as they are.
+    """
+
+    def __init__(self, prefix: str = "t") -> None:
+        self.prefix = prefix
+        self.lines: list[tuple[sp.Symbol, sp.Expr]] = []
+        self._names: dict[sp.Expr, sp.Symbol] = {}
+
+    def let(self, expr: sp.Expr | int) -> sp.Expr:
+        expr = sp.sympify(expr)
+        if _is_cheap(expr):
+            return expr
+        name = self._names.get(expr)
+        if name is not None:
+            return name
+        neg = self._names.get(-expr)
+        if neg is not None:
+            return -neg
+        name = sp.Symbol(f"{self.prefix}{len(self.lines)}", real=True)
+        self.lines.append((name, expr))
+        self._names[expr] = name
+        return name
+
+    def vec(self, exprs: Sequence[sp.Expr]) -> list[sp.Expr]:
+        return [self.let(e) for e in exprs]
+
+
+def _cos_sin(angle: sp.Expr) -> tuple[sp.Expr, sp.Expr]:
+    if angle.is_number:
+        k = angle / _HALF_PI
+        if k.is_integer:
+            return tuple(sp.Integer(v) for v in ((1, 0), (0, 1), (-1, 0), (0, -1))[int(k) % 4])  # type: ignore[return-value]
+    return sp.cos(angle), sp.sin(angle)
+
+
+def _cross(P: Program, a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Expr]:
+    return P.vec([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+class _Walk:
+    """The running pose of a walk along the chain, every column and origin a named value."""
+
+    def __init__(self, P: Program) -> None:
+        self.P = P
+        one, zero = sp.Integer(1), sp.Integer(0)
+        self.cols = [[one if i == j else zero for i in range(3)] for j in range(3)]
+        self.p = [zero] * 3
+        self.axis: int | None = None
+        self.angle: sp.Expr = zero
+        self._trig: tuple[sp.Expr, sp.Expr] | None = None
+
+    def _cs(self) -> tuple[sp.Expr, sp.Expr]:
+        if self._trig is None:
+            c, s = _cos_sin(self.angle)
+            self._trig = (self.P.let(c), self.P.let(s))
+        return self._trig
+
+    def column(self, i: int) -> list[sp.Expr]:
+        if self.axis is None or self.axis == i:
+            return self.cols[i]
+        j, k = _MIX[self.axis]
+        c, s = self._cs()
+        cj, ck = self.cols[j], self.cols[k]
+        if i == j:
+            return self.P.vec([c * x + s * y for x, y in zip(cj, ck)])
+        return self.P.vec([c * y - s * x for x, y in zip(cj, ck)])
+
+    def effective(self) -> list[list[sp.Expr]]:
+        return [self.column(i) for i in range(3)]
+
+    def flush(self) -> None:
+        if self.axis is not None:
+            self.cols = self.effective()
+            self.axis, self.angle, self._trig = None, sp.Integer(0), None
+
+    def rotate(self, i: int, angle: sp.Expr) -> None:
+        if self.axis is not None and self.axis != i:
+            self.flush()
+        self.axis = i
+        self.angle = self.angle + angle
+        self._trig = None
+
+    def translate(self, i: int, d: sp.Expr) -> None:
+        col = self.column(i)
+        self.p = self.P.vec([p + d * x for p, x in zip(self.p, col)])
+
+    def pose(self) -> tuple[list[list[sp.Expr]], list[sp.Expr]]:
+        return self.effective(), list(self.p)
+
+
+Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, signed axis, origin)
+
+
+def _walk(
+    P: Program,
+    ets: ETS,
+    qs: Sequence[sp.Symbol],
+    constant: Callable[[Const], sp.Expr],
+    inverse: bool,
+    links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] | None = None,
+    marks: list[tuple[str, int]] | None = None,
+) -> tuple[_Walk, list[Frame]]:
+    """Walk the chain (or, ``inverse``, the inverse chain from the end effector), recording each
+    joint's axis and origin just before it and (into ``links``) the pose right after it."""
+    W = _Walk(P)
+    frames: list[Frame] = []
+    sign = -1 if inverse else 1
+    for e in reversed(tuple(ets)) if inverse else ets:
+        i = e.axis.index
+        if e.is_joint:
+            value = sign * qs[e.joint] * e.sign
+            axis = [x * e.sign for x in W.column(i)]
+            frames.append((e.joint, e.axis.is_rotation, axis, list(W.p)))
+        else:
+            value = sign * constant(e.const)
+            if value == 0:
+                continue
+        if e.axis.is_rotation:
+            W.rotate(i, value)
+        else:
+            W.translate(i, value)
+        if links is not None and e.is_joint:
+            links.append(W.pose())
+            if marks is not None:
+                marks.append((f"link {len(links) - 1}", len(P.lines)))
+    return W, frames
+
+
+def _matrix(cols: list[list[sp.Expr]], p: list[sp.Expr]) -> sp.Matrix:
+    return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], p[r]] for r in range(3)] + [[0, 0, 0, 1]])
+
+
+@dataclass(frozen=True, eq=False)
+class KinematicProgram:
+    """The kinematics of a chain as a straight-line program.
+
+    ``lines`` assign the intermediates ``t0, t1, ...`` in order (each a small expression of the
+    joint symbols and earlier intermediates). The outputs are matrices over those names: ``T``
+    (4x4, eq 1), ``links`` (the pose right after each joint, chain order, eq 5), ``J0`` and
+    ``Je`` (6xn, rows (v, omega), eqs 31-34 and eq 16). ``order`` lists the joint index of each
+    joint along the chain and ``revolute`` its kind. ``H0`` and ``He`` (n matrices 6xn,
+    ``H[i] = dJ/dq_i``) are the Hessians written out by the rules of :class:`HessianLoop`, or None
+    when they are left to loops. ``marks`` ends each section of ``lines``: ``("link k", end)``
+    for each link frame, then ``"T"``, ``"J0"``, ``"Je"`` and ``"H"``.
+    """
+
+    name: str
+    ets: ETS
+    q: tuple[sp.Symbol, ...]
+    lines: tuple[tuple[sp.Symbol, sp.Expr], ...]
+    T: sp.Matrix
+    links: tuple[sp.Matrix, ...]
+    J0: sp.Matrix
+    Je: sp.Matrix
+    order: tuple[int, ...]
+    revolute: tuple[bool, ...]
+    H0: tuple[sp.Matrix, ...] | None = None
+    He: tuple[sp.Matrix, ...] | None = None
+    marks: tuple[tuple[str, int], ...] = ()
+
+    @property
+    def n(self) -> int:
+        return len(self.q)
+
+
+def derive_program(
+    ets: ETS,
+    qs: Sequence[sp.Symbol],
+    constant: Callable[[Const], sp.Expr],
+    name: str = "robot",
+    hessians: bool = True,
+) -> KinematicProgram:
+    """Derive the pose, link frames and both Jacobians of ``ets`` as one straight-line program;
+    with ``hessians`` also both Hessians, written out (O(n^2) lines; zeros and exact axes of the
+    Jacobian columns make many of their cross products vanish or shrink)."""
+    n = ets.n
+    P = Program()
+    links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] = []
+    marks: list[tuple[str, int]] = []
+    W, frames = _walk(P, ets, qs, constant, False, links, marks)
+    cols, pe = W.pose()
+    marks.append(("T", len(P.lines)))
+    zero3 = [sp.Integer(0)] * 3
+    J0 = sp.zeros(6, n)
+    for j, revolute, w, p in frames:
+        v = _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])) if revolute else w
+        J0[:3, j] = sp.Matrix(v)
+        J0[3:, j] = sp.Matrix(w if revolute else zero3)
+    marks.append(("J0", len(P.lines)))
+    # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
+    _, inv = _walk(P, ets, qs, constant, True)
+    Je = sp.zeros(6, n)
+    for j, revolute, u, p in inv:
+        v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'
+        Je[:3, j] = sp.Matrix(v)
+        Je[3:, j] = sp.Matrix(u if revolute else zero3)
+    marks.append(("Je", len(P.lines)))
+    order = tuple(f[0] for f in frames)
+    H0 = He = None
+    if hessians:
+        H0, He = _hessians(P, J0, Je, order)
+    marks.append(("H", len(P.lines)))
+    return KinematicProgram(
+        name=name,
+        ets=ets,
+        q=tuple(qs),
+        lines=tuple(P.lines),
+        T=_matrix(cols, pe),
+        links=tuple(_matrix(c, p) for c, p in links),
+        J0=J0,
+        Je=Je,
+        order=order,
+        revolute=tuple(f[1] for f in frames),
+        H0=H0,
+        He=He,
+        marks=tuple(marks),
+    )
+
+
+def _hessians(
+    P: Program, J0: sp.Matrix, Je: sp.Matrix, order: tuple[int, ...]
+) -> tuple[tuple[sp.Matrix, ...], tuple[sp.Matrix, ...]]:
+    """Both Hessians by the rules of :class:`HessianLoop`, each cross product a named value."""
+    n = len(order)
+    H0 = [sp.zeros(6, n) for _ in range(n)]
+    He = [sp.zeros(6, n) for _ in range(n)]
+
+    def col(J: sp.Matrix, j: int) -> tuple[list[sp.Expr], list[sp.Expr]]:
+        return list(J[:3, j]), list(J[3:, j])
+
+    for kb, b in enumerate(order):
+        vb, wb = col(J0, b)
+        for a in order[kb:]:
+            va, wa = col(J0, a)
+            x = _cross(P, wb, va)
+            H0[b][:3, a] = sp.Matrix(x)
+            H0[b][3:, a] = sp.Matrix(_cross(P, wb, wa))
+            if a != b:
+                H0[a][:3, b] = sp.Matrix(x)
+        vb, wb = col(Je, b)
+        for a in order[:kb]:
+            va, wa = col(Je, a)
+            d = [x - y for x, y in zip(_cross(P, wa, vb), _cross(P, wb, va))]
+            He[b][:3, a] = sp.Matrix(P.vec(d))
+            He[b][3:, a] = sp.Matrix(_cross(P, wa, wb))
+    return tuple(H0), tuple(He)
+
+
+@dataclass(frozen=True)
+class HessianLoop:
+    """A Hessian (n, 6, n) written by loops from a Jacobian (6, n) of the same frame.
+
+    With ``Jv_a, Jw_a`` the columns of joint a (``Jw = 0`` for a prismatic joint) and chain order
+    ``order`` (joint index of the k-th joint from the base):
+
+    - base frame (``frame="base"``, eq 20 of Haviland and Corke, Maximising Manipulability During
+      Resolved-Rate Motion Control, 2020): for b at or before a,
+      ``dJ_a/dq_b = (Jw_b x Jv_a ; Jw_b x Jw_a)``; for b after a, ``(Jw_a x Jv_b ; 0)``;
+    - end-effector frame (``frame="ee"``): for b after a,
+      ``dJe_a/dq_b = (Jw_a x Jv_b - Jw_b x Jv_a ; Jw_a x Jw_b)``, and 0 for b at or before a
+      (a joint does not move the end-effector-frame axes of the joints after it).
+
+    ``out`` names the Hessian output and ``jacobian`` the (6, n) array it reads.
+    """
+
+    out: str
+    jacobian: str
+    frame: str
+    order: tuple[int, ...]
+
+    @property
+    def counts(self) -> OpCounts:
+        """Operations the loops execute (a cross product: 6 mul, 3 add)."""
+        n = len(self.order)
+        pairs, strict = n * (n + 1) // 2, n * (n - 1) // 2
+        if self.frame == "base":  # b after a reuses the block of (a, b)
+            return OpCounts(mul=12 * pairs, add=6 * pairs)
+        return OpCounts(mul=18 * strict, add=12 * strict)
+
+
+def _needed(lines: Sequence[tuple[sp.Symbol, sp.Expr]], roots: list[sp.Expr]) -> list[int]:
+    """Indices of the lines the ``roots`` depend on, in program order (dead code dropped)."""
+    index = {s: i for i, (s, _) in enumerate(lines)}
+    need: set[int] = set()
+    stack = [s for r in roots for s in r.free_symbols if s in index]
+    while stack:
+        i = index[stack.pop()]
+        if i in need:
+            continue
+        need.add(i)
+        stack.extend(s for s in lines[i][1].free_symbols if s in index and index[s] not in need)
+    return sorted(need)
+
+
+def program_code(
+    kp: KinematicProgram,
+    outputs: dict[str, sp.Matrix | tuple[sp.Matrix, ...]],
+    scratch: tuple[str, ...] = (),
+    hessians: tuple[HessianLoop, ...] = (),
+) -> CSEResult:
+    """The lines of ``kp`` that ``outputs`` need, as straight-line code (see :class:`CSEResult`)."""
+    flat: dict[str, tuple[tuple[int, ...], tuple[sp.Expr, ...]]] = {}
+    memo: dict[sp.Basic, sp.Expr] = {}
+    for name, value in outputs.items():
+        mats = value if isinstance(value, tuple) else (value,)
+        shape = mats[0].shape if not isinstance(value, tuple) else (len(mats), *mats[0].shape)
+        flat[name] = (tuple(shape), tuple(floatify(x, memo) for m in mats for x in m))
+    keep = _needed(kp.lines, [e for _, exprs in flat.values() for e in exprs])
+    lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in keep)
+    counts = OpCounts()
+    for _, e in lines:
+        counts = counts + count_ops(e)
+    for _, exprs in flat.values():
+        for e in exprs:
+            counts = counts + count_ops(e)
+    for h in hessians:
+        counts = counts + h.counts
+    return CSEResult(lines, flat, counts, kp.q, scratch, hessians, "program")

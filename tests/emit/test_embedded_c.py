@@ -1,0 +1,135 @@
+"""The generated C as an engineer embeds it: C99 and C++ with strict warnings, two robots in one
+program under their own prefixes, the header's macros and joint table."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin.emit.c.backend import check_prefix
+from symkin.errors import CompileError, SymkinError
+from symkin.model.robots import load
+
+CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+CXX = shutil.which("c++") or shutil.which("g++") or shutil.which("clang++")
+STRICT = ["-Wall", "-Wextra", "-pedantic", "-Werror"]
+
+MAIN = r"""
+#include <cstdio>
+#include "arm_a.h"
+#include "arm_b.h"
+
+int main()
+{
+    static const double qa_min[] = ARM_A_QMIN;
+    static const double qb_max[] = ARM_B_QMAX;
+    double qa[ARM_A_N], qb[ARM_B_N], T[ARM_A_T_SIZE], J[ARM_B_J_SIZE], Qb[2 * ARM_B_N], Jb[2 * ARM_B_J_SIZE];
+    for (int i = 0; i < ARM_A_N; ++i)
+        qa[i] = 0.5 * qa_min[i] + 0.1 * i;
+    for (int i = 0; i < ARM_B_N; ++i)
+        qb[i] = Qb[i] = Qb[ARM_B_N + i] = 0.3 * qb_max[i] - 0.05 * i;
+    arm_a_fkine(qa, T);
+    arm_b_jacob0(qb, J);
+    arm_b_jacob0_batch(Qb, Jb, (ptrdiff_t)2);
+    std::printf("%s %s %s\n", arm_a_robot_name, arm_b_robot_name, arm_a_joint_names[ARM_A_N - 1]);
+    for (int i = 0; i < ARM_A_T_SIZE; ++i)
+        std::printf("%.17g ", T[i]);
+    std::printf("\n");
+    for (int i = 0; i < ARM_B_J_SIZE; ++i)
+        std::printf("%.17g ", J[i]);
+    std::printf("\n%.17g %.17g\n", Jb[ARM_B_J_SIZE + 3], arm_a_manipulability(qa, ARM_A_AXES_TRANS));
+    return 0;
+}
+"""
+
+
+@pytest.fixture(scope="module")
+def two_robots(tmp_path_factory):
+    out = tmp_path_factory.mktemp("embedded")
+    a, b = load("panda"), load("ur5")  # one of each strategy (program, expanded)
+    symkin.write_generated(a, "c", out, prefix="arm_a")
+    symkin.write_generated(b, "c", out, prefix="arm_b")
+    return out, a, b
+
+
+@pytest.mark.skipif(CC is None, reason="no C compiler")
+@pytest.mark.parametrize("std", ["-std=c99", "-std=c11"])
+def test_generated_c_is_strict_c(two_robots, std):
+    out, _, _ = two_robots
+    for name in ("arm_a.c", "arm_b.c"):
+        proc = subprocess.run(
+            [CC, std, *STRICT, "-c", name, "-o", "/dev/null"], cwd=out, capture_output=True, text=True
+        )
+        assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.skipif(CXX is None, reason="no C++ compiler")
+def test_two_robots_link_into_one_cpp_program(two_robots):
+    out, a, b = two_robots
+    (out / "main.cpp").write_text(MAIN)
+    cmd = [
+        CXX,
+        "-std=c++11",
+        *STRICT,
+        "-x",
+        "c++",
+        "arm_a.c",
+        "arm_b.c",
+        "-x",
+        "c++",
+        "main.cpp",
+        "-o",
+        "prog",
+        "-lm",
+    ]
+    proc = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    run = subprocess.run([str(out / "prog")], capture_output=True, text=True, check=True)
+    lines = run.stdout.splitlines()
+    assert lines[0] == f"panda ur5 {a.joint_names[-1]}"
+    qa = 0.5 * a.qlim[0] + 0.1 * np.arange(a.n)
+    qb = 0.3 * b.qlim[1] - 0.05 * np.arange(b.n)
+    np.testing.assert_allclose(np.array(lines[1].split(), float).reshape(4, 4), a.fkine(qa), atol=1e-12)
+    Jb = b.jacob0(qb)
+    np.testing.assert_allclose(np.array(lines[2].split(), float).reshape(6, b.n), Jb, atol=1e-12)
+    last = np.array(lines[3].split(), float)
+    assert abs(last[0] - Jb.flat[3]) < 1e-12
+    assert abs(last[1] - a.manipulability(qa, axes="trans")) < 1e-12
+
+
+def test_header_states_units_limits_and_sizes(two_robots):
+    out, a, _ = two_robots
+    h = (out / "arm_a.h").read_text()
+    for text in (
+        "#define ARM_A_N 7",
+        "ARM_A_QMIN",
+        "ARM_A_QD_MAX",
+        "ARM_A_AXES_TRANS 1",
+        "ptrdiff_t N",
+        "rad",
+        "Licence:",
+    ):
+        assert text in h, text
+    for name in a.joint_names:
+        assert name in h
+    qmin = h.split("#define ARM_A_QMIN {")[1].split("}")[0]
+    np.testing.assert_array_equal(np.array(qmin.split(","), float), a.qlim[0])
+    c = (out / "arm_a.c").read_text()
+    assert "SYMKIN_RESTRICT" in c and "Licence:" in c
+
+
+@pytest.mark.parametrize("bad", ["1abc", "a-b", "x" * 64, "", "caf\u00e9"])
+def test_bad_prefixes_are_refused(bad):
+    with pytest.raises(CompileError, match="prefix"):
+        check_prefix(bad)
+    with pytest.raises(SymkinError):
+        symkin.generate(load("planar2"), "c", prefix=bad)
+
+
+def test_prefix_is_for_the_c_backend_only():
+    with pytest.raises(SymkinError, match="C backend only"):
+        symkin.generate(load("planar2"), "numpy", prefix="arm")
