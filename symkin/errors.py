@@ -48,3 +48,11 @@ class PoseError(SymkinError, ValueError):
 
 class CompileError(SymkinError, RuntimeError):
     """Generating or compiling code failed (missing C compiler, compiler error, template error)."""
+
+
+class WorkspaceError(SymkinError, ValueError):
+    """Bad settings for a workspace map or dataset, or a store that holds a different one."""
+
+
+class MissingExtraError(SymkinError, ImportError):
+    """An optional dependency is not installed; the message names the extra to install."""
