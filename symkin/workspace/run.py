@@ -66,7 +66,7 @@ def client_for(scheduler: Any = None, workers: int | None = None) -> Iterator[An
             n_workers=count,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,
+            dashboard_address=":0",
             silence_logs=logging.ERROR,
         )
         try:
@@ -81,7 +81,7 @@ def client_for(scheduler: Any = None, workers: int | None = None) -> Iterator[An
             f"distributed.Client, not {type(scheduler).__name__}"
         )
     try:
-        client = distributed.Client(scheduler, timeout="20s")
+        client = distributed.Client(scheduler)  # connect timeout: distributed.comm.timeouts.connect
     except (OSError, TimeoutError, ValueError) as exc:
         raise WorkspaceError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
     try:
