@@ -274,7 +274,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
         result = run_reach(
             _robot(args.robot or "ur5"), resolution=args.resolution, orientations=args.orientations,
-            seed=args.seed, fault=args.fault, progress=not args.json,
+            seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
         )  # fmt: skip
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
         return 0
@@ -491,6 +491,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--resolution", type=float, default=0.1, help="reach: voxel edge, m (default 0.1)")
     s.add_argument("--orientations", type=int, default=20, help="reach: orientations per voxel (default 20)")
     s.add_argument("--fault", action="store_true", help="reach: also kill a worker mid-run and compare")
+    s.add_argument("--repeat", type=int, default=3, help="reach: runs of each measurement (best is kept)")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench)
 
