@@ -156,8 +156,10 @@ def reachability(
 
     Args:
         robot_or_kin: compiled kinematics, a Robot, or a robot name / ETS text / file.
-        resolution: voxel edge, metres. Voxel centres are ``centre + resolution * i`` for integer
-            i within ``radius`` of the ball's centre (both from the link lengths unless given).
+        resolution: voxel edge, metres. Voxel centres are ``centre + resolution * i`` (integer
+            vectors i) over the cube around the ball of ``radius`` (both from the link lengths
+            unless given, :func:`symkin.workspace.grid.reach_ball`); centres outside the ball are
+            unreachable and get reach 0 without solving.
         orientations: K, the number of orientations per voxel (uniform on SO(3) from ``seed``),
             or the rotation matrices (K, 3, 3) themselves.
         output: the Zarr store (a folder, or a URL zarr opens); None keeps it in memory. An existing

@@ -177,3 +177,24 @@ def test_bad_settings_are_clear_errors(kin):
         pytest.raises(WorkspaceError, match="cannot reach the Dask scheduler"),
     ):
         reachability(kin, 0.5, 2, scheduler="tcp://127.0.0.1:1", progress=False)
+
+
+def test_a_worker_killed_mid_run_does_not_change_the_map(cluster_map, kin, client):
+    import os
+    import signal
+
+    pids = list(client.run(os.getpid).values())
+    killed = []
+
+    written: list[int] = []
+
+    def kill_after_two(index, result):
+        written.append(index)
+        if len(written) == 2:
+            os.kill(pids[0], signal.SIGKILL)  # the nanny restarts it; the scheduler reruns its tasks
+            killed.append(pids[0])
+
+    m = reachability(kin, chunk=4, scheduler=client, progress=False, on_block=kill_after_two, **SETTINGS)
+    assert killed and m.complete and m.stats["computed"] == m.stats["blocks"] == 36
+    assert np.array_equal(m.reach, cluster_map.reach)
+    assert np.array_equal(m.manipulability, cluster_map.manipulability, equal_nan=True)
