@@ -318,6 +318,15 @@ def _scheduler(args: argparse.Namespace) -> Any:
     return args.scheduler if args.scheduler else None
 
 
+def _rows(text: str) -> list[int]:
+    try:
+        return [int(x) for x in text.replace(",", " ").split()]
+    except ValueError:
+        raise UserError(
+            f"--axes must be all, trans, rot or row indices 0-5 such as '0 1 5', not {text!r}"
+        ) from None
+
+
 def cmd_reach(args: argparse.Namespace) -> int:
     from symkin.workspace import reachability
     from symkin.workspace.run import require_scale
@@ -325,9 +334,7 @@ def cmd_reach(args: argparse.Namespace) -> int:
     require_scale(_scheduler(args))  # before compiling: say which extra is missing at once
     robot = _robot(args.robot)
     bounds = None if args.bounds is None else _floats(args.bounds, "--bounds", 6).reshape(3, 2)
-    axes: Any = (
-        args.axes if args.axes in ("all", "trans", "rot") else [int(x) for x in _floats(args.axes, "--axes")]
-    )
+    axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
     rmap = reachability(
         robot, args.resolution, args.orientations, output=args.output, seed=args.seed,
