@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -222,17 +223,32 @@ def reachability(
     done = np.asarray(group["done"][...], dtype=bool).ravel()
     todo = [i for i in range(grid.n_chunks) if not done[i]]
 
-    arrays = {name: group[name] for name in ("centers", "reach", "manipulability", "done")}
+    arrays = {name: group[name] for name in ("reach", "manipulability")}
     if solutions:
         arrays["solutions"] = group["solutions"]
+    done_array = group["done"]
+    written: list[int] = []  # blocks written whose done marks are not yet stored
+    flushed = [time.monotonic()]
+
+    def flush() -> None:
+        if written:
+            mask = done.copy().reshape(grid.chunks)
+            mask.ravel()[written] = True
+            done_array[...] = mask
+            done[written] = True
+            written.clear()
+        flushed[0] = time.monotonic()
 
     def write(i: int, result: dict[str, Any]) -> None:
         sl = grid.block(i)
-        arrays["centers"][sl] = grid.centers(sl)
-        for name in ("reach", "manipulability", "solutions"):
-            if name in arrays:
-                arrays[name][sl] = result[name]
-        arrays["done"][np.unravel_index(i, grid.chunks)] = True  # after the data: marks it complete
+        for name, array in arrays.items():
+            data = result[name]
+            if name == "reach" and not data.any() or name != "reach" and np.isnan(data).all():
+                continue  # all fill value (a block outside the ball): nothing to store
+            array[sl] = data
+        written.append(i)  # marked done after the data, at most once a second
+        if time.monotonic() - flushed[0] > 1.0:
+            flush()
 
     stats: dict[str, float] = {
         "blocks": grid.n_chunks,
@@ -241,8 +257,11 @@ def reachability(
     }
     if todo:
         with client_for(scheduler, workers) as client:
-            stats.update(run_blocks(reach_block, (kin, spec), todo, write, client, total=grid.n_chunks,
-                                    progress=progress, on_block=on_block, desc="reach"))  # fmt: skip
+            try:
+                stats.update(run_blocks(reach_block, (kin, spec), todo, write, client, total=grid.n_chunks,
+                                        progress=progress, on_block=on_block, desc="reach"))  # fmt: skip
+            finally:
+                flush()
     return _load_map(group, None if output is None else str(output), stats)
 
 
@@ -260,10 +279,15 @@ def _open_map_store(
     if solutions:
         K = len(rotations)
         arrays["solutions"] = ((*grid.shape, K, n), (c, c, c, K, n), "f8", np.nan)
-    group = open_store(output, attrs, arrays, overwrite=overwrite)
-    if not np.isfinite(group["rotations"][0, 0, 0]):
+
+    def init(group: Any) -> None:
         group["rotations"][...] = rotations
-    return group
+        centers = group["centers"]
+        for i in range(0, grid.shape[0], grid.chunk):  # slabs of blocks: bounded memory
+            sl = (slice(i, min(i + grid.chunk, grid.shape[0])), slice(None), slice(None))
+            centers[sl] = grid.centers(sl)
+
+    return open_store(output, attrs, arrays, overwrite=overwrite, init=init)
 
 
 def _load_map(group: Any, path: str | None, stats: dict[str, float] | None) -> ReachMap:

@@ -9,6 +9,7 @@ client) leaves at worst a block that is computed again when the run resumes.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +61,7 @@ def open_store(
     arrays: dict[str, tuple[tuple[int, ...], tuple[int, ...], str, Any]],
     overwrite: bool = False,
     grow: str | None = None,
+    init: Callable[[Any], None] | None = None,
 ) -> Any:
     """Open (or create) the Zarr group at ``path`` for ``attrs`` with ``arrays``
     (name -> (shape, chunks, dtype, fill value)); ``None`` keeps it in memory.
@@ -67,14 +69,22 @@ def open_store(
     An existing store is reused when its attributes equal ``attrs`` (so a run resumes), else a
     WorkspaceError names the first difference. With ``grow`` (an attribute of ``attrs["settings"]``
     such as the dataset size), a store holding fewer rows is extended along axis 0 (appending).
+    ``init(group)`` fills a new store's arrays before its attributes are written; a store without
+    attributes (its creation was interrupted) is made afresh.
     """
     zarr = zarr_module()
     attrs = _jsonable(attrs)
+    group = None
     if path is not None and not overwrite and _exists(path):
         try:
             group = zarr.open_group(str(path), mode="r+")
         except Exception as exc:  # noqa: BLE001 - zarr raises many kinds for a non-store
             raise WorkspaceError(f"{path} exists and is not a Zarr store symkin can open: {exc}") from None
+        if "kind" not in group.attrs and not list(group.keys()):
+            group = None  # an empty group (a creation that was interrupted): make it afresh
+        elif "kind" not in group.attrs and "done" in group:
+            group = None  # arrays made but the attributes never written: an interrupted creation
+    if group is not None:
         old = dict(group.attrs)
         new = json.loads(json.dumps(attrs))
         if grow is not None:
@@ -98,7 +108,9 @@ def open_store(
     group = zarr.open_group(store, mode="w")
     for name, (shape, chunks, dtype, fill) in arrays.items():
         group.create_array(name, shape=shape, chunks=chunks, dtype=dtype, fill_value=fill)
-    group.attrs.update(attrs)
+    if init is not None:
+        init(group)
+    group.attrs.update(attrs)  # last: a store with attributes is complete
     return group
 
 

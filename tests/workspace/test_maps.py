@@ -138,6 +138,13 @@ def test_an_interrupted_map_resumes_from_its_written_blocks(cluster_map, kin, tm
     fresh = reachability(kin, output=path, scheduler="synchronous", progress=False, overwrite=True,
                          **{**SETTINGS, "resolution": 0.25})  # fmt: skip
     assert fresh.reach.shape == (9, 9, 1)
+    # a store whose creation was interrupted (arrays, no attributes yet) is made afresh
+    import zarr
+
+    half_made = tmp_path / "half.zarr"
+    zarr.open_group(str(half_made), mode="w").create_array("done", shape=(2,), dtype="bool")
+    remade = reachability(kin, output=half_made, scheduler="synchronous", progress=False, **SETTINGS)
+    assert remade.complete and np.array_equal(remade.reach, cluster_map.reach)
 
 
 def test_datasets_are_independent_of_chunks_and_append(robot, kin, client, tmp_path):
