@@ -495,7 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--plot", metavar="PNG", help="mmc: write a Fig. 3 style plot of one task")
-    s.add_argument("--resolution", type=float, default=0.15, help="reach: voxel edge, m (default 0.15)")
+    s.add_argument("--resolution", type=float, default=0.1, help="reach: voxel edge, m (default 0.1)")
     s.add_argument("--orientations", type=int, default=50, help="reach: orientations per voxel (default 50)")
     s.add_argument("--fault", action="store_true", help="reach: also kill a worker mid-run and compare")
     s.add_argument("--repeat", type=int, default=3, help="reach: runs of each measurement (best is kept)")

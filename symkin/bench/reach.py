@@ -1,6 +1,6 @@
 """``symkin bench reach``: reachability maps on Dask against plain batch IK, in one run.
 
-Measures on the same map (a UR5 by default, 0.15 m voxels, 50 orientations, the CLI default):
+Measures on the same map (a UR5 by default, 0.1 m voxels, 50 orientations as in the CLI, 64 blocks):
 
 1. plain batch IK: one ``kin.ik`` call on every (voxel centre, orientation) target of the map, in
    this process (one core): the throughput the map's overhead is compared with;
@@ -85,7 +85,7 @@ def _same(a: Any, b: Any) -> bool:
 
 def run_reach(
     robot: Any,
-    resolution: float = 0.15,
+    resolution: float = 0.1,
     orientations: int = 50,
     seed: int = 0,
     fault: bool = False,
@@ -106,7 +106,7 @@ def run_reach(
                            "cores": os.cpu_count(), "load_before": os.getloadavg()[0]}  # fmt: skip
     T = _targets(kin, resolution, orientations, seed)
     kin.ik(T[:100], seed=seed, **MAP_IK_DEFAULTS)  # warm the solver
-    kwargs = {"seed": seed, "chunk": 5, "progress": False}
+    kwargs = {"seed": seed, "chunk": 8, "progress": False}
     times: dict[str, list[float]] = {"batch": [], "workers_1": [], "workers_2": []}
     cpu: dict[str, list[float]] = {key: [] for key in times}
     maps: dict[int, Any] = {}
@@ -143,9 +143,9 @@ def run_reach(
     out["speedup_2_vs_1"] = r2 / r1
     out["per_core_vs_batch_1"] = r1 / out["batch"]["rate"]
     out["per_core_vs_batch_2"] = r2 / 2 / out["batch"]["rate"]
-    other = reachability(kin, resolution, orientations, seed=seed, chunk=4, workers=2, progress=False)
+    other = reachability(kin, resolution, orientations, seed=seed, chunk=6, workers=2, progress=False)
     out["identical_1_2_workers"] = _same(maps[1], maps[2])
-    out["identical_chunk_5_4"] = _same(maps[2], other)
+    out["identical_chunk_8_6"] = _same(maps[2], other)
     if fault:
         out["fault"] = _fault_run(kin, resolution, orientations, kwargs, maps[2])
     # cost of a 1 cm map: measured seconds per problem (per core, 2 workers) x problems at 1 cm
@@ -213,7 +213,7 @@ def format_reach(r: dict[str, Any]) -> str:
         f"(1 worker), {r['cpu_efficiency_2']:.0%} (2 workers); batch {b['cpu_seconds']:.2f} s, maps "
         f"{w1['cpu_seconds']:.2f} s, {w2['cpu_seconds']:.2f} s of CPU",
         f"same map bit for bit: 1 vs 2 workers {r['identical_1_2_workers']}, "
-        f"chunk 5 vs 4 {r['identical_chunk_5_4']}",
+        f"chunk 8 vs 6 {r['identical_chunk_8_6']}",
     ]
     if "fault" in r:
         f = r["fault"]
