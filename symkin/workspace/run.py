@@ -11,6 +11,10 @@
 Each block is one task (``Client.submit``); the client collects the results with
 ``as_completed`` and writes them, so workers need no access to the store. A worker that dies
 mid-task has its tasks rerun elsewhere by the scheduler (tasks are pure functions of their block).
+
+A task costs the client and scheduler a few milliseconds of CPU (about 5 ms measured on the 2-core
+development machine, whose scheduler shares the client's process), so blocks should hold seconds
+of work: the default block edges (up to 16 voxels) give thousands of IK problems per task.
 """
 
 from __future__ import annotations
