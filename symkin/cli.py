@@ -271,7 +271,9 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
 def cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "reach":
         from symkin.bench.reach import format_reach, run_reach
+        from symkin.workspace.run import require_scale
 
+        require_scale()
         result = run_reach(
             _robot(args.robot or "ur5"), resolution=args.resolution, orientations=args.orientations,
             seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
@@ -490,7 +492,9 @@ def build_parser() -> argparse.ArgumentParser:
         "bench", help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), reach (Dask maps)"
     )
     s.add_argument("what", choices=("kin", "ik", "mmc", "reach"))
-    s.add_argument("--robot", help="robot (default: panda for kin, ur5 for ik, the paper's three for mmc)")
+    s.add_argument(
+        "--robot", help="robot (default: panda for kin, ur5 for ik and reach, the paper's three for mmc)"
+    )
     s.add_argument("--batch", type=int, default=100_000, help="kin: batch size (default 100000)")
     s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
     s.add_argument("--seed", type=int, default=0)

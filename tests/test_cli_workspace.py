@@ -20,6 +20,8 @@ def test_reach_without_the_scale_extra_names_it_and_exits_2(monkeypatch, capsys,
     assert len(err) == 1 and 'pip install "symkin[scale]"' in err[0]
     assert main(["dataset", "ur5", "-n", "10", "-o", str(tmp_path / "d.zarr")]) == 2
     assert 'pip install "symkin[scale]"' in capsys.readouterr().err
+    assert main(["bench", "reach"]) == 2
+    assert 'pip install "symkin[scale]"' in capsys.readouterr().err
     assert not (tmp_path / "m.zarr").exists()
 
 
