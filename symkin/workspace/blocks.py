@@ -80,9 +80,7 @@ def reach_block(kin: Any, spec: ReachSpec, index: int) -> dict[str, Any]:
             if sol is not None:
                 sol[v, ok] = res.q[ok]
     if found:
-        Q = np.concatenate(found)
-        J = np.asarray(kin.jacob0(Q)).reshape(len(Q), 6, n)
-        np.fmax.at(manip, np.concatenate(owner), manipulability_of(J[:, list(spec.rows)]))
+        np.fmax.at(manip, np.concatenate(owner), _manipulability(kin, np.concatenate(found), spec.rows))
     out: dict[str, Any] = {
         "reach": reach.reshape(shape),
         "manipulability": manip.reshape(shape),
@@ -92,6 +90,19 @@ def reach_block(kin: Any, spec: ReachSpec, index: int) -> dict[str, Any]:
         out["solutions"] = sol.reshape((*shape, K, n))
     out["seconds"] = time.perf_counter() - t0
     return out
+
+
+_NAMED_ROWS = {(0, 1, 2, 3, 4, 5): "all", (0, 1, 2): "trans", (3, 4, 5): "rot"}
+
+
+def _manipulability(kin: Any, Q: np.ndarray, rows: tuple[int, ...]) -> np.ndarray:
+    """Manipulability (eq 52) of the rows of J0 at each q of Q (M, n) -> (M,): the compiled
+    ``kin.manipulability`` for the named row sets, else from ``kin.jacob0``."""
+    axes = _NAMED_ROWS.get(tuple(rows))
+    if axes is not None:
+        return np.asarray(kin.manipulability(Q, axes=axes), dtype=float).reshape(len(Q))
+    J = np.asarray(kin.jacob0(Q)).reshape(len(Q), 6, kin.n)
+    return manipulability_of(J[:, list(rows)])
 
 
 @dataclass(frozen=True, eq=False)
