@@ -10,12 +10,14 @@ from symkin.errors import (
     ConfigurationError,
     ETSParseError,
     FrameError,
+    MissingExtraError,
     NoAnalyticIKError,
     PoseError,
     RobotError,
     SymkinError,
     UnknownRobotError,
     URDFError,
+    WorkspaceError,
 )
 from symkin.model.dh import DHLink, load_dh_file
 from symkin.model.ets import ET, ETS, Axis, Const
@@ -59,6 +61,7 @@ __all__ = [
     "DHLink",
     "ETSParseError",
     "FrameError",
+    "MissingExtraError",
     "IKResult",
     "Kinematics",
     "MMC",
@@ -70,6 +73,7 @@ __all__ = [
     "StepInfo",
     "SymkinError",
     "URDFError",
+    "WorkspaceError",
     "UnknownRobotError",
     "__version__",
     "compile",
