@@ -10,6 +10,7 @@ from symkin.errors import (
     ConfigurationError,
     ETSParseError,
     FrameError,
+    MissingExtraError,
     NoAnalyticIKError,
     ParameterError,
     PoseError,
@@ -17,6 +18,7 @@ from symkin.errors import (
     SymkinError,
     UnknownRobotError,
     URDFError,
+    WorkspaceError,
 )
 from symkin.model.dh import DHLink, load_dh_file
 from symkin.model.ets import ET, ETS, Axis, Const
@@ -60,6 +62,7 @@ __all__ = [
     "DHLink",
     "ETSParseError",
     "FrameError",
+    "MissingExtraError",
     "IKResult",
     "Kinematics",
     "MMC",
@@ -72,6 +75,7 @@ __all__ = [
     "StepInfo",
     "SymkinError",
     "URDFError",
+    "WorkspaceError",
     "UnknownRobotError",
     "__version__",
     "compile",

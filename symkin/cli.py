@@ -54,6 +54,8 @@ def _positive_float(text: str) -> float:
 
 
 _positive_float.__name__ = "number"
+_positive = _positive_float
+_at_least_1 = _int_at_least(1)
 
 
 def _output_dir(path: str) -> Path:
@@ -425,6 +427,17 @@ def cmd_bench(args: argparse.Namespace) -> int:
         result = run_calls(robot, args.robot or "panda", seed=args.seed, progress=not args.json)
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
         return 0
+    if args.what == "reach":
+        from symkin.bench.reach import format_reach, run_reach
+        from symkin.workspace.run import require_scale
+
+        require_scale()
+        result = run_reach(
+            _robot(args.robot or "ur5"), resolution=args.resolution, orientations=args.orientations,
+            seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
+        )  # fmt: skip
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
+        return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -465,6 +478,95 @@ def cmd_bench(args: argparse.Namespace) -> int:
         plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
         if not args.json:
             print(f"plot written to {args.plot}")
+    return 0
+
+
+def _scheduler(args: argparse.Namespace) -> Any:
+    return args.scheduler if args.scheduler else None
+
+
+def _rows(text: str) -> list[int]:
+    try:
+        return [int(x) for x in text.replace(",", " ").split()]
+    except ValueError:
+        raise UserError(
+            f"--axes must be all, trans, rot or row indices 0-5 such as '0 1 5', not {text!r}"
+        ) from None
+
+
+def cmd_reach(args: argparse.Namespace) -> int:
+    from symkin.workspace import reachability
+    from symkin.workspace.run import require_scale
+
+    require_scale(_scheduler(args))  # before compiling: say which extra is missing at once
+    robot = _robot(args.robot)
+    bounds = None if args.bounds is None else _floats(args.bounds, "--bounds", 6).reshape(3, 2)
+    axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
+    ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
+    rmap = reachability(
+        robot, args.resolution, args.orientations, output=args.output, seed=args.seed,
+        solutions=args.solutions, axes=axes, bounds=bounds, radius=args.radius, chunk=args.chunk,
+        backend=args.backend, ik_options=ik_options, scheduler=_scheduler(args), workers=args.workers,
+        overwrite=args.overwrite,
+    )  # fmt: skip
+    inside = rmap.reach > 0
+    st = rmap.stats or {}
+    summary = {
+        "output": args.output,
+        "shape": list(rmap.reach.shape),
+        "orientations": len(rmap.rotations),
+        "reachable_voxels": int(inside.sum()),
+        "mean_reach_of_reachable": float(rmap.reach[inside].mean()) if inside.any() else 0.0,
+        "max_manipulability": float(np.nanmax(rmap.manipulability)) if inside.any() else None,
+        "blocks": int(st.get("blocks", 0)), "computed": int(st.get("computed", 0)),
+        "skipped": int(st.get("skipped", 0)), "seconds": float(st.get("seconds", 0.0)),
+        "problems": int(st.get("problems", 0)),
+    }  # fmt: skip
+    if args.plot:
+        rmap.plot(args.plot, axis=args.slice_axis, at=args.slice_at)
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    x, y, z = rmap.reach.shape
+    K = len(rmap.rotations)
+    print(f"{robot.name}: {x}x{y}x{z} voxels of {rmap.resolution:g} m, {K} orientations -> {args.output}")
+    done, skipped = summary["computed"], summary["skipped"]
+    print(f"blocks: {done} computed, {skipped} already written, of {summary['blocks']}")
+    if summary["computed"]:
+        rate = summary["problems"] / max(summary["seconds"], 1e-9)
+        print(f"{summary['problems']} IK problems in {summary['seconds']:.1f} s ({rate:,.0f} per second)")
+    best = summary["max_manipulability"] or 0.0
+    print(
+        f"reachable voxels: {summary['reachable_voxels']} (mean reachability index "
+        f"{summary['mean_reach_of_reachable']:.3f}); best manipulability {best:.4g}"
+    )
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+def cmd_dataset(args: argparse.Namespace) -> int:
+    from symkin.workspace import samples
+    from symkin.workspace.run import require_scale
+
+    require_scale(_scheduler(args))
+    robot = _robot(args.robot)
+    ds = samples(
+        robot, args.n, output=args.output, seed=args.seed, chunk=args.chunk, backend=args.backend,
+        scheduler=_scheduler(args), workers=args.workers, overwrite=args.overwrite,
+    )  # fmt: skip
+    st = ds.stats or {}
+    summary = {"output": args.output, "samples": len(ds), "blocks": int(st.get("blocks", 0)),
+               "computed": int(st.get("computed", 0)), "skipped": int(st.get("skipped", 0)),
+               "seconds": float(st.get("seconds", 0.0))}  # fmt: skip
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"{robot.name}: {len(ds)} (q, pose) samples -> {args.output} (arrays q {tuple(ds.q.shape)}, "
+              f"pose {tuple(ds.pose.shape)})")  # fmt: skip
+        print(f"blocks: {summary['computed']} computed, {summary['skipped']} already written, "
+              f"in {summary['seconds']:.1f} s")  # fmt: skip
     return 0
 
 
@@ -534,7 +636,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     s.add_argument("--backend", action="append", choices=("c", "numpy", "casadi"), help="only this backend")
-    s.add_argument("--samples", type=_int_at_least(1), default=20, help="random configurations (default 20)")
+    s.add_argument("--samples", type=_at_least_1, default=20, help="random configurations (default 20)")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--json", action="store_true", help="print the table as JSON")
     s.set_defaults(func=cmd_check)
@@ -581,7 +683,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     target_options(s)
     s.add_argument("--controller", choices=("mmc", "rrmc"), default="mmc")
-    s.add_argument("--dt", type=_positive_float, default=0.05, help="control period in s (default 0.05)")
+    s.add_argument("--dt", type=_positive, default=0.05, help="control period in s (default 0.05)")
     s.add_argument("--max-steps", type=_int_at_least(0), default=500)
     s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
@@ -590,22 +692,22 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser(
         "bench",
         help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
-        "compile (cold, by chain length)",
+        "compile (cold, by chain length), reach (Dask maps)",
     )
-    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile"))
+    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile", "reach"))
     s.add_argument(
         "--robot",
-        help="robot (default: panda for kin and compile, ur5 for ik, the paper's three for mmc, ur5 and "
-        "panda for calls)",
+        help="robot (default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, "
+        "ur5 and panda for calls)",
     )
     s.add_argument(
         "--joints",
         default="6,12,24,36",
         help="compile: joint counts of the random chains (default 6,12,24,36)",
     )
-    s.add_argument("--batch", type=_int_at_least(1), default=100_000, help="kin: batch size (default 100000)")
+    s.add_argument("--batch", type=_at_least_1, default=100_000, help="kin: batch size (default 100000)")
     s.add_argument(
-        "-n", "--problems", type=_int_at_least(1), help="ik: problems (default 10000); mmc: tasks per robot"
+        "-n", "--problems", type=_at_least_1, help="ik: problems (default 10000); mmc: tasks per robot"
     )
     s.add_argument("--seed", type=int, default=0)
     s.add_argument(
@@ -615,11 +717,67 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
     s.add_argument(
-        "--starts", type=_int_at_least(1), default=32, help="ik --analytic: LM searches per pose for sampling"
+        "--starts", type=_at_least_1, default=32, help="ik --analytic: LM searches per pose for sampling"
+    )
+    s.add_argument("--resolution", type=_positive, default=0.1, help="reach: voxel edge, m (default 0.1)")
+    s.add_argument(
+        "--orientations", type=_at_least_1, default=50, help="reach: orientations per voxel (default 50)"
+    )
+    s.add_argument("--fault", action="store_true", help="reach: also kill a worker mid-run and compare")
+    s.add_argument(
+        "--repeat", type=_at_least_1, default=3, help="reach: runs of each measurement (best is kept)"
     )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench)
+
+    add_workspace_commands(sub)
     return p
+
+
+def add_workspace_commands(sub: Any) -> None:
+    """``symkin reach`` and ``symkin dataset`` (the ``scale`` extra)."""
+
+    def scale_options(s: argparse.ArgumentParser) -> None:
+        s.add_argument("--seed", type=int, default=0)
+        s.add_argument(
+            "--scheduler",
+            metavar="ADDRESS",
+            help="a Dask scheduler such as tcp://host:8786, or 'synchronous' (default: a local cluster)",
+        )
+        s.add_argument(
+            "--workers", type=_at_least_1, help="local cluster size (default: one worker per core)"
+        )
+        s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c")
+        s.add_argument("--overwrite", action="store_true", help="replace the store instead of resuming it")
+        s.add_argument("--json", action="store_true", help="print JSON")
+
+    s = sub.add_parser("reach", help="reachability and manipulability map of the workspace (Zarr, on Dask)")
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    s.add_argument("--resolution", type=_positive, default=0.05, help="voxel edge in metres (default 0.05)")
+    s.add_argument("--orientations", type=_at_least_1, default=50, help="orientations per voxel (default 50)")
+    s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. map.zarr")
+    s.add_argument("--chunk", type=_at_least_1, help="voxels per block edge (default: 16..4, >= 64 blocks)")
+    s.add_argument("--solutions", action="store_true", help="also store one solution per orientation")
+    s.add_argument("--axes", default="all", help="manipulability rows: all, trans, rot or indices '0 1 5'")
+    s.add_argument("--bounds", metavar="'XMIN XMAX YMIN YMAX ZMIN ZMAX'", help="only voxels in this box (m)")
+    s.add_argument(
+        "--radius", type=_positive, help="radius of the mapped ball (default: sum of link lengths)"
+    )
+    s.add_argument("--slimit", type=_at_least_1, default=10, help="IK searches per target (default 10)")
+    s.add_argument("--ilimit", type=_at_least_1, default=30, help="IK iterations per search (default 30)")
+    s.add_argument("--plot", metavar="PNG", help="write a slice of the map (reachability, manipulability)")
+    s.add_argument("--slice-axis", choices=("x", "y", "z"), default="z", help="plot: axis of the slice")
+    s.add_argument("--slice-at", type=float, help="plot: coordinate of the slice (default: the centre)")
+    scale_options(s)
+    s.set_defaults(func=cmd_reach)
+
+    s = sub.add_parser("dataset", help="a (q, pose) dataset for learning (Zarr, on Dask)")
+    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    s.add_argument("-n", type=_at_least_1, required=True, help="number of samples (more than stored appends)")
+    s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. data.zarr")
+    s.add_argument("--chunk", type=_at_least_1, default=65536, help="samples per block (default 65536)")
+    scale_options(s)
+    s.set_defaults(func=cmd_dataset)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

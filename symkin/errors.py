@@ -61,3 +61,11 @@ class CompileError(SymkinError, RuntimeError):
 class NoAnalyticIKError(SymkinError, ValueError):
     """The arm has no closed-form inverse kinematics that symkin derives (the message says why and
     points at the numerical IK)."""
+
+
+class WorkspaceError(SymkinError, ValueError):
+    """Bad settings for a workspace map or dataset, or a store that holds a different one."""
+
+
+class MissingExtraError(SymkinError, ImportError):
+    """An optional dependency is not installed; the message names the extra to install."""

@@ -11,7 +11,7 @@ import math
 import numbers
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
@@ -253,6 +253,10 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, ets={str(self.ets)!r})"
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle the fields only (not the cached numeric kinematics): small pickles for workers."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
     def _repr_latex_(self) -> str:
         from symkin.model.latex import robot_latex

@@ -37,6 +37,13 @@ KIN_METHODS = (
 )
 
 
+def _rebuild(robot: Robot, backend: str) -> Kinematics:
+    """The kinematics of ``robot`` on ``backend`` (the unpickler of :class:`Kinematics`)."""
+    from symkin.compile import compile as compile_robot
+
+    return compile_robot(robot, backend=backend)
+
+
 class Kinematics:
     """Generated kinematics of ``robot`` on one backend ("c", "numpy" or "casadi").
 
@@ -96,6 +103,11 @@ class Kinematics:
 
     def __repr__(self) -> str:
         return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
+
+    def __reduce__(self) -> tuple[Any, tuple[Robot, str]]:
+        """Pickle as (robot, backend): unpickling compiles again, which loads the generated code
+        from the compile cache of the process that unpickles (a Dask worker, say) when it is there."""
+        return (_rebuild, (self.robot, self.backend))
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
         """Yoshikawa manipulability of the chosen rows of J0 (eq 52): float, or (N,) for a batch.
