@@ -19,80 +19,19 @@ from typing import Any
 
 import numpy as np
 
+from symkin.cli_checks import UserError
+from symkin.cli_checks import check_cflags_for as _check_cflags
+from symkin.cli_checks import int_at_least as _int_at_least
+from symkin.cli_checks import need_matplotlib as _need_matplotlib
+from symkin.cli_checks import output_dir as _output_dir
+from symkin.cli_checks import output_file as _output_file
+from symkin.cli_checks import positive_float as _positive
+
 __all__ = ["main"]
 
-ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
-
-
-class UserError(Exception):
-    """A mistake in the command line; printed as one line."""
-
-
-# -- argument types and checks done before any long work -------------------------------------
-def _int_at_least(minimum: int) -> Any:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
-        return value
-
-    parse.__name__ = "integer"
-    return parse
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (np.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
-    return value
-
-
-_positive_float.__name__ = "number"
-_positive = _positive_float
 _at_least_1 = _int_at_least(1)
 
-
-def _output_dir(path: str) -> Path:
-    """``-o DIR``: an existing folder or one that can be created (checked before the work)."""
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise UserError(f"-o {path}: exists and is not a folder")
-    return out
-
-
-def _output_file(path: str | None, what: str) -> None:
-    """A file to write after the work (``--plot``, ``-o FILE``): its folder must exist."""
-    if path is None:
-        return
-    p = Path(path)
-    if p.is_dir():
-        raise UserError(f"{what} {path}: is a folder; give a file name")
-    if not p.absolute().parent.is_dir():
-        raise UserError(f"{what} {path}: the folder {str(p.absolute().parent)!r} does not exist")
-
-
-def _need_matplotlib(path: str | None) -> None:
-    if path is None:
-        return
-    _output_file(path, "--plot")
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
-
-
-def _check_cflags(backend: str) -> None:
-    """Reject a SYMKIN_CFLAGS the C compiler cannot use before generating anything."""
-    if backend == "c":
-        from symkin.emit.c.build import check_cflags
-
-        check_cflags()
+ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
 
 
 def _robot(spec: str) -> Any:
