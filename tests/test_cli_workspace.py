@@ -50,4 +50,4 @@ def test_reach_and_dataset_commands_write_stores_and_a_plot(tmp_path, capsys):
     data = zarr.open_group(str(tmp_path / "d.zarr"), mode="r")
     assert data["q"].shape == (100, 3) and np.isfinite(data["pose"][...]).all()
     assert main(["reach", PLANAR, "-o", str(store), "--resolution", "0", "--scheduler", "synchronous"]) == 2
-    assert "resolution must be a positive" in capsys.readouterr().err
+    assert "--resolution: must be a positive" in capsys.readouterr().err
