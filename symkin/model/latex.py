@@ -8,12 +8,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from fractions import Fraction
+import re
 from math import isqrt
 from typing import Any
 
 from symkin.model.ets import ET, ETS, Axis, Const, rational_text
 
-__all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex"]
+__all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex", "display_name"]
 
 _AXIS = {
     Axis.tx: "t_x",
@@ -35,6 +36,12 @@ _TEXT_ESCAPES = {
     "^": r"\^{}",
     "~": r"\~{}",
 }
+
+
+def display_name(name: str) -> str:
+    """A robot's name as shown in Markdown and LaTeX derivations: characters that would open math
+    (``$``), code spans, escapes or new lines become ``?``."""
+    return re.sub(r"[`$\\\x00-\x1f\x7f]", "?", name)
 
 
 def text_latex(text: str) -> str:
