@@ -555,7 +555,8 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     }
     kinds = {True: "revolute", False: "prismatic"}
     ctx["joints"] = [
-        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`", kinds[ets[mu[j]].is_revolute],
+        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",
+         kinds[ets[mu[j]].is_revolute],
          f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
         for j in range(n)
     ]  # fmt: skip

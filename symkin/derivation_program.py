@@ -208,7 +208,8 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
         "checks": "; ".join(f"{k}: {_CHECK_TEXT[v]}" for k, v in D.checks.items()),
     }
     ctx["joints"] = [
-        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`", kinds[ets[mu[j]].is_revolute],
+        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",
+         kinds[ets[mu[j]].is_revolute],
          f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
         for j in range(n)
     ]  # fmt: skip

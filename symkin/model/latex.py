@@ -6,9 +6,9 @@ Joints are shown 1-based like the seed (``q_1 .. q_n``): symkin's joint ``q{j}``
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from fractions import Fraction
-import re
 from math import isqrt
 from typing import Any
 
