@@ -82,21 +82,41 @@ def cmd_compile(args: argparse.Namespace) -> int:
     _check_cflags(args.backend)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
+    c_only = (("--prefix", args.prefix), ("--precision", args.precision != "double"), ("--libm", args.libm))
+    for flag, given in c_only:
+        if given and args.backend != "c":
+            raise UserError(f"{flag} applies to the C backend only")
+        if given and not args.output:
+            raise UserError(f"{flag} shapes the files written with -o DIR; give -o too")
     if args.prefix:
-        if args.backend != "c":
-            raise UserError("--prefix applies to the C backend only")
-        if not args.output:
-            raise UserError("--prefix names the files written with -o DIR; give -o too")
         command += f" --prefix {args.prefix}"
+    if args.precision != "double":
+        command += f" --precision {args.precision}"
+    if args.libm:
+        command += " --libm"
     if args.strategy:
         command += f" --strategy {args.strategy}"
-    files = generate(robot, args.backend, command, strategy=args.strategy, prefix=args.prefix)
+    files = generate(
+        robot,
+        args.backend,
+        command,
+        strategy=args.strategy,
+        prefix=args.prefix,
+        precision=args.precision,
+        libm=args.libm,
+    )
     t_gen = time.perf_counter() - t0
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         for name, text in sorted(files.items()):
             (out / name).write_text(text)
         print(f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}")
+    if args.precision == "float":
+        from symkin.emit.c.backend import float_error
+
+        err = float_error(robot, files)
+        print(f"single-precision code against double on 100 random q: max |fkine| error {err['fkine']:.1e}, "
+              f"max |jacob0| error {err['jacob0']:.1e}")  # fmt: skip
     t1 = time.perf_counter()
     kin = compile_robot(robot, backend=args.backend, strategy=args.strategy)
     t_build = time.perf_counter() - t1
@@ -554,6 +574,19 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PREFIX",
         help="C: start every exported symbol and file name with PREFIX (default symkin_<robot>), so the "
         "code of several robots links into one program",
+    )
+    s.add_argument(
+        "--precision",
+        choices=("double", "float"),
+        default="double",
+        help="C: float writes single-precision code for microcontrollers (checked against double; "
+        "no Python module) (default double)",
+    )
+    s.add_argument(
+        "--libm",
+        action="store_true",
+        help="C: call the C library's sin and cos instead of the inline kernels (the same as compiling "
+        "with -DSYMKIN_USE_LIBM)",
     )
     s.add_argument(
         "--strategy",

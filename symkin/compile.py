@@ -96,19 +96,23 @@ def generate(
     command: str | None = None,
     strategy: str | None = None,
     prefix: str | None = None,
+    precision: str = "double",
+    libm: bool = False,
 ) -> dict[str, str]:
     """The generated source files of ``robot`` for ``backend`` (filename -> text). Imports sympy.
 
     ``strategy``: ``"expanded"`` (one exact expression per output, then CSE: the smallest, most
     readable code for arms of up to about 7 joints), ``"program"`` (named link frames, Hessians as
     loops: linear in the number of joints), or None to choose by size (the generated header says
-    which was used). ``prefix`` (C backend): the prefix of every exported symbol and file name
-    instead of ``symkin_<robot>``, so several robots link into one program.
+    which was used). C backend only: ``prefix``, the prefix of every exported symbol and file name
+    instead of ``symkin_<robot>``, so several robots link into one program; ``precision="float"``
+    for single-precision code (no Python module; for microcontrollers); ``libm`` to call the C
+    library's sin and cos instead of the inline kernels.
     """
     _check_backend(backend)
     _check_strategy(strategy)
-    if prefix is not None and backend != "c":
-        raise SymkinError(f"a symbol prefix applies to the C backend only, not {backend!r}")
+    if (prefix is not None or precision != "double" or libm) and backend != "c":
+        raise SymkinError(f"prefix, precision and libm apply to the C backend only, not {backend!r}")
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
@@ -123,7 +127,7 @@ def generate(
     if backend == "c":
         from symkin.emit.c.backend import render_c
 
-        return render_c(robot, functions, command, prefix)
+        return render_c(robot, functions, command, prefix, precision, libm)
     if backend == "numpy":
         from symkin.emit.numpy.backend import render_numpy
 
@@ -140,9 +144,12 @@ def write_generated(
     command: str | None = None,
     strategy: str | None = None,
     prefix: str | None = None,
+    precision: str = "double",
+    libm: bool = False,
 ) -> list[Path]:
-    """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths."""
-    files = generate(robot, backend, command, strategy, prefix)
+    """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths
+    (options as :func:`generate`)."""
+    files = generate(robot, backend, command, strategy, prefix, precision, libm)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = []

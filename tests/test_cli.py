@@ -202,3 +202,18 @@ def test_bench_compile_runs_small(capsys, tmp_path):
     assert plot.stat().st_size > 1000
     code, out, err = run(capsys, "bench", "compile", "--joints", "6,x")
     assert code == 2 and "--joints" in err
+
+
+def test_compile_single_precision_and_libm(capsys, tmp_path):
+    code, out, _ = run(
+        capsys, "compile", "planar3", "--precision", "float", "--prefix", "p3f", "-o", str(tmp_path)
+    )
+    assert code == 0, out
+    assert "single-precision code against double" in out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p3f.c", "p3f.h"]
+    code, _, err = run(capsys, "compile", "planar3", "--libm")
+    assert code == 2 and "-o DIR" in err
+    code, _, err = run(
+        capsys, "compile", "planar3", "--backend", "numpy", "--precision", "float", "-o", str(tmp_path)
+    )
+    assert code == 2 and "C backend only" in err

@@ -10,7 +10,7 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-__all__ = ["CPrinter", "NumPyPrinter", "CasADiPrinter", "float_literal"]
+__all__ = ["CPrinter", "FloatCPrinter", "NumPyPrinter", "CasADiPrinter", "float_literal"]
 
 
 def float_literal(x: float) -> str:
@@ -53,6 +53,23 @@ class CPrinter(_DoubleLiterals, C99CodePrinter):
 
     def _print_Pow(self, expr: sp.Pow) -> str:
         return _pow(self, expr, "sqrt")
+
+
+class FloatCPrinter(CPrinter):
+    """Single-precision C: ``f``-suffixed literals (the double rounded to float by the compiler),
+    ``sqrtf``; ``sk_sin``/``sk_cos`` map to ``sinf``/``cosf`` in the template."""
+
+    def _print_Rational(self, expr: sp.Rational) -> str:
+        return float_literal(float(expr)) + "f"
+
+    def _print_Integer(self, expr: sp.Integer) -> str:
+        return float_literal(int(expr)) + "f"
+
+    def _print_Float(self, expr: sp.Float) -> str:
+        return float_literal(float(expr)) + "f"
+
+    def _print_Pow(self, expr: sp.Pow) -> str:
+        return _pow(self, expr, "sqrtf", one="1.0f")
 
     def _print_sin(self, expr: sp.sin) -> str:
         return f"sk_sin({self._print(expr.args[0])})"

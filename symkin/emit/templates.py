@@ -39,7 +39,7 @@ def template_dir() -> Path:
 def _env() -> jinja2.Environment:
     import jinja2  # here: a warm compile (template_dir for the cache key) does without it
 
-    return jinja2.Environment(
+    env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(template_dir())),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
@@ -47,6 +47,18 @@ def _env() -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+    env.filters["lit"] = jinja2.pass_context(_literal)
+    return env
+
+
+def _literal(context: Any, text: str) -> str:
+    """A C floating-point literal in the precision of the code being rendered (``real`` in the
+    context): ``1.0`` stays for double, becomes ``1.0f`` for float (``HUGE_VAL``: ``HUGE_VALF``)."""
+    if context.get("real", "double") != "float":
+        return text
+    if "HUGE_VAL" in text:
+        return text.replace("HUGE_VAL", "HUGE_VALF")
+    return text + "f"
 
 
 def render(name: str, **context: Any) -> str:

@@ -133,3 +133,42 @@ def test_bad_prefixes_are_refused(bad):
 def test_prefix_is_for_the_c_backend_only():
     with pytest.raises(SymkinError, match="C backend only"):
         symkin.generate(load("planar2"), "numpy", prefix="arm")
+
+
+def test_single_precision_code_is_float_and_close_to_double(tmp_path):
+    from symkin.bench.compile import random_chain
+    from symkin.emit.c.backend import float_error
+
+    for robot in (load("panda"), random_chain(14, seed=2)):  # Hessians written out, and as loops
+        files = symkin.generate(robot, "c", precision="float", prefix="armf")
+        assert sorted(files) == ["armf.c", "armf.h"]  # no Python module in single precision
+        assert "double" not in files["armf.h"] and "sinf" in files["armf.c"]
+        err = float_error(robot, files)
+        assert max(err.values()) < 1e-5, err  # float epsilon 1.2e-7, a few dozen operations deep
+        if CC is not None:
+            for name, text in files.items():
+                (tmp_path / name).write_text(text)
+            flags = [*STRICT, "-Wdouble-promotion"]
+            proc = subprocess.run([CC, "-std=c99", *flags, "-c", "armf.c", "-o", "/dev/null"], cwd=tmp_path,
+                                  capture_output=True, text=True)  # fmt: skip
+            assert proc.returncode == 0, proc.stderr
+    with pytest.raises(CompileError, match="precision"):
+        symkin.generate(load("planar2"), "c", precision="half")
+
+
+def test_libm_switch_gives_the_same_kinematics(tmp_path):
+    import ctypes
+
+    from symkin.emit.c.build import compile_library, load_library
+
+    robot = load("ur5")
+    files = symkin.generate(robot, "c", libm=True, prefix="arml")
+    assert "#define SYMKIN_USE_LIBM 1" in files["arml.c"]
+    plain = symkin.generate(robot, "c", prefix="arml")["arml.c"]
+    assert "SYMKIN_USE_LIBM" in plain and "Sun Microsystems" in plain  # the switch, and fdlibm's notice
+    sources = {k: v for k, v in files.items() if not k.endswith("_pymodule.c")}
+    lib = load_library(compile_library(sources, "arml_libm"))
+    q = robot.random_q(seed=4)
+    T = np.empty(16)
+    lib.arml_fkine(q.ctypes.data_as(ctypes.c_void_p), T.ctypes.data_as(ctypes.c_void_p))
+    np.testing.assert_allclose(T.reshape(4, 4), robot.fkine(q), atol=1e-14)

@@ -34,6 +34,11 @@ const char *const symkin_lbr_iiwa7_joint_names[SYMKIN_LBR_IIWA7_N] = {
     "A7",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -43,7 +48,14 @@ const char *const symkin_lbr_iiwa7_joint_names[SYMKIN_LBR_IIWA7_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -125,6 +137,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -152,16 +166,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -171,16 +185,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t16 = -0.4*t6;
     const double t17 = -0.4*t7;
     const double t18 = (0.4)*t2 + 0.34;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -190,16 +204,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
     const double t40 = -t24*t39 + t29*t38;
     const double t41 = -t25*t39 + t30*t38;
     const double t42 = -t26*t39 + t31*t38;
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t46 = cos(q6);
+    const double t47 = sin(q6);
     const double t48 = t32*t47 + t40*t46;
     const double t49 = t33*t47 + t41*t46;
     const double t50 = t34*t47 + t42*t46;
@@ -248,16 +262,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -267,16 +281,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t16 = -0.4*t6;
     const double t17 = -0.4*t7;
     const double t18 = (0.4)*t2 + 0.34;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -286,16 +300,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
     const double t40 = -t24*t39 + t29*t38;
     const double t41 = -t25*t39 + t30*t38;
     const double t42 = -t26*t39 + t31*t38;
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t46 = cos(q6);
+    const double t47 = sin(q6);
     const double t48 = t32*t47 + t40*t46;
     const double t49 = t33*t47 + t41*t46;
     const double t50 = t34*t47 + t42*t46;
@@ -436,16 +450,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -455,16 +469,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t16 = -0.4*t6;
     const double t17 = -0.4*t7;
     const double t18 = (0.4)*t2 + 0.34;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -474,8 +488,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
@@ -571,18 +585,18 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
+    const double t46 = cos(q6);
+    const double t47 = sin(q6);
     const double t82 = t38*t46;
     const double t83 = -t38*t47;
     const double t84 = t39*t46;
@@ -716,18 +730,18 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
+    const double t46 = cos(q6);
+    const double t47 = sin(q6);
     const double t82 = t38*t46;
     const double t83 = -t38*t47;
     const double t84 = t39*t46;
@@ -1274,16 +1288,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -1293,16 +1307,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t16 = -0.4*t6;
     const double t17 = -0.4*t7;
     const double t18 = (0.4)*t2 + 0.34;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -1312,16 +1326,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
     const double t40 = -t24*t39 + t29*t38;
     const double t41 = -t25*t39 + t30*t38;
     const double t42 = -t26*t39 + t31*t38;
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t46 = cos(q6);
+    const double t47 = sin(q6);
     const double t48 = t32*t47 + t40*t46;
     const double t49 = t33*t47 + t41*t46;
     const double t50 = t34*t47 + t42*t46;
@@ -1436,16 +1450,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos(q2);
+    const double t9 = sin(q2);
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -1455,16 +1469,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t16 = -0.4*t6;
     const double t17 = -0.4*t7;
     const double t18 = (0.4)*t2 + 0.34;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos(q3);
+    const double t20 = sin(q3);
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos(q4);
+    const double t28 = sin(q4);
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -1474,8 +1488,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos(q5);
+    const double t39 = sin(q5);
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;

@@ -34,6 +34,11 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
     "panda_joint7",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -43,7 +48,14 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -125,6 +137,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -152,10 +166,10 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -163,8 +177,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -174,8 +188,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -188,16 +202,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -213,8 +227,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t66 = -0.1034*t49 + t55;
     const double t67 = -0.1034*t50 + t56;
     const double t68 = -0.1034*t51 + t57;
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    const double t69 = sin(q6 + 0.7853981633974483);
+    const double t70 = -cos(q6 + 0.7853981633974483);
     const double t71 = -t41*t70 + t46*t69;
     const double t72 = -t42*t70 + t47*t69;
     const double t73 = -t43*t70 + t48*t69;
@@ -260,10 +274,10 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -271,8 +285,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -282,8 +296,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -296,16 +310,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -318,8 +332,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t55 = -0.107*t49 + t52;
     const double t56 = -0.107*t50 + t53;
     const double t57 = -0.107*t51 + t54;
-    const double t58 = sk_cos(q6);
-    const double t59 = sk_sin(q6);
+    const double t58 = cos(q6);
+    const double t59 = sin(q6);
     const double t60 = -t41*t59 + t46*t58;
     const double t61 = -t42*t59 + t47*t58;
     const double t62 = -t43*t59 + t48*t58;
@@ -460,10 +474,10 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -471,8 +485,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -482,8 +496,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -496,16 +510,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -616,18 +630,18 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
+    const double t69 = sin(q6 + 0.7853981633974483);
+    const double t70 = -cos(q6 + 0.7853981633974483);
     const double t108 = -0.088*t69;
     const double t109 = (0.088)*t70;
     const double t110 = -t45*t69;
@@ -767,18 +781,18 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
+    const double t69 = sin(q6 + 0.7853981633974483);
+    const double t70 = -cos(q6 + 0.7853981633974483);
     const double t108 = -0.088*t69;
     const double t109 = (0.088)*t70;
     const double t110 = -t45*t69;
@@ -1331,10 +1345,10 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -1342,8 +1356,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -1353,8 +1367,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -1367,16 +1381,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -1392,8 +1406,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t66 = -0.1034*t49 + t55;
     const double t67 = -0.1034*t50 + t56;
     const double t68 = -0.1034*t51 + t57;
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    const double t69 = sin(q6 + 0.7853981633974483);
+    const double t70 = -cos(q6 + 0.7853981633974483);
     const double t71 = -t41*t70 + t46*t69;
     const double t72 = -t42*t70 + t47*t69;
     const double t73 = -t43*t70 + t48*t69;
@@ -1511,10 +1525,10 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -1522,8 +1536,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos(q2);
+    const double t12 = sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -1533,8 +1547,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos(q3);
+    const double t23 = -sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -1547,16 +1561,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos(q4);
+    const double t37 = sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos(q5);
+    const double t45 = -sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;

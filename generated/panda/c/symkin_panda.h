@@ -21,7 +21,7 @@
  *   5: panda_joint6, revolute, [-0.0175, 3.7525] rad, 2.61 rad/s
  *   6: panda_joint7, revolute, [-2.8973, 2.8973] rad, 2.61 rad/s
  *
- * Arrays are row-major doubles. Single entry points take one configuration q[SYMKIN_PANDA_N];
+ * Arrays are row-major, of double. Single entry points take one configuration q[SYMKIN_PANDA_N];
  * *_batch entry points take N configurations q[N * SYMKIN_PANDA_N] and write N outputs back
  * to back. Outputs must not overlap q or each other (they are restrict-qualified in the .c).
  * No allocation, no global state: every function is thread-safe. Joint limits are not enforced.
@@ -36,7 +36,7 @@
 extern "C" {
 #endif
 
-/* Number of joints, and the sizes (doubles) of the outputs of one configuration. */
+/* Number of joints, and the sizes (in elements) of the outputs of one configuration. */
 #define SYMKIN_PANDA_N 7
 #define SYMKIN_PANDA_T_SIZE 16 /* pose, 4x4 */
 #define SYMKIN_PANDA_LINKS_SIZE 112 /* link poses, n x 4 x 4 */

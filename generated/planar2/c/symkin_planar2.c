@@ -29,6 +29,11 @@ const char *const symkin_planar2_joint_names[SYMKIN_PLANAR2_N] = {
     "q1",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -38,7 +43,14 @@ const char *const symkin_planar2_joint_names[SYMKIN_PLANAR2_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -120,6 +132,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[2] = { 0, 1 };
@@ -133,16 +147,16 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sk_cos(x0);
-    const double x2 = sk_sin(x0);
+    const double x1 = cos(x0);
+    const double x2 = sin(x0);
     T[0] = x1;
     T[1] = -x2;
     T[2] = 0.0;
-    T[3] = x1 + sk_cos(q0);
+    T[3] = x1 + cos(q0);
     T[4] = x2;
     T[5] = x1;
     T[6] = 0.0;
-    T[7] = x2 + sk_sin(q0);
+    T[7] = x2 + sin(q0);
     T[8] = 0.0;
     T[9] = 0.0;
     T[10] = 1.0;
@@ -169,11 +183,11 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_sin(q0);
+    const double x0 = cos(q0);
+    const double x1 = sin(q0);
     const double x2 = q0 + q1;
-    const double x3 = sk_cos(x2);
-    const double x4 = sk_sin(x2);
+    const double x3 = cos(x2);
+    const double x4 = sin(x2);
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -225,11 +239,11 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sk_sin(x0);
-    const double x2 = sk_cos(x0);
-    J[0] = -x1 - sk_sin(q0);
+    const double x1 = sin(x0);
+    const double x2 = cos(x0);
+    J[0] = -x1 - sin(q0);
     J[1] = -x1;
-    J[2] = x2 + sk_cos(q0);
+    J[2] = x2 + cos(q0);
     J[3] = x2;
     J[4] = 0.0;
     J[5] = 0.0;
@@ -256,9 +270,9 @@ void symkin_planar2_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
 {
     const double q1 = q[1];
-    J[0] = sk_sin(q1);
+    J[0] = sin(q1);
     J[1] = 0.0;
-    J[2] = sk_cos(q1) + 1.0;
+    J[2] = cos(q1) + 1.0;
     J[3] = 1.0;
     J[4] = 0.0;
     J[5] = 0.0;
@@ -287,13 +301,13 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sk_cos(x0);
+    const double x1 = cos(x0);
     const double x2 = -x1;
-    const double x3 = sk_sin(x0);
+    const double x3 = sin(x0);
     const double x4 = -x3;
-    H[0] = -x1 - sk_cos(q0);
+    H[0] = -x1 - cos(q0);
     H[1] = x2;
-    H[2] = -x3 - sk_sin(q0);
+    H[2] = -x3 - sin(q0);
     H[3] = x4;
     H[4] = 0.0;
     H[5] = 0.0;
@@ -344,9 +358,9 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     H[9] = 0.0;
     H[10] = 0.0;
     H[11] = 0.0;
-    H[12] = sk_cos(q1);
+    H[12] = cos(q1);
     H[13] = 0.0;
-    H[14] = -sk_sin(q1);
+    H[14] = -sin(q1);
     H[15] = 0.0;
     H[16] = 0.0;
     H[17] = 0.0;
@@ -375,11 +389,11 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sk_cos(x0);
-    const double x2 = sk_sin(x0);
+    const double x1 = cos(x0);
+    const double x2 = sin(x0);
     const double x3 = -x2;
-    const double x4 = x1 + sk_cos(q0);
-    const double x5 = x2 + sk_sin(q0);
+    const double x4 = x1 + cos(q0);
+    const double x5 = x2 + sin(q0);
     T[0] = x1;
     T[1] = x3;
     T[2] = 0.0;
@@ -427,11 +441,11 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sk_sin(x0);
-    const double x2 = -x1 - sk_sin(q0);
+    const double x1 = sin(x0);
+    const double x2 = -x1 - sin(q0);
     const double x3 = -x1;
-    const double x4 = sk_cos(x0);
-    const double x5 = x4 + sk_cos(q0);
+    const double x4 = cos(x0);
+    const double x5 = x4 + cos(q0);
     const double x6 = -x4;
     J[0] = x2;
     J[1] = x3;

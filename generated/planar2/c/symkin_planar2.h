@@ -16,7 +16,7 @@
  *   0: q0, revolute, [-3.14159, 3.14159] rad
  *   1: q1, revolute, [-3.14159, 3.14159] rad
  *
- * Arrays are row-major doubles. Single entry points take one configuration q[SYMKIN_PLANAR2_N];
+ * Arrays are row-major, of double. Single entry points take one configuration q[SYMKIN_PLANAR2_N];
  * *_batch entry points take N configurations q[N * SYMKIN_PLANAR2_N] and write N outputs back
  * to back. Outputs must not overlap q or each other (they are restrict-qualified in the .c).
  * No allocation, no global state: every function is thread-safe. Joint limits are not enforced.
@@ -31,7 +31,7 @@
 extern "C" {
 #endif
 
-/* Number of joints, and the sizes (doubles) of the outputs of one configuration. */
+/* Number of joints, and the sizes (in elements) of the outputs of one configuration. */
 #define SYMKIN_PLANAR2_N 2
 #define SYMKIN_PLANAR2_T_SIZE 16 /* pose, 4x4 */
 #define SYMKIN_PLANAR2_LINKS_SIZE 32 /* link poses, n x 4 x 4 */

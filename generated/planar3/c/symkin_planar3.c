@@ -30,6 +30,11 @@ const char *const symkin_planar3_joint_names[SYMKIN_PLANAR3_N] = {
     "q2",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -39,7 +44,14 @@ const char *const symkin_planar3_joint_names[SYMKIN_PLANAR3_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -121,6 +133,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[3] = { 0, 1, 2 };
@@ -136,16 +150,16 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q2 = q[2];
     const double x0 = q0 + q1;
     const double x1 = q2 + x0;
-    const double x2 = sk_cos(x1);
-    const double x3 = sk_sin(x1);
+    const double x2 = cos(x1);
+    const double x3 = sin(x1);
     T[0] = x2;
     T[1] = -x3;
     T[2] = 0.0;
-    T[3] = x2 + sk_cos(q0) + sk_cos(x0);
+    T[3] = x2 + cos(q0) + cos(x0);
     T[4] = x3;
     T[5] = x2;
     T[6] = 0.0;
-    T[7] = x3 + sk_sin(q0) + sk_sin(x0);
+    T[7] = x3 + sin(q0) + sin(x0);
     T[8] = 0.0;
     T[9] = 0.0;
     T[10] = 1.0;
@@ -173,14 +187,14 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q0 = q[0];
     const double q1 = q[1];
     const double q2 = q[2];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_sin(q0);
+    const double x0 = cos(q0);
+    const double x1 = sin(q0);
     const double x2 = q0 + q1;
-    const double x3 = sk_cos(x2);
-    const double x4 = sk_sin(x2);
+    const double x3 = cos(x2);
+    const double x4 = sin(x2);
     const double x5 = q2 + x2;
-    const double x6 = sk_cos(x5);
-    const double x7 = sk_sin(x5);
+    const double x6 = cos(x5);
+    const double x7 = sin(x5);
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -250,14 +264,14 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q2 = q[2];
     const double x0 = q0 + q1;
     const double x1 = q2 + x0;
-    const double x2 = sk_sin(x1);
-    const double x3 = x2 + sk_sin(x0);
-    const double x4 = sk_cos(x1);
-    const double x5 = x4 + sk_cos(x0);
-    J[0] = -x3 - sk_sin(q0);
+    const double x2 = sin(x1);
+    const double x3 = x2 + sin(x0);
+    const double x4 = cos(x1);
+    const double x5 = x4 + cos(x0);
+    J[0] = -x3 - sin(q0);
     J[1] = -x3;
     J[2] = -x2;
-    J[3] = x5 + sk_cos(q0);
+    J[3] = x5 + cos(q0);
     J[4] = x5;
     J[5] = x4;
     J[6] = 0.0;
@@ -290,13 +304,13 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
 {
     const double q1 = q[1];
     const double q2 = q[2];
-    const double x0 = sk_sin(q2);
+    const double x0 = sin(q2);
     const double x1 = q1 + q2;
-    const double x2 = sk_cos(q2) + 1.0;
-    J[0] = x0 + sk_sin(x1);
+    const double x2 = cos(q2) + 1.0;
+    J[0] = x0 + sin(x1);
     J[1] = x0;
     J[2] = 0.0;
-    J[3] = x2 + sk_cos(x1);
+    J[3] = x2 + cos(x1);
     J[4] = x2;
     J[5] = 1.0;
     J[6] = 0.0;
@@ -332,18 +346,18 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double x0 = q0 + q1;
     const double x1 = q2 + x0;
-    const double x2 = sk_cos(x1);
-    const double x3 = x2 + sk_cos(x0);
+    const double x2 = cos(x1);
+    const double x3 = x2 + cos(x0);
     const double x4 = -x3;
     const double x5 = -x2;
-    const double x6 = sk_sin(x1);
-    const double x7 = x6 + sk_sin(x0);
+    const double x6 = sin(x1);
+    const double x7 = x6 + sin(x0);
     const double x8 = -x7;
     const double x9 = -x6;
-    H[0] = -x3 - sk_cos(q0);
+    H[0] = -x3 - cos(q0);
     H[1] = x4;
     H[2] = x5;
-    H[3] = -x7 - sk_sin(q0);
+    H[3] = -x7 - sin(q0);
     H[4] = x8;
     H[5] = x9;
     H[6] = 0.0;
@@ -413,10 +427,10 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q1 = q[1];
     const double q2 = q[2];
     const double x0 = q1 + q2;
-    const double x1 = sk_cos(x0);
-    const double x2 = sk_sin(x0);
-    const double x3 = sk_cos(q2);
-    const double x4 = sk_sin(q2);
+    const double x1 = cos(x0);
+    const double x2 = sin(x0);
+    const double x3 = cos(q2);
+    const double x4 = sin(q2);
     H[0] = 0.0;
     H[1] = 0.0;
     H[2] = 0.0;
@@ -492,13 +506,13 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q2 = q[2];
     const double x0 = q0 + q1;
     const double x1 = q2 + x0;
-    const double x2 = sk_cos(x1);
-    const double x3 = sk_sin(x1);
+    const double x2 = cos(x1);
+    const double x3 = sin(x1);
     const double x4 = -x3;
-    const double x5 = x2 + sk_cos(x0);
-    const double x6 = x5 + sk_cos(q0);
-    const double x7 = x3 + sk_sin(x0);
-    const double x8 = x7 + sk_sin(q0);
+    const double x5 = x2 + cos(x0);
+    const double x6 = x5 + cos(q0);
+    const double x7 = x3 + sin(x0);
+    const double x8 = x7 + sin(q0);
     T[0] = x2;
     T[1] = x4;
     T[2] = 0.0;
@@ -554,14 +568,14 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q2 = q[2];
     const double x0 = q0 + q1;
     const double x1 = q2 + x0;
-    const double x2 = sk_sin(x1);
-    const double x3 = x2 + sk_sin(x0);
-    const double x4 = -x3 - sk_sin(q0);
+    const double x2 = sin(x1);
+    const double x3 = x2 + sin(x0);
+    const double x4 = -x3 - sin(q0);
     const double x5 = -x3;
     const double x6 = -x2;
-    const double x7 = sk_cos(x1);
-    const double x8 = x7 + sk_cos(x0);
-    const double x9 = x8 + sk_cos(q0);
+    const double x7 = cos(x1);
+    const double x8 = x7 + cos(x0);
+    const double x9 = x8 + cos(q0);
     const double x10 = -x8;
     const double x11 = -x7;
     J[0] = x4;

@@ -33,6 +33,11 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
     "q5",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -42,7 +47,14 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -124,6 +136,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -140,25 +154,25 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q3);
+    const double x0 = sin(q0);
+    const double x1 = sin(q3);
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q0);
-    const double x4 = sk_cos(q3);
+    const double x3 = cos(q0);
+    const double x4 = cos(q3);
     const double x5 = q1 + q2;
-    const double x6 = sk_cos(x5);
+    const double x6 = cos(x5);
     const double x7 = -x2 + x3*x4*x6;
-    const double x8 = sk_cos(q4);
-    const double x9 = sk_sin(q4);
-    const double x10 = sk_sin(x5);
+    const double x8 = cos(q4);
+    const double x9 = sin(q4);
+    const double x10 = sin(x5);
     const double x11 = x10*x3;
     const double x12 = -x11*x9 + x7*x8;
-    const double x13 = sk_cos(q5);
+    const double x13 = cos(q5);
     const double x14 = x0*x4;
     const double x15 = x1*x3;
     const double x16 = -x14 - x15*x6;
-    const double x17 = sk_sin(q5);
-    const double x18 = sk_cos(q1);
+    const double x17 = sin(q5);
+    const double x18 = cos(q1);
     const double x19 = x14*x6 + x15;
     const double x20 = x0*x10;
     const double x21 = x19*x8 - x20*x9;
@@ -177,7 +191,7 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     T[8] = x13*x24 - x17*x25;
     T[9] = -x13*x25 - x17*x24;
     T[10] = -x23*x9 + x6*x8;
-    T[11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sk_sin(q1);
+    T[11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sin(q1);
     T[12] = 0.0;
     T[13] = 0.0;
     T[14] = 0.0;
@@ -204,17 +218,17 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_sin(q0);
-    const double x2 = sk_cos(q1);
+    const double x0 = cos(q0);
+    const double x1 = sin(q0);
+    const double x2 = cos(q1);
     const double x3 = x0*x2;
-    const double x4 = sk_sin(q1);
+    const double x4 = sin(q1);
     const double x5 = x1*x2;
     const double x6 = -x0;
     const double x7 = q1 + q2;
-    const double x8 = sk_cos(x7);
+    const double x8 = cos(x7);
     const double x9 = x0*x8;
-    const double x10 = sk_sin(x7);
+    const double x10 = sin(x7);
     const double x11 = x0*x10;
     const double x12 = -x11;
     const double x13 = (0.4318)*x3;
@@ -223,8 +237,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x16 = -x15;
     const double x17 = (0.4318)*x5;
     const double x18 = (0.4318)*x4;
-    const double x19 = sk_sin(q3);
-    const double x20 = sk_cos(q3);
+    const double x19 = sin(q3);
+    const double x20 = cos(q3);
     const double x21 = x0*x20*x8 - x1*x19;
     const double x22 = x1*x20 + x19*x9;
     const double x23 = -x22;
@@ -236,8 +250,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x29 = x10*x20;
     const double x30 = x10*x19;
     const double x31 = (0.0203)*x10 + x18;
-    const double x32 = sk_cos(q4);
-    const double x33 = sk_sin(q4);
+    const double x32 = cos(q4);
+    const double x33 = sin(q4);
     const double x34 = -x11*x33 + x21*x32;
     const double x35 = -x11*x32 - x21*x33;
     const double x36 = -0.4318*x11 + x24;
@@ -247,8 +261,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x40 = x29*x32 + x33*x8;
     const double x41 = -x29*x33 + x32*x8;
     const double x42 = x31 + (0.4318)*x8;
-    const double x43 = sk_cos(q5);
-    const double x44 = sk_sin(q5);
+    const double x43 = cos(q5);
+    const double x44 = sin(q5);
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -366,28 +380,28 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.4318)*sk_cos(q1);
-    const double x2 = sk_cos(q0);
+    const double x0 = sin(q0);
+    const double x1 = (0.4318)*cos(q1);
+    const double x2 = cos(q0);
     const double x3 = q1 + q2;
-    const double x4 = sk_cos(x3);
+    const double x4 = cos(x3);
     const double x5 = (0.0203)*x4;
-    const double x6 = sk_sin(x3);
+    const double x6 = sin(x3);
     const double x7 = x0*x6;
     const double x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7;
     const double x9 = -x0*x1 + x8;
     const double x10 = (0.4318)*x4 + (0.0203)*x6;
-    const double x11 = x10 + (0.4318)*sk_sin(q1);
+    const double x11 = x10 + (0.4318)*sin(q1);
     const double x12 = x2*x6;
     const double x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5;
     const double x14 = x1*x2 + x13;
-    const double x15 = sk_cos(q3);
+    const double x15 = cos(q3);
     const double x16 = x0*x15;
-    const double x17 = sk_sin(q3);
+    const double x17 = sin(q3);
     const double x18 = x17*x2;
     const double x19 = x0*x17;
-    const double x20 = sk_sin(q4);
-    const double x21 = sk_cos(q4);
+    const double x20 = sin(q4);
+    const double x21 = cos(q4);
     const double x22 = -x2;
     J[0] = x9;
     J[1] = -x11*x2;
@@ -446,26 +460,26 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q5);
-    const double x1 = sk_sin(q3);
+    const double x0 = cos(q5);
+    const double x1 = sin(q3);
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q4);
-    const double x4 = sk_cos(q3);
-    const double x5 = sk_sin(q5);
+    const double x3 = cos(q4);
+    const double x4 = cos(q3);
+    const double x5 = sin(q5);
     const double x6 = x4*x5;
     const double x7 = x3*x6;
     const double x8 = -x2 - x7;
     const double x9 = q1 + q2;
-    const double x10 = sk_sin(x9);
-    const double x11 = sk_cos(x9);
-    const double x12 = sk_sin(q4);
+    const double x10 = sin(x9);
+    const double x11 = cos(x9);
+    const double x12 = sin(q4);
     const double x13 = x12*x5;
     const double x14 = x10*x8 - x11*x13;
     const double x15 = x12*x4;
     const double x16 = (0.0203)*x15;
-    const double x17 = sk_sin(q2);
+    const double x17 = sin(q2);
     const double x18 = (0.4318)*x3;
-    const double x19 = sk_cos(q2);
+    const double x19 = cos(q2);
     const double x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3;
     const double x21 = -x10*x15 + x11*x3;
     const double x22 = x0*x4;
@@ -541,18 +555,18 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_cos(q0);
-    const double x1 = (0.4318)*sk_cos(q1);
-    const double x2 = sk_sin(q0);
+    const double x0 = cos(q0);
+    const double x1 = (0.4318)*cos(q1);
+    const double x2 = sin(q0);
     const double x3 = q1 + q2;
-    const double x4 = sk_sin(x3);
+    const double x4 = sin(x3);
     const double x5 = x0*x4;
-    const double x6 = sk_cos(x3);
+    const double x6 = cos(x3);
     const double x7 = x0*x6;
     const double x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7;
     const double x9 = x0*x1 + x8;
     const double x10 = (0.0203)*x4 + (0.4318)*x6;
-    const double x11 = x10 + (0.4318)*sk_sin(q1);
+    const double x11 = x10 + (0.4318)*sin(q1);
     const double x12 = x11*x2;
     const double x13 = x10*x2;
     const double x14 = x2*x6;
@@ -561,14 +575,14 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x17 = -x1*x2 + x16;
     const double x18 = -x0*x11;
     const double x19 = -x0*x10;
-    const double x20 = sk_cos(q3);
-    const double x21 = sk_sin(q3);
+    const double x20 = cos(q3);
+    const double x21 = sin(q3);
     const double x22 = x2*x21;
     const double x23 = -x0*x20 + x22*x6;
     const double x24 = x0*x21;
     const double x25 = x2*x20;
-    const double x26 = sk_sin(q4);
-    const double x27 = sk_cos(q4);
+    const double x26 = sin(q4);
+    const double x27 = cos(q4);
     const double x28 = x15*x27 + x26*(x24 + x25*x6);
     const double x29 = x24*x6 + x25;
     const double x30 = -x26*(x0*x20*x6 - x22) - x27*x5;
@@ -829,17 +843,17 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q3);
-    const double x1 = sk_sin(q5);
+    const double x0 = sin(q3);
+    const double x1 = sin(q5);
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q3);
-    const double x4 = sk_cos(q4);
-    const double x5 = sk_cos(q5);
+    const double x3 = cos(q3);
+    const double x4 = cos(q4);
+    const double x5 = cos(q5);
     const double x6 = -x2 + x3*x4*x5;
     const double x7 = q1 + q2;
-    const double x8 = sk_sin(x7);
-    const double x9 = sk_cos(x7);
-    const double x10 = sk_sin(q4);
+    const double x8 = sin(x7);
+    const double x9 = cos(x7);
+    const double x10 = sin(q4);
     const double x11 = x10*x5;
     const double x12 = x11*x9 + x6*x8;
     const double x13 = x3*x5;
@@ -855,9 +869,9 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x23 = x17 + x22;
     const double x24 = -x23;
     const double x25 = x12*x15 - x21*x24;
-    const double x26 = (0.4318)*sk_cos(q2);
+    const double x26 = (0.4318)*cos(q2);
     const double x27 = x19*x26;
-    const double x28 = sk_sin(q2);
+    const double x28 = sin(q2);
     const double x29 = (0.4318)*x20;
     const double x30 = x28*x29;
     const double x31 = (0.0203)*x16;
@@ -1172,27 +1186,27 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q3);
+    const double x0 = sin(q0);
+    const double x1 = sin(q3);
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q0);
-    const double x4 = sk_cos(q3);
+    const double x3 = cos(q0);
+    const double x4 = cos(q3);
     const double x5 = q1 + q2;
-    const double x6 = sk_cos(x5);
+    const double x6 = cos(x5);
     const double x7 = -x2 + x3*x4*x6;
-    const double x8 = sk_cos(q4);
-    const double x9 = sk_sin(q4);
-    const double x10 = sk_sin(x5);
+    const double x8 = cos(q4);
+    const double x9 = sin(q4);
+    const double x10 = sin(x5);
     const double x11 = x10*x3;
     const double x12 = -x11*x9 + x7*x8;
-    const double x13 = sk_cos(q5);
+    const double x13 = cos(q5);
     const double x14 = x0*x4;
     const double x15 = x1*x3;
     const double x16 = x14 + x15*x6;
     const double x17 = -x16;
-    const double x18 = sk_sin(q5);
+    const double x18 = sin(q5);
     const double x19 = -x11*x8 - x7*x9;
-    const double x20 = sk_cos(q1);
+    const double x20 = cos(q1);
     const double x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6;
     const double x22 = (0.4318)*x20*x3 + x21;
     const double x23 = x14*x6 + x15;
@@ -1209,7 +1223,7 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double x34 = x1*x10;
     const double x35 = -x32*x9 + x6*x8;
     const double x36 = (0.0203)*x10 + (0.4318)*x6;
-    const double x37 = x36 + (0.4318)*sk_sin(q1);
+    const double x37 = x36 + (0.4318)*sin(q1);
     const double x38 = -x3;
     T[0] = x12*x13 + x17*x18;
     T[1] = -x12*x18 + x13*x17;
@@ -1284,18 +1298,18 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.4318)*sk_cos(q1);
-    const double x2 = sk_cos(q0);
+    const double x0 = sin(q0);
+    const double x1 = (0.4318)*cos(q1);
+    const double x2 = cos(q0);
     const double x3 = q1 + q2;
-    const double x4 = sk_cos(x3);
+    const double x4 = cos(x3);
     const double x5 = x0*x4;
-    const double x6 = sk_sin(x3);
+    const double x6 = sin(x3);
     const double x7 = x0*x6;
     const double x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7;
     const double x9 = -x0*x1 + x8;
     const double x10 = (0.4318)*x4 + (0.0203)*x6;
-    const double x11 = x10 + (0.4318)*sk_sin(q1);
+    const double x11 = x10 + (0.4318)*sin(q1);
     const double x12 = -x11*x2;
     const double x13 = -x10*x2;
     const double x14 = x2*x6;
@@ -1307,14 +1321,14 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double x20 = -x0*x9 + x17*x2;
     const double x21 = -x0*x8 + x16*x2;
     const double x22 = -x14;
-    const double x23 = sk_cos(q3);
+    const double x23 = cos(q3);
     const double x24 = x0*x23;
-    const double x25 = sk_sin(q3);
+    const double x25 = sin(q3);
     const double x26 = x2*x25;
     const double x27 = x24 + x26*x4;
     const double x28 = x0*x25;
-    const double x29 = sk_sin(q4);
-    const double x30 = sk_cos(q4);
+    const double x29 = sin(q4);
+    const double x30 = cos(q4);
     const double x31 = -x14*x30 - x29*(x2*x23*x4 - x28);
     const double x32 = -x2;
     const double x33 = -x2*x23 + x28*x4;

@@ -20,7 +20,7 @@
  *   4: q4, revolute, [-1.74533, 1.74533] rad
  *   5: q5, revolute, [-4.64258, 4.64258] rad
  *
- * Arrays are row-major doubles. Single entry points take one configuration q[SYMKIN_PUMA560_N];
+ * Arrays are row-major, of double. Single entry points take one configuration q[SYMKIN_PUMA560_N];
  * *_batch entry points take N configurations q[N * SYMKIN_PUMA560_N] and write N outputs back
  * to back. Outputs must not overlap q or each other (they are restrict-qualified in the .c).
  * No allocation, no global state: every function is thread-safe. Joint limits are not enforced.
@@ -35,7 +35,7 @@
 extern "C" {
 #endif
 
-/* Number of joints, and the sizes (doubles) of the outputs of one configuration. */
+/* Number of joints, and the sizes (in elements) of the outputs of one configuration. */
 #define SYMKIN_PUMA560_N 6
 #define SYMKIN_PUMA560_T_SIZE 16 /* pose, 4x4 */
 #define SYMKIN_PUMA560_LINKS_SIZE 96 /* link poses, n x 4 x 4 */

@@ -34,6 +34,11 @@ const char *const symkin_sawyer_joint_names[SYMKIN_SAWYER_N] = {
     "right_j6",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -43,7 +48,14 @@ const char *const symkin_sawyer_joint_names[SYMKIN_SAWYER_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -125,6 +137,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -152,20 +166,20 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -175,8 +189,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -186,8 +200,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -197,8 +211,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
     const double t47 = -t28*t46 + t36*t45;
     const double t48 = -t29*t46 + t37*t45;
     const double t49 = -t30*t46 + t38*t45;
@@ -208,8 +222,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t53 = (0.1363)*t39 + t42;
     const double t54 = (0.1363)*t40 + t43;
     const double t55 = (0.1363)*t41 + t44;
-    const double t56 = sk_cos(q6);
-    const double t57 = sk_sin(q6);
+    const double t56 = cos(q6);
+    const double t57 = sin(q6);
     const double t58 = -t39*t57 + t47*t56;
     const double t59 = -t40*t57 + t48*t56;
     const double t60 = -t41*t57 + t49*t56;
@@ -258,20 +272,20 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -281,8 +295,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -292,8 +306,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -303,8 +317,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
     const double t47 = -t28*t46 + t36*t45;
     const double t48 = -t29*t46 + t37*t45;
     const double t49 = -t30*t46 + t38*t45;
@@ -314,8 +328,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t53 = (0.1363)*t39 + t42;
     const double t54 = (0.1363)*t40 + t43;
     const double t55 = (0.1363)*t41 + t44;
-    const double t56 = sk_cos(q6);
-    const double t57 = sk_sin(q6);
+    const double t56 = cos(q6);
+    const double t57 = sin(q6);
     const double t58 = -t39*t57 + t47*t56;
     const double t59 = -t40*t57 + t48*t56;
     const double t60 = -t41*t57 + t49*t56;
@@ -456,20 +470,20 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -479,8 +493,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -490,8 +504,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -501,8 +515,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
     const double t50 = -t28*t45 - t36*t46;
     const double t51 = -t29*t45 - t37*t46;
     const double t52 = -t30*t45 - t38*t46;
@@ -611,18 +625,18 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
-    const double t56 = sk_cos(q6);
-    const double t57 = sk_sin(q6);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
+    const double t56 = cos(q6);
+    const double t57 = sin(q6);
     const double t102 = (0.1363)*t57;
     const double t103 = (0.1363)*t56;
     const double t104 = t45*t56;
@@ -771,18 +785,18 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
-    const double t56 = sk_cos(q6);
-    const double t57 = sk_sin(q6);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
+    const double t56 = cos(q6);
+    const double t57 = sin(q6);
     const double t102 = (0.1363)*t57;
     const double t103 = (0.1363)*t56;
     const double t104 = t45*t56;
@@ -1344,20 +1358,20 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -1367,8 +1381,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -1378,8 +1392,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -1389,8 +1403,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
     const double t47 = -t28*t46 + t36*t45;
     const double t48 = -t29*t46 + t37*t45;
     const double t49 = -t30*t46 + t38*t45;
@@ -1400,8 +1414,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t53 = (0.1363)*t39 + t42;
     const double t54 = (0.1363)*t40 + t43;
     const double t55 = (0.1363)*t41 + t44;
-    const double t56 = sk_cos(q6);
-    const double t57 = sk_sin(q6);
+    const double t56 = cos(q6);
+    const double t57 = sin(q6);
     const double t58 = -t39*t57 + t47*t56;
     const double t59 = -t40*t57 + t48*t56;
     const double t60 = -t41*t57 + t49*t56;
@@ -1526,20 +1540,20 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos(q1);
+    const double t5 = sin(q1);
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos(q2);
+    const double t13 = sin(q2);
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -1549,8 +1563,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = cos(q3);
+    const double t24 = sin(q3);
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -1560,8 +1574,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos(q4);
+    const double t35 = sin(q4);
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -1571,8 +1585,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = sk_cos(q5);
-    const double t46 = sk_sin(q5);
+    const double t45 = cos(q5);
+    const double t46 = sin(q5);
     const double t50 = -t28*t45 - t36*t46;
     const double t51 = -t29*t45 - t37*t46;
     const double t52 = -t30*t45 - t38*t46;

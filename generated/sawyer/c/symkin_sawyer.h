@@ -21,7 +21,7 @@
  *   5: right_j5, revolute, [-3.14159, 3.14159] rad, 3.485 rad/s
  *   6: right_j6, revolute, [-3.14159, 3.14159] rad, 4.545 rad/s
  *
- * Arrays are row-major doubles. Single entry points take one configuration q[SYMKIN_SAWYER_N];
+ * Arrays are row-major, of double. Single entry points take one configuration q[SYMKIN_SAWYER_N];
  * *_batch entry points take N configurations q[N * SYMKIN_SAWYER_N] and write N outputs back
  * to back. Outputs must not overlap q or each other (they are restrict-qualified in the .c).
  * No allocation, no global state: every function is thread-safe. Joint limits are not enforced.
@@ -36,7 +36,7 @@
 extern "C" {
 #endif
 
-/* Number of joints, and the sizes (doubles) of the outputs of one configuration. */
+/* Number of joints, and the sizes (in elements) of the outputs of one configuration. */
 #define SYMKIN_SAWYER_N 7
 #define SYMKIN_SAWYER_T_SIZE 16 /* pose, 4x4 */
 #define SYMKIN_SAWYER_LINKS_SIZE 112 /* link poses, n x 4 x 4 */

@@ -33,6 +33,11 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
     "q5",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -42,7 +47,14 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -124,6 +136,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -150,10 +164,10 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -165,24 +179,24 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t31 = cos(q5);
+    const double t32 = sin(q5);
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -230,10 +244,10 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -245,24 +259,24 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t31 = cos(q5);
+    const double t32 = sin(q5);
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -386,10 +400,10 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -401,16 +415,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
@@ -490,14 +504,14 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
+    const double t31 = cos(q5);
+    const double t32 = sin(q5);
     const double t58 = t23*t31;
     const double t59 = -t23*t32;
     const double t60 = t24*t31;
@@ -608,14 +622,14 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
+    const double t31 = cos(q5);
+    const double t32 = sin(q5);
     const double t58 = t23*t31;
     const double t59 = -t23*t32;
     const double t60 = t24*t31;
@@ -955,10 +969,10 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -970,24 +984,24 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t31 = cos(q5);
+    const double t32 = sin(q5);
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -1086,10 +1100,10 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    const double t0 = cos(q0);
+    const double t1 = sin(q0);
+    const double t2 = cos(q1);
+    const double t3 = sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -1101,16 +1115,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin(q3);
+    const double t16 = -cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos(q4);
+    const double t24 = sin(q4);
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;

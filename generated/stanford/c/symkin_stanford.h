@@ -20,7 +20,7 @@
  *   4: q4, revolute, [-1.5708, 1.5708] rad
  *   5: q5, revolute, [-2.96706, 2.96706] rad
  *
- * Arrays are row-major doubles. Single entry points take one configuration q[SYMKIN_STANFORD_N];
+ * Arrays are row-major, of double. Single entry points take one configuration q[SYMKIN_STANFORD_N];
  * *_batch entry points take N configurations q[N * SYMKIN_STANFORD_N] and write N outputs back
  * to back. Outputs must not overlap q or each other (they are restrict-qualified in the .c).
  * No allocation, no global state: every function is thread-safe. Joint limits are not enforced.
@@ -35,7 +35,7 @@
 extern "C" {
 #endif
 
-/* Number of joints, and the sizes (doubles) of the outputs of one configuration. */
+/* Number of joints, and the sizes (in elements) of the outputs of one configuration. */
 #define SYMKIN_STANFORD_N 6
 #define SYMKIN_STANFORD_T_SIZE 16 /* pose, 4x4 */
 #define SYMKIN_STANFORD_LINKS_SIZE 96 /* link poses, n x 4 x 4 */

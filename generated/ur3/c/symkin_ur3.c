@@ -33,6 +33,11 @@ const char *const symkin_ur3_joint_names[SYMKIN_UR3_N] = {
     "wrist_3",
 };
 
+#ifdef SYMKIN_USE_LIBM
+/* The C library's sin and cos (SYMKIN_USE_LIBM). */
+#define sk_sin sin
+#define sk_cos cos
+#else
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
@@ -42,7 +47,14 @@ const char *const symkin_ur3_joint_names[SYMKIN_UR3_N] = {
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
  * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once.
+ * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
+ * `symkin compile --libm`) to call the C library's sin and cos instead.
+ *
+ * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
+ *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
+ *   Developed at SunPro, a Sun Microsystems, Inc. business.
+ *   Permission to use, copy, modify, and distribute this software is freely granted, provided
+ *   that this notice is preserved.
  */
 #if defined(__GNUC__) || defined(__clang__)
 #define SK_INLINE static inline __attribute__((always_inline))
@@ -124,6 +136,8 @@ SK_INLINE double sk_cos(double x)
     return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
+#endif /* SYMKIN_USE_LIBM */
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -140,25 +154,25 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q4);
+    const double x0 = sin(q0);
+    const double x1 = sin(q4);
     const double x2 = x0*x1;
     const double x3 = q1 + q2;
     const double x4 = q3 + x3;
-    const double x5 = sk_cos(x4);
-    const double x6 = sk_cos(q0);
-    const double x7 = sk_cos(q4);
+    const double x5 = cos(x4);
+    const double x6 = cos(q0);
+    const double x7 = cos(q4);
     const double x8 = x6*x7;
     const double x9 = x2 + x5*x8;
-    const double x10 = sk_cos(q5);
-    const double x11 = sk_sin(q5);
-    const double x12 = sk_sin(x4);
+    const double x10 = cos(q5);
+    const double x11 = sin(q5);
+    const double x12 = sin(x4);
     const double x13 = x12*x6;
     const double x14 = x0*x7;
     const double x15 = x1*x6;
     const double x16 = x15*x5;
-    const double x17 = (0.24365)*sk_cos(q1);
-    const double x18 = (0.21325)*sk_cos(x3);
+    const double x17 = (0.24365)*cos(q1);
+    const double x18 = (0.21325)*cos(x3);
     const double x19 = x14*x5 - x15;
     const double x20 = x0*x12;
     const double x21 = x2*x5;
@@ -175,7 +189,7 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     T[8] = x10*x22 + x11*x5;
     T[9] = x10*x5 - x11*x22;
     T[10] = -x23;
-    T[11] = -0.0819*x23 - 0.08535*x5 - 0.24365*sk_sin(q1) - 0.21325*sk_sin(x3) + 0.1519;
+    T[11] = -0.0819*x23 - 0.08535*x5 - 0.24365*sin(q1) - 0.21325*sin(x3) + 0.1519;
     T[12] = 0.0;
     T[13] = 0.0;
     T[14] = 0.0;
@@ -202,26 +216,26 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_sin(q0);
-    const double x2 = sk_cos(q1);
+    const double x0 = cos(q0);
+    const double x1 = sin(q0);
+    const double x2 = cos(q1);
     const double x3 = x0*x2;
-    const double x4 = sk_sin(q1);
+    const double x4 = sin(q1);
     const double x5 = x1*x2;
     const double x6 = -x0;
     const double x7 = q1 + q2;
-    const double x8 = sk_cos(x7);
+    const double x8 = cos(x7);
     const double x9 = x0*x8;
-    const double x10 = sk_sin(x7);
+    const double x10 = sin(x7);
     const double x11 = (0.24365)*x3;
     const double x12 = -x11;
     const double x13 = x1*x8;
     const double x14 = (0.24365)*x5;
     const double x15 = (0.24365)*x4 - 0.1519;
     const double x16 = q3 + x7;
-    const double x17 = sk_cos(x16);
+    const double x17 = cos(x16);
     const double x18 = x0*x17;
-    const double x19 = sk_sin(x16);
+    const double x19 = sin(x16);
     const double x20 = x0*x19;
     const double x21 = (0.21325)*x9;
     const double x22 = x11 + x21;
@@ -230,8 +244,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x25 = (0.21325)*x13 + x14;
     const double x26 = (0.21325)*x10 + x15;
     const double x27 = -x26;
-    const double x28 = sk_sin(q4);
-    const double x29 = sk_cos(q4);
+    const double x28 = sin(q4);
+    const double x29 = cos(q4);
     const double x30 = x1*x28 + x18*x29;
     const double x31 = x1*x29 - x18*x28;
     const double x32 = -x0*x28 + x23*x29;
@@ -239,8 +253,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x34 = (0.11235)*x0 + x25;
     const double x35 = x19*x29;
     const double x36 = -x19*x28;
-    const double x37 = sk_cos(q5);
-    const double x38 = sk_sin(q5);
+    const double x37 = cos(q5);
+    const double x38 = sin(q5);
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -358,18 +372,18 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.24365)*sk_cos(q1);
+    const double x0 = sin(q0);
+    const double x1 = (0.24365)*cos(q1);
     const double x2 = q1 + q2;
-    const double x3 = (0.21325)*sk_cos(x2);
-    const double x4 = sk_cos(q0);
+    const double x3 = (0.21325)*cos(x2);
+    const double x4 = cos(q0);
     const double x5 = q3 + x2;
-    const double x6 = sk_sin(x5);
+    const double x6 = sin(x5);
     const double x7 = x0*x6;
-    const double x8 = sk_cos(q4);
+    const double x8 = cos(q4);
     const double x9 = x4*x8;
-    const double x10 = sk_cos(x5);
-    const double x11 = sk_sin(q4);
+    const double x10 = cos(x5);
+    const double x11 = sin(q4);
     const double x12 = x10*x11;
     const double x13 = x0*x12;
     const double x14 = (0.0819)*x13 + (0.0819)*x9;
@@ -380,8 +394,8 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double x19 = x11*x6;
     const double x20 = (0.0819)*x19;
     const double x21 = (0.08535)*x10 + x20;
-    const double x22 = x21 + (0.21325)*sk_sin(x2);
-    const double x23 = -x22 - 0.24365*sk_sin(q1);
+    const double x22 = x21 + (0.21325)*sin(x2);
+    const double x23 = -x22 - 0.24365*sin(q1);
     const double x24 = -x22;
     const double x25 = -x21;
     const double x26 = x25*x4;
@@ -456,30 +470,30 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q5);
+    const double x0 = cos(q5);
     const double x1 = q2 + q3;
     const double x2 = q1 + x1;
-    const double x3 = sk_cos(x2);
-    const double x4 = sk_sin(q5);
-    const double x5 = sk_cos(q4);
-    const double x6 = sk_sin(x2);
+    const double x3 = cos(x2);
+    const double x4 = sin(q5);
+    const double x5 = cos(q4);
+    const double x6 = sin(x2);
     const double x7 = x5*x6;
     const double x8 = x4*x7;
     const double x9 = x0*x3 - x8;
-    const double x10 = sk_sin(q4);
+    const double x10 = sin(q4);
     const double x11 = x10*x6;
-    const double x12 = (0.24365)*sk_cos(x1);
-    const double x13 = (0.21325)*sk_cos(q3);
+    const double x12 = (0.24365)*cos(x1);
+    const double x13 = (0.21325)*cos(q3);
     const double x14 = (0.11235)*x5 + 0.0819;
     const double x15 = x10*x13 + x14;
     const double x16 = x10*x12 + x15;
     const double x17 = -0.1519*x11 + x16;
-    const double x18 = (0.24365)*sk_sin(x1);
+    const double x18 = (0.24365)*sin(x1);
     const double x19 = x4*x5;
     const double x20 = (0.08535)*x0;
     const double x21 = x10*x4;
     const double x22 = (0.11235)*x21;
-    const double x23 = (0.21325)*sk_sin(q3);
+    const double x23 = (0.21325)*sin(q3);
     const double x24 = x0*x23 + x13*x19 - x20 - x22;
     const double x25 = x0*x18 + x12*x19 + x24;
     const double x26 = (0.1519)*x0*x3 + x25 - 0.1519*x8;
@@ -551,18 +565,18 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_cos(q1);
+    const double x0 = cos(q0);
+    const double x1 = cos(q1);
     const double x2 = q1 + q2;
-    const double x3 = (0.21325)*sk_cos(x2);
-    const double x4 = sk_sin(q0);
+    const double x3 = (0.21325)*cos(x2);
+    const double x4 = sin(q0);
     const double x5 = q3 + x2;
-    const double x6 = sk_sin(x5);
+    const double x6 = sin(x5);
     const double x7 = x0*x6;
-    const double x8 = sk_cos(q4);
+    const double x8 = cos(q4);
     const double x9 = x4*x8;
-    const double x10 = sk_sin(q4);
-    const double x11 = sk_cos(x5);
+    const double x10 = sin(q4);
+    const double x11 = cos(x5);
     const double x12 = x0*x11;
     const double x13 = x10*x12;
     const double x14 = -0.0819*x13 + (0.0819)*x9;
@@ -573,8 +587,8 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x19 = x10*x6;
     const double x20 = (0.0819)*x19;
     const double x21 = (0.08535)*x11 + x20;
-    const double x22 = x21 + (0.21325)*sk_sin(x2);
-    const double x23 = -x22 - 0.24365*sk_sin(q1);
+    const double x22 = x21 + (0.21325)*sin(x2);
+    const double x23 = -x22 - 0.24365*sin(q1);
     const double x24 = x23*x4;
     const double x25 = -x22;
     const double x26 = x25*x4;
@@ -868,20 +882,20 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q5);
+    const double x0 = cos(q5);
     const double x1 = q2 + q3;
     const double x2 = q1 + x1;
-    const double x3 = sk_cos(x2);
-    const double x4 = sk_sin(x2);
-    const double x5 = sk_cos(q4);
-    const double x6 = sk_sin(q5);
+    const double x3 = cos(x2);
+    const double x4 = sin(x2);
+    const double x5 = cos(q4);
+    const double x6 = sin(q5);
     const double x7 = x5*x6;
     const double x8 = x4*x7;
     const double x9 = x0*x3 - x8;
     const double x10 = (0.1519)*x0*x3;
     const double x11 = (0.1519)*x8;
     const double x12 = -x10 + x11;
-    const double x13 = sk_sin(q4);
+    const double x13 = sin(q4);
     const double x14 = x0*x13;
     const double x15 = x3*x6;
     const double x16 = x0*x5;
@@ -900,22 +914,22 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x29 = (0.11235)*x5;
     const double x30 = x29 + 0.0819;
     const double x31 = (0.1519)*x26;
-    const double x32 = sk_cos(q3);
+    const double x32 = cos(q3);
     const double x33 = (0.21325)*x32;
     const double x34 = x13*x33;
-    const double x35 = sk_cos(x1);
+    const double x35 = cos(x1);
     const double x36 = (0.24365)*x35;
     const double x37 = x13*x36;
     const double x38 = x34 + x37;
     const double x39 = -x31 + x38;
     const double x40 = x30 + x39;
     const double x41 = -x14*x9 - x20*x27;
-    const double x42 = (0.24365)*sk_sin(x1);
+    const double x42 = (0.24365)*sin(x1);
     const double x43 = x0*x42 + x36*x7;
     const double x44 = x10 - x11 + x43;
     const double x45 = (0.08535)*x0;
     const double x46 = (0.11235)*x20;
-    const double x47 = (0.21325)*sk_sin(q3);
+    const double x47 = (0.21325)*sin(q3);
     const double x48 = x0*x47 + x33*x7;
     const double x49 = -x46 + x48;
     const double x50 = -x45 + x49;
@@ -1230,26 +1244,26 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q4);
+    const double x0 = sin(q0);
+    const double x1 = sin(q4);
     const double x2 = x0*x1;
     const double x3 = q1 + q2;
     const double x4 = q3 + x3;
-    const double x5 = sk_cos(x4);
-    const double x6 = sk_cos(q0);
-    const double x7 = sk_cos(q4);
+    const double x5 = cos(x4);
+    const double x6 = cos(q0);
+    const double x7 = cos(q4);
     const double x8 = x6*x7;
     const double x9 = x2 + x5*x8;
-    const double x10 = sk_cos(q5);
-    const double x11 = sk_sin(q5);
-    const double x12 = sk_sin(x4);
+    const double x10 = cos(q5);
+    const double x11 = sin(q5);
+    const double x12 = sin(x4);
     const double x13 = x12*x6;
     const double x14 = x0*x7;
     const double x15 = x1*x6;
     const double x16 = x15*x5;
     const double x17 = x14 - x16;
-    const double x18 = (0.24365)*sk_cos(q1);
-    const double x19 = (0.21325)*sk_cos(x3);
+    const double x18 = (0.24365)*cos(q1);
+    const double x19 = (0.21325)*cos(x3);
     const double x20 = (0.0819)*x14 - 0.0819*x16;
     const double x21 = (0.08535)*x13 + x20;
     const double x22 = (0.11235)*x0 + x21;
@@ -1270,8 +1284,8 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double x37 = -x36;
     const double x38 = (0.0819)*x36;
     const double x39 = x38 + (0.08535)*x5;
-    const double x40 = x39 + (0.21325)*sk_sin(x3);
-    const double x41 = x40 + (0.24365)*sk_sin(q1);
+    const double x40 = x39 + (0.21325)*sin(x3);
+    const double x41 = x40 + (0.24365)*sin(q1);
     const double x42 = -x41;
     const double x43 = -x40;
     const double x44 = -x39;
@@ -1353,18 +1367,18 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.24365)*sk_cos(q1);
+    const double x0 = sin(q0);
+    const double x1 = (0.24365)*cos(q1);
     const double x2 = q1 + q2;
-    const double x3 = (0.21325)*sk_cos(x2);
-    const double x4 = sk_cos(q0);
+    const double x3 = (0.21325)*cos(x2);
+    const double x4 = cos(q0);
     const double x5 = q3 + x2;
-    const double x6 = sk_sin(x5);
+    const double x6 = sin(x5);
     const double x7 = x0*x6;
-    const double x8 = sk_cos(q4);
+    const double x8 = cos(q4);
     const double x9 = x4*x8;
-    const double x10 = sk_sin(q4);
-    const double x11 = sk_cos(x5);
+    const double x10 = sin(q4);
+    const double x11 = cos(x5);
     const double x12 = x0*x11;
     const double x13 = x10*x12;
     const double x14 = (0.0819)*x13 + (0.0819)*x9;
@@ -1375,8 +1389,8 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double x19 = x10*x6;
     const double x20 = (0.0819)*x19;
     const double x21 = (0.08535)*x11 + x20;
-    const double x22 = x21 + (0.21325)*sk_sin(x2);
-    const double x23 = -x22 - 0.24365*sk_sin(q1);
+    const double x22 = x21 + (0.21325)*sin(x2);
+    const double x23 = -x22 - 0.24365*sin(q1);
     const double x24 = -x23*x4;
     const double x25 = -x22;
     const double x26 = -x25*x4;

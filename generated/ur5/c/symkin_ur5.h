@@ -20,7 +20,7 @@
  *   4: wrist_2, revolute, [-6.28319, 6.28319] rad, 3.14159 rad/s
  *   5: wrist_3, revolute, [-6.28319, 6.28319] rad, 3.14159 rad/s
  *
- * Arrays are row-major doubles. Single entry points take one configuration q[SYMKIN_UR5_N];
+ * Arrays are row-major, of double. Single entry points take one configuration q[SYMKIN_UR5_N];
  * *_batch entry points take N configurations q[N * SYMKIN_UR5_N] and write N outputs back
  * to back. Outputs must not overlap q or each other (they are restrict-qualified in the .c).
  * No allocation, no global state: every function is thread-safe. Joint limits are not enforced.
@@ -35,7 +35,7 @@
 extern "C" {
 #endif
 
-/* Number of joints, and the sizes (doubles) of the outputs of one configuration. */
+/* Number of joints, and the sizes (in elements) of the outputs of one configuration. */
 #define SYMKIN_UR5_N 6
 #define SYMKIN_UR5_T_SIZE 16 /* pose, 4x4 */
 #define SYMKIN_UR5_LINKS_SIZE 96 /* link poses, n x 4 x 4 */

@@ -70,16 +70,32 @@ def joint_table(robot: Any) -> list[dict[str, str]]:
     return rows
 
 
-def render_c(robot: Any, functions: list, command: str, prefix: str | None = None) -> dict[str, str]:
-    """The generated ``<prefix>.h``, ``<prefix>.c`` and the extension module source.
+PRECISIONS = ("double", "float")
+
+
+def render_c(
+    robot: Any,
+    functions: list,
+    command: str,
+    prefix: str | None = None,
+    precision: str = "double",
+    libm: bool = False,
+) -> dict[str, str]:
+    """The generated ``<prefix>.h``, ``<prefix>.c`` and (double precision) the extension module.
 
     ``prefix`` (default ``symkin_<robot>``) starts every exported symbol and the file names, so
-    the code of several robots links into one program.
+    the code of several robots links into one program. ``precision="float"``: single-precision
+    code (``float`` arrays, ``sinf``/``cosf``) for microcontrollers, without the Python module.
+    ``libm``: call the C library's sin and cos instead of the inline kernels (the same as
+    defining ``SYMKIN_USE_LIBM`` when compiling).
     """
     from symkin.emit.lowering import lower
-    from symkin.emit.printers import CPrinter
+    from symkin.emit.printers import CPrinter, FloatCPrinter
 
-    printer = CPrinter()
+    if precision not in PRECISIONS:
+        raise CompileError(f"unknown precision {precision!r}: choose one of {', '.join(PRECISIONS)}")
+    single = precision == "float"
+    printer = FloatCPrinter() if single else CPrinter()
     printed = [lower(f, printer) for f in functions]
     prefix = c_prefix(robot) if prefix is None else check_prefix(prefix)
     header = Header.of(robot, functions, command, c_string(robot.name))
@@ -94,12 +110,42 @@ def render_c(robot: Any, functions: list, command: str, prefix: str | None = Non
         "qd_max": robot.qd_max is not None,
         "licence": LICENCE,
         "references": header.references,
+        "real": precision,
+        "tiny": "1e-30f" if single else "1e-300",
+        "sqrt": "sqrtf" if single else "sqrt",
+        "libm": libm,
     }
     h = render("c/kinematics.h.j2", **context)
     c = render("c/kinematics.c.j2", **context)
     files = {f"{prefix}.h": h, f"{prefix}.c": c}
+    if single:
+        return files
     ext = render("c/module.c.j2", module=module_name(files), **context)
     return {**files, f"{prefix}_pymodule.c": ext}
+
+
+def float_error(robot: Any, files: dict[str, str], samples: int = 100, seed: int = 0) -> dict[str, float]:
+    """Largest |float - double| of the single-precision code's fkine and jacob0 (compiled here, called
+    through ctypes) against the numeric reference, over random configurations within the limits."""
+    import ctypes
+
+    import numpy as np
+
+    from symkin.emit.c.build import compile_library, load_library
+
+    header = next(name for name in files if name.endswith(".h"))
+    prefix = header[:-2]
+    lib = load_library(compile_library(files, f"{prefix}_float"))
+    Q = np.ascontiguousarray(robot.random_q(samples, seed=seed), dtype=np.float32)
+    out = {}
+    for name, size, ref in (("fkine", 16, robot.fkine), ("jacob0", 6 * robot.n, robot.jacob0)):
+        buf = np.empty(samples * size, dtype=np.float32)
+        fn = getattr(lib, f"{prefix}_{name}_batch")
+        fn.restype = None
+        fn(Q.ctypes.data_as(ctypes.c_void_p), buf.ctypes.data_as(ctypes.c_void_p), ctypes.c_ssize_t(samples))
+        want = ref(Q.astype(float))
+        out[name] = float(np.abs(buf.reshape(want.shape).astype(float) - want).max())
+    return out
 
 
 _NAME_SHOWN = re.compile(r"[^A-Za-z0-9_.:+\-]")  # joint names in comments: other characters as ?
