@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,14 @@ N_JOINTS = 7
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_21 = struct.Struct("21d").pack_into
+_PACK_26 = struct.Struct("26d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
+_PACK_28 = struct.Struct("28d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5, 6,),
@@ -36,23 +46,17 @@ CHAIN = ChainTables(
 
 
 def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
     t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
+    t8 = cos(q2)
+    t9 = sin(q2)
     t10 = -t1*t9 + t4*t8
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
@@ -62,16 +66,16 @@ def _fkine_one(q):
     t16 = -0.4*t6
     t17 = -0.4*t7
     t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
+    t19 = cos(q3)
+    t20 = sin(q3)
     t21 = t10*t19 - t20*t6
     t22 = t11*t19 - t20*t7
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
     t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
+    t27 = cos(q4)
+    t28 = sin(q4)
     t29 = t13*t28 + t21*t27
     t30 = t14*t28 + t22*t27
     t31 = t15*t28 + t23*t27
@@ -81,16 +85,16 @@ def _fkine_one(q):
     t35 = t16 + (0.4)*t24
     t36 = t17 + (0.4)*t25
     t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
+    t38 = cos(q5)
+    t39 = sin(q5)
     t40 = -t24*t39 + t29*t38
     t41 = -t25*t39 + t30*t38
     t42 = -t26*t39 + t31*t38
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
+    t46 = cos(q6)
+    t47 = sin(q6)
     t48 = t32*t47 + t40*t46
     t49 = t33*t47 + t41*t46
     t50 = t34*t47 + t42*t46
@@ -100,8 +104,9 @@ def _fkine_one(q):
     t54 = t35 - 0.126*t43
     t55 = t36 - 0.126*t44
     t56 = t37 - 0.126*t45
-    T = np.array([t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0)
+    return T
 
 
 def _fkine_batch(Q):
@@ -187,43 +192,36 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
+            return _fkine_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
-    return out[0]
+    return _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
 
 
 def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
     t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
+    t8 = cos(q2)
+    t9 = sin(q2)
     t10 = -t1*t9 + t4*t8
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
@@ -233,16 +231,16 @@ def _link_poses_one(q):
     t16 = -0.4*t6
     t17 = -0.4*t7
     t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
+    t19 = cos(q3)
+    t20 = sin(q3)
     t21 = t10*t19 - t20*t6
     t22 = t11*t19 - t20*t7
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
     t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
+    t27 = cos(q4)
+    t28 = sin(q4)
     t29 = t13*t28 + t21*t27
     t30 = t14*t28 + t22*t27
     t31 = t15*t28 + t23*t27
@@ -252,24 +250,28 @@ def _link_poses_one(q):
     t35 = t16 + (0.4)*t24
     t36 = t17 + (0.4)*t25
     t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
+    t38 = cos(q5)
+    t39 = sin(q5)
     t40 = -t24*t39 + t29*t38
     t41 = -t25*t39 + t30*t38
     t42 = -t26*t39 + t31*t38
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
+    t46 = cos(q6)
+    t47 = sin(q6)
     t48 = t32*t47 + t40*t46
     t49 = t33*t47 + t41*t46
     t50 = t34*t47 + t42*t46
     t51 = t32*t46 - t40*t47
     t52 = t33*t46 - t41*t47
     t53 = t34*t46 - t42*t47
-    links = np.array([t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0, -t3, -t2, 0.0, 0.34, 0.0, 0.0, 0.0, 1.0, t10, t13, -t6, 0.0, t11, t14, -t7, 0.0, t12, t15, t2, 0.34, 0.0, 0.0, 0.0, 1.0, t21, t24, -t13, t16, t22, t25, -t14, t17, t23, t26, -t15, t18, 0.0, 0.0, 0.0, 1.0, t29, t32, t24, t16, t30, t33, t25, t17, t31, t34, t26, t18, 0.0, 0.0, 0.0, 1.0, t40, t43, t32, t35, t41, t44, t33, t36, t42, t45, t34, t37, 0.0, 0.0, 0.0, 1.0, t48, t51, -t43, t35, t49, t52, -t44, t36, t50, t53, -t45, t37, 0.0, 0.0, 0.0, 1.0]).reshape((7, 4, 4))
-    return (links, )
+    links = _empty((7, 4, 4))
+    _PACK_28(links, 0, t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0, -t3, -t2, 0.0, 0.34)
+    _PACK_28(links, 224, 0.0, 0.0, 0.0, 1.0, t10, t13, -t6, 0.0, t11, t14, -t7, 0.0, t12, t15, t2, 0.34, 0.0, 0.0, 0.0, 1.0, t21, t24, -t13, t16, t22, t25, -t14, t17)
+    _PACK_28(links, 448, t23, t26, -t15, t18, 0.0, 0.0, 0.0, 1.0, t29, t32, t24, t16, t30, t33, t25, t17, t31, t34, t26, t18, 0.0, 0.0, 0.0, 1.0, t40, t43, t32, t35)
+    _PACK_28(links, 672, t41, t44, t33, t36, t42, t45, t34, t37, 0.0, 0.0, 0.0, 1.0, t48, t51, -t43, t35, t49, t52, -t44, t36, t50, t53, -t45, t37, 0.0, 0.0, 0.0, 1.0)
+    return links
 
 
 def _link_poses_batch(Q):
@@ -448,37 +450,31 @@ def _link_poses_batch(Q):
     links[:, 109] = 0.0
     links[:, 110] = 0.0
     links[:, 111] = 1.0
-    return (links.reshape((N,) + (7, 4, 4)), )
+    return links.reshape((N,) + (7, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
+            return _link_poses_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
-    return out[0]
+    return _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
 
 
 def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
     t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
+    t8 = cos(q2)
+    t9 = sin(q2)
     t10 = -t1*t9 + t4*t8
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
@@ -488,16 +484,16 @@ def _jacob0_one(q):
     t16 = -0.4*t6
     t17 = -0.4*t7
     t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
+    t19 = cos(q3)
+    t20 = sin(q3)
     t21 = t10*t19 - t20*t6
     t22 = t11*t19 - t20*t7
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
     t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
+    t27 = cos(q4)
+    t28 = sin(q4)
     t29 = t13*t28 + t21*t27
     t30 = t14*t28 + t22*t27
     t31 = t15*t28 + t23*t27
@@ -507,8 +503,8 @@ def _jacob0_one(q):
     t35 = t16 + (0.4)*t24
     t36 = t17 + (0.4)*t25
     t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
+    t38 = cos(q5)
+    t39 = sin(q5)
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
@@ -540,8 +536,10 @@ def _jacob0_one(q):
     t79 = -t44*t75 + t45*t74
     t80 = t43*t75 - t45*t73
     t81 = -t43*t74 + t44*t73
-    J = np.array([-t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45]).reshape((6, 7))
-    return (J, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
+    _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
+    return J
 
 
 def _jacob0_batch(Q):
@@ -666,44 +664,38 @@ def _jacob0_batch(Q):
     J[:, 39] = t26
     J[:, 40] = t34
     J[:, 41] = -t45
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
+            return _jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
-    return out[0]
+    return _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
 
 
 def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
+    _, q1, q2, q3, q4, q5, q6 = q
+    t2 = cos(q1)
+    t3 = sin(q1)
+    t8 = cos(q2)
+    t9 = sin(q2)
+    t19 = cos(q3)
+    t20 = sin(q3)
+    t27 = cos(q4)
+    t28 = sin(q4)
+    t38 = cos(q5)
+    t39 = sin(q5)
+    t46 = cos(q6)
+    t47 = sin(q6)
     t82 = t38*t46
     t83 = -t38*t47
     t84 = t39*t46
@@ -755,8 +747,10 @@ def _jacobe_one(q):
     t133 = t114*t118 - t115*t117
     t134 = -t113*t118 + t115*t116
     t135 = t113*t117 - t114*t116
-    J = np.array([t133, t130, t127, t124, t121, t119, 0.0, t134, t131, t128, t125, t122, t120, 0.0, t135, t132, t129, t126, t123, 0.0, 0.0, -t113, t107, t98, -t92, -t84, t47, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, -t115, t109, t100, -t94, t38, 0.0, 1.0]).reshape((6, 7))
-    return (J, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, t133, t130, t127, t124, t121, t119, 0.0, t134, t131, t128, t125, t122, t120, 0.0, t135, t132, t129, t126, t123, 0.0, 0.0)
+    _PACK_21(J, 168, -t113, t107, t98, -t92, -t84, t47, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, -t115, t109, t100, -t94, t38, 0.0, 1.0)
+    return J
 
 
 def _jacobe_batch(Q):
@@ -873,65 +867,58 @@ def _jacobe_batch(Q):
     J[:, 39] = t38
     J[:, 40] = 0.0
     J[:, 41] = 1.0
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
+            return _jacobe_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
-    return out[0]
+    return _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
 
 
 def _hessian0_one(q):
     out = _jacob0_hessian0_one(q)
-    return (out[1], )
+    return out[1]
 
 
 def _hessian0_batch(Q):
     out = _jacob0_hessian0_batch(Q)
-    return (out[1], )
+    return out[1]
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
+            return _hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
+    return _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
 
 
 def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
+    _, q1, q2, q3, q4, q5, q6 = q
+    t2 = cos(q1)
+    t3 = sin(q1)
+    t8 = cos(q2)
+    t9 = sin(q2)
+    t19 = cos(q3)
+    t20 = sin(q3)
+    t27 = cos(q4)
+    t28 = sin(q4)
+    t38 = cos(q5)
+    t39 = sin(q5)
+    t46 = cos(q6)
+    t47 = sin(q6)
     t82 = t38*t46
     t83 = -t38*t47
     t84 = t39*t46
@@ -1161,8 +1148,19 @@ def _hessiane_one(q):
     t414 = t408 - t411
     t415 = t409 - t412
     t416 = -t46*t84 + t47*t85
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t174, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t175, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t176, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t177, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t178, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t212, t224, 0.0, 0.0, 0.0, 0.0, 0.0, t213, t225, 0.0, 0.0, 0.0, 0.0, 0.0, t214, t226, 0.0, 0.0, 0.0, 0.0, 0.0, t215, t227, 0.0, 0.0, 0.0, 0.0, 0.0, t216, t228, 0.0, 0.0, 0.0, 0.0, 0.0, t217, t229, 0.0, 0.0, 0.0, 0.0, 0.0, t257, t269, t281, 0.0, 0.0, 0.0, 0.0, t258, t270, t282, 0.0, 0.0, 0.0, 0.0, t259, t271, t283, 0.0, 0.0, 0.0, 0.0, t260, t272, t284, 0.0, 0.0, 0.0, 0.0, t261, t273, t285, 0.0, 0.0, 0.0, 0.0, t262, t274, t286, 0.0, 0.0, 0.0, 0.0, t308, t320, t332, t344, 0.0, 0.0, 0.0, t309, t321, t333, t345, 0.0, 0.0, 0.0, t310, t322, t334, t346, 0.0, 0.0, 0.0, t311, t323, t335, t347, 0.0, 0.0, 0.0, t312, t324, t336, t348, 0.0, 0.0, 0.0, t313, t325, t337, t349, 0.0, 0.0, 0.0, t365, t377, t389, t401, t413, 0.0, 0.0, t366, t378, t390, t402, t414, 0.0, 0.0, t367, t379, t391, t403, t415, 0.0, 0.0, t368, t380, t392, t404, -t82, 0.0, 0.0, t369, t381, t393, t405, -t83, 0.0, 0.0, t370, t382, t394, t406, t416, 0.0, 0.0, t134, t131, t128, t125, t122, t120, 0.0, -t133, -t130, -t127, -t124, -t121, -t119, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, t113, -t107, -t98, t92, t84, -t47, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (H, )
+    H = _empty((7, 6, 7))
+    _PACK_26(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t174, 0.0, 0.0, 0.0)
+    _PACK_27(H, 424, 0.0, 0.0, 0.0, t175, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t176, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t177, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t178, 0.0, 0.0)
+    _PACK_26(H, 640, 0.0, 0.0, 0.0, 0.0, t212, t224, 0.0, 0.0, 0.0, 0.0, 0.0, t213, t225, 0.0, 0.0, 0.0, 0.0, 0.0, t214, t226, 0.0, 0.0, 0.0, 0.0, 0.0, t215)
+    _PACK_27(H, 848, t227, 0.0, 0.0, 0.0, 0.0, 0.0, t216, t228, 0.0, 0.0, 0.0, 0.0, 0.0, t217, t229, 0.0, 0.0, 0.0, 0.0, 0.0, t257, t269, t281, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1064, t258, t270, t282, 0.0, 0.0, 0.0, 0.0, t259, t271, t283, 0.0, 0.0, 0.0, 0.0, t260, t272, t284, 0.0, 0.0, 0.0, 0.0, t261, t273, t285, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1280, 0.0, t262, t274, t286, 0.0, 0.0, 0.0, 0.0, t308, t320, t332, t344, 0.0, 0.0, 0.0, t309, t321, t333, t345, 0.0, 0.0, 0.0, t310, t322, t334, t346, 0.0)
+    _PACK_26(H, 1496, 0.0, 0.0, t311, t323, t335, t347, 0.0, 0.0, 0.0, t312, t324, t336, t348, 0.0, 0.0, 0.0, t313, t325, t337, t349, 0.0, 0.0, 0.0, t365, t377, t389)
+    _PACK_27(H, 1704, t401, t413, 0.0, 0.0, t366, t378, t390, t402, t414, 0.0, 0.0, t367, t379, t391, t403, t415, 0.0, 0.0, t368, t380, t392, t404, -t82, 0.0, 0.0, t369, t381)
+    _PACK_27(H, 1920, t393, t405, -t83, 0.0, 0.0, t370, t382, t394, t406, t416, 0.0, 0.0, t134, t131, t128, t125, t122, t120, 0.0, -t133, -t130, -t127, -t124, -t121, -t119, 0.0, 0.0)
+    _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, t113, -t107, -t98, t92, t84, -t47, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return H
 
 
 def _hessiane_batch(Q):
@@ -1709,38 +1707,31 @@ def _hessiane_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (H.reshape((N,) + (7, 6, 7)), )
+    return H.reshape((N,) + (7, 6, 7))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
+            return _hessiane_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
-    return out[0]
+    return _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
 
 
 def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
     t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
+    t8 = cos(q2)
+    t9 = sin(q2)
     t10 = -t1*t9 + t4*t8
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
@@ -1750,16 +1741,16 @@ def _fkine_jacob0_one(q):
     t16 = -0.4*t6
     t17 = -0.4*t7
     t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
+    t19 = cos(q3)
+    t20 = sin(q3)
     t21 = t10*t19 - t20*t6
     t22 = t11*t19 - t20*t7
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
     t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
+    t27 = cos(q4)
+    t28 = sin(q4)
     t29 = t13*t28 + t21*t27
     t30 = t14*t28 + t22*t27
     t31 = t15*t28 + t23*t27
@@ -1769,16 +1760,16 @@ def _fkine_jacob0_one(q):
     t35 = t16 + (0.4)*t24
     t36 = t17 + (0.4)*t25
     t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
+    t38 = cos(q5)
+    t39 = sin(q5)
     t40 = -t24*t39 + t29*t38
     t41 = -t25*t39 + t30*t38
     t42 = -t26*t39 + t31*t38
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
+    t46 = cos(q6)
+    t47 = sin(q6)
     t48 = t32*t47 + t40*t46
     t49 = t33*t47 + t41*t46
     t50 = t34*t47 + t42*t46
@@ -1813,9 +1804,12 @@ def _fkine_jacob0_one(q):
     t79 = -t44*t75 + t45*t74
     t80 = t43*t75 - t45*t73
     t81 = -t43*t74 + t44*t73
-    T = np.array([t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45]).reshape((6, 7))
-    return (T, J, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0)
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
+    _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
+    return (T, J)
 
 
 def _fkine_jacob0_batch(Q):
@@ -1969,37 +1963,31 @@ def _fkine_jacob0_batch(Q):
     J[:, 39] = t26
     J[:, 40] = t34
     J[:, 41] = -t45
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
+    return _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
 
 
 def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
     t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
+    t8 = cos(q2)
+    t9 = sin(q2)
     t10 = -t1*t9 + t4*t8
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
@@ -2009,16 +1997,16 @@ def _jacob0_hessian0_one(q):
     t16 = -0.4*t6
     t17 = -0.4*t7
     t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
+    t19 = cos(q3)
+    t20 = sin(q3)
     t21 = t10*t19 - t20*t6
     t22 = t11*t19 - t20*t7
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
     t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
+    t27 = cos(q4)
+    t28 = sin(q4)
     t29 = t13*t28 + t21*t27
     t30 = t14*t28 + t22*t27
     t31 = t15*t28 + t23*t27
@@ -2028,8 +2016,8 @@ def _jacob0_hessian0_one(q):
     t35 = t16 + (0.4)*t24
     t36 = t17 + (0.4)*t25
     t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
+    t38 = cos(q5)
+    t39 = sin(q5)
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
@@ -2167,9 +2155,22 @@ def _jacob0_hessian0_one(q):
     t417 = -t44*t81 + t45*t80
     t418 = t43*t81 - t45*t79
     t419 = -t43*t80 + t44*t79
-    J = np.array([-t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45]).reshape((6, 7))
-    H = np.array([-t54, -t59, -t62, -t68, -t71, -t77, -t80, -t55, t58, t61, t67, t70, t76, t79, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, t7, t14, -t25, -t33, t44, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t59, t136, t139, t143, t149, t155, t161, t58, t137, t140, t144, t150, t156, t162, 0.0, t138, t141, t145, t151, t157, t163, 0.0, 0.0, t4, t146, t152, t158, t164, 0.0, 0.0, t5, t147, t153, t159, t165, 0.0, 0.0, t142, t148, t154, t160, t166, -t62, t139, t179, t182, t188, t194, t200, t61, t140, t180, t183, t189, t195, t201, 0.0, t141, t181, t184, t190, t196, t202, 0.0, 0.0, 0.0, t185, t191, t197, t203, 0.0, 0.0, 0.0, t186, t192, t198, t204, 0.0, 0.0, 0.0, t187, t193, t199, t205, -t68, t143, t182, t230, t233, t239, t245, t67, t144, t183, t231, t234, t240, t246, 0.0, t145, t184, t232, t235, t241, t247, 0.0, 0.0, 0.0, 0.0, t236, t242, t248, 0.0, 0.0, 0.0, 0.0, t237, t243, t249, 0.0, 0.0, 0.0, 0.0, t238, t244, t250, -t71, t149, t188, t233, t287, t290, t296, t70, t150, t189, t234, t288, t291, t297, 0.0, t151, t190, t235, t289, t292, t298, 0.0, 0.0, 0.0, 0.0, 0.0, t293, t299, 0.0, 0.0, 0.0, 0.0, 0.0, t294, t300, 0.0, 0.0, 0.0, 0.0, 0.0, t295, t301, -t77, t155, t194, t239, t290, t350, t353, t76, t156, t195, t240, t291, t351, t354, 0.0, t157, t196, t241, t292, t352, t355, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t356, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t357, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t358, -t80, t161, t200, t245, t296, t353, t417, t79, t162, t201, t246, t297, t354, t418, 0.0, t163, t202, t247, t298, t355, t419, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (J, H, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
+    _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
+    H = _empty((7, 6, 7))
+    _PACK_26(H, 0, -t54, -t59, -t62, -t68, -t71, -t77, -t80, -t55, t58, t61, t67, t70, t76, t79, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, t7, t14, -t25)
+    _PACK_27(H, 208, -t33, t44, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t59, t136, t139, t143, t149, t155, t161, t58, t137, t140, t144)
+    _PACK_27(H, 424, t150, t156, t162, 0.0, t138, t141, t145, t151, t157, t163, 0.0, 0.0, t4, t146, t152, t158, t164, 0.0, 0.0, t5, t147, t153, t159, t165, 0.0, 0.0, t142)
+    _PACK_26(H, 640, t148, t154, t160, t166, -t62, t139, t179, t182, t188, t194, t200, t61, t140, t180, t183, t189, t195, t201, 0.0, t141, t181, t184, t190, t196, t202, 0.0)
+    _PACK_27(H, 848, 0.0, 0.0, t185, t191, t197, t203, 0.0, 0.0, 0.0, t186, t192, t198, t204, 0.0, 0.0, 0.0, t187, t193, t199, t205, -t68, t143, t182, t230, t233, t239, t245)
+    _PACK_27(H, 1064, t67, t144, t183, t231, t234, t240, t246, 0.0, t145, t184, t232, t235, t241, t247, 0.0, 0.0, 0.0, 0.0, t236, t242, t248, 0.0, 0.0, 0.0, 0.0, t237, t243)
+    _PACK_27(H, 1280, t249, 0.0, 0.0, 0.0, 0.0, t238, t244, t250, -t71, t149, t188, t233, t287, t290, t296, t70, t150, t189, t234, t288, t291, t297, 0.0, t151, t190, t235, t289)
+    _PACK_26(H, 1496, t292, t298, 0.0, 0.0, 0.0, 0.0, 0.0, t293, t299, 0.0, 0.0, 0.0, 0.0, 0.0, t294, t300, 0.0, 0.0, 0.0, 0.0, 0.0, t295, t301, -t77, t155, t194)
+    _PACK_27(H, 1704, t239, t290, t350, t353, t76, t156, t195, t240, t291, t351, t354, 0.0, t157, t196, t241, t292, t352, t355, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t356, 0.0, 0.0)
+    _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t357, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t358, -t80, t161, t200, t245, t296, t353, t417, t79, t162, t201, t246, t297, t354, t418, 0.0)
+    _PACK_27(H, 2136, t163, t202, t247, t298, t355, t419, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (J, H)
 
 
 def _jacob0_hessian0_batch(Q):
@@ -2695,15 +2696,14 @@ def _jacob0_hessian0_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)), )
+    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    return _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)

@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,14 @@ N_JOINTS = 7
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_21 = struct.Struct("21d").pack_into
+_PACK_26 = struct.Struct("26d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
+_PACK_28 = struct.Struct("28d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5, 6,),
@@ -36,17 +46,11 @@ CHAIN = ChainTables(
 
 
 def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = t0*t3
@@ -54,8 +58,8 @@ def _fkine_one(q):
     t8 = (0.316)*t6
     t9 = (0.316)*t7
     t10 = (0.316)*t2 + 0.333
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
+    t11 = cos(q2)
+    t12 = sin(q2)
     t13 = -t1*t12 + t11*t4
     t14 = t0*t12 + t11*t5
     t15 = -t11*t3
@@ -65,8 +69,8 @@ def _fkine_one(q):
     t19 = (0.0825)*t13 + t8
     t20 = (0.0825)*t14 + t9
     t21 = t10 + (0.0825)*t15
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
+    t22 = cos(q3)
+    t23 = -sin(q3)
     t24 = t13*t22 - t23*t6
     t25 = t14*t22 - t23*t7
     t26 = t15*t22 - t2*t23
@@ -79,16 +83,16 @@ def _fkine_one(q):
     t33 = (0.384)*t27 + t30
     t34 = (0.384)*t28 + t31
     t35 = (0.384)*t29 + t32
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
+    t36 = cos(q4)
+    t37 = sin(q4)
     t38 = t16*t37 + t24*t36
     t39 = t17*t37 + t25*t36
     t40 = t18*t37 + t26*t36
     t41 = t16*t36 - t24*t37
     t42 = t17*t36 - t25*t37
     t43 = t18*t36 - t26*t37
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
+    t44 = cos(q5)
+    t45 = -sin(q5)
     t46 = -t27*t45 + t38*t44
     t47 = -t28*t45 + t39*t44
     t48 = -t29*t45 + t40*t44
@@ -104,16 +108,17 @@ def _fkine_one(q):
     t66 = -0.1034*t49 + t55
     t67 = -0.1034*t50 + t56
     t68 = -0.1034*t51 + t57
-    t69 = math.sin(q6 + 0.7853981633974483)
-    t70 = -math.cos(q6 + 0.7853981633974483)
+    t69 = sin(q6 + 0.7853981633974483)
+    t70 = -cos(q6 + 0.7853981633974483)
     t71 = -t41*t70 + t46*t69
     t72 = -t42*t70 + t47*t69
     t73 = -t43*t70 + t48*t69
     t74 = -t41*t69 - t46*t70
     t75 = -t42*t69 - t47*t70
     t76 = -t43*t69 - t48*t70
-    T = np.array([t71, t74, -t49, t66, t72, t75, -t50, t67, t73, t76, -t51, t68, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t71, t74, -t49, t66, t72, t75, -t50, t67, t73, t76, -t51, t68, 0.0, 0.0, 0.0, 1.0)
+    return T
 
 
 def _fkine_batch(Q):
@@ -211,37 +216,30 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
+            return _fkine_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
-    return out[0]
+    return _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
 
 
 def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = t0*t3
@@ -249,8 +247,8 @@ def _link_poses_one(q):
     t8 = (0.316)*t6
     t9 = (0.316)*t7
     t10 = (0.316)*t2 + 0.333
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
+    t11 = cos(q2)
+    t12 = sin(q2)
     t13 = -t1*t12 + t11*t4
     t14 = t0*t12 + t11*t5
     t15 = -t11*t3
@@ -260,8 +258,8 @@ def _link_poses_one(q):
     t19 = (0.0825)*t13 + t8
     t20 = (0.0825)*t14 + t9
     t21 = t10 + (0.0825)*t15
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
+    t22 = cos(q3)
+    t23 = -sin(q3)
     t24 = t13*t22 - t23*t6
     t25 = t14*t22 - t23*t7
     t26 = t15*t22 - t2*t23
@@ -274,16 +272,16 @@ def _link_poses_one(q):
     t33 = (0.384)*t27 + t30
     t34 = (0.384)*t28 + t31
     t35 = (0.384)*t29 + t32
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
+    t36 = cos(q4)
+    t37 = sin(q4)
     t38 = t16*t37 + t24*t36
     t39 = t17*t37 + t25*t36
     t40 = t18*t37 + t26*t36
     t41 = t16*t36 - t24*t37
     t42 = t17*t36 - t25*t37
     t43 = t18*t36 - t26*t37
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
+    t44 = cos(q5)
+    t45 = -sin(q5)
     t46 = -t27*t45 + t38*t44
     t47 = -t28*t45 + t39*t44
     t48 = -t29*t45 + t40*t44
@@ -296,16 +294,20 @@ def _link_poses_one(q):
     t55 = -0.107*t49 + t52
     t56 = -0.107*t50 + t53
     t57 = -0.107*t51 + t54
-    t58 = math.cos(q6)
-    t59 = math.sin(q6)
+    t58 = cos(q6)
+    t59 = sin(q6)
     t60 = -t41*t59 + t46*t58
     t61 = -t42*t59 + t47*t58
     t62 = -t43*t59 + t48*t58
     t63 = -t41*t58 - t46*t59
     t64 = -t42*t58 - t47*t59
     t65 = -t43*t58 - t48*t59
-    links = np.array([t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.333, 0.0, 0.0, 0.0, 1.0, t4, -t1, t6, 0.0, t5, t0, t7, 0.0, -t3, 0.0, t2, 0.333, 0.0, 0.0, 0.0, 1.0, t13, t16, t6, t8, t14, t17, t7, t9, t15, t18, t2, t10, 0.0, 0.0, 0.0, 1.0, t24, t16, t27, t19, t25, t17, t28, t20, t26, t18, t29, t21, 0.0, 0.0, 0.0, 1.0, t38, t41, t27, t33, t39, t42, t28, t34, t40, t43, t29, t35, 0.0, 0.0, 0.0, 1.0, t46, t41, t49, t33, t47, t42, t50, t34, t48, t43, t51, t35, 0.0, 0.0, 0.0, 1.0, t60, t63, -t49, t55, t61, t64, -t50, t56, t62, t65, -t51, t57, 0.0, 0.0, 0.0, 1.0]).reshape((7, 4, 4))
-    return (links, )
+    links = _empty((7, 4, 4))
+    _PACK_28(links, 0, t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.333, 0.0, 0.0, 0.0, 1.0, t4, -t1, t6, 0.0, t5, t0, t7, 0.0, -t3, 0.0, t2, 0.333)
+    _PACK_28(links, 224, 0.0, 0.0, 0.0, 1.0, t13, t16, t6, t8, t14, t17, t7, t9, t15, t18, t2, t10, 0.0, 0.0, 0.0, 1.0, t24, t16, t27, t19, t25, t17, t28, t20)
+    _PACK_28(links, 448, t26, t18, t29, t21, 0.0, 0.0, 0.0, 1.0, t38, t41, t27, t33, t39, t42, t28, t34, t40, t43, t29, t35, 0.0, 0.0, 0.0, 1.0, t46, t41, t49, t33)
+    _PACK_28(links, 672, t47, t42, t50, t34, t48, t43, t51, t35, 0.0, 0.0, 0.0, 1.0, t60, t63, -t49, t55, t61, t64, -t50, t56, t62, t65, -t51, t57, 0.0, 0.0, 0.0, 1.0)
+    return links
 
 
 def _link_poses_batch(Q):
@@ -496,31 +498,25 @@ def _link_poses_batch(Q):
     links[:, 109] = 0.0
     links[:, 110] = 0.0
     links[:, 111] = 1.0
-    return (links.reshape((N,) + (7, 4, 4)), )
+    return links.reshape((N,) + (7, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
+            return _link_poses_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
-    return out[0]
+    return _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
 
 
 def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = t0*t3
@@ -528,8 +524,8 @@ def _jacob0_one(q):
     t8 = (0.316)*t6
     t9 = (0.316)*t7
     t10 = (0.316)*t2 + 0.333
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
+    t11 = cos(q2)
+    t12 = sin(q2)
     t13 = -t1*t12 + t11*t4
     t14 = t0*t12 + t11*t5
     t15 = -t11*t3
@@ -539,8 +535,8 @@ def _jacob0_one(q):
     t19 = (0.0825)*t13 + t8
     t20 = (0.0825)*t14 + t9
     t21 = t10 + (0.0825)*t15
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
+    t22 = cos(q3)
+    t23 = -sin(q3)
     t24 = t13*t22 - t23*t6
     t25 = t14*t22 - t23*t7
     t26 = t15*t22 - t2*t23
@@ -553,16 +549,16 @@ def _jacob0_one(q):
     t33 = (0.384)*t27 + t30
     t34 = (0.384)*t28 + t31
     t35 = (0.384)*t29 + t32
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
+    t36 = cos(q4)
+    t37 = sin(q4)
     t38 = t16*t37 + t24*t36
     t39 = t17*t37 + t25*t36
     t40 = t18*t37 + t26*t36
     t41 = t16*t36 - t24*t37
     t42 = t17*t36 - t25*t37
     t43 = t18*t36 - t26*t37
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
+    t44 = cos(q5)
+    t45 = -sin(q5)
     t46 = -t27*t45 + t38*t44
     t47 = -t28*t45 + t39*t44
     t48 = -t29*t45 + t40*t44
@@ -609,8 +605,10 @@ def _jacob0_one(q):
     t105 = t103*t51 - t104*t50
     t106 = -t102*t51 + t104*t49
     t107 = t102*t50 - t103*t49
-    J = np.array([-t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51]).reshape((6, 7))
-    return (J, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107)
+    _PACK_21(J, 168, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51)
+    return J
 
 
 def _jacob0_batch(Q):
@@ -756,44 +754,38 @@ def _jacob0_batch(Q):
     J[:, 39] = t29
     J[:, 40] = -t43
     J[:, 41] = -t51
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
+            return _jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
-    return out[0]
+    return _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
 
 
 def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
-    t69 = math.sin(q6 + 0.7853981633974483)
-    t70 = -math.cos(q6 + 0.7853981633974483)
+    _, q1, q2, q3, q4, q5, q6 = q
+    t2 = cos(q1)
+    t3 = sin(q1)
+    t11 = cos(q2)
+    t12 = sin(q2)
+    t22 = cos(q3)
+    t23 = -sin(q3)
+    t36 = cos(q4)
+    t37 = sin(q4)
+    t44 = cos(q5)
+    t45 = -sin(q5)
+    t69 = sin(q6 + 0.7853981633974483)
+    t70 = -cos(q6 + 0.7853981633974483)
     t108 = -0.088*t69
     t109 = (0.088)*t70
     t110 = -t45*t69
@@ -851,8 +843,10 @@ def _jacobe_one(q):
     t168 = t136*t146 - t137*t145
     t169 = -t135*t146 + t137*t144
     t170 = t135*t145 - t136*t144
-    J = np.array([t168, t165, t162, t159, t156, t153, 0.0, t169, t166, t163, t160, t157, t154, 0.0, t170, t167, t164, t161, t158, t155, 0.0, t144, t138, t132, -t123, t110, t70, 0.0, t145, t139, t133, -t124, t111, t69, 0.0, t146, t140, t134, -t125, -t44, 0.0, 1.0]).reshape((6, 7))
-    return (J, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, t168, t165, t162, t159, t156, t153, 0.0, t169, t166, t163, t160, t157, t154, 0.0, t170, t167, t164, t161, t158, t155, 0.0)
+    _PACK_21(J, 168, t144, t138, t132, -t123, t110, t70, 0.0, t145, t139, t133, -t124, t111, t69, 0.0, t146, t140, t134, -t125, -t44, 0.0, 1.0)
+    return J
 
 
 def _jacobe_batch(Q):
@@ -975,65 +969,58 @@ def _jacobe_batch(Q):
     J[:, 39] = -t44
     J[:, 40] = 0.0
     J[:, 41] = 1.0
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
+            return _jacobe_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
-    return out[0]
+    return _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
 
 
 def _hessian0_one(q):
     out = _jacob0_hessian0_one(q)
-    return (out[1], )
+    return out[1]
 
 
 def _hessian0_batch(Q):
     out = _jacob0_hessian0_batch(Q)
-    return (out[1], )
+    return out[1]
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
+            return _hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
+    return _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
 
 
 def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
-    t69 = math.sin(q6 + 0.7853981633974483)
-    t70 = -math.cos(q6 + 0.7853981633974483)
+    _, q1, q2, q3, q4, q5, q6 = q
+    t2 = cos(q1)
+    t3 = sin(q1)
+    t11 = cos(q2)
+    t12 = sin(q2)
+    t22 = cos(q3)
+    t23 = -sin(q3)
+    t36 = cos(q4)
+    t37 = sin(q4)
+    t44 = cos(q5)
+    t45 = -sin(q5)
+    t69 = sin(q6 + 0.7853981633974483)
+    t70 = -cos(q6 + 0.7853981633974483)
     t108 = -0.088*t69
     t109 = (0.088)*t70
     t110 = -t45*t69
@@ -1269,8 +1256,19 @@ def _hessiane_one(q):
     t449 = t443 - t446
     t450 = t444 - t447
     t451 = t110*t69 - t111*t70
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t209, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t210, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t211, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t212, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t213, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t247, t259, 0.0, 0.0, 0.0, 0.0, 0.0, t248, t260, 0.0, 0.0, 0.0, 0.0, 0.0, t249, t261, 0.0, 0.0, 0.0, 0.0, 0.0, t250, t262, 0.0, 0.0, 0.0, 0.0, 0.0, t251, t263, 0.0, 0.0, 0.0, 0.0, 0.0, t252, t264, 0.0, 0.0, 0.0, 0.0, 0.0, t292, t304, t316, 0.0, 0.0, 0.0, 0.0, t293, t305, t317, 0.0, 0.0, 0.0, 0.0, t294, t306, t318, 0.0, 0.0, 0.0, 0.0, t295, t307, t319, 0.0, 0.0, 0.0, 0.0, t296, t308, t320, 0.0, 0.0, 0.0, 0.0, t297, t309, t321, 0.0, 0.0, 0.0, 0.0, t343, t355, t367, t379, 0.0, 0.0, 0.0, t344, t356, t368, t380, 0.0, 0.0, 0.0, t345, t357, t369, t381, 0.0, 0.0, 0.0, t346, t358, t370, t382, 0.0, 0.0, 0.0, t347, t359, t371, t383, 0.0, 0.0, 0.0, t348, t360, t372, t384, 0.0, 0.0, 0.0, t400, t412, t424, t436, t448, 0.0, 0.0, t401, t413, t425, t437, t449, 0.0, 0.0, t402, t414, t426, t438, t450, 0.0, 0.0, t403, t415, t427, t439, t112, 0.0, 0.0, t404, t416, t428, t440, t113, 0.0, 0.0, t405, t417, t429, t441, t451, 0.0, 0.0, t169, t166, t163, t160, t157, t154, 0.0, -t168, -t165, -t162, -t159, -t156, -t153, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t145, t139, t133, -t124, t111, t69, 0.0, -t144, -t138, -t132, t123, -t110, -t70, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (H, )
+    H = _empty((7, 6, 7))
+    _PACK_26(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t209, 0.0, 0.0, 0.0)
+    _PACK_27(H, 424, 0.0, 0.0, 0.0, t210, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t211, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t212, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t213, 0.0, 0.0)
+    _PACK_26(H, 640, 0.0, 0.0, 0.0, 0.0, t247, t259, 0.0, 0.0, 0.0, 0.0, 0.0, t248, t260, 0.0, 0.0, 0.0, 0.0, 0.0, t249, t261, 0.0, 0.0, 0.0, 0.0, 0.0, t250)
+    _PACK_27(H, 848, t262, 0.0, 0.0, 0.0, 0.0, 0.0, t251, t263, 0.0, 0.0, 0.0, 0.0, 0.0, t252, t264, 0.0, 0.0, 0.0, 0.0, 0.0, t292, t304, t316, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1064, t293, t305, t317, 0.0, 0.0, 0.0, 0.0, t294, t306, t318, 0.0, 0.0, 0.0, 0.0, t295, t307, t319, 0.0, 0.0, 0.0, 0.0, t296, t308, t320, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1280, 0.0, t297, t309, t321, 0.0, 0.0, 0.0, 0.0, t343, t355, t367, t379, 0.0, 0.0, 0.0, t344, t356, t368, t380, 0.0, 0.0, 0.0, t345, t357, t369, t381, 0.0)
+    _PACK_26(H, 1496, 0.0, 0.0, t346, t358, t370, t382, 0.0, 0.0, 0.0, t347, t359, t371, t383, 0.0, 0.0, 0.0, t348, t360, t372, t384, 0.0, 0.0, 0.0, t400, t412, t424)
+    _PACK_27(H, 1704, t436, t448, 0.0, 0.0, t401, t413, t425, t437, t449, 0.0, 0.0, t402, t414, t426, t438, t450, 0.0, 0.0, t403, t415, t427, t439, t112, 0.0, 0.0, t404, t416)
+    _PACK_27(H, 1920, t428, t440, t113, 0.0, 0.0, t405, t417, t429, t441, t451, 0.0, 0.0, t169, t166, t163, t160, t157, t154, 0.0, -t168, -t165, -t162, -t159, -t156, -t153, 0.0, 0.0)
+    _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t145, t139, t133, -t124, t111, t69, 0.0, -t144, -t138, -t132, t123, -t110, -t70, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return H
 
 
 def _hessiane_batch(Q):
@@ -1823,32 +1821,25 @@ def _hessiane_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (H.reshape((N,) + (7, 6, 7)), )
+    return H.reshape((N,) + (7, 6, 7))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
+            return _hessiane_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
-    return out[0]
+    return _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
 
 
 def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = t0*t3
@@ -1856,8 +1847,8 @@ def _fkine_jacob0_one(q):
     t8 = (0.316)*t6
     t9 = (0.316)*t7
     t10 = (0.316)*t2 + 0.333
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
+    t11 = cos(q2)
+    t12 = sin(q2)
     t13 = -t1*t12 + t11*t4
     t14 = t0*t12 + t11*t5
     t15 = -t11*t3
@@ -1867,8 +1858,8 @@ def _fkine_jacob0_one(q):
     t19 = (0.0825)*t13 + t8
     t20 = (0.0825)*t14 + t9
     t21 = t10 + (0.0825)*t15
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
+    t22 = cos(q3)
+    t23 = -sin(q3)
     t24 = t13*t22 - t23*t6
     t25 = t14*t22 - t23*t7
     t26 = t15*t22 - t2*t23
@@ -1881,16 +1872,16 @@ def _fkine_jacob0_one(q):
     t33 = (0.384)*t27 + t30
     t34 = (0.384)*t28 + t31
     t35 = (0.384)*t29 + t32
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
+    t36 = cos(q4)
+    t37 = sin(q4)
     t38 = t16*t37 + t24*t36
     t39 = t17*t37 + t25*t36
     t40 = t18*t37 + t26*t36
     t41 = t16*t36 - t24*t37
     t42 = t17*t36 - t25*t37
     t43 = t18*t36 - t26*t37
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
+    t44 = cos(q5)
+    t45 = -sin(q5)
     t46 = -t27*t45 + t38*t44
     t47 = -t28*t45 + t39*t44
     t48 = -t29*t45 + t40*t44
@@ -1906,8 +1897,8 @@ def _fkine_jacob0_one(q):
     t66 = -0.1034*t49 + t55
     t67 = -0.1034*t50 + t56
     t68 = -0.1034*t51 + t57
-    t69 = math.sin(q6 + 0.7853981633974483)
-    t70 = -math.cos(q6 + 0.7853981633974483)
+    t69 = sin(q6 + 0.7853981633974483)
+    t70 = -cos(q6 + 0.7853981633974483)
     t71 = -t41*t70 + t46*t69
     t72 = -t42*t70 + t47*t69
     t73 = -t43*t70 + t48*t69
@@ -1945,9 +1936,12 @@ def _fkine_jacob0_one(q):
     t105 = t103*t51 - t104*t50
     t106 = -t102*t51 + t104*t49
     t107 = t102*t50 - t103*t49
-    T = np.array([t71, t74, -t49, t66, t72, t75, -t50, t67, t73, t76, -t51, t68, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51]).reshape((6, 7))
-    return (T, J, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t71, t74, -t49, t66, t72, t75, -t50, t67, t73, t76, -t51, t68, 0.0, 0.0, 0.0, 1.0)
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107)
+    _PACK_21(J, 168, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51)
+    return (T, J)
 
 
 def _fkine_jacob0_batch(Q):
@@ -2119,31 +2113,25 @@ def _fkine_jacob0_batch(Q):
     J[:, 39] = t29
     J[:, 40] = -t43
     J[:, 41] = -t51
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
+    return _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
 
 
 def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = t0*t3
@@ -2151,8 +2139,8 @@ def _jacob0_hessian0_one(q):
     t8 = (0.316)*t6
     t9 = (0.316)*t7
     t10 = (0.316)*t2 + 0.333
-    t11 = math.cos(q2)
-    t12 = math.sin(q2)
+    t11 = cos(q2)
+    t12 = sin(q2)
     t13 = -t1*t12 + t11*t4
     t14 = t0*t12 + t11*t5
     t15 = -t11*t3
@@ -2162,8 +2150,8 @@ def _jacob0_hessian0_one(q):
     t19 = (0.0825)*t13 + t8
     t20 = (0.0825)*t14 + t9
     t21 = t10 + (0.0825)*t15
-    t22 = math.cos(q3)
-    t23 = -math.sin(q3)
+    t22 = cos(q3)
+    t23 = -sin(q3)
     t24 = t13*t22 - t23*t6
     t25 = t14*t22 - t23*t7
     t26 = t15*t22 - t2*t23
@@ -2176,16 +2164,16 @@ def _jacob0_hessian0_one(q):
     t33 = (0.384)*t27 + t30
     t34 = (0.384)*t28 + t31
     t35 = (0.384)*t29 + t32
-    t36 = math.cos(q4)
-    t37 = math.sin(q4)
+    t36 = cos(q4)
+    t37 = sin(q4)
     t38 = t16*t37 + t24*t36
     t39 = t17*t37 + t25*t36
     t40 = t18*t37 + t26*t36
     t41 = t16*t36 - t24*t37
     t42 = t17*t36 - t25*t37
     t43 = t18*t36 - t26*t37
-    t44 = math.cos(q5)
-    t45 = -math.sin(q5)
+    t44 = cos(q5)
+    t45 = -sin(q5)
     t46 = -t27*t45 + t38*t44
     t47 = -t28*t45 + t39*t44
     t48 = -t29*t45 + t40*t44
@@ -2338,9 +2326,22 @@ def _jacob0_hessian0_one(q):
     t452 = t106*t51 - t107*t50
     t453 = -t105*t51 + t107*t49
     t454 = t105*t50 - t106*t49
-    J = np.array([-t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51]).reshape((6, 7))
-    H = np.array([-t66, -t79, -t85, -t91, -t97, -t100, -t106, -t67, t78, t84, t90, t96, t99, t105, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, -t7, t17, -t28, t42, t50, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t79, t171, t174, t178, t184, t190, t196, t78, t172, t175, t179, t185, t191, t197, 0.0, t173, t176, t180, t186, t192, t198, 0.0, 0.0, t4, t181, t187, t193, t199, 0.0, 0.0, t5, t182, t188, t194, t200, 0.0, 0.0, t177, t183, t189, t195, t201, -t85, t174, t214, t217, t223, t229, t235, t84, t175, t215, t218, t224, t230, t236, 0.0, t176, t216, t219, t225, t231, t237, 0.0, 0.0, 0.0, t220, t226, t232, t238, 0.0, 0.0, 0.0, t221, t227, t233, t239, 0.0, 0.0, 0.0, t222, t228, t234, t240, -t91, t178, t217, t265, t268, t274, t280, t90, t179, t218, t266, t269, t275, t281, 0.0, t180, t219, t267, t270, t276, t282, 0.0, 0.0, 0.0, 0.0, t271, t277, t283, 0.0, 0.0, 0.0, 0.0, t272, t278, t284, 0.0, 0.0, 0.0, 0.0, t273, t279, t285, -t97, t184, t223, t268, t322, t325, t331, t96, t185, t224, t269, t323, t326, t332, 0.0, t186, t225, t270, t324, t327, t333, 0.0, 0.0, 0.0, 0.0, 0.0, t328, t334, 0.0, 0.0, 0.0, 0.0, 0.0, t329, t335, 0.0, 0.0, 0.0, 0.0, 0.0, t330, t336, -t100, t190, t229, t274, t325, t385, t388, t99, t191, t230, t275, t326, t386, t389, 0.0, t192, t231, t276, t327, t387, t390, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t391, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t392, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t393, -t106, t196, t235, t280, t331, t388, t452, t105, t197, t236, t281, t332, t389, t453, 0.0, t198, t237, t282, t333, t390, t454, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (J, H, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107)
+    _PACK_21(J, 168, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51)
+    H = _empty((7, 6, 7))
+    _PACK_26(H, 0, -t66, -t79, -t85, -t91, -t97, -t100, -t106, -t67, t78, t84, t90, t96, t99, t105, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, -t7, t17, -t28)
+    _PACK_27(H, 208, t42, t50, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t79, t171, t174, t178, t184, t190, t196, t78, t172, t175, t179)
+    _PACK_27(H, 424, t185, t191, t197, 0.0, t173, t176, t180, t186, t192, t198, 0.0, 0.0, t4, t181, t187, t193, t199, 0.0, 0.0, t5, t182, t188, t194, t200, 0.0, 0.0, t177)
+    _PACK_26(H, 640, t183, t189, t195, t201, -t85, t174, t214, t217, t223, t229, t235, t84, t175, t215, t218, t224, t230, t236, 0.0, t176, t216, t219, t225, t231, t237, 0.0)
+    _PACK_27(H, 848, 0.0, 0.0, t220, t226, t232, t238, 0.0, 0.0, 0.0, t221, t227, t233, t239, 0.0, 0.0, 0.0, t222, t228, t234, t240, -t91, t178, t217, t265, t268, t274, t280)
+    _PACK_27(H, 1064, t90, t179, t218, t266, t269, t275, t281, 0.0, t180, t219, t267, t270, t276, t282, 0.0, 0.0, 0.0, 0.0, t271, t277, t283, 0.0, 0.0, 0.0, 0.0, t272, t278)
+    _PACK_27(H, 1280, t284, 0.0, 0.0, 0.0, 0.0, t273, t279, t285, -t97, t184, t223, t268, t322, t325, t331, t96, t185, t224, t269, t323, t326, t332, 0.0, t186, t225, t270, t324)
+    _PACK_26(H, 1496, t327, t333, 0.0, 0.0, 0.0, 0.0, 0.0, t328, t334, 0.0, 0.0, 0.0, 0.0, 0.0, t329, t335, 0.0, 0.0, 0.0, 0.0, 0.0, t330, t336, -t100, t190, t229)
+    _PACK_27(H, 1704, t274, t325, t385, t388, t99, t191, t230, t275, t326, t386, t389, 0.0, t192, t231, t276, t327, t387, t390, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t391, 0.0, 0.0)
+    _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t392, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t393, -t106, t196, t235, t280, t331, t388, t452, t105, t197, t236, t281, t332, t389, t453, 0.0)
+    _PACK_27(H, 2136, t198, t237, t282, t333, t390, t454, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (J, H)
 
 
 def _jacob0_hessian0_batch(Q):
@@ -2887,15 +2888,14 @@ def _jacob0_hessian0_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)), )
+    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    return _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)

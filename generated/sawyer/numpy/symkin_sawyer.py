@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,14 @@ N_JOINTS = 7
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_21 = struct.Struct("21d").pack_into
+_PACK_26 = struct.Struct("26d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
+_PACK_28 = struct.Struct("28d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5, 6,),
@@ -36,27 +46,21 @@ CHAIN = ChainTables(
 
 
 def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
     t2 = (0.081)*t0
     t3 = (0.081)*t1
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
+    t4 = cos(q1)
+    t5 = sin(q1)
     t6 = t0*t4
     t7 = t1*t4
     t8 = -t0*t5
     t9 = -t1*t5
     t10 = -0.1925*t1 + t2
     t11 = (0.1925)*t0 + t3
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
+    t12 = cos(q2)
+    t13 = sin(q2)
     t14 = t1*t13 + t12*t6
     t15 = -t0*t13 + t12*t7
     t16 = -t12*t5
@@ -66,8 +70,8 @@ def _fkine_one(q):
     t20 = t10 + (0.4)*t8
     t21 = t11 + (0.4)*t9
     t22 = 0.317 - 0.4*t4
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
+    t23 = cos(q3)
+    t24 = sin(q3)
     t25 = t14*t23 - t24*t8
     t26 = t15*t23 - t24*t9
     t27 = t16*t23 + t24*t4
@@ -77,8 +81,8 @@ def _fkine_one(q):
     t31 = (0.1685)*t17 + t20
     t32 = (0.1685)*t18 + t21
     t33 = (0.1685)*t19 + t22
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
+    t34 = cos(q4)
+    t35 = sin(q4)
     t36 = -t17*t35 + t25*t34
     t37 = -t18*t35 + t26*t34
     t38 = -t19*t35 + t27*t34
@@ -88,8 +92,8 @@ def _fkine_one(q):
     t42 = (0.4)*t28 + t31
     t43 = (0.4)*t29 + t32
     t44 = (0.4)*t30 + t33
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
+    t45 = cos(q5)
+    t46 = sin(q5)
     t47 = -t28*t46 + t36*t45
     t48 = -t29*t46 + t37*t45
     t49 = -t30*t46 + t38*t45
@@ -99,8 +103,8 @@ def _fkine_one(q):
     t53 = (0.1363)*t39 + t42
     t54 = (0.1363)*t40 + t43
     t55 = (0.1363)*t41 + t44
-    t56 = math.cos(q6)
-    t57 = math.sin(q6)
+    t56 = cos(q6)
+    t57 = sin(q6)
     t58 = -t39*t57 + t47*t56
     t59 = -t40*t57 + t48*t56
     t60 = -t41*t57 + t49*t56
@@ -110,8 +114,9 @@ def _fkine_one(q):
     t64 = (0.13375)*t50 + t53
     t65 = (0.13375)*t51 + t54
     t66 = (0.13375)*t52 + t55
-    T = np.array([t58, t61, t50, t64, t59, t62, t51, t65, t60, t63, t52, t66, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t58, t61, t50, t64, t59, t62, t51, t65, t60, t63, t52, t66, 0.0, 0.0, 0.0, 1.0)
+    return T
 
 
 def _fkine_batch(Q):
@@ -207,47 +212,40 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
+            return _fkine_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
-    return out[0]
+    return _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
 
 
 def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
     t2 = (0.081)*t0
     t3 = (0.081)*t1
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
+    t4 = cos(q1)
+    t5 = sin(q1)
     t6 = t0*t4
     t7 = t1*t4
     t8 = -t0*t5
     t9 = -t1*t5
     t10 = -0.1925*t1 + t2
     t11 = (0.1925)*t0 + t3
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
+    t12 = cos(q2)
+    t13 = sin(q2)
     t14 = t1*t13 + t12*t6
     t15 = -t0*t13 + t12*t7
     t16 = -t12*t5
@@ -257,8 +255,8 @@ def _link_poses_one(q):
     t20 = t10 + (0.4)*t8
     t21 = t11 + (0.4)*t9
     t22 = 0.317 - 0.4*t4
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
+    t23 = cos(q3)
+    t24 = sin(q3)
     t25 = t14*t23 - t24*t8
     t26 = t15*t23 - t24*t9
     t27 = t16*t23 + t24*t4
@@ -268,8 +266,8 @@ def _link_poses_one(q):
     t31 = (0.1685)*t17 + t20
     t32 = (0.1685)*t18 + t21
     t33 = (0.1685)*t19 + t22
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
+    t34 = cos(q4)
+    t35 = sin(q4)
     t36 = -t17*t35 + t25*t34
     t37 = -t18*t35 + t26*t34
     t38 = -t19*t35 + t27*t34
@@ -279,8 +277,8 @@ def _link_poses_one(q):
     t42 = (0.4)*t28 + t31
     t43 = (0.4)*t29 + t32
     t44 = (0.4)*t30 + t33
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
+    t45 = cos(q5)
+    t46 = sin(q5)
     t47 = -t28*t46 + t36*t45
     t48 = -t29*t46 + t37*t45
     t49 = -t30*t46 + t38*t45
@@ -290,16 +288,20 @@ def _link_poses_one(q):
     t53 = (0.1363)*t39 + t42
     t54 = (0.1363)*t40 + t43
     t55 = (0.1363)*t41 + t44
-    t56 = math.cos(q6)
-    t57 = math.sin(q6)
+    t56 = cos(q6)
+    t57 = sin(q6)
     t58 = -t39*t57 + t47*t56
     t59 = -t40*t57 + t48*t56
     t60 = -t41*t57 + t49*t56
     t61 = -t39*t56 - t47*t57
     t62 = -t40*t56 - t48*t57
     t63 = -t41*t56 - t49*t57
-    links = np.array([t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t6, t8, -t1, t2, t7, t9, t0, t3, -t5, -t4, 0.0, 0.317, 0.0, 0.0, 0.0, 1.0, t14, t17, t8, t10, t15, t18, t9, t11, t16, t19, -t4, 0.317, 0.0, 0.0, 0.0, 1.0, t25, t28, t17, t20, t26, t29, t18, t21, t27, t30, t19, t22, 0.0, 0.0, 0.0, 1.0, t36, t39, t28, t31, t37, t40, t29, t32, t38, t41, t30, t33, 0.0, 0.0, 0.0, 1.0, t47, t50, t39, t42, t48, t51, t40, t43, t49, t52, t41, t44, 0.0, 0.0, 0.0, 1.0, t58, t61, t50, t53, t59, t62, t51, t54, t60, t63, t52, t55, 0.0, 0.0, 0.0, 1.0]).reshape((7, 4, 4))
-    return (links, )
+    links = _empty((7, 4, 4))
+    _PACK_28(links, 0, t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t6, t8, -t1, t2, t7, t9, t0, t3, -t5, -t4, 0.0, 0.317)
+    _PACK_28(links, 224, 0.0, 0.0, 0.0, 1.0, t14, t17, t8, t10, t15, t18, t9, t11, t16, t19, -t4, 0.317, 0.0, 0.0, 0.0, 1.0, t25, t28, t17, t20, t26, t29, t18, t21)
+    _PACK_28(links, 448, t27, t30, t19, t22, 0.0, 0.0, 0.0, 1.0, t36, t39, t28, t31, t37, t40, t29, t32, t38, t41, t30, t33, 0.0, 0.0, 0.0, 1.0, t47, t50, t39, t42)
+    _PACK_28(links, 672, t48, t51, t40, t43, t49, t52, t41, t44, 0.0, 0.0, 0.0, 1.0, t58, t61, t50, t53, t59, t62, t51, t54, t60, t63, t52, t55, 0.0, 0.0, 0.0, 1.0)
+    return links
 
 
 def _link_poses_batch(Q):
@@ -488,41 +490,35 @@ def _link_poses_batch(Q):
     links[:, 109] = 0.0
     links[:, 110] = 0.0
     links[:, 111] = 1.0
-    return (links.reshape((N,) + (7, 4, 4)), )
+    return links.reshape((N,) + (7, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
+            return _link_poses_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
-    return out[0]
+    return _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
 
 
 def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
+    q0, q1, q2, q3, q4, q5, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
     t2 = (0.081)*t0
     t3 = (0.081)*t1
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
+    t4 = cos(q1)
+    t5 = sin(q1)
     t6 = t0*t4
     t7 = t1*t4
     t8 = -t0*t5
     t9 = -t1*t5
     t10 = -0.1925*t1 + t2
     t11 = (0.1925)*t0 + t3
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
+    t12 = cos(q2)
+    t13 = sin(q2)
     t14 = t1*t13 + t12*t6
     t15 = -t0*t13 + t12*t7
     t16 = -t12*t5
@@ -532,8 +528,8 @@ def _jacob0_one(q):
     t20 = t10 + (0.4)*t8
     t21 = t11 + (0.4)*t9
     t22 = 0.317 - 0.4*t4
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
+    t23 = cos(q3)
+    t24 = sin(q3)
     t25 = t14*t23 - t24*t8
     t26 = t15*t23 - t24*t9
     t27 = t16*t23 + t24*t4
@@ -543,8 +539,8 @@ def _jacob0_one(q):
     t31 = (0.1685)*t17 + t20
     t32 = (0.1685)*t18 + t21
     t33 = (0.1685)*t19 + t22
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
+    t34 = cos(q4)
+    t35 = sin(q4)
     t36 = -t17*t35 + t25*t34
     t37 = -t18*t35 + t26*t34
     t38 = -t19*t35 + t27*t34
@@ -554,8 +550,8 @@ def _jacob0_one(q):
     t42 = (0.4)*t28 + t31
     t43 = (0.4)*t29 + t32
     t44 = (0.4)*t30 + t33
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
+    t45 = cos(q5)
+    t46 = sin(q5)
     t50 = -t28*t45 - t36*t46
     t51 = -t29*t45 - t37*t46
     t52 = -t30*t45 - t38*t46
@@ -600,8 +596,10 @@ def _jacob0_one(q):
     t99 = t51*t98 - t52*t97
     t100 = -t50*t98 + t52*t96
     t101 = t50*t97 - t51*t96
-    J = np.array([-t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, t0, t9, t18, t29, t40, t51, 1.0, 0.0, -t4, t19, t30, t41, t52]).reshape((6, 7))
-    return (J, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101)
+    _PACK_21(J, 168, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, t0, t9, t18, t29, t40, t51, 1.0, 0.0, -t4, t19, t30, t41, t52)
+    return J
 
 
 def _jacob0_batch(Q):
@@ -746,44 +744,38 @@ def _jacob0_batch(Q):
     J[:, 39] = t30
     J[:, 40] = t41
     J[:, 41] = t52
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
+            return _jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
-    return out[0]
+    return _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
 
 
 def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
-    t56 = math.cos(q6)
-    t57 = math.sin(q6)
+    _, q1, q2, q3, q4, q5, q6 = q
+    t4 = cos(q1)
+    t5 = sin(q1)
+    t12 = cos(q2)
+    t13 = sin(q2)
+    t23 = cos(q3)
+    t24 = sin(q3)
+    t34 = cos(q4)
+    t35 = sin(q4)
+    t45 = cos(q5)
+    t46 = sin(q5)
+    t56 = cos(q6)
+    t57 = sin(q6)
     t102 = (0.1363)*t57
     t103 = (0.1363)*t56
     t104 = t45*t56
@@ -850,8 +842,10 @@ def _jacobe_one(q):
     t165 = t142*t149 - t143*t148
     t166 = -t141*t149 + t143*t147
     t167 = t141*t148 - t142*t147
-    J = np.array([t165, t162, t159, t156, t153, t150, 0.0, t166, t163, t160, t157, t154, t151, 0.0, t167, t164, t161, t158, t155, t152, 0.0, -t141, -t132, -t123, -t114, -t106, -t57, 0.0, -t142, -t133, -t124, -t115, -t107, -t56, 0.0, -t143, -t134, -t125, -t116, -t45, 0.0, 1.0]).reshape((6, 7))
-    return (J, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, t165, t162, t159, t156, t153, t150, 0.0, t166, t163, t160, t157, t154, t151, 0.0, t167, t164, t161, t158, t155, t152, 0.0)
+    _PACK_21(J, 168, -t141, -t132, -t123, -t114, -t106, -t57, 0.0, -t142, -t133, -t124, -t115, -t107, -t56, 0.0, -t143, -t134, -t125, -t116, -t45, 0.0, 1.0)
+    return J
 
 
 def _jacobe_batch(Q):
@@ -983,65 +977,58 @@ def _jacobe_batch(Q):
     J[:, 39] = -t45
     J[:, 40] = 0.0
     J[:, 41] = 1.0
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
+            return _jacobe_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
-    return out[0]
+    return _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
 
 
 def _hessian0_one(q):
     out = _jacob0_hessian0_one(q)
-    return (out[1], )
+    return out[1]
 
 
 def _hessian0_batch(Q):
     out = _jacob0_hessian0_batch(Q)
-    return (out[1], )
+    return out[1]
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
+            return _hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
+    return _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
 
 
 def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
-    t56 = math.cos(q6)
-    t57 = math.sin(q6)
+    _, q1, q2, q3, q4, q5, q6 = q
+    t4 = cos(q1)
+    t5 = sin(q1)
+    t12 = cos(q2)
+    t13 = sin(q2)
+    t23 = cos(q3)
+    t24 = sin(q3)
+    t34 = cos(q4)
+    t35 = sin(q4)
+    t45 = cos(q5)
+    t46 = sin(q5)
+    t56 = cos(q6)
+    t57 = sin(q6)
     t102 = (0.1363)*t57
     t103 = (0.1363)*t56
     t104 = t45*t56
@@ -1286,8 +1273,19 @@ def _hessiane_one(q):
     t446 = t440 - t443
     t447 = t441 - t444
     t448 = t106*t56 - t107*t57
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t205, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t206, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t209, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t210, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t244, t256, 0.0, 0.0, 0.0, 0.0, 0.0, t245, t257, 0.0, 0.0, 0.0, 0.0, 0.0, t246, t258, 0.0, 0.0, 0.0, 0.0, 0.0, t247, t259, 0.0, 0.0, 0.0, 0.0, 0.0, t248, t260, 0.0, 0.0, 0.0, 0.0, 0.0, t249, t261, 0.0, 0.0, 0.0, 0.0, 0.0, t289, t301, t313, 0.0, 0.0, 0.0, 0.0, t290, t302, t314, 0.0, 0.0, 0.0, 0.0, t291, t303, t315, 0.0, 0.0, 0.0, 0.0, t292, t304, t316, 0.0, 0.0, 0.0, 0.0, t293, t305, t317, 0.0, 0.0, 0.0, 0.0, t294, t306, t318, 0.0, 0.0, 0.0, 0.0, t340, t352, t364, t376, 0.0, 0.0, 0.0, t341, t353, t365, t377, 0.0, 0.0, 0.0, t342, t354, t366, t378, 0.0, 0.0, 0.0, t343, t355, t367, t379, 0.0, 0.0, 0.0, t344, t356, t368, t380, 0.0, 0.0, 0.0, t345, t357, t369, t381, 0.0, 0.0, 0.0, t397, t409, t421, t433, t445, 0.0, 0.0, t398, t410, t422, t434, t446, 0.0, 0.0, t399, t411, t423, t435, t447, 0.0, 0.0, t400, t412, t424, t436, -t104, 0.0, 0.0, t401, t413, t425, t437, -t105, 0.0, 0.0, t402, t414, t426, t438, t448, 0.0, 0.0, t166, t163, t160, t157, t154, t151, 0.0, -t165, -t162, -t159, -t156, -t153, -t150, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t142, -t133, -t124, -t115, -t107, -t56, 0.0, t141, t132, t123, t114, t106, t57, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (H, )
+    H = _empty((7, 6, 7))
+    _PACK_26(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t205, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t206, 0.0, 0.0, 0.0)
+    _PACK_27(H, 424, 0.0, 0.0, 0.0, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t209, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t210, 0.0, 0.0)
+    _PACK_26(H, 640, 0.0, 0.0, 0.0, 0.0, t244, t256, 0.0, 0.0, 0.0, 0.0, 0.0, t245, t257, 0.0, 0.0, 0.0, 0.0, 0.0, t246, t258, 0.0, 0.0, 0.0, 0.0, 0.0, t247)
+    _PACK_27(H, 848, t259, 0.0, 0.0, 0.0, 0.0, 0.0, t248, t260, 0.0, 0.0, 0.0, 0.0, 0.0, t249, t261, 0.0, 0.0, 0.0, 0.0, 0.0, t289, t301, t313, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1064, t290, t302, t314, 0.0, 0.0, 0.0, 0.0, t291, t303, t315, 0.0, 0.0, 0.0, 0.0, t292, t304, t316, 0.0, 0.0, 0.0, 0.0, t293, t305, t317, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1280, 0.0, t294, t306, t318, 0.0, 0.0, 0.0, 0.0, t340, t352, t364, t376, 0.0, 0.0, 0.0, t341, t353, t365, t377, 0.0, 0.0, 0.0, t342, t354, t366, t378, 0.0)
+    _PACK_26(H, 1496, 0.0, 0.0, t343, t355, t367, t379, 0.0, 0.0, 0.0, t344, t356, t368, t380, 0.0, 0.0, 0.0, t345, t357, t369, t381, 0.0, 0.0, 0.0, t397, t409, t421)
+    _PACK_27(H, 1704, t433, t445, 0.0, 0.0, t398, t410, t422, t434, t446, 0.0, 0.0, t399, t411, t423, t435, t447, 0.0, 0.0, t400, t412, t424, t436, -t104, 0.0, 0.0, t401, t413)
+    _PACK_27(H, 1920, t425, t437, -t105, 0.0, 0.0, t402, t414, t426, t438, t448, 0.0, 0.0, t166, t163, t160, t157, t154, t151, 0.0, -t165, -t162, -t159, -t156, -t153, -t150, 0.0, 0.0)
+    _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t142, -t133, -t124, -t115, -t107, -t56, 0.0, t141, t132, t123, t114, t106, t57, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return H
 
 
 def _hessiane_batch(Q):
@@ -1849,42 +1847,35 @@ def _hessiane_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (H.reshape((N,) + (7, 6, 7)), )
+    return H.reshape((N,) + (7, 6, 7))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
+            return _hessiane_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
-    return out[0]
+    return _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
 
 
 def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
+    q0, q1, q2, q3, q4, q5, q6 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
     t2 = (0.081)*t0
     t3 = (0.081)*t1
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
+    t4 = cos(q1)
+    t5 = sin(q1)
     t6 = t0*t4
     t7 = t1*t4
     t8 = -t0*t5
     t9 = -t1*t5
     t10 = -0.1925*t1 + t2
     t11 = (0.1925)*t0 + t3
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
+    t12 = cos(q2)
+    t13 = sin(q2)
     t14 = t1*t13 + t12*t6
     t15 = -t0*t13 + t12*t7
     t16 = -t12*t5
@@ -1894,8 +1885,8 @@ def _fkine_jacob0_one(q):
     t20 = t10 + (0.4)*t8
     t21 = t11 + (0.4)*t9
     t22 = 0.317 - 0.4*t4
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
+    t23 = cos(q3)
+    t24 = sin(q3)
     t25 = t14*t23 - t24*t8
     t26 = t15*t23 - t24*t9
     t27 = t16*t23 + t24*t4
@@ -1905,8 +1896,8 @@ def _fkine_jacob0_one(q):
     t31 = (0.1685)*t17 + t20
     t32 = (0.1685)*t18 + t21
     t33 = (0.1685)*t19 + t22
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
+    t34 = cos(q4)
+    t35 = sin(q4)
     t36 = -t17*t35 + t25*t34
     t37 = -t18*t35 + t26*t34
     t38 = -t19*t35 + t27*t34
@@ -1916,8 +1907,8 @@ def _fkine_jacob0_one(q):
     t42 = (0.4)*t28 + t31
     t43 = (0.4)*t29 + t32
     t44 = (0.4)*t30 + t33
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
+    t45 = cos(q5)
+    t46 = sin(q5)
     t47 = -t28*t46 + t36*t45
     t48 = -t29*t46 + t37*t45
     t49 = -t30*t46 + t38*t45
@@ -1927,8 +1918,8 @@ def _fkine_jacob0_one(q):
     t53 = (0.1363)*t39 + t42
     t54 = (0.1363)*t40 + t43
     t55 = (0.1363)*t41 + t44
-    t56 = math.cos(q6)
-    t57 = math.sin(q6)
+    t56 = cos(q6)
+    t57 = sin(q6)
     t58 = -t39*t57 + t47*t56
     t59 = -t40*t57 + t48*t56
     t60 = -t41*t57 + t49*t56
@@ -1973,9 +1964,12 @@ def _fkine_jacob0_one(q):
     t99 = t51*t98 - t52*t97
     t100 = -t50*t98 + t52*t96
     t101 = t50*t97 - t51*t96
-    T = np.array([t58, t61, t50, t64, t59, t62, t51, t65, t60, t63, t52, t66, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, t0, t9, t18, t29, t40, t51, 1.0, 0.0, -t4, t19, t30, t41, t52]).reshape((6, 7))
-    return (T, J, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t58, t61, t50, t64, t59, t62, t51, t65, t60, t63, t52, t66, 0.0, 0.0, 0.0, 1.0)
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101)
+    _PACK_21(J, 168, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, t0, t9, t18, t29, t40, t51, 1.0, 0.0, -t4, t19, t30, t41, t52)
+    return (T, J)
 
 
 def _fkine_jacob0_batch(Q):
@@ -2149,41 +2143,35 @@ def _fkine_jacob0_batch(Q):
     J[:, 39] = t30
     J[:, 40] = t41
     J[:, 41] = t52
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
+    return _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
 
 
 def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
+    q0, q1, q2, q3, q4, q5, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
     t2 = (0.081)*t0
     t3 = (0.081)*t1
-    t4 = math.cos(q1)
-    t5 = math.sin(q1)
+    t4 = cos(q1)
+    t5 = sin(q1)
     t6 = t0*t4
     t7 = t1*t4
     t8 = -t0*t5
     t9 = -t1*t5
     t10 = -0.1925*t1 + t2
     t11 = (0.1925)*t0 + t3
-    t12 = math.cos(q2)
-    t13 = math.sin(q2)
+    t12 = cos(q2)
+    t13 = sin(q2)
     t14 = t1*t13 + t12*t6
     t15 = -t0*t13 + t12*t7
     t16 = -t12*t5
@@ -2193,8 +2181,8 @@ def _jacob0_hessian0_one(q):
     t20 = t10 + (0.4)*t8
     t21 = t11 + (0.4)*t9
     t22 = 0.317 - 0.4*t4
-    t23 = math.cos(q3)
-    t24 = math.sin(q3)
+    t23 = cos(q3)
+    t24 = sin(q3)
     t25 = t14*t23 - t24*t8
     t26 = t15*t23 - t24*t9
     t27 = t16*t23 + t24*t4
@@ -2204,8 +2192,8 @@ def _jacob0_hessian0_one(q):
     t31 = (0.1685)*t17 + t20
     t32 = (0.1685)*t18 + t21
     t33 = (0.1685)*t19 + t22
-    t34 = math.cos(q4)
-    t35 = math.sin(q4)
+    t34 = cos(q4)
+    t35 = sin(q4)
     t36 = -t17*t35 + t25*t34
     t37 = -t18*t35 + t26*t34
     t38 = -t19*t35 + t27*t34
@@ -2215,8 +2203,8 @@ def _jacob0_hessian0_one(q):
     t42 = (0.4)*t28 + t31
     t43 = (0.4)*t29 + t32
     t44 = (0.4)*t30 + t33
-    t45 = math.cos(q5)
-    t46 = math.sin(q5)
+    t45 = cos(q5)
+    t46 = sin(q5)
     t50 = -t28*t45 - t36*t46
     t51 = -t29*t45 - t37*t46
     t52 = -t30*t45 - t38*t46
@@ -2367,9 +2355,22 @@ def _jacob0_hessian0_one(q):
     t449 = -t100*t52 + t101*t51
     t450 = -t101*t50 + t52*t99
     t451 = t100*t50 - t51*t99
-    J = np.array([-t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, t0, t9, t18, t29, t40, t51, 1.0, 0.0, -t4, t19, t30, t41, t52]).reshape((6, 7))
-    H = np.array([-t64, -t71, -t76, -t82, -t88, -t94, -t100, -t65, t70, t75, t81, t87, t93, t99, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, -t9, -t18, -t29, -t40, -t51, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t71, t168, t171, t175, t181, t187, t193, t70, t169, t172, t176, t182, t188, t194, 0.0, t170, t173, t177, t183, t189, t195, 0.0, 0.0, -t6, t178, t184, t190, t196, 0.0, 0.0, -t7, t179, t185, t191, t197, 0.0, 0.0, t174, t180, t186, t192, t198, -t76, t171, t211, t214, t220, t226, t232, t75, t172, t212, t215, t221, t227, t233, 0.0, t173, t213, t216, t222, t228, t234, 0.0, 0.0, 0.0, t217, t223, t229, t235, 0.0, 0.0, 0.0, t218, t224, t230, t236, 0.0, 0.0, 0.0, t219, t225, t231, t237, -t82, t175, t214, t262, t265, t271, t277, t81, t176, t215, t263, t266, t272, t278, 0.0, t177, t216, t264, t267, t273, t279, 0.0, 0.0, 0.0, 0.0, t268, t274, t280, 0.0, 0.0, 0.0, 0.0, t269, t275, t281, 0.0, 0.0, 0.0, 0.0, t270, t276, t282, -t88, t181, t220, t265, t319, t322, t328, t87, t182, t221, t266, t320, t323, t329, 0.0, t183, t222, t267, t321, t324, t330, 0.0, 0.0, 0.0, 0.0, 0.0, t325, t331, 0.0, 0.0, 0.0, 0.0, 0.0, t326, t332, 0.0, 0.0, 0.0, 0.0, 0.0, t327, t333, -t94, t187, t226, t271, t322, t382, t385, t93, t188, t227, t272, t323, t383, t386, 0.0, t189, t228, t273, t324, t384, t387, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t388, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t389, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t390, -t100, t193, t232, t277, t328, t385, t449, t99, t194, t233, t278, t329, t386, t450, 0.0, t195, t234, t279, t330, t387, t451, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (J, H, )
+    J = _empty((6, 7))
+    _PACK_21(J, 0, -t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101)
+    _PACK_21(J, 168, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, t0, t9, t18, t29, t40, t51, 1.0, 0.0, -t4, t19, t30, t41, t52)
+    H = _empty((7, 6, 7))
+    _PACK_26(H, 0, -t64, -t71, -t76, -t82, -t88, -t94, -t100, -t65, t70, t75, t81, t87, t93, t99, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, -t9, -t18, -t29)
+    _PACK_27(H, 208, -t40, -t51, 0.0, -t1, t8, t17, t28, t39, t50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t71, t168, t171, t175, t181, t187, t193, t70, t169, t172, t176)
+    _PACK_27(H, 424, t182, t188, t194, 0.0, t170, t173, t177, t183, t189, t195, 0.0, 0.0, -t6, t178, t184, t190, t196, 0.0, 0.0, -t7, t179, t185, t191, t197, 0.0, 0.0, t174)
+    _PACK_26(H, 640, t180, t186, t192, t198, -t76, t171, t211, t214, t220, t226, t232, t75, t172, t212, t215, t221, t227, t233, 0.0, t173, t213, t216, t222, t228, t234, 0.0)
+    _PACK_27(H, 848, 0.0, 0.0, t217, t223, t229, t235, 0.0, 0.0, 0.0, t218, t224, t230, t236, 0.0, 0.0, 0.0, t219, t225, t231, t237, -t82, t175, t214, t262, t265, t271, t277)
+    _PACK_27(H, 1064, t81, t176, t215, t263, t266, t272, t278, 0.0, t177, t216, t264, t267, t273, t279, 0.0, 0.0, 0.0, 0.0, t268, t274, t280, 0.0, 0.0, 0.0, 0.0, t269, t275)
+    _PACK_27(H, 1280, t281, 0.0, 0.0, 0.0, 0.0, t270, t276, t282, -t88, t181, t220, t265, t319, t322, t328, t87, t182, t221, t266, t320, t323, t329, 0.0, t183, t222, t267, t321)
+    _PACK_26(H, 1496, t324, t330, 0.0, 0.0, 0.0, 0.0, 0.0, t325, t331, 0.0, 0.0, 0.0, 0.0, 0.0, t326, t332, 0.0, 0.0, 0.0, 0.0, 0.0, t327, t333, -t94, t187, t226)
+    _PACK_27(H, 1704, t271, t322, t382, t385, t93, t188, t227, t272, t323, t383, t386, 0.0, t189, t228, t273, t324, t384, t387, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t388, 0.0, 0.0)
+    _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t389, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t390, -t100, t193, t232, t277, t328, t385, t449, t99, t194, t233, t278, t329, t386, t450, 0.0)
+    _PACK_27(H, 2136, t195, t234, t279, t330, t387, t451, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (J, H)
 
 
 def _jacob0_hessian0_batch(Q):
@@ -2915,15 +2916,14 @@ def _jacob0_hessian0_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)), )
+    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    return _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)

@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,13 @@ N_JOINTS = 6
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_18 = struct.Struct("18d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5,),
@@ -36,16 +45,11 @@ CHAIN = ChainTables(
 
 
 def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
@@ -57,24 +61,24 @@ def _fkine_one(q):
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
     t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
+    t15 = sin(q3)
+    t16 = -cos(q3)
     t17 = -t1*t16 + t15*t4
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
     t21 = t0*t15 - t16*t5
     t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
+    t23 = cos(q4)
+    t24 = sin(q4)
     t25 = t17*t23 + t24*t6
     t26 = t18*t23 + t24*t7
     t27 = t19*t23 - t2*t24
     t28 = -t17*t24 + t23*t6
     t29 = -t18*t24 + t23*t7
     t30 = -t19*t24 - t2*t23
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
+    t31 = cos(q5)
+    t32 = sin(q5)
     t33 = t20*t32 + t25*t31
     t34 = t21*t32 + t26*t31
     t35 = t22*t32 + t27*t31
@@ -84,8 +88,9 @@ def _fkine_one(q):
     t39 = t13 - 0.263*t28
     t40 = t14 - 0.263*t29
     t41 = t12 - 0.263*t30
-    T = np.array([t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0)
+    return T
 
 
 def _fkine_batch(Q):
@@ -155,36 +160,30 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
+            return _fkine_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
-    return out[0]
+    return _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
 
 
 def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
@@ -196,32 +195,36 @@ def _link_poses_one(q):
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
     t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
+    t15 = sin(q3)
+    t16 = -cos(q3)
     t17 = -t1*t16 + t15*t4
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
     t21 = t0*t15 - t16*t5
     t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
+    t23 = cos(q4)
+    t24 = sin(q4)
     t25 = t17*t23 + t24*t6
     t26 = t18*t23 + t24*t7
     t27 = t19*t23 - t2*t24
     t28 = -t17*t24 + t23*t6
     t29 = -t18*t24 + t23*t7
     t30 = -t19*t24 - t2*t23
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
+    t31 = cos(q5)
+    t32 = sin(q5)
     t33 = t20*t32 + t25*t31
     t34 = t21*t32 + t26*t31
     t35 = t22*t32 + t27*t31
     t36 = t20*t31 - t25*t32
     t37 = t21*t31 - t26*t32
     t38 = t22*t31 - t27*t32
-    links = np.array([t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0, -t3, -t2, 0.0, 0.412, 0.0, 0.0, 0.0, 1.0, t1, t4, -t6, t10, -t0, t5, -t7, t11, 0.0, -t3, t2, t12, 0.0, 0.0, 0.0, 1.0, t17, t20, -t6, t13, t18, t21, -t7, t14, t19, t22, t2, t12, 0.0, 0.0, 0.0, 1.0, t25, t28, t20, t13, t26, t29, t21, t14, t27, t30, t22, t12, 0.0, 0.0, 0.0, 1.0, t33, t36, -t28, t13, t34, t37, -t29, t14, t35, t38, -t30, t12, 0.0, 0.0, 0.0, 1.0]).reshape((6, 4, 4))
-    return (links, )
+    links = _empty((6, 4, 4))
+    _PACK_24(links, 0, t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0)
+    _PACK_24(links, 192, -t3, -t2, 0.0, 0.412, 0.0, 0.0, 0.0, 1.0, t1, t4, -t6, t10, -t0, t5, -t7, t11, 0.0, -t3, t2, t12, 0.0, 0.0, 0.0, 1.0)
+    _PACK_24(links, 384, t17, t20, -t6, t13, t18, t21, -t7, t14, t19, t22, t2, t12, 0.0, 0.0, 0.0, 1.0, t25, t28, t20, t13, t26, t29, t21, t14)
+    _PACK_24(links, 576, t27, t30, t22, t12, 0.0, 0.0, 0.0, 1.0, t33, t36, -t28, t13, t34, t37, -t29, t14, t35, t38, -t30, t12, 0.0, 0.0, 0.0, 1.0)
+    return links
 
 
 def _link_poses_batch(Q):
@@ -368,30 +371,25 @@ def _link_poses_batch(Q):
     links[:, 93] = 0.0
     links[:, 94] = 0.0
     links[:, 95] = 1.0
-    return (links.reshape((N,) + (6, 4, 4)), )
+    return links.reshape((N,) + (6, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
+            return _link_poses_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
-    return out[0]
+    return _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
 
 
 def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
@@ -403,16 +401,16 @@ def _jacob0_one(q):
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
     t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
+    t15 = sin(q3)
+    t16 = -cos(q3)
     t17 = -t1*t16 + t15*t4
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
     t21 = t0*t15 - t16*t5
     t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
+    t23 = cos(q4)
+    t24 = sin(q4)
     t28 = -t17*t24 + t23*t6
     t29 = -t18*t24 + t23*t7
     t30 = -t19*t24 - t2*t23
@@ -435,8 +433,10 @@ def _jacob0_one(q):
     t55 = -t29*t48 + t30*t47
     t56 = t28*t48 - t30*t46
     t57 = -t28*t47 + t29*t46
-    J = np.array([-t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30]).reshape((6, 6))
-    return (J, )
+    J = _empty((6, 6))
+    _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
+    _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
+    return J
 
 
 def _jacob0_batch(Q):
@@ -530,39 +530,34 @@ def _jacob0_batch(Q):
     J[:, 33] = t2
     J[:, 34] = t22
     J[:, 35] = -t30
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
+            return _jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
-    return out[0]
+    return _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
 
 
 def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
+    _, q1, q2, q3, q4, q5 = q
+    t2 = cos(q1)
+    t3 = sin(q1)
+    t15 = sin(q3)
+    t16 = -cos(q3)
+    t23 = cos(q4)
+    t24 = sin(q4)
+    t31 = cos(q5)
+    t32 = sin(q5)
     t58 = t23*t31
     t59 = -t23*t32
     t60 = t24*t31
@@ -598,8 +593,10 @@ def _jacobe_one(q):
     t93 = t81*t85 - t82*t84
     t94 = -t80*t85 + t82*t83
     t95 = t80*t84 - t81*t83
-    J = np.array([t93, t90, -t60, t88, t86, 0.0, t94, t91, -t61, t89, t87, 0.0, t95, t92, t23, 0.0, 0.0, 0.0, -t80, -t62, 0.0, -t60, t32, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, -t82, -t64, 0.0, t23, 0.0, 1.0]).reshape((6, 6))
-    return (J, )
+    J = _empty((6, 6))
+    _PACK_18(J, 0, t93, t90, -t60, t88, t86, 0.0, t94, t91, -t61, t89, t87, 0.0, t95, t92, t23, 0.0, 0.0, 0.0)
+    _PACK_18(J, 144, -t80, -t62, 0.0, -t60, t32, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, -t82, -t64, 0.0, t23, 0.0, 1.0)
+    return J
 
 
 def _jacobe_batch(Q):
@@ -689,60 +686,54 @@ def _jacobe_batch(Q):
     J[:, 33] = t23
     J[:, 34] = 0.0
     J[:, 35] = 1.0
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
+            return _jacobe_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
-    return out[0]
+    return _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
 
 
 def _hessian0_one(q):
     out = _jacob0_hessian0_one(q)
-    return (out[1], )
+    return out[1]
 
 
 def _hessian0_batch(Q):
     out = _jacob0_hessian0_batch(Q)
-    return (out[1], )
+    return out[1]
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
+            return _hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
+    return _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
 
 
 def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
+    _, q1, q2, q3, q4, q5 = q
+    t2 = cos(q1)
+    t3 = sin(q1)
+    t15 = sin(q3)
+    t16 = -cos(q3)
+    t23 = cos(q4)
+    t24 = sin(q4)
+    t31 = cos(q5)
+    t32 = sin(q5)
     t58 = t23*t31
     t59 = -t23*t32
     t60 = t24*t31
@@ -844,8 +835,16 @@ def _hessiane_one(q):
     t202 = -t60*t87 + t61*t86
     t203 = -t31*t88 + t32*t89
     t204 = t202 - t203
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t121, 0.0, 0.0, 0.0, 0.0, 0.0, t122, 0.0, 0.0, 0.0, 0.0, 0.0, t123, 0.0, 0.0, 0.0, 0.0, 0.0, t124, 0.0, 0.0, 0.0, 0.0, 0.0, t125, 0.0, 0.0, 0.0, 0.0, 0.0, t126, 0.0, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t154, t163, 0.0, 0.0, 0.0, 0.0, t155, t164, 0.0, 0.0, 0.0, 0.0, t156, t165, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, t181, t193, -t58, t200, 0.0, 0.0, t182, t194, -t59, t201, 0.0, 0.0, t183, t195, -t199, t204, 0.0, 0.0, t184, t196, 0.0, -t58, 0.0, 0.0, t185, t197, 0.0, -t59, 0.0, 0.0, t186, t198, 0.0, -t199, 0.0, 0.0, t94, t91, -t61, t89, t87, 0.0, -t93, -t90, t60, -t88, -t86, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, t80, t62, 0.0, t60, -t32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
+    H = _empty((6, 6, 6))
+    _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t121, 0.0, 0.0, 0.0, 0.0, 0.0, t122, 0.0, 0.0, 0.0, 0.0, 0.0, t123, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 432, t124, 0.0, 0.0, 0.0, 0.0, 0.0, t125, 0.0, 0.0, 0.0, 0.0, 0.0, t126, 0.0, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0)
+    _PACK_27(H, 648, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 864, t154, t163, 0.0, 0.0, 0.0, 0.0, t155, t164, 0.0, 0.0, 0.0, 0.0, t156, t165, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0)
+    _PACK_27(H, 1080, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, t181, t193, -t58, t200, 0.0, 0.0, t182, t194, -t59, t201, 0.0, 0.0, t183, t195, -t199, t204, 0.0, 0.0)
+    _PACK_27(H, 1296, t184, t196, 0.0, -t58, 0.0, 0.0, t185, t197, 0.0, -t59, 0.0, 0.0, t186, t198, 0.0, -t199, 0.0, 0.0, t94, t91, -t61, t89, t87, 0.0, -t93, -t90, t60)
+    _PACK_27(H, 1512, -t88, -t86, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, t80, t62, 0.0, t60, -t32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return H
 
 
 def _hessiane_batch(Q):
@@ -1181,31 +1180,25 @@ def _hessiane_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
+            return _hessiane_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
-    return out[0]
+    return _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
 
 
 def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, q5 = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
@@ -1217,24 +1210,24 @@ def _fkine_jacob0_one(q):
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
     t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
+    t15 = sin(q3)
+    t16 = -cos(q3)
     t17 = -t1*t16 + t15*t4
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
     t21 = t0*t15 - t16*t5
     t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
+    t23 = cos(q4)
+    t24 = sin(q4)
     t25 = t17*t23 + t24*t6
     t26 = t18*t23 + t24*t7
     t27 = t19*t23 - t2*t24
     t28 = -t17*t24 + t23*t6
     t29 = -t18*t24 + t23*t7
     t30 = -t19*t24 - t2*t23
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
+    t31 = cos(q5)
+    t32 = sin(q5)
     t33 = t20*t32 + t25*t31
     t34 = t21*t32 + t26*t31
     t35 = t22*t32 + t27*t31
@@ -1260,9 +1253,12 @@ def _fkine_jacob0_one(q):
     t55 = -t29*t48 + t30*t47
     t56 = t28*t48 - t30*t46
     t57 = -t28*t47 + t29*t46
-    T = np.array([t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30]).reshape((6, 6))
-    return (T, J, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0)
+    J = _empty((6, 6))
+    _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
+    _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
+    return (T, J)
 
 
 def _fkine_jacob0_batch(Q):
@@ -1385,30 +1381,25 @@ def _fkine_jacob0_batch(Q):
     J[:, 33] = t2
     J[:, 34] = t22
     J[:, 35] = -t30
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
+    return _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
 
 
 def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
+    q0, q1, q2, q3, q4, _ = q
+    t0 = cos(q0)
+    t1 = sin(q0)
+    t2 = cos(q1)
+    t3 = sin(q1)
     t4 = t0*t2
     t5 = t1*t2
     t6 = -t0*t3
@@ -1420,16 +1411,16 @@ def _jacob0_hessian0_one(q):
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
     t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
+    t15 = sin(q3)
+    t16 = -cos(q3)
     t17 = -t1*t16 + t15*t4
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
     t21 = t0*t15 - t16*t5
     t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
+    t23 = cos(q4)
+    t24 = sin(q4)
     t28 = -t17*t24 + t23*t6
     t29 = -t18*t24 + t23*t7
     t30 = -t19*t24 - t2*t23
@@ -1498,9 +1489,19 @@ def _jacob0_hessian0_one(q):
     t205 = -t29*t57 + t30*t56
     t206 = t28*t57 - t30*t55
     t207 = -t28*t56 + t29*t55
-    J = np.array([-t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30]).reshape((6, 6))
-    H = np.array([-t39, -t44, t7, -t50, -t53, -t56, -t40, t43, -t6, t49, t52, t55, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, 0.0, t7, -t21, t29, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t44, t96, t4, t100, t103, t109, t43, t97, t5, t101, t104, t110, 0.0, t98, t99, t102, t105, t111, 0.0, 0.0, 0.0, t4, t106, t112, 0.0, 0.0, 0.0, t5, t107, t113, 0.0, 0.0, 0.0, t99, t108, t114, t7, t4, 0.0, 0.0, 0.0, 0.0, -t6, t5, 0.0, 0.0, 0.0, 0.0, 0.0, t99, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t50, t100, 0.0, t133, t136, t142, t49, t101, 0.0, t134, t137, t143, 0.0, t102, 0.0, t135, t138, t144, 0.0, 0.0, 0.0, 0.0, t139, t145, 0.0, 0.0, 0.0, 0.0, t140, t146, 0.0, 0.0, 0.0, 0.0, t141, t147, -t53, t103, 0.0, t136, t166, t169, t52, t104, 0.0, t137, t167, t170, 0.0, t105, 0.0, t138, t168, t171, 0.0, 0.0, 0.0, 0.0, 0.0, t172, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, t174, -t56, t109, 0.0, t142, t169, t205, t55, t110, 0.0, t143, t170, t206, 0.0, t111, 0.0, t144, t171, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (J, H, )
+    J = _empty((6, 6))
+    _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
+    _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
+    H = _empty((6, 6, 6))
+    _PACK_27(H, 0, -t39, -t44, t7, -t50, -t53, -t56, -t40, t43, -t6, t49, t52, t55, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, 0.0, t7, -t21, t29, 0.0, -t1, 0.0)
+    _PACK_27(H, 216, -t6, t20, -t28, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t44, t96, t4, t100, t103, t109, t43, t97, t5, t101, t104, t110, 0.0, t98, t99, t102, t105, t111)
+    _PACK_27(H, 432, 0.0, 0.0, 0.0, t4, t106, t112, 0.0, 0.0, 0.0, t5, t107, t113, 0.0, 0.0, 0.0, t99, t108, t114, t7, t4, 0.0, 0.0, 0.0, 0.0, -t6, t5, 0.0)
+    _PACK_27(H, 648, 0.0, 0.0, 0.0, 0.0, t99, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 864, -t50, t100, 0.0, t133, t136, t142, t49, t101, 0.0, t134, t137, t143, 0.0, t102, 0.0, t135, t138, t144, 0.0, 0.0, 0.0, 0.0, t139, t145, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1080, 0.0, t140, t146, 0.0, 0.0, 0.0, 0.0, t141, t147, -t53, t103, 0.0, t136, t166, t169, t52, t104, 0.0, t137, t167, t170, 0.0, t105, 0.0, t138, t168, t171)
+    _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, t172, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, t174, -t56, t109, 0.0, t142, t169, t205, t55, t110, 0.0)
+    _PACK_27(H, 1512, t143, t170, t206, 0.0, t111, 0.0, t144, t171, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (J, H)
 
 
 def _jacob0_hessian0_batch(Q):
@@ -1857,15 +1858,14 @@ def _jacob0_hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)), )
+    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    return _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)

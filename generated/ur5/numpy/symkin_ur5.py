@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,13 @@ N_JOINTS = 6
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_18 = struct.Struct("18d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5,),
@@ -36,38 +45,34 @@ CHAIN = ChainTables(
 
 
 def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q0)
-    x1 = math.sin(q4)
+    q0, q1, q2, q3, q4, q5 = q
+    x0 = sin(q0)
+    x1 = sin(q4)
     x2 = x0*x1
     x3 = q1 + q2
     x4 = q3 + x3
-    x5 = math.cos(x4)
-    x6 = math.cos(q0)
-    x7 = math.cos(q4)
+    x5 = cos(x4)
+    x6 = cos(q0)
+    x7 = cos(q4)
     x8 = x6*x7
     x9 = x2 + x5*x8
-    x10 = math.cos(q5)
-    x11 = math.sin(q5)
-    x12 = math.sin(x4)
+    x10 = cos(q5)
+    x11 = sin(q5)
+    x12 = sin(x4)
     x13 = x12*x6
     x14 = x0*x7
     x15 = x1*x6
     x16 = x15*x5
-    x17 = (0.39225)*math.cos(x3)
-    x18 = (0.425)*math.cos(q1)
+    x17 = (0.39225)*cos(x3)
+    x18 = (0.425)*cos(q1)
     x19 = x14*x5 - x15
     x20 = x0*x12
     x21 = x2*x5
     x22 = x12*x7
     x23 = x1*x12
-    T = np.array([x10*x9 - x11*x13, -x10*x13 - x11*x9, x14 - x16, (0.10915)*x0 + (0.09465)*x13 + (0.0823)*x14 - 0.0823*x16 - x17*x6 - x18*x6, x10*x19 - x11*x20, -x10*x20 - x11*x19, -x21 - x8, (0.09465)*x0*x12 - x0*x17 - x0*x18 - 0.0823*x21 - 0.10915*x6 - 0.0823*x8, x10*x22 + x11*x5, x10*x5 - x11*x22, -x23, -0.0823*x23 - 0.09465*x5 - 0.425*math.sin(q1) - 0.39225*math.sin(x3) + 0.089159, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, x10*x9 - x11*x13, -x10*x13 - x11*x9, x14 - x16, (0.10915)*x0 + (0.09465)*x13 + (0.0823)*x14 - 0.0823*x16 - x17*x6 - x18*x6, x10*x19 - x11*x20, -x10*x20 - x11*x19, -x21 - x8, (0.09465)*x0*x12 - x0*x17 - x0*x18 - 0.0823*x21 - 0.10915*x6 - 0.0823*x8, x10*x22 + x11*x5, x10*x5 - x11*x22, -x23, -0.0823*x23 - 0.09465*x5 - 0.425*sin(q1) - 0.39225*sin(x3) + 0.089159, 0.0, 0.0, 0.0, 1.0)
+    return T
 
 
 def _fkine_batch(Q):
@@ -119,52 +124,46 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
+            return _fkine_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
-    return out[0]
+    return _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
 
 
 def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q0)
-    x1 = math.sin(q0)
-    x2 = math.cos(q1)
+    q0, q1, q2, q3, q4, q5 = q
+    x0 = cos(q0)
+    x1 = sin(q0)
+    x2 = cos(q1)
     x3 = x0*x2
-    x4 = math.sin(q1)
+    x4 = sin(q1)
     x5 = x1*x2
     x6 = -x0
     x7 = q1 + q2
-    x8 = math.cos(x7)
+    x8 = cos(x7)
     x9 = x0*x8
-    x10 = math.sin(x7)
+    x10 = sin(x7)
     x11 = (0.425)*x3
     x12 = -x11
     x13 = x1*x8
     x14 = (0.425)*x5
     x15 = (0.425)*x4 - 0.089159
     x16 = q3 + x7
-    x17 = math.cos(x16)
+    x17 = cos(x16)
     x18 = x0*x17
-    x19 = math.sin(x16)
+    x19 = sin(x16)
     x20 = x0*x19
     x21 = (0.39225)*x9
     x22 = x11 + x21
@@ -173,8 +172,8 @@ def _link_poses_one(q):
     x25 = (0.39225)*x13 + x14
     x26 = (0.39225)*x10 + x15
     x27 = -x26
-    x28 = math.sin(q4)
-    x29 = math.cos(q4)
+    x28 = sin(q4)
+    x29 = cos(q4)
     x30 = x1*x28 + x18*x29
     x31 = x1*x29 - x18*x28
     x32 = -x0*x28 + x23*x29
@@ -182,10 +181,14 @@ def _link_poses_one(q):
     x34 = (0.10915)*x0 + x25
     x35 = x19*x29
     x36 = -x19*x28
-    x37 = math.cos(q5)
-    x38 = math.sin(q5)
-    links = np.array([x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x0*x4, x1, 0.0, x5, -x1*x4, x6, 0.0, x4, x2, 0.0, 0.089159, 0.0, 0.0, 0.0, 1.0, x9, -x0*x10, x1, x12, x13, -x1*x10, x6, -x14, x10, x8, 0.0, -x15, 0.0, 0.0, 0.0, 1.0, x18, -x20, x1, -x22, x23, -x24, x6, -x25, x19, x17, 0.0, x27, 0.0, 0.0, 0.0, 1.0, x30, x31, x20, (0.10915)*x1 - x22, x32, x33, x24, -x34, x35, x36, -x17, x27, 0.0, 0.0, 0.0, 1.0, -x20*x38 + x30*x37, -x20*x37 - x30*x38, x31, (0.10915)*x1 + x12 + (0.09465)*x20 - x21, -x24*x38 + x32*x37, -x24*x37 - x32*x38, x33, (0.09465)*x1*x19 - x34, x17*x38 + x35*x37, x17*x37 - x35*x38, x36, -0.09465*x17 - x26, 0.0, 0.0, 0.0, 1.0]).reshape((6, 4, 4))
-    return (links, )
+    x37 = cos(q5)
+    x38 = sin(q5)
+    links = _empty((6, 4, 4))
+    _PACK_24(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x0*x4, x1, 0.0, x5, -x1*x4, x6, 0.0)
+    _PACK_24(links, 192, x4, x2, 0.0, 0.089159, 0.0, 0.0, 0.0, 1.0, x9, -x0*x10, x1, x12, x13, -x1*x10, x6, -x14, x10, x8, 0.0, -x15, 0.0, 0.0, 0.0, 1.0)
+    _PACK_24(links, 384, x18, -x20, x1, -x22, x23, -x24, x6, -x25, x19, x17, 0.0, x27, 0.0, 0.0, 0.0, 1.0, x30, x31, x20, (0.10915)*x1 - x22, x32, x33, x24, -x34)
+    _PACK_24(links, 576, x35, x36, -x17, x27, 0.0, 0.0, 0.0, 1.0, -x20*x38 + x30*x37, -x20*x37 - x30*x38, x31, (0.10915)*x1 + x12 + (0.09465)*x20 - x21, -x24*x38 + x32*x37, -x24*x37 - x32*x38, x33, (0.09465)*x1*x19 - x34, x17*x38 + x35*x37, x17*x37 - x35*x38, x36, -0.09465*x17 - x26, 0.0, 0.0, 0.0, 1.0)
+    return links
 
 
 def _link_poses_batch(Q):
@@ -332,38 +335,33 @@ def _link_poses_batch(Q):
     links[:, 93] = 0.0
     links[:, 94] = 0.0
     links[:, 95] = 1.0
-    return (links.reshape((N,) + (6, 4, 4)), )
+    return links.reshape((N,) + (6, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
+            return _link_poses_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
-    return out[0]
+    return _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
 
 
 def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.sin(q0)
-    x1 = (0.425)*math.cos(q1)
+    q0, q1, q2, q3, q4, _ = q
+    x0 = sin(q0)
+    x1 = (0.425)*cos(q1)
     x2 = q1 + q2
-    x3 = (0.39225)*math.cos(x2)
-    x4 = math.cos(q0)
+    x3 = (0.39225)*cos(x2)
+    x4 = cos(q0)
     x5 = q3 + x2
-    x6 = math.sin(x5)
+    x6 = sin(x5)
     x7 = x0*x6
-    x8 = math.cos(q4)
+    x8 = cos(q4)
     x9 = x4*x8
-    x10 = math.cos(x5)
-    x11 = math.sin(q4)
+    x10 = cos(x5)
+    x11 = sin(q4)
     x12 = x10*x11
     x13 = x0*x12
     x14 = (0.0823)*x13 + (0.0823)*x9
@@ -374,8 +372,8 @@ def _jacob0_one(q):
     x19 = x11*x6
     x20 = (0.0823)*x19
     x21 = (0.09465)*x10 + x20
-    x22 = x21 + (0.39225)*math.sin(x2)
-    x23 = -x22 - 0.425*math.sin(q1)
+    x22 = x21 + (0.39225)*sin(x2)
+    x23 = -x22 - 0.425*sin(q1)
     x24 = -x22
     x25 = -x21
     x26 = x25*x4
@@ -393,8 +391,10 @@ def _jacob0_one(q):
     x38 = -x1*x4 + x37
     x39 = x32 - x33
     x40 = -x4
-    J = np.array([x18, -x23*x4, -x24*x4, -x26, x10*x27 + x28*x6, x11*x29*x6 - x20*x30, x38, -x0*x23, -x0*x24, -x28, -x10*x35 - x26*x6, (0.0823)*x11*x39*x6 - x19*x34, 0.0, -x0*x18 + x38*x4, -x0*x17 + x37*x4, -x0*x16 + x36*x4, x27*x4*x6 - x35*x7, x29*x39 - x30*x34, 0.0, x0, x0, x0, x31, x39, 0.0, x40, x40, x40, x7, x30, 1.0, 0.0, 0.0, 0.0, -x10, -x19]).reshape((6, 6))
-    return (J, )
+    J = _empty((6, 6))
+    _PACK_18(J, 0, x18, -x23*x4, -x24*x4, -x26, x10*x27 + x28*x6, x11*x29*x6 - x20*x30, x38, -x0*x23, -x0*x24, -x28, -x10*x35 - x26*x6, (0.0823)*x11*x39*x6 - x19*x34, 0.0, -x0*x18 + x38*x4, -x0*x17 + x37*x4, -x0*x16 + x36*x4, x27*x4*x6 - x35*x7, x29*x39 - x30*x34)
+    _PACK_18(J, 144, 0.0, x0, x0, x0, x31, x39, 0.0, x40, x40, x40, x7, x30, 1.0, 0.0, 0.0, 0.0, -x10, -x19)
+    return J
 
 
 def _jacob0_batch(Q):
@@ -482,55 +482,50 @@ def _jacob0_batch(Q):
     J[:, 33] = 0.0
     J[:, 34] = -x10
     J[:, 35] = -x19
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
+            return _jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
-    return out[0]
+    return _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
 
 
 def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q5)
+    _, q1, q2, q3, q4, q5 = q
+    x0 = cos(q5)
     x1 = q2 + q3
     x2 = q1 + x1
-    x3 = math.cos(x2)
-    x4 = math.sin(q5)
-    x5 = math.cos(q4)
-    x6 = math.sin(x2)
+    x3 = cos(x2)
+    x4 = sin(q5)
+    x5 = cos(q4)
+    x6 = sin(x2)
     x7 = x5*x6
     x8 = x4*x7
     x9 = x0*x3 - x8
-    x10 = math.sin(q4)
+    x10 = sin(q4)
     x11 = x10*x6
-    x12 = (0.425)*math.cos(x1)
-    x13 = (0.39225)*math.cos(q3)
+    x12 = (0.425)*cos(x1)
+    x13 = (0.39225)*cos(q3)
     x14 = (0.10915)*x5 + 0.0823
     x15 = x10*x13 + x14
     x16 = x10*x12 + x15
     x17 = -0.089159*x11 + x16
-    x18 = (0.425)*math.sin(x1)
+    x18 = (0.425)*sin(x1)
     x19 = x4*x5
     x20 = (0.09465)*x0
     x21 = x10*x4
     x22 = (0.10915)*x21
-    x23 = (0.39225)*math.sin(q3)
+    x23 = (0.39225)*sin(q3)
     x24 = x0*x23 + x13*x19 - x20 - x22
     x25 = x0*x18 + x12*x19 + x24
     x26 = (0.089159)*x0*x3 + x25 - 0.089159*x8
@@ -545,8 +540,10 @@ def _jacobe_one(q):
     x35 = -x12*x31 + x18*x4 + x34
     x36 = (0.089159)*x28 + (0.089159)*x29 + x35
     x37 = -x21
-    J = np.array([x11*x26 + x17*x9, -x16*x21 - x25*x5, -x15*x21 - x24*x5, -x14*x21 - x27*x5, -0.0823*x0, 0.0, -x11*x36 - x17*x30, -x16*x32 + x35*x5, -x15*x32 + x34*x5, -x14*x32 + x33*x5, (0.0823)*x4, 0.0, x26*x30 - x36*x9, x21*x35 + x25*x32, x21*x34 + x24*x32, x21*x33 + x27*x32, 0.0, 0.0, x30, x32, x32, x32, -x4, 0.0, x9, x37, x37, x37, -x0, 0.0, -x11, x5, x5, x5, 0.0, 1.0]).reshape((6, 6))
-    return (J, )
+    J = _empty((6, 6))
+    _PACK_18(J, 0, x11*x26 + x17*x9, -x16*x21 - x25*x5, -x15*x21 - x24*x5, -x14*x21 - x27*x5, -0.0823*x0, 0.0, -x11*x36 - x17*x30, -x16*x32 + x35*x5, -x15*x32 + x34*x5, -x14*x32 + x33*x5, (0.0823)*x4, 0.0, x26*x30 - x36*x9, x21*x35 + x25*x32, x21*x34 + x24*x32, x21*x33 + x27*x32, 0.0, 0.0)
+    _PACK_18(J, 144, x30, x32, x32, x32, -x4, 0.0, x9, x37, x37, x37, -x0, 0.0, -x11, x5, x5, x5, 0.0, 1.0)
+    return J
 
 
 def _jacobe_batch(Q):
@@ -631,43 +628,38 @@ def _jacobe_batch(Q):
     J[:, 33] = x5
     J[:, 34] = 0.0
     J[:, 35] = 1.0
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
+            return _jacobe_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
-    return out[0]
+    return _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
 
 
 def _hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.cos(q0)
-    x1 = math.cos(q1)
+    q0, q1, q2, q3, q4, _ = q
+    x0 = cos(q0)
+    x1 = cos(q1)
     x2 = q1 + q2
-    x3 = (0.39225)*math.cos(x2)
-    x4 = math.sin(q0)
+    x3 = (0.39225)*cos(x2)
+    x4 = sin(q0)
     x5 = q3 + x2
-    x6 = math.sin(x5)
+    x6 = sin(x5)
     x7 = x0*x6
-    x8 = math.cos(q4)
+    x8 = cos(q4)
     x9 = x4*x8
-    x10 = math.sin(q4)
-    x11 = math.cos(x5)
+    x10 = sin(q4)
+    x11 = cos(x5)
     x12 = x0*x11
     x13 = x10*x12
     x14 = -0.0823*x13 + (0.0823)*x9
@@ -678,8 +670,8 @@ def _hessian0_one(q):
     x19 = x10*x6
     x20 = (0.0823)*x19
     x21 = (0.09465)*x11 + x20
-    x22 = x21 + (0.39225)*math.sin(x2)
-    x23 = -x22 - 0.425*math.sin(q1)
+    x22 = x21 + (0.39225)*sin(x2)
+    x23 = -x22 - 0.425*sin(q1)
     x24 = x23*x4
     x25 = -x22
     x26 = x25*x4
@@ -736,8 +728,16 @@ def _hessian0_one(q):
     x77 = -x11*x50 - x58*x7
     x78 = -x33*x50 + x7*x70
     x79 = (x6*x6)
-    H = np.array([-x18, x24, x26, x28, x30, x32, x41, x42, x43, x44, x46, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x0, x0, x0, -x33, x48, 0.0, x4, x4, x4, x7, x31, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x24, -x0*x51, x53, x55, x57, x59, x42, -x4*x51, x60, x61, x62, x63, 0.0, -x23*x64 - x23*x65, x66, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x26, x53, x53, x55, x57, x59, x43, x60, x60, x61, x62, x63, 0.0, x66, x66, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x28, x55, x55, x55, x57, x59, x44, x61, x61, x61, x62, x63, 0.0, x67, x67, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x30, x57, x57, x57, x11*x68 + x33*x56, x76, x46, x62, x62, x62, -x11*x46 - x56*x7, x77, 0.0, x69, x69, x69, x0*x6*x68 - x33*x46, x78, 0.0, 0.0, 0.0, 0.0, 0.0, -x10*x4*x79 + x11*x49, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x10*x79 - x11*x31, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x49*x6 - x31*x33, x32, x59, x59, x59, x76, x19*x70 + x49*x58, x50, x63, x63, x63, x77, -x19*x50 - x31*x58, 0.0, x71, x71, x71, x78, x31*x70 - x49*x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
+    H = _empty((6, 6, 6))
+    _PACK_27(H, 0, -x18, x24, x26, x28, x30, x32, x41, x42, x43, x44, x46, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x0, x0, x0, -x33, x48, 0.0, x4, x4)
+    _PACK_27(H, 216, x4, x7, x31, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x24, -x0*x51, x53, x55, x57, x59, x42, -x4*x51, x60, x61, x62, x63, 0.0, -x23*x64 - x23*x65, x66, x67, x69, x71)
+    _PACK_27(H, 432, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x26, x53, x53, x55, x57, x59, x43, x60, x60)
+    _PACK_27(H, 648, x61, x62, x63, 0.0, x66, x66, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75)
+    _PACK_27(H, 864, x28, x55, x55, x55, x57, x59, x44, x61, x61, x61, x62, x63, 0.0, x67, x67, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1080, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x30, x57, x57, x57, x11*x68 + x33*x56, x76, x46, x62, x62, x62, -x11*x46 - x56*x7, x77, 0.0, x69, x69, x69, x0*x6*x68 - x33*x46, x78)
+    _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, -x10*x4*x79 + x11*x49, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x10*x79 - x11*x31, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x49*x6 - x31*x33, x32, x59, x59, x59, x76, x19*x70 + x49*x58, x50, x63, x63)
+    _PACK_27(H, 1512, x63, x77, -x19*x50 - x31*x58, 0.0, x71, x71, x71, x78, x31*x70 - x49*x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return H
 
 
 def _hessian0_batch(Q):
@@ -1044,40 +1044,35 @@ def _hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
+            return _hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
+    return _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
 
 
 def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q5)
+    _, q1, q2, q3, q4, q5 = q
+    x0 = cos(q5)
     x1 = q2 + q3
     x2 = q1 + x1
-    x3 = math.cos(x2)
-    x4 = math.sin(x2)
-    x5 = math.cos(q4)
-    x6 = math.sin(q5)
+    x3 = cos(x2)
+    x4 = sin(x2)
+    x5 = cos(q4)
+    x6 = sin(q5)
     x7 = x5*x6
     x8 = x4*x7
     x9 = x0*x3 - x8
     x10 = (0.089159)*x0*x3
     x11 = (0.089159)*x8
     x12 = -x10 + x11
-    x13 = math.sin(q4)
+    x13 = sin(q4)
     x14 = x0*x13
     x15 = x3*x6
     x16 = x0*x5
@@ -1096,22 +1091,22 @@ def _hessiane_one(q):
     x29 = (0.10915)*x5
     x30 = x29 + 0.0823
     x31 = (0.089159)*x26
-    x32 = math.cos(x1)
+    x32 = cos(x1)
     x33 = (0.425)*x32
     x34 = x13*x33
-    x35 = math.cos(q3)
+    x35 = cos(q3)
     x36 = (0.39225)*x35
     x37 = x13*x36
     x38 = x34 + x37
     x39 = -x31 + x38
     x40 = x30 + x39
     x41 = -x14*x9 - x20*x27
-    x42 = (0.425)*math.sin(x1)
+    x42 = (0.425)*sin(x1)
     x43 = x0*x42 + x33*x7
     x44 = x10 - x11 + x43
     x45 = (0.09465)*x0
     x46 = (0.10915)*x20
-    x47 = (0.39225)*math.sin(q3)
+    x47 = (0.39225)*sin(q3)
     x48 = x0*x47 + x36*x7
     x49 = -x46 + x48
     x50 = -x45 + x49
@@ -1188,8 +1183,16 @@ def _hessiane_one(q):
     x121 = -x60
     x122 = -x20
     x123 = -x14
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x9 + x25*x26 + x52, 0.0, 0.0, 0.0, 0.0, 0.0, -x21*x27 - x26*x54 - x63, 0.0, 0.0, 0.0, 0.0, 0.0, x25*x27 + x51*x55 - x54*x9 - x64, 0.0, 0.0, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x26*x69 + x52 + x67*x9, -x20*x73 - x5*x71, 0.0, 0.0, 0.0, 0.0, -x26*x74 - x27*x67 - x63, -x14*x73 + x5*x75, 0.0, 0.0, 0.0, 0.0, x27*x69 - x74*x9 - x76, x14*x71 + x20*x75, 0.0, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x26*x81 + x52 + x79*x9, -x20*x87 - x5*x85, -x20*x91 - x5*x89, 0.0, 0.0, 0.0, -x26*x92 - x27*x79 - x63, -x14*x87 + x5*x93, -x14*x91 + x5*x94, 0.0, 0.0, 0.0, x27*x81 - x76 - x9*x92, x14*x85 + x20*x93, x14*x89 + x20*x94, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x40*x99 - x51*x97 + x9*x96 + x98*x99, -x102*x103 - x104*x20 - x105*x7 - x106*x7, -x102*x50 - x108*x7 - x109*x20 - x110*x7, -x102*x111 + (0.10915)*x112*x6 - x113*x20 - x30*x7, 0.0, 0.0, x114*x40 + x114*x98 - x27*x96 + x62*x97, x102*x115 - x104*x14 - x105*x16 - x106*x16, x102*x61 - x108*x16 - x109*x14 - x110*x16, (0.10915)*x0*x112 + x102*x60 - x113*x14 - x16*x30, 0.0, 0.0, x0*x9*x98 - x114*x51 + x27*x6*x98 - x62*x99, x103*x16 + x115*x7, x16*x50 + x61*x7, x111*x16 + x60*x7, 0.0, 0.0, -x114, x16, x16, x16, 0.0, 0.0, x99, x116, x116, x116, 0.0, 0.0, x97, x102, x102, x102, 0.0, 0.0, x117*x40 + x118*x26, -x106*x14 - x119*x5, -x110*x14 - x120*x5, -x121*x5 - x14*x30, (0.0823)*x6, 0.0, -x26*x51 - x40*x9, x103*x5 + x106*x20, x110*x20 + x5*x50, x111*x5 + x20*x30, (0.0823)*x0, 0.0, -x117*x62 + x118*x27, x115*x14 + x119*x14, x120*x14 + x14*x61, x121*x14 + x14*x60, 0.0, 0.0, x9, x122, x122, x122, -x0, 0.0, x117, x123, x123, x123, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
+    H = _empty((6, 6, 6))
+    _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x9 + x25*x26 + x52, 0.0, 0.0, 0.0, 0.0, 0.0, -x21*x27 - x26*x54 - x63, 0.0, 0.0, 0.0, 0.0, 0.0, x25*x27 + x51*x55 - x54*x9 - x64, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 432, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x26*x69 + x52 + x67*x9, -x20*x73 - x5*x71, 0.0, 0.0, 0.0, 0.0, -x26*x74 - x27*x67 - x63, -x14*x73 + x5*x75, 0.0)
+    _PACK_27(H, 648, 0.0, 0.0, 0.0, x27*x69 - x74*x9 - x76, x14*x71 + x20*x75, 0.0, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0)
+    _PACK_27(H, 864, x26*x81 + x52 + x79*x9, -x20*x87 - x5*x85, -x20*x91 - x5*x89, 0.0, 0.0, 0.0, -x26*x92 - x27*x79 - x63, -x14*x87 + x5*x93, -x14*x91 + x5*x94, 0.0, 0.0, 0.0, x27*x81 - x76 - x9*x92, x14*x85 + x20*x93, x14*x89 + x20*x94, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0)
+    _PACK_27(H, 1080, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x40*x99 - x51*x97 + x9*x96 + x98*x99, -x102*x103 - x104*x20 - x105*x7 - x106*x7, -x102*x50 - x108*x7 - x109*x20 - x110*x7, -x102*x111 + (0.10915)*x112*x6 - x113*x20 - x30*x7, 0.0, 0.0, x114*x40 + x114*x98 - x27*x96 + x62*x97, x102*x115 - x104*x14 - x105*x16 - x106*x16, x102*x61 - x108*x16 - x109*x14 - x110*x16, (0.10915)*x0*x112 + x102*x60 - x113*x14 - x16*x30, 0.0, 0.0, x0*x9*x98 - x114*x51 + x27*x6*x98 - x62*x99, x103*x16 + x115*x7, x16*x50 + x61*x7, x111*x16 + x60*x7, 0.0, 0.0)
+    _PACK_27(H, 1296, -x114, x16, x16, x16, 0.0, 0.0, x99, x116, x116, x116, 0.0, 0.0, x97, x102, x102, x102, 0.0, 0.0, x117*x40 + x118*x26, -x106*x14 - x119*x5, -x110*x14 - x120*x5, -x121*x5 - x14*x30, (0.0823)*x6, 0.0, -x26*x51 - x40*x9, x103*x5 + x106*x20, x110*x20 + x5*x50)
+    _PACK_27(H, 1512, x111*x5 + x20*x30, (0.0823)*x0, 0.0, -x117*x62 + x118*x27, x115*x14 + x119*x14, x120*x14 + x14*x61, x121*x14 + x14*x60, 0.0, 0.0, x9, x122, x122, x122, -x0, 0.0, x117, x123, x123, x123, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return H
 
 
 def _hessiane_batch(Q):
@@ -1540,47 +1543,41 @@ def _hessiane_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
+            return _hessiane_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
-    return out[0]
+    return _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
 
 
 def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q0)
-    x1 = math.sin(q4)
+    q0, q1, q2, q3, q4, q5 = q
+    x0 = sin(q0)
+    x1 = sin(q4)
     x2 = x0*x1
     x3 = q1 + q2
     x4 = q3 + x3
-    x5 = math.cos(x4)
-    x6 = math.cos(q0)
-    x7 = math.cos(q4)
+    x5 = cos(x4)
+    x6 = cos(q0)
+    x7 = cos(q4)
     x8 = x6*x7
     x9 = x2 + x5*x8
-    x10 = math.cos(q5)
-    x11 = math.sin(q5)
-    x12 = math.sin(x4)
+    x10 = cos(q5)
+    x11 = sin(q5)
+    x12 = sin(x4)
     x13 = x12*x6
     x14 = x0*x7
     x15 = x1*x6
     x16 = x15*x5
     x17 = x14 - x16
-    x18 = (0.425)*math.cos(q1)
-    x19 = (0.39225)*math.cos(x3)
+    x18 = (0.425)*cos(q1)
+    x19 = (0.39225)*cos(x3)
     x20 = (0.0823)*x14 - 0.0823*x16
     x21 = (0.09465)*x13 + x20
     x22 = (0.10915)*x0 + x21
@@ -1601,8 +1598,8 @@ def _fkine_jacob0_one(q):
     x37 = -x36
     x38 = (0.0823)*x36
     x39 = x38 + (0.09465)*x5
-    x40 = x39 + (0.39225)*math.sin(x3)
-    x41 = x40 + (0.425)*math.sin(q1)
+    x40 = x39 + (0.39225)*sin(x3)
+    x41 = x40 + (0.425)*sin(q1)
     x42 = -x41
     x43 = -x40
     x44 = -x39
@@ -1611,9 +1608,12 @@ def _fkine_jacob0_one(q):
     x47 = x0*x44
     x48 = -x29
     x49 = -x6
-    T = np.array([x10*x9 - x11*x13, -x10*x13 - x11*x9, x17, x24, x10*x25 - x11*x26, -x10*x26 - x11*x25, x28, x34, x10*x35 + x11*x5, x10*x5 - x11*x35, x37, 0.089159 - x41, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([x33, -x42*x6, -x43*x6, -x45, x12*x47 + x46*x5, x1*x12*x48 - x28*x38, x24, -x0*x42, -x0*x43, -x47, -x12*x45 - x21*x5, (0.0823)*x1*x12*x17 - x20*x36, 0.0, x0*x34 + x24*x6, -x0*x32 + x23*x6, -x0*x31 + x22*x6, x12*x46*x6 - x21*x26, x17*x48 - x20*x28, 0.0, x0, x0, x0, x13, x17, 0.0, x49, x49, x49, x26, x28, 1.0, 0.0, 0.0, 0.0, -x5, x37]).reshape((6, 6))
-    return (T, J, )
+    T = _empty((4, 4))
+    _PACK_16(T, 0, x10*x9 - x11*x13, -x10*x13 - x11*x9, x17, x24, x10*x25 - x11*x26, -x10*x26 - x11*x25, x28, x34, x10*x35 + x11*x5, x10*x5 - x11*x35, x37, 0.089159 - x41, 0.0, 0.0, 0.0, 1.0)
+    J = _empty((6, 6))
+    _PACK_18(J, 0, x33, -x42*x6, -x43*x6, -x45, x12*x47 + x46*x5, x1*x12*x48 - x28*x38, x24, -x0*x42, -x0*x43, -x47, -x12*x45 - x21*x5, (0.0823)*x1*x12*x17 - x20*x36, 0.0, x0*x34 + x24*x6, -x0*x32 + x23*x6, -x0*x31 + x22*x6, x12*x46*x6 - x21*x26, x17*x48 - x20*x28)
+    _PACK_18(J, 144, 0.0, x0, x0, x0, x13, x17, 0.0, x49, x49, x49, x26, x28, 1.0, 0.0, 0.0, 0.0, -x5, x37)
+    return (T, J)
 
 
 def _fkine_jacob0_batch(Q):
@@ -1728,38 +1728,33 @@ def _fkine_jacob0_batch(Q):
     J[:, 33] = 0.0
     J[:, 34] = -x5
     J[:, 35] = x37
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _fkine_jacob0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
+    return _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
 
 
 def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.sin(q0)
-    x1 = (0.425)*math.cos(q1)
+    q0, q1, q2, q3, q4, _ = q
+    x0 = sin(q0)
+    x1 = (0.425)*cos(q1)
     x2 = q1 + q2
-    x3 = (0.39225)*math.cos(x2)
-    x4 = math.cos(q0)
+    x3 = (0.39225)*cos(x2)
+    x4 = cos(q0)
     x5 = q3 + x2
-    x6 = math.sin(x5)
+    x6 = sin(x5)
     x7 = x0*x6
-    x8 = math.cos(q4)
+    x8 = cos(q4)
     x9 = x4*x8
-    x10 = math.sin(q4)
-    x11 = math.cos(x5)
+    x10 = sin(q4)
+    x11 = cos(x5)
     x12 = x0*x11
     x13 = x10*x12
     x14 = (0.0823)*x13 + (0.0823)*x9
@@ -1770,8 +1765,8 @@ def _jacob0_hessian0_one(q):
     x19 = x10*x6
     x20 = (0.0823)*x19
     x21 = (0.09465)*x11 + x20
-    x22 = x21 + (0.39225)*math.sin(x2)
-    x23 = -x22 - 0.425*math.sin(q1)
+    x22 = x21 + (0.39225)*sin(x2)
+    x23 = -x22 - 0.425*sin(q1)
     x24 = -x23*x4
     x25 = -x22
     x26 = -x25*x4
@@ -1829,9 +1824,19 @@ def _jacob0_hessian0_one(q):
     x78 = -x11*x36 - x37*x57
     x79 = -x36*x7 + x37*x52
     x80 = (x6*x6)
-    J = np.array([x18, x24, x26, x29, x32, x36, x45, -x46, -x47, -x31, x49, x52, 0.0, x53, x54, x55, x56, x57, 0.0, x0, x0, x0, x37, x50, 0.0, x58, x58, x58, x7, x35, 1.0, 0.0, 0.0, 0.0, -x11, -x19]).reshape((6, 6))
-    H = np.array([-x45, x46, x47, x31, x48, x51, x18, x24, x26, x29, x32, x36, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x4, x4, x4, -x7, x34, 0.0, x0, x0, x0, x37, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x46, -x4*x53, x59, x60, x61, x62, x24, -x0*x53, x63, x64, x65, x66, 0.0, -x23*x67 - x23*x68, x69, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x47, x59, x59, x60, x61, x62, x26, x63, x63, x64, x65, x66, 0.0, x69, x69, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x31, x60, x60, x60, x61, x62, x29, x64, x64, x64, x65, x66, 0.0, x70, x70, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x48, x61, x61, x61, x11*x49 + x56*x7, x77, x32, x65, x65, x65, -x11*x32 - x37*x56, x78, 0.0, x71, x71, x71, -x32*x7 + x4*x49*x6, x79, 0.0, 0.0, 0.0, 0.0, 0.0, -x0*x10*x80 + x11*x35, 0.0, 0.0, 0.0, 0.0, 0.0, x10*x4*x80 - x11*x50, 0.0, 0.0, 0.0, 0.0, 0.0, x35*x4*x6 - x50*x7, x51, x62, x62, x62, x77, x19*x52 + x35*x57, x36, x66, x66, x66, x78, -x19*x36 - x50*x57, 0.0, x72, x72, x72, x79, -x35*x36 + x50*x52, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (J, H, )
+    J = _empty((6, 6))
+    _PACK_18(J, 0, x18, x24, x26, x29, x32, x36, x45, -x46, -x47, -x31, x49, x52, 0.0, x53, x54, x55, x56, x57)
+    _PACK_18(J, 144, 0.0, x0, x0, x0, x37, x50, 0.0, x58, x58, x58, x7, x35, 1.0, 0.0, 0.0, 0.0, -x11, -x19)
+    H = _empty((6, 6, 6))
+    _PACK_27(H, 0, -x45, x46, x47, x31, x48, x51, x18, x24, x26, x29, x32, x36, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x4, x4, x4, -x7, x34, 0.0, x0, x0)
+    _PACK_27(H, 216, x0, x37, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x46, -x4*x53, x59, x60, x61, x62, x24, -x0*x53, x63, x64, x65, x66, 0.0, -x23*x67 - x23*x68, x69, x70, x71, x72)
+    _PACK_27(H, 432, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x47, x59, x59, x60, x61, x62, x26, x63, x63)
+    _PACK_27(H, 648, x64, x65, x66, 0.0, x69, x69, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76)
+    _PACK_27(H, 864, x31, x60, x60, x60, x61, x62, x29, x64, x64, x64, x65, x66, 0.0, x70, x70, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0)
+    _PACK_27(H, 1080, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x48, x61, x61, x61, x11*x49 + x56*x7, x77, x32, x65, x65, x65, -x11*x32 - x37*x56, x78, 0.0, x71, x71, x71, -x32*x7 + x4*x49*x6, x79)
+    _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, -x0*x10*x80 + x11*x35, 0.0, 0.0, 0.0, 0.0, 0.0, x10*x4*x80 - x11*x50, 0.0, 0.0, 0.0, 0.0, 0.0, x35*x4*x6 - x50*x7, x51, x62, x62, x62, x77, x19*x52 + x35*x57, x36, x66, x66)
+    _PACK_27(H, 1512, x66, x78, -x19*x36 - x50*x57, 0.0, x72, x72, x72, x79, -x35*x36 + x50*x52, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (J, H)
 
 
 def _jacob0_hessian0_batch(Q):
@@ -2176,15 +2181,14 @@ def _jacob0_hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)), )
+    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         v = q.tolist()
         if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
             return _jacob0_hessian0_one(v)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    return _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
