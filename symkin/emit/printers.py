@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
+from sympy.printing.precedence import precedence
 from sympy.printing.pycode import PythonCodePrinter
 
-__all__ = ["CPrinter", "NumPyPrinter", "MathPrinter", "CasADiPrinter", "float_literal"]
+__all__ = ["CPrinter", "NumPyPrinter", "NumPyKinPrinter", "MathPrinter", "CasADiPrinter", "float_literal"]
 
 
 def float_literal(x: float) -> str:
@@ -80,9 +81,36 @@ class NumPyPrinter(_PyLikePrinter):
     module = "np"
 
 
-class MathPrinter(_PyLikePrinter):
+class _PositiveFirst:
+    """``-a + b`` (two terms, the first negated) printed as ``b - a``: the same IEEE result
+    (x + (-y) == x - y, and addition commutes, signed zeros included), one negation less. Sums of
+    three or more terms keep their order, which decides their rounding."""
+
+    def _print_Add(self, expr: sp.Add, order: str | None = None) -> str:
+        text = super()._print_Add(expr, order)  # type: ignore[misc]
+        terms = self._as_ordered_terms(expr, order=order)  # type: ignore[attr-defined]
+        if len(terms) != 2 or any(t.is_Add for t in terms):
+            return text
+        first, second = (self._print(t) for t in terms)  # type: ignore[attr-defined]
+        if not first.startswith("-") or second.startswith("-"):
+            return text
+        prec = precedence(expr)
+        a, b = first[1:], second
+        if precedence(terms[0]) < prec:
+            a = f"({a})"
+        if precedence(terms[1]) < prec:
+            b = f"({b})"
+        return f"{b} - {a}"
+
+
+class NumPyKinPrinter(_PositiveFirst, NumPyPrinter):
+    """The NumPy backend's batch code: :class:`NumPyPrinter` with ``-a + b`` as ``b - a``."""
+
+
+class MathPrinter(_PositiveFirst, _PyLikePrinter):
     """Scalar Python for one configuration: ``cos``, ``sin`` and ``sqrt`` as imported from ``math``
-    into the generated module (a global each: faster than ``math.cos`` per call)."""
+    into the generated module (a global each: faster than ``math.cos`` per call), ``-a + b`` as
+    ``b - a``."""
 
     def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
         return _pow(self, expr, "sqrt")

@@ -43,16 +43,6 @@ CHAIN = ChainTables(
 )
 
 
-def _fkine_one(q):
-    q0, q1 = q
-    x0 = q0 + q1
-    x1 = cos(x0)
-    x2 = sin(x0)
-    T = _empty((4, 4))
-    _PACK_16(T, 0, x1, -x2, 0.0, x1 + cos(q0), x2, x1, 0.0, x2 + sin(q0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-    return T
-
-
 def _fkine_batch(Q):
     N = Q.shape[0]
     q0 = Q[:, 0]
@@ -83,29 +73,26 @@ def _fkine_batch(Q):
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = cos(x0)
+            x2 = sin(x0)
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x1, -x2, 0.0, x1 + cos(q0), x2, x1, 0.0, x2 + sin(q0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
         L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    return _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
-
-
-def _link_poses_one(q):
-    q0, q1 = q
-    x0 = cos(q0)
-    x1 = sin(q0)
-    x2 = q0 + q1
-    x3 = cos(x2)
-    x4 = sin(x2)
-    links = _empty((2, 4, 4))
-    _PACK_16(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-    _PACK_16(links, 128, x3, -x4, 0.0, x0, x4, x3, 0.0, x1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-    return links
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
+    return out[0]
 
 
 def _link_poses_batch(Q):
@@ -156,21 +143,24 @@ def _link_poses_batch(Q):
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    return _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
-
-
-def _jacob0_one(q):
-    q0, q1 = q
-    x0 = q0 + q1
-    x1 = sin(x0)
-    x2 = cos(x0)
-    J = _empty((6, 2))
-    _PACK_12(J, 0, -x1 - sin(q0), -x1, x2 + cos(q0), x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
-    return J
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = sin(q0)
+            x2 = q0 + q1
+            x3 = cos(x2)
+            x4 = sin(x2)
+            links = _empty((2, 4, 4))
+            _PACK_16(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            _PACK_16(links, 128, x3, -x4, 0.0, x0, x4, x3, 0.0, x1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
+    return out[0]
 
 
 def _jacob0_batch(Q):
@@ -199,23 +189,26 @@ def _jacob0_batch(Q):
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = sin(x0)
+            x2 = cos(x0)
+            J = _empty((6, 2))
+            _PACK_12(J, 0, -x1 - sin(q0), -x1, x2 + cos(q0), x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
         L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    return _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
-
-
-def _jacobe_one(q):
-    _, q1 = q
-    J = _empty((6, 2))
-    _PACK_12(J, 0, sin(q1), 0.0, cos(q1) + 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
-    return J
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
+    return out[0]
 
 
 def _jacobe_batch(Q):
@@ -240,28 +233,23 @@ def _jacobe_batch(Q):
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            J = _empty((6, 2))
+            _PACK_12(J, 0, sin(q1), 0.0, cos(q1) + 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
         L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    return _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
-
-
-def _hessian0_one(q):
-    q0, q1 = q
-    x0 = q0 + q1
-    x1 = cos(x0)
-    x2 = -x1
-    x3 = sin(x0)
-    x4 = -x3
-    H = _empty((2, 6, 2))
-    _PACK_24(H, 0, -x1 - cos(q0), x2, -x3 - sin(q0), x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x4, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    return H
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
+    return out[0]
 
 
 def _hessian0_batch(Q):
@@ -304,18 +292,23 @@ def _hessian0_batch(Q):
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    return _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-
-
-def _hessiane_one(q):
-    _, q1 = q
-    H = _empty((2, 6, 2))
-    _PACK_24(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, cos(q1), 0.0, -sin(q1), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    return H
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = cos(x0)
+            x2 = -x1
+            x3 = sin(x0)
+            x4 = -x3
+            H = _empty((2, 6, 2))
+            _PACK_24(H, 0, -x1 - cos(q0), x2, -x3 - sin(q0), x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x4, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessian0(Q[0])  # the scalar code above
+    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
+    return out[0]
 
 
 def _hessiane_batch(Q):
@@ -352,26 +345,18 @@ def _hessiane_batch(Q):
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    return _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
-
-
-def _fkine_jacob0_one(q):
-    q0, q1 = q
-    x0 = q0 + q1
-    x1 = cos(x0)
-    x2 = sin(x0)
-    x3 = -x2
-    x4 = x1 + cos(q0)
-    x5 = x2 + sin(q0)
-    T = _empty((4, 4))
-    _PACK_16(T, 0, x1, x3, 0.0, x4, x2, x1, 0.0, x5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-    J = _empty((6, 2))
-    _PACK_12(J, 0, -x5, x3, x4, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
-    return (T, J)
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            H = _empty((2, 6, 2))
+            _PACK_24(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, cos(q1), 0.0, -sin(q1), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
+    return out[0]
 
 
 def _fkine_jacob0_batch(Q):
@@ -420,27 +405,26 @@ def _fkine_jacob0_batch(Q):
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    return _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-
-
-def _jacob0_hessian0_one(q):
-    q0, q1 = q
-    x0 = q0 + q1
-    x1 = sin(x0)
-    x2 = -x1 - sin(q0)
-    x3 = -x1
-    x4 = cos(x0)
-    x5 = x4 + cos(q0)
-    x6 = -x4
-    J = _empty((6, 2))
-    _PACK_12(J, 0, x2, x3, x5, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
-    H = _empty((2, 6, 2))
-    _PACK_24(H, 0, -x5, x6, x2, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x6, x6, x3, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    return (J, H)
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = cos(x0)
+            x2 = sin(x0)
+            x3 = -x2
+            x4 = x1 + cos(q0)
+            x5 = x2 + sin(q0)
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x1, x3, 0.0, x4, x2, x1, 0.0, x5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 2))
+            _PACK_12(J, 0, -x5, x3, x4, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -498,8 +482,24 @@ def _jacob0_hessian0_batch(Q):
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    return _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = sin(x0)
+            x2 = -x1 - sin(q0)
+            x3 = -x1
+            x4 = cos(x0)
+            x5 = x4 + cos(q0)
+            x6 = -x4
+            J = _empty((6, 2))
+            _PACK_12(J, 0, x2, x3, x5, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            H = _empty((2, 6, 2))
+            _PACK_24(H, 0, -x5, x6, x2, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x6, x6, x3, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

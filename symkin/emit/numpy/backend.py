@@ -22,26 +22,32 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>.py``.
 
     The scalar code of one configuration is written for CPython's speed, as measured with
-    ``symkin bench calls``: ``sin``, ``cos`` and ``sqrt`` imported from ``math`` (one global
-    lookup each), the joint values unpacked from a list in one statement, and each output array
-    filled by ``struct.pack_into`` on ``np.empty`` (0.5-0.9 us less than ``np.array(list)`` for
-    a 4x4 or 6x6 array); it still returns a new, writeable float64 array per call."""
+    ``symkin bench calls``: inline in the public function (no second call), the joint values
+    unpacked from a list in one statement and checked finite by their sum, ``sin``, ``cos`` and
+    ``sqrt`` imported from ``math`` (one global lookup each), and each output array filled by
+    ``struct.pack_into`` on ``np.empty`` (0.5-0.9 us less than ``np.array(list)`` for a 4x4 or
+    6x6 array); it still returns a new, writeable float64 array per call."""
     from symkin.emit.lowering import lower
-    from symkin.emit.printers import MathPrinter, NumPyPrinter
+    from symkin.emit.printers import MathPrinter, NumPyKinPrinter
 
     printed = []
     for f in functions:
-        vec, one = lower(f, NumPyPrinter()), lower(f, MathPrinter())
-        used = dict((j, name) for name, j in one.inputs)
+        vec, one = lower(f, NumPyKinPrinter()), lower(f, MathPrinter())
+        joints = [str(s) for s in f.code.inputs]
         printed.append(
             {
                 **vec.__dict__,
                 "scalar_lines": one.lines,
                 "scalar_fill": [_fill(o) for o in (*one.outs, *one.scratch) if o.values],
-                "unpack": ", ".join(used.get(j, "_") for j in range(robot.n)) + ("," if robot.n == 1 else ""),
+                # every joint, also those the function does not use: their sum is the finite check
+                "unpack": ", ".join(joints) + ("," if len(joints) == 1 else ""),
+                "joint_sum": " + ".join(joints),
                 # a function with one output returns the array, not a 1-tuple
                 "ret_one": _returned([o.name for o in one.outs]),
                 "ret_batch": _returned([f"{o.name}.reshape((N,) + {o.shape})" for o in vec.outs]),
+                "ret_first": "out[0]"
+                if len(vec.outs) == 1
+                else _returned([f"out[{i}][0]" for i in range(len(vec.outs))]),
                 "ret_delegate": _returned([f"out[{i}]" for i in vec.delegate_pick]),
             }
         )
