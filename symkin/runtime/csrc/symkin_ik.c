@@ -15,12 +15,14 @@
  * -fno-tree-slp-vectorize: GCC 12 fuses some straight-line a*b + c*d / a*b - c*d pairs into
  * vfmaddsub even under -ffp-contract=off).
  *
- * Speed: the LM step is compiled for n = 6 and n = 7 as constants (unrolled Cholesky) besides
- * any n, the normal equations are vectorised over the columns of J, and a batch of LM solves with
+ * Speed: the LM, NR and GN steps are compiled for n = 6 and n = 7 as constants (unrolled
+ * Cholesky, fixed-size copies) besides any n, the normal equations are vectorised over the
+ * columns of J (rows of J loaded straight into vectors), and a batch of LM solves with
  * 6 or 7 joints runs SYMKIN_LANES targets side by side with their steps in vector lanes
  * (solve_batch_lm). Every variant does the same operations in the same order, so the numbers are
  * the same to the bit as those of the plain loops. Hot paths call no libm function for min/max:
- * between AVX code such a call cost about 0.3 us on the development machine (SSE/AVX transitions).
+ * between AVX code such a call cost about 0.3 us on the development machine (SSE/AVX transitions),
+ * and the one libm call per iteration, atan2 (symkin_pose.h), comes after a vzeroupper.
  *
  * Thread safety: the functions keep their state on the stack; a config is only read.
  */
