@@ -84,23 +84,25 @@ class NumPyPrinter(_PyLikePrinter):
 class _PositiveFirst:
     """``-a + b`` (two terms, the first negated) printed as ``b - a``: the same IEEE result
     (x + (-y) == x - y, and addition commutes, signed zeros included), one negation less. Sums of
-    three or more terms keep their order, which decides their rounding."""
+    three or more terms keep their order, which decides their rounding. Otherwise sympy's
+    ``StrPrinter._print_Add``, each term printed once."""
 
     def _print_Add(self, expr: sp.Add, order: str | None = None) -> str:
-        text = super()._print_Add(expr, order)  # type: ignore[misc]
         terms = self._as_ordered_terms(expr, order=order)  # type: ignore[attr-defined]
-        if len(terms) != 2 or any(t.is_Add for t in terms):
-            return text
-        first, second = (self._print(t) for t in terms)  # type: ignore[attr-defined]
-        if not first.startswith("-") or second.startswith("-"):
-            return text
         prec = precedence(expr)
-        a, b = first[1:], second
-        if precedence(terms[0]) < prec:
-            a = f"({a})"
-        if precedence(terms[1]) < prec:
-            b = f"({b})"
-        return f"{b} - {a}"
+        signed = []
+        for term in terms:
+            t = self._print(term)  # type: ignore[attr-defined]
+            sign = "+"
+            if t.startswith("-") and not term.is_Add:
+                sign, t = "-", t[1:]
+            if precedence(term) < prec or term.is_Add:
+                t = f"({t})"
+            signed.append((sign, t))
+        if len(signed) == 2 and signed[0][0] == "-" and signed[1][0] == "+":
+            return f"{signed[1][1]} - {signed[0][1]}"
+        text = " ".join(f"{sign} {t}" for sign, t in signed)
+        return text[2:] if text.startswith("+ ") else "-" + text[2:]
 
 
 class NumPyKinPrinter(_PositiveFirst, NumPyPrinter):
