@@ -309,7 +309,10 @@ def _casadi_method(f: Any, robot: Robot) -> Any:
                 np.copyto(qbuf, q)
                 evaluate()
                 ok = buf.ret() == 0
-                res = [o.reshape(c, r).T.reshape(shapes[k]) for o, (r, c), k in zip(outs, sizes, names)]
+                # copies: the buffers are reused by the next call (and by other threads)
+                res = [
+                    o.reshape(c, r).T.copy().reshape(shapes[k]) for o, (r, c), k in zip(outs, sizes, names)
+                ]
             if ok:
                 return res[0] if len(res) == 1 else tuple(res)
         Q, single = as_batch(q, n, name)  # raises the reference's error for invalid q

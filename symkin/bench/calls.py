@@ -14,8 +14,9 @@ ratio next to the goal it answers (issue 14):
   ``import numpy``.
 
 Times are CPU times of the calling thread (``time.thread_time``), so that other processes on a
-shared machine do not count, best of several rounds (:func:`symkin.bench.kin.per_call_us`); loops
-over many targets or tasks take the best of a few rounds too. Start-up figures are wall times in
+shared machine do not count, best of several rounds (:func:`symkin.bench.kin.per_call_us`), the
+paths of one comparison measured in turn within each round; loops over many targets or tasks take
+the best of a few rounds too. Start-up figures are wall times in
 fresh interpreters (the fastest and the median of several). Trust the ratios.
 """
 
@@ -62,6 +63,20 @@ def _us(f: Callable[[], Any], budget: float) -> float:
     """Microseconds per call of f (best of several rounds within about ``budget`` seconds, CPU time
     of this thread)."""
     return per_call_us(f, budget=budget, clock=CLOCK)
+
+
+def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float, rounds: int = 4) -> dict:
+    """Microseconds per call of each path, measured in turn for ``rounds`` rounds (about ``budget``
+    seconds per path in all) and the best round kept: a burst of load on a shared machine then hits
+    every path of a comparison, not just one. Keys (row, column) -> {row: {column: us}}."""
+    best: dict[tuple[str, str], float] = {}
+    for _ in range(rounds):
+        for key, f in paths.items():
+            best[key] = min(best.get(key, math.inf), per_call_us(f, budget=budget / rounds, clock=CLOCK))
+    out: dict[str, dict[str, float]] = {}
+    for (row, col), us in best.items():
+        out.setdefault(row, {})[col] = us
+    return out
 
 
 def _best_of(f: Callable[[], Any], rounds: int) -> float:
@@ -133,27 +148,30 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
         "NR pinv": {"method": "NR", "pinv": True},
         "GN pinv": {"method": "GN", "pinv": True},
     }
-    out: dict[str, Any] = {}
-    for label, options in methods.items():
+    batch = {label: math.inf for label in methods}
+    single = dict(batch)
+    its: dict[str, tuple[int, int]] = {}
+    success: dict[str, float] = {}
+    for options in methods.values():
         kin.ik(Tep[:2], seed=seed, **options)
-        row: dict[str, float] = {}
-        its = 0
-        best = math.inf
-        for _ in range(rounds):
+    for _ in range(rounds):  # the methods in turn, so that each sees the same machine
+        for label, options in methods.items():
             t0 = CLOCK()
             res = kin.ik(Tep, seed=seed, **options)
-            best = min(best, CLOCK() - t0)
-            its = int(np.sum(res.iterations))
-        row["batch_us_per_iteration"] = 1e6 * best / its
-        row["success"] = float(np.mean(res.success))
-        best = math.inf
-        for _ in range(rounds):
+            batch[label] = min(batch[label], CLOCK() - t0)
             t0 = CLOCK()
             sols = [kin.ik(T, seed=seed, **options) for T in Tep]
-            best = min(best, CLOCK() - t0)
-        row["single_us_per_iteration"] = 1e6 * best / sum(int(s.iterations) for s in sols)
-        out[label] = row
-    return out
+            single[label] = min(single[label], CLOCK() - t0)
+            its[label] = (int(np.sum(res.iterations)), sum(int(s.iterations) for s in sols))
+            success[label] = float(np.mean(res.success))
+    return {
+        label: {
+            "batch_us_per_iteration": 1e6 * batch[label] / its[label][0],
+            "success": success[label],
+            "single_us_per_iteration": 1e6 * single[label] / its[label][1],
+        }
+        for label in methods
+    }
 
 
 # -- control -------------------------------------------------------------------------------------
@@ -199,13 +217,11 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[
     import symkin
 
     kn, kc = symkin.compile(robot, backend="numpy"), symkin.compile(robot, backend="c")
-    rows: dict[str, dict[str, float]] = {}
+    paths: dict[tuple[str, str], Callable[[], Any]] = {}
     for label, k in (("numpy", kn), ("c", kc)):
-        rows[label] = {
-            "fkine": _us(lambda k=k: k.fkine(q), budget),
-            "jacob0": _us(lambda k=k: k.jacob0(q), budget),
-            "manipulability": _us(lambda k=k: k.manipulability(q), budget),
-        }
+        paths[(label, "fkine")] = lambda k=k: k.fkine(q)
+        paths[(label, "jacob0")] = lambda k=k: k.jacob0(q)
+        paths[(label, "manipulability")] = lambda k=k: k.manipulability(q)
     pm = pinocchio_model(robot)
     if pm is not None:
         import pinocchio as pin
@@ -228,13 +244,11 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[
             pin.framesForwardKinematics(model, data, q)
             return data.oMf[fid]
 
-        rows["pinocchio"] = {
-            "fkine": _us(fk, budget),
-            "jacob0": _us(jac, budget),
-            "manipulability": _us(manip, budget),
-        }
-        rows["pinocchio (all frames)"] = {"fkine": _us(fk_all, budget)}
-    return rows
+        paths[("pinocchio", "fkine")] = fk
+        paths[("pinocchio", "jacob0")] = jac
+        paths[("pinocchio", "manipulability")] = manip
+        paths[("pinocchio (all frames)", "fkine")] = fk_all
+    return _interleaved(paths, budget)
 
 
 def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
@@ -250,7 +264,9 @@ def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, 
         "hessian0": (lambda: ka.hessian0(q), lambda: raw["hessian0"](q)),
         "manipulability": (lambda: ka.manipulability(q), lambda: raw["manipulability_all"](q)),
     }
-    return {k: {"backend": _us(a, budget), "raw": _us(b, budget)} for k, (a, b) in pairs.items()}
+    paths = {(k, "backend"): a for k, (a, _) in pairs.items()}
+    paths.update({(k, "raw"): b for k, (_, b) in pairs.items()})
+    return _interleaved(paths, budget)
 
 
 # -- start-up ------------------------------------------------------------------------------------

@@ -8,9 +8,18 @@ from __future__ import annotations
 
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
+from sympy.printing.precedence import precedence
 from sympy.printing.pycode import PythonCodePrinter
 
-__all__ = ["CPrinter", "FloatCPrinter", "NumPyPrinter", "CasADiPrinter", "float_literal"]
+__all__ = [
+    "CPrinter",
+    "FloatCPrinter",
+    "NumPyPrinter",
+    "NumPyKinPrinter",
+    "MathPrinter",
+    "CasADiPrinter",
+    "float_literal",
+]
 
 
 def float_literal(x: float) -> str:
@@ -95,6 +104,49 @@ class NumPyPrinter(_PyLikePrinter):
     """Elementwise NumPy expressions (``np.cos``) for the batched Python backend."""
 
     module = "np"
+
+
+class _PositiveFirst:
+    """``-a + b`` (two terms, the first negated) printed as ``b - a``: the same IEEE result
+    (x + (-y) == x - y, and addition commutes, signed zeros included), one negation less. Sums of
+    three or more terms keep their order, which decides their rounding. Otherwise sympy's
+    ``StrPrinter._print_Add``, each term printed once."""
+
+    def _print_Add(self, expr: sp.Add, order: str | None = None) -> str:
+        terms = self._as_ordered_terms(expr, order=order)  # type: ignore[attr-defined]
+        prec = precedence(expr)
+        signed = []
+        for term in terms:
+            t = self._print(term)  # type: ignore[attr-defined]
+            sign = "+"
+            if t.startswith("-") and not term.is_Add:
+                sign, t = "-", t[1:]
+            if precedence(term) < prec or term.is_Add:
+                t = f"({t})"
+            signed.append((sign, t))
+        if len(signed) == 2 and signed[0][0] == "-" and signed[1][0] == "+":
+            return f"{signed[1][1]} - {signed[0][1]}"
+        text = " ".join(f"{sign} {t}" for sign, t in signed)
+        return text[2:] if text.startswith("+ ") else "-" + text[2:]
+
+
+class NumPyKinPrinter(_PositiveFirst, NumPyPrinter):
+    """The NumPy backend's batch code: :class:`NumPyPrinter` with ``-a + b`` as ``b - a``."""
+
+
+class MathPrinter(_PositiveFirst, _PyLikePrinter):
+    """Scalar Python for one configuration: ``cos``, ``sin`` and ``sqrt`` as imported from ``math``
+    into the generated module (a global each: faster than ``math.cos`` per call), ``-a + b`` as
+    ``b - a``."""
+
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        return _pow(self, expr, "sqrt")
+
+    def _print_sin(self, expr: sp.sin) -> str:
+        return f"sin({self._print(expr.args[0])})"
+
+    def _print_cos(self, expr: sp.cos) -> str:
+        return f"cos({self._print(expr.args[0])})"
 
 
 class CasADiPrinter(_PyLikePrinter):

@@ -301,6 +301,15 @@ class CIKSolver:
         )
         self._seeds = random.Random(os.urandom(16))
 
+    def bind(self, fallback: Any) -> Any:
+        """A callable ``ik(Tep, *args, **kwargs)`` for a kinematics object's ``ik``: one target
+        alone solves in one C call (as :attr:`fast`, no Python frame); any other call, or a target
+        that needs checking, goes to ``fallback`` with the same arguments. None when this solver
+        uses another library than the default one."""
+        if self.fast is None:
+            return None
+        return ik_extension().bind(self._cfg_addr, self._reason, fallback, self)
+
     def __repr__(self) -> str:
         o = self.options
         kin = "fkjac" if self._fkjac_addr else "ets table"

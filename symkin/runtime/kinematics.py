@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from functools import cached_property
 from pathlib import Path
-from types import ModuleType
+from types import MethodType, ModuleType
 from typing import Any
 
 import numpy as np
@@ -155,8 +155,10 @@ class Kinematics:
 
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
         NumPy and CasADi backends the NumPy solver calls the generated functions. A call with the
-        default options goes straight to the C solver (one target costs little more than the
-        solve itself); it is thread-safe.
+        default options goes straight to the C solver; after the first one, ``kin.ik`` is the C
+        solver's entry point itself, which solves one target without a Python frame (one target
+        costs little more than the solve itself) and passes any other call on to this method. It
+        is thread-safe.
 
         ``method="analytic"``: the closed form (:meth:`ik_all`), returning the solution nearest
         ``q0`` (options ``q0``, ``weights``, ``joint_limits``, ``tol``); ``success=False`` with a
@@ -188,6 +190,9 @@ class Kinematics:
 
             self._ik_solver = solver = default_c_solver(self)
             self._ik_fast = solver.fast
+            bound = solver.bind(MethodType(Kinematics.ik, self))
+            if bound is not None:  # later calls of one target: one C call, no Python frame
+                self.__dict__["ik"] = bound
             return solver.solve(Tep)
         return ik(self, Tep, **kwargs)
 

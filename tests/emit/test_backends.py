@@ -110,6 +110,37 @@ def test_bad_q_gets_the_reference_error(backend):
         kin.fkine("abc")
 
 
+@pytest.mark.parametrize("backend", ["c", "numpy", "casadi"])
+def test_one_configuration_gets_new_writeable_arrays_and_finite_checks(backend):
+    # the single-configuration paths (NumPy: struct-filled np.empty arrays) must still return a
+    # fresh, writeable float64 array per call, and reject NaN and inf in an ndarray q, also in a
+    # joint the output does not depend on (jacob0 and the UR5's last joint)
+    robot = load("ur5")
+    kin = symkin.compile(robot, backend=backend)
+    q = robot.random_q(seed=3)
+    shapes = {
+        "fkine": (4, 4),
+        "link_poses": (6, 4, 4),
+        "jacob0": (6, 6),
+        "jacobe": (6, 6),
+        "hessian0": (6, 6, 6),
+    }
+    for name, shape in shapes.items():
+        a, b = getattr(kin, name)(q), getattr(kin, name)(q)
+        assert a.shape == shape and a.dtype == np.float64 and a.flags.writeable and a.flags.c_contiguous
+        assert not np.shares_memory(a, b)
+        a[...] = 0.0
+        assert_close(b, getattr(robot, name)(q), 1e-10, f"{backend} {name} after writing to another result")
+    T, J = kin.fkine_jacob0(q)
+    assert T.flags.writeable and J.flags.writeable and not np.shares_memory(T, J)
+    for bad in (np.nan, np.inf, -np.inf):
+        qb = q.copy()
+        qb[5] = bad
+        for name in ("fkine", "jacob0"):
+            with pytest.raises(ConfigurationError, match="must be finite"):
+                getattr(kin, name)(qb)
+
+
 def test_c_backend_accepts_any_array_like():
     robot = load("ur5")
     kin = symkin.compile(robot, backend="c")

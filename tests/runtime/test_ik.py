@@ -296,6 +296,19 @@ def test_one_target_call_takes_any_array_and_checks_it():
     with pytest.raises(ConfigurationError):
         symkin.ik(kin, T, backend="c", q0=np.zeros(5))
     assert first.success and kin.ik(T).success
+    # after the first call kin.ik is the C entry point itself; it passes every other call on to
+    # Kinematics.ik: keyword options, the target by keyword, no target
+    assert type(kin.ik).__name__ == "BoundIK" and type(kin).ik.__name__ == "ik"
+    a, b = kin.ik(T, seed=7), kin.ik(Tep=T, seed=7)
+    assert (
+        a.q.tobytes() == b.q.tobytes() and a.q.tobytes() == symkin.ik(kin, T, backend="c", seed=7).q.tobytes()
+    )
+    _assert_solved(UR5, kin.ik(T, method="GN", pinv=True, seed=1), T)
+    with pytest.raises(TypeError):
+        kin.ik()
+    import pickle
+
+    _assert_solved(UR5, pickle.loads(pickle.dumps(kin)).ik(T), T)
 
 
 # -- threads ----------------------------------------------------------------------------------

@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,14 @@ N_JOINTS = 7
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_21 = struct.Struct("21d").pack_into
+_PACK_26 = struct.Struct("26d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
+_PACK_28 = struct.Struct("28d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5, 6,),
@@ -33,75 +43,6 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
     (1, 1, 1, 1, 1, 1, 1,),
 )
-
-
-def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t10 = -t1*t9 + t4*t8
-    t11 = t0*t9 + t5*t8
-    t12 = -t3*t8
-    t13 = -t1*t8 - t4*t9
-    t14 = t0*t8 - t5*t9
-    t15 = t3*t9
-    t16 = -0.4*t6
-    t17 = -0.4*t7
-    t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t21 = t10*t19 - t20*t6
-    t22 = t11*t19 - t20*t7
-    t23 = t12*t19 + t2*t20
-    t24 = -t10*t20 - t19*t6
-    t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t29 = t13*t28 + t21*t27
-    t30 = t14*t28 + t22*t27
-    t31 = t15*t28 + t23*t27
-    t32 = t13*t27 - t21*t28
-    t33 = t14*t27 - t22*t28
-    t34 = t15*t27 - t23*t28
-    t35 = t16 + (0.4)*t24
-    t36 = t17 + (0.4)*t25
-    t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t40 = -t24*t39 + t29*t38
-    t41 = -t25*t39 + t30*t38
-    t42 = -t26*t39 + t31*t38
-    t43 = -t24*t38 - t29*t39
-    t44 = -t25*t38 - t30*t39
-    t45 = -t26*t38 - t31*t39
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
-    t48 = t32*t47 + t40*t46
-    t49 = t33*t47 + t41*t46
-    t50 = t34*t47 + t42*t46
-    t51 = t32*t46 - t40*t47
-    t52 = t33*t46 - t41*t47
-    t53 = t34*t46 - t42*t47
-    t54 = t35 - 0.126*t43
-    t55 = t36 - 0.126*t44
-    t56 = t37 - 0.126*t45
-    T = np.array([t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
 
 
 def _fkine_batch(Q):
@@ -123,7 +64,7 @@ def _fkine_batch(Q):
     t7 = -t1*t3
     t8 = np.cos(q2)
     t9 = np.sin(q2)
-    t10 = -t1*t9 + t4*t8
+    t10 = t4*t8 - t1*t9
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
     t13 = -t1*t8 - t4*t9
@@ -139,7 +80,7 @@ def _fkine_batch(Q):
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
+    t26 = t19*t2 - t12*t20
     t27 = np.cos(q4)
     t28 = np.sin(q4)
     t29 = t13*t28 + t21*t27
@@ -153,9 +94,9 @@ def _fkine_batch(Q):
     t37 = t18 + (0.4)*t26
     t38 = np.cos(q5)
     t39 = np.sin(q5)
-    t40 = -t24*t39 + t29*t38
-    t41 = -t25*t39 + t30*t38
-    t42 = -t26*t39 + t31*t38
+    t40 = t29*t38 - t24*t39
+    t41 = t30*t38 - t25*t39
+    t42 = t31*t38 - t26*t39
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
@@ -187,89 +128,86 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t10 = t4*t8 - t1*t9
+            t11 = t0*t9 + t5*t8
+            t12 = -t3*t8
+            t13 = -t1*t8 - t4*t9
+            t14 = t0*t8 - t5*t9
+            t15 = t3*t9
+            t16 = -0.4*t6
+            t17 = -0.4*t7
+            t18 = (0.4)*t2 + 0.34
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t21 = t10*t19 - t20*t6
+            t22 = t11*t19 - t20*t7
+            t23 = t12*t19 + t2*t20
+            t24 = -t10*t20 - t19*t6
+            t25 = -t11*t20 - t19*t7
+            t26 = t19*t2 - t12*t20
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t29 = t13*t28 + t21*t27
+            t30 = t14*t28 + t22*t27
+            t31 = t15*t28 + t23*t27
+            t32 = t13*t27 - t21*t28
+            t33 = t14*t27 - t22*t28
+            t34 = t15*t27 - t23*t28
+            t35 = t16 + (0.4)*t24
+            t36 = t17 + (0.4)*t25
+            t37 = t18 + (0.4)*t26
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t40 = t29*t38 - t24*t39
+            t41 = t30*t38 - t25*t39
+            t42 = t31*t38 - t26*t39
+            t43 = -t24*t38 - t29*t39
+            t44 = -t25*t38 - t30*t39
+            t45 = -t26*t38 - t31*t39
+            t46 = cos(q6)
+            t47 = sin(q6)
+            t48 = t32*t47 + t40*t46
+            t49 = t33*t47 + t41*t46
+            t50 = t34*t47 + t42*t46
+            t51 = t32*t46 - t40*t47
+            t52 = t33*t46 - t41*t47
+            t53 = t34*t46 - t42*t47
+            t54 = t35 - 0.126*t43
+            t55 = t36 - 0.126*t44
+            t56 = t37 - 0.126*t45
+            T = _empty((4, 4))
+            _PACK_16(T, 0, t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t10 = -t1*t9 + t4*t8
-    t11 = t0*t9 + t5*t8
-    t12 = -t3*t8
-    t13 = -t1*t8 - t4*t9
-    t14 = t0*t8 - t5*t9
-    t15 = t3*t9
-    t16 = -0.4*t6
-    t17 = -0.4*t7
-    t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t21 = t10*t19 - t20*t6
-    t22 = t11*t19 - t20*t7
-    t23 = t12*t19 + t2*t20
-    t24 = -t10*t20 - t19*t6
-    t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t29 = t13*t28 + t21*t27
-    t30 = t14*t28 + t22*t27
-    t31 = t15*t28 + t23*t27
-    t32 = t13*t27 - t21*t28
-    t33 = t14*t27 - t22*t28
-    t34 = t15*t27 - t23*t28
-    t35 = t16 + (0.4)*t24
-    t36 = t17 + (0.4)*t25
-    t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t40 = -t24*t39 + t29*t38
-    t41 = -t25*t39 + t30*t38
-    t42 = -t26*t39 + t31*t38
-    t43 = -t24*t38 - t29*t39
-    t44 = -t25*t38 - t30*t39
-    t45 = -t26*t38 - t31*t39
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
-    t48 = t32*t47 + t40*t46
-    t49 = t33*t47 + t41*t46
-    t50 = t34*t47 + t42*t46
-    t51 = t32*t46 - t40*t47
-    t52 = t33*t46 - t41*t47
-    t53 = t34*t46 - t42*t47
-    links = np.array([t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0, -t3, -t2, 0.0, 0.34, 0.0, 0.0, 0.0, 1.0, t10, t13, -t6, 0.0, t11, t14, -t7, 0.0, t12, t15, t2, 0.34, 0.0, 0.0, 0.0, 1.0, t21, t24, -t13, t16, t22, t25, -t14, t17, t23, t26, -t15, t18, 0.0, 0.0, 0.0, 1.0, t29, t32, t24, t16, t30, t33, t25, t17, t31, t34, t26, t18, 0.0, 0.0, 0.0, 1.0, t40, t43, t32, t35, t41, t44, t33, t36, t42, t45, t34, t37, 0.0, 0.0, 0.0, 1.0, t48, t51, -t43, t35, t49, t52, -t44, t36, t50, t53, -t45, t37, 0.0, 0.0, 0.0, 1.0]).reshape((7, 4, 4))
-    return (links, )
 
 
 def _link_poses_batch(Q):
@@ -291,7 +229,7 @@ def _link_poses_batch(Q):
     t7 = -t1*t3
     t8 = np.cos(q2)
     t9 = np.sin(q2)
-    t10 = -t1*t9 + t4*t8
+    t10 = t4*t8 - t1*t9
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
     t13 = -t1*t8 - t4*t9
@@ -307,7 +245,7 @@ def _link_poses_batch(Q):
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
+    t26 = t19*t2 - t12*t20
     t27 = np.cos(q4)
     t28 = np.sin(q4)
     t29 = t13*t28 + t21*t27
@@ -321,9 +259,9 @@ def _link_poses_batch(Q):
     t37 = t18 + (0.4)*t26
     t38 = np.cos(q5)
     t39 = np.sin(q5)
-    t40 = -t24*t39 + t29*t38
-    t41 = -t25*t39 + t30*t38
-    t42 = -t26*t39 + t31*t38
+    t40 = t29*t38 - t24*t39
+    t41 = t30*t38 - t25*t39
+    t42 = t31*t38 - t26*t39
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
@@ -448,100 +386,81 @@ def _link_poses_batch(Q):
     links[:, 109] = 0.0
     links[:, 110] = 0.0
     links[:, 111] = 1.0
-    return (links.reshape((N,) + (7, 4, 4)), )
+    return links.reshape((N,) + (7, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t10 = t4*t8 - t1*t9
+            t11 = t0*t9 + t5*t8
+            t12 = -t3*t8
+            t13 = -t1*t8 - t4*t9
+            t14 = t0*t8 - t5*t9
+            t15 = t3*t9
+            t16 = -0.4*t6
+            t17 = -0.4*t7
+            t18 = (0.4)*t2 + 0.34
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t21 = t10*t19 - t20*t6
+            t22 = t11*t19 - t20*t7
+            t23 = t12*t19 + t2*t20
+            t24 = -t10*t20 - t19*t6
+            t25 = -t11*t20 - t19*t7
+            t26 = t19*t2 - t12*t20
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t29 = t13*t28 + t21*t27
+            t30 = t14*t28 + t22*t27
+            t31 = t15*t28 + t23*t27
+            t32 = t13*t27 - t21*t28
+            t33 = t14*t27 - t22*t28
+            t34 = t15*t27 - t23*t28
+            t35 = t16 + (0.4)*t24
+            t36 = t17 + (0.4)*t25
+            t37 = t18 + (0.4)*t26
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t40 = t29*t38 - t24*t39
+            t41 = t30*t38 - t25*t39
+            t42 = t31*t38 - t26*t39
+            t43 = -t24*t38 - t29*t39
+            t44 = -t25*t38 - t30*t39
+            t45 = -t26*t38 - t31*t39
+            t46 = cos(q6)
+            t47 = sin(q6)
+            t48 = t32*t47 + t40*t46
+            t49 = t33*t47 + t41*t46
+            t50 = t34*t47 + t42*t46
+            t51 = t32*t46 - t40*t47
+            t52 = t33*t46 - t41*t47
+            t53 = t34*t46 - t42*t47
+            links = _empty((7, 4, 4))
+            _PACK_28(links, 0, t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0, -t3, -t2, 0.0, 0.34)
+            _PACK_28(links, 224, 0.0, 0.0, 0.0, 1.0, t10, t13, -t6, 0.0, t11, t14, -t7, 0.0, t12, t15, t2, 0.34, 0.0, 0.0, 0.0, 1.0, t21, t24, -t13, t16, t22, t25, -t14, t17)
+            _PACK_28(links, 448, t23, t26, -t15, t18, 0.0, 0.0, 0.0, 1.0, t29, t32, t24, t16, t30, t33, t25, t17, t31, t34, t26, t18, 0.0, 0.0, 0.0, 1.0, t40, t43, t32, t35)
+            _PACK_28(links, 672, t41, t44, t33, t36, t42, t45, t34, t37, 0.0, 0.0, 0.0, 1.0, t48, t51, -t43, t35, t49, t52, -t44, t36, t50, t53, -t45, t37, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t10 = -t1*t9 + t4*t8
-    t11 = t0*t9 + t5*t8
-    t12 = -t3*t8
-    t13 = -t1*t8 - t4*t9
-    t14 = t0*t8 - t5*t9
-    t15 = t3*t9
-    t16 = -0.4*t6
-    t17 = -0.4*t7
-    t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t21 = t10*t19 - t20*t6
-    t22 = t11*t19 - t20*t7
-    t23 = t12*t19 + t2*t20
-    t24 = -t10*t20 - t19*t6
-    t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t29 = t13*t28 + t21*t27
-    t30 = t14*t28 + t22*t27
-    t31 = t15*t28 + t23*t27
-    t32 = t13*t27 - t21*t28
-    t33 = t14*t27 - t22*t28
-    t34 = t15*t27 - t23*t28
-    t35 = t16 + (0.4)*t24
-    t36 = t17 + (0.4)*t25
-    t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t43 = -t24*t38 - t29*t39
-    t44 = -t25*t38 - t30*t39
-    t45 = -t26*t38 - t31*t39
-    t54 = t35 - 0.126*t43
-    t55 = t36 - 0.126*t44
-    t56 = t37 - 0.126*t45
-    t57 = t56 - 0.34
-    t58 = t0*t57
-    t59 = t1*t57
-    t60 = -t0*t54 - t1*t55
-    t61 = -t2*t55 - t57*t7
-    t62 = t2*t54 + t57*t6
-    t63 = t54*t7 - t55*t6
-    t64 = -t16 + t54
-    t65 = -t17 + t55
-    t66 = -t18 + t56
-    t67 = -t14*t66 + t15*t65
-    t68 = t13*t66 - t15*t64
-    t69 = -t13*t65 + t14*t64
-    t70 = t25*t66 - t26*t65
-    t71 = -t24*t66 + t26*t64
-    t72 = t24*t65 - t25*t64
-    t73 = -t35 + t54
-    t74 = -t36 + t55
-    t75 = -t37 + t56
-    t76 = t33*t75 - t34*t74
-    t77 = -t32*t75 + t34*t73
-    t78 = t32*t74 - t33*t73
-    t79 = -t44*t75 + t45*t74
-    t80 = t43*t75 - t45*t73
-    t81 = -t43*t74 + t44*t73
-    J = np.array([-t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45]).reshape((6, 7))
-    return (J, )
 
 
 def _jacob0_batch(Q):
@@ -562,7 +481,7 @@ def _jacob0_batch(Q):
     t7 = -t1*t3
     t8 = np.cos(q2)
     t9 = np.sin(q2)
-    t10 = -t1*t9 + t4*t8
+    t10 = t4*t8 - t1*t9
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
     t13 = -t1*t8 - t4*t9
@@ -578,7 +497,7 @@ def _jacob0_batch(Q):
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
+    t26 = t19*t2 - t12*t20
     t27 = np.cos(q4)
     t28 = np.sin(q4)
     t29 = t13*t28 + t21*t27
@@ -605,24 +524,24 @@ def _jacob0_batch(Q):
     t61 = -t2*t55 - t57*t7
     t62 = t2*t54 + t57*t6
     t63 = t54*t7 - t55*t6
-    t64 = -t16 + t54
-    t65 = -t17 + t55
-    t66 = -t18 + t56
-    t67 = -t14*t66 + t15*t65
+    t64 = t54 - t16
+    t65 = t55 - t17
+    t66 = t56 - t18
+    t67 = t15*t65 - t14*t66
     t68 = t13*t66 - t15*t64
-    t69 = -t13*t65 + t14*t64
+    t69 = t14*t64 - t13*t65
     t70 = t25*t66 - t26*t65
-    t71 = -t24*t66 + t26*t64
+    t71 = t26*t64 - t24*t66
     t72 = t24*t65 - t25*t64
-    t73 = -t35 + t54
-    t74 = -t36 + t55
-    t75 = -t37 + t56
+    t73 = t54 - t35
+    t74 = t55 - t36
+    t75 = t56 - t37
     t76 = t33*t75 - t34*t74
-    t77 = -t32*t75 + t34*t73
+    t77 = t34*t73 - t32*t75
     t78 = t32*t74 - t33*t73
-    t79 = -t44*t75 + t45*t74
+    t79 = t45*t74 - t44*t75
     t80 = t43*t75 - t45*t73
-    t81 = -t43*t74 + t44*t73
+    t81 = t44*t73 - t43*t74
     J = np.empty((N, 42))
     J[:, 0] = -t55
     J[:, 1] = t58
@@ -666,97 +585,101 @@ def _jacob0_batch(Q):
     J[:, 39] = t26
     J[:, 40] = t34
     J[:, 41] = -t45
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t10 = t4*t8 - t1*t9
+            t11 = t0*t9 + t5*t8
+            t12 = -t3*t8
+            t13 = -t1*t8 - t4*t9
+            t14 = t0*t8 - t5*t9
+            t15 = t3*t9
+            t16 = -0.4*t6
+            t17 = -0.4*t7
+            t18 = (0.4)*t2 + 0.34
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t21 = t10*t19 - t20*t6
+            t22 = t11*t19 - t20*t7
+            t23 = t12*t19 + t2*t20
+            t24 = -t10*t20 - t19*t6
+            t25 = -t11*t20 - t19*t7
+            t26 = t19*t2 - t12*t20
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t29 = t13*t28 + t21*t27
+            t30 = t14*t28 + t22*t27
+            t31 = t15*t28 + t23*t27
+            t32 = t13*t27 - t21*t28
+            t33 = t14*t27 - t22*t28
+            t34 = t15*t27 - t23*t28
+            t35 = t16 + (0.4)*t24
+            t36 = t17 + (0.4)*t25
+            t37 = t18 + (0.4)*t26
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t43 = -t24*t38 - t29*t39
+            t44 = -t25*t38 - t30*t39
+            t45 = -t26*t38 - t31*t39
+            t54 = t35 - 0.126*t43
+            t55 = t36 - 0.126*t44
+            t56 = t37 - 0.126*t45
+            t57 = t56 - 0.34
+            t58 = t0*t57
+            t59 = t1*t57
+            t60 = -t0*t54 - t1*t55
+            t61 = -t2*t55 - t57*t7
+            t62 = t2*t54 + t57*t6
+            t63 = t54*t7 - t55*t6
+            t64 = t54 - t16
+            t65 = t55 - t17
+            t66 = t56 - t18
+            t67 = t15*t65 - t14*t66
+            t68 = t13*t66 - t15*t64
+            t69 = t14*t64 - t13*t65
+            t70 = t25*t66 - t26*t65
+            t71 = t26*t64 - t24*t66
+            t72 = t24*t65 - t25*t64
+            t73 = t54 - t35
+            t74 = t55 - t36
+            t75 = t56 - t37
+            t76 = t33*t75 - t34*t74
+            t77 = t34*t73 - t32*t75
+            t78 = t32*t74 - t33*t73
+            t79 = t45*t74 - t44*t75
+            t80 = t43*t75 - t45*t73
+            t81 = t44*t73 - t43*t74
+            J = _empty((6, 7))
+            _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
+            _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
-    t82 = t38*t46
-    t83 = -t38*t47
-    t84 = t39*t46
-    t85 = -t39*t47
-    t86 = (0.4)*t84
-    t87 = (0.4)*t85
-    t88 = -0.4*t38 - 0.126
-    t89 = t27*t82 - t28*t47
-    t90 = t27*t83 - t28*t46
-    t91 = t27*t39
-    t92 = t27*t47 + t28*t82
-    t93 = t27*t46 + t28*t83
-    t94 = t28*t39
-    t95 = t19*t89 + t20*t84
-    t96 = t19*t90 + t20*t85
-    t97 = t19*t91 - t20*t38
-    t98 = -t19*t84 + t20*t89
-    t99 = -t19*t85 + t20*t90
-    t100 = t19*t38 + t20*t91
-    t101 = t86 - 0.4*t98
-    t102 = t87 - 0.4*t99
-    t103 = -0.4*t100 + t88
-    t104 = t8*t95 - t9*t92
-    t105 = t8*t96 - t9*t93
-    t106 = t8*t97 - t9*t94
-    t107 = t8*t92 + t9*t95
-    t108 = t8*t93 + t9*t96
-    t109 = t8*t94 + t9*t97
-    t113 = t104*t3 - t2*t98
-    t114 = t105*t3 - t2*t99
-    t115 = -t100*t2 + t106*t3
-    t116 = t101 + (0.34)*t113
-    t117 = t102 + (0.34)*t114
-    t118 = t103 + (0.34)*t115
-    t119 = (0.126)*t46
-    t120 = -0.126*t47
-    t121 = t38*t87 + t85*t88
-    t122 = -t38*t86 - t84*t88
-    t123 = t84*t87 - t85*t86
-    t124 = -t87*t94 + t88*t93
-    t125 = t86*t94 - t88*t92
-    t126 = -t86*t93 + t87*t92
-    t127 = t100*t102 - t103*t99
-    t128 = -t100*t101 + t103*t98
-    t129 = t101*t99 - t102*t98
-    t130 = t102*t109 - t103*t108
-    t131 = -t101*t109 + t103*t107
-    t132 = t101*t108 - t102*t107
-    t133 = t114*t118 - t115*t117
-    t134 = -t113*t118 + t115*t116
-    t135 = t113*t117 - t114*t116
-    J = np.array([t133, t130, t127, t124, t121, t119, 0.0, t134, t131, t128, t125, t122, t120, 0.0, t135, t132, t129, t126, t123, 0.0, 0.0, -t113, t107, t98, -t92, -t84, t47, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, -t115, t109, t100, -t94, t38, 0.0, 1.0]).reshape((6, 7))
-    return (J, )
 
 
 def _jacobe_batch(Q):
@@ -795,12 +718,12 @@ def _jacobe_batch(Q):
     t95 = t19*t89 + t20*t84
     t96 = t19*t90 + t20*t85
     t97 = t19*t91 - t20*t38
-    t98 = -t19*t84 + t20*t89
-    t99 = -t19*t85 + t20*t90
+    t98 = t20*t89 - t19*t84
+    t99 = t20*t90 - t19*t85
     t100 = t19*t38 + t20*t91
     t101 = t86 - 0.4*t98
     t102 = t87 - 0.4*t99
-    t103 = -0.4*t100 + t88
+    t103 = t88 - 0.4*t100
     t104 = t8*t95 - t9*t92
     t105 = t8*t96 - t9*t93
     t106 = t8*t97 - t9*t94
@@ -809,7 +732,7 @@ def _jacobe_batch(Q):
     t109 = t8*t94 + t9*t97
     t113 = t104*t3 - t2*t98
     t114 = t105*t3 - t2*t99
-    t115 = -t100*t2 + t106*t3
+    t115 = t106*t3 - t100*t2
     t116 = t101 + (0.34)*t113
     t117 = t102 + (0.34)*t114
     t118 = t103 + (0.34)*t115
@@ -818,17 +741,17 @@ def _jacobe_batch(Q):
     t121 = t38*t87 + t85*t88
     t122 = -t38*t86 - t84*t88
     t123 = t84*t87 - t85*t86
-    t124 = -t87*t94 + t88*t93
+    t124 = t88*t93 - t87*t94
     t125 = t86*t94 - t88*t92
-    t126 = -t86*t93 + t87*t92
+    t126 = t87*t92 - t86*t93
     t127 = t100*t102 - t103*t99
-    t128 = -t100*t101 + t103*t98
+    t128 = t103*t98 - t100*t101
     t129 = t101*t99 - t102*t98
     t130 = t102*t109 - t103*t108
-    t131 = -t101*t109 + t103*t107
+    t131 = t103*t107 - t101*t109
     t132 = t101*t108 - t102*t107
     t133 = t114*t118 - t115*t117
-    t134 = -t113*t118 + t115*t116
+    t134 = t115*t116 - t113*t118
     t135 = t113*t117 - t114*t116
     J = np.empty((N, 42))
     J[:, 0] = t133
@@ -873,296 +796,104 @@ def _jacobe_batch(Q):
     J[:, 39] = t38
     J[:, 40] = 0.0
     J[:, 41] = 1.0
-    return (J.reshape((N,) + (6, 7)), )
+    return J.reshape((N,) + (6, 7))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t46 = cos(q6)
+            t47 = sin(q6)
+            t82 = t38*t46
+            t83 = -t38*t47
+            t84 = t39*t46
+            t85 = -t39*t47
+            t86 = (0.4)*t84
+            t87 = (0.4)*t85
+            t88 = -0.4*t38 - 0.126
+            t89 = t27*t82 - t28*t47
+            t90 = t27*t83 - t28*t46
+            t91 = t27*t39
+            t92 = t27*t47 + t28*t82
+            t93 = t27*t46 + t28*t83
+            t94 = t28*t39
+            t95 = t19*t89 + t20*t84
+            t96 = t19*t90 + t20*t85
+            t97 = t19*t91 - t20*t38
+            t98 = t20*t89 - t19*t84
+            t99 = t20*t90 - t19*t85
+            t100 = t19*t38 + t20*t91
+            t101 = t86 - 0.4*t98
+            t102 = t87 - 0.4*t99
+            t103 = t88 - 0.4*t100
+            t104 = t8*t95 - t9*t92
+            t105 = t8*t96 - t9*t93
+            t106 = t8*t97 - t9*t94
+            t107 = t8*t92 + t9*t95
+            t108 = t8*t93 + t9*t96
+            t109 = t8*t94 + t9*t97
+            t113 = t104*t3 - t2*t98
+            t114 = t105*t3 - t2*t99
+            t115 = t106*t3 - t100*t2
+            t116 = t101 + (0.34)*t113
+            t117 = t102 + (0.34)*t114
+            t118 = t103 + (0.34)*t115
+            t119 = (0.126)*t46
+            t120 = -0.126*t47
+            t121 = t38*t87 + t85*t88
+            t122 = -t38*t86 - t84*t88
+            t123 = t84*t87 - t85*t86
+            t124 = t88*t93 - t87*t94
+            t125 = t86*t94 - t88*t92
+            t126 = t87*t92 - t86*t93
+            t127 = t100*t102 - t103*t99
+            t128 = t103*t98 - t100*t101
+            t129 = t101*t99 - t102*t98
+            t130 = t102*t109 - t103*t108
+            t131 = t103*t107 - t101*t109
+            t132 = t101*t108 - t102*t107
+            t133 = t114*t118 - t115*t117
+            t134 = t115*t116 - t113*t118
+            t135 = t113*t117 - t114*t116
+            J = _empty((6, 7))
+            _PACK_21(J, 0, t133, t130, t127, t124, t121, t119, 0.0, t134, t131, t128, t125, t122, t120, 0.0, t135, t132, t129, t126, t123, 0.0, 0.0)
+            _PACK_21(J, 168, -t113, t107, t98, -t92, -t84, t47, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, -t115, t109, t100, -t94, t38, 0.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessian0_one(q):
-    out = _jacob0_hessian0_one(q)
-    return (out[1], )
 
 
 def _hessian0_batch(Q):
     out = _jacob0_hessian0_batch(Q)
-    return (out[1], )
+    return out[1]
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
-
-
-def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
-    t82 = t38*t46
-    t83 = -t38*t47
-    t84 = t39*t46
-    t85 = -t39*t47
-    t86 = (0.4)*t84
-    t87 = (0.4)*t85
-    t88 = -0.4*t38 - 0.126
-    t89 = t27*t82 - t28*t47
-    t90 = t27*t83 - t28*t46
-    t91 = t27*t39
-    t92 = t27*t47 + t28*t82
-    t93 = t27*t46 + t28*t83
-    t94 = t28*t39
-    t95 = t19*t89 + t20*t84
-    t96 = t19*t90 + t20*t85
-    t97 = t19*t91 - t20*t38
-    t98 = -t19*t84 + t20*t89
-    t99 = -t19*t85 + t20*t90
-    t100 = t19*t38 + t20*t91
-    t101 = t86 - 0.4*t98
-    t102 = t87 - 0.4*t99
-    t103 = -0.4*t100 + t88
-    t104 = t8*t95 - t9*t92
-    t105 = t8*t96 - t9*t93
-    t106 = t8*t97 - t9*t94
-    t107 = t8*t92 + t9*t95
-    t108 = t8*t93 + t9*t96
-    t109 = t8*t94 + t9*t97
-    t113 = t104*t3 - t2*t98
-    t114 = t105*t3 - t2*t99
-    t115 = -t100*t2 + t106*t3
-    t116 = t101 + (0.34)*t113
-    t117 = t102 + (0.34)*t114
-    t118 = t103 + (0.34)*t115
-    t119 = (0.126)*t46
-    t120 = -0.126*t47
-    t121 = t38*t87 + t85*t88
-    t122 = -t38*t86 - t84*t88
-    t123 = t84*t87 - t85*t86
-    t124 = -t87*t94 + t88*t93
-    t125 = t86*t94 - t88*t92
-    t126 = -t86*t93 + t87*t92
-    t127 = t100*t102 - t103*t99
-    t128 = -t100*t101 + t103*t98
-    t129 = t101*t99 - t102*t98
-    t130 = t102*t109 - t103*t108
-    t131 = -t101*t109 + t103*t107
-    t132 = t101*t108 - t102*t107
-    t133 = t114*t118 - t115*t117
-    t134 = -t113*t118 + t115*t116
-    t135 = t113*t117 - t114*t116
-    t167 = -t114*t132 + t115*t131
-    t168 = t113*t132 - t115*t130
-    t169 = -t113*t131 + t114*t130
-    t170 = t108*t135 - t109*t134
-    t171 = -t107*t135 + t109*t133
-    t172 = t107*t134 - t108*t133
-    t173 = t167 - t170
-    t174 = t168 - t171
-    t175 = t169 - t172
-    t176 = t108*t115 - t109*t114
-    t177 = -t107*t115 + t109*t113
-    t178 = t107*t114 - t108*t113
-    t206 = -t114*t129 + t115*t128
-    t207 = t113*t129 - t115*t127
-    t208 = -t113*t128 + t114*t127
-    t209 = -t100*t134 + t135*t99
-    t210 = t100*t133 - t135*t98
-    t211 = -t133*t99 + t134*t98
-    t212 = t206 - t209
-    t213 = t207 - t210
-    t214 = t208 - t211
-    t215 = -t100*t114 + t115*t99
-    t216 = t100*t113 - t115*t98
-    t217 = -t113*t99 + t114*t98
-    t218 = t108*t129 - t109*t128
-    t219 = -t107*t129 + t109*t127
-    t220 = t107*t128 - t108*t127
-    t221 = -t100*t131 + t132*t99
-    t222 = t100*t130 - t132*t98
-    t223 = -t130*t99 + t131*t98
-    t224 = t218 - t221
-    t225 = t219 - t222
-    t226 = t220 - t223
-    t227 = t100*t108 - t109*t99
-    t228 = -t100*t107 + t109*t98
-    t229 = t107*t99 - t108*t98
-    t251 = -t114*t126 + t115*t125
-    t252 = t113*t126 - t115*t124
-    t253 = -t113*t125 + t114*t124
-    t254 = t134*t94 - t135*t93
-    t255 = -t133*t94 + t135*t92
-    t256 = t133*t93 - t134*t92
-    t257 = t251 - t254
-    t258 = t252 - t255
-    t259 = t253 - t256
-    t260 = t114*t94 - t115*t93
-    t261 = -t113*t94 + t115*t92
-    t262 = t113*t93 - t114*t92
-    t263 = t108*t126 - t109*t125
-    t264 = -t107*t126 + t109*t124
-    t265 = t107*t125 - t108*t124
-    t266 = t131*t94 - t132*t93
-    t267 = -t130*t94 + t132*t92
-    t268 = t130*t93 - t131*t92
-    t269 = t263 - t266
-    t270 = t264 - t267
-    t271 = t265 - t268
-    t272 = -t108*t94 + t109*t93
-    t273 = t107*t94 - t109*t92
-    t274 = -t107*t93 + t108*t92
-    t275 = -t100*t125 + t126*t99
-    t276 = t100*t124 - t126*t98
-    t277 = -t124*t99 + t125*t98
-    t278 = t128*t94 - t129*t93
-    t279 = -t127*t94 + t129*t92
-    t280 = t127*t93 - t128*t92
-    t281 = t275 - t278
-    t282 = t276 - t279
-    t283 = t277 - t280
-    t284 = t100*t93 - t94*t99
-    t285 = -t100*t92 + t94*t98
-    t286 = t92*t99 - t93*t98
-    t302 = -t114*t123 + t115*t122
-    t303 = t113*t123 - t115*t121
-    t304 = -t113*t122 + t114*t121
-    t305 = -t134*t38 - t135*t85
-    t306 = t133*t38 + t135*t84
-    t307 = t133*t85 - t134*t84
-    t308 = t302 - t305
-    t309 = t303 - t306
-    t310 = t304 - t307
-    t311 = -t114*t38 - t115*t85
-    t312 = t113*t38 + t115*t84
-    t313 = t113*t85 - t114*t84
-    t314 = t108*t123 - t109*t122
-    t315 = -t107*t123 + t109*t121
-    t316 = t107*t122 - t108*t121
-    t317 = -t131*t38 - t132*t85
-    t318 = t130*t38 + t132*t84
-    t319 = t130*t85 - t131*t84
-    t320 = t314 - t317
-    t321 = t315 - t318
-    t322 = t316 - t319
-    t323 = t108*t38 + t109*t85
-    t324 = -t107*t38 - t109*t84
-    t325 = -t107*t85 + t108*t84
-    t326 = -t100*t122 + t123*t99
-    t327 = t100*t121 - t123*t98
-    t328 = -t121*t99 + t122*t98
-    t329 = -t128*t38 - t129*t85
-    t330 = t127*t38 + t129*t84
-    t331 = t127*t85 - t128*t84
-    t332 = t326 - t329
-    t333 = t327 - t330
-    t334 = t328 - t331
-    t335 = t100*t85 + t38*t99
-    t336 = -t100*t84 - t38*t98
-    t337 = t84*t99 - t85*t98
-    t338 = t122*t94 - t123*t93
-    t339 = -t121*t94 + t123*t92
-    t340 = t121*t93 - t122*t92
-    t341 = -t125*t38 - t126*t85
-    t342 = t124*t38 + t126*t84
-    t343 = t124*t85 - t125*t84
-    t344 = t338 - t341
-    t345 = t339 - t342
-    t346 = t340 - t343
-    t347 = -t38*t93 - t85*t94
-    t348 = t38*t92 + t84*t94
-    t349 = -t84*t93 + t85*t92
-    t359 = t115*t120
-    t360 = -t115*t119
-    t361 = -t113*t120 + t114*t119
-    t362 = t135*t46
-    t363 = -t135*t47
-    t364 = -t133*t46 + t134*t47
-    t365 = t359 - t362
-    t366 = t360 - t363
-    t367 = t361 - t364
-    t368 = t115*t46
-    t369 = -t115*t47
-    t370 = -t113*t46 + t114*t47
-    t371 = -t109*t120
-    t372 = t109*t119
-    t373 = t107*t120 - t108*t119
-    t374 = t132*t46
-    t375 = -t132*t47
-    t376 = -t130*t46 + t131*t47
-    t377 = t371 - t374
-    t378 = t372 - t375
-    t379 = t373 - t376
-    t380 = -t109*t46
-    t381 = t109*t47
-    t382 = t107*t46 - t108*t47
-    t383 = -t100*t120
-    t384 = t100*t119
-    t385 = -t119*t99 + t120*t98
-    t386 = t129*t46
-    t387 = -t129*t47
-    t388 = -t127*t46 + t128*t47
-    t389 = t383 - t386
-    t390 = t384 - t387
-    t391 = t385 - t388
-    t392 = -t100*t46
-    t393 = t100*t47
-    t394 = t46*t98 - t47*t99
-    t395 = t120*t94
-    t396 = -t119*t94
-    t397 = t119*t93 - t120*t92
-    t398 = t126*t46
-    t399 = -t126*t47
-    t400 = -t124*t46 + t125*t47
-    t401 = t395 - t398
-    t402 = t396 - t399
-    t403 = t397 - t400
-    t404 = t46*t94
-    t405 = -t47*t94
-    t406 = -t46*t92 + t47*t93
-    t407 = -t120*t38
-    t408 = t119*t38
-    t409 = t119*t85 - t120*t84
-    t410 = t123*t46
-    t411 = -t123*t47
-    t412 = -t121*t46 + t122*t47
-    t413 = t407 - t410
-    t414 = t408 - t411
-    t415 = t409 - t412
-    t416 = -t46*t84 + t47*t85
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t174, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t175, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t176, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t177, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t178, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t212, t224, 0.0, 0.0, 0.0, 0.0, 0.0, t213, t225, 0.0, 0.0, 0.0, 0.0, 0.0, t214, t226, 0.0, 0.0, 0.0, 0.0, 0.0, t215, t227, 0.0, 0.0, 0.0, 0.0, 0.0, t216, t228, 0.0, 0.0, 0.0, 0.0, 0.0, t217, t229, 0.0, 0.0, 0.0, 0.0, 0.0, t257, t269, t281, 0.0, 0.0, 0.0, 0.0, t258, t270, t282, 0.0, 0.0, 0.0, 0.0, t259, t271, t283, 0.0, 0.0, 0.0, 0.0, t260, t272, t284, 0.0, 0.0, 0.0, 0.0, t261, t273, t285, 0.0, 0.0, 0.0, 0.0, t262, t274, t286, 0.0, 0.0, 0.0, 0.0, t308, t320, t332, t344, 0.0, 0.0, 0.0, t309, t321, t333, t345, 0.0, 0.0, 0.0, t310, t322, t334, t346, 0.0, 0.0, 0.0, t311, t323, t335, t347, 0.0, 0.0, 0.0, t312, t324, t336, t348, 0.0, 0.0, 0.0, t313, t325, t337, t349, 0.0, 0.0, 0.0, t365, t377, t389, t401, t413, 0.0, 0.0, t366, t378, t390, t402, t414, 0.0, 0.0, t367, t379, t391, t403, t415, 0.0, 0.0, t368, t380, t392, t404, -t82, 0.0, 0.0, t369, t381, t393, t405, -t83, 0.0, 0.0, t370, t382, t394, t406, t416, 0.0, 0.0, t134, t131, t128, t125, t122, t120, 0.0, -t133, -t130, -t127, -t124, -t121, -t119, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, t113, -t107, -t98, t92, t84, -t47, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (H, )
+    out = jacob0_hessian0(q)
+    return out[1]
 
 
 def _hessiane_batch(Q):
@@ -1201,12 +932,12 @@ def _hessiane_batch(Q):
     t95 = t19*t89 + t20*t84
     t96 = t19*t90 + t20*t85
     t97 = t19*t91 - t20*t38
-    t98 = -t19*t84 + t20*t89
-    t99 = -t19*t85 + t20*t90
+    t98 = t20*t89 - t19*t84
+    t99 = t20*t90 - t19*t85
     t100 = t19*t38 + t20*t91
     t101 = t86 - 0.4*t98
     t102 = t87 - 0.4*t99
-    t103 = -0.4*t100 + t88
+    t103 = t88 - 0.4*t100
     t104 = t8*t95 - t9*t92
     t105 = t8*t96 - t9*t93
     t106 = t8*t97 - t9*t94
@@ -1215,7 +946,7 @@ def _hessiane_batch(Q):
     t109 = t8*t94 + t9*t97
     t113 = t104*t3 - t2*t98
     t114 = t105*t3 - t2*t99
-    t115 = -t100*t2 + t106*t3
+    t115 = t106*t3 - t100*t2
     t116 = t101 + (0.34)*t113
     t117 = t102 + (0.34)*t114
     t118 = t103 + (0.34)*t115
@@ -1224,93 +955,93 @@ def _hessiane_batch(Q):
     t121 = t38*t87 + t85*t88
     t122 = -t38*t86 - t84*t88
     t123 = t84*t87 - t85*t86
-    t124 = -t87*t94 + t88*t93
+    t124 = t88*t93 - t87*t94
     t125 = t86*t94 - t88*t92
-    t126 = -t86*t93 + t87*t92
+    t126 = t87*t92 - t86*t93
     t127 = t100*t102 - t103*t99
-    t128 = -t100*t101 + t103*t98
+    t128 = t103*t98 - t100*t101
     t129 = t101*t99 - t102*t98
     t130 = t102*t109 - t103*t108
-    t131 = -t101*t109 + t103*t107
+    t131 = t103*t107 - t101*t109
     t132 = t101*t108 - t102*t107
     t133 = t114*t118 - t115*t117
-    t134 = -t113*t118 + t115*t116
+    t134 = t115*t116 - t113*t118
     t135 = t113*t117 - t114*t116
-    t167 = -t114*t132 + t115*t131
+    t167 = t115*t131 - t114*t132
     t168 = t113*t132 - t115*t130
-    t169 = -t113*t131 + t114*t130
+    t169 = t114*t130 - t113*t131
     t170 = t108*t135 - t109*t134
-    t171 = -t107*t135 + t109*t133
+    t171 = t109*t133 - t107*t135
     t172 = t107*t134 - t108*t133
     t173 = t167 - t170
     t174 = t168 - t171
     t175 = t169 - t172
     t176 = t108*t115 - t109*t114
-    t177 = -t107*t115 + t109*t113
+    t177 = t109*t113 - t107*t115
     t178 = t107*t114 - t108*t113
-    t206 = -t114*t129 + t115*t128
+    t206 = t115*t128 - t114*t129
     t207 = t113*t129 - t115*t127
-    t208 = -t113*t128 + t114*t127
-    t209 = -t100*t134 + t135*t99
+    t208 = t114*t127 - t113*t128
+    t209 = t135*t99 - t100*t134
     t210 = t100*t133 - t135*t98
-    t211 = -t133*t99 + t134*t98
+    t211 = t134*t98 - t133*t99
     t212 = t206 - t209
     t213 = t207 - t210
     t214 = t208 - t211
-    t215 = -t100*t114 + t115*t99
+    t215 = t115*t99 - t100*t114
     t216 = t100*t113 - t115*t98
-    t217 = -t113*t99 + t114*t98
+    t217 = t114*t98 - t113*t99
     t218 = t108*t129 - t109*t128
-    t219 = -t107*t129 + t109*t127
+    t219 = t109*t127 - t107*t129
     t220 = t107*t128 - t108*t127
-    t221 = -t100*t131 + t132*t99
+    t221 = t132*t99 - t100*t131
     t222 = t100*t130 - t132*t98
-    t223 = -t130*t99 + t131*t98
+    t223 = t131*t98 - t130*t99
     t224 = t218 - t221
     t225 = t219 - t222
     t226 = t220 - t223
     t227 = t100*t108 - t109*t99
-    t228 = -t100*t107 + t109*t98
+    t228 = t109*t98 - t100*t107
     t229 = t107*t99 - t108*t98
-    t251 = -t114*t126 + t115*t125
+    t251 = t115*t125 - t114*t126
     t252 = t113*t126 - t115*t124
-    t253 = -t113*t125 + t114*t124
+    t253 = t114*t124 - t113*t125
     t254 = t134*t94 - t135*t93
-    t255 = -t133*t94 + t135*t92
+    t255 = t135*t92 - t133*t94
     t256 = t133*t93 - t134*t92
     t257 = t251 - t254
     t258 = t252 - t255
     t259 = t253 - t256
     t260 = t114*t94 - t115*t93
-    t261 = -t113*t94 + t115*t92
+    t261 = t115*t92 - t113*t94
     t262 = t113*t93 - t114*t92
     t263 = t108*t126 - t109*t125
-    t264 = -t107*t126 + t109*t124
+    t264 = t109*t124 - t107*t126
     t265 = t107*t125 - t108*t124
     t266 = t131*t94 - t132*t93
-    t267 = -t130*t94 + t132*t92
+    t267 = t132*t92 - t130*t94
     t268 = t130*t93 - t131*t92
     t269 = t263 - t266
     t270 = t264 - t267
     t271 = t265 - t268
-    t272 = -t108*t94 + t109*t93
+    t272 = t109*t93 - t108*t94
     t273 = t107*t94 - t109*t92
-    t274 = -t107*t93 + t108*t92
-    t275 = -t100*t125 + t126*t99
+    t274 = t108*t92 - t107*t93
+    t275 = t126*t99 - t100*t125
     t276 = t100*t124 - t126*t98
-    t277 = -t124*t99 + t125*t98
+    t277 = t125*t98 - t124*t99
     t278 = t128*t94 - t129*t93
-    t279 = -t127*t94 + t129*t92
+    t279 = t129*t92 - t127*t94
     t280 = t127*t93 - t128*t92
     t281 = t275 - t278
     t282 = t276 - t279
     t283 = t277 - t280
     t284 = t100*t93 - t94*t99
-    t285 = -t100*t92 + t94*t98
+    t285 = t94*t98 - t100*t92
     t286 = t92*t99 - t93*t98
-    t302 = -t114*t123 + t115*t122
+    t302 = t115*t122 - t114*t123
     t303 = t113*t123 - t115*t121
-    t304 = -t113*t122 + t114*t121
+    t304 = t114*t121 - t113*t122
     t305 = -t134*t38 - t135*t85
     t306 = t133*t38 + t135*t84
     t307 = t133*t85 - t134*t84
@@ -1321,7 +1052,7 @@ def _hessiane_batch(Q):
     t312 = t113*t38 + t115*t84
     t313 = t113*t85 - t114*t84
     t314 = t108*t123 - t109*t122
-    t315 = -t107*t123 + t109*t121
+    t315 = t109*t121 - t107*t123
     t316 = t107*t122 - t108*t121
     t317 = -t131*t38 - t132*t85
     t318 = t130*t38 + t132*t84
@@ -1331,10 +1062,10 @@ def _hessiane_batch(Q):
     t322 = t316 - t319
     t323 = t108*t38 + t109*t85
     t324 = -t107*t38 - t109*t84
-    t325 = -t107*t85 + t108*t84
-    t326 = -t100*t122 + t123*t99
+    t325 = t108*t84 - t107*t85
+    t326 = t123*t99 - t100*t122
     t327 = t100*t121 - t123*t98
-    t328 = -t121*t99 + t122*t98
+    t328 = t122*t98 - t121*t99
     t329 = -t128*t38 - t129*t85
     t330 = t127*t38 + t129*t84
     t331 = t127*t85 - t128*t84
@@ -1345,7 +1076,7 @@ def _hessiane_batch(Q):
     t336 = -t100*t84 - t38*t98
     t337 = t84*t99 - t85*t98
     t338 = t122*t94 - t123*t93
-    t339 = -t121*t94 + t123*t92
+    t339 = t123*t92 - t121*t94
     t340 = t121*t93 - t122*t92
     t341 = -t125*t38 - t126*t85
     t342 = t124*t38 + t126*t84
@@ -1355,25 +1086,25 @@ def _hessiane_batch(Q):
     t346 = t340 - t343
     t347 = -t38*t93 - t85*t94
     t348 = t38*t92 + t84*t94
-    t349 = -t84*t93 + t85*t92
+    t349 = t85*t92 - t84*t93
     t359 = t115*t120
     t360 = -t115*t119
-    t361 = -t113*t120 + t114*t119
+    t361 = t114*t119 - t113*t120
     t362 = t135*t46
     t363 = -t135*t47
-    t364 = -t133*t46 + t134*t47
+    t364 = t134*t47 - t133*t46
     t365 = t359 - t362
     t366 = t360 - t363
     t367 = t361 - t364
     t368 = t115*t46
     t369 = -t115*t47
-    t370 = -t113*t46 + t114*t47
+    t370 = t114*t47 - t113*t46
     t371 = -t109*t120
     t372 = t109*t119
     t373 = t107*t120 - t108*t119
     t374 = t132*t46
     t375 = -t132*t47
-    t376 = -t130*t46 + t131*t47
+    t376 = t131*t47 - t130*t46
     t377 = t371 - t374
     t378 = t372 - t375
     t379 = t373 - t376
@@ -1382,10 +1113,10 @@ def _hessiane_batch(Q):
     t382 = t107*t46 - t108*t47
     t383 = -t100*t120
     t384 = t100*t119
-    t385 = -t119*t99 + t120*t98
+    t385 = t120*t98 - t119*t99
     t386 = t129*t46
     t387 = -t129*t47
-    t388 = -t127*t46 + t128*t47
+    t388 = t128*t47 - t127*t46
     t389 = t383 - t386
     t390 = t384 - t387
     t391 = t385 - t388
@@ -1397,23 +1128,23 @@ def _hessiane_batch(Q):
     t397 = t119*t93 - t120*t92
     t398 = t126*t46
     t399 = -t126*t47
-    t400 = -t124*t46 + t125*t47
+    t400 = t125*t47 - t124*t46
     t401 = t395 - t398
     t402 = t396 - t399
     t403 = t397 - t400
     t404 = t46*t94
     t405 = -t47*t94
-    t406 = -t46*t92 + t47*t93
+    t406 = t47*t93 - t46*t92
     t407 = -t120*t38
     t408 = t119*t38
     t409 = t119*t85 - t120*t84
     t410 = t123*t46
     t411 = -t123*t47
-    t412 = -t121*t46 + t122*t47
+    t412 = t122*t47 - t121*t46
     t413 = t407 - t410
     t414 = t408 - t411
     t415 = t409 - t412
-    t416 = -t46*t84 + t47*t85
+    t416 = t47*t85 - t46*t84
     H = np.empty((N, 294))
     H[:, 0] = 0.0
     H[:, 1] = 0.0
@@ -1709,113 +1440,275 @@ def _hessiane_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (H.reshape((N,) + (7, 6, 7)), )
+    return H.reshape((N,) + (7, 6, 7))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t46 = cos(q6)
+            t47 = sin(q6)
+            t82 = t38*t46
+            t83 = -t38*t47
+            t84 = t39*t46
+            t85 = -t39*t47
+            t86 = (0.4)*t84
+            t87 = (0.4)*t85
+            t88 = -0.4*t38 - 0.126
+            t89 = t27*t82 - t28*t47
+            t90 = t27*t83 - t28*t46
+            t91 = t27*t39
+            t92 = t27*t47 + t28*t82
+            t93 = t27*t46 + t28*t83
+            t94 = t28*t39
+            t95 = t19*t89 + t20*t84
+            t96 = t19*t90 + t20*t85
+            t97 = t19*t91 - t20*t38
+            t98 = t20*t89 - t19*t84
+            t99 = t20*t90 - t19*t85
+            t100 = t19*t38 + t20*t91
+            t101 = t86 - 0.4*t98
+            t102 = t87 - 0.4*t99
+            t103 = t88 - 0.4*t100
+            t104 = t8*t95 - t9*t92
+            t105 = t8*t96 - t9*t93
+            t106 = t8*t97 - t9*t94
+            t107 = t8*t92 + t9*t95
+            t108 = t8*t93 + t9*t96
+            t109 = t8*t94 + t9*t97
+            t113 = t104*t3 - t2*t98
+            t114 = t105*t3 - t2*t99
+            t115 = t106*t3 - t100*t2
+            t116 = t101 + (0.34)*t113
+            t117 = t102 + (0.34)*t114
+            t118 = t103 + (0.34)*t115
+            t119 = (0.126)*t46
+            t120 = -0.126*t47
+            t121 = t38*t87 + t85*t88
+            t122 = -t38*t86 - t84*t88
+            t123 = t84*t87 - t85*t86
+            t124 = t88*t93 - t87*t94
+            t125 = t86*t94 - t88*t92
+            t126 = t87*t92 - t86*t93
+            t127 = t100*t102 - t103*t99
+            t128 = t103*t98 - t100*t101
+            t129 = t101*t99 - t102*t98
+            t130 = t102*t109 - t103*t108
+            t131 = t103*t107 - t101*t109
+            t132 = t101*t108 - t102*t107
+            t133 = t114*t118 - t115*t117
+            t134 = t115*t116 - t113*t118
+            t135 = t113*t117 - t114*t116
+            t167 = t115*t131 - t114*t132
+            t168 = t113*t132 - t115*t130
+            t169 = t114*t130 - t113*t131
+            t170 = t108*t135 - t109*t134
+            t171 = t109*t133 - t107*t135
+            t172 = t107*t134 - t108*t133
+            t173 = t167 - t170
+            t174 = t168 - t171
+            t175 = t169 - t172
+            t176 = t108*t115 - t109*t114
+            t177 = t109*t113 - t107*t115
+            t178 = t107*t114 - t108*t113
+            t206 = t115*t128 - t114*t129
+            t207 = t113*t129 - t115*t127
+            t208 = t114*t127 - t113*t128
+            t209 = t135*t99 - t100*t134
+            t210 = t100*t133 - t135*t98
+            t211 = t134*t98 - t133*t99
+            t212 = t206 - t209
+            t213 = t207 - t210
+            t214 = t208 - t211
+            t215 = t115*t99 - t100*t114
+            t216 = t100*t113 - t115*t98
+            t217 = t114*t98 - t113*t99
+            t218 = t108*t129 - t109*t128
+            t219 = t109*t127 - t107*t129
+            t220 = t107*t128 - t108*t127
+            t221 = t132*t99 - t100*t131
+            t222 = t100*t130 - t132*t98
+            t223 = t131*t98 - t130*t99
+            t224 = t218 - t221
+            t225 = t219 - t222
+            t226 = t220 - t223
+            t227 = t100*t108 - t109*t99
+            t228 = t109*t98 - t100*t107
+            t229 = t107*t99 - t108*t98
+            t251 = t115*t125 - t114*t126
+            t252 = t113*t126 - t115*t124
+            t253 = t114*t124 - t113*t125
+            t254 = t134*t94 - t135*t93
+            t255 = t135*t92 - t133*t94
+            t256 = t133*t93 - t134*t92
+            t257 = t251 - t254
+            t258 = t252 - t255
+            t259 = t253 - t256
+            t260 = t114*t94 - t115*t93
+            t261 = t115*t92 - t113*t94
+            t262 = t113*t93 - t114*t92
+            t263 = t108*t126 - t109*t125
+            t264 = t109*t124 - t107*t126
+            t265 = t107*t125 - t108*t124
+            t266 = t131*t94 - t132*t93
+            t267 = t132*t92 - t130*t94
+            t268 = t130*t93 - t131*t92
+            t269 = t263 - t266
+            t270 = t264 - t267
+            t271 = t265 - t268
+            t272 = t109*t93 - t108*t94
+            t273 = t107*t94 - t109*t92
+            t274 = t108*t92 - t107*t93
+            t275 = t126*t99 - t100*t125
+            t276 = t100*t124 - t126*t98
+            t277 = t125*t98 - t124*t99
+            t278 = t128*t94 - t129*t93
+            t279 = t129*t92 - t127*t94
+            t280 = t127*t93 - t128*t92
+            t281 = t275 - t278
+            t282 = t276 - t279
+            t283 = t277 - t280
+            t284 = t100*t93 - t94*t99
+            t285 = t94*t98 - t100*t92
+            t286 = t92*t99 - t93*t98
+            t302 = t115*t122 - t114*t123
+            t303 = t113*t123 - t115*t121
+            t304 = t114*t121 - t113*t122
+            t305 = -t134*t38 - t135*t85
+            t306 = t133*t38 + t135*t84
+            t307 = t133*t85 - t134*t84
+            t308 = t302 - t305
+            t309 = t303 - t306
+            t310 = t304 - t307
+            t311 = -t114*t38 - t115*t85
+            t312 = t113*t38 + t115*t84
+            t313 = t113*t85 - t114*t84
+            t314 = t108*t123 - t109*t122
+            t315 = t109*t121 - t107*t123
+            t316 = t107*t122 - t108*t121
+            t317 = -t131*t38 - t132*t85
+            t318 = t130*t38 + t132*t84
+            t319 = t130*t85 - t131*t84
+            t320 = t314 - t317
+            t321 = t315 - t318
+            t322 = t316 - t319
+            t323 = t108*t38 + t109*t85
+            t324 = -t107*t38 - t109*t84
+            t325 = t108*t84 - t107*t85
+            t326 = t123*t99 - t100*t122
+            t327 = t100*t121 - t123*t98
+            t328 = t122*t98 - t121*t99
+            t329 = -t128*t38 - t129*t85
+            t330 = t127*t38 + t129*t84
+            t331 = t127*t85 - t128*t84
+            t332 = t326 - t329
+            t333 = t327 - t330
+            t334 = t328 - t331
+            t335 = t100*t85 + t38*t99
+            t336 = -t100*t84 - t38*t98
+            t337 = t84*t99 - t85*t98
+            t338 = t122*t94 - t123*t93
+            t339 = t123*t92 - t121*t94
+            t340 = t121*t93 - t122*t92
+            t341 = -t125*t38 - t126*t85
+            t342 = t124*t38 + t126*t84
+            t343 = t124*t85 - t125*t84
+            t344 = t338 - t341
+            t345 = t339 - t342
+            t346 = t340 - t343
+            t347 = -t38*t93 - t85*t94
+            t348 = t38*t92 + t84*t94
+            t349 = t85*t92 - t84*t93
+            t359 = t115*t120
+            t360 = -t115*t119
+            t361 = t114*t119 - t113*t120
+            t362 = t135*t46
+            t363 = -t135*t47
+            t364 = t134*t47 - t133*t46
+            t365 = t359 - t362
+            t366 = t360 - t363
+            t367 = t361 - t364
+            t368 = t115*t46
+            t369 = -t115*t47
+            t370 = t114*t47 - t113*t46
+            t371 = -t109*t120
+            t372 = t109*t119
+            t373 = t107*t120 - t108*t119
+            t374 = t132*t46
+            t375 = -t132*t47
+            t376 = t131*t47 - t130*t46
+            t377 = t371 - t374
+            t378 = t372 - t375
+            t379 = t373 - t376
+            t380 = -t109*t46
+            t381 = t109*t47
+            t382 = t107*t46 - t108*t47
+            t383 = -t100*t120
+            t384 = t100*t119
+            t385 = t120*t98 - t119*t99
+            t386 = t129*t46
+            t387 = -t129*t47
+            t388 = t128*t47 - t127*t46
+            t389 = t383 - t386
+            t390 = t384 - t387
+            t391 = t385 - t388
+            t392 = -t100*t46
+            t393 = t100*t47
+            t394 = t46*t98 - t47*t99
+            t395 = t120*t94
+            t396 = -t119*t94
+            t397 = t119*t93 - t120*t92
+            t398 = t126*t46
+            t399 = -t126*t47
+            t400 = t125*t47 - t124*t46
+            t401 = t395 - t398
+            t402 = t396 - t399
+            t403 = t397 - t400
+            t404 = t46*t94
+            t405 = -t47*t94
+            t406 = t47*t93 - t46*t92
+            t407 = -t120*t38
+            t408 = t119*t38
+            t409 = t119*t85 - t120*t84
+            t410 = t123*t46
+            t411 = -t123*t47
+            t412 = t122*t47 - t121*t46
+            t413 = t407 - t410
+            t414 = t408 - t411
+            t415 = t409 - t412
+            t416 = t47*t85 - t46*t84
+            H = _empty((7, 6, 7))
+            _PACK_26(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 208, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t174, 0.0, 0.0, 0.0)
+            _PACK_27(H, 424, 0.0, 0.0, 0.0, t175, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t176, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t177, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t178, 0.0, 0.0)
+            _PACK_26(H, 640, 0.0, 0.0, 0.0, 0.0, t212, t224, 0.0, 0.0, 0.0, 0.0, 0.0, t213, t225, 0.0, 0.0, 0.0, 0.0, 0.0, t214, t226, 0.0, 0.0, 0.0, 0.0, 0.0, t215)
+            _PACK_27(H, 848, t227, 0.0, 0.0, 0.0, 0.0, 0.0, t216, t228, 0.0, 0.0, 0.0, 0.0, 0.0, t217, t229, 0.0, 0.0, 0.0, 0.0, 0.0, t257, t269, t281, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1064, t258, t270, t282, 0.0, 0.0, 0.0, 0.0, t259, t271, t283, 0.0, 0.0, 0.0, 0.0, t260, t272, t284, 0.0, 0.0, 0.0, 0.0, t261, t273, t285, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1280, 0.0, t262, t274, t286, 0.0, 0.0, 0.0, 0.0, t308, t320, t332, t344, 0.0, 0.0, 0.0, t309, t321, t333, t345, 0.0, 0.0, 0.0, t310, t322, t334, t346, 0.0)
+            _PACK_26(H, 1496, 0.0, 0.0, t311, t323, t335, t347, 0.0, 0.0, 0.0, t312, t324, t336, t348, 0.0, 0.0, 0.0, t313, t325, t337, t349, 0.0, 0.0, 0.0, t365, t377, t389)
+            _PACK_27(H, 1704, t401, t413, 0.0, 0.0, t366, t378, t390, t402, t414, 0.0, 0.0, t367, t379, t391, t403, t415, 0.0, 0.0, t368, t380, t392, t404, -t82, 0.0, 0.0, t369, t381)
+            _PACK_27(H, 1920, t393, t405, -t83, 0.0, 0.0, t370, t382, t394, t406, t416, 0.0, 0.0, t134, t131, t128, t125, t122, t120, 0.0, -t133, -t130, -t127, -t124, -t121, -t119, 0.0, 0.0)
+            _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, t113, -t107, -t98, t92, t84, -t47, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    q6 = q[6]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t10 = -t1*t9 + t4*t8
-    t11 = t0*t9 + t5*t8
-    t12 = -t3*t8
-    t13 = -t1*t8 - t4*t9
-    t14 = t0*t8 - t5*t9
-    t15 = t3*t9
-    t16 = -0.4*t6
-    t17 = -0.4*t7
-    t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t21 = t10*t19 - t20*t6
-    t22 = t11*t19 - t20*t7
-    t23 = t12*t19 + t2*t20
-    t24 = -t10*t20 - t19*t6
-    t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t29 = t13*t28 + t21*t27
-    t30 = t14*t28 + t22*t27
-    t31 = t15*t28 + t23*t27
-    t32 = t13*t27 - t21*t28
-    t33 = t14*t27 - t22*t28
-    t34 = t15*t27 - t23*t28
-    t35 = t16 + (0.4)*t24
-    t36 = t17 + (0.4)*t25
-    t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t40 = -t24*t39 + t29*t38
-    t41 = -t25*t39 + t30*t38
-    t42 = -t26*t39 + t31*t38
-    t43 = -t24*t38 - t29*t39
-    t44 = -t25*t38 - t30*t39
-    t45 = -t26*t38 - t31*t39
-    t46 = math.cos(q6)
-    t47 = math.sin(q6)
-    t48 = t32*t47 + t40*t46
-    t49 = t33*t47 + t41*t46
-    t50 = t34*t47 + t42*t46
-    t51 = t32*t46 - t40*t47
-    t52 = t33*t46 - t41*t47
-    t53 = t34*t46 - t42*t47
-    t54 = t35 - 0.126*t43
-    t55 = t36 - 0.126*t44
-    t56 = t37 - 0.126*t45
-    t57 = t56 - 0.34
-    t58 = t0*t57
-    t59 = t1*t57
-    t60 = -t0*t54 - t1*t55
-    t61 = -t2*t55 - t57*t7
-    t62 = t2*t54 + t57*t6
-    t63 = t54*t7 - t55*t6
-    t64 = -t16 + t54
-    t65 = -t17 + t55
-    t66 = -t18 + t56
-    t67 = -t14*t66 + t15*t65
-    t68 = t13*t66 - t15*t64
-    t69 = -t13*t65 + t14*t64
-    t70 = t25*t66 - t26*t65
-    t71 = -t24*t66 + t26*t64
-    t72 = t24*t65 - t25*t64
-    t73 = -t35 + t54
-    t74 = -t36 + t55
-    t75 = -t37 + t56
-    t76 = t33*t75 - t34*t74
-    t77 = -t32*t75 + t34*t73
-    t78 = t32*t74 - t33*t73
-    t79 = -t44*t75 + t45*t74
-    t80 = t43*t75 - t45*t73
-    t81 = -t43*t74 + t44*t73
-    T = np.array([t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45]).reshape((6, 7))
-    return (T, J, )
 
 
 def _fkine_jacob0_batch(Q):
@@ -1837,7 +1730,7 @@ def _fkine_jacob0_batch(Q):
     t7 = -t1*t3
     t8 = np.cos(q2)
     t9 = np.sin(q2)
-    t10 = -t1*t9 + t4*t8
+    t10 = t4*t8 - t1*t9
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
     t13 = -t1*t8 - t4*t9
@@ -1853,7 +1746,7 @@ def _fkine_jacob0_batch(Q):
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
+    t26 = t19*t2 - t12*t20
     t27 = np.cos(q4)
     t28 = np.sin(q4)
     t29 = t13*t28 + t21*t27
@@ -1867,9 +1760,9 @@ def _fkine_jacob0_batch(Q):
     t37 = t18 + (0.4)*t26
     t38 = np.cos(q5)
     t39 = np.sin(q5)
-    t40 = -t24*t39 + t29*t38
-    t41 = -t25*t39 + t30*t38
-    t42 = -t26*t39 + t31*t38
+    t40 = t29*t38 - t24*t39
+    t41 = t30*t38 - t25*t39
+    t42 = t31*t38 - t26*t39
     t43 = -t24*t38 - t29*t39
     t44 = -t25*t38 - t30*t39
     t45 = -t26*t38 - t31*t39
@@ -1891,24 +1784,24 @@ def _fkine_jacob0_batch(Q):
     t61 = -t2*t55 - t57*t7
     t62 = t2*t54 + t57*t6
     t63 = t54*t7 - t55*t6
-    t64 = -t16 + t54
-    t65 = -t17 + t55
-    t66 = -t18 + t56
-    t67 = -t14*t66 + t15*t65
+    t64 = t54 - t16
+    t65 = t55 - t17
+    t66 = t56 - t18
+    t67 = t15*t65 - t14*t66
     t68 = t13*t66 - t15*t64
-    t69 = -t13*t65 + t14*t64
+    t69 = t14*t64 - t13*t65
     t70 = t25*t66 - t26*t65
-    t71 = -t24*t66 + t26*t64
+    t71 = t26*t64 - t24*t66
     t72 = t24*t65 - t25*t64
-    t73 = -t35 + t54
-    t74 = -t36 + t55
-    t75 = -t37 + t56
+    t73 = t54 - t35
+    t74 = t55 - t36
+    t75 = t56 - t37
     t76 = t33*t75 - t34*t74
-    t77 = -t32*t75 + t34*t73
+    t77 = t34*t73 - t32*t75
     t78 = t32*t74 - t33*t73
-    t79 = -t44*t75 + t45*t74
+    t79 = t45*t74 - t44*t75
     t80 = t43*t75 - t45*t73
-    t81 = -t43*t74 + t44*t73
+    t81 = t44*t73 - t43*t74
     T = np.empty((N, 16))
     T[:, 0] = t48
     T[:, 1] = t51
@@ -1969,207 +1862,109 @@ def _fkine_jacob0_batch(Q):
     J[:, 39] = t26
     J[:, 40] = t34
     J[:, 41] = -t45
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 7)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
-
-
-def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = math.cos(q2)
-    t9 = math.sin(q2)
-    t10 = -t1*t9 + t4*t8
-    t11 = t0*t9 + t5*t8
-    t12 = -t3*t8
-    t13 = -t1*t8 - t4*t9
-    t14 = t0*t8 - t5*t9
-    t15 = t3*t9
-    t16 = -0.4*t6
-    t17 = -0.4*t7
-    t18 = (0.4)*t2 + 0.34
-    t19 = math.cos(q3)
-    t20 = math.sin(q3)
-    t21 = t10*t19 - t20*t6
-    t22 = t11*t19 - t20*t7
-    t23 = t12*t19 + t2*t20
-    t24 = -t10*t20 - t19*t6
-    t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
-    t27 = math.cos(q4)
-    t28 = math.sin(q4)
-    t29 = t13*t28 + t21*t27
-    t30 = t14*t28 + t22*t27
-    t31 = t15*t28 + t23*t27
-    t32 = t13*t27 - t21*t28
-    t33 = t14*t27 - t22*t28
-    t34 = t15*t27 - t23*t28
-    t35 = t16 + (0.4)*t24
-    t36 = t17 + (0.4)*t25
-    t37 = t18 + (0.4)*t26
-    t38 = math.cos(q5)
-    t39 = math.sin(q5)
-    t43 = -t24*t38 - t29*t39
-    t44 = -t25*t38 - t30*t39
-    t45 = -t26*t38 - t31*t39
-    t54 = t35 - 0.126*t43
-    t55 = t36 - 0.126*t44
-    t56 = t37 - 0.126*t45
-    t57 = t56 - 0.34
-    t58 = t0*t57
-    t59 = t1*t57
-    t60 = -t0*t54 - t1*t55
-    t61 = -t2*t55 - t57*t7
-    t62 = t2*t54 + t57*t6
-    t63 = t54*t7 - t55*t6
-    t64 = -t16 + t54
-    t65 = -t17 + t55
-    t66 = -t18 + t56
-    t67 = -t14*t66 + t15*t65
-    t68 = t13*t66 - t15*t64
-    t69 = -t13*t65 + t14*t64
-    t70 = t25*t66 - t26*t65
-    t71 = -t24*t66 + t26*t64
-    t72 = t24*t65 - t25*t64
-    t73 = -t35 + t54
-    t74 = -t36 + t55
-    t75 = -t37 + t56
-    t76 = t33*t75 - t34*t74
-    t77 = -t32*t75 + t34*t73
-    t78 = t32*t74 - t33*t73
-    t79 = -t44*t75 + t45*t74
-    t80 = t43*t75 - t45*t73
-    t81 = -t43*t74 + t44*t73
-    t136 = t0*t60
-    t137 = t1*t60
-    t138 = -t0*t58 - t1*t59
-    t139 = t0*t63
-    t140 = t1*t63
-    t141 = -t0*t61 - t1*t62
-    t142 = t0*t6 + t1*t7
-    t143 = t0*t69
-    t144 = t1*t69
-    t145 = -t0*t67 - t1*t68
-    t146 = -t0*t15
-    t147 = -t1*t15
-    t148 = t0*t13 + t1*t14
-    t149 = t0*t72
-    t150 = t1*t72
-    t151 = -t0*t70 - t1*t71
-    t152 = t0*t26
-    t153 = t1*t26
-    t154 = -t0*t24 - t1*t25
-    t155 = t0*t78
-    t156 = t1*t78
-    t157 = -t0*t76 - t1*t77
-    t158 = t0*t34
-    t159 = t1*t34
-    t160 = -t0*t32 - t1*t33
-    t161 = t0*t81
-    t162 = t1*t81
-    t163 = -t0*t79 - t1*t80
-    t164 = -t0*t45
-    t165 = -t1*t45
-    t166 = t0*t43 + t1*t44
-    t179 = -t2*t62 - t63*t7
-    t180 = t2*t61 + t6*t63
-    t181 = -t6*t62 + t61*t7
-    t182 = -t2*t68 - t69*t7
-    t183 = t2*t67 + t6*t69
-    t184 = -t6*t68 + t67*t7
-    t185 = t14*t2 + t15*t7
-    t186 = -t13*t2 - t15*t6
-    t187 = -t13*t7 + t14*t6
-    t188 = -t2*t71 - t7*t72
-    t189 = t2*t70 + t6*t72
-    t190 = -t6*t71 + t7*t70
-    t191 = -t2*t25 - t26*t7
-    t192 = t2*t24 + t26*t6
-    t193 = t24*t7 - t25*t6
-    t194 = -t2*t77 - t7*t78
-    t195 = t2*t76 + t6*t78
-    t196 = -t6*t77 + t7*t76
-    t197 = -t2*t33 - t34*t7
-    t198 = t2*t32 + t34*t6
-    t199 = t32*t7 - t33*t6
-    t200 = -t2*t80 - t7*t81
-    t201 = t2*t79 + t6*t81
-    t202 = -t6*t80 + t7*t79
-    t203 = t2*t44 + t45*t7
-    t204 = -t2*t43 - t45*t6
-    t205 = -t43*t7 + t44*t6
-    t230 = -t14*t69 + t15*t68
-    t231 = t13*t69 - t15*t67
-    t232 = -t13*t68 + t14*t67
-    t233 = -t14*t72 + t15*t71
-    t234 = t13*t72 - t15*t70
-    t235 = -t13*t71 + t14*t70
-    t236 = -t14*t26 + t15*t25
-    t237 = t13*t26 - t15*t24
-    t238 = -t13*t25 + t14*t24
-    t239 = -t14*t78 + t15*t77
-    t240 = t13*t78 - t15*t76
-    t241 = -t13*t77 + t14*t76
-    t242 = -t14*t34 + t15*t33
-    t243 = t13*t34 - t15*t32
-    t244 = -t13*t33 + t14*t32
-    t245 = -t14*t81 + t15*t80
-    t246 = t13*t81 - t15*t79
-    t247 = -t13*t80 + t14*t79
-    t248 = t14*t45 - t15*t44
-    t249 = -t13*t45 + t15*t43
-    t250 = t13*t44 - t14*t43
-    t287 = t25*t72 - t26*t71
-    t288 = -t24*t72 + t26*t70
-    t289 = t24*t71 - t25*t70
-    t290 = t25*t78 - t26*t77
-    t291 = -t24*t78 + t26*t76
-    t292 = t24*t77 - t25*t76
-    t293 = t25*t34 - t26*t33
-    t294 = -t24*t34 + t26*t32
-    t295 = t24*t33 - t25*t32
-    t296 = t25*t81 - t26*t80
-    t297 = -t24*t81 + t26*t79
-    t298 = t24*t80 - t25*t79
-    t299 = -t25*t45 + t26*t44
-    t300 = t24*t45 - t26*t43
-    t301 = -t24*t44 + t25*t43
-    t350 = t33*t78 - t34*t77
-    t351 = -t32*t78 + t34*t76
-    t352 = t32*t77 - t33*t76
-    t353 = t33*t81 - t34*t80
-    t354 = -t32*t81 + t34*t79
-    t355 = t32*t80 - t33*t79
-    t356 = -t33*t45 + t34*t44
-    t357 = t32*t45 - t34*t43
-    t358 = -t32*t44 + t33*t43
-    t417 = -t44*t81 + t45*t80
-    t418 = t43*t81 - t45*t79
-    t419 = -t43*t80 + t44*t79
-    J = np.array([-t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45]).reshape((6, 7))
-    H = np.array([-t54, -t59, -t62, -t68, -t71, -t77, -t80, -t55, t58, t61, t67, t70, t76, t79, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, t7, t14, -t25, -t33, t44, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t59, t136, t139, t143, t149, t155, t161, t58, t137, t140, t144, t150, t156, t162, 0.0, t138, t141, t145, t151, t157, t163, 0.0, 0.0, t4, t146, t152, t158, t164, 0.0, 0.0, t5, t147, t153, t159, t165, 0.0, 0.0, t142, t148, t154, t160, t166, -t62, t139, t179, t182, t188, t194, t200, t61, t140, t180, t183, t189, t195, t201, 0.0, t141, t181, t184, t190, t196, t202, 0.0, 0.0, 0.0, t185, t191, t197, t203, 0.0, 0.0, 0.0, t186, t192, t198, t204, 0.0, 0.0, 0.0, t187, t193, t199, t205, -t68, t143, t182, t230, t233, t239, t245, t67, t144, t183, t231, t234, t240, t246, 0.0, t145, t184, t232, t235, t241, t247, 0.0, 0.0, 0.0, 0.0, t236, t242, t248, 0.0, 0.0, 0.0, 0.0, t237, t243, t249, 0.0, 0.0, 0.0, 0.0, t238, t244, t250, -t71, t149, t188, t233, t287, t290, t296, t70, t150, t189, t234, t288, t291, t297, 0.0, t151, t190, t235, t289, t292, t298, 0.0, 0.0, 0.0, 0.0, 0.0, t293, t299, 0.0, 0.0, 0.0, 0.0, 0.0, t294, t300, 0.0, 0.0, 0.0, 0.0, 0.0, t295, t301, -t77, t155, t194, t239, t290, t350, t353, t76, t156, t195, t240, t291, t351, t354, 0.0, t157, t196, t241, t292, t352, t355, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t356, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t357, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t358, -t80, t161, t200, t245, t296, t353, t417, t79, t162, t201, t246, t297, t354, t418, 0.0, t163, t202, t247, t298, t355, t419, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((7, 6, 7))
-    return (J, H, )
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t10 = t4*t8 - t1*t9
+            t11 = t0*t9 + t5*t8
+            t12 = -t3*t8
+            t13 = -t1*t8 - t4*t9
+            t14 = t0*t8 - t5*t9
+            t15 = t3*t9
+            t16 = -0.4*t6
+            t17 = -0.4*t7
+            t18 = (0.4)*t2 + 0.34
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t21 = t10*t19 - t20*t6
+            t22 = t11*t19 - t20*t7
+            t23 = t12*t19 + t2*t20
+            t24 = -t10*t20 - t19*t6
+            t25 = -t11*t20 - t19*t7
+            t26 = t19*t2 - t12*t20
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t29 = t13*t28 + t21*t27
+            t30 = t14*t28 + t22*t27
+            t31 = t15*t28 + t23*t27
+            t32 = t13*t27 - t21*t28
+            t33 = t14*t27 - t22*t28
+            t34 = t15*t27 - t23*t28
+            t35 = t16 + (0.4)*t24
+            t36 = t17 + (0.4)*t25
+            t37 = t18 + (0.4)*t26
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t40 = t29*t38 - t24*t39
+            t41 = t30*t38 - t25*t39
+            t42 = t31*t38 - t26*t39
+            t43 = -t24*t38 - t29*t39
+            t44 = -t25*t38 - t30*t39
+            t45 = -t26*t38 - t31*t39
+            t46 = cos(q6)
+            t47 = sin(q6)
+            t48 = t32*t47 + t40*t46
+            t49 = t33*t47 + t41*t46
+            t50 = t34*t47 + t42*t46
+            t51 = t32*t46 - t40*t47
+            t52 = t33*t46 - t41*t47
+            t53 = t34*t46 - t42*t47
+            t54 = t35 - 0.126*t43
+            t55 = t36 - 0.126*t44
+            t56 = t37 - 0.126*t45
+            t57 = t56 - 0.34
+            t58 = t0*t57
+            t59 = t1*t57
+            t60 = -t0*t54 - t1*t55
+            t61 = -t2*t55 - t57*t7
+            t62 = t2*t54 + t57*t6
+            t63 = t54*t7 - t55*t6
+            t64 = t54 - t16
+            t65 = t55 - t17
+            t66 = t56 - t18
+            t67 = t15*t65 - t14*t66
+            t68 = t13*t66 - t15*t64
+            t69 = t14*t64 - t13*t65
+            t70 = t25*t66 - t26*t65
+            t71 = t26*t64 - t24*t66
+            t72 = t24*t65 - t25*t64
+            t73 = t54 - t35
+            t74 = t55 - t36
+            t75 = t56 - t37
+            t76 = t33*t75 - t34*t74
+            t77 = t34*t73 - t32*t75
+            t78 = t32*t74 - t33*t73
+            t79 = t45*t74 - t44*t75
+            t80 = t43*t75 - t45*t73
+            t81 = t44*t73 - t43*t74
+            T = _empty((4, 4))
+            _PACK_16(T, 0, t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 7))
+            _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
+            _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -2190,7 +1985,7 @@ def _jacob0_hessian0_batch(Q):
     t7 = -t1*t3
     t8 = np.cos(q2)
     t9 = np.sin(q2)
-    t10 = -t1*t9 + t4*t8
+    t10 = t4*t8 - t1*t9
     t11 = t0*t9 + t5*t8
     t12 = -t3*t8
     t13 = -t1*t8 - t4*t9
@@ -2206,7 +2001,7 @@ def _jacob0_hessian0_batch(Q):
     t23 = t12*t19 + t2*t20
     t24 = -t10*t20 - t19*t6
     t25 = -t11*t20 - t19*t7
-    t26 = -t12*t20 + t19*t2
+    t26 = t19*t2 - t12*t20
     t27 = np.cos(q4)
     t28 = np.sin(q4)
     t29 = t13*t28 + t21*t27
@@ -2233,24 +2028,24 @@ def _jacob0_hessian0_batch(Q):
     t61 = -t2*t55 - t57*t7
     t62 = t2*t54 + t57*t6
     t63 = t54*t7 - t55*t6
-    t64 = -t16 + t54
-    t65 = -t17 + t55
-    t66 = -t18 + t56
-    t67 = -t14*t66 + t15*t65
+    t64 = t54 - t16
+    t65 = t55 - t17
+    t66 = t56 - t18
+    t67 = t15*t65 - t14*t66
     t68 = t13*t66 - t15*t64
-    t69 = -t13*t65 + t14*t64
+    t69 = t14*t64 - t13*t65
     t70 = t25*t66 - t26*t65
-    t71 = -t24*t66 + t26*t64
+    t71 = t26*t64 - t24*t66
     t72 = t24*t65 - t25*t64
-    t73 = -t35 + t54
-    t74 = -t36 + t55
-    t75 = -t37 + t56
+    t73 = t54 - t35
+    t74 = t55 - t36
+    t75 = t56 - t37
     t76 = t33*t75 - t34*t74
-    t77 = -t32*t75 + t34*t73
+    t77 = t34*t73 - t32*t75
     t78 = t32*t74 - t33*t73
-    t79 = -t44*t75 + t45*t74
+    t79 = t45*t74 - t44*t75
     t80 = t43*t75 - t45*t73
-    t81 = -t43*t74 + t44*t73
+    t81 = t44*t73 - t43*t74
     t136 = t0*t60
     t137 = t1*t60
     t138 = -t0*t58 - t1*t59
@@ -2284,79 +2079,79 @@ def _jacob0_hessian0_batch(Q):
     t166 = t0*t43 + t1*t44
     t179 = -t2*t62 - t63*t7
     t180 = t2*t61 + t6*t63
-    t181 = -t6*t62 + t61*t7
+    t181 = t61*t7 - t6*t62
     t182 = -t2*t68 - t69*t7
     t183 = t2*t67 + t6*t69
-    t184 = -t6*t68 + t67*t7
+    t184 = t67*t7 - t6*t68
     t185 = t14*t2 + t15*t7
     t186 = -t13*t2 - t15*t6
-    t187 = -t13*t7 + t14*t6
+    t187 = t14*t6 - t13*t7
     t188 = -t2*t71 - t7*t72
     t189 = t2*t70 + t6*t72
-    t190 = -t6*t71 + t7*t70
+    t190 = t7*t70 - t6*t71
     t191 = -t2*t25 - t26*t7
     t192 = t2*t24 + t26*t6
     t193 = t24*t7 - t25*t6
     t194 = -t2*t77 - t7*t78
     t195 = t2*t76 + t6*t78
-    t196 = -t6*t77 + t7*t76
+    t196 = t7*t76 - t6*t77
     t197 = -t2*t33 - t34*t7
     t198 = t2*t32 + t34*t6
     t199 = t32*t7 - t33*t6
     t200 = -t2*t80 - t7*t81
     t201 = t2*t79 + t6*t81
-    t202 = -t6*t80 + t7*t79
+    t202 = t7*t79 - t6*t80
     t203 = t2*t44 + t45*t7
     t204 = -t2*t43 - t45*t6
-    t205 = -t43*t7 + t44*t6
-    t230 = -t14*t69 + t15*t68
+    t205 = t44*t6 - t43*t7
+    t230 = t15*t68 - t14*t69
     t231 = t13*t69 - t15*t67
-    t232 = -t13*t68 + t14*t67
-    t233 = -t14*t72 + t15*t71
+    t232 = t14*t67 - t13*t68
+    t233 = t15*t71 - t14*t72
     t234 = t13*t72 - t15*t70
-    t235 = -t13*t71 + t14*t70
-    t236 = -t14*t26 + t15*t25
+    t235 = t14*t70 - t13*t71
+    t236 = t15*t25 - t14*t26
     t237 = t13*t26 - t15*t24
-    t238 = -t13*t25 + t14*t24
-    t239 = -t14*t78 + t15*t77
+    t238 = t14*t24 - t13*t25
+    t239 = t15*t77 - t14*t78
     t240 = t13*t78 - t15*t76
-    t241 = -t13*t77 + t14*t76
-    t242 = -t14*t34 + t15*t33
+    t241 = t14*t76 - t13*t77
+    t242 = t15*t33 - t14*t34
     t243 = t13*t34 - t15*t32
-    t244 = -t13*t33 + t14*t32
-    t245 = -t14*t81 + t15*t80
+    t244 = t14*t32 - t13*t33
+    t245 = t15*t80 - t14*t81
     t246 = t13*t81 - t15*t79
-    t247 = -t13*t80 + t14*t79
+    t247 = t14*t79 - t13*t80
     t248 = t14*t45 - t15*t44
-    t249 = -t13*t45 + t15*t43
+    t249 = t15*t43 - t13*t45
     t250 = t13*t44 - t14*t43
     t287 = t25*t72 - t26*t71
-    t288 = -t24*t72 + t26*t70
+    t288 = t26*t70 - t24*t72
     t289 = t24*t71 - t25*t70
     t290 = t25*t78 - t26*t77
-    t291 = -t24*t78 + t26*t76
+    t291 = t26*t76 - t24*t78
     t292 = t24*t77 - t25*t76
     t293 = t25*t34 - t26*t33
-    t294 = -t24*t34 + t26*t32
+    t294 = t26*t32 - t24*t34
     t295 = t24*t33 - t25*t32
     t296 = t25*t81 - t26*t80
-    t297 = -t24*t81 + t26*t79
+    t297 = t26*t79 - t24*t81
     t298 = t24*t80 - t25*t79
-    t299 = -t25*t45 + t26*t44
+    t299 = t26*t44 - t25*t45
     t300 = t24*t45 - t26*t43
-    t301 = -t24*t44 + t25*t43
+    t301 = t25*t43 - t24*t44
     t350 = t33*t78 - t34*t77
-    t351 = -t32*t78 + t34*t76
+    t351 = t34*t76 - t32*t78
     t352 = t32*t77 - t33*t76
     t353 = t33*t81 - t34*t80
-    t354 = -t32*t81 + t34*t79
+    t354 = t34*t79 - t32*t81
     t355 = t32*t80 - t33*t79
-    t356 = -t33*t45 + t34*t44
+    t356 = t34*t44 - t33*t45
     t357 = t32*t45 - t34*t43
-    t358 = -t32*t44 + t33*t43
-    t417 = -t44*t81 + t45*t80
+    t358 = t33*t43 - t32*t44
+    t417 = t45*t80 - t44*t81
     t418 = t43*t81 - t45*t79
-    t419 = -t43*t80 + t44*t79
+    t419 = t44*t79 - t43*t80
     J = np.empty((N, 42))
     J[:, 0] = -t55
     J[:, 1] = t58
@@ -2695,15 +2490,211 @@ def _jacob0_hessian0_batch(Q):
     H[:, 291] = 0.0
     H[:, 292] = 0.0
     H[:, 293] = 0.0
-    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)), )
+    return (J.reshape((N,) + (6, 7)), H.reshape((N,) + (7, 6, 7)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5, q6 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5 + q6):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = cos(q2)
+            t9 = sin(q2)
+            t10 = t4*t8 - t1*t9
+            t11 = t0*t9 + t5*t8
+            t12 = -t3*t8
+            t13 = -t1*t8 - t4*t9
+            t14 = t0*t8 - t5*t9
+            t15 = t3*t9
+            t16 = -0.4*t6
+            t17 = -0.4*t7
+            t18 = (0.4)*t2 + 0.34
+            t19 = cos(q3)
+            t20 = sin(q3)
+            t21 = t10*t19 - t20*t6
+            t22 = t11*t19 - t20*t7
+            t23 = t12*t19 + t2*t20
+            t24 = -t10*t20 - t19*t6
+            t25 = -t11*t20 - t19*t7
+            t26 = t19*t2 - t12*t20
+            t27 = cos(q4)
+            t28 = sin(q4)
+            t29 = t13*t28 + t21*t27
+            t30 = t14*t28 + t22*t27
+            t31 = t15*t28 + t23*t27
+            t32 = t13*t27 - t21*t28
+            t33 = t14*t27 - t22*t28
+            t34 = t15*t27 - t23*t28
+            t35 = t16 + (0.4)*t24
+            t36 = t17 + (0.4)*t25
+            t37 = t18 + (0.4)*t26
+            t38 = cos(q5)
+            t39 = sin(q5)
+            t43 = -t24*t38 - t29*t39
+            t44 = -t25*t38 - t30*t39
+            t45 = -t26*t38 - t31*t39
+            t54 = t35 - 0.126*t43
+            t55 = t36 - 0.126*t44
+            t56 = t37 - 0.126*t45
+            t57 = t56 - 0.34
+            t58 = t0*t57
+            t59 = t1*t57
+            t60 = -t0*t54 - t1*t55
+            t61 = -t2*t55 - t57*t7
+            t62 = t2*t54 + t57*t6
+            t63 = t54*t7 - t55*t6
+            t64 = t54 - t16
+            t65 = t55 - t17
+            t66 = t56 - t18
+            t67 = t15*t65 - t14*t66
+            t68 = t13*t66 - t15*t64
+            t69 = t14*t64 - t13*t65
+            t70 = t25*t66 - t26*t65
+            t71 = t26*t64 - t24*t66
+            t72 = t24*t65 - t25*t64
+            t73 = t54 - t35
+            t74 = t55 - t36
+            t75 = t56 - t37
+            t76 = t33*t75 - t34*t74
+            t77 = t34*t73 - t32*t75
+            t78 = t32*t74 - t33*t73
+            t79 = t45*t74 - t44*t75
+            t80 = t43*t75 - t45*t73
+            t81 = t44*t73 - t43*t74
+            t136 = t0*t60
+            t137 = t1*t60
+            t138 = -t0*t58 - t1*t59
+            t139 = t0*t63
+            t140 = t1*t63
+            t141 = -t0*t61 - t1*t62
+            t142 = t0*t6 + t1*t7
+            t143 = t0*t69
+            t144 = t1*t69
+            t145 = -t0*t67 - t1*t68
+            t146 = -t0*t15
+            t147 = -t1*t15
+            t148 = t0*t13 + t1*t14
+            t149 = t0*t72
+            t150 = t1*t72
+            t151 = -t0*t70 - t1*t71
+            t152 = t0*t26
+            t153 = t1*t26
+            t154 = -t0*t24 - t1*t25
+            t155 = t0*t78
+            t156 = t1*t78
+            t157 = -t0*t76 - t1*t77
+            t158 = t0*t34
+            t159 = t1*t34
+            t160 = -t0*t32 - t1*t33
+            t161 = t0*t81
+            t162 = t1*t81
+            t163 = -t0*t79 - t1*t80
+            t164 = -t0*t45
+            t165 = -t1*t45
+            t166 = t0*t43 + t1*t44
+            t179 = -t2*t62 - t63*t7
+            t180 = t2*t61 + t6*t63
+            t181 = t61*t7 - t6*t62
+            t182 = -t2*t68 - t69*t7
+            t183 = t2*t67 + t6*t69
+            t184 = t67*t7 - t6*t68
+            t185 = t14*t2 + t15*t7
+            t186 = -t13*t2 - t15*t6
+            t187 = t14*t6 - t13*t7
+            t188 = -t2*t71 - t7*t72
+            t189 = t2*t70 + t6*t72
+            t190 = t7*t70 - t6*t71
+            t191 = -t2*t25 - t26*t7
+            t192 = t2*t24 + t26*t6
+            t193 = t24*t7 - t25*t6
+            t194 = -t2*t77 - t7*t78
+            t195 = t2*t76 + t6*t78
+            t196 = t7*t76 - t6*t77
+            t197 = -t2*t33 - t34*t7
+            t198 = t2*t32 + t34*t6
+            t199 = t32*t7 - t33*t6
+            t200 = -t2*t80 - t7*t81
+            t201 = t2*t79 + t6*t81
+            t202 = t7*t79 - t6*t80
+            t203 = t2*t44 + t45*t7
+            t204 = -t2*t43 - t45*t6
+            t205 = t44*t6 - t43*t7
+            t230 = t15*t68 - t14*t69
+            t231 = t13*t69 - t15*t67
+            t232 = t14*t67 - t13*t68
+            t233 = t15*t71 - t14*t72
+            t234 = t13*t72 - t15*t70
+            t235 = t14*t70 - t13*t71
+            t236 = t15*t25 - t14*t26
+            t237 = t13*t26 - t15*t24
+            t238 = t14*t24 - t13*t25
+            t239 = t15*t77 - t14*t78
+            t240 = t13*t78 - t15*t76
+            t241 = t14*t76 - t13*t77
+            t242 = t15*t33 - t14*t34
+            t243 = t13*t34 - t15*t32
+            t244 = t14*t32 - t13*t33
+            t245 = t15*t80 - t14*t81
+            t246 = t13*t81 - t15*t79
+            t247 = t14*t79 - t13*t80
+            t248 = t14*t45 - t15*t44
+            t249 = t15*t43 - t13*t45
+            t250 = t13*t44 - t14*t43
+            t287 = t25*t72 - t26*t71
+            t288 = t26*t70 - t24*t72
+            t289 = t24*t71 - t25*t70
+            t290 = t25*t78 - t26*t77
+            t291 = t26*t76 - t24*t78
+            t292 = t24*t77 - t25*t76
+            t293 = t25*t34 - t26*t33
+            t294 = t26*t32 - t24*t34
+            t295 = t24*t33 - t25*t32
+            t296 = t25*t81 - t26*t80
+            t297 = t26*t79 - t24*t81
+            t298 = t24*t80 - t25*t79
+            t299 = t26*t44 - t25*t45
+            t300 = t24*t45 - t26*t43
+            t301 = t25*t43 - t24*t44
+            t350 = t33*t78 - t34*t77
+            t351 = t34*t76 - t32*t78
+            t352 = t32*t77 - t33*t76
+            t353 = t33*t81 - t34*t80
+            t354 = t34*t79 - t32*t81
+            t355 = t32*t80 - t33*t79
+            t356 = t34*t44 - t33*t45
+            t357 = t32*t45 - t34*t43
+            t358 = t33*t43 - t32*t44
+            t417 = t45*t80 - t44*t81
+            t418 = t43*t81 - t45*t79
+            t419 = t44*t79 - t43*t80
+            J = _empty((6, 7))
+            _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
+            _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
+            H = _empty((7, 6, 7))
+            _PACK_26(H, 0, -t54, -t59, -t62, -t68, -t71, -t77, -t80, -t55, t58, t61, t67, t70, t76, t79, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, t7, t14, -t25)
+            _PACK_27(H, 208, -t33, t44, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t59, t136, t139, t143, t149, t155, t161, t58, t137, t140, t144)
+            _PACK_27(H, 424, t150, t156, t162, 0.0, t138, t141, t145, t151, t157, t163, 0.0, 0.0, t4, t146, t152, t158, t164, 0.0, 0.0, t5, t147, t153, t159, t165, 0.0, 0.0, t142)
+            _PACK_26(H, 640, t148, t154, t160, t166, -t62, t139, t179, t182, t188, t194, t200, t61, t140, t180, t183, t189, t195, t201, 0.0, t141, t181, t184, t190, t196, t202, 0.0)
+            _PACK_27(H, 848, 0.0, 0.0, t185, t191, t197, t203, 0.0, 0.0, 0.0, t186, t192, t198, t204, 0.0, 0.0, 0.0, t187, t193, t199, t205, -t68, t143, t182, t230, t233, t239, t245)
+            _PACK_27(H, 1064, t67, t144, t183, t231, t234, t240, t246, 0.0, t145, t184, t232, t235, t241, t247, 0.0, 0.0, 0.0, 0.0, t236, t242, t248, 0.0, 0.0, 0.0, 0.0, t237, t243)
+            _PACK_27(H, 1280, t249, 0.0, 0.0, 0.0, 0.0, t238, t244, t250, -t71, t149, t188, t233, t287, t290, t296, t70, t150, t189, t234, t288, t291, t297, 0.0, t151, t190, t235, t289)
+            _PACK_26(H, 1496, t292, t298, 0.0, 0.0, 0.0, 0.0, 0.0, t293, t299, 0.0, 0.0, 0.0, 0.0, 0.0, t294, t300, 0.0, 0.0, 0.0, 0.0, 0.0, t295, t301, -t77, t155, t194)
+            _PACK_27(H, 1704, t239, t290, t350, t353, t76, t156, t195, t240, t291, t351, t354, 0.0, t157, t196, t241, t292, t352, t355, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t356, 0.0, 0.0)
+            _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t357, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t358, -t80, t161, t200, t245, t296, t353, t417, t79, t162, t201, t246, t297, t354, t418, 0.0)
+            _PACK_27(H, 2136, t163, t202, t247, t298, t355, t419, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

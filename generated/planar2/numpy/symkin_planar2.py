@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,12 @@ N_JOINTS = 2
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_12 = struct.Struct("12d").pack_into
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1,),
@@ -33,16 +41,6 @@ CHAIN = ChainTables(
     (1.0, 1.0,),
     (1, 1,),
 )
-
-
-def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    x0 = q0 + q1
-    x1 = math.cos(x0)
-    x2 = math.sin(x0)
-    T = np.array([x1, -x2, 0.0, x1 + math.cos(q0), x2, x1, 0.0, x2 + math.sin(q0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
 
 
 def _fkine_batch(Q):
@@ -69,35 +67,32 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = cos(x0)
+            x2 = sin(x0)
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x1, -x2, 0.0, x1 + cos(q0), x2, x1, 0.0, x2 + sin(q0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    x0 = math.cos(q0)
-    x1 = math.sin(q0)
-    x2 = q0 + q1
-    x3 = math.cos(x2)
-    x4 = math.sin(x2)
-    links = np.array([x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x4, 0.0, x0, x4, x3, 0.0, x1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]).reshape((2, 4, 4))
-    return (links, )
 
 
 def _link_poses_batch(Q):
@@ -142,28 +137,30 @@ def _link_poses_batch(Q):
     links[:, 29] = 0.0
     links[:, 30] = 0.0
     links[:, 31] = 1.0
-    return (links.reshape((N,) + (2, 4, 4)), )
+    return links.reshape((N,) + (2, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = sin(q0)
+            x2 = q0 + q1
+            x3 = cos(x2)
+            x4 = sin(x2)
+            links = _empty((2, 4, 4))
+            _PACK_16(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            _PACK_16(links, 128, x3, -x4, 0.0, x0, x4, x3, 0.0, x1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    x0 = q0 + q1
-    x1 = math.sin(x0)
-    x2 = math.cos(x0)
-    J = np.array([-x1 - math.sin(q0), -x1, x2 + math.cos(q0), x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]).reshape((6, 2))
-    return (J, )
 
 
 def _jacob0_batch(Q):
@@ -186,29 +183,32 @@ def _jacob0_batch(Q):
     J[:, 9] = 0.0
     J[:, 10] = 1.0
     J[:, 11] = 1.0
-    return (J.reshape((N,) + (6, 2)), )
+    return J.reshape((N,) + (6, 2))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = sin(x0)
+            x2 = cos(x0)
+            J = _empty((6, 2))
+            _PACK_12(J, 0, -x1 - sin(q0), -x1, x2 + cos(q0), x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacobe_one(q):
-    q1 = q[1]
-    J = np.array([math.sin(q1), 0.0, math.cos(q1) + 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]).reshape((6, 2))
-    return (J, )
 
 
 def _jacobe_batch(Q):
@@ -227,35 +227,29 @@ def _jacobe_batch(Q):
     J[:, 9] = 0.0
     J[:, 10] = 1.0
     J[:, 11] = 1.0
-    return (J.reshape((N,) + (6, 2)), )
+    return J.reshape((N,) + (6, 2))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            J = _empty((6, 2))
+            _PACK_12(J, 0, sin(q1), 0.0, cos(q1) + 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    x0 = q0 + q1
-    x1 = math.cos(x0)
-    x2 = -x1
-    x3 = math.sin(x0)
-    x4 = -x3
-    H = np.array([-x1 - math.cos(q0), x2, -x3 - math.sin(q0), x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x4, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((2, 6, 2))
-    return (H, )
 
 
 def _hessian0_batch(Q):
@@ -292,24 +286,29 @@ def _hessian0_batch(Q):
     H[:, 21] = 0.0
     H[:, 22] = 0.0
     H[:, 23] = 0.0
-    return (H.reshape((N,) + (2, 6, 2)), )
+    return H.reshape((N,) + (2, 6, 2))
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = cos(x0)
+            x2 = -x1
+            x3 = sin(x0)
+            x4 = -x3
+            H = _empty((2, 6, 2))
+            _PACK_24(H, 0, -x1 - cos(q0), x2, -x3 - sin(q0), x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x4, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessian0(Q[0])  # the scalar code above
+    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessiane_one(q):
-    q1 = q[1]
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, math.cos(q1), 0.0, -math.sin(q1), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((2, 6, 2))
-    return (H, )
 
 
 def _hessiane_batch(Q):
@@ -340,32 +339,24 @@ def _hessiane_batch(Q):
     H[:, 21] = 0.0
     H[:, 22] = 0.0
     H[:, 23] = 0.0
-    return (H.reshape((N,) + (2, 6, 2)), )
+    return H.reshape((N,) + (2, 6, 2))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            H = _empty((2, 6, 2))
+            _PACK_24(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, cos(q1), 0.0, -sin(q1), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    x0 = q0 + q1
-    x1 = math.cos(x0)
-    x2 = math.sin(x0)
-    x3 = -x2
-    x4 = x1 + math.cos(q0)
-    x5 = x2 + math.sin(q0)
-    T = np.array([x1, x3, 0.0, x4, x2, x1, 0.0, x5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-x5, x3, x4, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]).reshape((6, 2))
-    return (T, J, )
 
 
 def _fkine_jacob0_batch(Q):
@@ -408,33 +399,32 @@ def _fkine_jacob0_batch(Q):
     J[:, 9] = 0.0
     J[:, 10] = 1.0
     J[:, 11] = 1.0
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 2)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 2)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
-
-
-def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    x0 = q0 + q1
-    x1 = math.sin(x0)
-    x2 = -x1 - math.sin(q0)
-    x3 = -x1
-    x4 = math.cos(x0)
-    x5 = x4 + math.cos(q0)
-    x6 = -x4
-    J = np.array([x2, x3, x5, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0]).reshape((6, 2))
-    H = np.array([-x5, x6, x2, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x6, x6, x3, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((2, 6, 2))
-    return (J, H, )
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = cos(x0)
+            x2 = sin(x0)
+            x3 = -x2
+            x4 = x1 + cos(q0)
+            x5 = x2 + sin(q0)
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x1, x3, 0.0, x4, x2, x1, 0.0, x5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 2))
+            _PACK_12(J, 0, -x5, x3, x4, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -486,15 +476,30 @@ def _jacob0_hessian0_batch(Q):
     H[:, 21] = 0.0
     H[:, 22] = 0.0
     H[:, 23] = 0.0
-    return (J.reshape((N,) + (6, 2)), H.reshape((N,) + (2, 6, 2)), )
+    return (J.reshape((N,) + (6, 2)), H.reshape((N,) + (2, 6, 2)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1 = q.tolist()
+        if _isfinite(q0 + q1):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = sin(x0)
+            x2 = -x1 - sin(q0)
+            x3 = -x1
+            x4 = cos(x0)
+            x5 = x4 + cos(q0)
+            x6 = -x4
+            J = _empty((6, 2))
+            _PACK_12(J, 0, x2, x3, x5, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
+            H = _empty((2, 6, 2))
+            _PACK_24(H, 0, -x5, x6, x2, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x6, x6, x3, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

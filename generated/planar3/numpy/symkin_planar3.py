@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,13 @@ N_JOINTS = 3
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_18 = struct.Struct("18d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2,),
@@ -33,18 +42,6 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0,),
     (1, 1, 1,),
 )
-
-
-def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    x0 = q0 + q1
-    x1 = q2 + x0
-    x2 = math.cos(x1)
-    x3 = math.sin(x1)
-    T = np.array([x2, -x3, 0.0, x2 + math.cos(q0) + math.cos(x0), x3, x2, 0.0, x3 + math.sin(q0) + math.sin(x0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
 
 
 def _fkine_batch(Q):
@@ -73,39 +70,33 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = q2 + x0
+            x2 = cos(x1)
+            x3 = sin(x1)
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x2, -x3, 0.0, x2 + cos(q0) + cos(x0), x3, x2, 0.0, x3 + sin(q0) + sin(x0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    x0 = math.cos(q0)
-    x1 = math.sin(q0)
-    x2 = q0 + q1
-    x3 = math.cos(x2)
-    x4 = math.sin(x2)
-    x5 = q2 + x2
-    x6 = math.cos(x5)
-    x7 = math.sin(x5)
-    links = np.array([x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x4, 0.0, x0, x4, x3, 0.0, x1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x6, -x7, 0.0, x0 + x3, x7, x6, 0.0, x1 + x4, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]).reshape((3, 4, 4))
-    return (links, )
 
 
 def _link_poses_batch(Q):
@@ -170,32 +161,33 @@ def _link_poses_batch(Q):
     links[:, 45] = 0.0
     links[:, 46] = 0.0
     links[:, 47] = 1.0
-    return (links.reshape((N,) + (3, 4, 4)), )
+    return links.reshape((N,) + (3, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = sin(q0)
+            x2 = q0 + q1
+            x3 = cos(x2)
+            x4 = sin(x2)
+            x5 = q2 + x2
+            x6 = cos(x5)
+            x7 = sin(x5)
+            links = _empty((3, 4, 4))
+            _PACK_24(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x4, 0.0, x0, x4, x3, 0.0, x1)
+            _PACK_24(links, 192, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x6, -x7, 0.0, x0 + x3, x7, x6, 0.0, x1 + x4, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    x0 = q0 + q1
-    x1 = q2 + x0
-    x2 = math.sin(x1)
-    x3 = x2 + math.sin(x0)
-    x4 = math.cos(x1)
-    x5 = x4 + math.cos(x0)
-    J = np.array([-x3 - math.sin(q0), -x3, -x2, x5 + math.cos(q0), x5, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0]).reshape((6, 3))
-    return (J, )
 
 
 def _jacob0_batch(Q):
@@ -228,33 +220,35 @@ def _jacob0_batch(Q):
     J[:, 15] = 1.0
     J[:, 16] = 1.0
     J[:, 17] = 1.0
-    return (J.reshape((N,) + (6, 3)), )
+    return J.reshape((N,) + (6, 3))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = q2 + x0
+            x2 = sin(x1)
+            x3 = x2 + sin(x0)
+            x4 = cos(x1)
+            x5 = x4 + cos(x0)
+            J = _empty((6, 3))
+            _PACK_18(J, 0, -x3 - sin(q0), -x3, -x2, x5 + cos(q0), x5, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    x0 = math.sin(q2)
-    x1 = q1 + q2
-    x2 = math.cos(q2) + 1.0
-    J = np.array([x0 + math.sin(x1), x0, 0.0, x2 + math.cos(x1), x2, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0]).reshape((6, 3))
-    return (J, )
 
 
 def _jacobe_batch(Q):
@@ -283,41 +277,32 @@ def _jacobe_batch(Q):
     J[:, 15] = 1.0
     J[:, 16] = 1.0
     J[:, 17] = 1.0
-    return (J.reshape((N,) + (6, 3)), )
+    return J.reshape((N,) + (6, 3))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = sin(q2)
+            x1 = q1 + q2
+            x2 = cos(q2) + 1.0
+            J = _empty((6, 3))
+            _PACK_18(J, 0, x0 + sin(x1), x0, 0.0, x2 + cos(x1), x2, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    x0 = q0 + q1
-    x1 = q2 + x0
-    x2 = math.cos(x1)
-    x3 = x2 + math.cos(x0)
-    x4 = -x3
-    x5 = -x2
-    x6 = math.sin(x1)
-    x7 = x6 + math.sin(x0)
-    x8 = -x7
-    x9 = -x6
-    H = np.array([-x3 - math.cos(q0), x4, x5, -x7 - math.sin(q0), x8, x9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x4, x4, x5, x8, x8, x9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x5, x5, x5, x9, x9, x9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((3, 6, 3))
-    return (H, )
 
 
 def _hessian0_batch(Q):
@@ -390,30 +375,35 @@ def _hessian0_batch(Q):
     H[:, 51] = 0.0
     H[:, 52] = 0.0
     H[:, 53] = 0.0
-    return (H.reshape((N,) + (3, 6, 3)), )
+    return H.reshape((N,) + (3, 6, 3))
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = q2 + x0
+            x2 = cos(x1)
+            x3 = x2 + cos(x0)
+            x4 = -x3
+            x5 = -x2
+            x6 = sin(x1)
+            x7 = x6 + sin(x0)
+            x8 = -x7
+            x9 = -x6
+            H = _empty((3, 6, 3))
+            _PACK_27(H, 0, -x3 - cos(q0), x4, x5, -x7 - sin(q0), x8, x9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x4, x4, x5, x8, x8, x9, 0.0, 0.0, 0.0)
+            _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x5, x5, x5, x9, x9, x9, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessian0(Q[0])  # the scalar code above
+    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    x0 = q1 + q2
-    x1 = math.cos(x0)
-    x2 = math.sin(x0)
-    x3 = math.cos(q2)
-    x4 = math.sin(q2)
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1, 0.0, 0.0, -x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1 + x3, x3, 0.0, -x2 - x4, -x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((3, 6, 3))
-    return (H, )
 
 
 def _hessiane_batch(Q):
@@ -480,36 +470,30 @@ def _hessiane_batch(Q):
     H[:, 51] = 0.0
     H[:, 52] = 0.0
     H[:, 53] = 0.0
-    return (H.reshape((N,) + (3, 6, 3)), )
+    return H.reshape((N,) + (3, 6, 3))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = q1 + q2
+            x1 = cos(x0)
+            x2 = sin(x0)
+            x3 = cos(q2)
+            x4 = sin(q2)
+            H = _empty((3, 6, 3))
+            _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1, 0.0, 0.0, -x2, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1 + x3, x3, 0.0, -x2 - x4, -x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    x0 = q0 + q1
-    x1 = q2 + x0
-    x2 = math.cos(x1)
-    x3 = math.sin(x1)
-    x4 = -x3
-    x5 = x2 + math.cos(x0)
-    x6 = x5 + math.cos(q0)
-    x7 = x3 + math.sin(x0)
-    x8 = x7 + math.sin(q0)
-    T = np.array([x2, x4, 0.0, x6, x3, x2, 0.0, x8, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-x8, -x7, x4, x6, x5, x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0]).reshape((6, 3))
-    return (T, J, )
 
 
 def _fkine_jacob0_batch(Q):
@@ -562,39 +546,35 @@ def _fkine_jacob0_batch(Q):
     J[:, 15] = 1.0
     J[:, 16] = 1.0
     J[:, 17] = 1.0
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 3)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 3)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
-
-
-def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    x0 = q0 + q1
-    x1 = q2 + x0
-    x2 = math.sin(x1)
-    x3 = x2 + math.sin(x0)
-    x4 = -x3 - math.sin(q0)
-    x5 = -x3
-    x6 = -x2
-    x7 = math.cos(x1)
-    x8 = x7 + math.cos(x0)
-    x9 = x8 + math.cos(q0)
-    x10 = -x8
-    x11 = -x7
-    J = np.array([x4, x5, x6, x9, x8, x7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0]).reshape((6, 3))
-    H = np.array([-x9, x10, x11, x4, x5, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x10, x10, x11, x5, x5, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x11, x11, x11, x6, x6, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((3, 6, 3))
-    return (J, H, )
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = q2 + x0
+            x2 = cos(x1)
+            x3 = sin(x1)
+            x4 = -x3
+            x5 = x2 + cos(x0)
+            x6 = x5 + cos(q0)
+            x7 = x3 + sin(x0)
+            x8 = x7 + sin(q0)
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x2, x4, 0.0, x6, x3, x2, 0.0, x8, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 3))
+            _PACK_18(J, 0, -x8, -x7, x4, x6, x5, x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -688,15 +668,36 @@ def _jacob0_hessian0_batch(Q):
     H[:, 51] = 0.0
     H[:, 52] = 0.0
     H[:, 53] = 0.0
-    return (J.reshape((N,) + (6, 3)), H.reshape((N,) + (3, 6, 3)), )
+    return (J.reshape((N,) + (6, 3)), H.reshape((N,) + (3, 6, 3)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2 = q.tolist()
+        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+            x0 = q0 + q1
+            x1 = q2 + x0
+            x2 = sin(x1)
+            x3 = x2 + sin(x0)
+            x4 = -x3 - sin(q0)
+            x5 = -x3
+            x6 = -x2
+            x7 = cos(x1)
+            x8 = x7 + cos(x0)
+            x9 = x8 + cos(q0)
+            x10 = -x8
+            x11 = -x7
+            J = _empty((6, 3))
+            _PACK_18(J, 0, x4, x5, x6, x9, x8, x7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+            H = _empty((3, 6, 3))
+            _PACK_27(H, 0, -x9, x10, x11, x4, x5, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x10, x10, x11, x5, x5, x6, 0.0, 0.0, 0.0)
+            _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x11, x11, x11, x6, x6, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

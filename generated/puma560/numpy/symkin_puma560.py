@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,13 @@ N_JOINTS = 6
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_18 = struct.Struct("18d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5,),
@@ -33,43 +42,6 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
     (1, 1, 1, 1, 1, 1,),
 )
-
-
-def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q0)
-    x1 = math.sin(q3)
-    x2 = x0*x1
-    x3 = math.cos(q0)
-    x4 = math.cos(q3)
-    x5 = q1 + q2
-    x6 = math.cos(x5)
-    x7 = -x2 + x3*x4*x6
-    x8 = math.cos(q4)
-    x9 = math.sin(q4)
-    x10 = math.sin(x5)
-    x11 = x10*x3
-    x12 = -x11*x9 + x7*x8
-    x13 = math.cos(q5)
-    x14 = x0*x4
-    x15 = x1*x3
-    x16 = -x14 - x15*x6
-    x17 = math.sin(q5)
-    x18 = math.cos(q1)
-    x19 = x14*x6 + x15
-    x20 = x0*x10
-    x21 = x19*x8 - x20*x9
-    x22 = -x2*x6 + x3*x4
-    x23 = x10*x4
-    x24 = x23*x8 + x6*x9
-    x25 = x1*x10
-    T = np.array([x12*x13 + x16*x17, -x12*x17 + x13*x16, -x11*x8 - x7*x9, (0.15005)*x0 - 0.4318*x11 + (0.4318)*x18*x3 + (0.0203)*x3*x6, x13*x21 + x17*x22, x13*x22 - x17*x21, -x19*x9 - x20*x8, (0.4318)*x0*x18 + (0.0203)*x0*x6 - 0.4318*x20 - 0.15005*x3, x13*x24 - x17*x25, -x13*x25 - x17*x24, -x23*x9 + x6*x8, (0.0203)*x10 + (0.4318)*x6 + (0.4318)*math.sin(q1), 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
 
 
 def _fkine_batch(Q):
@@ -87,12 +59,12 @@ def _fkine_batch(Q):
     x4 = np.cos(q3)
     x5 = q1 + q2
     x6 = np.cos(x5)
-    x7 = -x2 + x3*x4*x6
+    x7 = x3*x4*x6 - x2
     x8 = np.cos(q4)
     x9 = np.sin(q4)
     x10 = np.sin(x5)
     x11 = x10*x3
-    x12 = -x11*x9 + x7*x8
+    x12 = x7*x8 - x11*x9
     x13 = np.cos(q5)
     x14 = x0*x4
     x15 = x1*x3
@@ -102,13 +74,13 @@ def _fkine_batch(Q):
     x19 = x14*x6 + x15
     x20 = x0*x10
     x21 = x19*x8 - x20*x9
-    x22 = -x2*x6 + x3*x4
+    x22 = x3*x4 - x2*x6
     x23 = x10*x4
     x24 = x23*x8 + x6*x9
     x25 = x1*x10
     T = np.empty((N, 16))
     T[:, 0] = x12*x13 + x16*x17
-    T[:, 1] = -x12*x17 + x13*x16
+    T[:, 1] = x13*x16 - x12*x17
     T[:, 2] = -x11*x8 - x7*x9
     T[:, 3] = (0.15005)*x0 - 0.4318*x11 + (0.4318)*x18*x3 + (0.0203)*x3*x6
     T[:, 4] = x13*x21 + x17*x22
@@ -117,85 +89,61 @@ def _fkine_batch(Q):
     T[:, 7] = (0.4318)*x0*x18 + (0.0203)*x0*x6 - 0.4318*x20 - 0.15005*x3
     T[:, 8] = x13*x24 - x17*x25
     T[:, 9] = -x13*x25 - x17*x24
-    T[:, 10] = -x23*x9 + x6*x8
+    T[:, 10] = x6*x8 - x23*x9
     T[:, 11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*np.sin(q1)
     T[:, 12] = 0.0
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = sin(q3)
+            x2 = x0*x1
+            x3 = cos(q0)
+            x4 = cos(q3)
+            x5 = q1 + q2
+            x6 = cos(x5)
+            x7 = x3*x4*x6 - x2
+            x8 = cos(q4)
+            x9 = sin(q4)
+            x10 = sin(x5)
+            x11 = x10*x3
+            x12 = x7*x8 - x11*x9
+            x13 = cos(q5)
+            x14 = x0*x4
+            x15 = x1*x3
+            x16 = -x14 - x15*x6
+            x17 = sin(q5)
+            x18 = cos(q1)
+            x19 = x14*x6 + x15
+            x20 = x0*x10
+            x21 = x19*x8 - x20*x9
+            x22 = x3*x4 - x2*x6
+            x23 = x10*x4
+            x24 = x23*x8 + x6*x9
+            x25 = x1*x10
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x12*x13 + x16*x17, x13*x16 - x12*x17, -x11*x8 - x7*x9, (0.15005)*x0 - 0.4318*x11 + (0.4318)*x18*x3 + (0.0203)*x3*x6, x13*x21 + x17*x22, x13*x22 - x17*x21, -x19*x9 - x20*x8, (0.4318)*x0*x18 + (0.0203)*x0*x6 - 0.4318*x20 - 0.15005*x3, x13*x24 - x17*x25, -x13*x25 - x17*x24, x6*x8 - x23*x9, (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sin(q1), 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q0)
-    x1 = math.sin(q0)
-    x2 = math.cos(q1)
-    x3 = x0*x2
-    x4 = math.sin(q1)
-    x5 = x1*x2
-    x6 = -x0
-    x7 = q1 + q2
-    x8 = math.cos(x7)
-    x9 = x0*x8
-    x10 = math.sin(x7)
-    x11 = x0*x10
-    x12 = -x11
-    x13 = (0.4318)*x3
-    x14 = x1*x8
-    x15 = x1*x10
-    x16 = -x15
-    x17 = (0.4318)*x5
-    x18 = (0.4318)*x4
-    x19 = math.sin(q3)
-    x20 = math.cos(q3)
-    x21 = x0*x20*x8 - x1*x19
-    x22 = x1*x20 + x19*x9
-    x23 = -x22
-    x24 = (0.15005)*x1 + x13 + (0.0203)*x9
-    x25 = x0*x19 + x14*x20
-    x26 = -x0*x20 + x14*x19
-    x27 = -x26
-    x28 = (0.15005)*x0
-    x29 = x10*x20
-    x30 = x10*x19
-    x31 = (0.0203)*x10 + x18
-    x32 = math.cos(q4)
-    x33 = math.sin(q4)
-    x34 = -x11*x33 + x21*x32
-    x35 = -x11*x32 - x21*x33
-    x36 = -0.4318*x11 + x24
-    x37 = -x15*x33 + x25*x32
-    x38 = -x15*x32 - x25*x33
-    x39 = (0.4318)*x1*x2 + (0.0203)*x1*x8 - 0.4318*x15 - x28
-    x40 = x29*x32 + x33*x8
-    x41 = -x29*x33 + x32*x8
-    x42 = x31 + (0.4318)*x8
-    x43 = math.cos(q5)
-    x44 = math.sin(q5)
-    links = np.array([x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x0*x4, x1, 0.0, x5, -x1*x4, x6, 0.0, x4, x2, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, x9, x12, x1, x13, x14, x16, x6, x17, x10, x8, 0.0, x18, 0.0, 0.0, 0.0, 1.0, x21, x23, x12, x24, x25, x27, x16, (0.0203)*x14 + x17 - x28, x29, -x30, x8, x31, 0.0, 0.0, 0.0, 1.0, x34, x35, x22, x36, x37, x38, x26, x39, x40, x41, x30, x42, 0.0, 0.0, 0.0, 1.0, x23*x44 + x34*x43, x23*x43 - x34*x44, x35, x36, x27*x44 + x37*x43, x27*x43 - x37*x44, x38, x39, -x30*x44 + x40*x43, -x30*x43 - x40*x44, x41, x42, 0.0, 0.0, 0.0, 1.0]).reshape((6, 4, 4))
-    return (links, )
 
 
 def _link_poses_batch(Q):
@@ -232,7 +180,7 @@ def _link_poses_batch(Q):
     x23 = -x22
     x24 = (0.15005)*x1 + x13 + (0.0203)*x9
     x25 = x0*x19 + x14*x20
-    x26 = -x0*x20 + x14*x19
+    x26 = x14*x19 - x0*x20
     x27 = -x26
     x28 = (0.15005)*x0
     x29 = x10*x20
@@ -240,14 +188,14 @@ def _link_poses_batch(Q):
     x31 = (0.0203)*x10 + x18
     x32 = np.cos(q4)
     x33 = np.sin(q4)
-    x34 = -x11*x33 + x21*x32
+    x34 = x21*x32 - x11*x33
     x35 = -x11*x32 - x21*x33
-    x36 = -0.4318*x11 + x24
-    x37 = -x15*x33 + x25*x32
+    x36 = x24 - 0.4318*x11
+    x37 = x25*x32 - x15*x33
     x38 = -x15*x32 - x25*x33
     x39 = (0.4318)*x1*x2 + (0.0203)*x1*x8 - 0.4318*x15 - x28
     x40 = x29*x32 + x33*x8
-    x41 = -x29*x33 + x32*x8
+    x41 = x32*x8 - x29*x33
     x42 = x31 + (0.4318)*x8
     x43 = np.cos(q5)
     x44 = np.sin(q5)
@@ -340,7 +288,7 @@ def _link_poses_batch(Q):
     links[:, 85] = x27*x43 - x37*x44
     links[:, 86] = x38
     links[:, 87] = x39
-    links[:, 88] = -x30*x44 + x40*x43
+    links[:, 88] = x40*x43 - x30*x44
     links[:, 89] = -x30*x43 - x40*x44
     links[:, 90] = x41
     links[:, 91] = x42
@@ -348,51 +296,72 @@ def _link_poses_batch(Q):
     links[:, 93] = 0.0
     links[:, 94] = 0.0
     links[:, 95] = 1.0
-    return (links.reshape((N,) + (6, 4, 4)), )
+    return links.reshape((N,) + (6, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = sin(q0)
+            x2 = cos(q1)
+            x3 = x0*x2
+            x4 = sin(q1)
+            x5 = x1*x2
+            x6 = -x0
+            x7 = q1 + q2
+            x8 = cos(x7)
+            x9 = x0*x8
+            x10 = sin(x7)
+            x11 = x0*x10
+            x12 = -x11
+            x13 = (0.4318)*x3
+            x14 = x1*x8
+            x15 = x1*x10
+            x16 = -x15
+            x17 = (0.4318)*x5
+            x18 = (0.4318)*x4
+            x19 = sin(q3)
+            x20 = cos(q3)
+            x21 = x0*x20*x8 - x1*x19
+            x22 = x1*x20 + x19*x9
+            x23 = -x22
+            x24 = (0.15005)*x1 + x13 + (0.0203)*x9
+            x25 = x0*x19 + x14*x20
+            x26 = x14*x19 - x0*x20
+            x27 = -x26
+            x28 = (0.15005)*x0
+            x29 = x10*x20
+            x30 = x10*x19
+            x31 = (0.0203)*x10 + x18
+            x32 = cos(q4)
+            x33 = sin(q4)
+            x34 = x21*x32 - x11*x33
+            x35 = -x11*x32 - x21*x33
+            x36 = x24 - 0.4318*x11
+            x37 = x25*x32 - x15*x33
+            x38 = -x15*x32 - x25*x33
+            x39 = (0.4318)*x1*x2 + (0.0203)*x1*x8 - 0.4318*x15 - x28
+            x40 = x29*x32 + x33*x8
+            x41 = x32*x8 - x29*x33
+            x42 = x31 + (0.4318)*x8
+            x43 = cos(q5)
+            x44 = sin(q5)
+            links = _empty((6, 4, 4))
+            _PACK_24(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x0*x4, x1, 0.0, x5, -x1*x4, x6, 0.0)
+            _PACK_24(links, 192, x4, x2, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, x9, x12, x1, x13, x14, x16, x6, x17, x10, x8, 0.0, x18, 0.0, 0.0, 0.0, 1.0)
+            _PACK_24(links, 384, x21, x23, x12, x24, x25, x27, x16, (0.0203)*x14 + x17 - x28, x29, -x30, x8, x31, 0.0, 0.0, 0.0, 1.0, x34, x35, x22, x36, x37, x38, x26, x39)
+            _PACK_24(links, 576, x40, x41, x30, x42, 0.0, 0.0, 0.0, 1.0, x23*x44 + x34*x43, x23*x43 - x34*x44, x35, x36, x27*x44 + x37*x43, x27*x43 - x37*x44, x38, x39, x40*x43 - x30*x44, -x30*x43 - x40*x44, x41, x42, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.sin(q0)
-    x1 = (0.4318)*math.cos(q1)
-    x2 = math.cos(q0)
-    x3 = q1 + q2
-    x4 = math.cos(x3)
-    x5 = (0.0203)*x4
-    x6 = math.sin(x3)
-    x7 = x0*x6
-    x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7
-    x9 = -x0*x1 + x8
-    x10 = (0.4318)*x4 + (0.0203)*x6
-    x11 = x10 + (0.4318)*math.sin(q1)
-    x12 = x2*x6
-    x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5
-    x14 = x1*x2 + x13
-    x15 = math.cos(q3)
-    x16 = x0*x15
-    x17 = math.sin(q3)
-    x18 = x17*x2
-    x19 = x0*x17
-    x20 = math.sin(q4)
-    x21 = math.cos(q4)
-    x22 = -x2
-    J = np.array([x9, -x11*x2, -x10*x2, 0.0, 0.0, 0.0, x14, -x0*x11, -x0*x10, 0.0, 0.0, 0.0, 0.0, -x0*x9 + x14*x2, -x0*x8 + x13*x2, 0.0, 0.0, 0.0, 0.0, x0, x0, -x12, x16 + x18*x4, -x12*x21 - x20*(x15*x2*x4 - x19), 0.0, x22, x22, -x7, -x15*x2 + x19*x4, -x20*(x16*x4 + x18) - x21*x7, 1.0, 0.0, 0.0, x4, x17*x6, -x15*x20*x6 + x21*x4]).reshape((6, 6))
-    return (J, )
 
 
 def _jacob0_batch(Q):
@@ -411,7 +380,7 @@ def _jacob0_batch(Q):
     x6 = np.sin(x3)
     x7 = x0*x6
     x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7
-    x9 = -x0*x1 + x8
+    x9 = x8 - x0*x1
     x10 = (0.4318)*x4 + (0.0203)*x6
     x11 = x10 + (0.4318)*np.sin(q1)
     x12 = x2*x6
@@ -439,8 +408,8 @@ def _jacob0_batch(Q):
     J[:, 10] = 0.0
     J[:, 11] = 0.0
     J[:, 12] = 0.0
-    J[:, 13] = -x0*x9 + x14*x2
-    J[:, 14] = -x0*x8 + x13*x2
+    J[:, 13] = x14*x2 - x0*x9
+    J[:, 14] = x13*x2 - x0*x8
     J[:, 15] = 0.0
     J[:, 16] = 0.0
     J[:, 17] = 0.0
@@ -454,79 +423,61 @@ def _jacob0_batch(Q):
     J[:, 25] = x22
     J[:, 26] = x22
     J[:, 27] = -x7
-    J[:, 28] = -x15*x2 + x19*x4
+    J[:, 28] = x19*x4 - x15*x2
     J[:, 29] = -x20*(x16*x4 + x18) - x21*x7
     J[:, 30] = 1.0
     J[:, 31] = 0.0
     J[:, 32] = 0.0
     J[:, 33] = x4
     J[:, 34] = x17*x6
-    J[:, 35] = -x15*x20*x6 + x21*x4
-    return (J.reshape((N,) + (6, 6)), )
+    J[:, 35] = x21*x4 - x15*x20*x6
+    return J.reshape((N,) + (6, 6))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = (0.4318)*cos(q1)
+            x2 = cos(q0)
+            x3 = q1 + q2
+            x4 = cos(x3)
+            x5 = (0.0203)*x4
+            x6 = sin(x3)
+            x7 = x0*x6
+            x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7
+            x9 = x8 - x0*x1
+            x10 = (0.4318)*x4 + (0.0203)*x6
+            x11 = x10 + (0.4318)*sin(q1)
+            x12 = x2*x6
+            x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5
+            x14 = x1*x2 + x13
+            x15 = cos(q3)
+            x16 = x0*x15
+            x17 = sin(q3)
+            x18 = x17*x2
+            x19 = x0*x17
+            x20 = sin(q4)
+            x21 = cos(q4)
+            x22 = -x2
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x9, -x11*x2, -x10*x2, 0.0, 0.0, 0.0, x14, -x0*x11, -x0*x10, 0.0, 0.0, 0.0, 0.0, x14*x2 - x0*x9, x13*x2 - x0*x8, 0.0, 0.0, 0.0)
+            _PACK_18(J, 144, 0.0, x0, x0, -x12, x16 + x18*x4, -x12*x21 - x20*(x15*x2*x4 - x19), 0.0, x22, x22, -x7, x19*x4 - x15*x2, -x20*(x16*x4 + x18) - x21*x7, 1.0, 0.0, 0.0, x4, x17*x6, x21*x4 - x15*x20*x6)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q5)
-    x1 = math.sin(q3)
-    x2 = x0*x1
-    x3 = math.cos(q4)
-    x4 = math.cos(q3)
-    x5 = math.sin(q5)
-    x6 = x4*x5
-    x7 = x3*x6
-    x8 = -x2 - x7
-    x9 = q1 + q2
-    x10 = math.sin(x9)
-    x11 = math.cos(x9)
-    x12 = math.sin(q4)
-    x13 = x12*x5
-    x14 = x10*x8 - x11*x13
-    x15 = x12*x4
-    x16 = (0.0203)*x15
-    x17 = math.sin(q2)
-    x18 = (0.4318)*x3
-    x19 = math.cos(q2)
-    x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3
-    x21 = -x10*x15 + x11*x3
-    x22 = x0*x4
-    x23 = -0.15005*x1*x3*x5 + (0.4318)*x13 + (0.0203)*x2 + (0.15005)*x22 + (0.0203)*x7
-    x24 = (0.4318)*x12*x17*x5 + (0.4318)*x19*x8 - x23
-    x25 = x1*x5
-    x26 = -x22 + x25*x3
-    x27 = x1*x12
-    x28 = -x16 + x18 + (0.15005)*x27
-    x29 = -x23
-    x30 = x0*x3*x4 - x25
-    x31 = x0*x12
-    x32 = x10*x30 + x11*x31
-    x33 = x2*x3
-    x34 = -0.4318*x0*x12 - 0.0203*x0*x3*x4 + (0.0203)*x25 + (0.15005)*x33 + (0.15005)*x6
-    x35 = -0.4318*x17*x31 + (0.4318)*x19*x30 - x34
-    x36 = -x33 - x6
-    x37 = -x34
-    J = np.array([x14*x20 - x21*x24, x20*x26 - x24*x27, x26*x28 - x27*x29, 0.0, 0.0, 0.0, -x20*x32 + x21*x35, x1*x12*x35 - x20*x36, x1*x12*x37 - x28*x36, 0.0, 0.0, 0.0, -x14*x35 + x24*x32, x24*x36 - x26*x35, -x26*x37 + x29*x36, 0.0, 0.0, 0.0, x32, x36, x36, x31, -x5, 0.0, x14, x26, x26, -x13, -x0, 0.0, x21, x27, x27, x3, 0.0, 1.0]).reshape((6, 6))
-    return (J, )
 
 
 def _jacobe_batch(Q):
@@ -557,12 +508,12 @@ def _jacobe_batch(Q):
     x18 = (0.4318)*x3
     x19 = np.cos(q2)
     x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3
-    x21 = -x10*x15 + x11*x3
+    x21 = x11*x3 - x10*x15
     x22 = x0*x4
     x23 = -0.15005*x1*x3*x5 + (0.4318)*x13 + (0.0203)*x2 + (0.15005)*x22 + (0.0203)*x7
     x24 = (0.4318)*x12*x17*x5 + (0.4318)*x19*x8 - x23
     x25 = x1*x5
-    x26 = -x22 + x25*x3
+    x26 = x25*x3 - x22
     x27 = x1*x12
     x28 = -x16 + x18 + (0.15005)*x27
     x29 = -x23
@@ -581,15 +532,15 @@ def _jacobe_batch(Q):
     J[:, 3] = 0.0
     J[:, 4] = 0.0
     J[:, 5] = 0.0
-    J[:, 6] = -x20*x32 + x21*x35
+    J[:, 6] = x21*x35 - x20*x32
     J[:, 7] = x1*x12*x35 - x20*x36
     J[:, 8] = x1*x12*x37 - x28*x36
     J[:, 9] = 0.0
     J[:, 10] = 0.0
     J[:, 11] = 0.0
-    J[:, 12] = -x14*x35 + x24*x32
+    J[:, 12] = x24*x32 - x14*x35
     J[:, 13] = x24*x36 - x26*x35
-    J[:, 14] = -x26*x37 + x29*x36
+    J[:, 14] = x29*x36 - x26*x37
     J[:, 15] = 0.0
     J[:, 16] = 0.0
     J[:, 17] = 0.0
@@ -611,84 +562,68 @@ def _jacobe_batch(Q):
     J[:, 33] = x3
     J[:, 34] = 0.0
     J[:, 35] = 1.0
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q5)
+            x1 = sin(q3)
+            x2 = x0*x1
+            x3 = cos(q4)
+            x4 = cos(q3)
+            x5 = sin(q5)
+            x6 = x4*x5
+            x7 = x3*x6
+            x8 = -x2 - x7
+            x9 = q1 + q2
+            x10 = sin(x9)
+            x11 = cos(x9)
+            x12 = sin(q4)
+            x13 = x12*x5
+            x14 = x10*x8 - x11*x13
+            x15 = x12*x4
+            x16 = (0.0203)*x15
+            x17 = sin(q2)
+            x18 = (0.4318)*x3
+            x19 = cos(q2)
+            x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3
+            x21 = x11*x3 - x10*x15
+            x22 = x0*x4
+            x23 = -0.15005*x1*x3*x5 + (0.4318)*x13 + (0.0203)*x2 + (0.15005)*x22 + (0.0203)*x7
+            x24 = (0.4318)*x12*x17*x5 + (0.4318)*x19*x8 - x23
+            x25 = x1*x5
+            x26 = x25*x3 - x22
+            x27 = x1*x12
+            x28 = -x16 + x18 + (0.15005)*x27
+            x29 = -x23
+            x30 = x0*x3*x4 - x25
+            x31 = x0*x12
+            x32 = x10*x30 + x11*x31
+            x33 = x2*x3
+            x34 = -0.4318*x0*x12 - 0.0203*x0*x3*x4 + (0.0203)*x25 + (0.15005)*x33 + (0.15005)*x6
+            x35 = -0.4318*x17*x31 + (0.4318)*x19*x30 - x34
+            x36 = -x33 - x6
+            x37 = -x34
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x14*x20 - x21*x24, x20*x26 - x24*x27, x26*x28 - x27*x29, 0.0, 0.0, 0.0, x21*x35 - x20*x32, x1*x12*x35 - x20*x36, x1*x12*x37 - x28*x36, 0.0, 0.0, 0.0, x24*x32 - x14*x35, x24*x36 - x26*x35, x29*x36 - x26*x37, 0.0, 0.0, 0.0)
+            _PACK_18(J, 144, x32, x36, x36, x31, -x5, 0.0, x14, x26, x26, -x13, -x0, 0.0, x21, x27, x27, x3, 0.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.cos(q0)
-    x1 = (0.4318)*math.cos(q1)
-    x2 = math.sin(q0)
-    x3 = q1 + q2
-    x4 = math.sin(x3)
-    x5 = x0*x4
-    x6 = math.cos(x3)
-    x7 = x0*x6
-    x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7
-    x9 = x0*x1 + x8
-    x10 = (0.0203)*x4 + (0.4318)*x6
-    x11 = x10 + (0.4318)*math.sin(q1)
-    x12 = x11*x2
-    x13 = x10*x2
-    x14 = x2*x6
-    x15 = x2*x4
-    x16 = (0.15005)*x0 - 0.0203*x14 + (0.4318)*x15
-    x17 = -x1*x2 + x16
-    x18 = -x0*x11
-    x19 = -x0*x10
-    x20 = math.cos(q3)
-    x21 = math.sin(q3)
-    x22 = x2*x21
-    x23 = -x0*x20 + x22*x6
-    x24 = x0*x21
-    x25 = x2*x20
-    x26 = math.sin(q4)
-    x27 = math.cos(q4)
-    x28 = x15*x27 + x26*(x24 + x25*x6)
-    x29 = x24*x6 + x25
-    x30 = -x26*(x0*x20*x6 - x22) - x27*x5
-    x31 = x0*x9 - x17*x2
-    x32 = x0*x8 - x16*x2
-    x33 = -x0*x32
-    x34 = -x2*x32
-    x35 = (x0*x0)
-    x36 = (x2*x2)
-    x37 = -x10*x35 - x10*x36
-    x38 = -x7
-    x39 = -x24*x4
-    x40 = -x20*x26*x4 + x27*x6
-    x41 = -x0*x40
-    x42 = -x14
-    x43 = -x15*x21
-    x44 = -x2*x40
-    x45 = -x35*x4 - x36*x4
-    x46 = x0*x29 + x2*x23
-    x47 = -x28
-    x48 = x0*x30 + x2*x47
-    x49 = (x4*x4)
-    x50 = x21*x4
-    H = np.array([-x9, x12, x13, 0.0, 0.0, 0.0, x17, x18, x19, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x0, x0, x15, -x23, x28, 0.0, x2, x2, -x5, x29, x30, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x12, -x0*x31, x33, 0.0, 0.0, 0.0, x18, -x2*x31, x34, 0.0, 0.0, 0.0, 0.0, -x11*x35 - x11*x36, x37, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x38, x39, x41, 0.0, 0.0, 0.0, x42, x43, x44, 0.0, 0.0, 0.0, x45, x46, x48, x13, x33, x33, 0.0, 0.0, 0.0, x19, x34, x34, 0.0, 0.0, 0.0, 0.0, x37, x37, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x38, x39, x41, 0.0, 0.0, 0.0, x42, x43, x44, 0.0, 0.0, 0.0, x45, x46, x48, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -x22*x49 - x23*x6, -x15*x40 - x47*x6, 0.0, 0.0, 0.0, 0.0, x24*x49 + x29*x6, x30*x6 + x40*x5, 0.0, 0.0, 0.0, 0.0, x15*x29 - x23*x5, x15*x30 - x47*x5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x23*x40 - x47*x50, 0.0, 0.0, 0.0, 0.0, 0.0, -x29*x40 + x30*x50, 0.0, 0.0, 0.0, 0.0, 0.0, -x23*x30 + x29*x47, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
 
 
 def _hessian0_batch(Q):
@@ -715,13 +650,13 @@ def _hessian0_batch(Q):
     x14 = x2*x6
     x15 = x2*x4
     x16 = (0.15005)*x0 - 0.0203*x14 + (0.4318)*x15
-    x17 = -x1*x2 + x16
+    x17 = x16 - x1*x2
     x18 = -x0*x11
     x19 = -x0*x10
     x20 = np.cos(q3)
     x21 = np.sin(q3)
     x22 = x2*x21
-    x23 = -x0*x20 + x22*x6
+    x23 = x22*x6 - x0*x20
     x24 = x0*x21
     x25 = x2*x20
     x26 = np.sin(q4)
@@ -738,7 +673,7 @@ def _hessian0_batch(Q):
     x37 = -x10*x35 - x10*x36
     x38 = -x7
     x39 = -x24*x4
-    x40 = -x20*x26*x4 + x27*x6
+    x40 = x27*x6 - x20*x26*x4
     x41 = -x0*x40
     x42 = -x14
     x43 = -x15*x21
@@ -923,13 +858,13 @@ def _hessian0_batch(Q):
     H[:, 170] = 0.0
     H[:, 171] = 0.0
     H[:, 172] = 0.0
-    H[:, 173] = -x29*x40 + x30*x50
+    H[:, 173] = x30*x50 - x29*x40
     H[:, 174] = 0.0
     H[:, 175] = 0.0
     H[:, 176] = 0.0
     H[:, 177] = 0.0
     H[:, 178] = 0.0
-    H[:, 179] = -x23*x30 + x29*x47
+    H[:, 179] = x29*x47 - x23*x30
     H[:, 180] = 0.0
     H[:, 181] = 0.0
     H[:, 182] = 0.0
@@ -966,133 +901,82 @@ def _hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = (0.4318)*cos(q1)
+            x2 = sin(q0)
+            x3 = q1 + q2
+            x4 = sin(x3)
+            x5 = x0*x4
+            x6 = cos(x3)
+            x7 = x0*x6
+            x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7
+            x9 = x0*x1 + x8
+            x10 = (0.0203)*x4 + (0.4318)*x6
+            x11 = x10 + (0.4318)*sin(q1)
+            x12 = x11*x2
+            x13 = x10*x2
+            x14 = x2*x6
+            x15 = x2*x4
+            x16 = (0.15005)*x0 - 0.0203*x14 + (0.4318)*x15
+            x17 = x16 - x1*x2
+            x18 = -x0*x11
+            x19 = -x0*x10
+            x20 = cos(q3)
+            x21 = sin(q3)
+            x22 = x2*x21
+            x23 = x22*x6 - x0*x20
+            x24 = x0*x21
+            x25 = x2*x20
+            x26 = sin(q4)
+            x27 = cos(q4)
+            x28 = x15*x27 + x26*(x24 + x25*x6)
+            x29 = x24*x6 + x25
+            x30 = -x26*(x0*x20*x6 - x22) - x27*x5
+            x31 = x0*x9 - x17*x2
+            x32 = x0*x8 - x16*x2
+            x33 = -x0*x32
+            x34 = -x2*x32
+            x35 = (x0*x0)
+            x36 = (x2*x2)
+            x37 = -x10*x35 - x10*x36
+            x38 = -x7
+            x39 = -x24*x4
+            x40 = x27*x6 - x20*x26*x4
+            x41 = -x0*x40
+            x42 = -x14
+            x43 = -x15*x21
+            x44 = -x2*x40
+            x45 = -x35*x4 - x36*x4
+            x46 = x0*x29 + x2*x23
+            x47 = -x28
+            x48 = x0*x30 + x2*x47
+            x49 = (x4*x4)
+            x50 = x21*x4
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, -x9, x12, x13, 0.0, 0.0, 0.0, x17, x18, x19, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x0, x0, x15, -x23, x28, 0.0, x2, x2)
+            _PACK_27(H, 216, -x5, x29, x30, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x12, -x0*x31, x33, 0.0, 0.0, 0.0, x18, -x2*x31, x34, 0.0, 0.0, 0.0, 0.0, -x11*x35 - x11*x36, x37, 0.0, 0.0, 0.0)
+            _PACK_27(H, 432, 0.0, 0.0, 0.0, x38, x39, x41, 0.0, 0.0, 0.0, x42, x43, x44, 0.0, 0.0, 0.0, x45, x46, x48, x13, x33, x33, 0.0, 0.0, 0.0, x19, x34, x34)
+            _PACK_27(H, 648, 0.0, 0.0, 0.0, 0.0, x37, x37, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x38, x39, x41, 0.0, 0.0, 0.0, x42, x43, x44, 0.0, 0.0, 0.0, x45, x46, x48)
+            _PACK_27(H, 864, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -x22*x49 - x23*x6, -x15*x40 - x47*x6, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1080, 0.0, x24*x49 + x29*x6, x30*x6 + x40*x5, 0.0, 0.0, 0.0, 0.0, x15*x29 - x23*x5, x15*x30 - x47*x5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, x23*x40 - x47*x50, 0.0, 0.0, 0.0, 0.0, 0.0, x30*x50 - x29*x40, 0.0, 0.0, 0.0, 0.0, 0.0, x29*x47 - x23*x30, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1512, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessian0(Q[0])  # the scalar code above
+    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q3)
-    x1 = math.sin(q5)
-    x2 = x0*x1
-    x3 = math.cos(q3)
-    x4 = math.cos(q4)
-    x5 = math.cos(q5)
-    x6 = -x2 + x3*x4*x5
-    x7 = q1 + q2
-    x8 = math.sin(x7)
-    x9 = math.cos(x7)
-    x10 = math.sin(q4)
-    x11 = x10*x5
-    x12 = x11*x9 + x6*x8
-    x13 = x3*x5
-    x14 = x2*x4
-    x15 = -x13 + x14
-    x16 = x0*x5
-    x17 = x1*x3
-    x18 = x17*x4
-    x19 = -x16 - x18
-    x20 = x1*x10
-    x21 = x19*x8 - x20*x9
-    x22 = x16*x4
-    x23 = x17 + x22
-    x24 = -x23
-    x25 = x12*x15 - x21*x24
-    x26 = (0.4318)*math.cos(q2)
-    x27 = x19*x26
-    x28 = math.sin(q2)
-    x29 = (0.4318)*x20
-    x30 = x28*x29
-    x31 = (0.0203)*x16
-    x32 = (0.15005)*x13
-    x33 = (0.15005)*x14
-    x34 = (0.0203)*x18
-    x35 = x31 + x32 - x33 + x34
-    x36 = x29 + x35
-    x37 = -x27 - x30 + x36
-    x38 = -x37
-    x39 = x10*x3
-    x40 = -x39*x8 + x4*x9
-    x41 = x0*x10
-    x42 = -x12*x41 + x24*x40
-    x43 = (0.4318)*x4
-    x44 = (0.15005)*x41
-    x45 = (0.0203)*x39
-    x46 = x26*x39 + x28*x43
-    x47 = -x44 + x45 + x46
-    x48 = -x43 + x47
-    x49 = -x48
-    x50 = x25*x38 - x42*x49
-    x51 = -0.0203*x13*x4 + (0.15005)*x17 + (0.0203)*x2 + (0.15005)*x22
-    x52 = -0.4318*x10*x5 + x51
-    x53 = x26*x6
-    x54 = (0.4318)*x11
-    x55 = x28*x54
-    x56 = -x53 + x55
-    x57 = x52 + x56
-    x58 = -x57
-    x59 = -x15*x40 + x21*x41
-    x60 = x25*x58 - x49*x59
-    x61 = x42*x58
-    x62 = -x53 + x55
-    x63 = -x24*x46 + x41*x62
-    x64 = x27 + x30
-    x65 = -x64
-    x66 = -x15*x62 + x24*x65
-    x67 = x15*x46 - x41*x65
-    x68 = x31 + x32 - x33 + x34 - x64
-    x69 = x51 + x56
-    x70 = x11*x68 + x20*x69
-    x71 = x10*x40*x5 - x12*x4
-    x72 = -x11*x47 + x4*x69
-    x73 = -x11*x21 - x12*x20
-    x74 = (x10*x10)
-    x75 = x0*x5*x74 - x24*x4
-    x76 = -x11*x15 - x20*x24
-    x77 = x44 - x45
-    x78 = x43 + x77
-    x79 = x11*x35 + x20*x51
-    x80 = -x36
-    x81 = -x77
-    x82 = -x11*x81 + x4*x51
-    x83 = x1*x40
-    x84 = x10*x83 + x21*x4
-    x85 = -x20*x47 - x4*x68
-    x86 = x15*x4 + x2*x74
-    x87 = -x52
-    x88 = -x20*x81 - x35*x4
-    x89 = x1*x21 - x12*x5
-    x90 = -x1*x37 + x5*x57
-    x91 = x1*x15 - x24*x5
-    x92 = x10*x2
-    x93 = -x1*x36 + x5*x52
-    x94 = -x78
-    x95 = x10*(x5*x5)
-    x96 = (x1*x1)*x10
-    x97 = -0.4318*x95 - 0.4318*x96
-    x98 = -x95 - x96
-    x99 = x40*x5
-    x100 = x10*x16
-    x101 = x48*x5
-    x102 = x1*x48
-    x103 = -x92
-    x104 = -x12
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -x50, 0.0, 0.0, 0.0, 0.0, 0.0, x60, 0.0, 0.0, 0.0, 0.0, 0.0, x38*x59 - x61, 0.0, 0.0, 0.0, 0.0, 0.0, x59, 0.0, 0.0, 0.0, 0.0, 0.0, x42, 0.0, 0.0, 0.0, 0.0, 0.0, x25, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x66 - x40*x63 - x50, x15*x66 - x41*x63, 0.0, 0.0, 0.0, 0.0, -x12*x66 + x40*x67 + x60, x0*x10*x67 - x24*x66, 0.0, 0.0, 0.0, 0.0, x12*x63 - x21*x67 + x38*x59 - x61, -x15*x67 + x24*x63, 0.0, 0.0, 0.0, 0.0, x59, 0.0, 0.0, 0.0, 0.0, 0.0, x42, 0.0, 0.0, 0.0, 0.0, 0.0, x25, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x70 - x38*x73 - x40*x72 + x49*x71, x15*x70 - x38*x76 - x41*x72 + x49*x75, x15*x79 - x41*x82 + x75*x78 - x76*x80, 0.0, 0.0, 0.0, -x12*x70 + x40*x85 - x49*x84 + x58*x73, x0*x10*x85 - x24*x70 - x49*x86 + x58*x76, x0*x10*x88 - x24*x79 + x76*x87 - x78*x86, 0.0, 0.0, 0.0, x12*x72 - x21*x85 + x38*x84 - x58*x71, -x15*x85 + x24*x72 + x38*x86 - x58*x75, -x15*x88 + x24*x82 - x75*x87 + x80*x86, 0.0, 0.0, 0.0, x84, x86, x86, 0.0, 0.0, 0.0, x71, x75, x75, 0.0, 0.0, 0.0, x73, x76, x76, 0.0, 0.0, 0.0, x21*x90 - x38*x89 - x48*x83 - x49*x83, x15*x90 - x38*x91 - x48*x92 - x49*x92, x15*x93 - x78*x92 - x80*x91 - x92*x94, -x20*x97 + x29*x98, 0.0, 0.0, -x12*x90 - x48*x99 - x49*x99 + x58*x89, -x100*x48 - x100*x49 - x24*x90 + x58*x91, -x100*x78 - x100*x94 - x24*x93 + x87*x91, -x11*x97 + x54*x98, 0.0, 0.0, x101*x21 + x102*x12 + x38*x99 + x58*x83, x100*x38 + x101*x15 + x102*x24 + x58*x92, x1*x24*x94 + x100*x80 + x15*x5*x94 + x87*x92, 0.0, 0.0, 0.0, x99, x100, x100, x4*x5, 0.0, 0.0, -x83, x103, x103, -x1*x4, 0.0, 0.0, x89, x91, x91, x98, 0.0, 0.0, x104*x49 - x40*x57, x23*x49 - x41*x57, x23*x78 - x41*x52, 0.0, 0.0, 0.0, -x21*x49 + x38*x40, x0*x10*x38 - x15*x49, x0*x10*x80 - x15*x78, 0.0, 0.0, 0.0, -x104*x58 + x12*x57, -x23*x58 + x24*x57, -x23*x87 + x24*x52, 0.0, 0.0, 0.0, x21, x15, x15, -x20, -x5, 0.0, x104, x23, x23, -x11, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
 
 
 def _hessiane_batch(Q):
@@ -1108,7 +992,7 @@ def _hessiane_batch(Q):
     x3 = np.cos(q3)
     x4 = np.cos(q4)
     x5 = np.cos(q5)
-    x6 = -x2 + x3*x4*x5
+    x6 = x3*x4*x5 - x2
     x7 = q1 + q2
     x8 = np.sin(x7)
     x9 = np.cos(x7)
@@ -1117,7 +1001,7 @@ def _hessiane_batch(Q):
     x12 = x11*x9 + x6*x8
     x13 = x3*x5
     x14 = x2*x4
-    x15 = -x13 + x14
+    x15 = x14 - x13
     x16 = x0*x5
     x17 = x1*x3
     x18 = x17*x4
@@ -1142,39 +1026,39 @@ def _hessiane_batch(Q):
     x37 = -x27 - x30 + x36
     x38 = -x37
     x39 = x10*x3
-    x40 = -x39*x8 + x4*x9
+    x40 = x4*x9 - x39*x8
     x41 = x0*x10
-    x42 = -x12*x41 + x24*x40
+    x42 = x24*x40 - x12*x41
     x43 = (0.4318)*x4
     x44 = (0.15005)*x41
     x45 = (0.0203)*x39
     x46 = x26*x39 + x28*x43
     x47 = -x44 + x45 + x46
-    x48 = -x43 + x47
+    x48 = x47 - x43
     x49 = -x48
     x50 = x25*x38 - x42*x49
     x51 = -0.0203*x13*x4 + (0.15005)*x17 + (0.0203)*x2 + (0.15005)*x22
-    x52 = -0.4318*x10*x5 + x51
+    x52 = x51 - 0.4318*x10*x5
     x53 = x26*x6
     x54 = (0.4318)*x11
     x55 = x28*x54
-    x56 = -x53 + x55
+    x56 = x55 - x53
     x57 = x52 + x56
     x58 = -x57
-    x59 = -x15*x40 + x21*x41
+    x59 = x21*x41 - x15*x40
     x60 = x25*x58 - x49*x59
     x61 = x42*x58
-    x62 = -x53 + x55
-    x63 = -x24*x46 + x41*x62
+    x62 = x55 - x53
+    x63 = x41*x62 - x24*x46
     x64 = x27 + x30
     x65 = -x64
-    x66 = -x15*x62 + x24*x65
+    x66 = x24*x65 - x15*x62
     x67 = x15*x46 - x41*x65
     x68 = x31 + x32 - x33 + x34 - x64
     x69 = x51 + x56
     x70 = x11*x68 + x20*x69
     x71 = x10*x40*x5 - x12*x4
-    x72 = -x11*x47 + x4*x69
+    x72 = x4*x69 - x11*x47
     x73 = -x11*x21 - x12*x20
     x74 = (x10*x10)
     x75 = x0*x5*x74 - x24*x4
@@ -1184,7 +1068,7 @@ def _hessiane_batch(Q):
     x79 = x11*x35 + x20*x51
     x80 = -x36
     x81 = -x77
-    x82 = -x11*x81 + x4*x51
+    x82 = x4*x51 - x11*x81
     x83 = x1*x40
     x84 = x10*x83 + x21*x4
     x85 = -x20*x47 - x4*x68
@@ -1192,10 +1076,10 @@ def _hessiane_batch(Q):
     x87 = -x52
     x88 = -x20*x81 - x35*x4
     x89 = x1*x21 - x12*x5
-    x90 = -x1*x37 + x5*x57
+    x90 = x5*x57 - x1*x37
     x91 = x1*x15 - x24*x5
     x92 = x10*x2
-    x93 = -x1*x36 + x5*x52
+    x93 = x5*x52 - x1*x36
     x94 = -x78
     x95 = x10*(x5*x5)
     x96 = (x1*x1)*x10
@@ -1293,7 +1177,7 @@ def _hessiane_batch(Q):
     H[:, 82] = 0.0
     H[:, 83] = 0.0
     H[:, 84] = x12*x63 - x21*x67 + x38*x59 - x61
-    H[:, 85] = -x15*x67 + x24*x63
+    H[:, 85] = x24*x63 - x15*x67
     H[:, 86] = 0.0
     H[:, 87] = 0.0
     H[:, 88] = 0.0
@@ -1355,13 +1239,13 @@ def _hessiane_batch(Q):
     H[:, 144] = x21*x90 - x38*x89 - x48*x83 - x49*x83
     H[:, 145] = x15*x90 - x38*x91 - x48*x92 - x49*x92
     H[:, 146] = x15*x93 - x78*x92 - x80*x91 - x92*x94
-    H[:, 147] = -x20*x97 + x29*x98
+    H[:, 147] = x29*x98 - x20*x97
     H[:, 148] = 0.0
     H[:, 149] = 0.0
     H[:, 150] = -x12*x90 - x48*x99 - x49*x99 + x58*x89
     H[:, 151] = -x100*x48 - x100*x49 - x24*x90 + x58*x91
     H[:, 152] = -x100*x78 - x100*x94 - x24*x93 + x87*x91
-    H[:, 153] = -x11*x97 + x54*x98
+    H[:, 153] = x54*x98 - x11*x97
     H[:, 154] = 0.0
     H[:, 155] = 0.0
     H[:, 156] = x101*x21 + x102*x12 + x38*x99 + x58*x83
@@ -1394,15 +1278,15 @@ def _hessiane_batch(Q):
     H[:, 183] = 0.0
     H[:, 184] = 0.0
     H[:, 185] = 0.0
-    H[:, 186] = -x21*x49 + x38*x40
+    H[:, 186] = x38*x40 - x21*x49
     H[:, 187] = x0*x10*x38 - x15*x49
     H[:, 188] = x0*x10*x80 - x15*x78
     H[:, 189] = 0.0
     H[:, 190] = 0.0
     H[:, 191] = 0.0
-    H[:, 192] = -x104*x58 + x12*x57
-    H[:, 193] = -x23*x58 + x24*x57
-    H[:, 194] = -x23*x87 + x24*x52
+    H[:, 192] = x12*x57 - x104*x58
+    H[:, 193] = x24*x57 - x23*x58
+    H[:, 194] = x24*x52 - x23*x87
     H[:, 195] = 0.0
     H[:, 196] = 0.0
     H[:, 197] = 0.0
@@ -1424,69 +1308,136 @@ def _hessiane_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q3)
+            x1 = sin(q5)
+            x2 = x0*x1
+            x3 = cos(q3)
+            x4 = cos(q4)
+            x5 = cos(q5)
+            x6 = x3*x4*x5 - x2
+            x7 = q1 + q2
+            x8 = sin(x7)
+            x9 = cos(x7)
+            x10 = sin(q4)
+            x11 = x10*x5
+            x12 = x11*x9 + x6*x8
+            x13 = x3*x5
+            x14 = x2*x4
+            x15 = x14 - x13
+            x16 = x0*x5
+            x17 = x1*x3
+            x18 = x17*x4
+            x19 = -x16 - x18
+            x20 = x1*x10
+            x21 = x19*x8 - x20*x9
+            x22 = x16*x4
+            x23 = x17 + x22
+            x24 = -x23
+            x25 = x12*x15 - x21*x24
+            x26 = (0.4318)*cos(q2)
+            x27 = x19*x26
+            x28 = sin(q2)
+            x29 = (0.4318)*x20
+            x30 = x28*x29
+            x31 = (0.0203)*x16
+            x32 = (0.15005)*x13
+            x33 = (0.15005)*x14
+            x34 = (0.0203)*x18
+            x35 = x31 + x32 - x33 + x34
+            x36 = x29 + x35
+            x37 = -x27 - x30 + x36
+            x38 = -x37
+            x39 = x10*x3
+            x40 = x4*x9 - x39*x8
+            x41 = x0*x10
+            x42 = x24*x40 - x12*x41
+            x43 = (0.4318)*x4
+            x44 = (0.15005)*x41
+            x45 = (0.0203)*x39
+            x46 = x26*x39 + x28*x43
+            x47 = -x44 + x45 + x46
+            x48 = x47 - x43
+            x49 = -x48
+            x50 = x25*x38 - x42*x49
+            x51 = -0.0203*x13*x4 + (0.15005)*x17 + (0.0203)*x2 + (0.15005)*x22
+            x52 = x51 - 0.4318*x10*x5
+            x53 = x26*x6
+            x54 = (0.4318)*x11
+            x55 = x28*x54
+            x56 = x55 - x53
+            x57 = x52 + x56
+            x58 = -x57
+            x59 = x21*x41 - x15*x40
+            x60 = x25*x58 - x49*x59
+            x61 = x42*x58
+            x62 = x55 - x53
+            x63 = x41*x62 - x24*x46
+            x64 = x27 + x30
+            x65 = -x64
+            x66 = x24*x65 - x15*x62
+            x67 = x15*x46 - x41*x65
+            x68 = x31 + x32 - x33 + x34 - x64
+            x69 = x51 + x56
+            x70 = x11*x68 + x20*x69
+            x71 = x10*x40*x5 - x12*x4
+            x72 = x4*x69 - x11*x47
+            x73 = -x11*x21 - x12*x20
+            x74 = (x10*x10)
+            x75 = x0*x5*x74 - x24*x4
+            x76 = -x11*x15 - x20*x24
+            x77 = x44 - x45
+            x78 = x43 + x77
+            x79 = x11*x35 + x20*x51
+            x80 = -x36
+            x81 = -x77
+            x82 = x4*x51 - x11*x81
+            x83 = x1*x40
+            x84 = x10*x83 + x21*x4
+            x85 = -x20*x47 - x4*x68
+            x86 = x15*x4 + x2*x74
+            x87 = -x52
+            x88 = -x20*x81 - x35*x4
+            x89 = x1*x21 - x12*x5
+            x90 = x5*x57 - x1*x37
+            x91 = x1*x15 - x24*x5
+            x92 = x10*x2
+            x93 = x5*x52 - x1*x36
+            x94 = -x78
+            x95 = x10*(x5*x5)
+            x96 = (x1*x1)*x10
+            x97 = -0.4318*x95 - 0.4318*x96
+            x98 = -x95 - x96
+            x99 = x40*x5
+            x100 = x10*x16
+            x101 = x48*x5
+            x102 = x1*x48
+            x103 = -x92
+            x104 = -x12
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -x50, 0.0, 0.0, 0.0, 0.0, 0.0, x60, 0.0, 0.0, 0.0, 0.0, 0.0, x38*x59 - x61, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 432, x59, 0.0, 0.0, 0.0, 0.0, 0.0, x42, 0.0, 0.0, 0.0, 0.0, 0.0, x25, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x66 - x40*x63 - x50, x15*x66 - x41*x63, 0.0, 0.0, 0.0, 0.0, -x12*x66 + x40*x67 + x60, x0*x10*x67 - x24*x66, 0.0)
+            _PACK_27(H, 648, 0.0, 0.0, 0.0, x12*x63 - x21*x67 + x38*x59 - x61, x24*x63 - x15*x67, 0.0, 0.0, 0.0, 0.0, x59, 0.0, 0.0, 0.0, 0.0, 0.0, x42, 0.0, 0.0, 0.0, 0.0, 0.0, x25, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 864, x21*x70 - x38*x73 - x40*x72 + x49*x71, x15*x70 - x38*x76 - x41*x72 + x49*x75, x15*x79 - x41*x82 + x75*x78 - x76*x80, 0.0, 0.0, 0.0, -x12*x70 + x40*x85 - x49*x84 + x58*x73, x0*x10*x85 - x24*x70 - x49*x86 + x58*x76, x0*x10*x88 - x24*x79 + x76*x87 - x78*x86, 0.0, 0.0, 0.0, x12*x72 - x21*x85 + x38*x84 - x58*x71, -x15*x85 + x24*x72 + x38*x86 - x58*x75, -x15*x88 + x24*x82 - x75*x87 + x80*x86, 0.0, 0.0, 0.0, x84, x86, x86, 0.0, 0.0, 0.0, x71, x75, x75)
+            _PACK_27(H, 1080, 0.0, 0.0, 0.0, x73, x76, x76, 0.0, 0.0, 0.0, x21*x90 - x38*x89 - x48*x83 - x49*x83, x15*x90 - x38*x91 - x48*x92 - x49*x92, x15*x93 - x78*x92 - x80*x91 - x92*x94, x29*x98 - x20*x97, 0.0, 0.0, -x12*x90 - x48*x99 - x49*x99 + x58*x89, -x100*x48 - x100*x49 - x24*x90 + x58*x91, -x100*x78 - x100*x94 - x24*x93 + x87*x91, x54*x98 - x11*x97, 0.0, 0.0, x101*x21 + x102*x12 + x38*x99 + x58*x83, x100*x38 + x101*x15 + x102*x24 + x58*x92, x1*x24*x94 + x100*x80 + x15*x5*x94 + x87*x92, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1296, x99, x100, x100, x4*x5, 0.0, 0.0, -x83, x103, x103, -x1*x4, 0.0, 0.0, x89, x91, x91, x98, 0.0, 0.0, x104*x49 - x40*x57, x23*x49 - x41*x57, x23*x78 - x41*x52, 0.0, 0.0, 0.0, x38*x40 - x21*x49, x0*x10*x38 - x15*x49, x0*x10*x80 - x15*x78)
+            _PACK_27(H, 1512, 0.0, 0.0, 0.0, x12*x57 - x104*x58, x24*x57 - x23*x58, x24*x52 - x23*x87, 0.0, 0.0, 0.0, x21, x15, x15, -x20, -x5, 0.0, x104, x23, x23, -x11, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q0)
-    x1 = math.sin(q3)
-    x2 = x0*x1
-    x3 = math.cos(q0)
-    x4 = math.cos(q3)
-    x5 = q1 + q2
-    x6 = math.cos(x5)
-    x7 = -x2 + x3*x4*x6
-    x8 = math.cos(q4)
-    x9 = math.sin(q4)
-    x10 = math.sin(x5)
-    x11 = x10*x3
-    x12 = -x11*x9 + x7*x8
-    x13 = math.cos(q5)
-    x14 = x0*x4
-    x15 = x1*x3
-    x16 = x14 + x15*x6
-    x17 = -x16
-    x18 = math.sin(q5)
-    x19 = -x11*x8 - x7*x9
-    x20 = math.cos(q1)
-    x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6
-    x22 = (0.4318)*x20*x3 + x21
-    x23 = x14*x6 + x15
-    x24 = x0*x10
-    x25 = x23*x8 - x24*x9
-    x26 = x2*x6 - x3*x4
-    x27 = -x26
-    x28 = -x23*x9 - x24*x8
-    x29 = -0.0203*x0*x6 + (0.4318)*x24 + (0.15005)*x3
-    x30 = -0.4318*x0*x20 + x29
-    x31 = -x30
-    x32 = x10*x4
-    x33 = x32*x8 + x6*x9
-    x34 = x1*x10
-    x35 = -x32*x9 + x6*x8
-    x36 = (0.0203)*x10 + (0.4318)*x6
-    x37 = x36 + (0.4318)*math.sin(q1)
-    x38 = -x3
-    T = np.array([x12*x13 + x17*x18, -x12*x18 + x13*x17, x19, x22, x13*x25 + x18*x27, x13*x27 - x18*x25, x28, x31, x13*x33 - x18*x34, -x13*x34 - x18*x33, x35, x37, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([x30, -x3*x37, -x3*x36, 0.0, 0.0, 0.0, x22, -x0*x37, -x0*x36, 0.0, 0.0, 0.0, 0.0, x0*x31 + x22*x3, -x0*x29 + x21*x3, 0.0, 0.0, 0.0, 0.0, x0, x0, -x11, x16, x19, 0.0, x38, x38, -x24, x26, x28, 1.0, 0.0, 0.0, x6, x34, x35]).reshape((6, 6))
-    return (T, J, )
 
 
 def _fkine_jacob0_batch(Q):
@@ -1504,12 +1455,12 @@ def _fkine_jacob0_batch(Q):
     x4 = np.cos(q3)
     x5 = q1 + q2
     x6 = np.cos(x5)
-    x7 = -x2 + x3*x4*x6
+    x7 = x3*x4*x6 - x2
     x8 = np.cos(q4)
     x9 = np.sin(q4)
     x10 = np.sin(x5)
     x11 = x10*x3
-    x12 = -x11*x9 + x7*x8
+    x12 = x7*x8 - x11*x9
     x13 = np.cos(q5)
     x14 = x0*x4
     x15 = x1*x3
@@ -1527,18 +1478,18 @@ def _fkine_jacob0_batch(Q):
     x27 = -x26
     x28 = -x23*x9 - x24*x8
     x29 = -0.0203*x0*x6 + (0.4318)*x24 + (0.15005)*x3
-    x30 = -0.4318*x0*x20 + x29
+    x30 = x29 - 0.4318*x0*x20
     x31 = -x30
     x32 = x10*x4
     x33 = x32*x8 + x6*x9
     x34 = x1*x10
-    x35 = -x32*x9 + x6*x8
+    x35 = x6*x8 - x32*x9
     x36 = (0.0203)*x10 + (0.4318)*x6
     x37 = x36 + (0.4318)*np.sin(q1)
     x38 = -x3
     T = np.empty((N, 16))
     T[:, 0] = x12*x13 + x17*x18
-    T[:, 1] = -x12*x18 + x13*x17
+    T[:, 1] = x13*x17 - x12*x18
     T[:, 2] = x19
     T[:, 3] = x22
     T[:, 4] = x13*x25 + x18*x27
@@ -1568,7 +1519,7 @@ def _fkine_jacob0_batch(Q):
     J[:, 11] = 0.0
     J[:, 12] = 0.0
     J[:, 13] = x0*x31 + x22*x3
-    J[:, 14] = -x0*x29 + x21*x3
+    J[:, 14] = x21*x3 - x0*x29
     J[:, 15] = 0.0
     J[:, 16] = 0.0
     J[:, 17] = 0.0
@@ -1590,82 +1541,66 @@ def _fkine_jacob0_batch(Q):
     J[:, 33] = x6
     J[:, 34] = x34
     J[:, 35] = x35
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
-
-
-def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.sin(q0)
-    x1 = (0.4318)*math.cos(q1)
-    x2 = math.cos(q0)
-    x3 = q1 + q2
-    x4 = math.cos(x3)
-    x5 = x0*x4
-    x6 = math.sin(x3)
-    x7 = x0*x6
-    x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7
-    x9 = -x0*x1 + x8
-    x10 = (0.4318)*x4 + (0.0203)*x6
-    x11 = x10 + (0.4318)*math.sin(q1)
-    x12 = -x11*x2
-    x13 = -x10*x2
-    x14 = x2*x6
-    x15 = x2*x4
-    x16 = (0.15005)*x0 - 0.4318*x14 + (0.0203)*x15
-    x17 = x1*x2 + x16
-    x18 = x0*x11
-    x19 = x0*x10
-    x20 = -x0*x9 + x17*x2
-    x21 = -x0*x8 + x16*x2
-    x22 = -x14
-    x23 = math.cos(q3)
-    x24 = x0*x23
-    x25 = math.sin(q3)
-    x26 = x2*x25
-    x27 = x24 + x26*x4
-    x28 = x0*x25
-    x29 = math.sin(q4)
-    x30 = math.cos(q4)
-    x31 = -x14*x30 - x29*(x2*x23*x4 - x28)
-    x32 = -x2
-    x33 = -x2*x23 + x28*x4
-    x34 = x29*(x24*x4 + x26) + x30*x7
-    x35 = -x34
-    x36 = x25*x6
-    x37 = -x23*x29*x6 + x30*x4
-    x38 = -x2*x21
-    x39 = -x0*x21
-    x40 = (x2*x2)
-    x41 = (x0*x0)
-    x42 = -x10*x40 - x10*x41
-    x43 = -x15
-    x44 = -x14*x25
-    x45 = -x2*x37
-    x46 = -x5
-    x47 = -x28*x6
-    x48 = -x0*x37
-    x49 = -x40*x6 - x41*x6
-    x50 = x0*x33 + x2*x27
-    x51 = x0*x35 + x2*x31
-    x52 = (x6*x6)
-    J = np.array([x9, x12, x13, 0.0, 0.0, 0.0, x17, -x18, -x19, 0.0, 0.0, 0.0, 0.0, x20, x21, 0.0, 0.0, 0.0, 0.0, x0, x0, x22, x27, x31, 0.0, x32, x32, -x7, x33, x35, 1.0, 0.0, 0.0, x4, x36, x37]).reshape((6, 6))
-    H = np.array([-x17, x18, x19, 0.0, 0.0, 0.0, x9, x12, x13, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x7, -x33, x34, 0.0, x0, x0, x22, x27, x31, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x18, -x2*x20, x38, 0.0, 0.0, 0.0, x12, -x0*x20, x39, 0.0, 0.0, 0.0, 0.0, -x11*x40 - x11*x41, x42, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x43, x44, x45, 0.0, 0.0, 0.0, x46, x47, x48, 0.0, 0.0, 0.0, x49, x50, x51, x19, x38, x38, 0.0, 0.0, 0.0, x13, x39, x39, 0.0, 0.0, 0.0, 0.0, x42, x42, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x43, x44, x45, 0.0, 0.0, 0.0, x46, x47, x48, 0.0, 0.0, 0.0, x49, x50, x51, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -x28*x52 - x33*x4, -x35*x4 - x37*x7, 0.0, 0.0, 0.0, 0.0, x26*x52 + x27*x4, x14*x37 + x31*x4, 0.0, 0.0, 0.0, 0.0, -x14*x33 + x27*x7, -x14*x35 + x31*x7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x33*x37 - x35*x36, 0.0, 0.0, 0.0, 0.0, 0.0, -x27*x37 + x31*x36, 0.0, 0.0, 0.0, 0.0, 0.0, x27*x35 - x31*x33, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (J, H, )
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = sin(q3)
+            x2 = x0*x1
+            x3 = cos(q0)
+            x4 = cos(q3)
+            x5 = q1 + q2
+            x6 = cos(x5)
+            x7 = x3*x4*x6 - x2
+            x8 = cos(q4)
+            x9 = sin(q4)
+            x10 = sin(x5)
+            x11 = x10*x3
+            x12 = x7*x8 - x11*x9
+            x13 = cos(q5)
+            x14 = x0*x4
+            x15 = x1*x3
+            x16 = x14 + x15*x6
+            x17 = -x16
+            x18 = sin(q5)
+            x19 = -x11*x8 - x7*x9
+            x20 = cos(q1)
+            x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6
+            x22 = (0.4318)*x20*x3 + x21
+            x23 = x14*x6 + x15
+            x24 = x0*x10
+            x25 = x23*x8 - x24*x9
+            x26 = x2*x6 - x3*x4
+            x27 = -x26
+            x28 = -x23*x9 - x24*x8
+            x29 = -0.0203*x0*x6 + (0.4318)*x24 + (0.15005)*x3
+            x30 = x29 - 0.4318*x0*x20
+            x31 = -x30
+            x32 = x10*x4
+            x33 = x32*x8 + x6*x9
+            x34 = x1*x10
+            x35 = x6*x8 - x32*x9
+            x36 = (0.0203)*x10 + (0.4318)*x6
+            x37 = x36 + (0.4318)*sin(q1)
+            x38 = -x3
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x12*x13 + x17*x18, x13*x17 - x12*x18, x19, x22, x13*x25 + x18*x27, x13*x27 - x18*x25, x28, x31, x13*x33 - x18*x34, -x13*x34 - x18*x33, x35, x37, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x30, -x3*x37, -x3*x36, 0.0, 0.0, 0.0, x22, -x0*x37, -x0*x36, 0.0, 0.0, 0.0, 0.0, x0*x31 + x22*x3, x21*x3 - x0*x29, 0.0, 0.0, 0.0)
+            _PACK_18(J, 144, 0.0, x0, x0, -x11, x16, x19, 0.0, x38, x38, -x24, x26, x28, 1.0, 0.0, 0.0, x6, x34, x35)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -1684,7 +1619,7 @@ def _jacob0_hessian0_batch(Q):
     x6 = np.sin(x3)
     x7 = x0*x6
     x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7
-    x9 = -x0*x1 + x8
+    x9 = x8 - x0*x1
     x10 = (0.4318)*x4 + (0.0203)*x6
     x11 = x10 + (0.4318)*np.sin(q1)
     x12 = -x11*x2
@@ -1695,8 +1630,8 @@ def _jacob0_hessian0_batch(Q):
     x17 = x1*x2 + x16
     x18 = x0*x11
     x19 = x0*x10
-    x20 = -x0*x9 + x17*x2
-    x21 = -x0*x8 + x16*x2
+    x20 = x17*x2 - x0*x9
+    x21 = x16*x2 - x0*x8
     x22 = -x14
     x23 = np.cos(q3)
     x24 = x0*x23
@@ -1708,11 +1643,11 @@ def _jacob0_hessian0_batch(Q):
     x30 = np.cos(q4)
     x31 = -x14*x30 - x29*(x2*x23*x4 - x28)
     x32 = -x2
-    x33 = -x2*x23 + x28*x4
+    x33 = x28*x4 - x2*x23
     x34 = x29*(x24*x4 + x26) + x30*x7
     x35 = -x34
     x36 = x25*x6
-    x37 = -x23*x29*x6 + x30*x4
+    x37 = x30*x4 - x23*x29*x6
     x38 = -x2*x21
     x39 = -x0*x21
     x40 = (x2*x2)
@@ -1908,8 +1843,8 @@ def _jacob0_hessian0_batch(Q):
     H[:, 139] = 0.0
     H[:, 140] = 0.0
     H[:, 141] = 0.0
-    H[:, 142] = -x14*x33 + x27*x7
-    H[:, 143] = -x14*x35 + x31*x7
+    H[:, 142] = x27*x7 - x14*x33
+    H[:, 143] = x31*x7 - x14*x35
     H[:, 144] = 0.0
     H[:, 145] = 0.0
     H[:, 146] = 0.0
@@ -1939,7 +1874,7 @@ def _jacob0_hessian0_batch(Q):
     H[:, 170] = 0.0
     H[:, 171] = 0.0
     H[:, 172] = 0.0
-    H[:, 173] = -x27*x37 + x31*x36
+    H[:, 173] = x31*x36 - x27*x37
     H[:, 174] = 0.0
     H[:, 175] = 0.0
     H[:, 176] = 0.0
@@ -1982,15 +1917,84 @@ def _jacob0_hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)), )
+    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = (0.4318)*cos(q1)
+            x2 = cos(q0)
+            x3 = q1 + q2
+            x4 = cos(x3)
+            x5 = x0*x4
+            x6 = sin(x3)
+            x7 = x0*x6
+            x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7
+            x9 = x8 - x0*x1
+            x10 = (0.4318)*x4 + (0.0203)*x6
+            x11 = x10 + (0.4318)*sin(q1)
+            x12 = -x11*x2
+            x13 = -x10*x2
+            x14 = x2*x6
+            x15 = x2*x4
+            x16 = (0.15005)*x0 - 0.4318*x14 + (0.0203)*x15
+            x17 = x1*x2 + x16
+            x18 = x0*x11
+            x19 = x0*x10
+            x20 = x17*x2 - x0*x9
+            x21 = x16*x2 - x0*x8
+            x22 = -x14
+            x23 = cos(q3)
+            x24 = x0*x23
+            x25 = sin(q3)
+            x26 = x2*x25
+            x27 = x24 + x26*x4
+            x28 = x0*x25
+            x29 = sin(q4)
+            x30 = cos(q4)
+            x31 = -x14*x30 - x29*(x2*x23*x4 - x28)
+            x32 = -x2
+            x33 = x28*x4 - x2*x23
+            x34 = x29*(x24*x4 + x26) + x30*x7
+            x35 = -x34
+            x36 = x25*x6
+            x37 = x30*x4 - x23*x29*x6
+            x38 = -x2*x21
+            x39 = -x0*x21
+            x40 = (x2*x2)
+            x41 = (x0*x0)
+            x42 = -x10*x40 - x10*x41
+            x43 = -x15
+            x44 = -x14*x25
+            x45 = -x2*x37
+            x46 = -x5
+            x47 = -x28*x6
+            x48 = -x0*x37
+            x49 = -x40*x6 - x41*x6
+            x50 = x0*x33 + x2*x27
+            x51 = x0*x35 + x2*x31
+            x52 = (x6*x6)
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x9, x12, x13, 0.0, 0.0, 0.0, x17, -x18, -x19, 0.0, 0.0, 0.0, 0.0, x20, x21, 0.0, 0.0, 0.0)
+            _PACK_18(J, 144, 0.0, x0, x0, x22, x27, x31, 0.0, x32, x32, -x7, x33, x35, 1.0, 0.0, 0.0, x4, x36, x37)
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, -x17, x18, x19, 0.0, 0.0, 0.0, x9, x12, x13, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x7, -x33, x34, 0.0, x0, x0)
+            _PACK_27(H, 216, x22, x27, x31, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x18, -x2*x20, x38, 0.0, 0.0, 0.0, x12, -x0*x20, x39, 0.0, 0.0, 0.0, 0.0, -x11*x40 - x11*x41, x42, 0.0, 0.0, 0.0)
+            _PACK_27(H, 432, 0.0, 0.0, 0.0, x43, x44, x45, 0.0, 0.0, 0.0, x46, x47, x48, 0.0, 0.0, 0.0, x49, x50, x51, x19, x38, x38, 0.0, 0.0, 0.0, x13, x39, x39)
+            _PACK_27(H, 648, 0.0, 0.0, 0.0, 0.0, x42, x42, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x43, x44, x45, 0.0, 0.0, 0.0, x46, x47, x48, 0.0, 0.0, 0.0, x49, x50, x51)
+            _PACK_27(H, 864, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -x28*x52 - x33*x4, -x35*x4 - x37*x7, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1080, 0.0, x26*x52 + x27*x4, x14*x37 + x31*x4, 0.0, 0.0, 0.0, 0.0, x27*x7 - x14*x33, x31*x7 - x14*x35, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, x33*x37 - x35*x36, 0.0, 0.0, 0.0, 0.0, 0.0, x31*x36 - x27*x37, 0.0, 0.0, 0.0, 0.0, 0.0, x27*x35 - x31*x33, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1512, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

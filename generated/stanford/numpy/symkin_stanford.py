@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,13 @@ N_JOINTS = 6
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_18 = struct.Struct("18d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5,),
@@ -33,59 +42,6 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
     (1, 1, 0, 1, 1, 1,),
 )
-
-
-def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = -0.154*t1
-    t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
-    t12 = q2*t2 + 0.412
-    t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t17 = -t1*t16 + t15*t4
-    t18 = t0*t16 + t15*t5
-    t19 = -t15*t3
-    t20 = -t1*t15 - t16*t4
-    t21 = t0*t15 - t16*t5
-    t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t25 = t17*t23 + t24*t6
-    t26 = t18*t23 + t24*t7
-    t27 = t19*t23 - t2*t24
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
-    t30 = -t19*t24 - t2*t23
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
-    t33 = t20*t32 + t25*t31
-    t34 = t21*t32 + t26*t31
-    t35 = t22*t32 + t27*t31
-    t36 = t20*t31 - t25*t32
-    t37 = t21*t31 - t26*t32
-    t38 = t22*t31 - t27*t32
-    t39 = t13 - 0.263*t28
-    t40 = t14 - 0.263*t29
-    t41 = t12 - 0.263*t30
-    T = np.array([t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
 
 
 def _fkine_batch(Q):
@@ -106,14 +62,14 @@ def _fkine_batch(Q):
     t7 = -t1*t3
     t8 = -0.154*t1
     t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
+    t10 = t8 - q2*t6
+    t11 = t9 - q2*t7
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
+    t14 = t11 - 0.0203*t0
     t15 = np.sin(q3)
     t16 = -np.cos(q3)
-    t17 = -t1*t16 + t15*t4
+    t17 = t15*t4 - t1*t16
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
@@ -124,8 +80,8 @@ def _fkine_batch(Q):
     t25 = t17*t23 + t24*t6
     t26 = t18*t23 + t24*t7
     t27 = t19*t23 - t2*t24
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
+    t28 = t23*t6 - t17*t24
+    t29 = t23*t7 - t18*t24
     t30 = -t19*t24 - t2*t23
     t31 = np.cos(q5)
     t32 = np.sin(q5)
@@ -155,73 +111,71 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = -0.154*t1
+            t9 = (0.154)*t0
+            t10 = t8 - q2*t6
+            t11 = t9 - q2*t7
+            t12 = q2*t2 + 0.412
+            t13 = (0.0203)*t1 + t10
+            t14 = t11 - 0.0203*t0
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t17 = t15*t4 - t1*t16
+            t18 = t0*t16 + t15*t5
+            t19 = -t15*t3
+            t20 = -t1*t15 - t16*t4
+            t21 = t0*t15 - t16*t5
+            t22 = t16*t3
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t25 = t17*t23 + t24*t6
+            t26 = t18*t23 + t24*t7
+            t27 = t19*t23 - t2*t24
+            t28 = t23*t6 - t17*t24
+            t29 = t23*t7 - t18*t24
+            t30 = -t19*t24 - t2*t23
+            t31 = cos(q5)
+            t32 = sin(q5)
+            t33 = t20*t32 + t25*t31
+            t34 = t21*t32 + t26*t31
+            t35 = t22*t32 + t27*t31
+            t36 = t20*t31 - t25*t32
+            t37 = t21*t31 - t26*t32
+            t38 = t22*t31 - t27*t32
+            t39 = t13 - 0.263*t28
+            t40 = t14 - 0.263*t29
+            t41 = t12 - 0.263*t30
+            T = _empty((4, 4))
+            _PACK_16(T, 0, t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = -0.154*t1
-    t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
-    t12 = q2*t2 + 0.412
-    t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t17 = -t1*t16 + t15*t4
-    t18 = t0*t16 + t15*t5
-    t19 = -t15*t3
-    t20 = -t1*t15 - t16*t4
-    t21 = t0*t15 - t16*t5
-    t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t25 = t17*t23 + t24*t6
-    t26 = t18*t23 + t24*t7
-    t27 = t19*t23 - t2*t24
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
-    t30 = -t19*t24 - t2*t23
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
-    t33 = t20*t32 + t25*t31
-    t34 = t21*t32 + t26*t31
-    t35 = t22*t32 + t27*t31
-    t36 = t20*t31 - t25*t32
-    t37 = t21*t31 - t26*t32
-    t38 = t22*t31 - t27*t32
-    links = np.array([t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0, -t3, -t2, 0.0, 0.412, 0.0, 0.0, 0.0, 1.0, t1, t4, -t6, t10, -t0, t5, -t7, t11, 0.0, -t3, t2, t12, 0.0, 0.0, 0.0, 1.0, t17, t20, -t6, t13, t18, t21, -t7, t14, t19, t22, t2, t12, 0.0, 0.0, 0.0, 1.0, t25, t28, t20, t13, t26, t29, t21, t14, t27, t30, t22, t12, 0.0, 0.0, 0.0, 1.0, t33, t36, -t28, t13, t34, t37, -t29, t14, t35, t38, -t30, t12, 0.0, 0.0, 0.0, 1.0]).reshape((6, 4, 4))
-    return (links, )
 
 
 def _link_poses_batch(Q):
@@ -242,14 +196,14 @@ def _link_poses_batch(Q):
     t7 = -t1*t3
     t8 = -0.154*t1
     t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
+    t10 = t8 - q2*t6
+    t11 = t9 - q2*t7
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
+    t14 = t11 - 0.0203*t0
     t15 = np.sin(q3)
     t16 = -np.cos(q3)
-    t17 = -t1*t16 + t15*t4
+    t17 = t15*t4 - t1*t16
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
@@ -260,8 +214,8 @@ def _link_poses_batch(Q):
     t25 = t17*t23 + t24*t6
     t26 = t18*t23 + t24*t7
     t27 = t19*t23 - t2*t24
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
+    t28 = t23*t6 - t17*t24
+    t29 = t23*t7 - t18*t24
     t30 = -t19*t24 - t2*t23
     t31 = np.cos(q5)
     t32 = np.sin(q5)
@@ -368,75 +322,66 @@ def _link_poses_batch(Q):
     links[:, 93] = 0.0
     links[:, 94] = 0.0
     links[:, 95] = 1.0
-    return (links.reshape((N,) + (6, 4, 4)), )
+    return links.reshape((N,) + (6, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = -0.154*t1
+            t9 = (0.154)*t0
+            t10 = t8 - q2*t6
+            t11 = t9 - q2*t7
+            t12 = q2*t2 + 0.412
+            t13 = (0.0203)*t1 + t10
+            t14 = t11 - 0.0203*t0
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t17 = t15*t4 - t1*t16
+            t18 = t0*t16 + t15*t5
+            t19 = -t15*t3
+            t20 = -t1*t15 - t16*t4
+            t21 = t0*t15 - t16*t5
+            t22 = t16*t3
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t25 = t17*t23 + t24*t6
+            t26 = t18*t23 + t24*t7
+            t27 = t19*t23 - t2*t24
+            t28 = t23*t6 - t17*t24
+            t29 = t23*t7 - t18*t24
+            t30 = -t19*t24 - t2*t23
+            t31 = cos(q5)
+            t32 = sin(q5)
+            t33 = t20*t32 + t25*t31
+            t34 = t21*t32 + t26*t31
+            t35 = t22*t32 + t27*t31
+            t36 = t20*t31 - t25*t32
+            t37 = t21*t31 - t26*t32
+            t38 = t22*t31 - t27*t32
+            links = _empty((6, 4, 4))
+            _PACK_24(links, 0, t0, -t1, 0.0, 0.0, t1, t0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, t4, t6, -t1, 0.0, t5, t7, t0, 0.0)
+            _PACK_24(links, 192, -t3, -t2, 0.0, 0.412, 0.0, 0.0, 0.0, 1.0, t1, t4, -t6, t10, -t0, t5, -t7, t11, 0.0, -t3, t2, t12, 0.0, 0.0, 0.0, 1.0)
+            _PACK_24(links, 384, t17, t20, -t6, t13, t18, t21, -t7, t14, t19, t22, t2, t12, 0.0, 0.0, 0.0, 1.0, t25, t28, t20, t13, t26, t29, t21, t14)
+            _PACK_24(links, 576, t27, t30, t22, t12, 0.0, 0.0, 0.0, 1.0, t33, t36, -t28, t13, t34, t37, -t29, t14, t35, t38, -t30, t12, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = -0.154*t1
-    t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
-    t12 = q2*t2 + 0.412
-    t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t17 = -t1*t16 + t15*t4
-    t18 = t0*t16 + t15*t5
-    t19 = -t15*t3
-    t20 = -t1*t15 - t16*t4
-    t21 = t0*t15 - t16*t5
-    t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
-    t30 = -t19*t24 - t2*t23
-    t39 = t13 - 0.263*t28
-    t40 = t14 - 0.263*t29
-    t41 = t12 - 0.263*t30
-    t42 = t41 - 0.412
-    t43 = t0*t42
-    t44 = t1*t42
-    t45 = -t0*t39 - t1*t40
-    t46 = -t13 + t39
-    t47 = -t14 + t40
-    t48 = -t12 + t41
-    t49 = -t2*t47 - t48*t7
-    t50 = t2*t46 + t48*t6
-    t51 = t46*t7 - t47*t6
-    t52 = t21*t48 - t22*t47
-    t53 = -t20*t48 + t22*t46
-    t54 = t20*t47 - t21*t46
-    t55 = -t29*t48 + t30*t47
-    t56 = t28*t48 - t30*t46
-    t57 = -t28*t47 + t29*t46
-    J = np.array([-t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30]).reshape((6, 6))
-    return (J, )
 
 
 def _jacob0_batch(Q):
@@ -456,14 +401,14 @@ def _jacob0_batch(Q):
     t7 = -t1*t3
     t8 = -0.154*t1
     t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
+    t10 = t8 - q2*t6
+    t11 = t9 - q2*t7
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
+    t14 = t11 - 0.0203*t0
     t15 = np.sin(q3)
     t16 = -np.cos(q3)
-    t17 = -t1*t16 + t15*t4
+    t17 = t15*t4 - t1*t16
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
@@ -471,8 +416,8 @@ def _jacob0_batch(Q):
     t22 = t16*t3
     t23 = np.cos(q4)
     t24 = np.sin(q4)
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
+    t28 = t23*t6 - t17*t24
+    t29 = t23*t7 - t18*t24
     t30 = -t19*t24 - t2*t23
     t39 = t13 - 0.263*t28
     t40 = t14 - 0.263*t29
@@ -481,18 +426,18 @@ def _jacob0_batch(Q):
     t43 = t0*t42
     t44 = t1*t42
     t45 = -t0*t39 - t1*t40
-    t46 = -t13 + t39
-    t47 = -t14 + t40
-    t48 = -t12 + t41
+    t46 = t39 - t13
+    t47 = t40 - t14
+    t48 = t41 - t12
     t49 = -t2*t47 - t48*t7
     t50 = t2*t46 + t48*t6
     t51 = t46*t7 - t47*t6
     t52 = t21*t48 - t22*t47
-    t53 = -t20*t48 + t22*t46
+    t53 = t22*t46 - t20*t48
     t54 = t20*t47 - t21*t46
-    t55 = -t29*t48 + t30*t47
+    t55 = t30*t47 - t29*t48
     t56 = t28*t48 - t30*t46
-    t57 = -t28*t47 + t29*t46
+    t57 = t29*t46 - t28*t47
     J = np.empty((N, 36))
     J[:, 0] = -t40
     J[:, 1] = t43
@@ -530,76 +475,77 @@ def _jacob0_batch(Q):
     J[:, 33] = t2
     J[:, 34] = t22
     J[:, 35] = -t30
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = -0.154*t1
+            t9 = (0.154)*t0
+            t10 = t8 - q2*t6
+            t11 = t9 - q2*t7
+            t12 = q2*t2 + 0.412
+            t13 = (0.0203)*t1 + t10
+            t14 = t11 - 0.0203*t0
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t17 = t15*t4 - t1*t16
+            t18 = t0*t16 + t15*t5
+            t19 = -t15*t3
+            t20 = -t1*t15 - t16*t4
+            t21 = t0*t15 - t16*t5
+            t22 = t16*t3
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t28 = t23*t6 - t17*t24
+            t29 = t23*t7 - t18*t24
+            t30 = -t19*t24 - t2*t23
+            t39 = t13 - 0.263*t28
+            t40 = t14 - 0.263*t29
+            t41 = t12 - 0.263*t30
+            t42 = t41 - 0.412
+            t43 = t0*t42
+            t44 = t1*t42
+            t45 = -t0*t39 - t1*t40
+            t46 = t39 - t13
+            t47 = t40 - t14
+            t48 = t41 - t12
+            t49 = -t2*t47 - t48*t7
+            t50 = t2*t46 + t48*t6
+            t51 = t46*t7 - t47*t6
+            t52 = t21*t48 - t22*t47
+            t53 = t22*t46 - t20*t48
+            t54 = t20*t47 - t21*t46
+            t55 = t30*t47 - t29*t48
+            t56 = t28*t48 - t30*t46
+            t57 = t29*t46 - t28*t47
+            J = _empty((6, 6))
+            _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
+            _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
-    t58 = t23*t31
-    t59 = -t23*t32
-    t60 = t24*t31
-    t61 = -t24*t32
-    t62 = -t15*t32 - t16*t58
-    t63 = -t15*t31 - t16*t59
-    t64 = -t16*t24
-    t65 = -0.0203*t62
-    t66 = -0.0203*t63
-    t67 = -0.0203*t64 - 0.263
-    t68 = q2*t60 + t65
-    t69 = q2*t61 + t66
-    t70 = -q2*t23 + t67
-    t71 = t15*t58 - t16*t32
-    t72 = t15*t59 - t16*t31
-    t73 = t15*t24
-    t74 = (0.154)*t62 + t68
-    t75 = (0.154)*t63 + t69
-    t76 = (0.154)*t64 + t70
-    t80 = t2*t60 + t3*t71
-    t81 = t2*t61 + t3*t72
-    t82 = -t2*t23 + t3*t73
-    t83 = t74 + (0.412)*t80
-    t84 = t75 + (0.412)*t81
-    t85 = t76 + (0.412)*t82
-    t86 = (0.263)*t31
-    t87 = -0.263*t32
-    t88 = -0.263*t61
-    t89 = (0.263)*t60
-    t90 = t63*t76 - t64*t75
-    t91 = -t62*t76 + t64*t74
-    t92 = t62*t75 - t63*t74
-    t93 = t81*t85 - t82*t84
-    t94 = -t80*t85 + t82*t83
-    t95 = t80*t84 - t81*t83
-    J = np.array([t93, t90, -t60, t88, t86, 0.0, t94, t91, -t61, t89, t87, 0.0, t95, t92, t23, 0.0, 0.0, 0.0, -t80, -t62, 0.0, -t60, t32, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, -t82, -t64, 0.0, t23, 0.0, 1.0]).reshape((6, 6))
-    return (J, )
 
 
 def _jacobe_batch(Q):
@@ -629,7 +575,7 @@ def _jacobe_batch(Q):
     t67 = -0.0203*t64 - 0.263
     t68 = q2*t60 + t65
     t69 = q2*t61 + t66
-    t70 = -q2*t23 + t67
+    t70 = t67 - q2*t23
     t71 = t15*t58 - t16*t32
     t72 = t15*t59 - t16*t31
     t73 = t15*t24
@@ -638,7 +584,7 @@ def _jacobe_batch(Q):
     t76 = (0.154)*t64 + t70
     t80 = t2*t60 + t3*t71
     t81 = t2*t61 + t3*t72
-    t82 = -t2*t23 + t3*t73
+    t82 = t3*t73 - t2*t23
     t83 = t74 + (0.412)*t80
     t84 = t75 + (0.412)*t81
     t85 = t76 + (0.412)*t82
@@ -647,10 +593,10 @@ def _jacobe_batch(Q):
     t88 = -0.263*t61
     t89 = (0.263)*t60
     t90 = t63*t76 - t64*t75
-    t91 = -t62*t76 + t64*t74
+    t91 = t64*t74 - t62*t76
     t92 = t62*t75 - t63*t74
     t93 = t81*t85 - t82*t84
-    t94 = -t80*t85 + t82*t83
+    t94 = t82*t83 - t80*t85
     t95 = t80*t84 - t81*t83
     J = np.empty((N, 36))
     J[:, 0] = t93
@@ -689,163 +635,84 @@ def _jacobe_batch(Q):
     J[:, 33] = t23
     J[:, 34] = 0.0
     J[:, 35] = 1.0
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t31 = cos(q5)
+            t32 = sin(q5)
+            t58 = t23*t31
+            t59 = -t23*t32
+            t60 = t24*t31
+            t61 = -t24*t32
+            t62 = -t15*t32 - t16*t58
+            t63 = -t15*t31 - t16*t59
+            t64 = -t16*t24
+            t65 = -0.0203*t62
+            t66 = -0.0203*t63
+            t67 = -0.0203*t64 - 0.263
+            t68 = q2*t60 + t65
+            t69 = q2*t61 + t66
+            t70 = t67 - q2*t23
+            t71 = t15*t58 - t16*t32
+            t72 = t15*t59 - t16*t31
+            t73 = t15*t24
+            t74 = (0.154)*t62 + t68
+            t75 = (0.154)*t63 + t69
+            t76 = (0.154)*t64 + t70
+            t80 = t2*t60 + t3*t71
+            t81 = t2*t61 + t3*t72
+            t82 = t3*t73 - t2*t23
+            t83 = t74 + (0.412)*t80
+            t84 = t75 + (0.412)*t81
+            t85 = t76 + (0.412)*t82
+            t86 = (0.263)*t31
+            t87 = -0.263*t32
+            t88 = -0.263*t61
+            t89 = (0.263)*t60
+            t90 = t63*t76 - t64*t75
+            t91 = t64*t74 - t62*t76
+            t92 = t62*t75 - t63*t74
+            t93 = t81*t85 - t82*t84
+            t94 = t82*t83 - t80*t85
+            t95 = t80*t84 - t81*t83
+            J = _empty((6, 6))
+            _PACK_18(J, 0, t93, t90, -t60, t88, t86, 0.0, t94, t91, -t61, t89, t87, 0.0, t95, t92, t23, 0.0, 0.0, 0.0)
+            _PACK_18(J, 144, -t80, -t62, 0.0, -t60, t32, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, -t82, -t64, 0.0, t23, 0.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessian0_one(q):
-    out = _jacob0_hessian0_one(q)
-    return (out[1], )
 
 
 def _hessian0_batch(Q):
     out = _jacob0_hessian0_batch(Q)
-    return (out[1], )
+    return out[1]
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
-    return out[0]
-
-
-def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
-    t58 = t23*t31
-    t59 = -t23*t32
-    t60 = t24*t31
-    t61 = -t24*t32
-    t62 = -t15*t32 - t16*t58
-    t63 = -t15*t31 - t16*t59
-    t64 = -t16*t24
-    t65 = -0.0203*t62
-    t66 = -0.0203*t63
-    t67 = -0.0203*t64 - 0.263
-    t68 = q2*t60 + t65
-    t69 = q2*t61 + t66
-    t70 = -q2*t23 + t67
-    t71 = t15*t58 - t16*t32
-    t72 = t15*t59 - t16*t31
-    t73 = t15*t24
-    t74 = (0.154)*t62 + t68
-    t75 = (0.154)*t63 + t69
-    t76 = (0.154)*t64 + t70
-    t80 = t2*t60 + t3*t71
-    t81 = t2*t61 + t3*t72
-    t82 = -t2*t23 + t3*t73
-    t83 = t74 + (0.412)*t80
-    t84 = t75 + (0.412)*t81
-    t85 = t76 + (0.412)*t82
-    t86 = (0.263)*t31
-    t87 = -0.263*t32
-    t88 = -0.263*t61
-    t89 = (0.263)*t60
-    t90 = t63*t76 - t64*t75
-    t91 = -t62*t76 + t64*t74
-    t92 = t62*t75 - t63*t74
-    t93 = t81*t85 - t82*t84
-    t94 = -t80*t85 + t82*t83
-    t95 = t80*t84 - t81*t83
-    t115 = -t81*t92 + t82*t91
-    t116 = t80*t92 - t82*t90
-    t117 = -t80*t91 + t81*t90
-    t118 = -t63*t95 + t64*t94
-    t119 = t62*t95 - t64*t93
-    t120 = -t62*t94 + t63*t93
-    t121 = t115 - t118
-    t122 = t116 - t119
-    t123 = t117 - t120
-    t124 = -t63*t82 + t64*t81
-    t125 = t62*t82 - t64*t80
-    t126 = -t62*t81 + t63*t80
-    t127 = -t23*t81 - t61*t82
-    t128 = t23*t80 + t60*t82
-    t129 = -t60*t81 + t61*t80
-    t130 = -t23*t63 - t61*t64
-    t131 = t23*t62 + t60*t64
-    t132 = -t60*t63 + t61*t62
-    t148 = t82*t89
-    t149 = -t82*t88
-    t150 = -t80*t89 + t81*t88
-    t151 = -t23*t94 - t61*t95
-    t152 = t23*t93 + t60*t95
-    t153 = -t60*t94 + t61*t93
-    t154 = t148 - t151
-    t155 = t149 - t152
-    t156 = t150 - t153
-    t157 = t64*t89
-    t158 = -t64*t88
-    t159 = -t62*t89 + t63*t88
-    t160 = -t23*t91 - t61*t92
-    t161 = t23*t90 + t60*t92
-    t162 = -t60*t91 + t61*t90
-    t163 = t157 - t160
-    t164 = t158 - t161
-    t165 = t159 - t162
-    t175 = t82*t87
-    t176 = -t82*t86
-    t177 = -t80*t87 + t81*t86
-    t178 = t31*t95
-    t179 = -t32*t95
-    t180 = -t31*t93 + t32*t94
-    t181 = t175 - t178
-    t182 = t176 - t179
-    t183 = t177 - t180
-    t184 = t31*t82
-    t185 = -t32*t82
-    t186 = -t31*t80 + t32*t81
-    t187 = t64*t87
-    t188 = -t64*t86
-    t189 = -t62*t87 + t63*t86
-    t190 = t31*t92
-    t191 = -t32*t92
-    t192 = -t31*t90 + t32*t91
-    t193 = t187 - t190
-    t194 = t188 - t191
-    t195 = t189 - t192
-    t196 = t31*t64
-    t197 = -t32*t64
-    t198 = -t31*t62 + t32*t63
-    t199 = t31*t60 - t32*t61
-    t200 = -t23*t87
-    t201 = t23*t86
-    t202 = -t60*t87 + t61*t86
-    t203 = -t31*t88 + t32*t89
-    t204 = t202 - t203
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t121, 0.0, 0.0, 0.0, 0.0, 0.0, t122, 0.0, 0.0, 0.0, 0.0, 0.0, t123, 0.0, 0.0, 0.0, 0.0, 0.0, t124, 0.0, 0.0, 0.0, 0.0, 0.0, t125, 0.0, 0.0, 0.0, 0.0, 0.0, t126, 0.0, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t154, t163, 0.0, 0.0, 0.0, 0.0, t155, t164, 0.0, 0.0, 0.0, 0.0, t156, t165, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, t181, t193, -t58, t200, 0.0, 0.0, t182, t194, -t59, t201, 0.0, 0.0, t183, t195, -t199, t204, 0.0, 0.0, t184, t196, 0.0, -t58, 0.0, 0.0, t185, t197, 0.0, -t59, 0.0, 0.0, t186, t198, 0.0, -t199, 0.0, 0.0, t94, t91, -t61, t89, t87, 0.0, -t93, -t90, t60, -t88, -t86, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, t80, t62, 0.0, t60, -t32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
+    out = jacob0_hessian0(q)
+    return out[1]
 
 
 def _hessiane_batch(Q):
@@ -875,7 +742,7 @@ def _hessiane_batch(Q):
     t67 = -0.0203*t64 - 0.263
     t68 = q2*t60 + t65
     t69 = q2*t61 + t66
-    t70 = -q2*t23 + t67
+    t70 = t67 - q2*t23
     t71 = t15*t58 - t16*t32
     t72 = t15*t59 - t16*t31
     t73 = t15*t24
@@ -884,7 +751,7 @@ def _hessiane_batch(Q):
     t76 = (0.154)*t64 + t70
     t80 = t2*t60 + t3*t71
     t81 = t2*t61 + t3*t72
-    t82 = -t2*t23 + t3*t73
+    t82 = t3*t73 - t2*t23
     t83 = t74 + (0.412)*t80
     t84 = t75 + (0.412)*t81
     t85 = t76 + (0.412)*t82
@@ -893,76 +760,76 @@ def _hessiane_batch(Q):
     t88 = -0.263*t61
     t89 = (0.263)*t60
     t90 = t63*t76 - t64*t75
-    t91 = -t62*t76 + t64*t74
+    t91 = t64*t74 - t62*t76
     t92 = t62*t75 - t63*t74
     t93 = t81*t85 - t82*t84
-    t94 = -t80*t85 + t82*t83
+    t94 = t82*t83 - t80*t85
     t95 = t80*t84 - t81*t83
-    t115 = -t81*t92 + t82*t91
+    t115 = t82*t91 - t81*t92
     t116 = t80*t92 - t82*t90
-    t117 = -t80*t91 + t81*t90
-    t118 = -t63*t95 + t64*t94
+    t117 = t81*t90 - t80*t91
+    t118 = t64*t94 - t63*t95
     t119 = t62*t95 - t64*t93
-    t120 = -t62*t94 + t63*t93
+    t120 = t63*t93 - t62*t94
     t121 = t115 - t118
     t122 = t116 - t119
     t123 = t117 - t120
-    t124 = -t63*t82 + t64*t81
+    t124 = t64*t81 - t63*t82
     t125 = t62*t82 - t64*t80
-    t126 = -t62*t81 + t63*t80
+    t126 = t63*t80 - t62*t81
     t127 = -t23*t81 - t61*t82
     t128 = t23*t80 + t60*t82
-    t129 = -t60*t81 + t61*t80
+    t129 = t61*t80 - t60*t81
     t130 = -t23*t63 - t61*t64
     t131 = t23*t62 + t60*t64
-    t132 = -t60*t63 + t61*t62
+    t132 = t61*t62 - t60*t63
     t148 = t82*t89
     t149 = -t82*t88
-    t150 = -t80*t89 + t81*t88
+    t150 = t81*t88 - t80*t89
     t151 = -t23*t94 - t61*t95
     t152 = t23*t93 + t60*t95
-    t153 = -t60*t94 + t61*t93
+    t153 = t61*t93 - t60*t94
     t154 = t148 - t151
     t155 = t149 - t152
     t156 = t150 - t153
     t157 = t64*t89
     t158 = -t64*t88
-    t159 = -t62*t89 + t63*t88
+    t159 = t63*t88 - t62*t89
     t160 = -t23*t91 - t61*t92
     t161 = t23*t90 + t60*t92
-    t162 = -t60*t91 + t61*t90
+    t162 = t61*t90 - t60*t91
     t163 = t157 - t160
     t164 = t158 - t161
     t165 = t159 - t162
     t175 = t82*t87
     t176 = -t82*t86
-    t177 = -t80*t87 + t81*t86
+    t177 = t81*t86 - t80*t87
     t178 = t31*t95
     t179 = -t32*t95
-    t180 = -t31*t93 + t32*t94
+    t180 = t32*t94 - t31*t93
     t181 = t175 - t178
     t182 = t176 - t179
     t183 = t177 - t180
     t184 = t31*t82
     t185 = -t32*t82
-    t186 = -t31*t80 + t32*t81
+    t186 = t32*t81 - t31*t80
     t187 = t64*t87
     t188 = -t64*t86
-    t189 = -t62*t87 + t63*t86
+    t189 = t63*t86 - t62*t87
     t190 = t31*t92
     t191 = -t32*t92
-    t192 = -t31*t90 + t32*t91
+    t192 = t32*t91 - t31*t90
     t193 = t187 - t190
     t194 = t188 - t191
     t195 = t189 - t192
     t196 = t31*t64
     t197 = -t32*t64
-    t198 = -t31*t62 + t32*t63
+    t198 = t32*t63 - t31*t62
     t199 = t31*t60 - t32*t61
     t200 = -t23*t87
     t201 = t23*t86
-    t202 = -t60*t87 + t61*t86
-    t203 = -t31*t88 + t32*t89
+    t202 = t61*t86 - t60*t87
+    t203 = t32*t89 - t31*t88
     t204 = t202 - t203
     H = np.empty((N, 216))
     H[:, 0] = 0.0
@@ -1181,88 +1048,140 @@ def _hessiane_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t31 = cos(q5)
+            t32 = sin(q5)
+            t58 = t23*t31
+            t59 = -t23*t32
+            t60 = t24*t31
+            t61 = -t24*t32
+            t62 = -t15*t32 - t16*t58
+            t63 = -t15*t31 - t16*t59
+            t64 = -t16*t24
+            t65 = -0.0203*t62
+            t66 = -0.0203*t63
+            t67 = -0.0203*t64 - 0.263
+            t68 = q2*t60 + t65
+            t69 = q2*t61 + t66
+            t70 = t67 - q2*t23
+            t71 = t15*t58 - t16*t32
+            t72 = t15*t59 - t16*t31
+            t73 = t15*t24
+            t74 = (0.154)*t62 + t68
+            t75 = (0.154)*t63 + t69
+            t76 = (0.154)*t64 + t70
+            t80 = t2*t60 + t3*t71
+            t81 = t2*t61 + t3*t72
+            t82 = t3*t73 - t2*t23
+            t83 = t74 + (0.412)*t80
+            t84 = t75 + (0.412)*t81
+            t85 = t76 + (0.412)*t82
+            t86 = (0.263)*t31
+            t87 = -0.263*t32
+            t88 = -0.263*t61
+            t89 = (0.263)*t60
+            t90 = t63*t76 - t64*t75
+            t91 = t64*t74 - t62*t76
+            t92 = t62*t75 - t63*t74
+            t93 = t81*t85 - t82*t84
+            t94 = t82*t83 - t80*t85
+            t95 = t80*t84 - t81*t83
+            t115 = t82*t91 - t81*t92
+            t116 = t80*t92 - t82*t90
+            t117 = t81*t90 - t80*t91
+            t118 = t64*t94 - t63*t95
+            t119 = t62*t95 - t64*t93
+            t120 = t63*t93 - t62*t94
+            t121 = t115 - t118
+            t122 = t116 - t119
+            t123 = t117 - t120
+            t124 = t64*t81 - t63*t82
+            t125 = t62*t82 - t64*t80
+            t126 = t63*t80 - t62*t81
+            t127 = -t23*t81 - t61*t82
+            t128 = t23*t80 + t60*t82
+            t129 = t61*t80 - t60*t81
+            t130 = -t23*t63 - t61*t64
+            t131 = t23*t62 + t60*t64
+            t132 = t61*t62 - t60*t63
+            t148 = t82*t89
+            t149 = -t82*t88
+            t150 = t81*t88 - t80*t89
+            t151 = -t23*t94 - t61*t95
+            t152 = t23*t93 + t60*t95
+            t153 = t61*t93 - t60*t94
+            t154 = t148 - t151
+            t155 = t149 - t152
+            t156 = t150 - t153
+            t157 = t64*t89
+            t158 = -t64*t88
+            t159 = t63*t88 - t62*t89
+            t160 = -t23*t91 - t61*t92
+            t161 = t23*t90 + t60*t92
+            t162 = t61*t90 - t60*t91
+            t163 = t157 - t160
+            t164 = t158 - t161
+            t165 = t159 - t162
+            t175 = t82*t87
+            t176 = -t82*t86
+            t177 = t81*t86 - t80*t87
+            t178 = t31*t95
+            t179 = -t32*t95
+            t180 = t32*t94 - t31*t93
+            t181 = t175 - t178
+            t182 = t176 - t179
+            t183 = t177 - t180
+            t184 = t31*t82
+            t185 = -t32*t82
+            t186 = t32*t81 - t31*t80
+            t187 = t64*t87
+            t188 = -t64*t86
+            t189 = t63*t86 - t62*t87
+            t190 = t31*t92
+            t191 = -t32*t92
+            t192 = t32*t91 - t31*t90
+            t193 = t187 - t190
+            t194 = t188 - t191
+            t195 = t189 - t192
+            t196 = t31*t64
+            t197 = -t32*t64
+            t198 = t32*t63 - t31*t62
+            t199 = t31*t60 - t32*t61
+            t200 = -t23*t87
+            t201 = t23*t86
+            t202 = t61*t86 - t60*t87
+            t203 = t32*t89 - t31*t88
+            t204 = t202 - t203
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t121, 0.0, 0.0, 0.0, 0.0, 0.0, t122, 0.0, 0.0, 0.0, 0.0, 0.0, t123, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 432, t124, 0.0, 0.0, 0.0, 0.0, 0.0, t125, 0.0, 0.0, 0.0, 0.0, 0.0, t126, 0.0, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0)
+            _PACK_27(H, 648, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 864, t154, t163, 0.0, 0.0, 0.0, 0.0, t155, t164, 0.0, 0.0, 0.0, 0.0, t156, t165, 0.0, 0.0, 0.0, 0.0, t127, t130, 0.0, 0.0, 0.0, 0.0, t128, t131, 0.0)
+            _PACK_27(H, 1080, 0.0, 0.0, 0.0, t129, t132, 0.0, 0.0, 0.0, 0.0, t181, t193, -t58, t200, 0.0, 0.0, t182, t194, -t59, t201, 0.0, 0.0, t183, t195, -t199, t204, 0.0, 0.0)
+            _PACK_27(H, 1296, t184, t196, 0.0, -t58, 0.0, 0.0, t185, t197, 0.0, -t59, 0.0, 0.0, t186, t198, 0.0, -t199, 0.0, 0.0, t94, t91, -t61, t89, t87, 0.0, -t93, -t90, t60)
+            _PACK_27(H, 1512, -t88, -t86, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, t80, t62, 0.0, t60, -t32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = -0.154*t1
-    t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
-    t12 = q2*t2 + 0.412
-    t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t17 = -t1*t16 + t15*t4
-    t18 = t0*t16 + t15*t5
-    t19 = -t15*t3
-    t20 = -t1*t15 - t16*t4
-    t21 = t0*t15 - t16*t5
-    t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t25 = t17*t23 + t24*t6
-    t26 = t18*t23 + t24*t7
-    t27 = t19*t23 - t2*t24
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
-    t30 = -t19*t24 - t2*t23
-    t31 = math.cos(q5)
-    t32 = math.sin(q5)
-    t33 = t20*t32 + t25*t31
-    t34 = t21*t32 + t26*t31
-    t35 = t22*t32 + t27*t31
-    t36 = t20*t31 - t25*t32
-    t37 = t21*t31 - t26*t32
-    t38 = t22*t31 - t27*t32
-    t39 = t13 - 0.263*t28
-    t40 = t14 - 0.263*t29
-    t41 = t12 - 0.263*t30
-    t42 = t41 - 0.412
-    t43 = t0*t42
-    t44 = t1*t42
-    t45 = -t0*t39 - t1*t40
-    t46 = -t13 + t39
-    t47 = -t14 + t40
-    t48 = -t12 + t41
-    t49 = -t2*t47 - t48*t7
-    t50 = t2*t46 + t48*t6
-    t51 = t46*t7 - t47*t6
-    t52 = t21*t48 - t22*t47
-    t53 = -t20*t48 + t22*t46
-    t54 = t20*t47 - t21*t46
-    t55 = -t29*t48 + t30*t47
-    t56 = t28*t48 - t30*t46
-    t57 = -t28*t47 + t29*t46
-    T = np.array([t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([-t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30]).reshape((6, 6))
-    return (T, J, )
 
 
 def _fkine_jacob0_batch(Q):
@@ -1283,14 +1202,14 @@ def _fkine_jacob0_batch(Q):
     t7 = -t1*t3
     t8 = -0.154*t1
     t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
+    t10 = t8 - q2*t6
+    t11 = t9 - q2*t7
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
+    t14 = t11 - 0.0203*t0
     t15 = np.sin(q3)
     t16 = -np.cos(q3)
-    t17 = -t1*t16 + t15*t4
+    t17 = t15*t4 - t1*t16
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
@@ -1301,8 +1220,8 @@ def _fkine_jacob0_batch(Q):
     t25 = t17*t23 + t24*t6
     t26 = t18*t23 + t24*t7
     t27 = t19*t23 - t2*t24
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
+    t28 = t23*t6 - t17*t24
+    t29 = t23*t7 - t18*t24
     t30 = -t19*t24 - t2*t23
     t31 = np.cos(q5)
     t32 = np.sin(q5)
@@ -1319,18 +1238,18 @@ def _fkine_jacob0_batch(Q):
     t43 = t0*t42
     t44 = t1*t42
     t45 = -t0*t39 - t1*t40
-    t46 = -t13 + t39
-    t47 = -t14 + t40
-    t48 = -t12 + t41
+    t46 = t39 - t13
+    t47 = t40 - t14
+    t48 = t41 - t12
     t49 = -t2*t47 - t48*t7
     t50 = t2*t46 + t48*t6
     t51 = t46*t7 - t47*t6
     t52 = t21*t48 - t22*t47
-    t53 = -t20*t48 + t22*t46
+    t53 = t22*t46 - t20*t48
     t54 = t20*t47 - t21*t46
-    t55 = -t29*t48 + t30*t47
+    t55 = t30*t47 - t29*t48
     t56 = t28*t48 - t30*t46
-    t57 = -t28*t47 + t29*t46
+    t57 = t29*t46 - t28*t47
     T = np.empty((N, 16))
     T[:, 0] = t33
     T[:, 1] = t36
@@ -1385,122 +1304,85 @@ def _fkine_jacob0_batch(Q):
     J[:, 33] = t2
     J[:, 34] = t22
     J[:, 35] = -t30
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
-
-
-def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    t0 = math.cos(q0)
-    t1 = math.sin(q0)
-    t2 = math.cos(q1)
-    t3 = math.sin(q1)
-    t4 = t0*t2
-    t5 = t1*t2
-    t6 = -t0*t3
-    t7 = -t1*t3
-    t8 = -0.154*t1
-    t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
-    t12 = q2*t2 + 0.412
-    t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
-    t15 = math.sin(q3)
-    t16 = -math.cos(q3)
-    t17 = -t1*t16 + t15*t4
-    t18 = t0*t16 + t15*t5
-    t19 = -t15*t3
-    t20 = -t1*t15 - t16*t4
-    t21 = t0*t15 - t16*t5
-    t22 = t16*t3
-    t23 = math.cos(q4)
-    t24 = math.sin(q4)
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
-    t30 = -t19*t24 - t2*t23
-    t39 = t13 - 0.263*t28
-    t40 = t14 - 0.263*t29
-    t41 = t12 - 0.263*t30
-    t42 = t41 - 0.412
-    t43 = t0*t42
-    t44 = t1*t42
-    t45 = -t0*t39 - t1*t40
-    t46 = -t13 + t39
-    t47 = -t14 + t40
-    t48 = -t12 + t41
-    t49 = -t2*t47 - t48*t7
-    t50 = t2*t46 + t48*t6
-    t51 = t46*t7 - t47*t6
-    t52 = t21*t48 - t22*t47
-    t53 = -t20*t48 + t22*t46
-    t54 = t20*t47 - t21*t46
-    t55 = -t29*t48 + t30*t47
-    t56 = t28*t48 - t30*t46
-    t57 = -t28*t47 + t29*t46
-    t96 = t0*t45
-    t97 = t1*t45
-    t98 = -t0*t43 - t1*t44
-    t99 = t0*t6 + t1*t7
-    t100 = t0*t51
-    t101 = t1*t51
-    t102 = -t0*t49 - t1*t50
-    t103 = t0*t54
-    t104 = t1*t54
-    t105 = -t0*t52 - t1*t53
-    t106 = t0*t22
-    t107 = t1*t22
-    t108 = -t0*t20 - t1*t21
-    t109 = t0*t57
-    t110 = t1*t57
-    t111 = -t0*t55 - t1*t56
-    t112 = -t0*t30
-    t113 = -t1*t30
-    t114 = t0*t28 + t1*t29
-    t133 = -t2*t50 - t51*t7
-    t134 = t2*t49 + t51*t6
-    t135 = t49*t7 - t50*t6
-    t136 = -t2*t53 - t54*t7
-    t137 = t2*t52 + t54*t6
-    t138 = t52*t7 - t53*t6
-    t139 = -t2*t21 - t22*t7
-    t140 = t2*t20 + t22*t6
-    t141 = t20*t7 - t21*t6
-    t142 = -t2*t56 - t57*t7
-    t143 = t2*t55 + t57*t6
-    t144 = t55*t7 - t56*t6
-    t145 = t2*t29 + t30*t7
-    t146 = -t2*t28 - t30*t6
-    t147 = -t28*t7 + t29*t6
-    t166 = t21*t54 - t22*t53
-    t167 = -t20*t54 + t22*t52
-    t168 = t20*t53 - t21*t52
-    t169 = t21*t57 - t22*t56
-    t170 = -t20*t57 + t22*t55
-    t171 = t20*t56 - t21*t55
-    t172 = -t21*t30 + t22*t29
-    t173 = t20*t30 - t22*t28
-    t174 = -t20*t29 + t21*t28
-    t205 = -t29*t57 + t30*t56
-    t206 = t28*t57 - t30*t55
-    t207 = -t28*t56 + t29*t55
-    J = np.array([-t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30]).reshape((6, 6))
-    H = np.array([-t39, -t44, t7, -t50, -t53, -t56, -t40, t43, -t6, t49, t52, t55, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, 0.0, t7, -t21, t29, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t44, t96, t4, t100, t103, t109, t43, t97, t5, t101, t104, t110, 0.0, t98, t99, t102, t105, t111, 0.0, 0.0, 0.0, t4, t106, t112, 0.0, 0.0, 0.0, t5, t107, t113, 0.0, 0.0, 0.0, t99, t108, t114, t7, t4, 0.0, 0.0, 0.0, 0.0, -t6, t5, 0.0, 0.0, 0.0, 0.0, 0.0, t99, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t50, t100, 0.0, t133, t136, t142, t49, t101, 0.0, t134, t137, t143, 0.0, t102, 0.0, t135, t138, t144, 0.0, 0.0, 0.0, 0.0, t139, t145, 0.0, 0.0, 0.0, 0.0, t140, t146, 0.0, 0.0, 0.0, 0.0, t141, t147, -t53, t103, 0.0, t136, t166, t169, t52, t104, 0.0, t137, t167, t170, 0.0, t105, 0.0, t138, t168, t171, 0.0, 0.0, 0.0, 0.0, 0.0, t172, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, t174, -t56, t109, 0.0, t142, t169, t205, t55, t110, 0.0, t143, t170, t206, 0.0, t111, 0.0, t144, t171, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (J, H, )
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = -0.154*t1
+            t9 = (0.154)*t0
+            t10 = t8 - q2*t6
+            t11 = t9 - q2*t7
+            t12 = q2*t2 + 0.412
+            t13 = (0.0203)*t1 + t10
+            t14 = t11 - 0.0203*t0
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t17 = t15*t4 - t1*t16
+            t18 = t0*t16 + t15*t5
+            t19 = -t15*t3
+            t20 = -t1*t15 - t16*t4
+            t21 = t0*t15 - t16*t5
+            t22 = t16*t3
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t25 = t17*t23 + t24*t6
+            t26 = t18*t23 + t24*t7
+            t27 = t19*t23 - t2*t24
+            t28 = t23*t6 - t17*t24
+            t29 = t23*t7 - t18*t24
+            t30 = -t19*t24 - t2*t23
+            t31 = cos(q5)
+            t32 = sin(q5)
+            t33 = t20*t32 + t25*t31
+            t34 = t21*t32 + t26*t31
+            t35 = t22*t32 + t27*t31
+            t36 = t20*t31 - t25*t32
+            t37 = t21*t31 - t26*t32
+            t38 = t22*t31 - t27*t32
+            t39 = t13 - 0.263*t28
+            t40 = t14 - 0.263*t29
+            t41 = t12 - 0.263*t30
+            t42 = t41 - 0.412
+            t43 = t0*t42
+            t44 = t1*t42
+            t45 = -t0*t39 - t1*t40
+            t46 = t39 - t13
+            t47 = t40 - t14
+            t48 = t41 - t12
+            t49 = -t2*t47 - t48*t7
+            t50 = t2*t46 + t48*t6
+            t51 = t46*t7 - t47*t6
+            t52 = t21*t48 - t22*t47
+            t53 = t22*t46 - t20*t48
+            t54 = t20*t47 - t21*t46
+            t55 = t30*t47 - t29*t48
+            t56 = t28*t48 - t30*t46
+            t57 = t29*t46 - t28*t47
+            T = _empty((4, 4))
+            _PACK_16(T, 0, t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 6))
+            _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
+            _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -1520,14 +1402,14 @@ def _jacob0_hessian0_batch(Q):
     t7 = -t1*t3
     t8 = -0.154*t1
     t9 = (0.154)*t0
-    t10 = -q2*t6 + t8
-    t11 = -q2*t7 + t9
+    t10 = t8 - q2*t6
+    t11 = t9 - q2*t7
     t12 = q2*t2 + 0.412
     t13 = (0.0203)*t1 + t10
-    t14 = -0.0203*t0 + t11
+    t14 = t11 - 0.0203*t0
     t15 = np.sin(q3)
     t16 = -np.cos(q3)
-    t17 = -t1*t16 + t15*t4
+    t17 = t15*t4 - t1*t16
     t18 = t0*t16 + t15*t5
     t19 = -t15*t3
     t20 = -t1*t15 - t16*t4
@@ -1535,8 +1417,8 @@ def _jacob0_hessian0_batch(Q):
     t22 = t16*t3
     t23 = np.cos(q4)
     t24 = np.sin(q4)
-    t28 = -t17*t24 + t23*t6
-    t29 = -t18*t24 + t23*t7
+    t28 = t23*t6 - t17*t24
+    t29 = t23*t7 - t18*t24
     t30 = -t19*t24 - t2*t23
     t39 = t13 - 0.263*t28
     t40 = t14 - 0.263*t29
@@ -1545,18 +1427,18 @@ def _jacob0_hessian0_batch(Q):
     t43 = t0*t42
     t44 = t1*t42
     t45 = -t0*t39 - t1*t40
-    t46 = -t13 + t39
-    t47 = -t14 + t40
-    t48 = -t12 + t41
+    t46 = t39 - t13
+    t47 = t40 - t14
+    t48 = t41 - t12
     t49 = -t2*t47 - t48*t7
     t50 = t2*t46 + t48*t6
     t51 = t46*t7 - t47*t6
     t52 = t21*t48 - t22*t47
-    t53 = -t20*t48 + t22*t46
+    t53 = t22*t46 - t20*t48
     t54 = t20*t47 - t21*t46
-    t55 = -t29*t48 + t30*t47
+    t55 = t30*t47 - t29*t48
     t56 = t28*t48 - t30*t46
-    t57 = -t28*t47 + t29*t46
+    t57 = t29*t46 - t28*t47
     t96 = t0*t45
     t97 = t1*t45
     t98 = -t0*t43 - t1*t44
@@ -1590,19 +1472,19 @@ def _jacob0_hessian0_batch(Q):
     t144 = t55*t7 - t56*t6
     t145 = t2*t29 + t30*t7
     t146 = -t2*t28 - t30*t6
-    t147 = -t28*t7 + t29*t6
+    t147 = t29*t6 - t28*t7
     t166 = t21*t54 - t22*t53
-    t167 = -t20*t54 + t22*t52
+    t167 = t22*t52 - t20*t54
     t168 = t20*t53 - t21*t52
     t169 = t21*t57 - t22*t56
-    t170 = -t20*t57 + t22*t55
+    t170 = t22*t55 - t20*t57
     t171 = t20*t56 - t21*t55
-    t172 = -t21*t30 + t22*t29
+    t172 = t22*t29 - t21*t30
     t173 = t20*t30 - t22*t28
-    t174 = -t20*t29 + t21*t28
-    t205 = -t29*t57 + t30*t56
+    t174 = t21*t28 - t20*t29
+    t205 = t30*t56 - t29*t57
     t206 = t28*t57 - t30*t55
-    t207 = -t28*t56 + t29*t55
+    t207 = t29*t55 - t28*t56
     J = np.empty((N, 36))
     J[:, 0] = -t40
     J[:, 1] = t43
@@ -1857,15 +1739,124 @@ def _jacob0_hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)), )
+    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            t0 = cos(q0)
+            t1 = sin(q0)
+            t2 = cos(q1)
+            t3 = sin(q1)
+            t4 = t0*t2
+            t5 = t1*t2
+            t6 = -t0*t3
+            t7 = -t1*t3
+            t8 = -0.154*t1
+            t9 = (0.154)*t0
+            t10 = t8 - q2*t6
+            t11 = t9 - q2*t7
+            t12 = q2*t2 + 0.412
+            t13 = (0.0203)*t1 + t10
+            t14 = t11 - 0.0203*t0
+            t15 = sin(q3)
+            t16 = -cos(q3)
+            t17 = t15*t4 - t1*t16
+            t18 = t0*t16 + t15*t5
+            t19 = -t15*t3
+            t20 = -t1*t15 - t16*t4
+            t21 = t0*t15 - t16*t5
+            t22 = t16*t3
+            t23 = cos(q4)
+            t24 = sin(q4)
+            t28 = t23*t6 - t17*t24
+            t29 = t23*t7 - t18*t24
+            t30 = -t19*t24 - t2*t23
+            t39 = t13 - 0.263*t28
+            t40 = t14 - 0.263*t29
+            t41 = t12 - 0.263*t30
+            t42 = t41 - 0.412
+            t43 = t0*t42
+            t44 = t1*t42
+            t45 = -t0*t39 - t1*t40
+            t46 = t39 - t13
+            t47 = t40 - t14
+            t48 = t41 - t12
+            t49 = -t2*t47 - t48*t7
+            t50 = t2*t46 + t48*t6
+            t51 = t46*t7 - t47*t6
+            t52 = t21*t48 - t22*t47
+            t53 = t22*t46 - t20*t48
+            t54 = t20*t47 - t21*t46
+            t55 = t30*t47 - t29*t48
+            t56 = t28*t48 - t30*t46
+            t57 = t29*t46 - t28*t47
+            t96 = t0*t45
+            t97 = t1*t45
+            t98 = -t0*t43 - t1*t44
+            t99 = t0*t6 + t1*t7
+            t100 = t0*t51
+            t101 = t1*t51
+            t102 = -t0*t49 - t1*t50
+            t103 = t0*t54
+            t104 = t1*t54
+            t105 = -t0*t52 - t1*t53
+            t106 = t0*t22
+            t107 = t1*t22
+            t108 = -t0*t20 - t1*t21
+            t109 = t0*t57
+            t110 = t1*t57
+            t111 = -t0*t55 - t1*t56
+            t112 = -t0*t30
+            t113 = -t1*t30
+            t114 = t0*t28 + t1*t29
+            t133 = -t2*t50 - t51*t7
+            t134 = t2*t49 + t51*t6
+            t135 = t49*t7 - t50*t6
+            t136 = -t2*t53 - t54*t7
+            t137 = t2*t52 + t54*t6
+            t138 = t52*t7 - t53*t6
+            t139 = -t2*t21 - t22*t7
+            t140 = t2*t20 + t22*t6
+            t141 = t20*t7 - t21*t6
+            t142 = -t2*t56 - t57*t7
+            t143 = t2*t55 + t57*t6
+            t144 = t55*t7 - t56*t6
+            t145 = t2*t29 + t30*t7
+            t146 = -t2*t28 - t30*t6
+            t147 = t29*t6 - t28*t7
+            t166 = t21*t54 - t22*t53
+            t167 = t22*t52 - t20*t54
+            t168 = t20*t53 - t21*t52
+            t169 = t21*t57 - t22*t56
+            t170 = t22*t55 - t20*t57
+            t171 = t20*t56 - t21*t55
+            t172 = t22*t29 - t21*t30
+            t173 = t20*t30 - t22*t28
+            t174 = t21*t28 - t20*t29
+            t205 = t30*t56 - t29*t57
+            t206 = t28*t57 - t30*t55
+            t207 = t29*t55 - t28*t56
+            J = _empty((6, 6))
+            _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
+            _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, -t39, -t44, t7, -t50, -t53, -t56, -t40, t43, -t6, t49, t52, t55, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t0, 0.0, t7, -t21, t29, 0.0, -t1, 0.0)
+            _PACK_27(H, 216, -t6, t20, -t28, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t44, t96, t4, t100, t103, t109, t43, t97, t5, t101, t104, t110, 0.0, t98, t99, t102, t105, t111)
+            _PACK_27(H, 432, 0.0, 0.0, 0.0, t4, t106, t112, 0.0, 0.0, 0.0, t5, t107, t113, 0.0, 0.0, 0.0, t99, t108, t114, t7, t4, 0.0, 0.0, 0.0, 0.0, -t6, t5, 0.0)
+            _PACK_27(H, 648, 0.0, 0.0, 0.0, 0.0, t99, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 864, -t50, t100, 0.0, t133, t136, t142, t49, t101, 0.0, t134, t137, t143, 0.0, t102, 0.0, t135, t138, t144, 0.0, 0.0, 0.0, 0.0, t139, t145, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1080, 0.0, t140, t146, 0.0, 0.0, 0.0, 0.0, t141, t147, -t53, t103, 0.0, t136, t166, t169, t52, t104, 0.0, t137, t167, t170, 0.0, t105, 0.0, t138, t168, t171)
+            _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, t172, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, t174, -t56, t109, 0.0, t142, t169, t205, t55, t110, 0.0)
+            _PACK_27(H, 1512, t143, t170, t206, 0.0, t111, 0.0, t144, t171, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

@@ -15,6 +15,8 @@ along the chain, as ``link_poses``).
 """
 
 import math
+import struct
+from math import cos, sin, sqrt
 
 import numpy as np
 
@@ -26,6 +28,13 @@ N_JOINTS = 6
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _isfinite = math.isfinite
+_ndarray = np.ndarray
+_empty = np.empty
+# One configuration's outputs are written into new arrays by struct (native doubles, row-major).
+_PACK_16 = struct.Struct("16d").pack_into
+_PACK_18 = struct.Struct("18d").pack_into
+_PACK_24 = struct.Struct("24d").pack_into
+_PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
 CHAIN = ChainTables(
     (0, 1, 2, 3, 4, 5,),
@@ -33,41 +42,6 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
     (1, 1, 1, 1, 1, 1,),
 )
-
-
-def _fkine_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q0)
-    x1 = math.sin(q4)
-    x2 = x0*x1
-    x3 = q1 + q2
-    x4 = q3 + x3
-    x5 = math.cos(x4)
-    x6 = math.cos(q0)
-    x7 = math.cos(q4)
-    x8 = x6*x7
-    x9 = x2 + x5*x8
-    x10 = math.cos(q5)
-    x11 = math.sin(q5)
-    x12 = math.sin(x4)
-    x13 = x12*x6
-    x14 = x0*x7
-    x15 = x1*x6
-    x16 = x15*x5
-    x17 = (0.39225)*math.cos(x3)
-    x18 = (0.425)*math.cos(q1)
-    x19 = x14*x5 - x15
-    x20 = x0*x12
-    x21 = x2*x5
-    x22 = x12*x7
-    x23 = x1*x12
-    T = np.array([x10*x9 - x11*x13, -x10*x13 - x11*x9, x14 - x16, (0.10915)*x0 + (0.09465)*x13 + (0.0823)*x14 - 0.0823*x16 - x17*x6 - x18*x6, x10*x19 - x11*x20, -x10*x20 - x11*x19, -x21 - x8, (0.09465)*x0*x12 - x0*x17 - x0*x18 - 0.0823*x21 - 0.10915*x6 - 0.0823*x8, x10*x22 + x11*x5, x10*x5 - x11*x22, -x23, -0.0823*x23 - 0.09465*x5 - 0.425*math.sin(q1) - 0.39225*math.sin(x3) + 0.089159, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    return (T, )
 
 
 def _fkine_batch(Q):
@@ -119,73 +93,53 @@ def _fkine_batch(Q):
     T[:, 13] = 0.0
     T[:, 14] = 0.0
     T[:, 15] = 1.0
-    return (T.reshape((N,) + (4, 4)), )
+    return T.reshape((N,) + (4, 4))
 
 
 def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = sin(q4)
+            x2 = x0*x1
+            x3 = q1 + q2
+            x4 = q3 + x3
+            x5 = cos(x4)
+            x6 = cos(q0)
+            x7 = cos(q4)
+            x8 = x6*x7
+            x9 = x2 + x5*x8
+            x10 = cos(q5)
+            x11 = sin(q5)
+            x12 = sin(x4)
+            x13 = x12*x6
+            x14 = x0*x7
+            x15 = x1*x6
+            x16 = x15*x5
+            x17 = (0.39225)*cos(x3)
+            x18 = (0.425)*cos(q1)
+            x19 = x14*x5 - x15
+            x20 = x0*x12
+            x21 = x2*x5
+            x22 = x12*x7
+            x23 = x1*x12
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x10*x9 - x11*x13, -x10*x13 - x11*x9, x14 - x16, (0.10915)*x0 + (0.09465)*x13 + (0.0823)*x14 - 0.0823*x16 - x17*x6 - x18*x6, x10*x19 - x11*x20, -x10*x20 - x11*x19, -x21 - x8, (0.09465)*x0*x12 - x0*x17 - x0*x18 - 0.0823*x21 - 0.10915*x6 - 0.0823*x8, x10*x22 + x11*x5, x10*x5 - x11*x22, -x23, -0.0823*x23 - 0.09465*x5 - 0.425*sin(q1) - 0.39225*sin(x3) + 0.089159, 0.0, 0.0, 0.0, 1.0)
+            return T
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = L[:, k]
         return out[0] if single else out
-    out = _fkine_one(Q[0].tolist()) if single else _fkine_batch(Q)
+    if not single:
+        return _fkine_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine(Q[0])  # the scalar code above
+    out = _fkine_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _link_poses_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q0)
-    x1 = math.sin(q0)
-    x2 = math.cos(q1)
-    x3 = x0*x2
-    x4 = math.sin(q1)
-    x5 = x1*x2
-    x6 = -x0
-    x7 = q1 + q2
-    x8 = math.cos(x7)
-    x9 = x0*x8
-    x10 = math.sin(x7)
-    x11 = (0.425)*x3
-    x12 = -x11
-    x13 = x1*x8
-    x14 = (0.425)*x5
-    x15 = (0.425)*x4 - 0.089159
-    x16 = q3 + x7
-    x17 = math.cos(x16)
-    x18 = x0*x17
-    x19 = math.sin(x16)
-    x20 = x0*x19
-    x21 = (0.39225)*x9
-    x22 = x11 + x21
-    x23 = x1*x17
-    x24 = x1*x19
-    x25 = (0.39225)*x13 + x14
-    x26 = (0.39225)*x10 + x15
-    x27 = -x26
-    x28 = math.sin(q4)
-    x29 = math.cos(q4)
-    x30 = x1*x28 + x18*x29
-    x31 = x1*x29 - x18*x28
-    x32 = -x0*x28 + x23*x29
-    x33 = -x0*x29 - x23*x28
-    x34 = (0.10915)*x0 + x25
-    x35 = x19*x29
-    x36 = -x19*x28
-    x37 = math.cos(q5)
-    x38 = math.sin(q5)
-    links = np.array([x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x0*x4, x1, 0.0, x5, -x1*x4, x6, 0.0, x4, x2, 0.0, 0.089159, 0.0, 0.0, 0.0, 1.0, x9, -x0*x10, x1, x12, x13, -x1*x10, x6, -x14, x10, x8, 0.0, -x15, 0.0, 0.0, 0.0, 1.0, x18, -x20, x1, -x22, x23, -x24, x6, -x25, x19, x17, 0.0, x27, 0.0, 0.0, 0.0, 1.0, x30, x31, x20, (0.10915)*x1 - x22, x32, x33, x24, -x34, x35, x36, -x17, x27, 0.0, 0.0, 0.0, 1.0, -x20*x38 + x30*x37, -x20*x37 - x30*x38, x31, (0.10915)*x1 + x12 + (0.09465)*x20 - x21, -x24*x38 + x32*x37, -x24*x37 - x32*x38, x33, (0.09465)*x1*x19 - x34, x17*x38 + x35*x37, x17*x37 - x35*x38, x36, -0.09465*x17 - x26, 0.0, 0.0, 0.0, 1.0]).reshape((6, 4, 4))
-    return (links, )
 
 
 def _link_poses_batch(Q):
@@ -228,7 +182,7 @@ def _link_poses_batch(Q):
     x29 = np.cos(q4)
     x30 = x1*x28 + x18*x29
     x31 = x1*x29 - x18*x28
-    x32 = -x0*x28 + x23*x29
+    x32 = x23*x29 - x0*x28
     x33 = -x0*x29 - x23*x28
     x34 = (0.10915)*x0 + x25
     x35 = x19*x29
@@ -316,11 +270,11 @@ def _link_poses_batch(Q):
     links[:, 77] = 0.0
     links[:, 78] = 0.0
     links[:, 79] = 1.0
-    links[:, 80] = -x20*x38 + x30*x37
+    links[:, 80] = x30*x37 - x20*x38
     links[:, 81] = -x20*x37 - x30*x38
     links[:, 82] = x31
     links[:, 83] = (0.10915)*x1 + x12 + (0.09465)*x20 - x21
-    links[:, 84] = -x24*x38 + x32*x37
+    links[:, 84] = x32*x37 - x24*x38
     links[:, 85] = -x24*x37 - x32*x38
     links[:, 86] = x33
     links[:, 87] = (0.09465)*x1*x19 - x34
@@ -332,69 +286,66 @@ def _link_poses_batch(Q):
     links[:, 93] = 0.0
     links[:, 94] = 0.0
     links[:, 95] = 1.0
-    return (links.reshape((N,) + (6, 4, 4)), )
+    return links.reshape((N,) + (6, 4, 4))
 
 
 def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _link_poses_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _link_poses_one(Q[0].tolist()) if single else _link_poses_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = sin(q0)
+            x2 = cos(q1)
+            x3 = x0*x2
+            x4 = sin(q1)
+            x5 = x1*x2
+            x6 = -x0
+            x7 = q1 + q2
+            x8 = cos(x7)
+            x9 = x0*x8
+            x10 = sin(x7)
+            x11 = (0.425)*x3
+            x12 = -x11
+            x13 = x1*x8
+            x14 = (0.425)*x5
+            x15 = (0.425)*x4 - 0.089159
+            x16 = q3 + x7
+            x17 = cos(x16)
+            x18 = x0*x17
+            x19 = sin(x16)
+            x20 = x0*x19
+            x21 = (0.39225)*x9
+            x22 = x11 + x21
+            x23 = x1*x17
+            x24 = x1*x19
+            x25 = (0.39225)*x13 + x14
+            x26 = (0.39225)*x10 + x15
+            x27 = -x26
+            x28 = sin(q4)
+            x29 = cos(q4)
+            x30 = x1*x28 + x18*x29
+            x31 = x1*x29 - x18*x28
+            x32 = x23*x29 - x0*x28
+            x33 = -x0*x29 - x23*x28
+            x34 = (0.10915)*x0 + x25
+            x35 = x19*x29
+            x36 = -x19*x28
+            x37 = cos(q5)
+            x38 = sin(q5)
+            links = _empty((6, 4, 4))
+            _PACK_24(links, 0, x0, -x1, 0.0, 0.0, x1, x0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, x3, -x0*x4, x1, 0.0, x5, -x1*x4, x6, 0.0)
+            _PACK_24(links, 192, x4, x2, 0.0, 0.089159, 0.0, 0.0, 0.0, 1.0, x9, -x0*x10, x1, x12, x13, -x1*x10, x6, -x14, x10, x8, 0.0, -x15, 0.0, 0.0, 0.0, 1.0)
+            _PACK_24(links, 384, x18, -x20, x1, -x22, x23, -x24, x6, -x25, x19, x17, 0.0, x27, 0.0, 0.0, 0.0, 1.0, x30, x31, x20, (0.10915)*x1 - x22, x32, x33, x24, -x34)
+            _PACK_24(links, 576, x35, x36, -x17, x27, 0.0, 0.0, 0.0, 1.0, x30*x37 - x20*x38, -x20*x37 - x30*x38, x31, (0.10915)*x1 + x12 + (0.09465)*x20 - x21, x32*x37 - x24*x38, -x24*x37 - x32*x38, x33, (0.09465)*x1*x19 - x34, x17*x38 + x35*x37, x17*x37 - x35*x38, x36, -0.09465*x17 - x26, 0.0, 0.0, 0.0, 1.0)
+            return links
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _link_poses_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return link_poses(Q[0])  # the scalar code above
+    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.sin(q0)
-    x1 = (0.425)*math.cos(q1)
-    x2 = q1 + q2
-    x3 = (0.39225)*math.cos(x2)
-    x4 = math.cos(q0)
-    x5 = q3 + x2
-    x6 = math.sin(x5)
-    x7 = x0*x6
-    x8 = math.cos(q4)
-    x9 = x4*x8
-    x10 = math.cos(x5)
-    x11 = math.sin(q4)
-    x12 = x10*x11
-    x13 = x0*x12
-    x14 = (0.0823)*x13 + (0.0823)*x9
-    x15 = x14 - 0.09465*x7
-    x16 = x15 + (0.10915)*x4
-    x17 = x0*x3 + x16
-    x18 = x0*x1 + x17
-    x19 = x11*x6
-    x20 = (0.0823)*x19
-    x21 = (0.09465)*x10 + x20
-    x22 = x21 + (0.39225)*math.sin(x2)
-    x23 = -x22 - 0.425*math.sin(q1)
-    x24 = -x22
-    x25 = -x21
-    x26 = x25*x4
-    x27 = -x15
-    x28 = x0*x25
-    x29 = -x14
-    x30 = -x13 - x9
-    x31 = x4*x6
-    x32 = x0*x8
-    x33 = x12*x4
-    x34 = (0.0823)*x32 - 0.0823*x33
-    x35 = (0.09465)*x31 + x34
-    x36 = (0.10915)*x0 + x35
-    x37 = -x3*x4 + x36
-    x38 = -x1*x4 + x37
-    x39 = x32 - x33
-    x40 = -x4
-    J = np.array([x18, -x23*x4, -x24*x4, -x26, x10*x27 + x28*x6, x11*x29*x6 - x20*x30, x38, -x0*x23, -x0*x24, -x28, -x10*x35 - x26*x6, (0.0823)*x11*x39*x6 - x19*x34, 0.0, -x0*x18 + x38*x4, -x0*x17 + x37*x4, -x0*x16 + x36*x4, x27*x4*x6 - x35*x7, x29*x39 - x30*x34, 0.0, x0, x0, x0, x31, x39, 0.0, x40, x40, x40, x7, x30, 1.0, 0.0, 0.0, 0.0, -x10, -x19]).reshape((6, 6))
-    return (J, )
 
 
 def _jacob0_batch(Q):
@@ -441,8 +392,8 @@ def _jacob0_batch(Q):
     x34 = (0.0823)*x32 - 0.0823*x33
     x35 = (0.09465)*x31 + x34
     x36 = (0.10915)*x0 + x35
-    x37 = -x3*x4 + x36
-    x38 = -x1*x4 + x37
+    x37 = x36 - x3*x4
+    x38 = x37 - x1*x4
     x39 = x32 - x33
     x40 = -x4
     J = np.empty((N, 36))
@@ -459,9 +410,9 @@ def _jacob0_batch(Q):
     J[:, 10] = -x10*x35 - x26*x6
     J[:, 11] = (0.0823)*x11*x39*x6 - x19*x34
     J[:, 12] = 0.0
-    J[:, 13] = -x0*x18 + x38*x4
-    J[:, 14] = -x0*x17 + x37*x4
-    J[:, 15] = -x0*x16 + x36*x4
+    J[:, 13] = x38*x4 - x0*x18
+    J[:, 14] = x37*x4 - x0*x17
+    J[:, 15] = x36*x4 - x0*x16
     J[:, 16] = x27*x4*x6 - x35*x7
     J[:, 17] = x29*x39 - x30*x34
     J[:, 18] = 0.0
@@ -482,71 +433,71 @@ def _jacob0_batch(Q):
     J[:, 33] = 0.0
     J[:, 34] = -x10
     J[:, 35] = -x19
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = (0.425)*cos(q1)
+            x2 = q1 + q2
+            x3 = (0.39225)*cos(x2)
+            x4 = cos(q0)
+            x5 = q3 + x2
+            x6 = sin(x5)
+            x7 = x0*x6
+            x8 = cos(q4)
+            x9 = x4*x8
+            x10 = cos(x5)
+            x11 = sin(q4)
+            x12 = x10*x11
+            x13 = x0*x12
+            x14 = (0.0823)*x13 + (0.0823)*x9
+            x15 = x14 - 0.09465*x7
+            x16 = x15 + (0.10915)*x4
+            x17 = x0*x3 + x16
+            x18 = x0*x1 + x17
+            x19 = x11*x6
+            x20 = (0.0823)*x19
+            x21 = (0.09465)*x10 + x20
+            x22 = x21 + (0.39225)*sin(x2)
+            x23 = -x22 - 0.425*sin(q1)
+            x24 = -x22
+            x25 = -x21
+            x26 = x25*x4
+            x27 = -x15
+            x28 = x0*x25
+            x29 = -x14
+            x30 = -x13 - x9
+            x31 = x4*x6
+            x32 = x0*x8
+            x33 = x12*x4
+            x34 = (0.0823)*x32 - 0.0823*x33
+            x35 = (0.09465)*x31 + x34
+            x36 = (0.10915)*x0 + x35
+            x37 = x36 - x3*x4
+            x38 = x37 - x1*x4
+            x39 = x32 - x33
+            x40 = -x4
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x18, -x23*x4, -x24*x4, -x26, x10*x27 + x28*x6, x11*x29*x6 - x20*x30, x38, -x0*x23, -x0*x24, -x28, -x10*x35 - x26*x6, (0.0823)*x11*x39*x6 - x19*x34, 0.0, x38*x4 - x0*x18, x37*x4 - x0*x17, x36*x4 - x0*x16, x27*x4*x6 - x35*x7, x29*x39 - x30*x34)
+            _PACK_18(J, 144, 0.0, x0, x0, x0, x31, x39, 0.0, x40, x40, x40, x7, x30, 1.0, 0.0, 0.0, 0.0, -x10, -x19)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=False)
         return out[0] if single else out
-    out = _jacob0_one(Q[0].tolist()) if single else _jacob0_batch(Q)
+    if not single:
+        return _jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0(Q[0])  # the scalar code above
+    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _jacobe_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q5)
-    x1 = q2 + q3
-    x2 = q1 + x1
-    x3 = math.cos(x2)
-    x4 = math.sin(q5)
-    x5 = math.cos(q4)
-    x6 = math.sin(x2)
-    x7 = x5*x6
-    x8 = x4*x7
-    x9 = x0*x3 - x8
-    x10 = math.sin(q4)
-    x11 = x10*x6
-    x12 = (0.425)*math.cos(x1)
-    x13 = (0.39225)*math.cos(q3)
-    x14 = (0.10915)*x5 + 0.0823
-    x15 = x10*x13 + x14
-    x16 = x10*x12 + x15
-    x17 = -0.089159*x11 + x16
-    x18 = (0.425)*math.sin(x1)
-    x19 = x4*x5
-    x20 = (0.09465)*x0
-    x21 = x10*x4
-    x22 = (0.10915)*x21
-    x23 = (0.39225)*math.sin(q3)
-    x24 = x0*x23 + x13*x19 - x20 - x22
-    x25 = x0*x18 + x12*x19 + x24
-    x26 = (0.089159)*x0*x3 + x25 - 0.089159*x8
-    x27 = -x20 - x22
-    x28 = x3*x4
-    x29 = x0*x7
-    x30 = x28 + x29
-    x31 = x0*x5
-    x32 = x0*x10
-    x33 = (0.10915)*x32 - 0.09465*x4
-    x34 = -x13*x31 + x23*x4 + x33
-    x35 = -x12*x31 + x18*x4 + x34
-    x36 = (0.089159)*x28 + (0.089159)*x29 + x35
-    x37 = -x21
-    J = np.array([x11*x26 + x17*x9, -x16*x21 - x25*x5, -x15*x21 - x24*x5, -x14*x21 - x27*x5, -0.0823*x0, 0.0, -x11*x36 - x17*x30, -x16*x32 + x35*x5, -x15*x32 + x34*x5, -x14*x32 + x33*x5, (0.0823)*x4, 0.0, x26*x30 - x36*x9, x21*x35 + x25*x32, x21*x34 + x24*x32, x21*x33 + x27*x32, 0.0, 0.0, x30, x32, x32, x32, -x4, 0.0, x9, x37, x37, x37, -x0, 0.0, -x11, x5, x5, x5, 0.0, 1.0]).reshape((6, 6))
-    return (J, )
 
 
 def _jacobe_batch(Q):
@@ -573,7 +524,7 @@ def _jacobe_batch(Q):
     x14 = (0.10915)*x5 + 0.0823
     x15 = x10*x13 + x14
     x16 = x10*x12 + x15
-    x17 = -0.089159*x11 + x16
+    x17 = x16 - 0.089159*x11
     x18 = (0.425)*np.sin(x1)
     x19 = x4*x5
     x20 = (0.09465)*x0
@@ -602,9 +553,9 @@ def _jacobe_batch(Q):
     J[:, 4] = -0.0823*x0
     J[:, 5] = 0.0
     J[:, 6] = -x11*x36 - x17*x30
-    J[:, 7] = -x16*x32 + x35*x5
-    J[:, 8] = -x15*x32 + x34*x5
-    J[:, 9] = -x14*x32 + x33*x5
+    J[:, 7] = x35*x5 - x16*x32
+    J[:, 8] = x34*x5 - x15*x32
+    J[:, 9] = x33*x5 - x14*x32
     J[:, 10] = (0.0823)*x4
     J[:, 11] = 0.0
     J[:, 12] = x26*x30 - x36*x9
@@ -631,113 +582,68 @@ def _jacobe_batch(Q):
     J[:, 33] = x5
     J[:, 34] = 0.0
     J[:, 35] = 1.0
-    return (J.reshape((N,) + (6, 6)), )
+    return J.reshape((N,) + (6, 6))
 
 
 def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
-    if frame is None and type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacobe_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q5)
+            x1 = q2 + q3
+            x2 = q1 + x1
+            x3 = cos(x2)
+            x4 = sin(q5)
+            x5 = cos(q4)
+            x6 = sin(x2)
+            x7 = x5*x6
+            x8 = x4*x7
+            x9 = x0*x3 - x8
+            x10 = sin(q4)
+            x11 = x10*x6
+            x12 = (0.425)*cos(x1)
+            x13 = (0.39225)*cos(q3)
+            x14 = (0.10915)*x5 + 0.0823
+            x15 = x10*x13 + x14
+            x16 = x10*x12 + x15
+            x17 = x16 - 0.089159*x11
+            x18 = (0.425)*sin(x1)
+            x19 = x4*x5
+            x20 = (0.09465)*x0
+            x21 = x10*x4
+            x22 = (0.10915)*x21
+            x23 = (0.39225)*sin(q3)
+            x24 = x0*x23 + x13*x19 - x20 - x22
+            x25 = x0*x18 + x12*x19 + x24
+            x26 = (0.089159)*x0*x3 + x25 - 0.089159*x8
+            x27 = -x20 - x22
+            x28 = x3*x4
+            x29 = x0*x7
+            x30 = x28 + x29
+            x31 = x0*x5
+            x32 = x0*x10
+            x33 = (0.10915)*x32 - 0.09465*x4
+            x34 = -x13*x31 + x23*x4 + x33
+            x35 = -x12*x31 + x18*x4 + x34
+            x36 = (0.089159)*x28 + (0.089159)*x29 + x35
+            x37 = -x21
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x11*x26 + x17*x9, -x16*x21 - x25*x5, -x15*x21 - x24*x5, -x14*x21 - x27*x5, -0.0823*x0, 0.0, -x11*x36 - x17*x30, x35*x5 - x16*x32, x34*x5 - x15*x32, x33*x5 - x14*x32, (0.0823)*x4, 0.0, x26*x30 - x36*x9, x21*x35 + x25*x32, x21*x34 + x24*x32, x21*x33 + x27*x32, 0.0, 0.0)
+            _PACK_18(J, 144, x30, x32, x32, x32, -x4, 0.0, x9, x37, x37, x37, -x0, 0.0, -x11, x5, x5, x5, 0.0, 1.0)
+            return J
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if frame is not None:
         k = frame_index(frame, N_JOINTS, ROBOT_NAME)
-        L = _link_poses_batch(Q)[0]
+        L = _link_poses_batch(Q)
         out = frame_jacobian(L, k, CHAIN, ee=True)
         return out[0] if single else out
-    out = _jacobe_one(Q[0].tolist()) if single else _jacobe_batch(Q)
+    if not single:
+        return _jacobe_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacobe(Q[0])  # the scalar code above
+    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.cos(q0)
-    x1 = math.cos(q1)
-    x2 = q1 + q2
-    x3 = (0.39225)*math.cos(x2)
-    x4 = math.sin(q0)
-    x5 = q3 + x2
-    x6 = math.sin(x5)
-    x7 = x0*x6
-    x8 = math.cos(q4)
-    x9 = x4*x8
-    x10 = math.sin(q4)
-    x11 = math.cos(x5)
-    x12 = x0*x11
-    x13 = x10*x12
-    x14 = -0.0823*x13 + (0.0823)*x9
-    x15 = x14 + (0.09465)*x7
-    x16 = x15 + (0.10915)*x4
-    x17 = -x0*x3 + x16
-    x18 = -0.425*x0*x1 + x17
-    x19 = x10*x6
-    x20 = (0.0823)*x19
-    x21 = (0.09465)*x11 + x20
-    x22 = x21 + (0.39225)*math.sin(x2)
-    x23 = -x22 - 0.425*math.sin(q1)
-    x24 = x23*x4
-    x25 = -x22
-    x26 = x25*x4
-    x27 = -x21
-    x28 = x27*x4
-    x29 = x0*x27
-    x30 = x11*x15 + x29*x6
-    x31 = -x13 + x9
-    x32 = x14*x19 - x20*x31
-    x33 = x4*x6
-    x34 = x0*x8
-    x35 = x11*x4
-    x36 = x10*x35
-    x37 = (0.0823)*x34 + (0.0823)*x36
-    x38 = -0.09465*x33 + x37
-    x39 = (0.10915)*x0 + x38
-    x40 = x3*x4 + x39
-    x41 = (0.425)*x1*x4 + x40
-    x42 = -x0*x23
-    x43 = -x0*x25
-    x44 = -x29
-    x45 = -x38
-    x46 = x11*x45 + x28*x6
-    x47 = -x37
-    x48 = x34 + x36
-    x49 = -x48
-    x50 = x10*x47*x6 - x20*x49
-    x51 = x0*x18 - x4*x41
-    x52 = x0*x17 - x4*x40
-    x53 = -x0*x52
-    x54 = x0*x16 - x39*x4
-    x55 = -x0*x54
-    x56 = x0*x45*x6 - x15*x33
-    x57 = -x0*x56
-    x58 = -x14*x49 + x31*x47
-    x59 = -x0*x58
-    x60 = -x4*x52
-    x61 = -x4*x54
-    x62 = -x4*x56
-    x63 = -x4*x58
-    x64 = (x0*x0)
-    x65 = (x4*x4)
-    x66 = -x25*x64 - x25*x65
-    x67 = -x27*x64 - x27*x65
-    x68 = -x30
-    x69 = x0*x46 + x4*x68
-    x70 = -x32
-    x71 = x0*x50 + x4*x70
-    x72 = x10*x7
-    x73 = x10*x33
-    x74 = x6*x64 + x6*x65
-    x75 = x0*x31 + x4*x49
-    x76 = x11*x70 + x33*x58
-    x77 = -x11*x50 - x58*x7
-    x78 = -x33*x50 + x7*x70
-    x79 = (x6*x6)
-    H = np.array([-x18, x24, x26, x28, x30, x32, x41, x42, x43, x44, x46, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x0, x0, x0, -x33, x48, 0.0, x4, x4, x4, x7, x31, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x24, -x0*x51, x53, x55, x57, x59, x42, -x4*x51, x60, x61, x62, x63, 0.0, -x23*x64 - x23*x65, x66, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x26, x53, x53, x55, x57, x59, x43, x60, x60, x61, x62, x63, 0.0, x66, x66, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x28, x55, x55, x55, x57, x59, x44, x61, x61, x61, x62, x63, 0.0, x67, x67, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x30, x57, x57, x57, x11*x68 + x33*x56, x76, x46, x62, x62, x62, -x11*x46 - x56*x7, x77, 0.0, x69, x69, x69, x0*x6*x68 - x33*x46, x78, 0.0, 0.0, 0.0, 0.0, 0.0, -x10*x4*x79 + x11*x49, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x10*x79 - x11*x31, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x49*x6 - x31*x33, x32, x59, x59, x59, x76, x19*x70 + x49*x58, x50, x63, x63, x63, x77, -x19*x50 - x31*x58, 0.0, x71, x71, x71, x78, x31*x70 - x49*x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
 
 
 def _hessian0_batch(Q):
@@ -761,11 +667,11 @@ def _hessian0_batch(Q):
     x11 = np.cos(x5)
     x12 = x0*x11
     x13 = x10*x12
-    x14 = -0.0823*x13 + (0.0823)*x9
+    x14 = (0.0823)*x9 - 0.0823*x13
     x15 = x14 + (0.09465)*x7
     x16 = x15 + (0.10915)*x4
-    x17 = -x0*x3 + x16
-    x18 = -0.425*x0*x1 + x17
+    x17 = x16 - x0*x3
+    x18 = x17 - 0.425*x0*x1
     x19 = x10*x6
     x20 = (0.0823)*x19
     x21 = (0.09465)*x11 + x20
@@ -778,14 +684,14 @@ def _hessian0_batch(Q):
     x28 = x27*x4
     x29 = x0*x27
     x30 = x11*x15 + x29*x6
-    x31 = -x13 + x9
+    x31 = x9 - x13
     x32 = x14*x19 - x20*x31
     x33 = x4*x6
     x34 = x0*x8
     x35 = x11*x4
     x36 = x10*x35
     x37 = (0.0823)*x34 + (0.0823)*x36
-    x38 = -0.09465*x33 + x37
+    x38 = x37 - 0.09465*x33
     x39 = (0.10915)*x0 + x38
     x40 = x3*x4 + x39
     x41 = (0.425)*x1*x4 + x40
@@ -805,7 +711,7 @@ def _hessian0_batch(Q):
     x55 = -x0*x54
     x56 = x0*x45*x6 - x15*x33
     x57 = -x0*x56
-    x58 = -x14*x49 + x31*x47
+    x58 = x31*x47 - x14*x49
     x59 = -x0*x58
     x60 = -x4*x52
     x61 = -x4*x54
@@ -825,7 +731,7 @@ def _hessian0_batch(Q):
     x75 = x0*x31 + x4*x49
     x76 = x11*x70 + x33*x58
     x77 = -x11*x50 - x58*x7
-    x78 = -x33*x50 + x7*x70
+    x78 = x7*x70 - x33*x50
     x79 = (x6*x6)
     H = np.empty((N, 216))
     H[:, 0] = -x18
@@ -995,7 +901,7 @@ def _hessian0_batch(Q):
     H[:, 164] = 0.0
     H[:, 165] = 0.0
     H[:, 166] = 0.0
-    H[:, 167] = -x10*x4*x79 + x11*x49
+    H[:, 167] = x11*x49 - x10*x4*x79
     H[:, 168] = 0.0
     H[:, 169] = 0.0
     H[:, 170] = 0.0
@@ -1044,152 +950,111 @@ def _hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessian0_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessian0_one(Q[0].tolist()) if single else _hessian0_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q0)
+            x1 = cos(q1)
+            x2 = q1 + q2
+            x3 = (0.39225)*cos(x2)
+            x4 = sin(q0)
+            x5 = q3 + x2
+            x6 = sin(x5)
+            x7 = x0*x6
+            x8 = cos(q4)
+            x9 = x4*x8
+            x10 = sin(q4)
+            x11 = cos(x5)
+            x12 = x0*x11
+            x13 = x10*x12
+            x14 = (0.0823)*x9 - 0.0823*x13
+            x15 = x14 + (0.09465)*x7
+            x16 = x15 + (0.10915)*x4
+            x17 = x16 - x0*x3
+            x18 = x17 - 0.425*x0*x1
+            x19 = x10*x6
+            x20 = (0.0823)*x19
+            x21 = (0.09465)*x11 + x20
+            x22 = x21 + (0.39225)*sin(x2)
+            x23 = -x22 - 0.425*sin(q1)
+            x24 = x23*x4
+            x25 = -x22
+            x26 = x25*x4
+            x27 = -x21
+            x28 = x27*x4
+            x29 = x0*x27
+            x30 = x11*x15 + x29*x6
+            x31 = x9 - x13
+            x32 = x14*x19 - x20*x31
+            x33 = x4*x6
+            x34 = x0*x8
+            x35 = x11*x4
+            x36 = x10*x35
+            x37 = (0.0823)*x34 + (0.0823)*x36
+            x38 = x37 - 0.09465*x33
+            x39 = (0.10915)*x0 + x38
+            x40 = x3*x4 + x39
+            x41 = (0.425)*x1*x4 + x40
+            x42 = -x0*x23
+            x43 = -x0*x25
+            x44 = -x29
+            x45 = -x38
+            x46 = x11*x45 + x28*x6
+            x47 = -x37
+            x48 = x34 + x36
+            x49 = -x48
+            x50 = x10*x47*x6 - x20*x49
+            x51 = x0*x18 - x4*x41
+            x52 = x0*x17 - x4*x40
+            x53 = -x0*x52
+            x54 = x0*x16 - x39*x4
+            x55 = -x0*x54
+            x56 = x0*x45*x6 - x15*x33
+            x57 = -x0*x56
+            x58 = x31*x47 - x14*x49
+            x59 = -x0*x58
+            x60 = -x4*x52
+            x61 = -x4*x54
+            x62 = -x4*x56
+            x63 = -x4*x58
+            x64 = (x0*x0)
+            x65 = (x4*x4)
+            x66 = -x25*x64 - x25*x65
+            x67 = -x27*x64 - x27*x65
+            x68 = -x30
+            x69 = x0*x46 + x4*x68
+            x70 = -x32
+            x71 = x0*x50 + x4*x70
+            x72 = x10*x7
+            x73 = x10*x33
+            x74 = x6*x64 + x6*x65
+            x75 = x0*x31 + x4*x49
+            x76 = x11*x70 + x33*x58
+            x77 = -x11*x50 - x58*x7
+            x78 = x7*x70 - x33*x50
+            x79 = (x6*x6)
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, -x18, x24, x26, x28, x30, x32, x41, x42, x43, x44, x46, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x0, x0, x0, -x33, x48, 0.0, x4, x4)
+            _PACK_27(H, 216, x4, x7, x31, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x24, -x0*x51, x53, x55, x57, x59, x42, -x4*x51, x60, x61, x62, x63, 0.0, -x23*x64 - x23*x65, x66, x67, x69, x71)
+            _PACK_27(H, 432, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x26, x53, x53, x55, x57, x59, x43, x60, x60)
+            _PACK_27(H, 648, x61, x62, x63, 0.0, x66, x66, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75)
+            _PACK_27(H, 864, x28, x55, x55, x55, x57, x59, x44, x61, x61, x61, x62, x63, 0.0, x67, x67, x67, x69, x71, 0.0, 0.0, 0.0, 0.0, x12, x72, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1080, 0.0, x35, x73, 0.0, 0.0, 0.0, 0.0, x74, x75, x30, x57, x57, x57, x11*x68 + x33*x56, x76, x46, x62, x62, x62, -x11*x46 - x56*x7, x77, 0.0, x69, x69, x69, x0*x6*x68 - x33*x46, x78)
+            _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, x11*x49 - x10*x4*x79, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x10*x79 - x11*x31, 0.0, 0.0, 0.0, 0.0, 0.0, x0*x49*x6 - x31*x33, x32, x59, x59, x59, x76, x19*x70 + x49*x58, x50, x63, x63)
+            _PACK_27(H, 1512, x63, x77, -x19*x50 - x31*x58, 0.0, x71, x71, x71, x78, x31*x70 - x49*x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessian0(Q[0])  # the scalar code above
+    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _hessiane_one(q):
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.cos(q5)
-    x1 = q2 + q3
-    x2 = q1 + x1
-    x3 = math.cos(x2)
-    x4 = math.sin(x2)
-    x5 = math.cos(q4)
-    x6 = math.sin(q5)
-    x7 = x5*x6
-    x8 = x4*x7
-    x9 = x0*x3 - x8
-    x10 = (0.089159)*x0*x3
-    x11 = (0.089159)*x8
-    x12 = -x10 + x11
-    x13 = math.sin(q4)
-    x14 = x0*x13
-    x15 = x3*x6
-    x16 = x0*x5
-    x17 = x16*x4
-    x18 = (0.089159)*x15 + (0.089159)*x17
-    x19 = -x18
-    x20 = x13*x6
-    x21 = x12*x14 + x19*x20
-    x22 = (x13*x13)
-    x23 = x22*x4
-    x24 = x0*x23
-    x25 = x19*x5 - 0.089159*x24
-    x26 = x13*x4
-    x27 = x15 + x17
-    x28 = -x24 - x27*x5
-    x29 = (0.10915)*x5
-    x30 = x29 + 0.0823
-    x31 = (0.089159)*x26
-    x32 = math.cos(x1)
-    x33 = (0.425)*x32
-    x34 = x13*x33
-    x35 = math.cos(q3)
-    x36 = (0.39225)*x35
-    x37 = x13*x36
-    x38 = x34 + x37
-    x39 = -x31 + x38
-    x40 = x30 + x39
-    x41 = -x14*x9 - x20*x27
-    x42 = (0.425)*math.sin(x1)
-    x43 = x0*x42 + x33*x7
-    x44 = x10 - x11 + x43
-    x45 = (0.09465)*x0
-    x46 = (0.10915)*x20
-    x47 = (0.39225)*math.sin(q3)
-    x48 = x0*x47 + x36*x7
-    x49 = -x46 + x48
-    x50 = -x45 + x49
-    x51 = x44 + x50
-    x52 = x28*x40 - x41*x51
-    x53 = x23*x6
-    x54 = -x12*x5 - 0.089159*x53
-    x55 = x5*x9 - x53
-    x56 = -x16*x33 + x42*x6
-    x57 = x18 + x56
-    x58 = -x16*x36 + x47*x6
-    x59 = (0.10915)*x14
-    x60 = x59 - 0.09465*x6
-    x61 = x58 + x60
-    x62 = x57 + x61
-    x63 = x40*x55 - x41*x62
-    x64 = x28*x62
-    x65 = -x44
-    x66 = -x57
-    x67 = x14*x65 + x20*x66
-    x68 = x31 - x34
-    x69 = -x14*x68 + x5*x66
-    x70 = -x56
-    x71 = x0*x22*x33 + x5*x70
-    x72 = -x43
-    x73 = x14*x72 + x20*x70
-    x74 = -x20*x68 - x5*x65
-    x75 = (0.425)*x22*x32*x6 - x5*x72
-    x76 = -x51*x55 + x64
-    x77 = -x44 - x48
-    x78 = -x57 - x58
-    x79 = x14*x77 + x20*x78
-    x80 = -x39
-    x81 = -x14*x80 + x5*x78
-    x82 = x56 + x58
-    x83 = -x82
-    x84 = -x38
-    x85 = -x14*x84 + x5*x83
-    x86 = -x43 - x48
-    x87 = x14*x86 + x20*x83
-    x88 = -x58
-    x89 = x0*x22*x36 + x5*x88
-    x90 = -x48
-    x91 = x14*x90 + x20*x88
-    x92 = -x20*x80 - x5*x77
-    x93 = -x20*x84 - x5*x86
-    x94 = (0.39225)*x22*x35*x6 - x5*x90
-    x95 = x58 + x59
-    x96 = x0*(-x57 - x95) - x6*(-x44 - x49)
-    x97 = -x0*x27 + x6*x9
-    x98 = -x29 - x39
-    x99 = x20*x4
-    x100 = (x0*x0)*x13
-    x101 = x13*(x6*x6)
-    x102 = -x100 - x101
-    x103 = x43 + x50
-    x104 = x0*(-x56 - x95) - x6*(-x43 - x49)
-    x105 = -x29 - x38
-    x106 = x30 + x38
-    x107 = x29 + x37
-    x108 = -x107
-    x109 = -x0*x95 + x49*x6
-    x110 = x107 + 0.0823
-    x111 = -x45 - x46
-    x112 = (x5*x5)
-    x113 = -0.10915*x100 - 0.10915*x101
-    x114 = x14*x4
-    x115 = x60 + x82
-    x116 = -x7
-    x117 = -x27
-    x118 = -x62
-    x119 = -x115
-    x120 = -x61
-    x121 = -x60
-    x122 = -x20
-    x123 = -x14
-    H = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x9 + x25*x26 + x52, 0.0, 0.0, 0.0, 0.0, 0.0, -x21*x27 - x26*x54 - x63, 0.0, 0.0, 0.0, 0.0, 0.0, x25*x27 + x51*x55 - x54*x9 - x64, 0.0, 0.0, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x26*x69 + x52 + x67*x9, -x20*x73 - x5*x71, 0.0, 0.0, 0.0, 0.0, -x26*x74 - x27*x67 - x63, -x14*x73 + x5*x75, 0.0, 0.0, 0.0, 0.0, x27*x69 - x74*x9 - x76, x14*x71 + x20*x75, 0.0, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x26*x81 + x52 + x79*x9, -x20*x87 - x5*x85, -x20*x91 - x5*x89, 0.0, 0.0, 0.0, -x26*x92 - x27*x79 - x63, -x14*x87 + x5*x93, -x14*x91 + x5*x94, 0.0, 0.0, 0.0, x27*x81 - x76 - x9*x92, x14*x85 + x20*x93, x14*x89 + x20*x94, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x40*x99 - x51*x97 + x9*x96 + x98*x99, -x102*x103 - x104*x20 - x105*x7 - x106*x7, -x102*x50 - x108*x7 - x109*x20 - x110*x7, -x102*x111 + (0.10915)*x112*x6 - x113*x20 - x30*x7, 0.0, 0.0, x114*x40 + x114*x98 - x27*x96 + x62*x97, x102*x115 - x104*x14 - x105*x16 - x106*x16, x102*x61 - x108*x16 - x109*x14 - x110*x16, (0.10915)*x0*x112 + x102*x60 - x113*x14 - x16*x30, 0.0, 0.0, x0*x9*x98 - x114*x51 + x27*x6*x98 - x62*x99, x103*x16 + x115*x7, x16*x50 + x61*x7, x111*x16 + x60*x7, 0.0, 0.0, -x114, x16, x16, x16, 0.0, 0.0, x99, x116, x116, x116, 0.0, 0.0, x97, x102, x102, x102, 0.0, 0.0, x117*x40 + x118*x26, -x106*x14 - x119*x5, -x110*x14 - x120*x5, -x121*x5 - x14*x30, (0.0823)*x6, 0.0, -x26*x51 - x40*x9, x103*x5 + x106*x20, x110*x20 + x5*x50, x111*x5 + x20*x30, (0.0823)*x0, 0.0, -x117*x62 + x118*x27, x115*x14 + x119*x14, x120*x14 + x14*x61, x121*x14 + x14*x60, 0.0, 0.0, x9, x122, x122, x122, -x0, 0.0, x117, x123, x123, x123, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (H, )
 
 
 def _hessiane_batch(Q):
@@ -1211,7 +1076,7 @@ def _hessiane_batch(Q):
     x9 = x0*x3 - x8
     x10 = (0.089159)*x0*x3
     x11 = (0.089159)*x8
-    x12 = -x10 + x11
+    x12 = x11 - x10
     x13 = np.sin(q4)
     x14 = x0*x13
     x15 = x3*x6
@@ -1238,7 +1103,7 @@ def _hessiane_batch(Q):
     x36 = (0.39225)*x35
     x37 = x13*x36
     x38 = x34 + x37
-    x39 = -x31 + x38
+    x39 = x38 - x31
     x40 = x30 + x39
     x41 = -x14*x9 - x20*x27
     x42 = (0.425)*np.sin(x1)
@@ -1248,16 +1113,16 @@ def _hessiane_batch(Q):
     x46 = (0.10915)*x20
     x47 = (0.39225)*np.sin(q3)
     x48 = x0*x47 + x36*x7
-    x49 = -x46 + x48
-    x50 = -x45 + x49
+    x49 = x48 - x46
+    x50 = x49 - x45
     x51 = x44 + x50
     x52 = x28*x40 - x41*x51
     x53 = x23*x6
     x54 = -x12*x5 - 0.089159*x53
     x55 = x5*x9 - x53
-    x56 = -x16*x33 + x42*x6
+    x56 = x42*x6 - x16*x33
     x57 = x18 + x56
-    x58 = -x16*x36 + x47*x6
+    x58 = x47*x6 - x16*x36
     x59 = (0.10915)*x14
     x60 = x59 - 0.09465*x6
     x61 = x58 + x60
@@ -1268,23 +1133,23 @@ def _hessiane_batch(Q):
     x66 = -x57
     x67 = x14*x65 + x20*x66
     x68 = x31 - x34
-    x69 = -x14*x68 + x5*x66
+    x69 = x5*x66 - x14*x68
     x70 = -x56
     x71 = x0*x22*x33 + x5*x70
     x72 = -x43
     x73 = x14*x72 + x20*x70
     x74 = -x20*x68 - x5*x65
     x75 = (0.425)*x22*x32*x6 - x5*x72
-    x76 = -x51*x55 + x64
+    x76 = x64 - x51*x55
     x77 = -x44 - x48
     x78 = -x57 - x58
     x79 = x14*x77 + x20*x78
     x80 = -x39
-    x81 = -x14*x80 + x5*x78
+    x81 = x5*x78 - x14*x80
     x82 = x56 + x58
     x83 = -x82
     x84 = -x38
-    x85 = -x14*x84 + x5*x83
+    x85 = x5*x83 - x14*x84
     x86 = -x43 - x48
     x87 = x14*x86 + x20*x83
     x88 = -x58
@@ -1296,7 +1161,7 @@ def _hessiane_batch(Q):
     x94 = (0.39225)*x22*x35*x6 - x5*x90
     x95 = x58 + x59
     x96 = x0*(-x57 - x95) - x6*(-x44 - x49)
-    x97 = -x0*x27 + x6*x9
+    x97 = x6*x9 - x0*x27
     x98 = -x29 - x39
     x99 = x20*x4
     x100 = (x0*x0)*x13
@@ -1308,7 +1173,7 @@ def _hessiane_batch(Q):
     x106 = x30 + x38
     x107 = x29 + x37
     x108 = -x107
-    x109 = -x0*x95 + x49*x6
+    x109 = x49*x6 - x0*x95
     x110 = x107 + 0.0823
     x111 = -x45 - x46
     x112 = (x5*x5)
@@ -1403,7 +1268,7 @@ def _hessiane_batch(Q):
     H[:, 76] = 0.0
     H[:, 77] = 0.0
     H[:, 78] = -x26*x74 - x27*x67 - x63
-    H[:, 79] = -x14*x73 + x5*x75
+    H[:, 79] = x5*x75 - x14*x73
     H[:, 80] = 0.0
     H[:, 81] = 0.0
     H[:, 82] = 0.0
@@ -1439,8 +1304,8 @@ def _hessiane_batch(Q):
     H[:, 112] = 0.0
     H[:, 113] = 0.0
     H[:, 114] = -x26*x92 - x27*x79 - x63
-    H[:, 115] = -x14*x87 + x5*x93
-    H[:, 116] = -x14*x91 + x5*x94
+    H[:, 115] = x5*x93 - x14*x87
+    H[:, 116] = x5*x94 - x14*x91
     H[:, 117] = 0.0
     H[:, 118] = 0.0
     H[:, 119] = 0.0
@@ -1516,7 +1381,7 @@ def _hessiane_batch(Q):
     H[:, 189] = x111*x5 + x20*x30
     H[:, 190] = (0.0823)*x0
     H[:, 191] = 0.0
-    H[:, 192] = -x117*x62 + x118*x27
+    H[:, 192] = x118*x27 - x117*x62
     H[:, 193] = x115*x14 + x119*x14
     H[:, 194] = x120*x14 + x14*x61
     H[:, 195] = x121*x14 + x14*x60
@@ -1540,80 +1405,155 @@ def _hessiane_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (H.reshape((N,) + (6, 6, 6)), )
+    return H.reshape((N,) + (6, 6, 6))
 
 
 def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _hessiane_one(v)[0]
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _hessiane_one(Q[0].tolist()) if single else _hessiane_batch(Q)
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = cos(q5)
+            x1 = q2 + q3
+            x2 = q1 + x1
+            x3 = cos(x2)
+            x4 = sin(x2)
+            x5 = cos(q4)
+            x6 = sin(q5)
+            x7 = x5*x6
+            x8 = x4*x7
+            x9 = x0*x3 - x8
+            x10 = (0.089159)*x0*x3
+            x11 = (0.089159)*x8
+            x12 = x11 - x10
+            x13 = sin(q4)
+            x14 = x0*x13
+            x15 = x3*x6
+            x16 = x0*x5
+            x17 = x16*x4
+            x18 = (0.089159)*x15 + (0.089159)*x17
+            x19 = -x18
+            x20 = x13*x6
+            x21 = x12*x14 + x19*x20
+            x22 = (x13*x13)
+            x23 = x22*x4
+            x24 = x0*x23
+            x25 = x19*x5 - 0.089159*x24
+            x26 = x13*x4
+            x27 = x15 + x17
+            x28 = -x24 - x27*x5
+            x29 = (0.10915)*x5
+            x30 = x29 + 0.0823
+            x31 = (0.089159)*x26
+            x32 = cos(x1)
+            x33 = (0.425)*x32
+            x34 = x13*x33
+            x35 = cos(q3)
+            x36 = (0.39225)*x35
+            x37 = x13*x36
+            x38 = x34 + x37
+            x39 = x38 - x31
+            x40 = x30 + x39
+            x41 = -x14*x9 - x20*x27
+            x42 = (0.425)*sin(x1)
+            x43 = x0*x42 + x33*x7
+            x44 = x10 - x11 + x43
+            x45 = (0.09465)*x0
+            x46 = (0.10915)*x20
+            x47 = (0.39225)*sin(q3)
+            x48 = x0*x47 + x36*x7
+            x49 = x48 - x46
+            x50 = x49 - x45
+            x51 = x44 + x50
+            x52 = x28*x40 - x41*x51
+            x53 = x23*x6
+            x54 = -x12*x5 - 0.089159*x53
+            x55 = x5*x9 - x53
+            x56 = x42*x6 - x16*x33
+            x57 = x18 + x56
+            x58 = x47*x6 - x16*x36
+            x59 = (0.10915)*x14
+            x60 = x59 - 0.09465*x6
+            x61 = x58 + x60
+            x62 = x57 + x61
+            x63 = x40*x55 - x41*x62
+            x64 = x28*x62
+            x65 = -x44
+            x66 = -x57
+            x67 = x14*x65 + x20*x66
+            x68 = x31 - x34
+            x69 = x5*x66 - x14*x68
+            x70 = -x56
+            x71 = x0*x22*x33 + x5*x70
+            x72 = -x43
+            x73 = x14*x72 + x20*x70
+            x74 = -x20*x68 - x5*x65
+            x75 = (0.425)*x22*x32*x6 - x5*x72
+            x76 = x64 - x51*x55
+            x77 = -x44 - x48
+            x78 = -x57 - x58
+            x79 = x14*x77 + x20*x78
+            x80 = -x39
+            x81 = x5*x78 - x14*x80
+            x82 = x56 + x58
+            x83 = -x82
+            x84 = -x38
+            x85 = x5*x83 - x14*x84
+            x86 = -x43 - x48
+            x87 = x14*x86 + x20*x83
+            x88 = -x58
+            x89 = x0*x22*x36 + x5*x88
+            x90 = -x48
+            x91 = x14*x90 + x20*x88
+            x92 = -x20*x80 - x5*x77
+            x93 = -x20*x84 - x5*x86
+            x94 = (0.39225)*x22*x35*x6 - x5*x90
+            x95 = x58 + x59
+            x96 = x0*(-x57 - x95) - x6*(-x44 - x49)
+            x97 = x6*x9 - x0*x27
+            x98 = -x29 - x39
+            x99 = x20*x4
+            x100 = (x0*x0)*x13
+            x101 = x13*(x6*x6)
+            x102 = -x100 - x101
+            x103 = x43 + x50
+            x104 = x0*(-x56 - x95) - x6*(-x43 - x49)
+            x105 = -x29 - x38
+            x106 = x30 + x38
+            x107 = x29 + x37
+            x108 = -x107
+            x109 = x49*x6 - x0*x95
+            x110 = x107 + 0.0823
+            x111 = -x45 - x46
+            x112 = (x5*x5)
+            x113 = -0.10915*x100 - 0.10915*x101
+            x114 = x14*x4
+            x115 = x60 + x82
+            x116 = -x7
+            x117 = -x27
+            x118 = -x62
+            x119 = -x115
+            x120 = -x61
+            x121 = -x60
+            x122 = -x20
+            x123 = -x14
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x21*x9 + x25*x26 + x52, 0.0, 0.0, 0.0, 0.0, 0.0, -x21*x27 - x26*x54 - x63, 0.0, 0.0, 0.0, 0.0, 0.0, x25*x27 + x51*x55 - x54*x9 - x64, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 432, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x26*x69 + x52 + x67*x9, -x20*x73 - x5*x71, 0.0, 0.0, 0.0, 0.0, -x26*x74 - x27*x67 - x63, x5*x75 - x14*x73, 0.0)
+            _PACK_27(H, 648, 0.0, 0.0, 0.0, x27*x69 - x74*x9 - x76, x14*x71 + x20*x75, 0.0, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0)
+            _PACK_27(H, 864, x26*x81 + x52 + x79*x9, -x20*x87 - x5*x85, -x20*x91 - x5*x89, 0.0, 0.0, 0.0, -x26*x92 - x27*x79 - x63, x5*x93 - x14*x87, x5*x94 - x14*x91, 0.0, 0.0, 0.0, x27*x81 - x76 - x9*x92, x14*x85 + x20*x93, x14*x89 + x20*x94, 0.0, 0.0, 0.0, x55, 0.0, 0.0, 0.0, 0.0, 0.0, x28, 0.0, 0.0)
+            _PACK_27(H, 1080, 0.0, 0.0, 0.0, x41, 0.0, 0.0, 0.0, 0.0, 0.0, x40*x99 - x51*x97 + x9*x96 + x98*x99, -x102*x103 - x104*x20 - x105*x7 - x106*x7, -x102*x50 - x108*x7 - x109*x20 - x110*x7, -x102*x111 + (0.10915)*x112*x6 - x113*x20 - x30*x7, 0.0, 0.0, x114*x40 + x114*x98 - x27*x96 + x62*x97, x102*x115 - x104*x14 - x105*x16 - x106*x16, x102*x61 - x108*x16 - x109*x14 - x110*x16, (0.10915)*x0*x112 + x102*x60 - x113*x14 - x16*x30, 0.0, 0.0, x0*x9*x98 - x114*x51 + x27*x6*x98 - x62*x99, x103*x16 + x115*x7, x16*x50 + x61*x7, x111*x16 + x60*x7, 0.0, 0.0)
+            _PACK_27(H, 1296, -x114, x16, x16, x16, 0.0, 0.0, x99, x116, x116, x116, 0.0, 0.0, x97, x102, x102, x102, 0.0, 0.0, x117*x40 + x118*x26, -x106*x14 - x119*x5, -x110*x14 - x120*x5, -x121*x5 - x14*x30, (0.0823)*x6, 0.0, -x26*x51 - x40*x9, x103*x5 + x106*x20, x110*x20 + x5*x50)
+            _PACK_27(H, 1512, x111*x5 + x20*x30, (0.0823)*x0, 0.0, x118*x27 - x117*x62, x115*x14 + x119*x14, x120*x14 + x14*x61, x121*x14 + x14*x60, 0.0, 0.0, x9, x122, x122, x122, -x0, 0.0, x117, x123, x123, x123, x6, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return H
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _hessiane_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return hessiane(Q[0])  # the scalar code above
+    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
     return out[0]
-
-
-def _fkine_jacob0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    q5 = q[5]
-    x0 = math.sin(q0)
-    x1 = math.sin(q4)
-    x2 = x0*x1
-    x3 = q1 + q2
-    x4 = q3 + x3
-    x5 = math.cos(x4)
-    x6 = math.cos(q0)
-    x7 = math.cos(q4)
-    x8 = x6*x7
-    x9 = x2 + x5*x8
-    x10 = math.cos(q5)
-    x11 = math.sin(q5)
-    x12 = math.sin(x4)
-    x13 = x12*x6
-    x14 = x0*x7
-    x15 = x1*x6
-    x16 = x15*x5
-    x17 = x14 - x16
-    x18 = (0.425)*math.cos(q1)
-    x19 = (0.39225)*math.cos(x3)
-    x20 = (0.0823)*x14 - 0.0823*x16
-    x21 = (0.09465)*x13 + x20
-    x22 = (0.10915)*x0 + x21
-    x23 = -x19*x6 + x22
-    x24 = -x18*x6 + x23
-    x25 = x14*x5 - x15
-    x26 = x0*x12
-    x27 = x2*x5
-    x28 = -x27 - x8
-    x29 = (0.0823)*x27 + (0.0823)*x8
-    x30 = -0.09465*x0*x12 + x29
-    x31 = x30 + (0.10915)*x6
-    x32 = x0*x19 + x31
-    x33 = x0*x18 + x32
-    x34 = -x33
-    x35 = x12*x7
-    x36 = x1*x12
-    x37 = -x36
-    x38 = (0.0823)*x36
-    x39 = x38 + (0.09465)*x5
-    x40 = x39 + (0.39225)*math.sin(x3)
-    x41 = x40 + (0.425)*math.sin(q1)
-    x42 = -x41
-    x43 = -x40
-    x44 = -x39
-    x45 = x44*x6
-    x46 = -x30
-    x47 = x0*x44
-    x48 = -x29
-    x49 = -x6
-    T = np.array([x10*x9 - x11*x13, -x10*x13 - x11*x9, x17, x24, x10*x25 - x11*x26, -x10*x26 - x11*x25, x28, x34, x10*x35 + x11*x5, x10*x5 - x11*x35, x37, 0.089159 - x41, 0.0, 0.0, 0.0, 1.0]).reshape((4, 4))
-    J = np.array([x33, -x42*x6, -x43*x6, -x45, x12*x47 + x46*x5, x1*x12*x48 - x28*x38, x24, -x0*x42, -x0*x43, -x47, -x12*x45 - x21*x5, (0.0823)*x1*x12*x17 - x20*x36, 0.0, x0*x34 + x24*x6, -x0*x32 + x23*x6, -x0*x31 + x22*x6, x12*x46*x6 - x21*x26, x17*x48 - x20*x28, 0.0, x0, x0, x0, x13, x17, 0.0, x49, x49, x49, x26, x28, 1.0, 0.0, 0.0, 0.0, -x5, x37]).reshape((6, 6))
-    return (T, J, )
 
 
 def _fkine_jacob0_batch(Q):
@@ -1647,14 +1587,14 @@ def _fkine_jacob0_batch(Q):
     x20 = (0.0823)*x14 - 0.0823*x16
     x21 = (0.09465)*x13 + x20
     x22 = (0.10915)*x0 + x21
-    x23 = -x19*x6 + x22
-    x24 = -x18*x6 + x23
+    x23 = x22 - x19*x6
+    x24 = x23 - x18*x6
     x25 = x14*x5 - x15
     x26 = x0*x12
     x27 = x2*x5
     x28 = -x27 - x8
     x29 = (0.0823)*x27 + (0.0823)*x8
-    x30 = -0.09465*x0*x12 + x29
+    x30 = x29 - 0.09465*x0*x12
     x31 = x30 + (0.10915)*x6
     x32 = x0*x19 + x31
     x33 = x0*x18 + x32
@@ -1706,8 +1646,8 @@ def _fkine_jacob0_batch(Q):
     J[:, 11] = (0.0823)*x1*x12*x17 - x20*x36
     J[:, 12] = 0.0
     J[:, 13] = x0*x34 + x24*x6
-    J[:, 14] = -x0*x32 + x23*x6
-    J[:, 15] = -x0*x31 + x22*x6
+    J[:, 14] = x23*x6 - x0*x32
+    J[:, 15] = x22*x6 - x0*x31
     J[:, 16] = x12*x46*x6 - x21*x26
     J[:, 17] = x17*x48 - x20*x28
     J[:, 18] = 0.0
@@ -1728,110 +1668,77 @@ def _fkine_jacob0_batch(Q):
     J[:, 33] = 0.0
     J[:, 34] = -x5
     J[:, 35] = x37
-    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)), )
+    return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)))
 
 
 def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _fkine_jacob0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _fkine_jacob0_one(Q[0].tolist()) if single else _fkine_jacob0_batch(Q)
-    return out
-
-
-def _jacob0_hessian0_one(q):
-    q0 = q[0]
-    q1 = q[1]
-    q2 = q[2]
-    q3 = q[3]
-    q4 = q[4]
-    x0 = math.sin(q0)
-    x1 = (0.425)*math.cos(q1)
-    x2 = q1 + q2
-    x3 = (0.39225)*math.cos(x2)
-    x4 = math.cos(q0)
-    x5 = q3 + x2
-    x6 = math.sin(x5)
-    x7 = x0*x6
-    x8 = math.cos(q4)
-    x9 = x4*x8
-    x10 = math.sin(q4)
-    x11 = math.cos(x5)
-    x12 = x0*x11
-    x13 = x10*x12
-    x14 = (0.0823)*x13 + (0.0823)*x9
-    x15 = x14 - 0.09465*x7
-    x16 = x15 + (0.10915)*x4
-    x17 = x0*x3 + x16
-    x18 = x0*x1 + x17
-    x19 = x10*x6
-    x20 = (0.0823)*x19
-    x21 = (0.09465)*x11 + x20
-    x22 = x21 + (0.39225)*math.sin(x2)
-    x23 = -x22 - 0.425*math.sin(q1)
-    x24 = -x23*x4
-    x25 = -x22
-    x26 = -x25*x4
-    x27 = -x21
-    x28 = x27*x4
-    x29 = -x28
-    x30 = -x15
-    x31 = x0*x27
-    x32 = x11*x30 + x31*x6
-    x33 = -x14
-    x34 = x13 + x9
-    x35 = -x34
-    x36 = x10*x33*x6 - x20*x35
-    x37 = x4*x6
-    x38 = x0*x8
-    x39 = x11*x4
-    x40 = x10*x39
-    x41 = (0.0823)*x38 - 0.0823*x40
-    x42 = (0.09465)*x37 + x41
-    x43 = (0.10915)*x0 + x42
-    x44 = -x3*x4 + x43
-    x45 = -x1*x4 + x44
-    x46 = x0*x23
-    x47 = x0*x25
-    x48 = x11*x42 + x28*x6
-    x49 = -x48
-    x50 = x38 - x40
-    x51 = -0.0823*x10*x50*x6 + x19*x41
-    x52 = -x51
-    x53 = -x0*x18 + x4*x45
-    x54 = -x0*x17 + x4*x44
-    x55 = -x0*x16 + x4*x43
-    x56 = x30*x4*x6 - x42*x7
-    x57 = x33*x50 - x35*x41
-    x58 = -x4
-    x59 = -x4*x54
-    x60 = -x4*x55
-    x61 = -x4*x56
-    x62 = -x4*x57
-    x63 = -x0*x54
-    x64 = -x0*x55
-    x65 = -x0*x56
-    x66 = -x0*x57
-    x67 = (x4*x4)
-    x68 = (x0*x0)
-    x69 = -x25*x67 - x25*x68
-    x70 = -x27*x67 - x27*x68
-    x71 = x0*x49 + x32*x4
-    x72 = x0*x52 + x36*x4
-    x73 = x10*x37
-    x74 = x10*x7
-    x75 = x6*x67 + x6*x68
-    x76 = x0*x35 + x4*x50
-    x77 = x11*x52 + x57*x7
-    x78 = -x11*x36 - x37*x57
-    x79 = -x36*x7 + x37*x52
-    x80 = (x6*x6)
-    J = np.array([x18, x24, x26, x29, x32, x36, x45, -x46, -x47, -x31, x49, x52, 0.0, x53, x54, x55, x56, x57, 0.0, x0, x0, x0, x37, x50, 0.0, x58, x58, x58, x7, x35, 1.0, 0.0, 0.0, 0.0, -x11, -x19]).reshape((6, 6))
-    H = np.array([-x45, x46, x47, x31, x48, x51, x18, x24, x26, x29, x32, x36, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x4, x4, x4, -x7, x34, 0.0, x0, x0, x0, x37, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x46, -x4*x53, x59, x60, x61, x62, x24, -x0*x53, x63, x64, x65, x66, 0.0, -x23*x67 - x23*x68, x69, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x47, x59, x59, x60, x61, x62, x26, x63, x63, x64, x65, x66, 0.0, x69, x69, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x31, x60, x60, x60, x61, x62, x29, x64, x64, x64, x65, x66, 0.0, x70, x70, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x48, x61, x61, x61, x11*x49 + x56*x7, x77, x32, x65, x65, x65, -x11*x32 - x37*x56, x78, 0.0, x71, x71, x71, -x32*x7 + x4*x49*x6, x79, 0.0, 0.0, 0.0, 0.0, 0.0, -x0*x10*x80 + x11*x35, 0.0, 0.0, 0.0, 0.0, 0.0, x10*x4*x80 - x11*x50, 0.0, 0.0, 0.0, 0.0, 0.0, x35*x4*x6 - x50*x7, x51, x62, x62, x62, x77, x19*x52 + x35*x57, x36, x66, x66, x66, x78, -x19*x36 - x50*x57, 0.0, x72, x72, x72, x79, -x35*x36 + x50*x52, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).reshape((6, 6, 6))
-    return (J, H, )
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = sin(q4)
+            x2 = x0*x1
+            x3 = q1 + q2
+            x4 = q3 + x3
+            x5 = cos(x4)
+            x6 = cos(q0)
+            x7 = cos(q4)
+            x8 = x6*x7
+            x9 = x2 + x5*x8
+            x10 = cos(q5)
+            x11 = sin(q5)
+            x12 = sin(x4)
+            x13 = x12*x6
+            x14 = x0*x7
+            x15 = x1*x6
+            x16 = x15*x5
+            x17 = x14 - x16
+            x18 = (0.425)*cos(q1)
+            x19 = (0.39225)*cos(x3)
+            x20 = (0.0823)*x14 - 0.0823*x16
+            x21 = (0.09465)*x13 + x20
+            x22 = (0.10915)*x0 + x21
+            x23 = x22 - x19*x6
+            x24 = x23 - x18*x6
+            x25 = x14*x5 - x15
+            x26 = x0*x12
+            x27 = x2*x5
+            x28 = -x27 - x8
+            x29 = (0.0823)*x27 + (0.0823)*x8
+            x30 = x29 - 0.09465*x0*x12
+            x31 = x30 + (0.10915)*x6
+            x32 = x0*x19 + x31
+            x33 = x0*x18 + x32
+            x34 = -x33
+            x35 = x12*x7
+            x36 = x1*x12
+            x37 = -x36
+            x38 = (0.0823)*x36
+            x39 = x38 + (0.09465)*x5
+            x40 = x39 + (0.39225)*sin(x3)
+            x41 = x40 + (0.425)*sin(q1)
+            x42 = -x41
+            x43 = -x40
+            x44 = -x39
+            x45 = x44*x6
+            x46 = -x30
+            x47 = x0*x44
+            x48 = -x29
+            x49 = -x6
+            T = _empty((4, 4))
+            _PACK_16(T, 0, x10*x9 - x11*x13, -x10*x13 - x11*x9, x17, x24, x10*x25 - x11*x26, -x10*x26 - x11*x25, x28, x34, x10*x35 + x11*x5, x10*x5 - x11*x35, x37, 0.089159 - x41, 0.0, 0.0, 0.0, 1.0)
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x33, -x42*x6, -x43*x6, -x45, x12*x47 + x46*x5, x1*x12*x48 - x28*x38, x24, -x0*x42, -x0*x43, -x47, -x12*x45 - x21*x5, (0.0823)*x1*x12*x17 - x20*x36, 0.0, x0*x34 + x24*x6, x23*x6 - x0*x32, x22*x6 - x0*x31, x12*x46*x6 - x21*x26, x17*x48 - x20*x28)
+            _PACK_18(J, 144, 0.0, x0, x0, x0, x13, x17, 0.0, x49, x49, x49, x26, x28, 1.0, 0.0, 0.0, 0.0, -x5, x37)
+            return (T, J)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _fkine_jacob0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return fkine_jacob0(Q[0])  # the scalar code above
+    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])
 
 
 def _jacob0_hessian0_batch(Q):
@@ -1885,18 +1792,18 @@ def _jacob0_hessian0_batch(Q):
     x41 = (0.0823)*x38 - 0.0823*x40
     x42 = (0.09465)*x37 + x41
     x43 = (0.10915)*x0 + x42
-    x44 = -x3*x4 + x43
-    x45 = -x1*x4 + x44
+    x44 = x43 - x3*x4
+    x45 = x44 - x1*x4
     x46 = x0*x23
     x47 = x0*x25
     x48 = x11*x42 + x28*x6
     x49 = -x48
     x50 = x38 - x40
-    x51 = -0.0823*x10*x50*x6 + x19*x41
+    x51 = x19*x41 - 0.0823*x10*x50*x6
     x52 = -x51
-    x53 = -x0*x18 + x4*x45
-    x54 = -x0*x17 + x4*x44
-    x55 = -x0*x16 + x4*x43
+    x53 = x4*x45 - x0*x18
+    x54 = x4*x44 - x0*x17
+    x55 = x4*x43 - x0*x16
     x56 = x30*x4*x6 - x42*x7
     x57 = x33*x50 - x35*x41
     x58 = -x4
@@ -1920,7 +1827,7 @@ def _jacob0_hessian0_batch(Q):
     x76 = x0*x35 + x4*x50
     x77 = x11*x52 + x57*x7
     x78 = -x11*x36 - x37*x57
-    x79 = -x36*x7 + x37*x52
+    x79 = x37*x52 - x36*x7
     x80 = (x6*x6)
     J = np.empty((N, 36))
     J[:, 0] = x18
@@ -2120,14 +2027,14 @@ def _jacob0_hessian0_batch(Q):
     H[:, 157] = x71
     H[:, 158] = x71
     H[:, 159] = x71
-    H[:, 160] = -x32*x7 + x4*x49*x6
+    H[:, 160] = x4*x49*x6 - x32*x7
     H[:, 161] = x79
     H[:, 162] = 0.0
     H[:, 163] = 0.0
     H[:, 164] = 0.0
     H[:, 165] = 0.0
     H[:, 166] = 0.0
-    H[:, 167] = -x0*x10*x80 + x11*x35
+    H[:, 167] = x11*x35 - x0*x10*x80
     H[:, 168] = 0.0
     H[:, 169] = 0.0
     H[:, 170] = 0.0
@@ -2157,7 +2064,7 @@ def _jacob0_hessian0_batch(Q):
     H[:, 194] = x72
     H[:, 195] = x72
     H[:, 196] = x79
-    H[:, 197] = -x35*x36 + x50*x52
+    H[:, 197] = x50*x52 - x35*x36
     H[:, 198] = 0.0
     H[:, 199] = 0.0
     H[:, 200] = 0.0
@@ -2176,15 +2083,112 @@ def _jacob0_hessian0_batch(Q):
     H[:, 213] = 0.0
     H[:, 214] = 0.0
     H[:, 215] = 0.0
-    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)), )
+    return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)))
 
 
 def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
-    if type(q) is np.ndarray and q.dtype is _F8 and q.shape == _SHAPE:
-        v = q.tolist()
-        if _isfinite(sum(v)):  # one finite configuration (else as_batch raises the error)
-            return _jacob0_hessian0_one(v)
-    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
-    out = _jacob0_hessian0_one(Q[0].tolist()) if single else _jacob0_hessian0_batch(Q)
-    return out
+    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+        q0, q1, q2, q3, q4, q5 = q.tolist()
+        if _isfinite(q0 + q1 + q2 + q3 + q4 + q5):  # one finite configuration: scalar code
+            x0 = sin(q0)
+            x1 = (0.425)*cos(q1)
+            x2 = q1 + q2
+            x3 = (0.39225)*cos(x2)
+            x4 = cos(q0)
+            x5 = q3 + x2
+            x6 = sin(x5)
+            x7 = x0*x6
+            x8 = cos(q4)
+            x9 = x4*x8
+            x10 = sin(q4)
+            x11 = cos(x5)
+            x12 = x0*x11
+            x13 = x10*x12
+            x14 = (0.0823)*x13 + (0.0823)*x9
+            x15 = x14 - 0.09465*x7
+            x16 = x15 + (0.10915)*x4
+            x17 = x0*x3 + x16
+            x18 = x0*x1 + x17
+            x19 = x10*x6
+            x20 = (0.0823)*x19
+            x21 = (0.09465)*x11 + x20
+            x22 = x21 + (0.39225)*sin(x2)
+            x23 = -x22 - 0.425*sin(q1)
+            x24 = -x23*x4
+            x25 = -x22
+            x26 = -x25*x4
+            x27 = -x21
+            x28 = x27*x4
+            x29 = -x28
+            x30 = -x15
+            x31 = x0*x27
+            x32 = x11*x30 + x31*x6
+            x33 = -x14
+            x34 = x13 + x9
+            x35 = -x34
+            x36 = x10*x33*x6 - x20*x35
+            x37 = x4*x6
+            x38 = x0*x8
+            x39 = x11*x4
+            x40 = x10*x39
+            x41 = (0.0823)*x38 - 0.0823*x40
+            x42 = (0.09465)*x37 + x41
+            x43 = (0.10915)*x0 + x42
+            x44 = x43 - x3*x4
+            x45 = x44 - x1*x4
+            x46 = x0*x23
+            x47 = x0*x25
+            x48 = x11*x42 + x28*x6
+            x49 = -x48
+            x50 = x38 - x40
+            x51 = x19*x41 - 0.0823*x10*x50*x6
+            x52 = -x51
+            x53 = x4*x45 - x0*x18
+            x54 = x4*x44 - x0*x17
+            x55 = x4*x43 - x0*x16
+            x56 = x30*x4*x6 - x42*x7
+            x57 = x33*x50 - x35*x41
+            x58 = -x4
+            x59 = -x4*x54
+            x60 = -x4*x55
+            x61 = -x4*x56
+            x62 = -x4*x57
+            x63 = -x0*x54
+            x64 = -x0*x55
+            x65 = -x0*x56
+            x66 = -x0*x57
+            x67 = (x4*x4)
+            x68 = (x0*x0)
+            x69 = -x25*x67 - x25*x68
+            x70 = -x27*x67 - x27*x68
+            x71 = x0*x49 + x32*x4
+            x72 = x0*x52 + x36*x4
+            x73 = x10*x37
+            x74 = x10*x7
+            x75 = x6*x67 + x6*x68
+            x76 = x0*x35 + x4*x50
+            x77 = x11*x52 + x57*x7
+            x78 = -x11*x36 - x37*x57
+            x79 = x37*x52 - x36*x7
+            x80 = (x6*x6)
+            J = _empty((6, 6))
+            _PACK_18(J, 0, x18, x24, x26, x29, x32, x36, x45, -x46, -x47, -x31, x49, x52, 0.0, x53, x54, x55, x56, x57)
+            _PACK_18(J, 144, 0.0, x0, x0, x0, x37, x50, 0.0, x58, x58, x58, x7, x35, 1.0, 0.0, 0.0, 0.0, -x11, -x19)
+            H = _empty((6, 6, 6))
+            _PACK_27(H, 0, -x45, x46, x47, x31, x48, x51, x18, x24, x26, x29, x32, x36, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x4, x4, x4, -x7, x34, 0.0, x0, x0)
+            _PACK_27(H, 216, x0, x37, x50, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x46, -x4*x53, x59, x60, x61, x62, x24, -x0*x53, x63, x64, x65, x66, 0.0, -x23*x67 - x23*x68, x69, x70, x71, x72)
+            _PACK_27(H, 432, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x47, x59, x59, x60, x61, x62, x26, x63, x63)
+            _PACK_27(H, 648, x64, x65, x66, 0.0, x69, x69, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76)
+            _PACK_27(H, 864, x31, x60, x60, x60, x61, x62, x29, x64, x64, x64, x65, x66, 0.0, x70, x70, x70, x71, x72, 0.0, 0.0, 0.0, 0.0, x39, x73, 0.0, 0.0, 0.0)
+            _PACK_27(H, 1080, 0.0, x12, x74, 0.0, 0.0, 0.0, 0.0, x75, x76, x48, x61, x61, x61, x11*x49 + x56*x7, x77, x32, x65, x65, x65, -x11*x32 - x37*x56, x78, 0.0, x71, x71, x71, x4*x49*x6 - x32*x7, x79)
+            _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, x11*x35 - x0*x10*x80, 0.0, 0.0, 0.0, 0.0, 0.0, x10*x4*x80 - x11*x50, 0.0, 0.0, 0.0, 0.0, 0.0, x35*x4*x6 - x50*x7, x51, x62, x62, x62, x77, x19*x52 + x35*x57, x36, x66, x66)
+            _PACK_27(H, 1512, x66, x78, -x19*x36 - x50*x57, 0.0, x72, x72, x72, x79, x50*x52 - x35*x36, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            return (J, H)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
+    if not single:
+        return _jacob0_hessian0_batch(Q)
+    if _isfinite(sum(Q[0].tolist())):
+        return jacob0_hessian0(Q[0])  # the scalar code above
+    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    return (out[0][0], out[1][0])

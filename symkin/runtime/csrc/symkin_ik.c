@@ -15,12 +15,14 @@
  * -fno-tree-slp-vectorize: GCC 12 fuses some straight-line a*b + c*d / a*b - c*d pairs into
  * vfmaddsub even under -ffp-contract=off).
  *
- * Speed: the LM step is compiled for n = 6 and n = 7 as constants (unrolled Cholesky) besides
- * any n, the normal equations are vectorised over the columns of J, and a batch of LM solves with
+ * Speed: the LM, NR and GN steps are compiled for n = 6 and n = 7 as constants (unrolled
+ * Cholesky, fixed-size copies) besides any n, the normal equations are vectorised over the
+ * columns of J (rows of J loaded straight into vectors), and a batch of LM solves with
  * 6 or 7 joints runs SYMKIN_LANES targets side by side with their steps in vector lanes
  * (solve_batch_lm). Every variant does the same operations in the same order, so the numbers are
  * the same to the bit as those of the plain loops. Hot paths call no libm function for min/max:
- * between AVX code such a call cost about 0.3 us on the development machine (SSE/AVX transitions).
+ * between AVX code such a call cost about 0.3 us on the development machine (SSE/AVX transitions),
+ * and the one libm call per iteration, atan2 (symkin_pose.h), comes after a vzeroupper.
  *
  * Thread safety: the functions keep their state on the stack; a config is only read.
  */
@@ -226,6 +228,18 @@ SYMKIN_INLINE int chol_solve(int n, const double *At, double *b) {
  * g_i = sum_r J_ri (we_r e_r) and At[j * NM + i] = sum_r J_rj (we_r J_ri) for i >= j, each
  * summed over r in order from 0.0; we = NULL means We = I. */
 #if defined(SYMKIN_VECTORS)
+/* The vector of p[0 .. k-1] padded with zeros (k >= 1). Built in registers, not by memset and
+ * memcpy into a stack array: reading such an array back as vectors stalls on store forwarding. */
+SYMKIN_INLINE symkin_v4 load_padded(const double *p, int k) {
+    symkin_v4 v;
+    if (k >= SYMKIN_LANES) {
+        memcpy(&v, p, sizeof v);
+        return v;
+    }
+    v = (symkin_v4){p[0], k > 1 ? p[1] : 0.0, k > 2 ? p[2] : 0.0, 0.0};
+    return v;
+}
+
 /* Vectorised over i (rows of A, and g): rank-one updates row by row of J, each entry still summed
  * over r in order from 0.0 with the same products, so the numbers are those of the scalar loops.
  * The whole row j of A is written to At[j * NM + 0 .. 4 NV - 1] (the entries i < j are unused). */
@@ -234,9 +248,9 @@ SYMKIN_INLINE void normal_equations(int n, const double *J, const double *e, con
     const int nv = (n + SYMKIN_LANES - 1) / SYMKIN_LANES;
     symkin_v4 Jr[6][NV], Wr[6][NV], gv[NV];
     double ew[6];
-    memset(Jr, 0, sizeof Jr);
     for (int r = 0; r < 6; r++) {
-        memcpy(Jr[r], J + r * n, sizeof(double) * (size_t)n);
+        SYMKIN_UNROLL for (int c = 0; c < nv; c++)
+            Jr[r][c] = load_padded(J + r * n + SYMKIN_LANES * c, n - SYMKIN_LANES * c);
         ew[r] = we ? we[r] * e[r] : e[r];
         SYMKIN_UNROLL for (int c = 0; c < nv; c++) Wr[r][c] = we ? we[r] * Jr[r][c] : Jr[r][c];
     }
@@ -283,7 +297,7 @@ SYMKIN_INLINE void normal_equations(int n, const double *J, const double *e, con
 #endif
 
 /* The full symmetric A (row-major n x n) from At. */
-static void full_matrix(int n, const double *At, double *A) {
+SYMKIN_INLINE void full_matrix(int n, const double *At, double *A) {
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) A[i * n + j] = i >= j ? At[j * NM + i] : At[i * NM + j];
 }
@@ -374,8 +388,8 @@ static int gram_solve(int m, const double *G, double *b) {
 
 /* NR and GN with pinv (eqs 45-47): gram_solve, or the SVD of pinv_apply when J is (nearly) singular:
  * of We^1/2 J (NR) or of J^T We J (GN), as numpy.linalg.pinv(rcond=SYMKIN_PINV_RCOND). */
-static int pinv_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
-    const int n = c->n;
+SYMKIN_INLINE int pinv_step(int n, const symkin_ik_config *c, const double *we, const double *J, const double *e,
+                            double *dq) {
     double At[AT_SIZE], g[NM], A[NM * NM], Jw[6 * NM], ew[6];
     if (n <= 6 || c->method == SYMKIN_IK_GN) {
         normal_equations(n, J, e, we, At, g);
@@ -413,10 +427,11 @@ static int pinv_step(const symkin_ik_config *c, const double *we, const double *
     return pinv_apply(6, n, Jw, ew, dq);
 }
 
-/* NR and GN (eqs 45-47), and their pseudo-inverse variants. */
-static int nr_gn_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
-    int n = c->n;
-    if (c->pinv) return pinv_step(c, we, J, e, dq);
+/* NR and GN (eqs 45-47), and their pseudo-inverse variants; compiled for n = 6 and n = 7 as
+ * constants besides any n, like the LM step. */
+SYMKIN_INLINE int nr_gn_step(int n, const symkin_ik_config *c, const double *we, const double *J, const double *e,
+                             double *dq) {
+    if (c->pinv) return pinv_step(n, c, we, J, e, dq);
     if (c->method == SYMKIN_IK_NR) {
         double A[36];
         memcpy(A, J, sizeof(double) * 36);
@@ -428,6 +443,19 @@ static int nr_gn_step(const symkin_ik_config *c, const double *we, const double 
     full_matrix(n, At, A);
     memcpy(dq, g, sizeof(double) * (size_t)n);
     return lu_solve(n, A, dq);
+}
+
+static int nr_gn_step6(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
+    return nr_gn_step(6, c, we, J, e, dq);
+}
+
+static int nr_gn_step7(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
+    return nr_gn_step(7, c, we, J, e, dq);
+}
+
+static int nr_gn_step_any(const symkin_ik_config *c, const double *we, const double *J, const double *e,
+                          double *dq) {
+    return nr_gn_step(c->n, c, we, J, e, dq);
 }
 
 static int lm_step6(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
@@ -452,7 +480,9 @@ static int ik_step(const symkin_ik_config *c, const double *we, const double *J,
         if (c->n == 7) return lm_step7(c, we, J, e, r2, dq);
         return lm_step_any(c, we, J, e, r2, dq);
     }
-    return nr_gn_step(c, we, J, e, dq);
+    if (c->n == 6) return nr_gn_step6(c, we, J, e, dq);
+    if (c->n == 7) return nr_gn_step7(c, we, J, e, dq);
+    return nr_gn_step_any(c, we, J, e, dq);
 }
 
 /* The weights for the steps: NULL when We = I (multiplying by 1 changes nothing). */

@@ -11,6 +11,7 @@
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #include <numpy/arrayobject.h>
 #include <math.h>
+#include <stddef.h>
 
 #include "symkin_ik.h"
 
@@ -115,41 +116,31 @@ static PyArrayObject *as_doubles_(PyObject *arg, int nd, npy_intp d0, npy_intp d
     return a;
 }
 
-/* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
- * are not one valid (4, 4) target, an (n,) finite q0 or None, and an int seed or None (the caller
- * then validates them, raising the detailed error, or solves a batch). reason(residual,
- * limit_rejects, singular) gives the text of a failure. */
-static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
+/* One target (see py_solve): an IKResult, None when the arguments need checking, or NULL with an
+ * error set. */
+static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject *Tep, PyObject *q0arg,
+                        PyObject *seedarg)
 {
-    if (nargs < 3 || nargs > 5) {
-        PyErr_SetString(PyExc_TypeError, "solve(config, reason, Tep, q0=None, seed=None)");
-        return NULL;
-    }
-    /* args: config, Tep, q0, seed, reason */
-    PyObject *args[5] = {argv[0], argv[2], nargs > 3 ? argv[3] : Py_None, nargs > 4 ? argv[4] : Py_None, argv[1]};
     if (!result_type_) {
         PyErr_SetString(PyExc_RuntimeError, "setup() was not called");
         return NULL;
     }
-    const symkin_ik_config *cfg = (const symkin_ik_config *)PyLong_AsVoidPtr(args[0]);
-    if (!cfg)
-        return PyErr_Occurred() ? NULL : Py_NewRef(Py_None);
     const int n = cfg->n;
     uint64_t seed;
-    if (args[3] == Py_None) {
+    if (seedarg == Py_None) {
         seed = next_seed_();
-    } else if (PyLong_CheckExact(args[3])) {
-        seed = (uint64_t)PyLong_AsUnsignedLongLongMask(args[3]);
+    } else if (PyLong_CheckExact(seedarg)) {
+        seed = (uint64_t)PyLong_AsUnsignedLongLongMask(seedarg);
         if (PyErr_Occurred())
             return NULL;
     } else {
         Py_RETURN_NONE;
     }
-    PyArrayObject *T = as_doubles_(args[1], 2, 4, 4), *q0 = NULL;
+    PyArrayObject *T = as_doubles_(Tep, 2, 4, 4), *q0 = NULL;
     if (!T)
         Py_RETURN_NONE;
-    if (args[2] != Py_None) {
-        q0 = as_doubles_(args[2], 1, n, 0);
+    if (q0arg != Py_None) {
+        q0 = as_doubles_(q0arg, 1, n, 0);
         if (!q0) {
             Py_DECREF(T);
             Py_RETURN_NONE;
@@ -184,14 +175,123 @@ static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t narg
     if (st.success)
         values[5] = Py_NewRef(success_);
     else
-        values[5] = PyObject_CallFunction(args[4], "dii", st.residual, (int)st.limit_rejects, (int)st.singular);
+        values[5] = PyObject_CallFunction(reason, "dii", st.residual, (int)st.limit_rejects, (int)st.singular);
     return make_result_(values);
+}
+
+/* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
+ * are not one valid (4, 4) target, an (n,) finite q0 or None, and an int seed or None (the caller
+ * then validates them, raising the detailed error, or solves a batch). reason(residual,
+ * limit_rejects, singular) gives the text of a failure. */
+static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
+{
+    if (nargs < 3 || nargs > 5) {
+        PyErr_SetString(PyExc_TypeError, "solve(config, reason, Tep, q0=None, seed=None)");
+        return NULL;
+    }
+    const symkin_ik_config *cfg = (const symkin_ik_config *)PyLong_AsVoidPtr(argv[0]);
+    if (!cfg)
+        return PyErr_Occurred() ? NULL : Py_NewRef(Py_None);
+    return solve_(cfg, argv[1], argv[2], nargs > 3 ? argv[3] : Py_None, nargs > 4 ? argv[4] : Py_None);
+}
+
+/* ---- a bound solver: kin.ik of one target in one C call --------------------------------------- */
+/* ik(Tep) solves one valid target with the solver's options in C; any other call (keyword options,
+ * a batch, an argument that needs checking) goes to the fallback with the same arguments. The
+ * object keeps its owner (which owns the config) alive. */
+typedef struct {
+    PyObject_HEAD
+    vectorcallfunc vectorcall;
+    const symkin_ik_config *cfg;
+    PyObject *reason;
+    PyObject *fallback;
+    PyObject *owner;
+} bound_ik_;
+
+static PyObject *bound_ik_call_(PyObject *op, PyObject *const *args, size_t nargsf, PyObject *kwnames)
+{
+    bound_ik_ *b = (bound_ik_ *)op;
+    if (PyVectorcall_NARGS(nargsf) == 1 && !(kwnames && PyTuple_GET_SIZE(kwnames))) {
+        PyObject *r = solve_(b->cfg, b->reason, args[0], Py_None, Py_None);
+        if (r != Py_None)
+            return r;
+        Py_DECREF(r);
+    }
+    return PyObject_Vectorcall(b->fallback, args, nargsf, kwnames);
+}
+
+static int bound_ik_traverse_(PyObject *op, visitproc visit, void *arg)
+{
+    bound_ik_ *b = (bound_ik_ *)op;
+    Py_VISIT(b->reason);
+    Py_VISIT(b->fallback);
+    Py_VISIT(b->owner);
+    return 0;
+}
+
+static int bound_ik_clear_(PyObject *op)
+{
+    bound_ik_ *b = (bound_ik_ *)op;
+    Py_CLEAR(b->reason);
+    Py_CLEAR(b->fallback);
+    Py_CLEAR(b->owner);
+    return 0;
+}
+
+static void bound_ik_dealloc_(PyObject *op)
+{
+    PyObject_GC_UnTrack(op);
+    bound_ik_clear_(op);
+    Py_TYPE(op)->tp_free(op);
+}
+
+static PyTypeObject bound_ik_type_ = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "symkin.BoundIK",
+    .tp_basicsize = sizeof(bound_ik_),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_doc = "ik(Tep, **options): numerical inverse kinematics (see symkin.runtime.kinematics.Kinematics.ik); "
+              "one target with the default options is solved in one C call",
+    .tp_vectorcall_offset = offsetof(bound_ik_, vectorcall),
+    .tp_call = PyVectorcall_Call,
+    .tp_traverse = bound_ik_traverse_,
+    .tp_clear = bound_ik_clear_,
+    .tp_dealloc = bound_ik_dealloc_,
+};
+
+/* bind(config_address, reason, fallback, owner) -> a callable solving one target per call (above) */
+static PyObject *py_bind(PyObject *self, PyObject *args)
+{
+    PyObject *addr, *reason, *fallback, *owner;
+    if (!PyArg_ParseTuple(args, "OOOO", &addr, &reason, &fallback, &owner))
+        return NULL;
+    const symkin_ik_config *cfg = (const symkin_ik_config *)PyLong_AsVoidPtr(addr);
+    if (!cfg) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "bind() needs the address of a config");
+        return NULL;
+    }
+    if (!PyCallable_Check(reason) || !PyCallable_Check(fallback)) {
+        PyErr_SetString(PyExc_TypeError, "bind() needs callables reason and fallback");
+        return NULL;
+    }
+    bound_ik_ *b = PyObject_GC_New(bound_ik_, &bound_ik_type_);
+    if (!b)
+        return NULL;
+    b->vectorcall = bound_ik_call_;
+    b->cfg = cfg;
+    b->reason = Py_NewRef(reason);
+    b->fallback = Py_NewRef(fallback);
+    b->owner = Py_NewRef(owner);
+    PyObject_GC_Track((PyObject *)b);
+    return (PyObject *)b;
 }
 
 static PyMethodDef methods_[] = {
     {"setup", (PyCFunction)py_setup, METH_VARARGS, "setup(IKResult, entropy) -> bool (fast result path)"},
     {"solve", (PyCFunction)(void (*)(void))py_solve, METH_FASTCALL,
      "solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult or None"},
+    {"bind", (PyCFunction)py_bind, METH_VARARGS,
+     "bind(config_address, reason, fallback, owner) -> ik(Tep, ...) solving one target in C, else fallback"},
     {NULL, NULL, 0, NULL},
 };
 
@@ -203,7 +303,7 @@ PyMODINIT_FUNC SK_CAT_(PyInit_, SYMKIN_IK_MODULE)(void)
 {
     import_array();
     success_ = PyUnicode_InternFromString("success");
-    if (!success_)
+    if (!success_ || PyType_Ready(&bound_ik_type_) < 0)
         return NULL;
     return PyModule_Create(&module_);
 }
