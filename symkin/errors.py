@@ -57,3 +57,8 @@ class CompileError(SymkinError, RuntimeError):
 class NoAnalyticIKError(SymkinError, ValueError):
     """The arm has no closed-form inverse kinematics that symkin derives (the message says why and
     points at the numerical IK)."""
+
+
+class MissingDependencyError(SymkinError, ImportError):
+    """An optional dependency (an extra such as ``plot``) is not installed; the message names the
+    ``pip install`` that adds it."""
