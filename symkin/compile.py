@@ -108,7 +108,10 @@ def write_generated(
     strategy: str | None = None,
     prefix: str | None = None,
 ) -> list[Path]:
-    """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths."""
+    """Generate and write the files of ``robot`` for ``backend`` into ``folder``, with the manifest
+    :func:`symkin.load_compiled` reads back (``<stem>.symkin.json``); returns the paths."""
+    from symkin.compiled import write_manifest
+
     files = generate(robot, backend, command, strategy, prefix)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -117,6 +120,7 @@ def write_generated(
         path = folder / name
         path.write_text(text)
         out.append(path)
+    out.append(write_manifest(robot, backend, files, folder))
     return out
 
 
@@ -265,7 +269,10 @@ def _casadi_method(f: Any, robot: Robot) -> Any:
                 np.copyto(qbuf, q)
                 evaluate()
                 ok = buf.ret() == 0
-                res = [o.reshape(c, r).T.reshape(shapes[k]) for o, (r, c), k in zip(outs, sizes, names)]
+                # copies: a view of the shared buffer would change under the caller at the next call
+                res = [
+                    o.reshape(c, r).T.reshape(shapes[k]).copy() for o, (r, c), k in zip(outs, sizes, names)
+                ]
             if ok:
                 return res[0] if len(res) == 1 else tuple(res)
         Q, single = as_batch(q, n, name)
