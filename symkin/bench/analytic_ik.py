@@ -112,8 +112,10 @@ def run_analytic(
     robots: tuple[str, ...] = ("ur5",), n: int = 1000, starts: int = 32, seed: int = 0, progress: bool = False
 ) -> dict[str, Any]:
     """Measure every robot of ``robots`` (see the module docstring)."""
+    from symkin.progress import bar
+
     out: dict[str, Any] = {"n": n, "starts": starts, "seed": seed, "robots": {}}
-    for name in robots:
+    for name in bar(robots, progress, desc="closed-form IK", unit="robot"):
         robot, row = _measure(name, n, starts, seed)
         out["robots"][robot.name] = row
     return out

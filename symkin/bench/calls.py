@@ -329,10 +329,10 @@ def run_calls(
         ("casadi", lambda: casadi_vs_raw(robot, q, budget)),
         ("startup", lambda: startup(robot_spec if isinstance(robot_spec, str) else robot.name, startup_runs)),
     ]
-    from tqdm import tqdm
+    from symkin.progress import bar
 
     out: dict[str, Any] = {"robot": robot.name, "control_robot": crobot.name}
-    for name, run in tqdm(sections, desc="bench calls", disable=not progress, leave=False):
+    for name, run in bar(sections, progress, desc="bench calls"):
         out[name] = run()
     out["checks"] = _checks(out)
     return out

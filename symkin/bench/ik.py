@@ -120,8 +120,7 @@ def run_table1(
         us_per_iteration (over all iterations, failed searches included), max_error (largest |e|
         among solved problems) and ``paper`` (the published row or None).
     """
-    from tqdm import tqdm
-
+    from symkin.progress import bar as progress_bar
     from symkin.runtime.ik import ik
 
     robot = _robot(robot)
@@ -144,7 +143,7 @@ def run_table1(
     else:
         solver = robot
     rows = []
-    bar = tqdm(total=N * len(labels) * len(settings), desc="Table 1", unit="IK", disable=not progress)
+    bar = progress_bar(total=N * len(labels) * len(settings), progress=progress, desc="Table 1", unit="IK")
     for setting in settings:
         slimit, ilimit = SETTINGS[setting]
         for label in labels:

@@ -163,9 +163,9 @@ def run_table1(
         runs: dict[str, list[ServoResult]] = {k: [] for k in controllers}
         tasks = range(n_tasks)
         if progress:
-            from tqdm.auto import tqdm
+            from symkin.progress import bar
 
-            tasks = tqdm(tasks, desc=f"Table I {name}", unit="task")
+            tasks = bar(tasks, desc=f"Table I {name}", unit="task", leave=True)
         t0 = time.perf_counter()
         for t in tasks:
             for key, ctrl in controllers.items():

@@ -235,8 +235,8 @@ def _check_cap(nu_max: Any) -> None:
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:
-    if not progress:
-        return None
-    from tqdm.auto import tqdm
+    from symkin.progress import bar, progress_shown
 
-    return tqdm(total=total, desc=f"servo ({name})", leave=False)
+    if not progress_shown(progress):
+        return None
+    return bar(total=total, desc=f"servo ({name})")
