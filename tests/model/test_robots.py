@@ -50,7 +50,8 @@ ZERO_POSES = {
     "ur10": pose(RX90, [-0.612 - 0.5723, -(0.163941 + 0.0922), 0.1273 - 0.1157]),
     # Corke's Puma 560 at qz: (a2 + a3, -d3, d4) = (0.4521, -0.15005, 0.4318), R = I
     "puma560": pose(I3, [0.4521, -0.15005, 0.4318]),
-    # Panda (Fig. 1 of Manipulator Differential Kinematics, Part 1) at qz: x = 0.0825 - 0.0825 + 0.088, z = 0.333 + 0.316 + 0.384 - 0.107 - 0.1034,
+    # Panda (Fig. 1 of Manipulator Differential Kinematics, Part 1) at qz: x = 0.0825 - 0.0825 + 0.088,
+    # z = 0.333 + 0.316 + 0.384 - 0.107 - 0.1034,
     # R = Rx(pi) Rz(-pi/4)
     "panda": pose(
         [[S2, S2, 0], [S2, -S2, 0], [0, 0, -1]], [0.088, 0, 0.333 + 0.316 + 0.384 - 0.107 - 0.1034]
