@@ -158,7 +158,7 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
 
 # -- control -------------------------------------------------------------------------------------
 def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float = 0.25) -> dict[str, Any]:
-    """RRMC and MMC steps from Python (C backend) and servo steps per second, Table I tasks (seed 001
+    """RRMC and MMC steps from Python (C backend) and servo steps per second, Table I tasks (MMC paper
     eq 14, joint speeds unbounded as in the paper), loop in C and in Python."""
     from symkin.bench.mmc import table1_tasks
     from symkin.runtime.control import MMC, rrmc
