@@ -39,7 +39,9 @@ class _Formatter(argparse.HelpFormatter):
         text = action.help or ""
         if (
             not action.option_strings
-            or action.default in (None, False, argparse.SUPPRESS)
+            or action.default is None
+            or action.default is False
+            or action.default == argparse.SUPPRESS
             or "default" in text.lower()
         ):
             return text

@@ -231,7 +231,7 @@ def test_every_option_has_help_and_shows_its_default():
         seen += 1
         assert action.help, f"symkin {name} {action.option_strings[0]} has no help"
         text = cmd.formatter_class(prog="x")._get_help_string(action)
-        if action.default not in (None, False, argparse.SUPPRESS):
+        if action.default is not None and action.default is not False and action.default != argparse.SUPPRESS:
             assert "default" in text.lower(), f"symkin {name} {action.option_strings[0]} hides its default"
     assert seen > 40
     help_text = subprocess.run(
@@ -239,6 +239,7 @@ def test_every_option_has_help_and_shows_its_default():
     ).stdout
     assert "--target-q" in help_text and "--from-q" not in help_text
     assert "(default: LM)" in help_text and "--we" in help_text and "--ilimit" in help_text
+    assert "seed of the random restarts (default: 0)" in " ".join(help_text.split())
 
 
 def test_from_q_still_works_but_says_it_is_renamed(capsys):
