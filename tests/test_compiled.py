@@ -34,18 +34,19 @@ def test_cli_output_loads_back(tmp_path, capsys, backend: str) -> None:
 
 
 def test_a_prefixed_c_folder_loads_and_solves_ik(tmp_path) -> None:
-    robot = symkin.load("panda")
-    symkin.write_generated(robot, "c", tmp_path, prefix="arm_a")
-    symkin.write_generated(symkin.load("ur5"), "c", tmp_path, prefix="arm_b")
+    robot = symkin.load("ur5")
+    symkin.write_generated(robot, "c", tmp_path, prefix="arm_b")
+    symkin.write_generated(symkin.load("planar2"), "numpy", tmp_path)
     with pytest.raises(CompileError, match="several robots"):
         symkin.load_compiled(tmp_path)
-    kin = symkin.load_compiled(tmp_path, name="arm_a")
-    assert kin.c_prefix == "arm_a" and kin.robot.name == "panda"
+    kin = symkin.load_compiled(tmp_path, name="arm_b")
+    assert kin.c_prefix == "arm_b" and kin.robot.name == "ur5"
     q = robot.random_q(seed=1)
     res = kin.ik(kin.fkine(q))  # the C IK solver finds the prefixed entry points
     assert res.success and np.abs(robot.fkine(res.q) - kin.fkine(q)).max() < 1e-6
     qd, _ = symkin.MMC(kin).step(q, np.array([0.05, 0, 0, 0, 0, 0]))  # and the C controller
     assert_close(robot.jacob0(q) @ qd, [0.05, 0, 0, 0, 0, 0], 1e-9, "MMC on the loaded kinematics")
+    assert symkin.load_compiled(tmp_path, name="planar2").backend == "numpy"
 
 
 def test_not_a_compiled_folder(tmp_path) -> None:
