@@ -240,7 +240,7 @@ def format_table1(result: dict[str, Any]) -> str:
     crit = "E" if result["tol_on"] == "E" else "|e|"
     head = (
         f"Table 1 of Haviland and Corke 2023 (Part 1): {result['n_problems']} problems on {result['robot']}, "
-        f"seed {result['seed']}, "
+        f"random seed {result['seed']}, "
         f"solved when {crit} < {result['tol']:g}, backend {result['backend']}"
     )
     cols = ["Method", "S", "I", "Mean it", "Med it", "Infeas", "Infeas %", "Mean S", "Max S", "us/solve",

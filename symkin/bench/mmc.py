@@ -211,7 +211,7 @@ def format_table1(result: dict[str, Any]) -> str:
     pr = result["protocol"]
     lines = [
         f"Table I of Haviland and Corke 2020 (MMC), {pr['n_tasks']} tasks per robot, lambda = {pr['lam']}, "
-        f"seed {pr['seed']}",
+        f"random seed {pr['seed']}",
         "",
         f"{'robot':<10} {'':<6} {'mean m RRMC':>11} {'MMC':>8} {'impr.':>7}   "
         f"{'final m RRMC':>12} {'MMC':>8} {'impr.':>7}",
