@@ -1,8 +1,9 @@
 """Compiled kinematics: the object :func:`symkin.compile` returns (no sympy here).
 
 It has the numeric reference's methods and shapes (``fkine``, ``link_poses``, ``jacob0``,
-``jacobe``, ``hessian0``, ``hessiane``, ``manipulability``, ``jacobm``) plus the fused
-``fkine_jacob0`` and ``jacob0_hessian0`` used by IK and control. On the C backend the methods are
+``jacobe``, ``hessian0``, ``hessiane``, ``manipulability``, ``jacobm``, ``cond``, ``jacobs``,
+``jacobb``, ``jacob0_dot``) plus the fused ``fkine_jacob0`` and ``jacob0_hessian0`` used by IK and
+control; the last four are computed here from the generated functions. On the C backend the methods are
 the extension module's functions themselves, so a call costs one C function call.
 """
 
