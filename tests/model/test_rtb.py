@@ -95,3 +95,15 @@ def test_imported_robot_compiles_and_matches_the_toolbox() -> None:
     kin = symkin.compile(symkin.Robot.from_rtb(p), backend="c")
     for q in kin.robot.random_q(5, seed=4):
         np.testing.assert_allclose(kin.jacob0(q), p.jacob0(q), atol=1e-12)
+
+
+def test_builtin_iiwa14_agrees_with_the_ros_industrial_urdf() -> None:
+    """The toolbox's LBR is ROS-Industrial's lbr_iiwa_14_r820 URDF: same axes and zeros, and link
+    origins within 0.44 mm (that URDF's x offsets of links 2 and 4) of KUKA's 360/420/400/126 mm."""
+    urdf = symkin.Robot.from_rtb(rtb.models.LBR())
+    ours = symkin.load("lbr_iiwa14")
+    Q = ours.random_q(100, seed=6)
+    Tu, To = urdf.fkine(Q), ours.fkine(Q)
+    assert np.linalg.norm(Tu[:, :3, 3] - To[:, :3, 3], axis=1).max() < 1e-3
+    np.testing.assert_allclose(Tu[:, :3, :3], To[:, :3, :3], atol=1e-12)
+    np.testing.assert_allclose(urdf.qlim, ours.qlim, atol=5e-4)  # the URDF cuts 170 deg to 2.9668 rad
