@@ -107,3 +107,10 @@ def test_builtin_iiwa14_agrees_with_the_ros_industrial_urdf() -> None:
     assert np.linalg.norm(Tu[:, :3, 3] - To[:, :3, 3], axis=1).max() < 1e-3
     np.testing.assert_allclose(Tu[:, :3, :3], To[:, :3, :3], atol=1e-12)
     np.testing.assert_allclose(urdf.qlim, ours.qlim, atol=5e-4)  # the URDF cuts 170 deg to 2.9668 rad
+
+
+def test_builtin_cobra600_is_the_toolbox_model() -> None:
+    tb = rtb.models.DH.Cobra600()
+    ours = symkin.load("cobra600")
+    for q in ours.random_q(20, seed=7):
+        np.testing.assert_allclose(ours.fkine(q), tb.fkine(q).A, atol=1e-14)
