@@ -5,6 +5,11 @@ magnitudes) against the numeric O(n) reference, and against central finite diffe
 backend's own lower-order function (J from FK, H from J, J dot from J, Jm from m), at random
 configurations, at the robot's named configurations and near them (where singularities usually are).
 Space and body Jacobians and the condition number are compared with the reference.
+
+Rows marked ``(large q)`` evaluate FK, J and H at revolute angles of up to :data:`LARGE_TURNS`
+turns and next to large multiples of pi/2 (where an argument reduction for sin/cos is hardest).
+Generated code adds joint angles before sin/cos (``sin(q1 + q2)``), which rounds, so their
+tolerance grows with the angles: ``REF_TOL + 8 n max|q| 2^-53`` (see the README, "Accuracy").
 """
 
 from __future__ import annotations
@@ -17,9 +22,10 @@ import numpy as np
 from symkin.model.robot import Robot
 from symkin.runtime.kinematics import Kinematics
 
-__all__ = ["CheckRow", "CheckReport", "check", "REF_TOL", "FD_TOL", "FD_STEP"]
+__all__ = ["CheckRow", "CheckReport", "check", "REF_TOL", "FD_TOL", "FD_STEP", "LARGE_TURNS", "large_angles"]
 
 REF_TOL = 1e-10  # against the numeric reference (the tests hold 1e-12 for FK/J, 1e-10 for H)
+LARGE_TURNS = 10_000  # large-angle samples: revolute joints up to this many turns (|q| <~ 6.3e4 rad)
 FD_STEP = 1e-6  # central difference step
 FD_TOL = 1e-6  # central differences are accurate to O(h^2) truncation + O(eps/h) rounding ~ 1e-9
 
@@ -30,11 +36,12 @@ class CheckRow:
     function: str
     ref_error: float
     fd_error: float | None
+    ref_tol: float = REF_TOL
 
     @property
     def ok(self) -> bool:
         fd_ok = self.fd_error is None or self.fd_error <= FD_TOL
-        return bool(self.ref_error <= REF_TOL and fd_ok)
+        return bool(self.ref_error <= self.ref_tol and fd_ok)
 
 
 @dataclass(frozen=True)
@@ -55,6 +62,9 @@ class CheckReport:
             "rows": [{**r.__dict__, "ok": r.ok} for r in self.rows],
         }
 
+    def _large_tol(self) -> float:
+        return max((r.ref_tol for r in self.rows if r.function.endswith("(large q)")), default=REF_TOL)
+
     def format(self) -> str:
         head = f"{'backend':8} {'function':21} {'vs reference':>13} {'vs finite diff':>15}  result"
         lines = [f"symkin check {self.robot}: {self.samples} configurations per function", head]
@@ -65,7 +75,8 @@ class CheckReport:
                 f"{r.backend:8} {r.function:21} {r.ref_error:13.2e} {fd:>15}  {'ok' if r.ok else 'FAIL'}"
             )
         lines.append(
-            f"tolerances: {REF_TOL:g} vs reference, {FD_TOL:g} vs central differences (h = {FD_STEP:g})"
+            f"tolerances: {REF_TOL:g} vs reference, {FD_TOL:g} vs central differences (h = {FD_STEP:g});"
+            f" (large q): up to {LARGE_TURNS} turns, {self._large_tol():.2g} vs reference"
         )
         lines.append("all ok" if self.ok else "FAILED")
         return "\n".join(lines)
@@ -106,6 +117,21 @@ def sample_configurations(robot: Robot, n: int, seed: int = 0) -> np.ndarray:
     named = np.array(list(robot.configs.values()))
     near = named + rng.normal(scale=1e-5, size=named.shape)
     return np.vstack((robot.random_q(n, seed=rng), named, near))
+
+
+def large_angles(robot: Robot, n: int, seed: int = 0) -> np.ndarray:
+    """(2n, n_joints) configurations with large revolute angles: random ones moved by up to
+    :data:`LARGE_TURNS` whole turns, and ones next to large multiples of pi/2 (the doubles nearest
+    k pi/2 and their neighbours, k up to 4 LARGE_TURNS). Prismatic joints stay within limits."""
+    rng = np.random.default_rng(seed)
+    Q = np.vstack((robot.random_q(n, seed=rng), robot.random_q(n, seed=rng)))
+    rev = np.array([e.is_revolute for e in robot.ets.joints])
+    turns = rng.integers(-LARGE_TURNS, LARGE_TURNS + 1, size=(n, robot.n))
+    Q[:n] += np.where(rev, 2 * np.pi * turns, 0.0)
+    k = rng.integers(-4 * LARGE_TURNS, 4 * LARGE_TURNS + 1, size=(n, robot.n))
+    near = np.nextafter(k * (np.pi / 2), np.inf * rng.choice([-1, 1], size=k.shape))
+    Q[n:] = np.where(rev, near, Q[n:])
+    return Q
 
 
 def check(
@@ -176,4 +202,10 @@ def check(
                         kin.backend, f"jacobm:{axes}", _rel(Jm, robot.jacobm(Qg, axes=axes)), _rel(fd_m, Jm)
                     )
                 )
+        # large angles: FK, J and H against the reference, tolerance from the angle-sum rounding
+        QL = large_angles(robot, max(samples // 2, 1), seed + 1)
+        tol = REF_TOL + 8 * robot.n * float(np.abs(QL).max()) * 2.0**-53
+        for name in ("fkine", "jacob0", "hessian0"):
+            err = _rel(getattr(kin, name)(QL), getattr(robot, name)(QL))
+            rows.append(CheckRow(kin.backend, f"{name} (large q)", err, None, tol))
     return CheckReport(robot.name, len(Q), tuple(rows))

@@ -3,8 +3,10 @@
 Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
 (``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file, and ``--tool``/``--base`` to add a
 constant transform after the end effector / before the first link. User mistakes print one line
-``symkin: error: ...`` and exit with status 2; a failed check or an unsolved problem exits 1.
-Progress bars appear only when stderr is a terminal (:mod:`symkin.progress`).
+``symkin: error: ...`` and exit with status 2, checked before any long work starts where they can
+be; a failed check or an unsolved problem exits 1. When the reader of the output goes away
+(``symkin list | head -1``), symkin stops quietly with status 141 (128 + SIGPIPE). Progress bars
+appear only when stderr is a terminal (:mod:`symkin.progress`).
 """
 
 from __future__ import annotations
@@ -19,17 +21,23 @@ from typing import Any
 
 import numpy as np
 
+from symkin.cli_checks import UserError
+from symkin.cli_checks import check_cflags_for as _check_cflags
+from symkin.cli_checks import int_at_least as _int_at_least
+from symkin.cli_checks import need_matplotlib as _need_matplotlib
+from symkin.cli_checks import output_dir as _output_dir
+from symkin.cli_checks import output_file as _output_file
+from symkin.cli_checks import positive_float as _positive
+
 __all__ = ["main"]
+
+_at_least_1 = _int_at_least(1)
 
 ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
 TRANSFORM_HELP = (
     "constant ETS text like 'tz(0.1) Rx(pi/2)', or 'x y z roll pitch yaw' (m, rad; pi/2 and 90deg "
     "allowed), or 16 numbers of a row-major 4x4 matrix"
 )
-
-
-class UserError(Exception):
-    """A mistake in the command line; printed as one line."""
 
 
 class _Formatter(argparse.HelpFormatter):
@@ -111,6 +119,8 @@ def cmd_compile(args: argparse.Namespace) -> int:
     from symkin.compile import generate
 
     robot = _robot(args)
+    out = _output_dir(args.output) if args.output else None
+    _check_cflags(args.backend)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
     if args.prefix:
@@ -119,10 +129,11 @@ def cmd_compile(args: argparse.Namespace) -> int:
         if not args.output:
             raise UserError("--prefix names the files written with -o DIR; give -o too")
         command += f" --prefix {args.prefix}"
-    files = generate(robot, args.backend, command, prefix=args.prefix)
+    if args.strategy:
+        command += f" --strategy {args.strategy}"
+    files = generate(robot, args.backend, command, strategy=args.strategy, prefix=args.prefix)
     t_gen = time.perf_counter() - t0
-    if args.output:
-        out = Path(args.output)
+    if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         for name, text in sorted(files.items()):
             (out / name).write_text(text)
@@ -134,7 +145,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
             "symkin.load_compiled reads)"
         )
     t1 = time.perf_counter()
-    kin = compile_robot(robot, backend=args.backend)
+    kin = compile_robot(robot, backend=args.backend, strategy=args.strategy)
     t_build = time.perf_counter() - t1
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
@@ -161,6 +172,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
 def cmd_generate(args: argparse.Namespace) -> int:
     from symkin.emit.snapshot import compare_or_update
 
+    _output_dir(args.output)
     differ = compare_or_update(args.output, update=not args.check, progress=True)
     if args.check:
         if differ:
@@ -178,6 +190,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     from symkin.check import check
 
     robot = _robot(args)
+    for b in args.backend or ("c",):
+        _check_cflags(b)
     report = check(
         robot, backends=args.backend or ("c", "numpy", "casadi"), samples=args.samples, seed=args.seed
     )
@@ -190,6 +204,7 @@ def cmd_derive(args: argparse.Namespace) -> int:
 
     robot = _robot(args)
     sections = _sections(args.sections)
+    _output_file(args.output, "-o")
     if args.ik:
         if sections is not None:
             raise UserError("--sections chooses parts of the kinematics derivation, not of --ik")
@@ -256,6 +271,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
     robot = _robot(args)
     Tep = _target(args, robot)
     numerical = {"--we": args.we, "--lam": args.lam, "--ilimit": args.ilimit, "--slimit": args.slimit}
+    _check_cflags(args.backend)
     if args.all or args.method == "analytic":
         given = [k for k, v in numerical.items() if v is not None]
         if given:
@@ -351,8 +367,10 @@ def cmd_servo(args: argparse.Namespace) -> int:
 
     robot = _robot(args)
     Tep = _target(args, robot)
-    kin = compile_robot(robot, backend=args.backend)
+    _need_matplotlib(args.plot)
+    _check_cflags(args.backend)
     q0 = _floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
+    kin = compile_robot(robot, backend=args.backend)
     res = servo(
         kin,
         q0,
@@ -408,14 +426,6 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
     plt.close(fig)
 
 
-def _need_matplotlib() -> None:
-    """Fail before a long run when a plot was asked for and matplotlib is missing."""
-    try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
-
-
 def _joint_counts(text: str) -> tuple[int, ...]:
     try:
         counts = tuple(int(x) for x in text.replace(",", " ").split())
@@ -432,6 +442,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     custom = _custom(args)
     if custom and args.robot is None:
         raise UserError("--tool/--base change a ROBOT: name one (symkin bench WHAT ROBOT --tool ...)")
+    _check_cflags("c")
+    if args.plot and args.what not in ("mmc", "compile"):
+        raise UserError(f"--plot is for `symkin bench mmc` and `symkin bench compile`, not `{args.what}`")
+    _need_matplotlib(args.plot)
     if args.what == "compile":
         from symkin.bench.compile import format_compile, plot_compile, run_compile
 
@@ -440,8 +454,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
                 "bench compile measures ROBOT by name in a fresh process; --tool/--base do not apply"
             )
         joints = _joint_counts(args.joints)
-        if args.plot:
-            _need_matplotlib()
         rows = run_compile(joints, seed=args.seed, reference=args.robot or "panda", progress=not args.json)
         print(json.dumps(rows, indent=2) if args.json else format_compile(rows))
         if args.plot:
@@ -455,6 +467,17 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
         result = run_calls(spec or "ur5", spec or "panda", seed=args.seed, progress=not args.json)
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        return 0
+    if args.what == "reach":
+        from symkin.bench.reach import format_reach, run_reach
+        from symkin.workspace.run import require_scale
+
+        require_scale()
+        result = run_reach(
+            _robot(args, "ur5"), resolution=args.resolution, orientations=args.orientations,
+            seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
+        )  # fmt: skip
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
         return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
@@ -487,8 +510,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from symkin.bench.mmc import run_table1 as run_mmc
     from symkin.compile import compile as compile_robot
 
-    if args.plot:
-        _need_matplotlib()
     if spec is None:
         robots: tuple[Any, ...] = ("panda", "lbr_iiwa7", "sawyer")
     else:
@@ -522,6 +543,94 @@ def cmd_plot(args: argparse.Namespace) -> int:
     out = args.output or f"{robot.identifier}.png"
     robot.plot(q, frames=not args.no_frames, ellipsoid=args.ellipsoid, path=out)
     print(f"wrote {out}: {robot.name} at q = {_fmt(q)}")
+
+
+def _scheduler(args: argparse.Namespace) -> Any:
+    return args.scheduler if args.scheduler else None
+
+
+def _rows(text: str) -> list[int]:
+    try:
+        return [int(x) for x in text.replace(",", " ").split()]
+    except ValueError:
+        raise UserError(
+            f"--axes must be all, trans, rot or row indices 0-5 such as '0 1 5', not {text!r}"
+        ) from None
+
+
+def cmd_reach(args: argparse.Namespace) -> int:
+    from symkin.workspace import reachability
+    from symkin.workspace.run import require_scale
+
+    require_scale(_scheduler(args))  # before compiling: say which extra is missing at once
+    robot = _robot(args)
+    bounds = None if args.bounds is None else _floats(args.bounds, "--bounds", 6).reshape(3, 2)
+    axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
+    ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
+    rmap = reachability(
+        robot, args.resolution, args.orientations, output=args.output, seed=args.seed,
+        solutions=args.solutions, axes=axes, bounds=bounds, radius=args.radius, chunk=args.chunk,
+        backend=args.backend, ik_options=ik_options, scheduler=_scheduler(args), workers=args.workers,
+        overwrite=args.overwrite,
+    )  # fmt: skip
+    inside = rmap.reach > 0
+    st = rmap.stats or {}
+    summary = {
+        "output": args.output,
+        "shape": list(rmap.reach.shape),
+        "orientations": len(rmap.rotations),
+        "reachable_voxels": int(inside.sum()),
+        "mean_reach_of_reachable": float(rmap.reach[inside].mean()) if inside.any() else 0.0,
+        "max_manipulability": float(np.nanmax(rmap.manipulability)) if inside.any() else None,
+        "blocks": int(st.get("blocks", 0)), "computed": int(st.get("computed", 0)),
+        "skipped": int(st.get("skipped", 0)), "seconds": float(st.get("seconds", 0.0)),
+        "problems": int(st.get("problems", 0)),
+    }  # fmt: skip
+    if args.plot:
+        rmap.plot(args.plot, axis=args.slice_axis, at=args.slice_at)
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    x, y, z = rmap.reach.shape
+    K = len(rmap.rotations)
+    print(f"{robot.name}: {x}x{y}x{z} voxels of {rmap.resolution:g} m, {K} orientations -> {args.output}")
+    done, skipped = summary["computed"], summary["skipped"]
+    print(f"blocks: {done} computed, {skipped} already written, of {summary['blocks']}")
+    if summary["computed"]:
+        rate = summary["problems"] / max(summary["seconds"], 1e-9)
+        print(f"{summary['problems']} IK problems in {summary['seconds']:.1f} s ({rate:,.0f} per second)")
+    best = summary["max_manipulability"] or 0.0
+    print(
+        f"reachable voxels: {summary['reachable_voxels']} (mean reachability index "
+        f"{summary['mean_reach_of_reachable']:.3f}); best manipulability {best:.4g}"
+    )
+    if args.plot:
+        print(f"plot written to {args.plot}")
+    return 0
+
+
+def cmd_dataset(args: argparse.Namespace) -> int:
+    from symkin.workspace import samples
+    from symkin.workspace.run import require_scale
+
+    require_scale(_scheduler(args))
+    robot = _robot(args)
+    ds = samples(
+        robot, args.n, output=args.output, seed=args.seed, chunk=args.chunk, backend=args.backend,
+        scheduler=_scheduler(args), workers=args.workers, overwrite=args.overwrite,
+    )  # fmt: skip
+    st = ds.stats or {}
+    summary = {"output": args.output, "samples": len(ds), "blocks": int(st.get("blocks", 0)),
+               "computed": int(st.get("computed", 0)), "skipped": int(st.get("skipped", 0)),
+               "seconds": float(st.get("seconds", 0.0))}  # fmt: skip
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"{robot.name}: {len(ds)} (q, pose) samples -> {args.output} (arrays q {tuple(ds.q.shape)}, "
+              f"pose {tuple(ds.pose.shape)})")  # fmt: skip
+        print(f"blocks: {summary['computed']} computed, {summary['skipped']} already written, "
+              f"in {summary['seconds']:.1f} s")  # fmt: skip
     return 0
 
 
@@ -534,10 +643,37 @@ def _jsonable(x: Any) -> Any:
 
 
 # ----------------------------------------------------------------------------------------------
+def _robot_argument(s: argparse.ArgumentParser, default: str | None = None) -> None:
+    """The ROBOT argument (optional when ``default`` describes what it defaults to) and --tool/--base."""
+    if default is None:
+        s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    else:
+        s.add_argument("robot", metavar="ROBOT", nargs="?", default=None, help=f"{ROBOT_HELP} ({default})")
+    s.add_argument(
+        "--tool",
+        metavar="T",
+        help="append this constant transform after the end effector: " + TRANSFORM_HELP,
+    )
+    s.add_argument(
+        "--base",
+        metavar="T",
+        help="place this constant transform before the first link: " + TRANSFORM_HELP,
+    )
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with symkin's one-line errors (``symkin: error: ...``, exit 2)."""
+
+    def error(self, message: str) -> Any:  # type: ignore[override]
+        self.exit(
+            2, f"symkin: error: {self.prog.split(' ', 1)[-1] + ': ' if ' ' in self.prog else ''}{message}\n"
+        )
+
+
 def build_parser() -> argparse.ArgumentParser:
     from symkin import __version__
 
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="symkin",
         description="symkin: a symbolic, code-generating kinematics compiler for robot manipulators.",
         epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command.",
@@ -549,24 +685,7 @@ def build_parser() -> argparse.ArgumentParser:
     def command(name: str, text: str) -> argparse.ArgumentParser:
         return sub.add_parser(name, help=text, description=text, formatter_class=_Formatter)
 
-    def robot_argument(s: argparse.ArgumentParser, default: str | None = None) -> None:
-        if default is None:
-            s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-        else:
-            s.add_argument(
-                "robot", metavar="ROBOT", nargs="?", default=None, help=f"{ROBOT_HELP} ({default})"
-            )
-        s.add_argument(
-            "--tool",
-            metavar="T",
-            help="append this constant transform after the end effector: " + TRANSFORM_HELP,
-        )
-        s.add_argument(
-            "--base",
-            metavar="T",
-            help="place this constant transform before the first link: " + TRANSFORM_HELP,
-        )
-
+    robot_argument = _robot_argument
     backends = ("c", "numpy", "casadi")
     s = command("list", "list the built-in robots")
     s.add_argument("--json", action="store_true", help="print JSON")
@@ -588,6 +707,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="C: start every exported symbol and file name with PREFIX (default symkin_<robot>), so the "
         "code of several robots links into one program",
     )
+    s.add_argument(
+        "--strategy",
+        choices=("expanded", "program"),
+        help="how the code is derived: expanded (one expression per output, then CSE) or program "
+        "(named link frames, linear in the chain); default: chosen by size",
+    )
     s.set_defaults(func=cmd_compile)
 
     s = command("generate", "regenerate the checked-in code of the built-in robots under generated/")
@@ -603,7 +728,7 @@ def build_parser() -> argparse.ArgumentParser:
         choices=backends,
         help="only this backend (repeat for several; default all)",
     )
-    s.add_argument("--samples", type=int, default=20, help="random configurations")
+    s.add_argument("--samples", type=_at_least_1, default=20, help="random configurations")
     s.add_argument("--seed", type=int, default=0, help="seed of the random configurations")
     s.add_argument("--json", action="store_true", help="print the table as JSON")
     s.set_defaults(func=cmd_check)
@@ -664,10 +789,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="task weights: 'position' (position only), 'orientation', or six weights >= 0 for "
         "vx vy vz wx wy wz (default all 1)",
     )
-    s.add_argument("--lam", type=float, help="damping lambda of LM (default 0.1)")
-    s.add_argument("--tol", type=float, help="converged when |e| < TOL (default 1e-6: 1 um, 1 urad)")
-    s.add_argument("--ilimit", type=int, help="iterations per search (default 30)")
-    s.add_argument("--slimit", type=int, help="searches from random starts (default 100)")
+    s.add_argument("--lam", type=_positive, help="damping lambda of LM (default 0.1)")
+    s.add_argument("--tol", type=_positive, help="converged when |e| < TOL (default 1e-6: 1 um, 1 urad)")
+    s.add_argument("--ilimit", type=_at_least_1, help="iterations per search (default 30)")
+    s.add_argument("--slimit", type=_at_least_1, help="searches from random starts (default 100)")
     s.add_argument("--seed", type=int, default=0, help="seed of the random restarts")
     s.set_defaults(func=cmd_ik)
 
@@ -680,8 +805,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="mmc",
         help="manipulability-maximising or plain resolved rate",
     )
-    s.add_argument("--dt", type=float, default=0.05, help="time step (s)")
-    s.add_argument("--max-steps", type=int, default=500, help="give up after this many steps")
+    s.add_argument("--dt", type=_positive, default=0.05, help="control period (s)")
+    s.add_argument("--max-steps", type=_int_at_least(0), default=500, help="give up after this many steps")
     s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
     s.set_defaults(func=cmd_servo)
@@ -701,22 +826,23 @@ def build_parser() -> argparse.ArgumentParser:
     s = command(
         "bench",
         "benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
-        "compile (cold, by chain length)",
+        "compile (cold, by chain length), reach (Dask maps)",
     )
-    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile"), help="which benchmark")
+    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile", "reach"), help="which benchmark")
     robot_argument(
         s,
-        "default: panda for kin and compile, ur5 for ik, the paper's three for mmc, ur5 and panda for calls",
+        "default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, ur5 and "
+        "panda for calls",
     )
     s.add_argument(
         "--robot", dest="robot_option", action=_Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
     )
     s.add_argument("--joints", default="6,12,24,36", help="compile: joint counts of the random chains")
-    s.add_argument("--batch", type=int, default=100_000, help="kin: batch size")
+    s.add_argument("--batch", type=_at_least_1, default=100_000, help="kin: batch size")
     s.add_argument(
         "-n",
         "--problems",
-        type=int,
+        type=_at_least_1,
         help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000)",
     )
     s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
@@ -726,10 +852,70 @@ def build_parser() -> argparse.ArgumentParser:
         help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints",
     )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
-    s.add_argument("--starts", type=int, default=32, help="ik --analytic: LM searches per pose for sampling")
+    s.add_argument(
+        "--starts", type=_at_least_1, default=32, help="ik --analytic: LM searches per pose for sampling"
+    )
+    s.add_argument("--resolution", type=_positive, default=0.1, help="reach: voxel edge, m (default 0.1)")
+    s.add_argument(
+        "--orientations", type=_at_least_1, default=50, help="reach: orientations per voxel (default 50)"
+    )
+    s.add_argument("--fault", action="store_true", help="reach: also kill a worker mid-run and compare")
+    s.add_argument(
+        "--repeat", type=_at_least_1, default=3, help="reach: runs of each measurement (best is kept)"
+    )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench, robot_option=None)
+
+    add_workspace_commands(sub)
     return p
+
+
+def add_workspace_commands(sub: Any) -> None:
+    """``symkin reach`` and ``symkin dataset`` (the ``scale`` extra)."""
+
+    def scale_options(s: argparse.ArgumentParser) -> None:
+        s.add_argument("--seed", type=int, default=0, help="seed of the random orientations and samples")
+        s.add_argument(
+            "--scheduler",
+            metavar="ADDRESS",
+            help="a Dask scheduler such as tcp://host:8786, or 'synchronous' (default: a local cluster)",
+        )
+        s.add_argument(
+            "--workers", type=_at_least_1, help="local cluster size (default: one worker per core)"
+        )
+        s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c", help="kinematics backend")
+        s.add_argument("--overwrite", action="store_true", help="replace the store instead of resuming it")
+        s.add_argument("--json", action="store_true", help="print JSON")
+
+    text = "reachability and manipulability map of the workspace (Zarr, on Dask)"
+    s = sub.add_parser("reach", help=text, description=text, formatter_class=_Formatter)
+    _robot_argument(s)
+    s.add_argument("--resolution", type=_positive, default=0.05, help="voxel edge in metres (default 0.05)")
+    s.add_argument("--orientations", type=_at_least_1, default=50, help="orientations per voxel (default 50)")
+    s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. map.zarr")
+    s.add_argument("--chunk", type=_at_least_1, help="voxels per block edge (default: 16..4, >= 64 blocks)")
+    s.add_argument("--solutions", action="store_true", help="also store one solution per orientation")
+    s.add_argument("--axes", default="all", help="manipulability rows: all, trans, rot or indices '0 1 5'")
+    s.add_argument("--bounds", metavar="'XMIN XMAX YMIN YMAX ZMIN ZMAX'", help="only voxels in this box (m)")
+    s.add_argument(
+        "--radius", type=_positive, help="radius of the mapped ball (default: sum of link lengths)"
+    )
+    s.add_argument("--slimit", type=_at_least_1, default=10, help="IK searches per target (default 10)")
+    s.add_argument("--ilimit", type=_at_least_1, default=30, help="IK iterations per search (default 30)")
+    s.add_argument("--plot", metavar="PNG", help="write a slice of the map (reachability, manipulability)")
+    s.add_argument("--slice-axis", choices=("x", "y", "z"), default="z", help="plot: axis of the slice")
+    s.add_argument("--slice-at", type=float, help="plot: coordinate of the slice (default: the centre)")
+    scale_options(s)
+    s.set_defaults(func=cmd_reach)
+
+    text = "a (q, pose) dataset for learning (Zarr, on Dask)"
+    s = sub.add_parser("dataset", help=text, description=text, formatter_class=_Formatter)
+    _robot_argument(s)
+    s.add_argument("-n", type=_at_least_1, required=True, help="number of samples (more than stored appends)")
+    s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. data.zarr")
+    s.add_argument("--chunk", type=_at_least_1, default=65536, help="samples per block (default 65536)")
+    scale_options(s)
+    s.set_defaults(func=cmd_dataset)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -739,13 +925,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (UserError, SymkinError, ValueError, FileNotFoundError) as exc:
+    except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
+        _silence_stdout()
+        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+    except (UserError, SymkinError, ValueError, OSError) as exc:
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         print(f"symkin: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("symkin: interrupted", file=sys.stderr)
         return 130
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout without a file descriptor (captured)
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover

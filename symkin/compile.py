@@ -1,26 +1,31 @@
 """``symkin.compile``: robot -> symbolic derivation -> emitted code -> loaded :class:`Kinematics`.
 
 Generated sources are cached per user (``$SYMKIN_CACHE`` or ``~/.cache/symkin``) under a key made
-of the robot's structural hash, the backend, the symkin version and the templates, so a warm
-compile neither imports sympy nor re-derives anything.
+of everything they depend on: every attribute of the robot (:attr:`Robot.fingerprint`: name, ETS,
+limits, speed limits, joint names, configurations, source; the C header lists the limits), the
+backend and strategy, the symkin version, the templates, the compiler's own Python code
+(symbolic, emit and the model classes it prints) and the sympy version. So a warm compile
+neither imports sympy nor re-derives anything, a changed derivation never serves stale code, and
+robots differing only in limits get their own files and their own in-memory :class:`Kinematics`
+(the derivation itself, which depends on the name and ETS only, is shared).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
-import os
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from symkin.emit.c.build import cache_dir
+from symkin.emit.c.build import cache_dir, write_atomic
 from symkin.errors import CompileError, SymkinError
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
-from symkin.model.robot import Robot, as_batch
+from symkin.model.robot import MAX_JOINT_VALUE, Robot, as_batch
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
 __all__ = ["compile", "generate", "write_generated", "BACKENDS", "STRATEGIES", "cache_dir"]
@@ -39,6 +44,34 @@ def _templates_digest() -> str:
     for path in sorted(p for b in BACKENDS for p in (root / b).rglob("*.j2")):
         h.update(path.relative_to(root).as_posix().encode())
         h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+# the compiler's own code: what it derives and prints depends on these files
+_COMPILER_SOURCES = ("symbolic", "emit", "model/ets.py", "model/robot.py", "compile.py")
+
+
+@lru_cache(maxsize=1)
+def _compiler_digest() -> str:
+    """sha256 of the compiler's Python sources (:data:`_COMPILER_SOURCES`) and the sympy version."""
+    from importlib import metadata
+
+    h = hashlib.sha256(_sources_digest(Path(__file__).resolve().parent).encode())
+    with contextlib.suppress(metadata.PackageNotFoundError):  # sympy is a declared dependency
+        h.update(metadata.version("sympy").encode())
+    return h.hexdigest()
+
+
+def _sources_digest(root: Path) -> str:
+    """sha256 of the :data:`_COMPILER_SOURCES` under the package folder ``root``."""
+    h = hashlib.sha256()
+    paths: list[Path] = []
+    for part in _COMPILER_SOURCES:
+        p = root / part
+        paths += sorted(p.rglob("*.py")) if p.is_dir() else [p]
+    for path in paths:
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
     return h.hexdigest()
 
 
@@ -127,7 +160,8 @@ def write_generated(
 def _cache_key(robot: Robot, backend: str, strategy: str | None = None) -> str:
     from symkin import __version__
 
-    text = "\n".join((__version__, backend, robot.key, str(strategy), _templates_digest()))
+    parts = (__version__, backend, robot.fingerprint, str(strategy), _templates_digest(), _compiler_digest())
+    text = "\n".join(parts)
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
@@ -148,13 +182,8 @@ def _cached_files(
     files = generate(robot, backend, strategy=strategy)
     if use_cache:
         digest = hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_text(json.dumps({"sha256": digest, "files": files}))
-            os.replace(tmp, path)
-        except OSError:
-            pass  # an unwritable cache only costs speed
+        with contextlib.suppress(OSError):  # an unwritable cache only costs speed
+            write_atomic(path, json.dumps({"sha256": digest, "files": files}))
     return files
 
 
@@ -180,7 +209,7 @@ def compile(  # noqa: A001
         )
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
-    key = _cache_key(robot, backend, strategy)
+    key = _cache_key(robot, backend, strategy)  # every attribute of the robot: see the module docstring
     if cache and key in _LOADED:
         return _LOADED[key]
     files = _cached_files(robot, backend, key, cache, strategy)
@@ -195,12 +224,20 @@ def compile(  # noqa: A001
 
         module = load_numpy(files, cache_dir() / "numpy")
         functions = {name: getattr(module, name) for name in KIN_METHODS}
-        kin = Kinematics(robot, backend, functions, files, Path(module.__file__ or ""), module)
+        kin = Kinematics(robot, backend, functions, files, _module_path(module), module)
     else:
         kin = _casadi_kinematics(robot, files)
     if cache:
+        if len(_LOADED) > 256:
+            _LOADED.clear()
         _LOADED[key] = kin
     return kin
+
+
+def _module_path(module: Any) -> Path | None:
+    """The file a generated module was loaded from; None when imported from memory."""
+    file = getattr(module, "__file__", None)
+    return Path(file) if file else None
 
 
 def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
@@ -235,7 +272,7 @@ def _casadi_kinematics(robot: Robot, files: dict[str, str]) -> Kinematics:
     chain = ChainTables.of(robot.ets)
     for name in ("fkine", "jacob0", "jacobe"):
         functions[name] = framed(name)
-    kin = Kinematics(robot, "casadi", functions, files, Path(module.__file__ or ""), module)
+    kin = Kinematics(robot, "casadi", functions, files, _module_path(module), module)
     kin.functions = fns  # type: ignore[attr-defined]
     return kin
 
@@ -264,7 +301,7 @@ def _casadi_method(f: Any, robot: Robot) -> Any:
 
     def call(q: Any) -> Any:
         fast = evaluate is not None and type(q) is np.ndarray and q.dtype is f64 and q.shape == (n,)
-        if fast and math.isfinite(sum(q.tolist())):  # else as_batch below raises the error
+        if fast and math.isfinite(sum(ql := q.tolist())) and max(map(abs, ql)) <= MAX_JOINT_VALUE:
             with lock:
                 np.copyto(qbuf, q)
                 evaluate()
@@ -275,8 +312,10 @@ def _casadi_method(f: Any, robot: Robot) -> Any:
                 ]
             if ok:
                 return res[0] if len(res) == 1 else tuple(res)
-        Q, single = as_batch(q, n, name)
-        if single:
+        Q, single = as_batch(q, n, name)  # raises the reference's error for invalid q
+        if Q.shape[0] == 0:  # casadi cannot map over 0 items
+            outs1 = [np.zeros((0, *shapes[k])) for k in names]
+        elif single:
             res = f(Q[0])
             res = res if isinstance(res, (list, tuple)) else [res]
             outs1 = [np.asarray(r).reshape(shapes[k]) for k, r in zip(names, res)]

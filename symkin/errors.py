@@ -50,6 +50,10 @@ class PoseError(SymkinError, ValueError):
     """A target pose that is not a valid SE(3) matrix."""
 
 
+class ParameterError(SymkinError, ValueError):
+    """An invalid solver or controller parameter (IK ``ilimit``/``tol``, MMC ``dt``/``xi``/``rho``...)."""
+
+
 class CompileError(SymkinError, RuntimeError):
     """Generating or compiling code failed (missing C compiler, compiler error, template error)."""
 
@@ -59,6 +63,9 @@ class NoAnalyticIKError(SymkinError, ValueError):
     points at the numerical IK)."""
 
 
-class MissingDependencyError(SymkinError, ImportError):
-    """An optional dependency (an extra such as ``plot``) is not installed; the message names the
-    ``pip install`` that adds it."""
+class WorkspaceError(SymkinError, ValueError):
+    """Bad settings for a workspace map or dataset, or a store that holds a different one."""
+
+
+class MissingExtraError(SymkinError, ImportError):
+    """An optional dependency is not installed; the message names the extra to install."""

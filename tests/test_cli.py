@@ -242,6 +242,21 @@ def test_every_option_has_help_and_shows_its_default():
     assert "seed of the random restarts (default: 0)" in " ".join(help_text.split())
 
 
+def test_every_command_with_a_robot_takes_tool_and_base():
+    import argparse
+
+    from symkin.cli import build_parser
+
+    (sub,) = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
+    with_robot = []
+    for name, cmd in sub.choices.items():
+        dests = {a.dest for a in cmd._actions}
+        if "robot" in dests:
+            with_robot.append(name)
+            assert {"tool", "base"} <= dests, f"symkin {name} lacks --tool/--base"
+    assert {"compile", "check", "derive", "ik", "servo", "plot", "bench"} <= set(with_robot)
+
+
 def test_from_q_still_works_but_says_it_is_renamed(capsys):
     q = "0.3 -1.2 1.4 -0.6 1.1 0.4"
     code, out, err = run(capsys, "ik", "ur5", "--from-q", q, "--json")

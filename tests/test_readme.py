@@ -19,6 +19,9 @@ def test_readme_python_block_runs(index, capsys):
     for module in OPTIONAL:
         if f"import {module}" in BLOCKS[index]:
             pytest.importorskip(module)
+    if "symkin.workspace" in BLOCKS[index]:  # the scale extra's examples
+        pytest.importorskip("zarr")
+        pytest.importorskip("distributed")
     exec(compile(BLOCKS[index], f"README.md python block {index}", "exec"), {})  # noqa: S102
 
 

@@ -73,8 +73,8 @@ def render_python_module(
         module=module,
         n=robot.n,
         functions=printed,
-        header=Header.of(robot, functions, command, repr(robot.name)),
-        name_literal=repr(robot.name),
+        header=Header.of(robot, functions, command, ascii(robot.name)),
+        name_literal=ascii(robot.name),
         **context,
     )
     return {f"{module}.py": text}
@@ -101,11 +101,13 @@ def comment_safe(text: str, limit: int = 300) -> str:
 
 
 def c_string(text: str) -> str:
-    """A C string literal for arbitrary text (every non-alphanumeric byte escaped as octal)."""
+    """A C string literal of the UTF-8 bytes of ``text``: ASCII letters, digits and a few safe
+    punctuation marks as they are, every other byte (non-ASCII too) escaped as octal."""
     out = []
-    for b in text.encode("utf-8"):
+    for b in text.encode("utf-8", "surrogatepass"):
         ch = chr(b)
-        out.append(ch if ch.isalnum() or ch in " _-.,:;()[]=+" else f"\\{b:03o}")
+        safe = b < 128 and (ch.isalnum() or ch in " _-.,:;()[]=+")
+        out.append(ch if safe else f"\\{b:03o}")
     return '"' + "".join(out) + '"'
 
 

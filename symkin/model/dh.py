@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from fractions import Fraction
@@ -109,10 +110,11 @@ def _real(value: Any, what: str) -> Const | Fraction | float:
             raise RobotError(f"{what}: {str(exc).splitlines()[0]}") from None
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise RobotError(f"{what} must be a number or text like 'pi/2', not {type(value).__name__} {value!r}")
-    if isinstance(value, numbers.Integral):
-        return Fraction(int(value))
-    if isinstance(value, Fraction):
-        return value
+    if isinstance(value, (numbers.Integral, Fraction)):
+        r = Fraction(int(value)) if isinstance(value, numbers.Integral) else value
+        if abs(r) > sys.float_info.max:
+            raise RobotError(f"{what} = {value} is beyond the range of a double")
+        return r
     x = float(value)
     if not math.isfinite(x):
         raise RobotError(f"{what} is {x}: DH parameters must be finite")
@@ -140,9 +142,14 @@ def _link_of(row: DHLink | Mapping[str, Any], j: int) -> DHLink:
 
 def _add(a: Const, b: Const, what: str) -> Const:
     try:
-        return a + b
+        c = a + b
+        if not math.isfinite(c.value):
+            raise OverflowError
+        return c
     except ValueError as exc:
         raise RobotError(f"{what}: {exc}") from None
+    except OverflowError:
+        raise RobotError(f"{what}: d + offset = {c} is beyond the range of a double") from None
 
 
 def _link_ets(link: DHLink, j: int, modified: bool) -> list[ET]:

@@ -21,13 +21,15 @@ import ast
 import math
 import numbers
 import re
+import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from decimal import Decimal, localcontext
 from enum import Enum
 from fractions import Fraction
+from typing import Any
 
-from symkin.errors import ETSParseError
+from symkin.errors import ETSParseError, RobotError
 
 __all__ = ["Axis", "Const", "ET", "ETS", "rational_text", "surd", "tx", "ty", "tz", "Rx", "Ry", "Rz"]
 
@@ -119,10 +121,13 @@ class Const:
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise TypeError(f"a constant must be a number or text, not {type(value).__name__}")
         if isinstance(value, (int, Fraction, numbers.Integral)):
-            return Const(Fraction(int(value)) if isinstance(value, numbers.Integral) else value)
+            r = Fraction(int(value)) if isinstance(value, numbers.Integral) else value
+            if abs(r) > _DBL_MAX:
+                raise RobotError(f"a constant must be within the range of a double, not {value}")
+            return Const(r)
         x = float(value)
         if not math.isfinite(x):
-            raise ValueError(f"a constant must be finite, not {value}")
+            raise RobotError(f"a constant must be finite, not {value}")
         return Const(Fraction(repr(x)))
 
     @staticmethod
@@ -156,7 +161,7 @@ class Const:
 
     def __add__(self, other: Const) -> Const:
         if self.atan2 is not None and other.atan2 is not None:
-            raise ValueError("the sum of two atan2 constants is not representable")
+            raise RobotError("the sum of two atan2 constants is not representable")
         return Const(self.a + other.a, self.b + other.b, self.atan2 or other.atan2)
 
     def __str__(self) -> str:
@@ -177,7 +182,11 @@ class Const:
         return out
 
 
-_DEG = re.compile(r"((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(deg|°)")
+# A number followed by deg/°. Unambiguous (one way to split the digits) and anchored at the start
+# of a number by the lookbehind, so substitution takes linear time in the length of the text.
+_DEG = re.compile(r"(?<![\w.])((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*(deg|°)")
+_DBL_MAX = Fraction(sys.float_info.max)
+MAX_CONST_CHARS = 1000  # longest constant text accepted (a float's exact decimal has under 800)
 
 
 class _Lin:
@@ -190,16 +199,40 @@ class _Lin:
 
 
 def _parse_const(arg: str, text: str, pos: int) -> Const:
-    """Parse ``arg`` (found at ``pos`` of ``text``) into an exact Const."""
-    src = _DEG.sub(r"(\1*pi/180)", arg.strip())
+    """Parse ``arg`` (found at ``pos`` of ``text``) into an exact Const.
+
+    Raises ETSParseError for anything else, including text over :data:`MAX_CONST_CHARS`
+    characters, nesting too deep to evaluate and values beyond the range of a double.
+    """
+    shown = arg if len(arg) <= 60 else arg[:57] + "..."
 
     def fail(why: str) -> ETSParseError:
-        return ETSParseError(f"invalid constant '{arg}': {why}", text, pos)
+        return ETSParseError(f"invalid constant '{shown}': {why}", text, pos)
 
+    if len(arg) > MAX_CONST_CHARS:
+        raise fail(f"{len(arg)} characters, more than the {MAX_CONST_CHARS} allowed")
+    src = _DEG.sub(r"(\1*pi/180)", arg.strip())
     try:
         tree = ast.parse(src, mode="eval")
-    except SyntaxError as exc:
+    except (SyntaxError, ValueError) as exc:  # ValueError: an integer with too many digits
         raise fail("not a number, an expression in pi, or a number with deg/°") from exc
+    except (RecursionError, MemoryError):
+        raise fail("nested too deeply") from None
+    try:
+        c = _evaluate(tree, fail)
+    except RecursionError:
+        raise fail("nested too deeply") from None
+    try:
+        finite = math.isfinite(c.value)
+    except OverflowError:
+        finite = False
+    if not finite:
+        raise fail("its value cannot be computed in double precision (a number beyond about 1.8e308)")
+    return c
+
+
+def _evaluate(tree: ast.Expression, fail: Any) -> Const:
+    """The exact value of a parsed constant expression (see :func:`_parse_const`)."""
 
     def surd_arg(node: ast.AST) -> Fraction:
         neg = False
@@ -293,11 +326,11 @@ class ET:
         if not isinstance(self.axis, Axis):
             raise TypeError(f"axis must be an Axis, not {self.axis!r}")
         if (self.const is None) == (self.joint is None):
-            raise ValueError("an ET is either a constant or a joint, exactly one of the two")
+            raise RobotError("an ET is either a constant or a joint, exactly one of the two")
         if self.joint is not None and (not isinstance(self.joint, int) or self.joint < 0):
-            raise ValueError(f"joint index must be a non-negative int, not {self.joint!r}")
+            raise RobotError(f"joint index must be a non-negative int, not {self.joint!r}")
         if self.const is not None and self.flip:
-            raise ValueError("only joints can be flipped")
+            raise RobotError("only joints can be flipped")
 
     @property
     def is_joint(self) -> bool:
@@ -333,10 +366,10 @@ def _maker(axis: Axis):  # noqa: ANN202
     ) -> ET:
         if q is not None:
             if value is not None:
-                raise ValueError("give a constant or q=, not both")
+                raise RobotError("give a constant or q=, not both")
             return ET(axis, joint=q, flip=flip)
         if value is None:
-            raise ValueError("give a constant value or a joint index q=")
+            raise RobotError("give a constant value or a joint index q=")
         return ET(axis, const=Const.of(value))
 
     make.__name__ = axis.value
@@ -349,7 +382,7 @@ def _maker(axis: Axis):  # noqa: ANN202
 tx, ty, tz, Rx, Ry, Rz = (_maker(a) for a in Axis)
 
 _TOKEN = re.compile(r"(tx|ty|tz|Rx|Ry|Rz)\s*\(")
-_JOINT = re.compile(r"^\s*(-?)\s*q(\d*)\s*$")
+_JOINT = re.compile(r"(-?)\s*q(\d{0,9})")  # fullmatch on the stripped argument: linear time
 
 
 def _tokens(text: str) -> Iterator[tuple[str, str, int]]:
@@ -405,7 +438,7 @@ class ETS:
                 raise TypeError(f"an ETS holds ET objects, not {type(e).__name__}")
         idx = sorted(e.joint for e in self.ets if e.joint is not None)
         if idx != list(range(len(idx))):
-            raise ValueError(f"joint indices must be 0..{len(idx) - 1}, each once; got {idx}")
+            raise RobotError(f"joint indices must be 0..{len(idx) - 1}, each once; got {idx}")
 
     # -- text form ------------------------------------------------------------------------
     @classmethod
@@ -419,7 +452,7 @@ class ETS:
         for name, arg, pos in _tokens(text):
             axis = Axis(name)
             argpos = pos + len(name) + 1
-            jm = _JOINT.match(arg)
+            jm = _JOINT.fullmatch(arg.strip())
             if jm:
                 index = int(jm.group(2)) if jm.group(2) else njoint
                 if index in seen:
@@ -430,6 +463,8 @@ class ETS:
             else:
                 if not arg.strip():
                     raise ETSParseError(f"{name}() needs a constant or a joint q", text, pos)
+                if re.fullmatch(r"-?\s*q\d+", arg.strip()):
+                    raise ETSParseError("joint index too large (at most 9 digits)", text, argpos)
                 out.append(ET(axis, const=_parse_const(arg, text, argpos)))
         if not out:
             raise ETSParseError("empty ETS: expected at least one transform", text, 0)

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import MissingDependencyError
+from symkin.errors import MissingExtraError
 from symkin.model.kinematics import const_matrix, et_matrix
 
 __all__ = ["plot_robot", "chain_points"]
@@ -72,12 +72,12 @@ def plot_robot(
     base and end-effector frames are always drawn); ``ellipsoid``: add the linear-velocity
     manipulability ellipsoid at the end effector, scaled by ``ellipsoid_scale`` m per m/s (default:
     its largest semi-axis a quarter of the drawing's size; the title states the scale); ``path``:
-    save a PNG there (150 dpi). Raises MissingDependencyError without matplotlib.
+    save a PNG there (150 dpi). Raises MissingExtraError without matplotlib.
     """
     try:
         from matplotlib.figure import Figure
     except ImportError:
-        raise MissingDependencyError("robot plots need matplotlib: pip install 'symkin[plot]'") from None
+        raise MissingExtraError("robot plots need matplotlib: pip install 'symkin[plot]'") from None
     q = robot.configs["qz"] if q is None else robot.check_q(q)
     if q.ndim != 1:
         raise ValueError(f"plot draws one configuration: q must have shape ({robot.n},), got {q.shape}")

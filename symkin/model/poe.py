@@ -36,6 +36,9 @@ _FRAMES = ("space", "body")
 _CHECK = 1e-6  # tolerance of the unit-length, pitch and orthonormality checks
 
 
+_LIMIT = 1e150
+
+
 def _tidy(x: Fraction) -> Fraction:
     """Keep small exact rationals; a huge denominator (from float inputs) becomes the float's decimal."""
     return x if x.denominator <= 10**15 else Fraction(repr(float(x)))
@@ -46,10 +49,14 @@ def _exact(value: Any, what: str, tol: float) -> Fraction:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise RobotError(f"{what} must be a number, not {type(value).__name__} {value!r}")
     if isinstance(value, (numbers.Integral, Fraction)):
+        if abs(value) > _LIMIT:
+            raise RobotError(f"{what} is too large: PoE data must be within +-{_LIMIT:g}")
         return Fraction(value)
     x = float(value)
     if not math.isfinite(x):
         raise RobotError(f"{what} is {x}: PoE data must be finite")
+    if abs(x) > _LIMIT:  # squares in norms must not overflow
+        raise RobotError(f"{what} is {x:.3g}: PoE data must be within +-{_LIMIT:g}")
     for target in (0, 1, -1):
         if abs(x - target) <= tol:
             return Fraction(target)

@@ -6,9 +6,11 @@ spellings work everywhere.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
+from symkin.errors import RobotError
 from symkin.model.robot import Robot
 
 __all__ = ["resolve_robot"]
@@ -37,10 +39,22 @@ def _resolve(spec: str | Robot) -> Robot:
         return spec
     from symkin.model.robots import list_robots, load
 
+    if not isinstance(spec, str):
+        raise TypeError(
+            f"a robot is a Robot, a built-in name, ETS text or a file path, not {type(spec).__name__}"
+        )
     text = spec.strip()
     if text in list_robots():
         return load(text)
     path = Path(text).expanduser()
+    if "(" not in text and path.is_dir():
+        raise RobotError(
+            f"{text!r} is a folder; give a DH table file, a URDF file, a built-in name or ETS text"
+        )
+    if "(" not in text and not path.exists() and ("/" in text or os.sep in text or path.suffix):
+        raise RobotError(
+            f"no such file: {text!r} (a robot is a built-in name, quoted ETS text, a DH table or a URDF file)"
+        )
     if "(" not in text and path.suffix.lower() in _URDF_SUFFIXES:
         return Robot.from_urdf(path)
     if "(" not in text and path.is_file():

@@ -13,40 +13,101 @@ from __future__ import annotations
 
 import hashlib
 import math
+import numbers
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cached_property
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, RobotError
+from symkin.errors import ConfigurationError, ParameterError, RobotError, SymkinError
 from symkin.model.ets import ETS
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.model.kinematics import NumericKinematics, cross
 
-__all__ = ["Robot", "as_batch", "identifier", "AXES_ROWS", "jacob_dot_of", "cond_of", "space_jacobian"]
+__all__ = [
+    "Robot",
+    "as_batch",
+    "axes_rows",
+    "real_array",
+    "identifier",
+    "AXES_ROWS",
+    "IDENTIFIER_MAX",
+    "MAX_JOINT_VALUE",
+    "cond_of",
+    "jacob_dot_of",
+    "space_jacobian",
+]
 
 Axes = Literal["all", "trans", "rot"]
 AXES_ROWS: dict[str, slice] = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
 
 
+#: Largest |q| accepted. Beyond it a double resolves an angle to worse than 0.1 rad, and the
+#: generated code's angle sums (``sin(q1 + q2)``) could overflow to inf.
+MAX_JOINT_VALUE = 1e15
+IDENTIFIER_MAX = 40  # longest identifier(): C symbols, module and file names stay short
+
+
 def identifier(text: str) -> str:
-    """A safe lowercase C/Python identifier derived from arbitrary text (robot names in code)."""
+    """A safe lowercase ASCII C/Python identifier for arbitrary text (robot names in generated
+    code, symbols and file names), at most :data:`IDENTIFIER_MAX` characters.
+
+    Letters, digits and underscores are kept (others become ``_``); a name that is not plain
+    ASCII or is too long is cut and ends in ``_`` and 8 hex digits of its hash, so different
+    names stay apart (``café`` -> ``caf__1f3a...``). The display name is kept in ``Robot.name``.
+    """
     ident = re.sub(r"[^a-z0-9_]", "_", text.lower())
     if not ident or ident[0].isdigit():
         ident = "r_" + ident
+    if not text.isascii() or len(ident) > IDENTIFIER_MAX:
+        digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:8]
+        ident = f"{ident[: IDENTIFIER_MAX - 9]}_{digest}"
     return ident
 
 
-def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.ndarray, bool]:
-    """Validate ``q`` (shape (n,) or (N, n), finite) -> ((N, n) float array, was_single)."""
+def real_array(
+    x: Any, what: str, error: type[SymkinError] = ConfigurationError, items: str = "numbers"
+) -> np.ndarray:
+    """``x`` as a float64 array in native byte order, or raise ``error`` naming ``what``.
+
+    Booleans, integers and floats of any byte order convert, and so do sequences and object
+    arrays of real numbers; complex numbers, strings and other objects are refused (NumPy would
+    drop an imaginary part or parse a string), so every backend accepts the same inputs.
+    """
+    if isinstance(x, np.ndarray) and x.dtype.kind in "biuf":
+        return np.asarray(x, dtype=float)
     try:
-        Q = np.asarray(q, dtype=float)
+        a = np.asarray(x)
     except (TypeError, ValueError) as exc:
-        raise ConfigurationError(f"{what} must be an array of {n} numbers: {exc}") from None
+        raise error(f"{what} must be an array of {items}: {exc}") from None
+    kind = a.dtype.kind
+    if kind == "O":
+        for v in a.flat:
+            if isinstance(v, (str, bytes)):
+                kind = "U"
+                break
+            if isinstance(v, numbers.Complex) and not isinstance(v, numbers.Real):
+                kind = "c"
+                break
+    if kind == "c":
+        raise error(f"{what} must be real numbers, not complex")
+    if kind not in "biufO":
+        got = "strings" if kind in "US" else f"{a.dtype} values"
+        raise error(f"{what} must be an array of {items}, not {got}")
+    try:
+        return a.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise error(f"{what} must be an array of {items}: {exc}") from None
+
+
+def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.ndarray, bool]:
+    """Validate ``q`` (shape (n,) or (N, n), real, finite, within :data:`MAX_JOINT_VALUE`)
+    -> ((N, n) float array, was_single)."""
+    Q = real_array(q, what, items=f"{n} numbers")
     single = Q.ndim == 1
     if Q.ndim == 0 or Q.ndim > 2 or Q.shape[-1] != n:
         raise ConfigurationError(
@@ -54,18 +115,22 @@ def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.n
         )
     if single:
         Q = Q[None, :]
-    if not np.isfinite(Q).all():
-        bad = np.argwhere(~np.isfinite(Q))[0]
+    ok = np.abs(Q) <= MAX_JOINT_VALUE  # False for NaN too
+    if not ok.all():
+        bad = np.argwhere(~ok)[0]
         where = f"[{bad[1]}]" if single else f"[{bad[0]}, {bad[1]}]"
-        raise ConfigurationError(f"{what}{where} is {Q[tuple(bad)]}: joint values must be finite")
+        value = Q[tuple(bad)]
+        why = "must be finite" if not np.isfinite(value) else f"must be within +-{MAX_JOINT_VALUE:g}"
+        raise ConfigurationError(f"{what}{where} is {value}: joint values {why}")
     return Q, single
 
 
-def _axes_rows(axes: str) -> slice:
+def axes_rows(axes: str) -> slice:
+    """The rows of J0 that ``axes`` ("all", "trans", "rot") selects; ParameterError otherwise."""
     try:
         return AXES_ROWS[axes]
-    except KeyError:
-        raise ValueError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
+    except (KeyError, TypeError):
+        raise ParameterError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -109,11 +174,13 @@ class Robot:
         n = self.ets.n
         if not isinstance(self.name, str) or not self.name:
             raise RobotError("a robot name must be a non-empty string")
+        if "\0" in self.name or re.search("[\ud800-\udfff]", self.name):
+            raise RobotError(f"a robot name must be text without NUL or lone surrogates, got {self.name!r}")
         if self.qlim is None:
             lo = [-math.pi if e.is_revolute else -1.0 for e in self.ets.joints]
             qlim = np.array([lo, [-v for v in lo]])
         else:
-            qlim = np.asarray(self.qlim, dtype=float)
+            qlim = real_array(self.qlim, "qlim", RobotError)
             if qlim.shape != (2, n):
                 raise RobotError(f"qlim must have shape (2, {n}) (lower row, upper row), got {qlim.shape}")
             if np.isnan(qlim).any():
@@ -123,6 +190,8 @@ class Robot:
                 raise RobotError(f"qlim lower > upper for joint {int(bad[0])}: {qlim[:, bad[0]].tolist()}")
         object.__setattr__(self, "qlim", _readonly(qlim))
         names = tuple(self.joint_names) or tuple(f"q{j}" for j in range(n))
+        if not all(isinstance(x, str) and x for x in names):
+            raise RobotError(f"joint names must be non-empty strings, got {names!r}")
         if len(names) != n:
             raise RobotError(f"{len(names)} joint names given for {n} joints")
         if len(set(names)) != n:
@@ -132,13 +201,13 @@ class Robot:
         for key, value in dict(self.configs).items():
             if not key.isidentifier():
                 raise RobotError(f"configuration name {key!r} is not an identifier")
-            v = np.asarray(value, dtype=float)
-            if v.shape != (n,) or not np.isfinite(v).all():
+            v = real_array(value, f"configuration {key!r}", RobotError)
+            if v.shape != (n,) or not (np.abs(v) <= MAX_JOINT_VALUE).all():
                 raise RobotError(f"configuration {key!r} must be {n} finite numbers, got {value!r}")
             configs[key] = v
         object.__setattr__(self, "configs", {k: _readonly(v) for k, v in configs.items()})
         if self.qd_max is not None:
-            qd = np.asarray(self.qd_max, dtype=float)
+            qd = real_array(self.qd_max, "qd_max", RobotError)
             if qd.shape != (n,) or not (qd > 0).all():
                 raise RobotError(f"qd_max must be {n} positive numbers, got {self.qd_max!r}")
             object.__setattr__(self, "qd_max", _readonly(qd))
@@ -261,6 +330,10 @@ class Robot:
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, ets={str(self.ets)!r})"
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle the fields only (not the cached numeric kinematics): small pickles for workers."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
     def _repr_latex_(self) -> str:
         from symkin.model.latex import robot_latex
 
@@ -268,8 +341,21 @@ class Robot:
 
     @property
     def key(self) -> str:
-        """Structural hash of the kinematics (ETS text and name): the compile-cache key."""
+        """Structural hash (name and ETS text): what the derivation depends on. The compile caches
+        use :attr:`fingerprint`."""
         return hashlib.sha256(f"{self.name}\n{self.ets}".encode()).hexdigest()
+
+    @property
+    def fingerprint(self) -> str:
+        """Hash of every attribute (name, ETS, qlim, qd_max, configurations, joint names, source):
+        two robots with equal fingerprints behave identically. Part of the compile-cache keys."""
+        h = hashlib.sha256(f"{self.name}\0{self.ets}\0{self.source}\0".encode())
+        h.update("\0".join(self.joint_names).encode() + b"\0\0")
+        h.update(np.ascontiguousarray(self.qlim, dtype="<f8").tobytes())
+        h.update(b"none" if self.qd_max is None else np.ascontiguousarray(self.qd_max, dtype="<f8").tobytes())
+        for k in sorted(self.configs):
+            h.update(f"\0{k}\0".encode() + np.ascontiguousarray(self.configs[k], dtype="<f8").tobytes())
+        return h.hexdigest()
 
     @property
     def identifier(self) -> str:
@@ -308,9 +394,15 @@ class Robot:
         return bool(ok[0]) if single else ok
 
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
-        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        """Uniform random configurations within qlim: (n,) or (N, n). An infinite bound is replaced
+        by one turn (revolute) or 2 m (prismatic) beyond the other bound, or +-pi / +-1 m around 0."""
         rng = np.random.default_rng(seed)
         lo, hi = self.qlim
+        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+            half = np.array([math.pi if e.is_revolute else 1.0 for e in self.ets.joints])
+            lo_inf, hi_inf = ~np.isfinite(lo), ~np.isfinite(hi)
+            lo = np.where(lo_inf, np.where(hi_inf, -half, hi - 2 * half), lo)
+            hi = np.where(hi_inf, lo + 2 * half, hi)
         if N is None:
             return rng.uniform(lo, hi)
         return rng.uniform(lo, hi, size=(N, self.n))
@@ -397,22 +489,23 @@ class Robot:
 
     def manipulability(self, q: Any, axes: Axes = "all") -> np.ndarray | float:
         """Yoshikawa manipulability ``sqrt(det(J J^T))`` (eq 52) of the chosen rows of J0."""
-        rows = _axes_rows(axes)
+        rows = axes_rows(axes)
         Q, single = self._batch(q)
         m = manipulability_of(self._num.jacob0(Q)[:, rows])
         return float(m[0]) if single else m
 
     def jacobm(self, q: Any, axes: Axes = "all") -> np.ndarray:
         """Manipulability Jacobian dm/dq (MMC paper eq 11): (n,) or (N, n)."""
-        rows = _axes_rows(axes)
+        rows = axes_rows(axes)
         Q, single = self._batch(q)
         _, J, H = self._num.jacob0_hessian0(Q)
         Jm = jacobm_of(J[:, rows], H[:, :, rows])
         return Jm[0] if single else Jm
 
     def cond(self, q: Any, axes: Axes = "all") -> np.ndarray | float:
-        """Condition number sigma_max / sigma_min of the chosen rows of J0 (eq 53); inf when singular."""
-        rows = _axes_rows(axes)
+        """Condition number sigma_max / sigma_min of the chosen rows of J0 (eq 53); inf when singular
+        (see :func:`cond_of`)."""
+        rows = axes_rows(axes)
         Q, single = self._batch(q)
         c = cond_of(self._num.jacob0(Q)[:, rows])
         return float(c[0]) if single else c
@@ -483,13 +576,18 @@ def hessian_to_ee(T: np.ndarray, J: np.ndarray, H: np.ndarray) -> np.ndarray:
 
 
 def cond_of(J: np.ndarray) -> np.ndarray:
-    """sigma_max / sigma_min per batch item of J (N, r, n) (eq 53); inf when J has rank < r."""
+    """sigma_max / sigma_min per batch item of J (N, r, n) (eq 53), inf where J is rank-deficient:
+    fewer columns than rows, or sigma_min <= sigma_max * max(r, n) * eps (NumPy's matrix_rank
+    tolerance: below it sigma_min is rounding noise, e.g. 1e-17 at a singular configuration)."""
+    r, n = J.shape[-2:]
+    if J.shape[0] == 0:
+        return np.zeros(0)
     s = np.linalg.svd(J, compute_uv=False)
-    with np.errstate(divide="ignore"):
-        c = np.where(s[:, -1] > 0, s[:, 0] / np.where(s[:, -1] > 0, s[:, -1], 1.0), np.inf)
-    if s.shape[-1] < J.shape[1]:  # fewer joints than task rows: rank-deficient
-        c = np.full_like(c, np.inf)
-    return c
+    if n < r:
+        return np.full(J.shape[0], np.inf)
+    singular = s[:, -1] <= s[:, 0] * max(r, n) * np.finfo(float).eps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(singular, np.inf, s[:, 0] / np.where(singular, 1.0, s[:, -1]))
 
 
 def space_jacobian(T: np.ndarray, J: np.ndarray) -> np.ndarray:
@@ -506,7 +604,10 @@ def jacob_dot_of(H: np.ndarray, qd: np.ndarray) -> np.ndarray:
 
 
 def manipulability_of(J: np.ndarray) -> np.ndarray:
-    """sqrt(det(J J^T)) per batch item of J (N, r, n); 0 where J J^T is singular (eq 52)."""
+    """sqrt(det(J J^T)) per batch item of J (N, r, n); 0 where J J^T is singular (eq 52), exactly 0
+    with fewer joints than rows (det would be rounding noise)."""
+    if J.shape[-1] < J.shape[-2]:
+        return np.zeros(J.shape[0])
     d = np.linalg.det(J @ np.swapaxes(J, 1, 2))
     return np.sqrt(np.maximum(d, 0.0))
 
@@ -517,6 +618,8 @@ def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
     ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)``; at a singular configuration (m = 0) the
     pseudo-inverse keeps the result finite.
     """
+    if J.shape[-1] < J.shape[-2]:  # m = 0 for every q: so is its gradient
+        return np.zeros((J.shape[0], J.shape[-1]))
     A = J @ np.swapaxes(J, 1, 2)
     m = np.sqrt(np.maximum(np.linalg.det(A), 0.0))
     try:

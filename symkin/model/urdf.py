@@ -25,10 +25,13 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
+import sys
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
 from xml.etree import ElementTree
+from xml.parsers import expat
 
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
@@ -138,16 +141,31 @@ def _numbers(text: str | None, count: int, what: str, default: str | None = None
     cells = text.split()
     if len(cells) != count:
         raise URDFError(f"{what} must have {count} numbers, got {text!r}")
-    out = []
-    for c in cells:
-        low = c.lower().lstrip("+-")
-        if low in ("nan", "inf", "infinity"):
-            raise URDFError(f"{what} contains {c!r}: numbers must be finite")
-        try:
-            out.append(Fraction(c))
-        except (ValueError, ZeroDivisionError):
-            raise URDFError(f"{what} contains {c!r}, which is not a number") from None
-    return out
+    return [_number(c, what) for c in cells]
+
+
+# a decimal number as XML Schema's xs:double writes it (no inf/nan, no fractions); unambiguous, so
+# matching takes linear time
+_DECIMAL = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
+_MAX_NUMBER_CHARS = 1000
+
+
+def _number(cell: str, what: str) -> Fraction:
+    """One exact, finite number from URDF text (the decimal as written)."""
+    shown = cell if len(cell) <= 40 else cell[:37] + "..."
+    if cell.lower().lstrip("+-") in ("nan", "inf", "infinity"):
+        raise URDFError(f"{what} contains {shown!r}: numbers must be finite")
+    if len(cell) > _MAX_NUMBER_CHARS or not _DECIMAL.fullmatch(cell):
+        raise URDFError(f"{what} contains {shown!r}, which is not a number")
+    mantissa, _, exponent = cell.lower().partition("e")
+    if exponent and abs(int(exponent)) > 400:  # Fraction would build a 10**exponent integer
+        if float(cell) != 0.0:
+            raise URDFError(f"{what} contains {shown!r}, beyond the range of a double (about 1.8e308)")
+        return Fraction(0)  # smaller than the smallest double
+    value = Fraction(cell)
+    if abs(value) > sys.float_info.max:
+        raise URDFError(f"{what} contains {shown!r}, beyond the range of a double (about 1.8e308)")
+    return value
 
 
 def _suggest(name: str, options: Sequence[str]) -> str:
@@ -156,21 +174,57 @@ def _suggest(name: str, options: Sequence[str]) -> str:
     return f"{hint} Links: {list(options)}"
 
 
+class _RefusedError(Exception):
+    pass
+
+
+def _refuse(*args: object) -> None:
+    raise _RefusedError
+
+
+def _refuse_doctype(text: str, where: str) -> None:
+    """Raise URDFError if the XML has a document type declaration (DOCTYPE, entities).
+
+    A URDF never needs one, and its entities are what "billion laughs" and external-entity
+    attacks are made of; expat stops at the declaration, before expanding anything.
+    """
+    parser = expat.ParserCreate()
+    parser.StartDoctypeDeclHandler = _refuse
+    parser.EntityDeclHandler = _refuse
+    try:
+        parser.Parse(text, True)
+    except _RefusedError:
+        raise URDFError(
+            f"{where} has a DOCTYPE (document type declaration); symkin refuses DOCTYPE and entity "
+            "declarations in URDF, which never needs them: remove it"
+        ) from None
+    except expat.ExpatError:
+        pass  # reported by the real parse below, with its position
+
+
 def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     """Parse a URDF file path or XML text -> (root element, description for messages)."""
     if isinstance(path_or_xml, Path) or (
-        isinstance(path_or_xml, str) and not path_or_xml.lstrip().startswith("<")
+        isinstance(path_or_xml, str) and not path_or_xml.lstrip().lstrip("\ufeff").lstrip().startswith("<")
     ):
         path = Path(path_or_xml)
+        shown = repr(str(path)) if len(str(path)) <= 200 else repr(str(path)[:197] + "...")
         try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise URDFError(f"cannot read URDF file {str(path)!r}: {exc.strerror or exc}") from None
-        where = f"URDF file {str(path)!r}"
+            text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is allowed
+        except UnicodeDecodeError as exc:
+            raise URDFError(
+                f"URDF file {shown} is not UTF-8 text: {exc.reason} at byte {exc.start}"
+            ) from None
+        except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+            raise URDFError(
+                f"cannot read URDF file {shown}: {getattr(exc, 'strerror', None) or exc}"
+            ) from None
+        where = f"URDF file {shown}"
     elif isinstance(path_or_xml, str):
-        text, where = path_or_xml, "URDF text"
+        text, where = path_or_xml.lstrip().lstrip("\ufeff"), "URDF text"
     else:
         raise URDFError(f"expected a URDF file path or XML text, not {type(path_or_xml).__name__}")
+    _refuse_doctype(text, where)
     try:
         root = ElementTree.fromstring(text)
     except ElementTree.ParseError as exc:

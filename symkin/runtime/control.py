@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import CompileError, ConfigurationError
+from symkin.errors import CompileError, ConfigurationError, ParameterError
+from symkin.model.robot import MAX_JOINT_VALUE, real_array
 from symkin.runtime.mmc_qp import (
     _AXES,
     MMCQP,
@@ -108,17 +109,41 @@ class StepInfo:
 
 
 def _q(kin: Any, q: Any) -> np.ndarray:
-    q = np.asarray(q, dtype=float)
-    if q.shape != (kin.n,) or not np.isfinite(q).all():
-        raise ConfigurationError(f"q must be {kin.n} finite numbers, got {q!r}")
+    q = real_array(q, "q")
+    if q.shape != (kin.n,) or not (np.abs(q) <= MAX_JOINT_VALUE).all():
+        raise ConfigurationError(f"q must be {kin.n} finite numbers within +-{MAX_JOINT_VALUE:g}, got {q!r}")
     return q
 
 
 def _nu(nu: Any) -> np.ndarray:
-    nu = np.asarray(nu, dtype=float)
+    nu = real_array(nu, "nu", ParameterError)
     if nu.shape != (6,) or not np.isfinite(nu).all():
-        raise ValueError(f"nu must be 6 finite numbers (v, omega), got {nu!r}")
+        raise ParameterError(f"nu must be 6 finite numbers (v, omega), got {nu!r}")
     return nu
+
+
+def _number(value: Any, name: str, minimum: float = 0.0, strict: bool = True) -> float:
+    """``value`` as a finite float > ``minimum`` (``>=`` when not ``strict``), else ParameterError."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+    if not (math.isfinite(x) and (x > minimum if strict else x >= minimum)):
+        raise ParameterError(
+            f"{name} must be finite and {'>' if strict else '>='} {minimum:g}, got {value!r}"
+        )
+    return x
+
+
+def _per_joint(value: Any, n: int, name: str) -> np.ndarray:
+    """A scalar or (n,) parameter as finite (n,) floats >= 0, else ParameterError."""
+    try:
+        a = np.broadcast_to(real_array(value, name, ParameterError), (n,)).copy()
+    except ValueError:
+        raise ParameterError(f"{name} must be a number or {n} numbers, got {value!r}") from None
+    if not (np.isfinite(a).all() and (a >= 0).all()):
+        raise ParameterError(f"{name} must be finite and >= 0, got {a.tolist()}")
+    return a
 
 
 def _speed_limits(kin: Any, n: int, qd_max: Any) -> np.ndarray:
@@ -127,9 +152,12 @@ def _speed_limits(kin: Any, n: int, qd_max: Any) -> np.ndarray:
         qd_max = getattr(kin, "qd_max", None)
     if qd_max is None:
         return np.full(n, np.inf)
-    a = np.broadcast_to(np.asarray(qd_max, dtype=float), (n,)).copy()
+    try:
+        a = np.broadcast_to(real_array(qd_max, "qd_max", ParameterError), (n,)).copy()
+    except ValueError:
+        raise ParameterError(f"qd_max must be a number or {n} numbers, got {qd_max!r}") from None
     if not (a > 0).all() or np.isnan(a).any():
-        raise ValueError(f"qd_max must be positive, got {a.tolist()}")
+        raise ParameterError(f"qd_max must be positive (inf for no limit), got {a.tolist()}")
     return a
 
 
@@ -174,6 +202,8 @@ def rrmc(
         return c.fast(q, nu) or c.step(q, nu)  # fast: None for invalid input; step raises the error
     q = _q(kin, q)
     nu = _nu(nu)
+    damping = _number(damping, "damping", strict=False)
+    singular_tol = _number(singular_tol, "singular_tol", strict=False)
     J = np.asarray(kin.jacob0(q), dtype=float)
     qd, status, method, m = _rrmc_step(J, nu, damping, singular_tol, _axes(axes))
     qd, scale = scale_to_limits(qd, _speed_limits(kin, kin.n, qd_max))
@@ -202,8 +232,8 @@ def rrmc_controller(
     if not mmc_c.supports(kin):
         return None
     _axes(axes)
-    if not (float(damping) >= 0 and float(singular_tol) >= 0):
-        raise ValueError(f"damping and singular_tol must be >= 0, got {damping}, {singular_tol}")
+    damping = _number(damping, "damping", strict=False)
+    singular_tol = _number(singular_tol, "singular_tol", strict=False)
     c = mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), damping, singular_tol, axes)
     try:
         if isinstance(cache, dict):
@@ -298,27 +328,28 @@ class MMC:
         backend: str = "auto",
     ) -> None:
         if backend not in ("auto", "c", "python"):
-            raise ValueError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
-        if not lam > 0:
-            raise ValueError(f"lam must be positive, got {lam}")
-        if joint_limits and not np.all(np.asarray(rho_i) > np.asarray(rho_s)):
-            raise ValueError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s})")
+            raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin = kin
         self.n = int(kin.n)
-        self.lam = float(lam)
+        if self.n < 1:
+            raise ParameterError("MMC needs a robot with at least one joint")
+        self.lam = _number(lam, "lam")
         self.axes = axes
         self._rows = _axes(axes)
         self.qd_max = _speed_limits(kin, self.n, qd_max)
         self._bounded = bool(joint_limits) or bool(np.isfinite(self.qd_max).any())
         self.qlim = np.asarray(kin.qlim, dtype=float)
         self.joint_limits = bool(joint_limits)
-        self.rho_i, self.rho_s, self.xi = rho_i, rho_s, float(xi)
-        self.dt = None if dt is None else float(dt)
+        ri, rs = _per_joint(rho_i, self.n, "rho_i"), _per_joint(rho_s, self.n, "rho_s")
+        if self.joint_limits and not (ri > rs).all():
+            raise ParameterError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s})")
+        self.rho_i, self.rho_s, self.xi = rho_i, rho_s, _number(xi, "xi")
+        self.dt = None if dt is None else _number(dt, "dt")
         self.slack = self.joint_limits if slack is None else bool(slack)
-        self.slack_weight = float(slack_weight)
+        self.slack_weight = _number(slack_weight, "slack_weight")
         self.closed_form = bool(closed_form)
         self.active_set = bool(active_set)
-        self.singular_tol = float(singular_tol)
+        self.singular_tol = _number(singular_tol, "singular_tol", strict=False)
         self.settings = {**OSQP_SETTINGS, **(osqp_settings or {})}
         self._jh = getattr(kin, "jacob0_hessian0", None)
         self._solver: Any = None  # osqp.OSQP, set up on the first step that needs it (osqp imported then)
@@ -408,8 +439,17 @@ class MMC:
         """
         if self._c is not None:
             return self._c.fast(q, nu) or self._c.step(q, nu)  # fast: None for invalid input
-        q = _q(self.kin, q)
         nu = _nu(nu)
+        try:
+            qd, info = self._step(_q(self.kin, q), nu)
+        except np.linalg.LinAlgError:  # non-finite kinematics (e.g. overflow): no answer
+            qd, info = np.full(self.n, math.nan), StepInfo("error", "closed_form", math.nan)
+        if not np.isfinite(qd).all():  # never "solved" with NaN or inf: stop the joints instead
+            res = float(np.abs(nu).max())  # max |J 0 - nu|
+            return np.zeros(self.n), StepInfo("error", info.method, info.manipulability, 0, "zero", res)
+        return qd, info
+
+    def _step(self, q: np.ndarray, nu: np.ndarray) -> tuple[np.ndarray, StepInfo]:
         J, Jm, m, s_min, B = self._terms(q)
         lower, upper = self.bounds(q)
         if self.closed_form and B is not None:

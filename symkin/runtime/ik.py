@@ -32,6 +32,7 @@ The C solver (:mod:`symkin.runtime.ik_c`) runs the same loop with the same rando
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import weakref
 from collections.abc import Sequence
@@ -40,7 +41,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, PoseError
+from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.model.robot import real_array
 
 __all__ = [
     "IKResult",
@@ -162,39 +164,67 @@ class IKOptions:
         starts: Any = None,
     ) -> IKOptions:
         n = int(kin.n)
+        if n < 1:
+            raise ParameterError("inverse kinematics needs a robot with at least one joint")
         method = str(method).upper()
         if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, not {method!r}")
+            raise ParameterError(f"method must be one of {METHODS}, not {method!r}")
         damping = str(damping).lower()
         if damping not in DAMPINGS:
-            raise ValueError(f"damping must be one of {DAMPINGS}, not {damping!r}")
+            raise ParameterError(f"damping must be one of {DAMPINGS}, not {damping!r}")
         if method == "NR" and not pinv and n != 6:
-            raise ValueError(
+            raise ParameterError(
                 f"NR without pinv needs a square Jacobian (6 joints), not {n}; use pinv=True or LM"
             )
-        lam_a = np.broadcast_to(np.asarray(lam, dtype=float), (n,)).copy()
+        try:
+            lam_a = np.broadcast_to(real_array(lam, "lam", ParameterError), (n,)).copy()
+        except ValueError:
+            raise ParameterError(f"lam must be a number or {n} numbers, got {lam!r}") from None
         if not (np.isfinite(lam_a).all() and (lam_a >= 0).all()):
-            raise ValueError(f"lam must be finite and >= 0, got {lam!r}")
-        we_a = np.ones(6) if we is None else np.asarray(we, dtype=float)
+            raise ParameterError(f"lam must be finite and >= 0, got {lam!r}")
+        we_a = np.ones(6) if we is None else real_array(we, "we", ParameterError)
         if we_a.shape != (6,) or not np.isfinite(we_a).all() or (we_a < 0).any() or not (we_a > 0).any():
-            raise ValueError(f"we must be 6 finite weights >= 0, not all 0, got {we!r}")
-        if int(ilimit) < 1 or int(slimit) < 1:
-            raise ValueError(f"ilimit and slimit must be >= 1, got {ilimit}, {slimit}")
-        if not (float(tol) > 0 and math.isfinite(float(tol))):
-            raise ValueError(f"tol must be a positive number, got {tol!r}")
+            raise ParameterError(f"we must be 6 finite weights >= 0, not all 0, got {we!r}")
+        ilimit, slimit = _count(ilimit, "ilimit"), _count(slimit, "slimit")
+        if ilimit * slimit > MAX_ITERATIONS:
+            raise ParameterError(
+                f"ilimit * slimit = {ilimit * slimit} exceeds {MAX_ITERATIONS} iterations per target "
+                "(the iteration counters are 32-bit)"
+            )
+        try:
+            tol_ok = float(tol) > 0 and math.isfinite(float(tol))
+        except (TypeError, ValueError):
+            tol_ok = False
+        if not tol_ok:
+            raise ParameterError(f"tol must be a positive number, got {tol!r}")
         if tol_on not in ("e", "E"):
-            raise ValueError(f"tol_on must be 'e' (|e|_We < tol) or 'E' (E < tol), not {tol_on!r}")
+            raise ParameterError(f"tol_on must be 'e' (|e|_We < tol) or 'E' (E < tol), not {tol_on!r}")
         qlim = np.asarray(kin.qlim, dtype=float)
         if qlim.shape != (2, n) or np.isnan(qlim).any():
-            raise ValueError(f"kin.qlim must be a (2, {n}) array without NaN, got shape {qlim.shape}")
+            raise ParameterError(f"kin.qlim must be a (2, {n}) array without NaN, got shape {qlim.shape}")
         rev = revolute_mask(kin)
-        S = np.zeros((0, n)) if starts is None else np.asarray(starts, dtype=float).reshape(-1, n)
+        S = np.zeros((0, n)) if starts is None else real_array(starts, "starts")
+        if not (S.shape == (n,) or (S.ndim == 2 and S.shape[1] == n)):
+            raise ConfigurationError(f"starts must have shape (S, {n}), got {S.shape}")
+        S = S.reshape(-1, n)
         if not np.isfinite(S).all():
             raise ConfigurationError("starts must be finite")
         return cls(
             n, method, damping, _ro(lam_a), bool(pinv), int(ilimit), int(slimit), float(tol), tol_on,
             bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S),
         )  # fmt: skip
+
+
+MAX_ITERATIONS = 2**31 - 1  # ilimit * slimit: the C solver counts iterations in int32
+
+
+def _count(value: Any, name: str) -> int:
+    """An iteration or search limit: an integer in 1 .. MAX_ITERATIONS, else ParameterError."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, float, np.floating)):
+        raise ParameterError(f"{name} must be a positive integer, got {value!r}")
+    if not (float(value).is_integer() and 1 <= value <= MAX_ITERATIONS):
+        raise ParameterError(f"{name} must be an integer from 1 to {MAX_ITERATIONS}, got {value!r}")
+    return int(value)
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
@@ -267,10 +297,7 @@ def check_pose(Tep: Any) -> tuple[np.ndarray, bool]:
     Raises PoseError for a wrong shape, NaN/inf, a bottom row other than (0, 0, 0, 1), a
     rotation with ``max |R^T R - I| > 1e-6`` or a reflection (det R < 0).
     """
-    try:
-        T = np.asarray(Tep, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise PoseError(f"a target pose must be a 4x4 array: {exc}") from None
+    T = real_array(Tep, "a target pose", PoseError)
     single = T.ndim == 2
     if T.ndim not in (2, 3) or T.shape[-2:] != (4, 4):
         raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
@@ -502,7 +529,7 @@ def ik(
         return solver.solve(Tep, q0, seed)
     opt = _options(kin, *args)
     if backend != "numpy":
-        raise ValueError(f"backend must be 'numpy' or 'c', not {backend!r}")
+        raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
     Q0 = _start_rows(q0, opt.n, len(T), single)
     seed = new_seed() if seed is None else int(seed) & _M64
@@ -511,6 +538,9 @@ def ik(
     ]
     if single:
         return IKResult(*out[0])
+    if not out:  # no targets: empty arrays, like the C solver
+        z = np.zeros(0, dtype=int)
+        return IKResult(np.zeros((0, opt.n)), np.zeros(0, dtype=bool), z, z.copy(), np.zeros(0), ())
     q, success, iterations, searches, residual, reason = zip(*out, strict=True)
     return IKResult(
         np.array(q), np.array(success), np.array(iterations), np.array(searches), np.array(residual), reason
@@ -558,10 +588,7 @@ def _start_rows(q0: Any, n: int, N: int, single: bool) -> np.ndarray | None:
     """q0 as (N, n) rows (one per target), or None."""
     if q0 is None:
         return None
-    try:
-        Q = np.asarray(q0, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ConfigurationError(f"q0 must be an array of {n} numbers: {exc}") from None
+    Q = real_array(q0, "q0")
     if Q.shape == (n,):
         Q = np.broadcast_to(Q, (N, n))
     elif single or Q.shape != (N, n):

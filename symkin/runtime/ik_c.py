@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ConfigurationError, PoseError
+from symkin.model.robot import real_array
 from symkin.runtime.ik import IKOptions, IKResult, check_pose, ets_of, failure_reason
 
 __all__ = [
@@ -327,10 +328,7 @@ class CIKSolver:
             seed = self._seeds.getrandbits(64)
         else:
             seed = int(seed) & _M64
-        try:
-            T = np.ascontiguousarray(Tep, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise PoseError(f"a target pose must be a 4x4 array: {exc}") from None
+        T = np.ascontiguousarray(real_array(Tep, "a target pose", PoseError))  # no complex, strings...
         if T.shape != (4, 4):
             return self._solve_batch(T, q0, seed)
         check_pose(T)  # the detailed PoseError
@@ -349,10 +347,7 @@ class CIKSolver:
         return _result(q, bool(st.success), st.iterations, st.searches, st.residual, reason)
 
     def _check_q0(self, q0: Any) -> np.ndarray:
-        try:
-            q = np.asarray(q0, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ConfigurationError(f"q0 must be an array of {self.n} numbers: {exc}") from None
+        q = real_array(q0, "q0", items=f"{self.n} numbers")
         if q.shape != (self.n,) or not np.isfinite(q).all():
             raise ConfigurationError(f"q0 must be {self.n} finite numbers, got shape {q.shape}")
         return q
@@ -364,7 +359,7 @@ class CIKSolver:
         N, n = len(T), self.n
         stride, Q0 = 0, None
         if q0 is not None:
-            Q0 = np.ascontiguousarray(np.asarray(q0, dtype=float))
+            Q0 = np.ascontiguousarray(real_array(q0, "q0"))
             if Q0.shape == (N, n) and (N != 1 or Q0.ndim == 2):
                 stride = n
             elif Q0.shape != (n,):

@@ -19,9 +19,9 @@ import numpy as np
 
 from symkin.errors import ConfigurationError
 from symkin.model.robot import (
-    AXES_ROWS,
     Robot,
     as_batch,
+    axes_rows,
     cond_of,
     jacob_dot_of,
     jacobm_of,
@@ -47,11 +47,11 @@ KIN_METHODS = (
 )
 
 
-def _rows(axes: str) -> slice:
-    try:
-        return AXES_ROWS[axes]
-    except KeyError:
-        raise ValueError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
+def _rebuild(robot: Robot, backend: str) -> Kinematics:
+    """The kinematics of ``robot`` on ``backend`` (the unpickler of :class:`Kinematics`)."""
+    from symkin.compile import compile as compile_robot
+
+    return compile_robot(robot, backend=backend)
 
 
 class Kinematics:
@@ -114,12 +114,17 @@ class Kinematics:
     def __repr__(self) -> str:
         return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
 
+    def __reduce__(self) -> tuple[Any, tuple[Robot, str]]:
+        """Pickle as (robot, backend): unpickling compiles again, which loads the generated code
+        from the compile cache of the process that unpickles (a Dask worker, say) when it is there."""
+        return (_rebuild, (self.robot, self.backend))
+
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
         """Yoshikawa manipulability of the chosen rows of J0 (eq 52): float, or (N,) for a batch.
 
         One configuration takes the backend's single-configuration J0 and no determinant routine
         (:func:`symkin.runtime.manip.manipulability_one`)."""
-        rows = _rows(axes)
+        rows = axes_rows(axes)
         if type(q) is np.ndarray and q.ndim == 1:  # jacob0 checks q
             return manipulability_one(self.jacob0(q)[rows])
         Q, single = as_batch(q, self.n, self.name)
@@ -130,7 +135,7 @@ class Kinematics:
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
         """Manipulability Jacobian (Haviland and Corke, Maximising Manipulability During Resolved-Rate
         Motion Control, 2020, eq 11), (n,) or (N, n)."""
-        rows = _rows(axes)
+        rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
         if single:
             J, H = self.jacob0_hessian0(Q[0])
@@ -139,11 +144,10 @@ class Kinematics:
         return jacobm_of(J[:, rows], H[:, :, rows])
 
     def cond(self, q: Any, axes: str = "all") -> np.ndarray | float:
-        """Condition number sigma_max / sigma_min of the chosen rows of J0 (eq 53): float, or (N,)
-        for a batch; inf where J loses rank."""
-        rows = _rows(axes)
+        """Condition number of the chosen rows of J0 (eq 53), inf at a singular configuration."""
+        rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
-        c = cond_of((self.jacob0(Q[0])[None] if single else self.jacob0(Q))[:, rows])
+        c = cond_of(self.jacob0(Q)[:, rows])
         return float(c[0]) if single else c
 
     def jacobs(self, q: Any) -> np.ndarray:

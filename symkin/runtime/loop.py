@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -11,7 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, PoseError
+from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.model.robot import real_array
 from symkin.runtime.control import MMC, StepInfo, rrmc, rrmc_controller
 from symkin.runtime.ik import check_pose, pose_error
 from symkin.runtime.servo import servo_gain, servo_velocity
@@ -121,24 +123,24 @@ def servo(
     the time of the C step alone.
     """
     if backend not in ("auto", "c", "python"):
-        raise ValueError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
+        raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
     n = int(kin.n)
-    q = np.array(q0, dtype=float)
+    q = real_array(q0, "q0").copy()
     if q.shape != (n,) or not np.isfinite(q).all():
         raise ConfigurationError(f"q0 must be {n} finite numbers, got {q0!r}")
-    if not dt > 0:
-        raise ValueError(f"dt must be positive, got {dt}")
-    if max_steps < 0:
-        raise ValueError(f"max_steps must be >= 0, got {max_steps}")
-    T = np.asarray(Tep, dtype=float) if isinstance(Tep, np.ndarray) else None
+    if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
+        raise ParameterError(f"dt must be a positive finite number, got {dt!r}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 0:
+        raise ParameterError(f"max_steps must be an integer >= 0, got {max_steps!r}")
+    T = real_array(Tep, "the target pose", PoseError) if isinstance(Tep, np.ndarray) else None
     if T is None or T.shape != (4, 4):  # the C loop checks the pose itself
         T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
         if not single:
             raise PoseError(f"servo takes one target pose (4, 4), got shape {np.shape(Tep)}")
         T = T_all[0]
     k = [float(gain)] * 6 if type(gain) in (int, float) and 0 <= gain < math.inf else servo_gain(gain)
-    if threshold < 0:
-        raise ValueError(f"threshold must be non-negative, got {threshold}")
+    if not (isinstance(threshold, numbers.Real) and math.isfinite(threshold) and threshold >= 0):
+        raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
     _check_cap(nu_max)
     step, name, cstep = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
     if isinstance(controller, MMC):
@@ -214,7 +216,9 @@ def _controller(
         return controller.step, "mmc", cstep
     if isinstance(controller, str) and controller == "rrmc":
         if joint_limits:
-            raise ValueError("joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)")
+            raise ParameterError(
+                "joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)"
+            )
         return (
             (lambda q, nu: rrmc(kin, q, nu, qd_max=qd_max, axes=axes)),
             "rrmc",
@@ -222,18 +226,18 @@ def _controller(
         )
     if callable(controller):
         return controller, getattr(controller, "__name__", type(controller).__name__), None
-    raise ValueError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
+    raise ParameterError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
 
 
 def _check_cap(nu_max: Any) -> None:
     """The checks of servo_velocity's nu_max, made before the loop starts."""
     if nu_max is None:
         return
-    cap = np.asarray(nu_max, dtype=float)
+    cap = real_array(nu_max, "nu_max", ParameterError)
     if cap.ndim != 0 and cap.shape != (2,):
-        raise ValueError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
+        raise ParameterError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
     if not (cap > 0).all():
-        raise ValueError(f"velocity caps must be positive, got {cap.tolist()}")
+        raise ParameterError(f"velocity caps must be positive, got {cap.tolist()}")
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:

@@ -20,7 +20,9 @@ __all__ = ["manipulability_one", "jacobm_one"]
 
 def manipulability_one(Jr: np.ndarray) -> float:
     """sqrt(det(Jr Jr^T)) (eq 52) of one (r, n) Jacobian, r = 3 or 6 (other r: numpy's det);
-    0 where Jr Jr^T is singular."""
+    0 where Jr Jr^T is singular, exactly 0 with fewer joints than rows."""
+    if Jr.shape[1] < Jr.shape[0]:
+        return 0.0
     G = (Jr @ Jr.T).tolist()
     r = len(G)
     if r == 6:

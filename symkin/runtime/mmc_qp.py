@@ -20,6 +20,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from symkin.errors import ParameterError
+
 __all__ = [
     "MMCQP",
     "mmc_qp",
@@ -37,8 +39,8 @@ _AXES = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
 def _axes(axes: str) -> slice:
     try:
         return _AXES[axes]
-    except KeyError:
-        raise ValueError(f"axes must be one of {sorted(_AXES)}, not {axes!r}") from None
+    except (KeyError, TypeError):
+        raise ParameterError(f"axes must be one of {sorted(_AXES)}, not {axes!r}") from None
 
 
 def manipulability_jacobian(J: np.ndarray, H: np.ndarray, axes: str = "all") -> tuple[np.ndarray, float]:

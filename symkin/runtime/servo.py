@@ -9,12 +9,14 @@ numpy only. All quantities are in the robot's base frame; spatial velocities and
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from symkin.errors import PoseError
+from symkin.errors import ParameterError, PoseError
+from symkin.model.robot import real_array
 from symkin.runtime.ik import pose_error
 
 __all__ = ["p_servo", "servo_velocity", "servo_gain", "pose_error_checked"]
@@ -27,7 +29,7 @@ def pose_error_checked(Te: Any, Tep: Any) -> np.ndarray:
 
 def servo_gain(gain: float | Sequence[float] | np.ndarray) -> np.ndarray:
     """The diagonal of the gain matrix k (eq 42) from a scalar, ``(k_t, k_r)`` or six values: (6,)."""
-    g = np.asarray(gain, dtype=float)
+    g = real_array(gain, "gain", ParameterError)
     if g.ndim == 0:
         k = np.full(6, float(g))
     elif g.shape == (2,):
@@ -35,9 +37,9 @@ def servo_gain(gain: float | Sequence[float] | np.ndarray) -> np.ndarray:
     elif g.shape == (6,):
         k = g.copy()
     else:
-        raise ValueError(f"gain must be a number, (k_t, k_r) or 6 numbers, got shape {g.shape}")
+        raise ParameterError(f"gain must be a number, (k_t, k_r) or 6 numbers, got shape {g.shape}")
     if not np.isfinite(k).all() or (k < 0).any():
-        raise ValueError(f"gain must be finite and non-negative, got {k.tolist()}")
+        raise ParameterError(f"gain must be finite and non-negative, got {k.tolist()}")
     return k
 
 
@@ -72,26 +74,26 @@ def servo_velocity(
     mixes m/s with rad/s (Excurse 1); a pair ``(v_max, omega_max)`` caps the translational and
     rotational parts separately, each keeping its direction. ``None`` (default) applies no cap.
     """
-    if threshold < 0:
-        raise ValueError(f"threshold must be non-negative, got {threshold}")
+    if not (isinstance(threshold, numbers.Real) and math.isfinite(threshold) and threshold >= 0):
+        raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
     if float(np.abs(e).sum()) < threshold:
         return np.zeros(6), True
     nu = servo_gain(gain) * e
     if nu_max is not None:
-        cap = np.asarray(nu_max, dtype=float)
+        cap = real_array(nu_max, "nu_max", ParameterError)
         if cap.ndim == 0:
             _cap(nu, slice(0, 6), float(cap))
         elif cap.shape == (2,):
             _cap(nu, slice(0, 3), float(cap[0]))
             _cap(nu, slice(3, 6), float(cap[1]))
         else:
-            raise ValueError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
+            raise ParameterError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
     return nu, False
 
 
 def _cap(nu: np.ndarray, rows: slice, limit: float) -> None:
     if not limit > 0:
-        raise ValueError(f"velocity caps must be positive, got {limit}")
+        raise ParameterError(f"velocity caps must be positive, got {limit}")
     s = 0.0
     for v in nu[rows].tolist():  # summed in order, as the C servo loop does
         s += v * v
@@ -101,7 +103,7 @@ def _cap(nu: np.ndarray, rows: slice, limit: float) -> None:
 
 
 def _pose(T: Any, what: str) -> np.ndarray:
-    T = np.asarray(T, dtype=float)
+    T = real_array(T, what, PoseError)
     if T.shape != (4, 4):
         raise PoseError(f"{what} must be a 4x4 homogeneous transform, got shape {T.shape}")
     if not np.isfinite(T).all():

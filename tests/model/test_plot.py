@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.errors import MissingDependencyError
+from symkin.errors import MissingExtraError
 from symkin.model.plot import chain_points
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -45,7 +45,7 @@ def test_plot_without_matplotlib_says_what_to_install(monkeypatch) -> None:
         return real(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_mpl)
-    with pytest.raises(MissingDependencyError, match=r"pip install 'symkin\[plot\]'"):
+    with pytest.raises(MissingExtraError, match=r"pip install 'symkin\[plot\]'"):
         symkin.load("ur5").plot()
 
 

@@ -11,6 +11,7 @@
  * C99; also compiles as C++ (restrict becomes __restrict).
  */
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 #include "symkin_ur5.h"
 
@@ -33,53 +34,94 @@ const char *const symkin_ur5_joint_names[SYMKIN_UR5_N] = {
 };
 
 /*
- * Inline sin and cos (fdlibm's kernels on [-pi/4, pi/4] after a three-part Cody-Waite
- * reduction by pi/2): no libm call per angle, which is what bounds batch throughput otherwise.
- * Within about 1 ulp of libm for |x| < 1e6; larger arguments go to libm.
+ * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
+ * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
+ * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
+ * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
+ * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
+ * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
+ * whose sin and cos are both used is reduced once.
  */
-static inline double sk_reduce_(double x, long *quadrant)
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
+
+/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
+   the second stage always runs (its rounding error is captured exactly), the third's result is
+   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
+SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
     const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
-    *quadrant = (long)k & 3;
-    double r = x - k * 1.57079632673412561417e+00;
-    r = r - k * 6.07710050630396597660e-11;
-    return r - k * 2.02226624871116645580e-21;
+    const double t = x - k * 1.57079632673412561417e+00; /* exact */
+    double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const double y = r - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3;
+    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
+    *r0 = third ? y3 : y;
+    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
+    return (long)k & 3;
 }
 
-static inline double sk_ksin_(double x)
+/* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
+SK_INLINE double sk_ksin_(double x, double y)
 {
     const double z = x * x;
-    return x + x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+    const double p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
         + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
 }
 
-static inline double sk_kcos_(double x)
+/* cos(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
+SK_INLINE double sk_kcos_(double x, double y)
 {
     const double z = x * x;
     const double r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
         + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
     const double hz = 0.5 * z, w = 1.0 - hz;
-    return w + (((1.0 - w) - hz) + z * r);
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
 }
 
-static inline double sk_sin(double x)
+/* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
+   angle (a mispredicted branch costs more than both kernels) */
+SK_INLINE double sk_select_(long k, double a, double b)
 {
-    if (!(fabs(x) < 1e6))
+    uint64_t ua, ub, u;
+    memcpy(&ua, &a, sizeof ua);
+    memcpy(&ub, &b, sizeof ub);
+    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
+    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
+    double r;
+    memcpy(&r, &u, sizeof r);
+    return r;
+}
+
+SK_INLINE double sk_sin(double x)
+{
+    if (!(fabs(x) <= 1.6e6))
         return sin(x);
-    long k;
-    const double r = sk_reduce_(x, &k);
-    const double s = sk_ksin_(r), c = sk_kcos_(r);
-    return k == 0 ? s : k == 1 ? c : k == 2 ? -s : -c;
+    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
+        return x;
+    double r0, r1;
+    const long k = sk_reduce_(x, &r0, &r1);
+    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
 }
 
-static inline double sk_cos(double x)
+SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) < 1e6))
+    if (!(fabs(x) <= 1.6e6))
         return cos(x);
-    long k;
-    const double r = sk_reduce_(x, &k);
-    const double s = sk_ksin_(r), c = sk_kcos_(r);
-    return k == 0 ? c : k == 1 ? -s : k == 2 ? -c : s;
+    double r0, r1;
+    const long k = sk_reduce_(x, &r0, &r1);
+    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
 }
 
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
@@ -1758,6 +1800,8 @@ double symkin_ur5_manipulability(const double *q, int axes)
 {
     double J[6 * 6], A[36];
     int r, r0 = rows_(axes, &r);
+    if (6 < r) /* fewer joints than rows: J J^T is singular, m = 0 exactly */
+        return 0.0;
     jacob0_(q, J);
     gram_(J, r0, r, A);
     if (!chol_(A, r))
@@ -1772,6 +1816,10 @@ double symkin_ur5_jacobm(const double *q, int axes, double *Jm)
 {
     double J[6 * 6], H[6 * 6 * 6], A[36], B[6 * 6];
     int r, r0 = rows_(axes, &r);
+    if (6 < r) {
+        memset(Jm, 0, sizeof(double) * 6);
+        return 0.0;
+    }
     jacob0_hessian0_(q, J, H);
     gram_(J, r0, r, A);
     if (!chol_(A, r)) {

@@ -1,7 +1,8 @@
 """Compile C sources into a cached shared library, safely under concurrency.
 
-A cache entry is a folder ``<cache>/<name>-<key>/`` holding the sources, ``lib<name>.so`` and
-``lib<name>.so.sha256`` (the library's checksum, written after it). ``key`` is a sha256 of the
+A cache entry is a folder ``<cache>/<name>-<key>/`` holding the sources, ``lib<name>.so``,
+``lib<name>.so.build`` (the hash of the sources and flags, so a warm cache works without a
+compiler) and ``lib<name>.so.sha256`` (the library's checksum, written last). ``key`` is a sha256 of the
 sources, the flags and the compiler's identity (resolved path, size, mtime; the host name too
 when the flags contain ``-march=native``). An entry is built in a temporary folder inside the
 cache and moved into place with one ``rename``, so readers never see a half-written entry and the
@@ -27,7 +28,16 @@ from pathlib import Path
 
 from symkin.errors import CompileError
 
-__all__ = ["compile_library", "load_library", "cache_dir", "find_compiler", "DEFAULT_OPT_FLAGS", "BASE_FLAGS"]
+__all__ = [
+    "compile_library",
+    "load_library",
+    "cache_dir",
+    "write_atomic",
+    "find_compiler",
+    "check_cflags",
+    "DEFAULT_OPT_FLAGS",
+    "BASE_FLAGS",
+]
 
 DEFAULT_OPT_FLAGS: tuple[str, ...] = ("-O2", "-march=native")  # -O3: same speed, 1 s slower to build
 # -ffp-contract=off: no fused multiply-add, so results round like NumPy's (FMA changes them at 1e-16).
@@ -46,10 +56,37 @@ _FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*\.(c|h)$")
 _NO_COMPILER_HINT = "The NumPy backend works without a C compiler (backend='numpy')."
 
 
+_ABSOLUTE: dict[str, Path] = {}
+
+
 def cache_dir() -> Path:
-    """``$SYMKIN_CACHE`` or ``~/.cache/symkin`` (created on first use)."""
+    """``$SYMKIN_CACHE`` or ``~/.cache/symkin`` (created on first use), as an absolute path.
+
+    A relative ``SYMKIN_CACHE`` is taken relative to the working directory at its first use in
+    the process, so compiled objects keep working (and the cache stays put) after ``os.chdir``.
+    """
     env = os.environ.get("SYMKIN_CACHE")
-    return Path(env).expanduser() if env else Path.home() / ".cache" / "symkin"
+    if not env:
+        return Path.home() / ".cache" / "symkin"
+    path = _ABSOLUTE.get(env)
+    if path is None:
+        path = _ABSOLUTE[env] = Path(env).expanduser().absolute()
+    return path
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to a unique temporary file beside ``path``, then rename it over ``path``."""
+    import tempfile
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
 
 
 def find_compiler() -> list[str]:
@@ -93,8 +130,61 @@ def _compiler_identity(argv: Sequence[str]) -> str:
 
 def _flags(extra_cflags: Sequence[str]) -> list[str]:
     env = os.environ.get("SYMKIN_CFLAGS")
-    opt = shlex.split(env) if env is not None else list(DEFAULT_OPT_FLAGS)
+    try:
+        opt = shlex.split(env) if env is not None else list(DEFAULT_OPT_FLAGS)
+    except ValueError as exc:
+        raise CompileError(f"SYMKIN_CFLAGS={env!r} cannot be parsed as shell words: {exc}") from None
     return [*BASE_FLAGS, *opt, *extra_cflags]
+
+
+def _cflags_hint() -> str:
+    env = os.environ.get("SYMKIN_CFLAGS")
+    return (
+        "" if env is None else f" with SYMKIN_CFLAGS={env!r} (unset it to use {' '.join(DEFAULT_OPT_FLAGS)})"
+    )
+
+
+def check_cflags() -> None:
+    """Raise CompileError naming ``SYMKIN_CFLAGS`` when it is set and cannot be parsed or the C
+    compiler rejects it (one tiny test compile per process and setting). Without a compiler
+    nothing is checked: a warm cache may still serve."""
+    env = os.environ.get("SYMKIN_CFLAGS")
+    if env is None:
+        return
+    flags = _flags(())
+    try:
+        compiler = find_compiler()
+    except CompileError:
+        return
+    error = _probe(tuple(compiler), tuple(flags))
+    if error:
+        raise CompileError(f"the C compiler rejects SYMKIN_CFLAGS={env!r}: {error}")
+
+
+@lru_cache(maxsize=8)
+def _probe(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
+    """'' when ``compiler`` builds a tiny shared library with ``flags``, else its first error line."""
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="symkin-cflags-") as tmp:
+        (Path(tmp) / "probe.c").write_text("double symkin_probe(double x) { return x + 1.0; }\n")
+        try:
+            proc = subprocess.run(
+                [*compiler, *flags, "-o", "probe.so", "probe.c"],
+                cwd=tmp,
+                capture_output=True,
+                text=True,
+                timeout=60,
+            )
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            return str(exc)
+        if proc.returncode == 0:
+            return ""
+        lines = [ln for ln in (proc.stderr or proc.stdout).splitlines() if "error" in ln.lower()]
+        return (lines or (proc.stderr or proc.stdout or f"exit {proc.returncode}").splitlines() or [""])[
+            0
+        ].strip()
 
 
 def _check_inputs(sources: Mapping[str, str], name: str) -> None:
@@ -111,7 +201,9 @@ def _check_inputs(sources: Mapping[str, str], name: str) -> None:
         raise CompileError(f"no .c file among the sources {sorted(sources)}")
 
 
-def _key(sources: Mapping[str, str], flags: Sequence[str], compiler: Sequence[str]) -> str:
+def _build_key(sources: Mapping[str, str], flags: Sequence[str]) -> str:
+    """Hash of what a build depends on apart from the compiler: sources, flags (and the host when
+    the flags tune for it). Stored in each entry, so a warm cache works without a compiler."""
     import platform
 
     h = hashlib.sha256()
@@ -119,10 +211,15 @@ def _key(sources: Mapping[str, str], flags: Sequence[str], compiler: Sequence[st
         data = sources[fname].encode()
         h.update(f"{fname}\0{len(data)}\0".encode())
         h.update(data)
-    h.update(("\0".join(flags) + "\0" + _compiler_identity(compiler)).encode())
+    h.update("\0".join(flags).encode())
     if any("native" in f for f in flags):
         h.update(f"\0{platform.node()}:{platform.machine()}".encode())
     return h.hexdigest()
+
+
+def _key(sources: Mapping[str, str], flags: Sequence[str], compiler: Sequence[str]) -> str:
+    text = _build_key(sources, flags) + "\0" + _compiler_identity(compiler)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _sha256_file(path: Path) -> str:
@@ -137,6 +234,23 @@ def _valid(entry: Path, lib: str) -> bool:
         return bool(expected) and _sha256_file(entry / lib) == expected
     except OSError:
         return False
+
+
+def _without_compiler(root: Path, name: str, lib: str, build_key: str) -> Path | None:
+    """The newest intact cache entry of ``name`` built from the same sources and flags, by any
+    compiler (used when no compiler is found), or None."""
+    found = []
+    try:
+        for entry in root.glob(f"{name}-*"):
+            try:
+                same = (entry / (lib + ".build")).read_text().strip() == build_key
+            except OSError:
+                continue
+            if same and _valid(entry, lib):
+                found.append((entry.stat().st_mtime_ns, entry))
+    except OSError:
+        return None
+    return max(found)[1] / lib if found else None
 
 
 def _build(
@@ -158,9 +272,10 @@ def _build(
         lines = (proc.stderr or proc.stdout or "").strip().splitlines()
         shown = "\n".join(lines[:25]) + (f"\n... ({len(lines) - 25} more lines)" if len(lines) > 25 else "")
         raise CompileError(
-            f"the C compiler failed (exit {proc.returncode}) on {', '.join(cfiles)}:\n"
+            f"the C compiler failed (exit {proc.returncode}) on {', '.join(cfiles)}{_cflags_hint()}:\n"
             f"  {shlex.join(cmd)}\n{shown}"
         )
+    (tmp / (lib + ".build")).write_text(_build_key(sources, flags) + "\n")
     checksum = tmp / (lib + ".sha256")
     checksum.write_text(_sha256_file(tmp / lib) + "\n")
 
@@ -169,26 +284,35 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     """Compile ``sources`` (file name -> text, ``.c`` and ``.h``) into a cached shared library.
 
     Returns the path of ``lib<name>.so`` inside its cache entry. A cached, intact entry is
-    returned without compiling (about 0.1 ms). Raises CompileError when no compiler is found or
-    compilation fails (with the first lines of the compiler's output).
+    returned without compiling (about 0.1 ms); without a C compiler, an entry built from the same
+    sources and flags by any compiler is used. When the cache cannot be written, the library is
+    built in a temporary folder (removed at exit): it only costs speed. Raises CompileError when
+    no compiler is found (and nothing is cached) or compilation fails (with the first lines of the
+    compiler's output).
     """
     import shutil
     import tempfile
 
     _check_inputs(sources, name)
-    compiler = find_compiler()
     flags = _flags(extra_cflags)
-    key = _key(sources, flags, compiler)
     root = cache_dir()
-    entry = root / f"{name}-{key[:24]}"
     lib = f"lib{name}.so"
+    try:
+        compiler = find_compiler()
+    except CompileError:
+        cached = _without_compiler(root, name, lib, _build_key(sources, flags))
+        if cached is None:
+            raise
+        return cached
+    key = _key(sources, flags, compiler)
+    entry = root / f"{name}-{key[:24]}"
     if _valid(entry, lib):
         return entry / lib
     try:
         root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".tmp-{name}-", dir=root))
-    except OSError as exc:
-        raise CompileError(f"cannot write to the symkin cache {root} ({exc}); set SYMKIN_CACHE") from None
+    except OSError:
+        return _build_uncached(sources, name, lib, flags, compiler)
     try:
         _build(tmp, sources, lib, flags, compiler)
         for _ in range(5):
@@ -203,6 +327,36 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+_UNCACHED: list[Path] = []
+
+
+def _build_uncached(
+    sources: Mapping[str, str], name: str, lib: str, flags: Sequence[str], compiler: Sequence[str]
+) -> Path:
+    """Build in a private temporary folder (the cache is not writable); removed at exit."""
+    import atexit
+    import tempfile
+
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f"symkin-{name}-"))
+    except OSError as exc:
+        raise CompileError(
+            f"cannot write to the symkin cache {cache_dir()} nor a temporary folder ({exc})"
+        ) from None
+    if not _UNCACHED:
+        atexit.register(_remove_uncached)
+    _UNCACHED.append(tmp)
+    _build(tmp, sources, lib, flags, compiler)
+    return tmp / lib
+
+
+def _remove_uncached() -> None:
+    import shutil
+
+    for path in _UNCACHED:
+        shutil.rmtree(path, ignore_errors=True)
 
 
 def _discard(entry: Path, root: Path) -> None:

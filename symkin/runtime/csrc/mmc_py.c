@@ -117,16 +117,21 @@ done:
     return r;
 }
 
-/* arg as a C-contiguous native float64 array of shape (d0,), or NULL without an error set */
+/* arg as a C-contiguous native float64 array of shape (d0,), or NULL without an error set.
+ * Only arrays of booleans, integers or floats convert here: anything else (lists, complex,
+ * strings, objects) gives NULL, and the caller's Python checks convert it or raise their error. */
 static PyArrayObject *as_vector_(PyObject *arg, npy_intp d0)
 {
     PyArrayObject *a;
     if (PyArray_CheckExact(arg) && PyArray_TYPE((PyArrayObject *)arg) == NPY_DOUBLE &&
-        PyArray_IS_C_CONTIGUOUS((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
+        PyArray_ISCARRAY_RO((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
         a = (PyArrayObject *)arg;
         Py_INCREF(a);
     } else {
-        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY);
+        if (!PyArray_Check(arg) || !(PyArray_ISBOOL((PyArrayObject *)arg) ||
+                                     PyArray_ISINTEGER((PyArrayObject *)arg) || PyArray_ISFLOAT((PyArrayObject *)arg)))
+            return NULL;
+        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_NOTSWAPPED);
         if (!a) {
             PyErr_Clear();
             return NULL;
@@ -146,6 +151,27 @@ static PyObject *new_array_(int nd, npy_intp d0, npy_intp d1, const double *data
     if (a && d0 * (nd == 2 ? d1 : 1) > 0)
         memcpy(PyArray_DATA((PyArrayObject *)a), data, sizeof(double) * (size_t)(d0 * (nd == 2 ? d1 : 1)));
     return a;
+}
+
+/* never "solved" with a NaN or inf velocity: stop the joints, status "error", fallback "zero" */
+static void zero_unless_finite_(const double *nu, double *out)
+{
+    int finite = 1;
+    for (int i = 0; i < NQ; ++i)
+        finite &= isfinite(out[i]) != 0;
+    if (finite)
+        return;
+    double res = 0.0;
+    for (int i = 0; i < 6; ++i)
+        res = fmax(res, fabs(nu[i])); /* max |J 0 - nu| */
+    memset(out, 0, sizeof(double) * NQ);
+    double *info = out + NQ; /* status, method, m, iterations, fallback, residual, slack, scale, polished */
+    info[0] = 5.0;           /* "error" */
+    info[3] = 0.0;
+    info[4] = 2.0;           /* "zero" */
+    info[5] = res;
+    info[6] = 0.0;
+    info[7] = 1.0;
 }
 
 /* step(ctrl_address, kind, q, nu) -> (qd, StepInfo), or None when q (n,) or nu (6,) is not finite
@@ -173,8 +199,12 @@ static PyObject *py_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     memcpy(in + NQ, PyArray_DATA(nu), sizeof(double) * 6);
     Py_DECREF(q);
     Py_DECREF(nu);
+    for (int i = 0; i < NQ; ++i)
+        if (!(fabs(in[i]) <= 1e15)) /* symkin.model.robot.MAX_JOINT_VALUE (NaN too) */
+            Py_RETURN_NONE;
     if (fn(c, in, out))
         Py_RETURN_NONE; /* q or nu not finite */
+    zero_unless_finite_(in + NQ, out);
     PyObject *qd = new_array_(1, NQ, 0, out), *info = qd ? make_info_(out + NQ) : NULL;
     if (!info) {
         Py_XDECREF(qd);
@@ -322,6 +352,7 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
                          steps);
             goto fail;
         }
+        zero_unless_finite_(in + NQ, out);
         memcpy(b.QD + steps * NQ, out, sizeof(double) * NQ);
         memcpy(b.info + steps * MMC_NINFO, out + NQ, sizeof(double) * MMC_NINFO);
         b.M[steps] = out[NQ + 2];
