@@ -922,7 +922,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     from symkin.errors import SymkinError
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or a one-line usage error (exit 2)
+        return exc.code if isinstance(exc.code, int) else 2
     try:
         return int(args.func(args) or 0)
     except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools

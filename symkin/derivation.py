@@ -35,7 +35,7 @@ import sympy as sp
 from symkin.emit.templates import render
 from symkin.errors import SymkinError
 from symkin.model.ets import ET, ETS, Axis, Const, rational_text
-from symkin.model.latex import et_latex, ets_latex, text_latex
+from symkin.model.latex import display_name, et_latex, ets_latex, text_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops
 from symkin.symbolic.kinematics import const_to_sympy, derive
@@ -556,7 +556,7 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     P = _Printer(q)
     full = n <= FULL_MAX_N
     ctx: dict[str, Any] = {
-        "robot": robot.name,
+        "robot": display_name(robot.name),
         "n": n,
         "structure": ets.structure,
         "M": len(ets),
@@ -575,7 +575,8 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     }
     kinds = {True: "revolute", False: "prismatic"}
     ctx["joints"] = [
-        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{robot.joint_names[j]}`", kinds[ets[mu[j]].is_revolute],
+        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",
+         kinds[ets[mu[j]].is_revolute],
          f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
         for j in range(n)
     ]  # fmt: skip

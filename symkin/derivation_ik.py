@@ -12,6 +12,7 @@ from typing import Literal
 import sympy as sp
 
 from symkin.emit.templates import render
+from symkin.model.latex import display_name
 from symkin.model.robot import Robot
 from symkin.symbolic.analytic_ik import derive_analytic
 
@@ -105,7 +106,7 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
     )
     md = render(
         "derive/analytic_ik.md.j2",
-        robot=robot.name,
+        robot=display_name(robot.name),
         n=plan.n,
         structure=robot.ets.structure,
         version=__version__,

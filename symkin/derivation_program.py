@@ -21,7 +21,7 @@ import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
 from symkin.model.ets import ETS, Axis
-from symkin.model.latex import et_latex, ets_latex
+from symkin.model.latex import display_name, et_latex, ets_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.program import KinematicProgram, _needed, derive_program
 
@@ -196,7 +196,7 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
     ends = dict(D.sections)
     kinds = {True: "revolute", False: "prismatic"}
     ctx: dict[str, Any] = {
-        "robot": robot.name,
+        "robot": display_name(robot.name),
         "n": n,
         "structure": ets.structure,
         "M": len(ets),
@@ -208,7 +208,8 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
         "checks": "; ".join(f"{k}: {_CHECK_TEXT[v]}" for k, v in D.checks.items()),
     }
     ctx["joints"] = [
-        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{robot.joint_names[j]}`", kinds[ets[mu[j]].is_revolute],
+        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",
+         kinds[ets[mu[j]].is_revolute],
          f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
         for j in range(n)
     ]  # fmt: skip

@@ -371,3 +371,11 @@ def test_form_can_be_chosen() -> None:
     assert d.form == "program" and set(d.checks.values()) == {"numeric"}
     with pytest.raises(symkin.SymkinError, match="unknown form"):
         derive_steps("planar3", form="short")
+
+
+def test_names_cannot_open_math_or_code_in_the_derivation() -> None:
+    robot = symkin.Robot.from_ets("Rz(q0) tx(1)", name="a$\\frac{1}{0}$`x`", joint_names=("j$1`",))
+    for fmt in ("markdown", "latex"):
+        text = derivation(robot, fmt=fmt)
+        assert "$\\frac{1}{0}$" not in text and "j$1" not in text and "`x`" not in text
+    assert "Kinematics of a??frac" in derivation(robot)

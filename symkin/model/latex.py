@@ -6,6 +6,7 @@ Joints are shown 1-based like the seed (``q_1 .. q_n``): symkin's joint ``q{j}``
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from fractions import Fraction
 from math import isqrt
@@ -13,7 +14,7 @@ from typing import Any
 
 from symkin.model.ets import ET, ETS, Axis, Const, rational_text
 
-__all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex"]
+__all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex", "display_name"]
 
 _AXIS = {
     Axis.tx: "t_x",
@@ -35,6 +36,12 @@ _TEXT_ESCAPES = {
     "^": r"\^{}",
     "~": r"\~{}",
 }
+
+
+def display_name(name: str) -> str:
+    """A robot's name as shown in Markdown and LaTeX derivations: characters that would open math
+    (``$``), code spans, escapes or new lines become ``?``."""
+    return re.sub(r"[`$\\\x00-\x1f\x7f]", "?", name)
 
 
 def text_latex(text: str) -> str:
