@@ -12,7 +12,8 @@ into ``casadi.Opti``::
 
 For a redundant arm (the 7-joint Panda) the pose leaves a one-dimensional self-motion, along which
 IPOPT climbs to the most manipulable configuration; started from symkin's numerical IK solution
-(``kin.ik``, seed 000 eqs 37-51) the result reaches the same pose with at least its manipulability.
+(``kin.ik``, Manipulator Differential Kinematics, Part 1, eqs 37-51) the result reaches the same pose with
+at least its manipulability.
 
 Run ``python examples/ik_nlp_casadi.py [ROBOT] [--targets N] [--small]``.
 """

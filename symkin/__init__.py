@@ -5,6 +5,7 @@ emit (C, NumPy, CasADi from jinja2 templates) -> runtime (compiled kinematics, I
 """
 
 from symkin.compile import BACKENDS, compile, generate, write_generated
+from symkin.compiled import load_compiled
 from symkin.errors import (
     CompileError,
     ConfigurationError,
@@ -42,6 +43,10 @@ _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import sy
 
 
 def __getattr__(name: str):  # noqa: ANN202
+    if name == "symbolic":  # the callable subpackage: symkin.symbolic(robot) -> sympy expressions
+        import importlib
+
+        return importlib.import_module("symkin.symbolic")
     if name in _LAZY:
         import importlib
 
@@ -85,6 +90,7 @@ __all__ = [
     "ik",
     "list_robots",
     "load",
+    "load_compiled",
     "load_dh_file",
     "p_servo",
     "poe_of",
@@ -92,5 +98,6 @@ __all__ = [
     "resolve_robot",
     "rrmc",
     "servo",
+    "symbolic",
     "write_generated",
 ]

@@ -2,8 +2,9 @@
 
 For each backend and each function, :func:`check` reports the largest error (relative to the
 magnitudes) against the numeric O(n) reference, and against central finite differences of the
-backend's own lower-order function (J from FK, H from J, Jm from m), at random configurations,
-at the robot's named configurations and near them (where singularities usually are).
+backend's own lower-order function (J from FK, H from J, J dot from J, Jm from m), at random
+configurations, at the robot's named configurations and near them (where singularities usually are).
+Space and body Jacobians and the condition number are compared with the reference.
 
 Rows marked ``(large q)`` evaluate FK, J and H at revolute angles of up to :data:`LARGE_TURNS`
 turns and next to large multiples of pi/2 (where an argument reduction for sin/cos is hardest).
@@ -168,6 +169,18 @@ def check(
         rows.append(
             CheckRow(kin.backend, "jacob0_hessian0", max(_rel(J3, J0), _rel(H3, robot.hessian0(Q))), None)
         )
+        # dJ0/dt = sum_i H0[i] qd_i against d/dt J0(q + t qd) by central differences
+        qd = np.random.default_rng(seed + 1).uniform(-1.0, 1.0, Q.shape)
+        Jd = kin.jacob0_dot(Q, qd)
+        fd_Jd = (kin.jacob0(Q + h * qd) - kin.jacob0(Q - h * qd)) / (2 * h)
+        rows.append(CheckRow(kin.backend, "jacob0_dot", _rel(Jd, robot.jacob0_dot(Q, qd)), _rel(fd_Jd, Jd)))
+        rows.append(CheckRow(kin.backend, "jacobs", _rel(kin.jacobs(Q), robot.jacobs(Q)), None))
+        rows.append(CheckRow(kin.backend, "jacobb", _rel(kin.jacobb(Q), robot.jacobb(Q)), None))
+        c_ref = robot.cond(Q)
+        fine = c_ref < 1e6  # the condition number itself is ill-conditioned near a singularity
+        if fine.any():
+            ratio = np.asarray(kin.cond(Q[fine])) / c_ref[fine]
+            rows.append(CheckRow(kin.backend, "cond", _rel(ratio, np.ones_like(ratio)), None))
         # manipulability: compare m^2 (sqrt amplifies rounding at singularities); Jm where well conditioned
         for axes in ("all", "trans", "rot"):
             m = np.asarray(kin.manipulability(Q, axes=axes))

@@ -1,10 +1,12 @@
 """The ``symkin`` command.
 
 Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
-(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file. User mistakes print one line
+(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file, and ``--tool``/``--base`` to add a
+constant transform after the end effector / before the first link. User mistakes print one line
 ``symkin: error: ...`` and exit with status 2, checked before any long work starts where they can
 be; a failed check or an unsolved problem exits 1. When the reader of the output goes away
-(``symkin list | head -1``), symkin stops quietly with status 141 (128 + SIGPIPE).
+(``symkin list | head -1``), symkin stops quietly with status 141 (128 + SIGPIPE). Progress bars
+appear only when stderr is a terminal (:mod:`symkin.progress`).
 """
 
 from __future__ import annotations
@@ -32,12 +34,51 @@ __all__ = ["main"]
 _at_least_1 = _int_at_least(1)
 
 ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
+TRANSFORM_HELP = (
+    "constant ETS text like 'tz(0.1) Rx(pi/2)', or 'x y z roll pitch yaw' (m, rad; pi/2 and 90deg "
+    "allowed), or 16 numbers of a row-major 4x4 matrix"
+)
 
 
-def _robot(spec: str) -> Any:
+class _Formatter(argparse.HelpFormatter):
+    """Help that shows every option's default (unless its text already names it)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (
+            not action.option_strings
+            or action.default is None
+            or action.default is False
+            or action.default == argparse.SUPPRESS
+            or "default" in text.lower()
+        ):
+            return text
+        return text + " (default: %(default)s)"
+
+
+class _Deprecated(argparse.Action):
+    """A renamed option kept working: stores into the new option's dest and says so on stderr."""
+
+    def __init__(self, *args: Any, new: str = "", **kwargs: Any) -> None:
+        self.new = new
+        super().__init__(*args, **kwargs)
+
+    def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None) -> None:
+        print(f"symkin: {option_string} is deprecated; use {self.new}", file=sys.stderr)
+        setattr(namespace, self.dest, values)
+
+
+def _robot(args: argparse.Namespace, default: str | None = None) -> Any:
+    """The ROBOT of a command (or ``default`` when it is optional and not given), with --tool/--base."""
     from symkin.model.resolve import resolve_robot
 
-    return resolve_robot(spec)
+    spec = args.robot if args.robot is not None else default
+    return resolve_robot(spec, tool=getattr(args, "tool", None), base=getattr(args, "base", None))
+
+
+def _custom(args: argparse.Namespace) -> bool:
+    """Whether --tool or --base changed the robot (benchmarks then take the Robot, not its name)."""
+    return getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None
 
 
 def _floats(text: str, what: str, count: int | None = None) -> np.ndarray:
@@ -77,7 +118,7 @@ def cmd_compile(args: argparse.Namespace) -> int:
     from symkin.compile import compile as compile_robot
     from symkin.compile import generate
 
-    robot = _robot(args.robot)
+    robot = _robot(args)
     out = _output_dir(args.output) if args.output else None
     _check_cflags(args.backend)
     t0 = time.perf_counter()
@@ -110,7 +151,13 @@ def cmd_compile(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
         for name, text in sorted(files.items()):
             (out / name).write_text(text)
-        print(f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}")
+        from symkin.compiled import write_manifest
+
+        manifest = write_manifest(robot, args.backend, files, out, args.precision)
+        print(
+            f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))} (and {manifest.name}, which "
+            "symkin.load_compiled reads)"
+        )
     if args.precision == "float":
         from symkin.emit.c.backend import float_error
 
@@ -146,7 +193,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from symkin.emit.snapshot import compare_or_update
 
     _output_dir(args.output)
-    differ = compare_or_update(args.output, update=not args.check, progress=sys.stderr.isatty())
+    differ = compare_or_update(args.output, update=not args.check, progress=True)
     if args.check:
         if differ:
             print(f"{len(differ)} generated files are out of date in {args.output}/ (run `symkin generate`):")
@@ -162,7 +209,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 def cmd_check(args: argparse.Namespace) -> int:
     from symkin.check import check
 
-    robot = _robot(args.robot)
+    robot = _robot(args)
     for b in args.backend or ("c",):
         _check_cflags(b)
     report = check(
@@ -175,9 +222,12 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_derive(args: argparse.Namespace) -> int:
     from symkin.derivation import derivation
 
-    robot = _robot(args.robot)
+    robot = _robot(args)
+    sections = _sections(args.sections)
     _output_file(args.output, "-o")
     if args.ik:
+        if sections is not None:
+            raise UserError("--sections chooses parts of the kinematics derivation, not of --ik")
         from symkin.derivation_ik import ik_derivation
 
         text = ik_derivation(robot, fmt=args.format)
@@ -188,6 +238,7 @@ def cmd_derive(args: argparse.Namespace) -> int:
             symbolic_constants=args.symbolic_constants,
             simplify=not args.no_simplify,
             form=args.form,
+            sections=sections,
         )
     if args.output:
         Path(args.output).write_text(text)
@@ -197,15 +248,29 @@ def cmd_derive(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sections(text: str | None) -> tuple[str, ...] | None:
+    if text is None:
+        return None
+    from symkin.derivation import SECTIONS
+
+    names = tuple(w for w in text.replace(",", " ").split())
+    bad = [w for w in names if w not in SECTIONS]
+    if bad or not names:
+        raise UserError(
+            f"--sections takes names from {', '.join(SECTIONS)} separated by commas, not {text!r}"
+        )
+    return names
+
+
 def _target(args: argparse.Namespace, robot: Any) -> np.ndarray:
-    """A target pose from --pose (x y z roll pitch yaw, rad), --matrix (16 numbers) or --from-q."""
-    given = [x is not None for x in (args.pose, args.matrix, args.from_q)]
+    """A target pose from --pose (x y z roll pitch yaw, rad), --matrix (16 numbers) or --target-q."""
+    given = [x is not None for x in (args.pose, args.matrix, args.target_q)]
     if sum(given) != 1:
         raise UserError(
-            "give exactly one of --pose 'x y z roll pitch yaw', --matrix '16 numbers', --from-q 'q...'"
+            "give exactly one of --pose 'x y z roll pitch yaw', --matrix '16 numbers', --target-q 'q...'"
         )
-    if args.from_q is not None:
-        return robot.fkine(_floats(args.from_q, "--from-q", robot.n))
+    if args.target_q is not None:
+        return robot.fkine(_floats(args.target_q, "--target-q", robot.n))
     if args.matrix is not None:
         return _floats(args.matrix, "--matrix", 16).reshape(4, 4)
     x, y, z, r, p, yaw = _floats(args.pose, "--pose", 6)
@@ -223,17 +288,33 @@ def _target(args: argparse.Namespace, robot: Any) -> np.ndarray:
 def cmd_ik(args: argparse.Namespace) -> int:
     from symkin.compile import compile as compile_robot
 
-    robot = _robot(args.robot)
+    robot = _robot(args)
     Tep = _target(args, robot)
+    numerical = {"--we": args.we, "--lam": args.lam, "--ilimit": args.ilimit, "--slimit": args.slimit}
     _check_cflags(args.backend)
-    kin = compile_robot(robot, backend=args.backend)
     if args.all or args.method == "analytic":
-        return _ik_analytic(args, kin, Tep)
+        given = [k for k, v in numerical.items() if v is not None]
+        if given:
+            raise UserError(
+                f"{', '.join(given)} set the numerical methods NR, GN and LM, not the closed form"
+            )
+        return _ik_analytic(args, compile_robot(robot, backend=args.backend), Tep)
+    kin = compile_robot(robot, backend=args.backend)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
     if args.damping:
         kwargs["damping"] = args.damping
     if args.q0 is not None:
         kwargs["q0"] = _floats(args.q0, "--q0", robot.n)
+    if args.we is not None:
+        kwargs["we"] = _weights(args.we)
+    if args.lam is not None:
+        kwargs["lam"] = args.lam
+    if args.tol is not None:
+        kwargs["tol"] = args.tol
+    if args.ilimit is not None:
+        kwargs["ilimit"] = args.ilimit
+    if args.slimit is not None:
+        kwargs["slimit"] = args.slimit
     t = time.perf_counter()
     res = kin.ik(Tep, **kwargs)
     dt = time.perf_counter() - t
@@ -248,12 +329,24 @@ def cmd_ik(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
+def _weights(text: str) -> np.ndarray:
+    """--we: 'position' (1 1 1 0 0 0), 'orientation' (0 0 0 1 1 1) or six weights >= 0."""
+    named = {"position": [1, 1, 1, 0, 0, 0], "orientation": [0, 0, 0, 1, 1, 1]}
+    if text.strip().lower() in named:
+        return np.array(named[text.strip().lower()], dtype=float)
+    we = _floats(text, "--we", 6)
+    if (we < 0).any() or not we.any():
+        raise UserError(f"--we needs six weights >= 0, not all 0 (or 'position'), got {text!r}")
+    return we
+
+
 def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
     """``symkin ik --all`` (every closed-form solution) or ``--method analytic`` (the nearest)."""
     q0 = _floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
     t = time.perf_counter()
     if not args.all:
-        res = kin.ik(Tep, method="analytic", q0=q0)
+        extra = {} if args.tol is None else {"tol": args.tol}
+        res = kin.ik(Tep, method="analytic", q0=q0, **extra)
         dt = time.perf_counter() - t
         if args.json:
             print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
@@ -292,7 +385,7 @@ def cmd_servo(args: argparse.Namespace) -> int:
     from symkin.compile import compile as compile_robot
     from symkin.runtime.loop import servo
 
-    robot = _robot(args.robot)
+    robot = _robot(args)
     Tep = _target(args, robot)
     _need_matplotlib(args.plot)
     _check_cflags(args.backend)
@@ -364,6 +457,11 @@ def _joint_counts(text: str) -> tuple[int, ...]:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    if args.robot is None:
+        args.robot = args.robot_option
+    custom = _custom(args)
+    if custom and args.robot is None:
+        raise UserError("--tool/--base change a ROBOT: name one (symkin bench WHAT ROBOT --tool ...)")
     _check_cflags("c")
     if args.plot and args.what not in ("mmc", "compile"):
         raise UserError(f"--plot is for `symkin bench mmc` and `symkin bench compile`, not `{args.what}`")
@@ -371,6 +469,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "compile":
         from symkin.bench.compile import format_compile, plot_compile, run_compile
 
+        if custom:
+            raise UserError(
+                "bench compile measures ROBOT by name in a fresh process; --tool/--base do not apply"
+            )
         joints = _joint_counts(args.joints)
         rows = run_compile(joints, seed=args.seed, reference=args.robot or "panda", progress=not args.json)
         print(json.dumps(rows, indent=2) if args.json else format_compile(rows))
@@ -379,11 +481,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
             if not args.json:
                 print(f"plot written to {args.plot}")
         return 0
+    spec: Any = _robot(args) if custom else args.robot
     if args.what == "calls":
         from symkin.bench.calls import format_calls, run_calls
 
-        robot = args.robot or "ur5"
-        result = run_calls(robot, args.robot or "panda", seed=args.seed, progress=not args.json)
+        result = run_calls(spec or "ur5", spec or "panda", seed=args.seed, progress=not args.json)
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
         return 0
     if args.what == "reach":
@@ -392,7 +494,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
         require_scale()
         result = run_reach(
-            _robot(args.robot or "ur5"), resolution=args.resolution, orientations=args.orientations,
+            _robot(args, "ur5"), resolution=args.resolution, orientations=args.orientations,
             seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
         )  # fmt: skip
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
@@ -400,21 +502,23 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
-        result = run_kin(args.robot or "panda", batch=args.batch, progress=not args.json)
+        result = run_kin(spec or "panda", batch=args.batch, progress=not args.json)
         print(json.dumps(result, indent=2) if args.json else format_kin(result))
         return 0
     if args.what == "ik" and args.analytic:
         from symkin.bench.analytic_ik import format_analytic, run_analytic
 
-        robots = (args.robot,) if args.robot else ("ur5", "ur10", "puma560", "stanford")
-        result = run_analytic(robots, n=args.problems or 1000, starts=args.starts, seed=args.seed)
+        robots = (spec,) if spec is not None else ("ur5", "ur10", "puma560", "stanford")
+        result = run_analytic(
+            robots, n=args.problems or 1000, starts=args.starts, seed=args.seed, progress=not args.json
+        )
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_analytic(result))
         return 0
     if args.what == "ik":
         from symkin.bench.ik import format_table1, run_table1
 
         result = run_table1(
-            _robot(args.robot or "ur5"),
+            _robot(args, "ur5"),
             n_problems=args.problems or 10_000,
             seed=args.seed,
             progress=not args.json,
@@ -424,20 +528,41 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from symkin.bench.mmc import format_table1 as format_mmc
     from symkin.bench.mmc import plot_task
     from symkin.bench.mmc import run_table1 as run_mmc
+    from symkin.compile import compile as compile_robot
 
-    robots = (args.robot,) if args.robot else ("panda", "lbr_iiwa7", "sawyer")
+    if spec is None:
+        robots: tuple[Any, ...] = ("panda", "lbr_iiwa7", "sawyer")
+    else:
+        robots = (compile_robot(_robot(args), backend="c"),) if custom else (spec,)
     result = run_mmc(robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json)
     print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_mmc(result))
     if args.plot:
         from symkin.bench.mmc import table1_tasks
-        from symkin.compile import compile as compile_robot
 
-        kin = compile_robot(_robot(robots[0]), backend="c")
+        first = robots[0]
+        kin = compile_robot(_robot(args, first), backend="c") if isinstance(first, str) else first
         q0, Tep = table1_tasks(kin, 1, np.random.default_rng(args.seed))
         plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
         if not args.json:
             print(f"plot written to {args.plot}")
     return 0
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    robot = _robot(args)
+    if args.q is None:
+        q = robot.configs.get("qr", robot.configs["qz"])
+    elif args.q.strip() in robot.configs:
+        q = robot.configs[args.q.strip()]
+    else:
+        q = _floats(args.q, "--q", robot.n)
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise UserError("plot needs matplotlib: pip install 'symkin[plot]'") from None
+    out = args.output or f"{robot.identifier}.png"
+    robot.plot(q, frames=not args.no_frames, ellipsoid=args.ellipsoid, path=out)
+    print(f"wrote {out}: {robot.name} at q = {_fmt(q)}")
 
 
 def _scheduler(args: argparse.Namespace) -> Any:
@@ -458,7 +583,7 @@ def cmd_reach(args: argparse.Namespace) -> int:
     from symkin.workspace.run import require_scale
 
     require_scale(_scheduler(args))  # before compiling: say which extra is missing at once
-    robot = _robot(args.robot)
+    robot = _robot(args)
     bounds = None if args.bounds is None else _floats(args.bounds, "--bounds", 6).reshape(3, 2)
     axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
@@ -510,7 +635,7 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     from symkin.workspace.run import require_scale
 
     require_scale(_scheduler(args))
-    robot = _robot(args.robot)
+    robot = _robot(args)
     ds = samples(
         robot, args.n, output=args.output, seed=args.seed, chunk=args.chunk, backend=args.backend,
         scheduler=_scheduler(args), workers=args.workers, overwrite=args.overwrite,
@@ -538,6 +663,24 @@ def _jsonable(x: Any) -> Any:
 
 
 # ----------------------------------------------------------------------------------------------
+def _robot_argument(s: argparse.ArgumentParser, default: str | None = None) -> None:
+    """The ROBOT argument (optional when ``default`` describes what it defaults to) and --tool/--base."""
+    if default is None:
+        s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    else:
+        s.add_argument("robot", metavar="ROBOT", nargs="?", default=None, help=f"{ROBOT_HELP} ({default})")
+    s.add_argument(
+        "--tool",
+        metavar="T",
+        help="append this constant transform after the end effector: " + TRANSFORM_HELP,
+    )
+    s.add_argument(
+        "--base",
+        metavar="T",
+        help="place this constant transform before the first link: " + TRANSFORM_HELP,
+    )
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with symkin's one-line errors (``symkin: error: ...``, exit 2)."""
 
@@ -554,20 +697,29 @@ def build_parser() -> argparse.ArgumentParser:
         prog="symkin",
         description="symkin: a symbolic, code-generating kinematics compiler for robot manipulators.",
         epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command.",
+        formatter_class=_Formatter,
     )
     p.add_argument("--version", action="version", version=f"symkin {__version__}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    s = sub.add_parser("list", help="list the built-in robots")
+    def command(name: str, text: str) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=text, description=text, formatter_class=_Formatter)
+
+    robot_argument = _robot_argument
+    backends = ("c", "numpy", "casadi")
+    s = command("list", "list the built-in robots")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_list)
 
-    s = sub.add_parser("compile", help="generate (and build) the kinematics code of a robot")
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    s = command("compile", "generate (and build) the kinematics code of a robot")
+    robot_argument(s)
+    s.add_argument("--backend", choices=backends, default="c", help="code to generate")
     s.add_argument(
-        "--backend", choices=("c", "numpy", "casadi"), default="c", help="code to generate (default c)"
+        "-o",
+        "--output",
+        metavar="DIR",
+        help="write the generated files into DIR (symkin.load_compiled reads them)",
     )
-    s.add_argument("-o", "--output", metavar="DIR", help="write the generated files into DIR")
     s.add_argument(
         "--prefix",
         "--name",
@@ -596,26 +748,27 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.set_defaults(func=cmd_compile)
 
-    s = sub.add_parser(
-        "generate", help="regenerate the checked-in code of the built-in robots under generated/"
-    )
-    s.add_argument("-o", "--output", default="generated", metavar="DIR", help="folder (default generated)")
+    s = command("generate", "regenerate the checked-in code of the built-in robots under generated/")
+    s.add_argument("-o", "--output", default="generated", metavar="DIR", help="folder to write")
     s.add_argument("--check", action="store_true", help="only report out-of-date files (exit 1 if any)")
     s.set_defaults(func=cmd_generate)
 
-    s = sub.add_parser(
-        "check", help="compare every backend with the numeric reference and finite differences"
+    s = command("check", "compare every backend with the numeric reference and finite differences")
+    robot_argument(s)
+    s.add_argument(
+        "--backend",
+        action="append",
+        choices=backends,
+        help="only this backend (repeat for several; default all)",
     )
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    s.add_argument("--backend", action="append", choices=("c", "numpy", "casadi"), help="only this backend")
-    s.add_argument("--samples", type=_at_least_1, default=20, help="random configurations (default 20)")
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--samples", type=_at_least_1, default=20, help="random configurations")
+    s.add_argument("--seed", type=int, default=0, help="seed of the random configurations")
     s.add_argument("--json", action="store_true", help="print the table as JSON")
     s.set_defaults(func=cmd_check)
 
-    s = sub.add_parser("derive", help="write the derivation of FK, Jacobian and Hessian (Markdown or LaTeX)")
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    s.add_argument("--format", choices=("markdown", "latex"), default="markdown")
+    s = command("derive", "write the derivation of FK, Jacobian and Hessian (Markdown or LaTeX)")
+    robot_argument(s)
+    s.add_argument("--format", choices=("markdown", "latex"), default="markdown", help="output format")
     s.add_argument("--symbolic-constants", action="store_true", help="keep link lengths as named symbols")
     s.add_argument("--no-simplify", action="store_true", help="show the literal products of eqs 1, 5, 26-28")
     s.add_argument(
@@ -626,62 +779,106 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("auto", "expanded", "program"),
         default="auto",
         help="expanded: every result multiplied out; program: link frame by link frame with named "
-        "intermediates; auto (default): program when the expanded form is too large to read",
+        "intermediates; auto: program when the expanded form is too large to read",
+    )
+    s.add_argument(
+        "--sections",
+        metavar="LIST",
+        help="only these parts, comma-separated, e.g. fk,jacobian (names: ets, transforms, links, fk, "
+        "derivatives, jacobian, hessian, checks; default all)",
     )
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
     s.set_defaults(func=cmd_derive)
 
-    def target_options(s: argparse.ArgumentParser) -> None:
+    def target_options(s: argparse.ArgumentParser, q0_help: str) -> None:
         s.add_argument("--pose", metavar="'X Y Z R P Y'", help="target position (m) and roll pitch yaw (rad)")
         s.add_argument("--matrix", metavar="'16 NUMBERS'", help="target pose as a row-major 4x4 matrix")
-        s.add_argument("--from-q", metavar="'Q...'", help="target = forward kinematics of these joint values")
-        s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c")
-        s.add_argument("--q0", metavar="'Q...'", help="start configuration")
+        s.add_argument(
+            "--target-q", metavar="'Q...'", help="target = the pose of the robot at these joint values"
+        )
+        s.add_argument(
+            "--from-q", dest="target_q", action=_Deprecated, new="--target-q", help=argparse.SUPPRESS
+        )
+        s.add_argument("--backend", choices=backends, default="c", help="kinematics backend")
+        s.add_argument("--q0", metavar="'Q...'", help=q0_help)
         s.add_argument("--json", action="store_true", help="print JSON")
 
-    s = sub.add_parser("ik", help="solve inverse kinematics for one target pose")
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    target_options(s)
-    s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM")
+    s = command("ik", "solve inverse kinematics for one target pose")
+    robot_argument(s)
+    target_options(s, "first start of the search (default: random within the joint limits)")
+    s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM", help="solver")
     s.add_argument(
         "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"
     )
     s.add_argument("--no-limits", action="store_true", help="--all: keep solutions outside the joint limits")
-    s.add_argument("--damping", choices=("wampler", "chan", "sugihara"))
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument(
+        "--damping",
+        choices=("wampler", "chan", "sugihara"),
+        help="LM damping (default chan: lambda E_k, eq 50 of Manipulator Differential Kinematics, Part 1)",
+    )
+    s.add_argument(
+        "--we",
+        metavar="W",
+        help="task weights: 'position' (position only), 'orientation', or six weights >= 0 for "
+        "vx vy vz wx wy wz (default all 1)",
+    )
+    s.add_argument("--lam", type=_positive, help="damping lambda of LM (default 0.1)")
+    s.add_argument("--tol", type=_positive, help="converged when |e| < TOL (default 1e-6: 1 um, 1 urad)")
+    s.add_argument("--ilimit", type=_at_least_1, help="iterations per search (default 30)")
+    s.add_argument("--slimit", type=_at_least_1, help="searches from random starts (default 100)")
+    s.add_argument("--seed", type=int, default=0, help="seed of the random restarts")
     s.set_defaults(func=cmd_ik)
 
-    s = sub.add_parser("servo", help="servo to a target pose with RRMC or MMC, optionally plotting")
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    target_options(s)
-    s.add_argument("--controller", choices=("mmc", "rrmc"), default="mmc")
-    s.add_argument("--dt", type=_positive, default=0.05, help="control period in s (default 0.05)")
-    s.add_argument("--max-steps", type=_int_at_least(0), default=500)
+    s = command("servo", "servo to a target pose with RRMC or MMC, optionally plotting")
+    robot_argument(s)
+    target_options(s, "start configuration (default: the ready pose qr, else qz)")
+    s.add_argument(
+        "--controller",
+        choices=("mmc", "rrmc"),
+        default="mmc",
+        help="manipulability-maximising or plain resolved rate",
+    )
+    s.add_argument("--dt", type=_positive, default=0.05, help="control period (s)")
+    s.add_argument("--max-steps", type=_int_at_least(0), default=500, help="give up after this many steps")
     s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
     s.set_defaults(func=cmd_servo)
 
-    s = sub.add_parser(
+    s = command("plot", "draw a robot (links, joint frames, optionally the velocity ellipsoid) to a PNG")
+    robot_argument(s)
+    s.add_argument(
+        "--q", metavar="'Q...'", help="joint values, or a configuration name like qr (default qr, else qz)"
+    )
+    s.add_argument("-o", "--output", metavar="PNG", help="file to write (default <robot>.png)")
+    s.add_argument(
+        "--ellipsoid", action="store_true", help="draw the manipulability ellipsoid of linear velocity"
+    )
+    s.add_argument("--no-frames", action="store_true", help="draw only the base and end-effector frames")
+    s.set_defaults(func=cmd_plot)
+
+    s = command(
         "bench",
-        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
+        "benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
         "compile (cold, by chain length), reach (Dask maps)",
     )
-    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile", "reach"))
-    s.add_argument(
-        "--robot",
-        help="robot (default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, "
-        "ur5 and panda for calls)",
+    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile", "reach"), help="which benchmark")
+    robot_argument(
+        s,
+        "default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, ur5 and "
+        "panda for calls",
     )
     s.add_argument(
-        "--joints",
-        default="6,12,24,36",
-        help="compile: joint counts of the random chains (default 6,12,24,36)",
+        "--robot", dest="robot_option", action=_Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
     )
-    s.add_argument("--batch", type=_at_least_1, default=100_000, help="kin: batch size (default 100000)")
+    s.add_argument("--joints", default="6,12,24,36", help="compile: joint counts of the random chains")
+    s.add_argument("--batch", type=_at_least_1, default=100_000, help="kin: batch size")
     s.add_argument(
-        "-n", "--problems", type=_at_least_1, help="ik: problems (default 10000); mmc: tasks per robot"
+        "-n",
+        "--problems",
+        type=_at_least_1,
+        help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000)",
     )
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
     s.add_argument(
         "--plot",
         metavar="PNG",
@@ -700,7 +897,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--repeat", type=_at_least_1, default=3, help="reach: runs of each measurement (best is kept)"
     )
     s.add_argument("--json", action="store_true", help="print JSON")
-    s.set_defaults(func=cmd_bench)
+    s.set_defaults(func=cmd_bench, robot_option=None)
 
     add_workspace_commands(sub)
     return p
@@ -710,7 +907,7 @@ def add_workspace_commands(sub: Any) -> None:
     """``symkin reach`` and ``symkin dataset`` (the ``scale`` extra)."""
 
     def scale_options(s: argparse.ArgumentParser) -> None:
-        s.add_argument("--seed", type=int, default=0)
+        s.add_argument("--seed", type=int, default=0, help="seed of the random orientations and samples")
         s.add_argument(
             "--scheduler",
             metavar="ADDRESS",
@@ -719,12 +916,13 @@ def add_workspace_commands(sub: Any) -> None:
         s.add_argument(
             "--workers", type=_at_least_1, help="local cluster size (default: one worker per core)"
         )
-        s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c")
+        s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c", help="kinematics backend")
         s.add_argument("--overwrite", action="store_true", help="replace the store instead of resuming it")
         s.add_argument("--json", action="store_true", help="print JSON")
 
-    s = sub.add_parser("reach", help="reachability and manipulability map of the workspace (Zarr, on Dask)")
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    text = "reachability and manipulability map of the workspace (Zarr, on Dask)"
+    s = sub.add_parser("reach", help=text, description=text, formatter_class=_Formatter)
+    _robot_argument(s)
     s.add_argument("--resolution", type=_positive, default=0.05, help="voxel edge in metres (default 0.05)")
     s.add_argument("--orientations", type=_at_least_1, default=50, help="orientations per voxel (default 50)")
     s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. map.zarr")
@@ -743,8 +941,9 @@ def add_workspace_commands(sub: Any) -> None:
     scale_options(s)
     s.set_defaults(func=cmd_reach)
 
-    s = sub.add_parser("dataset", help="a (q, pose) dataset for learning (Zarr, on Dask)")
-    s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    text = "a (q, pose) dataset for learning (Zarr, on Dask)"
+    s = sub.add_parser("dataset", help=text, description=text, formatter_class=_Formatter)
+    _robot_argument(s)
     s.add_argument("-n", type=_at_least_1, required=True, help="number of samples (more than stored appends)")
     s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. data.zarr")
     s.add_argument("--chunk", type=_at_least_1, default=65536, help="samples per block (default 65536)")

@@ -147,8 +147,11 @@ def write_generated(
     precision: str = "double",
     libm: bool = False,
 ) -> list[Path]:
-    """Generate and write the files of ``robot`` for ``backend`` into ``folder``; returns the paths
+    """Generate and write the files of ``robot`` for ``backend`` into ``folder``, with the manifest
+    :func:`symkin.load_compiled` reads back (``<stem>.symkin.json``); returns the paths
     (options as :func:`generate`)."""
+    from symkin.compiled import write_manifest
+
     files = generate(robot, backend, command, strategy, prefix, precision, libm)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -157,6 +160,7 @@ def write_generated(
         path = folder / name
         path.write_text(text)
         out.append(path)
+    out.append(write_manifest(robot, backend, files, folder, precision))
     return out
 
 

@@ -1,12 +1,14 @@
-"""Step-by-step kinematic derivations for teaching (issue 6): Markdown with LaTeX math, or LaTeX.
+"""Step-by-step kinematic derivations for teaching: Markdown with LaTeX math, or LaTeX.
 
-:func:`derivation` writes out what a student does by hand (seed 004) the way the ETS paper builds it
-(seed 000): the ETS (eq 1), each elementary transform as its 4x4 matrix (Fig. 2), the link frames
-(eq 5), the forward kinematics, the partial derivatives dT/dq_j (eq 26), every Jacobian column by
-eqs 27-28 and by the fast form (eqs 31-34), and the Hessian (seed 001 eq 20).
-:func:`derive_steps` returns the same results as sympy expressions in a :class:`Derivation`.
+:func:`derivation` writes out what a student does by hand the way Haviland and Corke build it
+(Manipulator Differential Kinematics, Part 1, 2023): the ETS (eq 1), each elementary transform as
+its 4x4 matrix (Fig. 2), the link frames (eq 5), the forward kinematics, the partial derivatives
+dT/dq_j (eq 26), every Jacobian column by eqs 27-28 and by the fast form (eqs 31-34), and the
+Hessian (eq 20 of Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion
+Control, 2020). :func:`derive_steps` returns the same results as sympy expressions in a
+:class:`Derivation`; ``sections`` keeps only some parts of the text (:data:`SECTIONS`).
 
-Joints are numbered from 1 as in the seeds: the symbol ``q_1`` is symkin's joint ``q0``, and
+Joints are numbered from 1 as in the paper: the symbol ``q_1`` is symkin's joint ``q0``, and
 ``Derivation.q[j]`` is the symbol of joint index ``j``. With ``symbolic_constants`` every nonzero
 translation constant of the ETS becomes its own positive symbol ``l_1, l_2, ...`` in chain order
 (a negative constant reads ``-l_k``); angle constants stay exact (``pi/2`` gives 0 and 1).
@@ -38,12 +40,17 @@ from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops
 from symkin.symbolic.kinematics import const_to_sympy, derive
 
-__all__ = ["Derivation", "derive_steps", "derivation"]
+__all__ = ["Derivation", "derive_steps", "derivation", "SECTIONS"]
 
 Fmt = Literal["markdown", "latex"]
 FORMATS = ("markdown", "latex")
 Form = Literal["auto", "expanded", "program"]
 FORMS = ("auto", "expanded", "program")
+#: The parts of a written derivation, in order (``derive --sections fk,jacobian``). The heading and
+#: the joint table are always written. In the program form a part that uses named quantities also
+#: brings the parts that define them (``fk`` the link frames, ``jacobian`` the link frames and ``fk``).
+SECTIONS = ("ets", "transforms", "links", "fk", "derivatives", "jacobian", "hessian", "checks")
+_NEEDS_PROGRAM = {"fk": ("links",), "jacobian": ("links", "fk"), "hessian": ("links", "fk", "jacobian")}
 SYMBOLIC_CHECK_MAX_OPS = 1500  # larger differences are checked at random points
 DISPLAY_MAX_OPS = 900  # larger expressions are not printed
 MATRIX_MAX_OPS = 160  # larger matrices are printed entry by entry
@@ -72,10 +79,12 @@ class Derivation:
         dT: dT/dq_j by joint index, 4x4 each (eq 26).
         J0: base-frame Jacobian 6xn, rows (v, omega), by eqs 27-28.
         J0_fast: the same by the fast form, eqs 31-34.
-        H0: Hessian blocks, ``H0[i] = dJ0/dq_i`` 6xn (seed 001 eq 20).
+        H0: Hessian blocks, ``H0[i] = dJ0/dq_i`` 6xn (eq 20 of the manipulability paper).
         simplified: whether the results are the compact forms (else the literal products).
         checks: how each equality was established: ``"symbolic"`` or ``"numeric"``.
         fmt: the format of ``text``; text: the derivation as Markdown or a LaTeX document.
+        markdown: the derivation as Markdown whatever ``fmt`` (what Jupyter shows).
+        shown: the sections written (:data:`SECTIONS`).
         form: ``"expanded"`` (every result multiplied out) or ``"program"`` (long chains: the
             results are matrices over named intermediates, ``intermediates`` lists their
             definitions in order and :meth:`expand` substitutes them back; ``dT`` and ``ee`` are
@@ -103,6 +112,8 @@ class Derivation:
     form: str = "expanded"
     intermediates: tuple[tuple[sp.Symbol, sp.Expr], ...] = field(default=(), repr=False)
     sections: tuple[tuple[str, int], ...] = field(default=(), repr=False)
+    markdown: str = field(default="", repr=False)
+    shown: tuple[str, ...] = SECTIONS
 
     def numeric(self, expr: Any) -> Any:
         """``expr`` with the symbolic link constants replaced by their values."""
@@ -119,6 +130,10 @@ class Derivation:
 
     def _repr_latex_(self) -> str:
         return self.latex_summary
+
+    def _repr_markdown_(self) -> str:
+        """The written derivation (Markdown with ``$$`` math) for Jupyter."""
+        return self.markdown
 
 
 # ---------------------------------------------------------------------------------------------
@@ -417,13 +432,18 @@ class _Printer:
             a = self._abbreviation(f)
             if a is not None:
                 subs[f] = a
+        for pw in expr.atoms(sp.Pow):  # roots keep their exponent: sqrt(2), not 2^0.5
+            if pw.exp.is_Rational and not pw.exp.is_Integer:
+                sym = sp.Symbol(f"zzpow{len(self.names)}")
+                self.names[sym] = sp.latex(pw)
+                subs[pw] = sym
         for r in expr.atoms(sp.Rational):
             den = r.q
             while den % 2 == 0:
                 den //= 2
             while den % 5 == 0:
                 den //= 5
-            if r.q > 4 and den == 1:
+            if r.q > 1 and den == 1:  # every terminating decimal as a decimal, as in the ETS
                 text = rational_text(Fraction(int(r.p), int(r.q)))
                 subs[r] = sp.Float(text, max(15, len(text)))
         return sp.latex(expr.xreplace(subs), symbol_names=self.names)
@@ -627,6 +647,7 @@ def derive_steps(
     simplify: bool = True,
     fmt: Fmt = "markdown",
     form: Form = "auto",
+    sections: Sequence[str] | None = None,
 ) -> Derivation:
     """Derive ``robot``'s kinematics step by step: the results and the written derivation.
 
@@ -641,7 +662,10 @@ def derive_steps(
             frame, new quantities named: :mod:`symkin.derivation_program`), or ``"auto"``: the
             program form when the expanded one would be too large to read or to check
             symbolically (the same size rule as the compiler's, about 8 joints and more).
+        sections: write only these parts of the text (names in :data:`SECTIONS`, e.g.
+            ``("fk", "jacobian")``); default all. The results are computed in full either way.
     """
+    shown = _shown_sections(sections)
     if fmt not in FORMATS:
         raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
     if form not in FORMS:
@@ -663,12 +687,32 @@ def derive_steps(
 
         D = program_derivation(robot, symbolic_constants)
         ctx, summary = program_context(D)
-        text = render("derive/program.md.j2", **ctx)
+        for part in list(shown):
+            shown |= set(_NEEDS_PROGRAM.get(part, ()))
+        text = render("derive/program.md.j2", **ctx, sections=shown)
     else:
         D = _steps(robot, symbolic_constants, simplify)
         ctx, summary = _context(D)
-        text = render("derive/derivation.md.j2", **ctx)
-    return replace(D, fmt=fmt, text=_latex_document(text) if fmt == "latex" else text, latex_summary=summary)
+        text = render("derive/derivation.md.j2", **ctx, sections=shown)
+    return replace(
+        D,
+        fmt=fmt,
+        text=_latex_document(text) if fmt == "latex" else text,
+        latex_summary=summary,
+        markdown=text,
+        shown=tuple(k for k in SECTIONS if k in shown),
+    )
+
+
+def _shown_sections(sections: Sequence[str] | str | None) -> set[str]:
+    if sections is None:
+        return set(SECTIONS)
+    if isinstance(sections, str):
+        sections = [w for w in sections.replace(",", " ").split()]
+    bad = [k for k in sections if k not in SECTIONS]
+    if bad or not sections:
+        raise SymkinError(f"unknown section(s) {bad or list(sections)}: choose from {', '.join(SECTIONS)}")
+    return set(sections)
 
 
 def derivation(
@@ -677,8 +721,9 @@ def derivation(
     symbolic_constants: bool = False,
     simplify: bool = True,
     form: Form = "auto",
+    sections: Sequence[str] | None = None,
 ) -> str:
     """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`)."""
     return derive_steps(
-        robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form
+        robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form, sections=sections
     ).text

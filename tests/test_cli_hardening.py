@@ -65,11 +65,11 @@ def test_a_folder_or_missing_file_as_robot(capsys, tmp_path, no_work):
         ["check", "planar2", "--samples", "0"],
         ["bench", "kin", "--batch", "-1"],
         ["bench", "ik", "-n", "0"],
-        ["servo", "planar2", "--from-q", "0.1 0.2", "--max-steps", "-5"],
-        ["servo", "planar2", "--from-q", "0.1 0.2", "--dt", "inf"],  # failed mid-run
-        ["servo", "planar2", "--from-q", "0.1 0.2", "--dt", "nan"],
-        ["servo", "planar2", "--from-q", "0.1 0.2", "--dt", "0"],
-        ["servo", "planar2", "--from-q", "0.1 0.2", "--dt", "fast"],
+        ["servo", "planar2", "--target-q", "0.1 0.2", "--max-steps", "-5"],
+        ["servo", "planar2", "--target-q", "0.1 0.2", "--dt", "inf"],  # failed mid-run
+        ["servo", "planar2", "--target-q", "0.1 0.2", "--dt", "nan"],
+        ["servo", "planar2", "--target-q", "0.1 0.2", "--dt", "0"],
+        ["servo", "planar2", "--target-q", "0.1 0.2", "--dt", "fast"],
     ],
 )
 def test_bad_numbers(capsys, argv, no_work):
@@ -96,7 +96,7 @@ def test_bad_symkin_cflags_is_named_by_the_build_too(monkeypatch):
 
 def test_plot_without_matplotlib_is_found_first(capsys, monkeypatch, tmp_path, no_work):
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises ImportError
-    argv = ["servo", "planar2", "--from-q", "0.1 0.2", "--plot", str(tmp_path / "p.png")]
+    argv = ["servo", "planar2", "--target-q", "0.1 0.2", "--plot", str(tmp_path / "p.png")]
     assert "matplotlib" in one_line_error(capsys, argv)
     assert "matplotlib" in one_line_error(
         capsys, ["bench", "mmc", "-n", "1", "--plot", str(tmp_path / "p.png")]
@@ -104,7 +104,7 @@ def test_plot_without_matplotlib_is_found_first(capsys, monkeypatch, tmp_path, n
 
 
 def test_plot_into_a_missing_folder_is_found_first(capsys, tmp_path, no_work):
-    argv = ["servo", "planar2", "--from-q", "0.1 0.2", "--plot", str(tmp_path / "no" / "p.png")]
+    argv = ["servo", "planar2", "--target-q", "0.1 0.2", "--plot", str(tmp_path / "no" / "p.png")]
     assert "does not exist" in one_line_error(capsys, argv)
 
 

@@ -26,7 +26,7 @@ SECTIONS = (
     "Jacobian columns by eqs 27-28",
     "Jacobian columns by the fast form (eqs 31-34)",
     "The manipulator Jacobian (eqs 29-30)",
-    "The manipulator Hessian (seed 001 eq 20)",
+    "The manipulator Hessian (eq 20 of the manipulability paper)",
     "How the results were checked",
 )
 
@@ -50,7 +50,7 @@ def numeric_fn(d: Derivation, M: sp.Matrix):  # noqa: ANN201
     return sp.lambdify(d.q, d.numeric(M), "numpy")
 
 
-# -- the planar arm reads like the hand derivation (seed 004) ----------------------------------
+# -- the planar arm reads like the hand derivation of a textbook -------------------------------
 
 
 def test_planar3_pose_is_l1c1_plus_l2c12_plus_l3c123(planar_sym: Derivation) -> None:
@@ -227,6 +227,57 @@ def test_latex_is_a_complete_document(panda: tuple[Derivation, None], tmp_path) 
             timeout=120,
         )
         assert run.returncode == 0, run.stdout.decode(errors="replace")[-2000:]
+
+
+def test_text_names_sources_not_internal_labels(planar_sym: Derivation) -> None:
+    for text in (
+        planar_sym.text,
+        derivation("ur5", sections="fk,jacobian"),
+        derivation("planar2", form="program"),
+    ):
+        assert not re.search(r"(?i)seed \d|lab \d", text)
+        assert "Haviland and Corke" in text and "Manipulator Differential Kinematics, Part 1" in text
+
+
+def test_constants_are_written_in_one_style() -> None:
+    """Lengths read as in the ETS (0.5, not 1/2): the same decimals in the sequence and the results."""
+    text = derivation("Rz(q) tx(0.5) Rz(q) tx(0.25) Rx(pi/2) tz(0.333)", sections="ets,fk")
+    assert "t_x(0.5)" in text and "0.5 c_{1}" in text and "0.25 c_{12}" in text
+    assert "\\frac{c_{1}}{2}" not in text and "\\frac{c_{12}}{4}" not in text
+    assert "\\frac{\\pi}{2}" in text  # angles stay multiples of pi
+    # a root keeps its form: atan2 constants of a tilted axis print sqrt, not a power 0.5
+    tilted = derivation("Rz(atan2(1, sqrt(2))) Rx(q) tx(0.5)", sections="ets,fk")
+    assert "^{0.5}" not in tilted
+
+
+def test_sections_shorten_the_text_in_both_forms() -> None:
+    full = derive_steps("planar3")
+    short = derive_steps("planar3", sections=("fk", "jacobian"))
+    assert short.shown == ("fk", "jacobian") and len(short.text) < len(full.text)
+    assert "## Forward kinematics" in short.text and "## The manipulator Jacobian (eqs 29-30)" in short.text
+    for title in ("Link frames (eq 5)", "The manipulator Hessian", "The elementary transforms (Fig. 2)"):
+        assert title not in short.text
+    assert short.text.startswith("# Kinematics of planar3") and "| joint |" in short.text
+    # the program form brings the link frames the pose and the Jacobian are written in
+    prog = derive_steps("planar3", form="program", sections="jacobian")
+    assert prog.shown == ("links", "fk", "jacobian")
+    assert (
+        "## Link frames (eq 5), one from the previous" in prog.text
+        and "## The manipulator Hessian" not in prog.text
+    )
+    assert "## The elementary transforms" not in prog.text
+    with pytest.raises(SymkinError, match="fk, derivatives"):
+        derive_steps("planar2", sections=("fk", "jacobians"))
+
+
+def test_markdown_repr_is_the_whole_derivation(
+    panda: tuple[Derivation, None], planar_sym: Derivation
+) -> None:
+    assert planar_sym._repr_markdown_() == planar_sym.text
+    md = panda[0]._repr_markdown_()  # a LaTeX derivation still shows Markdown in a notebook
+    assert md.startswith("# Kinematics of panda") and "\\documentclass" not in md
+    for title in SECTIONS:
+        assert f"## {title}" in md
 
 
 def test_unknown_format_is_rejected() -> None:

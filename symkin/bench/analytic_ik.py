@@ -112,8 +112,10 @@ def run_analytic(
     robots: tuple[str, ...] = ("ur5",), n: int = 1000, starts: int = 32, seed: int = 0, progress: bool = False
 ) -> dict[str, Any]:
     """Measure every robot of ``robots`` (see the module docstring)."""
+    from symkin.progress import bar
+
     out: dict[str, Any] = {"n": n, "starts": starts, "seed": seed, "robots": {}}
-    for name in robots:
+    for name in bar(robots, progress, desc="closed-form IK", unit="robot"):
         robot, row = _measure(name, n, starts, seed)
         out["robots"][robot.name] = row
     return out
@@ -193,7 +195,7 @@ def _getter(r: dict[str, Any]) -> Any:
 def format_analytic(result: dict[str, Any]) -> str:
     """The result of :func:`run_analytic` as a table."""
     lines = [
-        f"closed-form IK, {result['n']} random poses per robot (seed {result['seed']}); "
+        f"closed-form IK, {result['n']} random poses per robot (random seed {result['seed']}); "
         f"sampling: {result['starts']} LM searches per pose",
         f"{'robot':10} {'kind':30} {'derive':>7} {'C batch':>8} {'C one':>7} {'NumPy':>7} {'sols':>5} "
         f"{'max err':>8} {'agree':>6} | {'EAIK one':>8} {'batch':>7} {'sols':>5} {'max err':>8} {'agree':>6} "

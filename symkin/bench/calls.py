@@ -176,7 +176,7 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
 
 # -- control -------------------------------------------------------------------------------------
 def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float = 0.25) -> dict[str, Any]:
-    """RRMC and MMC steps from Python (C backend) and servo steps per second, Table I tasks (seed 001
+    """RRMC and MMC steps from Python (C backend) and servo steps per second, Table I tasks (MMC paper
     eq 14, joint speeds unbounded as in the paper), loop in C and in Python."""
     from symkin.bench.mmc import table1_tasks
     from symkin.runtime.control import MMC, rrmc
@@ -345,10 +345,10 @@ def run_calls(
         ("casadi", lambda: casadi_vs_raw(robot, q, budget)),
         ("startup", lambda: startup(robot_spec if isinstance(robot_spec, str) else robot.name, startup_runs)),
     ]
-    from tqdm import tqdm
+    from symkin.progress import bar
 
     out: dict[str, Any] = {"robot": robot.name, "control_robot": crobot.name}
-    for name, run in tqdm(sections, desc="bench calls", disable=not progress, leave=False):
+    for name, run in bar(sections, progress, desc="bench calls"):
         out[name] = run()
     out["checks"] = _checks(out)
     return out

@@ -134,10 +134,10 @@ def run_compile(
     progress: bool = False,
 ) -> list[dict[str, Any]]:
     """One cold compile per chain length (and of ``reference``), each in its own process."""
-    from tqdm import tqdm
+    from symkin.progress import bar
 
     specs = ([reference] if reference else []) + [str(n) for n in joints]
-    return [measure(s, seed) for s in tqdm(specs, desc="compiling", disable=not progress, leave=False)]
+    return [measure(s, seed) for s in bar(specs, progress, desc="compiling")]
 
 
 def format_compile(rows: list[dict[str, Any]]) -> str:

@@ -1,4 +1,5 @@
-"""Table 1 of seed 000: numerical IK methods compared over random reachable UR5 targets.
+"""Table 1 of Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023: numerical IK methods
+compared over random reachable UR5 targets.
 
 The authors' protocol: ``np.random.seed(seed)``; ``n_problems`` target configurations uniform
 within the joint limits (targets are their poses), then one shared set of 100 start points;
@@ -36,7 +37,7 @@ TABLE1_METHODS: dict[str, dict[str, Any]] = {
     "LM (Sugihara w_n=1e-4)": {"method": "LM", "damping": "sugihara", "lam": 1e-4},
 }
 
-# Seed 000 Table 1: (mean iterations, median iterations, infeasible count, infeasible %, mean
+# Table 1 of Part 1: (mean iterations, median iterations, infeasible count, infeasible %, mean
 # searches, max searches) per method and setting, 10 000 problems.
 PAPER_TABLE1: dict[tuple[str, str], tuple[float, float, int, float, float, float]] = {
     ("NR", "a"): (21.34, 16.0, 1093, 10.93, 1.0, 1.0),
@@ -103,7 +104,7 @@ def run_table1(
     chunk: int = 1000,
     rtb: bool = True,
 ) -> dict[str, Any]:
-    """Reproduce Table 1 of seed 000 (module docstring) -> a dict with one entry per row.
+    """Reproduce Table 1 of Part 1 (module docstring) -> a dict with one entry per row.
 
     Args:
         robot: a Robot or built-in name (the paper uses the UR5).
@@ -120,8 +121,7 @@ def run_table1(
         us_per_iteration (over all iterations, failed searches included), max_error (largest |e|
         among solved problems) and ``paper`` (the published row or None).
     """
-    from tqdm import tqdm
-
+    from symkin.progress import bar as progress_bar
     from symkin.runtime.ik import ik
 
     robot = _robot(robot)
@@ -144,7 +144,7 @@ def run_table1(
     else:
         solver = robot
     rows = []
-    bar = tqdm(total=N * len(labels) * len(settings), desc="Table 1", unit="IK", disable=not progress)
+    bar = progress_bar(total=N * len(labels) * len(settings), progress=progress, desc="Table 1", unit="IK")
     for setting in settings:
         slimit, ilimit = SETTINGS[setting]
         for label in labels:
@@ -239,7 +239,8 @@ def format_table1(result: dict[str, Any]) -> str:
     """A plain-text table of :func:`run_table1`'s result, the paper's figures beside ours."""
     crit = "E" if result["tol_on"] == "E" else "|e|"
     head = (
-        f"Table 1 (seed 000): {result['n_problems']} problems on {result['robot']}, seed {result['seed']}, "
+        f"Table 1 of Haviland and Corke 2023 (Part 1): {result['n_problems']} problems on {result['robot']}, "
+        f"random seed {result['seed']}, "
         f"solved when {crit} < {result['tol']:g}, backend {result['backend']}"
     )
     cols = ["Method", "S", "I", "Mean it", "Med it", "Infeas", "Infeas %", "Mean S", "Max S", "us/solve",

@@ -191,11 +191,11 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
         paths[b] = {f: (lambda f=f, b=b: getattr(kins[b], f)(q)) for f in FUNCS}
     paths["reference"] = {f: (lambda f=f: getattr(robot, f)(q)) for f in FUNCS}
     paths.update(_peer_calls(robot, q))
-    from tqdm import tqdm
+    from symkin.progress import bar
 
     items = [(p, f) for p in paths for f in FUNCS]
     per_call: dict[str, dict[str, float]] = {p: {} for p in paths}
-    for p, f in tqdm(items, desc="per call", disable=not progress, leave=False):
+    for p, f in bar(items, progress, desc="per call"):
         per_call[p][f] = per_call_us(paths[p][f], clock=time.thread_time)
     Q = robot.random_q(batch, seed=seed + 1)
     batched: dict[str, dict[str, float]] = {}

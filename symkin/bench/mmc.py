@@ -1,4 +1,4 @@
-"""Table I of seed 001 (Haviland & Corke, "Maximising Manipulability During Resolved-Rate Motion Control").
+"""Table I of Haviland and Corke, "Maximising Manipulability During Resolved-Rate Motion Control" (2020).
 
 ``run_table1`` servos each robot over random tasks with RRMC and with MMC and reports mean and final
 manipulability, arrivals, tasks leaving the joint limits and step times beside the paper's numbers.
@@ -34,15 +34,16 @@ __all__ = [
     "PAPER_TABLE1",
 ]
 
-#: Table I of seed 001: mean and mean final manipulability, RRMC and MMC (lambda = 0.005, 1000 tasks)
+#: Table I of the MMC paper: mean and mean final manipulability, RRMC and MMC (lambda = 0.005, 1000 tasks)
 PAPER_TABLE1: dict[str, dict[str, float]] = {
     "panda": {"mean_rrmc": 0.0742, "mean_mmc": 0.0880, "final_rrmc": 0.0782, "final_mmc": 0.0934},
     "lbr_iiwa7": {"mean_rrmc": 0.0667, "mean_mmc": 0.0776, "final_rrmc": 0.0643, "final_mmc": 0.0761},
     "sawyer": {"mean_rrmc": 0.2721, "mean_mmc": 0.3206, "final_rrmc": 0.2572, "final_mmc": 0.3263},
 }
 PROTOCOL_NOTE = (
-    "Protocol of seed 001 eq 14: start and target configurations uniform in [qmin + 50 deg, qmax - 50 deg], "
-    "target pose = FK of the target configuration; angle-axis base-frame error (seed 000 eq 37), gain 1, "
+    "Protocol of eq 14 of Haviland and Corke's MMC paper (2020): start and target configurations uniform "
+    "in [qmin + 50 deg, qmax - 50 deg], target pose = FK of the target configuration; angle-axis "
+    "base-frame error (Manipulator Differential Kinematics, Part 1, eq 37), gain 1, "
     "dt 0.05 s, arrival at sum|e| < 0.1, at most 500 steps. The paper discards self-colliding "
     "configurations; symkin has no collision model, so none are discarded here. Joint limits are not "
     "enforced except in the 'mmc_jl' run (velocity dampers)."
@@ -71,7 +72,7 @@ def _robot(robot: Any, backend: str | None = None) -> Any:
 
 
 def table1_tasks(kin: Any, n_tasks: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Start configurations (n_tasks, n) and target poses (n_tasks, 4, 4) by eq 14 of seed 001."""
+    """Start configurations (n_tasks, n) and target poses (n_tasks, 4, 4) by eq 14 of the MMC paper."""
     lo, hi = np.asarray(kin.qlim, dtype=float)
     margin = np.minimum(_MARGIN, 0.45 * (hi - lo))
     lo, hi = lo + margin, hi - margin
@@ -123,7 +124,7 @@ def run_table1(
     timing: bool = True,
     timing_tasks: int = 50,
 ) -> dict[str, Any]:
-    """Reproduce Table I of seed 001 (protocol in :data:`PROTOCOL_NOTE`); returns a JSON-able dict.
+    """Reproduce Table I of the MMC paper (protocol in :data:`PROTOCOL_NOTE`); returns a JSON-able dict.
 
     ``robots`` are built-in names (``symkin.model.robots.load``, compiled with ``symkin.compile``
     on ``backend``, or the NumPy reference with ``backend=None``) or robot objects. With ``timing``
@@ -163,9 +164,9 @@ def run_table1(
         runs: dict[str, list[ServoResult]] = {k: [] for k in controllers}
         tasks = range(n_tasks)
         if progress:
-            from tqdm.auto import tqdm
+            from symkin.progress import bar
 
-            tasks = tqdm(tasks, desc=f"Table I {name}", unit="task")
+            tasks = bar(tasks, desc=f"Table I {name}", unit="task", leave=True)
         t0 = time.perf_counter()
         for t in tasks:
             for key, ctrl in controllers.items():
@@ -209,7 +210,8 @@ def format_table1(result: dict[str, Any]) -> str:
     """Plain-text table of a :func:`run_table1` result, with the paper's numbers beside ours."""
     pr = result["protocol"]
     lines = [
-        f"Table I (seed 001), {pr['n_tasks']} tasks per robot, lambda = {pr['lam']}, seed {pr['seed']}",
+        f"Table I of Haviland and Corke 2020 (MMC), {pr['n_tasks']} tasks per robot, lambda = {pr['lam']}, "
+        f"random seed {pr['seed']}",
         "",
         f"{'robot':<10} {'':<6} {'mean m RRMC':>11} {'MMC':>8} {'impr.':>7}   "
         f"{'final m RRMC':>12} {'MMC':>8} {'impr.':>7}",
@@ -495,7 +497,8 @@ def plot_task(
     title: str | None = None,
     **servo_options: Any,
 ) -> dict[str, ServoResult]:
-    """Servo one task with RRMC and MMC and write manipulability against time as a PNG (seed 001 Fig. 3).
+    """Servo one task with RRMC and MMC and write manipulability against time as a PNG (Fig. 3 of the MMC
+    paper).
 
     ``servo_options`` go to :func:`symkin.runtime.loop.servo` (``lam``, ``dt``, ``qd_max``...).
     Needs matplotlib (``pip install symkin[plot]``). Returns the two :class:`ServoResult`.
@@ -525,7 +528,7 @@ def plot_task(
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description="Reproduce Table I of seed 001 (MMC vs RRMC).")
+    ap = argparse.ArgumentParser(description="Reproduce Table I of Haviland and Corke 2020 (MMC vs RRMC).")
     ap.add_argument("--robots", nargs="+", default=["panda", "lbr_iiwa7", "sawyer"])
     ap.add_argument("--tasks", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=0)

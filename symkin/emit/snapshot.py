@@ -21,12 +21,11 @@ def snapshot_files(
     robots: Iterable[str] | None = None, backends: Iterable[str] = BACKENDS, progress: bool = False
 ) -> dict[str, str]:
     """Every generated file as ``"<robot>/<backend>/<file>" -> text``."""
-    from tqdm import tqdm
-
     from symkin.model.robots import list_robots, load
+    from symkin.progress import bar
 
     out: dict[str, str] = {}
-    for name in tqdm(list(robots or list_robots()), desc="generating", disable=not progress, leave=False):
+    for name in bar(list(robots or list_robots()), progress, desc="generating"):
         robot = load(name)
         for backend in backends:
             for fname, text in generate(robot, backend, COMMAND).items():

@@ -1,7 +1,7 @@
-"""Denavit-Hartenberg parameters to an ETS (seed 004, "Determining DH parameters").
+"""Denavit-Hartenberg parameters to an ETS (Corke, Robotics, Vision and Control, 2017, chapter 7).
 
 A standard DH link is ``Rz(theta) tz(d) tx(a) Rx(alpha)``; a modified (Craig) link is
-``tx(a) Rx(alpha) Rz(theta) tz(d)`` (seed 004, Fig. 7.15). For a revolute link the joint is
+``tx(a) Rx(alpha) Rz(theta) tz(d)`` (Craig's convention). For a revolute link the joint is
 ``theta = q + offset``; for a prismatic link ``theta`` is a constant angle and the joint is
 ``d = q + offset`` (a nonzero ``d`` of a prismatic link is added to ``offset``). A joint offset
 becomes a constant ET just before the joint (``Rz(offset) Rz(q)`` or ``tz(offset) tz(q)``), and zero
@@ -153,7 +153,7 @@ def _add(a: Const, b: Const, what: str) -> Const:
 
 
 def _link_ets(link: DHLink, j: int, modified: bool) -> list[ET]:
-    """The ETs of one DH link (seed 004): joint index ``j``."""
+    """The ETs of one DH link: joint index ``j``."""
     where = f"DH link {j}"
     d = length_const(link.d, f"{where} d")
     a = length_const(link.a, f"{where} a")
@@ -209,7 +209,8 @@ def robot_from_dh(
     source: str = "",
     joint_names: Sequence[str] | None = None,
 ) -> Robot:
-    """A robot from standard (``modified=False``) or modified (Craig) DH links (seed 004).
+    """A robot from standard (``modified=False``) or modified (Craig) DH links (Corke, Robotics, Vision and
+    Control, 2017, chapter 7).
 
     ``links``: DHLink or dicts with the same keys (plus ``type``: ``'R'``/``'P'``). ``qlim``
     (2, n) overrides the per-link limits; links without limits get the Robot defaults.

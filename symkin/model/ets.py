@@ -1,4 +1,5 @@
-"""The elementary transform sequence (seed 000, eqs 1-4, Fig. 2).
+"""The elementary transform sequence (Haviland and Corke, Manipulator Differential Kinematics, Part 1,
+2023, eqs 1-4, Fig. 2).
 
 An ETS is a product of elementary transforms tx, ty, tz (translations) and Rx, Ry, Rz (rotations),
 each either a constant or a joint variable. Constants are kept exact: a constant is

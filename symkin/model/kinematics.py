@@ -1,4 +1,5 @@
-"""Numeric reference kinematics of an ETS (numpy only): the O(n) algorithm of seed 000.
+"""Numeric reference kinematics of an ETS (numpy only): the O(n) algorithm of Haviland and Corke,
+Manipulator Differential Kinematics, Part 1, 2023.
 
 Everything is batched: a configuration array ``Q`` of shape (N, n) gives (N, ...) results. The
 chain is pre-reduced to ``P0 * S_1(q) * ... * S_n(q)`` where each segment ``S_k`` is the joint's
@@ -9,8 +10,10 @@ so all segments are built by one ``einsum``.
 Conventions:
 - Base-frame Jacobian ``J0`` rows (v, omega), v the velocity of the end-effector origin (eq 14-16,
   31-34). End-effector-frame Jacobian ``Je = blkdiag(R^T, R^T) J0``.
-- Hessian ``H`` of shape (n, 6, n), ``H[i] = dJ/dq_i`` (seed 001, eq 20 and Appendix I).
-- Space / body Jacobians of seed 002 have rows (omega, v) (twist order of Modern Robotics).
+- Hessian ``H`` of shape (n, 6, n), ``H[i] = dJ/dq_i`` (Haviland and Corke, Maximising Manipulability
+  During Resolved-Rate Motion Control, 2020, eq 20 and Appendix I).
+- Space / body Jacobians have rows (omega, v), the twist order of Lynch and Park, Modern Robotics,
+  2017.
 """
 
 from __future__ import annotations

@@ -1,11 +1,13 @@
-"""Product of exponentials (seed 002, Chapter 4) to an exact ETS, and back (numerically).
+"""Product of exponentials (Lynch and Park, Modern Robotics, 2017, chapter 4) to an exact ETS, and back
+(numerically).
 
 Space form ``T(q) = e^[S1]q1 ... e^[Sn]qn M``; body form ``T(q) = M e^[B1]q1 ... e^[Bn]qn`` with
-``B_i = Ad_{M^-1} S_i``. Screws are rows ``(omega, v)`` (twist order of seed 002 / Modern
+``B_i = Ad_{M^-1} S_i``. Screws are rows ``(omega, v)`` (twist order of Modern
 Robotics). A revolute screw has ``|omega| = 1`` and pitch 0 (``v = -omega x p`` for a point ``p``
 on the axis); a prismatic screw has ``omega = 0`` and ``|v| = 1``. Helical screws are rejected.
 
-Each ``e^[S]q`` becomes ``G E(q) G^-1`` (seed 000 eq 1): ``G = tx ty tz(p)`` times an exact rotation
+Each ``e^[S]q`` becomes ``G E(q) G^-1`` (the ETS of Haviland and Corke, Manipulator Differential
+Kinematics, Part 1, 2023, eq 1): ``G = tx ty tz(p)`` times an exact rotation
 taking a coordinate axis onto ``omega`` (none when ``omega`` is +-x/y/z, so the joint is one ET),
 ``E(q)`` an elementary joint transform. ``M`` becomes ``tx ty tz`` and ZYX angles
 ``Rz Ry Rx`` (exact quarter turns when its rotation is a signed permutation). Adjacent constants
@@ -140,7 +142,7 @@ def simplify_constants(chain: list[ET], tol: float = 0.0) -> list[ET]:
 
 
 def _screw_ets(S: list[Fraction], j: int, tol: float) -> list[ET]:
-    """``e^[S]q`` of joint ``j`` as ETs (seed 002): ``G E(q) G^-1``."""
+    """``e^[S]q`` of joint ``j`` as ETs (Modern Robotics): ``G E(q) G^-1``."""
     w, v = S[:3], S[3:]
     wn = math.sqrt(sum(float(c) ** 2 for c in w))
     vn = math.sqrt(sum(float(c) ** 2 for c in v))
@@ -180,7 +182,7 @@ def robot_from_poe(
     joint_names: Sequence[str] | None = None,
     tol: float = 1e-9,
 ) -> Robot:
-    """A robot from the home pose ``M`` (4x4) and screws (n, 6) rows ``(omega, v)`` (seed 002).
+    """A robot from the home pose ``M`` (4x4) and screws (n, 6) rows ``(omega, v)`` (Modern Robotics).
 
     ``frame="space"``: ``T = e^[S1]q1 ... e^[Sn]qn M``; ``frame="body"``: ``T = M e^[B1]q1 ... e^[Bn]qn``.
     Entries within ``tol`` of 0 or +-1 are snapped to them.
@@ -230,7 +232,7 @@ def robot_from_poe(
 def poe_of(robot: Robot, q: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """Space-form PoE data of ``robot`` about ``q`` (default zeros): ``(M (4, 4), S (n, 6))``.
 
-    ``M = T(q)`` and ``S`` the space Jacobian's columns at ``q`` (seed 002, ``J_s1 = S_1``...),
+    ``M = T(q)`` and ``S`` the space Jacobian's columns at ``q`` (Modern Robotics, ``J_s1 = S_1``...),
     so ``T(q + dq) = e^[S1]dq1 ... e^[Sn]dqn M``.
     """
     q = np.zeros(robot.n) if q is None else np.asarray(q, dtype=float)

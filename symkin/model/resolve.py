@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 from symkin.errors import RobotError
 from symkin.model.robot import Robot
@@ -17,9 +18,23 @@ __all__ = ["resolve_robot"]
 _URDF_SUFFIXES = (".urdf", ".xml")
 
 
-def resolve_robot(spec: str | Robot) -> Robot:
+def resolve_robot(spec: str | Robot, tool: Any = None, base: Any = None) -> Robot:
     """A Robot from a built-in name (``panda``), ETS text (``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table
-    file or a URDF file."""
+    file or a URDF file.
+
+    ``tool``/``base``: a constant transform appended after the end effector / placed before the
+    first link (any form :meth:`symkin.Robot.with_tool` takes, e.g. ``"tz(0.1)"`` or
+    ``"0 0 0.1 0 0 pi/2"``), on top of any the source itself has (a DH file's ``# tool:``).
+    """
+    robot = _resolve(spec)
+    if tool is not None:
+        robot = robot.with_tool(tool)
+    if base is not None:
+        robot = robot.with_base(base)
+    return robot
+
+
+def _resolve(spec: str | Robot) -> Robot:
     if isinstance(spec, Robot):
         return spec
     from symkin.model.robots import list_robots, load

@@ -2,6 +2,11 @@
 
 Numeric reference kinematics (numpy only) are methods of :class:`Robot`. Every method takes ``q``
 of shape (n,) or a batch (N, n); a batch gives results with a leading (N,) axis.
+
+References: "eq N" and "Part 1 eq N" are the equations of Haviland and Corke, Manipulator
+Differential Kinematics, Part 1 (IEEE Robotics and Automation Magazine, 2023); "MMC paper eq N"
+those of Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control
+(arXiv, 2020).
 """
 
 from __future__ import annotations
@@ -32,6 +37,9 @@ __all__ = [
     "AXES_ROWS",
     "IDENTIFIER_MAX",
     "MAX_JOINT_VALUE",
+    "cond_of",
+    "jacob_dot_of",
+    "space_jacobian",
 ]
 
 Axes = Literal["all", "trans", "rot"]
@@ -155,7 +163,14 @@ class Robot:
 
     def __post_init__(self) -> None:
         if not isinstance(self.ets, ETS):
-            raise RobotError(f"ets must be an ETS, not {type(self.ets).__name__}")
+            from symkin.model.transform import type_name
+
+            hint = (
+                "; for a roboticstoolbox robot or ETS use Robot.from_rtb"
+                if "roboticstoolbox" in type_name(self.ets)
+                else ""
+            )
+            raise RobotError(f"ets must be a symkin.ETS, not {type_name(self.ets)}{hint}")
         n = self.ets.n
         if not isinstance(self.name, str) or not self.name:
             raise RobotError("a robot name must be a non-empty string")
@@ -206,10 +221,32 @@ class Robot:
         name: str | None = None,
         **kwargs: Any,
     ) -> Robot:
-        """A robot from an ETS or its text form (see :class:`symkin.ETS`)."""
+        """A robot from an ETS or its text form (see :class:`symkin.ETS`).
+
+        A roboticstoolbox-python ETS is refused with a pointer to :meth:`from_rtb`, which also
+        carries over its joint limits.
+        """
         if isinstance(ets, str):
             ets = ETS.parse(ets)
+        elif not isinstance(ets, ETS):
+            from symkin.model.transform import type_name
+
+            hint = (
+                "; for a roboticstoolbox robot or ETS use Robot.from_rtb(...)"
+                if "roboticstoolbox" in type_name(ets)
+                else ""
+            )
+            raise RobotError(f"ets must be a symkin.ETS or ETS text, not {type_name(ets)}{hint}")
         return cls(ets, name=name or "robot", qlim=qlim, **kwargs)
+
+    @classmethod
+    def from_rtb(cls, robot_or_ets: Any, name: str | None = None, **kwargs: Any) -> Robot:
+        """A robot from a roboticstoolbox-python robot (``rtb.models.Panda()``, a ``DHRobot``) or
+        ETS, with exact constants, its joint limits, named configurations, base and tool; see
+        :mod:`symkin.model.rtb`. roboticstoolbox itself is not needed to call this."""
+        from symkin.model.rtb import robot_from_rtb
+
+        return robot_from_rtb(robot_or_ets, name=name, **kwargs)
 
     @classmethod
     def from_dh(cls, *args: Any, **kwargs: Any) -> Robot:
@@ -229,10 +266,49 @@ class Robot:
 
     @classmethod
     def from_poe(cls, M: Any, screws: Any, frame: str = "space", **kwargs: Any) -> Robot:
-        """A robot from product-of-exponentials data (seed 002); see :mod:`symkin.model.poe`."""
+        """A robot from product-of-exponentials data (Lynch and Park, Modern Robotics, 2017); see
+        :mod:`symkin.model.poe`."""
         from symkin.model.poe import robot_from_poe
 
         return robot_from_poe(M, screws, frame=frame, **kwargs)
+
+    # -- tool and base ---------------------------------------------------------------------
+    def with_tool(self, tool: Any, name: str | None = None) -> Robot:
+        """A new robot with the constant transform ``tool`` appended after the end effector.
+
+        ``tool``: constant ETS text (``"tz(0.1) Rx(pi/2)"``, exact), ``"x y z roll pitch yaw"``
+        (m, rad; text stays exact), a symkin ETS or ET, a 4x4 homogeneous matrix or spatialmath
+        ``SE3`` (split into ``tx ty tz`` and rotations, float noise snapped: see
+        :mod:`symkin.model.transform`) or a roboticstoolbox ETS without joints. The new robot's
+        ``fkine(q)`` is ``self.fkine(q) @ T_tool``; limits, names and configurations are kept.
+        """
+        from symkin.model.transform import constant_ets
+
+        extra = constant_ets(tool, "tool")
+        return self._with(self.ets.ets + tuple(extra), f"tool {ETS(tuple(extra))}" if extra else "", name)
+
+    def with_base(self, base: Any, name: str | None = None) -> Robot:
+        """A new robot with the constant transform ``base`` placed before the first link, so its
+        ``fkine(q)`` is ``T_base @ self.fkine(q)``; ``base`` in any form :meth:`with_tool` takes."""
+        from symkin.model.transform import constant_ets
+
+        extra = constant_ets(base, "base")
+        return self._with(tuple(extra) + self.ets.ets, f"base {ETS(tuple(extra))}" if extra else "", name)
+
+    def _with(self, ets: tuple, note: str, name: str | None) -> Robot:
+        if not note and name is None:
+            return self
+        configs = {k: v for k, v in self.configs.items() if k != "qz"}
+        source = "; ".join(s for s in (self.source, note) if s)
+        return Robot(
+            ETS(ets),
+            name=name or self.name,
+            qlim=self.qlim,
+            configs=configs,
+            joint_names=self.joint_names,
+            qd_max=self.qd_max,
+            source=source,
+        )
 
     # -- plain attributes ------------------------------------------------------------------
     @property
@@ -331,7 +407,7 @@ class Robot:
             return rng.uniform(lo, hi)
         return rng.uniform(lo, hi, size=(N, self.n))
 
-    # -- numeric reference kinematics (eqs 1, 14-16, 31-34; seed 001 eq 11) -----------------
+    # -- numeric reference kinematics (Part 1 eqs 1, 14-16, 31-34) ------------------------
     def fkine(self, q: Any, frame: int | None = None) -> np.ndarray:
         """End-effector pose in the base frame 0T_e (eq 1): (4, 4) or (N, 4, 4).
 
@@ -399,7 +475,7 @@ class Robot:
         return (J[0], H[0]) if single else (J, H)
 
     def hessian0(self, q: Any) -> np.ndarray:
-        """Base-frame manipulator Hessian (seed 001 eq 20): (n, 6, n) or (N, n, 6, n), H[i] = dJ0/dq_i."""
+        """Base-frame manipulator Hessian (MMC paper eq 20): (n, 6, n) or (N, n, 6, n), H[i] = dJ0/dq_i."""
         Q, single = self._batch(q)
         H = self._num.hessian0(Q)
         return H[0] if single else H
@@ -419,7 +495,7 @@ class Robot:
         return float(m[0]) if single else m
 
     def jacobm(self, q: Any, axes: Axes = "all") -> np.ndarray:
-        """Manipulability Jacobian dm/dq (seed 001 eq 11): (n,) or (N, n)."""
+        """Manipulability Jacobian dm/dq (MMC paper eq 11): (n,) or (N, n)."""
         rows = axes_rows(axes)
         Q, single = self._batch(q)
         _, J, H = self._num.jacob0_hessian0(Q)
@@ -441,19 +517,43 @@ class Robot:
         return ik(self, Tep, **kwargs)
 
     def jacobs(self, q: Any) -> np.ndarray:
-        """Space Jacobian of seed 002: (6, n) or (N, 6, n), rows (omega, v_s), v_s = v_e - omega x p_e."""
+        """Space Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows
+        (omega, v_s), v_s = v_e - omega x p_e."""
         Q, single = self._batch(q)
-        T, J = self._num.fkine_jacob0(Q)
-        p = T[:, None, :3, 3]
-        Jv, Jw = np.swapaxes(J[:, :3], 1, 2), np.swapaxes(J[:, 3:], 1, 2)
-        vs = Jv - cross(Jw, p)
-        Js = np.concatenate((J[:, 3:], np.swapaxes(vs, 1, 2)), axis=1)
+        Js = space_jacobian(*self._num.fkine_jacob0(Q))
         return Js[0] if single else Js
 
     def jacobb(self, q: Any) -> np.ndarray:
-        """Body Jacobian of seed 002: (6, n) or (N, 6, n), rows (omega, v) in the end-effector frame."""
+        """Body Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows (omega, v)
+        in the end-effector frame."""
         Je = self.jacobe(q)
         return np.concatenate((Je[..., 3:, :], Je[..., :3, :]), axis=-2)
+
+    def jacob0_dot(self, q: Any, qd: Any) -> np.ndarray:
+        """Time derivative of the base-frame Jacobian, ``dJ0/dt = sum_i H0[i] qd_i`` (Haviland and
+        Corke, Manipulator Differential Kinematics, Part 2, 2023; roboticstoolbox's ``jacob0_dot``):
+        (6, n), or (N, 6, n) for q and qd of shape (N, n). Rows (v, omega)."""
+        Q, single = self._batch(q)
+        Qd, _ = as_batch(qd, self.n, self.name, "qd")
+        if Qd.shape[0] != Q.shape[0]:
+            raise ConfigurationError(f"q and qd hold {Q.shape[0]} and {Qd.shape[0]} configurations")
+        Jd = jacob_dot_of(self._num.hessian0(Q), Qd)
+        return Jd[0] if single else Jd
+
+    # -- notebook and plot -----------------------------------------------------------------
+    def _repr_markdown_(self) -> str:
+        """The robot as a Markdown table (joints, kinds, limits, speeds) for Jupyter."""
+        from symkin.model.describe import robot_markdown
+
+        return robot_markdown(self)
+
+    def plot(self, q: Any = None, **kwargs: Any) -> Any:
+        """Draw the robot at ``q`` (default ``qz``) with matplotlib: links, joint frames and
+        optionally the manipulability ellipsoid; ``path=`` saves a PNG. Returns the figure. See
+        :func:`symkin.model.plot.plot_robot` (needs the ``plot`` extra)."""
+        from symkin.model.plot import plot_robot
+
+        return plot_robot(self, q, **kwargs)
 
 
 def _rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:
@@ -490,6 +590,19 @@ def cond_of(J: np.ndarray) -> np.ndarray:
         return np.where(singular, np.inf, s[:, 0] / np.where(singular, 1.0, s[:, -1]))
 
 
+def space_jacobian(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """Space Jacobian (rows (omega, v_s), v_s = v_e - omega x p_e) from T (N, 4, 4), J0 (N, 6, n)."""
+    p = T[:, None, :3, 3]
+    Jv, Jw = np.swapaxes(J[:, :3], 1, 2), np.swapaxes(J[:, 3:], 1, 2)
+    vs = Jv - cross(Jw, p)
+    return np.concatenate((J[:, 3:], np.swapaxes(vs, 1, 2)), axis=1)
+
+
+def jacob_dot_of(H: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """``sum_i H[:, i] qd[:, i]`` for batches: H (N, n, 6, n), qd (N, n) -> (N, 6, n)."""
+    return np.einsum("Nirj,Ni->Nrj", H, qd)
+
+
 def manipulability_of(J: np.ndarray) -> np.ndarray:
     """sqrt(det(J J^T)) per batch item of J (N, r, n); 0 where J J^T is singular (eq 52), exactly 0
     with fewer joints than rows (det would be rounding noise)."""
@@ -500,7 +613,7 @@ def manipulability_of(J: np.ndarray) -> np.ndarray:
 
 
 def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
-    """Manipulability Jacobian (seed 001 eq 11): J (N, r, n), H (N, n, r, n) -> (N, n).
+    """Manipulability Jacobian (MMC paper eq 11): J (N, r, n), H (N, n, r, n) -> (N, n).
 
     ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)``; at a singular configuration (m = 0) the
     pseudo-inverse keeps the result finite.

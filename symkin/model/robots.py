@@ -1,7 +1,8 @@
 """Built-in robots with published kinematic parameters, joint limits and named configurations.
 
 Every robot has ``qz`` (all zeros); ``qr`` (a "ready" pose) and others where published. Each robot's
-``source`` says where its numbers come from. ``load(name)`` returns a cached, immutable Robot.
+``source`` names the documents its numbers come from (manufacturer data sheets and specifications,
+papers, Corke's Robotics Toolbox). ``load(name)`` returns a cached, immutable Robot.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import numpy as np
 
 from symkin.errors import UnknownRobotError
 from symkin.model.dh import DHLink, robot_from_dh
+from symkin.model.ets import ET, ETS
 from symkin.model.robot import Robot
 
 __all__ = ["load", "list_robots"]
@@ -28,7 +30,8 @@ def _deg(*values: float) -> list[float]:
 
 
 def _panda() -> Robot:
-    # Seed 000 Fig. 1 (Haviland & Corke): E1..E15 with the flipped joints E7 and E11, then the tool
+    # Haviland and Corke, Manipulator Differential Kinematics, Part 1 (2023), Fig. 1: E1..E15 with the
+    # flipped joints E7 and E11, then the tool
     # point of the Franka hand: 0.1034 m along the flange z and -45 deg about it (as RTB's Panda ets()).
     ets = (
         "tz(0.333) Rz(q0) Ry(q1) tz(0.316) Rz(q2) tx(0.0825) Ry(-q3) tx(-0.0825) tz(0.384) Rz(q4) "
@@ -45,7 +48,7 @@ def _panda() -> Robot:
         joint_names=tuple(f"panda_joint{i}" for i in range(1, 8)),
         qd_max=[2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61],
         source=(
-            "ETS of seed 000 Fig. 1 (Haviland & Corke, 'Manipulator Differential Kinematics, Part 1'), "
+            "ETS of Fig. 1 of Haviland and Corke, 'Manipulator Differential Kinematics, Part 1' (2023), "
             "ending at the gripper tool point: flange tz(0.107) then tz(0.1034) Rz(-pi/4) as in Corke's "
             "Robotics Toolbox Panda ets() (the "
             "URDF's panda_hand frame lacks the 0.1034 m); joint and speed limits and qr from Franka Emika's "
@@ -115,48 +118,115 @@ def _puma560() -> Robot:
     )
 
 
-def _lbr_iiwa7() -> Robot:
-    d = [0.34, 0, 0.4, 0, 0.4, 0, 0.126]
+def _lbr_iiwa(name: str, model: str, d1: float, d3: float, speeds: list[float]) -> Robot:
+    d = [d1, 0, d3, 0, 0.4, 0, 0.126]
     alpha = ["-pi/2", "pi/2", "pi/2", "-pi/2", "-pi/2", "pi/2", 0]
     lim = [170, 120, 170, 120, 170, 120, 175]
     links = [DHLink(d=d[j], alpha=alpha[j], qlim=(-lim[j] * _DEG, lim[j] * _DEG)) for j in range(7)]
+    mm = "/".join(f"{round(v * 1000)}" for v in (d1, d3, 0.4, 0.126))
     return robot_from_dh(
         links,
-        name="lbr_iiwa7",
+        name=name,
         joint_names=tuple(f"A{i}" for i in range(1, 8)),
-        qd_max=_deg(98, 98, 100, 130, 140, 180, 180),
+        qd_max=_deg(*speeds),
         source=(
-            "KUKA LBR iiwa 7 R800 specification (link lengths 340/400/400/126 mm, axis ranges and "
-            "speeds), as standard DH with alternating +-pi/2 twists; zero pose is the arm straight up"
+            f"KUKA, 'LBR iiwa 7 R800, LBR iiwa 14 R820 Specifications' ({model}: link lengths {mm} mm, "
+            "axis ranges +-170/120/170/120/170/120/175 deg and axis speeds), as standard DH with "
+            "alternating +-pi/2 twists; zero pose is the arm straight up"
         ),
     )
+
+
+def _lbr_iiwa7() -> Robot:
+    return _lbr_iiwa("lbr_iiwa7", "LBR iiwa 7 R800", 0.34, 0.4, [98, 98, 100, 130, 140, 180, 180])
+
+
+def _lbr_iiwa14() -> Robot:
+    return _lbr_iiwa("lbr_iiwa14", "LBR iiwa 14 R820", 0.36, 0.42, [85, 85, 100, 75, 130, 135, 135])
+
+
+#: Sawyer: the robot's joint value q_j against the angle theta_j of the DH table,
+#: theta_j = SAWYER_SIGN_j q_j + SAWYER_OFFSET_j: every joint axis of the DH table then lies on the URDF's
+#: (same line, same direction) at every q, and the tool point is within 0.75 mm of the URDF's right_hand.
+SAWYER_SIGN = (1, 1, 1, -1, 1, 1, 1)
+SAWYER_OFFSET = (0, "-pi/2", 0, "pi", 0, "pi", "pi/2")
 
 
 def _sawyer() -> Robot:
     a = [0.081, 0, 0, 0, 0, 0, 0]
     d = [0.317, 0.1925, 0.4, 0.1685, 0.4, 0.1363, 0.13375]
     alpha = ["-pi/2"] * 6 + [0]
-    links = [DHLink(d=d[j], a=a[j], alpha=alpha[j]) for j in range(7)]
-    return robot_from_dh(
-        links,
+    links = [DHLink(d=d[j], a=a[j], alpha=alpha[j], offset=SAWYER_OFFSET[j]) for j in range(7)]
+    dh = robot_from_dh(links, name="sawyer")
+    ets = ETS(
+        tuple(ET(e.axis, joint=e.joint, flip=SAWYER_SIGN[e.joint] < 0) if e.is_joint else e for e in dh.ets)
+    )
+    return Robot(
+        ets,
         name="sawyer",
+        qlim=[
+            [-3.0503, -3.8095, -3.0426, -3.0439, -2.9761, -2.9761, -4.7124],
+            [3.0503, 2.2736, 3.0426, 3.0439, 2.9761, 2.9761, 4.7124],
+        ],
         joint_names=tuple(f"right_j{i}" for i in range(7)),
         qd_max=[1.74, 1.328, 1.957, 1.957, 3.485, 3.485, 4.545],
         source=(
-            "Rethink Sawyer standard DH as in Corke's Robotics Toolbox (after D. Layeghi, 'Dynamic and "
-            "kinematic modelling of the Sawyer arm', 2017); joint speeds from Rethink's sawyer URDF. The DH "
-            "joint zeros differ from the URDF's, so its joint limits are not used (default +-pi)"
+            "Rethink Robotics Sawyer: link lengths and twists of the standard DH table in Corke's Robotics "
+            "Toolbox (after D. Layeghi, 'Dynamic and kinematic modelling of the Sawyer arm', 2017); joint "
+            "values (zeros and directions), limits and speeds of Rethink's URDF (sawyer_description, "
+            "sawyer_base.urdf.xacro): with theta the DH angles, theta_1 = q_1 - pi/2, theta_3 = pi - q_3, "
+            "theta_5 = q_5 + pi, theta_6 = q_6 + pi/2, so every joint axis lies on the URDF's. The end "
+            "effector is the DH table's last frame: 0.75 mm from the URDF's right_hand, turned 10 deg about z"
         ),
     )
 
 
 def _planar(n: int) -> Robot:
+    terms = " + ".join(f"l{k} c{''.join(str(i) for i in range(1, k + 1))}" for k in range(1, n + 1))
     return robot_from_dh(
         [DHLink(a=1) for _ in range(n)],
         name=f"planar{n}",
         source=(
-            f"planar {n}-link arm with unit links (Corke's Robotics Toolbox mdl_planar{n}; seed 004 Lab 7: "
-            "x = l1 c1 + l2 c12 + l3 c123)"
+            f"planar {n}-link arm with unit links, the textbook example (Corke's Robotics Toolbox "
+            f"mdl_planar{n}; Corke, 'Robotics, Vision and Control', 2017, chapter 7): x = {terms}"
+        ),
+    )
+
+
+def _cobra600() -> Robot:
+    links = [
+        DHLink(d=0.387, a=0.325, qlim=(-105 * _DEG, 105 * _DEG)),
+        DHLink(a=0.275, alpha="pi", qlim=(-157.5 * _DEG, 157.5 * _DEG)),
+        DHLink(prismatic=True, qlim=(0.0, 0.21)),
+        DHLink(qlim=(-2 * _PI, 2 * _PI)),
+    ]
+    return robot_from_dh(
+        links,
+        name="cobra600",
+        joint_names=("J1", "J2", "J3", "J4"),
+        configs={"qr": [_PI / 4, -_PI / 2, 0.1, 0]},
+        source=(
+            "Adept (Omron) Cobra s600 SCARA: standard DH of the Cobra600 model in Corke's Robotics Toolbox "
+            "(base to joint 2 height 387 mm, inner link 325 mm, outer link 275 mm, joint 3 a quill moving "
+            "down); joint ranges from Adept's Cobra s600 data sheet: J1 +-105 deg, J2 +-157.5 deg, J3 "
+            "210 mm, J4 +-360 deg"
+        ),
+    )
+
+
+def _gantry() -> Robot:
+    return Robot.from_ets(
+        "tx(q0) ty(q1) tz(q2)",
+        name="gantry",
+        qlim=[[0.0, 0.0, 0.0], [0.3, 0.25, 0.035]],
+        joint_names=("X", "Y", "Z"),
+        configs={"qr": [0.15, 0.125, 0.0175]},
+        qd_max=[0.3, 0.3, 0.5 / 60],
+        source=(
+            "three-axis Cartesian gantry: the axis positions are the tool's x, y, z in the machine frame "
+            "and the tool frame keeps the machine's orientation (the Kin_Gantry3 kinematics of the CODESYS "
+            "SoftMotion library); travel 300 x 250 x 35 mm and speeds 18000, 18000 and 500 mm/min of "
+            "IRNAS's open-hardware PreciseXY gantry (its README)"
         ),
     )
 
@@ -188,10 +258,13 @@ _BUILDERS: dict[str, Callable[[], Robot]] = {
     "ur10": _ur10,
     "puma560": _puma560,
     "lbr_iiwa7": _lbr_iiwa7,
+    "lbr_iiwa14": _lbr_iiwa14,
     "sawyer": _sawyer,
     "planar2": lambda: _planar(2),
     "planar3": lambda: _planar(3),
     "stanford": _stanford,
+    "cobra600": _cobra600,
+    "gantry": _gantry,
 }
 
 

@@ -1,8 +1,9 @@
 """URDF to an exact ETS: the serial chain from ``base_link`` to ``end_link`` (xml.etree only).
 
 Each joint on the chain contributes its origin ``tx ty tz Rz(yaw) Ry(pitch) Rx(roll)`` (the URDF
-fixed-axis roll-pitch-yaw convention ``R = Rz(y) Ry(p) Rx(r)``, seed 004 "Analytical Jacobian")
-followed by the joint itself (seed 000, Fig. 2):
+fixed-axis roll-pitch-yaw convention ``R = Rz(y) Ry(p) Rx(r)`` of the URDF specification)
+followed by the joint itself (the elementary transforms of Haviland and Corke, Manipulator Differential
+Kinematics, Part 1, 2023, Fig. 2):
 
 - an axis along +-x, +-y or +-z is one ET (a negative axis gives a flipped joint, ``Rz(-q)``);
 - an axis ``u`` in a coordinate plane is conjugated by one exact rotation, e.g. ``u`` in the

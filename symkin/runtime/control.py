@@ -1,4 +1,6 @@
-"""Resolved-rate motion control (seed 000, eqs 35-36) and the Manipulability Motion Controller (seed 001).
+"""Resolved-rate motion control (Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eqs
+35-36) and the Manipulability Motion Controller
+(Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control, 2020, "the MMC paper").
 
 numpy and OSQP (the reference path). ``kin`` is any object with ``n``, ``qlim`` (2, n), optionally
 ``qd_max`` (n,), and the base-frame ``jacob0(q)`` (6, n) and ``hessian0(q)`` (n, 6, n) (or
@@ -83,7 +85,7 @@ class StepInfo:
             stopped early); ``"error"`` (any other solver failure).
         method: how qd was computed: ``"inverse"``/``"pinv"``/``"damped"`` (RRMC, eqs 35-36),
             ``"closed_form"``, ``"active_set"`` or ``"osqp"`` (MMC).
-        manipulability: m(q) of the chosen axes (seed 000 eq 52) at the configuration of the step.
+        manipulability: m(q) of the chosen axes (Part 1 eq 52) at the configuration of the step.
         iterations: OSQP iterations, or the active-set solves (0 for the closed form).
         fallback: ``None``, or ``"rrmc"``/``"zero"`` when the MMC answer was replaced.
         residual: max |J qd - nu| of the returned qd.
@@ -160,7 +162,7 @@ def _speed_limits(kin: Any, n: int, qd_max: Any) -> np.ndarray:
 
 
 def scale_to_limits(qd: np.ndarray, qd_max: np.ndarray) -> tuple[np.ndarray, float]:
-    """Scale qd down proportionally (keeping its direction) so that |qd_i| <= qd_max_i (seed 004)."""
+    """Scale qd down proportionally (keeping its direction) so that |qd_i| <= qd_max_i."""
     a = np.abs(qd)
     over = a > qd_max
     if not over.any():
@@ -185,7 +187,7 @@ def rrmc(
     When J0 has a singular value below ``singular_tol`` (or fewer than 6 joints), the damped
     least-squares step ``J^T (J J^T + damping^2 I)^-1 nu`` is taken instead and the status is
     ``"singular"``. If |qd_i| exceeds the joint speed limit (``qd_max``, else ``kin.qd_max``), all of qd
-    is scaled down by the same factor so its direction is kept (seed 004); ``info.scale`` says by how much.
+    is scaled down by the same factor so its direction is kept; ``info.scale`` says by how much.
     ``axes`` only chooses which manipulability ``info`` reports.
 
     On compiled C kinematics the step is one C call (:class:`symkin.runtime.mmc_c.CRRMC`, kept per
@@ -276,7 +278,7 @@ def _rrmc_step(
 
 # -- MMC: the controller ---------------------------------------------------------------------------
 class MMC:
-    """Manipulability Motion Controller (seed 001 eq 12), one OSQP problem per controller.
+    """Manipulability Motion Controller (MMC paper eq 12), one OSQP problem per controller.
 
     ``step(q, nu)`` returns joint velocities (n,) achieving the base-frame spatial velocity ``nu`` (6,)
     while maximising the manipulability of ``axes``, within ``-alpha <= qd <= alpha`` (``qd_max``, else

@@ -1,4 +1,5 @@
-"""Numerical inverse kinematics (seed 000, eqs 37-51), NumPy reference solver.
+"""Numerical inverse kinematics (Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eqs
+37-51), NumPy reference solver.
 
 The error e (eq 37) is the base-frame translation error and the angle-axis vector alpha of
 ``R_target R^T`` (eqs 38-40); E = 1/2 e^T We e (eq 44). Steps:

@@ -1,8 +1,9 @@
 """Compiled kinematics: the object :func:`symkin.compile` returns (no sympy here).
 
 It has the numeric reference's methods and shapes (``fkine``, ``link_poses``, ``jacob0``,
-``jacobe``, ``hessian0``, ``hessiane``, ``manipulability``, ``jacobm``) plus the fused
-``fkine_jacob0`` and ``jacob0_hessian0`` used by IK and control. On the C backend the methods are
+``jacobe``, ``hessian0``, ``hessiane``, ``manipulability``, ``jacobm``, ``cond``, ``jacobs``,
+``jacobb``, ``jacob0_dot``) plus the fused ``fkine_jacob0`` and ``jacob0_hessian0`` used by IK and
+control; the last four are computed here from the generated functions. On the C backend the methods are
 the extension module's functions themselves, so a call costs one C function call.
 """
 
@@ -17,7 +18,16 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ConfigurationError
-from symkin.model.robot import Robot, as_batch, axes_rows, cond_of, jacobm_of, manipulability_of
+from symkin.model.robot import (
+    Robot,
+    as_batch,
+    axes_rows,
+    cond_of,
+    jacob_dot_of,
+    jacobm_of,
+    manipulability_of,
+    space_jacobian,
+)
 from symkin.runtime.ik import ik
 from symkin.runtime.manip import jacobm_one, manipulability_one
 
@@ -123,7 +133,8 @@ class Kinematics:
         return manipulability_of(self.jacob0(Q)[:, rows])
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
-        """Manipulability Jacobian (seed 001 eq 11), (n,) or (N, n)."""
+        """Manipulability Jacobian (Haviland and Corke, Maximising Manipulability During Resolved-Rate
+        Motion Control, 2020, eq 11), (n,) or (N, n)."""
         rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
         if single:
@@ -139,16 +150,61 @@ class Kinematics:
         c = cond_of(self.jacob0(Q)[:, rows])
         return float(c[0]) if single else c
 
+    def jacobs(self, q: Any) -> np.ndarray:
+        """Space Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows
+        (omega, v_s) with v_s = v_e - omega x p_e the velocity of the point at the base origin."""
+        Q, single = as_batch(q, self.n, self.name)
+        if single:
+            T, J = self.fkine_jacob0(Q[0])
+            return space_jacobian(T[None], J[None])[0]
+        return space_jacobian(*self.fkine_jacob0(Q))
+
+    def jacobb(self, q: Any) -> np.ndarray:
+        """Body Jacobian of Modern Robotics: (6, n) or (N, 6, n), rows (omega, v) in the
+        end-effector frame (``jacobe`` with its row blocks swapped)."""
+        Je = self.jacobe(q)
+        return np.concatenate((Je[..., 3:, :], Je[..., :3, :]), axis=-2)
+
+    def jacob0_dot(self, q: Any, qd: Any) -> np.ndarray:
+        """dJ0/dt = sum_i H0[i] qd_i at joint velocity ``qd`` (as roboticstoolbox's ``jacob0_dot``):
+        (6, n), or (N, 6, n) for q and qd of shape (N, n). Rows (v, omega), base frame."""
+        Q, single = as_batch(q, self.n, self.name)
+        Qd, _ = as_batch(qd, self.n, self.name, "qd")
+        if Qd.shape[0] != Q.shape[0]:
+            raise ConfigurationError(f"q and qd hold {Q.shape[0]} and {Qd.shape[0]} configurations")
+        if single:
+            return np.tensordot(Qd[0], self.hessian0(Q[0]), axes=(0, 0))
+        return jacob_dot_of(self.hessian0(Q), Qd)
+
+    def _repr_markdown_(self) -> str:
+        """Notebook view: the backend, the generated files and the robot's joint table."""
+        from symkin.model.describe import md_text, robot_markdown
+
+        files = ", ".join(f"`{md_text(f)}`" for f in sorted(self.files))
+        head = f"**{md_text(self.name)}** compiled for the **{self.backend}** backend ({files})"
+        methods = (
+            "fkine, link_poses, jacob0, jacobe, jacobs, jacobb, jacob0_dot, hessian0, hessiane, "
+            "manipulability, jacobm, cond, ik"
+        )
+        return robot_markdown(self.robot, head) + f"Methods: {methods}.\n"
+
+    @property
+    def c_prefix(self) -> str:
+        """The prefix of the exported C symbols (``symkin_<robot>`` unless compiled with another)."""
+        headers = sorted(f for f in self.files if f.endswith(".h"))
+        if self.backend != "c" or not headers:
+            raise AttributeError("c_prefix exists only on the C backend")
+        return headers[0][:-2]
+
     @cached_property
     def c_fkjac(self) -> Any:
         """The C entry point ``fkine_jacob0(q, T, J)`` as a ctypes function (C backend only), for
         the C IK solver."""
         if self.backend != "c" or self.path is None:
             raise AttributeError("c_fkjac exists only on the C backend")
-        from symkin.emit.c.backend import c_prefix
         from symkin.emit.c.build import load_library
 
-        return getattr(load_library(self.path), f"{c_prefix(self.robot)}_fkine_jacob0")
+        return getattr(load_library(self.path), f"{self.c_prefix}_fkine_jacob0")
 
     def ik(self, Tep: Any, **kwargs: Any) -> Any:
         """Numerical inverse kinematics (eqs 37-51); see :func:`symkin.runtime.ik.ik` for the options.

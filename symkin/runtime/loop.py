@@ -1,4 +1,5 @@
-"""The servo loop: position-based servoing (seed 000 eqs 37-43) driven by RRMC or MMC, integrated in time."""
+"""The servo loop: position-based servoing (Haviland and Corke, Manipulator Differential Kinematics, Part 1,
+2023, eqs 37-43) driven by RRMC or MMC, integrated in time."""
 
 from __future__ import annotations
 
@@ -106,7 +107,8 @@ def servo(
     Each step: ``e`` from eq 37 at ``fkine(q)``; stop when ``sum |e| < threshold``; else
     ``nu = k e`` (eq 41-42, ``gain`` a number, ``(k_t, k_r)`` or six values; capped by ``nu_max`` as in
     :func:`symkin.runtime.servo.p_servo`), ``qd`` from the controller and ``q += dt qd``; at most
-    ``max_steps`` steps. The seed 001 protocol is the default: gain 1, dt 0.05 s, threshold 0.1.
+    ``max_steps`` steps. The protocol of the MMC paper's experiments is the default: gain 1, dt 0.05 s,
+    threshold 0.1.
 
     ``controller`` is ``"mmc"`` (a new :class:`MMC` with ``lam``, ``qd_max``, ``joint_limits``,
     ``axes`` and ``dt``), ``"rrmc"`` (:func:`rrmc` with ``qd_max``), an :class:`MMC` to reuse (its own
@@ -239,8 +241,8 @@ def _check_cap(nu_max: Any) -> None:
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:
-    if not progress:
-        return None
-    from tqdm.auto import tqdm
+    from symkin.progress import bar, progress_shown
 
-    return tqdm(total=total, desc=f"servo ({name})", leave=False)
+    if not progress_shown(progress):
+        return None
+    return bar(total=total, desc=f"servo ({name})")

@@ -1,4 +1,6 @@
-"""Manipulability of one configuration (seed 000 eq 52; seed 001 eq 11) without a determinant routine.
+"""Manipulability of one configuration without a determinant routine (Haviland and Corke, Manipulator
+Differential Kinematics, Part 1, 2023, eq 52; Maximising Manipulability During Resolved-Rate Motion Control,
+2020, eq 11).
 
 For one configuration the batched helpers of :mod:`symkin.model.robot` (``numpy.linalg.det`` and
 ``inv`` over a stack) cost more than the kinematics. Here ``m = sqrt(det(Jr Jr^T))`` comes from the
@@ -34,7 +36,7 @@ def manipulability_one(Jr: np.ndarray) -> float:
 
 
 def jacobm_one(Jr: np.ndarray, Hr: np.ndarray) -> np.ndarray:
-    """Manipulability Jacobian (seed 001 eq 11) of one configuration: Jr (r, n), Hr (n, r, n) -> (n,),
+    """Manipulability Jacobian (MMC paper eq 11) of one configuration: Jr (r, n), Hr (n, r, n) -> (n,),
     ``Jm_i = m sum(H_i * (Jr Jr^T)^-1 Jr)``; zeros where Jr Jr^T is singular (m = 0)."""
     m = manipulability_one(Jr)
     if m == 0.0:

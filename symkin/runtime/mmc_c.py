@@ -67,10 +67,9 @@ def kinematics_functions(kin: Any) -> dict[str, Any]:
     ``manipulability``. Memoised per kinematics object."""
     fns = _KIN_FUNCTIONS.get(kin)
     if fns is None:
-        from symkin.emit.c.backend import c_prefix
         from symkin.emit.c.build import load_library
 
-        lib, prefix = load_library(kin.path), c_prefix(kin.robot)
+        lib, prefix = load_library(kin.path), kin.c_prefix
         names = ("jacob0_hessian0", "jacob0", "fkine", "manipulability")
         fns = _KIN_FUNCTIONS[kin] = {name: getattr(lib, f"{prefix}_{name}") for name in names}
     return fns

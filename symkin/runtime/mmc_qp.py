@@ -1,4 +1,5 @@
-"""The MMC quadratic program (seed 001 eq 12 with bounds): assembly, closed form, exact solution.
+"""The MMC quadratic program (eq 12 of Haviland and Corke, Maximising Manipulability During Resolved-Rate
+Motion Control, 2020, with bounds): assembly, closed form, exact solution.
 
 NumPy only: the manipulability Jacobian (eq 11), the joint velocity bounds (speed limits and
 velocity dampers), the QP matrices, the solution without inequalities, and an active-set solver.
@@ -43,7 +44,7 @@ def _axes(axes: str) -> slice:
 
 
 def manipulability_jacobian(J: np.ndarray, H: np.ndarray, axes: str = "all") -> tuple[np.ndarray, float]:
-    """Manipulability Jacobian (seed 001 eq 11) and m (eq 8) from J (6, n) and H (n, 6, n): ((n,), m).
+    """Manipulability Jacobian (MMC paper eq 11) and m (eq 8) from J (6, n) and H (n, 6, n): ((n,), m).
 
     ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)`` over the rows chosen by ``axes``. At a singular
     configuration (J J^T not invertible) Jm is returned as zeros and m as 0.
@@ -76,7 +77,7 @@ def joint_velocity_bounds(
     xi: float = 1.0,
     dt: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds (lower, upper), each (n,), on qd: the speed limits -alpha <= qd <= alpha (seed 001) and,
+    """Bounds (lower, upper), each (n,), on qd: the speed limits -alpha <= qd <= alpha (MMC paper) and,
     with ``joint_limits``, velocity dampers.
 
     A joint closer than ``rho_i`` (influence distance) to its upper limit gets
@@ -111,7 +112,7 @@ def joint_velocity_bounds(
 
 
 class MMCQP(NamedTuple):
-    """The MMC quadratic program (seed 001 eq 12 with bounds): min 0.5 x^T P x + c^T x, l <= A x <= u.
+    """The MMC quadratic program (MMC paper eq 12 with bounds): min 0.5 x^T P x + c^T x, l <= A x <= u.
 
     ``x = qd`` (n,), or ``(qd, s)`` (n + 6,) with an equality slack ``s``. The first 6 rows of A are
     the equality ``J qd (+ s) = nu`` (l = u = nu); the next n rows are ``lower <= qd <= upper``.

@@ -1,4 +1,5 @@
-"""Position-based servoing (seed 000, eqs 37-43): the end-effector velocity command from a pose error.
+"""Position-based servoing (Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eqs
+37-43): the end-effector velocity command from a pose error.
 
 numpy only. All quantities are in the robot's base frame; spatial velocities and errors have rows
 (v, omega) like the base-frame Jacobian ``jacob0``. The pose error of eq 37 is
@@ -66,8 +67,8 @@ def servo_velocity(
     """Commanded velocity ``nu`` (6,) for the pose error ``e`` (6,) (eq 37), and whether it is arrived.
 
     ``nu = k e`` (eq 41) with ``k = diag(gain)`` (eq 42: a scalar, ``(k_t, k_r)`` or six gains).
-    ``arrived`` is ``sum |e| < threshold`` (the arrival test of seed 001's experiments); once
-    arrived, ``nu = 0`` (eq 43, third case).
+    ``arrived`` is ``sum |e| < threshold`` (the arrival test of the experiments of Haviland and Corke's MMC
+    paper, 2020); once arrived, ``nu = 0`` (eq 43, third case).
 
     ``nu_max`` caps the commanded velocity (eq 43): a number caps ``|k e|`` over all six rows, which
     mixes m/s with rad/s (Excurse 1); a pair ``(v_max, omega_max)`` caps the translational and

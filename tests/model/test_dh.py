@@ -19,7 +19,7 @@ from symkin.model.robots import load
 
 
 def dh_standard(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
-    """The standard DH link matrix (Corke, seed 004), written out."""
+    """The standard DH link matrix (Corke, Robotics, Vision and Control), written out."""
     ct, st_, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
     return np.array(
         [[ct, -st_ * ca, st_ * sa, a * ct], [st_, ct * ca, -ct * sa, a * st_], [0, sa, ca, d], [0, 0, 0, 1]]

@@ -1,4 +1,5 @@
-"""Product of exponentials (seed 002): the published UR5 example, space/body agreement, round trips
+"""Product of exponentials (Lynch and Park, Modern Robotics): the published UR5 example, space/body
+agreement, round trips
 through every built-in robot, J_b = Ad_{T^-1} J_s, and rejected screws."""
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ def skew(w: np.ndarray) -> np.ndarray:
 
 
 def adjoint(T: np.ndarray) -> np.ndarray:
-    """Ad_T for twists ordered (omega, v) (seed 002)."""
+    """Ad_T for twists ordered (omega, v) (Modern Robotics)."""
     R, p = T[:3, :3], T[:3, 3]
     return np.block([[R, np.zeros((3, 3))], [skew(p) @ R, R]])
 

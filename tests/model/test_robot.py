@@ -1,4 +1,5 @@
-"""The Robot model and its numeric reference: shapes, batches, bad input, frames, seed 002 Jacobians."""
+"""The Robot model and its numeric reference: shapes, batches, bad input, frames, Modern Robotics
+Jacobians."""
 
 from __future__ import annotations
 
@@ -85,7 +86,7 @@ def test_link_poses_end_at_the_last_joint_frame(panda):
 
 
 def test_space_and_body_jacobians_are_related_by_the_adjoint(panda):
-    """Seed 002: J_b = [Ad_{T^-1}] J_s, twists ordered (omega, v)."""
+    """Modern Robotics: J_b = [Ad_{T^-1}] J_s, twists ordered (omega, v)."""
     for seed in range(5):
         q = panda.random_q(seed=seed)
         T = panda.fkine(q)

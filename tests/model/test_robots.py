@@ -9,10 +9,25 @@ import numpy as np
 import pytest
 
 from symkin.errors import UnknownRobotError
+from symkin.model.dh import DHLink
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load
 
-REQUIRED = ["panda", "ur3", "ur5", "ur10", "puma560", "lbr_iiwa7", "sawyer", "planar2", "planar3", "stanford"]
+REQUIRED = [
+    "panda",
+    "ur3",
+    "ur5",
+    "ur10",
+    "puma560",
+    "lbr_iiwa7",
+    "lbr_iiwa14",
+    "sawyer",
+    "planar2",
+    "planar3",
+    "stanford",
+    "cobra600",
+    "gantry",
+]
 
 
 def pose(R: list[list[float]], t: list[float]) -> np.ndarray:
@@ -35,15 +50,23 @@ ZERO_POSES = {
     "ur10": pose(RX90, [-0.612 - 0.5723, -(0.163941 + 0.0922), 0.1273 - 0.1157]),
     # Corke's Puma 560 at qz: (a2 + a3, -d3, d4) = (0.4521, -0.15005, 0.4318), R = I
     "puma560": pose(I3, [0.4521, -0.15005, 0.4318]),
-    # Panda (seed 000 Fig. 1) at qz: x = 0.0825 - 0.0825 + 0.088, z = 0.333 + 0.316 + 0.384 - 0.107 - 0.1034,
+    # Panda (Fig. 1 of Manipulator Differential Kinematics, Part 1) at qz: x = 0.0825 - 0.0825 + 0.088,
+    # z = 0.333 + 0.316 + 0.384 - 0.107 - 0.1034,
     # R = Rx(pi) Rz(-pi/4)
     "panda": pose(
         [[S2, S2, 0], [S2, -S2, 0], [0, 0, -1]], [0.088, 0, 0.333 + 0.316 + 0.384 - 0.107 - 0.1034]
     ),
-    # LBR iiwa: straight up, z = 0.34 + 0.4 + 0.4 + 0.126
+    # LBR iiwa: straight up, z = 0.34 + 0.4 + 0.4 + 0.126 (iiwa 7), 0.36 + 0.42 + 0.4 + 0.126 (iiwa 14)
     "lbr_iiwa7": pose(I3, [0, 0, 1.266]),
-    # Sawyer DH: folded zero pose, x = a1, y = d2 - d4 + d6, z = d1 - d3 + d5 - d7, R = Rx(pi)
-    "sawyer": pose(RXPI, [0.081, 0.1925 - 0.1685 + 0.1363, 0.317 - 0.4 + 0.4 - 0.13375]),
+    "lbr_iiwa14": pose(I3, [0, 0, 1.306]),
+    # Sawyer at the URDF's zero: the arm stretched out along x, x = a1 + d3 + d5 + d7, y = d2 - d4 + d6,
+    # z = d1; the tool axis along x
+    "sawyer": pose(
+        [[0, 0, 1], [-1, 0, 0], [0, -1, 0]], [0.081 + 0.4 + 0.4 + 0.13375, 0.1925 - 0.1685 + 0.1363, 0.317]
+    ),
+    # Cobra 600 SCARA: links along x (0.325 + 0.275), flange at the height of joint 2, tool z down
+    "cobra600": pose([[1, 0, 0], [0, -1, 0], [0, 0, -1]], [0.6, 0, 0.387]),
+    "gantry": pose(I3, [0, 0, 0]),
     # Stanford at q = 0 (d3 = 0): y = d2 - a3, z = d1 + d6, R = Rz(-pi/2)
     "stanford": pose([[0, 1, 0], [-1, 0, 0], [0, 0, 1]], [0, 0.154 - 0.0203, 0.412 + 0.263]),
     "planar2": pose(I3, [2, 0, 0]),
@@ -107,7 +130,7 @@ def test_puma560_ready_and_stretched_poses() -> None:
     assert p.within_limits(p.qn) and p.within_limits(p.qr)
 
 
-def test_planar_arms_match_the_closed_form_of_seed_004() -> None:
+def test_planar_arms_match_the_textbook_closed_form() -> None:
     rng = np.random.default_rng(4)
     for n in (2, 3):
         r = load(f"planar{n}")
@@ -205,3 +228,48 @@ def test_batched_kinematics_equal_the_single_configuration_results(name: str) ->
     np.testing.assert_allclose(r.fkine(Q), np.stack([r.fkine(q) for q in Q]), atol=1e-14)
     np.testing.assert_allclose(r.jacob0(Q), np.stack([r.jacob0(q) for q in Q]), atol=1e-14)
     np.testing.assert_allclose(r.hessian0(Q), np.stack([r.hessian0(q) for q in Q]), atol=1e-14)
+
+
+def test_descriptions_name_sources_not_internal_labels() -> None:
+    for name in list_robots():
+        src = load(name).source.lower()
+        assert "seed" not in src and " lab " not in src, (name, src)
+    assert "c123" not in load("planar2").source and "c12" in load("planar2").source
+    assert "c123" in load("planar3").source
+
+
+def test_sawyer_joint_values_are_the_robots_own() -> None:
+    """The DH table of Corke's toolbox with Rethink's joint zeros and directions: theta_1 = q_1 - pi/2,
+    theta_3 = pi - q_3, theta_5 = q_5 + pi, theta_6 = q_6 + pi/2 (independent construction)."""
+    a = [0.081, 0, 0, 0, 0, 0, 0]
+    d = [0.317, 0.1925, 0.4, 0.1685, 0.4, 0.1363, 0.13375]
+    dh = Robot.from_dh([DHLink(d=d[j], a=a[j], alpha=-math.pi / 2 if j < 6 else 0) for j in range(7)])
+    s = load("sawyer")
+    Q = s.random_q(20, seed=3)
+    theta = Q * [1, 1, 1, -1, 1, 1, 1] + [0, -math.pi / 2, 0, math.pi, 0, math.pi, math.pi / 2]
+    np.testing.assert_allclose(s.fkine(Q), dh.fkine(theta), atol=1e-12)
+    # Rethink's published limits (rad), not +-pi
+    np.testing.assert_allclose(s.qlim[:, 1], [-3.8095, 2.2736])
+    np.testing.assert_allclose(s.qlim[1, [0, 6]], [3.0503, 4.7124])
+
+
+def test_scara_moves_in_the_plane_and_its_quill_down() -> None:
+    r = load("cobra600")
+    assert r.ets.structure == "RRPR"
+    for q in r.random_q(10, seed=4):
+        T = r.fkine(q)
+        c1, c12 = math.cos(q[0]), math.cos(q[0] + q[1])
+        s1, s12 = math.sin(q[0]), math.sin(q[0] + q[1])
+        np.testing.assert_allclose(
+            T[:3, 3], [0.325 * c1 + 0.275 * c12, 0.325 * s1 + 0.275 * s12, 0.387 - q[2]]
+        )
+        np.testing.assert_allclose(T[:3, 2], [0, 0, -1], atol=1e-12)  # the tool always points down
+
+
+def test_gantry_joints_are_the_tool_position() -> None:
+    r = load("gantry")
+    assert r.ets.structure == "PPP"
+    Q = r.random_q(10, seed=5)
+    np.testing.assert_allclose(r.fkine(Q)[:, :3, 3], Q, atol=1e-15)
+    np.testing.assert_allclose(r.jacob0(Q[0]), np.vstack((np.eye(3), np.zeros((3, 3)))))
+    np.testing.assert_allclose(r.qlim, [[0, 0, 0], [0.3, 0.25, 0.035]])

@@ -1,4 +1,4 @@
-"""RRMC, MMC, position-based servoing and the Table I benchmark (seed 000 eqs 35-43, seed 001)."""
+"""RRMC, MMC, position-based servoing and the Table I benchmark (Part 1 eqs 35-43, the MMC paper)."""
 
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ PANDA_QD_MAX = [2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61]
 
 @pytest.fixture(scope="module")
 def panda() -> symkin.Robot:
-    """The Panda of seed 000 Fig. 1 with its datasheet limits (independent of the built-in robots)."""
+    """The Panda of Fig. 1 of Part 1 with its datasheet limits (independent of the built-in robots)."""
     return symkin.Robot.from_ets(
         PANDA_ETS,
         qlim=PANDA_QLIM,
@@ -58,7 +58,7 @@ def panda() -> symkin.Robot:
 
 @pytest.fixture(scope="module")
 def tasks(panda):
-    """Eight Table I tasks (seed 001 eq 14)."""
+    """Eight Table I tasks (MMC paper eq 14)."""
     return table1_tasks(panda, 8, np.random.default_rng(7))
 
 

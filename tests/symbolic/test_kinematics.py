@@ -61,7 +61,7 @@ def test_quarter_turn_constants_are_exact_permutations():
 
 
 def test_parallel_joints_merge_into_summed_angles():
-    """Seed 004's planar arm: x = l1 c1 + l2 c12 + l3 c123 comes out directly."""
+    """The textbook planar arm: x = l1 c1 + l2 c12 + l3 c123 comes out directly."""
     sk = derive(Robot.from_ets("Rz(q0) tx(1) Rz(q1) tx(2) Rz(q2) tx(3)"))
     q0, q1, q2 = sk.q
     x_expected = sp.cos(q0) + 2 * sp.cos(q0 + q1) + 3 * sp.cos(q0 + q1 + q2)

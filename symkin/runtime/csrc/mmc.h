@@ -1,5 +1,5 @@
 /*
- * mmc.h: one step of the Manipulability Motion Controller (seed 001 eq 12) in C.
+ * mmc.h: one step of the Manipulability Motion Controller (Haviland and Corke 2020, eq 12) in C.
  *
  * A library for robots of MMC_N joints (mmc_config.h) holds the embedded OSQP sources emitted by
  * osqp.OSQP.codegen for the MMC QP without slack (solver mmcqp0_solver) and with the equality
@@ -77,7 +77,7 @@ MMC_API int symkin_mmc0_step(symkin_mmc_ctrl *c, const double *in, double *out);
 MMC_API int symkin_mmc6_step(symkin_mmc_ctrl *c, const double *in, double *out);
 
 /*
- * One resolved-rate step (seed 000 eqs 35-36; symkin.runtime.control.rrmc): qd = J^T (J J^T)^-1 nu
+ * One resolved-rate step (Haviland and Corke 2023, eqs 35-36; symkin.runtime.control.rrmc): qd = J^T (J J^T)^-1 nu
  * (J^-1 nu for 6 joints), or J^T (J J^T + damping^2 I)^-1 nu when the smallest singular value of J
  * is below singular_tol or n < 6 (status singular, method damped); then scaled down as a whole to
  * |qd_i| <= qd_max_i. Same in and out as symkin_mmc0_step (iterations 0, no fallback, no slack).

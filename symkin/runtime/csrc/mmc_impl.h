@@ -3,7 +3,7 @@
  * per QP variant by a file that defines MMC_NS (0, or 6 with the equality slack), MMC_SOLVER (that
  * variant's embedded OSQP solver) and MMC_FN(name) (its exported names) and includes its workspace.
  *
- * Mirrors symkin.runtime.control.MMC.step: J, H (generated), the singularity test, Jm (seed 001
+ * Mirrors symkin.runtime.control.MMC.step: J, H (generated), the singularity test, Jm (MMC paper
  * eq 11), the bounds (joint_velocity_bounds), the closed form J+ nu + (I - J+ J) Jm / lam when it
  * lies within them, else the active-set solve from the bounds it crosses, else the QP (eq 12) on
  * the embedded OSQP, then the same fallbacks (the RRMC step scaled into the bounds). OSQP's

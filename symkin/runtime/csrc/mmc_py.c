@@ -1,7 +1,7 @@
 /*
  * mmc_py.c: the CPython entry points of the MMC library (see mmc.h), compiled into it with
  * -DSYMKIN_MMC_MODULE=<module name>: one control step (MMC or RRMC) per call, and the whole
- * servo loop of symkin.runtime.loop.servo (seed 000 eqs 37-43) in C. The library is also reached
+ * servo loop of symkin.runtime.loop.servo (Haviland and Corke 2023, eqs 37-43) in C. The library is also reached
  * through ctypes (symkin/runtime/mmc_c.py). The GIL stays held: the controllers of a library share
  * its embedded OSQP solvers.
  */

@@ -1,4 +1,4 @@
-/* Table-driven ETS kinematics: T and the base-frame Jacobian by the O(n) method of seed 000
+/* Table-driven ETS kinematics: T and the base-frame Jacobian by the O(n) method of Haviland and Corke (2023)
  * (eqs 31-34). The pose is kept as a rotation R (3x3, in local variables r<row><col>) and a
  * position p; each elementary transform updates only what it touches (a rotation mixes two
  * columns of R, a translation moves p along one column). Before each joint its base-frame axis w

@@ -1,4 +1,4 @@
-/* symkin numerical inverse kinematics in C (seed 000, eqs 37-51).
+/* symkin numerical inverse kinematics in C (Haviland and Corke 2023, eqs 37-51).
  *
  * The solver loop of symkin/runtime/ik.py, step for step: the same pose error, the same NR / GN /
  * LM steps, the same restarts (splitmix64 streams) and the same joint-limit handling, so both take

@@ -1,4 +1,4 @@
-/* symkin_pose.h: the check of a target pose and the pose error of eq 37 (seed 000): translation
+/* symkin_pose.h: the check of a target pose and the pose error of eq 37 (Haviland and Corke 2023): translation
  * error and the angle-axis vector alpha of eqs 38-40, shared by the IK solver (symkin_ik.c) and the
  * servo loop of the MMC library (mmc_py.c). Mirrors symkin.runtime.ik.check_pose and pose_error
  * branch for branch. */

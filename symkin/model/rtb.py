@@ -1,0 +1,225 @@
+"""roboticstoolbox-python robots and ETS to an exact symkin Robot (Corke's Robotics Toolbox for Python).
+
+roboticstoolbox is never imported here: its objects are read through their attributes, so this
+module works wherever the caller got them from. What is read:
+
+- each ET's kind (``kind``, formerly ``axis``: ``tx ty tz Rx Ry Rz``, ``SE3`` for a constant 4x4
+  transform; in 2-D ``ETS2``: ``R`` (about z), ``tx``, ``ty``, ``SE2``), its constant (``param``,
+  formerly ``eta``), ``isjoint``, ``isflip`` and ``jindex``;
+- a robot's ``ets()`` (base to its default end effector, or ``start``/``end``), its ``base`` and
+  ``tool`` transforms (which its ``fkine`` includes), ``qlim``, ``configs`` (``qr``, ``qz``...),
+  ``qdlim`` when it holds a positive speed per joint, the names of its joint links, and ``name``;
+- an ETS's per-joint ``qlim`` where set (other joints get symkin's defaults).
+
+Constants become exact the way :mod:`symkin.model.transform` snaps floats: angles within 1e-9 of
+``k pi / m`` (m <= 12) are that multiple of pi, lengths within a few units in the last place of a
+shorter decimal are that decimal, and ``SE3`` constants are split into translations and rotations.
+Joint indices are renumbered 0..n-1 in the order of their ``jindex`` (a sub-chain of a
+branched robot keeps the robot's order).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import RobotError
+from symkin.model.ets import ET, ETS, Axis
+from symkin.model.robot import Robot
+from symkin.model.transform import SNAP_TOL, angle_const, length_const, se3_ets, type_name
+
+__all__ = ["robot_from_rtb", "rtb_ets"]
+
+_KINDS = {
+    "tx": Axis.tx,
+    "ty": Axis.ty,
+    "tz": Axis.tz,
+    "Rx": Axis.Rx,
+    "Ry": Axis.Ry,
+    "Rz": Axis.Rz,
+    "R": Axis.Rz,
+}
+
+
+def _kind(et: Any) -> str:
+    kind = getattr(et, "kind", None)
+    if kind is None:
+        kind = getattr(et, "axis", None)
+    return str(kind)
+
+
+def _param(et: Any) -> Any:
+    return et.param if hasattr(et, "param") else getattr(et, "eta", None)
+
+
+def _matrix_4x4(et: Any, kind: str) -> np.ndarray:
+    A = np.asarray(et.A(), dtype=float)
+    if kind == "SE2":  # (3, 3) planar transform: rotation about z and a translation in xy
+        M = np.eye(4)
+        M[:2, :2], M[:2, 3] = A[:2, :2], A[:2, 2]
+        return M
+    return A
+
+
+def rtb_ets(ets: Any, snap_tol: float = SNAP_TOL) -> tuple[list[ET], list[tuple[int, Any]]]:
+    """symkin ETs of a roboticstoolbox ET or ETS, and (roboticstoolbox jindex, ET) per joint in
+    chain order. Joints are numbered 0..n-1 by their ``jindex`` (in chain order when unset)."""
+    items = [ets] if hasattr(ets, "isjoint") else list(ets)
+    joints = [(getattr(et, "jindex", None), k) for k, et in enumerate(items) if getattr(et, "isjoint", False)]
+    if any(j is None for j, _ in joints):
+        joints = [(k, pos) for k, (_, pos) in enumerate(joints)]
+    indices = [int(j) for j, _ in joints]
+    if len(set(indices)) != len(indices):
+        raise RobotError(f"the roboticstoolbox ETS uses a joint index twice: jindex {sorted(indices)}")
+    number = {j: i for i, j in enumerate(sorted(indices))}
+    joint_at = dict((pos, j) for j, pos in zip(indices, (p for _, p in joints)))
+    out: list[ET] = []
+    info: list[tuple[int, Any]] = []
+    for pos, et in enumerate(items):
+        kind = _kind(et)
+        where = f"element {pos} ({kind}) of the roboticstoolbox ETS"
+        if pos in joint_at:
+            if kind not in _KINDS:
+                raise RobotError(f"{where} is a joint of kind {kind!r}; symkin joints are tx ty tz Rx Ry Rz")
+            out.append(ET(_KINDS[kind], joint=number[joint_at[pos]], flip=bool(getattr(et, "isflip", False))))
+            info.append((joint_at[pos], et))
+        elif kind in ("SE3", "SE2"):
+            out += se3_ets(_matrix_4x4(et, kind), where, snap_tol)
+        elif kind in _KINDS:
+            try:
+                value = float(_param(et))
+            except (TypeError, ValueError):
+                raise RobotError(f"{where} has the constant {_param(et)!r}, which is not a number") from None
+            axis = _KINDS[kind]
+            c = angle_const(value, snap_tol) if axis.is_rotation else length_const(value)
+            if not c.is_zero:
+                out.append(ET(axis, const=c))
+        else:
+            raise RobotError(
+                f"{where}: unknown kind {kind!r} (expected tx ty tz Rx Ry Rz SE3, or R SE2 in 2-D)"
+            )
+    return out, info
+
+
+def _is_identity(T: Any) -> bool:
+    A = getattr(T, "A", T)
+    try:
+        return bool(np.allclose(np.asarray(A, dtype=float), np.eye(4), rtol=0, atol=1e-15))
+    except (TypeError, ValueError):
+        return False
+
+
+def _limits(qlim: Any, n: int) -> np.ndarray | None:
+    try:
+        a = np.asarray(qlim, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return a if a.shape == (2, n) and np.isfinite(a).all() and (a[0] <= a[1]).all() else None
+
+
+def robot_from_rtb(
+    obj: Any,
+    name: str | None = None,
+    start: Any = None,
+    end: Any = None,
+    snap_tol: float = SNAP_TOL,
+) -> Robot:
+    """A symkin Robot from a roboticstoolbox robot (``rtb.models.Panda()``, a ``DHRobot``...) or an
+    ``ETS``/``ETS2``/``ET`` (see the module docstring for what is carried over).
+
+    ``start``/``end`` choose the links of a branched robot (passed to its ``ets()``); ``name``
+    replaces the robot's name. The result's ``fkine`` equals the robot's ``fkine`` (base and tool
+    included).
+    """
+    if hasattr(obj, "ets") and callable(obj.ets) and hasattr(obj, "qlim"):
+        return _from_robot(obj, name, start, end, snap_tol)
+    if start is not None or end is not None:
+        raise RobotError("start/end choose links of a roboticstoolbox robot; an ETS has no links")
+    try:
+        is_ets = hasattr(obj, "isjoint") or all(hasattr(et, "isjoint") for et in obj)
+    except TypeError:
+        is_ets = False
+    if not is_ets:
+        raise RobotError(
+            f"from_rtb needs a roboticstoolbox robot, ETS or ET, not {type_name(obj)}; for symkin's own "
+            "ETS use Robot.from_ets"
+        )
+    chain, info = rtb_ets(obj, snap_tol)
+    if not info:
+        raise RobotError("the roboticstoolbox ETS has no joints")
+    lo, hi = [], []
+    for _, et in sorted(info, key=lambda t: t[0]):
+        default = math.pi if _KINDS[_kind(et)].is_rotation else 1.0
+        raw = getattr(et, "qlim", None)
+        lim = None if raw is None or np.size(raw) != 2 else _limits(np.reshape(raw, (2, 1)), 1)
+        lo.append(float(lim[0, 0]) if lim is not None else -default)
+        hi.append(float(lim[1, 0]) if lim is not None else default)
+    return Robot(
+        ETS(tuple(chain)),
+        name=name or "rtb_ets",
+        qlim=[lo, hi],
+        source=f"imported from a roboticstoolbox-python {type(obj).__name__}",
+    )
+
+
+def _from_robot(robot: Any, name: str | None, start: Any, end: Any, snap_tol: float) -> Robot:
+    kwargs = {k: v for k, v in (("start", start), ("end", end)) if v is not None}
+    try:
+        ets = robot.ets(**kwargs)
+    except Exception as exc:  # roboticstoolbox raises ValueError/TypeError for branched robots
+        raise RobotError(
+            f"cannot take the chain of the roboticstoolbox robot {getattr(robot, 'name', '')!r}: {exc} "
+            "(name the links with start=/end=)"
+        ) from None
+    chain, info = rtb_ets(ets, snap_tol)
+    if not info:
+        raise RobotError(
+            f"the roboticstoolbox robot {getattr(robot, 'name', '')!r} has no joints on this chain"
+        )
+    base = getattr(robot, "base", None)
+    tool = getattr(robot, "tool", None)
+    if base is not None and not _is_identity(base):
+        chain = se3_ets(getattr(base, "A", base), "the robot's base", snap_tol) + chain
+    if tool is not None and not _is_identity(tool):
+        chain = chain + se3_ets(getattr(tool, "A", tool), "the robot's tool", snap_tol)
+    order = sorted(j for j, _ in info)  # roboticstoolbox joint index of symkin joint 0..n-1
+    n = len(order)
+    qlim_all = np.asarray(robot.qlim, dtype=float) if robot.qlim is not None else None
+    qlim = None
+    if (
+        qlim_all is not None
+        and qlim_all.ndim == 2
+        and qlim_all.shape[0] == 2
+        and qlim_all.shape[1] > max(order)
+    ):
+        qlim = _limits(qlim_all[:, order], n)
+    configs = {}
+    for key, value in dict(getattr(robot, "configs", None) or {}).items():
+        v = np.asarray(value, dtype=float).ravel()
+        if key != "qz" and key.isidentifier() and v.size > max(order) and np.isfinite(v[order]).all():
+            configs[key] = v[order]
+    qd_max = None
+    qd = getattr(robot, "qdlim", None)
+    if qd is not None:
+        qd = np.asarray(qd, dtype=float).ravel()
+        if qd.size > max(order) and np.isfinite(qd[order]).all() and (qd[order] > 0).all():
+            qd_max = qd[order]
+    links = {getattr(link, "jindex", None): getattr(link, "name", "") for link in getattr(robot, "links", ())}
+    names = tuple(str(links.get(j) or "") for j in order)
+    if not all(names) or len(set(names)) != n:
+        names = ()
+    maker = getattr(robot, "manufacturer", "") or ""
+    rname = str(getattr(robot, "name", "") or "rtb_robot")
+    return Robot(
+        ETS(tuple(chain)),
+        name=name or rname.lower().replace(" ", "_"),
+        qlim=qlim,
+        configs=configs,
+        joint_names=names,
+        qd_max=qd_max,
+        source=f"imported from roboticstoolbox-python {type(robot).__name__} {rname!r}"
+        + (f" ({maker})" if maker else "")
+        + ("; joint names are its joint links' names" if names else ""),
+    )
