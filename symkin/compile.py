@@ -41,6 +41,12 @@ def _templates_digest() -> str:
     return h.hexdigest()
 
 
+def _is_tree(robot: Any) -> bool:
+    from symkin.model.tree import Tree
+
+    return isinstance(robot, Tree)
+
+
 def _check_backend(backend: str) -> None:
     if backend not in BACKENDS:
         raise SymkinError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
@@ -68,6 +74,10 @@ def generate(
     """
     _check_backend(backend)
     _check_strategy(strategy)
+    if _is_tree(robot):
+        from symkin.compile_tree import generate_tree
+
+        return generate_tree(robot, backend, command)  # type: ignore[arg-type]
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
@@ -144,7 +154,9 @@ def _cached_files(
 def compile(  # noqa: A001
     robot: Robot | str, backend: str = "c", cache: bool = True, strategy: str | None = None
 ) -> Kinematics:
-    """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`.
+    """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`, or a
+    :class:`symkin.Tree` into one kernel for all its frames, a
+    :class:`~symkin.runtime.tree_kinematics.TreeKinematics`.
 
     ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
     ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
@@ -153,6 +165,10 @@ def compile(  # noqa: A001
     """
     _check_backend(backend)
     _check_strategy(strategy)
+    if _is_tree(robot):
+        from symkin.compile_tree import compile_tree
+
+        return compile_tree(robot, backend, cache)  # type: ignore[arg-type,return-value]
     if isinstance(robot, str):
         from symkin.model.resolve import resolve_robot
 

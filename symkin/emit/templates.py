@@ -102,7 +102,7 @@ def c_string(text: str) -> str:
     out = []
     for b in text.encode("utf-8"):
         ch = chr(b)
-        out.append(ch if ch.isalnum() or ch in " _-.,:;()[]=+" else f"\\{b:03o}")
+        out.append(ch if (ch.isascii() and ch.isalnum()) or ch in " _-.,:;()[]=+" else f"\\{b:03o}")
     return '"' + "".join(out) + '"'
 
 
