@@ -96,6 +96,7 @@ def servo(
     axes: str = "all",
     nu_max: Any = None,
     progress: bool = False,
+    frame: Any = None,
 ) -> ServoResult:
     """Servo the end effector from configuration ``q0`` (n,) to the base-frame pose ``Tep`` (4, 4).
 
@@ -108,8 +109,14 @@ def servo(
     ``axes`` and ``dt``), ``"rrmc"`` (:func:`rrmc` with ``qd_max``), an :class:`MMC` to reuse (its own
     options apply), or any callable ``(q, nu) -> (qd, StepInfo)``; ``kin`` needs ``n``, ``qlim``,
     ``fkine``, ``manipulability(q, axes)`` and what the controller uses. ``qd_max=None`` uses
-    ``kin.qd_max`` when the robot has it; pass ``np.inf`` for no speed limit.
+    ``kin.qd_max`` when the robot has it; pass ``np.inf`` for no speed limit. For a tree
+    (:class:`symkin.Tree` or its compiled kinematics) ``frame`` names the frame that servos; the
+    joints off its path do not move.
     """
+    if frame is not None or getattr(type(kin), "_symkin_tree", False):
+        from symkin.model.frame_view import task_kinematics
+
+        kin = task_kinematics(kin, frame)
     n = int(kin.n)
     q = np.array(q0, dtype=float)
     if q.shape != (n,) or not np.isfinite(q).all():
