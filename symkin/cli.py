@@ -1,8 +1,11 @@
 """The ``symkin`` command.
 
 Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
-(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file. User mistakes print one line
-``symkin: error: ...`` and exit with status 2; a failed check or an unsolved problem exits 1.
+(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file, ``path.urdf:FRAME`` for the
+chain to one link and ``--base-link/--end-link``; ``compile``, ``check`` and ``derive`` take a
+whole tree with ``--frames a,b,c`` (a branching URDF without a frame is a tree of its leaves).
+User mistakes print one line ``symkin: error: ...`` and exit with status 2; a failed check or an
+unsolved problem exits 1.
 """
 
 from __future__ import annotations
@@ -19,7 +22,10 @@ import numpy as np
 
 __all__ = ["main"]
 
-ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
+ROBOT_HELP = (
+    "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file, a URDF file or "
+    "path.urdf:FRAME (the chain to link FRAME)"
+)
 
 
 class UserError(Exception):
@@ -66,10 +72,14 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def cmd_compile(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import chain_or_tree, compile_tree_report
     from symkin.compile import compile as compile_robot
     from symkin.compile import generate
+    from symkin.model.tree import Tree
 
-    robot = _robot(args.robot)
+    robot = chain_or_tree(args)
+    if isinstance(robot, Tree):
+        return compile_tree_report(robot, args.backend, args.output)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
     files = generate(robot, args.backend, command)
@@ -123,20 +133,34 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 def cmd_check(args: argparse.Namespace) -> int:
     from symkin.check import check
+    from symkin.cli_tree import chain_or_tree
+    from symkin.model.tree import Tree
 
-    robot = _robot(args.robot)
-    report = check(
-        robot, backends=args.backend or ("c", "numpy", "casadi"), samples=args.samples, seed=args.seed
-    )
+    robot = chain_or_tree(args)
+    backends = args.backend or ("c", "numpy", "casadi")
+    if isinstance(robot, Tree):
+        from symkin.check_tree import check_tree
+
+        report = check_tree(robot, backends=backends, samples=args.samples, seed=args.seed)
+    else:
+        report = check(robot, backends=backends, samples=args.samples, seed=args.seed)
     print(json.dumps(report.as_dict(), indent=2) if args.json else report.format())
     return 0 if report.ok else 1
 
 
 def cmd_derive(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import chain_or_tree
     from symkin.derivation import derivation
+    from symkin.model.tree import Tree
 
-    robot = _robot(args.robot)
-    if args.ik:
+    robot = chain_or_tree(args)
+    if isinstance(robot, Tree):
+        if args.ik:
+            raise UserError("--ik derives the closed form of one chain: name it as ROBOT.urdf:FRAME")
+        from symkin.derivation_tree import tree_derivation
+
+        text = tree_derivation(robot, fmt=args.format)
+    elif args.ik:
         from symkin.derivation_ik import ik_derivation
 
         text = ik_derivation(robot, fmt=args.format)
@@ -180,9 +204,10 @@ def _target(args: argparse.Namespace, robot: Any) -> np.ndarray:
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import single_chain
     from symkin.compile import compile as compile_robot
 
-    robot = _robot(args.robot)
+    robot = single_chain(args)
     Tep = _target(args, robot)
     kin = compile_robot(robot, backend=args.backend)
     if args.all or args.method == "analytic":
@@ -247,10 +272,11 @@ def _result_dict(res: Any) -> dict:
 
 
 def cmd_servo(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import single_chain
     from symkin.compile import compile as compile_robot
     from symkin.runtime.loop import servo
 
-    robot = _robot(args.robot)
+    robot = single_chain(args)
     Tep = _target(args, robot)
     kin = compile_robot(robot, backend=args.backend)
     q0 = _floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
@@ -345,8 +371,29 @@ def cmd_bench(args: argparse.Namespace) -> int:
         from symkin.bench.kin import format_kin, run_kin
 
         result = run_kin(args.robot or "panda", batch=args.batch, progress=not args.json)
-        print(json.dumps(result, indent=2) if args.json else format_kin(result))
+        if not args.json:
+            print(format_kin(result), flush=True)
+        result["trees"] = _bench_trees(args)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
         return 0
+    if args.what == "tree":
+        trees = _bench_trees(args)
+        print(json.dumps(trees, indent=2, default=_jsonable) if args.json else "")
+        return 0
+    if args.what == "urdf":
+        from symkin.bench.urdf_sweep import format_sweep, run_sweep
+
+        if args.plot:
+            _need_matplotlib()
+        sweep = run_sweep(
+            backends=tuple(args.backends.split(",")), progress=not args.json, limit=args.problems
+        )
+        print(json.dumps(sweep, indent=2, default=_jsonable) if args.json else format_sweep(sweep))
+        if args.plot:
+            from symkin.bench.urdf_sweep import plot_sweep
+
+            plot_sweep(sweep, args.plot)
+        return 0 if sweep["ok"] else 1
     if args.what == "ik" and args.analytic:
         from symkin.bench.analytic_ik import format_analytic, run_analytic
 
@@ -384,6 +431,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_trees(args: argparse.Namespace) -> dict:
+    """The tree rows of ``bench kin`` / ``bench tree`` (printed unless --json)."""
+    from symkin.bench.tree import format_tree_kin, run_tree_kin
+
+    trees = run_tree_kin(batch=args.batch, seed=args.seed, cold=not args.no_cold)
+    if not args.json:
+        print(format_tree_kin(trees))
+    return trees
+
+
 def _jsonable(x: Any) -> Any:
     if isinstance(x, np.ndarray):
         return x.tolist()
@@ -395,6 +452,7 @@ def _jsonable(x: Any) -> Any:
 # ----------------------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
     from symkin import __version__
+    from symkin.cli_tree import add_link_options, cmd_list_frames
 
     p = argparse.ArgumentParser(
         prog="symkin",
@@ -414,7 +472,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--backend", choices=("c", "numpy", "casadi"), default="c", help="code to generate (default c)"
     )
     s.add_argument("-o", "--output", metavar="DIR", help="write the generated files into DIR")
+    add_link_options(s, frames=True)
     s.set_defaults(func=cmd_compile)
+
+    s = sub.add_parser("list-frames", help="print the link tree of a URDF (joints, links, leaves)")
+    s.add_argument("urdf", metavar="URDF", help="a URDF file")
+    s.add_argument("--base-link", metavar="LINK", help="start at this link (default the root)")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=cmd_list_frames)
 
     s = sub.add_parser(
         "generate", help="regenerate the checked-in code of the built-in robots under generated/"
@@ -431,6 +496,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--samples", type=int, default=20, help="random configurations (default 20)")
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_link_options(s, frames=True)
     s.set_defaults(func=cmd_check)
 
     s = sub.add_parser("derive", help="write the derivation of FK, Jacobian and Hessian (Markdown or LaTeX)")
@@ -449,6 +515,7 @@ def build_parser() -> argparse.ArgumentParser:
         "intermediates; auto (default): program when the expanded form is too large to read",
     )
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
+    add_link_options(s, frames=True)
     s.set_defaults(func=cmd_derive)
 
     def target_options(s: argparse.ArgumentParser) -> None:
@@ -458,6 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--backend", choices=("c", "numpy", "casadi"), default="c")
         s.add_argument("--q0", metavar="'Q...'", help="start configuration")
         s.add_argument("--json", action="store_true", help="print JSON")
+        add_link_options(s)
 
     s = sub.add_parser("ik", help="solve inverse kinematics for one target pose")
     s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
@@ -483,9 +551,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser(
         "bench",
-        help="benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), compile (cold, by length)",
+        help="benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
+        "mmc (Table I), compile (cold, by length), urdf (every chain of example-robot-data)",
     )
-    s.add_argument("what", choices=("kin", "ik", "mmc", "compile"))
+    s.add_argument("what", choices=("kin", "tree", "ik", "mmc", "compile", "urdf"))
     s.add_argument(
         "--robot",
         help="robot (default: panda for kin and compile, ur5 for ik, the paper's three for mmc)",
@@ -496,15 +565,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="compile: joint counts of the random chains (default 6,12,24,36)",
     )
     s.add_argument("--batch", type=int, default=100_000, help="kin: batch size (default 100000)")
-    s.add_argument("-n", "--problems", type=int, help="ik: problems (default 10000); mmc: tasks per robot")
+    s.add_argument(
+        "-n",
+        "--problems",
+        type=int,
+        help="ik: problems (default 10000); mmc: tasks per robot; urdf: at most N chains",
+    )
     s.add_argument("--seed", type=int, default=0)
     s.add_argument(
         "--plot",
         metavar="PNG",
-        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints",
+        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints; urdf: compile time "
+        "against joints",
     )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
     s.add_argument("--starts", type=int, default=32, help="ik --analytic: LM searches per pose for sampling")
+    s.add_argument("--no-cold", action="store_true", help="kin, tree: skip the cold compile of each tree")
+    s.add_argument(
+        "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
+    )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench)
     return p
