@@ -354,6 +354,8 @@ def _joint_counts(text: str) -> tuple[int, ...]:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import bench_trees, bench_urdf
+
     if args.what == "compile":
         from symkin.bench.compile import format_compile, plot_compile, run_compile
 
@@ -373,27 +375,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
         result = run_kin(args.robot or "panda", batch=args.batch, progress=not args.json)
         if not args.json:
             print(format_kin(result), flush=True)
-        result["trees"] = _bench_trees(args)
+        result["trees"] = bench_trees(args)
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
         return 0
-    if args.what == "tree":
-        trees = _bench_trees(args)
-        print(json.dumps(trees, indent=2, default=_jsonable) if args.json else "")
-        return 0
-    if args.what == "urdf":
-        from symkin.bench.urdf_sweep import format_sweep, run_sweep
-
+    if args.what in ("tree", "urdf"):
         if args.plot:
             _need_matplotlib()
-        sweep = run_sweep(
-            backends=tuple(args.backends.split(",")), progress=not args.json, limit=args.problems
-        )
-        print(json.dumps(sweep, indent=2, default=_jsonable) if args.json else format_sweep(sweep))
-        if args.plot:
-            from symkin.bench.urdf_sweep import plot_sweep
-
-            plot_sweep(sweep, args.plot)
-        return 0 if sweep["ok"] else 1
+        code, result = (0, bench_trees(args)) if args.what == "tree" else bench_urdf(args)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
+        return code
     if args.what == "ik" and args.analytic:
         from symkin.bench.analytic_ik import format_analytic, run_analytic
 
@@ -429,16 +419,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"plot written to {args.plot}")
     return 0
-
-
-def _bench_trees(args: argparse.Namespace) -> dict:
-    """The tree rows of ``bench kin`` / ``bench tree`` (printed unless --json)."""
-    from symkin.bench.tree import format_tree_kin, run_tree_kin
-
-    trees = run_tree_kin(batch=args.batch, seed=args.seed, cold=not args.no_cold)
-    if not args.json:
-        print(format_tree_kin(trees))
-    return trees
 
 
 def _jsonable(x: Any) -> Any:

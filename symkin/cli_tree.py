@@ -129,6 +129,30 @@ def cmd_list_frames(args: argparse.Namespace) -> int:
     return 0
 
 
+def bench_trees(args: argparse.Namespace) -> dict:
+    """The tree rows of ``bench kin`` / ``bench tree`` (printed unless --json)."""
+    from symkin.bench.tree import format_tree_kin, run_tree_kin
+
+    trees = run_tree_kin(batch=args.batch, seed=args.seed, cold=not args.no_cold)
+    if not args.json:
+        print(format_tree_kin(trees))
+    return trees
+
+
+def bench_urdf(args: argparse.Namespace) -> tuple[int, dict]:
+    """``symkin bench urdf``: (exit code, result); the table printed unless --json."""
+    from symkin.bench.urdf_sweep import format_sweep, plot_sweep, run_sweep
+
+    sweep = run_sweep(backends=tuple(args.backends.split(",")), progress=not args.json, limit=args.problems)
+    if not args.json:
+        print(format_sweep(sweep))
+    if args.plot and "rows" in sweep:
+        plot_sweep(sweep, args.plot)
+        if not args.json:
+            print(f"plot written to {args.plot}")
+    return (0 if sweep["ok"] else 1), sweep
+
+
 def compile_tree_report(tree: Any, backend: str, output: str | None) -> int:
     """``symkin compile path.urdf --frames ...``: generate, build, print the summary."""
     from symkin.compile import compile as compile_model

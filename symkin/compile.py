@@ -77,6 +77,9 @@ def generate(
     if _is_tree(robot):
         from symkin.compile_tree import generate_tree
 
+        if strategy not in (None, "program"):
+            raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
+
         return generate_tree(robot, backend, command)  # type: ignore[arg-type]
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
@@ -167,6 +170,9 @@ def compile(  # noqa: A001
     _check_strategy(strategy)
     if _is_tree(robot):
         from symkin.compile_tree import compile_tree
+
+        if strategy not in (None, "program"):
+            raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
 
         return compile_tree(robot, backend, cache)  # type: ignore[arg-type,return-value]
     if isinstance(robot, str):

@@ -35,7 +35,7 @@ def _factor(e: Any) -> str:
 def _theta(s: Any) -> str:
     q = f"q_{{{s.joint + 1}}}"
     m, c = s.multiplier, s.offset
-    text = q if m == 1 else f"{_num(m)}\\, {q}"
+    text = q if m == 1 else f"-{q}" if m == -1 else f"{_num(m)}\\, {q}"
     if c != 0:
         text += f" {'+' if c > 0 else '-'} {_num(abs(c))}"
     return text

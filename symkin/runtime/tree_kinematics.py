@@ -85,6 +85,10 @@ class TreeKinematics:
         frames = list(self.frames)
         return f"TreeKinematics(tree={self.name!r}, n={self.n}, frames={frames}, backend={self.backend!r})"
 
+    def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
+        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        return self.tree.random_q(N, seed)
+
     def select(self, frame: Any = None) -> Any:
         """Frame ``frame`` as chain kinematics of all n joints (:class:`symkin.model.frame_view.FrameView`),
         for :func:`symkin.ik`, :func:`symkin.servo` and :class:`symkin.MMC`."""
