@@ -117,3 +117,10 @@ def test_derive_a_tree_shows_the_shared_part_once(capsys, tmp_path):
     assert "on the path to `l_tool`, `r_tool`" in out
     assert "### Frame `l_tool`" in out and "### Frame `r_tool`" in out
     assert "(ok, tolerance 1e-12)" in out
+
+
+def test_resolve_accepts_a_urdf_frame(quad):
+    from symkin.model.resolve import resolve_robot
+
+    robot = resolve_robot(f"{quad}:r_foot")
+    assert robot.joint_names == ("r_haa", "r_hfe", "r_kfe")
