@@ -174,11 +174,22 @@ def run_tree_kin(
             fn(Q[:1000])
             best = min(_timed(fn, Q) for _ in range(3))
             row[f"batch_{fname}_per_s"] = batch / best
+        shapes = ((batch, len(tree.frames), 4, 4), (batch, len(tree.frames), 6, tree.n))
+        row["batch_write_ceiling_per_s"] = batch / min(
+            _timed(lambda _, s=shapes: _fill(s), Q) for _ in range(3)
+        )
+        row["bytes_per_tree"] = 8 * (16 + 6 * tree.n) * len(tree.frames)
         row["pinocchio"] = _pinocchio(root / urdf, tree.frames, q, tree)
         if cold:
             row["cold_compile_s"] = cold_compile_seconds(root / urdf, tree.frames)
         rows.append(row)
     return {"batch": batch, "rows": rows}
+
+
+def _fill(shapes: Any) -> None:
+    """Allocate and write arrays of the output's size: the memory ceiling of a batch call."""
+    for shape in shapes:
+        np.empty(shape).fill(1.0)
 
 
 def _timed(fn: Any, Q: np.ndarray) -> float:
@@ -219,7 +230,9 @@ def format_tree_kin(r: dict) -> str:
         lines.append(
             f"{row['case']}: frames {', '.join(row['frames'])}; fkine_all {us['fkine_all']:.2f} us, "
             f"reference {row['reference_us']:.0f} us, batch fkine_all {row['batch_fkine_all_per_s']:.3g}/s, "
-            f"max error vs reference {row['error_vs_reference']:.1e}{extra}"
+            f"max error vs reference {row['error_vs_reference']:.1e}; allocating and writing the "
+            f"{row['bytes_per_tree']} output bytes per tree alone: {row['batch_write_ceiling_per_s']:.3g}/s"
+            f"{extra}"
         )
     lines.append(
         f"batch: {r['batch']} configurations on one core; Pinocchio's batch is a Python loop of its best way"
