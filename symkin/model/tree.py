@@ -196,7 +196,7 @@ class Tree:
         :mod:`symkin.model.urdf_tree`. ``snap_tol`` as in :func:`symkin.model.urdf.robot_from_urdf`."""
         from symkin.model.urdf_tree import tree_from_urdf
 
-        return tree_from_urdf(path_or_xml, frames=frames, base_link=base_link, snap_tol=snap_tol, name=name)  # type: ignore[return-value]
+        return tree_from_urdf(path_or_xml, frames=frames, base_link=base_link, snap_tol=snap_tol, name=name)
 
     # -- plain attributes ------------------------------------------------------------------
     @property
@@ -271,14 +271,11 @@ class Tree:
                     "a Robot has independent joints only: use the Tree (symkin.compile(tree), "
                     f"frame={frame!r})"
                 )
-        renumber = {id(self.slots[k]): i for i, k in enumerate(self.path_slots(frame))}
+        renumber = {k: i for i, k in enumerate(self.path_slots(frame))}  # slot -> joint of the chain
         ets: list[ET] = []
         for si in self.path(frame):
-            seg = self.segments[si]
-            for e in seg.ets:
-                if e.is_joint:
-                    e = ET(e.axis, joint=renumber[id(self.slots[seg.slot])], flip=e.flip)  # type: ignore[index]
-                ets.append(e)
+            for e in self.segments[si].ets:
+                ets.append(ET(e.axis, joint=renumber[e.joint], flip=e.flip) if e.is_joint else e)
         if not slots:
             raise URDFError(
                 f"no revolute, continuous or prismatic joint between {self.base_link!r} and {frame!r}"

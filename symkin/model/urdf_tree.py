@@ -20,11 +20,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.etree import ElementTree
 
 from symkin.errors import URDFError
 from symkin.model.ets import ET, Axis
 from symkin.model.urdf import _load, _numbers, _suggest, axis_ets, snap_angle, snap_atan2, translation_ets
+
+if TYPE_CHECKING:
+    from symkin.model.tree import Tree
 
 __all__ = ["URDFGraph", "read_graph", "joint_ets", "tree_from_urdf", "describe_urdf"]
 
@@ -248,7 +252,7 @@ def tree_from_urdf(
     base_link: str | None = None,
     snap_tol: float = 1e-9,
     name: str | None = None,
-) -> object:
+) -> Tree:
     """The :class:`symkin.Tree` of a URDF: see :meth:`symkin.Tree.from_urdf`."""
     from symkin.model.tree import Segment, Slot, Tree
 
