@@ -27,6 +27,7 @@ from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load
+from symkin.model.tree import Tree
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
@@ -79,6 +80,7 @@ __all__ = [
     "ServoResult",
     "StepInfo",
     "SymkinError",
+    "Tree",
     "URDFError",
     "WorkspaceError",
     "UnknownRobotError",

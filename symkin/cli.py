@@ -1,12 +1,14 @@
 """The ``symkin`` command.
 
 Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
-(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file or a URDF file, and ``--tool``/``--base`` to add a
-constant transform after the end effector / before the first link. User mistakes print one line
-``symkin: error: ...`` and exit with status 2, checked before any long work starts where they can
-be; a failed check or an unsolved problem exits 1. When the reader of the output goes away
-(``symkin list | head -1``), symkin stops quietly with status 141 (128 + SIGPIPE). Progress bars
-appear only when stderr is a terminal (:mod:`symkin.progress`).
+(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file, a URDF file or ``path.urdf:FRAME`` for the
+chain to one link (also ``--base-link/--end-link``), and ``--tool``/``--base`` to add a constant
+transform after the end effector / before the first link. ``compile``, ``check`` and ``derive``
+take a whole tree with ``--frames a,b,c`` (a branching URDF without a frame is a tree of its
+leaves). User mistakes print one line ``symkin: error: ...`` and exit with status 2, checked before
+any long work starts where they can be; a failed check or an unsolved problem exits 1. When the
+reader of the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
+(128 + SIGPIPE). Progress bars appear only when stderr is a terminal (:mod:`symkin.progress`).
 """
 
 from __future__ import annotations
@@ -33,7 +35,10 @@ __all__ = ["main"]
 
 _at_least_1 = _int_at_least(1)
 
-ROBOT_HELP = "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file or a URDF file"
+ROBOT_HELP = (
+    "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file, a URDF file or "
+    "path.urdf:FRAME (the chain to link FRAME)"
+)
 TRANSFORM_HELP = (
     "constant ETS text like 'tz(0.1) Rx(pi/2)', or 'x y z roll pitch yaw' (m, rad; pi/2 and 90deg "
     "allowed), or 16 numbers of a row-major 4x4 matrix"
@@ -69,11 +74,11 @@ class _Deprecated(argparse.Action):
 
 
 def _robot(args: argparse.Namespace, default: str | None = None) -> Any:
-    """The ROBOT of a command (or ``default`` when it is optional and not given), with --tool/--base."""
-    from symkin.model.resolve import resolve_robot
+    """The serial ROBOT of a command (or ``default`` when it is optional and not given), with
+    --tool/--base and, for a URDF, ``path.urdf:FRAME`` or --base-link/--end-link."""
+    from symkin.cli_tree import single_chain
 
-    spec = args.robot if args.robot is not None else default
-    return resolve_robot(spec, tool=getattr(args, "tool", None), base=getattr(args, "base", None))
+    return single_chain(args, default)
 
 
 def _custom(args: argparse.Namespace) -> bool:
@@ -115,12 +120,16 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def cmd_compile(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import chain_or_tree, compile_tree_report
     from symkin.compile import compile as compile_robot
     from symkin.compile import generate
+    from symkin.model.tree import Tree
 
-    robot = _robot(args)
+    robot = chain_or_tree(args)
     out = _output_dir(args.output) if args.output else None
     _check_cflags(args.backend)
+    if isinstance(robot, Tree):
+        return compile_tree_report(robot, args.backend, args.output)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"
     c_only = (("--prefix", args.prefix), ("--precision", args.precision != "double"), ("--libm", args.libm))
@@ -208,24 +217,40 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 def cmd_check(args: argparse.Namespace) -> int:
     from symkin.check import check
+    from symkin.cli_tree import chain_or_tree
+    from symkin.model.tree import Tree
 
-    robot = _robot(args)
+    robot = chain_or_tree(args)
+    backends = args.backend or ("c", "numpy", "casadi")
     for b in args.backend or ("c",):
         _check_cflags(b)
-    report = check(
-        robot, backends=args.backend or ("c", "numpy", "casadi"), samples=args.samples, seed=args.seed
-    )
+    if isinstance(robot, Tree):
+        from symkin.check_tree import check_tree
+
+        report = check_tree(robot, backends=backends, samples=args.samples, seed=args.seed)
+    else:
+        report = check(robot, backends=backends, samples=args.samples, seed=args.seed)
     print(json.dumps(report.as_dict(), indent=2) if args.json else report.format())
     return 0 if report.ok else 1
 
 
 def cmd_derive(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import chain_or_tree
     from symkin.derivation import derivation
+    from symkin.model.tree import Tree
 
-    robot = _robot(args)
+    robot = chain_or_tree(args)
     sections = _sections(args.sections)
     _output_file(args.output, "-o")
-    if args.ik:
+    if isinstance(robot, Tree):
+        if args.ik:
+            raise UserError("--ik derives the closed form of one chain: name it as ROBOT.urdf:FRAME")
+        if sections is not None:
+            raise UserError("--sections chooses parts of a chain's derivation, not of a tree's")
+        from symkin.derivation_tree import tree_derivation
+
+        text = tree_derivation(robot, fmt=args.format)
+    elif args.ik:
         if sections is not None:
             raise UserError("--sections chooses parts of the kinematics derivation, not of --ik")
         from symkin.derivation_ik import ik_derivation
@@ -457,14 +482,18 @@ def _joint_counts(text: str) -> tuple[int, ...]:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    from symkin.cli_tree import bench_trees, bench_urdf
+
     if args.robot is None:
         args.robot = args.robot_option
     custom = _custom(args)
     if custom and args.robot is None:
         raise UserError("--tool/--base change a ROBOT: name one (symkin bench WHAT ROBOT --tool ...)")
     _check_cflags("c")
-    if args.plot and args.what not in ("mmc", "compile"):
-        raise UserError(f"--plot is for `symkin bench mmc` and `symkin bench compile`, not `{args.what}`")
+    if args.plot and args.what not in ("mmc", "compile", "urdf"):
+        raise UserError(f"--plot is for `symkin bench mmc`, `compile` and `urdf`, not `{args.what}`")
+    if args.what in ("tree", "urdf") and args.robot is not None:
+        raise UserError(f"bench {args.what} measures its own robots; it takes no ROBOT")
     _need_matplotlib(args.plot)
     if args.what == "compile":
         from symkin.bench.compile import format_compile, plot_compile, run_compile
@@ -503,8 +532,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
         from symkin.bench.kin import format_kin, run_kin
 
         result = run_kin(spec or "panda", batch=args.batch, progress=not args.json)
-        print(json.dumps(result, indent=2) if args.json else format_kin(result))
+        if not args.json:
+            print(format_kin(result), flush=True)
+        result["trees"] = bench_trees(args)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
         return 0
+    if args.what in ("tree", "urdf"):
+        code, result = (0, bench_trees(args)) if args.what == "tree" else bench_urdf(args)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
+        return code
     if args.what == "ik" and args.analytic:
         from symkin.bench.analytic_ik import format_analytic, run_analytic
 
@@ -692,6 +728,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     from symkin import __version__
+    from symkin.cli_tree import add_link_options, cmd_list_frames
 
     p = _Parser(
         prog="symkin",
@@ -746,7 +783,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="how the code is derived: expanded (one expression per output, then CSE) or program "
         "(named link frames, linear in the chain); default: chosen by size",
     )
+    add_link_options(s, frames=True)
     s.set_defaults(func=cmd_compile)
+
+    s = command("list-frames", "print the link tree of a URDF (joints, links, leaves)")
+    s.add_argument("urdf", metavar="URDF", help="a URDF file")
+    s.add_argument("--base-link", metavar="LINK", help="start at this link (default the root)")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=cmd_list_frames)
 
     s = command("generate", "regenerate the checked-in code of the built-in robots under generated/")
     s.add_argument("-o", "--output", default="generated", metavar="DIR", help="folder to write")
@@ -764,6 +808,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--samples", type=_at_least_1, default=20, help="random configurations")
     s.add_argument("--seed", type=int, default=0, help="seed of the random configurations")
     s.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_link_options(s, frames=True)
     s.set_defaults(func=cmd_check)
 
     s = command("derive", "write the derivation of FK, Jacobian and Hessian (Markdown or LaTeX)")
@@ -788,6 +833,7 @@ def build_parser() -> argparse.ArgumentParser:
         "derivatives, jacobian, hessian, checks; default all)",
     )
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
+    add_link_options(s, frames=True)
     s.set_defaults(func=cmd_derive)
 
     def target_options(s: argparse.ArgumentParser, q0_help: str) -> None:
@@ -802,6 +848,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--backend", choices=backends, default="c", help="kinematics backend")
         s.add_argument("--q0", metavar="'Q...'", help=q0_help)
         s.add_argument("--json", action="store_true", help="print JSON")
+        add_link_options(s)
 
     s = command("ik", "solve inverse kinematics for one target pose")
     robot_argument(s)
@@ -858,10 +905,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = command(
         "bench",
-        "benchmarks: kin (per call, batched), ik (Table 1), mmc (Table I), calls (one at a time), "
-        "compile (cold, by chain length), reach (Dask maps)",
+        "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
+        "mmc (Table I), calls (one at a time), compile (cold, by chain length), urdf (every chain of "
+        "example-robot-data), reach (Dask maps)",
     )
-    s.add_argument("what", choices=("kin", "ik", "mmc", "calls", "compile", "reach"), help="which benchmark")
+    s.add_argument(
+        "what",
+        choices=("kin", "tree", "ik", "mmc", "calls", "compile", "urdf", "reach"),
+        help="which benchmark",
+    )
     robot_argument(
         s,
         "default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, ur5 and "
@@ -876,13 +928,15 @@ def build_parser() -> argparse.ArgumentParser:
         "-n",
         "--problems",
         type=_at_least_1,
-        help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000)",
+        help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000); "
+        "urdf: at most N chains (default all)",
     )
     s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
     s.add_argument(
         "--plot",
         metavar="PNG",
-        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints",
+        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints; urdf: compile time "
+        "against joints",
     )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
     s.add_argument(
@@ -895,6 +949,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--fault", action="store_true", help="reach: also kill a worker mid-run and compare")
     s.add_argument(
         "--repeat", type=_at_least_1, default=3, help="reach: runs of each measurement (best is kept)"
+    )
+    s.add_argument("--no-cold", action="store_true", help="kin, tree: skip the cold compile of each tree")
+    s.add_argument(
+        "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
     )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_bench, robot_option=None)

@@ -48,7 +48,15 @@ def _templates_digest() -> str:
 
 
 # the compiler's own code: what it derives and prints depends on these files
-_COMPILER_SOURCES = ("symbolic", "emit", "model/ets.py", "model/robot.py", "compile.py")
+_COMPILER_SOURCES = (
+    "symbolic",
+    "emit",
+    "model/ets.py",
+    "model/robot.py",
+    "model/tree.py",
+    "compile.py",
+    "compile_tree.py",
+)
 
 
 @lru_cache(maxsize=1)
@@ -73,6 +81,12 @@ def _sources_digest(root: Path) -> str:
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
         h.update(path.read_bytes() + b"\0")
     return h.hexdigest()
+
+
+def _is_tree(robot: Any) -> bool:
+    from symkin.model.tree import Tree
+
+    return isinstance(robot, Tree)
 
 
 def _check_backend(backend: str) -> None:
@@ -113,6 +127,17 @@ def generate(
     _check_strategy(strategy)
     if (prefix is not None or precision != "double" or libm) and backend != "c":
         raise SymkinError(f"prefix, precision and libm apply to the C backend only, not {backend!r}")
+    if _is_tree(robot):
+        from symkin.compile_tree import generate_tree
+
+        if strategy not in (None, "program"):
+            raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
+
+        if prefix is not None or precision != "double" or libm:
+            raise SymkinError(
+                "prefix, precision and libm are for serial chains; trees compile with the defaults"
+            )
+        return generate_tree(robot, backend, command)  # type: ignore[arg-type]
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
     from symkin.symbolic.functions import kin_functions
@@ -197,7 +222,9 @@ def _cached_files(
 def compile(  # noqa: A001
     robot: Robot | str, backend: str = "c", cache: bool = True, strategy: str | None = None
 ) -> Kinematics:
-    """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`.
+    """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`, or a
+    :class:`symkin.Tree` into one kernel for all its frames, a
+    :class:`~symkin.runtime.tree_kinematics.TreeKinematics`.
 
     ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
     ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
@@ -206,6 +233,13 @@ def compile(  # noqa: A001
     """
     _check_backend(backend)
     _check_strategy(strategy)
+    if _is_tree(robot):
+        from symkin.compile_tree import compile_tree
+
+        if strategy not in (None, "program"):
+            raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
+
+        return compile_tree(robot, backend, cache)  # type: ignore[arg-type,return-value]
     if isinstance(robot, str):
         from symkin.model.resolve import resolve_robot
 

@@ -20,7 +20,7 @@ _URDF_SUFFIXES = (".urdf", ".xml")
 
 def resolve_robot(spec: str | Robot, tool: Any = None, base: Any = None) -> Robot:
     """A Robot from a built-in name (``panda``), ETS text (``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table
-    file or a URDF file.
+    file, a URDF file or ``path.urdf:FRAME`` (the chain from the root to link FRAME).
 
     ``tool``/``base``: a constant transform appended after the end effector / placed before the
     first link (any form :meth:`symkin.Robot.with_tool` takes, e.g. ``"tz(0.1)"`` or
@@ -46,6 +46,9 @@ def _resolve(spec: str | Robot) -> Robot:
     text = spec.strip()
     if text in list_robots():
         return load(text)
+    head, sep, frame = text.rpartition(":")  # path.urdf:FRAME, the chain to link FRAME
+    if sep and frame and "(" not in text and "/" not in frame and Path(head).suffix.lower() in _URDF_SUFFIXES:
+        return Robot.from_urdf(Path(head).expanduser(), end_link=frame)
     path = Path(text).expanduser()
     if "(" not in text and path.is_dir():
         raise RobotError(

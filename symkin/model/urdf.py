@@ -341,7 +341,7 @@ def robot_from_urdf(
                 "revolute, continuous, prismatic and fixed joints (choose base_link/end_link to avoid it)"
             )
         mimic = jel.find("mimic")
-        if mimic is not None:
+        if mimic is not None and jtype != "fixed":  # a fixed joint does not move: its <mimic> says nothing
             raise URDFError(
                 f"{where}: {what} mimics joint {mimic.get('joint')!r}; mimic joints are not supported "
                 "(each joint must be independent): choose another end_link or edit the URDF"

@@ -299,7 +299,8 @@ class MMC:
     (``symkin.compile(robot, backend="c")``): kinematics, closed form, active set and an embedded
     OSQP built for this QP (:mod:`symkin.runtime.mmc_c`), the same answers within solver
     tolerance; ``"python"`` keeps this NumPy + OSQP path (the reference); ``"c"`` requires C.
-    :meth:`build` and :meth:`solve` always run in Python.
+    :meth:`build` and :meth:`solve` always run in Python. For a tree (:class:`symkin.Tree` or its
+    compiled kinematics), ``frame`` names the task frame; that runs in Python.
 
     ``slack`` (default: on with ``joint_limits``) adds a slack ``s`` on the equality, weighted by
     ``slack_weight``, so the QP stays feasible when the dampers or speed limits cannot meet nu;
@@ -326,7 +327,12 @@ class MMC:
         singular_tol: float = 1e-6,
         osqp_settings: dict[str, Any] | None = None,
         backend: str = "auto",
+        frame: Any = None,
     ) -> None:
+        if frame is not None or getattr(type(kin), "_symkin_tree", False):  # one frame of a tree
+            from symkin.model.frame_view import task_kinematics
+
+            kin = task_kinematics(kin, frame)
         if backend not in ("auto", "c", "python"):
             raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin = kin

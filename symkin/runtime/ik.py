@@ -500,6 +500,7 @@ def ik(
     tol_on: Literal["e", "E"] = "e",
     starts: Any = None,
     backend: Literal["numpy", "c"] = "numpy",
+    frame: Any = None,
 ) -> IKResult:
     """Numerical IK: joint values q with ``kin.fkine(q)`` = ``Tep`` (eqs 37-51).
 
@@ -516,10 +517,16 @@ def ik(
         joint_limits: reject solutions outside ``kin.qlim`` (after wrapping revolute joints).
         we: the diagonal of We (6,), default ones (eq 44).
         backend: ``"numpy"`` (this module) or ``"c"`` (:class:`symkin.runtime.ik_c.CIKSolver`).
+        frame: for a :class:`symkin.Tree` or its compiled kinematics, the frame (link name) whose
+            pose is the task; the joints off its path are free (they keep their start values).
 
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.
     """
+    if frame is not None or getattr(type(kin), "_symkin_tree", False):
+        from symkin.model.frame_view import task_kinematics
+
+        kin = task_kinematics(kin, frame)
     args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts)
     if backend == "c":
         try:

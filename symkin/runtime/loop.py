@@ -101,6 +101,7 @@ def servo(
     nu_max: Any = None,
     progress: bool = False,
     backend: str = "auto",
+    frame: Any = None,
 ) -> ServoResult:
     """Servo the end effector from configuration ``q0`` (n,) to the base-frame pose ``Tep`` (4, 4).
 
@@ -121,7 +122,14 @@ def servo(
     compiled C kinematics and the controller is ``"rrmc"`` or an MMC whose step runs in C; ``"python"``
     runs this loop in Python around the same step; ``"c"`` requires the C loop. ``step_time`` is then
     the time of the C step alone.
+
+    For a tree (:class:`symkin.Tree` or its compiled kinematics) ``frame`` names the frame that
+    servos; the joints off its path do not move (the loop then runs in Python).
     """
+    if frame is not None or getattr(type(kin), "_symkin_tree", False):
+        from symkin.model.frame_view import task_kinematics
+
+        kin = task_kinematics(kin, frame)
     if backend not in ("auto", "c", "python"):
         raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
     n = int(kin.n)

@@ -98,6 +98,13 @@ class _Walk:
         self.angle: sp.Expr = zero
         self._trig: tuple[sp.Expr, sp.Expr] | None = None
 
+    def fork(self) -> _Walk:
+        """A copy to walk on from here (a branch of a tree); both share the program."""
+        W = _Walk.__new__(_Walk)
+        W.P, W.cols, W.p = self.P, [list(c) for c in self.cols], list(self.p)
+        W.axis, W.angle, W._trig = self.axis, self.angle, self._trig
+        return W
+
     def _cs(self) -> tuple[sp.Expr, sp.Expr]:
         if self._trig is None:
             c, s = _cos_sin(self.angle)

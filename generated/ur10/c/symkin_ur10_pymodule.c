@@ -367,7 +367,10 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *arg)
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
-    return PyTuple_Pack(2, out_T, out_J);
+    PyObject *result = PyTuple_Pack(2, out_T, out_J);
+    Py_DECREF(out_T); /* the tuple holds the reference */
+    Py_DECREF(out_J); /* the tuple holds the reference */
+    return result;
 }
 
 static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *arg)
@@ -396,7 +399,10 @@ static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *arg)
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
-    return PyTuple_Pack(2, out_J, out_H);
+    PyObject *result = PyTuple_Pack(2, out_J, out_H);
+    Py_DECREF(out_J); /* the tuple holds the reference */
+    Py_DECREF(out_H); /* the tuple holds the reference */
+    return result;
 }
 
 static int axes_(PyObject *obj, int *axes)

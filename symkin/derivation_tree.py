@@ -1,0 +1,175 @@
+"""The derivation of a kinematic tree: the shared walk once, then each frame's pose and Jacobian.
+
+The tree is walked depth first exactly as the compiler does (:mod:`symkin.symbolic.tree_program`):
+each link frame from its parent link's, every new quantity named (``zeta_k``), so a part several
+frames share (a torso, a hip) appears once, with the frames it serves. Then each frame's pose and
+the nonzero columns of its Jacobian (Haviland and Corke, Manipulator Differential Kinematics,
+Part 1, 2023, eqs 31-34, frame f in place of the end effector; a mimic joint's column added by the
+chain rule). The named quantities are evaluated at random points and compared with the numeric
+reference :class:`symkin.Tree` (an independent walk with 4x4 matrices).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from symkin.model.latex import _AXIS, et_latex
+from symkin.model.tree import Tree
+
+__all__ = ["tree_derivation"]
+
+LINES_PER_BLOCK = 12
+CHECK_TOL = 1e-12
+
+
+def _factor(e: Any) -> str:
+    """One factor; a joint as the angle (or displacement) of its slot, theta_k."""
+    if not e.is_joint:
+        return et_latex(e)
+    return f"{_AXIS[e.axis]}({'-' if e.flip else ''}\\theta_{{{e.joint + 1}}})"
+
+
+def _theta(s: Any) -> str:
+    q = f"q_{{{s.joint + 1}}}"
+    m, c = s.multiplier, s.offset
+    text = q if m == 1 else f"-{q}" if m == -1 else f"{_num(m)}\\, {q}"
+    if c != 0:
+        text += f" {'+' if c > 0 else '-'} {_num(abs(c))}"
+    return text
+
+
+def _num(r: Any) -> str:
+    from symkin.model.ets import rational_text
+
+    return rational_text(r)
+
+
+def _checks(tree: Tree, tp: Any, samples: int = 3) -> float:
+    """Largest difference of the program's poses and Jacobians from the numeric reference."""
+    import mpmath
+    from sympy.printing.pycode import MpmathPrinter
+
+    printer = MpmathPrinter({"fully_qualified_modules": True})
+    outs = [x for T in tp.T for x in T] + [x for J in tp.J0 for x in J]
+    body = [f"    {s} = {printer.doprint(e)}" for s, e in tp.lines]
+    src = (
+        f"def f({', '.join(str(s) for s in tp.q)}):\n"
+        + "\n".join(body)
+        + f"\n    return [{', '.join(printer.doprint(e) for e in outs)}]\n"
+    )
+    scope: dict[str, Any] = {"mpmath": mpmath}
+    exec(compile(src, "<symkin tree program>", "exec"), scope)  # noqa: S102 - our own printed code
+    worst = 0.0
+    F, n = len(tree.frames), tree.n
+    for q in tree.random_q(samples, seed=1):
+        with mpmath.workdps(30):
+            got = np.array([float(v) for v in scope["f"](*[mpmath.mpf(float(x)) for x in q])])
+        T, J = tree.fkine_jacob0_all(q)
+        ref = np.concatenate((T.reshape(-1), J.reshape(-1)))
+        assert got.size == 16 * F + 6 * n * F
+        worst = max(worst, float(np.abs(got - ref).max()))
+    return worst
+
+
+def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
+    """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
+    from symkin import __version__
+    from symkin.derivation import FORMATS, _latex_document, _Printer
+    from symkin.emit.templates import render
+    from symkin.errors import SymkinError
+    from symkin.symbolic.kinematics import const_to_sympy
+    from symkin.symbolic.tree_program import derive_tree_program, safe_text
+
+    if fmt not in FORMATS:
+        raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
+    if tree.n == 0:
+        raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
+    q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(tree.n))
+    tp = derive_tree_program(tree, q, const_to_sympy, frame_jacobians=False)
+    P = _Printer(q)
+    for i, (s, _) in enumerate(tp.lines):
+        P.names[s] = f"\\zeta_{{{i}}}"
+    ends = dict(tp.marks)
+    users: dict[int, list[str]] = {}
+    for f in tree.frames:
+        for s in tree.path(f):
+            users.setdefault(s, []).append(safe_text(f))
+    kinds = {True: "revolute", False: "prismatic"}
+    joints = []
+    for j, name in enumerate(tree.joint_names):
+        driven = [s for s in tree.slots if s.joint == j]
+        follow = ", ".join(f"$\\theta_{{{k + 1}}} = {_theta(tree.slots[k])}$" for k in range(len(tree.slots))
+                           if tree.slots[k].joint == j)  # fmt: skip
+        joints.append([f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{safe_text(name)}`",
+                       kinds[all(s.revolute for s in driven)], follow])  # fmt: skip
+    steps, start = [], 0
+    for k, seg in enumerate(tree.segments):
+        end = ends[f"segment {k}"]
+        parent = "base" if seg.parent < 0 else safe_text(tree.segments[seg.parent].link)
+        lhs = f"{{}}^{{0}}T_{{\\mathrm{{{k + 1}}}}}"
+        before = "" if seg.parent < 0 else f"{{}}^{{0}}T_{{\\mathrm{{{seg.parent + 1}}}}}\\, "
+        factors = " ".join(_factor(e) for e in seg.ets) or "I"
+        rows = tp.lines[start:end]
+        steps.append(
+            {
+                "title": f"link {k + 1}, `{safe_text(seg.link)}` (joint `{safe_text(seg.name)}` from "
+                f"`{parent}`); on the path to {', '.join(f'`{u}`' for u in users.get(k, []))}",
+                "product": f"{lhs} = {before}{factors}",
+                "lines": [
+                    _block(P, rows[i : i + LINES_PER_BLOCK]) for i in range(0, len(rows), LINES_PER_BLOCK)
+                ],
+                "matrix": f"{lhs} = {P.matrix(tp.links[k])}",
+            }
+        )
+        start = end
+    frames = []
+    for f, name in enumerate(tree.frames):
+        end = ends[f"frame {f}"]
+        rows = tp.lines[start:end]
+        J = tp.J0[f]
+        cols = [
+            f"J_{{{j + 1}}} = {P.matrix(sp.Matrix(J[:, j]).T)}^\\top" for j in range(tree.n) if any(J[:, j])
+        ]
+        frames.append(
+            {
+                "name": safe_text(name),
+                "link": tree.frame_segments[f] + 1,
+                "lines": [
+                    _block(P, rows[i : i + LINES_PER_BLOCK]) for i in range(0, len(rows), LINES_PER_BLOCK)
+                ],
+                "pose": f"{{}}^{{0}}T_{{\\mathrm{{{tree.frame_segments[f] + 1}}}}} = {P.matrix(tp.T[f])}",
+                "columns": cols,
+                "zero": tree.n - len(cols),
+            }
+        )
+        start = end
+    worst = _checks(tree, tp)
+    verdict = "ok" if worst < CHECK_TOL else "FAILED"
+    shared = sum(1 for v in users.values() if len(v) > 1)
+    text = render(
+        "derive/tree.md.j2",
+        robot=safe_text(tree.name),
+        n=tree.n,
+        F=len(tree.frames),
+        S=len(tree.segments),
+        shared=shared,
+        version=__version__,
+        joints=joints,
+        steps=steps,
+        frames=frames,
+        nodes=len(tp.lines),
+        legend=P.legend(),
+        check=f"largest difference {worst:.1e} ({verdict}, tolerance {CHECK_TOL:g})",
+        source=safe_text(tree.source, limit=300),
+    )
+    if fmt == "latex":  # subsections as plain paragraphs
+        return _latex_document("\n".join(ln[4:] if ln.startswith("### ") else ln for ln in text.splitlines()))
+    return text
+
+
+def _block(P: Any, rows: Any) -> str:
+    body = r" \\ ".join(f"{P.names[s]} &= {P(e)}" for s, e in rows)
+    return r"\begin{aligned} " + body + r" \end{aligned}"

@@ -1,0 +1,143 @@
+"""Emit a tree kernel: the functions of :func:`symkin.symbolic.tree_program.tree_functions` as C
+(a ``.c``/``.h`` pair and a CPython extension), a NumPy module or a CasADi module.
+
+One generated function per entry point, each the straight-line code its outputs need: the
+``*_all`` functions walk the whole tree once, the per-frame functions only the path to their
+frame. Frame names enter generated code only as escaped string literals (C) or ``repr`` (Python).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from symkin.emit.templates import c_string, comment_safe, identifier, render
+from symkin.symbolic.tree_program import PER_FRAME
+
+__all__ = ["render_tree", "tree_prefix", "TreeHeader", "FRAMED_DOCS"]
+
+FRAMED_DOCS = {
+    "fkine": "Pose of the frame in the base frame, (4, 4) or (N, 4, 4).",
+    "jacob0": "Base-frame Jacobian of the frame, (6, n) or (N, 6, n), rows (v, omega); 0 off its path.",
+    "jacobe": "Jacobian of the frame in that frame, (6, n) or (N, 6, n), rows (v, omega) (eq 16).",
+    "fkine_jacob0": "Pose and base-frame Jacobian of the frame together.",
+}
+STRATEGY = (
+    "straight-line program over the tree, walked depth first: the parts frames share are computed "
+    "once (named link frames and Jacobian columns)"
+)
+
+
+def tree_prefix(tree: Any) -> str:
+    """The C symbol prefix of a tree kernel: ``symkin_<identifier>_tree``."""
+    return f"symkin_{identifier(tree.name)}_tree"
+
+
+@dataclass(frozen=True)
+class TreeHeader:
+    """What every generated tree file says about itself."""
+
+    robot: str
+    name_literal: str
+    frames: str
+    version: str
+    command: str
+    counts: str
+    strategy: str
+
+    @classmethod
+    def of(cls, tree: Any, functions: list, command: str, literal: str) -> TreeHeader:
+        from symkin import __version__
+        from symkin.symbolic.tree_program import total_ops
+
+        return cls(
+            robot=identifier(tree.name),
+            name_literal=literal,
+            frames=comment_safe(", ".join(tree.frames), limit=2000),
+            version=__version__,
+            command=comment_safe(command),
+            counts=f"{total_ops(functions)} over {len(functions)} functions",
+            strategy=STRATEGY,
+        )
+
+
+def _frame_fns(tree: Any) -> dict[str, list[str]]:
+    return {base: [f"{base}_{k}" for k in range(len(tree.frames))] for base in PER_FRAME}
+
+
+def render_tree(tree: Any, functions: list, backend: str, command: str) -> dict[str, str]:
+    """The generated files of ``tree`` for ``backend`` (filename -> text)."""
+    from symkin.emit.lowering import lower
+
+    n, F = tree.n, len(tree.frames)
+    if backend == "c":
+        from symkin.emit.c.backend import module_name
+        from symkin.emit.printers import CPrinter
+
+        printer = CPrinter()
+        printed = [lower(f, printer) for f in functions]
+        prefix = tree_prefix(tree)
+        outs = {f.name: f.outs for f in printed}
+        context = {
+            "prefix": prefix,
+            "n": n,
+            "F": F,
+            "functions": printed,
+            "header": TreeHeader.of(tree, functions, command, c_string(tree.name)),
+            "frame_literals": [c_string(f) for f in tree.frames],
+            "frame_fns": {base: [f"{name}_" for name in names] for base, names in _frame_fns(tree).items()},
+            "framed": [(base, outs[f"{base}_0"]) for base in PER_FRAME],
+            "framed_docs": FRAMED_DOCS,
+        }
+        files = {
+            f"{prefix}.h": render("c/tree.h.j2", **context),
+            f"{prefix}.c": render("c/tree.c.j2", **context),
+        }
+        ext = render("c/tree_module.c.j2", module=module_name(files), **context)
+        return {**files, f"{prefix}_pymodule.c": ext}
+    if backend == "numpy":
+        from symkin.emit.printers import NumPyPrinter
+
+        class _MathPrinter(NumPyPrinter):
+            module = "math"
+
+        printed_py = []
+        for f in functions:
+            vec, one = lower(f, NumPyPrinter()), lower(f, _MathPrinter())
+            printed_py.append({**vec.__dict__, "scalar_lines": one.lines, "scalar_outs": one.outs})
+        module = f"symkin_{identifier(tree.name)}_tree"
+        text = render(
+            "numpy/tree.py.j2",
+            module=module,
+            n=n,
+            F=F,
+            functions=printed_py,
+            header=TreeHeader.of(tree, functions, command, repr(tree.name)),
+            name_literal=repr(tree.name),
+            frame_literals=[repr(f) for f in tree.frames],
+            frame_fns=_frame_fns(tree),
+            framed_docs=FRAMED_DOCS,
+        )
+        return {f"{module}.py": text}
+    from symkin.emit.printers import CasADiPrinter
+
+    printed_ca = []
+    for f in functions:
+        p = lower(f, CasADiPrinter())
+        table = [
+            {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
+            for o in p.outs
+        ]
+        printed_ca.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": table})
+    module = f"symkin_{identifier(tree.name)}_tree_casadi"
+    text = render(
+        "casadi/tree.py.j2",
+        module=module,
+        n=n,
+        F=F,
+        functions=printed_ca,
+        header=TreeHeader.of(tree, functions, command, repr(tree.name)),
+        name_literal=repr(tree.name),
+        frame_literals=[repr(f) for f in tree.frames],
+    )
+    return {f"{module}.py": text}

@@ -1,0 +1,455 @@
+"""A kinematic tree: many frames of one robot (a quadruped's feet, a humanoid's hands and feet).
+
+A :class:`Tree` is a set of :class:`Segment` s (one per URDF joint on a path to a frame), each
+an exact ETS fragment from its parent link to its child link, walked depth first. Movable
+segments are :class:`Slot` s; each is driven by one joint of ``q`` as ``theta = m q_j + c``
+(``m = 1, c = 0`` except for mimic joints). Numeric reference kinematics (numpy only) are methods
+of :class:`Tree`; every method takes ``q`` of shape (n,) or a batch (N, n).
+
+The Jacobian of frame f in the base frame, rows (v, omega), has for each slot a on the path to f
+the column ``(w_a x (p_f - p_a) ; w_a)`` (revolute) or ``(w_a ; 0)`` (prismatic), with ``w_a``
+the slot's signed axis and ``p_a`` its origin (Haviland and Corke, Manipulator Differential
+Kinematics, Part 1, IEEE RAM 2023, eqs 31-34, frame f in place of the end effector), added
+``m_a`` times into joint ``j_a``'s column (the chain rule); joints off the path have zero columns.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import FrameError, RobotError, URDFError
+from symkin.model.ets import ET, ETS
+from symkin.model.kinematics import _ROT_SLICES, const_matrix, cross
+from symkin.model.robot import Robot, as_batch, identifier
+
+__all__ = ["Tree", "Segment", "Slot", "frame_position"]
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One joint of the tree: from link ``parent`` (a segment index, -1 for the base link) to
+    link ``link``; ``ets`` its origin and motion, the joint ET (if any) numbered ``slot``."""
+
+    name: str
+    parent: int
+    link: str
+    ets: tuple[ET, ...]
+    slot: int | None = None
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A movable segment driven by joint ``joint`` of q: ``theta = multiplier q_joint + offset``.
+
+    ``mimics`` names the joint it follows (its own name when it is an independent joint)."""
+
+    name: str
+    segment: int
+    joint: int
+    multiplier: Fraction
+    offset: Fraction
+    revolute: bool
+    mimics: str = ""
+
+    @property
+    def is_mimic(self) -> bool:
+        return self.mimics != self.name
+
+
+def frame_position(frame: Any, frames: Sequence[str], name: str = "tree") -> int:
+    """The position of frame ``frame`` (a name) in ``frames``; FrameError listing the valid ones."""
+    if isinstance(frame, str):
+        try:
+            return frames.index(frame)
+        except ValueError:
+            import difflib
+
+            close = difflib.get_close_matches(frame, frames, n=3)
+            hint = f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
+            raise FrameError(f"{name} has no frame {frame!r}{hint}; its frames: {list(frames)}") from None
+    if frame is None:
+        if len(frames) == 1:
+            return 0
+        raise FrameError(f"{name} has {len(frames)} frames: name one with frame=, one of {list(frames)}")
+    raise FrameError(
+        f"a frame of {name} is a link name, one of {list(frames)}, not {type(frame).__name__} {frame!r}"
+    )
+
+
+def _joint_matrices(axis: int, prismatic: bool, x: np.ndarray) -> np.ndarray:
+    """(N, 4, 4) elementary transforms about/along ``axis`` by ``x`` (N,)."""
+    M = np.zeros((len(x), 4, 4))
+    M[:, range(4), range(4)] = 1.0
+    if prismatic:
+        M[:, axis, 3] = x
+    else:
+        j, k = _ROT_SLICES[axis]
+        c, s = np.cos(x), np.sin(x)
+        M[:, j, j] = M[:, k, k] = c
+        M[:, j, k], M[:, k, j] = -s, s
+    return M
+
+
+@dataclass(frozen=True, eq=False)
+class _Numeric:
+    """Per segment: constants before (A) and after (B) the joint, its axis index, sign, kind."""
+
+    A: np.ndarray  # (S, 4, 4)
+    B: np.ndarray  # (S, 4, 4)
+    axis: tuple[int, ...]
+    sign: tuple[float, ...]
+
+    @classmethod
+    def of(cls, segments: Sequence[Segment]) -> _Numeric:
+        A, B, axis, sign = [], [], [], []
+        for seg in segments:
+            before, after, joint = np.eye(4), np.eye(4), None
+            for e in seg.ets:
+                if e.is_joint:
+                    joint = e
+                    continue
+                M = const_matrix(e.axis, e.const)
+                if joint is None:
+                    before = before @ M
+                else:
+                    after = after @ M
+            A.append(before)
+            B.append(after)
+            axis.append(joint.axis.index if joint is not None else 0)
+            sign.append(float(joint.sign) if joint is not None else 1.0)
+        return cls(np.array(A).reshape(-1, 4, 4), np.array(B).reshape(-1, 4, 4), tuple(axis), tuple(sign))
+
+
+@dataclass(frozen=True, eq=False)
+class Tree:
+    """A kinematic tree with named frames (build with :meth:`from_urdf`).
+
+    Attributes:
+        name: the robot's name.
+        base_link: the link every pose is expressed in.
+        segments: the joints on the paths to the frames, depth first (parents before children).
+        slots: the movable segments, depth first.
+        frames: the frame (link) names, in the order given; ``*_all`` results follow it.
+        frame_segments: per frame, the segment ending at its link.
+        joint_names: the n independent joints, depth first (children in file order).
+        qlim: joint limits (2, n); qd_max: joint speed limits (n,) when every joint gives one.
+    """
+
+    _symkin_tree = True  # marks trees for symkin.ik, servo and MMC (a class attribute, not a field)
+
+    name: str
+    base_link: str
+    segments: tuple[Segment, ...]
+    slots: tuple[Slot, ...]
+    frames: tuple[str, ...]
+    frame_segments: tuple[int, ...]
+    joint_names: tuple[str, ...]
+    qlim: np.ndarray = field(default=None)  # type: ignore[assignment]
+    velocity: Any = None  # per joint, NaN when unknown
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        n = len(self.joint_names)
+        if not isinstance(self.name, str) or not self.name:
+            raise RobotError("a tree name must be a non-empty string")
+        if len(set(self.joint_names)) != n:
+            raise RobotError(f"joint names must be unique: {self.joint_names}")
+        if len(self.frames) != len(self.frame_segments) or not self.frames:
+            raise RobotError("a tree needs at least one frame, each with its segment")
+        for k, seg in enumerate(self.segments):
+            if not -1 <= seg.parent < k:
+                raise RobotError(f"segment {seg.name!r}: its parent must come before it (depth first)")
+        qlim = np.asarray(
+            self.qlim if self.qlim is not None else [[-math.pi] * n, [math.pi] * n], dtype=float
+        )
+        if qlim.shape != (2, n) or np.isnan(qlim).any() or (qlim[0] > qlim[1]).any():
+            raise RobotError(f"qlim must be (2, {n}) with lower <= upper, got {qlim.tolist()}")
+        qlim.setflags(write=False)
+        object.__setattr__(self, "qlim", qlim)
+        vel = np.full(n, np.nan) if self.velocity is None else np.asarray(self.velocity, dtype=float)
+        vel.setflags(write=False)
+        object.__setattr__(self, "velocity", vel)
+
+    # -- constructors ----------------------------------------------------------------------
+    @classmethod
+    def from_urdf(
+        cls,
+        path_or_xml: str | Path,
+        frames: Sequence[str] | str | None = None,
+        base_link: str | None = None,
+        snap_tol: float = 1e-9,
+        name: str | None = None,
+    ) -> Tree:
+        """The tree of a URDF (file path or XML text): the movable joints below ``base_link``
+        (default the root link) on the path to at least one of ``frames`` (link names, default
+        every leaf link below ``base_link``, depth first). Fixed joints are folded, continuous
+        joints are revolute, mimic joints follow their joint exactly; see
+        :mod:`symkin.model.urdf_tree`. ``snap_tol`` as in :func:`symkin.model.urdf.robot_from_urdf`."""
+        from symkin.model.urdf_tree import tree_from_urdf
+
+        return tree_from_urdf(path_or_xml, frames=frames, base_link=base_link, snap_tol=snap_tol, name=name)
+
+    # -- plain attributes ------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of independent joints."""
+        return len(self.joint_names)
+
+    @property
+    def qd_max(self) -> np.ndarray | None:
+        return None if np.isnan(self.velocity).any() else self.velocity
+
+    @property
+    def configs(self) -> dict[str, np.ndarray]:
+        return {"qz": np.zeros(self.n)}
+
+    @property
+    def qz(self) -> np.ndarray:
+        return np.zeros(self.n)
+
+    @property
+    def identifier(self) -> str:
+        return identifier(self.name)
+
+    @cached_property
+    def key(self) -> str:
+        """Structural hash (name, segments, slots, frames): the compile-cache key."""
+        lines = [self.name, self.base_link, ",".join(self.frames), ",".join(self.joint_names)]
+        for seg in self.segments:
+            lines.append(f"{seg.name}|{seg.parent}|{seg.link}|{seg.slot}|{' '.join(map(str, seg.ets))}")
+        for s in self.slots:
+            lines.append(f"{s.name}|{s.segment}|{s.joint}|{s.multiplier}|{s.offset}|{s.revolute}")
+        return hashlib.sha256("\n".join(lines).encode()).hexdigest()
+
+    def __repr__(self) -> str:
+        return f"Tree(name={self.name!r}, n={self.n}, frames={list(self.frames)})"
+
+    def frame_position(self, frame: Any) -> int:
+        """The position of ``frame`` in :attr:`frames` (FrameError listing them when unknown)."""
+        return frame_position(frame, self.frames, self.name)
+
+    def path(self, frame: Any) -> list[int]:
+        """Segment indices from the base link to ``frame``, in order."""
+        out = []
+        s = self.frame_segments[self.frame_position(frame)]
+        while s >= 0:
+            out.append(s)
+            s = self.segments[s].parent
+        return out[::-1]
+
+    def path_slots(self, frame: Any) -> list[int]:
+        """Slot indices on the path to ``frame``, base first."""
+        return [self.segments[s].slot for s in self.path(frame) if self.segments[s].slot is not None]  # type: ignore[misc]
+
+    @property
+    def revolute(self) -> np.ndarray:
+        """(n,) bool: joints whose every slot turns by an integer multiple of them (so q wraps by 2 pi)."""
+        rev = np.ones(self.n, dtype=bool)
+        for s in self.slots:
+            if not s.revolute or s.multiplier.denominator != 1:
+                rev[s.joint] = False
+        return rev
+
+    def chain(self, frame: str) -> Robot:
+        """The serial chain from the base link to ``frame`` as a :class:`Robot` (joints in tree
+        order; the same ETS as ``Robot.from_urdf(..., end_link=frame)``). A chain through a mimic
+        joint cannot be a Robot (its joints are independent): URDFError naming the joint."""
+        slots = [self.slots[k] for k in self.path_slots(frame)]
+        for s in slots:
+            if s.is_mimic:
+                raise URDFError(
+                    f"the chain to frame {frame!r} passes mimic joint {s.name!r} (it follows {s.mimics!r}); "
+                    "a Robot has independent joints only: use the Tree (symkin.compile(tree), "
+                    f"frame={frame!r})"
+                )
+        renumber = {k: i for i, k in enumerate(self.path_slots(frame))}  # slot -> joint of the chain
+        ets: list[ET] = []
+        for si in self.path(frame):
+            for e in self.segments[si].ets:
+                ets.append(ET(e.axis, joint=renumber[e.joint], flip=e.flip) if e.is_joint else e)
+        if not slots:
+            raise URDFError(
+                f"no revolute, continuous or prismatic joint between {self.base_link!r} and {frame!r}"
+            )
+        cols = [s.joint for s in slots]
+        vel = self.velocity[cols]
+        return Robot(
+            ETS(tuple(ets)),
+            name=self.name,
+            qlim=self.qlim[:, cols],
+            joint_names=tuple(s.name for s in slots),
+            qd_max=None if np.isnan(vel).any() else vel,
+            source=f"{self.source.split(', tree below')[0]}, chain {self.base_link} -> {frame}",
+        )
+
+    def select(self, frame: Any = None) -> Any:
+        """This tree's kinematics of one frame, as a chain-like object for IK, servo and MMC
+        (:class:`symkin.model.frame_view.FrameView`; the joints off its path are free)."""
+        from symkin.model.frame_view import frame_view
+
+        return frame_view(self, self, frame)
+
+    # -- configurations --------------------------------------------------------------------
+    def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
+        return as_batch(q, self.n, self.name)
+
+    def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
+        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        rng = np.random.default_rng(seed)
+        lo, hi = self.qlim
+        return rng.uniform(lo, hi) if N is None else rng.uniform(lo, hi, size=(N, self.n))
+
+    def within_limits(self, q: Any) -> np.ndarray | bool:
+        Q, single = self._batch(q)
+        ok = ((self.qlim[0] <= Q) & (self.qlim[1] >= Q)).all(axis=-1)
+        return bool(ok[0]) if single else ok
+
+    # -- numeric reference kinematics ------------------------------------------------------
+    @cached_property
+    def _num(self) -> _Numeric:
+        return _Numeric.of(self.segments)
+
+    def _walk(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Link poses L (N, S, 4, 4) after each segment and joint frames P (N, S, 4, 4) just
+        before each segment's joint, depth first."""
+        num, N = self._num, Q.shape[0]
+        S = len(self.segments)
+        L = np.empty((N, S, 4, 4))
+        P = np.empty((N, S, 4, 4))
+        for k, seg in enumerate(self.segments):
+            P[:, k] = num.A[k] if seg.parent < 0 else L[:, seg.parent] @ num.A[k]
+            if seg.slot is None:
+                L[:, k] = P[:, k]
+                continue
+            s = self.slots[seg.slot]
+            theta = float(s.multiplier) * Q[:, s.joint] + float(s.offset)
+            M = _joint_matrices(num.axis[k], not s.revolute, num.sign[k] * theta)
+            L[:, k] = P[:, k] @ M @ num.B[k]
+        return L, P
+
+    def _slot_columns(self, L: np.ndarray, P: np.ndarray, f: int) -> tuple[list[int], np.ndarray, np.ndarray]:
+        """Slots on the path to frame position f and their geometric columns Jv, Jw (N, s, 3)
+        (Jw = 0 for a prismatic slot)."""
+        slots = self.path_slots(self.frames[f])
+        pf = L[:, self.frame_segments[f], :3, 3]
+        N = L.shape[0]
+        Jv, Jw = np.zeros((N, len(slots), 3)), np.zeros((N, len(slots), 3))
+        for i, k in enumerate(slots):
+            s = self.slots[k]
+            seg = s.segment
+            w = P[:, seg, :3, self._num.axis[seg]] * self._num.sign[seg]
+            if s.revolute:
+                Jv[:, i] = cross(w, pf - P[:, seg, :3, 3])
+                Jw[:, i] = w
+            else:
+                Jv[:, i] = w
+        return slots, Jv, Jw
+
+    def _jacobian(self, L: np.ndarray, P: np.ndarray, f: int) -> np.ndarray:
+        slots, Jv, Jw = self._slot_columns(L, P, f)
+        J = np.zeros((L.shape[0], 6, self.n))
+        for i, k in enumerate(slots):
+            s = self.slots[k]
+            m = float(s.multiplier)
+            J[:, :3, s.joint] += m * Jv[:, i]
+            J[:, 3:, s.joint] += m * Jw[:, i]
+        return J
+
+    def fkine(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Pose of ``frame`` in the base-link frame: (4, 4) or (N, 4, 4). ``frame`` may be
+        omitted when the tree has one frame."""
+        f = self.frame_position(frame)
+        Q, single = self._batch(q)
+        T = self._walk(Q)[0][:, self.frame_segments[f]]
+        return T[0] if single else T
+
+    def jacob0(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Base-frame Jacobian of ``frame`` (module docstring): (6, n) or (N, 6, n), rows (v, omega);
+        zero columns for the joints off its path."""
+        f = self.frame_position(frame)
+        Q, single = self._batch(q)
+        J = self._jacobian(*self._walk(Q), f)
+        return J[0] if single else J
+
+    def jacobe(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Jacobian of ``frame`` expressed in that frame (eq 16): ``blkdiag(R^T, R^T) J0``."""
+        f = self.frame_position(frame)
+        Q, single = self._batch(q)
+        L, P = self._walk(Q)
+        J = _rotate_rows(L[:, self.frame_segments[f]], self._jacobian(L, P, f))
+        return J[0] if single else J
+
+    def fkine_jacob0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """Pose and base-frame Jacobian of ``frame`` from one pass."""
+        f = self.frame_position(frame)
+        Q, single = self._batch(q)
+        L, P = self._walk(Q)
+        T, J = L[:, self.frame_segments[f]], self._jacobian(L, P, f)
+        return (T[0], J[0]) if single else (T, J)
+
+    def fkine_all(self, q: Any) -> np.ndarray:
+        """Poses of every frame, in :attr:`frames` order: (F, 4, 4) or (N, F, 4, 4)."""
+        Q, single = self._batch(q)
+        T = self._walk(Q)[0][:, list(self.frame_segments)]
+        return T[0] if single else T
+
+    def jacob0_all(self, q: Any) -> np.ndarray:
+        """Base-frame Jacobians of every frame: (F, 6, n) or (N, F, 6, n)."""
+        Q, single = self._batch(q)
+        L, P = self._walk(Q)
+        J = np.stack([self._jacobian(L, P, f) for f in range(len(self.frames))], axis=1)
+        return J[0] if single else J
+
+    def fkine_jacob0_all(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`fkine_all` and :meth:`jacob0_all` from one pass."""
+        Q, single = self._batch(q)
+        L, P = self._walk(Q)
+        T = L[:, list(self.frame_segments)]
+        J = np.stack([self._jacobian(L, P, f) for f in range(len(self.frames))], axis=1)
+        return (T[0], J[0]) if single else (T, J)
+
+    def hessian0(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Base-frame Hessian of ``frame``: (n, 6, n) or (N, n, 6, n), ``H[i] = dJ0/dq_i``.
+
+        Per pair of slots a, b on the path (b at or before a: ``(w_b x Jv_a ; w_b x w_a)``; b after
+        a: ``(w_a x Jv_b ; 0)``; Haviland and Corke, Maximising Manipulability During
+        Resolved-Rate Motion Control, 2020, eq 20), weighted by both slots' multipliers."""
+        f = self.frame_position(frame)
+        Q, single = self._batch(q)
+        slots, Jv, Jw = self._slot_columns(*self._walk(Q), f)
+        H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
+        return H[0] if single else H
+
+    def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        return self.jacob0(q, frame), self.hessian0(q, frame)
+
+
+def hessian_of_columns(Jv: np.ndarray, Jw: np.ndarray, slots: Sequence[Slot], n: int) -> np.ndarray:
+    """Hessian (N, n, 6, n) from the geometric columns Jv, Jw (N, s, 3) of the slots on one path
+    (base first; Jw = 0 for a prismatic slot), contracted onto the joints they follow."""
+    s = Jv.shape[1]
+    X = cross(Jw[:, :, None, :], Jv[:, None, :, :])  # X[:, b, a] = w_b x v_a
+    Y = cross(Jw[:, :, None, :], Jw[:, None, :, :])
+    lower = np.triu(np.ones((s, s), dtype=bool))[None, :, :, None]  # b <= a
+    Hv = np.where(lower, X, np.swapaxes(X, 1, 2))
+    Hw = np.where(lower, Y, 0.0)
+    Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
+    A = np.zeros((s, n))
+    for i, sl in enumerate(slots):
+        A[i, sl.joint] = float(sl.multiplier)
+    return np.einsum("bk,Nbar,ai->Nkri", A, Hs, A)
+
+
+def _rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """blkdiag(R^T, R^T) @ J: T (N, 4, 4), J (N, 6, n)."""
+    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
+    return np.concatenate((Rt @ J[:, :3], Rt @ J[:, 3:]), axis=1)

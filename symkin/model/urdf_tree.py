@@ -1,0 +1,363 @@
+"""URDF to a kinematic tree: every joint below a base link that lies on the path to a frame.
+
+The tree is read with xml.etree like :mod:`symkin.model.urdf` and each joint becomes the same
+exact ETS fragment (its origin ``tx ty tz Rz(yaw) Ry(pitch) Rx(roll)`` followed by the joint
+about or along its axis), so the serial chain to one frame, :meth:`symkin.Tree.chain`, is the
+chain :func:`symkin.model.urdf.robot_from_urdf` imports, transform for transform.
+
+Joints are numbered depth first from the base link, the children of a link in file order.
+Fixed joints are folded into the constants, continuous joints are revolute. A mimic joint
+(``<mimic joint="j" multiplier="m" offset="c"/>``) is no joint of its own: it moves by
+``m q_j + c`` (exact rationals; a mimic of a mimic composes), and its Jacobian column adds ``m``
+times its geometric column to joint j's column (the chain rule). Floating and planar joints on a
+path are refused: name a ``base_link`` below them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import TYPE_CHECKING
+from xml.etree import ElementTree
+
+from symkin.errors import URDFError
+from symkin.model.ets import ET, Axis
+from symkin.model.urdf import _load, _numbers, _suggest, axis_ets, snap_angle, snap_atan2, translation_ets
+
+if TYPE_CHECKING:
+    from symkin.model.tree import Tree
+
+__all__ = ["URDFGraph", "read_graph", "joint_ets", "tree_from_urdf", "describe_urdf"]
+
+_KNOWN = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+_MOVABLE = ("revolute", "continuous", "prismatic")
+
+
+@dataclass(frozen=True, eq=False)
+class URDFJoint:
+    """One ``<joint>`` element: ``name``, ``kind`` (its type), ``parent`` and ``child`` links."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    el: ElementTree.Element
+
+    @property
+    def movable(self) -> bool:
+        return self.kind in _MOVABLE
+
+
+@dataclass(frozen=True, eq=False)
+class URDFGraph:
+    """The link/joint graph of a URDF (checked to be a forest without cycles)."""
+
+    where: str
+    name: str
+    links: tuple[str, ...]
+    joints: dict[str, URDFJoint]  # by name, in file order
+    parent_joint: dict[str, URDFJoint]  # by child link
+    children: dict[str, list[URDFJoint]]  # by parent link, in file order
+
+    @property
+    def roots(self) -> list[str]:
+        return [ln for ln in self.links if ln not in self.parent_joint]
+
+    def check_link(self, link: str, what: str) -> None:
+        if link not in self.children:
+            raise URDFError(
+                f"{self.where}: {what} {link!r} is not a link;" + _suggest(link, list(self.links))
+            )
+
+    def root(self) -> str:
+        roots = self.roots
+        if len(roots) != 1:
+            raise URDFError(
+                f"{self.where} has {len(roots)} root links {roots}; name base_link, one of the links: "
+                f"{list(self.links)}"
+            )
+        return roots[0]
+
+    def depth_first(self, base: str) -> list[URDFJoint]:
+        """The joints below ``base``, depth first, the children of a link in file order."""
+        out: list[URDFJoint] = []
+        stack = list(reversed(self.children[base]))
+        while stack:
+            j = stack.pop()
+            out.append(j)
+            stack.extend(reversed(self.children[j.child]))
+        return out
+
+    def leaves(self, base: str) -> list[str]:
+        """Links below ``base`` without children, depth first."""
+        return [j.child for j in self.depth_first(base) if not self.children[j.child]]
+
+    def path(self, base: str, link: str) -> list[URDFJoint]:
+        """The joints from ``base`` down to ``link``, in order."""
+        out: list[URDFJoint] = []
+        ln = link
+        while ln != base:
+            j = self.parent_joint.get(ln)
+            if j is None:
+                raise URDFError(
+                    f"{self.where}: link {link!r} is not below base_link {base!r} (walking up from "
+                    f"{link!r} reached the root {ln!r})"
+                )
+            out.append(j)
+            ln = j.parent
+        out.reverse()
+        return out
+
+
+def read_graph(path_or_xml: str | Path) -> URDFGraph:
+    """Parse a URDF (file path or XML text) into its link/joint graph, with clear errors."""
+    root, where = _load(path_or_xml)
+    links = [el.get("name") for el in root.findall("link")]
+    if any(n is None for n in links):
+        raise URDFError(f"{where}: a <link> has no name attribute")
+    if len(set(links)) != len(links):
+        dup = sorted({n for n in links if links.count(n) > 1})
+        raise URDFError(f"{where}: link names must be unique; {dup} appear more than once")
+    joints: dict[str, URDFJoint] = {}
+    parent_joint: dict[str, URDFJoint] = {}
+    children: dict[str, list[URDFJoint]] = {n: [] for n in links}
+    for el in root.findall("joint"):
+        jname = el.get("name")
+        if not jname:
+            raise URDFError(f"{where}: a <joint> has no name attribute")
+        if jname in joints:
+            raise URDFError(f"{where}: joint names must be unique; {jname!r} appears more than once")
+        kind = el.get("type")
+        if kind not in _KNOWN:
+            raise URDFError(
+                f"{where}: joint {jname!r} has unknown type {kind!r}; valid types: {list(_KNOWN)}"
+            )
+        ends = []
+        for tag in ("parent", "child"):
+            sub = el.find(tag)
+            lname = sub.get("link") if sub is not None else None
+            if lname is None:
+                raise URDFError(f"{where}: joint {jname!r} has no <{tag} link=...>")
+            if lname not in children:
+                raise URDFError(
+                    f"{where}: joint {jname!r} names {tag} link {lname!r}, which is not declared"
+                    + _suggest(lname, links)
+                )
+            ends.append(lname)
+        j = URDFJoint(jname, kind, ends[0], ends[1], el)
+        if j.child in parent_joint:
+            raise URDFError(
+                f"{where}: link {j.child!r} is the child of two joints, {parent_joint[j.child].name!r} and "
+                f"{jname!r}; a URDF must be a tree"
+            )
+        joints[jname] = j
+        parent_joint[j.child] = j
+        children[j.parent].append(j)
+    graph = URDFGraph(where, root.get("name") or "robot", tuple(links), joints, parent_joint, children)
+    for link in links:  # a cycle has no root: walking up from any of its links comes back
+        seen, ln = {link}, link
+        while ln in parent_joint:
+            ln = parent_joint[ln].parent
+            if ln in seen:
+                raise URDFError(f"{where}: the joints form a cycle through link {ln!r}")
+            seen.add(ln)
+    return graph
+
+
+def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> list[ET]:
+    """The exact ETs of joint ``j``: its origin, then (movable) the joint as joint index ``slot``.
+
+    The same transforms :func:`symkin.model.urdf.robot_from_urdf` writes for it.
+    """
+    what = f"joint {j.name!r}"
+    origin = j.el.find("origin")
+    xyz = _numbers(origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0")
+    rpy = _numbers(origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0")
+    out = translation_ets(xyz)
+    for axis, ang in ((Axis.Rz, rpy[2]), (Axis.Ry, rpy[1]), (Axis.Rx, rpy[0])):
+        c = snap_angle(ang, snap_tol)
+        if not c.is_zero:
+            out.append(ET(axis, const=c))
+    if not j.movable:
+        return out
+    axis_el = j.el.find("axis")
+    u = _numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
+    norm = math.sqrt(sum(float(c) ** 2 for c in u))
+    if norm == 0:
+        raise URDFError(
+            f"{graph.where}: {what} has the zero vector as its axis; give a direction like '0 0 1'"
+        )
+    u = [c if abs(float(c)) > snap_tol * norm else Fraction(0) for c in u]
+    return out + [snap_atan2(e, snap_tol) for e in axis_ets(u, slot, revolute=j.kind != "prismatic")]
+
+
+def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
+    """(lower, upper, velocity) of a movable joint; velocity NaN when not given (as robot_from_urdf)."""
+    what = f"joint {j.name!r}"
+    lim = j.el.find("limit")
+    default = math.pi if j.kind != "prismatic" else 1.0
+    lo, hi = -default, default
+    if lim is not None and j.kind != "continuous":
+        if lim.get("lower") is not None:
+            lo = float(_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
+        if lim.get("upper") is not None:
+            hi = float(_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
+        if lo > hi:
+            raise URDFError(f"{where}: {what} has limit lower {lo} > upper {hi}")
+    vel = lim.get("velocity") if lim is not None else None
+    v = float(_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else math.nan
+    return lo, hi, v if v > 0 else math.nan
+
+
+def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fraction] | None:
+    """(source joint, multiplier, offset) of a mimic joint, composed down to an independent joint."""
+    el = j.el.find("mimic")
+    if el is None:
+        return None
+    m, c = Fraction(1), Fraction(0)
+    seen = [j.name]
+    cur, src_el = j, el
+    while src_el is not None:
+        what = f"joint {cur.name!r}"
+        src = src_el.get("joint")
+        if src is None:
+            raise URDFError(f"{graph.where}: {what} has <mimic> without a joint attribute")
+        if src not in graph.joints:
+            raise URDFError(
+                f"{graph.where}: {what} mimics joint {src!r}, which does not exist"
+                + _suggest(src, list(graph.joints)).replace("Links", "Joints")
+            )
+        mult = _numbers(src_el.get("multiplier"), 1, f"{what} mimic multiplier", "1")[0]
+        off = _numbers(src_el.get("offset"), 1, f"{what} mimic offset", "0")[0]
+        m, c = m * mult, m * off + c  # q_j = m q_cur + c and q_cur = mult q_src + off
+        cur = graph.joints[src]
+        if cur.name in seen:
+            raise URDFError(f"{graph.where}: mimic joints form a cycle: {' -> '.join([*seen, cur.name])}")
+        if not cur.movable:
+            raise URDFError(
+                f"{graph.where}: {what} mimics joint {cur.name!r}, which is {cur.kind}; a mimic source must "
+                "be revolute, continuous or prismatic"
+            )
+        seen.append(cur.name)
+        src_el = cur.el.find("mimic")
+    return cur, m, c
+
+
+def tree_from_urdf(
+    path_or_xml: str | Path,
+    frames: Sequence[str] | str | None = None,
+    base_link: str | None = None,
+    snap_tol: float = 1e-9,
+    name: str | None = None,
+) -> Tree:
+    """The :class:`symkin.Tree` of a URDF: see :meth:`symkin.Tree.from_urdf`."""
+    from symkin.model.tree import Segment, Slot, Tree
+
+    graph = read_graph(path_or_xml)
+    where = graph.where
+    if base_link is None:
+        base_link = graph.root()
+    else:
+        graph.check_link(base_link, "base_link")
+    if isinstance(frames, str):
+        frames = [f.strip() for f in frames.split(",") if f.strip()]
+    if frames is None:
+        frames = graph.leaves(base_link)
+        if not frames:
+            raise URDFError(f"{where}: base_link {base_link!r} has no links below it")
+    frames = tuple(frames)
+    if not frames:
+        raise URDFError(f"{where}: frames is empty; name at least one link")
+    if len(set(frames)) != len(frames):
+        dup = sorted({f for f in frames if frames.count(f) > 1})
+        raise URDFError(f"{where}: frames must be distinct; {dup} appear more than once")
+    needed: set[str] = set()
+    for f in frames:
+        if not isinstance(f, str):
+            raise URDFError(f"{where}: frames are link names, not {type(f).__name__} {f!r}")
+        graph.check_link(f, "frame")
+        if f == base_link:
+            raise URDFError(f"{where}: frame {f!r} is the base link; frames are links below it")
+        for j in graph.path(base_link, f):
+            if j.kind in ("floating", "planar"):
+                raise URDFError(
+                    f"{where}: joint {j.name!r} on the path from {base_link!r} to {f!r} is {j.kind}; symkin "
+                    f"supports revolute, continuous, prismatic and fixed joints (name base_link "
+                    f"{j.child!r} or a link below it)"
+                )
+            needed.add(j.name)
+    # independent joints: the movable joints on the paths that mimic nothing, and the joints the
+    # mimic joints on the paths follow; numbered depth first from the URDF root (base_link's
+    # subtree keeps that order)
+    mimics = {n: _mimic(graph, graph.joints[n]) for n in needed if graph.joints[n].movable}
+    independent = {n for n, mm in mimics.items() if mm is None}
+    independent |= {mm[0].name for mm in mimics.values() if mm is not None}
+    rank = {j.name: i for r in graph.roots for i, j in enumerate(graph.depth_first(r))}
+    names = sorted(independent, key=lambda n: rank[n])
+    index = {n: i for i, n in enumerate(names)}
+    lower, upper, vel = [], [], []
+    for n in names:
+        lo, hi, v = joint_limits(graph.joints[n], where)
+        lower.append(lo)
+        upper.append(hi)
+        vel.append(v)
+    segments: list[Segment] = []
+    slots: list[Slot] = []
+    seg_of: dict[str, int] = {}  # by child link
+    for j in graph.depth_first(base_link):
+        if j.name not in needed:
+            continue
+        slot = len(slots) if j.movable else None
+        ets = tuple(joint_ets(graph, j, slot or 0, snap_tol))
+        parent = seg_of.get(j.parent, -1)
+        seg_of[j.child] = len(segments)
+        segments.append(Segment(j.name, parent, j.child, ets, slot))
+        if slot is not None:
+            mm = mimics[j.name]
+            src, m, c = (j, Fraction(1), Fraction(0)) if mm is None else mm
+            slots.append(
+                Slot(j.name, len(segments) - 1, index[src.name], m, c, j.kind != "prismatic", src.name)
+            )
+    robot_name = name or graph.name
+    return Tree(
+        name=robot_name,
+        base_link=base_link,
+        segments=tuple(segments),
+        slots=tuple(slots),
+        frames=frames,
+        frame_segments=tuple(seg_of[f] for f in frames),
+        joint_names=tuple(names),
+        qlim=[lower, upper],
+        velocity=vel,
+        source=f"{where}, tree below {base_link}",
+    )
+
+
+def describe_urdf(path_or_xml: str | Path, base_link: str | None = None) -> list[tuple[int, str, str, str]]:
+    """The tree below ``base_link`` as rows (depth, link, joint, text) for ``symkin list-frames``:
+    each link with the joint that leads to it (type, axis kind, mimic), depth first."""
+    graph = read_graph(path_or_xml)
+    if base_link is None:
+        base_link = graph.root()
+    else:
+        graph.check_link(base_link, "base_link")
+    depth = {base_link: 0}
+    rows = [(0, base_link, "", "base")]
+    movable = 0
+    for j in graph.depth_first(base_link):
+        depth[j.child] = depth[j.parent] + 1
+        text = j.kind
+        if j.movable:
+            mm = j.el.find("mimic")
+            if mm is not None:
+                text += f", mimics {mm.get('joint')!r}"
+            else:
+                text += f", q{movable}"
+                movable += 1
+        if not graph.children[j.child]:
+            text += ", leaf"
+        rows.append((depth[j.child], j.child, j.name, text))
+    return rows

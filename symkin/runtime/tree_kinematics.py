@@ -1,0 +1,114 @@
+"""Compiled tree kinematics: what :func:`symkin.compile` returns for a :class:`symkin.Tree` (no sympy).
+
+It has the numeric reference's methods and shapes: ``fkine``, ``jacob0``, ``jacobe`` and
+``fkine_jacob0`` of one frame (``frame=name``), ``fkine_all`` (F, 4, 4), ``jacob0_all`` (F, 6, n)
+and ``fkine_jacob0_all`` for every frame in ``tree.frames`` order, each with a leading (N,) axis
+for a batch. On the C backend the methods are the extension module's functions themselves.
+:meth:`TreeKinematics.select` gives one frame as chain kinematics for IK, servo and MMC.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+__all__ = ["TreeKinematics", "TREE_METHODS"]
+
+TREE_METHODS = ("fkine", "jacob0", "jacobe", "fkine_jacob0", "fkine_all", "jacob0_all", "fkine_jacob0_all")
+
+
+class TreeKinematics:
+    """Generated kinematics of a tree on one backend ("c", "numpy" or "casadi").
+
+    Attributes: ``tree``, ``backend``, ``n``, ``frames``, ``joint_names``, ``qlim``, ``qd_max``,
+    ``name``, ``files`` (the generated sources), ``path`` (library or module), ``module``.
+    """
+
+    _symkin_tree = True  # marks trees for symkin.ik, servo and MMC
+
+    fkine: Callable[..., np.ndarray]
+    jacob0: Callable[..., np.ndarray]
+    jacobe: Callable[..., np.ndarray]
+    fkine_jacob0: Callable[..., tuple[np.ndarray, np.ndarray]]
+    fkine_all: Callable[[Any], np.ndarray]
+    jacob0_all: Callable[[Any], np.ndarray]
+    fkine_jacob0_all: Callable[[Any], tuple[np.ndarray, np.ndarray]]
+
+    def __init__(
+        self,
+        tree: Any,
+        backend: str,
+        functions: dict[str, Callable[..., Any]],
+        files: dict[str, str],
+        path: Path | None = None,
+        module: ModuleType | None = None,
+    ) -> None:
+        self.tree = tree
+        self.backend = backend
+        self.files = files
+        self.path = path
+        self.module = module
+        for name in TREE_METHODS:
+            setattr(self, name, functions[name])
+        if backend == "c":
+            self.c_fkjac_of = self._c_fkjac_of
+
+    @property
+    def n(self) -> int:
+        return self.tree.n
+
+    @property
+    def name(self) -> str:
+        return self.tree.name
+
+    @property
+    def frames(self) -> tuple[str, ...]:
+        return self.tree.frames
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self.tree.joint_names
+
+    @property
+    def qlim(self) -> np.ndarray:
+        return self.tree.qlim
+
+    @property
+    def qd_max(self) -> np.ndarray | None:
+        return self.tree.qd_max
+
+    def __repr__(self) -> str:
+        frames = list(self.frames)
+        return f"TreeKinematics(tree={self.name!r}, n={self.n}, frames={frames}, backend={self.backend!r})"
+
+    def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
+        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        return self.tree.random_q(N, seed)
+
+    def select(self, frame: Any = None) -> Any:
+        """Frame ``frame`` as chain kinematics of all n joints (:class:`symkin.model.frame_view.FrameView`),
+        for :func:`symkin.ik`, :func:`symkin.servo` and :class:`symkin.MMC`."""
+        from symkin.model.frame_view import frame_view
+
+        return frame_view(self.tree, self, frame)
+
+    def hessian0(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Base-frame Hessian of ``frame``, (n, 6, n) or (N, n, 6, n) (see :meth:`symkin.Tree.hessian0`)."""
+        return self.select(frame).hessian0(q)
+
+    def ik(self, Tep: Any, frame: Any = None, **kwargs: Any) -> Any:
+        """Numerical IK of one frame (the other joints are free): see :func:`symkin.runtime.ik.ik`."""
+        return self.select(frame).ik(Tep, **kwargs)
+
+    def _c_fkjac_of(self, frame: str) -> Any:
+        """The C entry point ``fkine_jacob0`` of ``frame`` as a ctypes function (C backend)."""
+        from symkin.emit.c.build import load_library
+        from symkin.emit.tree import tree_prefix
+
+        k = self.tree.frame_position(frame)
+        self._lib = load_library(self.path)
+        return getattr(self._lib, f"{tree_prefix(self.tree)}_fkine_jacob0_{k}")

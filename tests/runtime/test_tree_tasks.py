@@ -1,0 +1,87 @@
+"""IK, servo and MMC on one frame of a tree (the other joints free), on the numeric reference and
+on compiled kernels; results checked by the reference's forward kinematics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin import MMC, FrameError, Tree, ik, pose_error, servo
+from tests.conftest import assert_close
+from tests.model.tree_urdfs import DUAL_ARM, GRIPPER, QUADRUPED
+
+ARM = Tree.from_urdf(QUADRUPED, frames=["r_foot", "l_foot"])
+
+
+@pytest.mark.parametrize("backend", ["reference", "c", "numpy"])
+def test_ik_on_one_frame_reaches_it_and_leaves_the_other_branch(backend):
+    kin = ARM if backend == "reference" else symkin.compile(ARM, backend)
+    q_goal = ARM.random_q(seed=11)
+    Tep = ARM.fkine(q_goal, "r_foot")
+    q0 = q_goal + 0.15
+    res = ik(kin, Tep, frame="r_foot", q0=q0, seed=1)
+    assert res.success, res.reason
+    assert np.abs(pose_error(ARM.fkine(res.q, "r_foot"), Tep)).max() < 1e-6
+    left = [ARM.joint_names.index(n) for n in ("l_haa", "l_hfe", "l_kfe")]
+    assert_close(res.q[left], q0[left], 1e-15, "joints off the frame's path keep their start values")
+    if backend == "c":
+        assert hasattr(kin.select("r_foot"), "c_fkjac")  # the C loop on the frame's generated kernel
+        res_c = kin.ik(Tep, frame="r_foot", q0=q0, seed=1)
+        assert res_c.success and np.abs(pose_error(ARM.fkine(res_c.q, "r_foot"), Tep)).max() < 1e-6
+
+
+def test_ik_with_a_mimic_joint_on_the_path():
+    tree = Tree.from_urdf(GRIPPER)
+    q_goal = np.array([0.4, -0.3, 0.02])
+    Tep = tree.fkine(q_goal, "fa_tip2")
+    res = ik(tree, Tep, frame="fa_tip2", q0=np.array([0.2, 0.1, 0.01]), joint_limits=False, seed=2)
+    assert res.success, res.reason
+    assert np.abs(pose_error(tree.fkine(res.q, "fa_tip2"), Tep)).max() < 1e-6
+
+
+def test_frame_is_required_on_a_tree_and_refused_on_a_chain():
+    with pytest.raises(FrameError, match="name one with frame="):
+        ik(ARM, np.eye(4))
+    with pytest.raises(FrameError, match="serial chain"):
+        ik(symkin.load("panda"), np.eye(4), frame="tool")
+
+
+@pytest.mark.parametrize("controller", ["rrmc", "mmc"])
+def test_servo_moves_one_frame_to_its_target(controller):
+    kin = symkin.compile(ARM, "c")
+    q0 = np.full(ARM.n, 0.3)
+    q_goal = q0 + np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.2, -0.2, 0.2, 0.0, 0.0, 0.0])[: ARM.n]
+    Tep = ARM.fkine(q_goal, "r_foot")
+    res = servo(kin, q0, Tep, frame="r_foot", controller=controller, max_steps=300)
+    assert res.arrived
+    assert np.abs(pose_error(ARM.fkine(res.q[-1], "r_foot"), Tep)).sum() < 0.1
+    off = [ARM.joint_names.index(n) for n in ("l_haa", "l_hfe", "l_kfe")]
+    assert_close(res.q[-1][off], q0[off], 1e-12, "the other leg does not move")
+
+
+def test_mmc_on_one_arm_of_a_dual_arm_robot():
+    tree = Tree.from_urdf(DUAL_ARM)
+    assert tree.n == 13 and tree.frames == ("l_tool", "r_tool")
+    kin = symkin.compile(tree, "numpy")
+    ctrl = MMC(kin, frame="l_tool")
+    q = tree.random_q(seed=5)
+    J, Jm, m = ctrl.kinematics(q)
+    assert_close(J, tree.jacob0(q, "l_tool"), 1e-13, "J0 of the frame")
+    assert_close(Jm, tree.select("l_tool").jacobm(q), 1e-9, "manipulability Jacobian against the reference's")
+    assert m == pytest.approx(tree.select("l_tool").manipulability(q), rel=1e-9)
+    nu = np.array([0.02, -0.01, 0.01, 0.0, 0.05, 0.0])
+    qd, info = ctrl.step(q, nu)
+    assert info.ok, info
+    assert_close(tree.jacob0(q, "l_tool") @ qd, nu, 1e-8, "the step achieves nu")
+    right = [tree.joint_names.index(f"r_j{i}") for i in range(1, 7)]
+    assert not qd[right].any(), "the other arm does not move"
+    res = servo(kin, q, tree.fkine(q + 0.05, "l_tool"), frame="l_tool", max_steps=200)
+    assert res.arrived
+
+
+def test_frame_view_hessian_from_the_compiled_jacobian_matches_the_reference():
+    kin = symkin.compile(ARM, "c")
+    q = ARM.random_q(seed=6)
+    for f in ARM.frames:
+        assert_close(kin.hessian0(q, frame=f), ARM.hessian0(q, f), 1e-12, f)

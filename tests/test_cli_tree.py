@@ -1,0 +1,126 @@
+"""The command line with URDF trees: path.urdf:FRAME, --base-link/--end-link, --frames, list-frames."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from symkin.cli import main
+from symkin.cli_tree import split_frame
+from tests.model.tree_urdfs import GRIPPER, QUADRUPED
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture()
+def quad(tmp_path):
+    path = tmp_path / "quad.urdf"
+    path.write_text(QUADRUPED)
+    return str(path)
+
+
+def test_split_frame():
+    assert split_frame("a/robot.urdf:tool0") == ("a/robot.urdf", "tool0")
+    assert split_frame("robot.urdf") == ("robot.urdf", None)
+    assert split_frame("Rz(q) tx(1)") == ("Rz(q) tx(1)", None)
+    assert split_frame("panda") == ("panda", None)
+
+
+def test_list_frames_prints_the_tree(capsys, quad):
+    code, out, _ = run(capsys, "list-frames", quad)
+    assert code == 0
+    assert "8 independent joints, 3 leaf links" in out
+    assert "    l_thigh  <- l_hfe (revolute, q1)" in out
+    assert "r_hip  <- r_haa (continuous, q5)" in out
+    assert "leaf links (the default frames): l_foot,tail_tip,r_foot" in out
+    code, out, _ = run(capsys, "list-frames", quad, "--json")
+    rows = json.loads(out)
+    assert rows[0] == {"depth": 0, "link": "body", "joint": "", "kind": "base"}
+
+
+def test_list_frames_shows_mimic_joints(capsys, tmp_path):
+    path = tmp_path / "g.urdf"
+    path.write_text(GRIPPER)
+    code, out, _ = run(capsys, "list-frames", str(path), "--base-link", "palm")
+    assert code == 0 and "fb  <- finger_b (prismatic, mimics 'finger_a', leaf)" in out
+
+
+def test_compile_a_tree_with_frames(capsys, quad, tmp_path):
+    code, out, _ = run(
+        capsys, "compile", quad, "--frames", "r_foot,l_foot", "--backend", "numpy", "-o", str(tmp_path / "g")
+    )
+    assert code == 0, out
+    assert "tree of 6 joints and 2 frames: r_foot, l_foot" in out
+    assert "max |fkine_all, jacob0_all - numeric reference| = 0.00e+00" in out or "e-1" in out
+    assert (tmp_path / "g" / "symkin_quad_tree.py").exists()
+
+
+def test_a_branching_urdf_without_a_frame_compiles_every_leaf(capsys, quad):
+    code, out, _ = run(capsys, "compile", quad, "--backend", "numpy")
+    assert code == 0 and "3 frames: l_foot, tail_tip, r_foot" in out
+
+
+def test_check_one_frame_and_a_tree(capsys, quad):
+    code, out, _ = run(capsys, "check", f"{quad}:r_foot", "--backend", "numpy", "--samples", "3")
+    assert code == 0 and "all ok" in out and "symkin check quad" in out
+    code, out, _ = run(
+        capsys, "check", quad, "--end-link", "l_foot", "--base-link", "l_hip", "--backend", "numpy"
+    )
+    assert code == 0 and "all ok" in out
+    code, out, _ = run(
+        capsys, "check", quad, "--frames", "l_foot,tail_tip", "--backend", "numpy", "--samples", "3"
+    )
+    assert code == 0 and "chain:l_foot" in out and "jacob0(frame)" in out and "all ok" in out
+
+
+def test_ik_and_servo_need_one_frame(capsys, quad):
+    code, _, err = run(capsys, "ik", quad, "--from-q", "0.1 0.2 0.3")
+    assert code == 2 and "branches: name the frame as" in err and "list-frames" in err
+    code, out, _ = run(capsys, "ik", f"{quad}:l_foot", "--from-q", "0.1 0.2 0.3", "--backend", "numpy")
+    assert code == 0 and "solved" in out
+    argv = ["--from-q", "0.1 0.2 0.3", "--q0", "0.15 0.2 0.3", "--controller", "rrmc", "--backend", "numpy"]
+    code, out, _ = run(capsys, "servo", quad, "--end-link", "l_foot", *argv, "--json")
+    assert code == 0 and json.loads(out)["arrived"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["compile", "{quad}:l_foot", "--end-link", "r_foot"], "give one"),
+        (["compile", "panda", "--end-link", "tool"], "apply to URDF files only"),
+        (["compile", "panda", "--frames", "a,b"], "--frames applies to URDF files only"),
+        (["compile", "{quad}", "--frames", "l_foot", "--end-link", "l_foot"], "give either --frames"),
+        (["compile", "{quad}", "--frames", "l_foot,nope"], "frame 'nope' is not a link"),
+        (["check", "{quad}:nope"], "end_link 'nope' is not a link"),
+        (["list-frames", "{quad}", "--base-link", "nope"], "base_link 'nope' is not a link"),
+    ],
+)
+def test_mistakes_are_one_line_errors(capsys, quad, argv, message):
+    code, _, err = run(capsys, *[a.format(quad=quad) for a in argv])
+    assert code == 2
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_derive_a_tree_shows_the_shared_part_once(capsys, tmp_path):
+    from tests.model.tree_urdfs import DUAL_ARM
+
+    path = tmp_path / "dual.urdf"
+    path.write_text(DUAL_ARM)
+    code, out, _ = run(capsys, "derive", str(path))
+    assert code == 0
+    assert out.count("joint `waist`") == 1  # the torso, once, serving both tools
+    assert "on the path to `l_tool`, `r_tool`" in out
+    assert "### Frame `l_tool`" in out and "### Frame `r_tool`" in out
+    assert "(ok, tolerance 1e-12)" in out
+
+
+def test_resolve_accepts_a_urdf_frame(quad):
+    from symkin.model.resolve import resolve_robot
+
+    robot = resolve_robot(f"{quad}:r_foot")
+    assert robot.joint_names == ("r_haa", "r_hfe", "r_kfe")
