@@ -21,6 +21,13 @@ __all__ = ["TreeKinematics", "TREE_METHODS"]
 TREE_METHODS = ("fkine", "jacob0", "jacobe", "fkine_jacob0", "fkine_all", "jacob0_all", "fkine_jacob0_all")
 
 
+def _rebuild(tree: Any, backend: str) -> TreeKinematics:
+    """The compiled kinematics of ``tree`` on ``backend`` (the unpickler of :class:`TreeKinematics`)."""
+    from symkin.compile_tree import compile_tree
+
+    return compile_tree(tree, backend=backend)
+
+
 class TreeKinematics:
     """Generated kinematics of a tree on one backend ("c", "numpy" or "casadi").
 
@@ -84,6 +91,11 @@ class TreeKinematics:
     def __repr__(self) -> str:
         frames = list(self.frames)
         return f"TreeKinematics(tree={self.name!r}, n={self.n}, frames={frames}, backend={self.backend!r})"
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, str]]:
+        """Pickle as (tree, backend): unpickling compiles again, which loads the generated code from
+        the compile cache of the process that unpickles (a Dask worker, say) when it is there."""
+        return (_rebuild, (self.tree, self.backend))
 
     def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
         """Uniform random configurations within qlim: (n,) or (N, n)."""

@@ -52,3 +52,18 @@ def test_kinematics_pickle_to_robot_and_backend_and_rebuild_in_another_process(b
 
     T_kin, T_ref = np.load(io.BytesIO(payload))
     assert np.abs(T_kin - T_ref).max() < 1e-12  # the rebuilt kinematics against the numeric reference
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy"])
+def test_tree_and_its_kinematics_pickle(backend):
+    from tests.model.tree_urdfs import QUADRUPED
+
+    tree = symkin.Tree.from_urdf(QUADRUPED)
+    kin = symkin.compile(tree, backend=backend)
+    data = pickle.dumps(kin)
+    assert len(data) < 8000 and b"sk_sin" not in data  # the tree and the backend, not the generated code
+    copy = pickle.loads(data)
+    assert type(copy).__name__ == "TreeKinematics" and copy.backend == backend
+    assert copy.frames == tree.frames
+    q = tree.random_q(seed=3)
+    assert np.abs(copy.fkine_all(q) - pickle.loads(pickle.dumps(tree)).fkine_all(q)).max() < 1e-12
