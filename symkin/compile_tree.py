@@ -130,7 +130,9 @@ def _casadi(tree: Tree, files: dict[str, str]) -> TreeKinematics:
     def call(f: Any, q: Any, shape: dict[str, tuple[int, ...]]) -> Any:
         Q, single = as_batch(q, n, tree.name)
         names = f.name_out()
-        if single:
+        if Q.shape[0] == 0:  # casadi cannot map over 0 items
+            outs = [np.zeros((0, *shape[k])) for k in names]
+        elif single:
             res = f(Q[0])
             res = res if isinstance(res, (list, tuple)) else [res]
             outs = [np.asarray(r).reshape(shape[k]) for k, r in zip(names, res)]

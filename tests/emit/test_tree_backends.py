@@ -135,3 +135,21 @@ def test_tuple_results_of_the_c_extension_do_not_leak():
     for call in calls:
         a, b = call()  # the tuple is gone: the names hold the only references
         assert sys.getrefcount(a) == sys.getrefcount(b) == 2  # the name and getrefcount's argument
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_every_backend_takes_and_refuses_the_inputs_the_chains_do(backend):
+    tree = Tree.from_urdf(QUADRUPED)
+    kin = symkin.compile(tree, backend)
+    q = tree.random_q(seed=2)
+    T = tree.fkine_all(q)
+    for same in (q.astype(">f8"), q.astype(np.float32).astype(object), list(q), q[None][::1, :][0]):
+        assert_close(kin.fkine_all(same), tree.fkine_all(np.asarray(same, dtype=float)), 1e-6, "converted q")
+    assert_close(kin.fkine_all(q.astype(">f8")), T, 1e-15, "big-endian q")
+    assert kin.fkine_all(np.zeros((0, tree.n))).shape == (0, len(tree.frames), 4, 4)
+    T0, J0 = kin.fkine_jacob0_all(np.zeros((0, tree.n)))
+    assert T0.shape == (0, len(tree.frames), 4, 4) and J0.shape == (0, len(tree.frames), 6, tree.n)
+    with pytest.raises(ConfigurationError, match="within"):
+        kin.fkine_all(np.full(tree.n, 1e300))  # as the chains: |q| <= 1e15
+    with pytest.raises(ConfigurationError, match="real"):
+        kin.fkine_all(q.astype(complex))
