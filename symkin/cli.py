@@ -129,6 +129,11 @@ def cmd_compile(args: argparse.Namespace) -> int:
     out = _output_dir(args.output) if args.output else None
     _check_cflags(args.backend)
     if isinstance(robot, Tree):
+        if args.prefix or args.precision != "double" or args.libm:
+            raise UserError(
+                "--prefix, --precision and --libm shape the C of one chain; a tree compiles with the "
+                "defaults (name one chain as ROBOT.urdf:FRAME)"
+            )
         return compile_tree_report(robot, args.backend, args.output)
     t0 = time.perf_counter()
     command = f"symkin compile {robot.identifier} --backend {args.backend}"

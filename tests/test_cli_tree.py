@@ -98,6 +98,15 @@ def test_ik_and_servo_need_one_frame(capsys, quad):
         (["compile", "{quad}", "--frames", "l_foot,nope"], "frame 'nope' is not a link"),
         (["check", "{quad}:nope"], "end_link 'nope' is not a link"),
         (["list-frames", "{quad}", "--base-link", "nope"], "base_link 'nope' is not a link"),
+        (["compile", "{quad}", "--prefix", "q", "-o", "{quad}.out"], "a tree compiles with the defaults"),
+        (
+            ["compile", "{quad}", "--precision", "float", "-o", "{quad}.out"],
+            "a tree compiles with the defaults",
+        ),
+        (["check", "{quad}", "--tool", "tz(0.1)"], "--tool/--base change one chain"),
+        (["compile", "{quad}", "--frames", "l_foot", "--base", "tz(1)"], "--tool/--base change one chain"),
+        (["ik", "{quad}", "--target-q", "0 0 0"], "branches: name the frame"),
+        (["bench", "tree", "panda"], "takes no ROBOT"),
     ],
 )
 def test_mistakes_are_one_line_errors(capsys, quad, argv, message):

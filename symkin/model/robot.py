@@ -37,6 +37,7 @@ __all__ = [
     "AXES_ROWS",
     "IDENTIFIER_MAX",
     "MAX_JOINT_VALUE",
+    "sample_q",
     "cond_of",
     "jacob_dot_of",
     "space_jacobian",
@@ -137,6 +138,29 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a
+
+
+def sample_q(
+    qlim: np.ndarray,
+    revolute: np.ndarray,
+    N: int | None = None,
+    seed: int | np.random.Generator | None = None,
+) -> np.ndarray:
+    """Uniform random joint values within ``qlim`` (2, n): (n,) or (N, n). A bound that is infinite
+    or beyond +-:data:`MAX_JOINT_VALUE` (which q may not exceed) counts as no bound: it is replaced
+    by one turn (``revolute``) or 2 m beyond the other bound, or +-pi / +-1 m around 0 when both are."""
+    rng = np.random.default_rng(seed)
+    lo, hi = np.asarray(qlim, dtype=float)
+    lo_free, hi_free = ~(np.abs(lo) <= MAX_JOINT_VALUE), ~(np.abs(hi) <= MAX_JOINT_VALUE)
+    if lo_free.any() or hi_free.any():
+        half = np.where(revolute, math.pi, 1.0)
+        lo, hi = (
+            np.where(lo_free, np.where(hi_free, -half, hi - 2 * half), lo),
+            np.where(hi_free, np.where(lo_free, half, lo + 2 * half), hi),
+        )
+    if N is None:
+        return rng.uniform(lo, hi)
+    return rng.uniform(lo, hi, size=(N, lo.size))
 
 
 @dataclass(frozen=True, eq=False)
@@ -394,18 +418,11 @@ class Robot:
         return bool(ok[0]) if single else ok
 
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
-        """Uniform random configurations within qlim: (n,) or (N, n). An infinite bound is replaced
-        by one turn (revolute) or 2 m (prismatic) beyond the other bound, or +-pi / +-1 m around 0."""
-        rng = np.random.default_rng(seed)
-        lo, hi = self.qlim
-        if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
-            half = np.array([math.pi if e.is_revolute else 1.0 for e in self.ets.joints])
-            lo_inf, hi_inf = ~np.isfinite(lo), ~np.isfinite(hi)
-            lo = np.where(lo_inf, np.where(hi_inf, -half, hi - 2 * half), lo)
-            hi = np.where(hi_inf, lo + 2 * half, hi)
-        if N is None:
-            return rng.uniform(lo, hi)
-        return rng.uniform(lo, hi, size=(N, self.n))
+        """Uniform random configurations within qlim: (n,) or (N, n). An infinite bound (or one
+        beyond +-MAX_JOINT_VALUE) is replaced by one turn (revolute) or 2 m (prismatic) beyond the
+        other bound, or +-pi / +-1 m around 0 (:func:`sample_q`)."""
+        revolute = np.array([e.is_revolute for e in self.ets.joints], dtype=bool)
+        return sample_q(self.qlim, revolute, N, seed)
 
     # -- numeric reference kinematics (Part 1 eqs 1, 14-16, 31-34) ------------------------
     def fkine(self, q: Any, frame: int | None = None) -> np.ndarray:

@@ -303,10 +303,13 @@ class Tree:
         return as_batch(q, self.n, self.name)
 
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
-        """Uniform random configurations within qlim: (n,) or (N, n)."""
-        rng = np.random.default_rng(seed)
-        lo, hi = self.qlim
-        return rng.uniform(lo, hi) if N is None else rng.uniform(lo, hi, size=(N, self.n))
+        """Uniform random configurations within qlim: (n,) or (N, n); bounds beyond +-1e15 or
+        infinite as in :meth:`symkin.Robot.random_q`."""
+        from symkin.model.robot import sample_q
+
+        prismatic = {s.joint for s in self.slots if not s.revolute}
+        revolute = np.array([k not in prismatic for k in range(self.n)], dtype=bool)
+        return sample_q(self.qlim, revolute, N, seed)
 
     def within_limits(self, q: Any) -> np.ndarray | bool:
         Q, single = self._batch(q)

@@ -129,3 +129,30 @@ def test_reference_jacobian_handles_joints_out_of_chain_order():
     np.testing.assert_allclose(a.jacob0(q[[1, 0, 2]])[:, [1, 0, 2]], b.jacob0(q), atol=1e-15)
     Ha, Hb = a.hessian0(q[[1, 0, 2]]), b.hessian0(q)
     np.testing.assert_allclose(Ha[[1, 0, 2]][:, :, [1, 0, 2]], Hb, atol=1e-15)
+
+
+def test_random_q_stays_usable_when_limits_are_huge_or_infinite():
+    # URDFs write "no limit" as 1e16 or 1.7e308; q beyond +-1e15 is refused, so sampling must not go there
+    import symkin
+    from symkin.runtime.ik import sample_range
+
+    big = 1.7976931348623157e308
+    robot = symkin.Robot.from_ets("Rz(q) tx(1) tz(q) Rz(q)", qlim=[[-big, -np.inf, -1e16], [big, 0.5, 2.0]])
+    Q = robot.random_q(2000, seed=1)
+    assert np.abs(Q[:, 0]).max() <= np.pi and Q[:, 0].min() < -3 and Q[:, 0].max() > 3  # +-pi
+    assert Q[:, 1].min() >= 0.5 - 2.0 and Q[:, 1].max() <= 0.5  # 2 m below the finite bound
+    assert Q[:, 2].min() >= 2.0 - 2 * np.pi and Q[:, 2].max() <= 2.0  # one turn below
+    assert robot.fkine(Q).shape == (2000, 4, 4)  # usable: within +-1e15
+    lo, hi = sample_range(robot.qlim, np.array([True, False, True]))
+    assert np.allclose(lo, [-np.pi, 0.5 - 2.0, 2.0 - 2 * np.pi]) and np.allclose(hi, [np.pi, 0.5, 2.0])
+    tree_xml = (
+        '<robot name="t"><link name="a"/><link name="b"/><link name="c"/>'
+        '<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1e300" upper="1e300" velocity="1" effort="1"/></joint>'
+        '<joint name="k" type="prismatic"><parent link="b"/><child link="c"/><axis xyz="1 0 0"/>'
+        '<limit lower="-3e16" upper="0.2" velocity="1" effort="1"/></joint></robot>'
+    )
+    tree = symkin.Tree.from_urdf(tree_xml)
+    Q = tree.random_q(500, seed=2)
+    assert np.abs(Q[:, 0]).max() <= np.pi and Q[:, 1].min() >= 0.2 - 2.0 and Q[:, 1].max() <= 0.2
+    assert tree.fkine_all(Q).shape == (500, 1, 4, 4)
