@@ -298,6 +298,15 @@ class Tree:
 
         return frame_view(self, self, frame)
 
+    def manipulability(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
+        """Yoshikawa manipulability of ``frame`` (the chosen rows of its J0, Part 1 eq 52):
+        float, or (N,) for a batch."""
+        return self.select(frame).manipulability(q, axes)
+
+    def jacobm(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray:
+        """Manipulability Jacobian of ``frame`` (Haviland and Corke, 2020, eq 11): (n,) or (N, n)."""
+        return self.select(frame).jacobm(q, axes)
+
     # -- configurations --------------------------------------------------------------------
     def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
         return as_batch(q, self.n, self.name)

@@ -112,6 +112,15 @@ class TreeKinematics:
         """Base-frame Hessian of ``frame``, (n, 6, n) or (N, n, 6, n) (see :meth:`symkin.Tree.hessian0`)."""
         return self.select(frame).hessian0(q)
 
+    def manipulability(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
+        """Yoshikawa manipulability of ``frame`` (the chosen rows of its J0, Part 1 eq 52):
+        float, or (N,) for a batch."""
+        return self.select(frame).manipulability(q, axes)
+
+    def jacobm(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray:
+        """Manipulability Jacobian of ``frame`` (Haviland and Corke, 2020, eq 11): (n,) or (N, n)."""
+        return self.select(frame).jacobm(q, axes)
+
     def ik(self, Tep: Any, frame: Any = None, **kwargs: Any) -> Any:
         """Numerical IK of one frame (the other joints are free): see :func:`symkin.runtime.ik.ik`."""
         return self.select(frame).ik(Tep, **kwargs)

@@ -3,6 +3,8 @@ on compiled kernels; results checked by the reference's forward kinematics."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,7 @@ from tests.conftest import assert_close
 from tests.model.tree_urdfs import DUAL_ARM, GRIPPER, QUADRUPED
 
 ARM = Tree.from_urdf(QUADRUPED, frames=["r_foot", "l_foot"])
+ROOT_UR5 = Path(__file__).resolve().parents[2] / "examples" / "ur5.urdf"  # a tree: tool0 and camera
 
 
 @pytest.mark.parametrize("backend", ["reference", "c", "numpy"])
@@ -85,3 +88,21 @@ def test_frame_view_hessian_from_the_compiled_jacobian_matches_the_reference():
     q = ARM.random_q(seed=6)
     for f in ARM.frames:
         assert_close(kin.hessian0(q, frame=f), ARM.hessian0(q, f), 1e-12, f)
+
+
+@pytest.mark.parametrize("backend", ["reference", "c", "numpy"])
+def test_manipulability_and_jacobm_of_a_frame_match_its_chain_and_finite_differences(backend):
+    tree = symkin.Tree.from_urdf(ROOT_UR5)
+    kin = tree if backend == "reference" else symkin.compile(tree, backend)
+    camera = tree.chain("camera")
+    Q = tree.random_q(6, seed=11)
+    for axes in ("all", "trans"):
+        m = kin.manipulability(Q, frame="camera", axes=axes)
+        assert np.abs(m - camera.manipulability(Q, axes=axes)).max() < 1e-12
+        Jm = kin.jacobm(Q, frame="camera", axes=axes)
+        assert np.abs(Jm - camera.jacobm(Q, axes=axes)).max() < 1e-10
+        q, h = Q[0], 1e-6
+        m_at = lambda x: kin.manipulability(x, "camera", axes)  # noqa: E731
+        fd = [(m_at(q + h * e) - m_at(q - h * e)) / (2 * h) for e in np.eye(tree.n)]
+        assert np.abs(Jm[0] - np.array(fd)).max() < 1e-7
+    assert isinstance(kin.manipulability(Q[0], frame="tool0"), float)
