@@ -102,7 +102,8 @@ def test_manipulability_and_jacobm_of_a_frame_match_its_chain_and_finite_differe
         Jm = kin.jacobm(Q, frame="camera", axes=axes)
         assert np.abs(Jm - camera.jacobm(Q, axes=axes)).max() < 1e-10
         q, h = Q[0], 1e-6
-        m = kin.manipulability(np.concatenate([q + h * np.eye(tree.n), q - h * np.eye(tree.n)]), "camera", axes)
+        steps = h * np.eye(tree.n)
+        m = kin.manipulability(np.concatenate([q + steps, q - steps]), "camera", axes)
         fd = (m[: tree.n] - m[tree.n :]) / (2 * h)
         assert np.abs(Jm[0] - fd).max() < 1e-7
     assert isinstance(kin.manipulability(Q[0], frame="tool0"), float)
