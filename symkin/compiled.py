@@ -87,6 +87,12 @@ def _find_manifest(folder: Path, name: str | None) -> Path:
         found = [
             p for p in found if p.name[: -len(MANIFEST_SUFFIX)] in (name, f"symkin_{name}", f"{name}_casadi")
         ]
+    if not found and any(folder.glob("*_tree*.[chp]*")):
+        raise CompileError(
+            f"{str(folder)!r} holds the code of a kinematic tree, which load_compiled does not read "
+            "(it reads chains): compile the tree with symkin.compile(symkin.Tree.from_urdf(...)), "
+            "which reuses the compile cache"
+        )
     if not found:
         hint = f" for {name!r}" if name is not None else ""
         raise CompileError(

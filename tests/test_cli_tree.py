@@ -133,3 +133,13 @@ def test_resolve_accepts_a_urdf_frame(quad):
 
     robot = resolve_robot(f"{quad}:r_foot")
     assert robot.joint_names == ("r_haa", "r_hfe", "r_kfe")
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy", "casadi"])
+def test_load_compiled_says_a_tree_folder_is_a_tree(capsys, quad, tmp_path, backend):
+    import symkin
+
+    code, _, _ = run(capsys, "compile", quad, "--backend", backend, "-o", str(tmp_path))
+    assert code == 0
+    with pytest.raises(symkin.CompileError, match="code of a kinematic tree"):
+        symkin.load_compiled(tmp_path)

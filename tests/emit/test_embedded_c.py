@@ -172,3 +172,49 @@ def test_libm_switch_gives_the_same_kinematics(tmp_path):
     T = np.empty(16)
     lib.arml_fkine(q.ctypes.data_as(ctypes.c_void_p), T.ctypes.data_as(ctypes.c_void_p))
     np.testing.assert_allclose(T.reshape(4, 4), robot.fkine(q), atol=1e-14)
+
+
+TREE_MAIN = r"""
+#include <cstdio>
+#include "symkin_ur5_tree.h"
+
+int main()
+{
+    const double q[SYMKIN_UR5_TREE_N] = {0.1, -0.7, 1.2, -0.4, 0.9, 0.3};
+    double T[SYMKIN_UR5_TREE_F * 16], J[SYMKIN_UR5_TREE_F * 6 * SYMKIN_UR5_TREE_N];
+    symkin_ur5_tree_fkine_jacob0_all(q, T, J);
+    for (int i = 0; i < SYMKIN_UR5_TREE_F * 16; ++i)
+        std::printf("%.17g ", T[i]);
+    std::printf("\n");
+    for (int i = 0; i < SYMKIN_UR5_TREE_F * 6 * SYMKIN_UR5_TREE_N; ++i)
+        std::printf("%.17g ", J[i]);
+    std::printf("\n");
+    return 0;
+}
+"""
+
+
+@pytest.mark.skipif(CC is None or CXX is None, reason="no C or C++ compiler")
+def test_a_tree_kernel_is_strict_c_and_links_into_a_cpp_program(tmp_path):
+    from pathlib import Path
+
+    tree = symkin.Tree.from_urdf(Path(__file__).resolve().parents[2] / "examples" / "ur5.urdf")
+    for name, text in symkin.generate(tree, "c").items():
+        (tmp_path / name).write_text(text)
+    c = subprocess.run([CC, "-std=c99", *STRICT, "-c", "symkin_ur5_tree.c", "-o", "/dev/null"],
+                       cwd=tmp_path, capture_output=True, text=True)  # fmt: skip
+    assert c.returncode == 0, c.stderr
+    (tmp_path / "main.cpp").write_text(TREE_MAIN)
+    cmd = [CXX, "-std=c++11", *STRICT, "-x", "c++", "symkin_ur5_tree.c", "main.cpp", "-o", "prog", "-lm"]
+    proc = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    lines = subprocess.run(
+        [str(tmp_path / "prog")], capture_output=True, text=True, check=True
+    ).stdout.splitlines()
+    q = np.array([0.1, -0.7, 1.2, -0.4, 0.9, 0.3])
+    F = len(tree.frames)
+    np.testing.assert_allclose(
+        np.array(lines[0].split(), float).reshape(F, 4, 4), tree.fkine_all(q), atol=1e-12
+    )
+    J = np.array(lines[1].split(), float).reshape(F, 6, tree.n)
+    np.testing.assert_allclose(J, tree.jacob0_all(q), atol=1e-12)
