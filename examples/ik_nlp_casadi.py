@@ -1,4 +1,4 @@
-"""Inverse kinematics as a nonlinear program in CasADi, solved with IPOPT (issue 6, item 3).
+"""Inverse kinematics as a nonlinear program in CasADi, solved with IPOPT.
 
 The CasADi backend of ``symkin.compile`` gives ``casadi.Function`` objects (``fkine``, ``jacob0``,
 ``manipulability_all`` ...) that take symbolic arguments, so the generated kinematics drop straight

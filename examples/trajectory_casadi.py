@@ -1,4 +1,4 @@
-"""A short-horizon trajectory / MPC problem in CasADi with symkin's generated kinematics (issue 6, item 3).
+"""A short-horizon trajectory / MPC problem in CasADi with symkin's generated kinematics.
 
 Over N steps of length dt, with joint positions q_0..q_N and velocities qd_0..qd_{N-1}::
 

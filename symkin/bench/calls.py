@@ -1,7 +1,7 @@
 """``symkin bench calls``: the paths a user calls one thing at a time, each beside its baseline.
 
 Every figure is measured in the same run as the figure it is compared with, and printed as a
-ratio next to the goal it answers (issue 14):
+ratio next to the goal it answers (symkin's targets for one call at a time):
 
 - IK: one ``kin.ik(T)`` per target against the batched per-solve time on the same targets, and
   against roboticstoolbox-python's C++ ``ik_LM`` (when installed);
@@ -38,7 +38,7 @@ __all__ = ["run_calls", "format_calls", "GOALS"]
 
 CLOCK = time.thread_time  # see the module docstring
 
-#: the bars of issue 14 (a ratio or an absolute figure), by check
+#: symkin's targets for one call at a time (a ratio or an absolute figure), by check
 GOALS: dict[str, tuple[str, float]] = {
     "ik_single_over_batch": ("<=", 1.5),
     "ik_rtb_over_single": (">=", 10.0),
@@ -451,7 +451,7 @@ def format_calls(r: dict[str, Any]) -> str:
     ):
         lines.append(f"  {label:38} {st[key]['min']:.3f} / {st[key]['median']:.3f}")
     lines.append("")
-    lines.append("Goals (issue 14):")
+    lines.append("Goals (targets for one call at a time):")
     for key, c in r["checks"].items():
         v = c["value"]
         shown = "n/a" if v is None else (f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}")

@@ -23,4 +23,4 @@ def test_bench_calls_runs_small_and_reports_every_goal():
     loops = r["control"]["servo_steps_per_s"]
     assert loops["rrmc"]["c_steps"] > 0 and loops["mmc"]["python_steps"] > 0
     text = format_calls(r)
-    assert "Goals (issue 14)" in text and "import symkin" in text
+    assert "Goals (targets for one call at a time)" in text and "import symkin" in text
