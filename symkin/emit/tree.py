@@ -65,6 +65,17 @@ def _frame_fns(tree: Any) -> dict[str, list[str]]:
     return {base: [f"{base}_{k}" for k in range(len(tree.frames))] for base in PER_FRAME}
 
 
+def plain_paths(tree: Any) -> list[tuple[int, list[int]]]:
+    """(frame index, joint indices on its path, base first) of every frame whose path has no mimic
+    joint: its Jacobian columns are the joints' own, so H follows from J (the C controllers' case)."""
+    out = []
+    for k, frame in enumerate(tree.frames):
+        slots = [tree.slots[i] for i in tree.path_slots(frame)]
+        if not any(s.is_mimic for s in slots):
+            out.append((k, [s.joint for s in slots]))
+    return out
+
+
 def render_tree(tree: Any, functions: list, backend: str, command: str) -> dict[str, str]:
     """The generated files of ``tree`` for ``backend`` (filename -> text)."""
     from symkin.emit.lowering import lower
@@ -88,6 +99,7 @@ def render_tree(tree: Any, functions: list, backend: str, command: str) -> dict[
             "frame_fns": {base: [f"{name}_" for name in names] for base, names in _frame_fns(tree).items()},
             "framed": [(base, outs[f"{base}_0"]) for base in PER_FRAME],
             "framed_docs": FRAMED_DOCS,
+            "plain_paths": plain_paths(tree),
         }
         files = {
             f"{prefix}.h": render("c/tree.h.j2", **context),

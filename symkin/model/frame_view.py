@@ -74,6 +74,10 @@ class FrameView:
         fkjac = getattr(source, "c_fkjac_of", None)
         if fkjac is not None:
             self.c_fkjac = fkjac(frame)
+        controller_fns = getattr(source, "c_controller_functions", None)
+        fns = controller_fns(frame) if controller_fns is not None else None
+        if fns is not None:  # the C controllers' functions (symkin.runtime.mmc_c.kinematics_functions)
+            self.c_controller_fns = fns
 
     def __repr__(self) -> str:
         return f"FrameView({self.name!r}, n={self.n}, backend={self.backend!r})"

@@ -373,6 +373,11 @@ class MMC:
                         raise
                     warnings.warn(f"MMC runs in Python: the C step is unavailable ({exc})", stacklevel=2)
             elif backend == "c":
+                if getattr(kin, "backend", None) == "c" and hasattr(kin, "tree"):  # a frame of a C tree
+                    raise ConfigurationError(
+                        f"backend='c': the path to {kin.name} has a mimic joint, whose Hessian the C "
+                        "tree does not generate; this MMC runs in Python (backend='auto')"
+                    )
                 raise ConfigurationError("backend='c' needs C kinematics: symkin.compile(robot, backend='c')")
 
     @property

@@ -125,6 +125,26 @@ class TreeKinematics:
         """Numerical IK of one frame (the other joints are free): see :func:`symkin.runtime.ik.ik`."""
         return self.select(frame).ik(Tep, **kwargs)
 
+    def c_controller_functions(self, frame: str) -> dict[str, Any] | None:
+        """The C functions the C controllers (MMC, RRMC, the servo loop) call for ``frame``, as
+        ctypes functions (``jacob0_hessian0``, ``jacob0``, ``fkine``, ``manipulability``), or None
+        when the backend is not C or a mimic joint is on the frame's path (its H is then not
+        generated; the controllers run in Python)."""
+        if self.backend != "c":
+            return None
+        from symkin.emit.c.build import load_library
+        from symkin.emit.tree import tree_prefix
+
+        k = self.tree.frame_position(frame)
+        lib, prefix = load_library(self.path), tree_prefix(self.tree)
+        try:
+            return {
+                name: getattr(lib, f"{prefix}_{name}_{k}")
+                for name in ("jacob0_hessian0", "jacob0", "fkine", "manipulability")
+            }
+        except AttributeError:  # a mimic joint on the path
+            return None
+
     def _c_fkjac_of(self, frame: str) -> Any:
         """The C entry point ``fkine_jacob0`` of ``frame`` as a ctypes function (C backend)."""
         from symkin.emit.c.build import load_library

@@ -107,3 +107,67 @@ def test_manipulability_and_jacobm_of_a_frame_match_its_chain_and_finite_differe
         fd = (m[: tree.n] - m[tree.n :]) / (2 * h)
         assert np.abs(Jm[0] - fd).max() < 1e-7
     assert isinstance(kin.manipulability(Q[0], frame="tool0"), float)
+
+
+def test_controllers_on_a_c_tree_frame_run_in_c_with_the_python_path_s_results():
+    tree = Tree.from_urdf(DUAL_ARM)
+    kin = symkin.compile(tree, "c")
+    view = kin.select("l_tool")
+    c_mmc, py_mmc = MMC(view, lam=0.005), MMC(view, lam=0.005, backend="python")
+    assert (c_mmc.backend, py_mmc.backend) == ("c", "python")
+    rng, solved = np.random.default_rng(3), 0
+    for q in tree.random_q(20, seed=7):
+        nu = rng.normal(0, 0.02, 6)
+        qd_c, info_c = c_mmc.step(q, nu)
+        qd_py, info_py = py_mmc.step(q, nu)
+        assert (info_c.status, info_c.method) == (info_py.status, info_py.method)
+        assert_close(qd_c, qd_py, 1e-7, "C step against the Python step")  # J, H and m from C vs NumPy
+        if info_c.ok:
+            solved += 1
+            assert_close(tree.jacob0(q, "l_tool") @ qd_c, nu, 1e-8, "the C step achieves nu")
+    assert solved >= 10
+    q0 = tree.random_q(seed=8)
+    Tep = tree.fkine(q0 + 0.1, "l_tool")
+    for controller in ("mmc", "rrmc"):
+        in_c = servo(kin, q0, Tep, frame="l_tool", controller=controller, max_steps=300, backend="c")
+        in_py = servo(kin, q0, Tep, frame="l_tool", controller=controller, max_steps=300, backend="python")
+        assert in_c.arrived and in_py.arrived and len(in_c.q) == len(in_py.q)
+        assert_close(
+            np.asarray(in_c.q), np.asarray(in_py.q), 1e-9, f"{controller}: C loop against Python loop"
+        )
+    with pytest.raises(symkin.SymkinError):
+        servo(kin, q0, Tep, frame="l_tool", controller="mmc", backend="c", max_steps=1, dt=float("nan"))
+
+
+def test_a_frame_behind_a_mimic_joint_keeps_its_controllers_in_python():
+    tree = Tree.from_urdf(GRIPPER)
+    kin = symkin.compile(tree, "c")
+    mimic_frames = [f for f in tree.frames if any(tree.slots[i].is_mimic for i in tree.path_slots(f))]
+    assert mimic_frames
+    ctrl = MMC(kin, frame=mimic_frames[0])
+    assert ctrl.backend == "python"
+    q = tree.random_q(seed=4)
+    qd, info = ctrl.step(q, np.array([0.01, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    assert np.isfinite(qd).all()
+    with pytest.raises(symkin.SymkinError, match="mimic"):
+        MMC(kin, frame=mimic_frames[0], backend="c")
+
+
+def test_the_c_tree_s_hessian_and_manipulability_match_the_reference():
+    import ctypes
+
+    tree = Tree.from_urdf(DUAL_ARM)
+    fns = symkin.compile(tree, "c").select("r_tool").c_controller_fns
+    P = ctypes.POINTER(ctypes.c_double)
+    jh, manip = fns["jacob0_hessian0"], fns["manipulability"]
+    jh.argtypes, jh.restype = [P, P, P], None
+    manip.argtypes, manip.restype = [P, ctypes.c_int], ctypes.c_double
+    n = tree.n
+    for q in tree.random_q(10, seed=12):
+        J, H = np.zeros(6 * n), np.zeros(n * 6 * n)
+        jh(q.ctypes.data_as(P), J.ctypes.data_as(P), H.ctypes.data_as(P))
+        assert_close(J.reshape(6, n), tree.jacob0(q, "r_tool"), 1e-13, "J0")
+        assert_close(H.reshape(n, 6, n), tree.hessian0(q, "r_tool"), 1e-13, "H0 from J (eq 20)")
+        for code, axes in ((0, "all"), (1, "trans"), (2, "rot")):
+            m = tree.manipulability(q, "r_tool", axes)
+            assert manip(q.ctypes.data_as(P), code) == pytest.approx(m, rel=1e-10, abs=1e-15)
