@@ -22,7 +22,7 @@ from symkin.runtime.tree_kinematics import TREE_METHODS, TreeKinematics
 
 __all__ = ["generate_tree", "compile_tree", "tree_derivation_functions"]
 
-_LOADED: dict[str, TreeKinematics] = {}
+_LOADED: dict[tuple[str, bytes, bytes, str], TreeKinematics] = {}
 _FUNCTIONS: dict[str, list] = {}
 
 
@@ -93,8 +93,11 @@ def compile_tree(tree: Tree, backend: str = "c", cache: bool = True) -> TreeKine
     if tree.n == 0:
         raise SymkinError(f"tree {tree.name!r} has no joints on the paths to its frames: nothing to compile")
     key = _cache_key(tree, backend)
-    if cache and key in _LOADED:
-        return _LOADED[key]
+    # the generated code depends on the structure only (key); the object also carries the limits,
+    # speeds and source a controller reads, so trees that differ there get their own object
+    loaded_key = (key, tree.qlim.tobytes(), np.asarray(tree.velocity).tobytes(), tree.source)
+    if cache and loaded_key in _LOADED:
+        return _LOADED[loaded_key]
     files = _cached_files(tree, backend, key, cache)
     if backend == "c":
         from symkin.emit.c.backend import build_c
@@ -111,7 +114,7 @@ def compile_tree(tree: Tree, backend: str = "c", cache: bool = True) -> TreeKine
     else:
         kin = _casadi(tree, files)
     if cache:
-        _LOADED[key] = kin
+        _LOADED[loaded_key] = kin
     return kin
 
 

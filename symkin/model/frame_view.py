@@ -10,7 +10,6 @@ or compiled tree kinematics.
 
 from __future__ import annotations
 
-import weakref
 from typing import Any
 
 import numpy as np
@@ -19,8 +18,6 @@ from symkin.errors import FrameError
 from symkin.model.robot import AXES_ROWS, as_batch, jacobm_of, manipulability_of
 
 __all__ = ["FrameView", "frame_view", "task_kinematics", "is_tree"]
-
-_VIEWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def is_tree(kin: Any) -> bool:
@@ -43,12 +40,18 @@ def task_kinematics(kin: Any, frame: Any = None) -> Any:
 
 
 def frame_view(tree: Any, source: Any, frame: Any) -> FrameView:
-    """The (memoised) view of ``frame`` of ``source`` (a Tree or compiled tree kinematics)."""
+    """The (memoised) view of ``frame`` of ``source`` (a Tree or compiled tree kinematics).
+
+    The views live in ``source._frame_views``: a reference cycle (view -> source -> views) that
+    the garbage collector frees with the source, where a module-level map would keep it alive."""
     name = tree.frames[tree.frame_position(frame)]
-    try:
-        views = _VIEWS.setdefault(source, {})
-    except TypeError:
-        return FrameView(tree, source, name)
+    views = getattr(source, "_frame_views", None)
+    if views is None:
+        views = {}
+        try:
+            object.__setattr__(source, "_frame_views", views)  # frozen dataclasses too
+        except (AttributeError, TypeError):  # no instance dict: an unmemoised view
+            return FrameView(tree, source, name)
     view = views.get(name)
     if view is None:
         view = views[name] = FrameView(tree, source, name)

@@ -198,6 +198,12 @@ class Tree:
 
         return tree_from_urdf(path_or_xml, frames=frames, base_link=base_link, snap_tol=snap_tol, name=name)
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle the fields (and cached values) without the memoised frame views."""
+        state = dict(self.__dict__)
+        state.pop("_frame_views", None)
+        return state
+
     # -- plain attributes ------------------------------------------------------------------
     @property
     def n(self) -> int:

@@ -153,3 +153,18 @@ def test_every_backend_takes_and_refuses_the_inputs_the_chains_do(backend):
         kin.fkine_all(np.full(tree.n, 1e300))  # as the chains: |q| <= 1e15
     with pytest.raises(ConfigurationError, match="real"):
         kin.fkine_all(q.astype(complex))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_trees_differing_only_in_limits_get_their_own_compiled_object(backend):
+    # the same structure shares generated code, never the limits a controller reads
+    loose = Tree.from_urdf(QUADRUPED)
+    old, new = 'lower="-2.5" upper="2.5" velocity="2"', 'lower="-0.2" upper="0.2" velocity="0.1"'
+    tight_xml = QUADRUPED.replace(old, new)
+    assert tight_xml != QUADRUPED
+    tight = Tree.from_urdf(tight_xml)
+    a, b = symkin.compile(loose, backend), symkin.compile(tight, backend)
+    assert a is not b and a is symkin.compile(loose, backend)
+    assert np.array_equal(a.qlim, loose.qlim) and np.array_equal(b.qlim, tight.qlim)
+    assert b.tree is tight and not np.array_equal(a.tree.velocity, b.tree.velocity, equal_nan=True)
+    assert np.array_equal(b.select("l_foot").qlim, tight.qlim) and not np.array_equal(tight.qlim, loose.qlim)

@@ -171,3 +171,16 @@ def test_the_c_tree_s_hessian_and_manipulability_match_the_reference():
         for code, axes in ((0, "all"), (1, "trans"), (2, "rot")):
             m = tree.manipulability(q, "r_tool", axes)
             assert manip(q.ctypes.data_as(P), code) == pytest.approx(m, rel=1e-10, abs=1e-15)
+
+
+def test_frame_views_do_not_keep_compiled_trees_alive():
+    import gc
+    import weakref
+
+    kin = symkin.compile(Tree.from_urdf(QUADRUPED), "numpy", cache=False)
+    view = kin.select("l_foot")
+    assert kin.select("l_foot") is view  # memoised on the kinematics object
+    ref = weakref.ref(kin)
+    del kin, view
+    gc.collect()
+    assert ref() is None
