@@ -1,7 +1,8 @@
 """``symkin check`` of a tree: every backend's tree kernel against two independent references.
 
 Per backend: ``fkine_all``, ``jacob0_all``, ``fkine_jacob0_all`` and the per-frame ``fkine``,
-``jacob0``, ``jacobe`` against the numeric reference :class:`symkin.Tree`, and the Jacobians
+``jacob0``, ``jacobe``, ``hessian0``, ``manipulability`` (and on C the functions the C controllers
+call) against the numeric reference :class:`symkin.Tree`, and the Jacobians
 against central differences of the backend's own poses; for the reference itself, each frame
 against the serial chain :class:`symkin.Robot` to that frame (frames without mimic joints on
 their path). Random configurations within limits, zero and points 1e-5 from zero.
@@ -30,6 +31,38 @@ def _fd_jacobians(fkine_all, Q: np.ndarray, T: np.ndarray, h: float) -> np.ndarr
     plus, minus = _shifted(fkine_all, Q, h)  # (N, n, F, 4, 4)
     rate = _vee_rate(plus, minus, T[:, None], h)  # (N, n, F, 6)
     return np.transpose(rate, (0, 2, 3, 1))
+
+
+def _c_controller_rows(tree: Tree, kin: object, Q: np.ndarray) -> list[CheckRow]:
+    """The C functions the C controllers call (per frame without mimic joints on its path:
+    ``jacob0_hessian0_<k>``, ``manipulability_<k>``) against the reference, through ctypes."""
+    import ctypes
+
+    P = ctypes.POINTER(ctypes.c_double)
+    n, e_H, e_m, seen = tree.n, 0.0, 0.0, False
+    for f in tree.frames:
+        fns = kin.c_controller_functions(f)  # type: ignore[attr-defined]
+        if fns is None:
+            continue
+        seen = True
+        jh, manip = fns["jacob0_hessian0"], fns["manipulability"]
+        jh.argtypes, jh.restype = [P, P, P], None
+        manip.argtypes, manip.restype = [P, ctypes.c_int], ctypes.c_double
+        H_ref = tree.hessian0(Q, f)
+        for axes, code in (("all", 0), ("trans", 1), ("rot", 2)):
+            m_ref = tree.manipulability(Q, f, axes)
+            m = [manip(np.ascontiguousarray(q).ctypes.data_as(P), code) for q in Q]
+            e_m = max(e_m, _rel(np.array(m), m_ref))
+        for i, q in enumerate(np.ascontiguousarray(Q)):
+            J, H = np.zeros(6 * n), np.zeros(n * 6 * n)
+            jh(q.ctypes.data_as(P), J.ctypes.data_as(P), H.ctypes.data_as(P))
+            e_H = max(e_H, _rel(H.reshape(n, 6, n), H_ref[i]))
+    if not seen:
+        return []
+    return [
+        CheckRow("c", "C jacob0_hessian0_<k>", e_H, None),
+        CheckRow("c", "C manipulability_<k>", e_m, None),
+    ]
 
 
 def check_tree(
@@ -75,4 +108,12 @@ def check_tree(
         rows.append(CheckRow(backend, "fkine(frame)", e_T, None))
         rows.append(CheckRow(backend, "jacob0(frame)", e_J, None))
         rows.append(CheckRow(backend, "jacobe(frame)", e_Je, None))
+        e_H = e_m = 0.0
+        for f in tree.frames:
+            e_H = max(e_H, _rel(kin.hessian0(Q, frame=f), tree.hessian0(Q, f)))
+            e_m = max(e_m, _rel(kin.manipulability(Q, frame=f), tree.manipulability(Q, f)))
+        rows.append(CheckRow(backend, "hessian0(frame)", e_H, None))
+        rows.append(CheckRow(backend, "manipulability(frame)", e_m, None))
+        if backend == "c":
+            rows.extend(_c_controller_rows(tree, kin, Q))
     return CheckReport(f"{tree.name} ({len(tree.frames)} frames)", len(Q), tuple(rows))
