@@ -625,8 +625,9 @@ def manipulability_of(J: np.ndarray) -> np.ndarray:
     with fewer joints than rows (det would be rounding noise)."""
     if J.shape[-1] < J.shape[-2]:
         return np.zeros(J.shape[0])
-    d = np.linalg.det(J @ np.swapaxes(J, 1, 2))
-    return np.sqrt(np.maximum(d, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular J J^T
+        d = np.linalg.det(J @ np.swapaxes(J, 1, 2))
+    return np.sqrt(np.maximum(np.nan_to_num(d, nan=0.0), 0.0))
 
 
 def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
@@ -638,7 +639,8 @@ def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
     if J.shape[-1] < J.shape[-2]:  # m = 0 for every q: so is its gradient
         return np.zeros((J.shape[0], J.shape[-1]))
     A = J @ np.swapaxes(J, 1, 2)
-    m = np.sqrt(np.maximum(np.linalg.det(A), 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular A
+        m = np.sqrt(np.maximum(np.nan_to_num(np.linalg.det(A), nan=0.0), 0.0))
     try:
         Ainv = np.linalg.inv(A)
         if not np.isfinite(Ainv).all():
