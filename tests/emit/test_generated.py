@@ -147,9 +147,9 @@ def test_corrupted_cache_entries_are_detected_and_rebuilt(tmp_path, monkeypatch)
 
 def test_warm_compile_does_not_import_sympy(tmp_path):
     code = (
-        "import sys, time, symkin\n"
+        "import sys, symkin\n"
         "r = symkin.load('panda')\n"
-        "t = time.perf_counter(); symkin.compile(r, backend='c'); print(time.perf_counter() - t)\n"
+        "symkin.compile(r, backend='c')\n"
         "print('sympy' in sys.modules)\n"
     )
     env = {**os.environ, "SYMKIN_CACHE": str(tmp_path)}
@@ -157,7 +157,7 @@ def test_warm_compile_does_not_import_sympy(tmp_path):
     assert first.returncode == 0, first.stderr
     warm = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
     assert warm.returncode == 0, warm.stderr
-    assert warm.stdout.split()[1] == "False"
+    assert warm.stdout.split() == ["False"]
 
 
 def test_missing_compiler_gives_a_clear_error_and_numpy_still_works(tmp_path, monkeypatch):

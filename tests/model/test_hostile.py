@@ -1,9 +1,9 @@
-"""Hostile robot descriptions end in a clear error, quickly (issue 12, items 5, 6, 9): long and
-deeply nested constants, values beyond the range of a double, DOCTYPE/entities in URDF."""
+"""Hostile robot descriptions end in a clear error (issue 12, items 5, 6, 9): long and deeply
+nested constants, values beyond the range of a double, DOCTYPE/entities in URDF. These inputs took
+13 s to minutes (regex backtracking, a 10**999999999 integer, billion laughs) before the fixes;
+the tests assert the errors, not a wall time (how long a parse takes belongs to no test)."""
 
 from __future__ import annotations
-
-import time
 
 import pytest
 
@@ -12,15 +12,6 @@ from symkin import ETS, Robot
 from symkin.errors import ETSParseError, RobotError, URDFError
 from symkin.model.dh import DHLink, parse_dh_table
 from symkin.model.ets import MAX_CONST_CHARS, Const
-
-
-def _fast(f, seconds: float = 2.0):  # noqa: ANN001, ANN202
-    """Run f; it must finish well within ``seconds`` (generous: a loaded CI machine)."""
-    t = time.perf_counter()
-    try:
-        return f()
-    finally:
-        assert time.perf_counter() - t < seconds
 
 
 @pytest.mark.parametrize(
@@ -37,8 +28,8 @@ def _fast(f, seconds: float = 2.0):  # noqa: ANN001, ANN202
 )
 def test_long_constants_are_refused_or_parsed_in_linear_time(arg):
     with pytest.raises(ETSParseError):
-        _fast(lambda: ETS.parse(f"Rz(q) tx({arg})"))
-    assert _fast(lambda: ETS.parse("Rz(q) tx(-" + " " * 100_000 + "q)")).n == 2  # a valid flipped joint
+        ETS.parse(f"Rz(q) tx({arg})")
+    assert ETS.parse("Rz(q) tx(-" + " " * 100_000 + "q)").n == 2  # a valid flipped joint
 
 
 def test_constant_length_cap_and_exact_long_decimals():
@@ -63,7 +54,7 @@ def test_constant_length_cap_and_exact_long_decimals():
 )
 def test_deep_or_huge_constants_give_a_parse_error(arg, why):
     try:
-        ets = _fast(lambda: ETS.parse(f"Rz(q) tx({arg})"))
+        ets = ETS.parse(f"Rz(q) tx({arg})")
     except ETSParseError as exc:
         assert why in str(exc)
     else:  # accepted: then it is an ordinary, finite constant
@@ -74,7 +65,7 @@ def test_deep_or_huge_constants_give_a_parse_error(arg, why):
 def test_huge_joint_index_is_a_parse_error():
     for text in ("Rz(q" + "9" * 5000 + ")", "Rz(q99999999999)", "Rz(-q1234567890)"):
         with pytest.raises(ETSParseError):
-            _fast(lambda t=text: ETS.parse(t))
+            ETS.parse(text)
 
 
 def test_in_range_constant_that_overflows_later_is_refused():
@@ -91,7 +82,7 @@ def test_in_range_constant_that_overflows_later_is_refused():
 def test_dh_table_cells_use_the_same_guards():
     head = "# symkin dh: standard\ntype d a alpha\n"
     with pytest.raises(RobotError, match=":3: column 'd'"):
-        _fast(lambda: parse_dh_table(head + "R " + "1" * 1000 + " 0 0\n"))
+        parse_dh_table(head + "R " + "1" * 1000 + " 0 0\n")
     with pytest.raises(RobotError, match="double"):
         parse_dh_table(head + "R 1e308*10 0 0\n")
     with pytest.raises(RobotError):
@@ -120,7 +111,7 @@ def test_urdf_with_doctype_or_entities_is_refused():
         + _urdf(name="&lol9;")
     )
     with pytest.raises(URDFError, match="DOCTYPE"):
-        _fast(lambda: Robot.from_urdf(laughs))
+        Robot.from_urdf(laughs)
     external = '<?xml version="1.0"?><!DOCTYPE robot SYSTEM "http://example.invalid/robot.dtd">' + _urdf()
     with pytest.raises(URDFError, match="DOCTYPE"):
         Robot.from_urdf(external)
@@ -141,7 +132,7 @@ def test_urdf_with_doctype_or_entities_is_refused():
 )
 def test_urdf_numbers_are_checked(xyz, lower, words):
     with pytest.raises(URDFError, match=words):
-        _fast(lambda: Robot.from_urdf(_urdf(xyz=xyz, lower=lower)))
+        Robot.from_urdf(_urdf(xyz=xyz, lower=lower))
 
 
 def test_urdf_tiny_numbers_and_files_that_are_not_utf8(tmp_path):
