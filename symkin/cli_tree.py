@@ -89,11 +89,13 @@ def single_chain(args: argparse.Namespace, default: str | None = None) -> Any:
                 f"(`symkin list-frames {path}` shows the tree)"
             ) from None
         raise
-    if tool is not None:
-        robot = robot.with_tool(tool)
-    if base_transform is not None:
-        robot = robot.with_base(base_transform)
-    return robot
+    return resolve_robot(robot, tool=tool, base=base_transform)
+
+
+def _no_transform(args: argparse.Namespace, hint: str) -> None:
+    """--tool/--base change one chain: refused for a tree (``hint`` ends the message)."""
+    if getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None:
+        raise TreeUserError(f"--tool/--base change one chain{hint}")
 
 
 def chain_or_tree(args: argparse.Namespace) -> Any:
@@ -111,16 +113,12 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
         names = [f.strip() for f in frames.split(",") if f.strip()]
         if not names:
             raise TreeUserError(f"--frames needs link names separated by commas, not {frames!r}")
-        if getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None:
-            raise TreeUserError("--tool/--base change one chain, not a tree of --frames")
+        _no_transform(args, ", not a tree of --frames")
         return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
     if _is_urdf(path) and _end(args, frame) is None:
         tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
         if len(tree.frames) > 1:
-            if getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None:
-                raise TreeUserError(
-                    f"--tool/--base change one chain: name the frame as {path}:FRAME or with --end-link"
-                )
+            _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
             return tree
     return single_chain(args)
 

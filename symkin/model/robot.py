@@ -37,6 +37,7 @@ __all__ = [
     "AXES_ROWS",
     "IDENTIFIER_MAX",
     "MAX_JOINT_VALUE",
+    "sample_bounds",
     "sample_q",
     "cond_of",
     "jacob_dot_of",
@@ -140,17 +141,11 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def sample_q(
-    qlim: np.ndarray,
-    revolute: np.ndarray,
-    N: int | None = None,
-    seed: int | np.random.Generator | None = None,
-) -> np.ndarray:
-    """Uniform random joint values within ``qlim`` (2, n): (n,) or (N, n). A bound that is infinite
-    or beyond +-:data:`MAX_JOINT_VALUE` (which q may not exceed) counts as no bound: it is replaced
-    by one turn (``revolute``) or 2 m beyond the other bound, or +-pi / +-1 m around 0 when both are."""
-    rng = np.random.default_rng(seed)
-    lo, hi = np.asarray(qlim, dtype=float)
+def sample_bounds(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
+    """(2, n) range to draw random joint values from: ``qlim``, where a bound that is infinite or
+    beyond +-:data:`MAX_JOINT_VALUE` (which q may not exceed) counts as no bound: it is replaced by
+    one turn (``revolute``) or 2 m beyond the other bound, or +-pi / +-1 m around 0 when both are."""
+    lo, hi = np.array(qlim[0], dtype=float), np.array(qlim[1], dtype=float)
     lo_free, hi_free = ~(np.abs(lo) <= MAX_JOINT_VALUE), ~(np.abs(hi) <= MAX_JOINT_VALUE)
     if lo_free.any() or hi_free.any():
         half = np.where(revolute, math.pi, 1.0)
@@ -158,6 +153,18 @@ def sample_q(
             np.where(lo_free, np.where(hi_free, -half, hi - 2 * half), lo),
             np.where(hi_free, np.where(lo_free, half, lo + 2 * half), hi),
         )
+    return np.stack((lo, hi))
+
+
+def sample_q(
+    qlim: np.ndarray,
+    revolute: np.ndarray,
+    N: int | None = None,
+    seed: int | np.random.Generator | None = None,
+) -> np.ndarray:
+    """Uniform random joint values within :func:`sample_bounds` of ``qlim``: (n,) or (N, n)."""
+    rng = np.random.default_rng(seed)
+    lo, hi = sample_bounds(qlim, revolute)
     if N is None:
         return rng.uniform(lo, hi)
     return rng.uniform(lo, hi, size=(N, lo.size))

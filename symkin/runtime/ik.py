@@ -42,7 +42,7 @@ from typing import Any, Literal
 import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError, PoseError
-from symkin.model.robot import MAX_JOINT_VALUE, real_array
+from symkin.model.robot import real_array, sample_bounds
 
 __all__ = [
     "IKResult",
@@ -251,15 +251,8 @@ def revolute_mask(kin: Any) -> np.ndarray:
 
 
 def sample_range(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """(2, n) range random restarts are drawn from: qlim, infinite bounds (or bounds beyond
-    +-MAX_JOINT_VALUE, which q may not exceed) replaced by one turn (revolute) or 2 m (prismatic)
-    beyond the other bound, or +-pi / +-1 around 0 (as :func:`symkin.model.robot.sample_q`)."""
-    lo, hi = np.array(qlim[0], dtype=float), np.array(qlim[1], dtype=float)
-    half = np.where(revolute, math.pi, 1.0)
-    lo_inf, hi_inf = ~(np.abs(lo) <= MAX_JOINT_VALUE), ~(np.abs(hi) <= MAX_JOINT_VALUE)
-    lo = np.where(lo_inf, np.where(hi_inf, -half, hi - 2 * half), lo)
-    hi = np.where(hi_inf, lo + 2 * half, hi)
-    return np.stack((lo, hi))
+    """(2, n) range random restarts are drawn from (:func:`symkin.model.robot.sample_bounds`)."""
+    return sample_bounds(qlim, revolute)
 
 
 # -- random restarts --------------------------------------------------------------------------
