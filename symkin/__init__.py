@@ -4,8 +4,8 @@ Pipeline: model (ETS, Robot, DH/URDF/PoE importers, built-in robots) -> symbolic
 emit (C, NumPy, CasADi from jinja2 templates) -> runtime (compiled kinematics, IK, control).
 """
 
-from symkin.compile import BACKENDS, compile, generate, write_generated
-from symkin.compiled import load_compiled
+from symkin.compiler.compile import BACKENDS, generate, write_generated
+from symkin.core.version import __version__  # noqa: E402
 from symkin.errors import (
     CompileError,
     ConfigurationError,
@@ -21,25 +21,24 @@ from symkin.errors import (
     URDFError,
     WorkspaceError,
 )
-from symkin.model.dh import DHLink, load_dh_file
+from symkin.model.dh import DHLink
 from symkin.model.ets import ET, ETS, Axis, Const
 from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
-from symkin.model.robots import list_robots, load
+from symkin.model.robots import list_robots, load, load_dh_file
 from symkin.model.tree import Tree
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
+from symkin.runtime.load import compile, load_compiled
 from symkin.runtime.loop import ServoResult, servo
 from symkin.runtime.servo import p_servo
 
-__version__ = "0.1.0"
-
 _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
-    "derive": ("symkin.derivation", "derivation"),
-    "derive_steps": ("symkin.derivation", "derive_steps"),
-    "Derivation": ("symkin.derivation", "Derivation"),
+    "derive": ("symkin.derive.chain", "derivation"),
+    "derive_steps": ("symkin.derive.chain", "derive_steps"),
+    "Derivation": ("symkin.derive.chain", "Derivation"),
 }
 
 

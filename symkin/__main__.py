@@ -2,6 +2,6 @@
 
 import sys
 
-from symkin.cli import main
+from symkin.cli.main import main
 
 sys.exit(main())

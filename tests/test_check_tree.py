@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from symkin import Tree
-from symkin.check_tree import check_tree
+from symkin.check.tree import check_tree
 from tests.model.tree_urdfs import DUAL_ARM
 
 

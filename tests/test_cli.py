@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.cli import main
+from symkin.cli.main import main
 from symkin.model.robots import list_robots, load
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -231,7 +231,7 @@ def test_compile_single_precision_and_libm(capsys, tmp_path):
 def _options():  # noqa: ANN202
     import argparse
 
-    from symkin.cli import build_parser
+    from symkin.cli.main import build_parser
 
     parser = build_parser()
     (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
@@ -263,7 +263,7 @@ def test_every_option_has_help_and_shows_its_default():
 def test_every_command_with_a_robot_takes_tool_and_base():
     import argparse
 
-    from symkin.cli import build_parser
+    from symkin.cli.main import build_parser
 
     (sub,) = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
     with_robot = []

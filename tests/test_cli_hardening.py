@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from symkin.cli import main
+from symkin.cli.main import main
 
 
 def one_line_error(capsys, argv: list[str]) -> str:
@@ -31,12 +31,12 @@ def no_work(monkeypatch):
         raise AssertionError("long work started before the command line was checked")
 
     # modules that bind these functions when first imported must not bind the stand-in for good
-    for module in ("symkin.emit.snapshot", "symkin.bench.kin", "symkin.bench.ik", "symkin.bench.mmc"):
+    for module in ("symkin.compiler.snapshot", "symkin.bench.kin", "symkin.bench.ik", "symkin.bench.mmc"):
         importlib.import_module(module)
 
     for module, name in (
-        ("symkin.compile", "generate"),
-        ("symkin.compile", "compile"),
+        ("symkin.compiler.compile", "generate"),
+        ("symkin.runtime.load", "compile"),
         ("symkin.runtime.loop", "servo"),
         ("symkin.bench.kin", "run_kin"),
         ("symkin.bench.mmc", "run_table1"),

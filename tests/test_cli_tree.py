@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from symkin.cli import main
-from symkin.cli_tree import split_frame
+from symkin.cli.common import split_frame
+from symkin.cli.main import main
 from tests.model.tree_urdfs import GRIPPER, QUADRUPED
 
 
@@ -98,11 +98,9 @@ def test_ik_and_servo_need_one_frame(capsys, quad):
         (["compile", "{quad}", "--frames", "l_foot,nope"], "frame 'nope' is not a link"),
         (["check", "{quad}:nope"], "end_link 'nope' is not a link"),
         (["list-frames", "{quad}", "--base-link", "nope"], "base_link 'nope' is not a link"),
-        (["compile", "{quad}", "--prefix", "q", "-o", "{quad}.out"], "a tree compiles with the defaults"),
-        (
-            ["compile", "{quad}", "--precision", "float", "-o", "{quad}.out"],
-            "a tree compiles with the defaults",
-        ),
+        (["compile", "{quad}", "--prefix", "q", "--backend", "numpy", "-o", "{quad}.out"], "C backend only"),
+        (["compile", "{quad}", "--precision", "float"], "give -o too"),
+        (["compile", "{quad}", "--strategy", "expanded"], "a tree compiles as one program"),
         (["check", "{quad}", "--tool", "tz(0.1)"], "--tool/--base change one chain"),
         (["compile", "{quad}", "--frames", "l_foot", "--base", "tz(1)"], "--tool/--base change one chain"),
         (["ik", "{quad}", "--target-q", "0 0 0"], "branches: name the frame"),
@@ -136,10 +134,27 @@ def test_resolve_accepts_a_urdf_frame(quad):
 
 
 @pytest.mark.parametrize("backend", ["c", "numpy", "casadi"])
-def test_load_compiled_says_a_tree_folder_is_a_tree(capsys, quad, tmp_path, backend):
+def test_a_compiled_tree_folder_loads_back(capsys, quad, tmp_path, backend):
+    """``symkin compile TREE -o DIR`` writes a manifest; ``load_compiled(DIR)`` gives the tree's
+    kinematics, equal to the numeric reference on every frame."""
+    import numpy as np
+
     import symkin
 
-    code, _, _ = run(capsys, "compile", quad, "--backend", backend, "-o", str(tmp_path))
-    assert code == 0
-    with pytest.raises(symkin.CompileError, match="code of a kinematic tree"):
-        symkin.load_compiled(tmp_path)
+    code, out, _ = run(capsys, "compile", quad, "--backend", backend, "-o", str(tmp_path))
+    assert code == 0 and "which symkin.load_compiled reads" in out
+    kin = symkin.load_compiled(tmp_path)
+    tree = symkin.Tree.from_urdf(quad)
+    assert kin.frames == tree.frames
+    q = tree.random_q(5, seed=3)
+    np.testing.assert_allclose(kin.fkine_all(q), tree.fkine_all(q), atol=1e-12)
+    np.testing.assert_allclose(kin.jacob0_all(q), tree.jacob0_all(q), atol=1e-12)
+
+
+def test_a_tree_compiles_with_a_prefix_in_single_precision(capsys, quad, tmp_path):
+    code, out, _ = run(
+        capsys, "compile", quad, "--prefix", "quad", "--precision", "float", "-o", str(tmp_path)
+    )
+    assert code == 0, out
+    assert (tmp_path / "quad.h").exists() and "single-precision code against double" in out
+    assert "--prefix quad --precision float" in (tmp_path / "quad.h").read_text()

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from symkin.cli import main
+from symkin.cli.main import main
 
 PLANAR = "Rz(q) tx(0.6) Rz(q) tx(0.25) Rz(q) tx(0.15)"
 

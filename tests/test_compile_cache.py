@@ -18,7 +18,7 @@ import pytest
 import symkin
 from symkin.emit.numpy.backend import load_numpy
 
-compile_mod = importlib.import_module("symkin.compile")  # the module (symkin.compile is the function)
+compile_mod = importlib.import_module("symkin.compiler.compile")
 
 ETS3 = "Rz(q0) tx(0.4) Rz(q1) tx(0.3) Rz(q2) tx(0.1)"
 
@@ -63,36 +63,36 @@ def test_generated_files_on_disk_are_per_robot_attributes():
     also from the on-disk cache (a fresh process would otherwise be served the other's)."""
     A = _arm()
     B = _arm(qlim=[[-0.2] * 3, [0.2] * 3], qd_max=[0.1] * 3, joint_names="abc")
-    assert compile_mod._cache_key(A, "c") != compile_mod._cache_key(B, "c")
-    assert compile_mod._cache_key(A, "c") == compile_mod._cache_key(_arm(), "c")
-    files = compile_mod._cached_files(B, "c", compile_mod._cache_key(B, "c"), True)
+    assert compile_mod.cache_key(A, "c") != compile_mod.cache_key(B, "c")
+    assert compile_mod.cache_key(A, "c") == compile_mod.cache_key(_arm(), "c")
+    files = compile_mod.cached_files(B, "c", compile_mod.cache_key(B, "c"), True)
     header = next(text for name, text in files.items() if name.endswith(".h"))
     assert "[-0.2, 0.2]" in header and "QMAX" in header
 
 
 def test_disk_cache_key_covers_the_compiler_code(tmp_path, monkeypatch):
     robot = _arm()
-    key = compile_mod._cache_key(robot, "c")
-    monkeypatch.setattr(compile_mod, "_compiler_digest", lambda: "changed")
-    assert compile_mod._cache_key(robot, "c") != key
+    key = compile_mod.cache_key(robot, "c")
+    monkeypatch.setattr(compile_mod, "compiler_digest", lambda: "changed")
+    assert compile_mod.cache_key(robot, "c") != key
     monkeypatch.undo()
     # the digest covers the symbolic and emit sources: editing any of them changes it
-    root = Path(compile_mod.__file__).resolve().parent
+    root = Path(compile_mod.__file__).resolve().parent.parent
     copy = tmp_path / "symkin"
-    for part in compile_mod._COMPILER_SOURCES:
+    for part in compile_mod.COMPILER_SOURCES:
         src = root / part
         if src.is_dir():
             shutil.copytree(src, copy / part)
         else:
             (copy / part).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy(src, copy / part)
-    before = compile_mod._sources_digest(copy)
-    assert before == compile_mod._sources_digest(root)
+    before = compile_mod.sources_digest(copy)
+    assert before == compile_mod.sources_digest(root)
     for edited in ("symbolic/kinematics.py", "emit/printers.py", "emit/lowering.py"):
         path = copy / edited
         text = path.read_text()
         path.write_text(text + "\n# changed\n")
-        assert compile_mod._sources_digest(copy) != before, edited
+        assert compile_mod.sources_digest(copy) != before, edited
         path.write_text(text)
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.cli import main
+from symkin.cli.main import main
 from symkin.errors import CompileError
 from tests.conftest import assert_close
 

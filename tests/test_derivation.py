@@ -12,7 +12,8 @@ import pytest
 import sympy as sp
 
 import symkin
-from symkin.derivation import DISPLAY_MAX_OPS, Derivation, _ops, derivation, derive_steps
+from symkin.derive.chain import DISPLAY_MAX_OPS, Derivation, derivation, derive_steps
+from symkin.derive.common import ops_of
 from symkin.errors import SymkinError
 from symkin.model.latex import const_latex, ets_latex, robot_latex
 from tests.conftest import assert_close
@@ -156,7 +157,7 @@ def test_seven_dof_derivation_stays_small_and_says_what_it_skipped(panda: tuple[
     assert d.form == "expanded"
     assert len(d.text) < 120_000
     assert max(len(block) for block in d.text.split("\\[")) < 20_000
-    assert sum(_ops(x) for x in d.T) <= 3 * DISPLAY_MAX_OPS
+    assert sum(ops_of(x) for x in d.T) <= 3 * DISPLAY_MAX_OPS
     assert "not printed for more than 4 joints" in d.text
     assert "random points" in d.text  # checks too large to expand are done numerically and said so
 
@@ -329,7 +330,7 @@ def test_long_chain_derivation_uses_named_intermediates(chain12: Derivation) -> 
     assert "\\zeta_{" in d.text and "one from the previous" in d.text
     assert "an expression of" not in d.text  # nothing had to be elided
     # every displayed formula is short: one named step
-    assert max(_ops(e) for _, e in d.intermediates) <= 12
+    assert max(ops_of(e) for _, e in d.intermediates) <= 12
     assert len(d.text) < 60_000
 
 
@@ -350,7 +351,7 @@ def test_long_chain_results_expand_to_the_reference(chain12: Derivation) -> None
 
 def test_long_chain_checks_catch_a_wrong_step(monkeypatch) -> None:
     """The 30-digit checks compare with the literal products: a program with one wrong sign fails."""
-    import symkin.derivation_program as dp
+    import symkin.derive.program as dp
     from symkin.bench.compile import random_chain
 
     real = dp.derive_program

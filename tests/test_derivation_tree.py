@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from symkin import Tree
-from symkin.derivation_tree import tree_derivation
+from symkin.derive.tree import tree_derivation
 from tests.model.tree_urdfs import GRIPPER
 
 

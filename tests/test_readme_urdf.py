@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 import symkin
-from symkin.cli import main
+from symkin.cli.main import main
 from tests.test_readme import README
 
 ROOT = README.parent

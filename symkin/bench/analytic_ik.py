@@ -112,7 +112,7 @@ def run_analytic(
     robots: tuple[str, ...] = ("ur5",), n: int = 1000, starts: int = 32, seed: int = 0, progress: bool = False
 ) -> dict[str, Any]:
     """Measure every robot of ``robots`` (see the module docstring)."""
-    from symkin.progress import bar
+    from symkin.core.progress import bar
 
     out: dict[str, Any] = {"n": n, "starts": starts, "seed": seed, "robots": {}}
     for name in bar(robots, progress, desc="closed-form IK", unit="robot"):
@@ -123,8 +123,9 @@ def run_analytic(
 
 def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, Any]]:
     import symkin
-    from symkin.compile_ik import compile_analytic, generate_analytic
+    from symkin.compiler.analytic_ik import generate_analytic
     from symkin.model.resolve import resolve_robot
+    from symkin.runtime.analytic_ik import compile_analytic
 
     robot = resolve_robot(name)
     t = time.perf_counter()

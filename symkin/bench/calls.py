@@ -345,7 +345,7 @@ def run_calls(
         ("casadi", lambda: casadi_vs_raw(robot, q, budget)),
         ("startup", lambda: startup(robot_spec if isinstance(robot_spec, str) else robot.name, startup_runs)),
     ]
-    from symkin.progress import bar
+    from symkin.core.progress import bar
 
     out: dict[str, Any] = {"robot": robot.name, "control_robot": crobot.name}
     for name, run in bar(sections, progress, desc="bench calls"):

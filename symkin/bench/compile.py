@@ -58,7 +58,8 @@ def _peak_mb() -> tuple[float, float]:
 
 def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     """Cold compile of one robot in this process (the caller provides an empty cache)."""
-    from symkin.emit.c.backend import compile_c, load_extension, render_c
+    from symkin.emit.c.backend import compile_c, render_c
+    from symkin.emit.c.build import load_extension
     from symkin.emit.casadi.backend import render_casadi
     from symkin.emit.numpy.backend import render_numpy
     from symkin.model.resolve import resolve_robot
@@ -134,7 +135,7 @@ def run_compile(
     progress: bool = False,
 ) -> list[dict[str, Any]]:
     """One cold compile per chain length (and of ``reference``), each in its own process."""
-    from symkin.progress import bar
+    from symkin.core.progress import bar
 
     specs = ([reference] if reference else []) + [str(n) for n in joints]
     return [measure(s, seed) for s in bar(specs, progress, desc="compiling")]

@@ -121,7 +121,7 @@ def run_table1(
         us_per_iteration (over all iterations, failed searches included), max_error (largest |e|
         among solved problems) and ``paper`` (the published row or None).
     """
-    from symkin.progress import bar as progress_bar
+    from symkin.core.progress import bar as progress_bar
     from symkin.runtime.ik import ik
 
     robot = _robot(robot)
@@ -138,7 +138,7 @@ def run_table1(
     # the solver runs on the generated C kinematics (the fast path); targets and the reported pose
     # errors come from the numeric reference
     if backend == "c":
-        from symkin.compile import compile as compile_robot
+        from symkin.runtime.load import compile as compile_robot
 
         solver = compile_robot(robot, backend="c")
     else:

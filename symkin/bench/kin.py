@@ -191,7 +191,7 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
         paths[b] = {f: (lambda f=f, b=b: getattr(kins[b], f)(q)) for f in FUNCS}
     paths["reference"] = {f: (lambda f=f: getattr(robot, f)(q)) for f in FUNCS}
     paths.update(_peer_calls(robot, q))
-    from symkin.progress import bar
+    from symkin.core.progress import bar
 
     items = [(p, f) for p in paths for f in FUNCS]
     per_call: dict[str, dict[str, float]] = {p: {} for p in paths}

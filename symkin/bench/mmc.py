@@ -164,7 +164,7 @@ def run_table1(
         runs: dict[str, list[ServoResult]] = {k: [] for k in controllers}
         tasks = range(n_tasks)
         if progress:
-            from symkin.progress import bar
+            from symkin.core.progress import bar
 
             tasks = bar(tasks, desc=f"Table I {name}", unit="task", leave=True)
         t0 = time.perf_counter()

@@ -96,7 +96,7 @@ def run_reach(
     workers; figures are the best of the repeats (medians alongside). Returns them as a dict."""
     import distributed
 
-    from symkin.compile import compile as compile_robot
+    from symkin.runtime.load import compile as compile_robot
     from symkin.workspace import reachability
     from symkin.workspace.grid import reach_ball
     from symkin.workspace.maps import MAP_IK_DEFAULTS

@@ -138,7 +138,7 @@ def run_tree_kin(
 ) -> dict:
     """Measure every case of :data:`TREE_CASES` (see the module docstring); ``{"skipped": why}``
     without example-robot-data."""
-    from symkin.compile import compile as compile_model
+    from symkin.runtime.load import compile as compile_model
 
     root = erd_robots_dir()
     if root is None:

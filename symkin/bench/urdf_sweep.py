@@ -156,8 +156,8 @@ def run_sweep(
     seed: int = 0,
 ) -> dict:
     """Compile and check every distinct chain (module docstring); the summary and each chain's row."""
-    from symkin.compile import BACKENDS
-    from symkin.compile import compile as compile_model
+    from symkin.compiler.compile import BACKENDS
+    from symkin.runtime.load import compile as compile_model
 
     for b in backends:
         if b not in BACKENDS:

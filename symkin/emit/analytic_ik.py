@@ -11,14 +11,12 @@ before they are returned). The C body is :mod:`symkin.emit.analytic_ik_c`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-import sympy as sp
-
+from symkin.core.names import c_string, comment_safe, identifier
+from symkin.emit.analytic_ik_c import body_c
+from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
 from symkin.emit.printers import CPrinter, NumPyPrinter
-from symkin.emit.templates import c_string, comment_safe, identifier, render
+from symkin.emit.templates import render
 from symkin.symbolic.analytic_ik import AnalyticIK, pose_symbols
-from symkin.symbolic.cse import floatify
 
 __all__ = ["render_analytic", "ik_prefix", "BACKEND_DIALECT"]
 
@@ -35,48 +33,17 @@ def ik_prefix(robot_name: str) -> str:
     return f"symkin_{identifier(robot_name)}_ik"
 
 
-@dataclass
-class _Out:
-    lines: list[str]
-    depth: int
-
-    def emit(self, text: str) -> None:
-        self.lines.append("    " * self.depth + text)
-
-
-def _cse(exprs: list[sp.Expr], prefix: str) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
-    flat = [floatify(e) for e in exprs]
-    repl, reduced = sp.cse(flat, symbols=sp.numbered_symbols(prefix), order="none")
-    return list(repl), list(reduced)
-
-
-def _used_later(plan: AnalyticIK) -> list[set[str]]:
-    """Names of the symbols each step's successors use."""
-    used: list[set[str]] = []
-    acc: set[str] = set()
-    for st in reversed(plan.steps):
-        used.append(set(acc))
-        for _, e in st.exprs:
-            acc |= {str(s) for s in e.free_symbols}
-    return used[::-1]
-
-
-def _cs_names(var: str) -> tuple[str, str]:
-    suffix = var[1:] if var.startswith("q") else var
-    return f"c{suffix}", f"s{suffix}"
-
-
 def _body(plan: AnalyticIK, dialect: str) -> str:
     """The NumPy or plain-Python body: every step in order, a loop per two-branch step."""
     pr = NumPyPrinter() if dialect == "numpy" else _MathPrinter()
-    out = _Out([], 1)
-    later = _used_later(plan)
+    out = Out([], 1)
+    later = used_later(plan)
     flag = "0"
     slot_terms: list[str] = []
     bit = 0
     for st, used in zip(plan.steps, later):
         v = st.var
-        temps, values = _cse([e for _, e in st.exprs], f"{v}_x")
+        temps, values = cse_lines([e for _, e in st.exprs], f"{v}_x")
         for sym, e in temps:
             out.emit(f"{sym} = {pr.doprint(e)}")
         args = [pr.doprint(e) for e in values]
@@ -85,7 +52,7 @@ def _body(plan: AnalyticIK, dialect: str) -> str:
             if st.joint is None
             else (f"qf[..., {st.joint}]" if dialect == "numpy" else f"qf[{st.joint}]")
         )
-        cn, sn = _cs_names(v)
+        cn, sn = cs_names(v)
         need_cs = st.revolute and (cn in used or sn in used)
         if st.kind in ("sp4", "quad"):
             if st.kind == "sp4":
@@ -126,7 +93,7 @@ def _body(plan: AnalyticIK, dialect: str) -> str:
 def _fk_code(plan: AnalyticIK, dialect: str) -> tuple[list[str], list[str]]:
     """Straight-line code for the 3x4 pose of q (for verifying flagged candidates)."""
     pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else _MathPrinter())
-    temps, values = _cse(list(plan.fk), "f")
+    temps, values = cse_lines(list(plan.fk), "f")
     lines = []
     for sym, e in temps:
         lines.append(
@@ -138,8 +105,7 @@ def _fk_code(plan: AnalyticIK, dialect: str) -> tuple[list[str], list[str]]:
 def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str) -> dict[str, str]:
     """The generated files of the closed form for ``backend`` ("c", "numpy" or "casadi", the last
     rendered as plain Python)."""
-    from symkin import __version__
-    from symkin.emit.analytic_ik_c import body_c
+    from symkin.core.version import __version__
 
     dialect = BACKEND_DIALECT[backend]
     name = getattr(robot, "name", plan.name)

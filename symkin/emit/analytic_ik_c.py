@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symkin.emit.analytic_ik import _cs_names, _cse, _Out, _used_later
+from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
 from symkin.emit.printers import CPrinter
 from symkin.symbolic.analytic_ik import AnalyticIK, Step
 from symkin.symbolic.ik_geometry import is_zero
@@ -89,7 +89,7 @@ def _region(steps: tuple[Step, ...], k: int) -> list[tuple[int, Pattern]]:
     first = branch_mirror(steps[k])
     if first is None:
         return []
-    cn, sn = _cs_names(steps[k].var)
+    cn, sn = cs_names(steps[k].var)
     sigma: dict[sp.Symbol, sp.Expr] = {_sym(cn): first[0] * _sym(cn), _sym(sn): first[1] * _sym(sn)}
     angles = {_sym(steps[k].var)}
     out = []
@@ -98,7 +98,7 @@ def _region(steps: tuple[Step, ...], k: int) -> list[tuple[int, Pattern]]:
         if pat is None:
             break
         out.append((m, pat))
-        cn, sn = _cs_names(steps[m].var)
+        cn, sn = cs_names(steps[m].var)
         sigma[_sym(cn)] = pat[0] * _sym(cn)
         sigma[_sym(sn)] = pat[1] * _sym(sn)
         angles.add(_sym(steps[m].var))
@@ -127,8 +127,8 @@ def _free(st: Step) -> str:
 def body_c(plan: AnalyticIK) -> str:
     """The C statements of ``raw_`` between reading the pose and counting the candidates."""
     pr = CPrinter()
-    out = _Out([], 1)
-    later = _used_later(plan)
+    out = Out([], 1)
+    later = used_later(plan)
     steps = plan.steps
     flag = "0"
     slot_terms: list[str] = []
@@ -139,11 +139,11 @@ def body_c(plan: AnalyticIK) -> str:
     while k < len(steps):
         st, used = steps[k], later[k]
         v = st.var
-        temps, values = _cse([e for _, e in st.exprs], f"{v}_x")
+        temps, values = cse_lines([e for _, e in st.exprs], f"{v}_x")
         for sym, e in temps:
             out.emit(f"const double {sym} = {pr.doprint(e)};")
         args = [pr.doprint(e) for e in values]
-        cn, sn = _cs_names(v)
+        cn, sn = cs_names(v)
         need_cs = st.revolute and (cn in used or sn in used)
         if st.kind in ("sp4", "quad"):
             region = _region(steps, k)
@@ -215,7 +215,7 @@ def body_c(plan: AnalyticIK) -> str:
 
 
 def _names(st: Step, used: set[str]) -> list[str]:
-    cn, sn = _cs_names(st.var)
+    cn, sn = cs_names(st.var)
     return [st.var] + ([cn, sn] if st.revolute and (cn in used or sn in used) else [])
 
 
@@ -224,7 +224,7 @@ def _store(st: Step, used: set[str]) -> str:
 
 
 def _emit_region(
-    out: _Out,
+    out: Out,
     pr: CPrinter,
     steps: tuple[Step, ...],
     later: list[set[str]],
@@ -253,7 +253,7 @@ def _emit_region(
     out.depth += 1
     for m, _ in region:
         st = steps[m]
-        temps, values = _cse([e for _, e in st.exprs], f"{st.var}_x")
+        temps, values = cse_lines([e for _, e in st.exprs], f"{st.var}_x")
         out.emit("{")
         out.depth += 1
         for sym, e in temps:

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from symkin.core.names import comment_safe, identifier
 from symkin.errors import CompileError
-from symkin.model.robot import identifier
 
 if TYPE_CHECKING:
     import jinja2
@@ -19,9 +18,6 @@ __all__ = [
     "render_python_module",
     "template_dir",
     "Header",
-    "comment_safe",
-    "c_string",
-    "identifier",
     "chain_tables",
 ]
 
@@ -103,26 +99,6 @@ def chain_tables(robot: Any) -> dict[str, list[str]]:
     }
 
 
-_UNSAFE = re.compile(r"[^\x20-\x7e]")
-
-
-def comment_safe(text: str, limit: int = 300) -> str:
-    """Text that cannot end or escape a C or Python comment: printable ASCII, no ``*/``."""
-    text = _UNSAFE.sub("?", text).replace("*/", "* /").replace("/*", "/ *").replace("\\", "/")
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def c_string(text: str) -> str:
-    """A C string literal of the UTF-8 bytes of ``text``: ASCII letters, digits and a few safe
-    punctuation marks as they are, every other byte (non-ASCII too) escaped as octal."""
-    out = []
-    for b in text.encode("utf-8", "surrogatepass"):
-        ch = chr(b)
-        safe = b < 128 and (ch.isalnum() or ch in " _-.,:;()[]=+")
-        out.append(ch if safe else f"\\{b:03o}")
-    return '"' + "".join(out) + '"'
-
-
 @dataclass(frozen=True)
 class Header:
     """What every generated file says about itself."""
@@ -139,7 +115,7 @@ class Header:
     @classmethod
     def of(cls, robot: Any, functions: list, command: str, literal: str) -> Header:
         """The header for ``functions`` (KinFunction list) of ``robot``; ``literal`` quotes its name."""
-        from symkin import __version__
+        from symkin.core.version import __version__
         from symkin.symbolic.cse import OpCounts
         from symkin.symbolic.functions import REFERENCES
 

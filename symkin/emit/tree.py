@@ -11,7 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from symkin.emit.templates import c_string, comment_safe, identifier, render
+from symkin.core.names import c_string, comment_safe, identifier
+from symkin.emit.templates import render
 from symkin.symbolic.tree_program import PER_FRAME
 
 __all__ = ["render_tree", "tree_prefix", "TreeHeader", "FRAMED_DOCS"]
@@ -47,7 +48,7 @@ class TreeHeader:
 
     @classmethod
     def of(cls, tree: Any, functions: list, command: str, literal: str) -> TreeHeader:
-        from symkin import __version__
+        from symkin.core.version import __version__
         from symkin.symbolic.tree_program import total_ops
 
         return cls(
@@ -76,21 +77,31 @@ def plain_paths(tree: Any) -> list[tuple[int, list[int]]]:
     return out
 
 
-def render_tree(tree: Any, functions: list, backend: str, command: str) -> dict[str, str]:
-    """The generated files of ``tree`` for ``backend`` (filename -> text)."""
+def render_tree(
+    tree: Any,
+    functions: list,
+    backend: str,
+    command: str,
+    prefix: str | None = None,
+    precision: str = "double",
+    libm: bool = False,
+) -> dict[str, str]:
+    """The generated files of ``tree`` for ``backend`` (filename -> text). C only, as for a chain
+    (:func:`symkin.emit.c.backend.render_c`): ``prefix`` of every exported symbol and file name
+    (default ``symkin_<tree>_tree``), ``precision="float"`` for single-precision code without the
+    Python module, ``libm`` for the C library's sin and cos."""
     from symkin.emit.lowering import lower
 
     n, F = tree.n, len(tree.frames)
     if backend == "c":
-        from symkin.emit.c.backend import module_name
-        from symkin.emit.printers import CPrinter
+        from symkin.emit.c.backend import c_variant, module_name
 
-        printer = CPrinter()
+        printer, variant = c_variant(tree_prefix(tree), prefix, precision, libm)
         printed = [lower(f, printer) for f in functions]
-        prefix = tree_prefix(tree)
+        prefix = variant["prefix"]
         outs = {f.name: f.outs for f in printed}
         context = {
-            "prefix": prefix,
+            **variant,
             "n": n,
             "F": F,
             "functions": printed,
@@ -105,6 +116,8 @@ def render_tree(tree: Any, functions: list, backend: str, command: str) -> dict[
             f"{prefix}.h": render("c/tree.h.j2", **context),
             f"{prefix}.c": render("c/tree.c.j2", **context),
         }
+        if precision == "float":
+            return files
         ext = render("c/tree_module.c.j2", module=module_name(files), **context)
         return {**files, f"{prefix}_pymodule.c": ext}
     if backend == "numpy":

@@ -11,7 +11,7 @@ Constants stay exact: numbers, or text such as ``"pi/2"`` or ``"90deg"`` (see :c
 An angle given as a float within 1e-12 of ``k*pi/m`` (``m <= 12``) snaps to it exactly, so
 ``math.pi/2`` becomes ``pi/2``; any other float is kept as the exact decimal it prints as.
 
-DH table files (:func:`load_dh_file`) are whitespace tables::
+DH table files (:func:`symkin.load_dh_file`, :func:`dh_file_args`) are whitespace tables::
 
     # symkin dh: standard            <- required: 'standard' or 'modified'
     # name: puma560                  <- optional metadata: name, source, base, tool,
@@ -42,9 +42,8 @@ import numpy as np
 
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
-from symkin.model.robot import Robot
 
-__all__ = ["DHLink", "robot_from_dh", "load_dh_file", "angle_const", "length_const"]
+__all__ = ["DHLink", "dh_args", "dh_file_args", "dh_table_args", "angle_const", "length_const"]
 
 Number: TypeAlias = float | int | Fraction | str | Const
 
@@ -197,7 +196,7 @@ def _const_ets(ets: ETS | ET | str | Sequence[ET] | None, what: str) -> list[ET]
     return [e for e in out if not e.const.is_zero]
 
 
-def robot_from_dh(
+def dh_args(
     links: Sequence[DHLink | Mapping[str, Any]],
     modified: bool = False,
     name: str = "robot",
@@ -208,9 +207,10 @@ def robot_from_dh(
     qd_max: Any = None,
     source: str = "",
     joint_names: Sequence[str] | None = None,
-) -> Robot:
-    """A robot from standard (``modified=False``) or modified (Craig) DH links (Corke, Robotics, Vision and
-    Control, 2017, chapter 7).
+) -> dict[str, Any]:
+    """The :class:`~symkin.Robot` arguments (``ets``, ``name``, limits, ...) of standard
+    (``modified=False``) or modified (Craig) DH links (Corke, Robotics, Vision and Control, 2017,
+    chapter 7).
 
     ``links``: DHLink or dicts with the same keys (plus ``type``: ``'R'``/``'P'``). ``qlim``
     (2, n) overrides the per-link limits; links without limits get the Robot defaults.
@@ -240,8 +240,8 @@ def robot_from_dh(
         qlim = np.array(lim, dtype=float).T
     if joint_names is None and all(r.name for r in rows):
         joint_names = [str(r.name) for r in rows]
-    return Robot(
-        ETS(tuple(chain)),
+    return dict(
+        ets=ETS(tuple(chain)),
         name=name,
         qlim=qlim,
         configs=dict(configs or {}),
@@ -263,18 +263,18 @@ _COLUMNS = ("type", "d", "a", "alpha", "offset", "theta", "qmin", "qmax", "qdmax
 _META = ("name", "source", "base", "tool", "qd_max")
 
 
-def load_dh_file(path: str | Path) -> Robot:
-    """A robot from a DH table file (format in the module docstring)."""
+def dh_file_args(path: str | Path) -> dict[str, Any]:
+    """The Robot arguments of a DH table file (format in the module docstring)."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise RobotError(f"cannot read DH table {str(path)!r}: {exc.strerror or exc}") from None
-    return parse_dh_table(text, str(path))
+    return dh_table_args(text, str(path))
 
 
-def parse_dh_table(text: str, filename: str = "<dh table>") -> Robot:
-    """A robot from the text of a DH table file (see the module docstring)."""
+def dh_table_args(text: str, filename: str = "<dh table>") -> dict[str, Any]:
+    """The Robot arguments of the text of a DH table file (see the module docstring)."""
     lines = text.splitlines()
 
     def fail(lineno: int, why: str) -> RobotError:
@@ -376,7 +376,7 @@ def parse_dh_table(text: str, filename: str = "<dh table>") -> Robot:
         qd_max = qd
     cfg = {k: _values(v, n, f"config {k}", fail, ln) for k, (ln, v) in configs.items()}
     try:
-        return robot_from_dh(
+        return dh_args(
             links,
             modified=convention == "modified",
             name=meta.get("name") or Path(filename).stem or "robot",

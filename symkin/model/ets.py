@@ -24,11 +24,11 @@ import re
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
-from decimal import Decimal, localcontext
 from enum import Enum
 from fractions import Fraction
 from typing import Any
 
+from symkin.core.rational import rational_text
 from symkin.errors import ETSParseError, RobotError
 
 __all__ = ["Axis", "Const", "ET", "ETS", "rational_text", "surd", "tx", "ty", "tz", "Rx", "Ry", "Rz"]
@@ -56,28 +56,6 @@ class Axis(Enum):
 
 # ---------------------------------------------------------------------------------------------
 # Exact constants
-
-
-def rational_text(r: Fraction) -> str:
-    """Shortest exact text for a rational: a float's repr when that is exact (``0.333``, ``1e+300``),
-    else a terminating decimal, else ``n/d``."""
-    if abs(r) < 1e308:
-        short = repr(float(r))
-        if Fraction(short) == r:
-            return short[:-2] if short.endswith(".0") else short
-    if r.denominator == 1:
-        return str(r.numerator)
-    d = r.denominator
-    while d % 2 == 0:
-        d //= 2
-    while d % 5 == 0:
-        d //= 5
-    if d != 1:
-        return f"{r.numerator}/{r.denominator}"
-    with localcontext() as ctx:
-        ctx.prec = 200
-        text = str((Decimal(r.numerator) / Decimal(r.denominator)).normalize())
-    return text.replace("E", "e").replace("e+", "e")
 
 
 def _surd_value(s: Fraction) -> float:

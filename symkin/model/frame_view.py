@@ -14,29 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import FrameError
-from symkin.model.robot import AXES_ROWS, as_batch, jacobm_of, manipulability_of
+from symkin.core.arrays import as_batch, axes_rows
+from symkin.model.robot import jacobm_of, manipulability_of
+from symkin.model.slots import hessian_of_columns
 
-__all__ = ["FrameView", "frame_view", "task_kinematics", "is_tree"]
-
-
-def is_tree(kin: Any) -> bool:
-    """A :class:`symkin.Tree` or compiled tree kinematics (a class attribute marks them, so the
-    test costs no instance attribute lookup)."""
-    return bool(getattr(type(kin), "_symkin_tree", False))
-
-
-def task_kinematics(kin: Any, frame: Any = None) -> Any:
-    """``kin`` itself for a serial chain (``frame`` must be None), its :class:`FrameView` of
-    ``frame`` for a tree (``frame`` may be omitted when the tree has one frame)."""
-    if is_tree(kin):
-        return kin.select(frame)
-    if frame is not None:
-        raise FrameError(
-            f"frame={frame!r} picks a frame of a tree (symkin.Tree or its compiled kinematics); "
-            f"{getattr(kin, 'name', type(kin).__name__)} is a serial chain"
-        )
-    return kin
+__all__ = ["FrameView", "frame_view"]
 
 
 def frame_view(tree: Any, source: Any, frame: Any) -> FrameView:
@@ -107,8 +89,6 @@ class FrameView:
         slots' own), else from the numeric reference."""
         if not self._plain or self.source is self.tree:
             return self.tree.hessian0(q, frame=self.frame)
-        from symkin.model.tree import hessian_of_columns
-
         Q, single = as_batch(q, self.n, self.name)
         J = np.asarray(self.jacob0(Q))
         Jv = np.swapaxes(J[:, :3, self._joints], 1, 2)
@@ -122,12 +102,12 @@ class FrameView:
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:
         """Yoshikawa manipulability of the chosen rows of the frame's J0 (eq 52)."""
         Q, single = as_batch(q, self.n, self.name)
-        m = manipulability_of(np.asarray(self.jacob0(Q))[:, _rows(axes)])
+        m = manipulability_of(np.asarray(self.jacob0(Q))[:, axes_rows(axes)])
         return float(m[0]) if single else m
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:
         """Manipulability Jacobian of the frame (Haviland and Corke, 2020, eq 11), (n,) or (N, n)."""
-        rows = _rows(axes)
+        rows = axes_rows(axes)
         Q, single = as_batch(q, self.n, self.name)
         J, H = self.jacob0(Q), self.hessian0(Q)
         Jm = jacobm_of(np.asarray(J)[:, rows], np.asarray(H)[:, :, rows])
@@ -144,10 +124,3 @@ class FrameView:
         c_loop = hasattr(self, "c_fkjac") and self.n <= 12
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
         return ik(self, Tep, **kwargs)
-
-
-def _rows(axes: str) -> slice:
-    try:
-        return AXES_ROWS[axes]
-    except KeyError:
-        raise ValueError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None

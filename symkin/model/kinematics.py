@@ -28,7 +28,7 @@ from symkin.model.ets import ETS, Axis, Const
 
 __all__ = ["NumericKinematics", "et_matrix", "const_matrix", "cross"]
 
-_ROT_SLICES = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about i mixes columns (j, k)
+ROT_SLICES = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about i mixes columns (j, k)
 
 
 def et_matrix(axis: Axis, value: float) -> np.ndarray:
@@ -36,7 +36,7 @@ def et_matrix(axis: Axis, value: float) -> np.ndarray:
     T = np.eye(4)
     i = axis.index
     if axis.is_rotation:
-        j, k = _ROT_SLICES[i]
+        j, k = ROT_SLICES[i]
         c, s = math.cos(value), math.sin(value)
         T[j, j], T[j, k], T[k, j], T[k, k] = c, -s, s, c
     else:
@@ -49,7 +49,7 @@ def const_matrix(axis: Axis, const: Const) -> np.ndarray:
     k = const.quarter_turns
     if axis.is_rotation and k is not None:
         T = np.eye(4)
-        j, l_ = _ROT_SLICES[axis.index]
+        j, l_ = ROT_SLICES[axis.index]
         c, s = ((1, 0), (0, 1), (-1, 0), (0, -1))[k]
         T[j, j], T[j, l_], T[l_, j], T[l_, l_] = c, -s, s, c
         return T
@@ -103,7 +103,7 @@ class NumericKinematics:
             i = e.axis.index
             A, B, D = np.zeros((4, 4)), np.zeros((4, 4)), np.eye(4)
             if e.axis.is_rotation:
-                j, l_ = _ROT_SLICES[i]
+                j, l_ = ROT_SLICES[i]
                 A[j, j] = A[l_, l_] = 1.0
                 B[j, l_], B[l_, j] = -1.0, 1.0
                 D[j, j] = D[l_, l_] = 0.0

@@ -10,19 +10,22 @@ import re
 from collections.abc import Mapping
 from fractions import Fraction
 from math import isqrt
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from symkin.model.ets import ET, ETS, Axis, Const, rational_text
+from symkin.core.rational import rational_text
+
+if TYPE_CHECKING:
+    from symkin.model.ets import ET, ETS, Const
 
 __all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex", "display_name"]
 
-_AXIS = {
-    Axis.tx: "t_x",
-    Axis.ty: "t_y",
-    Axis.tz: "t_z",
-    Axis.Rx: "R_x",
-    Axis.Ry: "R_y",
-    Axis.Rz: "R_z",
+AXIS_LATEX = {
+    "tx": "t_x",
+    "ty": "t_y",
+    "tz": "t_z",
+    "Rx": "R_x",
+    "Ry": "R_y",
+    "Rz": "R_z",
 }
 _TEXT_ESCAPES = {
     "\\": r"\textbackslash{}",
@@ -106,7 +109,7 @@ def et_latex(e: ET, arg: str | None = None) -> str:
         inner = ("-" if e.flip else "") + joint_latex(e.joint)
     else:
         inner = arg if arg is not None else const_latex(e.const)  # type: ignore[arg-type]
-    return f"{_AXIS[e.axis]}({inner})"
+    return f"{AXIS_LATEX[e.axis.name]}({inner})"
 
 
 def ets_latex(ets: ETS, lhs: str | None = "{}^{0}T_{e}", names: Mapping[int, str] | None = None) -> str:

@@ -27,10 +27,10 @@ import numpy as np
 from symkin.errors import RobotError
 from symkin.model.dh import angle_const
 from symkin.model.ets import ET, ETS, Axis, Const
-from symkin.model.robot import Robot
+from symkin.model.kinematics import NumericKinematics
 from symkin.model.urdf import axis_ets, snap_atan2, translation_ets
 
-__all__ = ["robot_from_poe", "poe_of"]
+__all__ = ["poe_args", "poe_of"]
 
 _FRAMES = ("space", "body")
 _CHECK = 1e-6  # tolerance of the unit-length, pitch and orthonormality checks
@@ -170,7 +170,7 @@ def _screw_ets(S: list[Fraction], j: int, tol: float) -> list[ET]:
     return translation_ets(p) + rot + translation_ets([-c for c in p])
 
 
-def robot_from_poe(
+def poe_args(
     M: Any,
     screws: Any,
     frame: str = "space",
@@ -181,7 +181,7 @@ def robot_from_poe(
     source: str = "",
     joint_names: Sequence[str] | None = None,
     tol: float = 1e-9,
-) -> Robot:
+) -> dict[str, Any]:
     """A robot from the home pose ``M`` (4x4) and screws (n, 6) rows ``(omega, v)`` (Modern Robotics).
 
     ``frame="space"``: ``T = e^[S1]q1 ... e^[Sn]qn M``; ``frame="body"``: ``T = M e^[B1]q1 ... e^[Bn]qn``.
@@ -212,8 +212,8 @@ def robot_from_poe(
         joints += _screw_ets(S, j, tol)
     chain = joints + home if frame == "space" else home + joints
     chain = simplify_constants(chain, tol)
-    robot = Robot(
-        ETS(tuple(chain)),
+    args = dict(
+        ets=ETS(tuple(chain)),
         name=name,
         qlim=qlim,
         configs=dict(configs or {}),
@@ -221,15 +221,15 @@ def robot_from_poe(
         qd_max=qd_max,
         source=source or f"product of exponentials ({frame} form), {len(Sx)} screws",
     )
-    T0 = robot.fkine(np.zeros(robot.n))
+    T0 = NumericKinematics.of(args["ets"]).fkine(np.zeros((1, len(Sx))))[0]
     if np.abs(T0 - Mf).max() > _CHECK:  # guard against a decomposition bug: T(0) must be M
         raise RobotError(
             f"internal error: the ETS of M does not reproduce M (max error {np.abs(T0 - Mf).max():.3g})"
         )
-    return robot
+    return args
 
 
-def poe_of(robot: Robot, q: Any = None) -> tuple[np.ndarray, np.ndarray]:
+def poe_of(robot: Any, q: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """Space-form PoE data of ``robot`` about ``q`` (default zeros): ``(M (4, 4), S (n, 6))``.
 
     ``M = T(q)`` and ``S`` the space Jacobian's columns at ``q`` (Modern Robotics, ``J_s1 = S_1``...),

@@ -61,7 +61,7 @@ def _resolve(spec: str | Robot) -> Robot:
     if "(" not in text and path.suffix.lower() in _URDF_SUFFIXES:
         return Robot.from_urdf(path)
     if "(" not in text and path.is_file():
-        from symkin.model.dh import load_dh_file
+        from symkin.model.robots import load_dh_file
 
         return load_dh_file(path)
     if "(" in text:

@@ -13,161 +13,34 @@ from __future__ import annotations
 
 import hashlib
 import math
-import numbers
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, ParameterError, RobotError, SymkinError
+from symkin.core.arrays import MAX_JOINT_VALUE, Axes, as_batch, axes_rows, real_array, sample_q
+from symkin.core.names import identifier
+from symkin.errors import ConfigurationError, RobotError
 from symkin.model.ets import ETS
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.model.kinematics import NumericKinematics, cross
 
 __all__ = [
     "Robot",
-    "as_batch",
-    "axes_rows",
-    "real_array",
-    "identifier",
-    "AXES_ROWS",
-    "IDENTIFIER_MAX",
-    "MAX_JOINT_VALUE",
-    "sample_bounds",
-    "sample_q",
     "cond_of",
     "jacob_dot_of",
     "space_jacobian",
 ]
-
-Axes = Literal["all", "trans", "rot"]
-AXES_ROWS: dict[str, slice] = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
-
-
-#: Largest |q| accepted. Beyond it a double resolves an angle to worse than 0.1 rad, and the
-#: generated code's angle sums (``sin(q1 + q2)``) could overflow to inf.
-MAX_JOINT_VALUE = 1e15
-IDENTIFIER_MAX = 40  # longest identifier(): C symbols, module and file names stay short
-
-
-def identifier(text: str) -> str:
-    """A safe lowercase ASCII C/Python identifier for arbitrary text (robot names in generated
-    code, symbols and file names), at most :data:`IDENTIFIER_MAX` characters.
-
-    Letters, digits and underscores are kept (others become ``_``); a name that is not plain
-    ASCII or is too long is cut and ends in ``_`` and 8 hex digits of its hash, so different
-    names stay apart (``café`` -> ``caf__1f3a...``). The display name is kept in ``Robot.name``.
-    """
-    ident = re.sub(r"[^a-z0-9_]", "_", text.lower())
-    if not ident or ident[0].isdigit():
-        ident = "r_" + ident
-    if not text.isascii() or len(ident) > IDENTIFIER_MAX:
-        digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:8]
-        ident = f"{ident[: IDENTIFIER_MAX - 9]}_{digest}"
-    return ident
-
-
-def real_array(
-    x: Any, what: str, error: type[SymkinError] = ConfigurationError, items: str = "numbers"
-) -> np.ndarray:
-    """``x`` as a float64 array in native byte order, or raise ``error`` naming ``what``.
-
-    Booleans, integers and floats of any byte order convert, and so do sequences and object
-    arrays of real numbers; complex numbers, strings and other objects are refused (NumPy would
-    drop an imaginary part or parse a string), so every backend accepts the same inputs.
-    """
-    if isinstance(x, np.ndarray) and x.dtype.kind in "biuf":
-        return np.asarray(x, dtype=float)
-    try:
-        a = np.asarray(x)
-    except (TypeError, ValueError) as exc:
-        raise error(f"{what} must be an array of {items}: {exc}") from None
-    kind = a.dtype.kind
-    if kind == "O":
-        for v in a.flat:
-            if isinstance(v, (str, bytes)):
-                kind = "U"
-                break
-            if isinstance(v, numbers.Complex) and not isinstance(v, numbers.Real):
-                kind = "c"
-                break
-    if kind == "c":
-        raise error(f"{what} must be real numbers, not complex")
-    if kind not in "biufO":
-        got = "strings" if kind in "US" else f"{a.dtype} values"
-        raise error(f"{what} must be an array of {items}, not {got}")
-    try:
-        return a.astype(float)
-    except (TypeError, ValueError) as exc:
-        raise error(f"{what} must be an array of {items}: {exc}") from None
-
-
-def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.ndarray, bool]:
-    """Validate ``q`` (shape (n,) or (N, n), real, finite, within :data:`MAX_JOINT_VALUE`)
-    -> ((N, n) float array, was_single)."""
-    Q = real_array(q, what, items=f"{n} numbers")
-    single = Q.ndim == 1
-    if Q.ndim == 0 or Q.ndim > 2 or Q.shape[-1] != n:
-        raise ConfigurationError(
-            f"{what} must have shape ({n},) or (N, {n}) for {name} with {n} joints, got shape {Q.shape}"
-        )
-    if single:
-        Q = Q[None, :]
-    ok = np.abs(Q) <= MAX_JOINT_VALUE  # False for NaN too
-    if not ok.all():
-        bad = np.argwhere(~ok)[0]
-        where = f"[{bad[1]}]" if single else f"[{bad[0]}, {bad[1]}]"
-        value = Q[tuple(bad)]
-        why = "must be finite" if not np.isfinite(value) else f"must be within +-{MAX_JOINT_VALUE:g}"
-        raise ConfigurationError(f"{what}{where} is {value}: joint values {why}")
-    return Q, single
-
-
-def axes_rows(axes: str) -> slice:
-    """The rows of J0 that ``axes`` ("all", "trans", "rot") selects; ParameterError otherwise."""
-    try:
-        return AXES_ROWS[axes]
-    except (KeyError, TypeError):
-        raise ParameterError(f"axes must be one of {sorted(AXES_ROWS)}, not {axes!r}") from None
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a
-
-
-def sample_bounds(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """(2, n) range to draw random joint values from: ``qlim``, where a bound that is infinite or
-    beyond +-:data:`MAX_JOINT_VALUE` (which q may not exceed) counts as no bound: it is replaced by
-    one turn (``revolute``) or 2 m beyond the other bound, or +-pi / +-1 m around 0 when both are."""
-    lo, hi = np.array(qlim[0], dtype=float), np.array(qlim[1], dtype=float)
-    lo_free, hi_free = ~(np.abs(lo) <= MAX_JOINT_VALUE), ~(np.abs(hi) <= MAX_JOINT_VALUE)
-    if lo_free.any() or hi_free.any():
-        half = np.where(revolute, math.pi, 1.0)
-        lo, hi = (
-            np.where(lo_free, np.where(hi_free, -half, hi - 2 * half), lo),
-            np.where(hi_free, np.where(lo_free, half, lo + 2 * half), hi),
-        )
-    return np.stack((lo, hi))
-
-
-def sample_q(
-    qlim: np.ndarray,
-    revolute: np.ndarray,
-    N: int | None = None,
-    seed: int | np.random.Generator | None = None,
-) -> np.ndarray:
-    """Uniform random joint values within :func:`sample_bounds` of ``qlim``: (n,) or (N, n)."""
-    rng = np.random.default_rng(seed)
-    lo, hi = sample_bounds(qlim, revolute)
-    if N is None:
-        return rng.uniform(lo, hi)
-    return rng.uniform(lo, hi, size=(N, lo.size))
 
 
 @dataclass(frozen=True, eq=False)
@@ -275,33 +148,40 @@ class Robot:
         """A robot from a roboticstoolbox-python robot (``rtb.models.Panda()``, a ``DHRobot``) or
         ETS, with exact constants, its joint limits, named configurations, base and tool; see
         :mod:`symkin.model.rtb`. roboticstoolbox itself is not needed to call this."""
-        from symkin.model.rtb import robot_from_rtb
+        from symkin.model.rtb import rtb_args
 
-        return robot_from_rtb(robot_or_ets, name=name, **kwargs)
+        return cls(**rtb_args(robot_or_ets, name=name, **kwargs))
 
     @classmethod
     def from_dh(cls, *args: Any, **kwargs: Any) -> Robot:
-        """A robot from standard or modified DH parameters; see :func:`symkin.model.dh.robot_from_dh`."""
-        from symkin.model.dh import robot_from_dh
+        """A robot from standard or modified DH parameters; see :func:`symkin.model.dh.dh_args`."""
+        from symkin.model.dh import dh_args
 
-        return robot_from_dh(*args, **kwargs)
+        return cls(**dh_args(*args, **kwargs))
+
+    @classmethod
+    def from_dh_file(cls, path: str | Path) -> Robot:
+        """A robot from a DH table file (format in :mod:`symkin.model.dh`)."""
+        from symkin.model.dh import dh_file_args
+
+        return cls(**dh_file_args(path))
 
     @classmethod
     def from_urdf(
         cls, path_or_xml: str | Path, base_link: str | None = None, end_link: str | None = None, **kwargs: Any
     ) -> Robot:
         """The serial chain of a URDF from ``base_link`` to ``end_link``; see :mod:`symkin.model.urdf`."""
-        from symkin.model.urdf import robot_from_urdf
+        from symkin.model.urdf import urdf_args
 
-        return robot_from_urdf(path_or_xml, base_link=base_link, end_link=end_link, **kwargs)
+        return cls(**urdf_args(path_or_xml, base_link=base_link, end_link=end_link, **kwargs))
 
     @classmethod
     def from_poe(cls, M: Any, screws: Any, frame: str = "space", **kwargs: Any) -> Robot:
         """A robot from product-of-exponentials data (Lynch and Park, Modern Robotics, 2017); see
         :mod:`symkin.model.poe`."""
-        from symkin.model.poe import robot_from_poe
+        from symkin.model.poe import poe_args
 
-        return robot_from_poe(M, screws, frame=frame, **kwargs)
+        return cls(**poe_args(M, screws, frame=frame, **kwargs))
 
     # -- tool and base ---------------------------------------------------------------------
     def with_tool(self, tool: Any, name: str | None = None) -> Robot:

@@ -11,11 +11,12 @@ import difflib
 import math
 from collections.abc import Callable
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 
 from symkin.errors import UnknownRobotError
-from symkin.model.dh import DHLink, robot_from_dh
+from symkin.model.dh import DHLink
 from symkin.model.ets import ET, ETS
 from symkin.model.robot import Robot
 
@@ -64,7 +65,7 @@ def _ur(
     d = [d1, 0, 0, d4, d5, d6]
     a = [0, a2, a3, 0, 0, 0]
     links = [DHLink(d=d[j], a=a[j], alpha=alpha[j]) for j in range(6)]
-    return robot_from_dh(
+    return Robot.from_dh(
         links,
         name=name,
         qlim=np.array([[-2 * _PI] * 6, [2 * _PI] * 6]),
@@ -101,7 +102,7 @@ def _puma560() -> Robot:
         (0, 0, 0, (-266, 266)),
     ]
     links = [DHLink(d=d, a=a, alpha=al, qlim=tuple(_deg(*lim))) for d, a, al, lim in rows]
-    return robot_from_dh(
+    return Robot.from_dh(
         links,
         name="puma560",
         configs={
@@ -124,7 +125,7 @@ def _lbr_iiwa(name: str, model: str, d1: float, d3: float, speeds: list[float]) 
     lim = [170, 120, 170, 120, 170, 120, 175]
     links = [DHLink(d=d[j], alpha=alpha[j], qlim=(-lim[j] * _DEG, lim[j] * _DEG)) for j in range(7)]
     mm = "/".join(f"{round(v * 1000)}" for v in (d1, d3, 0.4, 0.126))
-    return robot_from_dh(
+    return Robot.from_dh(
         links,
         name=name,
         joint_names=tuple(f"A{i}" for i in range(1, 8)),
@@ -157,7 +158,7 @@ def _sawyer() -> Robot:
     d = [0.317, 0.1925, 0.4, 0.1685, 0.4, 0.1363, 0.13375]
     alpha = ["-pi/2"] * 6 + [0]
     links = [DHLink(d=d[j], a=a[j], alpha=alpha[j], offset=SAWYER_OFFSET[j]) for j in range(7)]
-    dh = robot_from_dh(links, name="sawyer")
+    dh = Robot.from_dh(links, name="sawyer")
     ets = ETS(
         tuple(ET(e.axis, joint=e.joint, flip=SAWYER_SIGN[e.joint] < 0) if e.is_joint else e for e in dh.ets)
     )
@@ -183,7 +184,7 @@ def _sawyer() -> Robot:
 
 def _planar(n: int) -> Robot:
     terms = " + ".join(f"l{k} c{''.join(str(i) for i in range(1, k + 1))}" for k in range(1, n + 1))
-    return robot_from_dh(
+    return Robot.from_dh(
         [DHLink(a=1) for _ in range(n)],
         name=f"planar{n}",
         source=(
@@ -200,7 +201,7 @@ def _cobra600() -> Robot:
         DHLink(prismatic=True, qlim=(0.0, 0.21)),
         DHLink(qlim=(-2 * _PI, 2 * _PI)),
     ]
-    return robot_from_dh(
+    return Robot.from_dh(
         links,
         name="cobra600",
         joint_names=("J1", "J2", "J3", "J4"),
@@ -241,7 +242,7 @@ def _stanford() -> Robot:
         DHLink(alpha="pi/2", qlim=(-90 * _DEG, 90 * _DEG)),
         DHLink(d=0.263, qlim=(-170 * _DEG, 170 * _DEG)),
     ]
-    return robot_from_dh(
+    return Robot.from_dh(
         links,
         name="stanford",
         source=(
@@ -290,3 +291,8 @@ def load(name: str) -> Robot:
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         raise UnknownRobotError(f"unknown robot {name!r}{hint} Available: {', '.join(list_robots())}")
     return _build(key)
+
+
+def load_dh_file(path: str | Path) -> Robot:
+    """A robot from a DH table file (format in :mod:`symkin.model.dh`)."""
+    return Robot.from_dh_file(path)

@@ -26,81 +26,10 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import RobotError
-from symkin.model.ets import ET, ETS, Axis
-from symkin.model.robot import Robot
-from symkin.model.transform import SNAP_TOL, angle_const, length_const, se3_ets, type_name
+from symkin.model.ets import ETS
+from symkin.model.transform import RTB_KINDS, SNAP_TOL, rtb_ets, rtb_kind, se3_ets, type_name
 
-__all__ = ["robot_from_rtb", "rtb_ets"]
-
-_KINDS = {
-    "tx": Axis.tx,
-    "ty": Axis.ty,
-    "tz": Axis.tz,
-    "Rx": Axis.Rx,
-    "Ry": Axis.Ry,
-    "Rz": Axis.Rz,
-    "R": Axis.Rz,
-}
-
-
-def _kind(et: Any) -> str:
-    kind = getattr(et, "kind", None)
-    if kind is None:
-        kind = getattr(et, "axis", None)
-    return str(kind)
-
-
-def _param(et: Any) -> Any:
-    return et.param if hasattr(et, "param") else getattr(et, "eta", None)
-
-
-def _matrix_4x4(et: Any, kind: str) -> np.ndarray:
-    A = np.asarray(et.A(), dtype=float)
-    if kind == "SE2":  # (3, 3) planar transform: rotation about z and a translation in xy
-        M = np.eye(4)
-        M[:2, :2], M[:2, 3] = A[:2, :2], A[:2, 2]
-        return M
-    return A
-
-
-def rtb_ets(ets: Any, snap_tol: float = SNAP_TOL) -> tuple[list[ET], list[tuple[int, Any]]]:
-    """symkin ETs of a roboticstoolbox ET or ETS, and (roboticstoolbox jindex, ET) per joint in
-    chain order. Joints are numbered 0..n-1 by their ``jindex`` (in chain order when unset)."""
-    items = [ets] if hasattr(ets, "isjoint") else list(ets)
-    joints = [(getattr(et, "jindex", None), k) for k, et in enumerate(items) if getattr(et, "isjoint", False)]
-    if any(j is None for j, _ in joints):
-        joints = [(k, pos) for k, (_, pos) in enumerate(joints)]
-    indices = [int(j) for j, _ in joints]
-    if len(set(indices)) != len(indices):
-        raise RobotError(f"the roboticstoolbox ETS uses a joint index twice: jindex {sorted(indices)}")
-    number = {j: i for i, j in enumerate(sorted(indices))}
-    joint_at = dict((pos, j) for j, pos in zip(indices, (p for _, p in joints)))
-    out: list[ET] = []
-    info: list[tuple[int, Any]] = []
-    for pos, et in enumerate(items):
-        kind = _kind(et)
-        where = f"element {pos} ({kind}) of the roboticstoolbox ETS"
-        if pos in joint_at:
-            if kind not in _KINDS:
-                raise RobotError(f"{where} is a joint of kind {kind!r}; symkin joints are tx ty tz Rx Ry Rz")
-            out.append(ET(_KINDS[kind], joint=number[joint_at[pos]], flip=bool(getattr(et, "isflip", False))))
-            info.append((joint_at[pos], et))
-        elif kind in ("SE3", "SE2"):
-            out += se3_ets(_matrix_4x4(et, kind), where, snap_tol)
-        elif kind in _KINDS:
-            try:
-                value = float(_param(et))
-            except (TypeError, ValueError):
-                raise RobotError(f"{where} has the constant {_param(et)!r}, which is not a number") from None
-            axis = _KINDS[kind]
-            c = angle_const(value, snap_tol) if axis.is_rotation else length_const(value)
-            if not c.is_zero:
-                out.append(ET(axis, const=c))
-        else:
-            raise RobotError(
-                f"{where}: unknown kind {kind!r} (expected tx ty tz Rx Ry Rz SE3, or R SE2 in 2-D)"
-            )
-    return out, info
+__all__ = ["rtb_args", "rtb_ets"]
 
 
 def _is_identity(T: Any) -> bool:
@@ -119,14 +48,15 @@ def _limits(qlim: Any, n: int) -> np.ndarray | None:
     return a if a.shape == (2, n) and np.isfinite(a).all() and (a[0] <= a[1]).all() else None
 
 
-def robot_from_rtb(
+def rtb_args(
     obj: Any,
     name: str | None = None,
     start: Any = None,
     end: Any = None,
     snap_tol: float = SNAP_TOL,
-) -> Robot:
-    """A symkin Robot from a roboticstoolbox robot (``rtb.models.Panda()``, a ``DHRobot``...) or an
+) -> dict[str, Any]:
+    """The :class:`~symkin.Robot` arguments (``ets``, ``name``, limits, ...) of a roboticstoolbox
+    robot (``rtb.models.Panda()``, a ``DHRobot``...) or an
     ``ETS``/``ETS2``/``ET`` (see the module docstring for what is carried over).
 
     ``start``/``end`` choose the links of a branched robot (passed to its ``ets()``); ``name``
@@ -151,20 +81,20 @@ def robot_from_rtb(
         raise RobotError("the roboticstoolbox ETS has no joints")
     lo, hi = [], []
     for _, et in sorted(info, key=lambda t: t[0]):
-        default = math.pi if _KINDS[_kind(et)].is_rotation else 1.0
+        default = math.pi if RTB_KINDS[rtb_kind(et)].is_rotation else 1.0
         raw = getattr(et, "qlim", None)
         lim = None if raw is None or np.size(raw) != 2 else _limits(np.reshape(raw, (2, 1)), 1)
         lo.append(float(lim[0, 0]) if lim is not None else -default)
         hi.append(float(lim[1, 0]) if lim is not None else default)
-    return Robot(
-        ETS(tuple(chain)),
+    return dict(
+        ets=ETS(tuple(chain)),
         name=name or "rtb_ets",
         qlim=[lo, hi],
         source=f"imported from a roboticstoolbox-python {type(obj).__name__}",
     )
 
 
-def _from_robot(robot: Any, name: str | None, start: Any, end: Any, snap_tol: float) -> Robot:
+def _from_robot(robot: Any, name: str | None, start: Any, end: Any, snap_tol: float) -> dict[str, Any]:
     kwargs = {k: v for k, v in (("start", start), ("end", end)) if v is not None}
     try:
         ets = robot.ets(**kwargs)
@@ -212,8 +142,8 @@ def _from_robot(robot: Any, name: str | None, start: Any, end: Any, snap_tol: fl
         names = ()
     maker = getattr(robot, "manufacturer", "") or ""
     rname = str(getattr(robot, "name", "") or "rtb_robot")
-    return Robot(
-        ETS(tuple(chain)),
+    return dict(
+        ets=ETS(tuple(chain)),
         name=name or rname.lower().replace(" ", "_"),
         qlim=qlim,
         configs=configs,

@@ -191,8 +191,6 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
     ):
         out = se3_ets(value, what, snap_tol)
     elif _is_rtb(value):
-        from symkin.model.rtb import rtb_ets
-
         chain, _ = rtb_ets(value, snap_tol)
         out = chain
     elif isinstance(getattr(value, "A", None), np.ndarray) and np.shape(value.A) == (4, 4):
@@ -206,3 +204,77 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
         if e.is_joint:
             raise RobotError(f"{what} must be constant, but contains the joint {e}")
     return [e for e in out if not e.const.is_zero]
+
+
+# -- roboticstoolbox ETS ----------------------------------------------------------------------
+RTB_KINDS = {
+    "tx": Axis.tx,
+    "ty": Axis.ty,
+    "tz": Axis.tz,
+    "Rx": Axis.Rx,
+    "Ry": Axis.Ry,
+    "Rz": Axis.Rz,
+    "R": Axis.Rz,
+}
+
+
+def rtb_kind(et: Any) -> str:
+    kind = getattr(et, "kind", None)
+    if kind is None:
+        kind = getattr(et, "axis", None)
+    return str(kind)
+
+
+def _param(et: Any) -> Any:
+    return et.param if hasattr(et, "param") else getattr(et, "eta", None)
+
+
+def _matrix_4x4(et: Any, kind: str) -> np.ndarray:
+    A = np.asarray(et.A(), dtype=float)
+    if kind == "SE2":  # (3, 3) planar transform: rotation about z and a translation in xy
+        M = np.eye(4)
+        M[:2, :2], M[:2, 3] = A[:2, :2], A[:2, 2]
+        return M
+    return A
+
+
+def rtb_ets(ets: Any, snap_tol: float = SNAP_TOL) -> tuple[list[ET], list[tuple[int, Any]]]:
+    """symkin ETs of a roboticstoolbox ET or ETS, and (roboticstoolbox jindex, ET) per joint in
+    chain order. Joints are numbered 0..n-1 by their ``jindex`` (in chain order when unset)."""
+    items = [ets] if hasattr(ets, "isjoint") else list(ets)
+    joints = [(getattr(et, "jindex", None), k) for k, et in enumerate(items) if getattr(et, "isjoint", False)]
+    if any(j is None for j, _ in joints):
+        joints = [(k, pos) for k, (_, pos) in enumerate(joints)]
+    indices = [int(j) for j, _ in joints]
+    if len(set(indices)) != len(indices):
+        raise RobotError(f"the roboticstoolbox ETS uses a joint index twice: jindex {sorted(indices)}")
+    number = {j: i for i, j in enumerate(sorted(indices))}
+    joint_at = dict((pos, j) for j, pos in zip(indices, (p for _, p in joints)))
+    out: list[ET] = []
+    info: list[tuple[int, Any]] = []
+    for pos, et in enumerate(items):
+        kind = rtb_kind(et)
+        where = f"element {pos} ({kind}) of the roboticstoolbox ETS"
+        if pos in joint_at:
+            if kind not in RTB_KINDS:
+                raise RobotError(f"{where} is a joint of kind {kind!r}; symkin joints are tx ty tz Rx Ry Rz")
+            out.append(
+                ET(RTB_KINDS[kind], joint=number[joint_at[pos]], flip=bool(getattr(et, "isflip", False)))
+            )
+            info.append((joint_at[pos], et))
+        elif kind in ("SE3", "SE2"):
+            out += se3_ets(_matrix_4x4(et, kind), where, snap_tol)
+        elif kind in RTB_KINDS:
+            try:
+                value = float(_param(et))
+            except (TypeError, ValueError):
+                raise RobotError(f"{where} has the constant {_param(et)!r}, which is not a number") from None
+            axis = RTB_KINDS[kind]
+            c = angle_const(value, snap_tol) if axis.is_rotation else length_const(value)
+            if not c.is_zero:
+                out.append(ET(axis, const=c))
+        else:
+            raise RobotError(
+                f"{where}: unknown kind {kind!r} (expected tx ty tz Rx Ry Rz SE3, or R SE2 in 2-D)"
+            )
+    return out, info

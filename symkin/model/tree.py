@@ -19,50 +19,21 @@ import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from fractions import Fraction
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import as_batch
+from symkin.core.names import identifier
 from symkin.errors import FrameError, RobotError, URDFError
 from symkin.model.ets import ET, ETS
-from symkin.model.kinematics import _ROT_SLICES, const_matrix, cross
-from symkin.model.robot import Robot, as_batch, identifier
+from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
+from symkin.model.robot import Robot
+from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
 
 __all__ = ["Tree", "Segment", "Slot", "frame_position"]
-
-
-@dataclass(frozen=True)
-class Segment:
-    """One joint of the tree: from link ``parent`` (a segment index, -1 for the base link) to
-    link ``link``; ``ets`` its origin and motion, the joint ET (if any) numbered ``slot``."""
-
-    name: str
-    parent: int
-    link: str
-    ets: tuple[ET, ...]
-    slot: int | None = None
-
-
-@dataclass(frozen=True)
-class Slot:
-    """A movable segment driven by joint ``joint`` of q: ``theta = multiplier q_joint + offset``.
-
-    ``mimics`` names the joint it follows (its own name when it is an independent joint)."""
-
-    name: str
-    segment: int
-    joint: int
-    multiplier: Fraction
-    offset: Fraction
-    revolute: bool
-    mimics: str = ""
-
-    @property
-    def is_mimic(self) -> bool:
-        return self.mimics != self.name
 
 
 def frame_position(frame: Any, frames: Sequence[str], name: str = "tree") -> int:
@@ -92,7 +63,7 @@ def _joint_matrices(axis: int, prismatic: bool, x: np.ndarray) -> np.ndarray:
     if prismatic:
         M[:, axis, 3] = x
     else:
-        j, k = _ROT_SLICES[axis]
+        j, k = ROT_SLICES[axis]
         c, s = np.cos(x), np.sin(x)
         M[:, j, j] = M[:, k, k] = c
         M[:, j, k], M[:, k, j] = -s, s
@@ -193,10 +164,10 @@ class Tree:
         (default the root link) on the path to at least one of ``frames`` (link names, default
         every leaf link below ``base_link``, depth first). Fixed joints are folded, continuous
         joints are revolute, mimic joints follow their joint exactly; see
-        :mod:`symkin.model.urdf_tree`. ``snap_tol`` as in :func:`symkin.model.urdf.robot_from_urdf`."""
-        from symkin.model.urdf_tree import tree_from_urdf
+        :mod:`symkin.model.urdf_tree`. ``snap_tol`` as in :func:`symkin.model.urdf.urdf_args`."""
+        from symkin.model.urdf_tree import urdf_tree_args
 
-        return tree_from_urdf(path_or_xml, frames=frames, base_link=base_link, snap_tol=snap_tol, name=name)
+        return cls(**urdf_tree_args(path_or_xml, frames, base_link, snap_tol, name))
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickle the fields (and cached values) without the memoised frame views."""
@@ -320,7 +291,7 @@ class Tree:
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
         """Uniform random configurations within qlim: (n,) or (N, n); bounds beyond +-1e15 or
         infinite as in :meth:`symkin.Robot.random_q`."""
-        from symkin.model.robot import sample_q
+        from symkin.core.arrays import sample_q
 
         prismatic = {s.joint for s in self.slots if not s.revolute}
         revolute = np.array([k not in prismatic for k in range(self.n)], dtype=bool)
@@ -449,22 +420,6 @@ class Tree:
 
     def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
         return self.jacob0(q, frame), self.hessian0(q, frame)
-
-
-def hessian_of_columns(Jv: np.ndarray, Jw: np.ndarray, slots: Sequence[Slot], n: int) -> np.ndarray:
-    """Hessian (N, n, 6, n) from the geometric columns Jv, Jw (N, s, 3) of the slots on one path
-    (base first; Jw = 0 for a prismatic slot), contracted onto the joints they follow."""
-    s = Jv.shape[1]
-    X = cross(Jw[:, :, None, :], Jv[:, None, :, :])  # X[:, b, a] = w_b x v_a
-    Y = cross(Jw[:, :, None, :], Jw[:, None, :, :])
-    lower = np.triu(np.ones((s, s), dtype=bool))[None, :, :, None]  # b <= a
-    Hv = np.where(lower, X, np.swapaxes(X, 1, 2))
-    Hw = np.where(lower, Y, 0.0)
-    Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
-    A = np.zeros((s, n))
-    for i, sl in enumerate(slots):
-        A[i, sl.joint] = float(sl.multiplier)
-    return np.einsum("bk,Nbar,ai->Nkri", A, Hs, A)
 
 
 def _rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:

@@ -30,14 +30,14 @@ import sys
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
+from typing import Any
 from xml.etree import ElementTree
 from xml.parsers import expat
 
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
-from symkin.model.robot import Robot
 
-__all__ = ["robot_from_urdf", "axis_ets", "translation_ets", "atan2_const", "snap_angle", "snap_atan2"]
+__all__ = ["urdf_args", "axis_ets", "translation_ets", "atan2_const", "snap_angle", "snap_atan2"]
 
 _KNOWN = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 _ROT = (Axis.Rx, Axis.Ry, Axis.Rz)
@@ -236,13 +236,13 @@ def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     return root, where
 
 
-def robot_from_urdf(
+def urdf_args(
     path_or_xml: str | Path,
     base_link: str | None = None,
     end_link: str | None = None,
     name: str | None = None,
     snap_tol: float = 1e-9,
-) -> Robot:
+) -> dict[str, Any]:
     """The serial chain of a URDF (file path or XML text) from ``base_link`` to ``end_link``.
 
     ``base_link`` defaults to the root link, ``end_link`` to the only leaf below ``base_link``
@@ -384,8 +384,8 @@ def robot_from_urdf(
         )
     robot_name = name or root.get("name") or "robot"
     qd_max = qd if all(v is not None and v > 0 for v in qd) else None
-    return Robot(
-        ETS(tuple(chain)),
+    return dict(
+        ets=ETS(tuple(chain)),
         name=robot_name,
         qlim=[lower, upper],
         joint_names=tuple(names),

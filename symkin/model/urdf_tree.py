@@ -3,7 +3,7 @@
 The tree is read with xml.etree like :mod:`symkin.model.urdf` and each joint becomes the same
 exact ETS fragment (its origin ``tx ty tz Rz(yaw) Ry(pitch) Rx(roll)`` followed by the joint
 about or along its axis), so the serial chain to one frame, :meth:`symkin.Tree.chain`, is the
-chain :func:`symkin.model.urdf.robot_from_urdf` imports, transform for transform.
+chain :func:`symkin.model.urdf.urdf_args` imports, transform for transform.
 
 Joints are numbered depth first from the base link, the children of a link in file order.
 Fixed joints are folded into the constants, continuous joints are revolute. A mimic joint
@@ -20,17 +20,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 from xml.etree import ElementTree
 
 from symkin.errors import URDFError
 from symkin.model.ets import ET, Axis
+from symkin.model.slots import Segment, Slot
 from symkin.model.urdf import _load, _numbers, _suggest, axis_ets, snap_angle, snap_atan2, translation_ets
 
-if TYPE_CHECKING:
-    from symkin.model.tree import Tree
-
-__all__ = ["URDFGraph", "read_graph", "joint_ets", "tree_from_urdf", "describe_urdf"]
+__all__ = ["URDFGraph", "read_graph", "joint_ets", "urdf_tree_args", "describe_urdf"]
 
 _KNOWN = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 _MOVABLE = ("revolute", "continuous", "prismatic")
@@ -170,7 +168,7 @@ def read_graph(path_or_xml: str | Path) -> URDFGraph:
 def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> list[ET]:
     """The exact ETs of joint ``j``: its origin, then (movable) the joint as joint index ``slot``.
 
-    The same transforms :func:`symkin.model.urdf.robot_from_urdf` writes for it.
+    The same transforms :func:`symkin.model.urdf.urdf_args` writes for it.
     """
     what = f"joint {j.name!r}"
     origin = j.el.find("origin")
@@ -195,7 +193,7 @@ def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> lis
 
 
 def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
-    """(lower, upper, velocity) of a movable joint; velocity NaN when not given (as robot_from_urdf)."""
+    """(lower, upper, velocity) of a movable joint; velocity NaN when not given (as urdf_args)."""
     what = f"joint {j.name!r}"
     lim = j.el.find("limit")
     default = math.pi if j.kind != "prismatic" else 1.0
@@ -246,16 +244,14 @@ def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fractio
     return cur, m, c
 
 
-def tree_from_urdf(
+def urdf_tree_args(
     path_or_xml: str | Path,
     frames: Sequence[str] | str | None = None,
     base_link: str | None = None,
     snap_tol: float = 1e-9,
     name: str | None = None,
-) -> Tree:
-    """The :class:`symkin.Tree` of a URDF: see :meth:`symkin.Tree.from_urdf`."""
-    from symkin.model.tree import Segment, Slot, Tree
-
+) -> dict[str, Any]:
+    """The :class:`symkin.Tree` arguments of a URDF: see :meth:`symkin.Tree.from_urdf`."""
     graph = read_graph(path_or_xml)
     where = graph.where
     if base_link is None:
@@ -322,7 +318,7 @@ def tree_from_urdf(
                 Slot(j.name, len(segments) - 1, index[src.name], m, c, j.kind != "prismatic", src.name)
             )
     robot_name = name or graph.name
-    return Tree(
+    return dict(
         name=robot_name,
         base_link=base_link,
         segments=tuple(segments),

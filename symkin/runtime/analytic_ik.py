@@ -23,10 +23,13 @@ from typing import Any
 
 import numpy as np
 
+from symkin.compiler.analytic_ik import analytic_key, build_analytic
 from symkin.errors import ConfigurationError
+from symkin.model.resolve import resolve_robot
 from symkin.runtime.ik import IKResult, check_pose, pose_error
+from symkin.runtime.memo import memoised
 
-__all__ = ["AnalyticIK", "invalid_input", "VERIFY_TOL", "DUPLICATE_TOL"]
+__all__ = ["AnalyticIK", "compile_analytic", "invalid_input", "VERIFY_TOL", "DUPLICATE_TOL"]
 
 VERIFY_TOL = 1e-8  # max |T(q) - T| of a flagged candidate that is kept
 DUPLICATE_TOL = 1e-6  # rows closer than this in every joint are one solution
@@ -229,3 +232,17 @@ class AnalyticIK:
             if len(free):
                 return f"all {len(free)} closed-form solution(s) lie outside the joint limits"
         return "the pose is out of reach: no closed-form solution exists"
+
+
+def compile_analytic(robot: Any, backend: str = "c", cache: bool = True) -> AnalyticIK:
+    """The closed-form solver of ``robot`` (a Robot, built-in name or ETS text) on ``backend``
+    (memoised; see :func:`symkin.compiler.analytic_ik.build_analytic`). Raises NoAnalyticIKError
+    with the reason when the arm has no closed form."""
+    if isinstance(robot, str):
+        robot = resolve_robot(robot)
+
+    def make() -> AnalyticIK:
+        art, meta = build_analytic(robot, backend, cache)
+        return AnalyticIK(robot, backend, art.module, art.files, meta["kind"], meta["S"])
+
+    return memoised(("analytic-ik", analytic_key(robot, backend)), make, cache)

@@ -18,13 +18,12 @@ import contextlib
 import math
 import warnings
 import weakref
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import real_array
 from symkin.errors import CompileError, ConfigurationError, ParameterError
-from symkin.model.robot import MAX_JOINT_VALUE, real_array
 from symkin.runtime.mmc_qp import (
     _AXES,
     MMCQP,
@@ -37,6 +36,7 @@ from symkin.runtime.mmc_qp import (
     mmc_closed_form,
     mmc_qp,
 )
+from symkin.runtime.step import OSQP_SETTINGS, StepInfo, step_nu, step_q
 
 __all__ = [
     "MMC",
@@ -59,67 +59,6 @@ _OSQP_STATUS = {
     "OSQP_MAX_ITER_REACHED": "max_iter",
     "OSQP_TIME_LIMIT_REACHED": "max_iter",
 }
-#: OSQP settings of :class:`MMC`: tight tolerances, and polishing. ``polishing`` is done by symkin,
-#: not OSQP: :func:`~symkin.runtime.mmc_qp.active_set_solve` from OSQP's active set, whose answer,
-#: when it settles, is the exact solution (J qd = nu to about 1e-14; OSQP's own polish left errors
-#: up to 1e-5 on ill-conditioned steps with the slack), also when OSQP stopped unfinished.
-#: ``polish_refine_iter`` is unused.
-OSQP_SETTINGS: dict[str, Any] = {
-    "eps_abs": 1e-7,
-    "eps_rel": 1e-7,
-    "polishing": True,
-    "polish_refine_iter": 3,
-    "max_iter": 4000,
-    "verbose": False,
-    "warm_starting": True,
-}
-
-
-@dataclass(frozen=True, slots=True)
-class StepInfo:
-    """How one control step went.
-
-    Attributes:
-        status: ``"solved"``; ``"singular"`` (J lost rank: damped step); ``"infeasible"`` (the QP has
-            no solution, e.g. velocity bounds too small for nu); ``"max_iter"``/``"inaccurate"`` (OSQP
-            stopped early); ``"error"`` (any other solver failure).
-        method: how qd was computed: ``"inverse"``/``"pinv"``/``"damped"`` (RRMC, eqs 35-36),
-            ``"closed_form"``, ``"active_set"`` or ``"osqp"`` (MMC).
-        manipulability: m(q) of the chosen axes (Part 1 eq 52) at the configuration of the step.
-        iterations: OSQP iterations, or the active-set solves (0 for the closed form).
-        fallback: ``None``, or ``"rrmc"``/``"zero"`` when the MMC answer was replaced.
-        residual: max |J qd - nu| of the returned qd.
-        slack: norm of the equality slack (MMC with ``slack``), else 0.
-        scale: factor (<= 1) by which qd was scaled down to respect the joint speed limits.
-    """
-
-    status: str
-    method: str
-    manipulability: float
-    iterations: int = 0
-    fallback: str | None = None
-    residual: float = 0.0
-    slack: float = 0.0
-    scale: float = 1.0
-
-    @property
-    def ok(self) -> bool:
-        """True when the step is the controller's own answer (no singularity, no fallback)."""
-        return self.status == "solved" and self.fallback is None
-
-
-def _q(kin: Any, q: Any) -> np.ndarray:
-    q = real_array(q, "q")
-    if q.shape != (kin.n,) or not (np.abs(q) <= MAX_JOINT_VALUE).all():
-        raise ConfigurationError(f"q must be {kin.n} finite numbers within +-{MAX_JOINT_VALUE:g}, got {q!r}")
-    return q
-
-
-def _nu(nu: Any) -> np.ndarray:
-    nu = real_array(nu, "nu", ParameterError)
-    if nu.shape != (6,) or not np.isfinite(nu).all():
-        raise ParameterError(f"nu must be 6 finite numbers (v, omega), got {nu!r}")
-    return nu
 
 
 def _number(value: Any, name: str, minimum: float = 0.0, strict: bool = True) -> float:
@@ -200,8 +139,8 @@ def rrmc(
         c = rrmc_controller(kin, qd_max, damping, singular_tol, axes)
     if c is not None:
         return c.fast(q, nu) or c.step(q, nu)  # fast: None for invalid input; step raises the error
-    q = _q(kin, q)
-    nu = _nu(nu)
+    q = step_q(kin, q)
+    nu = step_nu(nu)
     damping = _number(damping, "damping", strict=False)
     singular_tol = _number(singular_tol, "singular_tol", strict=False)
     J = np.asarray(kin.jacob0(q), dtype=float)
@@ -330,7 +269,7 @@ class MMC:
         frame: Any = None,
     ) -> None:
         if frame is not None or getattr(type(kin), "_symkin_tree", False):  # one frame of a tree
-            from symkin.model.frame_view import task_kinematics
+            from symkin.runtime.task import task_kinematics
 
             kin = task_kinematics(kin, frame)
         if backend not in ("auto", "c", "python"):
@@ -436,8 +375,8 @@ class MMC:
 
     def build(self, q: Any, nu: Any) -> MMCQP:
         """The QP of eq 12 at configuration q (n,) for the spatial velocity nu (6,)."""
-        q = _q(self.kin, q)
-        nu = _nu(nu)
+        q = step_q(self.kin, q)
+        nu = step_nu(nu)
         J, Jm, m = self.kinematics(q)
         lower, upper = self.bounds(q)
         return mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m)
@@ -450,9 +389,9 @@ class MMC:
         """
         if self._c is not None:
             return self._c.fast(q, nu) or self._c.step(q, nu)  # fast: None for invalid input
-        nu = _nu(nu)
+        nu = step_nu(nu)
         try:
-            qd, info = self._step(_q(self.kin, q), nu)
+            qd, info = self._step(step_q(self.kin, q), nu)
         except np.linalg.LinAlgError:  # non-finite kinematics (e.g. overflow): no answer
             qd, info = np.full(self.n, math.nan), StepInfo("error", "closed_form", math.nan)
         if not np.isfinite(qd).all():  # never "solved" with NaN or inf: stop the joints instead

@@ -5,7 +5,7 @@ transform, ``P`` and ``S`` the chain before and after it. When ``j`` is the firs
 chain ``P`` is constant and the rest of the arm must reach ``P E_j(-v) P^{-1} T``; when ``j`` is the
 last, ``S`` is constant and the rest must reach ``T S^{-1} E_j(-v) S``. That rest is the *sub-robot*,
 the ETS without joint ``j`` (the arm with ``q_j = 0``): its geometry does not depend on ``v``, so its
-closed form is derived and compiled once (:func:`symkin.compile_ik.compile_analytic`, cached) and
+closed form is derived and compiled once (:func:`symkin.runtime.analytic_ik.compile_analytic`, cached) and
 each value of the sweep is one target pose of it. For a 7-joint arm the sub-robot has 6 joints and
 gets every structure symkin solves, read from the base or from the tool (a spherical shoulder): the
 Franka Emika Panda with ``q7`` given as in He and Liu (Analytical inverse kinematics for Franka Emika
@@ -92,7 +92,7 @@ class FreeJointIK:
     """
 
     def __init__(self, robot: Robot, joint: int, backend: str = "c") -> None:
-        from symkin.compile_ik import compile_analytic
+        from symkin.runtime.analytic_ik import compile_analytic
 
         self.robot = robot
         self.sub, self.end, self._side, self._et = sub_robot(robot, joint)

@@ -32,17 +32,36 @@ The C solver (:mod:`symkin.runtime.ik_c`) runs the same loop with the same rando
 from __future__ import annotations
 
 import math
-import numbers
-import os
 import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 
+from symkin.core.arrays import real_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
-from symkin.model.robot import real_array, sample_bounds
+from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
+    DAMPINGS,
+    M64,
+    MAX_ITERATIONS,
+    METHODS,
+    PINV_RCOND,
+    POSE_ATOL,
+    TWO_PI,
+    Damping,
+    IKOptions,
+    IKResult,
+    Method,
+    SplitMix64,
+    angle_axis,
+    check_pose,
+    ets_of,
+    failure_reason,
+    new_seed,
+    pose_error,
+    revolute_mask,
+    sample_range,
+)
 
 __all__ = [
     "IKResult",
@@ -56,345 +75,6 @@ __all__ = [
     "SplitMix64",
 ]
 
-Method = Literal["NR", "GN", "LM"]
-Damping = Literal["wampler", "chan", "sugihara"]
-METHODS = ("NR", "GN", "LM")
-DAMPINGS = ("wampler", "chan", "sugihara")
-PINV_RCOND = 1e-12  # singular values <= PINV_RCOND * largest are dropped (same in C)
-POSE_ATOL = 1e-6  # max |R^T R - I| of an accepted target
-_BOTTOM_ATOL = 1e-12
-_NEAR_PI_L = 1e-6
-_TWO_PI = 6.283185307179586
-_M64 = (1 << 64) - 1
-
-
-# -- results ----------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False, slots=True)
-class IKResult:
-    """The outcome of :func:`ik`: one target, or arrays with a leading (N,) axis for N targets.
-
-    Attributes:
-        q: (n,) or (N, n) the solution; on failure the best iterate found (lowest residual).
-        success: converged to ``tol`` within the joint limits.
-        iterations: pose evaluations over all searches, failed ones included.
-        searches: searches started.
-        residual: ``|e|_We`` at ``q`` (E = residual**2 / 2).
-        reason: ``"success"`` or why it failed (tuple of str for a batch).
-    """
-
-    q: np.ndarray
-    success: bool | np.ndarray
-    iterations: int | np.ndarray
-    searches: int | np.ndarray
-    residual: float | np.ndarray
-    reason: str | tuple[str, ...]
-
-    @property
-    def batch(self) -> bool:
-        return isinstance(self.reason, tuple)
-
-    def __len__(self) -> int:
-        if not self.batch:
-            raise TypeError("a single IKResult has no len(); it is not a batch")
-        return len(self.reason)
-
-    def __getitem__(self, i: int) -> IKResult:
-        """Result ``i`` of a batch."""
-        if not self.batch:
-            raise TypeError("a single IKResult cannot be indexed; it is not a batch")
-        return IKResult(
-            self.q[i],
-            bool(self.success[i]),
-            int(self.iterations[i]),
-            int(self.searches[i]),
-            float(self.residual[i]),
-            self.reason[i],
-        )
-
-
-def failure_reason(
-    success: bool, residual: float, limit_rejects: int, singular: int, ilimit: int, slimit: int
-) -> str:
-    """The ``reason`` text of a result (shared by the NumPy and C solvers)."""
-    if success:
-        return "success"
-    parts = [f"no solution within {slimit} search(es) x {ilimit} iterations (best residual {residual:.3g})"]
-    if limit_rejects:
-        parts.append(f"{limit_rejects} converged solution(s) rejected for joint limits")
-    if singular:
-        parts.append(f"{singular} search(es) abandoned at a singular or diverging step")
-    return "; ".join(parts)
-
-
-# -- options ----------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class IKOptions:
-    """Validated solver settings (see :func:`ik`); arrays are read-only."""
-
-    n: int
-    method: str
-    damping: str
-    lam: np.ndarray  # (n,)
-    pinv: bool
-    ilimit: int
-    slimit: int
-    tol: float
-    tol_on: str
-    joint_limits: bool
-    we: np.ndarray  # (6,)
-    qlim: np.ndarray  # (2, n)
-    sample: np.ndarray  # (2, n) finite range of random restarts
-    revolute: np.ndarray  # (n,) bool
-    starts: np.ndarray  # (S, n)
-
-    @classmethod
-    def of(
-        cls,
-        kin: Any,
-        method: str = "LM",
-        damping: str = "chan",
-        lam: float | Sequence[float] = 0.1,
-        pinv: bool = False,
-        ilimit: int = 30,
-        slimit: int = 100,
-        tol: float = 1e-6,
-        tol_on: str = "e",
-        joint_limits: bool = True,
-        we: Sequence[float] | None = None,
-        starts: Any = None,
-    ) -> IKOptions:
-        n = int(kin.n)
-        if n < 1:
-            raise ParameterError("inverse kinematics needs a robot with at least one joint")
-        method = str(method).upper()
-        if method not in METHODS:
-            raise ParameterError(f"method must be one of {METHODS}, not {method!r}")
-        damping = str(damping).lower()
-        if damping not in DAMPINGS:
-            raise ParameterError(f"damping must be one of {DAMPINGS}, not {damping!r}")
-        if method == "NR" and not pinv and n != 6:
-            raise ParameterError(
-                f"NR without pinv needs a square Jacobian (6 joints), not {n}; use pinv=True or LM"
-            )
-        try:
-            lam_a = np.broadcast_to(real_array(lam, "lam", ParameterError), (n,)).copy()
-        except ValueError:
-            raise ParameterError(f"lam must be a number or {n} numbers, got {lam!r}") from None
-        if not (np.isfinite(lam_a).all() and (lam_a >= 0).all()):
-            raise ParameterError(f"lam must be finite and >= 0, got {lam!r}")
-        we_a = np.ones(6) if we is None else real_array(we, "we", ParameterError)
-        if we_a.shape != (6,) or not np.isfinite(we_a).all() or (we_a < 0).any() or not (we_a > 0).any():
-            raise ParameterError(f"we must be 6 finite weights >= 0, not all 0, got {we!r}")
-        ilimit, slimit = _count(ilimit, "ilimit"), _count(slimit, "slimit")
-        if ilimit * slimit > MAX_ITERATIONS:
-            raise ParameterError(
-                f"ilimit * slimit = {ilimit * slimit} exceeds {MAX_ITERATIONS} iterations per target "
-                "(the iteration counters are 32-bit)"
-            )
-        try:
-            tol_ok = float(tol) > 0 and math.isfinite(float(tol))
-        except (TypeError, ValueError):
-            tol_ok = False
-        if not tol_ok:
-            raise ParameterError(f"tol must be a positive number, got {tol!r}")
-        if tol_on not in ("e", "E"):
-            raise ParameterError(f"tol_on must be 'e' (|e|_We < tol) or 'E' (E < tol), not {tol_on!r}")
-        qlim = np.asarray(kin.qlim, dtype=float)
-        if qlim.shape != (2, n) or np.isnan(qlim).any():
-            raise ParameterError(f"kin.qlim must be a (2, {n}) array without NaN, got shape {qlim.shape}")
-        rev = revolute_mask(kin)
-        S = np.zeros((0, n)) if starts is None else real_array(starts, "starts")
-        if not (S.shape == (n,) or (S.ndim == 2 and S.shape[1] == n)):
-            raise ConfigurationError(f"starts must have shape (S, {n}), got {S.shape}")
-        S = S.reshape(-1, n)
-        if not np.isfinite(S).all():
-            raise ConfigurationError("starts must be finite")
-        return cls(
-            n, method, damping, _ro(lam_a), bool(pinv), int(ilimit), int(slimit), float(tol), tol_on,
-            bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S),
-        )  # fmt: skip
-
-
-MAX_ITERATIONS = 2**31 - 1  # ilimit * slimit: the C solver counts iterations in int32
-
-
-def _count(value: Any, name: str) -> int:
-    """An iteration or search limit: an integer in 1 .. MAX_ITERATIONS, else ParameterError."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, float, np.floating)):
-        raise ParameterError(f"{name} must be a positive integer, got {value!r}")
-    if not (float(value).is_integer() and 1 <= value <= MAX_ITERATIONS):
-        raise ParameterError(f"{name} must be an integer from 1 to {MAX_ITERATIONS}, got {value!r}")
-    return int(value)
-
-
-def _ro(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a)
-    a.setflags(write=False)
-    return a
-
-
-def ets_of(kin: Any) -> Any:
-    """``kin.ets``, or ``kin.robot.ets`` (compiled kinematics), or None."""
-    ets = getattr(kin, "ets", None)
-    return ets if ets is not None else getattr(getattr(kin, "robot", None), "ets", None)
-
-
-def revolute_mask(kin: Any) -> np.ndarray:
-    """(n,) bool: which joints are revolute, from ``kin.revolute`` or the ETS; else none."""
-    rev = getattr(kin, "revolute", None)
-    ets = ets_of(kin) if rev is None else None
-    if ets is not None:
-        rev = [e.is_revolute for e in ets.joints]
-    if rev is None:
-        return np.zeros(int(kin.n), dtype=bool)
-    return np.asarray(rev, dtype=bool).reshape(int(kin.n))
-
-
-def sample_range(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """(2, n) range random restarts are drawn from (:func:`symkin.model.robot.sample_bounds`)."""
-    return sample_bounds(qlim, revolute)
-
-
-# -- random restarts --------------------------------------------------------------------------
-def _mix64(z: int) -> int:
-    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _M64
-    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _M64
-    return z ^ (z >> 31)
-
-
-class SplitMix64:
-    """The restart generator shared with the C solver: stream ``i`` of ``seed`` (target i)."""
-
-    def __init__(self, seed: int, stream: int = 0) -> None:
-        self.state = _mix64((int(seed) + _mix64(int(stream) + 1)) & _M64)
-
-    def uniform(self) -> float:
-        self.state = (self.state + 0x9E3779B97F4A7C15) & _M64
-        return (_mix64(self.state) >> 11) * 2.0**-53
-
-    def random_q(self, sample: np.ndarray) -> np.ndarray:
-        lo, hi = sample
-        return np.array(
-            [float(lo[j]) + (float(hi[j]) - float(lo[j])) * self.uniform() for j in range(len(lo))]
-        )
-
-
-def new_seed() -> int:
-    """A fresh random 64-bit seed (used when ``seed`` is None)."""
-    return int.from_bytes(os.urandom(8), "little")
-
-
-# -- pose error (eqs 37-40) -------------------------------------------------------------------
-def check_pose(Tep: Any) -> tuple[np.ndarray, bool]:
-    """Validate SE(3) targets: (4, 4) or (N, 4, 4) -> ((N, 4, 4) float array, was_single).
-
-    Raises PoseError for a wrong shape, NaN/inf, a bottom row other than (0, 0, 0, 1), a
-    rotation with ``max |R^T R - I| > 1e-6`` or a reflection (det R < 0).
-    """
-    T = real_array(Tep, "a target pose", PoseError)
-    single = T.ndim == 2
-    if T.ndim not in (2, 3) or T.shape[-2:] != (4, 4):
-        raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
-    if single:
-        T = T[None]
-
-    def where(i: int) -> str:
-        return "the target" if single else f"target [{i}]"
-
-    bad = ~np.isfinite(T).all(axis=(1, 2))
-    if bad.any():
-        raise PoseError(f"{where(int(np.argmax(bad)))} contains NaN or inf")
-    bottom = np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > _BOTTOM_ATOL
-    if bottom.any():
-        i = int(np.argmax(bottom))
-        raise PoseError(f"{where(i)} has bottom row {T[i, 3].tolist()}, not [0, 0, 0, 1]")
-    R = T[:, :3, :3]
-    dev = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
-    if (dev > POSE_ATOL).any():
-        i = int(np.argmax(dev > POSE_ATOL))
-        raise PoseError(
-            f"{where(i)} rotation is not orthonormal: max |R^T R - I| = {dev[i]:.3g} > {POSE_ATOL:g}"
-        )
-    det = np.linalg.det(R)
-    if (det <= 0).any():
-        i = int(np.argmax(det <= 0))
-        raise PoseError(f"{where(i)} rotation is a reflection (det R = {det[i]:.3g})")
-    return T, single
-
-
-def angle_axis(R: Any) -> np.ndarray:
-    """alpha(R) (eqs 38-40): the Euler vector of rotation matrices R (..., 3, 3) -> (..., 3).
-
-    A diagonal R gives 0 for (1, 1, 1) and pi/2 (r11 + 1, r22 + 1, r33 + 1) otherwise (eq 40);
-    other matrices use eq 38, except near pi (trace < 0 and |l| < 1e-6), where l of eq 39 is
-    rounding noise and the axis comes from the symmetric part of R (its sign from l).
-    """
-    R = np.asarray(R, dtype=float)
-    l = np.stack((R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]), -1)
-    tr = np.trace(R, axis1=-2, axis2=-1)
-    nl = np.sqrt((l * l).sum(-1))
-    diag = R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0
-    diag = diag.all(-1)
-    theta = np.arctan2(nl, tr - 1.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        general = np.where((nl == 0)[..., None], 0.0, (theta / nl)[..., None] * l)
-        ct = (tr - 1.0) / 2.0
-        M = ((R + np.swapaxes(R, -1, -2)) / 2.0 - ct[..., None, None] * np.eye(3)) / (1.0 - ct)[
-            ..., None, None
-        ]
-        d = np.diagonal(M, axis1=-2, axis2=-1)
-        k = np.argmax(d, axis=-1)  # first maximum, like the C code
-        ak = np.sqrt(np.maximum(np.take_along_axis(d, k[..., None], -1), 0.0))
-        col = np.take_along_axis(M, k[..., None, None], -1)[..., 0]
-        ax = col / ak
-        ax = np.where(np.arange(3) == k[..., None], ak, ax)
-        ax = np.where(((ax * l).sum(-1) < 0)[..., None], -ax, ax)
-        near_pi = theta[..., None] * ax
-    eq40 = np.where((tr > 0)[..., None], 0.0, math.pi / 2 * (np.diagonal(R, axis1=-2, axis2=-1) + 1.0))
-    use_general = (tr >= 0) | (nl >= _NEAR_PI_L)
-    return np.where(diag[..., None], eq40, np.where(use_general[..., None], general, near_pi))
-
-
-def _angle_axis_one(R: np.ndarray) -> np.ndarray:
-    """:func:`angle_axis` of one (3, 3) matrix with scalar arithmetic (the same branches)."""
-    r = R.ravel().tolist()
-    l0, l1, l2 = r[7] - r[5], r[2] - r[6], r[3] - r[1]
-    tr = r[0] + r[4] + r[8]
-    if r[1] == 0.0 and r[2] == 0.0 and r[3] == 0.0 and r[5] == 0.0 and r[6] == 0.0 and r[7] == 0.0:
-        if tr > 0.0:
-            return np.zeros(3)
-        return math.pi / 2 * (np.array([r[0], r[4], r[8]]) + 1.0)  # eq 40
-    nl = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
-    if tr >= 0.0 or nl >= _NEAR_PI_L:  # eq 38
-        if nl == 0.0:
-            return np.zeros(3)
-        k = math.atan2(nl, tr - 1.0) / nl
-        return np.array([k * l0, k * l1, k * l2])
-    return angle_axis(R)  # near a half turn: the symmetric-part formula
-
-
-def pose_error(Te: Any, Tep: Any) -> np.ndarray:
-    """e of eq 37 for poses Te, Tep (..., 4, 4) -> (..., 6): (t* - t, alpha(R* R^T)), base frame.
-
-    One pose pair is computed with scalar arithmetic in the order of the C code (``csrc/symkin_pose.h``),
-    so both give the same numbers to the bit: the C and Python servo loops take the same steps."""
-    Te, Tep = np.asarray(Te, dtype=float), np.asarray(Tep, dtype=float)
-    if Te.shape == Tep.shape == (4, 4):
-        a, b = Te.ravel().tolist(), Tep.ravel().tolist()
-        R = np.array(
-            [
-                b[4 * i] * a[4 * j] + b[4 * i + 1] * a[4 * j + 1] + b[4 * i + 2] * a[4 * j + 2]
-                for i in range(3)
-                for j in range(3)
-            ]  # fmt: skip
-        ).reshape(3, 3)
-        e = np.empty(6)
-        e[:3] = (b[3] - a[3], b[7] - a[7], b[11] - a[11])
-        e[3:] = _angle_axis_one(R)
-        return e
-    R = Tep[..., :3, :3] @ np.swapaxes(Te[..., :3, :3], -1, -2)
-    return np.concatenate((Tep[..., :3, 3] - Te[..., :3, 3], angle_axis(R)), axis=-1)
-
 
 # -- the solver -------------------------------------------------------------------------------
 def wrap_into_limits(q: np.ndarray, opt: IKOptions) -> np.ndarray:
@@ -405,9 +85,9 @@ def wrap_into_limits(q: np.ndarray, opt: IKOptions) -> np.ndarray:
     for j in np.flatnonzero(opt.revolute):
         x = float(q[j])
         if x < lo[j]:
-            x += _TWO_PI * math.ceil((lo[j] - x) / _TWO_PI)
+            x += TWO_PI * math.ceil((lo[j] - x) / TWO_PI)
         elif x > hi[j]:
-            x -= _TWO_PI * math.ceil((x - hi[j]) / _TWO_PI)
+            x -= TWO_PI * math.ceil((x - hi[j]) / TWO_PI)
         if lo[j] <= x <= hi[j]:
             q[j] = x
     return q
@@ -518,7 +198,7 @@ def ik(
         IKResult; unreachable targets give ``success=False`` and a ``reason``.
     """
     if frame is not None or getattr(type(kin), "_symkin_tree", False):
-        from symkin.model.frame_view import task_kinematics
+        from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)
     args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts)
@@ -533,7 +213,7 @@ def ik(
         raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
     Q0 = _start_rows(q0, opt.n, len(T), single)
-    seed = new_seed() if seed is None else int(seed) & _M64
+    seed = new_seed() if seed is None else int(seed) & M64
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
     ]
@@ -622,3 +302,14 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
             break
         out.append(q.copy())
     return np.array(out)
+
+
+def default_c_solver(kin: Any) -> Any:
+    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default
+    (memoised like any other: per kinematics object and options)."""
+    import inspect
+
+    defaults = inspect.signature(ik).parameters
+    names = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
+             "starts")  # fmt: skip
+    return _c_solver(kin, tuple(defaults[k].default for k in names))

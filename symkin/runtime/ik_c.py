@@ -29,9 +29,9 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import real_array
 from symkin.errors import ConfigurationError, PoseError
-from symkin.model.robot import real_array
-from symkin.runtime.ik import IKOptions, IKResult, check_pose, ets_of, failure_reason
+from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
 
 __all__ = [
     "CIKSolver",
@@ -39,7 +39,6 @@ __all__ = [
     "ik_library",
     "ik_extension",
     "solver_for",
-    "default_c_solver",
     "ets_table",
 ]
 
@@ -159,7 +158,7 @@ def ik_library() -> ctypes.CDLL:
 def ik_extension() -> Any:
     """The extension module of :func:`ik_library`'s library: ``solve`` of one target (see
     ``csrc/symkin_ik_py.c``)."""
-    from symkin.emit.c.backend import load_extension
+    from symkin.emit.c.build import load_extension
 
     path, name = _ik_build()
     module = load_extension(name, path)
@@ -175,7 +174,7 @@ def ik_extension() -> Any:
 
 def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
     """The ``symkin_et`` table of an ETS; constants of k*pi/2 rotations are exact (0, +-1)."""
-    from symkin.model.kinematics import _ROT_SLICES, const_matrix
+    from symkin.model.kinematics import ROT_SLICES, const_matrix
 
     rows = []
     for e in ets:
@@ -184,7 +183,7 @@ def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
             rows.append((code, int(e.joint), float(e.sign), 1.0, 0.0, 0.0))
         elif e.axis.is_rotation:
             M = const_matrix(e.axis, e.const)
-            j, k = _ROT_SLICES[e.axis.index]
+            j, k = ROT_SLICES[e.axis.index]
             rows.append((code, -1, 1.0, float(M[j, j]), float(M[k, j]), 0.0))
         else:
             rows.append((code, -1, 1.0, 1.0, 0.0, float(e.const.value)))
@@ -460,16 +459,3 @@ def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
             cache.clear()
         solver = cache[key] = CIKSolver(kin, opt)
     return solver
-
-
-def default_c_solver(kin: Any) -> CIKSolver:
-    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default
-    (memoised like any other: per kinematics object and options)."""
-    import inspect
-
-    from symkin.runtime.ik import _c_solver, ik
-
-    defaults = inspect.signature(ik).parameters
-    names = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
-             "starts")  # fmt: skip
-    return _c_solver(kin, tuple(defaults[k].default for k in names))

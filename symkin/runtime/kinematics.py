@@ -17,21 +17,16 @@ from typing import Any
 
 import numpy as np
 
+from symkin.compiler.compile import Artifact, build, cache_key
+from symkin.core.arrays import as_batch, axes_rows
 from symkin.errors import ConfigurationError
-from symkin.model.robot import (
-    Robot,
-    as_batch,
-    axes_rows,
-    cond_of,
-    jacob_dot_of,
-    jacobm_of,
-    manipulability_of,
-    space_jacobian,
-)
+from symkin.model.robot import Robot, cond_of, jacob_dot_of, jacobm_of, manipulability_of, space_jacobian
+from symkin.runtime.casadi_calls import chain_functions
 from symkin.runtime.ik import ik
 from symkin.runtime.manip import jacobm_one, manipulability_one
+from symkin.runtime.memo import memoised
 
-__all__ = ["Kinematics", "KIN_METHODS"]
+__all__ = ["Kinematics", "KIN_METHODS", "kinematics_of", "load_chain"]
 
 C_IK_MAX_JOINTS = 12  # SYMKIN_IK_NMAX of the C solver; longer chains use the NumPy solver
 
@@ -49,9 +44,32 @@ KIN_METHODS = (
 
 def _rebuild(robot: Robot, backend: str) -> Kinematics:
     """The kinematics of ``robot`` on ``backend`` (the unpickler of :class:`Kinematics`)."""
-    from symkin.compile import compile as compile_robot
+    return load_chain(robot, backend)
 
-    return compile_robot(robot, backend=backend)
+
+def load_chain(
+    robot: Robot, backend: str = "c", cache: bool = True, strategy: str | None = None
+) -> Kinematics:
+    """The compiled kinematics of the chain ``robot`` on ``backend`` (memoised per cache key: every
+    attribute of the robot, see :mod:`symkin.compiler.compile`)."""
+    key = cache_key(robot, backend, strategy)
+    return memoised(
+        key, lambda: kinematics_of(robot, build(robot, backend, cache, strategy, key), backend), cache
+    )
+
+
+def kinematics_of(robot: Robot, art: Artifact, backend: str) -> Kinematics:
+    """The :class:`Kinematics` of ``robot`` around its built code ``art``."""
+    if backend == "casadi":
+        fns = art.module.functions()
+        kin = Kinematics(
+            robot, backend, chain_functions(robot, fns, KIN_METHODS), art.files, art.path, art.module
+        )
+        kin.functions = fns  # type: ignore[attr-defined]
+        return kin
+    names = (*KIN_METHODS, "manipulability", "jacobm") if backend == "c" else KIN_METHODS
+    functions = {name: getattr(art.module, name) for name in names}
+    return Kinematics(robot, backend, functions, art.files, art.path, art.module)
 
 
 class Kinematics:
@@ -242,7 +260,7 @@ class Kinematics:
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
         if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
-            from symkin.runtime.ik_c import default_c_solver
+            from symkin.runtime.ik import default_c_solver
 
             self._ik_solver = solver = default_c_solver(self)
             self._ik_fast = solver.fast
@@ -252,19 +270,19 @@ class Kinematics:
             return solver.solve(Tep)
         return ik(self, Tep, **kwargs)
 
-    # -- closed-form inverse kinematics (symkin.compile_ik) -------------------------------------
+    # -- closed-form inverse kinematics (symkin.compiler.analytic_ik) -------------------------------------
     @cached_property
     def analytic(self) -> Any:
         """The closed-form solver of this robot on this backend (compiled on first use); raises
         NoAnalyticIKError naming what the arm lacks."""
-        from symkin.compile_ik import compile_analytic
+        from symkin.runtime.analytic_ik import compile_analytic
 
         return compile_analytic(self.robot, self.backend)
 
     @property
     def has_analytic_ik(self) -> bool:
         """Whether symkin derives a closed-form IK for this arm (cached; see :meth:`ik_all`)."""
-        from symkin.compile_ik import analytic_refusal
+        from symkin.compiler.analytic_ik import analytic_refusal
 
         return analytic_refusal(self.robot, self.backend) is None
 

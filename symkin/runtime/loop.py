@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import real_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
-from symkin.model.robot import real_array
 from symkin.runtime.control import MMC, StepInfo, rrmc, rrmc_controller
 from symkin.runtime.ik import check_pose, pose_error
 from symkin.runtime.servo import servo_gain, servo_velocity
@@ -127,7 +127,7 @@ def servo(
     servos; the joints off its path do not move (the loop then runs in Python).
     """
     if frame is not None or getattr(type(kin), "_symkin_tree", False):
-        from symkin.model.frame_view import task_kinematics
+        from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)
     if backend not in ("auto", "c", "python"):
@@ -249,7 +249,7 @@ def _check_cap(nu_max: Any) -> None:
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:
-    from symkin.progress import bar, progress_shown
+    from symkin.core.progress import bar, progress_shown
 
     if not progress_shown(progress):
         return None

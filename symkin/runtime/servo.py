@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import real_array
 from symkin.errors import ParameterError, PoseError
-from symkin.model.robot import real_array
 from symkin.runtime.ik import pose_error
 
 __all__ = ["p_servo", "servo_velocity", "servo_gain", "pose_error_checked"]

@@ -16,16 +16,41 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["TreeKinematics", "TREE_METHODS"]
+from symkin.compiler.compile import Artifact, build, cache_key
+from symkin.runtime.casadi_calls import tree_functions
+from symkin.runtime.memo import memoised
+
+__all__ = ["TreeKinematics", "TREE_METHODS", "load_tree", "tree_kinematics_of"]
 
 TREE_METHODS = ("fkine", "jacob0", "jacobe", "fkine_jacob0", "fkine_all", "jacob0_all", "fkine_jacob0_all")
 
 
 def _rebuild(tree: Any, backend: str) -> TreeKinematics:
     """The compiled kinematics of ``tree`` on ``backend`` (the unpickler of :class:`TreeKinematics`)."""
-    from symkin.compile_tree import compile_tree
+    return load_tree(tree, backend)
 
-    return compile_tree(tree, backend=backend)
+
+def load_tree(tree: Any, backend: str = "c", cache: bool = True) -> TreeKinematics:
+    """Every frame of ``tree`` in one kernel on ``backend``. The generated code depends on the
+    structure only (the cache key); the object also carries the limits, speeds and source a
+    controller reads, so trees that differ there get their own object."""
+    key = cache_key(tree, backend)
+    memo_key = (key, tree.qlim.tobytes(), np.asarray(tree.velocity).tobytes(), tree.source)
+    return memoised(
+        memo_key, lambda: tree_kinematics_of(tree, build(tree, backend, cache, key=key), backend), cache
+    )
+
+
+def tree_kinematics_of(tree: Any, art: Artifact, backend: str) -> TreeKinematics:
+    """The :class:`TreeKinematics` of ``tree`` around its built code ``art``."""
+    if backend == "casadi":
+        fns = art.module.functions()
+        functions = tree_functions(tree, fns, TREE_METHODS)
+        kin = TreeKinematics(tree, backend, functions, art.files, art.path, art.module)
+        kin.functions = fns  # type: ignore[attr-defined]
+        return kin
+    functions = {name: getattr(art.module, name) for name in TREE_METHODS}
+    return TreeKinematics(tree, backend, functions, art.files, art.path, art.module)
 
 
 class TreeKinematics:
@@ -97,6 +122,14 @@ class TreeKinematics:
         the compile cache of the process that unpickles (a Dask worker, say) when it is there."""
         return (_rebuild, (self.tree, self.backend))
 
+    @property
+    def c_prefix(self) -> str:
+        """The prefix of the exported C symbols (``symkin_<tree>_tree`` unless generated with another)."""
+        headers = sorted(f for f in self.files if f.endswith(".h"))
+        if self.backend != "c" or not headers:
+            raise AttributeError("c_prefix exists only on the C backend")
+        return headers[0][:-2]
+
     def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
         """Uniform random configurations within qlim: (n,) or (N, n)."""
         return self.tree.random_q(N, seed)
@@ -133,10 +166,9 @@ class TreeKinematics:
         if self.backend != "c":
             return None
         from symkin.emit.c.build import load_library
-        from symkin.emit.tree import tree_prefix
 
         k = self.tree.frame_position(frame)
-        lib, prefix = load_library(self.path), tree_prefix(self.tree)
+        lib, prefix = load_library(self.path), self.c_prefix
         try:
             return {
                 name: getattr(lib, f"{prefix}_{name}_{k}")
@@ -148,8 +180,7 @@ class TreeKinematics:
     def _c_fkjac_of(self, frame: str) -> Any:
         """The C entry point ``fkine_jacob0`` of ``frame`` as a ctypes function (C backend)."""
         from symkin.emit.c.build import load_library
-        from symkin.emit.tree import tree_prefix
 
         k = self.tree.frame_position(frame)
         self._lib = load_library(self.path)
-        return getattr(self._lib, f"{tree_prefix(self.tree)}_fkine_jacob0_{k}")
+        return getattr(self._lib, f"{self.c_prefix}_fkine_jacob0_{k}")

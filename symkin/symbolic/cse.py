@@ -9,13 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
-
-if TYPE_CHECKING:
-    from symkin.symbolic.program import HessianLoop
 
 __all__ = ["OpCounts", "CSEResult", "count_ops", "cse_outputs", "floatify", "tree_size", "depth"]
 
@@ -187,3 +183,35 @@ def cse_outputs(
         counts = counts + count_ops(e)
     out = {name: (shape, tuple(reduced[a:b])) for name, (shape, a, b) in shapes.items()}
     return CSEResult(tuple(repl), out, counts, tuple(inputs))
+
+
+@dataclass(frozen=True)
+class HessianLoop:
+    """A Hessian (n, 6, n) written by loops from a Jacobian (6, n) of the same frame.
+
+    With ``Jv_a, Jw_a`` the columns of joint a (``Jw = 0`` for a prismatic joint) and chain order
+    ``order`` (joint index of the k-th joint from the base):
+
+    - base frame (``frame="base"``, eq 20 of Haviland and Corke, Maximising Manipulability During
+      Resolved-Rate Motion Control, 2020): for b at or before a,
+      ``dJ_a/dq_b = (Jw_b x Jv_a ; Jw_b x Jw_a)``; for b after a, ``(Jw_a x Jv_b ; 0)``;
+    - end-effector frame (``frame="ee"``): for b after a,
+      ``dJe_a/dq_b = (Jw_a x Jv_b - Jw_b x Jv_a ; Jw_a x Jw_b)``, and 0 for b at or before a
+      (a joint does not move the end-effector-frame axes of the joints after it).
+
+    ``out`` names the Hessian output and ``jacobian`` the (6, n) array it reads.
+    """
+
+    out: str
+    jacobian: str
+    frame: str
+    order: tuple[int, ...]
+
+    @property
+    def counts(self) -> OpCounts:
+        """Operations the loops execute (a cross product: 6 mul, 3 add)."""
+        n = len(self.order)
+        pairs, strict = n * (n + 1) // 2, n * (n - 1) // 2
+        if self.frame == "base":  # b after a reuses the block of (a, b)
+            return OpCounts(mul=12 * pairs, add=6 * pairs)
+        return OpCounts(mul=18 * strict, add=12 * strict)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from symkin.model.ets import ETS, Const
-from symkin.symbolic.cse import CSEResult, OpCounts, count_ops, floatify
+from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, count_ops, floatify
 
 __all__ = ["Program", "KinematicProgram", "derive_program", "HessianLoop", "program_code"]
 
@@ -302,39 +302,7 @@ def _hessians(
     return tuple(H0), tuple(He)
 
 
-@dataclass(frozen=True)
-class HessianLoop:
-    """A Hessian (n, 6, n) written by loops from a Jacobian (6, n) of the same frame.
-
-    With ``Jv_a, Jw_a`` the columns of joint a (``Jw = 0`` for a prismatic joint) and chain order
-    ``order`` (joint index of the k-th joint from the base):
-
-    - base frame (``frame="base"``, eq 20 of Haviland and Corke, Maximising Manipulability During
-      Resolved-Rate Motion Control, 2020): for b at or before a,
-      ``dJ_a/dq_b = (Jw_b x Jv_a ; Jw_b x Jw_a)``; for b after a, ``(Jw_a x Jv_b ; 0)``;
-    - end-effector frame (``frame="ee"``): for b after a,
-      ``dJe_a/dq_b = (Jw_a x Jv_b - Jw_b x Jv_a ; Jw_a x Jw_b)``, and 0 for b at or before a
-      (a joint does not move the end-effector-frame axes of the joints after it).
-
-    ``out`` names the Hessian output and ``jacobian`` the (6, n) array it reads.
-    """
-
-    out: str
-    jacobian: str
-    frame: str
-    order: tuple[int, ...]
-
-    @property
-    def counts(self) -> OpCounts:
-        """Operations the loops execute (a cross product: 6 mul, 3 add)."""
-        n = len(self.order)
-        pairs, strict = n * (n + 1) // 2, n * (n - 1) // 2
-        if self.frame == "base":  # b after a reuses the block of (a, b)
-            return OpCounts(mul=12 * pairs, add=6 * pairs)
-        return OpCounts(mul=18 * strict, add=12 * strict)
-
-
-def _needed(lines: Sequence[tuple[sp.Symbol, sp.Expr]], roots: list[sp.Expr]) -> list[int]:
+def needed_lines(lines: Sequence[tuple[sp.Symbol, sp.Expr]], roots: list[sp.Expr]) -> list[int]:
     """Indices of the lines the ``roots`` depend on, in program order (dead code dropped)."""
     index = {s: i for i, (s, _) in enumerate(lines)}
     need: set[int] = set()
@@ -361,7 +329,7 @@ def program_code(
         mats = value if isinstance(value, tuple) else (value,)
         shape = mats[0].shape if not isinstance(value, tuple) else (len(mats), *mats[0].shape)
         flat[name] = (tuple(shape), tuple(floatify(x, memo) for m in mats for x in m))
-    keep = _needed(kp.lines, [e for _, exprs in flat.values() for e in exprs])
+    keep = needed_lines(kp.lines, [e for _, exprs in flat.values() for e in exprs])
     lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in keep)
     counts = OpCounts()
     for _, e in lines:

@@ -83,7 +83,7 @@ def samples(
     n, chunk, seed = int(n), _stored_chunk(output, overwrite) or int(chunk), int(seed)
     sample = sample_range(np.asarray(kin.qlim, dtype=float), revolute_mask(kin))
     blocks = -(-n // chunk)
-    from symkin import __version__
+    from symkin.core.version import __version__
 
     attrs = {
         "kind": "dataset",

@@ -80,7 +80,7 @@ def kinematics_of(robot_or_kin: Any, backend: str = "c") -> Any:
 
     if isinstance(robot_or_kin, Kinematics):
         return robot_or_kin
-    from symkin.compile import compile as compile_robot
+    from symkin.runtime.load import compile as compile_robot
 
     return compile_robot(robot_or_kin, backend=backend)
 
@@ -212,7 +212,7 @@ def reachability(
         "solutions": bool(solutions),
         "backend": kin.backend,
     }
-    from symkin import __version__
+    from symkin.core.version import __version__
 
     attrs = {"kind": "reachability", "robot": robot_attrs(kin.robot), "settings": settings, "seed": seed,
              "symkin_version": __version__}  # fmt: skip

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
-import numpy as np
+import re
 
-from symkin.bench.urdf_sweep import _one, find_chains, format_sweep
-from symkin.compile import compile as compile_model
+import numpy as np
+import pytest
+
+from symkin.bench.urdf_sweep import TOL, _one, find_chains, format_sweep
+from symkin.model.tree import Tree
+from symkin.runtime.load import compile as compile_model
 from tests.model.tree_urdfs import GRIPPER, QUADRUPED, joint, urdf
 
 
@@ -29,16 +33,65 @@ def test_chains_root_to_leaf_deduplicated_mimic_as_trees_and_refusals_reported(t
     assert [b[0] for b in bad] == ["broken.urdf"] and "malformed XML" in bad[0][1]
 
 
+class _Shifted:
+    """Compiled kinematics whose FK (translation x) or J (first entry) is off by a known amount."""
+
+    def __init__(self, kin, dT: float, dJ: float) -> None:
+        self.kin, self.dT, self.dJ = kin, dT, dJ
+
+    def fkine(self, *args, **kwargs):
+        T = np.array(self.kin.fkine(*args, **kwargs))
+        T[..., 0, 3] += self.dT
+        return T
+
+    def jacob0(self, *args, **kwargs):
+        J = np.array(self.kin.jacob0(*args, **kwargs))
+        J[..., 0, 0] += self.dJ
+        return J
+
+
+def _gripper_tip(root):
+    """The chain to fa_tip2 of GRIPPER (three joints, two mimic joints on the path)."""
+    root.mkdir(exist_ok=True)
+    (root / "gripper.urdf").write_text(GRIPPER)
+    chains, _, _ = find_chains(root)
+    return next(c for c in chains if c.leaf == "fa_tip2")
+
+
+def _row(c) -> dict:
+    """A chain's row of the sweep's report, as run_sweep writes it."""
+    return {"urdf": c.urdf, "base": c.base, "leaf": c.leaf, "n": c.n,
+            "mimic": c.model.__class__.__name__ == "Tree", "same_as": c.also, "compile_s": c.compile_s,
+            "error": c.error, "pinocchio": c.pinocchio, "snap": c.snap, "failure": c.failure}  # fmt: skip
+
+
 def test_one_chain_is_compiled_and_checked(tmp_path):
-    (tmp_path / "gripper.urdf").write_text(GRIPPER)
-    chains, _, _ = find_chains(tmp_path)
-    chain = next(c for c in chains if c.leaf == "fa_tip2")
-    _one(chain, ("numpy",), compile_model, tmp_path, {}, seed=0)
-    assert chain.failure == "" and chain.error["numpy"] < 1e-12 and chain.compile_s["numpy"] > 0
-    row = {"urdf": chain.urdf, "base": chain.base, "leaf": chain.leaf, "n": chain.n, "mimic": True,
-           "same_as": [], "compile_s": chain.compile_s, "error": chain.error, "pinocchio": None,
-           "failure": ""}  # fmt: skip
-    text = format_sweep({"ok": True, "files": 1, "unreadable": [], "found": 2, "distinct": 1, "find_s": 0.0,
-                         "backends": ["numpy"], "rows": [row]})  # fmt: skip
-    assert "failures: 0" in text and "joints per distinct chain: 3: 1" in text
-    assert np.isfinite(chain.error["numpy"])
+    root = tmp_path / "erd"
+    good, bad = _gripper_tip(root), _gripper_tip(root)
+    _one(good, ("numpy",), compile_model, root, {}, seed=0)
+    assert good.failure == "" and good.error["numpy"] < 1e-12 and good.compile_s["numpy"] > 0
+    # a deliberately wrong model (the wrist 1 cm further out) compiled for the same chain is flagged
+    (tmp_path / "wrong.urdf").write_text(GRIPPER.replace('xyz="0.3 0 0"', 'xyz="0.31 0 0"'))
+    wrong = Tree.from_urdf(tmp_path / "wrong.urdf", frames=["fa_tip2"], base_link=bad.base)
+    _one(bad, ("numpy",), lambda model, backend: compile_model(wrong, backend), root, {}, seed=0)
+    assert 5e-3 < bad.error["numpy"] < 2e-2, bad.error
+    assert f"numpy: FK/J differ from the reference by {bad.error['numpy']:.2e}" in bad.failure.split("; ")
+    text = format_sweep({"ok": False, "files": 1, "unreadable": [], "found": 2, "distinct": 2, "find_s": 0.0,
+                         "backends": ["numpy"], "rows": [_row(good), _row(bad)]})  # fmt: skip
+    assert "joints per distinct chain: 3: 2" in text
+    assert re.search(r"^numpy +2 +1 ", text, re.M), text  # compiled 2, within 1e-10: 1
+    assert f"largest FK/J difference from the numeric reference: {bad.error['numpy']:.1e}" in text
+    assert "failures: 1\n" in text and f"\n  gripper.urdf:fa_tip2: {bad.failure}" in text
+
+
+@pytest.mark.parametrize(("dT", "dJ"), [(1e-6, 0.0), (0.0, 1e-6), (5e-11, 0.0)])
+def test_the_error_is_the_difference_from_the_numeric_reference(tmp_path, dT, dJ):
+    """Kinematics off by a known amount in FK or in J: the chain's error is that amount, and it is a
+    failure when above the sweep's tolerance (1e-10)."""
+    chain = _gripper_tip(tmp_path)
+    _one(chain, ("numpy",), lambda m, b: _Shifted(compile_model(m, b), dT, dJ), tmp_path, {}, seed=0)
+    shift = max(dT, dJ)
+    assert abs(chain.error["numpy"] - shift) < 1e-13, chain.error
+    failures = chain.failure.split("; ")
+    flagged = f"numpy: FK/J differ from the reference by {chain.error['numpy']:.2e}" in failures
+    assert flagged == (shift > TOL), chain.failure

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.compile import cache_dir, generate
-from symkin.emit.snapshot import compare_or_update
+import symkin.runtime.memo
+from symkin.compiler.compile import cache_dir, generate
+from symkin.compiler.snapshot import compare_or_update
 from symkin.model.robots import load
 from tests.conftest import assert_close
 
@@ -126,7 +127,7 @@ def test_corrupted_cache_entries_are_detected_and_rebuilt(tmp_path, monkeypatch)
     first = next(iter(data["files"]))
     data["files"][first] = data["files"][first].replace("np.cos", "np.sin")
     entry.write_text(json.dumps(data))
-    symkin.compile.__globals__["_LOADED"].clear()
+    symkin.runtime.memo.clear()
     assert_close(symkin.compile(robot, backend="numpy").fkine(q), ref, 1e-15)
     # truncate a compiled library (built by another process, so this one has not mapped it):
     # detected by its checksum and rebuilt

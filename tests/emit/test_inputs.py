@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import symkin
+from symkin.core.names import IDENTIFIER_MAX, identifier
 from symkin.errors import ConfigurationError, ParameterError
-from symkin.model.robot import IDENTIFIER_MAX, identifier
 from symkin.runtime.kinematics import KIN_METHODS
 
 BACKENDS = ("c", "numpy", "casadi")

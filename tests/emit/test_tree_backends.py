@@ -11,7 +11,7 @@ import pytest
 
 import symkin
 from symkin import ConfigurationError, FrameError, Tree
-from symkin.compile import generate
+from symkin.compiler.compile import generate
 from tests.conftest import assert_close
 from tests.model.tree_urdfs import GRIPPER, QUADRUPED, fixed, joint, urdf
 
@@ -77,7 +77,7 @@ def test_the_kernel_shares_what_frames_share():
         for i in range(3)
     ]
     xml = urdf([f"k{i}" for i in range(7)] + [f"{s}{i}" for s in "ab" for i in range(1, 4)], trunk + branches)
-    from symkin.compile_tree import tree_derivation_functions
+    from symkin.compiler.compile import tree_derivation_functions
 
     tree = Tree.from_urdf(xml)
     assert tree.n == 12 and tree.frames == ("a3", "b3")

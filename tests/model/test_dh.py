@@ -11,8 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from symkin import load_dh_file
 from symkin.errors import RobotError
-from symkin.model.dh import DHLink, angle_const, load_dh_file, parse_dh_table, robot_from_dh
+from symkin.model.dh import DHLink, angle_const, dh_table_args
 from symkin.model.ets import Const
 from symkin.model.robot import Robot
 from symkin.model.robots import load
@@ -48,14 +49,14 @@ def fk_reference(rows: list[dict], q: np.ndarray, modified: bool) -> np.ndarray:
 
 def test_standard_and_modified_link_order() -> None:
     link = DHLink(d=0.1, a=0.2, alpha="pi/2", offset="pi/6")
-    assert str(robot_from_dh([link]).ets) == "Rz(pi/6) Rz(q0) tz(0.1) tx(0.2) Rx(pi/2)"
-    assert str(robot_from_dh([link], modified=True).ets) == "tx(0.2) Rx(pi/2) Rz(pi/6) Rz(q0) tz(0.1)"
+    assert str(Robot.from_dh([link]).ets) == "Rz(pi/6) Rz(q0) tz(0.1) tx(0.2) Rx(pi/2)"
+    assert str(Robot.from_dh([link], modified=True).ets) == "tx(0.2) Rx(pi/2) Rz(pi/6) Rz(q0) tz(0.1)"
     p = DHLink(theta="-pi/2", a=0.0203, prismatic=True, offset=0.1)
-    assert str(robot_from_dh([p]).ets) == "Rz(-pi/2) tz(0.1) tz(q0) tx(0.0203)"
+    assert str(Robot.from_dh([p]).ets) == "Rz(-pi/2) tz(0.1) tz(q0) tx(0.0203)"
 
 
 def test_zero_constants_are_dropped() -> None:
-    assert str(robot_from_dh([DHLink(), DHLink(a=1)]).ets) == "Rz(q0) Rz(q1) tx(1)"
+    assert str(Robot.from_dh([DHLink(), DHLink(a=1)]).ets) == "Rz(q0) Rz(q1) tx(1)"
 
 
 @pytest.mark.parametrize(
@@ -80,7 +81,7 @@ def test_angles_snap_to_exact_multiples_of_pi(value: object, text: str) -> None:
 
 
 def test_float_lengths_stay_the_decimal_they_print_as() -> None:
-    r = robot_from_dh([DHLink(d=0.089159, a=np.float64(-0.425), alpha=math.pi / 2)])
+    r = Robot.from_dh([DHLink(d=0.089159, a=np.float64(-0.425), alpha=math.pi / 2)])
     assert str(r.ets) == "Rz(q0) tz(0.089159) tx(-0.425) Rx(pi/2)"
 
 
@@ -98,7 +99,7 @@ def test_fk_matches_the_textbook_dh_matrices(rows: list[dict], modified: bool, s
         if row["prismatic"]:
             row["theta"] = row.pop("alpha")  # a constant joint angle for prismatic rows
             row["alpha"] = 0.3
-    r = robot_from_dh([DHLink(**row) for row in rows], modified=modified)
+    r = Robot.from_dh([DHLink(**row) for row in rows], modified=modified)
     q = np.random.default_rng(seed).uniform(-2, 2, len(rows))
     np.testing.assert_allclose(r.fkine(q), fk_reference(rows, q, modified), atol=1e-12)
 
@@ -108,7 +109,7 @@ def test_base_tool_limits_names_and_configs() -> None:
         {"d": 0.3, "alpha": "pi/2", "qlim": (-1, 1), "name": "shoulder"},
         {"type": "P", "qlim": (0, 0.5), "name": "slide"},
     ]
-    r = robot_from_dh(
+    r = Robot.from_dh(
         links, base="tz(1)", tool="tx(0.1)", configs={"qr": [0.5, 0.2]}, qd_max=[1, 2], name="arm"
     )
     assert str(r.ets) == "tz(1) Rz(q0) tz(0.3) Rx(pi/2) tz(q1) tx(0.1)"
@@ -135,7 +136,7 @@ def test_base_tool_limits_names_and_configs() -> None:
 )
 def test_bad_dh_input_raises_an_actionable_robot_error(links: list, kwargs: dict, words: list[str]) -> None:
     with pytest.raises(RobotError) as info:
-        robot_from_dh(links, **kwargs)
+        Robot.from_dh(links, **kwargs)
     for w in words:
         assert w in str(info.value)
 
@@ -197,7 +198,7 @@ R 0.10915 0 pi/2
 R 0.09465 0 -pi/2
 R 0.0823 0 0
 """
-    r = parse_dh_table(text, "ur5.dh")
+    r = _parse_dh_table(text, "ur5.dh")
     assert isinstance(r, Robot)
     Q = load("ur5").random_q(10, seed=3)
     np.testing.assert_allclose(r.fkine(Q), load("ur5").fkine(Q), atol=1e-12)
@@ -222,7 +223,7 @@ R 0.0823 0 0
 )
 def test_bad_tables_name_the_file_line_and_the_fix(text: str, words: list[str]) -> None:
     with pytest.raises(RobotError) as info:
-        parse_dh_table(text, "t.dh")
+        _parse_dh_table(text, "t.dh")
     for w in words:
         assert w in str(info.value)
 
@@ -236,3 +237,7 @@ def test_robot_from_dh_is_the_robot_classmethod() -> None:
     r = Robot.from_dh([DHLink(a=1), DHLink(a=1)], name="p2")
     assert str(r.ets) == str(load("planar2").ets) and r.name == "p2"
     assert angle_const(Const.of("pi/3")) == Const.pi_times(Fraction(1, 3))
+
+
+def _parse_dh_table(text, filename="<dh table>"):
+    return Robot(**dh_table_args(text, filename))

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from symkin import ETS, Robot
 from symkin.errors import SymkinError
-from symkin.model.dh import DHLink, parse_dh_table, robot_from_dh
+from symkin.model.dh import DHLink, dh_table_args
 
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 FEW = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -107,7 +107,7 @@ _NUM = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)
 def test_dh_robot_matches_the_dh_product(rows, modified, seed):
     """Standard: Rz(theta) Tz(d) Tx(a) Rx(alpha); modified: Tx(a) Rx(alpha) Rz(theta) Tz(d)."""
     links = [DHLink(d=d, a=a, alpha=al, offset=off, prismatic=p) for d, a, al, off, p in rows]
-    robot = robot_from_dh(links, modified=modified)
+    robot = Robot.from_dh(links, modified=modified)
     q = np.random.default_rng(seed).uniform(-1, 1, len(rows))
     T = np.eye(4)
     for (d, a, al, off, p), qj in zip(rows, q):
@@ -135,7 +135,7 @@ CELLS = [
 def test_dh_table_text_parses_or_raises_a_symkin_error(header, rows, first):
     text = "\n".join([first, " ".join(header), *(" ".join(r) for r in rows)])
     try:
-        robot = parse_dh_table(text)
+        robot = Robot(**dh_table_args(text))
     except SymkinError:
         return
     assert np.isfinite(robot.fkine(np.zeros(robot.n))).all()

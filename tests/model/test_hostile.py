@@ -10,7 +10,8 @@ import pytest
 import symkin
 from symkin import ETS, Robot
 from symkin.errors import ETSParseError, RobotError, URDFError
-from symkin.model.dh import DHLink, parse_dh_table
+from symkin.model.dh import DHLink
+from symkin.model.dh import dh_table_args as parse_dh_table
 from symkin.model.ets import MAX_CONST_CHARS, Const
 
 

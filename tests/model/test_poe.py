@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from symkin.errors import RobotError
-from symkin.model.poe import poe_of, robot_from_poe
+from symkin.model.poe import poe_of
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load
 
@@ -71,14 +71,14 @@ B_UR5 = (adjoint(np.linalg.inv(M_UR5)) @ S_UR5.T).T
 
 
 def test_ur5_example_matches_the_published_pose() -> None:
-    r = robot_from_poe(M_UR5, S_UR5)
+    r = Robot.from_poe(M_UR5, S_UR5)
     T = r.fkine([0, -math.pi / 2, 0, 0, math.pi / 2, 0])
     expected = np.array([[0, -1, 0, 0.095], [1, 0, 0, 0.109], [0, 0, 1, 0.988], [0, 0, 0, 1]])
     np.testing.assert_allclose(T, expected, atol=1e-12)
 
 
 def test_axis_aligned_screws_become_single_ets() -> None:
-    r = robot_from_poe(M_UR5, S_UR5)
+    r = Robot.from_poe(M_UR5, S_UR5)
     assert len([e for e in r.ets if e.is_joint]) == 6
     assert "atan2" not in str(r.ets)
     assert str(r.ets).startswith("Rz(q0) tz(0.089) Ry(q1) tx(0.425) Ry(q2)")  # inverse constants merged
@@ -88,14 +88,14 @@ def test_axis_aligned_screws_become_single_ets() -> None:
 @pytest.mark.parametrize("frame", ["space", "body"])
 def test_ur5_example_matches_the_matrix_exponential_product(frame: str) -> None:
     screws = S_UR5 if frame == "space" else B_UR5
-    r = robot_from_poe(M_UR5, screws, frame=frame)
+    r = Robot.from_poe(M_UR5, screws, frame=frame)
     ref = poe_space if frame == "space" else poe_body
     for q in np.random.default_rng(7).uniform(-3, 3, (10, 6)):
         np.testing.assert_allclose(r.fkine(q), ref(M_UR5, screws, q), atol=1e-12)
 
 
 def test_space_and_body_forms_agree() -> None:
-    rs = robot_from_poe(M_UR5, S_UR5, frame="space")
+    rs = Robot.from_poe(M_UR5, S_UR5, frame="space")
     rb = Robot.from_poe(M_UR5, B_UR5, frame="body")
     Q = np.random.default_rng(8).uniform(-3, 3, (20, 6))
     np.testing.assert_allclose(rs.fkine(Q), rb.fkine(Q), atol=1e-12)
@@ -108,7 +108,7 @@ def test_tilted_and_prismatic_screws() -> None:
     S = np.array([np.r_[w, -np.cross(w, p)], [0, 0, 0, 0.6, 0, 0.8], [0, 0, 1, 0, 0, 0]])
     M = np.eye(4)
     M[:3, 3] = [0.5, 0, 0.2]
-    r = robot_from_poe(M, S)
+    r = Robot.from_poe(M, S)
     assert "Rx(pi/4) Ry(q0) Rx(-pi/4)" in str(r.ets)
     assert r.ets.structure == "RPR"
     for q in np.random.default_rng(9).uniform(-2, 2, (10, 3)):
@@ -122,7 +122,7 @@ def test_round_trip_through_the_space_and_body_screws_of_every_builtin(name: str
     B = (adjoint(np.linalg.inv(M)) @ S.T).T
     Q = robot.random_q(10, seed=10)
     for frame, screws in (("space", S), ("body", B)):
-        r = robot_from_poe(M, screws, frame=frame)
+        r = Robot.from_poe(M, screws, frame=frame)
         np.testing.assert_allclose(r.fkine(Q), robot.fkine(Q), atol=1e-12)
 
 
@@ -130,14 +130,14 @@ def test_poe_about_a_nonzero_configuration() -> None:
     robot = load("panda")
     q0 = robot.qr
     M, S = poe_of(robot, q0)
-    r = robot_from_poe(M, S)
+    r = Robot.from_poe(M, S)
     dQ = np.random.default_rng(11).uniform(-1, 1, (10, 7))
     np.testing.assert_allclose(r.fkine(dQ), robot.fkine(q0 + dQ), atol=1e-12)
 
 
 @pytest.mark.parametrize("frame", ["space", "body"])
 def test_body_jacobian_is_the_adjoint_of_the_space_jacobian(frame: str) -> None:
-    r = robot_from_poe(M_UR5, S_UR5 if frame == "space" else B_UR5, frame=frame)
+    r = Robot.from_poe(M_UR5, S_UR5 if frame == "space" else B_UR5, frame=frame)
     np.testing.assert_allclose(r.jacobs(np.zeros(6)), S_UR5.T, atol=1e-12)  # J_s(0) = [S_1 ... S_n]
     np.testing.assert_allclose(r.jacobb(np.zeros(6)), B_UR5.T, atol=1e-12)
     for q in np.random.default_rng(12).uniform(-3, 3, (10, 6)):
@@ -148,7 +148,7 @@ def test_body_jacobian_is_the_adjoint_of_the_space_jacobian(frame: str) -> None:
 def test_body_jacobian_adjoint_relation_with_flipped_and_prismatic_joints() -> None:
     for name in ("panda", "stanford"):
         M, S = poe_of(load(name))
-        r = robot_from_poe(M, S)
+        r = Robot.from_poe(M, S)
         for q in r.random_q(5, seed=13):
             T = r.fkine(q)
             np.testing.assert_allclose(r.jacobb(q), adjoint(np.linalg.inv(T)) @ r.jacobs(q), atol=1e-12)
@@ -173,6 +173,6 @@ def test_bad_poe_input_raises_an_actionable_error(
     M: object, S: object, kwargs: dict, words: list[str]
 ) -> None:
     with pytest.raises(RobotError) as info:
-        robot_from_poe(M, S, **kwargs)
+        Robot.from_poe(M, S, **kwargs)
     for w in words:
         assert w in str(info.value)

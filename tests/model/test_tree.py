@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from symkin import FrameError, Robot, Tree, URDFError
-from symkin.model.urdf import robot_from_urdf
 from tests.conftest import assert_close
 from tests.model.tree_urdfs import ARM_CAMERA, GRIPPER, GRIPPER_FREE, QUADRUPED, fixed, joint, urdf
 
@@ -65,7 +64,7 @@ def test_each_frame_is_the_serial_chain_robot_from_urdf_imports(name):
     Q = tree.random_q(6, seed=1)
     for f in tree.frames:
         robot = tree.chain(f)
-        assert robot.ets == robot_from_urdf(xml, end_link=f).ets
+        assert robot.ets == Robot.from_urdf(xml, end_link=f).ets
         cols = [tree.slots[k].joint for k in tree.path_slots(f)]
         assert robot.joint_names == tuple(tree.joint_names[c] for c in cols)
         assert_close(tree.fkine(Q, f), robot.fkine(Q[:, cols]), 1e-13, f"T {f}")

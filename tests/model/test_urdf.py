@@ -14,7 +14,6 @@ from hypothesis import strategies as st
 from symkin.errors import RobotError, URDFError
 from symkin.model.robot import Robot
 from symkin.model.robots import load
-from symkin.model.urdf import robot_from_urdf
 
 HALF_PI = "1.570796326794897"
 
@@ -159,7 +158,7 @@ PANDA = urdf(
 
 
 def test_ur5_urdf_gives_the_same_ets_and_fk_as_the_published_dh() -> None:
-    r = robot_from_urdf(UR5)
+    r = Robot.from_urdf(UR5)
     ref = load("ur5")
     assert str(r.ets) == str(ref.ets)  # 1.570796326794897 snapped to pi/2; zero constants dropped
     Q = ref.random_q(20, seed=5)
@@ -172,7 +171,7 @@ def test_ur5_urdf_gives_the_same_ets_and_fk_as_the_published_dh() -> None:
 
 
 def test_panda_urdf_to_the_hand_plus_the_tool_offset_is_the_builtin_panda() -> None:
-    r = robot_from_urdf(PANDA, end_link="panda_hand")
+    r = Robot.from_urdf(PANDA, end_link="panda_hand")
     ref = load("panda")
     tool = np.eye(4)
     tool[2, 3] = 0.1034  # the URDF ends at panda_hand; the built-in at the tool point 0.1034 m further
@@ -185,7 +184,7 @@ def test_panda_urdf_to_the_hand_plus_the_tool_offset_is_the_builtin_panda() -> N
 
 
 def test_panda_urdf_to_the_left_finger_includes_the_prismatic_finger() -> None:
-    r = robot_from_urdf(PANDA, end_link="panda_leftfinger")
+    r = Robot.from_urdf(PANDA, end_link="panda_leftfinger")
     assert r.n == 8 and r.ets.structure == "RRRRRRRP"
     assert str(r.ets).endswith("tz(0.0584) ty(q7)")
 
@@ -194,14 +193,14 @@ def test_urdf_from_a_file_path(tmp_path: Path) -> None:
     f = tmp_path / "ur5.urdf"
     f.write_text(UR5)
     for arg in (f, str(f)):
-        assert str(robot_from_urdf(arg).ets) == str(load("ur5").ets)
+        assert str(Robot.from_urdf(arg).ets) == str(load("ur5").ets)
     assert (
         str(Robot.from_urdf(f, end_link="l3").ets) == "Rz(q0) tz(0.089159) Rx(pi/2) Rz(q1) tx(-0.425) Rz(q2)"
     )
 
 
 def test_sub_chain_between_named_links() -> None:
-    r = robot_from_urdf(UR5, base_link="l2", end_link="l5")
+    r = Robot.from_urdf(UR5, base_link="l2", end_link="l5")
     assert str(r.ets) == "tx(-0.425) Rz(q0) tx(-0.39225) Rz(q1) tz(0.10915) Rx(pi/2) Rz(q2)"
     assert r.joint_names == ("elbow", "wrist_1", "wrist_2")
 
@@ -219,7 +218,7 @@ def test_sub_chain_between_named_links() -> None:
     ],
 )
 def test_axes_become_exact_ets(axis: str, text: str) -> None:
-    r = robot_from_urdf(urdf(["a", "b"], [joint("j", "a", "b", axis=axis)]))
+    r = Robot.from_urdf(urdf(["a", "b"], [joint("j", "a", "b", axis=axis)]))
     assert str(r.ets) == text
 
 
@@ -275,7 +274,7 @@ def spec_urdf(spec: list[tuple]) -> str:
 
 def test_arbitrary_unit_axis_matches_rodrigues() -> None:
     spec = [("revolute", (0.1, -0.2, 0.3), (0.4, -0.5, 0.6), (1, 2, 2))]
-    r = robot_from_urdf(spec_urdf(spec))
+    r = Robot.from_urdf(spec_urdf(spec))
     assert "." not in str(r.ets).split("Rz(q0)")[1]  # the axis rotations are exact atan2 terms
     for q in np.linspace(-3, 3, 7):
         T = r.fkine([q])
@@ -301,7 +300,7 @@ joint_st = st.tuples(
 def test_random_chains_match_an_independent_urdf_fk(spec: list[tuple], seed: int) -> None:
     if all(k == "fixed" for k, *_ in spec):
         spec[0] = ("revolute", *spec[0][1:])
-    r = robot_from_urdf(spec_urdf(spec))
+    r = Robot.from_urdf(spec_urdf(spec))
     q = np.random.default_rng(seed).uniform(-2, 2, r.n)
     np.testing.assert_allclose(r.fkine(q), urdf_fk(spec, q), atol=1e-12)
 
@@ -312,7 +311,7 @@ def test_random_chains_match_an_independent_urdf_fk(spec: list[tuple], seed: int
 
 def test_branching_tree_without_end_link_lists_the_leaves() -> None:
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(PANDA)
+        Robot.from_urdf(PANDA)
     msg = str(info.value)
     assert (
         "branches" in msg
@@ -324,7 +323,7 @@ def test_branching_tree_without_end_link_lists_the_leaves() -> None:
 
 def test_mimic_joint_on_the_chain_is_rejected() -> None:
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(PANDA, end_link="panda_rightfinger")
+        Robot.from_urdf(PANDA, end_link="panda_rightfinger")
     msg = str(info.value)
     assert "'panda_finger_joint2'" in msg and "mimic" in msg and "'panda_finger_joint1'" in msg
 
@@ -332,7 +331,7 @@ def test_mimic_joint_on_the_chain_is_rejected() -> None:
 def test_malformed_xml_reports_line_and_column() -> None:
     bad = '<robot name="x">\n  <link name="a"/>\n  <link name="b">\n</robot>\n'
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(bad)
+        Robot.from_urdf(bad)
     msg = str(info.value)
     assert "malformed XML" in msg and "line 4" in msg and "column" in msg
 
@@ -340,7 +339,7 @@ def test_malformed_xml_reports_line_and_column() -> None:
 @pytest.mark.parametrize("kind", ["floating", "planar"])
 def test_floating_and_planar_joints_are_rejected(kind: str) -> None:
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(urdf(["a", "b"], [joint("free", "a", "b", kind=kind)]))
+        Robot.from_urdf(urdf(["a", "b"], [joint("free", "a", "b", kind=kind)]))
     msg = str(info.value)
     assert "'free'" in msg and kind in msg and "revolute, continuous, prismatic and fixed" in msg
 
@@ -369,26 +368,26 @@ def test_floating_and_planar_joints_are_rejected(kind: str) -> None:
 )
 def test_bad_urdf_raises_an_actionable_error(text: str, words: list[str]) -> None:
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(text)
+        Robot.from_urdf(text)
     for w in words:
         assert w in str(info.value)
 
 
 def test_unknown_links_and_missing_paths_name_the_links() -> None:
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(UR5, end_link="tool")
+        Robot.from_urdf(UR5, end_link="tool")
     assert "end_link 'tool'" in str(info.value) and "'tool0'" in str(info.value)
     with pytest.raises(URDFError) as info:
-        robot_from_urdf(UR5, base_link="basee")
+        Robot.from_urdf(UR5, base_link="basee")
     assert "base_link 'basee'" in str(info.value) and "'base'" in str(info.value)
     with pytest.raises(URDFError) as info:  # end above base: URDF chains go from parent to child
-        robot_from_urdf(UR5, base_link="l4", end_link="l2")
+        Robot.from_urdf(UR5, base_link="l4", end_link="l2")
     assert "no path" in str(info.value) and "'l4'" in str(info.value) and "'l2'" in str(info.value)
     with pytest.raises(URDFError) as info:  # two roots
-        robot_from_urdf(urdf(["a", "b", "c"], [joint("j", "a", "b")]))
+        Robot.from_urdf(urdf(["a", "b", "c"], [joint("j", "a", "b")]))
     assert "root links" in str(info.value) and "base_link" in str(info.value)
 
 
 def test_missing_file_is_a_urdf_error_and_a_robot_error(tmp_path: Path) -> None:
     with pytest.raises(RobotError, match="cannot read URDF file"):
-        robot_from_urdf(tmp_path / "missing.urdf")
+        Robot.from_urdf(tmp_path / "missing.urdf")

@@ -10,8 +10,6 @@ as the arithmetic. The same shared library also exports the plain C entry points
 from __future__ import annotations
 
 import hashlib
-import importlib.machinery
-import importlib.util
 import math
 import re
 import sysconfig
@@ -19,10 +17,11 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.emit.templates import Header, c_string, chain_tables, comment_safe, identifier, render
+from symkin.core.names import c_string, comment_safe, identifier
+from symkin.emit.templates import Header, chain_tables, render
 from symkin.errors import CompileError
 
-__all__ = ["render_c", "build_c", "compile_c", "load_extension", "c_prefix"]
+__all__ = ["render_c", "build_c", "compile_c", "c_prefix", "c_variant", "float_error"]
 
 
 def c_prefix(robot: Any) -> str:
@@ -73,6 +72,28 @@ def joint_table(robot: Any) -> list[dict[str, str]]:
 PRECISIONS = ("double", "float")
 
 
+def c_variant(
+    default_prefix: str, prefix: str | None, precision: str, libm: bool
+) -> tuple[Any, dict[str, Any]]:
+    """The printer and the template context of one variant of generated C, shared by chains and
+    trees: ``prefix`` (checked; ``default_prefix`` when None), ``real`` (``precision``: "double"
+    or "float"), the ``tiny`` and ``sqrt`` of the Cholesky in ``c/_gram.c.j2`` and ``libm`` for
+    ``c/_sincos.c.j2``."""
+    from symkin.emit.printers import CPrinter, FloatCPrinter
+
+    if precision not in PRECISIONS:
+        raise CompileError(f"unknown precision {precision!r}: choose one of {', '.join(PRECISIONS)}")
+    single = precision == "float"
+    context = {
+        "prefix": default_prefix if prefix is None else check_prefix(prefix),
+        "real": precision,
+        "tiny": "1e-30f" if single else "1e-300",
+        "sqrt": "sqrtf" if single else "sqrt",
+        "libm": libm,
+    }
+    return (FloatCPrinter() if single else CPrinter()), context
+
+
 def render_c(
     robot: Any,
     functions: list,
@@ -90,17 +111,13 @@ def render_c(
     defining ``SYMKIN_USE_LIBM`` when compiling).
     """
     from symkin.emit.lowering import lower
-    from symkin.emit.printers import CPrinter, FloatCPrinter
 
-    if precision not in PRECISIONS:
-        raise CompileError(f"unknown precision {precision!r}: choose one of {', '.join(PRECISIONS)}")
-    single = precision == "float"
-    printer = FloatCPrinter() if single else CPrinter()
+    printer, variant = c_variant(c_prefix(robot), prefix, precision, libm)
     printed = [lower(f, printer) for f in functions]
-    prefix = c_prefix(robot) if prefix is None else check_prefix(prefix)
+    prefix = variant["prefix"]
     header = Header.of(robot, functions, command, c_string(robot.name))
     context = {
-        "prefix": prefix,
+        **variant,
         "n": robot.n,
         "functions": printed,
         "header": header,
@@ -110,15 +127,11 @@ def render_c(
         "qd_max": robot.qd_max is not None,
         "licence": LICENCE,
         "references": header.references,
-        "real": precision,
-        "tiny": "1e-30f" if single else "1e-300",
-        "sqrt": "sqrtf" if single else "sqrt",
-        "libm": libm,
     }
     h = render("c/kinematics.h.j2", **context)
     c = render("c/kinematics.c.j2", **context)
     files = {f"{prefix}.h": h, f"{prefix}.c": c}
-    if single:
+    if precision == "float":
         return files
     ext = render("c/module.c.j2", module=module_name(files), **context)
     return {**files, f"{prefix}_pymodule.c": ext}
@@ -126,7 +139,9 @@ def render_c(
 
 def float_error(robot: Any, files: dict[str, str], samples: int = 100, seed: int = 0) -> dict[str, float]:
     """Largest |float - double| of the single-precision code's fkine and jacob0 (compiled here, called
-    through ctypes) against the numeric reference, over random configurations within the limits."""
+    through ctypes) against the numeric reference, over random configurations within the limits.
+    For a tree (``robot`` a :class:`symkin.Tree`): of every frame, through ``fkine_all`` and
+    ``jacob0_all``."""
     import ctypes
 
     import numpy as np
@@ -137,14 +152,22 @@ def float_error(robot: Any, files: dict[str, str], samples: int = 100, seed: int
     prefix = header[:-2]
     lib = load_library(compile_library(files, f"{prefix}_float"))
     Q = np.ascontiguousarray(robot.random_q(samples, seed=seed), dtype=np.float32)
+    if getattr(robot, "_symkin_tree", False):
+        F = len(robot.frames)
+        entries = (
+            ("fkine", "fkine_all", 16 * F, robot.fkine_all),
+            ("jacob0", "jacob0_all", 6 * robot.n * F, robot.jacob0_all),
+        )
+    else:
+        entries = (("fkine", "fkine", 16, robot.fkine), ("jacob0", "jacob0", 6 * robot.n, robot.jacob0))
     out = {}
-    for name, size, ref in (("fkine", 16, robot.fkine), ("jacob0", 6 * robot.n, robot.jacob0)):
+    for key, name, size, ref in entries:
         buf = np.empty(samples * size, dtype=np.float32)
         fn = getattr(lib, f"{prefix}_{name}_batch")
         fn.restype = None
         fn(Q.ctypes.data_as(ctypes.c_void_p), buf.ctypes.data_as(ctypes.c_void_p), ctypes.c_ssize_t(samples))
         want = ref(Q.astype(float))
-        out[name] = float(np.abs(buf.reshape(want.shape).astype(float) - want).max())
+        out[key] = float(np.abs(buf.reshape(want.shape).astype(float) - want).max())
     return out
 
 
@@ -186,20 +209,7 @@ def compile_c(files: dict[str, str]) -> tuple[str, Path]:
 
 def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:
     """Compile the generated files (cached) and import the extension module."""
+    from symkin.emit.c.build import load_extension
+
     name, path = compile_c(files)
     return load_extension(name, path), path
-
-
-def load_extension(name: str, path: Path) -> ModuleType:
-    """Import the extension module ``name`` from the shared library at ``path``."""
-    import sys
-
-    if name in sys.modules:
-        return sys.modules[name]
-    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
-    spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
-    assert spec is not None
-    module = importlib.util.module_from_spec(spec)
-    loader.exec_module(module)
-    sys.modules[name] = module
-    return module

@@ -19,20 +19,23 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import hashlib
+import importlib.machinery
+import importlib.util
 import os
 import re
 import shlex
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from pathlib import Path
+from types import ModuleType
 
+from symkin.core.cache import cache_dir
 from symkin.errors import CompileError
 
 __all__ = [
     "compile_library",
     "load_library",
-    "cache_dir",
-    "write_atomic",
+    "load_extension",
     "find_compiler",
     "check_cflags",
     "DEFAULT_OPT_FLAGS",
@@ -54,39 +57,6 @@ BASE_FLAGS: tuple[str, ...] = (
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*\.(c|h)$")
 _NO_COMPILER_HINT = "The NumPy backend works without a C compiler (backend='numpy')."
-
-
-_ABSOLUTE: dict[str, Path] = {}
-
-
-def cache_dir() -> Path:
-    """``$SYMKIN_CACHE`` or ``~/.cache/symkin`` (created on first use), as an absolute path.
-
-    A relative ``SYMKIN_CACHE`` is taken relative to the working directory at its first use in
-    the process, so compiled objects keep working (and the cache stays put) after ``os.chdir``.
-    """
-    env = os.environ.get("SYMKIN_CACHE")
-    if not env:
-        return Path.home() / ".cache" / "symkin"
-    path = _ABSOLUTE.get(env)
-    if path is None:
-        path = _ABSOLUTE[env] = Path(env).expanduser().absolute()
-    return path
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to a unique temporary file beside ``path``, then rename it over ``path``."""
-    import tempfile
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
 
 
 def find_compiler() -> list[str]:
@@ -389,3 +359,18 @@ def load_library(path: str | os.PathLike[str]) -> ctypes.CDLL:
             raise CompileError(f"cannot load the compiled library {p}: {exc}") from None
         _LOADED[k] = lib
     return lib
+
+
+def load_extension(name: str, path: Path) -> ModuleType:
+    """Import the extension module ``name`` from the shared library at ``path``."""
+    import sys
+
+    if name in sys.modules:
+        return sys.modules[name]
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
+    assert spec is not None
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    sys.modules[name] = module
+    return module

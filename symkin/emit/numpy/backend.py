@@ -14,7 +14,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.emit.c.build import write_atomic
+from symkin.core.cache import write_atomic
 from symkin.emit.templates import chain_tables, render_python_module
 
 __all__ = ["render_numpy", "load_numpy"]

@@ -23,7 +23,7 @@ from sympy.printing.pycode import MpmathPrinter
 from symkin.model.ets import ETS, Axis
 from symkin.model.latex import display_name, et_latex, ets_latex
 from symkin.model.robot import Robot
-from symkin.symbolic.program import KinematicProgram, _needed, derive_program
+from symkin.symbolic.program import KinematicProgram, derive_program, needed_lines
 
 __all__ = ["program_derivation", "program_context", "LINES_PER_BLOCK"]
 
@@ -32,16 +32,16 @@ _XYZ = "xyz"
 
 
 def program_derivation(robot: Robot, symbolic_constants: bool) -> Any:
-    """The :class:`symkin.derivation.Derivation` of ``robot`` in program form (see the module)."""
-    from symkin.derivation import Derivation, _constants, _et_matrix
+    """The :class:`symkin.derive.chain.Derivation` of ``robot`` in program form (see the module)."""
+    from symkin.derive.common import Derivation, constants, et_matrix
 
     ets = robot.ets
     n = ets.n
     q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(n))
-    C = _constants(ets, symbolic_constants)
+    C = constants(ets, symbolic_constants)
     kp = derive_program(C.ets, q, C.constant, robot.name, hessians=True)
     eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
-    E = [_et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
+    E = [et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
     checks = _checks(kp, ets, eta, q, dict(C.values))
     im = sp.ImmutableMatrix
     position = {j: k for k, j in enumerate(kp.order)}
@@ -74,7 +74,7 @@ def _mp_function(kp: KinematicProgram, inputs: Sequence[sp.Symbol], outputs: lis
     """The program as one Python function of ``inputs`` evaluated with mpmath (joint symbols
     ``q_k``, constants ``l_k`` and intermediates ``tk`` are valid Python names as they are)."""
     printer = MpmathPrinter({"fully_qualified_modules": True})
-    needed = set(_needed(kp.lines, outputs))
+    needed = set(needed_lines(kp.lines, outputs))
     body = [f"    {s} = {printer.doprint(e)}" for i, (s, e) in enumerate(kp.lines) if i in needed]
     src = (
         f"def f({', '.join(str(s) for s in inputs)}):\n"
@@ -183,13 +183,13 @@ def _diff(a: Sequence[Any], b: Sequence[Any]) -> float:
 
 def program_context(D: Any) -> tuple[dict[str, Any], str]:
     """The template context of ``derive/program.md.j2`` and the LaTeX summary for Jupyter."""
-    from symkin import __version__
-    from symkin.derivation import _CHECK_TEXT, _constants, _Printer
+    from symkin.core.version import __version__
+    from symkin.derive.common import CHECK_TEXT, Printer, constants
 
     robot, q, n, ets = D.robot, D.q, len(D.q), D.robot.ets
-    C = _constants(ets, bool(D.constants))
+    C = constants(ets, bool(D.constants))
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-    P = _Printer(q)
+    P = Printer(q)
     for i, (s, _) in enumerate(D.intermediates):
         P.names[s] = f"\\zeta_{{{i}}}"
     lines = [(s, e) for s, e in D.intermediates]
@@ -205,7 +205,7 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
         "joint_map": ", ".join(f"$q_{{{j + 1}}}$ is `q{j}`" for j in range(n)),
         "ets": ets_latex(ets, names=C.names),
         "nodes": len(lines),
-        "checks": "; ".join(f"{k}: {_CHECK_TEXT[v]}" for k, v in D.checks.items()),
+        "checks": "; ".join(f"{k}: {CHECK_TEXT[v]}" for k, v in D.checks.items()),
     }
     ctx["joints"] = [
         [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from symkin.model.latex import _AXIS, et_latex
+from symkin.model.latex import AXIS_LATEX, et_latex
 from symkin.model.tree import Tree
 
 __all__ = ["tree_derivation"]
@@ -29,7 +29,7 @@ def _factor(e: Any) -> str:
     """One factor; a joint as the angle (or displacement) of its slot, theta_k."""
     if not e.is_joint:
         return et_latex(e)
-    return f"{_AXIS[e.axis]}({'-' if e.flip else ''}\\theta_{{{e.joint + 1}}})"
+    return f"{AXIS_LATEX[e.axis.name]}({'-' if e.flip else ''}\\theta_{{{e.joint + 1}}})"
 
 
 def _theta(s: Any) -> str:
@@ -76,8 +76,8 @@ def _checks(tree: Tree, tp: Any, samples: int = 3) -> float:
 
 def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
-    from symkin import __version__
-    from symkin.derivation import FORMATS, _latex_document, _Printer
+    from symkin.core.version import __version__
+    from symkin.derive.common import FORMATS, Printer, latex_document
     from symkin.emit.templates import render
     from symkin.errors import SymkinError
     from symkin.symbolic.kinematics import const_to_sympy
@@ -89,7 +89,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
         raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
     q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(tree.n))
     tp = derive_tree_program(tree, q, const_to_sympy, frame_jacobians=False)
-    P = _Printer(q)
+    P = Printer(q)
     for i, (s, _) in enumerate(tp.lines):
         P.names[s] = f"\\zeta_{{{i}}}"
     ends = dict(tp.marks)
@@ -166,7 +166,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
         source=safe_text(tree.source, limit=300),
     )
     if fmt == "latex":  # subsections as plain paragraphs
-        return _latex_document("\n".join(ln[4:] if ln.startswith("### ") else ln for ln in text.splitlines()))
+        return latex_document("\n".join(ln[4:] if ln.startswith("### ") else ln for ln in text.splitlines()))
     return text
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from symkin.compile import BACKENDS, generate
+from symkin.compiler.compile import BACKENDS, generate
 
 __all__ = ["snapshot_files", "compare_or_update", "COMMAND"]
 
@@ -21,8 +21,8 @@ def snapshot_files(
     robots: Iterable[str] | None = None, backends: Iterable[str] = BACKENDS, progress: bool = False
 ) -> dict[str, str]:
     """Every generated file as ``"<robot>/<backend>/<file>" -> text``."""
+    from symkin.core.progress import bar
     from symkin.model.robots import list_robots, load
-    from symkin.progress import bar
 
     out: dict[str, str] = {}
     for name in bar(list(robots or list_robots()), progress, desc="generating"):

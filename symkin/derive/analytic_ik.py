@@ -55,7 +55,7 @@ _RESULT = {
 
 def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") -> str:
     """The derivation of ``robot``'s closed-form IK; raises NoAnalyticIKError when there is none."""
-    from symkin import __version__
+    from symkin.core.version import __version__
 
     plan = derive_analytic(robot)
     g, s = plan.geometry, plan.structure

@@ -141,7 +141,7 @@ def check(
     seed: int = 0,
 ) -> CheckReport:
     """Compare every function of every backend (names, or compiled Kinematics objects) with the references."""
-    from symkin.compile import compile as compile_robot
+    from symkin.runtime.load import compile as compile_robot
 
     kins = [b if isinstance(b, Kinematics) else compile_robot(robot, backend=b) for b in backends]
     Q = sample_configurations(robot, samples, seed)

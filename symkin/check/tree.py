@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from symkin.check import FD_STEP, CheckReport, CheckRow, _rel, _shifted, _vee_rate
+from symkin.check.chain import FD_STEP, CheckReport, CheckRow, _rel, _shifted, _vee_rate
 from symkin.model.tree import Tree
 
 __all__ = ["check_tree", "tree_configurations"]
@@ -69,8 +69,8 @@ def check_tree(
     tree: Tree, backends: Sequence[str] = ("c", "numpy", "casadi"), samples: int = 20, seed: int = 0
 ) -> CheckReport:
     """Compare every function of every backend's tree kernel with the references (module docstring)."""
-    from symkin.compile import compile as compile_model
     from symkin.errors import URDFError
+    from symkin.runtime.load import compile as compile_model
 
     Q = tree_configurations(tree, samples, seed)
     h = FD_STEP

@@ -23,39 +23,44 @@ digits instead, and the text says which check was used.
 from __future__ import annotations
 
 import random
-import re
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
-from fractions import Fraction
+from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any, Literal
 
 import mpmath
 import sympy as sp
 
+from symkin.derive.common import (  # noqa: F401
+    CHECK_TEXT,
+    DISPLAY_MAX_OPS,
+    FORMATS,
+    MIX,
+    SECTIONS,
+    Constants,
+    Derivation,
+    Printer,
+    constants,
+    et_matrix,
+    generator,
+    latex_document,
+    ops_of,
+)
 from symkin.emit.templates import render
 from symkin.errors import SymkinError
-from symkin.model.ets import ET, ETS, Axis, Const, rational_text
-from symkin.model.latex import display_name, et_latex, ets_latex, text_latex
+from symkin.model.ets import ET, ETS, Axis
+from symkin.model.latex import display_name, et_latex, ets_latex
 from symkin.model.robot import Robot
-from symkin.symbolic.cse import count_ops
-from symkin.symbolic.kinematics import const_to_sympy, derive
+from symkin.symbolic.kinematics import derive
 
 __all__ = ["Derivation", "derive_steps", "derivation", "SECTIONS"]
 
 Fmt = Literal["markdown", "latex"]
-FORMATS = ("markdown", "latex")
 Form = Literal["auto", "expanded", "program"]
 FORMS = ("auto", "expanded", "program")
-#: The parts of a written derivation, in order (``derive --sections fk,jacobian``). The heading and
-#: the joint table are always written. In the program form a part that uses named quantities also
-#: brings the parts that define them (``fk`` the link frames, ``jacobian`` the link frames and ``fk``).
-SECTIONS = ("ets", "transforms", "links", "fk", "derivatives", "jacobian", "hessian", "checks")
 _NEEDS_PROGRAM = {"fk": ("links",), "jacobian": ("links", "fk"), "hessian": ("links", "fk", "jacobian")}
 SYMBOLIC_CHECK_MAX_OPS = 1500  # larger differences are checked at random points
-DISPLAY_MAX_OPS = 900  # larger expressions are not printed
 MATRIX_MAX_OPS = 160  # larger matrices are printed entry by entry
 FULL_MAX_N = 4  # dT/dq_j matrices and Hessian blocks are printed up to this many joints
-_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # a rotation about axis i mixes columns (j, k)
 _XYZ = "xyz"
 
 
@@ -63,155 +68,8 @@ _XYZ = "xyz"
 # Results
 
 
-@dataclass(frozen=True, eq=False)
-class Derivation:
-    """A robot's kinematics derived step by step. Matrices are sympy ``ImmutableMatrix``.
-
-    Attributes:
-        robot: the robot.
-        q: joint symbols ``q_1 .. q_n``; ``q[j]`` is symkin's joint ``j`` (0-based).
-        constants: symbol -> exact value of each symbolic link constant (empty unless
-            ``symbolic_constants``); :meth:`numeric` substitutes them.
-        E: the elementary transforms of the ETS as 4x4 matrices, in chain order (Fig. 2).
-        T: end-effector pose 0T_e, 4x4 (eq 1).
-        links: link frames 0T_j by joint index (eq 5).
-        ee: the end-effector pose in each link frame, jT_e, by joint index.
-        dT: dT/dq_j by joint index, 4x4 each (eq 26).
-        J0: base-frame Jacobian 6xn, rows (v, omega), by eqs 27-28.
-        J0_fast: the same by the fast form, eqs 31-34.
-        H0: Hessian blocks, ``H0[i] = dJ0/dq_i`` 6xn (eq 20 of the manipulability paper).
-        simplified: whether the results are the compact forms (else the literal products).
-        checks: how each equality was established: ``"symbolic"`` or ``"numeric"``.
-        fmt: the format of ``text``; text: the derivation as Markdown or a LaTeX document.
-        markdown: the derivation as Markdown whatever ``fmt`` (what Jupyter shows).
-        shown: the sections written (:data:`SECTIONS`).
-        form: ``"expanded"`` (every result multiplied out) or ``"program"`` (long chains: the
-            results are matrices over named intermediates, ``intermediates`` lists their
-            definitions in order and :meth:`expand` substitutes them back; ``dT`` and ``ee`` are
-            empty).
-        intermediates: (symbol, expression) of each named intermediate (program form).
-        sections: where each link frame's, the pose's and the Jacobians' intermediates end.
-    """
-
-    robot: Robot
-    q: tuple[sp.Symbol, ...]
-    constants: Mapping[sp.Symbol, sp.Expr]
-    E: tuple[sp.ImmutableMatrix, ...]
-    T: sp.ImmutableMatrix
-    links: tuple[sp.ImmutableMatrix, ...]
-    ee: tuple[sp.ImmutableMatrix, ...]
-    dT: tuple[sp.ImmutableMatrix, ...]
-    J0: sp.ImmutableMatrix
-    J0_fast: sp.ImmutableMatrix
-    H0: tuple[sp.ImmutableMatrix, ...]
-    simplified: bool
-    checks: Mapping[str, str]
-    fmt: str = "markdown"
-    text: str = ""
-    latex_summary: str = field(default="", repr=False)
-    form: str = "expanded"
-    intermediates: tuple[tuple[sp.Symbol, sp.Expr], ...] = field(default=(), repr=False)
-    sections: tuple[tuple[str, int], ...] = field(default=(), repr=False)
-    markdown: str = field(default="", repr=False)
-    shown: tuple[str, ...] = SECTIONS
-
-    def numeric(self, expr: Any) -> Any:
-        """``expr`` with the symbolic link constants replaced by their values."""
-        return sp.sympify(expr).xreplace(dict(self.constants))
-
-    def expand(self, expr: Any) -> Any:
-        """``expr`` with the named intermediates of the program form substituted back, in terms of
-        the joint symbols (large for long chains: that is why they are named)."""
-        expr = sp.sympify(expr)
-        for s, e in reversed(self.intermediates):
-            if expr.has(s):
-                expr = expr.xreplace({s: e})
-        return expr
-
-    def _repr_latex_(self) -> str:
-        return self.latex_summary
-
-    def _repr_markdown_(self) -> str:
-        """The written derivation (Markdown with ``$$`` math) for Jupyter."""
-        return self.markdown
-
-
 # ---------------------------------------------------------------------------------------------
 # Constants and elementary transforms
-
-
-@dataclass(frozen=True, eq=False)
-class _Constants:
-    """The ETS handed to ``derive`` (symbolic translation constants replaced by unique
-    placeholder constants), the value of each factor, and the names shown in the ETS."""
-
-    ets: ETS
-    eta: tuple[sp.Expr | None, ...]  # value of each constant factor, by position (None: a joint)
-    names: dict[int, str]  # LaTeX argument by position, for symbolic constants
-    values: dict[sp.Symbol, sp.Expr]
-    factor: dict[sp.Symbol, int]  # the position of each symbol's factor in the ETS
-    placeholders: dict[Const, sp.Expr]
-
-    def constant(self, c: Const) -> sp.Expr:
-        return self.placeholders[c] if c in self.placeholders else const_to_sympy(c)
-
-
-def _constants(ets: ETS, symbolic: bool) -> _Constants:
-    if not symbolic:
-        eta = tuple(None if e.const is None else const_to_sympy(e.const) for e in ets)
-        return _Constants(ets, eta, {}, {}, {}, {})
-    used = {e.const for e in ets if e.const is not None}
-    scale = 10**40
-    while any(Const(Fraction(i + 1, scale)) in used for i in range(len(ets))):
-        scale += 1
-    out: list[ET] = []
-    eta: list[sp.Expr | None] = []
-    names: dict[int, str] = {}
-    values: dict[sp.Symbol, sp.Expr] = {}
-    factor: dict[sp.Symbol, int] = {}
-    placeholders: dict[Const, sp.Expr] = {}
-    for pos, e in enumerate(ets):
-        if e.const is None or e.axis.is_rotation or e.const.is_zero:
-            out.append(e)
-            eta.append(None if e.const is None else const_to_sympy(e.const))
-            continue
-        k = len(values) + 1
-        sym = sp.Symbol(f"l_{k}", positive=True)
-        value = const_to_sympy(e.const)
-        sign = -1 if value.is_negative else 1
-        values[sym] = sign * value
-        factor[sym] = pos
-        ph = Const(Fraction(pos + 1, scale))
-        placeholders[ph] = sign * sym
-        out.append(ET(e.axis, const=ph))
-        eta.append(sign * sym)
-        names[pos] = ("-" if sign < 0 else "") + f"l_{{{k}}}"
-    return _Constants(ETS(tuple(out)), tuple(eta), names, values, factor, placeholders)
-
-
-def _et_matrix(axis: Axis, eta: sp.Expr) -> sp.Matrix:
-    """The elementary transform of Fig. 2."""
-    M = sp.eye(4)
-    i = axis.index
-    if axis.is_rotation:
-        j, k = _MIX[i]
-        M[j, j] = M[k, k] = sp.cos(eta)
-        M[j, k], M[k, j] = -sp.sin(eta), sp.sin(eta)
-    else:
-        M[i, 3] = eta
-    return M
-
-
-def _generator(axis: Axis) -> sp.Matrix:
-    """[G] of eqs 20-25: dE/deta = [G] E."""
-    G = sp.zeros(4, 4)
-    i = axis.index
-    if axis.is_rotation:
-        j, k = _MIX[i]
-        G[k, j], G[j, k] = 1, -1
-    else:
-        G[i, 3] = 1
-    return G
 
 
 def _skew(w: Sequence[sp.Expr]) -> sp.Matrix:
@@ -254,7 +112,7 @@ def _check(a: sp.Matrix, b: sp.Matrix, symbols: Sequence[sp.Symbol]) -> str:
     when it vanishes at 3 random points to 30 digits (differences over ``SYMBOLIC_CHECK_MAX_OPS``
     are not expanded; constant angles such as cos(1/10) may hide identities), else "failed"."""
     d = sp.Matrix(a) - sp.Matrix(b)
-    if sum(_ops(x) for x in d) <= SYMBOLIC_CHECK_MAX_OPS and all(_is_zero(x) for x in d):
+    if sum(ops_of(x) for x in d) <= SYMBOLIC_CHECK_MAX_OPS and all(_is_zero(x) for x in d):
         return "symbolic"
     f = sp.lambdify(list(symbols), list(d), modules="mpmath")
     rng = random.Random(1)
@@ -266,7 +124,7 @@ def _check(a: sp.Matrix, b: sp.Matrix, symbols: Sequence[sp.Symbol]) -> str:
     return "numeric"
 
 
-def _suffix_pose(C: _Constants, start: int, q: Sequence[sp.Symbol]) -> sp.Matrix:
+def _suffix_pose(C: Constants, start: int, q: Sequence[sp.Symbol]) -> sp.Matrix:
     """The pose of the factors ``start..M`` of the ETS (jT_e for the frame before ``start``)."""
     part = C.ets.ets[start:]
     joints = sorted(e.joint for e in part if e.joint is not None)
@@ -301,9 +159,9 @@ def _steps(robot: Robot, symbolic_constants: bool, simplify: bool) -> Derivation
     if n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to derive")
     q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(n))
-    C = _constants(ets, symbolic_constants)
+    C = constants(ets, symbolic_constants)
     eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
-    E = [_et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
+    E = [et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
     prefix, suffix = [sp.eye(4)], [sp.eye(4)]
     for M in E:
@@ -375,13 +233,8 @@ def _steps(robot: Robot, symbolic_constants: bool, simplify: bool) -> Derivation
     )
 
 
-def _ops(expr: Any) -> int:
-    """Operations of an expression, memoised over shared subexpressions (no recursion)."""
-    return count_ops(sp.sympify(expr)).total
-
-
 def _matrix_ops(M: sp.Matrix) -> int:
-    return sum(_ops(x) for x in M)
+    return sum(ops_of(x) for x in M)
 
 
 def _worst(results: Any) -> str:
@@ -396,122 +249,15 @@ def _worst(results: Any) -> str:
 # Printing expressions
 
 
-class _Printer:
-    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals."""
-
-    def __init__(self, q: Sequence[sp.Symbol]) -> None:
-        self.index = {s: j + 1 for j, s in enumerate(q)}
-        self.used: dict[sp.Symbol, tuple[str, str]] = {}  # abbreviation -> (latex, meaning)
-        self.names: dict[sp.Symbol, str] = {}
-
-    def _abbreviation(self, f: sp.Expr) -> sp.Symbol | None:
-        idx = []
-        for term, c in f.args[0].as_coefficients_dict().items():
-            if c != 1 or term not in self.index:
-                return None
-            idx.append(self.index[term])
-        idx.sort()
-        kind = "c" if isinstance(f, sp.cos) else "s"
-        sym = sp.Symbol(f"zz{kind}{'_'.join(map(str, idx))}")
-        sub = ("" if max(idx) < 10 else ",").join(map(str, idx))
-        tex = f"{kind}_{{{sub}}}"
-        arg = " + ".join(f"q_{{{i}}}" for i in idx)
-        fn = "\\cos" if kind == "c" else "\\sin"
-        meaning = f"{fn} {arg}" if len(idx) == 1 else f"{fn}({arg})"
-        self.used[sym] = (tex, meaning)
-        self.names[sym] = tex
-        return sym
-
-    def __call__(self, expr: Any) -> str:
-        expr = sp.sympify(expr)
-        ops = _ops(expr)
-        if ops > DISPLAY_MAX_OPS:
-            return f"\\text{{(an expression of {ops} operations, not shown)}}"
-        subs = {}
-        for f in expr.atoms(sp.cos, sp.sin):
-            a = self._abbreviation(f)
-            if a is not None:
-                subs[f] = a
-        for pw in expr.atoms(sp.Pow):  # roots keep their exponent: sqrt(2), not 2^0.5
-            if pw.exp.is_Rational and not pw.exp.is_Integer:
-                sym = sp.Symbol(f"zzpow{len(self.names)}")
-                self.names[sym] = sp.latex(pw)
-                subs[pw] = sym
-        for r in expr.atoms(sp.Rational):
-            den = r.q
-            while den % 2 == 0:
-                den //= 2
-            while den % 5 == 0:
-                den //= 5
-            if r.q > 1 and den == 1:  # every terminating decimal as a decimal, as in the ETS
-                text = rational_text(Fraction(int(r.p), int(r.q)))
-                subs[r] = sp.Float(text, max(15, len(text)))
-        return sp.latex(expr.xreplace(subs), symbol_names=self.names)
-
-    def matrix(self, M: sp.Matrix) -> str:
-        rows = [" & ".join(self(M[r, c]) for c in range(M.cols)) for r in range(M.rows)]
-        return "\\begin{pmatrix} " + " \\\\ ".join(rows) + " \\end{pmatrix}"
-
-    def legend(self) -> str:
-        items = sorted(self.used.items(), key=lambda kv: (kv[0].name[2], len(kv[0].name), kv[0].name))
-        return ", ".join(f"${tex} = {meaning}$" for _, (tex, meaning) in items)
-
-
 # ---------------------------------------------------------------------------------------------
 # Markdown (from templates/derive/derivation.md.j2) and its LaTeX document
-
-_INLINE = re.compile(r"(\$[^$]*\$|`[^`]*`)")
-
-
-def _inline_latex(text: str) -> str:
-    """Markdown text -> LaTeX: ``$math$`` kept, backquoted code in typewriter, the rest escaped."""
-    out = []
-    for part in _INLINE.split(text):
-        if part.startswith("$"):
-            out.append(part)
-        elif part.startswith("`"):
-            out.append(f"\\texttt{{{text_latex(part[1:-1])}}}")
-        else:
-            out.append(text_latex(part))
-    return "".join(out)
-
-
-def _latex_document(markdown: str) -> str:
-    """The template's Markdown (``#`` title, ``##`` sections, paragraphs, ``$$`` blocks, pipe
-    tables) as a standalone LaTeX document (amsmath only)."""
-    body: list[str] = []
-    title = ""
-    table = False
-    lines = iter(markdown.splitlines())
-    for line in lines:
-        if table and not line.startswith("|"):
-            body += [r"\end{tabular}", r"\end{center}", ""]
-            table = False
-        if line.startswith("# "):
-            title = _inline_latex(line[2:])
-        elif line.startswith("## "):
-            body += [rf"\section{{{_inline_latex(line[3:])}}}", ""]
-        elif line == "$$":
-            body += [r"\[", *iter(lines.__next__, "$$"), r"\]", ""]
-        elif line.startswith("|") and not set(line) <= set("|-"):
-            cells = [_inline_latex(c.strip()) for c in line.strip().strip("|").split(" | ")]
-            if not table:
-                body += [r"\begin{center}", r"\begin{tabular}{" + "l" * len(cells) + "}"]
-                table = True
-            body.append(" & ".join(cells) + r" \\")
-        elif line.strip() and not line.startswith("|"):
-            body += [_inline_latex(line), ""]
-    head = [r"\documentclass[a4paper,10pt]{article}", r"\usepackage[margin=2cm]{geometry}",
-            r"\usepackage{amsmath,amssymb}", r"\setcounter{MaxMatrixCols}{40}", r"\allowdisplaybreaks",
-            rf"\title{{{title}}}", r"\date{}", r"\begin{document}", r"\maketitle", ""]  # fmt: skip
-    return "\n".join(head + body + [r"\end{document}"]) + "\n"
 
 
 # ---------------------------------------------------------------------------------------------
 # Writing the derivation
 
 
-def _vec(P: _Printer, v: Sequence[sp.Expr]) -> str:
+def _vec(P: Printer, v: Sequence[sp.Expr]) -> str:
     return P.matrix(sp.Matrix(list(v)))
 
 
@@ -519,7 +265,7 @@ def _shown(M: sp.Matrix) -> bool:
     return _matrix_ops(M) <= MATRIX_MAX_OPS
 
 
-def _pose_tex(P: _Printer, M: sp.Matrix, lhs: str) -> str:
+def _pose_tex(P: Printer, M: sp.Matrix, lhs: str) -> str:
     """A pose as one matrix when short, else its columns n, o, a, t one per line."""
     if _shown(M):
         return f"{lhs} = {P.matrix(M)}"
@@ -531,11 +277,6 @@ def _pose_tex(P: _Printer, M: sp.Matrix, lhs: str) -> str:
     return r"\begin{aligned} " + r" \\ ".join(lines) + r" \end{aligned}"
 
 
-_CHECK_TEXT = {
-    "symbolic": "the difference simplifies to 0",
-    "numeric": "the difference vanishes at 3 random points to 30 digits (too large to expand symbolically)",
-    "failed": "NOT equal",
-}
 _FAST_RULE = {
     Axis.Rz: r"\mathbf{o}_{#} x_e - \mathbf{n}_{#} y_e",
     Axis.Rx: r"\mathbf{a}_{#} y_e - \mathbf{o}_{#} z_e",
@@ -548,12 +289,12 @@ _FAST_RULE = {
 
 def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     """The template's context (every math string ready-made) and the LaTeX summary for Jupyter."""
-    from symkin import __version__
+    from symkin.core.version import __version__
 
     robot, q, n, ets = D.robot, D.q, len(D.q), D.robot.ets
-    C = _constants(ets, bool(D.constants))
+    C = constants(ets, bool(D.constants))
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-    P = _Printer(q)
+    P = Printer(q)
     full = n <= FULL_MAX_N
     ctx: dict[str, Any] = {
         "robot": display_name(robot.name),
@@ -569,8 +310,8 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
         "what": "compact forms, each proved equal to the literal products of the equations"
         if D.simplified
         else "the literal products of the equations, not simplified",
-        "checks": "; ".join(f"{k}: {_CHECK_TEXT[v]}" for k, v in D.checks.items()),
-        "same": _CHECK_TEXT[D.checks["J0 = J0_fast"]],
+        "checks": "; ".join(f"{k}: {CHECK_TEXT[v]}" for k, v in D.checks.items()),
+        "same": CHECK_TEXT[D.checks["J0 = J0_fast"]],
         "jacobian": P.matrix(D.J0_fast),
     }
     kinds = {True: "revolute", False: "prismatic"}
@@ -601,7 +342,7 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
         sign = "-" if e.flip else ""
         ctx["derivatives"].append(
             rf"\mu({J}) = {k + 1}, \quad \frac{{dE_{{{k + 1}}}}}{{dq_{{{J}}}}} = "
-            rf"{sign}{P.matrix(_generator(e.axis))}\, {et_latex(e)} = {P.matrix(D.E[k].diff(q[j]))}"
+            rf"{sign}{P.matrix(generator(e.axis))}\, {et_latex(e)} = {P.matrix(D.E[k].diff(q[j]))}"
         )
         if full:
             ctx["derivatives"].append(
@@ -659,7 +400,7 @@ def derive_steps(
             keeps the literal products (long beyond 3 joints; the text omits huge entries).
         fmt: ``"markdown"`` (Markdown with ``$$`` math) or ``"latex"`` (a standalone document).
         form: ``"expanded"`` (every result multiplied out), ``"program"`` (link frame by link
-            frame, new quantities named: :mod:`symkin.derivation_program`), or ``"auto"``: the
+            frame, new quantities named: :mod:`symkin.derive.program`), or ``"auto"``: the
             program form when the expanded one would be too large to read or to check
             symbolically (the same size rule as the compiler's, about 8 joints and more).
         sections: write only these parts of the text (names in :data:`SECTIONS`, e.g.
@@ -683,7 +424,7 @@ def derive_steps(
 
         form = "expanded" if expanded_if_small(robot) is not None else "program"
     if form == "program":
-        from symkin.derivation_program import program_context, program_derivation
+        from symkin.derive.program import program_context, program_derivation
 
         D = program_derivation(robot, symbolic_constants)
         ctx, summary = program_context(D)
@@ -697,7 +438,7 @@ def derive_steps(
     return replace(
         D,
         fmt=fmt,
-        text=_latex_document(text) if fmt == "latex" else text,
+        text=latex_document(text) if fmt == "latex" else text,
         latex_summary=summary,
         markdown=text,
         shown=tuple(k for k in SECTIONS if k in shown),

@@ -12,6 +12,7 @@ from typing import Any
 __all__ = [
     "UserError",
     "int_at_least",
+    "at_least_1",
     "positive_float",
     "output_dir",
     "output_file",
@@ -37,6 +38,9 @@ def int_at_least(minimum: int) -> Any:
 
     parse.__name__ = "integer"
     return parse
+
+
+at_least_1 = int_at_least(1)
 
 
 def positive_float(text: str) -> float:

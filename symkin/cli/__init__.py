@@ -1,0 +1,20 @@
+"""The ``symkin`` command line: :mod:`symkin.cli.main` (the parser and the entry point), one module
+per command (``symkin.cli.compile`` for ``symkin compile``, ``symkin.cli.list_frames`` for ``symkin
+list-frames``, ...; each with ``add_parser(subparsers)`` and ``run(args) -> int``),
+:mod:`symkin.cli.common` (the ROBOT argument and its resolution into a chain or a tree, the parser
+classes, output helpers) and :mod:`symkin.cli.checks` (argument checks made before any long work).
+
+Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS string in quotes
+(``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table file, a URDF file or ``path.urdf:FRAME`` for the
+chain to one link (also ``--base-link/--end-link``), and ``--tool``/``--base`` to add a constant
+transform after the end effector / before the first link. ``compile``, ``check`` and ``derive``
+take a whole tree with ``--frames a,b,c`` (a branching URDF without a frame is a tree of its
+leaves). User mistakes print one line ``symkin: error: ...`` and exit with status 2, checked before
+any long work starts where they can be; a failed check or an unsolved problem exits 1. When the
+reader of the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
+(128 + SIGPIPE). Progress bars appear only when stderr is a terminal (:mod:`symkin.core.progress`).
+"""
+
+from symkin.cli.main import build_parser, main
+
+__all__ = ["build_parser", "main"]

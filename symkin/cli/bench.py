@@ -1,0 +1,221 @@
+"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, calls, compile, urdf, reach)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+import numpy as np
+
+from symkin.cli.checks import UserError, at_least_1, check_cflags_for, need_matplotlib, positive_float
+from symkin.cli.common import Deprecated, add_command, add_robot_argument, single_chain
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(
+        sub,
+        "bench",
+        "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
+        "mmc (Table I), calls (one at a time), compile (cold, by chain length), urdf (every chain of "
+        "example-robot-data), reach (Dask maps)",
+    )
+    s.add_argument(
+        "what",
+        choices=("kin", "tree", "ik", "mmc", "calls", "compile", "urdf", "reach"),
+        help="which benchmark",
+    )
+    add_robot_argument(
+        s,
+        "default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, ur5 and "
+        "panda for calls",
+    )
+    s.add_argument(
+        "--robot", dest="robot_option", action=Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
+    )
+    s.add_argument("--joints", default="6,12,24,36", help="compile: joint counts of the random chains")
+    s.add_argument("--batch", type=at_least_1, default=100_000, help="kin: batch size")
+    s.add_argument(
+        "-n",
+        "--problems",
+        type=at_least_1,
+        help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000); "
+        "urdf: at most N chains (default all)",
+    )
+    s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
+    s.add_argument(
+        "--plot",
+        metavar="PNG",
+        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints; urdf: compile time "
+        "against joints",
+    )
+    s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
+    s.add_argument(
+        "--starts", type=at_least_1, default=32, help="ik --analytic: LM searches per pose for sampling"
+    )
+    s.add_argument(
+        "--resolution", type=positive_float, default=0.1, help="reach: voxel edge, m (default 0.1)"
+    )
+    s.add_argument(
+        "--orientations", type=at_least_1, default=50, help="reach: orientations per voxel (default 50)"
+    )
+    s.add_argument("--fault", action="store_true", help="reach: also kill a worker mid-run and compare")
+    s.add_argument(
+        "--repeat", type=at_least_1, default=3, help="reach: runs of each measurement (best is kept)"
+    )
+    s.add_argument("--no-cold", action="store_true", help="kin, tree: skip the cold compile of each tree")
+    s.add_argument(
+        "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
+    )
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=run, robot_option=None)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.robot is None:
+        args.robot = args.robot_option
+    custom = _custom(args)
+    if custom and args.robot is None:
+        raise UserError("--tool/--base change a ROBOT: name one (symkin bench WHAT ROBOT --tool ...)")
+    check_cflags_for("c")
+    if args.plot and args.what not in ("mmc", "compile", "urdf"):
+        raise UserError(f"--plot is for `symkin bench mmc`, `compile` and `urdf`, not `{args.what}`")
+    if args.what in ("tree", "urdf") and args.robot is not None:
+        raise UserError(f"bench {args.what} measures its own robots; it takes no ROBOT")
+    need_matplotlib(args.plot)
+    if args.what == "compile":
+        from symkin.bench.compile import format_compile, plot_compile, run_compile
+
+        if custom:
+            raise UserError(
+                "bench compile measures ROBOT by name in a fresh process; --tool/--base do not apply"
+            )
+        joints = _joint_counts(args.joints)
+        rows = run_compile(joints, seed=args.seed, reference=args.robot or "panda", progress=not args.json)
+        print(json.dumps(rows, indent=2) if args.json else format_compile(rows))
+        if args.plot:
+            plot_compile(rows, args.plot)
+            if not args.json:
+                print(f"plot written to {args.plot}")
+        return 0
+    spec: Any = single_chain(args) if custom else args.robot
+    if args.what == "calls":
+        from symkin.bench.calls import format_calls, run_calls
+
+        result = run_calls(spec or "ur5", spec or "panda", seed=args.seed, progress=not args.json)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        return 0
+    if args.what == "reach":
+        from symkin.bench.reach import format_reach, run_reach
+        from symkin.workspace.run import require_scale
+
+        require_scale()
+        result = run_reach(
+            single_chain(args, "ur5"), resolution=args.resolution, orientations=args.orientations,
+            seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
+        )  # fmt: skip
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
+        return 0
+    if args.what == "kin":
+        from symkin.bench.kin import format_kin, run_kin
+
+        result = run_kin(spec or "panda", batch=args.batch, progress=not args.json)
+        if not args.json:
+            print(format_kin(result), flush=True)
+        result["trees"] = _trees(args)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
+        return 0
+    if args.what in ("tree", "urdf"):
+        code, result = (0, _trees(args)) if args.what == "tree" else _urdf(args)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
+        return code
+    if args.what == "ik" and args.analytic:
+        from symkin.bench.analytic_ik import format_analytic, run_analytic
+
+        robots = (spec,) if spec is not None else ("ur5", "ur10", "puma560", "stanford")
+        result = run_analytic(
+            robots, n=args.problems or 1000, starts=args.starts, seed=args.seed, progress=not args.json
+        )
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_analytic(result))
+        return 0
+    if args.what == "ik":
+        from symkin.bench.ik import format_table1, run_table1
+
+        result = run_table1(
+            single_chain(args, "ur5"),
+            n_problems=args.problems or 10_000,
+            seed=args.seed,
+            progress=not args.json,
+        )
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_table1(result))
+        return 0
+    from symkin.bench.mmc import format_table1 as format_mmc
+    from symkin.bench.mmc import plot_task
+    from symkin.bench.mmc import run_table1 as run_mmc
+    from symkin.runtime.load import compile as compile_robot
+
+    if spec is None:
+        robots: tuple[Any, ...] = ("panda", "lbr_iiwa7", "sawyer")
+    else:
+        robots = (compile_robot(single_chain(args), backend="c"),) if custom else (spec,)
+    result = run_mmc(robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json)
+    print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_mmc(result))
+    if args.plot:
+        from symkin.bench.mmc import table1_tasks
+
+        first = robots[0]
+        kin = compile_robot(single_chain(args, first), backend="c") if isinstance(first, str) else first
+        q0, Tep = table1_tasks(kin, 1, np.random.default_rng(args.seed))
+        plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
+        if not args.json:
+            print(f"plot written to {args.plot}")
+    return 0
+
+
+def _custom(args: argparse.Namespace) -> bool:
+    """Whether --tool or --base changed the robot (benchmarks then take the Robot, not its name)."""
+    return getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None
+
+
+def _joint_counts(text: str) -> tuple[int, ...]:
+    try:
+        counts = tuple(int(x) for x in text.replace(",", " ").split())
+    except ValueError:
+        counts = ()
+    if not counts or any(c < 1 or c > 200 for c in counts):
+        raise UserError(f"--joints must be joint counts between 1 and 200 like '6,12,24,36', not {text!r}")
+    return counts
+
+
+def _trees(args: argparse.Namespace) -> dict:
+    """The tree rows of ``bench kin`` / ``bench tree`` (printed unless --json)."""
+    from symkin.bench.tree import format_tree_kin, run_tree_kin
+
+    trees = run_tree_kin(batch=args.batch, seed=args.seed, cold=not args.no_cold)
+    if not args.json:
+        print(format_tree_kin(trees))
+    return trees
+
+
+def _urdf(args: argparse.Namespace) -> tuple[int, dict]:
+    """``symkin bench urdf``: (exit code, result); the table printed unless --json."""
+    from symkin.bench.urdf_sweep import format_sweep, plot_sweep, run_sweep
+
+    sweep = run_sweep(backends=tuple(args.backends.split(",")), progress=not args.json, limit=args.problems)
+    if not args.json:
+        print(format_sweep(sweep))
+    if args.plot and "rows" in sweep:
+        plot_sweep(sweep, args.plot)
+        if not args.json:
+            print(f"plot written to {args.plot}")
+    return (0 if sweep["ok"] else 1), sweep
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(f"not JSON serialisable: {type(x).__name__}")

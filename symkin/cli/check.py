@@ -1,0 +1,47 @@
+"""``symkin check``: every backend of a chain or tree against the numeric reference and finite
+differences."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from symkin.cli.checks import check_cflags_for, int_at_least
+from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(sub, "check", "compare every backend with the numeric reference and finite differences")
+    add_robot_argument(s)
+    s.add_argument(
+        "--backend",
+        action="append",
+        choices=BACKENDS,
+        help="only this backend (repeat for several; default all)",
+    )
+    s.add_argument("--samples", type=int_at_least(1), default=20, help="random configurations")
+    s.add_argument("--seed", type=int, default=0, help="seed of the random configurations")
+    s.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_link_options(s, frames=True)
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.check.chain import check
+    from symkin.model.tree import Tree
+
+    robot = chain_or_tree(args)
+    backends = args.backend or BACKENDS
+    for b in args.backend or ("c",):
+        check_cflags_for(b)
+    if isinstance(robot, Tree):
+        from symkin.check.tree import check_tree
+
+        report = check_tree(robot, backends=backends, samples=args.samples, seed=args.seed)
+    else:
+        report = check(robot, backends=backends, samples=args.samples, seed=args.seed)
+    print(json.dumps(report.as_dict(), indent=2) if args.json else report.format())
+    return 0 if report.ok else 1

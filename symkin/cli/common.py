@@ -1,0 +1,279 @@
+"""What several commands share: the parser classes, the ROBOT argument and its options (``--tool``,
+``--base``, ``--base-link``, ``--end-link``, ``--frames``, ``path.urdf:FRAME``) and their
+resolution into a Robot or a :class:`symkin.Tree`, the target pose of ``ik`` and ``servo``, the
+options of the Dask commands, and the output helpers."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.cli.checks import UserError, at_least_1
+
+__all__ = [
+    "ROBOT_HELP",
+    "BACKENDS",
+    "Formatter",
+    "Parser",
+    "Deprecated",
+    "add_command",
+    "add_robot_argument",
+    "add_link_options",
+    "add_target_options",
+    "add_scale_options",
+    "split_frame",
+    "single_chain",
+    "chain_or_tree",
+    "target",
+    "scheduler",
+    "floats",
+    "fmt",
+]
+
+ROBOT_HELP = (
+    "a built-in robot name (see `symkin list`), a quoted ETS string, a DH table file, a URDF file or "
+    "path.urdf:FRAME (the chain to link FRAME)"
+)
+TRANSFORM_HELP = (
+    "constant ETS text like 'tz(0.1) Rx(pi/2)', or 'x y z roll pitch yaw' (m, rad; pi/2 and 90deg "
+    "allowed), or 16 numbers of a row-major 4x4 matrix"
+)
+BACKENDS = ("c", "numpy", "casadi")
+_URDF = (".urdf", ".xml")
+
+
+# -- the parser ----------------------------------------------------------------------------------
+class Formatter(argparse.HelpFormatter):
+    """Help that shows every option's default (unless its text already names it)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if (
+            not action.option_strings
+            or action.default is None
+            or action.default is False
+            or action.default == argparse.SUPPRESS
+            or "default" in text.lower()
+        ):
+            return text
+        return text + " (default: %(default)s)"
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with symkin's one-line errors (``symkin: error: ...``, exit 2)."""
+
+    def error(self, message: str) -> Any:  # type: ignore[override]
+        self.exit(
+            2, f"symkin: error: {self.prog.split(' ', 1)[-1] + ': ' if ' ' in self.prog else ''}{message}\n"
+        )
+
+
+class Deprecated(argparse.Action):
+    """A renamed option kept working: stores into the new option's dest and says so on stderr."""
+
+    def __init__(self, *args: Any, new: str = "", **kwargs: Any) -> None:
+        self.new = new
+        super().__init__(*args, **kwargs)
+
+    def __call__(self, parser: Any, namespace: Any, values: Any, option_string: Any = None) -> None:
+        print(f"symkin: {option_string} is deprecated; use {self.new}", file=sys.stderr)
+        setattr(namespace, self.dest, values)
+
+
+def add_command(sub: Any, name: str, text: str) -> argparse.ArgumentParser:
+    """The parser of ``symkin NAME`` (``text`` is its line in ``symkin --help`` and its description)."""
+    return sub.add_parser(name, help=text, description=text, formatter_class=Formatter)
+
+
+def add_robot_argument(s: argparse.ArgumentParser, default: str | None = None) -> None:
+    """The ROBOT argument (optional when ``default`` describes what it defaults to) and --tool/--base."""
+    if default is None:
+        s.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    else:
+        s.add_argument("robot", metavar="ROBOT", nargs="?", default=None, help=f"{ROBOT_HELP} ({default})")
+    s.add_argument(
+        "--tool",
+        metavar="T",
+        help="append this constant transform after the end effector: " + TRANSFORM_HELP,
+    )
+    s.add_argument(
+        "--base",
+        metavar="T",
+        help="place this constant transform before the first link: " + TRANSFORM_HELP,
+    )
+
+
+def add_link_options(s: argparse.ArgumentParser, frames: bool = False) -> None:
+    """``--base-link``, ``--end-link`` (and ``--frames``) for a command taking ROBOT."""
+    s.add_argument(
+        "--base-link", metavar="LINK", help="URDF: the link poses are expressed in (default the root)"
+    )
+    s.add_argument("--end-link", metavar="LINK", help="URDF: the chain's last link (same as ROBOT.urdf:LINK)")
+    if frames:
+        s.add_argument(
+            "--frames",
+            metavar="A,B,...",
+            help="URDF: the links of a tree to compile into one kernel (default: every leaf when the URDF "
+            "branches)",
+        )
+
+
+def add_target_options(s: argparse.ArgumentParser, q0_help: str) -> None:
+    """The target pose, backend, start and output options of ``ik`` and ``servo``."""
+    s.add_argument("--pose", metavar="'X Y Z R P Y'", help="target position (m) and roll pitch yaw (rad)")
+    s.add_argument("--matrix", metavar="'16 NUMBERS'", help="target pose as a row-major 4x4 matrix")
+    s.add_argument(
+        "--target-q", metavar="'Q...'", help="target = the pose of the robot at these joint values"
+    )
+    s.add_argument("--from-q", dest="target_q", action=Deprecated, new="--target-q", help=argparse.SUPPRESS)
+    s.add_argument("--backend", choices=BACKENDS, default="c", help="kinematics backend")
+    s.add_argument("--q0", metavar="'Q...'", help=q0_help)
+    s.add_argument("--json", action="store_true", help="print JSON")
+    add_link_options(s)
+
+
+def add_scale_options(s: argparse.ArgumentParser) -> None:
+    """The Dask and store options of ``reach`` and ``dataset`` (the ``scale`` extra)."""
+    s.add_argument("--seed", type=int, default=0, help="seed of the random orientations and samples")
+    s.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a Dask scheduler such as tcp://host:8786, or 'synchronous' (default: a local cluster)",
+    )
+    s.add_argument("--workers", type=at_least_1, help="local cluster size (default: one worker per core)")
+    s.add_argument("--backend", choices=BACKENDS, default="c", help="kinematics backend")
+    s.add_argument("--overwrite", action="store_true", help="replace the store instead of resuming it")
+    s.add_argument("--json", action="store_true", help="print JSON")
+
+
+# -- ROBOT: a serial chain or a URDF tree --------------------------------------------------------
+def split_frame(spec: str) -> tuple[str, str | None]:
+    """``"robot.urdf:tool0"`` -> ``("robot.urdf", "tool0")``; anything else -> ``(spec, None)``."""
+    text = spec.strip()
+    if "(" in text:
+        return spec, None
+    head, sep, tail = text.rpartition(":")
+    if sep and tail and "/" not in tail and Path(head).suffix.lower() in _URDF:
+        return head, tail
+    return spec, None
+
+
+def _is_urdf(path: str) -> bool:
+    return "(" not in path and Path(path.strip()).suffix.lower() in _URDF
+
+
+def _end(args: argparse.Namespace, frame: str | None) -> str | None:
+    end = getattr(args, "end_link", None)
+    if frame and end and frame != end:
+        raise UserError(f"ROBOT names frame {frame!r} and --end-link names {end!r}: give one")
+    return frame or end
+
+
+def single_chain(args: argparse.Namespace, default: str | None = None) -> Any:
+    """The serial Robot a command works on: ROBOT (or ``default`` when it is optional and not
+    given), ``path.urdf:FRAME``, ``--base-link/--end-link``, then ``--tool``/``--base``; a branching
+    URDF without a frame is a clear error."""
+    from symkin.errors import URDFError
+    from symkin.model.resolve import resolve_robot
+    from symkin.model.robot import Robot
+
+    spec = args.robot if args.robot is not None else default
+    tool, base_transform = getattr(args, "tool", None), getattr(args, "base", None)
+    path, frame = split_frame(spec) if isinstance(spec, str) else (spec, None)
+    end, base = _end(args, frame), getattr(args, "base_link", None)
+    if not isinstance(path, str) or not _is_urdf(path):
+        if frame or end or base:
+            raise UserError("--base-link, --end-link and ROBOT:FRAME apply to URDF files only")
+        return resolve_robot(spec, tool=tool, base=base_transform)
+    try:
+        robot = Robot.from_urdf(Path(path).expanduser(), base_link=base, end_link=end)
+    except URDFError as exc:
+        if "branches" in str(exc) and end is None:
+            raise UserError(
+                f"{path} branches: name the frame as {path}:FRAME or with --end-link FRAME "
+                f"(`symkin list-frames {path}` shows the tree)"
+            ) from None
+        raise
+    return resolve_robot(robot, tool=tool, base=base_transform)
+
+
+def _no_transform(args: argparse.Namespace, hint: str) -> None:
+    """--tool/--base change one chain: refused for a tree (``hint`` ends the message)."""
+    if getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None:
+        raise UserError(f"--tool/--base change one chain{hint}")
+
+
+def chain_or_tree(args: argparse.Namespace) -> Any:
+    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``):
+    a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``."""
+    from symkin.model.tree import Tree
+
+    path, frame = split_frame(args.robot)
+    frames = getattr(args, "frames", None)
+    if frames is not None:
+        if not _is_urdf(path):
+            raise UserError("--frames applies to URDF files only")
+        if frame or getattr(args, "end_link", None):
+            raise UserError("give either --frames (a tree) or one frame (ROBOT:FRAME, --end-link)")
+        names = [f.strip() for f in frames.split(",") if f.strip()]
+        if not names:
+            raise UserError(f"--frames needs link names separated by commas, not {frames!r}")
+        _no_transform(args, ", not a tree of --frames")
+        return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+    if _is_urdf(path) and _end(args, frame) is None:
+        tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
+        if len(tree.frames) > 1:
+            _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
+            return tree
+    return single_chain(args)
+
+
+# -- values ----------------------------------------------------------------------------------------
+def target(args: argparse.Namespace, robot: Any) -> np.ndarray:
+    """A target pose from --pose (x y z roll pitch yaw, rad), --matrix (16 numbers) or --target-q."""
+    given = [x is not None for x in (args.pose, args.matrix, args.target_q)]
+    if sum(given) != 1:
+        raise UserError(
+            "give exactly one of --pose 'x y z roll pitch yaw', --matrix '16 numbers', --target-q 'q...'"
+        )
+    if args.target_q is not None:
+        return robot.fkine(floats(args.target_q, "--target-q", robot.n))
+    if args.matrix is not None:
+        return floats(args.matrix, "--matrix", 16).reshape(4, 4)
+    x, y, z, r, p, yaw = floats(args.pose, "--pose", 6)
+    cr, sr, cp, sp_, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(yaw), np.sin(yaw)
+    T = np.eye(4)
+    T[:3, :3] = [
+        [cy * cp, cy * sp_ * sr - sy * cr, cy * sp_ * cr + sy * sr],
+        [sy * cp, sy * sp_ * sr + cy * cr, sy * sp_ * cr - cy * sr],
+        [-sp_, cp * sr, cp * cr],
+    ]
+    T[:3, 3] = [x, y, z]
+    return T
+
+
+def scheduler(args: argparse.Namespace) -> Any:
+    """--scheduler of ``reach`` and ``dataset`` (None: a local cluster)."""
+    return args.scheduler if args.scheduler else None
+
+
+def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
+    """The numbers of option ``what`` (separated by spaces or commas; ``count`` of them if given)."""
+    try:
+        values = np.array([float(x) for x in text.replace(",", " ").split()])
+    except ValueError:
+        raise UserError(f"{what} must be numbers separated by spaces or commas, got {text!r}") from None
+    if count is not None and values.size != count:
+        raise UserError(f"{what} needs {count} numbers, got {values.size}")
+    if not np.isfinite(values).all():
+        raise UserError(f"{what} must be finite numbers, got {text!r}")
+    return values
+
+
+def fmt(a: np.ndarray) -> str:
+    """An array as printed by the commands."""
+    return np.array2string(np.asarray(a), precision=5, suppress_small=True, max_line_width=110)

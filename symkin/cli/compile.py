@@ -1,0 +1,166 @@
+"""``symkin compile``: generate, build and load the kinematics code of a chain or of a URDF tree,
+write it with ``-o DIR``, and print a summary (the pose, the Jacobian and the time per call)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+import numpy as np
+
+from symkin.cli.checks import UserError, check_cflags_for, output_dir
+from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree, fmt
+from symkin.model.tree import Tree
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(sub, "compile", "generate (and build) the kinematics code of a robot")
+    add_robot_argument(s)
+    s.add_argument("--backend", choices=BACKENDS, default="c", help="code to generate")
+    s.add_argument(
+        "-o",
+        "--output",
+        metavar="DIR",
+        help="write the generated files into DIR (symkin.load_compiled reads them)",
+    )
+    s.add_argument(
+        "--prefix",
+        "--name",
+        metavar="PREFIX",
+        help="C: start every exported symbol and file name with PREFIX (default symkin_<robot>), so the "
+        "code of several robots links into one program",
+    )
+    s.add_argument(
+        "--precision",
+        choices=("double", "float"),
+        default="double",
+        help="C: float writes single-precision code for microcontrollers (checked against double; "
+        "no Python module) (default double)",
+    )
+    s.add_argument(
+        "--libm",
+        action="store_true",
+        help="C: call the C library's sin and cos instead of the inline kernels (the same as compiling "
+        "with -DSYMKIN_USE_LIBM)",
+    )
+    s.add_argument(
+        "--strategy",
+        choices=("expanded", "program"),
+        help="how the code is derived: expanded (one expression per output, then CSE) or program "
+        "(named link frames, linear in the chain); default: chosen by size",
+    )
+    add_link_options(s, frames=True)
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.compiler.compile import generate
+    from symkin.runtime.load import compile as compile_model
+
+    model = chain_or_tree(args)
+    out = output_dir(args.output) if args.output else None
+    check_cflags_for(args.backend)
+    tree = isinstance(model, Tree)
+    command, options = _command(args, model)
+    t0 = time.perf_counter()
+    files = generate(model, args.backend, command, **options)
+    t_gen = time.perf_counter() - t0
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        for name, text in sorted(files.items()):
+            (out / name).write_text(text)
+        written = f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}"
+        from symkin.compiler.manifest import write_manifest
+
+        manifest = write_manifest(model, args.backend, files, out, args.precision)
+        print(f"{written} (and {manifest.name}, which symkin.load_compiled reads)")
+    if args.precision == "float":
+        from symkin.emit.c.backend import float_error
+
+        err = float_error(model, files)
+        print(f"single-precision code against double on 100 random q: max |fkine| error {err['fkine']:.1e}, "
+              f"max |jacob0| error {err['jacob0']:.1e}")  # fmt: skip
+    t1 = time.perf_counter()
+    kin = compile_model(model, backend=args.backend, **({} if tree else {"strategy": args.strategy}))
+    t_build = time.perf_counter() - t1
+    first = next(iter(files.values())).splitlines()
+    ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
+    if tree:
+        frames = ", ".join(model.frames)
+        print(f"{model.name}: tree of {model.n} joints and {len(model.frames)} frames: {frames}")
+    else:
+        print(f"{model.name}: {model.n} joints ({model.ets.structure}), ETS {model.ets}")
+    print(f"backend {args.backend}: derived + generated in {t_gen:.2f} s, built/loaded in {t_build:.2f} s")
+    if ops:
+        print(f"{'operations' if tree else 'operations after CSE'}: {ops}")
+    (_tree_report if tree else _chain_report)(model, kin)
+    return 0
+
+
+def _command(args: argparse.Namespace, model: Any) -> tuple[str, dict[str, Any]]:
+    """The command recorded in the generated files of a chain or tree, and the options of
+    ``generate``; the C-only options are refused for another backend or without ``-o``."""
+    if isinstance(model, Tree):
+        frames = ",".join(model.frames)
+        command = f"symkin compile {model.identifier} --frames {frames} --backend {args.backend}"
+    else:
+        command = f"symkin compile {model.identifier} --backend {args.backend}"
+    c_only = (("--prefix", args.prefix), ("--precision", args.precision != "double"), ("--libm", args.libm))
+    for flag, given in c_only:
+        if given and args.backend != "c":
+            raise UserError(f"{flag} applies to the C backend only")
+        if given and not args.output:
+            raise UserError(f"{flag} shapes the files written with -o DIR; give -o too")
+    if args.prefix:
+        command += f" --prefix {args.prefix}"
+    if args.precision != "double":
+        command += f" --precision {args.precision}"
+    if args.libm:
+        command += " --libm"
+    if args.strategy:
+        command += f" --strategy {args.strategy}"
+    options = {
+        "strategy": args.strategy,
+        "prefix": args.prefix,
+        "precision": args.precision,
+        "libm": args.libm,
+    }
+    return command, options
+
+
+def _chain_report(robot: Any, kin: Any) -> None:
+    """The pose, Jacobian and manipulability at the ready pose, checked against the reference."""
+    q = robot.configs.get("qr", robot.configs["qz"])
+    qname = "qr" if "qr" in robot.configs else "qz"
+    print(f"\nat {qname} = {fmt(q)}:")
+    print(f"fkine (4x4):\n{fmt(kin.fkine(q))}")
+    print(f"jacob0 (6x{robot.n}, rows v, omega):\n{fmt(kin.jacob0(q))}")
+    print(f"manipulability: {float(kin.manipulability(q)):.6g}")
+    err = float(np.abs(kin.jacob0(q) - robot.jacob0(q)).max())
+    print(f"max |jacob0 - numeric reference| = {err:.2e}")
+    print(f"jacob0: {_us_per_call(kin.jacob0, q):.2f} us per call from Python")
+
+
+def _tree_report(tree: Any, kin: Any) -> None:
+    """Every frame's position at q = 0, checked against the reference."""
+    q = np.zeros(tree.n)
+    T, J = kin.fkine_jacob0_all(q)
+    Tr, Jr = tree.fkine_jacob0_all(q)
+    print("\nframe positions at q = 0 (m):")
+    for f, Tf in zip(tree.frames, T):
+        print(f"  {f:24} {np.array2string(Tf[:3, 3], precision=5, suppress_small=True)}")
+    err = max(float(np.abs(T - Tr).max()), float(np.abs(J - Jr).max()))
+    print(f"max |fkine_all, jacob0_all - numeric reference| = {err:.2e}")
+    print(
+        f"fkine_jacob0_all (every frame): {_us_per_call(kin.fkine_jacob0_all, q):.2f} us per call from Python"
+    )
+
+
+def _us_per_call(function: Any, q: np.ndarray, reps: int = 2000) -> float:
+    t = time.perf_counter()
+    for _ in range(reps):
+        function(q)
+    return (time.perf_counter() - t) / reps * 1e6

@@ -1,0 +1,92 @@
+"""``symkin derive``: the derivation of FK, Jacobian and Hessian of a chain or tree, or the
+closed-form IK of a chain (Markdown or LaTeX)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from symkin.cli.checks import UserError, output_file
+from symkin.cli.common import add_command, add_link_options, add_robot_argument, chain_or_tree
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(sub, "derive", "write the derivation of FK, Jacobian and Hessian (Markdown or LaTeX)")
+    add_robot_argument(s)
+    s.add_argument("--format", choices=("markdown", "latex"), default="markdown", help="output format")
+    s.add_argument("--symbolic-constants", action="store_true", help="keep link lengths as named symbols")
+    s.add_argument("--no-simplify", action="store_true", help="show the literal products of eqs 1, 5, 26-28")
+    s.add_argument(
+        "--ik", action="store_true", help="write the closed-form inverse kinematics derivation instead"
+    )
+    s.add_argument(
+        "--form",
+        choices=("auto", "expanded", "program"),
+        default="auto",
+        help="expanded: every result multiplied out; program: link frame by link frame with named "
+        "intermediates; auto: program when the expanded form is too large to read",
+    )
+    s.add_argument(
+        "--sections",
+        metavar="LIST",
+        help="only these parts, comma-separated, e.g. fk,jacobian (names: ets, transforms, links, fk, "
+        "derivatives, jacobian, hessian, checks; default all)",
+    )
+    s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of printing")
+    add_link_options(s, frames=True)
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.derive.chain import derivation
+    from symkin.model.tree import Tree
+
+    robot = chain_or_tree(args)
+    sections = _sections(args.sections)
+    output_file(args.output, "-o")
+    if isinstance(robot, Tree):
+        if args.ik:
+            raise UserError("--ik derives the closed form of one chain: name it as ROBOT.urdf:FRAME")
+        if sections is not None:
+            raise UserError("--sections chooses parts of a chain's derivation, not of a tree's")
+        from symkin.derive.tree import tree_derivation
+
+        text = tree_derivation(robot, fmt=args.format)
+    elif args.ik:
+        if sections is not None:
+            raise UserError("--sections chooses parts of the kinematics derivation, not of --ik")
+        from symkin.derive.analytic_ik import ik_derivation
+
+        text = ik_derivation(robot, fmt=args.format)
+    else:
+        text = derivation(
+            robot,
+            fmt=args.format,
+            symbolic_constants=args.symbolic_constants,
+            simplify=not args.no_simplify,
+            form=args.form,
+            sections=sections,
+        )
+    if args.output:
+        Path(args.output).write_text(text)
+        print(f"wrote the derivation of {robot.name} to {args.output}")
+    else:
+        print(text)
+    return 0
+
+
+def _sections(text: str | None) -> tuple[str, ...] | None:
+    if text is None:
+        return None
+    from symkin.derive.chain import SECTIONS
+
+    names = tuple(w for w in text.replace(",", " ").split())
+    bad = [w for w in names if w not in SECTIONS]
+    if bad or not names:
+        raise UserError(
+            f"--sections takes names from {', '.join(SECTIONS)} separated by commas, not {text!r}"
+        )
+    return names

@@ -1,0 +1,148 @@
+"""``symkin ik``: inverse kinematics for one target pose, numerical (NR, GN, LM) or in closed form
+(``--method analytic``, ``--all``)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any
+
+import numpy as np
+
+from symkin.cli.checks import UserError, at_least_1, check_cflags_for, positive_float
+from symkin.cli.common import (
+    add_command,
+    add_robot_argument,
+    add_target_options,
+    floats,
+    fmt,
+    single_chain,
+    target,
+)
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(sub, "ik", "solve inverse kinematics for one target pose")
+    add_robot_argument(s)
+    add_target_options(s, "first start of the search (default: random within the joint limits)")
+    s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM", help="solver")
+    s.add_argument(
+        "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"
+    )
+    s.add_argument("--no-limits", action="store_true", help="--all: keep solutions outside the joint limits")
+    s.add_argument(
+        "--damping",
+        choices=("wampler", "chan", "sugihara"),
+        help="LM damping (default chan: lambda E_k, eq 50 of Manipulator Differential Kinematics, Part 1)",
+    )
+    s.add_argument(
+        "--we",
+        metavar="W",
+        help="task weights: 'position' (position only), 'orientation', or six weights >= 0 for "
+        "vx vy vz wx wy wz (default all 1)",
+    )
+    s.add_argument("--lam", type=positive_float, help="damping lambda of LM (default 0.1)")
+    s.add_argument("--tol", type=positive_float, help="converged when |e| < TOL (default 1e-6: 1 um, 1 urad)")
+    s.add_argument("--ilimit", type=at_least_1, help="iterations per search (default 30)")
+    s.add_argument("--slimit", type=at_least_1, help="searches from random starts (default 100)")
+    s.add_argument("--seed", type=int, default=0, help="seed of the random restarts")
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.runtime.load import compile as compile_robot
+
+    robot = single_chain(args)
+    Tep = target(args, robot)
+    numerical = {"--we": args.we, "--lam": args.lam, "--ilimit": args.ilimit, "--slimit": args.slimit}
+    check_cflags_for(args.backend)
+    if args.all or args.method == "analytic":
+        given = [k for k, v in numerical.items() if v is not None]
+        if given:
+            raise UserError(
+                f"{', '.join(given)} set the numerical methods NR, GN and LM, not the closed form"
+            )
+        return _ik_analytic(args, compile_robot(robot, backend=args.backend), Tep)
+    kin = compile_robot(robot, backend=args.backend)
+    kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
+    if args.damping:
+        kwargs["damping"] = args.damping
+    if args.q0 is not None:
+        kwargs["q0"] = floats(args.q0, "--q0", robot.n)
+    if args.we is not None:
+        kwargs["we"] = _weights(args.we)
+    if args.lam is not None:
+        kwargs["lam"] = args.lam
+    if args.tol is not None:
+        kwargs["tol"] = args.tol
+    if args.ilimit is not None:
+        kwargs["ilimit"] = args.ilimit
+    if args.slimit is not None:
+        kwargs["slimit"] = args.slimit
+    t = time.perf_counter()
+    res = kin.ik(Tep, **kwargs)
+    dt = time.perf_counter() - t
+    if args.json:
+        print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
+    else:
+        print(f"target:\n{fmt(Tep)}")
+        status = "solved" if res.success else f"not solved: {res.reason}"
+        print(f"{status} in {res.iterations} iterations, {res.searches} searches, {dt * 1e3:.2f} ms")
+        print(f"q = {fmt(res.q)}")
+        print(f"residual = {res.residual:.3e}")
+    return 0 if res.success else 1
+
+
+def _weights(text: str) -> np.ndarray:
+    """--we: 'position' (1 1 1 0 0 0), 'orientation' (0 0 0 1 1 1) or six weights >= 0."""
+    named = {"position": [1, 1, 1, 0, 0, 0], "orientation": [0, 0, 0, 1, 1, 1]}
+    if text.strip().lower() in named:
+        return np.array(named[text.strip().lower()], dtype=float)
+    we = floats(text, "--we", 6)
+    if (we < 0).any() or not we.any():
+        raise UserError(f"--we needs six weights >= 0, not all 0 (or 'position'), got {text!r}")
+    return we
+
+
+def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
+    """``symkin ik --all`` (every closed-form solution) or ``--method analytic`` (the nearest)."""
+    q0 = floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
+    t = time.perf_counter()
+    if not args.all:
+        extra = {} if args.tol is None else {"tol": args.tol}
+        res = kin.ik(Tep, method="analytic", q0=q0, **extra)
+        dt = time.perf_counter() - t
+        if args.json:
+            print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
+        else:
+            status = "solved" if res.success else f"not solved: {res.reason}"
+            print(
+                f"{status} (closed form) in {dt * 1e3:.3f} ms\n"
+                f"q = {fmt(res.q)}\nresidual = {res.residual:.3e}"
+            )
+        return 0 if res.success else 1
+    sols = kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits)
+    dt = time.perf_counter() - t
+    errors = [float(np.abs(kin.robot.fkine(q) - Tep).max()) for q in sols]
+    if args.json:
+        print(json.dumps({"solutions": sols.tolist(), "fk_error": errors, "seconds": dt}, indent=2))
+    else:
+        print(f"target:\n{fmt(Tep)}")
+        where = "" if args.no_limits else " within the joint limits"
+        print(f"{len(sols)} solution(s){where} (closed form, {kin.analytic.kind}) in {dt * 1e3:.3f} ms")
+        for i, (q, e) in enumerate(zip(sols, errors)):
+            print(f"  {i + 1}: q = {fmt(q)}  |T(q) - T| = {e:.1e}")
+    return 0 if len(sols) else 1
+
+
+def _result_dict(res: Any) -> dict:
+    import dataclasses
+
+    out = {}
+    for f in dataclasses.fields(res):
+        v = getattr(res, f.name)
+        out[f.name] = v.tolist() if isinstance(v, (np.ndarray, np.generic)) else v
+    return out

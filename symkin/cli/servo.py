@@ -1,0 +1,105 @@
+"""``symkin servo``: servo to a target pose with RRMC or MMC, optionally plotting manipulability
+and error against time."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+import numpy as np
+
+from symkin.cli.checks import UserError, check_cflags_for, int_at_least, need_matplotlib, positive_float
+from symkin.cli.common import (
+    add_command,
+    add_robot_argument,
+    add_target_options,
+    floats,
+    fmt,
+    single_chain,
+    target,
+)
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(sub, "servo", "servo to a target pose with RRMC or MMC, optionally plotting")
+    add_robot_argument(s)
+    add_target_options(s, "start configuration (default: the ready pose qr, else qz)")
+    s.add_argument(
+        "--controller",
+        choices=("mmc", "rrmc"),
+        default="mmc",
+        help="manipulability-maximising or plain resolved rate",
+    )
+    s.add_argument("--dt", type=positive_float, default=0.05, help="control period (s)")
+    s.add_argument("--max-steps", type=int_at_least(0), default=500, help="give up after this many steps")
+    s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
+    s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.runtime.load import compile as compile_robot
+    from symkin.runtime.loop import servo
+
+    robot = single_chain(args)
+    Tep = target(args, robot)
+    need_matplotlib(args.plot)
+    check_cflags_for(args.backend)
+    q0 = floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
+    kin = compile_robot(robot, backend=args.backend)
+    res = servo(
+        kin,
+        q0,
+        Tep,
+        controller=args.controller,
+        dt=args.dt,
+        max_steps=args.max_steps,
+        joint_limits=args.joint_limits,
+        progress=not args.json,
+    )
+    steps = len(res.q) - 1
+    summary = {
+        "arrived": bool(res.arrived),
+        "steps": steps,
+        "final_error": float(np.abs(res.e[-1]).sum()) if len(res.e) else None,
+        "mean_manipulability": float(np.mean(res.manipulability)),
+        "q_final": res.q[-1].tolist(),
+    }
+    if args.plot:
+        _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}")
+        summary["plot"] = args.plot
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(
+            f"{args.controller}: {'arrived' if res.arrived else 'did not arrive'} after {steps} steps "
+            f"(dt {args.dt} s); mean manipulability {summary['mean_manipulability']:.4f}"
+        )
+        print(f"q final = {fmt(res.q[-1])}")
+        if args.plot:
+            print(f"plot written to {args.plot}")
+    return 0 if res.arrived else 1
+
+
+def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
+    t = np.arange(len(res.manipulability)) * dt
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    a1.plot(t, res.manipulability)
+    a1.set_ylabel("manipulability")
+    a1.set_title(title)
+    a2.plot(np.arange(len(res.e)) * dt, np.abs(np.asarray(res.e)).sum(axis=1))
+    a2.set_ylabel("sum |e|")
+    a2.set_xlabel("time (s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

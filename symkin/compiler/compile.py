@@ -1,0 +1,313 @@
+"""The compiler: a model (a :class:`Robot` chain or a :class:`Tree`) -> its symbolic functions ->
+emitted sources -> a built and loaded :class:`Artifact` (the C extension module, or the NumPy or
+CasADi Python module). :func:`symkin.compile` (:mod:`symkin.runtime.load`) wraps an artifact in
+the runtime's kinematics object.
+
+Generated sources are cached per user (``$SYMKIN_CACHE`` or ``~/.cache/symkin``) under a key made
+of everything they depend on (:func:`cache_key`): every attribute of a robot
+(:attr:`Robot.fingerprint`: name, ETS, limits, speed limits, joint names, configurations, source;
+the C header lists the limits) or a tree's structure (:attr:`Tree.key`), the backend and strategy,
+the symkin version, the templates, the compiler's own Python code (symbolic, emit, compiler and the
+model classes it prints) and the sympy version. So a warm compile neither imports sympy nor
+re-derives anything, and a changed derivation never serves stale code. The derivation itself
+(which depends on the name and ETS only) is shared by the backends and by robots that differ only
+in their limits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from symkin.core.cache import cache_dir, write_atomic
+from symkin.core.version import __version__
+from symkin.errors import CompileError, SymkinError
+from symkin.model.robot import Robot
+from symkin.model.tree import Tree
+
+__all__ = [
+    "Artifact",
+    "BACKENDS",
+    "STRATEGIES",
+    "build",
+    "COMPILER_SOURCES",
+    "cache_key",
+    "cached_entry",
+    "cached_files",
+    "compiler_digest",
+    "sources_digest",
+    "templates_digest",
+    "check_backend",
+    "check_strategy",
+    "generate",
+    "load_artifact",
+    "tree_derivation_functions",
+    "write_generated",
+]
+
+BACKENDS = ("c", "numpy", "casadi")
+STRATEGIES = ("expanded", "program")
+Model = Robot | Tree
+
+_FUNCTIONS: dict[tuple[str, str, str | None], list] = {}  # derived functions, shared by the backends
+_FUNCTIONS_MAX = 32
+
+# the compiler's own code: what it derives and prints depends on these files
+COMPILER_SOURCES = ("symbolic", "emit", "compiler", "model/ets.py", "model/robot.py", "model/tree.py")
+
+
+@dataclass(frozen=True)
+class Artifact:
+    """Built, loaded generated code: ``files`` (file name -> text), ``module`` (the C extension
+    module, or the NumPy / CasADi Python module) and ``path`` (the library or module file; None
+    when imported from memory)."""
+
+    files: dict[str, str]
+    module: ModuleType
+    path: Path | None
+
+
+def check_backend(backend: str) -> None:
+    """SymkinError unless ``backend`` is one of :data:`BACKENDS`."""
+    if backend not in BACKENDS:
+        raise SymkinError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+
+
+def check_strategy(strategy: str | None, model: Any = None) -> None:
+    """SymkinError unless ``strategy`` is None or one of :data:`STRATEGIES` (a tree: "program")."""
+    if strategy is not None and strategy not in STRATEGIES:
+        raise SymkinError(
+            f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)} (or None: by size)"
+        )
+    if isinstance(model, Tree) and strategy not in (None, "program"):
+        raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
+
+
+def _check_model(model: Any) -> None:
+    if not isinstance(model, (Robot, Tree)):
+        raise TypeError(
+            f"compile() needs a Robot, a Tree, a built-in robot name or ETS text, not {type(model).__name__}"
+        )
+    if model.n == 0:
+        what = "tree" if isinstance(model, Tree) else "robot"
+        tail = " on the paths to its frames" if isinstance(model, Tree) else ""
+        raise SymkinError(f"{what} {model.name!r} has no joints{tail}: nothing to compile")
+
+
+@lru_cache(maxsize=1)
+def templates_digest() -> str:
+    """sha256 of every template."""
+    from symkin.emit.templates import template_dir
+
+    h = hashlib.sha256()
+    root = template_dir()
+    for path in sorted(root.rglob("*.j2")):
+        h.update(path.relative_to(root).as_posix().encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+@lru_cache(maxsize=1)
+def compiler_digest() -> str:
+    """sha256 of the compiler's Python sources (:data:`COMPILER_SOURCES`) and the sympy version."""
+    from importlib import metadata
+
+    h = hashlib.sha256(sources_digest(Path(__file__).resolve().parent.parent).encode())
+    with contextlib.suppress(metadata.PackageNotFoundError):  # sympy is a declared dependency
+        h.update(metadata.version("sympy").encode())
+    return h.hexdigest()
+
+
+def sources_digest(root: Path) -> str:
+    """sha256 of the :data:`COMPILER_SOURCES` under the package folder ``root``."""
+    h = hashlib.sha256()
+    paths: list[Path] = []
+    for part in COMPILER_SOURCES:
+        p = root / part
+        paths += sorted(p.rglob("*.py")) if p.is_dir() else [p]
+    for path in paths:
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def cache_key(model: Model, backend: str, strategy: str | None = None, what: str = "kinematics") -> str:
+    """The key of ``model``'s generated ``what`` (its kinematics, or "analytic-ik" for the closed-form
+    IK) on ``backend`` (see the module docstring)."""
+    if what != "kinematics":  # e.g. "analytic-ik": depends on the ETS and name only
+        parts = (__version__, what, backend, model.key)
+    elif isinstance(model, Tree):
+        parts = (__version__, "tree", backend, model.key)
+    else:
+        parts = (__version__, backend, model.fingerprint, str(strategy))
+    text = "\n".join((*parts, templates_digest(), compiler_digest()))
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def _memo_functions(key: tuple[str, str, str | None], derive: Any) -> list:
+    functions = _FUNCTIONS.get(key)
+    if functions is None:
+        functions = derive()
+        if len(_FUNCTIONS) >= _FUNCTIONS_MAX:
+            _FUNCTIONS.clear()
+        _FUNCTIONS[key] = functions
+    return functions
+
+
+def tree_derivation_functions(tree: Tree) -> list:
+    """Derive the tree program of ``tree`` and build its emitted functions (imports sympy)."""
+
+    def derive() -> list:
+        from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
+        from symkin.symbolic.tree_program import derive_tree_program, tree_functions
+
+        return tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy))
+
+    return _memo_functions(("tree", tree.key, None), derive)
+
+
+def generate(
+    robot: Model,
+    backend: str,
+    command: str | None = None,
+    strategy: str | None = None,
+    prefix: str | None = None,
+    precision: str = "double",
+    libm: bool = False,
+) -> dict[str, str]:
+    """The generated source files of ``robot`` (a chain or a tree) for ``backend`` (file name ->
+    text). Imports sympy.
+
+    ``strategy``: ``"expanded"`` (one exact expression per output, then CSE: the smallest, most
+    readable code for arms of up to about 7 joints), ``"program"`` (named link frames, Hessians as
+    loops: linear in the number of joints; a tree always compiles so), or None to choose by size
+    (the generated header says which was used). C backend only, for chains and trees alike:
+    ``prefix``, the prefix of every exported symbol and file name instead of ``symkin_<robot>``
+    (a tree: ``symkin_<tree>_tree``), so several robots link into one program;
+    ``precision="float"`` for single-precision code (no Python module; for microcontrollers);
+    ``libm`` to call the C library's sin and cos instead of the inline kernels.
+    """
+    check_backend(backend)
+    check_strategy(strategy, robot)
+    _check_model(robot)
+    if (prefix is not None or precision != "double" or libm) and backend != "c":
+        raise SymkinError(f"prefix, precision and libm apply to the C backend only, not {backend!r}")
+    if isinstance(robot, Tree):
+        from symkin.emit.tree import render_tree
+
+        frames = ",".join(robot.frames)
+        command = command or f"symkin compile {robot.identifier} --frames {frames} --backend {backend}"
+        return render_tree(robot, tree_derivation_functions(robot), backend, command, prefix, precision, libm)
+
+    def derive() -> list:
+        from symkin.symbolic.functions import kin_functions
+
+        return kin_functions(robot, strategy=strategy)
+
+    command = command or f"symkin compile {robot.identifier} --backend {backend}"
+    functions = _memo_functions(("chain", robot.key, strategy), derive)
+    if backend == "c":
+        from symkin.emit.c.backend import render_c
+
+        return render_c(robot, functions, command, prefix, precision, libm)
+    if backend == "numpy":
+        from symkin.emit.numpy.backend import render_numpy
+
+        return render_numpy(robot, functions, command)
+    from symkin.emit.casadi.backend import render_casadi
+
+    return render_casadi(robot, functions, command)
+
+
+def write_generated(
+    robot: Model,
+    backend: str,
+    folder: str | Path,
+    command: str | None = None,
+    strategy: str | None = None,
+    prefix: str | None = None,
+    precision: str = "double",
+    libm: bool = False,
+) -> list[Path]:
+    """Generate and write the files of ``robot`` (a chain or a tree) for ``backend`` into
+    ``folder``, with the manifest :func:`symkin.load_compiled` reads back (``<stem>.symkin.json``);
+    returns the paths (options as :func:`generate`)."""
+    from symkin.compiler.manifest import write_manifest
+
+    files = generate(robot, backend, command, strategy, prefix, precision, libm)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for name, text in sorted(files.items()):
+        path = folder / name
+        path.write_text(text)
+        out.append(path)
+    out.append(write_manifest(robot, backend, files, folder, precision))
+    return out
+
+
+def _digest(files: dict[str, str]) -> str:
+    return hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
+
+
+def cached_entry(key: str, make: Callable[[], dict[str, Any]], use_cache: bool = True) -> dict[str, Any]:
+    """The entry ``key`` of the generated-code cache (a JSON object, verified by its sha256), else
+    ``make()``, stored atomically. One store for chains, trees and closed-form IK."""
+    path = cache_dir() / "gen" / f"{key}.json"
+    if use_cache and path.exists():
+        try:
+            data = json.loads(path.read_text())
+            body = {k: v for k, v in data.items() if k != "sha256"}
+            if data["sha256"] == _digest(body):
+                return body
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            pass  # corrupted entry: make it again below
+    body = make()
+    if use_cache:
+        with contextlib.suppress(OSError):  # an unwritable cache only costs speed
+            write_atomic(path, json.dumps({**body, "sha256": _digest(body)}))
+    return body
+
+
+def cached_files(
+    model: Model, backend: str, key: str, use_cache: bool = True, strategy: str | None = None
+) -> dict[str, str]:
+    """Generated files from the cache (verified by checksum), else generate and store atomically."""
+    return cached_entry(key, lambda: {"files": generate(model, backend, strategy=strategy)}, use_cache)[
+        "files"
+    ]
+
+
+def load_artifact(files: dict[str, str], backend: str) -> Artifact:
+    """Build (C, cached by content) and import generated ``files`` of ``backend``."""
+    if backend == "c":
+        from symkin.emit.c.backend import build_c
+
+        module, lib = build_c(files)
+        return Artifact(files, module, lib)
+    from symkin.emit.numpy.backend import load_numpy
+
+    try:
+        module = load_numpy(files, cache_dir() / backend)
+    except ImportError as exc:  # pragma: no cover - casadi is a declared dependency
+        raise CompileError(f"the {backend} backend cannot import its module: {exc}") from exc
+    file = getattr(module, "__file__", None)
+    return Artifact(files, module, Path(file) if file else None)
+
+
+def build(
+    model: Model, backend: str = "c", cache: bool = True, strategy: str | None = None, key: str | None = None
+) -> Artifact:
+    """Generate (or take from the cache), build and load ``model``'s code on ``backend``."""
+    check_backend(backend)
+    check_strategy(strategy, model)
+    _check_model(model)
+    key = key or cache_key(model, backend, strategy)
+    return load_artifact(cached_files(model, backend, key, cache, strategy), backend)

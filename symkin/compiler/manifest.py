@@ -1,0 +1,301 @@
+"""Folders of generated code: what ``symkin compile -o DIR`` writes, and :func:`load_compiled`.
+
+Beside the generated sources, ``symkin compile -o DIR`` (and :func:`symkin.write_generated`)
+writes a manifest ``<stem>.symkin.json`` (``stem`` the main file's name without its suffix, e.g.
+``symkin_panda``, ``symkin_quadruped_tree`` or a C prefix): the symkin version, the kind of model
+(``"chain"`` or ``"tree"``; manifests without it are chains), the backend, the model and the
+sha256 of every file. A chain is stored as its ETS text (which round-trips exactly), name, joint
+names, limits, speeds, configurations and source; a tree as every field of :class:`Tree` (its
+segments' ETS as text, the slots' multipliers and offsets as exact fractions), so either is rebuilt
+exactly without the URDF. :func:`load_compiled` reads it back: the C sources are compiled (through
+the cache, like :func:`symkin.compile`) and their extension module loaded, a NumPy or CasADi module
+is imported from the folder itself. No sympy is imported.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+import sys
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import CompileError, SymkinError
+from symkin.model.ets import ET, ETS
+from symkin.model.robot import Robot
+from symkin.model.tree import Segment, Slot, Tree
+
+__all__ = [
+    "Manifest",
+    "read_manifest",
+    "import_module_file",
+    "write_manifest",
+    "manifest_name",
+    "MANIFEST_SUFFIX",
+]
+
+MANIFEST_SUFFIX = ".symkin.json"
+FORMAT = 1
+KINDS = ("chain", "tree")
+
+
+def _digest(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def manifest_name(files: dict[str, str]) -> str:
+    """The manifest's file name for a set of generated files: ``<stem>.symkin.json``."""
+    headers = sorted(name for name in files if name.endswith(".h"))
+    main = headers[0] if headers else sorted(name for name in files if name.endswith(".py"))[0]
+    return main.rsplit(".", 1)[0] + MANIFEST_SUFFIX
+
+
+def write_manifest(
+    robot: Robot | Tree, backend: str, files: dict[str, str], folder: str | Path, precision: str = "double"
+) -> Path:
+    """Write the manifest of ``files`` (generated for the chain or tree ``robot`` on ``backend``,
+    in ``precision``) into ``folder``."""
+    tree = isinstance(robot, Tree)
+    data = {
+        "format": FORMAT,
+        "generator": "symkin",
+        "version": _version(),
+        "kind": "tree" if tree else "chain",
+        "backend": backend,
+        "robot": _tree_data(robot) if tree else _chain_data(robot),  # type: ignore[arg-type]
+        "files": {name: _digest(text) for name, text in sorted(files.items())},
+    }
+    if precision != "double":
+        data["precision"] = precision
+    path = Path(folder) / manifest_name(files)
+    path.write_text(json.dumps(data, indent=2) + "\n")
+    return path
+
+
+def _chain_data(robot: Robot) -> dict[str, Any]:
+    return {
+        "name": robot.name,
+        "ets": str(robot.ets),
+        "joint_names": list(robot.joint_names),
+        "qlim": robot.qlim.tolist(),
+        "qd_max": None if robot.qd_max is None else robot.qd_max.tolist(),
+        "configs": {k: v.tolist() for k, v in robot.configs.items() if k != "qz"},
+        "source": robot.source,
+    }
+
+
+def _segment_ets(ets: tuple[ET, ...]) -> tuple[str, list[int]]:
+    """A segment's ETS as text with its joints numbered q0, q1, ... in order (ETS text numbers the
+    joints of a chain from 0), and the joints' own indices."""
+    joints = [e.joint for e in ets if e.is_joint]
+    local = iter(range(len(joints)))
+    text = " ".join(str(ET(e.axis, joint=next(local), flip=e.flip) if e.is_joint else e) for e in ets)
+    return text, joints  # type: ignore[return-value]
+
+
+def _tree_data(tree: Tree) -> dict[str, Any]:
+    """Every field of ``tree`` (as :meth:`Tree.__getstate__` pickles it), as JSON."""
+    segments = []
+    for seg in tree.segments:
+        text, joints = _segment_ets(seg.ets)
+        segments.append(
+            {
+                "name": seg.name,
+                "parent": seg.parent,
+                "link": seg.link,
+                "slot": seg.slot,
+                "ets": text,
+                "joints": joints,
+            }
+        )
+    slots = [
+        {
+            "name": s.name,
+            "segment": s.segment,
+            "joint": s.joint,
+            "multiplier": str(s.multiplier),
+            "offset": str(s.offset),
+            "revolute": s.revolute,
+            "mimics": s.mimics,
+        }
+        for s in tree.slots
+    ]
+    return {
+        "name": tree.name,
+        "base_link": tree.base_link,
+        "frames": list(tree.frames),
+        "frame_segments": list(tree.frame_segments),
+        "joint_names": list(tree.joint_names),
+        "qlim": tree.qlim.tolist(),
+        "velocity": [None if np.isnan(v) else float(v) for v in tree.velocity],
+        "source": tree.source,
+        "segments": segments,
+        "slots": slots,
+    }
+
+
+def _version() -> str:
+    from symkin.core.version import __version__
+
+    return __version__
+
+
+def _find_manifest(folder: Path, name: str | None) -> Path:
+    if not folder.is_dir():
+        what = "does not exist" if not folder.exists() else "is not a folder"
+        raise CompileError(
+            f"{str(folder)!r} {what}: load_compiled takes the folder written by `symkin compile -o DIR`"
+        )
+    found = sorted(folder.glob("*" + MANIFEST_SUFFIX))
+    if name is not None:
+        stems = {p: p.name[: -len(MANIFEST_SUFFIX)] for p in found}
+        exact = [p for p in found if stems[p] == name]  # a prefix, or the stem itself
+        forms = {
+            f"{name}_casadi",
+            *(f"symkin_{name}{tail}" for tail in ("", "_casadi", "_tree", "_tree_casadi")),
+        }
+        found = exact or [p for p in found if stems[p] in forms]
+    if not found:
+        hint = f" for {name!r}" if name is not None else ""
+        raise CompileError(
+            f"{str(folder)!r} is not a folder written by `symkin compile -o DIR`: it has no "
+            f"*{MANIFEST_SUFFIX} manifest{hint} (older symkin versions wrote none: compile again)"
+        )
+    if len(found) > 1:
+        stems = [p.name[: -len(MANIFEST_SUFFIX)] for p in found]
+        raise CompileError(f"{str(folder)!r} holds the code of several robots {stems}: choose one with name=")
+    return found[0]
+
+
+def _model(data: dict, where: str) -> Robot | Tree:
+    """The chain or tree the manifest describes (a manifest without ``kind``: a chain)."""
+    kind = data.get("kind", "chain")
+    if kind not in KINDS:
+        raise CompileError(f"{where}: unknown kind of model {kind!r} (symkin reads {', '.join(KINDS)})")
+    return _tree(data, where) if kind == "tree" else _robot(data, where)
+
+
+def _tree(data: dict, where: str) -> Tree:
+    try:
+        t = data["robot"]
+        segments = []
+        for seg in t["segments"]:
+            joints = iter(seg["joints"])
+            ets = ETS.parse(seg["ets"]).ets if seg["ets"] else ()
+            ets = tuple(ET(e.axis, joint=int(next(joints)), flip=e.flip) if e.is_joint else e for e in ets)
+            if next(joints, None) is not None:
+                raise ValueError(f"segment {seg['name']!r} lists more joints than its ETS has")
+            slot = None if seg["slot"] is None else int(seg["slot"])
+            segments.append(Segment(seg["name"], int(seg["parent"]), seg["link"], ets, slot))
+        slots = [
+            Slot(
+                s["name"],
+                int(s["segment"]),
+                int(s["joint"]),
+                Fraction(s["multiplier"]),
+                Fraction(s["offset"]),
+                bool(s["revolute"]),
+                s["mimics"],
+            )
+            for s in t["slots"]
+        ]
+        return Tree(
+            name=t["name"],
+            base_link=t["base_link"],
+            segments=tuple(segments),
+            slots=tuple(slots),
+            frames=tuple(t["frames"]),
+            frame_segments=tuple(int(k) for k in t["frame_segments"]),
+            joint_names=tuple(t["joint_names"]),
+            qlim=np.array(t["qlim"], dtype=float),
+            velocity=np.array([np.nan if v is None else v for v in t["velocity"]], dtype=float),
+            source=t.get("source", ""),
+        )
+    except (KeyError, TypeError, ValueError, StopIteration, SymkinError) as exc:
+        raise CompileError(f"{where}: the tree in the manifest is unreadable ({exc})") from None
+
+
+def _robot(data: dict, where: str) -> Robot:
+    try:
+        r = data["robot"]
+        return Robot(
+            ETS.parse(r["ets"]),
+            name=r["name"],
+            qlim=np.array(r["qlim"], dtype=float),
+            configs={k: np.array(v, dtype=float) for k, v in r.get("configs", {}).items()},
+            joint_names=tuple(r["joint_names"]),
+            qd_max=None if r.get("qd_max") is None else np.array(r["qd_max"], dtype=float),
+            source=r.get("source", ""),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CompileError(f"{where}: the robot in the manifest is unreadable ({exc})") from None
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """What a folder of ``symkin compile -o`` holds: the robot (a chain, or a :class:`Tree`), the
+    backend, the generated files (name -> text) and the folder."""
+
+    robot: Robot | Tree
+    backend: str
+    files: dict[str, str]
+    folder: Path
+
+    @property
+    def kind(self) -> str:
+        """``"tree"`` or ``"chain"``."""
+        return "tree" if isinstance(self.robot, Tree) else "chain"
+
+
+def read_manifest(folder: str | Path, name: str | None = None, verify: bool = True) -> Manifest:
+    """The manifest and files in ``folder`` (see :func:`symkin.load_compiled` for ``name`` and
+    ``verify``); CompileError when they are missing, unreadable, edited or for embedding only."""
+    folder = Path(folder).expanduser()
+    path = _find_manifest(folder, name)
+    where = str(path)
+    try:
+        data = json.loads(path.read_text())
+        backend, digests = data["backend"], data["files"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise CompileError(f"{where} is not a readable symkin manifest ({exc})") from None
+    if data.get("generator") != "symkin" or backend not in ("c", "numpy", "casadi"):
+        raise CompileError(f"{where} is not a symkin manifest (backend {backend!r})")
+    files: dict[str, str] = {}
+    for fname, digest in digests.items():
+        if "/" in fname or "\\" in fname or fname.startswith("."):
+            raise CompileError(f"{where} names the file {fname!r}, which is not a plain file name")
+        try:
+            text = (folder / fname).read_text()
+        except OSError:
+            raise CompileError(f"{str(folder)!r} lacks {fname}, which the manifest lists") from None
+        if verify and _digest(text) != digest:
+            raise CompileError(
+                f"{fname} in {str(folder)!r} differs from what symkin wrote (edited?); "
+                "load it anyway with load_compiled(..., verify=False)"
+            )
+        files[fname] = text
+    if data.get("precision", "double") != "double":
+        raise CompileError(
+            f"{str(folder)!r} holds {data['precision']}-precision C code, which is for embedding and has "
+            "no Python module: compile without --precision to load it here"
+        )
+    return Manifest(_model(data, where), backend, files, folder)
+
+
+def import_module_file(path: Path, text: str) -> Any:
+    """Import the module at ``path`` under a name unique to its content."""
+    name = f"_{path.stem}_{_digest(text)[:12]}_loaded"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None or spec.loader is None:
+        raise CompileError(f"cannot import {path}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    sys.modules[name] = module
+    return module

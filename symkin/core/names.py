@@ -1,0 +1,47 @@
+"""Safe names: identifiers, comments and string literals for generated code (leaf module)."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+
+__all__ = ["IDENTIFIER_MAX", "identifier", "comment_safe", "c_string"]
+
+IDENTIFIER_MAX = 40  # longest identifier(): C symbols, module and file names stay short
+
+
+def identifier(text: str) -> str:
+    """A safe lowercase ASCII C/Python identifier for arbitrary text (robot names in generated
+    code, symbols and file names), at most :data:`IDENTIFIER_MAX` characters.
+
+    Letters, digits and underscores are kept (others become ``_``); a name that is not plain
+    ASCII or is too long is cut and ends in ``_`` and 8 hex digits of its hash, so different
+    names stay apart (``café`` -> ``caf__1f3a...``). The display name is kept in ``Robot.name``.
+    """
+    ident = re.sub(r"[^a-z0-9_]", "_", text.lower())
+    if not ident or ident[0].isdigit():
+        ident = "r_" + ident
+    if not text.isascii() or len(ident) > IDENTIFIER_MAX:
+        digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:8]
+        ident = f"{ident[: IDENTIFIER_MAX - 9]}_{digest}"
+    return ident
+
+
+_UNSAFE = re.compile(r"[^\x20-\x7e]")
+
+
+def comment_safe(text: str, limit: int = 300) -> str:
+    """Text that cannot end or escape a C or Python comment: printable ASCII, no ``*/``."""
+    text = _UNSAFE.sub("?", text).replace("*/", "* /").replace("/*", "/ *").replace("\\", "/")
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def c_string(text: str) -> str:
+    """A C string literal of the UTF-8 bytes of ``text``: ASCII letters, digits and a few safe
+    punctuation marks as they are, every other byte (non-ASCII too) escaped as octal."""
+    out = []
+    for b in text.encode("utf-8", "surrogatepass"):
+        ch = chr(b)
+        safe = b < 128 and (ch.isalnum() or ch in " _-.,:;()[]=+")
+        out.append(ch if safe else f"\\{b:03o}")
+    return '"' + "".join(out) + '"'

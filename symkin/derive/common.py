@@ -1,0 +1,317 @@
+"""What every derivation shares: the Derivation record, the ETS constants as sympy values, the
+elementary transform matrices, the LaTeX printer with textbook abbreviations and the Markdown ->
+LaTeX document writer."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Literal
+
+import sympy as sp
+
+from symkin.model.ets import ET, ETS, Axis, Const, rational_text
+from symkin.model.latex import text_latex
+from symkin.model.robot import Robot
+from symkin.symbolic.cse import count_ops
+from symkin.symbolic.kinematics import const_to_sympy
+
+__all__ = [
+    "CHECK_TEXT",
+    "FORMATS",
+    "SECTIONS",
+    "Constants",
+    "Derivation",
+    "Printer",
+    "constants",
+    "et_matrix",
+    "latex_document",
+    "ops_of",
+]
+
+Fmt = Literal["markdown", "latex"]
+Form = Literal["auto", "expanded", "program"]
+
+
+#: The parts of a written derivation, in order (``derive --sections fk,jacobian``). The heading and
+#: the joint table are always written. In the program form a part that uses named quantities also
+#: brings the parts that define them (``fk`` the link frames, ``jacobian`` the link frames and ``fk``).
+SECTIONS = ("ets", "transforms", "links", "fk", "derivatives", "jacobian", "hessian", "checks")
+
+
+DISPLAY_MAX_OPS = 900  # larger expressions are not printed
+
+
+MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # a rotation about axis i mixes columns (j, k)
+
+
+def ops_of(expr: Any) -> int:
+    """Operations of an expression, memoised over shared subexpressions (no recursion)."""
+    return count_ops(sp.sympify(expr)).total
+
+
+FORMATS = ("markdown", "latex")
+
+
+@dataclass(frozen=True, eq=False)
+class Derivation:
+    """A robot's kinematics derived step by step. Matrices are sympy ``ImmutableMatrix``.
+
+    Attributes:
+        robot: the robot.
+        q: joint symbols ``q_1 .. q_n``; ``q[j]`` is symkin's joint ``j`` (0-based).
+        constants: symbol -> exact value of each symbolic link constant (empty unless
+            ``symbolic_constants``); :meth:`numeric` substitutes them.
+        E: the elementary transforms of the ETS as 4x4 matrices, in chain order (Fig. 2).
+        T: end-effector pose 0T_e, 4x4 (eq 1).
+        links: link frames 0T_j by joint index (eq 5).
+        ee: the end-effector pose in each link frame, jT_e, by joint index.
+        dT: dT/dq_j by joint index, 4x4 each (eq 26).
+        J0: base-frame Jacobian 6xn, rows (v, omega), by eqs 27-28.
+        J0_fast: the same by the fast form, eqs 31-34.
+        H0: Hessian blocks, ``H0[i] = dJ0/dq_i`` 6xn (eq 20 of the manipulability paper).
+        simplified: whether the results are the compact forms (else the literal products).
+        checks: how each equality was established: ``"symbolic"`` or ``"numeric"``.
+        fmt: the format of ``text``; text: the derivation as Markdown or a LaTeX document.
+        markdown: the derivation as Markdown whatever ``fmt`` (what Jupyter shows).
+        shown: the sections written (:data:`SECTIONS`).
+        form: ``"expanded"`` (every result multiplied out) or ``"program"`` (long chains: the
+            results are matrices over named intermediates, ``intermediates`` lists their
+            definitions in order and :meth:`expand` substitutes them back; ``dT`` and ``ee`` are
+            empty).
+        intermediates: (symbol, expression) of each named intermediate (program form).
+        sections: where each link frame's, the pose's and the Jacobians' intermediates end.
+    """
+
+    robot: Robot
+    q: tuple[sp.Symbol, ...]
+    constants: Mapping[sp.Symbol, sp.Expr]
+    E: tuple[sp.ImmutableMatrix, ...]
+    T: sp.ImmutableMatrix
+    links: tuple[sp.ImmutableMatrix, ...]
+    ee: tuple[sp.ImmutableMatrix, ...]
+    dT: tuple[sp.ImmutableMatrix, ...]
+    J0: sp.ImmutableMatrix
+    J0_fast: sp.ImmutableMatrix
+    H0: tuple[sp.ImmutableMatrix, ...]
+    simplified: bool
+    checks: Mapping[str, str]
+    fmt: str = "markdown"
+    text: str = ""
+    latex_summary: str = field(default="", repr=False)
+    form: str = "expanded"
+    intermediates: tuple[tuple[sp.Symbol, sp.Expr], ...] = field(default=(), repr=False)
+    sections: tuple[tuple[str, int], ...] = field(default=(), repr=False)
+    markdown: str = field(default="", repr=False)
+    shown: tuple[str, ...] = SECTIONS
+
+    def numeric(self, expr: Any) -> Any:
+        """``expr`` with the symbolic link constants replaced by their values."""
+        return sp.sympify(expr).xreplace(dict(self.constants))
+
+    def expand(self, expr: Any) -> Any:
+        """``expr`` with the named intermediates of the program form substituted back, in terms of
+        the joint symbols (large for long chains: that is why they are named)."""
+        expr = sp.sympify(expr)
+        for s, e in reversed(self.intermediates):
+            if expr.has(s):
+                expr = expr.xreplace({s: e})
+        return expr
+
+    def _repr_latex_(self) -> str:
+        return self.latex_summary
+
+    def _repr_markdown_(self) -> str:
+        """The written derivation (Markdown with ``$$`` math) for Jupyter."""
+        return self.markdown
+
+
+@dataclass(frozen=True, eq=False)
+class Constants:
+    """The ETS handed to ``derive`` (symbolic translation constants replaced by unique
+    placeholder constants), the value of each factor, and the names shown in the ETS."""
+
+    ets: ETS
+    eta: tuple[sp.Expr | None, ...]  # value of each constant factor, by position (None: a joint)
+    names: dict[int, str]  # LaTeX argument by position, for symbolic constants
+    values: dict[sp.Symbol, sp.Expr]
+    factor: dict[sp.Symbol, int]  # the position of each symbol's factor in the ETS
+    placeholders: dict[Const, sp.Expr]
+
+    def constant(self, c: Const) -> sp.Expr:
+        return self.placeholders[c] if c in self.placeholders else const_to_sympy(c)
+
+
+def constants(ets: ETS, symbolic: bool) -> Constants:
+    if not symbolic:
+        eta = tuple(None if e.const is None else const_to_sympy(e.const) for e in ets)
+        return Constants(ets, eta, {}, {}, {}, {})
+    used = {e.const for e in ets if e.const is not None}
+    scale = 10**40
+    while any(Const(Fraction(i + 1, scale)) in used for i in range(len(ets))):
+        scale += 1
+    out: list[ET] = []
+    eta: list[sp.Expr | None] = []
+    names: dict[int, str] = {}
+    values: dict[sp.Symbol, sp.Expr] = {}
+    factor: dict[sp.Symbol, int] = {}
+    placeholders: dict[Const, sp.Expr] = {}
+    for pos, e in enumerate(ets):
+        if e.const is None or e.axis.is_rotation or e.const.is_zero:
+            out.append(e)
+            eta.append(None if e.const is None else const_to_sympy(e.const))
+            continue
+        k = len(values) + 1
+        sym = sp.Symbol(f"l_{k}", positive=True)
+        value = const_to_sympy(e.const)
+        sign = -1 if value.is_negative else 1
+        values[sym] = sign * value
+        factor[sym] = pos
+        ph = Const(Fraction(pos + 1, scale))
+        placeholders[ph] = sign * sym
+        out.append(ET(e.axis, const=ph))
+        eta.append(sign * sym)
+        names[pos] = ("-" if sign < 0 else "") + f"l_{{{k}}}"
+    return Constants(ETS(tuple(out)), tuple(eta), names, values, factor, placeholders)
+
+
+def et_matrix(axis: Axis, eta: sp.Expr) -> sp.Matrix:
+    """The elementary transform of Fig. 2."""
+    M = sp.eye(4)
+    i = axis.index
+    if axis.is_rotation:
+        j, k = MIX[i]
+        M[j, j] = M[k, k] = sp.cos(eta)
+        M[j, k], M[k, j] = -sp.sin(eta), sp.sin(eta)
+    else:
+        M[i, 3] = eta
+    return M
+
+
+def generator(axis: Axis) -> sp.Matrix:
+    """[G] of eqs 20-25: dE/deta = [G] E."""
+    G = sp.zeros(4, 4)
+    i = axis.index
+    if axis.is_rotation:
+        j, k = MIX[i]
+        G[k, j], G[j, k] = 1, -1
+    else:
+        G[i, 3] = 1
+    return G
+
+
+class Printer:
+    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals."""
+
+    def __init__(self, q: Sequence[sp.Symbol]) -> None:
+        self.index = {s: j + 1 for j, s in enumerate(q)}
+        self.used: dict[sp.Symbol, tuple[str, str]] = {}  # abbreviation -> (latex, meaning)
+        self.names: dict[sp.Symbol, str] = {}
+
+    def _abbreviation(self, f: sp.Expr) -> sp.Symbol | None:
+        idx = []
+        for term, c in f.args[0].as_coefficients_dict().items():
+            if c != 1 or term not in self.index:
+                return None
+            idx.append(self.index[term])
+        idx.sort()
+        kind = "c" if isinstance(f, sp.cos) else "s"
+        sym = sp.Symbol(f"zz{kind}{'_'.join(map(str, idx))}")
+        sub = ("" if max(idx) < 10 else ",").join(map(str, idx))
+        tex = f"{kind}_{{{sub}}}"
+        arg = " + ".join(f"q_{{{i}}}" for i in idx)
+        fn = "\\cos" if kind == "c" else "\\sin"
+        meaning = f"{fn} {arg}" if len(idx) == 1 else f"{fn}({arg})"
+        self.used[sym] = (tex, meaning)
+        self.names[sym] = tex
+        return sym
+
+    def __call__(self, expr: Any) -> str:
+        expr = sp.sympify(expr)
+        ops = ops_of(expr)
+        if ops > DISPLAY_MAX_OPS:
+            return f"\\text{{(an expression of {ops} operations, not shown)}}"
+        subs = {}
+        for f in expr.atoms(sp.cos, sp.sin):
+            a = self._abbreviation(f)
+            if a is not None:
+                subs[f] = a
+        for pw in expr.atoms(sp.Pow):  # roots keep their exponent: sqrt(2), not 2^0.5
+            if pw.exp.is_Rational and not pw.exp.is_Integer:
+                sym = sp.Symbol(f"zzpow{len(self.names)}")
+                self.names[sym] = sp.latex(pw)
+                subs[pw] = sym
+        for r in expr.atoms(sp.Rational):
+            den = r.q
+            while den % 2 == 0:
+                den //= 2
+            while den % 5 == 0:
+                den //= 5
+            if r.q > 1 and den == 1:  # every terminating decimal as a decimal, as in the ETS
+                text = rational_text(Fraction(int(r.p), int(r.q)))
+                subs[r] = sp.Float(text, max(15, len(text)))
+        return sp.latex(expr.xreplace(subs), symbol_names=self.names)
+
+    def matrix(self, M: sp.Matrix) -> str:
+        rows = [" & ".join(self(M[r, c]) for c in range(M.cols)) for r in range(M.rows)]
+        return "\\begin{pmatrix} " + " \\\\ ".join(rows) + " \\end{pmatrix}"
+
+    def legend(self) -> str:
+        items = sorted(self.used.items(), key=lambda kv: (kv[0].name[2], len(kv[0].name), kv[0].name))
+        return ", ".join(f"${tex} = {meaning}$" for _, (tex, meaning) in items)
+
+
+INLINE = re.compile(r"(\$[^$]*\$|`[^`]*`)")
+
+
+def inline_latex(text: str) -> str:
+    """Markdown text -> LaTeX: ``$math$`` kept, backquoted code in typewriter, the rest escaped."""
+    out = []
+    for part in INLINE.split(text):
+        if part.startswith("$"):
+            out.append(part)
+        elif part.startswith("`"):
+            out.append(f"\\texttt{{{text_latex(part[1:-1])}}}")
+        else:
+            out.append(text_latex(part))
+    return "".join(out)
+
+
+def latex_document(markdown: str) -> str:
+    """The template's Markdown (``#`` title, ``##`` sections, paragraphs, ``$$`` blocks, pipe
+    tables) as a standalone LaTeX document (amsmath only)."""
+    body: list[str] = []
+    title = ""
+    table = False
+    lines = iter(markdown.splitlines())
+    for line in lines:
+        if table and not line.startswith("|"):
+            body += [r"\end{tabular}", r"\end{center}", ""]
+            table = False
+        if line.startswith("# "):
+            title = inline_latex(line[2:])
+        elif line.startswith("## "):
+            body += [rf"\section{{{inline_latex(line[3:])}}}", ""]
+        elif line == "$$":
+            body += [r"\[", *iter(lines.__next__, "$$"), r"\]", ""]
+        elif line.startswith("|") and not set(line) <= set("|-"):
+            cells = [inline_latex(c.strip()) for c in line.strip().strip("|").split(" | ")]
+            if not table:
+                body += [r"\begin{center}", r"\begin{tabular}{" + "l" * len(cells) + "}"]
+                table = True
+            body.append(" & ".join(cells) + r" \\")
+        elif line.strip() and not line.startswith("|"):
+            body += [inline_latex(line), ""]
+    head = [r"\documentclass[a4paper,10pt]{article}", r"\usepackage[margin=2cm]{geometry}",
+            r"\usepackage{amsmath,amssymb}", r"\setcounter{MaxMatrixCols}{40}", r"\allowdisplaybreaks",
+            rf"\title{{{title}}}", r"\date{}", r"\begin{document}", r"\maketitle", ""]  # fmt: skip
+    return "\n".join(head + body + [r"\end{document}"]) + "\n"
+
+
+CHECK_TEXT = {
+    "symbolic": "the difference simplifies to 0",
+    "numeric": "the difference vanishes at 3 random points to 30 digits (too large to expand symbolically)",
+    "failed": "NOT equal",
+}
