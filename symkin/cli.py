@@ -8,12 +8,15 @@ take a whole tree with ``--frames a,b,c`` (a branching URDF without a frame is a
 leaves). User mistakes print one line ``symkin: error: ...`` and exit with status 2, checked before
 any long work starts where they can be; a failed check or an unsolved problem exits 1. When the
 reader of the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
-(128 + SIGPIPE). Progress bars appear only when stderr is a terminal (:mod:`symkin.progress`).
+(128 + SIGPIPE), as a program killed by SIGPIPE would; an output that cannot be written (a full
+disk, ``> /dev/full``) is an error: ``symkin: error: cannot write the output: ...``, status 2.
+Progress bars appear only when stderr is a terminal (:mod:`symkin.progress`).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
@@ -644,8 +647,8 @@ def cmd_reach(args: argparse.Namespace) -> int:
         "mean_reach_of_reachable": float(rmap.reach[inside].mean()) if inside.any() else 0.0,
         "max_manipulability": float(np.nanmax(rmap.manipulability)) if inside.any() else None,
         "blocks": int(st.get("blocks", 0)), "computed": int(st.get("computed", 0)),
-        "skipped": int(st.get("skipped", 0)), "seconds": float(st.get("seconds", 0.0)),
-        "problems": int(st.get("problems", 0)),
+        "skipped": int(st.get("skipped", 0)), "damaged": int(st.get("damaged", 0)),
+        "seconds": float(st.get("seconds", 0.0)), "problems": int(st.get("problems", 0)),
     }  # fmt: skip
     if args.plot:
         rmap.plot(args.plot, axis=args.slice_axis, at=args.slice_at)
@@ -657,7 +660,7 @@ def cmd_reach(args: argparse.Namespace) -> int:
     K = len(rmap.rotations)
     print(f"{robot.name}: {x}x{y}x{z} voxels of {rmap.resolution:g} m, {K} orientations -> {args.output}")
     done, skipped = summary["computed"], summary["skipped"]
-    print(f"blocks: {done} computed, {skipped} already written, of {summary['blocks']}")
+    print(f"blocks: {done} computed{_damaged(summary)}, {skipped} already written, of {summary['blocks']}")
     if summary["computed"]:
         rate = summary["problems"] / max(summary["seconds"], 1e-9)
         print(f"{summary['problems']} IK problems in {summary['seconds']:.1f} s ({rate:,.0f} per second)")
@@ -684,15 +687,20 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     st = ds.stats or {}
     summary = {"output": args.output, "samples": len(ds), "blocks": int(st.get("blocks", 0)),
                "computed": int(st.get("computed", 0)), "skipped": int(st.get("skipped", 0)),
-               "seconds": float(st.get("seconds", 0.0))}  # fmt: skip
+               "damaged": int(st.get("damaged", 0)), "seconds": float(st.get("seconds", 0.0))}  # fmt: skip
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
         print(f"{robot.name}: {len(ds)} (q, pose) samples -> {args.output} (arrays q {tuple(ds.q.shape)}, "
               f"pose {tuple(ds.pose.shape)})")  # fmt: skip
-        print(f"blocks: {summary['computed']} computed, {summary['skipped']} already written, "
-              f"in {summary['seconds']:.1f} s")  # fmt: skip
+        print(f"blocks: {summary['computed']} computed{_damaged(summary)}, {summary['skipped']} already "
+              f"written, in {summary['seconds']:.1f} s")  # fmt: skip
     return 0
+
+
+def _damaged(summary: dict) -> str:
+    """`` (2 of them damaged)``: written blocks computed again because a chunk could not be read."""
+    return f" ({summary['damaged']} of them damaged)" if summary["damaged"] else ""
 
 
 def _jsonable(x: Any) -> Any:
@@ -1015,6 +1023,33 @@ def add_workspace_commands(sub: Any) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one symkin command; returns the exit status (see the module docstring).
+
+    The output is flushed here, inside the guard, not by the interpreter at exit: an output that
+    cannot be written (a full disk, ``> /dev/full``) is an error of one line and status 2 like any
+    other, not a success with nothing written or "Exception ignored" and status 120.
+    """
+    stdout = sys.stdout
+    if stdout is not None:
+        sys.stdout = _Output(stdout)
+    try:
+        code = _run(argv)
+        if sys.stdout is not None:
+            sys.stdout.flush()
+        return code
+    except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
+        _silence_stdout()
+        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+    except _OutputError as exc:
+        _silence_stdout()
+        _say(f"symkin: error: cannot write the output: {exc.cause.strerror or exc.cause}")
+        return 2
+    finally:
+        if isinstance(sys.stdout, _Output):
+            sys.stdout = stdout
+
+
+def _run(argv: Sequence[str] | None) -> int:
     from symkin.errors import SymkinError
 
     parser = build_parser()
@@ -1024,16 +1059,59 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exc.code if isinstance(exc.code, int) else 2
     try:
         return int(args.func(args) or 0)
-    except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
-        _silence_stdout()
-        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+    except (BrokenPipeError, _OutputError):
+        raise
     except (UserError, SymkinError, ValueError, OSError) as exc:
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        print(f"symkin: error: {message}", file=sys.stderr)
+        _say(f"symkin: error: {message}")
         return 2
     except KeyboardInterrupt:
-        print("symkin: interrupted", file=sys.stderr)
+        _say("symkin: interrupted")
         return 130
+
+
+class _OutputError(Exception):
+    """The output (stdout) could not be written; ``cause`` is the OSError."""
+
+    def __init__(self, cause: OSError) -> None:
+        super().__init__(str(cause))
+        self.cause = cause
+
+
+class _Output:
+    """``sys.stdout`` while a command runs: a failed write raises _OutputError, told apart from the
+    command's own OSErrors (a file it cannot write); a closed pipe stays a BrokenPipeError."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        return self._guard(self._stream.write, text)
+
+    def writelines(self, lines: Any) -> None:
+        self._guard(self._stream.writelines, lines)
+
+    def flush(self) -> None:
+        self._guard(self._stream.flush)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+    @staticmethod
+    def _guard(fn: Any, *args: Any) -> Any:
+        try:
+            return fn(*args)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _OutputError(exc) from exc
+
+
+def _say(line: str) -> None:
+    """One line on stderr; a stderr that cannot be written either is ignored (nowhere to report)."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
 
 
 def _silence_stdout() -> None:
@@ -1043,7 +1121,7 @@ def _silence_stdout() -> None:
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):  # stdout without a file descriptor (captured)
+    except (OSError, ValueError, AttributeError):  # stdout without a file descriptor (captured, None)
         pass
 
 

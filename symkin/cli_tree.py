@@ -20,7 +20,7 @@ __all__ = [
     "compile_tree_report",
 ]
 
-_URDF = (".urdf", ".xml")
+_URDF = (".urdf", ".xml", ".xacro")  # .xacro: refused by the URDF reader, with how to expand it
 
 
 class TreeUserError(ValueError):

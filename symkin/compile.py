@@ -140,6 +140,10 @@ def generate(
         return generate_tree(robot, backend, command)  # type: ignore[arg-type]
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to compile")
+    if prefix is not None:
+        from symkin.emit.c.backend import check_prefix
+
+        check_prefix(prefix)  # before the derivation, which can take long
     from symkin.symbolic.functions import kin_functions
 
     command = command or f"symkin compile {robot.identifier} --backend {backend}"

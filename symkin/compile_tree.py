@@ -34,7 +34,7 @@ def tree_derivation_functions(tree: Tree) -> list:
     from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
     from symkin.symbolic.tree_program import derive_tree_program, tree_functions
 
-    functions = tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy))
+    functions = tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy, fold=True))
     if len(_FUNCTIONS) > 16:
         _FUNCTIONS.clear()
     _FUNCTIONS[tree.key] = functions

@@ -27,7 +27,7 @@ import numpy as np
 from symkin.errors import RobotError
 from symkin.model.dh import angle_const
 from symkin.model.ets import ET, ETS, Axis, Const
-from symkin.model.robot import Robot
+from symkin.model.robot import Robot, as_config
 from symkin.model.urdf import axis_ets, snap_atan2, translation_ets
 
 __all__ = ["robot_from_poe", "poe_of"]
@@ -235,5 +235,5 @@ def poe_of(robot: Robot, q: Any = None) -> tuple[np.ndarray, np.ndarray]:
     ``M = T(q)`` and ``S`` the space Jacobian's columns at ``q`` (Modern Robotics, ``J_s1 = S_1``...),
     so ``T(q + dq) = e^[S1]dq1 ... e^[Sn]dqn M``.
     """
-    q = np.zeros(robot.n) if q is None else np.asarray(q, dtype=float)
+    q = np.zeros(robot.n) if q is None else as_config(q, robot.n, robot.name)
     return robot.fkine(q), robot.jacobs(q).T.copy()

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import CompileError, ConfigurationError, ParameterError
-from symkin.model.robot import MAX_JOINT_VALUE, real_array
+from symkin.model.robot import as_config, name_of, real_array
 from symkin.runtime.mmc_qp import (
     _AXES,
     MMCQP,
@@ -109,10 +109,8 @@ class StepInfo:
 
 
 def _q(kin: Any, q: Any) -> np.ndarray:
-    q = real_array(q, "q")
-    if q.shape != (kin.n,) or not (np.abs(q) <= MAX_JOINT_VALUE).all():
-        raise ConfigurationError(f"q must be {kin.n} finite numbers within +-{MAX_JOINT_VALUE:g}, got {q!r}")
-    return q
+    """The configuration of a step: the joint-value rule of the kinematics (as_config)."""
+    return as_config(q, kin.n, name_of(kin), "q")
 
 
 def _nu(nu: Any) -> np.ndarray:

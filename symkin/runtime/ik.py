@@ -41,8 +41,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, ParameterError, PoseError
-from symkin.model.robot import real_array, sample_bounds
+from symkin.errors import ParameterError, PoseError
+from symkin.model.robot import as_batch, as_rows, name_of, real_array, sample_bounds
 
 __all__ = [
     "IKResult",
@@ -203,12 +203,8 @@ class IKOptions:
         if qlim.shape != (2, n) or np.isnan(qlim).any():
             raise ParameterError(f"kin.qlim must be a (2, {n}) array without NaN, got shape {qlim.shape}")
         rev = revolute_mask(kin)
-        S = np.zeros((0, n)) if starts is None else real_array(starts, "starts")
-        if not (S.shape == (n,) or (S.ndim == 2 and S.shape[1] == n)):
-            raise ConfigurationError(f"starts must have shape (S, {n}), got {S.shape}")
-        S = S.reshape(-1, n)
-        if not np.isfinite(S).all():
-            raise ConfigurationError("starts must be finite")
+        # start configurations: the joint-value rule of q (as_batch), (n,) or (S, n)
+        S = np.zeros((0, n)) if starts is None else as_batch(starts, n, name_of(kin), "starts")[0]
         return cls(
             n, method, damping, _ro(lam_a), bool(pinv), int(ilimit), int(slimit), float(tol), tol_on,
             bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S),
@@ -532,7 +528,7 @@ def ik(
     if backend != "numpy":
         raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
-    Q0 = _start_rows(q0, opt.n, len(T), single)
+    Q0 = _start_rows(q0, opt.n, len(T), single, name_of(kin))
     seed = new_seed() if seed is None else int(seed) & _M64
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
@@ -585,19 +581,12 @@ def _options(kin: Any, *args: Any) -> IKOptions:
     return opt
 
 
-def _start_rows(q0: Any, n: int, N: int, single: bool) -> np.ndarray | None:
-    """q0 as (N, n) rows (one per target), or None."""
+def _start_rows(q0: Any, n: int, N: int, single: bool, name: str = "robot") -> np.ndarray | None:
+    """q0 as (N, n) rows (one per target), or None: the joint-value rule of q
+    (:func:`symkin.model.robot.as_rows`), shared with the C solver and the closed form."""
     if q0 is None:
         return None
-    Q = real_array(q0, "q0")
-    if Q.shape == (n,):
-        Q = np.broadcast_to(Q, (N, n))
-    elif single or Q.shape != (N, n):
-        want = f"({n},)" if single else f"({n},) or ({N}, {n})"
-        raise ConfigurationError(f"q0 must have shape {want}, got {Q.shape}")
-    if not np.isfinite(Q).all():
-        raise ConfigurationError("q0 contains NaN or inf")
-    return Q
+    return as_rows(q0, n, N, single, name, "q0")
 
 
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
@@ -607,7 +596,7 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
-    q = _start_rows(q0, opt.n, 1, True)[0].copy()  # type: ignore[index]
+    q = _start_rows(q0, opt.n, 1, True, name_of(kin))[0].copy()  # type: ignore[index]
     out = [q.copy()]
     for _ in range(int(steps)):
         Te, J = _fkjac(kin, q)

@@ -42,3 +42,21 @@ def test_one_chain_is_compiled_and_checked(tmp_path):
                          "backends": ["numpy"], "rows": [row]})  # fmt: skip
     assert "failures: 0" in text and "joints per distinct chain: 3: 1" in text
     assert np.isfinite(chain.error["numpy"])
+
+
+def test_sweep_adds_its_own_chains_of_fixed_joints(tmp_path, monkeypatch):
+    """Fixed joints with rpy after a 6-joint arm (2, 3, 4 and 2000 of them), 2000 before it and
+    300 between its joints, 2000 quarter turns: each a distinct chain, compiled and checked with
+    the collection's."""
+    from symkin.bench import urdf_sweep
+
+    (tmp_path / "gripper.urdf").write_text(GRIPPER)
+    monkeypatch.setattr(urdf_sweep, "erd_robots_dir", lambda: tmp_path)
+    r = urdf_sweep.run_sweep(backends=("numpy",), progress=False, limit=1)
+    own = [row for row in r["rows"] if row["synthetic"]]
+    assert sorted(row["urdf"] for row in own) == sorted(urdf_sweep.synthetic_urdfs())
+    assert r["distinct"] == 1 and len(r["rows"]) == 1 + len(own)  # the collection's counts are its own
+    assert r["ok"] and all(row["n"] == 6 and row["error"]["numpy"] < 1e-10 for row in own)
+    text = format_sweep(r)
+    assert "the sweep's own chains" in text and "arm6_fixed2000.urdf (6 joints)" in text
+    assert "failures: 0" in text
