@@ -8,6 +8,11 @@ with the numeric reference and, when Pinocchio is installed, with Pinocchio's fr
 and LOCAL_WORLD_ALIGNED frame Jacobian, all to 1e-10. A chain through a mimic joint is compiled
 as a one-frame :class:`symkin.Tree` (a :class:`symkin.Robot` has independent joints only).
 Needs the ``compare`` extra (example-robot-data).
+
+The sweep also compiles the chains of :func:`synthetic_urdfs`, written here: a 6-joint arm with
+2, 3 and 4 fixed joints of rpy ``0.1 0.2 0.3`` after it, with 2000 such fixed links after it,
+before it and between its joints, and with 2000 fixed links of quarter turns and translations
+(what a collection rarely holds, and what once made the compile hang).
 """
 
 from __future__ import annotations
@@ -25,9 +30,50 @@ import numpy as np
 
 from symkin.bench.tree import erd_robots_dir, pinocchio_q
 
-__all__ = ["Chain", "find_chains", "run_sweep", "format_sweep", "plot_sweep", "TOL"]
+__all__ = ["Chain", "find_chains", "run_sweep", "format_sweep", "plot_sweep", "synthetic_urdfs", "TOL"]
 
 TOL = 1e-10
+_ARM_AXES = ("0 0 1", "0 1 0", "0 1 0", "1 0 0", "0 1 0", "1 0 0")
+
+
+def _fixed_joints_urdf(name: str, layout: list[int | str], rpy: str, xyz: str = "0.01 0.02 0.03") -> str:
+    """A chain of ``layout``: ``"J"`` a revolute joint of a 6-joint arm, a number that many fixed
+    joints with origin ``xyz`` and ``rpy``."""
+    links, joints = ["base"], []
+    for item in layout:
+        for _ in range(1 if item == "J" else int(item)):
+            parent, child = links[-1], f"link{len(links)}"
+            links.append(child)
+            if item == "J":
+                k = sum(1 for j in joints if 'type="revolute"' in j)
+                joints.append(
+                    f'<joint name="j{k}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+                    f'<origin xyz="0 0 0.1" rpy="0 0 0"/><axis xyz="{_ARM_AXES[k % 6]}"/>'
+                    '<limit lower="-2.8" upper="2.8" velocity="2" effort="10"/></joint>'
+                )
+            else:
+                joints.append(
+                    f'<joint name="fixed{len(links)}" type="fixed"><parent link="{parent}"/>'
+                    f'<child link="{child}"/><origin xyz="{xyz}" rpy="{rpy}"/></joint>'
+                )
+    body = "\n  ".join([f'<link name="{n}"/>' for n in links] + joints)
+    return f'<?xml version="1.0"?>\n<robot name="{name}">\n  {body}\n</robot>\n'
+
+
+def synthetic_urdfs() -> dict[str, str]:
+    """File name -> URDF text of the sweep's own chains (module docstring)."""
+    arm: list[int | str] = ["J"] * 6
+    rpy = "0.1 0.2 0.3"
+    out = {f"arm6_fixed{k}.urdf": _fixed_joints_urdf(f"arm6_fixed{k}", [*arm, k], rpy) for k in (2, 3, 4)}
+    out["arm6_fixed2000.urdf"] = _fixed_joints_urdf("arm6_fixed2000", [*arm, 2000], rpy)
+    out["fixed2000_arm6.urdf"] = _fixed_joints_urdf("fixed2000_arm6", [2000, *arm], rpy)
+    out["arm6_fixed300_between.urdf"] = _fixed_joints_urdf(
+        "arm6_fixed300_between", [x for _ in range(6) for x in ("J", 300)], rpy
+    )
+    out["arm6_fixed2000_quarter_turns.urdf"] = _fixed_joints_urdf(
+        "arm6_fixed2000_quarter_turns", [*arm, 2000], "0 0 1.5707963267948966"
+    )
+    return out
 
 
 @dataclass
@@ -47,6 +93,7 @@ class Chain:
     snap: float = 0.0  # how far the default import (angles snapped within 1e-9) is from the file as written
     failure: str = ""
     joints_key: str = ""  # the chain up to its last joint (without the constant tail to the leaf)
+    synthetic: bool = False  # one of synthetic_urdfs(), not of the collection
 
 
 def _start(graph: Any, leaf: str, root: str) -> str:
@@ -154,8 +201,10 @@ def run_sweep(
     progress: bool = True,
     limit: int | None = None,
     seed: int = 0,
+    synthetic: bool = True,
 ) -> dict:
-    """Compile and check every distinct chain (module docstring); the summary and each chain's row."""
+    """Compile and check every distinct chain (module docstring); the summary and each chain's row.
+    ``limit`` takes the first chains of the collection; ``synthetic`` adds :func:`synthetic_urdfs`."""
     from symkin.compiler.compile import BACKENDS
     from symkin.runtime.load import compile as compile_model
 
@@ -172,18 +221,25 @@ def run_sweep(
     chains, bad, found = find_chains(root)
     t_find = time.perf_counter() - t_find
     chains = chains[:limit] if limit else chains
-    bar = None
-    if progress and sys.stderr.isatty():
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=len(chains), desc="chains", leave=False)
     pin_cache: dict = {}
     old = os.environ.get("SYMKIN_CACHE")
     with tempfile.TemporaryDirectory() as tmp:
-        os.environ["SYMKIN_CACHE"] = tmp  # every compile derives, generates and builds
+        own = Path(tmp) / "synthetic"
+        own.mkdir()
+        for name, text in synthetic_urdfs().items() if synthetic else ():
+            (own / name).write_text(text)
+        extra = find_chains(own)[0]
+        for ch in extra:
+            ch.synthetic = True
+        bar = None
+        if progress and sys.stderr.isatty():
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=len(chains) + len(extra), desc="chains", leave=False)
+        os.environ["SYMKIN_CACHE"] = str(Path(tmp) / "cache")  # every compile derives, generates and builds
         try:
-            for ch in chains:
-                _one(ch, backends, compile_model, root, pin_cache, seed)
+            for ch, where in [(c, root) for c in chains] + [(c, own) for c in extra]:
+                _one(ch, backends, compile_model, where, pin_cache, seed)
                 if bar is not None:
                     bar.update(1)
         finally:
@@ -196,8 +252,9 @@ def run_sweep(
     rows = [
         {"urdf": c.urdf, "base": c.base, "leaf": c.leaf, "n": c.n,
          "mimic": c.model.__class__.__name__ == "Tree", "same_as": c.also, "compile_s": c.compile_s,
-         "error": c.error, "pinocchio": c.pinocchio, "snap": c.snap, "failure": c.failure}
-        for c in chains
+         "error": c.error, "pinocchio": c.pinocchio, "snap": c.snap, "failure": c.failure,
+         "synthetic": c.synthetic}
+        for c in chains + extra
     ]  # fmt: skip
     return {
         "ok": all(not r["failure"] for r in rows),
@@ -262,7 +319,8 @@ def _as_written(root: Path, ch: Chain, Q: np.ndarray) -> tuple[np.ndarray, np.nd
 def format_sweep(r: dict) -> str:
     if "skipped" in r:
         return f"symkin bench urdf: skipped ({r['skipped']})"
-    rows = r["rows"]
+    rows = [row for row in r["rows"] if not row.get("synthetic")]
+    own = [row for row in r["rows"] if row.get("synthetic")]
     to_last = r.get("distinct_to_last_joint", "?")
     lines = [
         f"symkin bench urdf: example-robot-data, {r['files']} URDF files, {r['found']} root-to-leaf chains "
@@ -315,7 +373,15 @@ def format_sweep(r: dict) -> str:
         f"snapping (the default, angles within 1e-9 of k pi/4 made exact) moved {moved} chains' FK/J by at "
         f"most {max(snaps, default=0.0):.1e} from the file as written"
     )
-    fails = [row for row in rows if row["failure"]]
+    if own:
+        lines.append("")
+        lines.append(f"the sweep's own chains (fixed joints with rpy, long fixed chains): {len(own)}")
+        for row in own:
+            times = ", ".join(f"{b} {t:.1f} s" for b, t in row["compile_s"].items())
+            err = max(row["error"].values(), default=float("nan"))
+            pin = "" if row.get("pinocchio") is None else f", from Pinocchio {row['pinocchio']:.1e}"
+            lines.append(f"  {row['urdf']} ({row['n']} joints): compile {times}; FK/J error {err:.1e}{pin}")
+    fails = [row for row in rows + own if row["failure"]]
     lines.append("")
     lines.append(f"failures: {len(fails)}" + ("" if fails else " (every chain compiled and matched)"))
     for row in fails:

@@ -12,7 +12,9 @@ take a whole tree with ``--frames a,b,c`` (a branching URDF without a frame is a
 leaves). User mistakes print one line ``symkin: error: ...`` and exit with status 2, checked before
 any long work starts where they can be; a failed check or an unsolved problem exits 1. When the
 reader of the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
-(128 + SIGPIPE). Progress bars appear only when stderr is a terminal (:mod:`symkin.core.progress`).
+(128 + SIGPIPE), as a program killed by SIGPIPE would; an output that cannot be written (a full
+disk, ``> /dev/full``) is an error: ``symkin: error: cannot write the output: ...``, status 2.
+Progress bars appear only when stderr is a terminal (:mod:`symkin.core.progress`).
 """
 
 from symkin.cli.main import build_parser, main

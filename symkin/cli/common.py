@@ -15,6 +15,7 @@ import numpy as np
 from symkin.cli.checks import UserError, at_least_1
 
 __all__ = [
+    "damaged",
     "ROBOT_HELP",
     "BACKENDS",
     "Formatter",
@@ -43,7 +44,7 @@ TRANSFORM_HELP = (
     "allowed), or 16 numbers of a row-major 4x4 matrix"
 )
 BACKENDS = ("c", "numpy", "casadi")
-_URDF = (".urdf", ".xml")
+_URDF = (".urdf", ".xml", ".xacro")  # .xacro: refused by the URDF reader, with how to expand it
 
 
 # -- the parser ----------------------------------------------------------------------------------
@@ -277,3 +278,8 @@ def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
 def fmt(a: np.ndarray) -> str:
     """An array as printed by the commands."""
     return np.array2string(np.asarray(a), precision=5, suppress_small=True, max_line_width=110)
+
+
+def damaged(summary: dict) -> str:
+    """`` (2 of them damaged)``: written blocks computed again because a chunk could not be read."""
+    return f" ({summary['damaged']} of them damaged)" if summary["damaged"] else ""

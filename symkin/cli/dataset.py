@@ -7,7 +7,14 @@ import json
 from typing import Any
 
 from symkin.cli.checks import at_least_1
-from symkin.cli.common import add_command, add_robot_argument, add_scale_options, scheduler, single_chain
+from symkin.cli.common import (
+    add_command,
+    add_robot_argument,
+    add_scale_options,
+    damaged,
+    scheduler,
+    single_chain,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -35,12 +42,12 @@ def run(args: argparse.Namespace) -> int:
     st = ds.stats or {}
     summary = {"output": args.output, "samples": len(ds), "blocks": int(st.get("blocks", 0)),
                "computed": int(st.get("computed", 0)), "skipped": int(st.get("skipped", 0)),
-               "seconds": float(st.get("seconds", 0.0))}  # fmt: skip
+               "damaged": int(st.get("damaged", 0)), "seconds": float(st.get("seconds", 0.0))}  # fmt: skip
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
         print(f"{robot.name}: {len(ds)} (q, pose) samples -> {args.output} (arrays q {tuple(ds.q.shape)}, "
               f"pose {tuple(ds.pose.shape)})")  # fmt: skip
-        print(f"blocks: {summary['computed']} computed, {summary['skipped']} already written, "
-              f"in {summary['seconds']:.1f} s")  # fmt: skip
+        print(f"blocks: {summary['computed']} computed{damaged(summary)}, {summary['skipped']} already "
+              f"written, in {summary['seconds']:.1f} s")  # fmt: skip
     return 0

@@ -4,8 +4,10 @@ exit status 2."""
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from symkin.cli import bench, check, dataset, derive, generate, ik, list_frames, plot, reach, servo
 from symkin.cli import compile as compile_command
@@ -39,6 +41,36 @@ def build_parser() -> Parser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one symkin command; returns the exit status.
+
+    User mistakes print one line ``symkin: error: ...`` and exit with status 2. When the reader of
+    the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
+    (128 + SIGPIPE), as a program killed by SIGPIPE would; an output that cannot be written (a full
+    disk, ``> /dev/full``) is an error: ``symkin: error: cannot write the output: ...``, status 2.
+    The output is flushed here, inside the guard, not by the interpreter at exit, so such an error
+    is one line and status 2, not a success with nothing written or "Exception ignored".
+    """
+    stdout = sys.stdout
+    if stdout is not None:
+        sys.stdout = _Output(stdout)
+    try:
+        code = _run(argv)
+        if sys.stdout is not None:
+            sys.stdout.flush()
+        return code
+    except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
+        _silence_stdout()
+        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+    except _OutputError as exc:
+        _silence_stdout()
+        _say(f"symkin: error: cannot write the output: {exc.cause.strerror or exc.cause}")
+        return 2
+    finally:
+        if isinstance(sys.stdout, _Output):
+            sys.stdout = stdout
+
+
+def _run(argv: Sequence[str] | None) -> int:
     from symkin.errors import SymkinError
 
     parser = build_parser()
@@ -48,16 +80,59 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exc.code if isinstance(exc.code, int) else 2
     try:
         return int(args.func(args) or 0)
-    except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
-        _silence_stdout()
-        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+    except (BrokenPipeError, _OutputError):
+        raise
     except (UserError, SymkinError, ValueError, OSError) as exc:
         message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        print(f"symkin: error: {message}", file=sys.stderr)
+        _say(f"symkin: error: {message}")
         return 2
     except KeyboardInterrupt:
-        print("symkin: interrupted", file=sys.stderr)
+        _say("symkin: interrupted")
         return 130
+
+
+class _OutputError(Exception):
+    """The output (stdout) could not be written; ``cause`` is the OSError."""
+
+    def __init__(self, cause: OSError) -> None:
+        super().__init__(str(cause))
+        self.cause = cause
+
+
+class _Output:
+    """``sys.stdout`` while a command runs: a failed write raises _OutputError, told apart from the
+    command's own OSErrors (a file it cannot write); a closed pipe stays a BrokenPipeError."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        return self._guard(self._stream.write, text)
+
+    def writelines(self, lines: Any) -> None:
+        self._guard(self._stream.writelines, lines)
+
+    def flush(self) -> None:
+        self._guard(self._stream.flush)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+    @staticmethod
+    def _guard(fn: Any, *args: Any) -> Any:
+        try:
+            return fn(*args)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _OutputError(exc) from exc
+
+
+def _say(line: str) -> None:
+    """One line on stderr; a stderr that cannot be written either is ignored (nowhere to report)."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
 
 
 def _silence_stdout() -> None:
@@ -67,7 +142,7 @@ def _silence_stdout() -> None:
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-    except (OSError, ValueError):  # stdout without a file descriptor (captured)
+    except (OSError, ValueError, AttributeError):  # stdout without a file descriptor (captured, None)
         pass
 
 

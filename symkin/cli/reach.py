@@ -14,6 +14,7 @@ from symkin.cli.common import (
     add_command,
     add_robot_argument,
     add_scale_options,
+    damaged,
     floats,
     scheduler,
     single_chain,
@@ -71,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
         "mean_reach_of_reachable": float(rmap.reach[inside].mean()) if inside.any() else 0.0,
         "max_manipulability": float(np.nanmax(rmap.manipulability)) if inside.any() else None,
         "blocks": int(st.get("blocks", 0)), "computed": int(st.get("computed", 0)),
-        "skipped": int(st.get("skipped", 0)), "seconds": float(st.get("seconds", 0.0)),
+        "skipped": int(st.get("skipped", 0)), "damaged": int(st.get("damaged", 0)),
+        "seconds": float(st.get("seconds", 0.0)),
         "problems": int(st.get("problems", 0)),
     }  # fmt: skip
     if args.plot:
@@ -84,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     K = len(rmap.rotations)
     print(f"{robot.name}: {x}x{y}x{z} voxels of {rmap.resolution:g} m, {K} orientations -> {args.output}")
     done, skipped = summary["computed"], summary["skipped"]
-    print(f"blocks: {done} computed, {skipped} already written, of {summary['blocks']}")
+    print(f"blocks: {done} computed{damaged(summary)}, {skipped} already written, of {summary['blocks']}")
     if summary["computed"]:
         rate = summary["problems"] / max(summary["seconds"], 1e-9)
         print(f"{summary['problems']} IK problems in {summary['seconds']:.1f} s ({rate:,.0f} per second)")

@@ -168,7 +168,7 @@ def tree_derivation_functions(tree: Tree) -> list:
         from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
         from symkin.symbolic.tree_program import derive_tree_program, tree_functions
 
-        return tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy))
+        return tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy, fold=True))
 
     return _memo_functions(("tree", tree.key, None), derive)
 
@@ -199,6 +199,10 @@ def generate(
     _check_model(robot)
     if (prefix is not None or precision != "double" or libm) and backend != "c":
         raise SymkinError(f"prefix, precision and libm apply to the C backend only, not {backend!r}")
+    if prefix is not None:
+        from symkin.emit.c.backend import check_prefix
+
+        check_prefix(prefix)  # before the derivation, which can take long
     if isinstance(robot, Tree):
         from symkin.emit.tree import render_tree
 

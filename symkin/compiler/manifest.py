@@ -15,7 +15,6 @@ is imported from the folder itself. No sympy is imported.
 from __future__ import annotations
 
 import hashlib
-import importlib.util
 import json
 import sys
 from dataclasses import dataclass
@@ -288,14 +287,11 @@ def read_manifest(folder: str | Path, name: str | None = None, verify: bool = Tr
 
 
 def import_module_file(path: Path, text: str) -> Any:
-    """Import the module at ``path`` under a name unique to its content."""
+    """Import the module at ``path`` (whose verified text is ``text``) under a name unique to its
+    content, compiled from that text: never from a ``__pycache__`` beside it, which nothing checks."""
+    from symkin.emit.numpy.backend import import_source
+
     name = f"_{path.stem}_{_digest(text)[:12]}_loaded"
     if name in sys.modules:
         return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, path)
-    if spec is None or spec.loader is None:
-        raise CompileError(f"cannot import {path}")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    sys.modules[name] = module
-    return module
+    return import_source(name, text, path)

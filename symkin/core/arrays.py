@@ -16,6 +16,9 @@ __all__ = [
     "Axes",
     "MAX_JOINT_VALUE",
     "as_batch",
+    "as_config",
+    "as_rows",
+    "name_of",
     "axes_rows",
     "real_array",
     "sample_bounds",
@@ -34,14 +37,21 @@ MAX_JOINT_VALUE = 1e15
 def real_array(
     x: Any, what: str, error: type[SymkinError] = ConfigurationError, items: str = "numbers"
 ) -> np.ndarray:
-    """``x`` as a float64 array in native byte order, or raise ``error`` naming ``what``.
+    """``x`` as an aligned float64 array in native byte order, or raise ``error`` naming ``what``.
 
-    Booleans, integers and floats of any byte order convert, and so do sequences and object
-    arrays of real numbers; complex numbers, strings and other objects are refused (NumPy would
-    drop an imaginary part or parse a string), so every backend accepts the same inputs.
+    The conversion rule of every entry point that takes joint values or poses, on every backend
+    (the C extensions convert plain arrays themselves and hand anything else to this): booleans,
+    integers and floats of any byte order, alignment, layout and precision (float16 to long
+    double) convert, and so do sequences and object arrays of real numbers (Python ints,
+    Fractions); complex numbers, strings and other objects are refused (NumPy would drop an
+    imaginary part or parse a string), and so is a finite number beyond the range of a double
+    (``10**400``, a long double 1e400), which NumPy would turn into an OverflowError or inf.
     """
-    if isinstance(x, np.ndarray) and x.dtype.kind in "biuf":
-        return np.asarray(x, dtype=float)
+    if isinstance(x, np.ndarray) and (
+        x.dtype.kind in "biu" or (x.dtype.kind == "f" and x.dtype.itemsize <= 8)
+    ):
+        a = np.asarray(x, dtype=float)
+        return a if a.flags.aligned else a.copy()  # aligned: C code may read it (after ascontiguousarray)
     try:
         a = np.asarray(x)
     except (TypeError, ValueError) as exc:
@@ -61,14 +71,36 @@ def real_array(
         got = "strings" if kind in "US" else f"{a.dtype} values"
         raise error(f"{what} must be an array of {items}, not {got}")
     try:
-        return a.astype(float)
+        with np.errstate(over="ignore"):  # a long double beyond a double's range: refused below
+            out = a.astype(float)
+        if kind == "f" and a.dtype.itemsize > 8 and (np.isinf(out) & np.isfinite(a)).any():
+            raise OverflowError
+    except OverflowError:
+        raise error(f"{what} holds a number beyond the range of a double (|x| > 1.8e308)") from None
     except (TypeError, ValueError) as exc:
         raise error(f"{what} must be an array of {items}: {exc}") from None
+    return out
+
+
+def _check_range(Q: np.ndarray, what: str, single: bool) -> None:
+    """ConfigurationError naming the first joint value of ``Q`` (N, n) that is NaN, inf or beyond
+    +-:data:`MAX_JOINT_VALUE`."""
+    ok = np.abs(Q) <= MAX_JOINT_VALUE  # False for NaN too
+    if not ok.all():
+        bad = np.argwhere(~ok)[0]
+        where = f"[{bad[1]}]" if single else f"[{bad[0]}, {bad[1]}]"
+        value = Q[tuple(bad)]
+        why = "must be finite" if not np.isfinite(value) else f"must be within +-{MAX_JOINT_VALUE:g}"
+        raise ConfigurationError(f"{what}{where} is {value}: joint values {why}")
 
 
 def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.ndarray, bool]:
     """Validate ``q`` (shape (n,) or (N, n), real, finite, within :data:`MAX_JOINT_VALUE`)
-    -> ((N, n) float array, was_single)."""
+    -> ((N, n) float array, was_single).
+
+    The rule for joint values everywhere (reference, every backend, trees, IK seeds, controllers):
+    :func:`real_array` converts, then the shape and the values are checked. N = 0 is a valid batch.
+    """
     Q = real_array(q, what, items=f"{n} numbers")
     single = Q.ndim == 1
     if Q.ndim == 0 or Q.ndim > 2 or Q.shape[-1] != n:
@@ -77,14 +109,41 @@ def as_batch(q: Any, n: int, name: str = "robot", what: str = "q") -> tuple[np.n
         )
     if single:
         Q = Q[None, :]
-    ok = np.abs(Q) <= MAX_JOINT_VALUE  # False for NaN too
-    if not ok.all():
-        bad = np.argwhere(~ok)[0]
-        where = f"[{bad[1]}]" if single else f"[{bad[0]}, {bad[1]}]"
-        value = Q[tuple(bad)]
-        why = "must be finite" if not np.isfinite(value) else f"must be within +-{MAX_JOINT_VALUE:g}"
-        raise ConfigurationError(f"{what}{where} is {value}: joint values {why}")
+    _check_range(Q, what, single)
     return Q, single
+
+
+def as_config(q: Any, n: int, name: str = "robot", what: str = "q") -> np.ndarray:
+    """One configuration (n,) (a controller's q, a servo's start), by :func:`as_batch`'s rule."""
+    Q = real_array(q, what, items=f"{n} numbers")
+    if Q.shape != (n,):
+        raise ConfigurationError(
+            f"{what} must be one configuration, shape ({n},), for {name} with {n} joints, got shape {Q.shape}"
+        )
+    _check_range(Q[None], what, True)
+    return Q
+
+
+def name_of(kin: Any) -> str:
+    """The robot name of kinematics ``kin`` (a Robot, compiled kinematics, a tree frame) for messages."""
+    name = getattr(kin, "name", None)
+    return name if isinstance(name, str) else "robot"
+
+
+def as_rows(q: Any, n: int, N: int, one: bool, name: str = "robot", what: str = "q0") -> np.ndarray:
+    """Joint values given per target (IK seeds ``q0``) -> (N, n), by :func:`as_batch`'s rule: one
+    configuration (n,) for all N targets, or (N, n) with a row per target when the targets are a
+    batch (``one`` False; a single (4, 4) target takes (n,) only)."""
+    if one:
+        return as_config(q, n, name, what)[None]
+    Q, single = as_batch(q, n, name, what)
+    if single:
+        return np.broadcast_to(Q, (N, n))
+    if Q.shape[0] != N:
+        raise ConfigurationError(
+            f"{what} must have shape ({n},) or ({N}, {n}), one row per target, got shape {Q.shape}"
+        )
+    return Q
 
 
 def axes_rows(axes: str) -> slice:

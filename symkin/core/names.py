@@ -28,11 +28,22 @@ def identifier(text: str) -> str:
 
 
 _UNSAFE = re.compile(r"[^\x20-\x7e]")
+# between * and /, / and *, ? and ?: where a space keeps a comment from ending or a trigraph from forming
+_APART = re.compile(r"(?<=\*)(?=/)|(?<=/)(?=\*)|(?<=\?)(?=\?)")
 
 
 def comment_safe(text: str, limit: int = 300) -> str:
-    """Text that cannot end or escape a C or Python comment: printable ASCII, no ``*/``."""
-    text = _UNSAFE.sub("?", text).replace("*/", "* /").replace("/*", "/ *").replace("\\", "/")
+    """Any text made inert inside a C block or line comment, a Python comment and a Python
+    docstring, cut to ``limit`` characters.
+
+    Only printable ASCII is kept: control characters (newlines, ``\\r``, form feeds, NUL) and
+    non-ASCII become ``?``, a backslash becomes ``/`` (no line continuation, no string escape) and
+    a double quote becomes ``'`` (no ``\"\"\"``). Then ``*`` and ``/`` next to each other, and two ``?``,
+    are set apart by a space, after every replacement, so no ``*/`` or ``/*`` and no trigraph
+    (``??/`` is a backslash in ISO C modes) can form.
+    """
+    text = _UNSAFE.sub("?", text).replace("\\", "/").replace('"', "'")
+    text = _APART.sub(" ", text)
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 

@@ -128,7 +128,7 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         "fk_values": fk_values,
         "joints": joints,
         "robot": identifier(name),
-        "name_literal": c_string(name) if dialect == "c" else repr(name),
+        "name_literal": c_string(name) if dialect == "c" else ascii(name),
         "kind": plan.structure.kind + (f" ({plan.structure.position})" if plan.structure.position else ""),
         "version": __version__,
         "command": comment_safe(command),

@@ -3,7 +3,8 @@
 
 One generated function per entry point, each the straight-line code its outputs need: the
 ``*_all`` functions walk the whole tree once, the per-frame functions only the path to their
-frame. Frame names enter generated code only as escaped string literals (C) or ``repr`` (Python).
+frame. Frame names enter generated code only as escaped string literals (C, or ``ascii`` in Python)
+and as :func:`~symkin.emit.templates.comment_safe` text in comments.
 """
 
 from __future__ import annotations
@@ -137,9 +138,9 @@ def render_tree(
             n=n,
             F=F,
             functions=printed_py,
-            header=TreeHeader.of(tree, functions, command, repr(tree.name)),
-            name_literal=repr(tree.name),
-            frame_literals=[repr(f) for f in tree.frames],
+            header=TreeHeader.of(tree, functions, command, ascii(tree.name)),
+            name_literal=ascii(tree.name),
+            frame_literals=[ascii(f) for f in tree.frames],
             frame_fns=_frame_fns(tree),
             framed_docs=FRAMED_DOCS,
         )
@@ -161,8 +162,8 @@ def render_tree(
         n=n,
         F=F,
         functions=printed_ca,
-        header=TreeHeader.of(tree, functions, command, repr(tree.name)),
-        name_literal=repr(tree.name),
-        frame_literals=[repr(f) for f in tree.frames],
+        header=TreeHeader.of(tree, functions, command, ascii(tree.name)),
+        name_literal=ascii(tree.name),
+        frame_literals=[ascii(f) for f in tree.frames],
     )
     return {f"{module}.py": text}

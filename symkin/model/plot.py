@@ -78,9 +78,9 @@ def plot_robot(
         from matplotlib.figure import Figure
     except ImportError:
         raise MissingExtraError("robot plots need matplotlib: pip install 'symkin[plot]'") from None
-    q = robot.configs["qz"] if q is None else robot.check_q(q)
-    if q.ndim != 1:
-        raise ValueError(f"plot draws one configuration: q must have shape ({robot.n},), got {q.shape}")
+    from symkin.core.arrays import as_config
+
+    q = robot.configs["qz"] if q is None else as_config(q, robot.n, robot.name)  # one configuration
     origins, joints, links = chain_points(robot, q)
     Tee = robot.fkine(q)
     span = float(np.ptp(origins, axis=0).max()) if len(origins) > 1 else 1.0

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import as_config
 from symkin.errors import RobotError
 from symkin.model.dh import angle_const
 from symkin.model.ets import ET, ETS, Axis, Const
@@ -235,5 +236,5 @@ def poe_of(robot: Any, q: Any = None) -> tuple[np.ndarray, np.ndarray]:
     ``M = T(q)`` and ``S`` the space Jacobian's columns at ``q`` (Modern Robotics, ``J_s1 = S_1``...),
     so ``T(q + dq) = e^[S1]dq1 ... e^[Sn]dqn M``.
     """
-    q = np.zeros(robot.n) if q is None else np.asarray(q, dtype=float)
+    q = np.zeros(robot.n) if q is None else as_config(q, robot.n, robot.name)
     return robot.fkine(q), robot.jacobs(q).T.copy()

@@ -15,7 +15,7 @@ from symkin.model.robot import Robot
 
 __all__ = ["resolve_robot"]
 
-_URDF_SUFFIXES = (".urdf", ".xml")
+_URDF_SUFFIXES = (".urdf", ".xml", ".xacro")  # .xacro: refused by the URDF reader, with how to expand it
 
 
 def resolve_robot(spec: str | Robot, tool: Any = None, base: Any = None) -> Robot:

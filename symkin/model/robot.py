@@ -94,8 +94,8 @@ class Robot:
                 raise RobotError(f"qlim lower > upper for joint {int(bad[0])}: {qlim[:, bad[0]].tolist()}")
         object.__setattr__(self, "qlim", _readonly(qlim))
         names = tuple(self.joint_names) or tuple(f"q{j}" for j in range(n))
-        if not all(isinstance(x, str) and x for x in names):
-            raise RobotError(f"joint names must be non-empty strings, got {names!r}")
+        if not all(isinstance(x, str) and x for x in names) or re.search("[\0\ud800-\udfff]", "".join(names)):
+            raise RobotError(f"joint names must be non-empty text without NUL or lone surrogates: {names!r}")
         if len(names) != n:
             raise RobotError(f"{len(names)} joint names given for {n} joints")
         if len(set(names)) != n:

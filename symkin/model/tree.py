@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -34,6 +35,8 @@ from symkin.model.robot import Robot
 from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
 
 __all__ = ["Tree", "Segment", "Slot", "frame_position"]
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 
 def frame_position(frame: Any, frames: Sequence[str], name: str = "tree") -> int:
@@ -132,6 +135,15 @@ class Tree:
         n = len(self.joint_names)
         if not isinstance(self.name, str) or not self.name:
             raise RobotError("a tree name must be a non-empty string")
+        # names reach generated C as string literals: text a C string carries whole (as Robot's)
+        for what, names in (
+            ("the tree name", [self.name]),
+            ("frame names", self.frames),
+            ("joint names", [*self.joint_names, *(s.name for s in self.segments)]),
+        ):
+            bad = [x for x in names if not isinstance(x, str) or "\0" in x or _SURROGATE.search(x)]
+            if bad:
+                raise RobotError(f"{what} must be text without NUL or lone surrogates, got {bad[0]!r}")
         if len(set(self.joint_names)) != n:
             raise RobotError(f"joint names must be unique: {self.joint_names}")
         if len(self.frames) != len(self.frame_segments) or not self.frames:

@@ -16,6 +16,11 @@ Numbers in the XML become exact rationals (the decimal as written). Angles withi
 a multiple of pi/4 snap to it exactly (``1.5707963267949`` becomes ``pi/2``), and axis components
 within ``snap_tol * |u|`` of 0 become 0. Zero constants are dropped.
 
+Numbers must be finite doubles; origin lengths and angles (and mimic multipliers and offsets)
+within +-1e15, like joint values. xacro (ROS's XML macros: ``xacro:`` elements, the xacro namespace,
+``${...}`` substitutions, a ``.xacro`` file name) is refused with the command that expands it, and
+so is a DOCTYPE.
+
 Limits come from ``<limit lower upper velocity>``; a continuous joint gets ``[-pi, pi]`` (every
 angle once); a revolute or prismatic joint without lower/upper gets ``[-pi, pi]`` or
 ``[-1, 1]`` m. ``qd_max`` is set when every moving joint on the chain gives a velocity.
@@ -26,6 +31,7 @@ from __future__ import annotations
 import difflib
 import math
 import re
+import shlex
 import sys
 from collections.abc import Sequence
 from fractions import Fraction
@@ -37,7 +43,17 @@ from xml.parsers import expat
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 
-__all__ = ["urdf_args", "axis_ets", "translation_ets", "atan2_const", "snap_angle", "snap_atan2"]
+__all__ = [
+    "urdf_args",
+    "axis_ets",
+    "translation_ets",
+    "atan2_const",
+    "snap_angle",
+    "snap_atan2",
+    "joint_origin",
+    "joint_axis",
+    "MAX_URDF_VALUE",
+]
 
 _KNOWN = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 _ROT = (Axis.Rx, Axis.Ry, Axis.Rz)
@@ -132,8 +148,10 @@ def snap_angle(value: Fraction, tol: float) -> Const:
 # the importer
 
 
-def _numbers(text: str | None, count: int, what: str, default: str | None = None) -> list[Fraction]:
-    """``count`` exact numbers from a space-separated attribute."""
+def _numbers(
+    text: str | None, count: int, what: str, default: str | None = None, bound: float | None = None
+) -> list[Fraction]:
+    """``count`` exact numbers from a space-separated attribute, each within +-``bound`` if given."""
     if text is None:
         if default is None:
             raise URDFError(f"{what} is missing")
@@ -141,7 +159,57 @@ def _numbers(text: str | None, count: int, what: str, default: str | None = None
     cells = text.split()
     if len(cells) != count:
         raise URDFError(f"{what} must have {count} numbers, got {text!r}")
-    return [_number(c, what) for c in cells]
+    values = [_number(c, what) for c in cells]
+    for cell, v in zip(cells, values):
+        if bound is not None and abs(v) > bound:
+            shown = cell if len(cell) <= 40 else cell[:37] + "..."
+            limit = f"{bound:g}".replace("e+", "e")
+            raise URDFError(
+                f"{what} contains {shown!r}; URDF lengths, angles and mimic factors must be within "
+                f"+-{limit} (an angle beyond it has no meaningful double value)"
+            )
+    return values
+
+
+#: The largest |value| of a URDF length or angle (origin xyz and rpy, mimic multiplier and offset),
+#: the bound of joint values (:data:`symkin.model.robot.MAX_JOINT_VALUE`): beyond it a double
+#: resolves an angle to worse than 0.1 rad, and sums and squares of lengths along a chain head
+#: for overflow (inf in the kinematics instead of an error here).
+MAX_URDF_VALUE = 1e15
+
+
+def joint_origin(jel: ElementTree.Element, what: str) -> tuple[list[Fraction], list[Fraction]]:
+    """``(xyz, rpy)`` of a joint's ``<origin>`` (zeros when absent), exact and within
+    +-:data:`MAX_URDF_VALUE`; ``what`` names the joint in messages. Shared by both readers."""
+    origin = jel.find("origin")
+    xyz = _numbers(
+        origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0", MAX_URDF_VALUE
+    )
+    rpy = _numbers(
+        origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0", MAX_URDF_VALUE
+    )
+    return xyz, rpy
+
+
+def joint_axis(jel: ElementTree.Element, what: str, where: str, snap_tol: float) -> list[Fraction]:
+    """The ``<axis xyz>`` of a movable joint (default ``1 0 0``) as exact rationals, components
+    within ``snap_tol * |u|`` of 0 set to 0. Shared by both readers.
+
+    Only the direction matters, so an axis whose largest component is beyond 1e+-100 is first
+    scaled exactly by a power of ten (``1e200 0 0`` is ``1 0 0``, ``1e-300 1e-300 0`` is ``1 1 0``):
+    the squares in its norm and atan2 terms neither overflow nor underflow. Other axes are used as
+    written, so their ETS text does not change.
+    """
+    axis_el = jel.find("axis")
+    u = _numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
+    big = max(abs(c) for c in u)
+    if big == 0:
+        raise URDFError(f"{where}: {what} has the zero vector as its axis; give a direction like '0 0 1'")
+    if not Fraction(1, 10**100) <= big <= 10**100:
+        shift = Fraction(10) ** round(math.log10(big.numerator) - math.log10(big.denominator))  # exact ints
+        u = [c / shift for c in u]
+    norm = math.sqrt(sum(float(c) ** 2 for c in u))
+    return [c if abs(float(c)) > snap_tol * norm else Fraction(0) for c in u]
 
 
 # a decimal number as XML Schema's xs:double writes it (no inf/nan, no fractions); unambiguous, so
@@ -182,15 +250,56 @@ def _refuse(*args: object) -> None:
     raise _RefusedError
 
 
-def _refuse_doctype(text: str, where: str) -> None:
-    """Raise URDFError if the XML has a document type declaration (DOCTYPE, entities).
+class _XacroError(Exception):
+    """A xacro construct, described for the message."""
 
-    A URDF never needs one, and its entities are what "billion laughs" and external-entity
-    attacks are made of; expat stops at the declaration, before expanding anything.
+
+def _xacro_in_element(name: str, attrs: dict[str, str]) -> None:
+    """Raise _XacroError for an element (raw, unprocessed names) that only xacro gives meaning to:
+    a ``xacro:`` element or attribute, a declaration of the xacro namespace
+    (``http://www.ros.org/wiki/xacro``, under any prefix) or a ``${...}`` / ``$(...)`` substitution
+    in an attribute."""
+    if name.startswith("xacro:"):
+        raise _XacroError(f"it has the element <{name}>")
+    for key, value in attrs.items():
+        if key.startswith("xacro:"):
+            raise _XacroError(f"it has the attribute {key!r} in <{name}>")
+        if (key == "xmlns" or key.startswith("xmlns:")) and "ros.org/wiki/xacro" in value:
+            raise _XacroError(f"it declares the xacro namespace, {key}={value!r}")
+        for mark in ("${", "$("):
+            if mark in value:
+                shown = value if len(value) <= 60 else value[:57] + "..."
+                raise _XacroError(f"it has the substitution {shown!r} in attribute {key!r} of <{name}>")
+
+
+def _xacro_error(where: str, found: str, path: Path | None = None) -> URDFError:
+    """The refusal of a xacro file, with the command that expands it."""
+    src, out = "file.urdf.xacro", "file.urdf"
+    if path is not None and path.name.lower().endswith(".xacro") and len(path.name) > len(".xacro"):
+        src = path.name
+        out = path.name[: -len(".xacro")]
+        out = out if out.lower().endswith(".urdf") else out + ".urdf"
+    return URDFError(
+        f"{where} is xacro, not plain URDF: {found}. symkin does not expand xacro macros; expand them "
+        f"first with `xacro {shlex.quote(src)} > {shlex.quote(out)}` (the xacro command comes with "
+        f"`pip install xacro` or ROS) and read {out}"
+    )
+
+
+def _prescan(text: str, where: str, path: Path | None = None) -> None:
+    """Refuse, before the real parse, what a URDF must not have: a document type declaration
+    (DOCTYPE, entities) and xacro.
+
+    A URDF never needs a DOCTYPE, and its entities are what "billion laughs" and external-entity
+    attacks are made of; expat stops at the declaration, before expanding anything. A xacro file
+    parses as XML too, but without its macros expanded it describes a different (smaller) robot,
+    so it is refused with the command that expands it. The scan sees names as written (no
+    namespace processing), so an undeclared ``xacro:`` prefix is caught too.
     """
     parser = expat.ParserCreate()
     parser.StartDoctypeDeclHandler = _refuse
     parser.EntityDeclHandler = _refuse
+    parser.StartElementHandler = _xacro_in_element
     try:
         parser.Parse(text, True)
     except _RefusedError:
@@ -198,6 +307,8 @@ def _refuse_doctype(text: str, where: str) -> None:
             f"{where} has a DOCTYPE (document type declaration); symkin refuses DOCTYPE and entity "
             "declarations in URDF, which never needs them: remove it"
         ) from None
+    except _XacroError as found:
+        raise _xacro_error(where, str(found), path) from None
     except expat.ExpatError:
         pass  # reported by the real parse below, with its position
 
@@ -207,7 +318,7 @@ def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     if isinstance(path_or_xml, Path) or (
         isinstance(path_or_xml, str) and not path_or_xml.lstrip().lstrip("\ufeff").lstrip().startswith("<")
     ):
-        path = Path(path_or_xml)
+        path: Path | None = Path(path_or_xml)
         shown = repr(str(path)) if len(str(path)) <= 200 else repr(str(path)[:197] + "...")
         try:
             text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is allowed
@@ -220,11 +331,14 @@ def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
                 f"cannot read URDF file {shown}: {getattr(exc, 'strerror', None) or exc}"
             ) from None
         where = f"URDF file {shown}"
+        if path.name.lower().endswith(".xacro"):  # even one without macros: read the expanded file
+            raise _xacro_error(where, "its name ends in .xacro", path)
     elif isinstance(path_or_xml, str):
         text, where = path_or_xml.lstrip().lstrip("\ufeff"), "URDF text"
+        path = None
     else:
         raise URDFError(f"expected a URDF file path or XML text, not {type(path_or_xml).__name__}")
-    _refuse_doctype(text, where)
+    _prescan(text, where, path)
     try:
         root = ElementTree.fromstring(text)
     except ElementTree.ParseError as exc:
@@ -346,9 +460,7 @@ def urdf_args(
                 f"{where}: {what} mimics joint {mimic.get('joint')!r}; mimic joints are not supported "
                 "(each joint must be independent): choose another end_link or edit the URDF"
             )
-        origin = jel.find("origin")
-        xyz = _numbers(origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0")
-        rpy = _numbers(origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0")
+        xyz, rpy = joint_origin(jel, what)
         chain += translation_ets(xyz)
         for axis, ang in ((Axis.Rz, rpy[2]), (Axis.Ry, rpy[1]), (Axis.Rx, rpy[0])):
             c = snap_angle(ang, snap_tol)
@@ -356,12 +468,7 @@ def urdf_args(
                 chain.append(ET(axis, const=c))
         if jtype == "fixed":
             continue
-        axis_el = jel.find("axis")
-        u = _numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
-        norm = math.sqrt(sum(float(c) ** 2 for c in u))
-        if norm == 0:
-            raise URDFError(f"{where}: {what} has the zero vector as its axis; give a direction like '0 0 1'")
-        u = [c if abs(float(c)) > snap_tol * norm else Fraction(0) for c in u]
+        u = joint_axis(jel, what, where, snap_tol)
         chain += [snap_atan2(e, snap_tol) for e in axis_ets(u, len(names), revolute=jtype != "prismatic")]
         names.append(jname)
         lim = jel.find("limit")

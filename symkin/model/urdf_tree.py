@@ -26,7 +26,18 @@ from xml.etree import ElementTree
 from symkin.errors import URDFError
 from symkin.model.ets import ET, Axis
 from symkin.model.slots import Segment, Slot
-from symkin.model.urdf import _load, _numbers, _suggest, axis_ets, snap_angle, snap_atan2, translation_ets
+from symkin.model.urdf import (
+    MAX_URDF_VALUE,
+    _load,
+    _numbers,
+    _suggest,
+    axis_ets,
+    joint_axis,
+    joint_origin,
+    snap_angle,
+    snap_atan2,
+    translation_ets,
+)
 
 __all__ = ["URDFGraph", "read_graph", "joint_ets", "urdf_tree_args", "describe_urdf"]
 
@@ -155,13 +166,15 @@ def read_graph(path_or_xml: str | Path) -> URDFGraph:
         parent_joint[j.child] = j
         children[j.parent].append(j)
     graph = URDFGraph(where, root.get("name") or "robot", tuple(links), joints, parent_joint, children)
+    rooted: set[str] = set()  # links whose walk up ends at a root: each link is walked from once
     for link in links:  # a cycle has no root: walking up from any of its links comes back
         seen, ln = {link}, link
-        while ln in parent_joint:
+        while ln in parent_joint and ln not in rooted:
             ln = parent_joint[ln].parent
             if ln in seen:
                 raise URDFError(f"{where}: the joints form a cycle through link {ln!r}")
             seen.add(ln)
+        rooted |= seen
     return graph
 
 
@@ -171,9 +184,7 @@ def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> lis
     The same transforms :func:`symkin.model.urdf.urdf_args` writes for it.
     """
     what = f"joint {j.name!r}"
-    origin = j.el.find("origin")
-    xyz = _numbers(origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0")
-    rpy = _numbers(origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0")
+    xyz, rpy = joint_origin(j.el, what)
     out = translation_ets(xyz)
     for axis, ang in ((Axis.Rz, rpy[2]), (Axis.Ry, rpy[1]), (Axis.Rx, rpy[0])):
         c = snap_angle(ang, snap_tol)
@@ -181,14 +192,7 @@ def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> lis
             out.append(ET(axis, const=c))
     if not j.movable:
         return out
-    axis_el = j.el.find("axis")
-    u = _numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
-    norm = math.sqrt(sum(float(c) ** 2 for c in u))
-    if norm == 0:
-        raise URDFError(
-            f"{graph.where}: {what} has the zero vector as its axis; give a direction like '0 0 1'"
-        )
-    u = [c if abs(float(c)) > snap_tol * norm else Fraction(0) for c in u]
+    u = joint_axis(j.el, what, graph.where, snap_tol)
     return out + [snap_atan2(e, snap_tol) for e in axis_ets(u, slot, revolute=j.kind != "prismatic")]
 
 
@@ -228,8 +232,8 @@ def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fractio
                 f"{graph.where}: {what} mimics joint {src!r}, which does not exist"
                 + _suggest(src, list(graph.joints)).replace("Links", "Joints")
             )
-        mult = _numbers(src_el.get("multiplier"), 1, f"{what} mimic multiplier", "1")[0]
-        off = _numbers(src_el.get("offset"), 1, f"{what} mimic offset", "0")[0]
+        mult = _numbers(src_el.get("multiplier"), 1, f"{what} mimic multiplier", "1", MAX_URDF_VALUE)[0]
+        off = _numbers(src_el.get("offset"), 1, f"{what} mimic offset", "0", MAX_URDF_VALUE)[0]
         m, c = m * mult, m * off + c  # q_j = m q_cur + c and q_cur = mult q_src + off
         cur = graph.joints[src]
         if cur.name in seen:
@@ -240,6 +244,12 @@ def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fractio
                 "be revolute, continuous or prismatic"
             )
         seen.append(cur.name)
+        if max(abs(m), abs(c)) > MAX_URDF_VALUE:  # checked at each step, so m and c stay doubles
+            raise URDFError(
+                f"{graph.where}: mimic joint {j.name!r} follows {' -> '.join(seen)} with the composed "
+                f"multiplier {float(m):.3g} and offset {float(c):.3g}; mimic multipliers and offsets, "
+                f"composed too, must be within +-{MAX_URDF_VALUE:g}"
+            )
         src_el = cur.el.find("mimic")
     return cur, m, c
 

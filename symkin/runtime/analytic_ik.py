@@ -17,6 +17,7 @@ No sympy here.
 
 from __future__ import annotations
 
+import functools
 import math
 from types import ModuleType
 from typing import Any
@@ -24,34 +25,60 @@ from typing import Any
 import numpy as np
 
 from symkin.compiler.analytic_ik import analytic_key, build_analytic
+from symkin.core.arrays import as_rows, real_array
 from symkin.errors import ConfigurationError
 from symkin.model.resolve import resolve_robot
 from symkin.runtime.ik import IKResult, check_pose, pose_error
 from symkin.runtime.memo import memoised
 
-__all__ = ["AnalyticIK", "compile_analytic", "invalid_input", "VERIFY_TOL", "DUPLICATE_TOL"]
+__all__ = [
+    "AnalyticIK",
+    "compile_analytic",
+    "ik_inputs",
+    "check_weights",
+    "invalid_input",
+    "VERIFY_TOL",
+    "DUPLICATE_TOL",
+]
 
 VERIFY_TOL = 1e-8  # max |T(q) - T| of a flagged candidate that is kept
 DUPLICATE_TOL = 1e-6  # rows closer than this in every joint are one solution
 _TWO_PI = 2 * math.pi
 
 
+def check_weights(weights: Any, n: int) -> np.ndarray:
+    """The distance weights of ``ik_all``: (n,) finite numbers >= 0 (converted by real_array)."""
+    w = real_array(weights, "weights", items=f"{n} numbers")
+    if w.shape != (n,) or not (np.isfinite(w).all() and (w >= 0).all()):
+        raise ConfigurationError(
+            f"weights must be {n} finite numbers >= 0; got shape {w.shape} {weights!r}"[:300]
+        )
+    return w
+
+
+def ik_inputs(
+    T: Any, q0: Any, weights: Any, n: int, name: str = "robot"
+) -> tuple[np.ndarray, bool, np.ndarray | None, np.ndarray | None]:
+    """The arguments of ``ik_all`` checked and converted, one rule for every backend: T -> (N, 4, 4)
+    (:func:`symkin.runtime.ik.check_pose`), was_single, q0 -> (N, n) (one row per target, by
+    :func:`symkin.model.robot.as_rows`: the joint-value rule of the kinematics) or None, weights ->
+    (n,) or None; C-contiguous float64. The C extension calls it for any argument that is not a
+    plain float64 array or that its own checks refuse, so it raises this function's errors."""
+    Tb, single = check_pose(T)
+    Q0 = None if q0 is None else np.ascontiguousarray(as_rows(q0, n, len(Tb), single, name, "q0"))
+    w = None if weights is None else check_weights(weights, n)
+    return np.ascontiguousarray(Tb), single, Q0, w
+
+
 def invalid_input(what: str, value: Any, n: int) -> None:
-    """Raise symkin's error for an invalid argument of ``ik_all`` (called by the C extension)."""
-    if what == "pose":
-        check_pose(value)
-        raise ConfigurationError("invalid target pose")
+    """Raise symkin's error for an invalid argument of ``ik_all`` that is not checked by
+    :func:`ik_inputs` (called by the C extension)."""
     if what == "free_joint":
         raise ConfigurationError(
             f"free_joint= is for redundant arms (7 joints or more); this arm has {n} and a closed form: "
             "use ik_all(T) without it"
         )
-    raise ConfigurationError(
-        f"{what} must be {n} finite numbers{' (>= 0)' if what == 'weights' else ''}"
-        f"{' per target, (n,) or (N, n)' if what == 'q0' else ''}; got {np.asarray(value).shape!r} {value!r}"[
-            :300
-        ]
-    )
+    raise ConfigurationError(f"{what} must be {n} finite numbers; got {value!r}"[:300])
 
 
 class AnalyticIK:
@@ -73,10 +100,11 @@ class AnalyticIK:
         self.n = int(robot.n)
         self._rev = np.array([e.is_revolute for e in robot.ets.joints], dtype=bool)
         self._qlim = np.ascontiguousarray(robot.qlim, dtype=float)
-        self._c = getattr(module, "ik_all", None) if backend == "c" else None
-        if backend == "c" and hasattr(module, "Solver"):
-            # the C method has ik_all's signature and the limits bound: no Python frame per call
-            self.ik_all = module.Solver(self._qlim, VERIFY_TOL).ik_all  # type: ignore[method-assign]
+        if backend == "c":
+            # the C method has ik_all's signature and the limits bound: no Python frame per call;
+            # it hands any argument its own checks do not take to ik_inputs, as the code below
+            inputs = functools.partial(ik_inputs, n=self.n, name=robot.name)
+            self.ik_all = module.Solver(self._qlim, VERIFY_TOL, inputs).ik_all  # type: ignore[method-assign]
 
     def __repr__(self) -> str:
         return (
@@ -95,16 +123,8 @@ class AnalyticIK:
     ) -> np.ndarray:
         """Every distinct solution of pose ``T`` (4, 4): (k, n), k <= S, ordered by distance to
         ``q0`` when given; for ``T`` (N, 4, 4): (N, S, n) with NaN rows after the k_i solutions."""
-        if self._c is not None:
-            return self._c(T, q0, weights, self._qlim, joint_limits, tol)
-        Tb, single = check_pose(T)
+        Tb, single, Q0, w = ik_inputs(T, q0, weights, self.n, self.robot.name)
         N = len(Tb)
-        Q0 = self._rows(q0, N, single, "q0")
-        w = None
-        if weights is not None:
-            w = np.asarray(weights, dtype=float)
-            if w.shape != (self.n,) or not np.isfinite(w).all() or (w < 0).any():
-                invalid_input("weights", weights, self.n)
         qf = np.zeros((N, self.n)) if Q0 is None else Q0
         if self.backend == "numpy":
             Q, F = self.module.raw(Tb, qf)
@@ -120,18 +140,6 @@ class AnalyticIK:
             k = int((~np.isnan(out[0, :, 0])).sum())
             return out[0, :k]
         return out
-
-    def _rows(self, q0: Any, N: int, single: bool, what: str) -> np.ndarray | None:
-        if q0 is None:
-            return None
-        Q = np.asarray(q0, dtype=float) if not isinstance(q0, np.ndarray) else q0.astype(float)
-        if Q.shape == (self.n,):
-            Q = np.broadcast_to(Q, (N, self.n))
-        elif single or Q.shape != (N, self.n):
-            invalid_input(what, q0, self.n)
-        if not np.isfinite(Q).all():
-            invalid_input(what, q0, self.n)
-        return Q
 
     def _fk12(self, q: np.ndarray) -> np.ndarray:
         if self.backend == "numpy":
@@ -197,10 +205,9 @@ class AnalyticIK:
     ) -> IKResult:
         """The solution nearest ``q0`` (weighted) as an :class:`IKResult`: ``success=False`` with a
         reason when the pose is out of reach or every solution is outside the joint limits."""
-        T, single = check_pose(Tep)
+        T, single, Q0, w = ik_inputs(Tep, q0, weights, self.n, self.robot.name)
         N = len(T)
-        Q0 = self._rows(q0, N, single, "q0")
-        allq = self.ik_all(T, Q0, joint_limits, weights)
+        allq = self.ik_all(T, Q0, joint_limits, w)
         fk = fkine or self.robot.fkine
         qs, ok, res, why = [], [], [], []
         for i in range(N):
@@ -223,7 +230,12 @@ class AnalyticIK:
         if single:
             return IKResult(qs[0], ok[0], 0, 1, res[0], why[0])
         return IKResult(
-            np.array(qs), np.array(ok), np.zeros(N, int), np.ones(N, int), np.array(res), tuple(why)
+            np.array(qs).reshape(N, self.n),  # (0, n) for no targets
+            np.array(ok, dtype=bool),
+            np.zeros(N, int),
+            np.ones(N, int),
+            np.array(res, dtype=float),
+            tuple(why),
         )
 
     def _why(self, T: np.ndarray, joint_limits: bool) -> str:

@@ -26,11 +26,12 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError, NoAnalyticIKError, SymkinError
+from symkin.core.arrays import MAX_JOINT_VALUE, as_rows, real_array
+from symkin.errors import ConfigurationError, NoAnalyticIKError, PoseError, SymkinError
 from symkin.model.ets import ET, ETS
 from symkin.model.kinematics import const_matrix
 from symkin.model.robot import Robot
-from symkin.runtime.analytic_ik import DUPLICATE_TOL
+from symkin.runtime.analytic_ik import DUPLICATE_TOL, check_weights
 from symkin.runtime.ik import IKResult, check_pose, pose_error
 
 __all__ = ["FreeJointIK", "sub_robot", "free_joint_solver", "parse_free_joint", "FREE_SWEEP"]
@@ -140,10 +141,11 @@ class FreeJointIK:
     def values(self, values: Any) -> np.ndarray:
         """``values`` as a 1-D array without repeats (within DUPLICATE_TOL, mod 2 pi for a revolute
         joint: such values give the same solutions), in the order given."""
-        v = np.atleast_1d(np.asarray(values, dtype=float))
-        if v.ndim != 1 or v.size == 0 or not np.isfinite(v).all():
+        what = f"the values of free joint {self.joint}"
+        v = np.atleast_1d(real_array(values, what))
+        if v.ndim != 1 or v.size == 0 or not (np.abs(v) <= MAX_JOINT_VALUE).all():
             raise ConfigurationError(
-                f"the values of free joint {self.joint} must be a number or a 1-D array of finite numbers, "
+                f"{what} must be a number or a 1-D array of finite numbers within +-{MAX_JOINT_VALUE:g}, "
                 f"got {values!r}"[:300]
             )
         if len(v) == 1:
@@ -177,12 +179,8 @@ class FreeJointIK:
         Tb, single = _poses(T)
         v = self.values(values)
         N, V, n, j = len(Tb), len(v), self._n, self.joint
-        Q0 = _rows(q0, N, single, n, "q0")
-        w = None
-        if weights is not None:
-            w = np.asarray(weights, dtype=float)
-            if w.shape != (n,) or not np.isfinite(w).all() or (w < 0).any():
-                raise ConfigurationError(f"weights must be {n} finite numbers >= 0, got {weights!r}"[:300])
+        Q0 = None if q0 is None else as_rows(q0, n, N, single, self.robot.name, "q0")
+        w = None if weights is None else check_weights(weights, n)
         keep = [k for k in range(n) if k != j]
         Tv = np.ascontiguousarray(self.targets(Tb, v).reshape(N * V, 4, 4))
         q0s = None if Q0 is None else np.ascontiguousarray(np.repeat(Q0[:, keep], V, axis=0))
@@ -234,9 +232,7 @@ class FreeJointIK:
             fine = fine[(fine >= lo) & (fine <= hi)] if joint_limits else fine
             more = self.ik_all(T, fine, q0, joint_limits, weights) if len(fine) else rows[:0]
             both = np.vstack((rows, more))
-            d = ((1.0 if weights is None else np.asarray(weights, dtype=float)) * (both - q0) ** 2).sum(
-                axis=1
-            )
+            d = ((1.0 if weights is None else weights) * (both - q0) ** 2).sum(axis=1)  # checked by ik
             rows = both[np.argsort(d, kind="stable")]
             h /= 8
         return rows
@@ -255,7 +251,8 @@ class FreeJointIK:
         :meth:`sweep`, then (with ``q0``) two finer sweeps of 17 values around the best one."""
         T, single = check_pose(Tep)
         N, n = len(T), self.robot.n
-        Q0 = _rows(q0, N, single, n, "q0")
+        Q0 = None if q0 is None else as_rows(q0, n, N, single, self.robot.name, "q0")
+        weights = None if weights is None else check_weights(weights, n)
         qs, ok, res, why = [], [], [], []
         for i in range(N):
             q0i = None if Q0 is None else Q0[i]
@@ -283,32 +280,24 @@ class FreeJointIK:
         if single:
             return IKResult(qs[0], ok[0], 0, 1, res[0], why[0])
         return IKResult(
-            np.array(qs), np.array(ok), np.zeros(N, int), np.ones(N, int), np.array(res), tuple(why)
+            np.array(qs).reshape(N, n),  # (0, n) for no targets
+            np.array(ok, dtype=bool),
+            np.zeros(N, int),
+            np.ones(N, int),
+            np.array(res, dtype=float),
+            tuple(why),
         )
 
 
 def _poses(T: Any) -> tuple[np.ndarray, bool]:
-    """T as (N, 4, 4) floats and whether it was one pose; the full check (check_pose) only when the
-    shape is wrong, the values are checked by the solver."""
-    Tb = np.asarray(T, dtype=float)
+    """T as (N, 4, 4) floats (converted by the one rule, real_array) and whether it was one pose;
+    the full check (check_pose) only when the shape is wrong, the values are checked by the solver."""
+    Tb = real_array(T, "a target pose", PoseError)
     if Tb.shape == (4, 4):
         return Tb[None], True
     if Tb.ndim == 3 and Tb.shape[1:] == (4, 4):
         return Tb, False
     return check_pose(T)
-
-
-def _rows(q0: Any, N: int, single: bool, n: int, what: str) -> np.ndarray | None:
-    if q0 is None:
-        return None
-    Q = np.asarray(q0, dtype=float)
-    if Q.shape == (n,):
-        Q = np.broadcast_to(Q, (N, n))
-    elif single or Q.shape != (N, n):
-        raise ConfigurationError(f"{what} must have shape ({n},) or ({N}, {n}), got {Q.shape}")
-    if not np.isfinite(Q).all():
-        raise ConfigurationError(f"{what} must be finite")
-    return Q
 
 
 _SOLVERS: dict[tuple[int, int, str], FreeJointIK] = {}

@@ -38,8 +38,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import real_array
-from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.core.arrays import as_rows, name_of
+from symkin.errors import ParameterError, PoseError
 from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     DAMPINGS,
     M64,
@@ -212,7 +212,7 @@ def ik(
     if backend != "numpy":
         raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
-    Q0 = _start_rows(q0, opt.n, len(T), single)
+    Q0 = _start_rows(q0, opt.n, len(T), single, name_of(kin))
     seed = new_seed() if seed is None else int(seed) & M64
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
@@ -265,19 +265,12 @@ def _options(kin: Any, *args: Any) -> IKOptions:
     return opt
 
 
-def _start_rows(q0: Any, n: int, N: int, single: bool) -> np.ndarray | None:
-    """q0 as (N, n) rows (one per target), or None."""
+def _start_rows(q0: Any, n: int, N: int, single: bool, name: str = "robot") -> np.ndarray | None:
+    """q0 as (N, n) rows (one per target), or None: the joint-value rule of q
+    (:func:`symkin.model.robot.as_rows`), shared with the C solver and the closed form."""
     if q0 is None:
         return None
-    Q = real_array(q0, "q0")
-    if Q.shape == (n,):
-        Q = np.broadcast_to(Q, (N, n))
-    elif single or Q.shape != (N, n):
-        want = f"({n},)" if single else f"({n},) or ({N}, {n})"
-        raise ConfigurationError(f"q0 must have shape {want}, got {Q.shape}")
-    if not np.isfinite(Q).all():
-        raise ConfigurationError("q0 contains NaN or inf")
-    return Q
+    return as_rows(q0, n, N, single, name, "q0")
 
 
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
@@ -287,7 +280,7 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
-    q = _start_rows(q0, opt.n, 1, True)[0].copy()  # type: ignore[index]
+    q = _start_rows(q0, opt.n, 1, True, name_of(kin))[0].copy()  # type: ignore[index]
     out = [q.copy()]
     for _ in range(int(steps)):
         Te, J = _fkjac(kin, q)

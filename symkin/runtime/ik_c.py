@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import real_array
+from symkin.core.arrays import as_config, as_rows, name_of, real_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
 
@@ -259,6 +259,7 @@ class CIKSolver:
                 f"the C IK solver handles 1..{nmax} joints, not {opt.n}; use backend='numpy'"
             )
         self.options, self.n, self.kin = opt, opt.n, kin
+        self._name = name_of(kin)
         if fkjac is None:
             fkjac = getattr(kin, "c_fkjac", None)
         self._fkjac_ref = fkjac
@@ -355,10 +356,8 @@ class CIKSolver:
         return _result(q, bool(st.success), st.iterations, st.searches, st.residual, reason)
 
     def _check_q0(self, q0: Any) -> np.ndarray:
-        q = real_array(q0, "q0", items=f"{self.n} numbers")
-        if q.shape != (self.n,) or not np.isfinite(q).all():
-            raise ConfigurationError(f"q0 must be {self.n} finite numbers, got shape {q.shape}")
-        return q
+        """q0 of one target: the joint-value rule of q (as_config), as the NumPy solver's."""
+        return as_config(q0, self.n, self._name, "q0")
 
     def _solve_batch(self, T: np.ndarray, q0: Any, seed: int) -> IKResult:
         if T.ndim != 3 or T.shape[1:] != (4, 4):
@@ -366,14 +365,9 @@ class CIKSolver:
         T = np.ascontiguousarray(T, dtype=float)
         N, n = len(T), self.n
         stride, Q0 = 0, None
-        if q0 is not None:
-            Q0 = np.ascontiguousarray(real_array(q0, "q0"))
-            if Q0.shape == (N, n) and (N != 1 or Q0.ndim == 2):
-                stride = n
-            elif Q0.shape != (n,):
-                raise ConfigurationError(f"q0 must have shape ({n},) or ({N}, {n}), got {Q0.shape}")
-            if not np.isfinite(Q0).all():
-                raise ConfigurationError("q0 contains NaN or inf")
+        if q0 is not None:  # the rule of the NumPy solver: (n,) for all targets or (N, n)
+            Q0 = np.ascontiguousarray(as_rows(q0, n, N, False, self._name, "q0"))
+            stride = n
         q = np.empty((N, n))
         st = np.zeros(N, dtype=STATS_DTYPE)
         bad = self.lib.symkin_ik_solve_batch(

@@ -14,34 +14,19 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import real_array, sample_bounds
-from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.core.arrays import as_batch, name_of, real_array, sample_bounds
+from symkin.errors import ParameterError, PoseError
 
 Method = Literal["NR", "GN", "LM"]
-
-
 Damping = Literal["wampler", "chan", "sugihara"]
-
-
 METHODS = ("NR", "GN", "LM")
-
-
 DAMPINGS = ("wampler", "chan", "sugihara")
-
-
 PINV_RCOND = 1e-12  # singular values <= PINV_RCOND * largest are dropped (same in C)
-
-
 POSE_ATOL = 1e-6  # max |R^T R - I| of an accepted target
-
-
 _BOTTOM_ATOL = 1e-12
-
-
 _NEAR_PI_L = 1e-6
-
-
 TWO_PI = 6.283185307179586
+M64 = (1 << 64) - 1
 
 
 # -- results ----------------------------------------------------------------------------------
@@ -179,12 +164,8 @@ class IKOptions:
         if qlim.shape != (2, n) or np.isnan(qlim).any():
             raise ParameterError(f"kin.qlim must be a (2, {n}) array without NaN, got shape {qlim.shape}")
         rev = revolute_mask(kin)
-        S = np.zeros((0, n)) if starts is None else real_array(starts, "starts")
-        if not (S.shape == (n,) or (S.ndim == 2 and S.shape[1] == n)):
-            raise ConfigurationError(f"starts must have shape (S, {n}), got {S.shape}")
-        S = S.reshape(-1, n)
-        if not np.isfinite(S).all():
-            raise ConfigurationError("starts must be finite")
+        # start configurations: the joint-value rule of q (as_batch), (n,) or (S, n)
+        S = np.zeros((0, n)) if starts is None else as_batch(starts, n, name_of(kin), "starts")[0]
         return cls(
             n, method, damping, _ro(lam_a), bool(pinv), int(ilimit), int(slimit), float(tol), tol_on,
             bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S),
@@ -229,9 +210,6 @@ def revolute_mask(kin: Any) -> np.ndarray:
 def sample_range(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
     """(2, n) range random restarts are drawn from (:func:`symkin.model.robot.sample_bounds`)."""
     return sample_bounds(qlim, revolute)
-
-
-M64 = (1 << 64) - 1
 
 
 # -- random restarts --------------------------------------------------------------------------

@@ -259,7 +259,7 @@ class Kinematics:
             return self.analytic.ik(Tep, fkine=self.fkine, **options)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
-        if len(kwargs) == 1 and c_loop:  # the defaults: keep the C solver for the next call
+        if kwargs == {"backend": "c"} and c_loop:  # the defaults: keep the C solver for the next call
             from symkin.runtime.ik import default_c_solver
 
             self._ik_solver = solver = default_c_solver(self)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import real_array
+from symkin.core.arrays import as_config, name_of, real_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc, rrmc_controller
 from symkin.runtime.ik import check_pose, pose_error
@@ -133,14 +133,12 @@ def servo(
     if backend not in ("auto", "c", "python"):
         raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
     n = int(kin.n)
-    q = real_array(q0, "q0").copy()
-    if q.shape != (n,) or not np.isfinite(q).all():
-        raise ConfigurationError(f"q0 must be {n} finite numbers, got {q0!r}")
+    q = as_config(q0, n, name_of(kin), "q0").copy()
     if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
         raise ParameterError(f"dt must be a positive finite number, got {dt!r}")
     if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 0:
         raise ParameterError(f"max_steps must be an integer >= 0, got {max_steps!r}")
-    T = real_array(Tep, "the target pose", PoseError) if isinstance(Tep, np.ndarray) else None
+    T = real_array(Tep, "a target pose", PoseError) if isinstance(Tep, np.ndarray) else None  # as check_pose
     if T is None or T.shape != (4, 4):  # the C loop checks the pose itself
         T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
         if not single:

@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import MAX_JOINT_VALUE, real_array
-from symkin.errors import ConfigurationError, ParameterError
+from symkin.core.arrays import as_config, name_of, real_array
+from symkin.errors import ParameterError
 
 __all__ = ["OSQP_SETTINGS", "StepInfo", "step_q", "step_nu"]
 
@@ -64,10 +64,8 @@ class StepInfo:
 
 
 def step_q(kin: Any, q: Any) -> np.ndarray:
-    q = real_array(q, "q")
-    if q.shape != (kin.n,) or not (np.abs(q) <= MAX_JOINT_VALUE).all():
-        raise ConfigurationError(f"q must be {kin.n} finite numbers within +-{MAX_JOINT_VALUE:g}, got {q!r}")
-    return q
+    """The configuration of a step: the joint-value rule of the kinematics (as_config)."""
+    return as_config(q, kin.n, name_of(kin), "q")
 
 
 def step_nu(nu: Any) -> np.ndarray:

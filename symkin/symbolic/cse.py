@@ -36,12 +36,14 @@ class OpCounts:
         return f"{self.total} ops ({self.mul} mul, {self.add} add, {self.trig} trig, {self.other} other)"
 
 
-def _postorder(roots: list[sp.Basic]) -> list[sp.Basic]:
-    """Every distinct node under ``roots``, children before parents (iterative: no recursion limit)."""
+def _postorder(roots: list[sp.Basic], skip: Mapping[sp.Basic, object] | None = None) -> list[sp.Basic]:
+    """Every distinct node under ``roots``, children before parents (iterative: no recursion limit),
+    without the nodes in ``skip`` and below them."""
     seen: set[sp.Basic] = set()
+    done = skip if skip is not None else {}
     out: list[sp.Basic] = []
     for root in roots:
-        if root in seen:
+        if root in seen or root in done:
             continue
         stack: list[tuple[sp.Basic, bool]] = [(root, False)]
         while stack:
@@ -53,7 +55,7 @@ def _postorder(roots: list[sp.Basic]) -> list[sp.Basic]:
                 continue
             seen.add(e)
             stack.append((e, True))
-            stack.extend((a, False) for a in e.args if a not in seen)
+            stack.extend((a, False) for a in e.args if a not in seen and a not in done)
     return out
 
 
@@ -91,16 +93,22 @@ def count_ops(expr: sp.Expr) -> OpCounts:
     return memo[expr]
 
 
+_PRECISE = "floatify: 30-digit values"  # the key of the numeric values kept in a shared memo
+
+
 def floatify(expr: sp.Expr, memo: dict[sp.Basic, sp.Expr] | None = None) -> sp.Expr:
     """Replace irrational numeric subexpressions (sqrt(2)/2, cos(1/3)...) by 17-digit Floats.
 
     Rationals are kept: the printers write them as correctly rounded doubles. Each distinct
     subexpression is rebuilt once (``memo`` may be shared between calls), bottom-up without
-    recursion, so shared subtrees stay shared.
+    recursion, so shared subtrees stay shared. A numeric subexpression is evaluated to 30 digits
+    from the 30-digit values of its arguments (each distinct one evaluated once), not by
+    ``sympy.N`` of the whole, which evaluates shared subtrees again at every use.
     """
     memo = {} if memo is None else memo
     if expr in memo:
         return memo[expr]
+    precise: dict[sp.Basic, sp.Float] = memo.setdefault(_PRECISE, {})  # type: ignore[call-overload]
     numeric: dict[sp.Basic, bool] = {}  # sympy's is_number recurses: computed bottom-up instead
     for e in _postorder([expr]):
         if e.is_Atom or not e.args:
@@ -110,7 +118,14 @@ def floatify(expr: sp.Expr, memo: dict[sp.Basic, sp.Expr] | None = None) -> sp.E
         if e in memo:
             continue
         if numeric[e]:
-            memo[e] = e if e.is_Rational else sp.Float(float(sp.N(e, 30)), 17)
+            if e.is_Rational:
+                memo[e] = e
+                continue
+            if any(a in precise for a in e.args):
+                precise[e] = sp.N(e.func(*(precise.get(a, a) for a in e.args)), 30)
+            else:  # a leaf of the numeric subtree: pi, sqrt(2), cos(1/3)
+                precise[e] = sp.N(e, 30)
+            memo[e] = sp.Float(float(precise[e]), 17)
         elif e.is_Atom or not e.args:
             memo[e] = e
         else:
@@ -120,11 +135,12 @@ def floatify(expr: sp.Expr, memo: dict[sp.Basic, sp.Expr] | None = None) -> sp.E
     return memo[expr]
 
 
-def tree_size(exprs: list[sp.Expr]) -> int:
+def tree_size(exprs: list[sp.Expr], memo: dict[sp.Basic, int] | None = None) -> int:
     """The number of nodes of ``exprs`` written out as trees (what a printer emits without
-    sharing), computed over the distinct subexpressions."""
-    memo: dict[sp.Basic, int] = {}
-    for e in _postorder(list(exprs)):
+    sharing), computed over the distinct subexpressions; ``memo`` (node -> size) may be shared
+    between calls, so sizing a derivation stage by stage visits each distinct node once."""
+    memo = {} if memo is None else memo
+    for e in _postorder(list(exprs), skip=memo):
         memo[e] = 1 + sum(memo[a] for a in e.args)
     return sum(memo[e] for e in exprs)
 

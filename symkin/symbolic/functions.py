@@ -12,6 +12,11 @@ Two strategies, chosen by size (:func:`choose_strategy`), both exact:
   (:func:`symkin.symbolic.program.derive_program`). Size and derivation time of FK and J grow
   linearly with the number of joints; the Hessians (an O(n^2) output) are written out up to
   :data:`UNROLL_MAX_JOINTS` joints and written as loops over the Jacobian columns beyond.
+
+Both derive from the chain with its long runs of constants, and runs with two or more rotations by
+arbitrary angles, folded into one numeric transform each (:mod:`symkin.symbolic.fold`: fixed
+joints with rpy offsets, thousands of fixed links). Choosing between them builds the expanded
+form only up to :data:`EXPANDED_MAX_NODES` (:func:`expanded_if_small`).
 """
 
 from __future__ import annotations
@@ -21,8 +26,14 @@ from dataclasses import dataclass, replace
 import sympy as sp
 
 from symkin.model.robot import Robot
-from symkin.symbolic.cse import CSEResult, OpCounts, cse_outputs, tree_size
-from symkin.symbolic.kinematics import SymbolicKinematics, const_to_sympy, derive, joint_symbols
+from symkin.symbolic.cse import CSEResult, OpCounts, cse_outputs
+from symkin.symbolic.kinematics import (
+    ExpansionTooLargeError,
+    SymbolicKinematics,
+    const_to_sympy,
+    derive,
+    joint_symbols,
+)
 from symkin.symbolic.program import HessianLoop, KinematicProgram, derive_program, program_code
 
 __all__ = [
@@ -102,18 +113,22 @@ def choose_strategy(robot: Robot) -> tuple[str, SymbolicKinematics | KinematicPr
 
 def expanded_if_small(robot: Robot) -> SymbolicKinematics | None:
     """The expanded derivation when its T, J0 and H0 written out as trees stay under
-    :data:`EXPANDED_MAX_NODES` nodes, else None (its CSE and code then grow about 2x per joint)."""
+    :data:`EXPANDED_MAX_NODES` nodes, else None (its CSE and code then grow about 2x per joint).
+
+    The derivation stops as soon as one of T, J0 and H0 takes the size over the limit, so asking
+    costs no more than building an expanded form of that size (sympy shares the subtrees;
+    printing and CSE are what grow)."""
     if robot.n > 10:  # a generic 10-joint chain has 3e5 nodes: no need to build it to know
         return None
-    sk = derive(robot)  # cheap: sympy shares the subtrees; printing and CSE are what grow
-    if tree_size([*sk.T, *sk.J0, *(x for h in sk.H0 for x in h)]) > EXPANDED_MAX_NODES:
+    try:
+        return derive(robot, fold=True, max_nodes=EXPANDED_MAX_NODES)
+    except ExpansionTooLargeError:
         return None
-    return sk
 
 
 def _derive_program(robot: Robot) -> KinematicProgram:
     qs = joint_symbols(robot.n)
-    return derive_program(robot.ets, qs, const_to_sympy, robot.name, robot.n <= UNROLL_MAX_JOINTS)
+    return derive_program(robot.ets, qs, const_to_sympy, robot.name, robot.n <= UNROLL_MAX_JOINTS, fold=True)
 
 
 def _expanded(sk: SymbolicKinematics) -> list[KinFunction]:
@@ -176,7 +191,7 @@ def derive_kinematics(robot: Robot, strategy: str | None = None) -> SymbolicKine
     if strategy is None:
         return choose_strategy(robot)[1]
     if strategy == "expanded":
-        return derive(robot)
+        return derive(robot, fold=True)
     if strategy == "program":
         return _derive_program(robot)
     raise ValueError(f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")

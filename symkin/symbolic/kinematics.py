@@ -22,10 +22,13 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from symkin.errors import SymkinError
 from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
+from symkin.symbolic.cse import tree_size
+from symkin.symbolic.fold import Fixed, fold_constants
 
-__all__ = ["SymbolicKinematics", "derive", "const_to_sympy", "joint_symbols"]
+__all__ = ["SymbolicKinematics", "ExpansionTooLargeError", "derive", "const_to_sympy", "joint_symbols"]
 
 _MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
 _HALF_PI = sp.pi / 2
@@ -104,6 +107,11 @@ class _Pose:
         col = self.column(i)
         self.p = [p + d * x for p, x in zip(self.p, col)]
 
+    def transform(self, f: Fixed) -> None:
+        """Apply a folded constant transform (:mod:`symkin.symbolic.fold`)."""
+        self.flush()
+        self.cols, self.p = f.apply(self.cols, self.p)
+
     def matrix(self) -> sp.Matrix:
         cols = self.effective()
         return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], self.p[r]] for r in range(3)] + [[0, 0, 0, 1]])
@@ -113,7 +121,7 @@ Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, axis
 
 
 def _walk(
-    elements: Iterable[ET],
+    elements: Iterable[ET | Fixed],
     qs: Sequence[sp.Symbol],
     constant: Callable[[Const], sp.Expr],
     sign: int,
@@ -124,6 +132,9 @@ def _walk(
     pose = _Pose()
     frames: list[Frame] = []
     for e in elements:
+        if isinstance(e, Fixed):
+            pose.transform(e if sign > 0 else e.inverse())
+            continue
         i = e.axis.index
         if e.is_joint:
             value = sign * qs[e.joint] * e.sign
@@ -142,7 +153,7 @@ def _walk(
 
 
 def _ee_frame(
-    ets: ETS, qs: Sequence[sp.Symbol], constant: Callable[[Const], sp.Expr]
+    elements: Sequence[ET | Fixed], qs: Sequence[sp.Symbol], constant: Callable[[Const], sp.Expr]
 ) -> tuple[sp.Matrix, list[sp.Matrix]]:
     """End-effector-frame Jacobian and Hessian from the inverse chain walked from the end effector.
 
@@ -152,8 +163,8 @@ def _ee_frame(
     dr = u_b x (p'_a - p'_b) when b is revolute (du = 0, dr = u_b when b is prismatic):
     ``dJe_a/dq_b = (du x r_a + u_a x dr; du)`` for revolute a (r_a = -p'_a), ``(du; 0)`` for prismatic a.
     """
-    n = ets.n
-    _, frames = _walk(reversed(tuple(ets)), qs, constant, -1)
+    n = len(qs)
+    _, frames = _walk(reversed(tuple(elements)), qs, constant, -1)
     ordered = frames[::-1]  # chain order
     zero3 = [sp.Integer(0)] * 3
     Je = sp.zeros(6, n)
@@ -213,23 +224,46 @@ class SymbolicKinematics:
         return len(self.q)
 
 
+class ExpansionTooLargeError(SymkinError):
+    """Raised by :func:`derive` when the expanded T, J0 and H0 exceed ``max_nodes`` tree nodes."""
+
+
 def derive(
     robot: Robot | ETS,
     constant: Callable[[Const], sp.Expr] = const_to_sympy,
     q: Sequence[sp.Symbol] | None = None,
+    fold: bool = False,
+    max_nodes: int | None = None,
 ) -> SymbolicKinematics:
     """Derive the exact pose, link frames, Jacobians and Hessians of ``robot``.
 
     ``constant`` maps each ETS constant to a sympy expression (exact by default; a teaching
-    derivation can map link lengths to named symbols instead).
+    derivation can map link lengths to named symbols instead). ``fold``: long runs of constants,
+    and runs with two or more rotations by arbitrary angles, become one numeric transform each
+    first (:func:`symkin.symbolic.fold.fold_constants`; ``constant`` then does not see them), as
+    the compiler derives. ``max_nodes``: raise :class:`ExpansionTooLargeError` as soon as T, J0 and H0
+    written out as trees (:func:`symkin.symbolic.cse.tree_size`) exceed that many nodes, checked
+    after each of them, so sizing the expanded form costs no more than building it up to that size.
     """
     ets = robot.ets if isinstance(robot, Robot) else robot
     name = robot.name if isinstance(robot, Robot) else "robot"
     n = ets.n
     qs = tuple(q) if q is not None else joint_symbols(n)
+    elements = fold_constants(ets) if fold else tuple(ets)
+    sizes: dict[sp.Basic, int] = {}
+    total = 0
+
+    def budget(exprs: Iterable[sp.Expr]) -> None:
+        nonlocal total
+        if max_nodes is not None:
+            total += tree_size(list(exprs), sizes)
+            if total > max_nodes:
+                raise ExpansionTooLargeError(f"{name}: over {max_nodes} nodes expanded")
+
     links: list[sp.Matrix] = []
-    pose, frames = _walk(ets, qs, constant, 1, links)
+    pose, frames = _walk(elements, qs, constant, 1, links)
     T = pose.matrix()
+    budget(T)
     pe = [T[r, 3] for r in range(3)]
 
     zero3 = [sp.Integer(0)] * 3
@@ -248,6 +282,7 @@ def derive(
         for r in range(3):
             J0[r, j] = Jv[k][r]
             J0[r + 3, j] = Jw[k][r]
+    budget(J0)
 
     H0 = [sp.zeros(6, n) for _ in range(n)]
     for kb, jb in enumerate(order):
@@ -264,5 +299,6 @@ def derive(
                 H0[jb][r, ja] = dv[r]
                 H0[jb][r + 3, ja] = dw[r]
 
-    Je, He = _ee_frame(ets, qs, constant)
+    budget(x for h in H0 for x in h)
+    Je, He = _ee_frame(elements, qs, constant)
     return SymbolicKinematics(name, ets, qs, T, tuple(links), J0, Je, tuple(H0), tuple(He))

@@ -12,7 +12,9 @@ The local rules are the same as the expanded derivation's: exact constants, a ro
 multiple of pi/2 is a signed column swap (no assignment), rotations about one axis separated by
 translations are merged into one rotation by the summed angle, and an assignment whose value is
 a number, a symbol or a negated symbol is not materialised. Identical right-hand sides share one
-name (value numbering), so nothing is computed twice and no CSE pass is needed afterwards.
+name (value numbering), so nothing is computed twice and no CSE pass is needed afterwards. With
+``fold``, a run of constants folded into one transform (:mod:`symkin.symbolic.fold`) is applied
+as one step: each new column and the origin a combination of the old columns.
 
 Hessians are not expanded: ``H0`` and ``He`` are written from the Jacobian columns by the
 pairwise cross products of :class:`HessianLoop` (eq 20 and Appendix I of Haviland and Corke,
@@ -27,8 +29,9 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from symkin.model.ets import ETS, Const
+from symkin.model.ets import ET, ETS, Const
 from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, count_ops, floatify
+from symkin.symbolic.fold import Fixed, fold_constants
 
 __all__ = ["Program", "KinematicProgram", "derive_program", "HessianLoop", "program_code"]
 
@@ -140,6 +143,14 @@ class _Walk:
         col = self.column(i)
         self.p = self.P.vec([p + d * x for p, x in zip(self.p, col)])
 
+    def transform(self, f: Fixed) -> None:
+        """Apply a folded constant transform (:mod:`symkin.symbolic.fold`), each entry of the new
+        columns and origin one named value."""
+        cols, p = f.apply(self.effective(), self.p)
+        self.axis, self.angle, self._trig = None, sp.Integer(0), None
+        self.p = self.P.vec(p)
+        self.cols = [self.P.vec(c) for c in cols]
+
     def pose(self) -> tuple[list[list[sp.Expr]], list[sp.Expr]]:
         return self.effective(), list(self.p)
 
@@ -149,7 +160,7 @@ Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, sign
 
 def _walk(
     P: Program,
-    ets: ETS,
+    ets: Sequence[ET | Fixed],
     qs: Sequence[sp.Symbol],
     constant: Callable[[Const], sp.Expr],
     inverse: bool,
@@ -162,6 +173,9 @@ def _walk(
     frames: list[Frame] = []
     sign = -1 if inverse else 1
     for e in reversed(tuple(ets)) if inverse else ets:
+        if isinstance(e, Fixed):
+            W.transform(e.inverse() if inverse else e)
+            continue
         i = e.axis.index
         if e.is_joint:
             value = sign * qs[e.joint] * e.sign
@@ -225,15 +239,20 @@ def derive_program(
     constant: Callable[[Const], sp.Expr],
     name: str = "robot",
     hessians: bool = True,
+    fold: bool = False,
 ) -> KinematicProgram:
     """Derive the pose, link frames and both Jacobians of ``ets`` as one straight-line program;
     with ``hessians`` also both Hessians, written out (O(n^2) lines; zeros and exact axes of the
-    Jacobian columns make many of their cross products vanish or shrink)."""
+    Jacobian columns make many of their cross products vanish or shrink). ``fold``: long runs of
+    constants, and runs with two or more rotations by arbitrary angles, become one numeric
+    transform each first (:func:`symkin.symbolic.fold.fold_constants`; ``constant`` then does
+    not see them)."""
     n = ets.n
     P = Program()
     links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] = []
     marks: list[tuple[str, int]] = []
-    W, frames = _walk(P, ets, qs, constant, False, links, marks)
+    elements = fold_constants(ets) if fold else tuple(ets)
+    W, frames = _walk(P, elements, qs, constant, False, links, marks)
     cols, pe = W.pose()
     marks.append(("T", len(P.lines)))
     zero3 = [sp.Integer(0)] * 3
@@ -244,7 +263,7 @@ def derive_program(
         J0[3:, j] = sp.Matrix(w if revolute else zero3)
     marks.append(("J0", len(P.lines)))
     # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
-    _, inv = _walk(P, ets, qs, constant, True)
+    _, inv = _walk(P, elements, qs, constant, True)
     Je = sp.zeros(6, n)
     for j, revolute, u, p in inv:
         v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'

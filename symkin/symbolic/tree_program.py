@@ -18,8 +18,9 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from symkin.model.ets import Const
+from symkin.model.ets import ET, Const
 from symkin.symbolic.cse import OpCounts
+from symkin.symbolic.fold import Fixed, fold_constants
 from symkin.symbolic.program import Program, _cross, _matrix, _Walk, program_code
 
 __all__ = ["TreeProgram", "derive_tree_program", "tree_functions", "TREE_FUNCTIONS"]
@@ -43,8 +44,9 @@ class TreeProgram:
     """A tree's kinematics as straight-line code: ``lines`` assign ``t0, t1, ...`` in order.
 
     Per frame (in ``frames`` order): ``T`` (4x4), ``J0`` and ``Je`` (6xn). ``links`` holds the
-    pose after each segment (depth first; used by the derivation). ``marks`` ends each section of
-    ``lines``: ``("segment k", end)`` per segment, then ``("frame k", end)`` per frame.
+    pose after each segment (depth first; used by the derivation; None for a fixed segment whose
+    constants were folded into the next one). ``marks`` ends each section of ``lines``:
+    ``("segment k", end)`` per segment, then ``("frame k", end)`` per frame.
     """
 
     name: str
@@ -54,7 +56,7 @@ class TreeProgram:
     T: tuple[sp.Matrix, ...]
     J0: tuple[sp.Matrix, ...]
     Je: tuple[sp.Matrix, ...]
-    links: tuple[sp.Matrix, ...]
+    links: tuple[sp.Matrix | None, ...]
     marks: tuple[tuple[str, int], ...]
 
     @property
@@ -68,19 +70,42 @@ def derive_tree_program(
     constant: Callable[[Const], sp.Expr],
     name: str | None = None,
     frame_jacobians: bool = True,
+    fold: bool = False,
 ) -> TreeProgram:
     """Derive the pose, base-frame and (``frame_jacobians``) frame-expressed Jacobian of every
-    frame of ``tree`` (a :class:`symkin.Tree`) as one program (module docstring)."""
+    frame of ``tree`` (a :class:`symkin.Tree`) as one program (module docstring).
+
+    ``fold``: the constants of a fixed segment that is no frame and has one child are walked with
+    the child's, and each long run of constants, or run with two or more rotations by arbitrary
+    angles, becomes one numeric transform (:func:`symkin.symbolic.fold.fold_constants`;
+    ``constant`` then does not see them): a chain of many fixed links costs one transform."""
     segments, slots = tree.segments, tree.slots  # type: ignore[attr-defined]
     n = len(qs)
     P = Program()
     walks: list[_Walk] = []
     joint_axes: dict[int, tuple[list[sp.Expr], list[sp.Expr]]] = {}  # slot -> (signed axis, origin)
-    links: list[sp.Matrix] = []
+    links: list[sp.Matrix | None] = []
     marks: list[tuple[str, int]] = []
+    children = [0] * len(segments)
+    for seg in segments:
+        if seg.parent >= 0:
+            children[seg.parent] += 1
+    ends = set(tree.frame_segments)  # type: ignore[attr-defined]
+    carried: list[tuple[ET, ...]] = []  # per segment: constants left for its child to walk
     for k, seg in enumerate(segments):
+        ets = (carried[seg.parent] if seg.parent >= 0 else ()) + tuple(seg.ets)
+        if fold and seg.slot is None and k not in ends and children[k] == 1:
+            carried.append(ets)
+            walks.append(_Walk(P) if seg.parent < 0 else walks[seg.parent])  # forked by the child
+            links.append(None)
+            marks.append((f"segment {k}", len(P.lines)))
+            continue
+        carried.append(())
         W = _Walk(P) if seg.parent < 0 else walks[seg.parent].fork()
-        for e in seg.ets:
+        for e in fold_constants(ets) if fold else ets:
+            if isinstance(e, Fixed):
+                W.transform(e)
+                continue
             i = e.axis.index
             if e.is_joint:
                 s = slots[seg.slot]

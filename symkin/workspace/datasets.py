@@ -21,7 +21,15 @@ from symkin.runtime.ik import revolute_mask, sample_range
 from symkin.workspace.blocks import SampleSpec, sample_block
 from symkin.workspace.maps import kinematics_of
 from symkin.workspace.run import client_for, require_scale, run_blocks
-from symkin.workspace.store import open_store, robot_attrs, zarr_module
+from symkin.workspace.store import (
+    damaged_blocks,
+    open_store,
+    read_array,
+    read_marks,
+    reset_blocks,
+    robot_attrs,
+    zarr_module,
+)
 
 __all__ = ["Dataset", "samples", "open_dataset"]
 
@@ -36,7 +44,8 @@ class Dataset:
         attrs: the store's attributes (robot, settings, seed, symkin_version).
         path: the store, or None when it was kept in memory.
         complete: every block is written.
-        stats: for a run, ``blocks``, ``computed``, ``skipped``, ``seconds``, ``task_seconds``.
+        stats: for a run, ``blocks``, ``computed``, ``skipped``, ``damaged`` (written blocks computed
+            again because a chunk of theirs could not be read), ``seconds``, ``task_seconds``.
     """
 
     q: Any
@@ -101,9 +110,15 @@ def samples(
     group = open_store(output, attrs, arrays, overwrite=overwrite, grow="n")
     spec = SampleSpec(n, chunk, seed, sample)
     rows = np.minimum(chunk, n - chunk * np.arange(blocks))
-    done = np.asarray(group["done"][...])
-    todo = [i for i in range(blocks) if done[i] != rows[i]]
     q_arr, pose_arr, done_arr = group["q"], group["pose"], group["done"]
+    done = read_marks(done_arr)
+    damaged = damaged_blocks([q_arr, pose_arr], (blocks,)) if done.any() else set()
+    redo = sorted(i for i in damaged if done[i])
+    if damaged:  # unmarked before the reset: an interruption cannot leave a reset block marked done
+        done[redo] = 0
+        done_arr[...] = done
+        reset_blocks([q_arr, pose_arr], (blocks,), damaged)
+    todo = [i for i in range(blocks) if done[i] != rows[i]]
 
     def write(i: int, result: dict[str, Any]) -> None:
         sl = slice(i * chunk, i * chunk + len(result["q"]))
@@ -111,7 +126,8 @@ def samples(
         pose_arr[sl] = result["pose"]
         done_arr[i] = len(result["q"])  # after the data: marks it complete
 
-    stats: dict[str, float] = {"blocks": blocks, "computed": len(todo), "skipped": blocks - len(todo)}
+    stats: dict[str, float] = {"blocks": blocks, "computed": len(todo), "skipped": blocks - len(todo),
+                               "damaged": len(redo)}  # fmt: skip
     if todo:
         with client_for(scheduler, workers) as client:
             stats.update(run_blocks(sample_block, (kin, spec), todo, write, client, total=blocks,
@@ -132,7 +148,7 @@ def _stored_chunk(output: Any, overwrite: bool) -> int | None:
 def _load(group: Any, path: str | None, stats: dict[str, float] | None) -> Dataset:
     n, chunk = group["q"].shape[0], group["q"].chunks[0]
     rows = np.minimum(chunk, n - chunk * np.arange(group["done"].shape[0]))
-    complete = bool((np.asarray(group["done"][...]) == rows).all())
+    complete = bool((read_array(group["done"], path) == rows).all())
     return Dataset(group["q"], group["pose"], dict(group.attrs), path, complete, stats)
 
 

@@ -25,7 +25,16 @@ from symkin.errors import WorkspaceError
 from symkin.workspace.blocks import ReachSpec, reach_block
 from symkin.workspace.grid import VoxelGrid, reach_ball, so3_uniform
 from symkin.workspace.run import client_for, require_scale, run_blocks
-from symkin.workspace.store import open_store, robot_attrs, zarr_module
+from symkin.workspace.store import (
+    damaged_blocks,
+    open_store,
+    read_array,
+    read_marks,
+    reset_blocks,
+    robot_attrs,
+    unreadable_chunks,
+    zarr_module,
+)
 
 __all__ = ["ReachMap", "reachability", "open_map", "kinematics_of", "MAP_IK_DEFAULTS"]
 
@@ -49,6 +58,7 @@ class ReachMap:
         path: the store, or None when it was kept in memory.
         complete: every block is written (False for a run stopped early, read by :func:`open_map`).
         stats: for a run, ``blocks``, ``computed`` and ``skipped`` (already written) blocks,
+            ``damaged`` (written blocks computed again because a chunk of theirs could not be read),
             ``seconds`` (wall), ``task_seconds`` (sum over tasks), ``problems`` (IK targets).
     """
 
@@ -164,7 +174,9 @@ def reachability(
         orientations: K, the number of orientations per voxel (uniform on SO(3) from ``seed``),
             or the rotation matrices (K, 3, 3) themselves.
         output: the Zarr store (a folder, or a URL zarr opens); None keeps it in memory. An existing
-            store of the same map is resumed: its written blocks are kept.
+            store of the same map is resumed: its written blocks are kept (those with a damaged,
+            unreadable chunk are computed again). Only a new path, an empty folder or a store
+            symkin wrote is written to; anything else is refused (WorkspaceError).
         seed: fixes the orientations and every voxel's IK restarts (with the voxel's grid index).
         solutions: also store one solution per orientation (X, Y, Z, K, n) as ``solutions``.
         axes: rows of J0 in the manipulability: ``"all"``, ``"trans"``, ``"rot"`` or indices 0-5
@@ -180,7 +192,7 @@ def reachability(
             a local cluster of ``workers`` processes (default: one per core), ``"tcp://host:8786"``
             uses an existing cluster, ``"synchronous"`` runs here without Dask.
         progress: progress bar on stderr (default: when stderr is a terminal).
-        overwrite: replace an existing store instead of resuming it.
+        overwrite: replace an existing store of symkin's instead of resuming it.
         on_block: called as ``on_block(index, result)`` after each block is written.
 
     Returns:
@@ -220,13 +232,19 @@ def reachability(
     grid = VoxelGrid(grid.centre, grid.radius, grid.resolution, grid.half, grid.lo, grid.shape,
                      int(group["reach"].chunks[0]))  # fmt: skip
     spec = ReachSpec(grid, rotations, seed, rows, ik, bool(solutions))
-    done = np.asarray(group["done"][...], dtype=bool).ravel()
-    todo = [i for i in range(grid.n_chunks) if not done[i]]
-
     arrays = {name: group[name] for name in ("reach", "manipulability")}
     if solutions:
         arrays["solutions"] = group["solutions"]
     done_array = group["done"]
+    done = read_marks(done_array).astype(bool).ravel()
+    damaged = damaged_blocks(list(arrays.values()), grid.chunks) if done.any() else set()
+    redo = sorted(i for i in damaged if done[i])
+    if damaged:  # unmarked before the reset: an interruption cannot leave a reset block marked done
+        done[redo] = False
+        done_array[...] = done.reshape(grid.chunks)
+        reset_blocks(list(arrays.values()), grid.chunks, damaged)
+    todo = [i for i in range(grid.n_chunks) if not done[i]]
+
     written: list[int] = []  # blocks written whose done marks are not yet stored
     flushed = [time.monotonic()]
 
@@ -254,6 +272,7 @@ def reachability(
         "blocks": grid.n_chunks,
         "computed": len(todo),
         "skipped": grid.n_chunks - len(todo),
+        "damaged": len(redo),
     }
     if todo:
         with client_for(scheduler, workers) as client:
@@ -287,26 +306,32 @@ def _open_map_store(
             sl = (slice(i, min(i + grid.chunk, grid.shape[0])), slice(None), slice(None))
             centers[sl] = grid.centers(sl)
 
-    return open_store(output, attrs, arrays, overwrite=overwrite, init=init)
+    group = open_store(output, attrs, arrays, overwrite=overwrite, init=init)
+    if output is not None and (unreadable_chunks(group["centers"]) or unreadable_chunks(group["rotations"])):
+        init(group)  # a resumed store whose grid arrays are damaged: write them again
+    return group
 
 
 def _load_map(group: Any, path: str | None, stats: dict[str, float] | None) -> ReachMap:
     attrs = dict(group.attrs)
     return ReachMap(
-        reach=np.asarray(group["reach"][...]),
-        manipulability=np.asarray(group["manipulability"][...]),
-        centers=np.asarray(group["centers"][...]),
-        rotations=np.asarray(group["rotations"][...]),
+        reach=read_array(group["reach"], path),
+        manipulability=read_array(group["manipulability"], path),
+        centers=read_array(group["centers"], path),
+        rotations=read_array(group["rotations"], path),
         solutions=group.get("solutions"),
         attrs=attrs,
         path=path,
-        complete=bool(np.asarray(group["done"][...]).all()),
+        complete=bool(read_array(group["done"], path).all()),
         stats=stats,
     )
 
 
 def open_map(path: str | Path) -> ReachMap:
-    """The reachability map stored at ``path`` (complete or not; see ``ReachMap.complete``)."""
+    """The reachability map stored at ``path`` (complete or not; see ``ReachMap.complete``).
+
+    A damaged chunk is a WorkspaceError naming it (``reachability`` with the same settings on the
+    store recomputes its blocks)."""
     zarr = zarr_module()
     try:
         group = zarr.open_group(str(path), mode="r")

@@ -95,3 +95,21 @@ def test_the_error_is_the_difference_from_the_numeric_reference(tmp_path, dT, dJ
     failures = chain.failure.split("; ")
     flagged = f"numpy: FK/J differ from the reference by {chain.error['numpy']:.2e}" in failures
     assert flagged == (shift > TOL), chain.failure
+
+
+def test_sweep_adds_its_own_chains_of_fixed_joints(tmp_path, monkeypatch):
+    """Fixed joints with rpy after a 6-joint arm (2, 3, 4 and 2000 of them), 2000 before it and
+    300 between its joints, 2000 quarter turns: each a distinct chain, compiled and checked with
+    the collection's."""
+    from symkin.bench import urdf_sweep
+
+    (tmp_path / "gripper.urdf").write_text(GRIPPER)
+    monkeypatch.setattr(urdf_sweep, "erd_robots_dir", lambda: tmp_path)
+    r = urdf_sweep.run_sweep(backends=("numpy",), progress=False, limit=1)
+    own = [row for row in r["rows"] if row["synthetic"]]
+    assert sorted(row["urdf"] for row in own) == sorted(urdf_sweep.synthetic_urdfs())
+    assert r["distinct"] == 1 and len(r["rows"]) == 1 + len(own)  # the collection's counts are its own
+    assert r["ok"] and all(row["n"] == 6 and row["error"]["numpy"] < 1e-10 for row in own)
+    text = format_sweep(r)
+    assert "the sweep's own chains" in text and "arm6_fixed2000.urdf (6 joints)" in text
+    assert "failures: 0" in text

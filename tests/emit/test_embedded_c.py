@@ -1,13 +1,17 @@
 """The generated C as an engineer embeds it: C99 and C++ with strict warnings, two robots in one
-program under their own prefixes, the header's macros and joint table."""
+program under their own prefixes, the header's macros and joint table; prefixes that could clash
+with the extension module's names are refused, every other one compiles and loads."""
 
 from __future__ import annotations
 
 import shutil
 import subprocess
+import tempfile
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
 
 import symkin
 from symkin.emit.c.backend import check_prefix
@@ -218,3 +222,64 @@ def test_a_tree_kernel_is_strict_c_and_links_into_a_cpp_program(tmp_path):
     )
     J = np.array(lines[1].split(), float).reshape(F, 6, tree.n)
     np.testing.assert_allclose(J, tree.jacob0_all(q), atol=1e-12)
+
+
+# issue 23, item 8: a prefix is refused where the names it makes could clash with the extension
+# module's (its own py_<function> wrappers, the include guards and macros of C, Python and NumPy);
+# every prefix that is accepted compiles and loads through load_compiled.
+
+CLASHES = [
+    "py",  # py_fkine: the module's own wrapper (compiled, then failed to build)
+    "py_fkine",  # py_fkine_jacob0
+    "Py_x",
+    "pyctype",  # PYCTYPE_H, an include guard of Python.h
+    "have_alloca",  # HAVE_ALLOCA_H, from pyconfig.h
+    "npy_have_endian",  # NPY_HAVE_ENDIAN_H, from NumPy
+    "numpy_x",
+    "_math",  # _MATH_H, math.h's include guard
+    "_x",
+]
+
+
+@pytest.mark.parametrize("bad", CLASHES)
+def test_prefixes_that_could_clash_with_the_module_are_refused(bad, tmp_path, capsys):
+    from symkin.cli.main import main
+
+    with pytest.raises(CompileError, match=f"prefix '{bad}' makes symbols.*Choose another prefix"):
+        check_prefix(bad)
+    with pytest.raises(CompileError, match="Choose another prefix"):
+        symkin.write_generated(load("planar2"), "c", tmp_path, prefix=bad)
+    assert main(["compile", "planar2", "--prefix", bad, "-o", str(tmp_path / "cli")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Choose another prefix" in err[0], err
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+PREFIX = st.one_of(
+    st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,24}", fullmatch=True),
+    st.sampled_from(
+        [*CLASHES, "math", "Python", "stddef", "string", "fkine", "jacob0", "link_poses", "sk", "N", "q",
+         "order", "methods", "module", "new_out", "get_q", "as_batch", "frame_index", "hessian_base",
+         "SYMKIN", "symkin_planar2", "have", "PYx"]
+    ),
+)  # fmt: skip
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(prefix=PREFIX)
+@example(prefix="math")  # the generated math.h must not shadow <math.h>
+@example(prefix="py")  # accepted before, then the module failed to compile
+def test_every_accepted_prefix_compiles_and_loads(prefix):
+    robot = load("planar2")
+    try:
+        check_prefix(prefix)
+    except CompileError:
+        assert prefix.upper().startswith(("_", "PY", "NPY", "NUMPY", "HAVE_")), prefix
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        symkin.write_generated(robot, "c", tmp, prefix=prefix)
+        kin = symkin.load_compiled(tmp)  # compiles the C and imports its module
+        assert kin.c_prefix == prefix
+        q = np.array([0.3, -0.4])
+        np.testing.assert_allclose(kin.fkine(q), robot.fkine(q), atol=1e-12)
+        assert kin.manipulability(q) == pytest.approx(robot.manipulability(q), abs=1e-12)

@@ -1,10 +1,12 @@
-"""Hostile robot descriptions end in a clear error (issue 12, items 5, 6, 9): long and deeply
-nested constants, values beyond the range of a double, DOCTYPE/entities in URDF. These inputs took
-13 s to minutes (regex backtracking, a 10**999999999 integer, billion laughs) before the fixes;
-the tests assert the errors, not a wall time (how long a parse takes belongs to no test)."""
+"""Hostile robot descriptions end in a clear error (issue 12, items 5, 6, 9; issue 23, item 9):
+long and deeply nested constants, values beyond the range of a double or of meaningful lengths and
+angles, huge or tiny URDF axes, DOCTYPE/entities in URDF. These inputs took 13 s to minutes (regex
+backtracking, a 10**999999999 integer, billion laughs) before the fixes; the tests assert the
+errors, not a wall time (how long a parse takes belongs to no test)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import symkin
@@ -178,3 +180,73 @@ def test_urdf_text_with_a_byte_order_mark_and_paths_with_nul():
     assert Robot.from_urdf("\ufeff" + _urdf()).n == 1
     with pytest.raises(URDFError, match="cannot read"):
         Robot.from_urdf("robot\x00.urdf")
+
+
+# issue 23, item 9: numbers that are doubles but break the kinematics, in both URDF readers
+
+TWO_JOINTS = """<robot name="r"><link name="a"/><link name="b"/><link name="c"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><origin xyz="{xyz}" rpy="{rpy}"/>
+<axis xyz="{axis}"/><limit lower="-1" upper="1" velocity="1"/></joint>
+<joint name="k" type="revolute"><parent link="b"/><child link="c"/><origin xyz="0 0.2 0.1"/>
+<axis xyz="0 0 1"/>{mimic}<limit lower="-1" upper="1" velocity="1"/></joint></robot>"""
+
+
+def _two(xyz="0 0 0.1", rpy="0 0 0", axis="0 0 1", mimic=""):
+    return TWO_JOINTS.format(xyz=xyz, rpy=rpy, axis=axis, mimic=mimic)
+
+
+@pytest.mark.parametrize(
+    ("axis", "unit"),
+    [
+        ("1e200 0 0", "1 0 0"),  # raw OverflowError from the norm before
+        ("0 -1e300 0", "0 -1 0"),
+        ("3e200 4e200 0", "0.6 0.8 0"),
+        ("1e200 2e200 2e200", "1 2 2"),
+        ("1e-300 1e-300 1e-300", "1 1 1"),  # was "the zero vector"
+        ("0 1e-320 -1e-320", "0 1 -1"),
+    ],
+)
+def test_urdf_axes_of_any_double_size_are_directions(axis, unit):
+    from symkin import Tree
+
+    q = np.array([0.4, -0.7])
+    want = Robot.from_urdf(_two(axis=unit))
+    got = Robot.from_urdf(_two(axis=axis))
+    np.testing.assert_allclose(got.fkine(q), want.fkine(q), atol=1e-12)
+    tree = Tree.from_urdf(_two(axis=axis))
+    np.testing.assert_allclose(tree.fkine(q, "c"), want.fkine(q), atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [
+        ({"xyz": "1e308 0 0"}, "joint 'j' origin xyz contains '1e308'"),  # two of them made inf poses
+        ({"xyz": "0 -2e15 0"}, "joint 'j' origin xyz contains '-2e15'"),
+        ({"rpy": "0 1e20 0"}, "joint 'j' origin rpy contains '1e20'"),  # no meaningful double angle
+        ({"mimic": '<mimic joint="j" multiplier="1e308"/>'}, "joint 'k' mimic multiplier contains '1e308'"),
+        ({"mimic": '<mimic joint="j" offset="-1e16"/>'}, "joint 'k' mimic offset contains '-1e16'"),
+    ],
+)
+def test_urdf_lengths_angles_and_mimics_beyond_1e15_are_refused(kwargs, words):
+    from symkin import Tree
+
+    text = _two(**kwargs)
+    readers = (Tree.from_urdf,) if "mimic" in kwargs else (Robot.from_urdf, Tree.from_urdf)
+    for read in readers:
+        with pytest.raises(URDFError, match="within \\+-1e15") as info:
+            read(text)
+        assert words in str(info.value)
+    assert Robot.from_urdf(_two(xyz="1e15 0 -1e15", rpy="1e15 0 0")).n == 2  # the bound itself is fine
+
+
+def test_composed_mimic_multipliers_stay_within_range():
+    from symkin import Tree
+
+    chain = _two(mimic='<mimic joint="j" multiplier="1e10"/>').replace(
+        "</robot>",
+        '<link name="d"/><joint name="l" type="revolute"><parent link="c"/><child link="d"/>'
+        '<axis xyz="0 0 1"/><mimic joint="k" multiplier="1e10"/></joint></robot>',
+    )
+    with pytest.raises(URDFError, match="'l' follows l -> k -> j with the composed multiplier 1e\\+20"):
+        Tree.from_urdf(chain)  # a raw OverflowError for 1e200 x 1e200 before
+    assert Tree.from_urdf(chain.replace('multiplier="1e10"', 'multiplier="1e5"')).n == 1

@@ -391,3 +391,75 @@ def test_unknown_links_and_missing_paths_name_the_links() -> None:
 def test_missing_file_is_a_urdf_error_and_a_robot_error(tmp_path: Path) -> None:
     with pytest.raises(RobotError, match="cannot read URDF file"):
         Robot.from_urdf(tmp_path / "missing.urdf")
+
+
+# ---------------------------------------------------------------------------------------------
+# xacro (issue 23, item 2): refused with the command that expands it, by both readers
+
+XACRO_ARM = """<?xml version="1.0"?>
+<robot name="arm" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:property name="len" value="0.5"/>
+  <xacro:macro name="segment" params="i parent">
+    <link name="l${i}"/>
+    <joint name="j${i}" type="revolute"><parent link="${parent}"/><child link="l${i}"/>
+      <origin xyz="0 0 ${len}"/><axis xyz="0 0 1"/></joint>
+  </xacro:macro>
+  <link name="base"/><link name="l0"/>
+  <joint name="j0" type="revolute"><parent link="base"/><child link="l0"/><axis xyz="0 0 1"/></joint>
+  <xacro:segment i="1" parent="l0"/>
+  <xacro:segment i="2" parent="l1"/>
+</robot>
+"""
+
+
+def _readers():
+    from symkin.model.tree import Tree
+
+    return (Robot.from_urdf, Tree.from_urdf)
+
+
+@pytest.mark.parametrize(
+    ("text", "found"),
+    [
+        (XACRO_ARM, "xmlns:xacro"),  # read as XML, it was a 1-joint robot: the macros were dropped
+        (XACRO_ARM.replace(' xmlns:xacro="http://www.ros.org/wiki/xacro"', ""), "<xacro:property>"),
+        (XACRO_ARM.replace("xacro:", "x:").replace("xmlns:xacro", "xmlns:x"), "xmlns:x"),  # any prefix
+        (urdf(["a", "b"], [joint("j", "a", "b", xyz="0 0 ${len}")]), "'0 0 ${len}' in attribute 'xyz'"),
+        (urdf(["a", "b"], [joint("j", "a", "b", extra='<x xacro:if="1"/>')]), "xacro:if"),
+        (urdf(["a", "$(arg b)"], [joint("j", "a", "$(arg b)")]), "$(arg b)"),
+    ],
+)
+def test_xacro_text_is_refused_with_how_to_expand_it(text: str, found: str) -> None:
+    for read in _readers():
+        with pytest.raises(URDFError) as info:
+            read(text)
+        msg = str(info.value)
+        assert "xacro, not plain URDF" in msg and found in msg, msg
+        assert "`xacro file.urdf.xacro > file.urdf`" in msg
+
+
+def test_xacro_files_are_refused_by_content_and_name(tmp_path: Path) -> None:
+    from symkin.cli.main import main
+
+    macro = tmp_path / "arm.urdf.xacro"
+    macro.write_text(XACRO_ARM)
+    plain = tmp_path / "plain.xacro"  # no macro in it, but a .xacro file is read expanded
+    plain.write_text(urdf(["a", "b"], [joint("j", "a", "b")]))
+    for read in _readers():
+        with pytest.raises(URDFError, match=r"`xacro arm\.urdf\.xacro > arm\.urdf`"):
+            read(macro)
+        with pytest.raises(URDFError, match=r"name ends in \.xacro.*`xacro plain\.xacro > plain\.urdf`"):
+            read(plain)
+    spaced = tmp_path / "my arm.URDF.xacro"
+    spaced.write_text(XACRO_ARM)
+    with pytest.raises(URDFError, match=r"`xacro 'my arm\.URDF\.xacro' > 'my arm\.URDF'`"):
+        Robot.from_urdf(spaced)
+    assert main(["list-frames", str(macro)]) == 2  # the CLI reads .xacro as URDF, so it says the same
+    assert main(["compile", str(macro), "--backend", "numpy"]) == 2
+
+
+def test_plain_urdf_with_dollars_in_text_and_other_namespaces_is_read() -> None:
+    text = urdf(["a", "b"], [joint("j", "a", "b", extra="<plugin>price: $5</plugin>")]).replace(
+        "<robot ", '<robot xmlns:gz="http://gazebosim.org/schema" '
+    )
+    assert Robot.from_urdf(text).n == 1

@@ -138,11 +138,15 @@ def test_an_interrupted_map_resumes_from_its_written_blocks(cluster_map, kin, tm
     fresh = reachability(kin, output=path, scheduler="synchronous", progress=False, overwrite=True,
                          **{**SETTINGS, "resolution": 0.25})  # fmt: skip
     assert fresh.reach.shape == (9, 9, 1)
-    # a store whose creation was interrupted (arrays, no attributes yet) is made afresh
+    # a store whose creation was interrupted (symkin's mark and arrays, no attributes yet) is made afresh
     import zarr
 
+    from symkin.workspace.store import MARK
+
     half_made = tmp_path / "half.zarr"
-    zarr.open_group(str(half_made), mode="w").create_array("done", shape=(2,), dtype="bool")
+    zarr.open_group(str(half_made), mode="w", attributes={MARK: 1}).create_array(
+        "done", shape=(2,), dtype="bool"
+    )
     remade = reachability(kin, output=half_made, scheduler="synchronous", progress=False, **SETTINGS)
     assert remade.complete and np.array_equal(remade.reach, cluster_map.reach)
 

@@ -27,7 +27,6 @@ ROBOT_NAME = 'cobra600'
 N_JOINTS = 4
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
-_isfinite = math.isfinite
 _ndarray = np.ndarray
 _empty = np.empty
 # One configuration's outputs are written into new arrays by struct (native doubles, row-major).
@@ -81,7 +80,7 @@ def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = cos(q3)
             x1 = q0 + q1
             x2 = cos(x1)
@@ -100,9 +99,9 @@ def fkine(q, frame=None):
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return fkine(Q[0])  # the scalar code above
-    out = _fkine_batch(Q)  # finite joint values whose sum overflows
+    out = _fkine_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -198,7 +197,7 @@ def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = cos(q0)
             x1 = sin(q0)
             x2 = q0 + q1
@@ -221,9 +220,9 @@ def link_poses(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _link_poses_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return link_poses(Q[0])  # the scalar code above
-    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
+    out = _link_poses_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -266,7 +265,7 @@ def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = q0 + q1
             x1 = (0.275)*sin(x0)
             x2 = (0.275)*cos(x0)
@@ -281,9 +280,9 @@ def jacob0(q, frame=None):
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return jacob0(Q[0])  # the scalar code above
-    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
+    out = _jacob0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -329,7 +328,7 @@ def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = sin(q3)
             x1 = (0.275)*x0
             x2 = cos(q3)
@@ -347,9 +346,9 @@ def jacobe(q, frame=None):
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return jacobe(Q[0])  # the scalar code above
-    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
+    out = _jacobe_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -466,7 +465,7 @@ def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = q0 + q1
             x1 = (0.275)*cos(x0)
             x2 = -x1
@@ -481,9 +480,9 @@ def hessian0(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessian0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return hessian0(Q[0])  # the scalar code above
-    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
+    out = _hessian0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -604,7 +603,7 @@ def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = cos(q3)
             x1 = (0.325)*cos(q1)
             x2 = sin(q3)
@@ -623,9 +622,9 @@ def hessiane(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return hessiane(Q[0])  # the scalar code above
-    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
+    out = _hessiane_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -695,7 +694,7 @@ def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = cos(q3)
             x1 = q0 + q1
             x2 = cos(x1)
@@ -715,9 +714,9 @@ def fkine_jacob0(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return fkine_jacob0(Q[0])  # the scalar code above
-    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    out = _fkine_jacob0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return (out[0][0], out[1][0])
 
 
@@ -861,7 +860,7 @@ def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3 = q.tolist()
-        if _isfinite(q0 + q1 + q2 + q3):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = q0 + q1
             x1 = (0.275)*sin(x0)
             x2 = -x1 - 0.325*sin(q0)
@@ -880,7 +879,7 @@ def jacob0_hessian0(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return jacob0_hessian0(Q[0])  # the scalar code above
-    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    out = _jacob0_hessian0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return (out[0][0], out[1][0])

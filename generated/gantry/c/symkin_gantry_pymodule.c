@@ -33,13 +33,13 @@ static PyObject *bad_q_(PyObject *arg)
 /*
  * q as a C-contiguous, aligned, native-byte-order float64 array of shape (NQ,) or (N, NQ) with
  * finite values within +-1e15, else NULL with the reference's error. Arrays of booleans,
- * integers or floats in any byte order and layout are converted here; anything else (lists,
- * scalars, complex, object or string arrays) goes through as_batch, so every backend accepts
- * and rejects the same inputs.
+ * integers or floats in any byte order and layout are converted here when the cast is exact;
+ * anything else (long double, lists, scalars, complex, object or string arrays) goes through
+ * as_batch, which converts or refuses it, so every backend accepts and rejects the same inputs.
  */
 static PyArrayObject *get_q_(PyObject *arg, npy_intp *N, int *single)
 {
-    PyArrayObject *a;
+    PyArrayObject *a = NULL;
     if (PyArray_CheckExact(arg) && PyArray_TYPE((PyArrayObject *)arg) == NPY_DOUBLE &&
         PyArray_ISCARRAY_RO((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
         a = (PyArrayObject *)arg;
@@ -47,11 +47,10 @@ static PyArrayObject *get_q_(PyObject *arg, npy_intp *N, int *single)
     } else if (PyArray_Check(arg) && (PyArray_ISBOOL((PyArrayObject *)arg) ||
                PyArray_ISINTEGER((PyArrayObject *)arg) || PyArray_ISFLOAT((PyArrayObject *)arg))) {
         a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_NOTSWAPPED);
-        if (!a) {
-            PyErr_Clear();
-            return (PyArrayObject *)bad_q_(arg);
-        }
-    } else {
+        if (!a)
+            PyErr_Clear(); /* not a safe cast (long double): as_batch below */
+    }
+    if (!a) {
         PyObject *r = PyObject_CallFunction(as_batch_, "Ois", arg, NQ, "gantry");
         if (!r)
             return NULL;

@@ -27,7 +27,6 @@ ROBOT_NAME = 'gantry'
 N_JOINTS = 3
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
-_isfinite = math.isfinite
 _ndarray = np.ndarray
 _empty = np.empty
 # One configuration's outputs are written into new arrays by struct (native doubles, row-major).
@@ -73,7 +72,7 @@ def fkine(q, frame=None):
     """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             T = _empty((4, 4))
             _PACK_16(T, 0, 1.0, 0.0, 0.0, q0, 0.0, 1.0, 0.0, q1, 0.0, 0.0, 1.0, q2, 0.0, 0.0, 0.0, 1.0)
             return T
@@ -85,9 +84,9 @@ def fkine(q, frame=None):
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return fkine(Q[0])  # the scalar code above
-    out = _fkine_batch(Q)  # finite joint values whose sum overflows
+    out = _fkine_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -152,7 +151,7 @@ def link_poses(q):
     """Base-frame pose of each link frame right after its joint, (n, 4, 4), chain order (Part 1 eq 5)."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             links = _empty((3, 4, 4))
             _PACK_24(links, 0, 1.0, 0.0, 0.0, q0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, q0, 0.0, 1.0, 0.0, q1)
             _PACK_24(links, 192, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, q0, 0.0, 1.0, 0.0, q1, 0.0, 0.0, 1.0, q2, 0.0, 0.0, 0.0, 1.0)
@@ -160,9 +159,9 @@ def link_poses(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _link_poses_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return link_poses(Q[0])  # the scalar code above
-    out = _link_poses_batch(Q)  # finite joint values whose sum overflows
+    out = _link_poses_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -194,7 +193,7 @@ def jacob0(q, frame=None):
     """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             J = _empty((6, 3))
             _PACK_18(J, 0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return J
@@ -206,9 +205,9 @@ def jacob0(q, frame=None):
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return jacob0(Q[0])  # the scalar code above
-    out = _jacob0_batch(Q)  # finite joint values whose sum overflows
+    out = _jacob0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -240,7 +239,7 @@ def jacobe(q, frame=None):
     """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             J = _empty((6, 3))
             _PACK_18(J, 0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return J
@@ -252,9 +251,9 @@ def jacobe(q, frame=None):
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return jacobe(Q[0])  # the scalar code above
-    out = _jacobe_batch(Q)  # finite joint values whose sum overflows
+    out = _jacobe_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -322,7 +321,7 @@ def hessian0(q):
     """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             H = _empty((3, 6, 3))
             _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -330,9 +329,9 @@ def hessian0(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessian0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return hessian0(Q[0])  # the scalar code above
-    out = _hessian0_batch(Q)  # finite joint values whose sum overflows
+    out = _hessian0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -400,7 +399,7 @@ def hessiane(q):
     """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             H = _empty((3, 6, 3))
             _PACK_27(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             _PACK_27(H, 216, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -408,9 +407,9 @@ def hessiane(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return hessiane(Q[0])  # the scalar code above
-    out = _hessiane_batch(Q)  # finite joint values whose sum overflows
+    out = _hessiane_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return out[0]
 
 
@@ -462,7 +461,7 @@ def fkine_jacob0(q):
     """Pose (4, 4) and base-frame Jacobian (6, n) together."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             T = _empty((4, 4))
             _PACK_16(T, 0, 1.0, 0.0, 0.0, q0, 0.0, 1.0, 0.0, q1, 0.0, 0.0, 1.0, q2, 0.0, 0.0, 0.0, 1.0)
             J = _empty((6, 3))
@@ -471,9 +470,9 @@ def fkine_jacob0(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return fkine_jacob0(Q[0])  # the scalar code above
-    out = _fkine_jacob0_batch(Q)  # finite joint values whose sum overflows
+    out = _fkine_jacob0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return (out[0][0], out[1][0])
 
 
@@ -560,7 +559,7 @@ def jacob0_hessian0(q):
     """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2 = q.tolist()
-        if _isfinite(q0 + q1 + q2):  # one finite configuration: scalar code
+        if q0 * q0 + q1 * q1 + q2 * q2 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             J = _empty((6, 3))
             _PACK_18(J, 0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             H = _empty((3, 6, 3))
@@ -570,7 +569,7 @@ def jacob0_hessian0(q):
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)
-    if _isfinite(sum(Q[0].tolist())):
+    if sum(x * x for x in Q[0].tolist()) <= 1e30:
         return jacob0_hessian0(Q[0])  # the scalar code above
-    out = _jacob0_hessian0_batch(Q)  # finite joint values whose sum overflows
+    out = _jacob0_hessian0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return (out[0][0], out[1][0])

@@ -54,7 +54,7 @@ def joint_table(robot: Any) -> list[dict[str, str]]:
         rows.append(
             {
                 "index": str(j),
-                "name": _NAME_SHOWN.sub("?", comment_safe(robot.joint_names[j], limit=80)),
+                "name": comment_safe(_NAME_SHOWN.sub("?", robot.joint_names[j]), limit=80),
                 "name_c": c_string(robot.joint_names[j]),
                 "kind": "revolute" if revolute else "prismatic",
                 "unit": "rad" if revolute else "m",
@@ -173,14 +173,36 @@ def float_error(robot: Any, files: dict[str, str], samples: int = 100, seed: int
 
 _NAME_SHOWN = re.compile(r"[^A-Za-z0-9_.:+\-]")  # joint names in comments: other characters as ?
 _PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,62}$")
+# Where the names a prefix makes (``<prefix>_fkine``, the header's ``<PREFIX>_H`` and ``<PREFIX>_N``...)
+# could be names the extension module already has: C reserves a leading underscore (``_math`` made
+# ``_MATH_H``, math.h's include guard), the module's own wrappers are ``py_<function>`` (``py``
+# made ``py_fkine`` twice), Python.h and pyconfig.h own ``Py``/``PY`` and ``HAVE_`` names
+# (``pyctype``, ``have_alloca`` made their include guards), NumPy ``NPY``/``NUMPY``. Checked on the
+# prefix in upper case, as the macros are.
+_RESERVED = {
+    "_": "C reserves names with a leading underscore",
+    "PY": "names starting with py (any case) are Python's and the extension module's own (py_fkine...)",
+    "NPY": "names starting with npy (any case) are NumPy's",
+    "NUMPY": "names starting with numpy (any case) are NumPy's",
+    "HAVE_": "names starting with have_ (any case) are Python's configuration macros",
+}
 
 
 def check_prefix(prefix: str) -> str:
-    """A C symbol prefix given by the user: an identifier of at most 63 characters."""
+    """A C symbol prefix given by the user: an identifier of at most 63 characters outside the
+    namespaces of C, Python and NumPy, so that the symbols and macros it makes clash with nothing
+    the generated extension module includes or defines."""
     if not isinstance(prefix, str) or not _PREFIX.match(prefix):
         raise CompileError(
             f"prefix {prefix!r} must be a C identifier (letters, digits, underscores; not starting with "
             "a digit; at most 63 characters)"
+        )
+    why = next((w for r, w in _RESERVED.items() if prefix.upper().startswith(r)), None)
+    if why is not None:
+        other = "arm_" + prefix.strip("_") if prefix.strip("_") else "arm"
+        raise CompileError(
+            f"prefix {prefix!r} makes symbols and macros ({prefix}_fkine, {prefix.upper()}_H...) that "
+            f"could clash with the extension module's: {why}. Choose another prefix, e.g. {other!r}"
         )
     return prefix
 

@@ -93,17 +93,22 @@ done:
     return r;
 }
 
-/* arg as a C-contiguous native float64 array of shape (d0,) (nd 1) or (d0, d1) (nd 2), or NULL
- * without an error set when it is anything else */
+/* arg as a C-contiguous, aligned, native float64 array of shape (d0,) (nd 1) or (d0, d1) (nd 2), or
+ * NULL without an error set when it is anything else. Only arrays of booleans, integers or floats
+ * convert here (exact casts): anything else (lists, long double, complex, strings, objects) gives
+ * NULL, and the caller's Python checks (symkin.model.robot.real_array) convert it or raise. */
 static PyArrayObject *as_doubles_(PyObject *arg, int nd, npy_intp d0, npy_intp d1)
 {
     PyArrayObject *a;
     if (PyArray_CheckExact(arg) && PyArray_TYPE((PyArrayObject *)arg) == NPY_DOUBLE &&
-        PyArray_IS_C_CONTIGUOUS((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
+        PyArray_ISCARRAY_RO((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
         a = (PyArrayObject *)arg;
         Py_INCREF(a);
     } else {
-        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY);
+        if (!PyArray_Check(arg) || !(PyArray_ISBOOL((PyArrayObject *)arg) ||
+                                     PyArray_ISINTEGER((PyArrayObject *)arg) || PyArray_ISFLOAT((PyArrayObject *)arg)))
+            return NULL;
+        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_NOTSWAPPED);
         if (!a) {
             PyErr_Clear();
             return NULL;
@@ -141,8 +146,12 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
         Py_RETURN_NONE;
     if (q0arg != Py_None) {
         q0 = as_doubles_(q0arg, 1, n, 0);
-        if (!q0) {
+        int ok = q0 != NULL;
+        for (int j = 0; ok && j < n; ++j) /* joint values: symkin.model.robot.MAX_JOINT_VALUE */
+            ok = fabs(((const double *)PyArray_DATA(q0))[j]) <= 1e15;
+        if (!ok) {
             Py_DECREF(T);
+            Py_XDECREF(q0);
             Py_RETURN_NONE;
         }
     }
