@@ -119,7 +119,8 @@ def test_tree_link_frame_and_joint_names_in_every_backend(name, joints, links):
 @given(name=NAME, command=NAME)
 @example(name='a*\\"""', command="x*\\")
 def test_analytic_ik_names_in_every_backend(name, command):
-    from symkin.compiler.analytic_ik import compile_analytic, generate_analytic
+    from symkin.compiler.analytic_ik import generate_analytic
+    from symkin.runtime.analytic_ik import compile_analytic
 
     robot = Robot.from_ets("Rz(q0) tx(0.7) Rz(q1) tx(0.4)", name=name)
     q = np.array([0.5, 0.9])
