@@ -115,7 +115,7 @@ def find_chains(root: Path) -> tuple[list[Chain], list[tuple[str, str]], int]:
     from symkin.errors import SymkinError
     from symkin.model.robot import Robot
     from symkin.model.tree import Tree
-    from symkin.model.urdf_tree import read_graph
+    from symkin.model.urdf import read_graph
 
     chains: dict[str, Chain] = {}
     bad: list[tuple[str, str]] = []

@@ -6,26 +6,19 @@ import argparse
 import json
 from typing import Any
 
+from symkin.cli import common
 from symkin.cli.checks import at_least_1
-from symkin.cli.common import (
-    add_command,
-    add_robot_argument,
-    add_scale_options,
-    damaged,
-    scheduler,
-    single_chain,
-)
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "dataset", "a (q, pose) dataset for learning (Zarr, on Dask)")
-    add_robot_argument(s)
+    s = common.add_command(sub, "dataset", "a (q, pose) dataset for learning (Zarr, on Dask)")
+    common.add_robot_argument(s)
     s.add_argument("-n", type=at_least_1, required=True, help="number of samples (more than stored appends)")
     s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. data.zarr")
     s.add_argument("--chunk", type=at_least_1, default=65536, help="samples per block (default 65536)")
-    add_scale_options(s)
+    common.add_scale_options(s)
     s.set_defaults(func=run)
 
 
@@ -33,11 +26,11 @@ def run(args: argparse.Namespace) -> int:
     from symkin.workspace import samples
     from symkin.workspace.run import require_scale
 
-    require_scale(scheduler(args))
-    robot = single_chain(args)
+    require_scale(common.scheduler(args))
+    robot = common.single_chain(args)
     ds = samples(
         robot, args.n, output=args.output, seed=args.seed, chunk=args.chunk, backend=args.backend,
-        scheduler=scheduler(args), workers=args.workers, overwrite=args.overwrite,
+        scheduler=common.scheduler(args), workers=args.workers, overwrite=args.overwrite,
     )  # fmt: skip
     st = ds.stats or {}
     summary = {"output": args.output, "samples": len(ds), "blocks": int(st.get("blocks", 0)),
@@ -48,6 +41,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"{robot.name}: {len(ds)} (q, pose) samples -> {args.output} (arrays q {tuple(ds.q.shape)}, "
               f"pose {tuple(ds.pose.shape)})")  # fmt: skip
-        print(f"blocks: {summary['computed']} computed{damaged(summary)}, {summary['skipped']} already "
-              f"written, in {summary['seconds']:.1f} s")  # fmt: skip
+        computed = f"{summary['computed']} computed{common.damaged(summary)}"
+        print(f"blocks: {computed}, {summary['skipped']} already written, in {summary['seconds']:.1f} s")
     return 0

@@ -10,24 +10,16 @@ from typing import Any
 
 import numpy as np
 
+from symkin.cli import common
 from symkin.cli.checks import UserError, at_least_1, check_cflags_for, positive_float
-from symkin.cli.common import (
-    add_command,
-    add_robot_argument,
-    add_target_options,
-    floats,
-    fmt,
-    single_chain,
-    target,
-)
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "ik", "solve inverse kinematics for one target pose")
-    add_robot_argument(s)
-    add_target_options(s, "first start of the search (default: random within the joint limits)")
+    s = common.add_command(sub, "ik", "solve inverse kinematics for one target pose")
+    common.add_robot_argument(s)
+    common.add_target_options(s, "first start of the search (default: random within the joint limits)")
     s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM", help="solver")
     s.add_argument(
         "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"
@@ -55,8 +47,8 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
 
-    robot = single_chain(args)
-    Tep = target(args, robot)
+    robot = common.single_chain(args)
+    Tep = common.target(args, robot)
     numerical = {"--we": args.we, "--lam": args.lam, "--ilimit": args.ilimit, "--slimit": args.slimit}
     check_cflags_for(args.backend)
     if args.all or args.method == "analytic":
@@ -71,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     if args.damping:
         kwargs["damping"] = args.damping
     if args.q0 is not None:
-        kwargs["q0"] = floats(args.q0, "--q0", robot.n)
+        kwargs["q0"] = common.floats(args.q0, "--q0", robot.n)
     if args.we is not None:
         kwargs["we"] = _weights(args.we)
     if args.lam is not None:
@@ -88,10 +80,10 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
     else:
-        print(f"target:\n{fmt(Tep)}")
+        print(f"target:\n{common.fmt(Tep)}")
         status = "solved" if res.success else f"not solved: {res.reason}"
         print(f"{status} in {res.iterations} iterations, {res.searches} searches, {dt * 1e3:.2f} ms")
-        print(f"q = {fmt(res.q)}")
+        print(f"q = {common.fmt(res.q)}")
         print(f"residual = {res.residual:.3e}")
     return 0 if res.success else 1
 
@@ -101,7 +93,7 @@ def _weights(text: str) -> np.ndarray:
     named = {"position": [1, 1, 1, 0, 0, 0], "orientation": [0, 0, 0, 1, 1, 1]}
     if text.strip().lower() in named:
         return np.array(named[text.strip().lower()], dtype=float)
-    we = floats(text, "--we", 6)
+    we = common.floats(text, "--we", 6)
     if (we < 0).any() or not we.any():
         raise UserError(f"--we needs six weights >= 0, not all 0 (or 'position'), got {text!r}")
     return we
@@ -109,7 +101,7 @@ def _weights(text: str) -> np.ndarray:
 
 def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
     """``symkin ik --all`` (every closed-form solution) or ``--method analytic`` (the nearest)."""
-    q0 = floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
+    q0 = common.floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
     t = time.perf_counter()
     if not args.all:
         extra = {} if args.tol is None else {"tol": args.tol}
@@ -121,7 +113,7 @@ def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
             status = "solved" if res.success else f"not solved: {res.reason}"
             print(
                 f"{status} (closed form) in {dt * 1e3:.3f} ms\n"
-                f"q = {fmt(res.q)}\nresidual = {res.residual:.3e}"
+                f"q = {common.fmt(res.q)}\nresidual = {res.residual:.3e}"
             )
         return 0 if res.success else 1
     sols = kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits)
@@ -130,11 +122,11 @@ def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
     if args.json:
         print(json.dumps({"solutions": sols.tolist(), "fk_error": errors, "seconds": dt}, indent=2))
     else:
-        print(f"target:\n{fmt(Tep)}")
+        print(f"target:\n{common.fmt(Tep)}")
         where = "" if args.no_limits else " within the joint limits"
         print(f"{len(sols)} solution(s){where} (closed form, {kin.analytic.kind}) in {dt * 1e3:.3f} ms")
         for i, (q, e) in enumerate(zip(sols, errors)):
-            print(f"  {i + 1}: q = {fmt(q)}  |T(q) - T| = {e:.1e}")
+            print(f"  {i + 1}: q = {common.fmt(q)}  |T(q) - T| = {e:.1e}")
     return 0 if len(sols) else 1
 
 

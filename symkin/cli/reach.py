@@ -9,23 +9,17 @@ from typing import Any
 
 import numpy as np
 
+from symkin.cli import common
 from symkin.cli.checks import UserError, at_least_1, positive_float
-from symkin.cli.common import (
-    add_command,
-    add_robot_argument,
-    add_scale_options,
-    damaged,
-    floats,
-    scheduler,
-    single_chain,
-)
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "reach", "reachability and manipulability map of the workspace (Zarr, on Dask)")
-    add_robot_argument(s)
+    s = common.add_command(
+        sub, "reach", "reachability and manipulability map of the workspace (Zarr, on Dask)"
+    )
+    common.add_robot_argument(s)
     s.add_argument(
         "--resolution", type=positive_float, default=0.05, help="voxel edge in metres (default 0.05)"
     )
@@ -43,7 +37,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--plot", metavar="PNG", help="write a slice of the map (reachability, manipulability)")
     s.add_argument("--slice-axis", choices=("x", "y", "z"), default="z", help="plot: axis of the slice")
     s.add_argument("--slice-at", type=float, help="plot: coordinate of the slice (default: the centre)")
-    add_scale_options(s)
+    common.add_scale_options(s)
     s.set_defaults(func=run)
 
 
@@ -51,15 +45,15 @@ def run(args: argparse.Namespace) -> int:
     from symkin.workspace import reachability
     from symkin.workspace.run import require_scale
 
-    require_scale(scheduler(args))  # before compiling: say which extra is missing at once
-    robot = single_chain(args)
-    bounds = None if args.bounds is None else floats(args.bounds, "--bounds", 6).reshape(3, 2)
+    require_scale(common.scheduler(args))  # before compiling: say which extra is missing at once
+    robot = common.single_chain(args)
+    bounds = None if args.bounds is None else common.floats(args.bounds, "--bounds", 6).reshape(3, 2)
     axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
     rmap = reachability(
         robot, args.resolution, args.orientations, output=args.output, seed=args.seed,
         solutions=args.solutions, axes=axes, bounds=bounds, radius=args.radius, chunk=args.chunk,
-        backend=args.backend, ik_options=ik_options, scheduler=scheduler(args), workers=args.workers,
+        backend=args.backend, ik_options=ik_options, scheduler=common.scheduler(args), workers=args.workers,
         overwrite=args.overwrite,
     )  # fmt: skip
     inside = rmap.reach > 0
@@ -86,7 +80,9 @@ def run(args: argparse.Namespace) -> int:
     K = len(rmap.rotations)
     print(f"{robot.name}: {x}x{y}x{z} voxels of {rmap.resolution:g} m, {K} orientations -> {args.output}")
     done, skipped = summary["computed"], summary["skipped"]
-    print(f"blocks: {done} computed{damaged(summary)}, {skipped} already written, of {summary['blocks']}")
+    print(
+        f"blocks: {done} computed{common.damaged(summary)}, {skipped} already written, of {summary['blocks']}"
+    )
     if summary["computed"]:
         rate = summary["problems"] / max(summary["seconds"], 1e-9)
         print(f"{summary['problems']} IK problems in {summary['seconds']:.1f} s ({rate:,.0f} per second)")

@@ -9,24 +9,16 @@ from typing import Any
 
 import numpy as np
 
+from symkin.cli import common
 from symkin.cli.checks import UserError, check_cflags_for, int_at_least, need_matplotlib, positive_float
-from symkin.cli.common import (
-    add_command,
-    add_robot_argument,
-    add_target_options,
-    floats,
-    fmt,
-    single_chain,
-    target,
-)
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "servo", "servo to a target pose with RRMC or MMC, optionally plotting")
-    add_robot_argument(s)
-    add_target_options(s, "start configuration (default: the ready pose qr, else qz)")
+    s = common.add_command(sub, "servo", "servo to a target pose with RRMC or MMC, optionally plotting")
+    common.add_robot_argument(s)
+    common.add_target_options(s, "start configuration (default: the ready pose qr, else qz)")
     s.add_argument(
         "--controller",
         choices=("mmc", "rrmc"),
@@ -44,11 +36,11 @@ def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
     from symkin.runtime.loop import servo
 
-    robot = single_chain(args)
-    Tep = target(args, robot)
+    robot = common.single_chain(args)
+    Tep = common.target(args, robot)
     need_matplotlib(args.plot)
     check_cflags_for(args.backend)
-    q0 = floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
+    q0 = common.floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
     kin = compile_robot(robot, backend=args.backend)
     res = servo(
         kin,
@@ -78,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             f"{args.controller}: {'arrived' if res.arrived else 'did not arrive'} after {steps} steps "
             f"(dt {args.dt} s); mean manipulability {summary['mean_manipulability']:.4f}"
         )
-        print(f"q final = {fmt(res.q[-1])}")
+        print(f"q final = {common.fmt(res.q[-1])}")
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0 if res.arrived else 1

@@ -1,4 +1,7 @@
-"""URDF to an exact ETS: the serial chain from ``base_link`` to ``end_link`` (xml.etree only).
+"""The one URDF reader (xml.etree only): :func:`read_graph` parses a URDF into its checked
+link/joint graph for both :meth:`symkin.Robot.from_urdf` (:func:`urdf_args`, the serial chain from
+``base_link`` to ``end_link`` as an exact ETS) and :meth:`symkin.Tree.from_urdf`
+(:mod:`symkin.model.urdf_tree`).
 
 Each joint on the chain contributes its origin ``tx ty tz Rz(yaw) Ry(pitch) Rx(roll)`` (the URDF
 fixed-axis roll-pitch-yaw convention ``R = Rz(y) Ry(p) Rx(r)`` of the URDF specification)
@@ -34,6 +37,7 @@ import re
 import shlex
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -44,6 +48,9 @@ from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 
 __all__ = [
+    "URDFGraph",
+    "URDFJoint",
+    "read_graph",
     "urdf_args",
     "axis_ets",
     "translation_ets",
@@ -350,6 +357,152 @@ def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     return root, where
 
 
+# -- the link/joint graph: the one reader of both Robot.from_urdf and Tree.from_urdf -----------
+
+
+_MOVABLE = ("revolute", "continuous", "prismatic")
+
+
+@dataclass(frozen=True, eq=False)
+class URDFJoint:
+    """One ``<joint>`` element: ``name``, ``kind`` (its type), ``parent`` and ``child`` links."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    el: ElementTree.Element
+
+    @property
+    def movable(self) -> bool:
+        return self.kind in _MOVABLE
+
+
+@dataclass(frozen=True, eq=False)
+class URDFGraph:
+    """The link/joint graph of a URDF (checked to be a forest without cycles)."""
+
+    where: str
+    name: str
+    links: tuple[str, ...]
+    joints: dict[str, URDFJoint]  # by name, in file order
+    parent_joint: dict[str, URDFJoint]  # by child link
+    children: dict[str, list[URDFJoint]]  # by parent link, in file order
+
+    @property
+    def roots(self) -> list[str]:
+        return [ln for ln in self.links if ln not in self.parent_joint]
+
+    def check_link(self, link: str, what: str) -> None:
+        if link not in self.children:
+            raise URDFError(
+                f"{self.where}: {what} {link!r} is not a link;" + _suggest(link, list(self.links))
+            )
+
+    def root(self) -> str:
+        roots = self.roots
+        if len(roots) != 1:
+            raise URDFError(
+                f"{self.where} has {len(roots)} root links {roots}; name base_link, one of the links: "
+                f"{list(self.links)}"
+            )
+        return roots[0]
+
+    def base(self, base_link: str | None) -> str:
+        """``base_link`` checked to be a link, or the root link when None."""
+        if base_link is None:
+            return self.root()
+        self.check_link(base_link, "base_link")
+        return base_link
+
+    def depth_first(self, base: str) -> list[URDFJoint]:
+        """The joints below ``base``, depth first, the children of a link in file order."""
+        out: list[URDFJoint] = []
+        stack = list(reversed(self.children[base]))
+        while stack:
+            j = stack.pop()
+            out.append(j)
+            stack.extend(reversed(self.children[j.child]))
+        return out
+
+    def leaves(self, base: str) -> list[str]:
+        """Links below ``base`` without children, depth first."""
+        return [j.child for j in self.depth_first(base) if not self.children[j.child]]
+
+    def path(self, base: str, link: str) -> list[URDFJoint]:
+        """The joints from ``base`` down to ``link``, in order."""
+        out: list[URDFJoint] = []
+        ln = link
+        while ln != base:
+            j = self.parent_joint.get(ln)
+            if j is None:
+                raise URDFError(
+                    f"{self.where}: link {link!r} is not below base_link {base!r} (walking up from "
+                    f"{link!r} reached the root {ln!r})"
+                )
+            out.append(j)
+            ln = j.parent
+        out.reverse()
+        return out
+
+
+def read_graph(path_or_xml: str | Path) -> URDFGraph:
+    """Parse a URDF (file path or XML text) into its link/joint graph, with clear errors."""
+    root, where = _load(path_or_xml)
+    links = [el.get("name") for el in root.findall("link")]
+    if any(n is None for n in links):
+        raise URDFError(f"{where}: a <link> has no name attribute")
+    if len(set(links)) != len(links):
+        dup = sorted({n for n in links if links.count(n) > 1})
+        raise URDFError(f"{where}: link names must be unique; {dup} appear more than once")
+    joints: dict[str, URDFJoint] = {}
+    parent_joint: dict[str, URDFJoint] = {}
+    children: dict[str, list[URDFJoint]] = {n: [] for n in links}
+    for el in root.findall("joint"):
+        jname = el.get("name")
+        if not jname:
+            raise URDFError(f"{where}: a <joint> has no name attribute")
+        if jname in joints:
+            raise URDFError(f"{where}: joint names must be unique; {jname!r} appears more than once")
+        kind = el.get("type")
+        if kind not in _KNOWN:
+            raise URDFError(
+                f"{where}: joint {jname!r} has unknown type {kind!r}; valid types: {list(_KNOWN)}"
+            )
+        ends = []
+        for tag in ("parent", "child"):
+            sub = el.find(tag)
+            lname = sub.get("link") if sub is not None else None
+            if lname is None:
+                raise URDFError(f"{where}: joint {jname!r} has no <{tag} link=...>")
+            if lname not in children:
+                raise URDFError(
+                    f"{where}: joint {jname!r} names {tag} link {lname!r}, which is not declared"
+                    + _suggest(lname, links)
+                )
+            ends.append(lname)
+        j = URDFJoint(jname, kind, ends[0], ends[1], el)
+        if j.child in parent_joint:
+            raise URDFError(
+                f"{where}: link {j.child!r} is the child of two joints, {parent_joint[j.child].name!r} and "
+                f"{jname!r}; a URDF must be a tree"
+            )
+        joints[jname] = j
+        parent_joint[j.child] = j
+        children[j.parent].append(j)
+    graph = URDFGraph(where, root.get("name") or "robot", tuple(links), joints, parent_joint, children)
+    rooted: set[str] = set()  # links whose walk up ends at a root: each link is walked from once
+    for link in links:  # a cycle has no root: walking up from any of its links comes back
+        seen, ln = {link}, link
+        while ln in parent_joint and ln not in rooted:
+            ln = parent_joint[ln].parent
+            if ln in seen:
+                raise URDFError(f"{where}: the joints form a cycle through link {ln!r}")
+            seen.add(ln)
+        rooted |= seen
+    return graph
+
+
 def urdf_args(
     path_or_xml: str | Path,
     base_link: str | None = None,
@@ -362,85 +515,28 @@ def urdf_args(
     ``base_link`` defaults to the root link, ``end_link`` to the only leaf below ``base_link``
     (a branching tree needs ``end_link``). Joints: revolute, continuous, prismatic, fixed.
     """
-    root, where = _load(path_or_xml)
-    links = [el.get("name") for el in root.findall("link")]
-    if any(n is None for n in links):
-        raise URDFError(f"{where}: a <link> has no name attribute")
-    link_set = set(links)
-    parent_joint: dict[str, ElementTree.Element] = {}
-    children: dict[str, list[ElementTree.Element]] = {n: [] for n in links}
-    for jel in root.findall("joint"):
-        jname = jel.get("name") or "<unnamed>"
-        jtype = jel.get("type")
-        if jtype not in _KNOWN:
-            raise URDFError(
-                f"{where}: joint {jname!r} has unknown type {jtype!r}; valid types: {list(_KNOWN)}"
-            )
-        ends = []
-        for tag in ("parent", "child"):
-            el = jel.find(tag)
-            lname = el.get("link") if el is not None else None
-            if lname is None:
-                raise URDFError(f"{where}: joint {jname!r} has no <{tag} link=...>")
-            if lname not in link_set:
-                raise URDFError(
-                    f"{where}: joint {jname!r} names {tag} link {lname!r}, which is not declared"
-                    + _suggest(lname, links)
-                )
-            ends.append(lname)
-        parent, child = ends
-        if child in parent_joint:
-            other = parent_joint[child].get("name")
-            raise URDFError(
-                f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r}; "
-                "a URDF must be a tree"
-            )
-        parent_joint[child] = jel
-        children[parent].append(jel)
-
-    if base_link is None:
-        roots = [n for n in links if n not in parent_joint]
-        if len(roots) != 1:
-            raise URDFError(
-                f"{where} has {len(roots)} root links {roots}; name base_link, one of the links: {links}"
-            )
-        base_link = roots[0]
-    elif base_link not in link_set:
-        raise URDFError(f"{where}: base_link {base_link!r} is not a link" + _suggest(base_link, links))
+    graph = read_graph(path_or_xml)
+    where, base_link = graph.where, graph.base(base_link)
     if end_link is None:
-        leaves, stack, seen = [], [base_link], set()
-        while stack:
-            ln = stack.pop()
-            if ln in seen:
-                continue
-            seen.add(ln)
-            kids = [j.find("child").get("link") for j in children[ln]]
-            if not kids:
-                leaves.append(ln)
-            stack.extend(reversed(kids))
+        leaves = graph.leaves(base_link) or [base_link]
         if len(leaves) != 1:
             raise URDFError(
                 f"{where}: the tree below {base_link!r} branches; name end_link, one of the leaf "
                 f"links {leaves}"
             )
         end_link = leaves[0]
-    elif end_link not in link_set:
-        raise URDFError(f"{where}: end_link {end_link!r} is not a link" + _suggest(end_link, links))
-
+    else:
+        graph.check_link(end_link, "end_link")
     path: list[ElementTree.Element] = []
-    ln, seen_links = end_link, {end_link}
+    ln = end_link
     while ln != base_link:
-        if ln not in parent_joint:
+        if ln not in graph.parent_joint:
             raise URDFError(
                 f"{where}: there is no path from base_link {base_link!r} down to end_link {end_link!r} "
                 f"(walking up from {end_link!r} reached the root {ln!r})"
             )
-        jel = parent_joint[ln]
-        path.append(jel)
-        ln = jel.find("parent").get("link")
-        if ln in seen_links:
-            raise URDFError(f"{where}: the joints form a cycle through link {ln!r}")
-        seen_links.add(ln)
+        path.append(graph.parent_joint[ln].el)
+        ln = graph.parent_joint[ln].parent
     path.reverse()
 
     chain: list[ET] = []
@@ -489,7 +585,7 @@ def urdf_args(
         raise URDFError(
             f"{where}: no revolute, continuous or prismatic joint between {base_link!r} and {end_link!r}"
         )
-    robot_name = name or root.get("name") or "robot"
+    robot_name = name or graph.name
     qd_max = qd if all(v is not None and v > 0 for v in qd) else None
     return dict(
         ets=ETS(tuple(chain)),

@@ -17,165 +17,29 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
-from xml.etree import ElementTree
 
 from symkin.errors import URDFError
 from symkin.model.ets import ET, Axis
 from symkin.model.slots import Segment, Slot
 from symkin.model.urdf import (
     MAX_URDF_VALUE,
-    _load,
+    URDFGraph,
+    URDFJoint,
     _numbers,
     _suggest,
     axis_ets,
     joint_axis,
     joint_origin,
+    read_graph,
     snap_angle,
     snap_atan2,
     translation_ets,
 )
 
-__all__ = ["URDFGraph", "read_graph", "joint_ets", "urdf_tree_args", "describe_urdf"]
-
-_KNOWN = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
-_MOVABLE = ("revolute", "continuous", "prismatic")
-
-
-@dataclass(frozen=True, eq=False)
-class URDFJoint:
-    """One ``<joint>`` element: ``name``, ``kind`` (its type), ``parent`` and ``child`` links."""
-
-    name: str
-    kind: str
-    parent: str
-    child: str
-    el: ElementTree.Element
-
-    @property
-    def movable(self) -> bool:
-        return self.kind in _MOVABLE
-
-
-@dataclass(frozen=True, eq=False)
-class URDFGraph:
-    """The link/joint graph of a URDF (checked to be a forest without cycles)."""
-
-    where: str
-    name: str
-    links: tuple[str, ...]
-    joints: dict[str, URDFJoint]  # by name, in file order
-    parent_joint: dict[str, URDFJoint]  # by child link
-    children: dict[str, list[URDFJoint]]  # by parent link, in file order
-
-    @property
-    def roots(self) -> list[str]:
-        return [ln for ln in self.links if ln not in self.parent_joint]
-
-    def check_link(self, link: str, what: str) -> None:
-        if link not in self.children:
-            raise URDFError(
-                f"{self.where}: {what} {link!r} is not a link;" + _suggest(link, list(self.links))
-            )
-
-    def root(self) -> str:
-        roots = self.roots
-        if len(roots) != 1:
-            raise URDFError(
-                f"{self.where} has {len(roots)} root links {roots}; name base_link, one of the links: "
-                f"{list(self.links)}"
-            )
-        return roots[0]
-
-    def depth_first(self, base: str) -> list[URDFJoint]:
-        """The joints below ``base``, depth first, the children of a link in file order."""
-        out: list[URDFJoint] = []
-        stack = list(reversed(self.children[base]))
-        while stack:
-            j = stack.pop()
-            out.append(j)
-            stack.extend(reversed(self.children[j.child]))
-        return out
-
-    def leaves(self, base: str) -> list[str]:
-        """Links below ``base`` without children, depth first."""
-        return [j.child for j in self.depth_first(base) if not self.children[j.child]]
-
-    def path(self, base: str, link: str) -> list[URDFJoint]:
-        """The joints from ``base`` down to ``link``, in order."""
-        out: list[URDFJoint] = []
-        ln = link
-        while ln != base:
-            j = self.parent_joint.get(ln)
-            if j is None:
-                raise URDFError(
-                    f"{self.where}: link {link!r} is not below base_link {base!r} (walking up from "
-                    f"{link!r} reached the root {ln!r})"
-                )
-            out.append(j)
-            ln = j.parent
-        out.reverse()
-        return out
-
-
-def read_graph(path_or_xml: str | Path) -> URDFGraph:
-    """Parse a URDF (file path or XML text) into its link/joint graph, with clear errors."""
-    root, where = _load(path_or_xml)
-    links = [el.get("name") for el in root.findall("link")]
-    if any(n is None for n in links):
-        raise URDFError(f"{where}: a <link> has no name attribute")
-    if len(set(links)) != len(links):
-        dup = sorted({n for n in links if links.count(n) > 1})
-        raise URDFError(f"{where}: link names must be unique; {dup} appear more than once")
-    joints: dict[str, URDFJoint] = {}
-    parent_joint: dict[str, URDFJoint] = {}
-    children: dict[str, list[URDFJoint]] = {n: [] for n in links}
-    for el in root.findall("joint"):
-        jname = el.get("name")
-        if not jname:
-            raise URDFError(f"{where}: a <joint> has no name attribute")
-        if jname in joints:
-            raise URDFError(f"{where}: joint names must be unique; {jname!r} appears more than once")
-        kind = el.get("type")
-        if kind not in _KNOWN:
-            raise URDFError(
-                f"{where}: joint {jname!r} has unknown type {kind!r}; valid types: {list(_KNOWN)}"
-            )
-        ends = []
-        for tag in ("parent", "child"):
-            sub = el.find(tag)
-            lname = sub.get("link") if sub is not None else None
-            if lname is None:
-                raise URDFError(f"{where}: joint {jname!r} has no <{tag} link=...>")
-            if lname not in children:
-                raise URDFError(
-                    f"{where}: joint {jname!r} names {tag} link {lname!r}, which is not declared"
-                    + _suggest(lname, links)
-                )
-            ends.append(lname)
-        j = URDFJoint(jname, kind, ends[0], ends[1], el)
-        if j.child in parent_joint:
-            raise URDFError(
-                f"{where}: link {j.child!r} is the child of two joints, {parent_joint[j.child].name!r} and "
-                f"{jname!r}; a URDF must be a tree"
-            )
-        joints[jname] = j
-        parent_joint[j.child] = j
-        children[j.parent].append(j)
-    graph = URDFGraph(where, root.get("name") or "robot", tuple(links), joints, parent_joint, children)
-    rooted: set[str] = set()  # links whose walk up ends at a root: each link is walked from once
-    for link in links:  # a cycle has no root: walking up from any of its links comes back
-        seen, ln = {link}, link
-        while ln in parent_joint and ln not in rooted:
-            ln = parent_joint[ln].parent
-            if ln in seen:
-                raise URDFError(f"{where}: the joints form a cycle through link {ln!r}")
-            seen.add(ln)
-        rooted |= seen
-    return graph
+__all__ = ["joint_ets", "urdf_tree_args", "describe_urdf"]
 
 
 def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> list[ET]:
@@ -263,11 +127,7 @@ def urdf_tree_args(
 ) -> dict[str, Any]:
     """The :class:`symkin.Tree` arguments of a URDF: see :meth:`symkin.Tree.from_urdf`."""
     graph = read_graph(path_or_xml)
-    where = graph.where
-    if base_link is None:
-        base_link = graph.root()
-    else:
-        graph.check_link(base_link, "base_link")
+    where, base_link = graph.where, graph.base(base_link)
     if isinstance(frames, str):
         frames = [f.strip() for f in frames.split(",") if f.strip()]
     if frames is None:

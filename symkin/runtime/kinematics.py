@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import cached_property
-from pathlib import Path
-from types import MethodType, ModuleType
+from types import MethodType
 from typing import Any
 
 import numpy as np
@@ -22,6 +21,7 @@ from symkin.core.arrays import as_batch, axes_rows
 from symkin.errors import ConfigurationError
 from symkin.model.robot import Robot, cond_of, jacob_dot_of, jacobm_of, manipulability_of, space_jacobian
 from symkin.runtime.casadi_calls import chain_functions
+from symkin.runtime.compiled import CompiledModel
 from symkin.runtime.ik import ik
 from symkin.runtime.manip import jacobm_one, manipulability_one
 from symkin.runtime.memo import memoised
@@ -72,7 +72,7 @@ def kinematics_of(robot: Robot, art: Artifact, backend: str) -> Kinematics:
     return Kinematics(robot, backend, functions, art.files, art.path, art.module)
 
 
-class Kinematics:
+class Kinematics(CompiledModel):
     """Generated kinematics of ``robot`` on one backend ("c", "numpy" or "casadi").
 
     Attributes: ``robot``, ``backend``, ``n``, ``qlim``, ``qd_max``, ``name``, ``files`` (the
@@ -88,46 +88,16 @@ class Kinematics:
     fkine_jacob0: Callable[[Any], tuple[np.ndarray, np.ndarray]]
     jacob0_hessian0: Callable[[Any], tuple[np.ndarray, np.ndarray]]
 
-    def __init__(
-        self,
-        robot: Robot,
-        backend: str,
-        functions: dict[str, Callable[..., Any]],
-        files: dict[str, str],
-        path: Path | None = None,
-        module: ModuleType | None = None,
-    ) -> None:
-        self.robot = robot
-        self._n = int(robot.n)
-        self.backend = backend
+    METHODS = KIN_METHODS
+
+    def _setup(self, functions: dict[str, Callable[..., Any]]) -> None:
+        self.robot = self.model
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
         self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
-        self.files = files
-        self.path = path
-        self.module = module
-        for name in KIN_METHODS:
-            setattr(self, name, functions[name])
         if "manipulability" in functions:
             self.manipulability = functions["manipulability"]
             self.jacobm = functions["jacobm"]
-
-    @property
-    def n(self) -> int:
-        """Number of joints (kept: ``robot.n`` counts the joints of the ETS on every call)."""
-        return self._n
-
-    @property
-    def name(self) -> str:
-        return self.robot.name
-
-    @property
-    def qlim(self) -> np.ndarray:
-        return self.robot.qlim
-
-    @property
-    def qd_max(self) -> np.ndarray | None:
-        return self.robot.qd_max
 
     def __repr__(self) -> str:
         return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
@@ -205,14 +175,6 @@ class Kinematics:
             "manipulability, jacobm, cond, ik"
         )
         return robot_markdown(self.robot, head) + f"Methods: {methods}.\n"
-
-    @property
-    def c_prefix(self) -> str:
-        """The prefix of the exported C symbols (``symkin_<robot>`` unless compiled with another)."""
-        headers = sorted(f for f in self.files if f.endswith(".h"))
-        if self.backend != "c" or not headers:
-            raise AttributeError("c_prefix exists only on the C backend")
-        return headers[0][:-2]
 
     @cached_property
     def c_fkjac(self) -> Any:

@@ -10,14 +10,13 @@ for a batch. On the C backend the methods are the extension module's functions t
 from __future__ import annotations
 
 from collections.abc import Callable
-from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 
 from symkin.compiler.compile import Artifact, build, cache_key
 from symkin.runtime.casadi_calls import tree_functions
+from symkin.runtime.compiled import CompiledModel
 from symkin.runtime.memo import memoised
 
 __all__ = ["TreeKinematics", "TREE_METHODS", "load_tree", "tree_kinematics_of"]
@@ -53,7 +52,7 @@ def tree_kinematics_of(tree: Any, art: Artifact, backend: str) -> TreeKinematics
     return TreeKinematics(tree, backend, functions, art.files, art.path, art.module)
 
 
-class TreeKinematics:
+class TreeKinematics(CompiledModel):
     """Generated kinematics of a tree on one backend ("c", "numpy" or "casadi").
 
     Attributes: ``tree``, ``backend``, ``n``, ``frames``, ``joint_names``, ``qlim``, ``qd_max``,
@@ -70,48 +69,16 @@ class TreeKinematics:
     jacob0_all: Callable[[Any], np.ndarray]
     fkine_jacob0_all: Callable[[Any], tuple[np.ndarray, np.ndarray]]
 
-    def __init__(
-        self,
-        tree: Any,
-        backend: str,
-        functions: dict[str, Callable[..., Any]],
-        files: dict[str, str],
-        path: Path | None = None,
-        module: ModuleType | None = None,
-    ) -> None:
-        self.tree = tree
-        self.backend = backend
-        self.files = files
-        self.path = path
-        self.module = module
-        for name in TREE_METHODS:
-            setattr(self, name, functions[name])
-        if backend == "c":
+    METHODS = TREE_METHODS
+
+    def _setup(self, functions: dict[str, Callable[..., Any]]) -> None:
+        self.tree = self.model
+        if self.backend == "c":
             self.c_fkjac_of = self._c_fkjac_of
-
-    @property
-    def n(self) -> int:
-        return self.tree.n
-
-    @property
-    def name(self) -> str:
-        return self.tree.name
 
     @property
     def frames(self) -> tuple[str, ...]:
         return self.tree.frames
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        return self.tree.joint_names
-
-    @property
-    def qlim(self) -> np.ndarray:
-        return self.tree.qlim
-
-    @property
-    def qd_max(self) -> np.ndarray | None:
-        return self.tree.qd_max
 
     def __repr__(self) -> str:
         frames = list(self.frames)
@@ -121,18 +88,6 @@ class TreeKinematics:
         """Pickle as (tree, backend): unpickling compiles again, which loads the generated code from
         the compile cache of the process that unpickles (a Dask worker, say) when it is there."""
         return (_rebuild, (self.tree, self.backend))
-
-    @property
-    def c_prefix(self) -> str:
-        """The prefix of the exported C symbols (``symkin_<tree>_tree`` unless generated with another)."""
-        headers = sorted(f for f in self.files if f.endswith(".h"))
-        if self.backend != "c" or not headers:
-            raise AttributeError("c_prefix exists only on the C backend")
-        return headers[0][:-2]
-
-    def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
-        """Uniform random configurations within qlim: (n,) or (N, n)."""
-        return self.tree.random_q(N, seed)
 
     def select(self, frame: Any = None) -> Any:
         """Frame ``frame`` as chain kinematics of all n joints (:class:`symkin.model.frame_view.FrameView`),
