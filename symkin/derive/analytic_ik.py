@@ -33,14 +33,19 @@ _NAMES = {
 }
 
 
+def _short(x: sp.Basic) -> sp.Basic:
+    """``x`` with its Floats (a folded run of constants, 50 digits) shown to 17 digits."""
+    return x.xreplace({f: sp.Float(f, 17) for f in x.atoms(sp.Float)})
+
+
 def _latex(x: sp.Expr) -> str:
     if sp.count_ops(x) > DISPLAY_MAX_OPS:
         return rf"\text{{(an expression of {sp.count_ops(x)} operations; see the generated code)}}"
-    return sp.latex(x)
+    return sp.latex(_short(x))
 
 
 def _vec(v: tuple) -> str:
-    return r"\begin{pmatrix} " + r" \\ ".join(sp.latex(x) for x in v) + r" \end{pmatrix}"
+    return r"\begin{pmatrix} " + r" \\ ".join(sp.latex(_short(x)) for x in v) + r" \end{pmatrix}"
 
 
 _RESULT = {
@@ -51,6 +56,29 @@ _RESULT = {
     "lin": "",
     "sum": "",
 }
+
+
+def _ends(base: sp.Matrix | None, tool: sp.Matrix | None) -> str:
+    """The paragraph on the constant ends moved to the target (empty without them)."""
+    if base is None and tool is None:
+        return ""
+    B, E = r"T_{\mathrm{base}}", r"T_{\mathrm{tool}}"
+    chain = " ".join(x for x in (B if base is not None else "", "T'(q)", E if tool is not None else "") if x)
+    target = " ".join(
+        x
+        for x in (f"{B}^{{-1}}" if base is not None else "", "T", f"{E}^{{-1}}" if tool is not None else "")
+        if x
+    )
+    shown = [(n, m) for n, m in ((B, base), (E, tool)) if m is not None]
+    mats = "\n\n".join(f"$$\n{n} = {sp.latex(_short(m))}\n$$" for n, m in shown)
+    return (
+        "The constant transforms before the first joint and after the last hold rotations by angles other "
+        "than multiples of $\\pi/2$: they are taken off the chain (the table above is the arm without them), "
+        f"${{}}^0T_e(q) = {chain}$, and applied to the target numerically: the joints solve "
+        f"$T' = {target}$ (below, $r_{{ij}}$ and $p$ are those of $T'$). On an arm with fewer than 6 "
+        "joints only the rotation of the tool transform is moved (its translation, the tool point, stays in "
+        "$M$).\n\n" + mats
+    )
 
 
 def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") -> str:
@@ -111,7 +139,8 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
         structure=robot.ets.structure,
         version=__version__,
         joints=joints,
-        M=sp.latex(sp.Matrix(g.M)),
+        M=sp.latex(_short(sp.Matrix(g.M))),
+        ends=_ends(plan.base, plan.tool),
         structure_text=text,
         wrist=_vec(s.wrist) if s.wrist is not None and s.kind == "spherical_wrist" else "",
         steps=steps,

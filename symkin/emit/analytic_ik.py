@@ -16,7 +16,8 @@ from symkin.emit.analytic_ik_c import body_c
 from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
 from symkin.emit.printers import CPrinter, NumPyPrinter
 from symkin.emit.templates import render
-from symkin.symbolic.analytic_ik import AnalyticIK, pose_symbols
+from symkin.symbolic.analytic_ik import AnalyticIK, given_symbols, pose_symbols
+from symkin.symbolic.cse import floatify
 
 __all__ = ["render_analytic", "ik_prefix", "BACKEND_DIALECT"]
 
@@ -102,6 +103,15 @@ def _fk_code(plan: AnalyticIK, dialect: str) -> tuple[list[str], list[str]]:
     return lines, [pr.doprint(e) for e in values]
 
 
+def _pose_lines(plan: AnalyticIK, dialect: str) -> list[str]:
+    """The pose the steps solve for from the target as given, when the arm's constant ends were
+    moved to the target (``plan.pose_map``; no lines otherwise)."""
+    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else _MathPrinter())
+    decl = "const double " if dialect == "c" else ""
+    end = ";" if dialect == "c" else ""
+    return [f"    {decl}{sym} = {pr.doprint(floatify(e))}{end}" for sym, e in plan.pose_map]
+
+
 def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str) -> dict[str, str]:
     """The generated files of the closed form for ``backend`` ("c", "numpy" or "casadi", the last
     rendered as plain Python)."""
@@ -110,7 +120,7 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
     dialect = BACKEND_DIALECT[backend]
     name = getattr(robot, "name", plan.name)
     prefix = ik_prefix(name)
-    R, p = pose_symbols()
+    R, p = given_symbols() if plan.pose_map else pose_symbols()
     pose = [(str(R[i, j]), i * 4 + j) for i in range(3) for j in range(3)] + [
         (str(p[i]), i * 4 + 3) for i in range(3)
     ]
@@ -123,7 +133,9 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         "check": plan.check,
         "revolute": [int(r) for r in plan.revolute],
         "pose": pose,
-        "body": body_c(plan) if dialect == "c" else _body(plan, dialect),
+        "body": "\n".join(
+            [*_pose_lines(plan, dialect), body_c(plan) if dialect == "c" else _body(plan, dialect)]
+        ),
         "fk_lines": fk_lines,
         "fk_values": fk_values,
         "joints": joints,

@@ -25,7 +25,7 @@ import sympy as sp
 from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
 from symkin.emit.printers import CPrinter
 from symkin.symbolic.analytic_ik import AnalyticIK, Step
-from symkin.symbolic.ik_geometry import is_zero
+from symkin.symbolic.ik_geometry import is_zero, random_point, same_value, value_at
 
 __all__ = ["body_c", "branch_mirror", "step_mirror"]
 
@@ -50,6 +50,33 @@ def branch_mirror(st: Step) -> Pattern | None:
     return None
 
 
+def _sign_under(expr: sp.Expr, sigma: dict[sp.Symbol, sp.Expr]) -> int | None:
+    """+1 or -1 when ``expr`` with ``sigma`` (symbols to +-themselves) substituted is +-``expr``, else
+    None. Decided at two random points first (:func:`value_at`: no expansion, which for the
+    coefficients of an arm with general axes has thousands of terms), then, for an exact ``expr``
+    (no Floats), confirmed by expanding."""
+    syms = expr.free_symbols
+    flip = {s: sigma[s] / s for s in syms if s in sigma}  # type: ignore[operator]
+    signs = set()
+    try:
+        for seed in (1, 2):
+            point = random_point(syms, seed)
+            a = value_at(expr, point)
+            b = value_at(expr, {s: v * flip.get(s, 1) for s, v in point.items()})
+            if same_value(a, b):
+                signs.add(1)
+            elif same_value(a, b, -1):
+                signs.add(-1)
+            else:
+                return None
+    except (ArithmeticError, ValueError):  # not defined at those points: decided by expanding
+        signs = {1, -1}
+    if len(signs) == 1 and expr.has(sp.Float):
+        return signs.pop()
+    moved = expr.subs(sigma, simultaneous=True)
+    return next((sign for sign in sorted(signs, reverse=True) if sp.expand(moved - sign * expr) == 0), None)
+
+
 def step_mirror(st: Step, sigma: dict[sp.Symbol, sp.Expr], angles: set[sp.Symbol]) -> Pattern | None:
     """The (cos, sin) signs of a subproblem 1 in the mirrored branch, when its arguments change
     only by signs under the substitution ``sigma`` (and use no mirrored angle itself)."""
@@ -61,13 +88,10 @@ def step_mirror(st: Step, sigma: dict[sp.Symbol, sp.Expr], angles: set[sp.Symbol
         expr = e[key]
         if expr.free_symbols & angles:
             return None
-        moved = expr.subs(sigma, simultaneous=True)
-        if sp.expand(moved - expr) == 0:
-            signs.append(1)
-        elif sp.expand(moved + expr) == 0:
-            signs.append(-1)
-        else:
+        sign = _sign_under(expr, sigma)
+        if sign is None:
             return None
+        signs.append(sign)
     return (signs[0], signs[1])
 
 

@@ -18,16 +18,28 @@ Every coefficient (A, B, C, ...) is an exact sympy expression in the target pose
 ``px, py, pz``) and the cosines and sines of the angles already solved (``c0, s0, ...``): the
 arm's constants are substituted exactly, so the emitted code does only the arithmetic this arm
 needs. Branches: each subproblem 4 and each prismatic quadratic doubles them (at most 8 for 6R).
+
+Constant ends: when the constants before the first joint (a base offset) or after the last (a
+tool, fixed joints with rpy offsets) form a run that folds (:func:`symkin.symbolic.ik_geometry.fold_ik`),
+they are taken off the chain and applied to the target instead, numerically: with
+``T(q) = B T'(q) E`` the joints solve ``T' = B^{-1} T E^{-1}`` (``pose_map``), and the geometry and
+the coefficients are those of the arm without its ends, exact as before. An arm with fewer than 6
+joints solves the position of its tool point, so there only the rotation of ``E`` is moved and
+its translation stays on the chain.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from fractions import Fraction
 
 import sympy as sp
 
+from symkin.model.ets import ET
 from symkin.model.robot import Robot
+from symkin.symbolic.fold import Fixed
 from symkin.symbolic.ik_geometry import (
+    IK_DIGITS,
     Geometry,
     NoAnalyticIKError,
     Structure,
@@ -36,16 +48,21 @@ from symkin.symbolic.ik_geometry import (
     classify,
     cross,
     dot,
+    fixed_matrix,
+    fold_ik,
     geometry,
+    is_constant,
     is_zero,
     parallel,
+    random_point,
     reverse,
     scale,
     snap,
     sub,
+    value_at,
 )
 
-__all__ = ["Step", "AnalyticIK", "derive_analytic", "pose_symbols"]
+__all__ = ["Step", "AnalyticIK", "derive_analytic", "pose_symbols", "given_symbols"]
 
 
 @dataclass(frozen=True)
@@ -81,7 +98,11 @@ class AnalyticIK:
     variable holding joint index j; ``check`` is True when solutions must be verified against the
     full pose (arms with fewer than 6 joints solve only part of it); ``fk`` is the pose of the
     solved joints as 12 expressions (rows of the top 3x4 block) in ``c<j>, s<j>`` (revolute) or
-    ``q<j>`` (prismatic), used to verify.
+    ``q<j>`` (prismatic), used to verify. ``base`` and ``tool`` (4x4, or None) are the constant ends
+    taken off the chain (module docstring), ``T(q) = base T'(q) tool``; ``pose_map`` then assigns the
+    pose symbols the steps use (:func:`pose_symbols`, the target of ``T'``) from the target as given
+    (:func:`given_symbols`), and is empty when the arm has no such ends. ``geometry`` is that of the
+    arm without its ends; ``fk`` is the whole arm's.
     """
 
     name: str
@@ -93,6 +114,9 @@ class AnalyticIK:
     check: bool
     fk: tuple[sp.Expr, ...]
     revolute: tuple[bool, ...]
+    base: sp.Matrix | None = None
+    tool: sp.Matrix | None = None
+    pose_map: tuple[tuple[sp.Symbol, sp.Expr], ...] = ()
 
     @property
     def max_solutions(self) -> int:
@@ -106,6 +130,14 @@ def pose_symbols() -> tuple[sp.Matrix, sp.Matrix]:
     """The target pose symbols: rotation ``r11 .. r33`` (3x3) and position ``px, py, pz`` (3x1)."""
     R = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"r{i + 1}{j + 1}", real=True))
     p = sp.Matrix([sp.Symbol(f"p{a}", real=True) for a in "xyz"])
+    return R, p
+
+
+def given_symbols() -> tuple[sp.Matrix, sp.Matrix]:
+    """The target as given, for an arm whose constant ends are moved to it (``AnalyticIK.pose_map``):
+    rotation ``g11 .. g33`` and position ``gx, gy, gz``."""
+    R = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"g{i + 1}{j + 1}", real=True))
+    p = sp.Matrix([sp.Symbol(f"g{a}", real=True) for a in "xyz"])
     return R, p
 
 
@@ -137,9 +169,23 @@ def _norm2(v: Vec) -> sp.Expr:
     return dot(v, v)
 
 
+_ZERO_VALUE = 1e-25  # as is_zero
+
+
 def _tidy(x: sp.Expr) -> sp.Expr:
     """``x`` as derived (nested dot products: about half the arithmetic of the expanded sum and
-    no cancellation between its terms), exactly 0 or a single number when it expands to one."""
+    no cancellation between its terms), exactly 0 or a single number when it expands to one.
+
+    Only an ``x`` that is constant at random points is expanded (:func:`is_constant`): the expanded
+    sum of a coefficient of an arm with general axes (a folded run of constants between joints)
+    has thousands of terms. A constant with Floats in it (such an arm) is its value, 0 when that
+    is 0 to 25 digits (:func:`is_zero`). One that cannot be evaluated at those points is expanded."""
+    constant = is_constant(x)
+    if constant is False:
+        return x
+    if constant and x.free_symbols and x.has(sp.Float):
+        v = value_at(x, random_point(x.free_symbols, 1))
+        return sp.Integer(0) if abs(v) < _ZERO_VALUE else sp.Float(v, IK_DIGITS)
     e = sp.expand(x)
     return e if e == 0 or not e.free_symbols else x
 
@@ -560,12 +606,55 @@ def _fk(b: _Builder) -> tuple[sp.Expr, ...]:
     return tuple(T[i, j] for i in range(3) for j in range(4))
 
 
+_ONE, _ZERO = Fraction(1), Fraction(0)
+_IDENTITY = ((_ONE, _ZERO, _ZERO), (_ZERO, _ONE, _ZERO), (_ZERO, _ZERO, _ONE))
+
+
+def _split_ends(
+    elements: tuple[ET | Fixed, ...], whole_tool: bool
+) -> tuple[Fixed | None, tuple[ET | Fixed, ...], Fixed | None]:
+    """(base, chain, tool): a folded run before the first joint and after the last taken off the
+    chain (module docstring); without ``whole_tool`` the tool's translation stays on the chain."""
+    if not any(e.is_joint for e in elements):
+        return None, elements, None
+    base = elements[0] if isinstance(elements[0], Fixed) else None
+    tool = elements[-1] if isinstance(elements[-1], Fixed) else None
+    chain = list(elements[int(base is not None) : len(elements) - int(tool is not None)])
+    if tool is not None and not whole_tool:
+        if any(tool.t):
+            chain.append(Fixed(_IDENTITY, tool.t, tool.count, tool.digits))
+        tool = Fixed(tool.cols, (_ZERO, _ZERO, _ZERO), tool.count, tool.digits)
+    identity = (_IDENTITY, (_ZERO, _ZERO, _ZERO))
+    base = None if base is None or (base.cols, base.t) == identity else base
+    tool = None if tool is None or (tool.cols, tool.t) == identity else tool
+    return base, tuple(chain), tool
+
+
+def _pose_map(base: Fixed | None, tool: Fixed | None) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
+    """The pose symbols of ``T' = base^{-1} T tool^{-1}`` from the given target ``T``."""
+    if base is None and tool is None:
+        return ()
+    G, g = given_symbols()
+    T = sp.eye(4)
+    T[:3, :3], T[:3, 3] = G, g
+    if base is not None:
+        T = fixed_matrix(base.inverse()) * T
+    if tool is not None:
+        T = T * fixed_matrix(tool.inverse())
+    R, p = pose_symbols()
+    pairs = [(R[i, j], T[i, j]) for i in range(3) for j in range(3)] + [(p[i], T[i, 3]) for i in range(3)]
+    return tuple((sym, sp.expand(e)) for sym, e in pairs)
+
+
 def derive_analytic(robot: Robot) -> AnalyticIK:
     """Detect the arm's structure and derive its closed form; NoAnalyticIKError when there is none.
 
     A 6-joint arm whose structure only shows when the chain is read from the tool (three first
-    axes meeting in a point: a spherical shoulder) is solved reversed, for the target ``T^{-1}``."""
-    g0 = geometry(snap(robot.ets))
+    axes meeting in a point: a spherical shoulder) is solved reversed, for the target ``T^{-1}``.
+    Constant ends that fold are applied to the target (module docstring)."""
+    elements = fold_ik(snap(robot.ets))
+    base, chain, tool = _split_ends(elements, whole_tool=sum(e.is_joint for e in elements) == 6)
+    g0 = geometry(chain)
     g = g0
     try:
         s = classify(g)
@@ -605,4 +694,23 @@ def derive_analytic(robot: Robot) -> AnalyticIK:
     for k, j in enumerate(g.joint):
         rev[j] = g.revolute[k]
     fk = _fk(_Builder(g0))
-    return AnalyticIK(robot.name, g.n, s, g, tuple(b.steps), tuple(outputs), g.n < 6, fk, tuple(rev))
+    B = None if base is None else fixed_matrix(base)
+    E = None if tool is None else fixed_matrix(tool)
+    if B is not None or E is not None:
+        T = sp.Matrix(3, 4, fk).col_join(sp.Matrix([[0, 0, 0, 1]]))
+        T = (B if B is not None else sp.eye(4)) * T * (E if E is not None else sp.eye(4))
+        fk = tuple(T[i, j] for i in range(3) for j in range(4))
+    return AnalyticIK(
+        robot.name,
+        g.n,
+        s,
+        g,
+        tuple(b.steps),
+        tuple(outputs),
+        g.n < 6,
+        fk,
+        tuple(rev),
+        B,
+        E,
+        _pose_map(base, tool),
+    )

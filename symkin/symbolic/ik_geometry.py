@@ -13,25 +13,45 @@ snapping floating-point constants: a rotation constant within :data:`SNAP_TOL` r
 of pi/2 becomes that multiple, a translation within :data:`SNAP_TOL` m of 0 becomes 0, so a DH
 table written with ``1.5707963267948966`` is recognised as ``pi/2``. The closed form solves the
 snapped model; it differs from the model as written by at most about ``SNAP_TOL`` times the reach.
+
+Runs of constants that the kinematics fold (:func:`symkin.symbolic.fold.fold_constants`: two or
+more rotations by angles other than multiples of pi/2, such as fixed joints with rpy offsets, or
+long runs) are folded here too, into one transform whose inexact entries are
+:data:`IK_DIGITS`-digit Floats (exact where the product is exact): walked exactly, the cos/sin of
+their angles multiply out into expressions that grow with every rotation and that the
+derivation's expansions cannot finish. At 50 digits the exact tests (40 digits, zero below
+1e-25) decide as they would on the exact product.
 """
 
 from __future__ import annotations
 
 import math
+import random
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 
+import mpmath
 import sympy as sp
 
 from symkin.errors import NoAnalyticIKError
 from symkin.model.ets import ET, ETS, Const
+from symkin.symbolic.cse import _postorder
+from symkin.symbolic.fold import Fixed, fold_constants
 from symkin.symbolic.kinematics import const_to_sympy
 
 __all__ = [
     "SNAP_TOL",
+    "IK_DIGITS",
     "NoAnalyticIKError",
     "Geometry",
     "Structure",
+    "fold_ik",
+    "fixed_matrix",
+    "value_at",
+    "random_point",
+    "is_constant",
+    "same_value",
     "geometry",
     "classify",
     "snap",
@@ -40,6 +60,9 @@ __all__ = [
 
 SNAP_TOL = 1e-10  # rad or m: floating-point constants this close to k*pi/2 or to 0 are snapped
 _ZERO = sp.Float("1e-25", 40)  # |x| below this (40-digit evaluation of an exact value) counts as 0
+IK_DIGITS = 50  # significant digits of the inexact entries of a folded run of constants
+_PROBE_DIGITS = 60  # working precision of value_at
+_PROBE_TOL = mpmath.mpf("1e-30")  # relative: two probes closer than this are the same value
 
 Vec = tuple[sp.Expr, sp.Expr, sp.Expr]
 
@@ -90,12 +113,44 @@ def _rot(axis: int, angle: sp.Expr) -> sp.Matrix:
     return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-def geometry(ets: ETS) -> Geometry:
-    """Walk ``ets`` at q = 0 with exact constants (snap it first for floating-point data)."""
+def fold_ik(ets: ETS) -> tuple[ET | Fixed, ...]:
+    """``ets`` with the runs of constants that the kinematics fold folded into one :class:`Fixed`
+    each, its inexact entries to :data:`IK_DIGITS` digits (module docstring)."""
+    return fold_constants(ets, digits=IK_DIGITS)
+
+
+def fixed_matrix(f: Fixed) -> sp.Matrix:
+    """The 4x4 matrix of a folded run (Rationals where exact, else :data:`IK_DIGITS`-digit Floats)."""
+    cols, t = f.exprs
+    M = sp.eye(4)
+    for j in range(3):
+        for i in range(3):
+            M[i, j] = cols[j][i]
+        M[j, 3] = t[j]
+    return M
+
+
+def _number(x: sp.Expr) -> sp.Expr:
+    """``x`` as one number: itself when a Rational or Float, else evaluated to IK_DIGITS digits."""
+    return x if x.is_Rational or x.is_Float else sp.Float(sp.N(x, IK_DIGITS), IK_DIGITS)
+
+
+def geometry(ets: ETS | Iterable[ET | Fixed]) -> Geometry:
+    """Walk ``ets`` at q = 0 with exact constants (snap it first for floating-point data; fold it
+    with :func:`fold_ik` for runs of rotations). After a folded run the pose holds Floats: the
+    rotations that follow are evaluated to IK_DIGITS digits too, so no entry grows."""
     R = sp.eye(3)
     t = sp.zeros(3, 1)
     joint, rev, hs, ps = [], [], [], []
+    inexact = False
     for e in ets:
+        if isinstance(e, Fixed):
+            F = fixed_matrix(e)
+            t, R = t + R * F[:3, 3], R * F[:3, :3]
+            inexact = inexact or F.has(sp.Float)
+            if inexact:
+                t, R = t.applyfunc(_number), R.applyfunc(_number)
+            continue
         i = e.axis.index
         if e.is_joint:
             joint.append(int(e.joint))  # type: ignore[arg-type]
@@ -105,9 +160,16 @@ def geometry(ets: ETS) -> Geometry:
             continue
         value = const_to_sympy(e.const)  # type: ignore[arg-type]
         if e.axis.is_rotation:
-            R = sp.simplify(R * _rot(i, value)) if value != 0 else R
+            if value == 0:
+                continue
+            if inexact:
+                R = (R * _rot(i, value)).applyfunc(_number)
+            else:
+                R = sp.simplify(R * _rot(i, value))
         else:
             t = t + R[:, i] * value
+            if inexact:
+                t = t.applyfunc(_number)
     M = sp.eye(4)
     M[:3, :3] = R
     M[:3, 3] = t
@@ -139,6 +201,62 @@ def reverse(g: Geometry) -> Geometry:
 def is_zero(x: sp.Expr) -> bool:
     """True when the exact value ``x`` is 0 (evaluated to 40 digits)."""
     return bool(abs(sp.N(x, 40)) < _ZERO)
+
+
+def value_at(x: sp.Expr, point: Mapping[sp.Basic, Fraction | float | mpmath.mpf]) -> mpmath.mpf:
+    """``x`` at ``point`` (a number for each of its free symbols), to 60 digits; each distinct
+    subexpression is evaluated once (bottom-up, no recursion), so this costs the size of ``x`` as a
+    graph, not as a tree, and no expansion."""
+    memo: dict[sp.Basic, mpmath.mpf] = {}
+    with mpmath.workdps(_PROBE_DIGITS):
+        for e in _postorder([x]):
+            if e.is_Symbol:
+                x0 = point[e]
+                v = mpmath.mpf(x0.numerator) / x0.denominator if isinstance(x0, Fraction) else mpmath.mpf(x0)
+            elif e.is_Rational:
+                v = mpmath.mpf(int(e.p)) / int(e.q)
+            elif e.is_Float:
+                v = mpmath.mpf(e)
+            elif e.is_Add:
+                v = mpmath.fsum(memo[a] for a in e.args)
+            elif e.is_Mul:
+                v = mpmath.fprod(memo[a] for a in e.args)
+            elif e.is_Pow:
+                v = memo[e.args[0]] ** memo[e.args[1]]
+            elif not e.args:  # pi, E
+                v = mpmath.mpf(sp.N(e, _PROBE_DIGITS))
+            else:  # cos(3/10), atan2(..): evaluated by sympy from its arguments' values
+                args = (sp.Float(memo[a], _PROBE_DIGITS) for a in e.args)
+                v = mpmath.mpf(sp.N(e.func(*args), _PROBE_DIGITS))
+            memo[e] = v
+        return +memo[x]
+
+
+def random_point(symbols: Iterable[sp.Basic], seed: int) -> dict[sp.Basic, Fraction]:
+    """A reproducible random value in [-2, 2] for each symbol (by name)."""
+    rng = random.Random(seed)
+    return {s: Fraction(rng.randint(-(2**40), 2**40), 2**39) for s in sorted(symbols, key=str)}
+
+
+def same_value(a: mpmath.mpf, b: mpmath.mpf, sign: int = 1) -> bool:
+    """Whether ``a = sign * b`` to within 1e-30 (relative), for values of :func:`value_at` (at their
+    precision: mpmath's default would round them to doubles)."""
+    with mpmath.workdps(_PROBE_DIGITS):
+        return bool(abs(a - sign * b) <= _PROBE_TOL * (1 + max(abs(a), abs(b))))
+
+
+def is_constant(x: sp.Expr) -> bool | None:
+    """Whether ``x``, a polynomial-like expression in its free symbols taken as independent
+    variables, is constant: the same value at two random points (a non-constant one agrees at
+    random points with probability 0). Costs two evaluations, not an expansion. None when ``x``
+    cannot be evaluated there (a division by 0)."""
+    syms = x.free_symbols
+    if not syms:
+        return True
+    try:
+        return same_value(value_at(x, random_point(syms, 1)), value_at(x, random_point(syms, 2)))
+    except (ArithmeticError, ValueError):
+        return None
 
 
 def vzero(v: Vec) -> bool:

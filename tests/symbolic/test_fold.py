@@ -73,6 +73,51 @@ def test_quarter_turns_and_translations_stay_exact():
     assert t == (sp.Rational(1, 2), sp.Rational(1, 4), 0) and isinstance(R[0][0], sp.Float)
 
 
+def _exact_product(run) -> sp.Matrix:
+    M = sp.eye(4)
+    for e in run:
+        v, i = const_to_sympy(e.const), e.axis.index
+        T = sp.eye(4)
+        if e.axis.is_rotation:
+            j, k = {0: (1, 2), 1: (2, 0), 2: (0, 1)}[i]
+            T[j, j], T[j, k], T[k, j], T[k, k] = sp.cos(v), -sp.sin(v), sp.sin(v), sp.cos(v)
+        else:
+            T[i, 3] = v
+        M = M * T
+    return M
+
+
+def test_digits_fold_to_that_precision_and_keep_what_is_exact():
+    """The closed-form IK folds with digits=50: the product and its inverse to 50 digits (not 16),
+    the exact entries still exact."""
+    run = list(
+        ETS.parse("tx(0.01) ty(0.02) tz(0.03) Rz(0.3) Ry(0.2) Rx(0.1) Rz(pi/2) tz(atan2(1,3)) Rx(pi/4+0.1)")
+    )
+    f = Fixed.of(run, digits=50)
+    assert f.digits == 50
+    M = sp.eye(4)
+    cols, t = f.exprs
+    for j in range(3):
+        M[:3, j] = sp.Matrix(cols[j])
+    M[:3, 3] = sp.Matrix(t)
+    assert max(abs(sp.N(x, 60)) for x in M - _exact_product(run)) < 1e-48
+    assert all(x._prec > 160 for x in M.atoms(sp.Float))  # 50 digits, not a double
+    inv = f.inverse()
+    Mi = sp.eye(4)
+    cols, t = inv.exprs
+    for j in range(3):
+        Mi[:3, j] = sp.Matrix(cols[j])
+    Mi[:3, 3] = sp.Matrix(t)
+    assert max(abs(sp.N(x, 60)) for x in Mi * M - sp.eye(4)) < 1e-48
+    double = Fixed.of(run)  # without digits: doubles, as the kinematics use
+    assert double.digits is None and isinstance(double.cols[0][0], float)
+    assert abs(float(double.cols[0][0]) - float(f.cols[0][0])) < 1e-15
+    assert fold_constants(run, digits=50)[0].digits == 50 and fold_constants(run)[0].digits is None
+    f = Fixed.of(list(ETS.parse("tx(0.5) Rz(pi/2) tx(0.25) Rx(0.3) Ry(0.2)")), digits=50)
+    assert f.t == (Fraction(1, 2), Fraction(1, 4), 0) and all(isinstance(x, Fraction) for x in f.t)
+    assert f.cols[1][1] == 0 and isinstance(f.cols[1][1], Fraction)
+
+
 def test_which_runs_fold():
     tail = " ".join(["tx(0.01) Rz(pi/2)"] * 6)  # 12 exact transforms: more than one URDF joint holds
     ets = ETS.parse(f"tz(0.1) Rz(q0) tx(0.1) Rz(0.3) Ry(0.2) Rz(q1) tz(0.1) Rx(pi/2) Rz(-pi/4) Ry(q2) {tail}")

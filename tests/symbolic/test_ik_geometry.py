@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import pytest
 
 from symkin import DHLink, Robot, load
@@ -105,3 +107,37 @@ def test_reversed_chain_is_the_inverse_and_solves_a_spherical_shoulder():
         Tr = Tr @ G
     Tr = Tr @ np.array(r.M.evalf(), dtype=float)
     np.testing.assert_allclose(Tr, np.linalg.inv(T), atol=1e-12)
+
+
+def test_constant_and_mirror_tests_need_no_expansion():
+    """is_constant and the C body's mirror test decide at random points (then, exactly, by
+    expanding only what passes): a coefficient of an arm with general axes would expand to
+    thousands of terms."""
+    import sympy as sp
+
+    from symkin.emit.analytic_ik_c import _sign_under
+    from symkin.symbolic.ik_geometry import is_constant, value_at
+
+    c, s, r = sp.symbols("c0 s0 r11", real=True)
+    assert is_constant((c + s) ** 2 - c**2 - s**2 - 2 * c * s + sp.Rational(3, 2))
+    assert not is_constant(c**2 + s**2)  # 1 on the circle only: c and s are independent symbols here
+    assert is_constant(sp.cos(sp.Rational(3, 10)) * 2)
+    assert abs(value_at(sp.sqrt(2) * c - s, {c: 1, s: Fraction(1, 2)}) - (2**0.5 - 0.5)) < 1e-15
+    assert _sign_under(-r * s, {c: -c, s: -s}) == -1
+    assert _sign_under(c * s + r, {c: -c, s: -s}) == 1
+    assert _sign_under(c + s, {c: -c}) is None
+    big = sp.Float("0.3", 50) * c * s - sp.Float("0.3", 50) * s * c + r
+    assert _sign_under(big, {c: -c, s: -s}) == 1
+
+
+def test_geometry_after_a_folded_run_is_numeric_to_50_digits():
+    """A run of rotations between joints (two turns about the next joint's axis) folds to 50-digit
+    numbers: the structure tests still see the UR arm's parallel axes."""
+    import sympy as sp
+
+    from symkin.symbolic.ik_geometry import fold_ik
+
+    ur5 = str(load("ur5").ets).replace("Rz(q2)", "Rz(0.3) tx(0.01) Rz(0.2) Rz(q2)")
+    g = geometry(fold_ik(snap(Robot.from_ets(ur5, name="u").ets)))
+    assert any(x.has(sp.Float) for v in g.h for x in v)
+    assert classify(g).kind == "three_parallel"
