@@ -287,6 +287,11 @@ class Tree:
 
         return frame_view(self, self, frame)
 
+    def ik(self, Tep: Any, frame: Any = None, **kwargs: Any) -> Any:
+        """Numerical IK of one frame on the numeric reference (the other joints are free), as
+        :meth:`symkin.Robot.ik` for a chain: see :func:`symkin.runtime.ik.ik`."""
+        return self.select(frame).ik(Tep, **kwargs)
+
     def manipulability(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
         """Yoshikawa manipulability of ``frame`` (the chosen rows of its J0, Part 1 eq 52):
         float, or (N,) for a batch."""

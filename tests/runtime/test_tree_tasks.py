@@ -184,3 +184,14 @@ def test_frame_views_do_not_keep_compiled_trees_alive():
     del kin, view
     gc.collect()
     assert ref() is None
+
+
+@pytest.mark.parametrize("backend", ["reference", "numpy"])
+def test_the_tree_and_its_compiled_kinematics_both_have_ik_with_frame(backend):
+    """``Tree.ik`` exists like ``Robot.ik`` (it did on compiled trees only)."""
+    kin = ARM if backend == "reference" else symkin.compile(ARM, backend)
+    q_goal = ARM.random_q(seed=5)
+    Tep = ARM.fkine(q_goal, "l_foot")
+    res = kin.ik(Tep, frame="l_foot", q0=q_goal + 0.1, seed=2)
+    assert res.success, res.reason
+    assert np.abs(pose_error(ARM.fkine(res.q, "l_foot"), Tep)).max() < 1e-6
