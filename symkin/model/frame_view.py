@@ -83,21 +83,27 @@ class FrameView:
         return self.source.fkine_jacob0(q, frame=self.frame)
 
     def hessian0(self, q: Any) -> np.ndarray:
-        """Base-frame Hessian of the frame, (n, 6, n) or (N, n, 6, n) (see :meth:`symkin.Tree.hessian0`).
+        """Base-frame Hessian of the frame, (n, 6, n) or (N, n, 6, n) (see :meth:`symkin.Tree.hessian0`)."""
+        return self.jacob0_hessian0(q)[1]
 
-        From the compiled Jacobian when no mimic joint is on the path (its columns are then the
-        slots' own), else from the numeric reference."""
+    def jacob0_hessian0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """J0 and H0 of the frame. Generated (the C kernel's ``jacob0_hessian0``, Haviland and Corke,
+        Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 20) when the source
+        is compiled C and no mimic joint is on the path; else from the compiled Jacobian's columns
+        (mimic-free path) or the numeric reference."""
+        generated = getattr(getattr(self.source, "module", None), "jacob0_hessian0", None)
+        if generated is not None and self._plain:
+            out = generated(q, self.frame)
+            if out is not NotImplemented:
+                return out
         if not self._plain or self.source is self.tree:
-            return self.tree.hessian0(q, frame=self.frame)
+            return self.jacob0(q), self.tree.hessian0(q, frame=self.frame)
         Q, single = as_batch(q, self.n, self.name)
         J = np.asarray(self.jacob0(Q))
         Jv = np.swapaxes(J[:, :3, self._joints], 1, 2)
         Jw = np.swapaxes(J[:, 3:, self._joints], 1, 2)
         H = hessian_of_columns(Jv, Jw, self._slots, self.n)
-        return H[0] if single else H
-
-    def jacob0_hessian0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
-        return self.jacob0(q), self.hessian0(q)
+        return (J[0], H[0]) if single else (J, H)
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:
         """Yoshikawa manipulability of the chosen rows of the frame's J0 (eq 52)."""

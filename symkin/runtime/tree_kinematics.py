@@ -100,6 +100,11 @@ class TreeKinematics(CompiledModel):
         """Base-frame Hessian of ``frame``, (n, 6, n) or (N, n, 6, n) (see :meth:`symkin.Tree.hessian0`)."""
         return self.select(frame).hessian0(q)
 
+    def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """Base-frame Jacobian and Hessian of ``frame`` (generated on the C backend for a frame
+        without mimic joints on its path)."""
+        return self.select(frame).jacob0_hessian0(q)
+
     def manipulability(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
         """Yoshikawa manipulability of ``frame`` (the chosen rows of its J0, Part 1 eq 52):
         float, or (N,) for a batch."""

@@ -168,3 +168,31 @@ def test_trees_differing_only_in_limits_get_their_own_compiled_object(backend):
     assert np.array_equal(a.qlim, loose.qlim) and np.array_equal(b.qlim, tight.qlim)
     assert b.tree is tight and not np.array_equal(a.tree.velocity, b.tree.velocity, equal_nan=True)
     assert np.array_equal(b.select("l_foot").qlim, tight.qlim) and not np.array_equal(tight.qlim, loose.qlim)
+
+
+def test_c_trees_give_generated_hessians_checked_by_finite_differences():
+    """The C kernel's per-frame J0 and H0 (generated for frames without mimic joints) through the
+    extension module: H0 equals the reference's and the central differences of the compiled J0;
+    a frame with a mimic joint on its path falls back and still matches the reference."""
+    tree = Tree.from_urdf(QUADRUPED)
+    kin = symkin.compile(tree, "c")
+    Q = tree.random_q(6, seed=4)
+    h = 1e-6
+    for frame in tree.frames:
+        assert kin.module.jacob0_hessian0(Q[0], frame) is not NotImplemented  # generated for this frame
+        J, H = kin.jacob0_hessian0(Q, frame=frame)
+        assert_close(J, tree.jacob0(Q, frame), 1e-12, f"J0 of {frame}")
+        assert_close(H, tree.hessian0(Q, frame), 1e-12, f"H0 of {frame}")
+        for j in range(tree.n):
+            dq = np.zeros(tree.n)
+            dq[j] = h
+            fd = (kin.jacob0(Q + dq, frame=frame) - kin.jacob0(Q - dq, frame=frame)) / (2 * h)
+            assert_close(H[:, j], fd, 1e-7, f"dJ0/dq{j} of {frame}")
+        H1 = kin.hessian0(Q[0], frame=frame)
+        assert H1.shape == (tree.n, 6, tree.n)
+        assert_close(H1, H[0], 0.0, "one configuration is the batch's first")
+    mimic = Tree.from_urdf(GRIPPER)
+    kin_m = symkin.compile(mimic, "c")
+    Qm = mimic.random_q(3, seed=5)
+    for frame in mimic.frames:
+        assert_close(kin_m.hessian0(Qm, frame=frame), mimic.hessian0(Qm, frame), 1e-12, f"H0 of {frame}")
