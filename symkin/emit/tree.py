@@ -4,7 +4,7 @@
 One generated function per entry point, each the straight-line code its outputs need: the
 ``*_all`` functions walk the whole tree once, the per-frame functions only the path to their
 frame. Frame names enter generated code only as escaped string literals (C, or ``ascii`` in Python)
-and as :func:`~symkin.emit.templates.comment_safe` text in comments.
+and as :func:`~symkin.core.names.comment_safe` text in comments.
 """
 
 from __future__ import annotations

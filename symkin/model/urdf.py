@@ -179,7 +179,7 @@ def _numbers(
 
 
 #: The largest |value| of a URDF length or angle (origin xyz and rpy, mimic multiplier and offset),
-#: the bound of joint values (:data:`symkin.model.robot.MAX_JOINT_VALUE`): beyond it a double
+#: the bound of joint values (:data:`symkin.core.arrays.MAX_JOINT_VALUE`): beyond it a double
 #: resolves an angle to worse than 0.1 rad, and sums and squares of lengths along a chain head
 #: for overflow (inf in the kinematics instead of an error here).
 MAX_URDF_VALUE = 1e15

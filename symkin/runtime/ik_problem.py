@@ -208,7 +208,7 @@ def revolute_mask(kin: Any) -> np.ndarray:
 
 
 def sample_range(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """(2, n) range random restarts are drawn from (:func:`symkin.model.robot.sample_bounds`)."""
+    """(2, n) range random restarts are drawn from (:func:`symkin.core.arrays.sample_bounds`)."""
     return sample_bounds(qlim, revolute)
 
 

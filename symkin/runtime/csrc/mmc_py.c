@@ -200,7 +200,7 @@ static PyObject *py_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     Py_DECREF(q);
     Py_DECREF(nu);
     for (int i = 0; i < NQ; ++i)
-        if (!(fabs(in[i]) <= 1e15)) /* symkin.model.robot.MAX_JOINT_VALUE (NaN too) */
+        if (!(fabs(in[i]) <= 1e15)) /* symkin.core.arrays.MAX_JOINT_VALUE (NaN too) */
             Py_RETURN_NONE;
     if (fn(c, in, out))
         Py_RETURN_NONE; /* q or nu not finite */

@@ -96,7 +96,7 @@ done:
 /* arg as a C-contiguous, aligned, native float64 array of shape (d0,) (nd 1) or (d0, d1) (nd 2), or
  * NULL without an error set when it is anything else. Only arrays of booleans, integers or floats
  * convert here (exact casts): anything else (lists, long double, complex, strings, objects) gives
- * NULL, and the caller's Python checks (symkin.model.robot.real_array) convert it or raise. */
+ * NULL, and the caller's Python checks (symkin.core.arrays.real_array) convert it or raise. */
 static PyArrayObject *as_doubles_(PyObject *arg, int nd, npy_intp d0, npy_intp d1)
 {
     PyArrayObject *a;
@@ -147,7 +147,7 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
     if (q0arg != Py_None) {
         q0 = as_doubles_(q0arg, 1, n, 0);
         int ok = q0 != NULL;
-        for (int j = 0; ok && j < n; ++j) /* joint values: symkin.model.robot.MAX_JOINT_VALUE */
+        for (int j = 0; ok && j < n; ++j) /* joint values: symkin.core.arrays.MAX_JOINT_VALUE */
             ok = fabs(((const double *)PyArray_DATA(q0))[j]) <= 1e15;
         if (!ok) {
             Py_DECREF(T);
