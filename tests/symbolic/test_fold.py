@@ -24,8 +24,8 @@ from symkin.symbolic.kinematics import ExpansionTooLargeError, const_to_sympy, d
 from symkin.symbolic.program import derive_program
 from symkin.symbolic.tree_program import derive_tree_program
 from tests.conftest import assert_close
-from tests.symbolic.test_kinematics import _evaluate
-from tests.symbolic.test_program import evaluator
+from tests.symbolic.test_kinematics import assert_expanded_matches_reference
+from tests.symbolic.test_program import assert_program_matches_reference, evaluator
 
 URDFS = synthetic_urdfs()
 
@@ -154,13 +154,7 @@ def test_program_sees_one_folded_constant_per_run_and_matches_the_reference(name
         assert len(kp.lines) == size if name == "arm6_fixed2000.urdf" else len(kp.lines) < size
     f = evaluator(kp)
     for q in robot.random_q(3, seed=7):
-        got = f(q)
-        assert_close(got["T"][0], robot.fkine(q), 1e-12, "T")
-        assert_close(got["links"], robot.link_poses(q), 1e-12, "links")
-        assert_close(got["J0"][0], robot.jacob0(q), 1e-12, "J0")
-        assert_close(got["Je"][0], robot.jacobe(q), 1e-12, "Je")
-        assert_close(got["H0"], robot.hessian0(q), 1e-10, "H0")
-        assert_close(got["He"], robot.hessiane(q), 1e-10, "He")
+        assert_program_matches_reference(f(q), robot, q)
 
 
 def test_expanded_form_sees_folded_constants_and_matches_the_reference():
@@ -170,12 +164,7 @@ def test_expanded_form_sees_folded_constants_and_matches_the_reference():
     assert sk.T.atoms(sp.Float)  # the rpy rotations, rounded once
     assert _trig_of_numbers(derive(Robot.from_ets("Rz(q0) Rz(0.3) Ry(0.2)")).T)  # unfolded: exact
     for q in robot.random_q(2, seed=8):
-        T, J0, Je, H0, He = _evaluate(sk, q)
-        assert_close(T, robot.fkine(q), 1e-12, "T")
-        assert_close(J0, robot.jacob0(q), 1e-12, "J0")
-        assert_close(Je, robot.jacobe(q), 1e-12, "Je")
-        assert_close(H0, robot.hessian0(q), 1e-10, "H0")
-        assert_close(He, robot.hessiane(q), 1e-10, "He")
+        assert_expanded_matches_reference(sk, robot, q)
 
 
 def test_tree_walks_a_chain_of_fixed_links_as_one_transform():

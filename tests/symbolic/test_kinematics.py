@@ -22,18 +22,23 @@ def _evaluate(sk, q):
     return out[0], out[1], out[2], np.array(out[3 : 3 + n]), np.array(out[3 + n :])
 
 
+def assert_expanded_matches_reference(sk, robot, q):
+    """The expanded derivation ``sk`` at ``q``: T, J0, Je, H0, He against the numeric reference."""
+    T, J0, Je, H0, He = _evaluate(sk, q)
+    assert_close(T, robot.fkine(q), 1e-12, "T")
+    assert_close(J0, robot.jacob0(q), 1e-12, "J0")
+    assert_close(Je, robot.jacobe(q), 1e-12, "Je")
+    assert_close(H0, robot.hessian0(q), 1e-10, "H0")
+    assert_close(He, robot.hessiane(q), 1e-10, "He")
+
+
 @pytest.mark.parametrize("name", list_robots())
 def test_derivation_matches_numeric_reference(name):
     robot = load(name)
     sk = derive(robot)
     for seed in range(3):
         q = robot.random_q(seed=seed)
-        T, J0, Je, H0, He = _evaluate(sk, q)
-        assert_close(T, robot.fkine(q), 1e-12, "T")
-        assert_close(J0, robot.jacob0(q), 1e-12, "J0")
-        assert_close(Je, robot.jacobe(q), 1e-12, "Je")
-        assert_close(H0, robot.hessian0(q), 1e-10, "H0")
-        assert_close(He, robot.hessiane(q), 1e-10, "He")
+        assert_expanded_matches_reference(sk, robot, q)
 
 
 def test_symbolic_jacobian_is_the_derivative_of_the_symbolic_pose():

@@ -58,18 +58,23 @@ def _program(robot: Robot, hessians: bool = True) -> KinematicProgram:
     return derive_program(robot.ets, joint_symbols(robot.n), const_to_sympy, robot.name, hessians)
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(robot=random_robots(), seed=st.integers(0, 2**16))
-def test_program_matches_the_numeric_reference(robot, seed):
-    kp = _program(robot)
-    q = robot.random_q(seed=seed)
-    got = evaluate(kp, q)
+def assert_program_matches_reference(got, robot, q):
+    """An evaluated program ``got`` at ``q``: T, link poses, J0, Je, H0, He against the numeric reference."""
     assert_close(got["T"][0], robot.fkine(q), 1e-12, "T")
     assert_close(got["links"], robot.link_poses(q), 1e-12, "links")
     assert_close(got["J0"][0], robot.jacob0(q), 1e-12, "J0")
     assert_close(got["Je"][0], robot.jacobe(q), 1e-12, "Je")
     assert_close(got["H0"], robot.hessian0(q), 1e-10, "H0")
     assert_close(got["He"], robot.hessiane(q), 1e-10, "He")
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(robot=random_robots(), seed=st.integers(0, 2**16))
+def test_program_matches_the_numeric_reference(robot, seed):
+    kp = _program(robot)
+    q = robot.random_q(seed=seed)
+    got = evaluate(kp, q)
+    assert_program_matches_reference(got, robot, q)
 
 
 @pytest.mark.parametrize("n", [9, 20])
