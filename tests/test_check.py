@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.check.chain import check
+from symkin.check.kinematics import check
 from symkin.model.robots import list_robots, load
 from symkin.runtime.kinematics import KIN_METHODS
 
@@ -44,7 +44,7 @@ def test_a_deliberately_broken_backend_fails_loudly(method, delta):
 
 
 def test_check_command_exits_1_when_a_backend_is_broken(monkeypatch, capsys):
-    import symkin.check.chain as check_module
+    import symkin.check.kinematics as check_module
     from symkin.cli.main import main
 
     real_check = check_module.check

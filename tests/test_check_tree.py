@@ -1,16 +1,27 @@
-"""`symkin check` of a tree covers every generated function, the C controllers' ones included."""
+"""`symkin check` of a tree: every chain row for each frame, the *_all functions, the C controllers' ones."""
 
 from __future__ import annotations
 
 from symkin import Tree
-from symkin.check.tree import check_tree
+from symkin.check.kinematics import check
 from tests.model.tree_urdfs import DUAL_ARM
 
 
 def test_check_tree_covers_hessians_manipulability_and_the_c_controller_functions():
-    report = check_tree(Tree.from_urdf(DUAL_ARM), backends=("c", "numpy"), samples=3)
+    report = check(Tree.from_urdf(DUAL_ARM), backends=("c", "numpy"), samples=3)
     names = {(r.backend, r.function) for r in report.rows}
     for backend in ("c", "numpy"):
-        assert {(backend, "hessian0(frame)"), (backend, "manipulability(frame)")} <= names
+        for fn in (
+            "hessian0",
+            "hessiane",
+            "jacobm:all",
+            "jacob0_dot",
+            "fkine_jacob0_all",
+            "hessian0 (large q)",
+        ):
+            assert (backend, fn) in names, fn
+        assert (
+            next(r for r in report.rows if r.backend == backend and r.function == "hessian0").fd_error < 1e-6
+        )
     assert {("c", "C jacob0_hessian0_<k>"), ("c", "C manipulability_<k>")} <= names
     assert report.ok, report.format()

@@ -30,18 +30,12 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.check.chain import check
-    from symkin.model.tree import Tree
+    from symkin.check.kinematics import check
 
     robot = chain_or_tree(args)
     backends = args.backend or BACKENDS
     for b in args.backend or ("c",):
         check_cflags_for(b)
-    if isinstance(robot, Tree):
-        from symkin.check.tree import check_tree
-
-        report = check_tree(robot, backends=backends, samples=args.samples, seed=args.seed)
-    else:
-        report = check(robot, backends=backends, samples=args.samples, seed=args.seed)
+    report = check(robot, backends=backends, samples=args.samples, seed=args.seed)
     print(json.dumps(report.as_dict(), indent=2) if args.json else report.format())
     return 0 if report.ok else 1

@@ -67,6 +67,12 @@ def _frame_fns(tree: Any) -> dict[str, list[str]]:
     return {base: [f"{base}_{k}" for k in range(len(tree.frames))] for base in PER_FRAME}
 
 
+def _paths(tree: Any) -> list[list[int] | None]:
+    """Per frame: the joints on its path, base first, or None when a mimic joint is on it."""
+    plain = dict(plain_paths(tree))
+    return [plain.get(k) for k in range(len(tree.frames))]
+
+
 def plain_paths(tree: Any) -> list[tuple[int, list[int]]]:
     """(frame index, joint indices on its path, base first) of every frame whose path has no mimic
     joint: its Jacobian columns are the joints' own, so H follows from J (the C controllers' case)."""
@@ -143,6 +149,7 @@ def render_tree(
             frame_literals=[ascii(f) for f in tree.frames],
             frame_fns=_frame_fns(tree),
             framed_docs=FRAMED_DOCS,
+            paths=_paths(tree),
         )
         return {f"{module}.py": text}
     from symkin.emit.printers import CasADiPrinter

@@ -1,11 +1,13 @@
-"""One frame of a kinematic tree seen as a serial chain: what IK, servo and MMC take.
+"""One frame of a model seen as a serial chain: what IK, servo and MMC take.
 
 ``ik(tree, Tep, frame="left_hand")`` solves for all n joints of the tree with the task on one
 frame; the joints off that frame's path have zero Jacobian columns and stay where they start
-(the damping of LM keeps its step defined). A :class:`FrameView` has the chain interface
-(``n``, ``qlim``, ``qd_max``, ``revolute``, ``fkine``, ``jacob0``, ``jacobe``, ``hessian0``,
-``manipulability``, ``jacobm``, ``ik``) over either the numeric reference :class:`symkin.Tree`
-or compiled tree kinematics.
+(the damping of LM keeps its step defined). The same holds for link frame k of a chain
+(``frame=k``). A :class:`FrameView` has the chain interface (``n``, ``qlim``, ``qd_max``,
+``revolute``, ``fkine``, ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``hessian0``,
+``jacob0_hessian0``, ``manipulability``, ``jacobm``, ``ik``) over any kinematics whose methods take
+``frame=``: the numeric references :class:`symkin.Robot` and :class:`symkin.Tree` or compiled
+:class:`symkin.Kinematics`.
 """
 
 from __future__ import annotations
@@ -14,51 +16,45 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_batch, axes_rows
-from symkin.model.robot import jacobm_of, manipulability_of
-from symkin.model.slots import hessian_of_columns
-
 __all__ = ["FrameView", "frame_view"]
 
 
-def frame_view(tree: Any, source: Any, frame: Any) -> FrameView:
-    """The (memoised) view of ``frame`` of ``source`` (a Tree or compiled tree kinematics).
+def frame_view(model: Any, source: Any, frame: Any) -> FrameView:
+    """The (memoised) view of ``frame`` of ``source`` (``model`` or its compiled kinematics).
 
     The views live in ``source._frame_views``: a reference cycle (view -> source -> views) that
     the garbage collector frees with the source, where a module-level map would keep it alive."""
-    name = tree.frames[tree.frame_position(frame)]
+    key = model.frame_name(frame)
     views = getattr(source, "_frame_views", None)
     if views is None:
         views = {}
         try:
             object.__setattr__(source, "_frame_views", views)  # frozen dataclasses too
         except (AttributeError, TypeError):  # no instance dict: an unmemoised view
-            return FrameView(tree, source, name)
-    view = views.get(name)
+            return FrameView(model, source, key)
+    view = views.get(key)
     if view is None:
-        view = views[name] = FrameView(tree, source, name)
+        view = views[key] = FrameView(model, source, key)
     return view
 
 
 class FrameView:
-    """Frame ``frame`` of a tree as chain kinematics of all its ``n`` joints (module docstring)."""
+    """Frame ``frame`` (a tree's frame name or a chain's link index) of ``source`` as chain
+    kinematics of all the model's ``n`` joints (module docstring)."""
 
-    def __init__(self, tree: Any, source: Any, frame: str) -> None:
-        self.tree, self.source, self.frame = tree, source, frame
-        self.n = tree.n
-        self.qlim = tree.qlim
-        self.qd_max = tree.qd_max
-        self.revolute = tree.revolute
-        self.joint_names = tree.joint_names
-        self.name = f"{tree.name}:{frame}"
+    def __init__(self, model: Any, source: Any, frame: Any) -> None:
+        self.tree, self.source, self.frame = model, source, frame
+        self.n = model.n
+        self.qlim = model.qlim
+        self.qd_max = model.qd_max
+        self.revolute = model.revolute
+        self.joint_names = model.joint_names
+        self.name = f"{model.name}:{frame}"
         self.backend = getattr(source, "backend", "reference")
-        slots = [tree.slots[k] for k in tree.path_slots(frame)]
-        self._slots = slots
-        self._joints = [s.joint for s in slots]
-        self._plain = not any(s.is_mimic for s in slots)  # J's columns are the slots' columns
-        fkjac = getattr(source, "c_fkjac_of", None)
-        if fkjac is not None:
-            self.c_fkjac = fkjac(frame)
+        fkjac_of = getattr(source, "c_fkjac_of", None)
+        fkjac = fkjac_of(frame) if fkjac_of is not None else None
+        if fkjac is not None:  # the C IK loop's kinematics (symkin.runtime.ik_c)
+            self.c_fkjac = fkjac
         controller_fns = getattr(source, "c_controller_functions", None)
         fns = controller_fns(frame) if controller_fns is not None else None
         if fns is not None:  # the C controllers' functions (symkin.runtime.mmc_c.kinematics_functions)
@@ -68,56 +64,34 @@ class FrameView:
         return f"FrameView({self.name!r}, n={self.n}, backend={self.backend!r})"
 
     def fkine(self, q: Any) -> np.ndarray:
-        """Pose of the frame in the base-link frame, (4, 4) or (N, 4, 4)."""
-        return self.source.fkine(q, frame=self.frame)
+        """Pose of the frame in the base frame, (4, 4) or (N, 4, 4)."""
+        return self.source.fkine(q, self.frame)
 
     def jacob0(self, q: Any) -> np.ndarray:
         """Base-frame Jacobian of the frame, (6, n) or (N, 6, n)."""
-        return self.source.jacob0(q, frame=self.frame)
+        return self.source.jacob0(q, self.frame)
 
     def jacobe(self, q: Any) -> np.ndarray:
         """Jacobian of the frame in the frame itself, (6, n) or (N, 6, n)."""
-        return self.source.jacobe(q, frame=self.frame)
+        return self.source.jacobe(q, self.frame)
 
     def fkine_jacob0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
-        return self.source.fkine_jacob0(q, frame=self.frame)
+        return self.source.fkine_jacob0(q, self.frame)
 
     def hessian0(self, q: Any) -> np.ndarray:
-        """Base-frame Hessian of the frame, (n, 6, n) or (N, n, 6, n) (see :meth:`symkin.Tree.hessian0`)."""
-        return self.jacob0_hessian0(q)[1]
+        """Base-frame Hessian of the frame, (n, 6, n) or (N, n, 6, n)."""
+        return self.source.hessian0(q, self.frame)
 
     def jacob0_hessian0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
-        """J0 and H0 of the frame. Generated (the C kernel's ``jacob0_hessian0``, Haviland and Corke,
-        Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 20) when the source
-        is compiled C and no mimic joint is on the path; else from the compiled Jacobian's columns
-        (mimic-free path) or the numeric reference."""
-        generated = getattr(getattr(self.source, "module", None), "jacob0_hessian0", None)
-        if generated is not None and self._plain:
-            out = generated(q, self.frame)
-            if out is not NotImplemented:
-                return out
-        if not self._plain or self.source is self.tree:
-            return self.jacob0(q), self.tree.hessian0(q, frame=self.frame)
-        Q, single = as_batch(q, self.n, self.name)
-        J = np.asarray(self.jacob0(Q))
-        Jv = np.swapaxes(J[:, :3, self._joints], 1, 2)
-        Jw = np.swapaxes(J[:, 3:, self._joints], 1, 2)
-        H = hessian_of_columns(Jv, Jw, self._slots, self.n)
-        return (J[0], H[0]) if single else (J, H)
+        return self.source.jacob0_hessian0(q, self.frame)
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:
         """Yoshikawa manipulability of the chosen rows of the frame's J0 (eq 52)."""
-        Q, single = as_batch(q, self.n, self.name)
-        m = manipulability_of(np.asarray(self.jacob0(Q))[:, axes_rows(axes)])
-        return float(m[0]) if single else m
+        return self.source.manipulability(q, self.frame, axes)
 
     def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:
         """Manipulability Jacobian of the frame (Haviland and Corke, 2020, eq 11), (n,) or (N, n)."""
-        rows = axes_rows(axes)
-        Q, single = as_batch(q, self.n, self.name)
-        J, H = self.jacob0(Q), self.hessian0(Q)
-        Jm = jacobm_of(np.asarray(J)[:, rows], np.asarray(H)[:, :, rows])
-        return Jm[0] if single else Jm
+        return self.source.jacobm(q, self.frame, axes)
 
     def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
         return self.tree.random_q(N, seed)

@@ -1,5 +1,6 @@
-"""Link frames of a serial chain at run time (NumPy only): validating a ``frame`` argument and the
-Jacobian of a link frame from the link poses.
+"""Link frames of a serial chain at run time (NumPy only): validating a ``frame`` argument, the
+Jacobian of a link frame from the link poses, and :class:`LinkFrames`, every method of a link frame
+from the generated ``fkine(q, frame=k)`` and ``jacob0(q, frame=k)``.
 
 Link frame ``k`` is the frame right after the k-th joint along the chain, ``link_poses(q)[k]``
 (chain order; for every built-in and imported robot the k-th joint along the chain is joint k).
@@ -13,8 +14,9 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import FrameError
+from symkin.model.differential import FrameMethods, chain_hessian, rotate_rows
 
-__all__ = ["frame_index", "ChainTables", "frame_jacobian"]
+__all__ = ["frame_index", "ChainTables", "frame_jacobian", "LinkFrames"]
 
 
 def frame_index(frame: Any, n: int, name: str = "robot") -> int:
@@ -82,3 +84,33 @@ def frame_jacobian(L: np.ndarray, k: int, chain: ChainTables, ee: bool = False) 
     J[:, :3, cols] = np.swapaxes(v, 1, 2)
     J[:, 3:, cols] = np.swapaxes(o, 1, 2)
     return J
+
+
+class LinkFrames(FrameMethods):
+    """The methods of the link frames of a compiled chain (``hessian0(q, frame=k)``, ``jacobm``...)
+    from its generated ``fkine(q, frame)`` and ``jacob0(q, frame)``: what the generated functions
+    without code of their own for ``frame=k`` call. ``order[k]``: the joint met k-th from the base."""
+
+    def __init__(self, n: int, name: str, fkine: Any, jacob0: Any, order: Any) -> None:
+        self.n, self.name = n, name
+        self._fkine, self._jacob0, self._order = fkine, jacob0, tuple(order)
+
+    def fkine(self, q: Any, frame: Any = None) -> np.ndarray:
+        return self._fkine(q, frame)
+
+    def jacob0(self, q: Any, frame: Any = None) -> np.ndarray:
+        return self._jacob0(q, frame)
+
+    def fkine_jacob0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        return self._fkine(q, frame), self._jacob0(q, frame)
+
+    def jacobe(self, q: Any, frame: Any = None) -> np.ndarray:
+        Q, single = self._batch(q)
+        Je = rotate_rows(self._fkine(Q, frame), self._jacob0(Q, frame))
+        return Je[0] if single else Je
+
+    def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        Q, single = self._batch(q)
+        J = self._jacob0(Q, frame)
+        H = chain_hessian(J, self._order)
+        return (J[0], H[0]) if single else (J, H)

@@ -22,12 +22,20 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import MAX_JOINT_VALUE, Axes, as_batch, axes_rows, real_array, sample_q
+from symkin.core.arrays import MAX_JOINT_VALUE, as_batch, axes_rows, real_array, sample_q  # noqa: F401 - generated C imports axes_rows here
 from symkin.core.names import identifier
 from symkin.errors import ConfigurationError, RobotError
+from symkin.model.differential import (  # noqa: F401 - re-exported
+    FrameMethods,
+    chain_hessian,
+    cond_of,
+    jacob_dot_of,
+    rotate_rows,
+    space_jacobian,
+)
 from symkin.model.ets import ETS
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
-from symkin.model.kinematics import NumericKinematics, cross
+from symkin.model.kinematics import NumericKinematics
 
 __all__ = [
     "Robot",
@@ -44,7 +52,7 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Robot:
+class Robot(FrameMethods):
     """A serial manipulator described by an ETS.
 
     Attributes:
@@ -308,8 +316,16 @@ class Robot:
         """Uniform random configurations within qlim: (n,) or (N, n). An infinite bound (or one
         beyond +-MAX_JOINT_VALUE) is replaced by one turn (revolute) or 2 m (prismatic) beyond the
         other bound, or +-pi / +-1 m around 0 (:func:`sample_q`)."""
-        revolute = np.array([e.is_revolute for e in self.ets.joints], dtype=bool)
-        return sample_q(self.qlim, revolute, N, seed)
+        return sample_q(self.qlim, self.revolute, N, seed)
+
+    @property
+    def revolute(self) -> np.ndarray:
+        """(n,) bool: which joints are revolute (by joint index)."""
+        return np.array([e.is_revolute for e in self.ets.joints], dtype=bool)
+
+    def frame_name(self, frame: Any) -> int:
+        """``frame`` as the index k of a link frame (FrameError naming the valid range)."""
+        return frame_index(frame, self.n, self.name)
 
     # -- numeric reference kinematics (Part 1 eqs 1, 14-16, 31-34) ------------------------
     def fkine(self, q: Any, frame: int | None = None) -> np.ndarray:
@@ -363,86 +379,52 @@ class Robot:
             Je = frame_jacobian(self._num.link_poses(Q), k, self._chain, ee=True)
         else:
             T, J = self._num.fkine_jacob0(Q)
-            Je = _rotate_rows(T, J)
+            Je = rotate_rows(T, J)
         return Je[0] if single else Je
 
-    def fkine_jacob0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+    def fkine_jacob0(self, q: Any, frame: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Pose and base-frame Jacobian from one pass: ((4, 4), (6, n)) or batched."""
         Q, single = self._batch(q)
-        T, J = self._num.fkine_jacob0(Q)
+        if frame is not None:
+            T, J = self.fkine(Q, frame), self.jacob0(Q, frame)
+        else:
+            T, J = self._num.fkine_jacob0(Q)
         return (T[0], J[0]) if single else (T, J)
 
-    def jacob0_hessian0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
-        """Base-frame Jacobian and Hessian from one pass: ((6, n), (n, 6, n)) or batched."""
+    def jacob0_hessian0(self, q: Any, frame: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Base-frame Jacobian and Hessian from one pass: ((6, n), (n, 6, n)) or batched. ``frame=k``:
+        of link frame k, the Hessian from the Jacobian's columns (MMC paper eq 20)."""
         Q, single = self._batch(q)
-        _, J, H = self._num.jacob0_hessian0(Q)
+        if frame is not None:
+            J = self.jacob0(Q, frame)
+            H = chain_hessian(J, self._chain.order)
+        else:
+            _, J, H = self._num.jacob0_hessian0(Q)
         return (J[0], H[0]) if single else (J, H)
 
-    def hessian0(self, q: Any) -> np.ndarray:
+    def hessian0(self, q: Any, frame: int | None = None) -> np.ndarray:
         """Base-frame manipulator Hessian (MMC paper eq 20): (n, 6, n) or (N, n, 6, n), H[i] = dJ0/dq_i."""
+        if frame is not None:
+            return self.jacob0_hessian0(q, frame)[1]
         Q, single = self._batch(q)
         H = self._num.hessian0(Q)
         return H[0] if single else H
 
-    def hessiane(self, q: Any) -> np.ndarray:
-        """End-effector-frame Hessian, ``He[i] = dJe/dq_i = blkdiag(R^T)(H0[i] - blkdiag([w_i]x) J0)``."""
-        Q, single = self._batch(q)
-        T, J, H = self._num.jacob0_hessian0(Q)
-        He = hessian_to_ee(T, J, H)
-        return He[0] if single else He
-
-    def manipulability(self, q: Any, axes: Axes = "all") -> np.ndarray | float:
-        """Yoshikawa manipulability ``sqrt(det(J J^T))`` (eq 52) of the chosen rows of J0."""
-        rows = axes_rows(axes)
-        Q, single = self._batch(q)
-        m = manipulability_of(self._num.jacob0(Q)[:, rows])
-        return float(m[0]) if single else m
-
-    def jacobm(self, q: Any, axes: Axes = "all") -> np.ndarray:
-        """Manipulability Jacobian dm/dq (MMC paper eq 11): (n,) or (N, n)."""
-        rows = axes_rows(axes)
-        Q, single = self._batch(q)
-        _, J, H = self._num.jacob0_hessian0(Q)
-        Jm = jacobm_of(J[:, rows], H[:, :, rows])
-        return Jm[0] if single else Jm
-
-    def cond(self, q: Any, axes: Axes = "all") -> np.ndarray | float:
-        """Condition number sigma_max / sigma_min of the chosen rows of J0 (eq 53); inf when singular
-        (see :func:`cond_of`)."""
-        rows = axes_rows(axes)
-        Q, single = self._batch(q)
-        c = cond_of(self._num.jacob0(Q)[:, rows])
-        return float(c[0]) if single else c
-
-    def ik(self, Tep: Any, **kwargs: Any) -> Any:
-        """Numerical IK on the numeric reference (slow; compile for speed): :func:`symkin.runtime.ik.ik`."""
+    def ik(self, Tep: Any, frame: int | None = None, **kwargs: Any) -> Any:
+        """Numerical IK on the numeric reference (slow; compile for speed): :func:`symkin.runtime.ik.ik`;
+        ``frame=k`` solves for link frame k."""
         from symkin.runtime.ik import ik
 
-        return ik(self, Tep, **kwargs)
+        return ik(self, Tep, frame=frame, **kwargs)
 
-    def jacobs(self, q: Any) -> np.ndarray:
-        """Space Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows
-        (omega, v_s), v_s = v_e - omega x p_e."""
-        Q, single = self._batch(q)
-        Js = space_jacobian(*self._num.fkine_jacob0(Q))
-        return Js[0] if single else Js
+    def select(self, frame: int | None = None) -> Any:
+        """The robot itself (``frame=None``: the end effector) or its link frame k as chain
+        kinematics of all n joints, for IK, servo and MMC (:class:`symkin.model.frame_view.FrameView`)."""
+        if frame is None:
+            return self
+        from symkin.model.frame_view import frame_view
 
-    def jacobb(self, q: Any) -> np.ndarray:
-        """Body Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows (omega, v)
-        in the end-effector frame."""
-        Je = self.jacobe(q)
-        return np.concatenate((Je[..., 3:, :], Je[..., :3, :]), axis=-2)
-
-    def jacob0_dot(self, q: Any, qd: Any) -> np.ndarray:
-        """Time derivative of the base-frame Jacobian, ``dJ0/dt = sum_i H0[i] qd_i`` (Haviland and
-        Corke, Manipulator Differential Kinematics, Part 2, 2023; roboticstoolbox's ``jacob0_dot``):
-        (6, n), or (N, 6, n) for q and qd of shape (N, n). Rows (v, omega)."""
-        Q, single = self._batch(q)
-        Qd, _ = as_batch(qd, self.n, self.name, "qd")
-        if Qd.shape[0] != Q.shape[0]:
-            raise ConfigurationError(f"q and qd hold {Q.shape[0]} and {Qd.shape[0]} configurations")
-        Jd = jacob_dot_of(self._num.hessian0(Q), Qd)
-        return Jd[0] if single else Jd
+        return frame_view(self, self, frame)
 
     # -- notebook and plot -----------------------------------------------------------------
     def _repr_markdown_(self) -> str:
@@ -458,81 +440,3 @@ class Robot:
         from symkin.model.plot import plot_robot
 
         return plot_robot(self, q, **kwargs)
-
-
-def _rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """blkdiag(R^T, R^T) @ J for batches: T (N, 4, 4), J (N, 6, k) or (N, m, 6, k)."""
-    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
-    if J.ndim == 4:
-        Rt = Rt[:, None]
-    return np.concatenate((Rt @ J[..., :3, :], Rt @ J[..., 3:, :]), axis=-2)
-
-
-def hessian_to_ee(T: np.ndarray, J: np.ndarray, H: np.ndarray) -> np.ndarray:
-    """End-effector-frame Hessian from base-frame T (N,4,4), J (N,6,n), H (N,n,6,n)."""
-    wi = np.swapaxes(J[:, 3:], 1, 2)[:, :, None, :]  # (N, i, 1, 3): omega_i
-    Jv = np.swapaxes(J[:, :3], 1, 2)[:, None]  # (N, 1, a, 3)
-    Jw = np.swapaxes(J[:, 3:], 1, 2)[:, None]
-    cv = np.swapaxes(cross(wi, Jv), 2, 3)  # (N, i, 3, a): omega_i x Jv_a
-    cw = np.swapaxes(cross(wi, Jw), 2, 3)
-    D = H - np.concatenate((cv, cw), axis=2)
-    return _rotate_rows(T, D)
-
-
-def cond_of(J: np.ndarray) -> np.ndarray:
-    """sigma_max / sigma_min per batch item of J (N, r, n) (eq 53), inf where J is rank-deficient:
-    fewer columns than rows, or sigma_min <= sigma_max * max(r, n) * eps (NumPy's matrix_rank
-    tolerance: below it sigma_min is rounding noise, e.g. 1e-17 at a singular configuration)."""
-    r, n = J.shape[-2:]
-    if J.shape[0] == 0:
-        return np.zeros(0)
-    s = np.linalg.svd(J, compute_uv=False)
-    if n < r:
-        return np.full(J.shape[0], np.inf)
-    singular = s[:, -1] <= s[:, 0] * max(r, n) * np.finfo(float).eps
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(singular, np.inf, s[:, 0] / np.where(singular, 1.0, s[:, -1]))
-
-
-def space_jacobian(T: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """Space Jacobian (rows (omega, v_s), v_s = v_e - omega x p_e) from T (N, 4, 4), J0 (N, 6, n)."""
-    p = T[:, None, :3, 3]
-    Jv, Jw = np.swapaxes(J[:, :3], 1, 2), np.swapaxes(J[:, 3:], 1, 2)
-    vs = Jv - cross(Jw, p)
-    return np.concatenate((J[:, 3:], np.swapaxes(vs, 1, 2)), axis=1)
-
-
-def jacob_dot_of(H: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """``sum_i H[:, i] qd[:, i]`` for batches: H (N, n, 6, n), qd (N, n) -> (N, 6, n)."""
-    return np.einsum("Nirj,Ni->Nrj", H, qd)
-
-
-def manipulability_of(J: np.ndarray) -> np.ndarray:
-    """sqrt(det(J J^T)) per batch item of J (N, r, n); 0 where J J^T is singular (eq 52), exactly 0
-    with fewer joints than rows (det would be rounding noise)."""
-    if J.shape[-1] < J.shape[-2]:
-        return np.zeros(J.shape[0])
-    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular J J^T
-        d = np.linalg.det(J @ np.swapaxes(J, 1, 2))
-    return np.sqrt(np.maximum(np.nan_to_num(d, nan=0.0), 0.0))
-
-
-def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
-    """Manipulability Jacobian (MMC paper eq 11): J (N, r, n), H (N, n, r, n) -> (N, n).
-
-    ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)``; at a singular configuration (m = 0) the
-    pseudo-inverse keeps the result finite.
-    """
-    if J.shape[-1] < J.shape[-2]:  # m = 0 for every q: so is its gradient
-        return np.zeros((J.shape[0], J.shape[-1]))
-    A = J @ np.swapaxes(J, 1, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular A
-        m = np.sqrt(np.maximum(np.nan_to_num(np.linalg.det(A), nan=0.0), 0.0))
-    try:
-        Ainv = np.linalg.inv(A)
-        if not np.isfinite(Ainv).all():
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:
-        Ainv = np.linalg.pinv(A, hermitian=True)
-    JH = np.einsum("Nrk,Nisk->Nirs", J, H)  # J H_i^T
-    return m[:, None] * np.einsum("Nirs,Nrs->Ni", JH, Ainv)

@@ -10,8 +10,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from symkin.model.differential import path_hessian
 from symkin.model.ets import ET
-from symkin.model.kinematics import cross
 
 __all__ = ["Segment", "Slot", "hessian_of_columns"]
 
@@ -50,14 +50,7 @@ class Slot:
 def hessian_of_columns(Jv: np.ndarray, Jw: np.ndarray, slots: Sequence[Slot], n: int) -> np.ndarray:
     """Hessian (N, n, 6, n) from the geometric columns Jv, Jw (N, s, 3) of the slots on one path
     (base first; Jw = 0 for a prismatic slot), contracted onto the joints they follow."""
-    s = Jv.shape[1]
-    X = cross(Jw[:, :, None, :], Jv[:, None, :, :])  # X[:, b, a] = w_b x v_a
-    Y = cross(Jw[:, :, None, :], Jw[:, None, :, :])
-    lower = np.triu(np.ones((s, s), dtype=bool))[None, :, :, None]  # b <= a
-    Hv = np.where(lower, X, np.swapaxes(X, 1, 2))
-    Hw = np.where(lower, Y, 0.0)
-    Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
-    A = np.zeros((s, n))
+    A = np.zeros((len(slots), n))
     for i, sl in enumerate(slots):
         A[i, sl.joint] = float(sl.multiplier)
-    return np.einsum("bk,Nbar,ai->Nkri", A, Hs, A)
+    return path_hessian(Jv, Jw, A)

@@ -20,15 +20,16 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_batch
 from symkin.core.names import identifier
 from symkin.errors import FrameError, RobotError, URDFError
+from symkin.model.differential import FrameMethods, rotate_rows
 from symkin.model.ets import ET, ETS
 from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
 from symkin.model.robot import Robot
@@ -104,7 +105,7 @@ class _Numeric:
 
 
 @dataclass(frozen=True, eq=False)
-class Tree:
+class Tree(FrameMethods):
     """A kinematic tree with named frames (build with :meth:`from_urdf`).
 
     Attributes:
@@ -181,6 +182,45 @@ class Tree:
 
         return cls(**urdf_tree_args(path_or_xml, frames, base_link, snap_tol, name))
 
+    @classmethod
+    def from_robot(cls, robot: Robot, frame: str = "ee", base_link: str = "base") -> Tree:
+        """The serial chain ``robot`` as a tree with one frame, ``frame``, at its end effector: a
+        chain is a tree with one end frame. One segment per joint (the constant transforms before
+        it, then the joint; its link ``link<k>``, k along the chain from 1), then a fixed one to
+        ``frame``. Same joints, names, limits and kinematics; :meth:`chain` gives the ETS back."""
+        segments: list[Segment] = []
+        slots: list[Slot] = []
+        consts: list[ET] = []
+        for e in robot.ets:
+            if not e.is_joint:
+                consts.append(e)
+                continue
+            k, name = len(slots), robot.joint_names[e.joint]  # type: ignore[index]
+            segments.append(
+                Segment(name, k - 1, f"link{k + 1}", (*consts, ET(e.axis, joint=k, flip=e.flip)), k)
+            )
+            slots.append(Slot(name, k, e.joint, Fraction(1), Fraction(0), e.is_revolute, name))  # type: ignore[arg-type]
+            consts = []
+        links = {base_link, *(seg.link for seg in segments)}
+        if not isinstance(frame, str) or frame in links:
+            raise RobotError(
+                f"the end frame must be a name other than the links {sorted(links)}, not {frame!r}"
+            )
+        segments.append(Segment(f"{frame}_fixed", len(segments) - 1, frame, tuple(consts)))
+        qd = robot.qd_max
+        return cls(
+            name=robot.name,
+            base_link=base_link,
+            segments=tuple(segments),
+            slots=tuple(slots),
+            frames=(frame,),
+            frame_segments=(len(segments) - 1,),
+            joint_names=robot.joint_names,
+            qlim=robot.qlim,
+            velocity=None if qd is None else qd,
+            source=f"{robot.source or robot.name}, as a tree",
+        )
+
     def __getstate__(self) -> dict[str, Any]:
         """Pickle the fields (and cached values) without the memoised frame views."""
         state = dict(self.__dict__)
@@ -225,6 +265,10 @@ class Tree:
     def frame_position(self, frame: Any) -> int:
         """The position of ``frame`` in :attr:`frames` (FrameError listing them when unknown)."""
         return frame_position(frame, self.frames, self.name)
+
+    def frame_name(self, frame: Any) -> str:
+        """The name of ``frame`` (a name, or None for a one-frame tree; FrameError when unknown)."""
+        return self.frames[self.frame_position(frame)]
 
     def path(self, frame: Any) -> list[int]:
         """Segment indices from the base link to ``frame``, in order."""
@@ -292,19 +336,7 @@ class Tree:
         :meth:`symkin.Robot.ik` for a chain: see :func:`symkin.runtime.ik.ik`."""
         return self.select(frame).ik(Tep, **kwargs)
 
-    def manipulability(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
-        """Yoshikawa manipulability of ``frame`` (the chosen rows of its J0, Part 1 eq 52):
-        float, or (N,) for a batch."""
-        return self.select(frame).manipulability(q, axes)
-
-    def jacobm(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray:
-        """Manipulability Jacobian of ``frame`` (Haviland and Corke, 2020, eq 11): (n,) or (N, n)."""
-        return self.select(frame).jacobm(q, axes)
-
     # -- configurations --------------------------------------------------------------------
-    def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
-        return as_batch(q, self.n, self.name)
-
     def random_q(self, N: int | None = None, seed: int | np.random.Generator | None = None) -> np.ndarray:
         """Uniform random configurations within qlim: (n,) or (N, n); bounds beyond +-1e15 or
         infinite as in :meth:`symkin.Robot.random_q`."""
@@ -391,7 +423,7 @@ class Tree:
         f = self.frame_position(frame)
         Q, single = self._batch(q)
         L, P = self._walk(Q)
-        J = _rotate_rows(L[:, self.frame_segments[f]], self._jacobian(L, P, f))
+        J = rotate_rows(L[:, self.frame_segments[f]], self._jacobian(L, P, f))
         return J[0] if single else J
 
     def fkine_jacob0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
@@ -436,10 +468,11 @@ class Tree:
         return H[0] if single else H
 
     def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        return self.jacob0(q, frame), self.hessian0(q, frame)
-
-
-def _rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """blkdiag(R^T, R^T) @ J: T (N, 4, 4), J (N, 6, n)."""
-    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
-    return np.concatenate((Rt @ J[:, :3], Rt @ J[:, 3:]), axis=1)
+        """Base-frame Jacobian and Hessian of ``frame`` from one walk."""
+        f = self.frame_position(frame)
+        Q, single = self._batch(q)
+        L, P = self._walk(Q)
+        slots, Jv, Jw = self._slot_columns(L, P, f)
+        J = self._jacobian(L, P, f)
+        H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
+        return (J[0], H[0]) if single else (J, H)

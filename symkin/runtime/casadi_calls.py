@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch
-from symkin.model.frames import ChainTables, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
 
 __all__ = ["casadi_call", "chain_functions", "tree_functions"]
 
@@ -77,8 +77,9 @@ def casadi_call(f: Any, n: int, name: str, shapes: dict[str, tuple[int, ...]]) -
 
 
 def chain_functions(robot: Any, fns: dict[str, Any], methods: tuple[str, ...]) -> dict[str, Any]:
-    """The methods of a chain's kinematics from its casadi functions; ``fkine``, ``jacob0`` and
-    ``jacobe`` also take ``frame=`` (a link index or name: from the link poses)."""
+    """The methods of a chain's kinematics from its casadi functions, each with ``frame=`` (link
+    frame k): ``fkine``, ``jacob0`` and ``jacobe`` from the link poses, the others from those
+    (:class:`symkin.model.frames.LinkFrames`)."""
     n = robot.n
     shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
     functions = {name: casadi_call(fns[name], n, robot.name, shapes) for name in methods}
@@ -104,14 +105,27 @@ def chain_functions(robot: Any, fns: dict[str, Any], methods: tuple[str, ...]) -
 
     for name in ("fkine", "jacob0", "jacobe"):
         functions[name] = framed(name)
+    links = LinkFrames(n, robot.name, functions["fkine"], functions["jacob0"], chain.order)
+
+    def linked(name: str) -> Any:
+        plain, of_link = functions[name], getattr(links, name)
+
+        def call(q: Any, frame: Any = None) -> Any:
+            return plain(q) if frame is None else of_link(q, frame)
+
+        call.__name__, call.__doc__ = plain.__name__, plain.__doc__
+        return call
+
+    for name in ("fkine_jacob0", "jacob0_hessian0", "hessian0", "hessiane"):
+        functions[name] = linked(name)
     return functions
 
 
 def tree_functions(tree: Any, fns: dict[str, Any], methods: tuple[str, ...]) -> dict[str, Any]:
     """The methods of a tree's kinematics from its casadi functions (one per frame, ``<name>_<k>``,
-    and the ``*_all`` ones over every frame)."""
+    and the ``*_all`` ones over every frame), and ``jacob0_hessian0(q, frame)``."""
     n, F = tree.n, len(tree.frames)
-    shapes = {"T": (4, 4), "J": (6, n)}
+    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n)}
     shapes_all = {"T": (F, 4, 4), "J": (F, 6, n)}
 
     def call(f: Any, q: Any, shape: dict[str, tuple[int, ...]]) -> Any:
@@ -133,4 +147,6 @@ def tree_functions(tree: Any, fns: dict[str, Any], methods: tuple[str, ...]) -> 
         method.__name__ = name
         return method
 
-    return {name: every(name) if name.endswith("_all") else framed(name) for name in methods}
+    return {
+        name: every(name) if name.endswith("_all") else framed(name) for name in (*methods, "jacob0_hessian0")
+    }

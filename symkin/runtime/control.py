@@ -268,7 +268,7 @@ class MMC:
         backend: str = "auto",
         frame: Any = None,
     ) -> None:
-        if frame is not None or getattr(type(kin), "_symkin_tree", False):  # one frame of a tree
+        if frame is not None or getattr(kin, "_symkin_tree", False):  # one frame of a tree
             from symkin.runtime.task import task_kinematics
 
             kin = task_kinematics(kin, frame)

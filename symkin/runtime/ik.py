@@ -197,7 +197,7 @@ def ik(
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.
     """
-    if frame is not None or getattr(type(kin), "_symkin_tree", False):
+    if frame is not None or getattr(kin, "_symkin_tree", False):
         from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)

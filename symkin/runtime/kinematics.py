@@ -1,32 +1,36 @@
-"""Compiled kinematics: the object :func:`symkin.compile` returns (no sympy here).
+"""Compiled kinematics: the object :func:`symkin.compile` returns, for a chain or a tree (no sympy here).
 
-It has the numeric reference's methods and shapes (``fkine``, ``link_poses``, ``jacob0``,
-``jacobe``, ``hessian0``, ``hessiane``, ``manipulability``, ``jacobm``, ``cond``, ``jacobs``,
-``jacobb``, ``jacob0_dot``) plus the fused ``fkine_jacob0`` and ``jacob0_hessian0`` used by IK and
-control; the last four are computed here from the generated functions. On the C backend the methods are
-the extension module's functions themselves, so a call costs one C function call.
+One class for every model. Every method takes ``frame=`` (a chain: None for the end effector or
+link frame k, the frame right after the k-th joint along the chain; a tree: a frame name, or None
+when it has one frame) and has the numeric references' signatures and shapes: ``fkine``,
+``jacob0``, ``jacobe``, ``fkine_jacob0``, ``hessian0``, ``hessiane``, ``jacob0_hessian0``,
+``manipulability``, ``jacobm``, ``cond``, ``jacobs``, ``jacobb``, ``jacob0_dot``, ``ik``; a chain
+adds ``link_poses``, ``ik_all`` and its closed form, a tree ``fkine_all``, ``jacob0_all`` and
+``fkine_jacob0_all`` (every frame, in ``tree.frames`` order). On the C backend the generated
+methods are the extension module's functions themselves, so a call costs one C function call.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from functools import cached_property
-from types import MethodType
+from pathlib import Path
+from types import MethodType, ModuleType
 from typing import Any
 
 import numpy as np
 
 from symkin.compiler.compile import Artifact, build, cache_key
-from symkin.core.arrays import as_batch, axes_rows
+from symkin.core.arrays import as_batch
 from symkin.errors import ConfigurationError
-from symkin.model.robot import Robot, cond_of, jacob_dot_of, jacobm_of, manipulability_of, space_jacobian
-from symkin.runtime.casadi_calls import chain_functions
-from symkin.runtime.compiled import CompiledModel
+from symkin.model.differential import FrameMethods
+from symkin.model.robot import Robot
+from symkin.model.slots import hessian_of_columns
+from symkin.runtime.casadi_calls import chain_functions, tree_functions
 from symkin.runtime.ik import ik
-from symkin.runtime.manip import jacobm_one, manipulability_one
 from symkin.runtime.memo import memoised
 
-__all__ = ["Kinematics", "KIN_METHODS", "kinematics_of", "load_chain"]
+__all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
 
 C_IK_MAX_JOINTS = 12  # SYMKIN_IK_NMAX of the C solver; longer chains use the NumPy solver
 
@@ -39,130 +43,140 @@ KIN_METHODS = (
     "hessiane",
     "fkine_jacob0",
     "jacob0_hessian0",
-)
+)  # generated for a chain
+TREE_METHODS = ("fkine", "jacob0", "jacobe", "fkine_jacob0", "fkine_all", "jacob0_all", "fkine_jacob0_all")
 
 
-def _rebuild(robot: Robot, backend: str) -> Kinematics:
-    """The kinematics of ``robot`` on ``backend`` (the unpickler of :class:`Kinematics`)."""
-    return load_chain(robot, backend)
+def _rebuild(model: Any, backend: str) -> Kinematics:
+    """The kinematics of ``model`` on ``backend`` (the unpickler of :class:`Kinematics`)."""
+    return load_kinematics(model, backend)
 
 
-def load_chain(
-    robot: Robot, backend: str = "c", cache: bool = True, strategy: str | None = None
+def load_kinematics(
+    model: Any, backend: str = "c", cache: bool = True, strategy: str | None = None
 ) -> Kinematics:
-    """The compiled kinematics of the chain ``robot`` on ``backend`` (memoised per cache key: every
-    attribute of the robot, see :mod:`symkin.compiler.compile`)."""
-    key = cache_key(robot, backend, strategy)
+    """The compiled kinematics of ``model`` (a Robot or a Tree) on ``backend``, memoised per cache
+    key (see :mod:`symkin.compiler.compile`). A tree's generated code depends on its structure only;
+    the object also carries the limits, speeds and source a controller reads, so trees that differ
+    there get their own object."""
+    key = cache_key(model, backend, strategy)
+    memo: Any = key
+    if not isinstance(model, Robot):
+        memo = (key, model.qlim.tobytes(), np.asarray(model.velocity).tobytes(), model.source)
     return memoised(
-        key, lambda: kinematics_of(robot, build(robot, backend, cache, strategy, key), backend), cache
+        memo, lambda: kinematics_of(model, build(model, backend, cache, strategy, key), backend), cache
     )
 
 
-def kinematics_of(robot: Robot, art: Artifact, backend: str) -> Kinematics:
-    """The :class:`Kinematics` of ``robot`` around its built code ``art``."""
+def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
+    """The :class:`Kinematics` of ``model`` around its built code ``art``."""
+    chain = isinstance(model, Robot)
+    methods = KIN_METHODS if chain else TREE_METHODS
     if backend == "casadi":
         fns = art.module.functions()
-        kin = Kinematics(
-            robot, backend, chain_functions(robot, fns, KIN_METHODS), art.files, art.path, art.module
-        )
+        functions = (chain_functions if chain else tree_functions)(model, fns, methods)
+        kin = Kinematics(model, backend, functions, art.files, art.path, art.module)
         kin.functions = fns  # type: ignore[attr-defined]
         return kin
-    names = (*KIN_METHODS, "manipulability", "jacobm") if backend == "c" else KIN_METHODS
-    functions = {name: getattr(art.module, name) for name in names}
-    return Kinematics(robot, backend, functions, art.files, art.path, art.module)
+    if chain and backend == "c":
+        methods = (*methods, "manipulability", "jacobm")
+    functions = {name: getattr(art.module, name) for name in methods}
+    return Kinematics(model, backend, functions, art.files, art.path, art.module)
 
 
-class Kinematics(CompiledModel):
-    """Generated kinematics of ``robot`` on one backend ("c", "numpy" or "casadi").
+class Kinematics(FrameMethods):
+    """Generated kinematics of ``model`` (a :class:`symkin.Robot` chain or a :class:`symkin.Tree`)
+    on one backend ("c", "numpy" or "casadi"); the generated functions are bound as attributes (on
+    the C backend, the extension module's functions themselves).
 
-    Attributes: ``robot``, ``backend``, ``n``, ``qlim``, ``qd_max``, ``name``, ``files`` (the
-    generated sources), ``path`` (the compiled library or module), ``module``.
+    Attributes: ``model`` (also ``robot`` and ``tree``), ``backend``, ``n``, ``name``,
+    ``joint_names``, ``qlim``, ``qd_max``, ``frames`` (a tree's), ``files`` (the generated sources),
+    ``path`` (the compiled library or module), ``module``.
     """
 
-    fkine: Callable[[Any], np.ndarray]
-    link_poses: Callable[[Any], np.ndarray]
-    jacob0: Callable[[Any], np.ndarray]
-    jacobe: Callable[[Any], np.ndarray]
-    hessian0: Callable[[Any], np.ndarray]
-    hessiane: Callable[[Any], np.ndarray]
-    fkine_jacob0: Callable[[Any], tuple[np.ndarray, np.ndarray]]
-    jacob0_hessian0: Callable[[Any], tuple[np.ndarray, np.ndarray]]
+    fkine: Callable[..., np.ndarray]
+    jacob0: Callable[..., np.ndarray]
+    jacobe: Callable[..., np.ndarray]
+    fkine_jacob0: Callable[..., tuple[np.ndarray, np.ndarray]]
 
-    METHODS = KIN_METHODS
-
-    def _setup(self, functions: dict[str, Callable[..., Any]]) -> None:
-        self.robot = self.model
+    def __init__(
+        self,
+        model: Any,
+        backend: str,
+        functions: dict[str, Callable[..., Any]],
+        files: dict[str, str],
+        path: Path | None = None,
+        module: ModuleType | None = None,
+    ) -> None:
+        self.model = model
+        self._n = int(model.n)  # kept: a Robot counts the joints of its ETS on every call
+        self.backend, self.files, self.path, self.module = backend, files, path, module
+        self.is_tree = not isinstance(model, Robot)
+        if self.is_tree:
+            self._symkin_tree = True  # marks trees for symkin.ik, servo and MMC
+        for name, fn in functions.items():
+            setattr(self, name, fn)
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
         self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
-        if "manipulability" in functions:
-            self.manipulability = functions["manipulability"]
-            self.jacobm = functions["jacobm"]
+
+    # -- what the model says -----------------------------------------------------------------
+    @property
+    def robot(self) -> Any:
+        return self.model
+
+    @property
+    def tree(self) -> Any:
+        return self.model
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self._n
+
+    @property
+    def name(self) -> str:
+        return self.model.name
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self.model.joint_names
+
+    @property
+    def qlim(self) -> np.ndarray:
+        return self.model.qlim
+
+    @property
+    def qd_max(self) -> np.ndarray | None:
+        return self.model.qd_max
+
+    @property
+    def frames(self) -> tuple[str, ...]:
+        """A tree's frame names (``*_all`` results follow them); () for a chain (link frames by index)."""
+        return self.model.frames if self.is_tree else ()
+
+    @property
+    def c_prefix(self) -> str:
+        """The prefix of the exported C symbols (``symkin_<name>`` unless generated with another)."""
+        headers = sorted(f for f in self.files if f.endswith(".h"))
+        if self.backend != "c" or not headers:
+            raise AttributeError("c_prefix exists only on the C backend")
+        return headers[0][:-2]
+
+    def random_q(self, N: int | None = None, seed: Any = None) -> np.ndarray:
+        """Uniform random configurations within qlim: (n,) or (N, n)."""
+        return self.model.random_q(N, seed)
 
     def __repr__(self) -> str:
-        return f"Kinematics(robot={self.robot.name!r}, n={self.n}, backend={self.backend!r})"
+        if self.is_tree:
+            frames = list(self.frames)
+            return f"Kinematics(tree={self.name!r}, n={self.n}, frames={frames}, backend={self.backend!r})"
+        return f"Kinematics(robot={self.name!r}, n={self.n}, backend={self.backend!r})"
 
-    def __reduce__(self) -> tuple[Any, tuple[Robot, str]]:
-        """Pickle as (robot, backend): unpickling compiles again, which loads the generated code
+    def __reduce__(self) -> tuple[Any, tuple[Any, str]]:
+        """Pickle as (model, backend): unpickling compiles again, which loads the generated code
         from the compile cache of the process that unpickles (a Dask worker, say) when it is there."""
-        return (_rebuild, (self.robot, self.backend))
-
-    def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:  # type: ignore[no-redef]
-        """Yoshikawa manipulability of the chosen rows of J0 (eq 52): float, or (N,) for a batch.
-
-        One configuration takes the backend's single-configuration J0 and no determinant routine
-        (:func:`symkin.runtime.manip.manipulability_one`)."""
-        rows = axes_rows(axes)
-        if type(q) is np.ndarray and q.ndim == 1:  # jacob0 checks q
-            return manipulability_one(self.jacob0(q)[rows])
-        Q, single = as_batch(q, self.n, self.name)
-        if single:
-            return manipulability_one(self.jacob0(Q[0])[rows])
-        return manipulability_of(self.jacob0(Q)[:, rows])
-
-    def jacobm(self, q: Any, axes: str = "all") -> np.ndarray:  # type: ignore[no-redef]
-        """Manipulability Jacobian (Haviland and Corke, Maximising Manipulability During Resolved-Rate
-        Motion Control, 2020, eq 11), (n,) or (N, n)."""
-        rows = axes_rows(axes)
-        Q, single = as_batch(q, self.n, self.name)
-        if single:
-            J, H = self.jacob0_hessian0(Q[0])
-            return jacobm_one(J[rows], H[:, rows])
-        J, H = self.jacob0_hessian0(Q)
-        return jacobm_of(J[:, rows], H[:, :, rows])
-
-    def cond(self, q: Any, axes: str = "all") -> np.ndarray | float:
-        """Condition number of the chosen rows of J0 (eq 53), inf at a singular configuration."""
-        rows = axes_rows(axes)
-        Q, single = as_batch(q, self.n, self.name)
-        c = cond_of(self.jacob0(Q)[:, rows])
-        return float(c[0]) if single else c
-
-    def jacobs(self, q: Any) -> np.ndarray:
-        """Space Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows
-        (omega, v_s) with v_s = v_e - omega x p_e the velocity of the point at the base origin."""
-        Q, single = as_batch(q, self.n, self.name)
-        if single:
-            T, J = self.fkine_jacob0(Q[0])
-            return space_jacobian(T[None], J[None])[0]
-        return space_jacobian(*self.fkine_jacob0(Q))
-
-    def jacobb(self, q: Any) -> np.ndarray:
-        """Body Jacobian of Modern Robotics: (6, n) or (N, 6, n), rows (omega, v) in the
-        end-effector frame (``jacobe`` with its row blocks swapped)."""
-        Je = self.jacobe(q)
-        return np.concatenate((Je[..., 3:, :], Je[..., :3, :]), axis=-2)
-
-    def jacob0_dot(self, q: Any, qd: Any) -> np.ndarray:
-        """dJ0/dt = sum_i H0[i] qd_i at joint velocity ``qd`` (as roboticstoolbox's ``jacob0_dot``):
-        (6, n), or (N, 6, n) for q and qd of shape (N, n). Rows (v, omega), base frame."""
-        Q, single = as_batch(q, self.n, self.name)
-        Qd, _ = as_batch(qd, self.n, self.name, "qd")
-        if Qd.shape[0] != Q.shape[0]:
-            raise ConfigurationError(f"q and qd hold {Q.shape[0]} and {Qd.shape[0]} configurations")
-        if single:
-            return np.tensordot(Qd[0], self.hessian0(Q[0]), axes=(0, 0))
-        return jacob_dot_of(self.hessian0(Q), Qd)
+        return (_rebuild, (self.model, self.backend))
 
     def _repr_markdown_(self) -> str:
         """Notebook view: the backend, the generated files and the robot's joint table."""
@@ -170,24 +184,94 @@ class Kinematics(CompiledModel):
 
         files = ", ".join(f"`{md_text(f)}`" for f in sorted(self.files))
         head = f"**{md_text(self.name)}** compiled for the **{self.backend}** backend ({files})"
+        if self.is_tree:
+            return f"{head}: frames {', '.join(f'`{md_text(f)}`' for f in self.frames)}, {self.n} joints.\n"
         methods = (
             "fkine, link_poses, jacob0, jacobe, jacobs, jacobb, jacob0_dot, hessian0, hessiane, "
             "manipulability, jacobm, cond, ik"
         )
-        return robot_markdown(self.robot, head) + f"Methods: {methods}.\n"
+        return robot_markdown(self.model, head) + f"Methods: {methods}.\n"
+
+    # -- frames ------------------------------------------------------------------------------
+    def select(self, frame: Any = None) -> Any:
+        """One frame as chain kinematics of all n joints, for :func:`symkin.ik`, :func:`symkin.servo`
+        and :class:`symkin.MMC`: the chain itself for ``frame=None``, else a
+        :class:`symkin.model.frame_view.FrameView`."""
+        if frame is None and not self.is_tree:
+            return self
+        from symkin.model.frame_view import frame_view
+
+        return frame_view(self.model, self, frame)
+
+    def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """Base-frame Jacobian and Hessian of ``frame``: ((6, n), (n, 6, n)) or batched (a chain
+        binds its generated function). A tree's frame: the generated function (Haviland and Corke,
+        Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 20) when the
+        backend has one and no mimic joint is on the path; else from the compiled Jacobian's
+        columns (no mimic joint) or the numeric reference."""
+        tree = self.model
+        name = tree.frame_name(frame)
+        slots = [tree.slots[k] for k in tree.path_slots(name)]
+        plain = not any(s.is_mimic for s in slots)  # J's columns are the slots' columns
+        generated = getattr(self.module, "jacob0_hessian0", None)
+        if generated is not None and plain:
+            out = generated(q, name)
+            if out is not NotImplemented:
+                return out
+        if not plain:
+            return self.jacob0(q, name), tree.hessian0(q, name)
+        Q, single = as_batch(q, self.n, self.name)
+        J = np.asarray(self.jacob0(Q, name))
+        joints = [s.joint for s in slots]
+        Jv, Jw = np.swapaxes(J[:, :3, joints], 1, 2), np.swapaxes(J[:, 3:, joints], 1, 2)
+        H = hessian_of_columns(Jv, Jw, slots, self.n)
+        return (J[0], H[0]) if single else (J, H)
+
+    def c_controller_functions(self, frame: str) -> dict[str, Any] | None:
+        """The C functions the C controllers (MMC, RRMC, the servo loop) call for a tree's
+        ``frame``, as ctypes functions (``jacob0_hessian0``, ``jacob0``, ``fkine``,
+        ``manipulability``), or None when the backend is not C, the model is a chain (whose
+        controllers find its functions by prefix) or a mimic joint is on the frame's path (its H
+        is then not generated; the controllers run in Python)."""
+        if self.backend != "c" or not self.is_tree:
+            return None
+        from symkin.emit.c.build import load_library
+
+        k = self.model.frame_position(frame)
+        lib, prefix = load_library(self.path), self.c_prefix
+        try:
+            return {
+                name: getattr(lib, f"{prefix}_{name}_{k}")
+                for name in ("jacob0_hessian0", "jacob0", "fkine", "manipulability")
+            }
+        except AttributeError:  # a mimic joint on the path
+            return None
+
+    def c_fkjac_of(self, frame: Any) -> Any:
+        """The C entry point ``fkine_jacob0`` of a tree's ``frame`` as a ctypes function (C
+        backend), for the C IK solver; None for other backends and a chain's link frames."""
+        if self.backend != "c" or not self.is_tree:
+            return None
+        from symkin.emit.c.build import load_library
+
+        k = self.model.frame_position(frame)
+        self._lib = load_library(self.path)
+        return getattr(self._lib, f"{self.c_prefix}_fkine_jacob0_{k}")
 
     @cached_property
     def c_fkjac(self) -> Any:
         """The C entry point ``fkine_jacob0(q, T, J)`` as a ctypes function (C backend only), for
         the C IK solver."""
-        if self.backend != "c" or self.path is None:
-            raise AttributeError("c_fkjac exists only on the C backend")
+        if self.backend != "c" or self.path is None or self.is_tree:
+            raise AttributeError("c_fkjac exists only for a chain on the C backend (a tree: c_fkjac_of)")
         from symkin.emit.c.build import load_library
 
         return getattr(load_library(self.path), f"{self.c_prefix}_fkine_jacob0")
 
-    def ik(self, Tep: Any, **kwargs: Any) -> Any:
-        """Numerical inverse kinematics (eqs 37-51); see :func:`symkin.runtime.ik.ik` for the options.
+    def ik(self, Tep: Any, frame: Any = None, **kwargs: Any) -> Any:
+        """Numerical inverse kinematics of ``frame`` (eqs 37-51); see :func:`symkin.runtime.ik.ik`
+        for the options. Off the end effector of a chain (a tree's frame, a chain's link frame) the
+        other joints are free: see :class:`symkin.model.frame_view.FrameView`.
 
         On the C backend the whole solver loop runs in C on the generated kinematics; on the
         NumPy and CasADi backends the NumPy solver calls the generated functions. A call with the
@@ -202,9 +286,11 @@ class Kinematics(CompiledModel):
         redundant arm ``free_joint=j`` sweeps joint ``j`` (64 values over its limits, or one turn,
         plus ``q0[j]``) and ``free_joint=(j, values)`` tries the given values; see :meth:`ik_all`.
         """
-        if not kwargs and self._ik_fast is not None:
+        if not kwargs and self._ik_fast is not None and frame is None:
             res = self._ik_fast(Tep)
             return res if res is not None else self._ik_solver.solve(Tep)  # None: Tep needs checking
+        if frame is not None or self.is_tree:
+            return self.select(frame).ik(Tep, **kwargs)
         if kwargs.get("method") == "analytic":
             options = {k: v for k, v in kwargs.items() if k != "method"}
             unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol", "free_joint"})

@@ -10,18 +10,16 @@ from symkin.compiler.manifest import import_module_file, read_manifest
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
 from symkin.model.tree import Tree
-from symkin.runtime.kinematics import Kinematics, kinematics_of, load_chain
-from symkin.runtime.tree_kinematics import TreeKinematics, load_tree, tree_kinematics_of
+from symkin.runtime.kinematics import Kinematics, kinematics_of, load_kinematics
 
 __all__ = ["compile", "load_compiled"]
 
 
 def compile(  # noqa: A001
     robot: Robot | Tree | str, backend: str = "c", cache: bool = True, strategy: str | None = None
-) -> Kinematics | TreeKinematics:
+) -> Kinematics:
     """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`, or a
-    :class:`symkin.Tree` into one kernel for all its frames, a
-    :class:`~symkin.runtime.tree_kinematics.TreeKinematics`.
+    :class:`symkin.Tree` into one kernel for all its frames (the same class, with ``frame=name``).
 
     ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
     ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
@@ -33,22 +31,19 @@ def compile(  # noqa: A001
     check_backend(backend)
     check_strategy(strategy, robot)
     if isinstance(robot, Tree):
-        return load_tree(robot, backend, cache)
+        return load_kinematics(robot, backend, cache)
     if isinstance(robot, str):
         robot = resolve_robot(robot)
     if not isinstance(robot, Robot):
         raise TypeError(
             f"compile() needs a Robot, a Tree, a built-in robot name or ETS text, not {type(robot).__name__}"
         )
-    return load_chain(robot, backend, cache, strategy)
+    return load_kinematics(robot, backend, cache, strategy)
 
 
-def load_compiled(
-    folder: str | Path, name: str | None = None, verify: bool = True
-) -> Kinematics | TreeKinematics:
-    """The :class:`symkin.Kinematics` of the generated code in ``folder`` (``symkin compile -o DIR``
-    or :func:`symkin.write_generated`), or for a tree's code its
-    :class:`~symkin.runtime.tree_kinematics.TreeKinematics`, as :func:`compile` gives them.
+def load_compiled(folder: str | Path, name: str | None = None, verify: bool = True) -> Kinematics:
+    """The :class:`symkin.Kinematics` of the generated code of a chain or a tree in ``folder``
+    (``symkin compile -o DIR`` or :func:`symkin.write_generated`), as :func:`compile` gives it.
 
     C: the ``.c``/``.h`` files are compiled (cached by content, needs a C compiler) and their
     extension module imported; NumPy and CasADi: the module in the folder is imported. ``name``
@@ -66,6 +61,4 @@ def load_compiled(
             art = Artifact(m.files, module, m.folder / pyname)
         else:
             art = load_artifact({pyname: m.files[pyname]}, "casadi")
-    if isinstance(m.robot, Tree):
-        return tree_kinematics_of(m.robot, art, m.backend)
     return kinematics_of(m.robot, art, m.backend)

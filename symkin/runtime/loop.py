@@ -126,7 +126,7 @@ def servo(
     For a tree (:class:`symkin.Tree` or its compiled kinematics) ``frame`` names the frame that
     servos; the joints off its path do not move (the loop then runs in Python).
     """
-    if frame is not None or getattr(type(kin), "_symkin_tree", False):
+    if frame is not None or getattr(kin, "_symkin_tree", False):
         from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)

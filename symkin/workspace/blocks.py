@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.model.robot import manipulability_of
+from symkin.model.differential import manipulability_of
 from symkin.workspace.grid import TAG_SAMPLE, VoxelGrid, counter_uniform, voxel_seeds
 
 __all__ = ["ReachSpec", "SampleSpec", "reach_block", "sample_block"]

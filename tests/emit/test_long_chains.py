@@ -72,11 +72,19 @@ def test_c_frame_argument_is_checked_like_a_python_function():
     q = np.zeros(6)
     with pytest.raises(TypeError, match="unexpected keyword"):
         kin.jacob0(q, fram=2)
-    with pytest.raises(TypeError, match="1 or 2 arguments"):
+    with pytest.raises(TypeError, match="from 1 to 2 positional arguments but 3 were given"):
         kin.fkine(q, 1, 2)
+    with pytest.raises(TypeError, match="from 1 to 3 positional arguments but 4 were given"):
+        kin.jacobm(q, 1, "all", 2)
     with pytest.raises(TypeError, match="unexpected keyword"):
         kin.manipulability(q, axis="trans")
+    with pytest.raises(TypeError, match="multiple values for argument 'frame'"):
+        kin.hessian0(q, 1, frame=2)
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        kin.hessian0(q, axes="all")
     assert kin.manipulability(q, axes="trans") == kin.manipulability(q, "trans")
+    with pytest.raises(ValueError, match="axes given twice"):
+        kin.manipulability(q, "trans", "rot")
 
 
 def test_strategy_can_be_forced_and_is_part_of_the_cache_key():

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.check.chain import LARGE_TURNS, check
+from symkin.check.kinematics import LARGE_TURNS, check
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
 INLINE_MAX = 1.6e6  # beyond, the generated code calls libm

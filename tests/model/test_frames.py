@@ -59,3 +59,60 @@ def test_numpy_integers_are_frames():
     assert frame_index(np.int64(3), 7) == 3
     robot = load("ur5")
     assert_close(robot.jacobe(robot.qz, frame=np.int32(2)), robot.jacobe(robot.qz, frame=2), 0)
+
+
+FRAME_METHODS = ("hessian0", "hessiane", "jacobm", "manipulability", "cond", "jacobs", "jacobb")
+
+
+@pytest.mark.parametrize("name", ["panda", "stanford"])
+def test_every_method_of_a_link_frame_is_that_of_the_truncated_chain(name):
+    """hessian0/hessiane/jacobm/... (q, frame=k) of the reference, against the end effector of the
+    chain cut after joint k (the O(n) ETS algorithm on its own ETS): columns of later joints 0."""
+    robot = load(name)
+    Q = robot.random_q(4, seed=7)
+    for k in (1, 3, robot.n - 1):
+        sub, c = truncated(robot, k), k + 1
+        Qs = Q[:, :c]
+        H, He = robot.hessian0(Q, frame=k), robot.hessiane(Q, frame=k)
+        assert_close(H[:, :c, :, :c], sub.hessian0(Qs), 1e-12, f"H0 frame {k}")
+        assert_close(He[:, :c, :, :c], sub.hessiane(Qs), 1e-12, f"He frame {k}")
+        assert not H[:, c:].any() and not H[..., c:].any()
+        assert_close(robot.jacobm(Q, frame=k, axes="trans")[:, :c], sub.jacobm(Qs, axes="trans"), 1e-9)
+        m = robot.manipulability(Q, k, "rot")
+        if c >= 3:
+            assert_close(m, sub.manipulability(Qs, axes="rot"), 1e-9, "manipulability")
+        else:  # 0 for the truncated chain (fewer joints than rows); sqrt of a rounding-level det here
+            assert np.abs(m).max() < 1e-7
+        cond, cond_sub = robot.cond(Q, k, "trans"), sub.cond(Qs, axes="trans")
+        assert np.array_equal(np.isinf(cond), np.isinf(cond_sub))
+        assert_close(cond[np.isfinite(cond)], cond_sub[np.isfinite(cond)], 1e-9, "cond")
+        assert_close(robot.jacobs(Q, frame=k)[..., :c], sub.jacobs(Qs), 1e-12)
+        assert_close(robot.jacobb(Q[0], frame=k)[:, :c], sub.jacobb(Qs[0]), 1e-12)
+        qd = np.linspace(-1, 1, robot.n)
+        assert_close(robot.jacob0_dot(Q[0], qd, frame=k)[:, :c], sub.jacob0_dot(Qs[0], qd[:c]), 1e-12)
+
+
+def test_a_link_frame_hessian_is_the_derivative_of_its_jacobian():
+    robot = random_chain(8, seed=4)
+    q = robot.random_q(seed=5)
+    h = 1e-6
+    for k in (0, 3, 7):
+        H = robot.hessian0(q, frame=k)
+        for i in range(robot.n):
+            dq = np.zeros(robot.n)
+            dq[i] = h
+            fd = (robot.jacob0(q + dq, frame=k) - robot.jacob0(q - dq, frame=k)) / (2 * h)
+            assert_close(H[i], fd, 1e-7, f"dJ/dq{i}, frame {k}")
+
+
+def test_axes_may_stand_second_as_before_and_frames_are_checked():
+    robot = load("ur5")
+    q = robot.qr if "qr" in robot.configs else robot.random_q(seed=1)
+    assert robot.manipulability(q, "trans") == robot.manipulability(q, axes="trans")
+    assert robot.manipulability(q, None, "trans") == robot.manipulability(q, axes="trans")
+    with pytest.raises(ValueError, match="axes given twice"):
+        robot.manipulability(q, "trans", "rot")
+    with pytest.raises(FrameError, match="link frame index"):
+        robot.hessian0(q, frame="tool")
+    with pytest.raises(FrameError, match="link frames 0..5"):
+        robot.jacobm(q, frame=6)

@@ -8,7 +8,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from symkin import FrameError, Robot, Tree, URDFError
+from symkin import FrameError, Robot, RobotError, Tree, URDFError
 from tests.conftest import assert_close
 from tests.model.tree_urdfs import ARM_CAMERA, GRIPPER, GRIPPER_FREE, QUADRUPED, fixed, joint, urdf
 
@@ -211,3 +211,21 @@ def test_unsupported_joints_and_bad_mimics_are_refused_with_the_joint_named():
         Tree.from_urdf(to_fixed)
     with pytest.raises(URDFError, match="joint names must be unique"):
         Tree.from_urdf(ARM_CAMERA.replace('name="j4"', 'name="j3"'))
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5", "stanford", "gantry"])
+def test_a_chain_is_a_tree_with_one_end_frame(name):
+    """Tree.from_robot: the same kinematics through the tree's own walk (segments and slots), and
+    Tree.chain gives the robot's ETS back."""
+    from symkin.model.robots import load
+
+    robot = load(name)
+    tree = Tree.from_robot(robot)
+    assert tree.frames == ("ee",) and tree.n == robot.n and tree.joint_names == robot.joint_names
+    assert np.array_equal(tree.qlim, robot.qlim)
+    assert str(tree.chain("ee").ets) == str(robot.ets)
+    Q = robot.random_q(5, seed=2)
+    for m in ("fkine", "jacob0", "jacobe", "hessian0", "hessiane", "jacobm", "manipulability"):
+        assert np.abs(getattr(tree, m)(Q) - getattr(robot, m)(Q)).max() < 1e-12, m
+    with pytest.raises(RobotError, match="other than the links"):
+        Tree.from_robot(robot, frame="link1")

@@ -43,11 +43,13 @@ def test_ik_with_a_mimic_joint_on_the_path():
     assert np.abs(pose_error(tree.fkine(res.q, "fa_tip2"), Tep)).max() < 1e-6
 
 
-def test_frame_is_required_on_a_tree_and_refused_on_a_chain():
+def test_frame_is_required_on_a_tree_and_a_chain_takes_link_indices():
     with pytest.raises(FrameError, match="name one with frame="):
         ik(ARM, np.eye(4))
-    with pytest.raises(FrameError, match="serial chain"):
+    with pytest.raises(FrameError, match="link frame index 0..6"):
         ik(symkin.load("panda"), np.eye(4), frame="tool")
+    with pytest.raises(FrameError, match="link frames 0..6"):
+        symkin.compile(symkin.load("panda"), "c").ik(np.eye(4), frame=7)
 
 
 @pytest.mark.parametrize("controller", ["rrmc", "mmc"])

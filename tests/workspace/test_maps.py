@@ -16,7 +16,7 @@ distributed = pytest.importorskip("distributed")
 
 import symkin  # noqa: E402
 from symkin.errors import WorkspaceError  # noqa: E402
-from symkin.model.robot import manipulability_of  # noqa: E402
+from symkin.model.differential import manipulability_of  # noqa: E402
 from symkin.workspace import open_dataset, open_map, reachability, samples  # noqa: E402
 
 L1, L2, L3 = 0.6, 0.25, 0.15

@@ -10,8 +10,9 @@
 
 Every function takes q of shape (6,) or (N, 6): one configuration is evaluated with
 scalar ``math`` code, a batch with vectorised NumPy code (no Python loop over N). ``fkine``,
-``jacob0`` and ``jacobe`` take ``frame=k`` for link frame k (the frame right after the k-th joint
-along the chain, as ``link_poses``).
+``jacob0``, ``jacobe``, ``fkine_jacob0``, ``jacob0_hessian0``, ``hessian0`` and ``hessiane`` take
+``frame=k`` for link frame k (the frame right after the k-th joint along the chain, as
+``link_poses``).
 """
 
 import math
@@ -21,7 +22,7 @@ from math import cos, sin, sqrt
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.model.frames import ChainTables, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
 
 ROBOT_NAME = 'puma560'
 N_JOINTS = 6
@@ -903,8 +904,10 @@ def _hessian0_batch(Q):
     return H.reshape((N,) + (6, 6, 6))
 
 
-def hessian0(q):
-    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
+def hessian0(q, frame=None):
+    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k."""
+    if frame is not None:
+        return _LINKS.hessian0(q, frame)
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -1310,8 +1313,10 @@ def _hessiane_batch(Q):
     return H.reshape((N,) + (6, 6, 6))
 
 
-def hessiane(q):
-    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+def hessiane(q, frame=None):
+    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k."""
+    if frame is not None:
+        return _LINKS.hessiane(q, frame)
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -1543,8 +1548,10 @@ def _fkine_jacob0_batch(Q):
     return (T.reshape((N,) + (4, 4)), J.reshape((N,) + (6, 6)))
 
 
-def fkine_jacob0(q):
-    """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+def fkine_jacob0(q, frame=None):
+    """Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k."""
+    if frame is not None:
+        return _LINKS.fkine_jacob0(q, frame)
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -1919,8 +1926,10 @@ def _jacob0_hessian0_batch(Q):
     return (J.reshape((N,) + (6, 6)), H.reshape((N,) + (6, 6, 6)))
 
 
-def jacob0_hessian0(q):
-    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+def jacob0_hessian0(q, frame=None):
+    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k."""
+    if frame is not None:
+        return _LINKS.jacob0_hessian0(q, frame)
     if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -1997,3 +2006,7 @@ def jacob0_hessian0(q):
         return jacob0_hessian0(Q[0])  # the scalar code above
     out = _jacob0_hessian0_batch(Q)  # valid joint values whose squares add up beyond 1e30
     return (out[0][0], out[1][0])
+
+
+# Every method of link frame k from fkine(q, k) and jacob0(q, k) (symkin.model.frames.LinkFrames).
+_LINKS = LinkFrames(N_JOINTS, ROBOT_NAME, fkine, jacob0, CHAIN.order)

@@ -94,27 +94,45 @@ static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape)
     return PyArray_SimpleNew(k, dims, NPY_DOUBLE);
 }
 
-/* The optional second argument of f(q, <name>=None), positional or by keyword; 0 on error. */
-static int opt_arg_(PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, const char *usage,
-                    const char *name, PyObject **value)
+/* The optional arguments after q of f(q, <names[0]>=None, ...), positional or by keyword (values
+ * not given are NULL); 0 with an exception set on error. */
+static int opt_args_(PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, const char *usage,
+                     int count, const char *const *names, PyObject **values)
 {
     Py_ssize_t nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
-    *value = nargs > 1 ? args[1] : NULL;
-    if (nargs < 1 || nargs + nkw > 2) {
-        PyErr_Format(PyExc_TypeError, "%s takes 1 or 2 arguments", usage);
+    if (nargs < 1 || nargs > count + 1) {
+        PyErr_Format(PyExc_TypeError, "%s takes from 1 to %d positional arguments but %zd were given", usage,
+                     count + 1, nargs);
         return 0;
     }
-    if (nkw) {
-        const char *kw = PyUnicode_AsUTF8(PyTuple_GET_ITEM(kwnames, 0));
-        if (!kw || strcmp(kw, name)) {
-            PyErr_Format(PyExc_TypeError, "%s got an unexpected keyword argument %R", usage,
-                         PyTuple_GET_ITEM(kwnames, 0));
+    for (int i = 0; i < count; ++i)
+        values[i] = i + 1 < nargs ? args[i + 1] : NULL;
+    for (Py_ssize_t k = 0; k < nkw; ++k) {
+        PyObject *key = PyTuple_GET_ITEM(kwnames, k);
+        const char *kw = PyUnicode_AsUTF8(key);
+        if (!kw)
+            return 0;
+        int i = 0;
+        while (i < count && strcmp(kw, names[i]))
+            ++i;
+        if (i == count) {
+            PyErr_Format(PyExc_TypeError, "%s got an unexpected keyword argument %R", usage, key);
             return 0;
         }
-        *value = args[nargs];
+        if (values[i]) {
+            PyErr_Format(PyExc_TypeError, "%s got multiple values for argument '%s'", usage, kw);
+            return 0;
+        }
+        values[i] = args[nargs + k];
     }
     return 1;
 }
+
+static const char *const frame_names_[] = { "frame", "axes" };
+
+/* symkin.model.frames.LinkFrames of this chain: link frame k of every method without its own
+ * frame code (hessian0, hessiane, fkine_jacob0, jacob0_hessian0, manipulability, jacobm). */
+static PyObject *links_ = NULL;
 
 static PyObject *frame_index_ = NULL; /* symkin.model.frames.frame_index */
 
@@ -145,7 +163,7 @@ static int frame_arg_(PyObject *obj)
 static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
     PyObject *frame_obj;
-    if (!opt_arg_(args, nargs, kwnames, "fkine(q, frame=None)", "frame", &frame_obj))
+    if (!opt_args_(args, nargs, kwnames, "fkine(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
     const int frame = frame_arg_(frame_obj);
     if (frame == -2)
@@ -211,7 +229,7 @@ static PyObject *py_link_poses(PyObject *self, PyObject *arg)
 static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
     PyObject *frame_obj;
-    if (!opt_arg_(args, nargs, kwnames, "jacob0(q, frame=None)", "frame", &frame_obj))
+    if (!opt_args_(args, nargs, kwnames, "jacob0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
     const int frame = frame_arg_(frame_obj);
     if (frame == -2)
@@ -251,7 +269,7 @@ static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nar
 static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
     PyObject *frame_obj;
-    if (!opt_arg_(args, nargs, kwnames, "jacobe(q, frame=None)", "frame", &frame_obj))
+    if (!opt_args_(args, nargs, kwnames, "jacobe(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
     const int frame = frame_arg_(frame_obj);
     if (frame == -2)
@@ -288,8 +306,14 @@ static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nar
     return out_J;
 }
 
-static PyObject *py_hessian0(PyObject *self, PyObject *arg)
+static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
+    PyObject *frame_obj;
+    if (!opt_args_(args, nargs, kwnames, "hessian0(q, frame=None)", 1, frame_names_, &frame_obj))
+        return NULL;
+    if (frame_obj && frame_obj != Py_None)
+        return PyObject_CallMethod(links_, "hessian0", "OO", args[0], frame_obj);
+    PyObject *arg = args[0];
     npy_intp N;
     int single;
     PyArrayObject *qa = get_q_(arg, &N, &single);
@@ -314,8 +338,14 @@ static PyObject *py_hessian0(PyObject *self, PyObject *arg)
     return out_H;
 }
 
-static PyObject *py_hessiane(PyObject *self, PyObject *arg)
+static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
+    PyObject *frame_obj;
+    if (!opt_args_(args, nargs, kwnames, "hessiane(q, frame=None)", 1, frame_names_, &frame_obj))
+        return NULL;
+    if (frame_obj && frame_obj != Py_None)
+        return PyObject_CallMethod(links_, "hessiane", "OO", args[0], frame_obj);
+    PyObject *arg = args[0];
     npy_intp N;
     int single;
     PyArrayObject *qa = get_q_(arg, &N, &single);
@@ -340,8 +370,14 @@ static PyObject *py_hessiane(PyObject *self, PyObject *arg)
     return out_H;
 }
 
-static PyObject *py_fkine_jacob0(PyObject *self, PyObject *arg)
+static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
+    PyObject *frame_obj;
+    if (!opt_args_(args, nargs, kwnames, "fkine_jacob0(q, frame=None)", 1, frame_names_, &frame_obj))
+        return NULL;
+    if (frame_obj && frame_obj != Py_None)
+        return PyObject_CallMethod(links_, "fkine_jacob0", "OO", args[0], frame_obj);
+    PyObject *arg = args[0];
     npy_intp N;
     int single;
     PyArrayObject *qa = get_q_(arg, &N, &single);
@@ -372,8 +408,14 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *arg)
     return result;
 }
 
-static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *arg)
+static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
+    PyObject *frame_obj;
+    if (!opt_args_(args, nargs, kwnames, "jacob0_hessian0(q, frame=None)", 1, frame_names_, &frame_obj))
+        return NULL;
+    if (frame_obj && frame_obj != Py_None)
+        return PyObject_CallMethod(links_, "jacob0_hessian0", "OO", args[0], frame_obj);
+    PyObject *arg = args[0];
     npy_intp N;
     int single;
     PyArrayObject *qa = get_q_(arg, &N, &single);
@@ -428,13 +470,36 @@ static int axes_(PyObject *obj, int *axes)
     return 1;
 }
 
+static PyObject *axes_all_ = NULL; /* "all" */
+
+/* manipulability/jacobm(q, frame, axes): a frame that names axes ("all", "trans", "rot"; a chain's
+ * frames are link indices) is the axes, as symkin.model.differential.frame_and_rows; 0 on error. */
+static int frame_or_axes_(PyObject **opt)
+{
+    const char *s = opt[0] && PyUnicode_Check(opt[0]) ? PyUnicode_AsUTF8(opt[0]) : NULL;
+    if (s && (!strcmp(s, "all") || !strcmp(s, "trans") || !strcmp(s, "rot"))) {
+        if (opt[1]) {
+            PyErr_Format(PyExc_ValueError,
+                         "axes given twice (%R and %R): pass frame= and axes= by keyword", opt[0], opt[1]);
+            return 0;
+        }
+        opt[1] = opt[0];
+        opt[0] = NULL;
+    }
+    return 1;
+}
+
 static PyObject *py_manipulability(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kw)
 {
-    PyObject *axes_obj;
-    if (!opt_arg_(args, nargs, kw, "manipulability(q, axes='all')", "axes", &axes_obj))
+    PyObject *opt[2];
+    if (!opt_args_(args, nargs, kw, "manipulability(q, frame=None, axes='all')", 2, frame_names_, opt))
         return NULL;
+    if (!frame_or_axes_(opt))
+        return NULL;
+    if (opt[0] && opt[0] != Py_None)
+        return PyObject_CallMethod(links_, "manipulability", "OOO", args[0], opt[0], opt[1] ? opt[1] : axes_all_);
     int axes;
-    if (!axes_(axes_obj, &axes))
+    if (!axes_(opt[1], &axes))
         return NULL;
     npy_intp N;
     int single;
@@ -459,11 +524,15 @@ static PyObject *py_manipulability(PyObject *self, PyObject *const *args, Py_ssi
 
 static PyObject *py_jacobm(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kw)
 {
-    PyObject *axes_obj;
-    if (!opt_arg_(args, nargs, kw, "jacobm(q, axes='all')", "axes", &axes_obj))
+    PyObject *opt[2];
+    if (!opt_args_(args, nargs, kw, "jacobm(q, frame=None, axes='all')", 2, frame_names_, opt))
         return NULL;
+    if (!frame_or_axes_(opt))
+        return NULL;
+    if (opt[0] && opt[0] != Py_None)
+        return PyObject_CallMethod(links_, "jacobm", "OOO", args[0], opt[0], opt[1] ? opt[1] : axes_all_);
     int axes;
-    if (!axes_(axes_obj, &axes))
+    if (!axes_(opt[1], &axes))
         return NULL;
     npy_intp N;
     int single;
@@ -490,14 +559,18 @@ static PyMethodDef methods_[] = {
      "jacob0(q, frame=None): Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."},
     {"jacobe", (PyCFunction)(void (*)(void))py_jacobe, METH_FASTCALL | METH_KEYWORDS,
      "jacobe(q, frame=None): End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."},
-    {"hessian0", (PyCFunction)py_hessian0, METH_O, "Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."},
-    {"hessiane", (PyCFunction)py_hessiane, METH_O, "End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."},
-    {"fkine_jacob0", (PyCFunction)py_fkine_jacob0, METH_O, "Pose (4, 4) and base-frame Jacobian (6, n) together."},
-    {"jacob0_hessian0", (PyCFunction)py_jacob0_hessian0, METH_O, "Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."},
+    {"hessian0", (PyCFunction)(void (*)(void))py_hessian0, METH_FASTCALL | METH_KEYWORDS,
+     "hessian0(q, frame=None): Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k (chain order, as link_poses)."},
+    {"hessiane", (PyCFunction)(void (*)(void))py_hessiane, METH_FASTCALL | METH_KEYWORDS,
+     "hessiane(q, frame=None): End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k (chain order, as link_poses)."},
+    {"fkine_jacob0", (PyCFunction)(void (*)(void))py_fkine_jacob0, METH_FASTCALL | METH_KEYWORDS,
+     "fkine_jacob0(q, frame=None): Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k (chain order, as link_poses)."},
+    {"jacob0_hessian0", (PyCFunction)(void (*)(void))py_jacob0_hessian0, METH_FASTCALL | METH_KEYWORDS,
+     "jacob0_hessian0(q, frame=None): Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k (chain order, as link_poses)."},
     {"manipulability", (PyCFunction)(void (*)(void))py_manipulability, METH_FASTCALL | METH_KEYWORDS,
-     "Manipulability sqrt(det(J J^T)) of the rows of J0 chosen by axes (eq 52)."},
+     "manipulability(q, frame=None, axes='all'): sqrt(det(J J^T)) of the rows of J0 chosen by axes (eq 52)."},
     {"jacobm", (PyCFunction)(void (*)(void))py_jacobm, METH_FASTCALL | METH_KEYWORDS,
-     "Manipulability Jacobian dm/dq (Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 11)."},
+     "jacobm(q, frame=None, axes='all'): manipulability Jacobian dm/dq (Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 11)."},
     {NULL, NULL, 0, NULL},
 };
 
@@ -524,7 +597,19 @@ PyMODINIT_FUNC PyInit__symkin_ur3_854be2fe5a47(void)
     if (!frame_index_)
         return NULL;
     PyObject *m = PyModule_Create(&module_);
-    if (m)
-        PyModule_AddIntConstant(m, "n", NQ);
+    if (!m || PyModule_AddIntConstant(m, "n", NQ) < 0 || !(axes_all_ = PyUnicode_InternFromString("all")))
+        return NULL;
+    PyObject *frames_mod = PyImport_ImportModule("symkin.model.frames");
+    PyObject *fkine = PyObject_GetAttrString(m, "fkine"), *jacob0 = PyObject_GetAttrString(m, "jacob0");
+    if (frames_mod && fkine && jacob0) /* the joints along the chain, base first */
+        links_ = PyObject_CallMethod(frames_mod, "LinkFrames", "isOON", NQ, "ur3", fkine, jacob0,
+                                     Py_BuildValue("(iiiiii)", 0, 1, 2, 3, 4, 5));
+    Py_XDECREF(frames_mod);
+    Py_XDECREF(fkine);
+    Py_XDECREF(jacob0);
+    if (!links_) {
+        Py_DECREF(m);
+        return NULL;
+    }
     return m;
 }

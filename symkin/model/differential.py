@@ -1,0 +1,352 @@
+"""What every frame's kinematics derive from its pose T, Jacobian J0 and Hessian H0 (numpy only).
+
+The numeric helpers (manipulability, its Jacobian, condition number, space Jacobian, dJ/dt,
+the end-effector-frame Hessian, the Hessian of a serial path from its Jacobian's columns) and
+:class:`FrameMethods`, the methods every kinematics object has once it gives ``fkine``,
+``jacob0``, ``jacobe``, ``fkine_jacob0`` and ``jacob0_hessian0`` of a frame: the numeric references
+(:class:`symkin.Robot`, :class:`symkin.Tree`) and the compiled :class:`symkin.Kinematics` share them.
+
+References: "eq N" are the equations of Haviland and Corke, Manipulator Differential Kinematics,
+Part 1 (IEEE Robotics and Automation Magazine, 2023); "MMC paper eq N" those of Haviland and Corke,
+Maximising Manipulability During Resolved-Rate Motion Control (arXiv, 2020).
+
+For one configuration the batched helpers (``numpy.linalg.det`` and ``inv`` over a stack) cost
+more than the kinematics: :func:`manipulability_one` takes ``m = sqrt(det(Jr Jr^T))`` from the
+closed form for the 3 x 3 Gram matrix of ``axes="trans"``/``"rot"`` and, for the 6 x 6 one of
+``axes="all"``, from symmetric Gaussian elimination written out as straight-line code (the product
+of the pivots; a non-positive pivot means a singular Jacobian and m = 0).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from symkin.core.arrays import AXES_ROWS, as_batch, axes_rows
+from symkin.errors import ConfigurationError, ParameterError
+from symkin.model.kinematics import cross
+
+__all__ = [
+    "FrameMethods",
+    "frame_and_rows",
+    "path_hessian",
+    "chain_hessian",
+    "rotate_rows",
+    "hessian_to_ee",
+    "cond_of",
+    "space_jacobian",
+    "jacob_dot_of",
+    "manipulability_of",
+    "jacobm_of",
+    "manipulability_one",
+    "jacobm_one",
+]
+
+
+def path_hessian(Jv: np.ndarray, Jw: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """Hessian (N, n, 6, n) of a frame from the geometric columns Jv, Jw (N, s, 3) of the s joint
+    slots on its path (base first; Jw = 0 for a prismatic slot): per pair of slots a, b, b at or
+    before a: ``dJ_a/dq_b = (w_b x Jv_a ; w_b x w_a)``, b after a: ``(w_a x Jv_b ; 0)`` (MMC paper
+    eq 20), contracted onto the joints by ``A`` (s, n): slot i moves joint j by ``A[i, j]``."""
+    s = Jv.shape[1]
+    X = cross(Jw[:, :, None, :], Jv[:, None, :, :])  # X[:, b, a] = w_b x v_a
+    Y = cross(Jw[:, :, None, :], Jw[:, None, :, :])
+    lower = np.triu(np.ones((s, s), dtype=bool))[None, :, :, None]  # b <= a
+    Hv = np.where(lower, X, np.swapaxes(X, 1, 2))
+    Hw = np.where(lower, Y, 0.0)
+    Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
+    return np.einsum("bk,Nbar,ai->Nkri", A, Hs, A)
+
+
+def chain_hessian(J: np.ndarray, order: Sequence[int]) -> np.ndarray:
+    """Base-frame Hessian (N, n, 6, n) of a frame of a serial chain from its J0 (N, 6, n):
+    ``order[k]`` is the joint met k-th from the base (columns of joints after the frame are 0)."""
+    o = list(order)
+    A = np.zeros((len(o), J.shape[-1]))
+    A[range(len(o)), o] = 1.0
+    return path_hessian(np.swapaxes(J[:, :3, o], 1, 2), np.swapaxes(J[:, 3:, o], 1, 2), A)
+
+
+def frame_and_rows(frame: Any, axes: Any, frames: Sequence[str] = ()) -> tuple[Any, slice]:
+    """``(frame, rows of J0)`` of ``manipulability``/``jacobm``/``cond(q, frame, axes)``. A second
+    positional argument that names axes ("all", "trans", "rot") and no frame of the model is the
+    axes: a chain's ``manipulability(q, "trans")`` keeps working."""
+    if isinstance(frame, str) and frame in AXES_ROWS and frame not in frames:
+        if axes != "all":
+            raise ParameterError(
+                f"axes given twice ({frame!r} and {axes!r}): pass frame= and axes= by keyword"
+            )
+        return None, AXES_ROWS[frame]
+    return frame, axes_rows(axes)
+
+
+def _at(method: Any, q: Any, frame: Any) -> Any:
+    """``method(q)`` for the default frame (a chain-like object's methods may take q alone), else
+    ``method(q, frame)``."""
+    return method(q) if frame is None else method(q, frame)
+
+
+class FrameMethods:
+    """The methods that follow from a frame's ``fkine``, ``jacob0``, ``jacobe``, ``fkine_jacob0``
+    and ``jacob0_hessian0`` (each ``(q, frame=None)``): every kinematics object of symkin has them,
+    with the same signatures, shapes and errors. ``frame=None`` is the end effector of a chain and
+    the only frame of a one-frame tree."""
+
+    n: int
+    name: str
+
+    def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
+        return as_batch(q, self.n, self.name)
+
+    def hessian0(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Base-frame manipulator Hessian of ``frame`` (MMC paper eq 20): (n, 6, n) or (N, n, 6, n),
+        ``H[i] = dJ0/dq_i``."""
+        return _at(self.jacob0_hessian0, q, frame)[1]  # type: ignore[attr-defined]
+
+    def hessiane(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Hessian of ``frame`` in that frame, ``He[i] = dJe/dq_i = blkdiag(R^T)(H0[i] -
+        blkdiag([w_i]x) J0)``: (n, 6, n) or (N, n, 6, n)."""
+        Q, single = self._batch(q)
+        T = _at(self.fkine, Q, frame)  # type: ignore[attr-defined]
+        J, H = _at(self.jacob0_hessian0, Q, frame)  # type: ignore[attr-defined]
+        He = hessian_to_ee(T, J, H)
+        return He[0] if single else He
+
+    def manipulability(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
+        """Yoshikawa manipulability ``sqrt(det(J J^T))`` (eq 52) of the chosen rows of the J0 of
+        ``frame``: float, or (N,) for a batch."""
+        frame, rows = frame_and_rows(frame, axes, getattr(self, "frames", ()))
+        Q, single = self._batch(q)
+        if single:
+            return manipulability_one(_at(self.jacob0, Q[0], frame)[rows])  # type: ignore[attr-defined]
+        return manipulability_of(_at(self.jacob0, Q, frame)[:, rows])  # type: ignore[attr-defined]
+
+    def jacobm(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray:
+        """Manipulability Jacobian dm/dq of ``frame`` (MMC paper eq 11): (n,) or (N, n)."""
+        frame, rows = frame_and_rows(frame, axes, getattr(self, "frames", ()))
+        Q, single = self._batch(q)
+        if single:
+            J, H = _at(self.jacob0_hessian0, Q[0], frame)  # type: ignore[attr-defined]
+            return jacobm_one(J[rows], H[:, rows])
+        J, H = _at(self.jacob0_hessian0, Q, frame)  # type: ignore[attr-defined]
+        return jacobm_of(J[:, rows], H[:, :, rows])
+
+    def cond(self, q: Any, frame: Any = None, axes: str = "all") -> np.ndarray | float:
+        """Condition number sigma_max / sigma_min of the chosen rows of the J0 of ``frame`` (eq 53);
+        inf when singular (see :func:`cond_of`)."""
+        frame, rows = frame_and_rows(frame, axes, getattr(self, "frames", ()))
+        Q, single = self._batch(q)
+        c = cond_of(_at(self.jacob0, Q, frame)[:, rows])  # type: ignore[attr-defined]
+        return float(c[0]) if single else c
+
+    def jacobs(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Space Jacobian of Lynch and Park's Modern Robotics: (6, n) or (N, 6, n), rows
+        (omega, v_s) with v_s = v - omega x p the velocity of the point at the base origin."""
+        Q, single = self._batch(q)
+        Js = space_jacobian(*_at(self.fkine_jacob0, Q, frame))  # type: ignore[attr-defined]
+        return Js[0] if single else Js
+
+    def jacobb(self, q: Any, frame: Any = None) -> np.ndarray:
+        """Body Jacobian of Modern Robotics: (6, n) or (N, 6, n), rows (omega, v) in ``frame``
+        (``jacobe`` with its row blocks swapped)."""
+        Je = _at(self.jacobe, q, frame)  # type: ignore[attr-defined]
+        return np.concatenate((Je[..., 3:, :], Je[..., :3, :]), axis=-2)
+
+    def jacob0_dot(self, q: Any, qd: Any, frame: Any = None) -> np.ndarray:
+        """dJ0/dt = sum_i H0[i] qd_i of ``frame`` at joint velocity ``qd`` (Haviland and Corke,
+        Manipulator Differential Kinematics, Part 2, 2023; roboticstoolbox's ``jacob0_dot``): (6, n),
+        or (N, 6, n) for q and qd of shape (N, n). Rows (v, omega), base frame."""
+        Q, single = self._batch(q)
+        Qd, _ = as_batch(qd, self.n, self.name, "qd")
+        if Qd.shape[0] != Q.shape[0]:
+            raise ConfigurationError(f"q and qd hold {Q.shape[0]} and {Qd.shape[0]} configurations")
+        Jd = jacob_dot_of(_at(self.hessian0, Q, frame), Qd)
+        return Jd[0] if single else Jd
+
+
+def rotate_rows(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """blkdiag(R^T, R^T) @ J for batches: T (N, 4, 4), J (N, 6, k) or (N, m, 6, k)."""
+    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
+    if J.ndim == 4:
+        Rt = Rt[:, None]
+    return np.concatenate((Rt @ J[..., :3, :], Rt @ J[..., 3:, :]), axis=-2)
+
+
+def hessian_to_ee(T: np.ndarray, J: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """End-effector-frame Hessian from base-frame T (N,4,4), J (N,6,n), H (N,n,6,n)."""
+    wi = np.swapaxes(J[:, 3:], 1, 2)[:, :, None, :]  # (N, i, 1, 3): omega_i
+    Jv = np.swapaxes(J[:, :3], 1, 2)[:, None]  # (N, 1, a, 3)
+    Jw = np.swapaxes(J[:, 3:], 1, 2)[:, None]
+    cv = np.swapaxes(cross(wi, Jv), 2, 3)  # (N, i, 3, a): omega_i x Jv_a
+    cw = np.swapaxes(cross(wi, Jw), 2, 3)
+    D = H - np.concatenate((cv, cw), axis=2)
+    return rotate_rows(T, D)
+
+
+def cond_of(J: np.ndarray) -> np.ndarray:
+    """sigma_max / sigma_min per batch item of J (N, r, n) (eq 53), inf where J is rank-deficient:
+    fewer columns than rows, or sigma_min <= sigma_max * max(r, n) * eps (NumPy's matrix_rank
+    tolerance: below it sigma_min is rounding noise, e.g. 1e-17 at a singular configuration)."""
+    r, n = J.shape[-2:]
+    if J.shape[0] == 0:
+        return np.zeros(0)
+    s = np.linalg.svd(J, compute_uv=False)
+    if n < r:
+        return np.full(J.shape[0], np.inf)
+    singular = s[:, -1] <= s[:, 0] * max(r, n) * np.finfo(float).eps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(singular, np.inf, s[:, 0] / np.where(singular, 1.0, s[:, -1]))
+
+
+def space_jacobian(T: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """Space Jacobian (rows (omega, v_s), v_s = v_e - omega x p_e) from T (N, 4, 4), J0 (N, 6, n)."""
+    p = T[:, None, :3, 3]
+    Jv, Jw = np.swapaxes(J[:, :3], 1, 2), np.swapaxes(J[:, 3:], 1, 2)
+    vs = Jv - cross(Jw, p)
+    return np.concatenate((J[:, 3:], np.swapaxes(vs, 1, 2)), axis=1)
+
+
+def jacob_dot_of(H: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """``sum_i H[:, i] qd[:, i]`` for batches: H (N, n, 6, n), qd (N, n) -> (N, 6, n)."""
+    return np.einsum("Nirj,Ni->Nrj", H, qd)
+
+
+def manipulability_of(J: np.ndarray) -> np.ndarray:
+    """sqrt(det(J J^T)) per batch item of J (N, r, n); 0 where J J^T is singular (eq 52), exactly 0
+    with fewer joints than rows (det would be rounding noise)."""
+    if J.shape[-1] < J.shape[-2]:
+        return np.zeros(J.shape[0])
+    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular J J^T
+        d = np.linalg.det(J @ np.swapaxes(J, 1, 2))
+    return np.sqrt(np.maximum(np.nan_to_num(d, nan=0.0), 0.0))
+
+
+def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """Manipulability Jacobian (MMC paper eq 11): J (N, r, n), H (N, n, r, n) -> (N, n).
+
+    ``Jm_i = m vec(J H_i^T)^T vec((J J^T)^-1)``; at a singular configuration (m = 0) the
+    pseudo-inverse keeps the result finite.
+    """
+    if J.shape[-1] < J.shape[-2]:  # m = 0 for every q: so is its gradient
+        return np.zeros((J.shape[0], J.shape[-1]))
+    A = J @ np.swapaxes(J, 1, 2)
+    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular A
+        m = np.sqrt(np.maximum(np.nan_to_num(np.linalg.det(A), nan=0.0), 0.0))
+    try:
+        Ainv = np.linalg.inv(A)
+        if not np.isfinite(Ainv).all():
+            raise np.linalg.LinAlgError
+    except np.linalg.LinAlgError:
+        Ainv = np.linalg.pinv(A, hermitian=True)
+    JH = np.einsum("Nrk,Nisk->Nirs", J, H)  # J H_i^T
+    return m[:, None] * np.einsum("Nirs,Nrs->Ni", JH, Ainv)
+
+
+def manipulability_one(Jr: np.ndarray) -> float:
+    """sqrt(det(Jr Jr^T)) (eq 52) of one (r, n) Jacobian, r = 3 or 6 (other r: numpy's det);
+    0 where Jr Jr^T is singular, exactly 0 with fewer joints than rows."""
+    if Jr.shape[1] < Jr.shape[0]:
+        return 0.0
+    G = (Jr @ Jr.T).tolist()
+    r = len(G)
+    if r == 6:
+        d = _det6_spd(G)
+    elif r == 3:
+        (a, b, c), (_, e, f), (_, _, i) = G
+        d = a * (e * i - f * f) - b * (b * i - f * c) + c * (b * f - e * c)
+    else:
+        d = float(np.linalg.det(np.array(G))) if r else 1.0
+    return math.sqrt(d) if d > 0.0 else 0.0
+
+
+def jacobm_one(Jr: np.ndarray, Hr: np.ndarray) -> np.ndarray:
+    """Manipulability Jacobian (MMC paper eq 11) of one configuration: Jr (r, n), Hr (n, r, n) -> (n,),
+    ``Jm_i = m sum(H_i * (Jr Jr^T)^-1 Jr)``; zeros where Jr Jr^T is singular (m = 0)."""
+    m = manipulability_one(Jr)
+    if m == 0.0:
+        return np.zeros(Hr.shape[0])
+    return m * np.einsum("irk,rk->i", Hr, np.linalg.solve(Jr @ Jr.T, Jr))
+
+
+def _det6_spd(G: list[list[float]]) -> float:
+    """det G of a symmetric 6 x 6 G (nested lists) by Gaussian elimination on its upper triangle,
+    written out; 0 at a non-positive pivot (G singular or not positive definite)."""
+    a00, a01, a02, a03, a04, a05 = G[0]
+    _, a11, a12, a13, a14, a15 = G[1]
+    _, _, a22, a23, a24, a25 = G[2]
+    _, _, _, a33, a34, a35 = G[3]
+    _, _, _, _, a44, a45 = G[4]
+    _, _, _, _, _, a55 = G[5]
+    det = 1.0
+    if not a00 > 0.0:
+        return 0.0
+    det *= a00
+    f = a01 / a00
+    a11 -= f * a01
+    a12 -= f * a02
+    a13 -= f * a03
+    a14 -= f * a04
+    a15 -= f * a05
+    f = a02 / a00
+    a22 -= f * a02
+    a23 -= f * a03
+    a24 -= f * a04
+    a25 -= f * a05
+    f = a03 / a00
+    a33 -= f * a03
+    a34 -= f * a04
+    a35 -= f * a05
+    f = a04 / a00
+    a44 -= f * a04
+    a45 -= f * a05
+    f = a05 / a00
+    a55 -= f * a05
+    if not a11 > 0.0:
+        return 0.0
+    det *= a11
+    f = a12 / a11
+    a22 -= f * a12
+    a23 -= f * a13
+    a24 -= f * a14
+    a25 -= f * a15
+    f = a13 / a11
+    a33 -= f * a13
+    a34 -= f * a14
+    a35 -= f * a15
+    f = a14 / a11
+    a44 -= f * a14
+    a45 -= f * a15
+    f = a15 / a11
+    a55 -= f * a15
+    if not a22 > 0.0:
+        return 0.0
+    det *= a22
+    f = a23 / a22
+    a33 -= f * a23
+    a34 -= f * a24
+    a35 -= f * a25
+    f = a24 / a22
+    a44 -= f * a24
+    a45 -= f * a25
+    f = a25 / a22
+    a55 -= f * a25
+    if not a33 > 0.0:
+        return 0.0
+    det *= a33
+    f = a34 / a33
+    a44 -= f * a34
+    a45 -= f * a35
+    f = a35 / a33
+    a55 -= f * a35
+    if not a44 > 0.0:
+        return 0.0
+    det *= a44
+    f = a45 / a44
+    a55 -= f * a45
+    if not a55 > 0.0:
+        return 0.0
+    det *= a55
+    return det
