@@ -44,11 +44,12 @@ from symkin.derive.common import (  # noqa: F401
     generator,
     latex_document,
     ops_of,
+    shared_context,
 )
 from symkin.emit.templates import render
 from symkin.errors import SymkinError
 from symkin.model.ets import ET, ETS, Axis
-from symkin.model.latex import display_name, et_latex, ets_latex
+from symkin.model.latex import et_latex, ets_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.kinematics import derive
 
@@ -289,44 +290,21 @@ _FAST_RULE = {
 
 def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     """The template's context (every math string ready-made) and the LaTeX summary for Jupyter."""
-    from symkin.core.version import __version__
-
-    robot, q, n, ets = D.robot, D.q, len(D.q), D.robot.ets
+    q, n, ets = D.q, len(D.q), D.robot.ets
     C = constants(ets, bool(D.constants))
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
     P = Printer(q)
     full = n <= FULL_MAX_N
     ctx: dict[str, Any] = {
-        "robot": display_name(robot.name),
-        "n": n,
-        "structure": ets.structure,
-        "M": len(ets),
-        "source": robot.source.rstrip(".") + ". " if robot.source else "",
-        "version": __version__,
-        "joint_map": ", ".join(f"$q_{{{j + 1}}}$ is `q{j}`" for j in range(n)),
+        **shared_context(D, P, C),
         "full": full,
         "full_max_n": FULL_MAX_N,
-        "ets": ets_latex(ets, names=C.names),
         "what": "compact forms, each proved equal to the literal products of the equations"
         if D.simplified
         else "the literal products of the equations, not simplified",
-        "checks": "; ".join(f"{k}: {CHECK_TEXT[v]}" for k, v in D.checks.items()),
         "same": CHECK_TEXT[D.checks["J0 = J0_fast"]],
         "jacobian": P.matrix(D.J0_fast),
     }
-    kinds = {True: "revolute", False: "prismatic"}
-    ctx["joints"] = [
-        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",
-         kinds[ets[mu[j]].is_revolute],
-         f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
-        for j in range(n)
-    ]  # fmt: skip
-    ctx["constants"] = [
-        [f"${sp.latex(s)}$", f"$E_{{{C.factor[s] + 1}}}$", f"${P(v)}$"] for s, v in C.values.items()
-    ]
-    ctx["factors"] = [
-        f"E_{{{k + 1}}} = {et_latex(e, C.names.get(k))} = {P.matrix(D.E[k])}" for k, e in enumerate(ets)
-    ]
     ctx["links"] = [_pose_tex(P, D.links[j], f"{{}}^{{0}}T_{{{j + 1}}}") for j in range(n)]
     T = D.T
     position = (
@@ -411,12 +389,9 @@ def derive_steps(
         raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
     if form not in FORMS:
         raise SymkinError(f"unknown form {form!r}: choose one of {', '.join(FORMS)}")
-    if isinstance(robot, ETS):
-        robot = Robot(robot, name="ets_robot")
-    elif not isinstance(robot, Robot):
-        from symkin.model.resolve import resolve_robot
+    from symkin.model.resolve import resolve_robot
 
-        robot = resolve_robot(robot)
+    robot = resolve_robot(robot)
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: nothing to derive")
     if form == "auto":

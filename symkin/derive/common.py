@@ -20,6 +20,7 @@ from symkin.symbolic.kinematics import const_to_sympy
 
 __all__ = [
     "CHECK_TEXT",
+    "shared_context",
     "FORMATS",
     "SECTIONS",
     "Constants",
@@ -315,3 +316,41 @@ CHECK_TEXT = {
     "numeric": "the difference vanishes at 3 random points to 30 digits (too large to expand symbolically)",
     "failed": "NOT equal",
 }
+
+
+def shared_context(D: Any, P: Printer, C: Constants) -> dict[str, Any]:
+    """What the chain's and the program's written derivations both show: the robot, its ETS, the
+    joints (each with its factor), the named constants, every factor as a matrix, the checks."""
+    from symkin.core.version import __version__
+    from symkin.model.latex import display_name, et_latex, ets_latex
+
+    robot, n, ets = D.robot, len(D.q), D.robot.ets
+    mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
+    kinds = {True: "revolute", False: "prismatic"}
+    return {
+        "robot": display_name(robot.name),
+        "n": n,
+        "structure": ets.structure,
+        "M": len(ets),
+        "source": robot.source.rstrip(".") + ". " if robot.source else "",
+        "version": __version__,
+        "joint_map": ", ".join(f"$q_{{{j + 1}}}$ is `q{j}`" for j in range(n)),
+        "ets": ets_latex(ets, names=C.names),
+        "checks": "; ".join(f"{k}: {CHECK_TEXT[v]}" for k, v in D.checks.items()),
+        "joints": [
+            [
+                f"$q_{{{j + 1}}}$",
+                f"`q{j}`",
+                f"`{display_name(robot.joint_names[j])}`",
+                kinds[ets[mu[j]].is_revolute],
+                f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$",
+            ]
+            for j in range(n)
+        ],  # fmt: skip
+        "constants": [
+            [f"${sp.latex(s)}$", f"$E_{{{C.factor[s] + 1}}}$", f"${P(v)}$"] for s, v in C.values.items()
+        ],
+        "factors": [
+            f"E_{{{k + 1}}} = {et_latex(e, C.names.get(k))} = {P.matrix(D.E[k])}" for k, e in enumerate(ets)
+        ],
+    }

@@ -21,7 +21,7 @@ import sympy as sp
 from sympy.printing.pycode import MpmathPrinter
 
 from symkin.model.ets import ETS, Axis
-from symkin.model.latex import display_name, et_latex, ets_latex
+from symkin.model.latex import ets_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.program import KinematicProgram, derive_program, needed_lines
 
@@ -183,10 +183,9 @@ def _diff(a: Sequence[Any], b: Sequence[Any]) -> float:
 
 def program_context(D: Any) -> tuple[dict[str, Any], str]:
     """The template context of ``derive/program.md.j2`` and the LaTeX summary for Jupyter."""
-    from symkin.core.version import __version__
-    from symkin.derive.common import CHECK_TEXT, Printer, constants
+    from symkin.derive.common import Printer, constants, shared_context
 
-    robot, q, n, ets = D.robot, D.q, len(D.q), D.robot.ets
+    q, n, ets = D.q, len(D.q), D.robot.ets
     C = constants(ets, bool(D.constants))
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
     P = Printer(q)
@@ -194,31 +193,7 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
         P.names[s] = f"\\zeta_{{{i}}}"
     lines = [(s, e) for s, e in D.intermediates]
     ends = dict(D.sections)
-    kinds = {True: "revolute", False: "prismatic"}
-    ctx: dict[str, Any] = {
-        "robot": display_name(robot.name),
-        "n": n,
-        "structure": ets.structure,
-        "M": len(ets),
-        "source": robot.source.rstrip(".") + ". " if robot.source else "",
-        "version": __version__,
-        "joint_map": ", ".join(f"$q_{{{j + 1}}}$ is `q{j}`" for j in range(n)),
-        "ets": ets_latex(ets, names=C.names),
-        "nodes": len(lines),
-        "checks": "; ".join(f"{k}: {CHECK_TEXT[v]}" for k, v in D.checks.items()),
-    }
-    ctx["joints"] = [
-        [f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(robot.joint_names[j])}`",
-         kinds[ets[mu[j]].is_revolute],
-         f"$E_{{{mu[j] + 1}}} = {et_latex(ets[mu[j]])}$"]
-        for j in range(n)
-    ]  # fmt: skip
-    ctx["constants"] = [
-        [f"${sp.latex(s)}$", f"$E_{{{C.factor[s] + 1}}}$", f"${P(v)}$"] for s, v in C.values.items()
-    ]
-    ctx["factors"] = [
-        f"E_{{{k + 1}}} = {et_latex(e, C.names.get(k))} = {P.matrix(D.E[k])}" for k, e in enumerate(ets)
-    ]
+    ctx: dict[str, Any] = {**shared_context(D, P, C), "nodes": len(lines)}
     order = [e.joint for e in ets if e.joint is not None]
     steps = []
     start = 0

@@ -119,6 +119,8 @@ class FrameMethods:
         """Yoshikawa manipulability ``sqrt(det(J J^T))`` (eq 52) of the chosen rows of the J0 of
         ``frame``: float, or (N,) for a batch."""
         frame, rows = frame_and_rows(frame, axes, getattr(self, "frames", ()))
+        if type(q) is np.ndarray and q.ndim == 1:  # one configuration: jacob0 checks q
+            return manipulability_one(_at(self.jacob0, q, frame)[rows])  # type: ignore[attr-defined]
         Q, single = self._batch(q)
         if single:
             return manipulability_one(_at(self.jacob0, Q[0], frame)[rows])  # type: ignore[attr-defined]

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from symkin.errors import RobotError
+from symkin.model.ets import ETS
 from symkin.model.robot import Robot
 
 __all__ = ["resolve_robot"]
@@ -18,8 +19,8 @@ __all__ = ["resolve_robot"]
 _URDF_SUFFIXES = (".urdf", ".xml", ".xacro")  # .xacro: refused by the URDF reader, with how to expand it
 
 
-def resolve_robot(spec: str | Robot, tool: Any = None, base: Any = None) -> Robot:
-    """A Robot from a built-in name (``panda``), ETS text (``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table
+def resolve_robot(spec: str | Robot | ETS, tool: Any = None, base: Any = None) -> Robot:
+    """A Robot from a built-in name (``panda``), an ETS, ETS text (``"Rz(q) tx(1) Rz(q) tx(1)"``), a DH table
     file, a URDF file or ``path.urdf:FRAME`` (the chain from the root to link FRAME).
 
     ``tool``/``base``: a constant transform appended after the end effector / placed before the
@@ -34,9 +35,11 @@ def resolve_robot(spec: str | Robot, tool: Any = None, base: Any = None) -> Robo
     return robot
 
 
-def _resolve(spec: str | Robot) -> Robot:
+def _resolve(spec: str | Robot | ETS) -> Robot:
     if isinstance(spec, Robot):
         return spec
+    if isinstance(spec, ETS):
+        return Robot(spec, name="ets_robot")
     from symkin.model.robots import list_robots, load
 
     if not isinstance(spec, str):

@@ -51,6 +51,7 @@ __all__ = [
     "URDFGraph",
     "URDFJoint",
     "read_graph",
+    "joint_limits",
     "urdf_args",
     "axis_ets",
     "translation_ets",
@@ -503,6 +504,25 @@ def read_graph(path_or_xml: str | Path) -> URDFGraph:
     return graph
 
 
+def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
+    """(lower, upper, velocity) of a movable joint: +-pi (revolute) or +-1 m without limits, the
+    velocity NaN when not given or not positive."""
+    what = f"joint {j.name!r}"
+    lim = j.el.find("limit")
+    default = math.pi if j.kind != "prismatic" else 1.0
+    lo, hi = -default, default
+    if lim is not None and j.kind != "continuous":
+        if lim.get("lower") is not None:
+            lo = float(_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
+        if lim.get("upper") is not None:
+            hi = float(_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
+        if lo > hi:
+            raise URDFError(f"{where}: {what} has limit lower {lo} > upper {hi}")
+    vel = lim.get("velocity") if lim is not None else None
+    v = float(_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else math.nan
+    return lo, hi, v if v > 0 else math.nan
+
+
 def urdf_args(
     path_or_xml: str | Path,
     base_link: str | None = None,
@@ -527,7 +547,7 @@ def urdf_args(
         end_link = leaves[0]
     else:
         graph.check_link(end_link, "end_link")
-    path: list[ElementTree.Element] = []
+    path: list[URDFJoint] = []
     ln = end_link
     while ln != base_link:
         if ln not in graph.parent_joint:
@@ -535,13 +555,14 @@ def urdf_args(
                 f"{where}: there is no path from base_link {base_link!r} down to end_link {end_link!r} "
                 f"(walking up from {end_link!r} reached the root {ln!r})"
             )
-        path.append(graph.parent_joint[ln].el)
+        path.append(graph.parent_joint[ln])
         ln = graph.parent_joint[ln].parent
     path.reverse()
 
     chain: list[ET] = []
     lower, upper, qd, names = [], [], [], []
-    for jel in path:
+    for j in path:
+        jel = j.el
         jname = jel.get("name") or "<unnamed>"
         jtype = jel.get("type")
         what = f"joint {jname!r}"
@@ -567,26 +588,16 @@ def urdf_args(
         u = joint_axis(jel, what, where, snap_tol)
         chain += [snap_atan2(e, snap_tol) for e in axis_ets(u, len(names), revolute=jtype != "prismatic")]
         names.append(jname)
-        lim = jel.find("limit")
-        default = math.pi if jtype != "prismatic" else 1.0
-        lo, hi = -default, default
-        if lim is not None and jtype != "continuous":
-            if lim.get("lower") is not None:
-                lo = float(_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
-            if lim.get("upper") is not None:
-                hi = float(_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
-            if lo > hi:
-                raise URDFError(f"{where}: {what} has limit lower {lo} > upper {hi}")
+        lo, hi, v = joint_limits(j, where)
         lower.append(lo)
         upper.append(hi)
-        vel = lim.get("velocity") if lim is not None else None
-        qd.append(float(_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else None)
+        qd.append(v)
     if not names:
         raise URDFError(
             f"{where}: no revolute, continuous or prismatic joint between {base_link!r} and {end_link!r}"
         )
     robot_name = name or graph.name
-    qd_max = qd if all(v is not None and v > 0 for v in qd) else None
+    qd_max = None if any(math.isnan(v) for v in qd) else qd
     return dict(
         ets=ETS(tuple(chain)),
         name=robot_name,

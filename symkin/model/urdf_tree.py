@@ -15,7 +15,6 @@ path are refused: name a ``base_link`` below them.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
@@ -32,6 +31,7 @@ from symkin.model.urdf import (
     _suggest,
     axis_ets,
     joint_axis,
+    joint_limits,
     joint_origin,
     read_graph,
     snap_angle,
@@ -58,24 +58,6 @@ def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> lis
         return out
     u = joint_axis(j.el, what, graph.where, snap_tol)
     return out + [snap_atan2(e, snap_tol) for e in axis_ets(u, slot, revolute=j.kind != "prismatic")]
-
-
-def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
-    """(lower, upper, velocity) of a movable joint; velocity NaN when not given (as urdf_args)."""
-    what = f"joint {j.name!r}"
-    lim = j.el.find("limit")
-    default = math.pi if j.kind != "prismatic" else 1.0
-    lo, hi = -default, default
-    if lim is not None and j.kind != "continuous":
-        if lim.get("lower") is not None:
-            lo = float(_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
-        if lim.get("upper") is not None:
-            hi = float(_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
-        if lo > hi:
-            raise URDFError(f"{where}: {what} has limit lower {lo} > upper {hi}")
-    vel = lim.get("velocity") if lim is not None else None
-    v = float(_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else math.nan
-    return lo, hi, v if v > 0 else math.nan
 
 
 def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fraction] | None:

@@ -40,12 +40,9 @@ def symbolic(robot: Robot | ETS | str, form: str = "expanded") -> Any:
     """
     if form not in FORMS:
         raise SymkinError(f"unknown form {form!r}: choose one of {', '.join(FORMS)}")
-    if isinstance(robot, ETS):
-        robot = Robot(robot, name="ets_robot")
-    elif not isinstance(robot, Robot):
-        from symkin.model.resolve import resolve_robot
+    from symkin.model.resolve import resolve_robot
 
-        robot = resolve_robot(robot)
+    robot = resolve_robot(robot)
     if robot.n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints")
     from symkin.symbolic.kinematics import const_to_sympy, derive, joint_symbols

@@ -24,6 +24,7 @@ from symkin.workspace.run import client_for, require_scale, run_blocks
 from symkin.workspace.store import (
     damaged_blocks,
     open_store,
+    open_stored,
     read_array,
     read_marks,
     reset_blocks,
@@ -154,11 +155,4 @@ def _load(group: Any, path: str | None, stats: dict[str, float] | None) -> Datas
 
 def open_dataset(path: str | Path) -> Dataset:
     """The (q, pose) dataset stored at ``path``."""
-    zarr = zarr_module()
-    try:
-        group = zarr.open_group(str(path), mode="r")
-    except Exception as exc:  # noqa: BLE001
-        raise WorkspaceError(f"cannot open the dataset {path}: {exc}") from None
-    if dict(group.attrs).get("kind") != "dataset":
-        raise WorkspaceError(f"{path} does not hold a symkin dataset")
-    return _load(group, str(path), None)
+    return _load(open_stored(path, "dataset"), str(path), None)

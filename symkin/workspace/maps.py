@@ -28,12 +28,12 @@ from symkin.workspace.run import client_for, require_scale, run_blocks
 from symkin.workspace.store import (
     damaged_blocks,
     open_store,
+    open_stored,
     read_array,
     read_marks,
     reset_blocks,
     robot_attrs,
     unreadable_chunks,
-    zarr_module,
 )
 
 __all__ = ["ReachMap", "reachability", "open_map", "kinematics_of", "MAP_IK_DEFAULTS"]
@@ -332,11 +332,4 @@ def open_map(path: str | Path) -> ReachMap:
 
     A damaged chunk is a WorkspaceError naming it (``reachability`` with the same settings on the
     store recomputes its blocks)."""
-    zarr = zarr_module()
-    try:
-        group = zarr.open_group(str(path), mode="r")
-    except Exception as exc:  # noqa: BLE001
-        raise WorkspaceError(f"cannot open the map {path}: {exc}") from None
-    if dict(group.attrs).get("kind") != "reachability":
-        raise WorkspaceError(f"{path} does not hold a symkin reachability map")
-    return _load_map(group, str(path), None)
+    return _load_map(open_stored(path, "reachability"), str(path), None)

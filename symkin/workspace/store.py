@@ -27,6 +27,7 @@ from symkin.errors import MissingExtraError, WorkspaceError
 __all__ = [
     "zarr_module",
     "open_store",
+    "open_stored",
     "robot_attrs",
     "read_array",
     "read_marks",
@@ -47,6 +48,19 @@ def zarr_module() -> Any:
     except ImportError:
         raise MissingExtraError(f"workspace maps and datasets need zarr and dask: {SCALE_HINT}") from None
     return zarr
+
+
+def open_stored(path: Any, kind: str) -> Any:
+    """The zarr group at ``path`` holding a symkin store of ``kind`` ("reachability" or
+    "dataset"), read-only; WorkspaceError when it cannot be opened or holds something else."""
+    what = "map" if kind == "reachability" else kind
+    try:
+        group = zarr_module().open_group(str(path), mode="r")
+    except Exception as exc:  # noqa: BLE001
+        raise WorkspaceError(f"cannot open the {what} {path}: {exc}") from None
+    if dict(group.attrs).get("kind") != kind:
+        raise WorkspaceError(f"{path} does not hold a symkin {'reachability map' if what == 'map' else kind}")
+    return group
 
 
 def robot_attrs(robot: Any) -> dict[str, Any]:
