@@ -31,6 +31,7 @@ The C solver (:mod:`symkin.runtime.ik_c`) runs the same loop with the same rando
 
 from __future__ import annotations
 
+import functools
 import math
 import weakref
 from collections.abc import Sequence
@@ -297,12 +298,29 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
     return np.array(out)
 
 
+IK_OPTIONS = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
+              "starts")  # fmt: skip
+"""The options of :func:`ik` that make a solver (``q0`` and ``seed`` vary per call)."""
+
+
+def c_solver_with(kin: Any, options: dict[str, Any]) -> Any:
+    """The C solver of ``ik(kin, Tep, backend="c", **options)`` (``options``: names of
+    :data:`IK_OPTIONS`, the others at their defaults), memoised like any other."""
+    defaults = _ik_defaults()
+    args = tuple(options[k] if k in options else defaults[k] for k in IK_OPTIONS)
+    try:
+        return _C_SOLVERS[kin][args]
+    except (KeyError, TypeError):
+        return _c_solver(kin, args)
+
+
 def default_c_solver(kin: Any) -> Any:
-    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default
-    (memoised like any other: per kinematics object and options)."""
+    """The C solver of ``ik(kin, Tep, backend="c")`` with every other option at its default."""
+    return c_solver_with(kin, {})
+
+
+@functools.cache
+def _ik_defaults() -> dict[str, Any]:
     import inspect
 
-    defaults = inspect.signature(ik).parameters
-    names = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
-             "starts")  # fmt: skip
-    return _c_solver(kin, tuple(defaults[k].default for k in names))
+    return {k: p.default for k, p in inspect.signature(ik).parameters.items()}

@@ -33,6 +33,10 @@ from symkin.runtime.memo import memoised
 __all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
 
 C_IK_MAX_JOINTS = 12  # SYMKIN_IK_NMAX of the C solver; longer chains use the NumPy solver
+_FAST_KEYS = frozenset(
+    ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits",
+     "we", "starts", "q0", "seed", "backend")
+)  # fmt: skip
 
 KIN_METHODS = (
     "fkine",
@@ -117,7 +121,7 @@ class Kinematics(FrameMethods):
         for name, fn in functions.items():
             setattr(self, name, fn)
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
-        self._ik_fast: Callable[[Any], Any] | None = None  # its solve of one target (None: check)
+        self._ik_by_options: dict[tuple, Any] = {}  # C IK solvers by keyword options (see ik)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
 
     # -- what the model says -----------------------------------------------------------------
@@ -286,11 +290,26 @@ class Kinematics(FrameMethods):
         redundant arm ``free_joint=j`` sweeps joint ``j`` (64 values over its limits, or one turn,
         plus ``q0[j]``) and ``free_joint=(j, values)`` tries the given values; see :meth:`ik_all`.
         """
-        if not kwargs and self._ik_fast is not None and frame is None:
-            res = self._ik_fast(Tep)
-            return res if res is not None else self._ik_solver.solve(Tep)  # None: Tep needs checking
+        if frame is None and self._ik_by_options:  # options seen before: straight to their C solver
+            q0, seed = kwargs.pop("q0", None), kwargs.pop("seed", None)
+            try:
+                solver = self._ik_by_options[tuple(kwargs.items())]
+            except (KeyError, TypeError):  # new or unhashable options: made and checked below
+                kwargs.update({k: v for k, v in (("q0", q0), ("seed", seed)) if v is not None})
+            else:
+                res = solver.fast(Tep, q0, seed) if solver.fast is not None else None
+                return res if res is not None else solver.solve(Tep, q0, seed)  # None: needs checking
         if frame is not None or self.is_tree:
             return self.select(frame).ik(Tep, **kwargs)
+        c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
+        fast = kwargs.keys() <= _FAST_KEYS and kwargs.get("method") != "analytic"
+        if c_loop and fast and kwargs.get("backend", "c") == "c":
+            q0, seed = kwargs.pop("q0", None), kwargs.pop("seed", None)
+            kwargs.pop("backend", None)
+            solver = self._c_ik_solver(kwargs)
+            if solver is not None:
+                return solver.solve(Tep, q0, seed)
+            kwargs.update({k: v for k, v in (("q0", q0), ("seed", seed)) if v is not None})  # unhashable
         if kwargs.get("method") == "analytic":
             options = {k: v for k, v in kwargs.items() if k != "method"}
             unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol", "free_joint"})
@@ -305,18 +324,36 @@ class Kinematics(FrameMethods):
                 j, values = parse_free_joint(free)
                 return free_joint_solver(self.robot, j, self.backend).ik(Tep, values, **options)
             return self.analytic.ik(Tep, fkine=self.fkine, **options)
-        c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
-        if kwargs == {"backend": "c"} and c_loop:  # the defaults: keep the C solver for the next call
-            from symkin.runtime.ik import default_c_solver
-
-            self._ik_solver = solver = default_c_solver(self)
-            self._ik_fast = solver.fast
-            bound = solver.bind(MethodType(Kinematics.ik, self))
-            if bound is not None:  # later calls of one target: one C call, no Python frame
-                self.__dict__["ik"] = bound
-            return solver.solve(Tep)
         return ik(self, Tep, **kwargs)
+
+    def _c_ik_solver(self, options: dict[str, Any]) -> Any:
+        """The C IK solver of these keyword options of :meth:`ik`, made and validated once per
+        options (None when one is unhashable, an array say). The defaults' solver also becomes
+        ``kin.ik`` itself: one target then costs one C call."""
+        if not options:
+            if self._ik_solver is None:
+                from symkin.runtime.ik import default_c_solver
+
+                self._ik_solver = solver = default_c_solver(self)
+                self._ik_by_options[()] = self._ik_by_options[(("backend", "c"),)] = solver
+                bound = solver.bind(MethodType(Kinematics.ik, self))
+                if bound is not None:  # later calls of one target: one C call, no Python frame
+                    self.__dict__["ik"] = bound
+            return self._ik_solver
+        key = tuple(options.items())
+        try:
+            solver = self._ik_by_options.get(key)
+        except TypeError:
+            return None
+        if solver is None:
+            from symkin.runtime.ik import c_solver_with
+
+            solver = c_solver_with(self, options)
+            if len(self._ik_by_options) >= 64:
+                self._ik_by_options.clear()
+            self._ik_by_options[key] = self._ik_by_options[(*key, ("backend", "c"))] = solver
+        return solver
 
     # -- closed-form inverse kinematics (symkin.compiler.analytic_ik) -------------------------------------
     @cached_property

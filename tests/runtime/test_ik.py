@@ -547,3 +547,31 @@ def test_table1_benchmark_runs_and_formats():
             assert row["infeasible"] == 0 and row["max_searches"] <= 100
     text = format_table1(result)
     assert "LM (Chan lambda=0.1)" in text and "paper" in text
+
+
+def test_keyword_options_reuse_their_solver_and_give_the_functions_results():
+    """kin.ik(T, **options) goes to the C solver made for those options the first time (no
+    validation per call) and answers exactly as symkin.ik with the same options and seed."""
+    import symkin
+    from symkin.errors import ParameterError
+
+    robot = symkin.load("ur5")
+    kin = symkin.compile(robot, "c")
+    Q = robot.random_q(6, seed=21)
+    options = [
+        {},
+        {"method": "LM", "lam": 0.05, "ilimit": 40},
+        {"damping": "wampler", "we": [1, 1, 1, 1, 1, 0]},
+    ]
+    for opts in options:
+        for i in range(len(Q)):
+            T = robot.fkine(Q[i])
+            for _ in range(2):  # the second call takes the memoised solver
+                got = kin.ik(T, seed=7 + i, **opts)
+                want = symkin.ik(kin, T, seed=7 + i, backend="c", **opts)
+                assert np.array_equal(got.q, want.q) and got.success == want.success
+    assert kin.ik(robot.fkine(Q[0]), q0=Q[0], we=np.ones(6)).success  # an unhashable option
+    for _ in range(2):
+        with pytest.raises(ParameterError):
+            kin.ik(robot.fkine(Q[0]), method="XX")
+    assert kin.ik(robot.fkine(Q[0]), method="analytic").success
