@@ -238,8 +238,8 @@ class MMC:
     (``symkin.compile(robot, backend="c")``): kinematics, closed form, active set and an embedded
     OSQP built for this QP (:mod:`symkin.runtime.mmc_c`), the same answers within solver
     tolerance; ``"python"`` keeps this NumPy + OSQP path (the reference); ``"c"`` requires C.
-    :meth:`build` and :meth:`solve` always run in Python. For a tree (:class:`symkin.Tree` or its
-    compiled kinematics), ``frame`` names the task frame; that runs in Python.
+    :meth:`build` and :meth:`solve` always run in Python. ``frame`` picks the task frame: a tree's
+    frame name (:class:`symkin.Tree` or its compiled kinematics) or link frame k of a chain.
 
     ``slack`` (default: on with ``joint_limits``) adds a slack ``s`` on the equality, weighted by
     ``slack_weight``, so the QP stays feasible when the dampers or speed limits cannot meet nu;
@@ -312,7 +312,9 @@ class MMC:
                         raise
                     warnings.warn(f"MMC runs in Python: the C step is unavailable ({exc})", stacklevel=2)
             elif backend == "c":
-                if getattr(kin, "backend", None) == "c" and hasattr(kin, "tree"):  # a frame of a C tree
+                if getattr(kin, "backend", None) == "c" and getattr(
+                    getattr(kin, "tree", None), "_symkin_tree", False
+                ):
                     raise ConfigurationError(
                         f"backend='c': the path to {kin.name} has a mimic joint, whose Hessian the C "
                         "tree does not generate; this MMC runs in Python (backend='auto')"

@@ -192,8 +192,9 @@ def ik(
         joint_limits: reject solutions outside ``kin.qlim`` (after wrapping revolute joints).
         we: the diagonal of We (6,), default ones (eq 44).
         backend: ``"numpy"`` (this module) or ``"c"`` (:class:`symkin.runtime.ik_c.CIKSolver`).
-        frame: for a :class:`symkin.Tree` or its compiled kinematics, the frame (link name) whose
-            pose is the task; the joints off its path are free (they keep their start values).
+        frame: the frame whose pose is the task: a tree's frame name (:class:`symkin.Tree` or
+            its compiled kinematics) or link frame k of a chain; the joints off its path are free
+            (they keep their start values).
 
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.

@@ -123,8 +123,9 @@ def servo(
     runs this loop in Python around the same step; ``"c"`` requires the C loop. ``step_time`` is then
     the time of the C step alone.
 
-    For a tree (:class:`symkin.Tree` or its compiled kinematics) ``frame`` names the frame that
-    servos; the joints off its path do not move (the loop then runs in Python).
+    ``frame`` picks the frame that servos: a tree's frame name (:class:`symkin.Tree` or its compiled
+    kinematics), or link frame k of a chain; the joints off its path do not move (the loop then
+    runs in Python, except for a C tree's frame without mimic joints).
     """
     if frame is not None or getattr(kin, "_symkin_tree", False):
         from symkin.runtime.task import task_kinematics

@@ -130,3 +130,23 @@ def test_ik_and_mmc_on_a_link_frame_of_a_chain():
     assert_close(robot.fkine(res.q, frame=5), Tep, 1e-6, "the link frame reaches its target")
     assert np.array_equal(res.q[6:], (q + 0.05)[6:]), "the joint after the frame does not move"
     assert kin.select(None) is kin and kin.select(5) is kin.select(5)
+
+
+def test_servo_and_mmc_on_a_link_frame_of_a_chain():
+    """The elbow-like link frame 3 of the Panda servos to a pose; joints after it stay put."""
+    from symkin import MMC, servo
+
+    robot = load("panda")
+    kin = symkin.compile(robot, "c")
+    q0 = robot.qr.copy()
+    q_goal = q0 + np.array([0.1, -0.1, 0.1, 0.1, 0.0, 0.0, 0.0])
+    Tep = robot.fkine(q_goal, frame=3)
+    res = servo(kin, q0, Tep, frame=3, controller="rrmc", max_steps=400)
+    assert res.arrived
+    assert_close(robot.fkine(res.q[-1], frame=3)[:3, 3], Tep[:3, 3], 1e-2, "frame 3 reaches its target")
+    assert np.array_equal(res.q[-1][4:], q0[4:])
+    J = robot.jacob0(q0, frame=3)
+    nu = J @ np.array([0.05, -0.02, 0.03, 0.04, 0.0, 0.0, 0.0])  # a velocity frame 3 can make
+    qd, _ = MMC(kin, frame=3, slack=False).step(q0, nu)
+    assert qd.shape == (7,) and np.abs(qd[4:]).max() < 1e-6
+    assert_close(J @ qd, nu, 1e-5, "the step makes the commanded velocity (OSQP's tolerance)")
