@@ -386,7 +386,9 @@ class Robot(FrameMethods):
         """Pose and base-frame Jacobian from one pass: ((4, 4), (6, n)) or batched."""
         Q, single = self._batch(q)
         if frame is not None:
-            T, J = self.fkine(Q, frame), self.jacob0(Q, frame)
+            k = frame_index(frame, self.n, self.name)
+            L = self._num.link_poses(Q)
+            T, J = L[:, k], frame_jacobian(L, k, self._chain)
         else:
             T, J = self._num.fkine_jacob0(Q)
         return (T[0], J[0]) if single else (T, J)

@@ -455,20 +455,12 @@ class Tree(FrameMethods):
         J = np.stack([self._jacobian(L, P, f) for f in range(len(self.frames))], axis=1)
         return (T[0], J[0]) if single else (T, J)
 
-    def hessian0(self, q: Any, frame: Any = None) -> np.ndarray:
-        """Base-frame Hessian of ``frame``: (n, 6, n) or (N, n, 6, n), ``H[i] = dJ0/dq_i``.
-
-        Per pair of slots a, b on the path (b at or before a: ``(w_b x Jv_a ; w_b x w_a)``; b after
-        a: ``(w_a x Jv_b ; 0)``; Haviland and Corke, Maximising Manipulability During
-        Resolved-Rate Motion Control, 2020, eq 20), weighted by both slots' multipliers."""
-        f = self.frame_position(frame)
-        Q, single = self._batch(q)
-        slots, Jv, Jw = self._slot_columns(*self._walk(Q), f)
-        H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
-        return H[0] if single else H
-
     def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        """Base-frame Jacobian and Hessian of ``frame`` from one walk."""
+        """Base-frame Jacobian and Hessian of ``frame`` from one walk ((6, n), (n, 6, n)) or
+        batched; ``hessian0`` is its second part. ``H[i] = dJ0/dq_i``: per pair of slots a, b on the
+        path (b at or before a: ``(w_b x Jv_a ; w_b x w_a)``; b after a: ``(w_a x Jv_b ; 0)``;
+        Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control, 2020,
+        eq 20), weighted by both slots' multipliers."""
         f = self.frame_position(frame)
         Q, single = self._batch(q)
         L, P = self._walk(Q)

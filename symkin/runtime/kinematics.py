@@ -27,16 +27,13 @@ from symkin.model.differential import FrameMethods
 from symkin.model.robot import Robot
 from symkin.model.slots import hessian_of_columns
 from symkin.runtime.casadi_calls import chain_functions, tree_functions
-from symkin.runtime.ik import ik
+from symkin.runtime.ik import IK_OPTIONS, ik
 from symkin.runtime.memo import memoised
 
 __all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
 
 C_IK_MAX_JOINTS = 12  # SYMKIN_IK_NMAX of the C solver; longer chains use the NumPy solver
-_FAST_KEYS = frozenset(
-    ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits",
-     "we", "starts", "q0", "seed", "backend")
-)  # fmt: skip
+_FAST_KEYS = frozenset((*IK_OPTIONS, "q0", "seed", "backend"))  # what ik's memoised C solvers take
 
 KIN_METHODS = (
     "fkine",
@@ -122,6 +119,7 @@ class Kinematics(FrameMethods):
             setattr(self, name, fn)
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
         self._ik_by_options: dict[tuple, Any] = {}  # C IK solvers by keyword options (see ik)
+        self._paths: dict[str, tuple[list[Any], list[int], bool]] = {}  # a tree's frames (see _path)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
 
     # -- what the model says -----------------------------------------------------------------
@@ -215,8 +213,7 @@ class Kinematics(FrameMethods):
         columns (no mimic joint) or the numeric reference."""
         tree = self.model
         name = tree.frame_name(frame)
-        slots = [tree.slots[k] for k in tree.path_slots(name)]
-        plain = not any(s.is_mimic for s in slots)  # J's columns are the slots' columns
+        slots, joints, plain = self._path(name)
         generated = getattr(self.module, "jacob0_hessian0", None)
         if generated is not None and plain:
             out = generated(q, name)
@@ -226,10 +223,18 @@ class Kinematics(FrameMethods):
             return self.jacob0(q, name), tree.hessian0(q, name)
         Q, single = as_batch(q, self.n, self.name)
         J = np.asarray(self.jacob0(Q, name))
-        joints = [s.joint for s in slots]
         Jv, Jw = np.swapaxes(J[:, :3, joints], 1, 2), np.swapaxes(J[:, 3:, joints], 1, 2)
         H = hessian_of_columns(Jv, Jw, slots, self.n)
         return (J[0], H[0]) if single else (J, H)
+
+    def _path(self, name: str) -> tuple[list[Any], list[int], bool]:
+        """A tree frame's slots on its path (base first), their joints, and whether no mimic joint
+        is among them (J's columns are then the slots' own); worked out once per frame."""
+        path = self._paths.get(name)
+        if path is None:
+            slots = [self.model.slots[k] for k in self.model.path_slots(name)]
+            path = self._paths[name] = (slots, [s.joint for s in slots], not any(s.is_mimic for s in slots))
+        return path
 
     def c_controller_functions(self, frame: str) -> dict[str, Any] | None:
         """The C functions the C controllers (MMC, RRMC, the servo loop) call for a tree's
@@ -297,8 +302,7 @@ class Kinematics(FrameMethods):
             except (KeyError, TypeError):  # new or unhashable options: made and checked below
                 kwargs.update({k: v for k, v in (("q0", q0), ("seed", seed)) if v is not None})
             else:
-                res = solver.fast(Tep, q0, seed) if solver.fast is not None else None
-                return res if res is not None else solver.solve(Tep, q0, seed)  # None: needs checking
+                return solver.solve(Tep, q0, seed)
         if frame is not None or self.is_tree:
             return self.select(frame).ik(Tep, **kwargs)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
