@@ -11,6 +11,7 @@ from symkin.errors import (
     ConfigurationError,
     ETSParseError,
     FrameError,
+    GeometryError,
     MissingExtraError,
     NoAnalyticIKError,
     ParameterError,
@@ -23,6 +24,7 @@ from symkin.errors import (
 )
 from symkin.model.dh import DHLink
 from symkin.model.ets import ET, ETS, Axis, Const
+from symkin.model.geometry import Box, Capsule, Environment, Geometry, Sphere
 from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
@@ -34,6 +36,16 @@ from symkin.runtime.kinematics import Kinematics
 from symkin.runtime.load import compile, load_compiled
 from symkin.runtime.loop import ServoResult, servo
 from symkin.runtime.servo import p_servo
+from symkin.runtime.trajectory import (
+    PathResult,
+    Trajectory,
+    ctraj,
+    jtraj,
+    mstraj,
+    quintic,
+    servo_path,
+    trapezoidal,
+)
 
 _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
     "derive": ("symkin.derive.chain", "derivation"),
@@ -47,6 +59,10 @@ def __getattr__(name: str):  # noqa: ANN202
         import importlib
 
         return importlib.import_module("symkin.symbolic")
+    if name == "geometry":  # collision geometry sources and the NumPy reference
+        import importlib
+
+        return importlib.import_module("symkin.geometry")
     if name in _LAZY:
         import importlib
 
@@ -60,45 +76,60 @@ __all__ = [
     "ET",
     "ETS",
     "Axis",
+    "Box",
+    "Capsule",
     "CompileError",
     "ConfigurationError",
     "Const",
     "Derivation",
     "DHLink",
+    "Environment",
     "ETSParseError",
     "FrameError",
+    "Geometry",
+    "GeometryError",
     "MissingExtraError",
     "IKResult",
     "Kinematics",
     "MMC",
     "NoAnalyticIKError",
     "ParameterError",
+    "PathResult",
     "PoseError",
     "Robot",
     "RobotError",
     "ServoResult",
+    "Sphere",
     "StepInfo",
     "SymkinError",
+    "Trajectory",
     "Tree",
     "URDFError",
     "WorkspaceError",
     "UnknownRobotError",
     "__version__",
     "compile",
+    "ctraj",
     "derive",
     "derive_steps",
     "generate",
+    "geometry",
     "ik",
+    "jtraj",
     "list_robots",
     "load",
     "load_compiled",
     "load_dh_file",
+    "mstraj",
     "p_servo",
     "poe_of",
     "pose_error",
+    "quintic",
     "resolve_robot",
     "rrmc",
     "servo",
+    "servo_path",
     "symbolic",
+    "trapezoidal",
     "write_generated",
 ]

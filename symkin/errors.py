@@ -69,3 +69,8 @@ class WorkspaceError(SymkinError, ValueError):
 
 class MissingExtraError(SymkinError, ImportError):
     """An optional dependency is not installed; the message names the extra to install."""
+
+
+class GeometryError(SymkinError, ValueError):
+    """Invalid collision geometry or environment: a shape on an unknown link, a negative radius,
+    NaN or infinite numbers, an unknown shape kind."""

@@ -51,3 +51,22 @@ def test_reach_and_dataset_commands_write_stores_and_a_plot(tmp_path, capsys):
     assert data["q"].shape == (100, 3) and np.isfinite(data["pose"][...]).all()
     assert main(["reach", PLANAR, "-o", str(store), "--resolution", "0", "--scheduler", "synchronous"]) == 2
     assert "--resolution: must be a positive" in capsys.readouterr().err
+
+
+def test_reach_collision_maps_only_collision_free_reach(tmp_path, capsys):
+    zarr = pytest.importorskip("zarr")
+    pytest.importorskip("distributed")
+    base = ["reach", "ur5", "--resolution", "0.3", "--orientations", "2", "--slimit", "3", "--scheduler",
+            "synchronous", "--bounds", "0.2 0.6 -0.3 0.3 0.0 0.4", "--json"]  # fmt: skip
+    assert main([*base, "-o", str(tmp_path / "plain.zarr")]) == 0
+    plain = zarr.open_group(str(tmp_path / "plain.zarr"), mode="r")["reach"][...]
+    capsys.readouterr()
+    wall = ["--collision", "--box", "0.4 0 0.2 0.3 0.4 0.25"]
+    assert main([*base, "-o", str(tmp_path / "free.zarr"), *wall]) == 0
+    group = zarr.open_group(str(tmp_path / "free.zarr"), mode="r")
+    free = group["reach"][...]
+    assert plain.sum() > 0 and free.sum() < plain.sum() and (free <= plain).all()
+    assert dict(group.attrs)["settings"]["collision"]["boxes"][0][:6] == [0.4, 0, 0.2, 0.3, 0.4, 0.25]
+    capsys.readouterr()
+    assert main([*base, "-o", str(tmp_path / "x.zarr"), "--sphere", "0 0 0 0.1"]) == 2
+    assert "add --collision" in capsys.readouterr().err

@@ -1,4 +1,4 @@
-"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, calls, compile, urdf, reach)."""
+"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, calls, compile, urdf, reach, collide)."""
 
 from __future__ import annotations
 
@@ -20,23 +20,25 @@ def add_parser(sub: Any) -> None:
         "bench",
         "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
         "mmc (Table I), calls (one at a time), compile (cold, by chain length), urdf (every chain of "
-        "example-robot-data), reach (Dask maps)",
+        "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK)",
     )
     s.add_argument(
         "what",
-        choices=("kin", "tree", "ik", "mmc", "calls", "compile", "urdf", "reach"),
+        choices=("kin", "tree", "ik", "mmc", "calls", "compile", "urdf", "reach", "collide"),
         help="which benchmark",
     )
     add_robot_argument(
         s,
-        "default: panda for kin and compile, ur5 for ik and reach, the paper's three for mmc, ur5 and "
-        "panda for calls",
+        "default: panda for kin, compile and collide, ur5 for ik and reach, the paper's three for mmc, "
+        "ur5 and panda for calls",
     )
     s.add_argument(
         "--robot", dest="robot_option", action=Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
     )
     s.add_argument("--joints", default="6,12,24,36", help="compile: joint counts of the random chains")
-    s.add_argument("--batch", type=at_least_1, default=100_000, help="kin: batch size")
+    s.add_argument(
+        "--batch", type=at_least_1, default=None, help="kin: batch size (default 100000); collide: (20000)"
+    )
     s.add_argument(
         "-n",
         "--problems",
@@ -118,6 +120,16 @@ def run(args: argparse.Namespace) -> int:
         )  # fmt: skip
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
         return 0
+    if args.what == "collide":
+        from symkin.bench.collide import format_collide, run_collide
+
+        result = run_collide(
+            single_chain(args, "panda"), batch=args.batch or 20_000, seed=args.seed, progress=not args.json
+        )
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
+        return 0
+    if args.batch is None:
+        args.batch = 100_000
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 

@@ -6,6 +6,7 @@ options of the Dask commands, and the output helpers."""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -33,6 +34,8 @@ __all__ = [
     "scheduler",
     "floats",
     "fmt",
+    "add_obstacle_options",
+    "environment_of",
 ]
 
 ROBOT_HELP = (
@@ -283,3 +286,57 @@ def fmt(a: np.ndarray) -> str:
 def damaged(summary: dict) -> str:
     """`` (2 of them damaged)``: written blocks computed again because a chunk could not be read."""
     return f" ({summary['damaged']} of them damaged)" if summary["damaged"] else ""
+
+
+# -- obstacles (collide, plot, reach) --------------------------------------------------------------
+_OBSTACLES = {"sphere": 4, "capsule": 7, "box": 6}
+
+
+def add_obstacle_options(s: argparse.ArgumentParser) -> None:
+    """--sphere, --capsule, --box (repeatable) and --env FILE: obstacles in the base frame."""
+    s.add_argument("--sphere", action="append", default=[], metavar="'X Y Z R'", help="an obstacle sphere")
+    s.add_argument(
+        "--capsule", action="append", default=[], metavar="'AX AY AZ BX BY BZ R'", help="an obstacle capsule"
+    )
+    s.add_argument(
+        "--box", action="append", default=[], metavar="'CX CY CZ HX HY HZ'",
+        help="an axis-aligned obstacle box (centre, half side lengths)",
+    )  # fmt: skip
+    s.add_argument(
+        "--env",
+        metavar="FILE",
+        help='obstacles from JSON: {"spheres": [[x,y,z,r]...], "capsules": [[ax,ay,az,bx,by,bz,r]...], '
+        '"boxes": [[cx,cy,cz,hx,hy,hz]...]} (base frame, m)',
+    )
+
+
+def _rows(items: list[str], what: str) -> list[np.ndarray]:
+    return [floats(text, f"--{what}", _OBSTACLES[what]) for text in items]
+
+
+def environment_of(args: argparse.Namespace) -> Any:
+    """The obstacles of --sphere, --capsule, --box and --env."""
+    from symkin.model.geometry import Box, Capsule, Environment, Sphere
+
+    spheres = [Sphere(v[:3], v[3]) for v in _rows(args.sphere, "sphere")]
+    capsules = [Capsule(v[:3], v[3:6], v[6]) for v in _rows(args.capsule, "capsule")]
+    boxes = [Box(v[:3], v[3:]) for v in _rows(args.box, "box")]
+    if args.env:
+        path = Path(args.env).expanduser()
+        try:
+            data = json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            raise UserError(f"--env {path}: {exc}") from None
+        if not isinstance(data, dict) or set(data) - {"spheres", "capsules", "boxes"}:
+            raise UserError(f"--env {path}: a JSON object with keys spheres, capsules, boxes")
+        for key, size, make, out in (
+            ("spheres", 4, lambda v: Sphere(v[:3], v[3]), spheres),
+            ("capsules", 7, lambda v: Capsule(v[:3], v[3:6], v[6]), capsules),
+            ("boxes", 6, lambda v: Box(v[:3], v[3:]), boxes),
+        ):
+            for row in data.get(key, []):
+                v = np.asarray(row, dtype=float) if isinstance(row, list) else np.zeros(0)
+                if v.shape != (size,):
+                    raise UserError(f"--env {path}: each of {key} needs {size} numbers, got {row!r}")
+                out.append(make(v))
+    return Environment(tuple(spheres), tuple(capsules), tuple(boxes))

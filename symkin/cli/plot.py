@@ -6,7 +6,15 @@ import argparse
 from typing import Any
 
 from symkin.cli.checks import UserError
-from symkin.cli.common import add_command, add_robot_argument, floats, fmt, single_chain
+from symkin.cli.common import (
+    add_command,
+    add_obstacle_options,
+    add_robot_argument,
+    environment_of,
+    floats,
+    fmt,
+    single_chain,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -24,6 +32,12 @@ def add_parser(sub: Any) -> None:
         "--ellipsoid", action="store_true", help="draw the manipulability ellipsoid of linear velocity"
     )
     s.add_argument("--no-frames", action="store_true", help="draw only the base and end-effector frames")
+    s.add_argument(
+        "--no-geometry",
+        action="store_true",
+        help="leave out the collision shapes (drawn when the robot has them)",
+    )
+    add_obstacle_options(s)
     s.set_defaults(func=run)
 
 
@@ -39,7 +53,22 @@ def run(args: argparse.Namespace) -> int:
         import matplotlib  # noqa: F401
     except ImportError:
         raise UserError("plot needs matplotlib: pip install 'symkin[plot]'") from None
+    env = environment_of(args)
+    highlight: list[int] = []
+    note = ""
+    if robot.geometry is not None and not args.no_geometry:
+        from symkin.runtime.collision import Collision
+
+        check = Collision(robot, "numpy")
+        d = check.distances(q, env)
+        for k, (kind, i, j) in enumerate(check.labels(env)):
+            if d[k] < 0:
+                highlight += [i, j] if kind == "self" else [i]
+        note = f"; {len(set(highlight))} shapes in collision (red)" if highlight else "; collision-free"
     out = args.output or f"{robot.identifier}.png"
-    robot.plot(q, frames=not args.no_frames, ellipsoid=args.ellipsoid, path=out)
-    print(f"wrote {out}: {robot.name} at q = {fmt(q)}")
+    robot.plot(
+        q, frames=not args.no_frames, ellipsoid=args.ellipsoid, path=out, geometry=not args.no_geometry,
+        env=env if len(env) else None, highlight=highlight,
+    )  # fmt: skip
+    print(f"wrote {out}: {robot.name} at q = {fmt(q)}{note}")
     return 0

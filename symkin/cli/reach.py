@@ -37,6 +37,12 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--plot", metavar="PNG", help="write a slice of the map (reachability, manipulability)")
     s.add_argument("--slice-axis", choices=("x", "y", "z"), default="z", help="plot: axis of the slice")
     s.add_argument("--slice-at", type=float, help="plot: coordinate of the slice (default: the centre)")
+    s.add_argument(
+        "--collision",
+        action="store_true",
+        help="count only collision-free solutions (self-collisions, and the obstacles given)",
+    )
+    common.add_obstacle_options(s)
     common.add_scale_options(s)
     s.set_defaults(func=run)
 
@@ -50,11 +56,15 @@ def run(args: argparse.Namespace) -> int:
     bounds = None if args.bounds is None else common.floats(args.bounds, "--bounds", 6).reshape(3, 2)
     axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
+    env = common.environment_of(args)
+    if len(env) and not args.collision:
+        raise UserError("--sphere, --capsule, --box and --env are obstacles of --collision: add --collision")
+    collision = (env if len(env) else True) if args.collision else None
     rmap = reachability(
         robot, args.resolution, args.orientations, output=args.output, seed=args.seed,
         solutions=args.solutions, axes=axes, bounds=bounds, radius=args.radius, chunk=args.chunk,
         backend=args.backend, ik_options=ik_options, scheduler=common.scheduler(args), workers=args.workers,
-        overwrite=args.overwrite,
+        overwrite=args.overwrite, collision=collision,
     )  # fmt: skip
     inside = rmap.reach > 0
     st = rmap.stats or {}

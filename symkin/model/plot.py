@@ -53,6 +53,31 @@ def _triad(ax: Any, T: np.ndarray, length: float, width: float = 1.5) -> None:
         ax.plot(*zip(T[:3, 3], end), color=colour, linewidth=width)
 
 
+def _shape(ax: Any, ends: list[np.ndarray], radius: float, colour: str) -> np.ndarray:
+    """A sphere (one end) or capsule (two) as a wireframe; returns points bounding it."""
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 13), np.linspace(0, np.pi, 7))
+    unit = np.stack((np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v)), axis=-1)
+    out = []
+    for c in ends:
+        pts = c + radius * unit
+        ax.plot_wireframe(pts[..., 0], pts[..., 1], pts[..., 2], color=colour, linewidth=0.4, alpha=0.5)
+        out.append(pts.reshape(-1, 3))
+    if len(ends) == 2:
+        ax.plot(*np.array(ends).T, color=colour, linewidth=max(1.0, 200 * radius), alpha=0.35)
+    return np.concatenate(out)
+
+
+def _box(ax: Any, box: Any) -> np.ndarray:
+    """A box's 12 edges; returns its corners."""
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    corners = np.array(box.center) + (signs * np.array(box.half_extents)) @ box.R.T
+    for i in range(8):
+        for j in range(i + 1, 8):
+            if np.sum(signs[i] != signs[j]) == 1:
+                ax.plot(*corners[[i, j]].T, color="0.45", linewidth=1.0)
+    return corners
+
+
 def plot_robot(
     robot: Any,
     q: Any = None,
@@ -65,6 +90,9 @@ def plot_robot(
     title: str | None = None,
     elev: float = 25.0,
     azim: float = -60.0,
+    geometry: bool = True,
+    env: Any = None,
+    highlight: Any = (),
 ) -> Any:
     """Draw ``robot`` at ``q`` ((n,), default ``qz``) and return the matplotlib Figure.
 
@@ -72,7 +100,9 @@ def plot_robot(
     base and end-effector frames are always drawn); ``ellipsoid``: add the linear-velocity
     manipulability ellipsoid at the end effector, scaled by ``ellipsoid_scale`` m per m/s (default:
     its largest semi-axis a quarter of the drawing's size; the title states the scale); ``path``:
-    save a PNG there (150 dpi). Raises MissingExtraError without matplotlib.
+    save a PNG there (150 dpi); ``geometry``: draw the robot's collision shapes (blue, wireframe;
+    the shapes whose indices are in ``highlight`` red); ``env``: obstacles to draw (an
+    :class:`~symkin.model.geometry.Environment`, grey). Raises MissingExtraError without matplotlib.
     """
     try:
         from matplotlib.figure import Figure
@@ -119,6 +149,20 @@ def plot_robot(
         heading += (
             f"\nvelocity ellipsoid at {scale:.3g} m per m/s, m = {robot.manipulability(q, 'trans'):.3g}"
         )
+    if geometry and robot.geometry is not None:
+        frames_of = {"base": np.eye(4), "ee": Tee, **{f"link{k + 1}": T for k, T in enumerate(links)}}
+        marked = set(int(i) for i in highlight)
+        for i, shape in enumerate(robot.geometry.shapes):
+            T = frames_of[shape.link]
+            ends = [T[:3, :3] @ np.array(p) + T[:3, 3] for p in shape.points]
+            points.append(_shape(ax, ends, shape.radius, "#d62728" if i in marked else "#1f77b4"))
+    if env is not None:
+        for s in env.spheres:
+            points.append(_shape(ax, [np.array(s.center)], s.radius, "0.45"))
+        for c in env.capsules:
+            points.append(_shape(ax, [np.array(c.a), np.array(c.b)], c.radius, "0.45"))
+        for b in env.boxes:
+            points.append(_box(ax, b))
     allp = np.concatenate(points)
     centre = (allp.max(axis=0) + allp.min(axis=0)) / 2
     half = max(float(np.ptp(allp, axis=0).max()) / 2, 0.1 * span) * 1.1

@@ -11,6 +11,7 @@ those of Haviland and Corke, Maximising Manipulability During Resolved-Rate Moti
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import re
@@ -35,7 +36,8 @@ from symkin.model.differential import (  # noqa: F401 - re-exported
 )
 from symkin.model.ets import ETS
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
-from symkin.model.kinematics import NumericKinematics
+from symkin.model.geometry import Geometry, check_geometry, move_links
+from symkin.model.kinematics import NumericKinematics, const_matrix
 
 __all__ = [
     "Robot",
@@ -43,6 +45,14 @@ __all__ = [
     "jacob_dot_of",
     "space_jacobian",
 ]
+
+
+def _product(ets: Sequence[Any]) -> np.ndarray:
+    """The 4x4 transform of constant elementary transforms."""
+    T = np.eye(4)
+    for e in ets:
+        T = T @ const_matrix(e.axis, e.const)
+    return T
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -63,6 +73,9 @@ class Robot(FrameMethods):
         joint_names: one name per joint (by joint index).
         qd_max: joint speed limits, shape (n,), or None when unknown.
         source: where the parameters come from.
+        geometry: collision shapes on the links ``base``, ``link1``..``link<n>`` (``link<k+1>``
+            moves with the k-th joint along the chain: link frame k) and ``ee``
+            (:class:`symkin.geometry.Geometry`), or None.
     """
 
     ets: ETS
@@ -72,6 +85,7 @@ class Robot(FrameMethods):
     joint_names: tuple[str, ...] = ()
     qd_max: np.ndarray | None = None
     source: str = ""
+    geometry: Geometry | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.ets, ETS):
@@ -123,6 +137,7 @@ class Robot(FrameMethods):
             if qd.shape != (n,) or not (qd > 0).all():
                 raise RobotError(f"qd_max must be {n} positive numbers, got {self.qd_max!r}")
             object.__setattr__(self, "qd_max", _readonly(qd))
+        check_geometry(self.geometry, self.link_names, self.name)
 
     # -- constructors ----------------------------------------------------------------------
     @classmethod
@@ -204,7 +219,9 @@ class Robot(FrameMethods):
         from symkin.model.transform import constant_ets
 
         extra = constant_ets(tool, "tool")
-        return self._with(self.ets.ets + tuple(extra), f"tool {ETS(tuple(extra))}" if extra else "", name)
+        note = f"tool {ETS(tuple(extra))}" if extra else ""
+        moves = {"ee": np.linalg.inv(_product(extra))}  # the hand's shapes stay on the hand
+        return self._with(self.ets.ets + tuple(extra), note, name, moves)
 
     def with_base(self, base: Any, name: str | None = None) -> Robot:
         """A new robot with the constant transform ``base`` placed before the first link, so its
@@ -212,9 +229,11 @@ class Robot(FrameMethods):
         from symkin.model.transform import constant_ets
 
         extra = constant_ets(base, "base")
-        return self._with(tuple(extra) + self.ets.ets, f"base {ETS(tuple(extra))}" if extra else "", name)
+        note = f"base {ETS(tuple(extra))}" if extra else ""
+        moves = {"base": _product(extra)}  # the base's shapes move with the arm
+        return self._with(tuple(extra) + self.ets.ets, note, name, moves)
 
-    def _with(self, ets: tuple, note: str, name: str | None) -> Robot:
+    def _with(self, ets: tuple, note: str, name: str | None, moves: dict[str, np.ndarray]) -> Robot:
         if not note and name is None:
             return self
         configs = {k: v for k, v in self.configs.items() if k != "qz"}
@@ -227,6 +246,7 @@ class Robot(FrameMethods):
             joint_names=self.joint_names,
             qd_max=self.qd_max,
             source=source,
+            geometry=move_links(self.geometry, moves),
         )
 
     # -- plain attributes ------------------------------------------------------------------
@@ -234,6 +254,16 @@ class Robot(FrameMethods):
     def n(self) -> int:
         """Number of joints."""
         return self.ets.n
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """The links geometry attaches to: ``base``, ``link1``..``link<n>`` (``link<k+1>`` moves with
+        the k-th joint along the chain; its frame is link frame k), ``ee`` (fixed to the last link)."""
+        return ("base", *(f"link{k + 1}" for k in range(self.n)), "ee")
+
+    def with_geometry(self, geometry: Geometry | None) -> Robot:
+        """The same robot with collision ``geometry`` (or none)."""
+        return dataclasses.replace(self, geometry=geometry)
 
     def __getattr__(self, key: str) -> np.ndarray:
         if key.startswith("_") or key == "configs":
@@ -266,8 +296,10 @@ class Robot(FrameMethods):
 
     @property
     def fingerprint(self) -> str:
-        """Hash of every attribute (name, ETS, qlim, qd_max, configurations, joint names, source):
-        two robots with equal fingerprints behave identically. Part of the compile-cache keys."""
+        """Hash of every attribute (name, ETS, qlim, qd_max, configurations, joint names, source) but
+        the collision geometry: two robots with equal fingerprints have identical kinematics. Part of
+        the compile-cache keys (the geometry's own fingerprint keys the collision kernel, whose C
+        source holds it, and the in-process memo of compiled kinematics)."""
         h = hashlib.sha256(f"{self.name}\0{self.ets}\0{self.source}\0".encode())
         h.update("\0".join(self.joint_names).encode() + b"\0\0")
         h.update(np.ascontiguousarray(self.qlim, dtype="<f8").tobytes())

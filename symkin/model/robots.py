@@ -276,7 +276,12 @@ def list_robots() -> list[str]:
 
 @cache
 def _build(name: str) -> Robot:
-    return _BUILDERS[name]()
+    """The built-in robot ``name``, with its sphere model when it has one (:mod:`builtin_geometry`)."""
+    from symkin.model.builtin_geometry import builtin_geometry
+
+    robot = _BUILDERS[name]()
+    geometry = builtin_geometry(name)
+    return robot if geometry is None else robot.with_geometry(geometry)
 
 
 def load(name: str) -> Robot:

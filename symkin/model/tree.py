@@ -15,6 +15,7 @@ Kinematics, Part 1, IEEE RAM 2023, eqs 31-34, frame f in place of the end effect
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import re
@@ -31,6 +32,7 @@ from symkin.core.names import identifier
 from symkin.errors import FrameError, RobotError, URDFError
 from symkin.model.differential import FrameMethods, rotate_rows
 from symkin.model.ets import ET, ETS
+from symkin.model.geometry import Geometry, check_geometry, rename_links
 from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
 from symkin.model.robot import Robot
 from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
@@ -131,6 +133,7 @@ class Tree(FrameMethods):
     qlim: np.ndarray = field(default=None)  # type: ignore[assignment]
     velocity: Any = None  # per joint, NaN when unknown
     source: str = ""
+    geometry: Geometry | None = None  # collision shapes on the tree's links (base_link, segment links)
 
     def __post_init__(self) -> None:
         n = len(self.joint_names)
@@ -162,6 +165,7 @@ class Tree(FrameMethods):
         vel = np.full(n, np.nan) if self.velocity is None else np.asarray(self.velocity, dtype=float)
         vel.setflags(write=False)
         object.__setattr__(self, "velocity", vel)
+        check_geometry(self.geometry, self.link_names, self.name)
 
     # -- constructors ----------------------------------------------------------------------
     @classmethod
@@ -219,12 +223,14 @@ class Tree(FrameMethods):
             qlim=robot.qlim,
             velocity=None if qd is None else qd,
             source=f"{robot.source or robot.name}, as a tree",
+            geometry=rename_links(robot.geometry, {"base": base_link, "ee": frame}),
         )
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickle the fields (and cached values) without the memoised frame views."""
         state = dict(self.__dict__)
         state.pop("_frame_views", None)
+        state.pop("_collision_layout", None)
         return state
 
     # -- plain attributes ------------------------------------------------------------------
@@ -261,6 +267,15 @@ class Tree(FrameMethods):
 
     def __repr__(self) -> str:
         return f"Tree(name={self.name!r}, n={self.n}, frames={list(self.frames)})"
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """The base link and every segment's link (what geometry attaches to), depth first."""
+        return (self.base_link, *(seg.link for seg in self.segments))
+
+    def with_geometry(self, geometry: Geometry | None) -> Tree:
+        """The same tree with collision ``geometry`` (or none)."""
+        return dataclasses.replace(self, geometry=geometry)
 
     def frame_position(self, frame: Any) -> int:
         """The position of ``frame`` in :attr:`frames` (FrameError listing them when unknown)."""

@@ -60,6 +60,8 @@ __all__ = [
     "snap_atan2",
     "joint_origin",
     "joint_axis",
+    "load_xml",
+    "xml_numbers",
     "MAX_URDF_VALUE",
 ]
 
@@ -156,7 +158,7 @@ def snap_angle(value: Fraction, tol: float) -> Const:
 # the importer
 
 
-def _numbers(
+def xml_numbers(
     text: str | None, count: int, what: str, default: str | None = None, bound: float | None = None
 ) -> list[Fraction]:
     """``count`` exact numbers from a space-separated attribute, each within +-``bound`` if given."""
@@ -190,10 +192,10 @@ def joint_origin(jel: ElementTree.Element, what: str) -> tuple[list[Fraction], l
     """``(xyz, rpy)`` of a joint's ``<origin>`` (zeros when absent), exact and within
     +-:data:`MAX_URDF_VALUE`; ``what`` names the joint in messages. Shared by both readers."""
     origin = jel.find("origin")
-    xyz = _numbers(
+    xyz = xml_numbers(
         origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0", MAX_URDF_VALUE
     )
-    rpy = _numbers(
+    rpy = xml_numbers(
         origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0", MAX_URDF_VALUE
     )
     return xyz, rpy
@@ -209,7 +211,7 @@ def joint_axis(jel: ElementTree.Element, what: str, where: str, snap_tol: float)
     written, so their ETS text does not change.
     """
     axis_el = jel.find("axis")
-    u = _numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
+    u = xml_numbers(axis_el.get("xyz") if axis_el is not None else None, 3, f"{what} axis xyz", "1 0 0")
     big = max(abs(c) for c in u)
     if big == 0:
         raise URDFError(f"{where}: {what} has the zero vector as its axis; give a direction like '0 0 1'")
@@ -321,7 +323,7 @@ def _prescan(text: str, where: str, path: Path | None = None) -> None:
         pass  # reported by the real parse below, with its position
 
 
-def _load(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
+def load_xml(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     """Parse a URDF file path or XML text -> (root element, description for messages)."""
     if isinstance(path_or_xml, Path) or (
         isinstance(path_or_xml, str) and not path_or_xml.lstrip().lstrip("\ufeff").lstrip().startswith("<")
@@ -449,7 +451,7 @@ class URDFGraph:
 
 def read_graph(path_or_xml: str | Path) -> URDFGraph:
     """Parse a URDF (file path or XML text) into its link/joint graph, with clear errors."""
-    root, where = _load(path_or_xml)
+    root, where = load_xml(path_or_xml)
     links = [el.get("name") for el in root.findall("link")]
     if any(n is None for n in links):
         raise URDFError(f"{where}: a <link> has no name attribute")
@@ -513,13 +515,13 @@ def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
     lo, hi = -default, default
     if lim is not None and j.kind != "continuous":
         if lim.get("lower") is not None:
-            lo = float(_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
+            lo = float(xml_numbers(lim.get("lower"), 1, f"{what} limit lower")[0])
         if lim.get("upper") is not None:
-            hi = float(_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
+            hi = float(xml_numbers(lim.get("upper"), 1, f"{what} limit upper")[0])
         if lo > hi:
             raise URDFError(f"{where}: {what} has limit lower {lo} > upper {hi}")
     vel = lim.get("velocity") if lim is not None else None
-    v = float(_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else math.nan
+    v = float(xml_numbers(vel, 1, f"{what} limit velocity")[0]) if vel is not None else math.nan
     return lo, hi, v if v > 0 else math.nan
 
 

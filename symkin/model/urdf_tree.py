@@ -27,7 +27,6 @@ from symkin.model.urdf import (
     MAX_URDF_VALUE,
     URDFGraph,
     URDFJoint,
-    _numbers,
     _suggest,
     axis_ets,
     joint_axis,
@@ -37,6 +36,7 @@ from symkin.model.urdf import (
     snap_angle,
     snap_atan2,
     translation_ets,
+    xml_numbers,
 )
 
 __all__ = ["joint_ets", "urdf_tree_args", "describe_urdf"]
@@ -78,8 +78,8 @@ def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fractio
                 f"{graph.where}: {what} mimics joint {src!r}, which does not exist"
                 + _suggest(src, list(graph.joints)).replace("Links", "Joints")
             )
-        mult = _numbers(src_el.get("multiplier"), 1, f"{what} mimic multiplier", "1", MAX_URDF_VALUE)[0]
-        off = _numbers(src_el.get("offset"), 1, f"{what} mimic offset", "0", MAX_URDF_VALUE)[0]
+        mult = xml_numbers(src_el.get("multiplier"), 1, f"{what} mimic multiplier", "1", MAX_URDF_VALUE)[0]
+        off = xml_numbers(src_el.get("offset"), 1, f"{what} mimic offset", "0", MAX_URDF_VALUE)[0]
         m, c = m * mult, m * off + c  # q_j = m q_cur + c and q_cur = mult q_src + off
         cur = graph.joints[src]
         if cur.name in seen:

@@ -31,6 +31,7 @@ from symkin.runtime.mmc_qp import (
     active_of,
     active_of_osqp,
     active_set_solve,
+    distance_dampers,
     joint_velocity_bounds,
     manipulability_jacobian,
     mmc_closed_form,
@@ -241,11 +242,19 @@ class MMC:
     :meth:`build` and :meth:`solve` always run in Python. ``frame`` picks the task frame: a tree's
     frame name (:class:`symkin.Tree` or its compiled kinematics) or link frame k of a chain.
 
-    ``slack`` (default: on with ``joint_limits``) adds a slack ``s`` on the equality, weighted by
-    ``slack_weight``, so the QP stays feasible when the dampers or speed limits cannot meet nu;
-    ``info.slack`` is |s|. Without it such a step is ``"infeasible"``. At a singular configuration
-    (smallest singular value of J below ``singular_tol``) and when OSQP fails, the RRMC step scaled
-    into the bounds is returned and ``info.fallback`` says so.
+    ``collision=env`` (an Environment or obstacles; ``True``: self-collision only; the model needs
+    geometry) adds one row per active pair of the robot's geometry: the velocity damper
+    ``d_dot >= -xi_d (d - d_s) / (d_i - d_s)`` for every distance below the influence distance
+    ``d_i`` (NEO's form, :func:`~symkin.runtime.mmc_qp.distance_dampers`), with ``d_dot = Jd qd``
+    from the distance Jacobians (:meth:`symkin.Kinematics.distance_jacobians`), for the
+    ``collision_rows`` (32) closest pairs within ``d_i``. Such steps are solved by OSQP in Python
+    (the C step has no distance rows yet).
+
+    ``slack`` (default: on with ``joint_limits`` or ``collision``) adds a slack ``s`` on the
+    equality, weighted by ``slack_weight``, so the QP stays feasible when the dampers or speed
+    limits cannot meet nu; ``info.slack`` is |s|. Without it such a step is ``"infeasible"``. At a
+    singular configuration (smallest singular value of J below ``singular_tol``) and when OSQP
+    fails, the RRMC step scaled into the bounds is returned and ``info.fallback`` says so.
     """
 
     def __init__(
@@ -267,7 +276,34 @@ class MMC:
         osqp_settings: dict[str, Any] | None = None,
         backend: str = "auto",
         frame: Any = None,
+        collision: Any = None,
+        d_i: float = 0.3,
+        d_s: float = 0.05,
+        xi_d: float = 1.0,
+        collision_rows: int = 32,
     ) -> None:
+        self._collision = self._env = None
+        if collision is not None and collision is not False:
+            from symkin.runtime.collision import collision_of
+
+            self._collision, self._env = collision_of(kin), collision
+            if backend == "c":
+                raise ConfigurationError("MMC with collision avoidance runs in Python: use backend='auto'")
+            backend = "python"
+        self.d_i, self.d_s, self.xi_d = (
+            _number(d_i, "d_i"),
+            _number(d_s, "d_s", strict=False),
+            _number(xi_d, "xi_d"),
+        )
+        if self._collision is not None and not self.d_i > self.d_s:
+            raise ParameterError(f"d_i ({d_i}) must exceed d_s ({d_s})")
+        if (
+            isinstance(collision_rows, bool)
+            or not isinstance(collision_rows, (int, np.integer))
+            or collision_rows < 1
+        ):
+            raise ParameterError(f"collision_rows must be a positive integer, got {collision_rows!r}")
+        self.collision_rows = int(collision_rows)
         if frame is not None or getattr(kin, "_symkin_tree", False):  # one frame of a tree
             from symkin.runtime.task import task_kinematics
 
@@ -290,7 +326,7 @@ class MMC:
             raise ParameterError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s})")
         self.rho_i, self.rho_s, self.xi = rho_i, rho_s, _number(xi, "xi")
         self.dt = None if dt is None else _number(dt, "dt")
-        self.slack = self.joint_limits if slack is None else bool(slack)
+        self.slack = (self.joint_limits or self._collision is not None) if slack is None else bool(slack)
         self.slack_weight = _number(slack_weight, "slack_weight")
         self.closed_form = bool(closed_form)
         self.active_set = bool(active_set)
@@ -381,7 +417,21 @@ class MMC:
         nu = step_nu(nu)
         J, Jm, m = self.kinematics(q)
         lower, upper = self.bounds(q)
-        return mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m)
+        Jd, dl = self._distance_rows(q)
+        return mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
+
+    def _distance_rows(self, q: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Collision avoidance rows (Jd, lower bounds on d_dot) at q; (None, None) without collision."""
+        if self._collision is None:
+            return None, None
+        d, Jd = self._collision.distance_jacobians(q, self._env)
+        K = min(self.collision_rows, len(d))
+        near = np.flatnonzero(d < self.d_i)
+        near = near[np.argsort(d[near], kind="stable")[:K]]  # the closest pairs within d_i
+        rows, lower = np.zeros((K, self.n)), np.full(K, -np.inf)  # K rows always: OSQP's sparsity is fixed
+        rows[: len(near)] = Jd[near]
+        lower[: len(near)] = distance_dampers(d[near], self.d_i, self.d_s, self.xi_d)
+        return rows, lower
 
     def step(self, q: Any, nu: Any) -> tuple[np.ndarray, StepInfo]:
         """Joint velocity qd (n,) for the spatial velocity nu (6,) at q (n,), and how it was found.
@@ -404,7 +454,9 @@ class MMC:
     def _step(self, q: np.ndarray, nu: np.ndarray) -> tuple[np.ndarray, StepInfo]:
         J, Jm, m, s_min, B = self._terms(q)
         lower, upper = self.bounds(q)
-        if self.closed_form and B is not None:
+        Jd, dl = self._distance_rows(q)
+        near = dl is not None and bool(np.isfinite(dl).any())
+        if self.closed_form and B is not None and not near:
             if self.slack:
                 qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
             else:
@@ -417,7 +469,7 @@ class MMC:
                 done = self._active_set(J, Jm, nu, lower, upper, m, qd)
                 if done is not None:
                     return done
-        qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m)
+        qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
         return self._solve(qp, s_min, try_closed_form=False)
 
     def _closed_form_info(
@@ -449,7 +501,9 @@ class MMC:
 
     def _solve(self, qp: MMCQP, s_min: float, try_closed_form: bool) -> tuple[np.ndarray, StepInfo]:
         J, nu, m = qp.J, qp.l[:6], qp.manipulability
-        lower, upper = qp.l[6:], qp.u[6:]
+        lower, upper = qp.lower, qp.upper
+        if qp.n_distance and np.isfinite(qp.l[6 + self.n :]).any():
+            try_closed_form = False  # the closed form and the active set know only the bounds
         if s_min < self.singular_tol:
             return self._fallback(qp, "singular", "closed_form", 0)
         if try_closed_form:
@@ -462,10 +516,11 @@ class MMC:
                     return done
         x, status, iters = self._osqp(qp)
         n = self.n
-        if x is not None and status in ("solved", "inaccurate", "max_iter") and self._polish:
+        polish = self._polish and not (qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
+        if x is not None and status in ("solved", "inaccurate", "max_iter") and polish:
             # polish: the active-set solve from OSQP's active set, which when it settles is the exact
             # solution, also of a QP that OSQP left unfinished (see OSQP_SETTINGS)
-            y = self._raw.solution.y[6:] if self._raw is not None else np.zeros(n)
+            y = self._raw.solution.y[6 : 6 + n] if self._raw is not None else np.zeros(n)
             w = self.slack_weight if qp.has_slack else None
             found = active_set_solve(
                 J, qp.Jm, nu, lower, upper, self.lam, w, active_of_osqp(x[:n], y, lower, upper)
@@ -541,6 +596,7 @@ class MMC:
 
         pattern = qp.A != 0
         pattern[:6, : self.n] = True  # the J block stays structurally dense whatever its values
+        pattern[6 + self.n :, : self.n] = True  # so do the distance rows
         self._A_rows, self._A_cols = _csc_order(pattern)
         indptr = np.concatenate(([0], np.cumsum(pattern.sum(axis=0))))
         A = sp.csc_matrix((qp.A[self._A_rows, self._A_cols], self._A_rows, indptr), shape=qp.A.shape)
@@ -558,7 +614,7 @@ class MMC:
     def _fallback(self, qp: MMCQP, status: str, method: str, iters: int) -> tuple[np.ndarray, StepInfo]:
         """The RRMC step scaled into [lower, upper] (or zero), never NaN."""
         J, nu = qp.J, qp.l[:6]
-        lower, upper = qp.l[6:], qp.u[6:]
+        lower, upper = qp.lower, qp.upper
         qd, _, _, _ = _rrmc_step(J, nu, 1e-2, self.singular_tol, self._rows)
         fallback = "rrmc"
         if not np.isfinite(qd).all():

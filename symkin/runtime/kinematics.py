@@ -61,9 +61,10 @@ def load_kinematics(
     the object also carries the limits, speeds and source a controller reads, so trees that differ
     there get their own object."""
     key = cache_key(model, backend, strategy)
-    memo: Any = key
+    geometry = None if model.geometry is None else model.geometry.fingerprint()  # not in the code's key
+    memo: Any = (key, geometry)
     if not isinstance(model, Robot):
-        memo = (key, model.qlim.tobytes(), np.asarray(model.velocity).tobytes(), model.source)
+        memo = (key, model.qlim.tobytes(), np.asarray(model.velocity).tobytes(), model.source, geometry)
     return memoised(
         memo, lambda: kinematics_of(model, build(model, backend, cache, strategy, key), backend), cache
     )
@@ -294,7 +295,20 @@ class Kinematics(FrameMethods):
         reason when the pose is out of reach or every solution is outside the joint limits. For a
         redundant arm ``free_joint=j`` sweeps joint ``j`` (64 values over its limits, or one turn,
         plus ``q0[j]``) and ``free_joint=(j, values)`` tries the given values; see :meth:`ik_all`.
+
+        ``collision=env`` (an Environment or obstacles; ``True``: self-collision only) rejects
+        solutions in collision and solves again from new random starts, at most
+        ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
         """
+        if "collision" in kwargs or "collision_attempts" in kwargs:
+            env = kwargs.pop("collision", None)
+            attempts = kwargs.pop("collision_attempts", 20)
+            if env is not None and env is not False:
+                from symkin.runtime.collision import collision_ik
+
+                if frame is not None:
+                    kwargs["frame"] = frame
+                return collision_ik(self, Tep, env, attempts, **kwargs)
         if frame is None and self._ik_by_options:  # options seen before: straight to their C solver
             q0, seed = kwargs.pop("q0", None), kwargs.pop("seed", None)
             try:
@@ -358,6 +372,62 @@ class Kinematics(FrameMethods):
                 self._ik_by_options.clear()
             self._ik_by_options[key] = self._ik_by_options[(*key, ("backend", "c"))] = solver
         return solver
+
+    # -- collision geometry (symkin.runtime.collision) -----------------------------------------------
+    def collision(self) -> Any:
+        """The collision queries of the model's geometry: the compiled FKCC kernel on the C backend,
+        the NumPy reference on the others (built once; GeometryError when the model has none)."""
+        checker = self.__dict__.get("_collision")
+        if checker is None:
+            from symkin.runtime.collision import Collision
+
+            checker = Collision(self.model, "c" if self.backend == "c" else "numpy")
+            self.__dict__["_collision"] = checker
+        return checker
+
+    def collision_points(self, q: Any) -> np.ndarray:
+        """Base-frame points of the geometry, (P, 3) or (N, P, 3): each sphere's centre, each
+        capsule's two segment ends, in the order of ``model.geometry.shapes``."""
+        return self.collision().points(q)
+
+    def in_collision(self, q: Any, env: Any = None) -> bool | np.ndarray:
+        """Whether the robot at ``q`` collides with itself (active pairs: not on one body, not on
+        adjacent bodies, not disabled) or with ``env`` (obstacles in the base frame); (N,) for a batch."""
+        return self.collision().in_collision(q, env)
+
+    def distances(self, q: Any, env: Any = None) -> np.ndarray:
+        """Signed distance (m) of every active pair, (M,) or (N, M): self pairs, then every shape
+        against each obstacle (spheres, capsules, boxes); :meth:`collision_pairs` says which is which."""
+        return self.collision().distances(q, env)
+
+    def distance_jacobians(self, q: Any, env: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """Signed distances (M,) and their gradients d d/d q (M, n) (from the point Jacobians of the
+        closest points); batched (N, M), (N, M, n)."""
+        return self.collision().distance_jacobians(q, env)
+
+    def collision_pairs(self, env: Any = None) -> list[tuple[str, int, int]]:
+        """What each entry of :meth:`distances` is: ("self", i, j) or (obstacle kind, shape i, obstacle k)."""
+        return self.collision().labels(env)
+
+    def collision_function(self, env: Any = None) -> Any:
+        """The distances of :meth:`distances` as a ``casadi.Function`` ``q -> d`` (SX, closed forms;
+        a capsule against a box is refused): constraints ``d >= margin`` for ``casadi.Opti``
+        problems, CasADi's derivatives. Built once per environment (any backend)."""
+        from symkin.emit.casadi.collision import collision_function
+        from symkin.geometry.pairs import as_environment, layout_of
+
+        env = as_environment(env)
+        memo = self.__dict__.setdefault("_collision_functions", {})
+        if env not in memo:
+            if len(memo) >= 8:
+                memo.clear()
+            memo[env] = collision_function(layout_of(self.model), env)
+        return memo[env]
+
+    def motion_valid(self, q0: Any, q1: Any, env: Any = None, resolution: float = 0.05) -> bool:
+        """Whether the straight joint-space motion q0 -> q1 stays free of collision (checked every
+        ``resolution`` rad or m of the largest joint change, ends included)."""
+        return self.collision().motion_valid(q0, q1, env, resolution)
 
     # -- closed-form inverse kinematics (symkin.compiler.analytic_ik) -------------------------------------
     @cached_property

@@ -28,6 +28,7 @@ __all__ = [
     "mmc_closed_form",
     "joint_velocity_bounds",
     "manipulability_jacobian",
+    "distance_dampers",
     "active_set_solve",
     "active_of",
     "active_of_osqp",
@@ -115,7 +116,8 @@ class MMCQP(NamedTuple):
     """The MMC quadratic program (MMC paper eq 12 with bounds): min 0.5 x^T P x + c^T x, l <= A x <= u.
 
     ``x = qd`` (n,), or ``(qd, s)`` (n + 6,) with an equality slack ``s``. The first 6 rows of A are
-    the equality ``J qd (+ s) = nu`` (l = u = nu); the next n rows are ``lower <= qd <= upper``.
+    the equality ``J qd (+ s) = nu`` (l = u = nu); the next n rows are ``lower <= qd <= upper``;
+    the last ``n_distance`` rows (collision avoidance) are ``Jd qd >= l`` (u = inf; see :func:`mmc_qp`).
     """
 
     P: np.ndarray  # (nx, nx) diagonal: lam I_n (and slack_weight I_6)
@@ -126,6 +128,17 @@ class MMCQP(NamedTuple):
     J: np.ndarray  # (6, n) base-frame Jacobian
     Jm: np.ndarray  # (n,) manipulability Jacobian
     manipulability: float
+    n_distance: int = 0  # rows of distance constraints after the bounds
+
+    @property
+    def lower(self) -> np.ndarray:
+        """The joint velocity lower bounds (n,)."""
+        return self.l[6 : 6 + self.J.shape[1]]
+
+    @property
+    def upper(self) -> np.ndarray:
+        """The joint velocity upper bounds (n,)."""
+        return self.u[6 : 6 + self.J.shape[1]]
 
     @property
     def n(self) -> int:
@@ -145,27 +158,43 @@ def mmc_qp(
     lam: float = 0.005,
     slack_weight: float | None = None,
     manipulability: float = float("nan"),
+    Jd: np.ndarray | None = None,
+    d_lower: np.ndarray | None = None,
 ) -> MMCQP:
     """Assemble the MMC QP: min ``0.5 lam qd^T qd - Jm^T qd`` s.t. ``J qd = nu``, ``lower <= qd <= upper``.
 
     With ``slack_weight`` w, the equality becomes ``J qd + s = nu`` and ``0.5 w s^T s`` is added to
-    the cost, so the QP stays feasible when the bounds cannot meet nu.
+    the cost, so the QP stays feasible when the bounds cannot meet nu. ``Jd`` (M, n) and
+    ``d_lower`` (M,) add the rows ``Jd qd >= d_lower``: the distances' rates of change bounded
+    below (collision avoidance, :func:`distance_dampers`; ``-inf`` leaves a row free).
     """
     n = J.shape[1]
     ns = 0 if slack_weight is None else 6
+    nd = 0 if Jd is None else Jd.shape[0]
     P = np.zeros((n + ns, n + ns))
     P[np.arange(n), np.arange(n)] = lam
     c = np.zeros(n + ns)
     c[:n] = -Jm
-    A = np.zeros((6 + n, n + ns))
+    A = np.zeros((6 + n + nd, n + ns))
     A[:6, :n] = J
-    A[6:, :n] = np.eye(n)
+    A[6 : 6 + n, :n] = np.eye(n)
+    if nd:
+        A[6 + n :, :n] = Jd
     if ns:
         P[np.arange(n, n + 6), np.arange(n, n + 6)] = slack_weight
         A[:6, n:] = np.eye(6)
-    l = np.concatenate((nu, lower))
-    u = np.concatenate((nu, upper))
-    return MMCQP(P, c, A, l, u, J, Jm, manipulability)
+    l = np.concatenate((nu, lower, d_lower if nd else np.zeros(0)))
+    u = np.concatenate((nu, upper, np.full(nd, np.inf)))
+    return MMCQP(P, c, A, l, u, J, Jm, manipulability, nd)
+
+
+def distance_dampers(d: np.ndarray, d_i: float, d_s: float, xi: float) -> np.ndarray:
+    """Lower bounds on the rates of change of the distances ``d`` (M,): the velocity damper of
+    Haviland and Corke, NEO: A Novel Expeditious Optimisation Algorithm for Reactive Motion
+    Control of Manipulators (IEEE RA-L, 2021), ``d_dot >= -xi (d - d_s) / (d_i - d_s)`` for a
+    distance within the influence distance ``d_i`` (the approach slows to 0 at the safety distance
+    ``d_s``; below it the shapes must part), ``-inf`` (no constraint) for the others."""
+    return np.where(d < d_i, -xi * (d - d_s) / (d_i - d_s), -np.inf)
 
 
 def mmc_closed_form(

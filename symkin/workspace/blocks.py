@@ -31,6 +31,8 @@ class ReachSpec:
         rows: rows of J0 in the manipulability (0-2 translation, 3-5 rotation).
         ik: keyword options of ``kin.ik`` as (name, value) pairs.
         solutions: also return one solution per orientation.
+        collision: None, or the obstacles (an Environment) whose collision-free solutions alone
+            count (self-collisions too: ``kin.ik(..., collision=env)``).
     """
 
     grid: VoxelGrid
@@ -39,6 +41,7 @@ class ReachSpec:
     rows: tuple[int, ...]
     ik: tuple[tuple[str, Any], ...]
     solutions: bool = False
+    collision: Any = None
 
 
 def reach_block(kin: Any, spec: ReachSpec, index: int) -> dict[str, Any]:
@@ -67,6 +70,8 @@ def reach_block(kin: Any, spec: ReachSpec, index: int) -> dict[str, Any]:
     T[:, :3, :3] = spec.rotations
     T[:, 3, 3] = 1.0
     options = dict(spec.ik)
+    if spec.collision is not None:
+        options["collision"] = spec.collision
     found, owner = [], []
     for v in inside.tolist():
         T[:, :3, 3] = P[v]

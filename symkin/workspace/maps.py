@@ -162,6 +162,7 @@ def reachability(
     progress: bool | None = None,
     overwrite: bool = False,
     on_block: Callable[[int, dict[str, Any]], None] | None = None,
+    collision: Any = None,
 ) -> ReachMap:
     """Reachability and manipulability map of a robot's workspace, computed on Dask.
 
@@ -194,6 +195,10 @@ def reachability(
         progress: progress bar on stderr (default: when stderr is a terminal).
         overwrite: replace an existing store of symkin's instead of resuming it.
         on_block: called as ``on_block(index, result)`` after each block is written.
+        collision: None; ``True`` (only solutions free of self-collision count) or obstacles (an
+            Environment, or spheres, capsules and boxes in the base frame: only solutions free
+            of self-collision and of them count, ``kin.ik(..., collision=env)``). The robot needs
+            collision geometry; the obstacles are part of the map's settings.
 
     Returns:
         ReachMap. The result does not depend on the scheduler, workers or chunk size.
@@ -211,6 +216,7 @@ def reachability(
     rotations, described = _rotations(orientations, seed)
     rows = _rows(axes)
     ik = ik_settings(kin, ik_options)
+    env = _collision_env(kin, collision)
     grid = VoxelGrid.of(centre, ball, resolution, bounds, chunk)
     settings = {
         "kind": "reachability",
@@ -224,6 +230,8 @@ def reachability(
         "solutions": bool(solutions),
         "backend": kin.backend,
     }
+    if env is not None:  # only then: the settings (and so resumable stores) of other maps are unchanged
+        settings["collision"] = {k: v.tolist() for k, v in env.arrays().items()}
     from symkin.core.version import __version__
 
     attrs = {"kind": "reachability", "robot": robot_attrs(kin.robot), "settings": settings, "seed": seed,
@@ -231,7 +239,7 @@ def reachability(
     group = _open_map_store(output, attrs, grid, rotations, kin.n, bool(solutions), overwrite)
     grid = VoxelGrid(grid.centre, grid.radius, grid.resolution, grid.half, grid.lo, grid.shape,
                      int(group["reach"].chunks[0]))  # fmt: skip
-    spec = ReachSpec(grid, rotations, seed, rows, ik, bool(solutions))
+    spec = ReachSpec(grid, rotations, seed, rows, ik, bool(solutions), env)
     arrays = {name: group[name] for name in ("reach", "manipulability")}
     if solutions:
         arrays["solutions"] = group["solutions"]
@@ -282,6 +290,17 @@ def reachability(
             finally:
                 flush()
     return _load_map(group, None if output is None else str(output), stats)
+
+
+def _collision_env(kin: Any, collision: Any) -> Any:
+    """The obstacles of ``collision`` (an Environment; empty for ``True``), or None when off."""
+    if collision is None or collision is False:
+        return None
+    from symkin.geometry.pairs import as_environment, layout_of
+    from symkin.model.geometry import Environment
+
+    layout_of(kin.robot)  # GeometryError now, not in a worker, when the robot has no geometry
+    return Environment() if collision is True else as_environment(collision)
 
 
 def _open_map_store(

@@ -233,3 +233,29 @@ def test_position_only_map_of_a_spatial_arm_with_translational_manipulability():
     # near a singularity sqrt(det) loses digits differently in C and in numpy.linalg.det: 1e-10
     assert np.allclose(m.manipulability, best, rtol=1e-9, atol=1e-10, equal_nan=True)
     assert np.nanmax(m.manipulability) > 0.05
+
+
+def test_collision_free_map_counts_only_collision_free_solutions(robot, client):
+    links = (("link1", L1), ("link2", L2), ("link3", L3))
+    geometry = symkin.Geometry(
+        tuple(symkin.Capsule((0, 0, 0), (length, 0, 0), 0.03, k) for k, length in links)
+    )
+    arm = robot.with_geometry(geometry)
+    wall = symkin.Environment(spheres=(symkin.Sphere((0.45, 0.45, 0.0), 0.12),))
+    common = dict(SETTINGS, solutions=True, scheduler="synchronous", progress=False)
+    plain = reachability(arm, **common)
+    free = reachability(arm, collision=wall, **common)
+    assert (free.reach <= plain.reach + 1e-12).all()
+    assert free.reach.sum() < plain.reach.sum()  # the wall takes reach away
+    assert free.attrs["settings"]["collision"]["spheres"] == [[0.45, 0.45, 0.0, 0.12]]
+    kin = symkin.compile(arm)
+    Q = np.asarray(free.solutions)[np.isfinite(np.asarray(free.solutions)).all(axis=-1)]
+    assert len(Q) and not kin.in_collision(Q, wall).any()
+    Qp = np.asarray(plain.solutions)[np.isfinite(np.asarray(plain.solutions)).all(axis=-1)]
+    assert kin.in_collision(Qp, wall).any()  # without collision=, some solutions go through the wall
+    centre = np.linalg.norm(np.asarray(free.centers)[..., :2] - [0.45, 0.45], axis=-1) < 0.1
+    assert (free.reach[centre] == 0).all()
+    on_workers = reachability(arm, collision=wall, **dict(common, scheduler=client, chunk=5))
+    assert np.array_equal(on_workers.reach, free.reach)  # the obstacles travel to the workers intact
+    with pytest.raises(symkin.GeometryError, match="no collision geometry"):
+        reachability(robot, collision=True, **common)

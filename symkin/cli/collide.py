@@ -1,0 +1,87 @@
+"""``symkin collide``: is the robot at q in collision with itself or with obstacles? Prints the
+verdict, the closest pairs and their signed distances; exit status 1 when in collision."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+import numpy as np
+
+from symkin.cli import common
+from symkin.cli.checks import UserError, check_cflags_for
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub: Any) -> None:
+    s = common.add_command(sub, "collide", "check a configuration for self- and environment collisions")
+    common.add_robot_argument(s)
+    s.add_argument(
+        "q",
+        nargs="*",
+        metavar="Q",
+        help="joint values (rad or m), or a named configuration such as qr (default qz)",
+    )
+    common.add_obstacle_options(s)
+    s.add_argument("--backend", choices=("c", "numpy"), default="c", help="the kernel that answers")
+    s.add_argument("--top", type=int, default=5, metavar="K", help="print the K closest pairs")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=run)
+
+
+def _q(args: argparse.Namespace, robot: Any) -> np.ndarray:
+    if not args.q:
+        return np.zeros(robot.n)
+    if len(args.q) == 1 and args.q[0] in robot.configs:
+        return np.asarray(robot.configs[args.q[0]])
+    return common.floats(" ".join(args.q), "Q", robot.n)
+
+
+def _label(kind: str, i: int, j: int, shapes: Any) -> str:
+    a = f"{type(shapes[i]).__name__.lower()} {i} ({shapes[i].link})"
+    if kind == "self":
+        return f"{a} - {type(shapes[j]).__name__.lower()} {j} ({shapes[j].link})"
+    return f"{a} - obstacle {kind} {j}"
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.runtime.load import compile as compile_robot
+
+    robot = common.single_chain(args)
+    if args.top < 0:
+        raise UserError(f"--top must be >= 0, got {args.top}")
+    q = _q(args, robot)
+    env = common.environment_of(args)
+    check_cflags_for(args.backend)
+    kin = compile_robot(robot, backend=args.backend)
+    q = np.asarray(robot.check_q(q), dtype=float).reshape(robot.n)
+    hit = kin.in_collision(q, env)
+    d = kin.distances(q, env)
+    labels = kin.collision_pairs(env)
+    shapes = robot.geometry.shapes
+    order = np.argsort(d, kind="stable")[: args.top]
+    colliding = [k for k in np.argsort(d, kind="stable") if d[k] < 0]
+    if args.json:
+        out = {
+            "robot": robot.name,
+            "q": q.tolist(),
+            "in_collision": bool(hit),
+            "pairs": len(d),
+            "closest": [{"pair": _label(*labels[k], shapes), "distance": float(d[k])} for k in order],
+            "colliding": [_label(*labels[k], shapes) for k in colliding],
+        }
+        print(json.dumps(out, indent=2))
+        return 1 if hit else 0
+    n_self = sum(1 for lab in labels if lab[0] == "self")
+    print(
+        f"{robot.name}: {len(shapes)} shapes, {n_self} self pairs, {len(env)} obstacles "
+        f"({len(d) - n_self} pairs); q = {common.fmt(q)}"
+    )
+    print(f"IN COLLISION: {len(colliding)} overlapping pairs" if hit else "collision-free")
+    if len(order):
+        print("closest pairs (signed distance, m):")
+        for k in order:
+            print(f"  {d[k]: .5f}  {_label(*labels[k], shapes)}")
+    return 1 if hit else 0

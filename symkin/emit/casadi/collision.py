@@ -1,0 +1,138 @@
+"""The collision distances of a model's geometry as one ``casadi.Function`` (SX): ``d = f(q)``, the
+signed distance of every active pair in the order of ``kin.collision_pairs(env)``, for
+``casadi.Opti`` problems (``opti.subject_to(f(q) >= margin)``) and CasADi's derivatives.
+
+The link poses are built from the model's segments (constant transforms as numbers, the joints'
+rotations and translations in ``q``), the shape points are the link poses applied to them, and the
+pair distances are the closed forms of :mod:`symkin.geometry.distance` written with CasADi's
+``if_else``/``fmin``/``fmax``: sphere-sphere, capsule-sphere, capsule-capsule (Ericson's closest
+points of two segments) and sphere-box (the box's signed distance field). A capsule against a box
+has no closed form (:mod:`symkin.geometry.distance` minimises along the segment): such an
+environment is refused with a GeometryError.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import GeometryError
+from symkin.model.geometry import Capsule
+
+__all__ = ["collision_function"]
+
+SEG_EPS, PAR_EPS = 1e-24, 1e-14  # as symkin.geometry.distance
+
+
+def _link_poses(ca: Any, tree: Any, q: Any) -> list[Any]:
+    """(4, 4) SX pose of each segment's link, depth first."""
+    num = tree._num
+    L: list[Any] = []
+    for k, seg in enumerate(tree.segments):
+        T = ca.DM(num.A[k]) if seg.parent < 0 else L[seg.parent] @ ca.DM(num.A[k])
+        if seg.slot is not None:
+            s = tree.slots[seg.slot]
+            theta = num.sign[k] * (float(s.multiplier) * q[s.joint] + float(s.offset))
+            M = ca.SX.eye(4)
+            axis = num.axis[k]
+            if s.revolute:
+                j, i = [(1, 2), (2, 0), (0, 1)][axis]
+                c, sn = ca.cos(theta), ca.sin(theta)
+                M[j, j], M[i, i], M[j, i], M[i, j] = c, c, -sn, sn
+            else:
+                M[axis, 3] = theta
+            T = T @ M @ ca.DM(num.B[k])
+        L.append(T)
+    return L
+
+
+def _norm(ca: Any, v: Any) -> Any:
+    return ca.sqrt(ca.sumsqr(v))
+
+
+def _clamp01(ca: Any, x: Any) -> Any:
+    return ca.fmin(ca.fmax(x, 0.0), 1.0)
+
+
+def _point_segment(ca: Any, p: Any, a: Any, b: Any) -> Any:
+    ab = b - a
+    l2 = ca.dot(ab, ab)
+    return ca.if_else(l2 > SEG_EPS, _clamp01(ca, ca.dot(p - a, ab) / ca.if_else(l2 > SEG_EPS, l2, 1.0)), 0.0)
+
+
+def _segment_closest(ca: Any, a1: Any, b1: Any, a2: Any, b2: Any) -> tuple[Any, Any]:
+    """Parameters (s, t) of the closest points of two segments (Ericson, Real-Time Collision
+    Detection, 2005, 5.1.9), as :func:`symkin.geometry.distance.segment_closest`."""
+    d1, d2, r = b1 - a1, b2 - a2, a1 - a2
+    a, e, f, c, b = ca.dot(d1, d1), ca.dot(d2, d2), ca.dot(d2, r), ca.dot(d1, r), ca.dot(d1, d2)
+    ok1, ok2 = a > SEG_EPS, e > SEG_EPS
+    a_s, e_s = ca.if_else(ok1, a, 1.0), ca.if_else(ok2, e, 1.0)
+    denom = a * e - b * b
+    skew = denom > PAR_EPS * a * e
+    s_gen = ca.if_else(skew, _clamp01(ca, (b * f - c * e) / ca.if_else(skew, denom, 1.0)), 0.0)
+    t_gen = (b * s_gen + f) / e_s
+    s_gen = ca.if_else(
+        t_gen < 0.0, _clamp01(ca, -c / a_s), ca.if_else(t_gen > 1.0, _clamp01(ca, (b - c) / a_s), s_gen)
+    )
+    t_gen = _clamp01(ca, t_gen)
+    s = ca.if_else(ok1, ca.if_else(ok2, s_gen, _clamp01(ca, -c / a_s)), 0.0)
+    t = ca.if_else(ok2, ca.if_else(ok1, t_gen, _clamp01(ca, f / e_s)), 0.0)
+    return s, t
+
+
+def _box_sdf(ca: Any, p: Any, center: np.ndarray, h: np.ndarray, R: np.ndarray) -> Any:
+    x = ca.DM(R.T) @ (p - ca.DM(center))
+    qs = [ca.fabs(x[i]) - float(h[i]) for i in range(3)]
+    m = [ca.fmax(v, 0.0) for v in qs]
+    s2 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2]
+    qmax = ca.fmax(ca.fmax(qs[0], qs[1]), qs[2])
+    # outside: the distance to the box; inside: minus the depth (sqrt only where it is positive,
+    # so its derivative at 0 never reaches the inside)
+    return ca.if_else(s2 > 0, ca.sqrt(ca.if_else(s2 > 0, s2, 1.0)), 0.0) + ca.fmin(qmax, 0.0)
+
+
+def _pair(ca: Any, A: Any, ra: float, cap_a: bool, B: Any, rb: float, cap_b: bool) -> Any:
+    """Signed distance of shape A (points A: 1 or 2) against shape B."""
+    if cap_a and cap_b:
+        s, t = _segment_closest(ca, A[0], A[1], B[0], B[1])
+        return _norm(ca, A[0] + s * (A[1] - A[0]) - B[0] - t * (B[1] - B[0])) - ra - rb
+    if cap_a or cap_b:
+        (a, b, ro), (p, rp) = ((A[0], A[1], ra), (B[0], rb)) if cap_a else ((B[0], B[1], rb), (A[0], ra))
+        t = _point_segment(ca, p, a, b)
+        return _norm(ca, a + t * (b - a) - p) - ro - rp
+    return _norm(ca, A[0] - B[0]) - ra - rb
+
+
+def collision_function(layout: Any, env: Any, name: str = "distances") -> Any:
+    """``casadi.Function`` ``name``: q (n,) -> d (M,), the signed distances of ``layout``'s active
+    pairs and of every shape against each obstacle of ``env`` (an Environment), in the order of
+    :meth:`symkin.geometry.pairs.Layout.pair_labels`."""
+    import casadi as ca
+
+    tree = layout.tree
+    if env.boxes and any(isinstance(s, Capsule) for s in layout.shapes):
+        raise GeometryError(
+            "the CasADi distances have no closed form for a capsule against a box; give the boxes "
+            "as spheres (symkin.geometry.fit_spheres) or use kin.distances"
+        )
+    q = ca.SX.sym("q", tree.n)
+    L = _link_poses(ca, tree, q)
+    pts = []
+    for s, k in zip(layout.shapes, layout.segment):
+        local = [ca.DM(np.array(p)) for p in s.points]
+        pts.append(local if k < 0 else [L[k][:3, :3] @ p + L[k][:3, 3] for p in local])
+    caps = [isinstance(s, Capsule) for s in layout.shapes]
+    radius = [s.radius for s in layout.shapes]
+    out = [_pair(ca, pts[i], radius[i], caps[i], pts[j], radius[j], caps[j]) for i, j in layout.self_pairs]
+    for o in env.spheres:
+        B = [ca.DM(np.array(o.center))]
+        out += [_pair(ca, pts[i], radius[i], caps[i], B, o.radius, False) for i in range(len(pts))]
+    for o in env.capsules:
+        B = [ca.DM(np.array(o.a)), ca.DM(np.array(o.b))]
+        out += [_pair(ca, pts[i], radius[i], caps[i], B, o.radius, True) for i in range(len(pts))]
+    for box in env.boxes:
+        c, h, R = np.array(box.center), np.array(box.half_extents), box.R
+        out += [_box_sdf(ca, pts[i][0], c, h, R) - radius[i] for i in range(len(pts))]
+    d = ca.vertcat(*out) if out else ca.SX(0, 1)
+    return ca.Function(name, [q], [d], ["q"], ["d"])

@@ -1,0 +1,240 @@
+"""Emit forward kinematics + collision checks ("FKCC", after Thomason, Kingston and Kavraki, Motions
+in Microseconds via Vectorized Sampling-Based Planning, ICRA 2024) as one C file per robot and
+geometry.
+
+The robot's constants are folded into straight-line code: each link pose is its parent's pose times
+the segment's constant transform (terms with a 0 factor dropped, 1 factors not multiplied) times
+the joint's rotation or translation; each shape point is its link's pose applied to the point.
+The pair tests call the primitives of ``runtime/csrc/symkin_collide.h``. Functions (all double):
+
+- ``skcoll_points(q, X)``: shape points in the base frame, (P, 3).
+- ``skcoll_in_collision(q, S, ns, C, nc, B, nb)``: 1 when any active pair overlaps; stops at the
+  first one found (environment first, then self pairs).
+- ``skcoll_distances(q, S, ns, C, nc, B, nb, d, J)``: the signed distance of every active pair and,
+  when ``J`` is not NULL, its gradient row (M, n).
+- ``*_batch`` of each over N configurations (rows of Q).
+
+Obstacles come packed as in :meth:`symkin.geometry.Environment.arrays`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.core.names import comment_safe, identifier
+from symkin.core.version import __version__
+from symkin.emit.templates import render
+from symkin.model.geometry import Capsule
+
+__all__ = ["render_collision", "collision_tables"]
+
+# the distance primitives, shared with the C runtime (the MMC step with obstacle constraints)
+COLLIDE_HEADER = Path(__file__).resolve().parent.parent / "runtime" / "csrc" / "symkin_collide.h"
+
+
+def _num(x: float) -> str:
+    """A C double literal that reads back exactly."""
+    r = repr(float(x))
+    return r if ("e" in r or "." in r or "n" in r) else r + ".0"
+
+
+def _product(dst: str, src: str | None, C: np.ndarray) -> list[str]:
+    """C statements for ``dst = src * C`` (3x4 row-major poses, C constant; src None: identity)."""
+    lines = []
+    for i in range(3):
+        for j in range(4):
+            if src is None:
+                lines.append(f"{dst}[{4 * i + j}] = {_num(C[i, j])};")
+                continue
+            terms = []
+            for m in range(3):
+                c = C[m, j]
+                if c != 0.0:
+                    y = f"{src}[{4 * i + m}]"
+                    terms.append(y if c == 1.0 else f"-{y}" if c == -1.0 else f"{_num(c)} * {y}")
+            if j == 3:
+                terms.append(f"{src}[{4 * i + 3}]")
+            value = (" + ".join(terms) if terms else "0.0").replace("+ -", "- ")
+            lines.append(f"{dst}[{4 * i + j}] = {value};")
+    return lines
+
+
+def _is_identity(C: np.ndarray) -> bool:
+    return bool(np.array_equal(C[:3, :4], np.eye(4)[:3]))
+
+
+def _times(dst: str, parent: str | None, A: np.ndarray) -> list[str]:
+    """``dst = parent * A``: the constants alone at the base, a copy when A is the identity."""
+    if parent is not None and _is_identity(A):
+        return [f"memcpy({dst}, {parent}, 12 * sizeof(double));"]
+    return _product(dst, parent, A)
+
+
+def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str) -> list[str]:
+    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``."""
+    lines = [f"memcpy({dst}, {src}, 12 * sizeof(double));"]
+    if not revolute:
+        for i in range(3):
+            lines.append(f"{dst}[{4 * i + 3}] = {src}[{4 * i + 3}] + ({theta}) * {src}[{4 * i + axis}];")
+        return lines
+    j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
+    lines.insert(0, f"{{ const double c = cos({theta}), s = sin({theta});")
+    for i in range(3):
+        a, b = f"{src}[{4 * i + j}]", f"{src}[{4 * i + k}]"
+        lines.append(f"{dst}[{4 * i + j}] = c * {a} + s * {b};")
+        lines.append(f"{dst}[{4 * i + k}] = c * {b} - s * {a};")
+    lines.append("}")
+    return lines
+
+
+def collision_tables(layout: Any) -> dict[str, Any]:
+    """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
+    tree = layout.tree
+    num = tree._num
+    fk: list[str] = []
+    joints = []  # per segment: (has joint, q index, multiplier, revolute, axis, sign)
+    for k, seg in enumerate(tree.segments):
+        parent = None if seg.parent < 0 else f"T[{seg.parent}]"
+        A, B = num.A[k], num.B[k]
+        fk.append(f"/* segment {k}: link {comment_safe(seg.link, 60)} */")
+        if seg.slot is None:
+            joints.append((0, 0, 0.0, 0, 0, 1.0))
+            fk += _times(f"T[{k}]", parent, A)
+            continue
+        s = tree.slots[seg.slot]
+        sign = num.sign[k]
+        mult, off = float(s.multiplier), float(s.offset)
+        theta = f"q[{s.joint}]"
+        if mult != 1.0:
+            theta = f"{_num(mult)} * {theta}"
+        if off != 0.0:
+            theta = f"{theta} + {_num(off)}"
+        if sign < 0:
+            theta = f"-({theta})"
+        joints.append((1, s.joint, mult, int(s.revolute), num.axis[k], float(sign)))
+        fk += _times(f"PJ[{k}]", parent, A)
+        if _is_identity(B):
+            fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta)
+        else:
+            fk.append("{ double M_[12];")
+            fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta)
+            fk += _product(f"T[{k}]", "M_", B)
+            fk.append("}")
+    points = []
+    for s, k in zip(layout.shapes, layout.segment):
+        for p in s.points:
+            points.append((k, [_num(x) for x in p]))
+    # one bounding sphere per link (its shapes' points' box centre, the radius enclosing every shape):
+    # in_collision tests a link's shapes only when its bounding sphere meets the obstacle or the
+    # other link's bounding sphere; appended to the points after the shapes' own
+    links = list(dict.fromkeys(s.link for s in layout.shapes))
+    members: list[list[int]] = [[] for _ in links]
+    for i, s in enumerate(layout.shapes):
+        members[links.index(s.link)].append(i)
+    bounds = []
+    for group in members:
+        P = np.array([p for i in group for p in layout.shapes[i].points])
+        c = 0.5 * (P.min(axis=0) + P.max(axis=0))
+        r = max(np.linalg.norm(np.array(p) - c) + layout.shapes[i].radius
+                for i in group for p in layout.shapes[i].points)  # fmt: skip
+        r = float(np.nextafter(r, np.inf))  # rounding may not shrink the bound below a shape
+        bounds.append((len(points), _num(r)))
+        points.append((layout.segment[group[0]], [_num(x) for x in c]))
+    link_of = {i: links.index(s.link) for i, s in enumerate(layout.shapes)}
+    groups: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for i, j in layout.self_pairs:
+        a, b = sorted((link_of[i], link_of[j]))
+        groups.setdefault((a, b), []).append((i, j))
+    group_links, group_start, grouped = [], [0], []
+    for key in sorted(groups):
+        group_links.append(key)
+        grouped += groups[key]
+        group_start.append(len(grouped))
+    link_start, link_shapes = [0], []
+    for group in members:
+        link_shapes += group
+        link_start.append(len(link_shapes))
+    # in_collision's checks as straight-line code: per pair of links, their bounding spheres, then
+    # each shape pair (two spheres: squared distance against the constant squared radius sum)
+    first = layout.point_index
+    radius = [float(x.radius) for x in layout.shapes]
+    is_cap = [isinstance(x, Capsule) for x in layout.shapes]
+    self_code = []
+    for (a, b), start, stop in zip(group_links, group_start, group_start[1:]):
+        (pa, ra), (pb, rb) = bounds[a], bounds[b]
+        self_code.append(f"if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{")
+        for i, j in grouped[start:stop]:
+            if is_cap[i] or is_cap[j]:
+                self_code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
+            else:
+                rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
+                self_code.append(f"    if (sphere_hit(X[{first[i]}], X[{first[j]}], {_num(rr)})) return 1;")
+        self_code.append("}")
+    sphere_code = []  # against obstacle sphere ob (centre ob, radius ro)
+    for (pb, rb), group in zip(bounds, members):
+        sphere_code.append(f"if (skc_spheres_overlap(X[{pb}], {rb}, ob, ro)) {{")
+        for i in group:
+            if is_cap[i]:
+                sphere_code.append(f"    if (overlaps(X, {i}, -1, 1, ob)) return 1;")
+            else:
+                r_i = _num(radius[i])
+                sphere_code.append(f"    if (skc_spheres_overlap(X[{first[i]}], {r_i}, ob, ro)) return 1;")
+        sphere_code.append("}")
+    point_code = []  # X = T[k] * local, straight-line: the local coordinates are constants (0 terms dropped)
+    for i, (k, local) in enumerate(points):
+        for r in range(3):
+            if k < 0:
+                point_code.append(f"X[{i}][{r}] = {local[r]};")
+                continue
+            terms = [
+                f"T[{k}][{4 * r + c}]" if float(local[c]) == 1.0 else f"{local[c]} * T[{k}][{4 * r + c}]"
+                for c in range(3)
+                if float(local[c]) != 0.0
+            ]
+            point_code.append(f"X[{i}][{r}] = {' + '.join([*terms, f'T[{k}][{4 * r + 3}]'])};")
+    anc_start, anc = [0], []
+    for k in range(len(tree.segments)):
+        anc += [a for a in layout.ancestors(k) if tree.segments[a].slot is not None]
+        anc_start.append(len(anc))
+    shapes = [
+        (int(isinstance(s, Capsule)), layout.point_index[i], _num(s.radius), layout.segment[i])
+        for i, s in enumerate(layout.shapes)
+    ]
+    return {
+        "n": tree.n,
+        "S": max(len(tree.segments), 1),
+        "fk": fk,
+        "joints": joints,
+        "points": points,
+        "point_code": point_code,
+        "shapes": shapes,
+        "pairs": list(layout.self_pairs) or [(0, 0)],
+        "npairs": len(layout.self_pairs),
+        "nlinks": len(links),
+        "bounds": bounds,
+        "link_start": link_start,
+        "link_shapes": link_shapes,
+        "self_code": self_code,
+        "sphere_code": sphere_code,
+        "anc_start": anc_start,
+        "anc": anc or [0],
+    }
+
+
+def render_collision(layout: Any) -> dict[str, str]:
+    """The C sources of ``layout``'s FKCC kernel: ``{"skcoll.c": ..., "symkin_collide.h": ...}``."""
+    tree = layout.tree
+    text = render(
+        "c/collision.c.j2",
+        robot=comment_safe(tree.name, 80),
+        ident=identifier(tree.name),
+        version=__version__,
+        nshapes=len(layout.shapes),
+        nshape_points=layout.n_points,
+        source=comment_safe(tree.geometry.source or "user geometry", 200),
+        **collision_tables(layout),
+    )
+    return {"skcoll.c": text, "symkin_collide.h": COLLIDE_HEADER.read_text()}

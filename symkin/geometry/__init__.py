@@ -1,0 +1,39 @@
+"""Collision geometry: shapes on a robot's links, obstacles, which pairs are checked, where they come
+from, and the NumPy reference of the queries the compiled kernel answers (:mod:`symkin.runtime.collision`).
+
+- :class:`Sphere`, :class:`Capsule` (robot and obstacles), :class:`Box` (obstacles),
+  :class:`Geometry` (a robot's shapes and disabled link pairs), :class:`Environment`.
+- Sources: :func:`geometry_from_urdf` (``<collision>``), :func:`read_srdf` (disabled pairs),
+  :func:`fit_spheres` (spheres covering a mesh or points), :func:`builtin_geometry` (the built-in
+  arms' sphere models, attached by :func:`symkin.load`).
+- :func:`layout_of`: the model's bodies and active pairs.
+- :func:`points`, :func:`distances`, :func:`distance_jacobians`, :func:`in_collision`: the reference.
+- :mod:`symkin.geometry.distance`: signed distances of sphere, capsule and box pairs.
+"""
+
+from symkin.geometry.fit import fit_spheres
+from symkin.geometry.pairs import Layout, as_environment, layout_of
+from symkin.geometry.reference import distance_jacobians, distances, in_collision, points
+from symkin.geometry.srdf import read_srdf
+from symkin.geometry.urdf import geometry_from_urdf
+from symkin.model.builtin_geometry import builtin_geometry
+from symkin.model.geometry import Box, Capsule, Environment, Geometry, Sphere
+
+__all__ = [
+    "Box",
+    "Capsule",
+    "Environment",
+    "Geometry",
+    "Layout",
+    "Sphere",
+    "as_environment",
+    "builtin_geometry",
+    "distance_jacobians",
+    "distances",
+    "fit_spheres",
+    "geometry_from_urdf",
+    "in_collision",
+    "layout_of",
+    "points",
+    "read_srdf",
+]

@@ -1,0 +1,196 @@
+"""The numeric reference for collision queries (NumPy, batched over configurations): shape points in
+the base frame, signed distances of the active pairs, their joint-space gradients, collision verdicts.
+
+Link poses come from the tree's O(n) walk (:meth:`symkin.Tree` numeric kinematics, Part 1 eqs 1-5
+of Haviland and Corke, Manipulator Differential Kinematics, 2023); a point x fixed to a link moves
+with ``dx/dq_j = w_j x (x - o_j)`` for each revolute joint j on the link's path (``w_j`` its axis,
+``o_j`` its origin, both in the base frame) and ``w_j`` for a prismatic one (the point Jacobian,
+eqs 31-34 with x in place of the end effector). A pair's distance gradient is
+``n . (dpa/dq - dpb/dq)`` (``pa``, ``pb`` the closest core points, ``n`` the unit normal from B
+to A). The compiled C kernel (:mod:`symkin.emit.collision`) is checked against this module.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from symkin.core.arrays import as_batch
+from symkin.geometry import distance as dist
+from symkin.geometry.pairs import Layout, as_environment, layout_of
+from symkin.model.geometry import Capsule, Environment
+
+__all__ = ["points", "evaluate", "distances", "distance_jacobians", "in_collision"]
+
+
+def _walk(layout: Layout, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return layout.tree._walk(Q)
+
+
+def _shape_points(layout: Layout, L: np.ndarray) -> list[np.ndarray]:
+    """Per shape, its points in the base frame, (N, k, 3) with k = 1 (sphere) or 2 (capsule)."""
+    out = []
+    for s, k in zip(layout.shapes, layout.segment):
+        local = np.array(s.points)  # (k, 3)
+        if k < 0:
+            out.append(np.broadcast_to(local, (L.shape[0], *local.shape)).copy())
+        else:
+            out.append(np.einsum("Nij,kj->Nki", L[:, k, :3, :3], local) + L[:, k, None, :3, 3])
+    return out
+
+
+def points(model: Any, q: Any) -> np.ndarray:
+    """Base-frame points of the geometry, (P, 3) or (N, P, 3): each sphere's centre and each
+    capsule's two segment ends, in shape order."""
+    layout = layout_of(model)
+    Q, single = as_batch(q, layout.tree.n, layout.tree.name)
+    L, _ = _walk(layout, Q)
+    X = np.concatenate(_shape_points(layout, L), axis=1)
+    return X[0] if single else X
+
+
+def _tables(layout: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per shape: capsule (bool), first point index, radius, segment (-1 base)."""
+    caps = np.array([isinstance(s, Capsule) for s in layout.shapes], dtype=bool)
+    first = np.array(layout.point_index, dtype=int)
+    radius = np.array([s.radius for s in layout.shapes], dtype=float)
+    return caps, first, radius, np.array(layout.segment, dtype=int)
+
+
+def _pair_kinds(X: np.ndarray, tab: tuple, I: np.ndarray, J: np.ndarray) -> tuple:
+    """(d, n, pa, pb) of shapes I against shapes J (index arrays of one length), vectorised."""
+    caps, first, radius, _ = tab
+    N, K = X.shape[0], len(I)
+    d, n, pa, pb = np.empty((N, K)), np.empty((N, K, 3)), np.empty((N, K, 3)), np.empty((N, K, 3))
+    for ci in (False, True):
+        for cj in (False, True):
+            m = np.nonzero((caps[I] == ci) & (caps[J] == cj))[0]
+            if not m.size:
+                continue
+            i, j = I[m], J[m]
+            A, B = X[:, first[i]], X[:, first[j]]
+            if ci and cj:
+                res = dist.capsule_capsule(A, X[:, first[i] + 1], radius[i], B, X[:, first[j] + 1], radius[j])
+            elif ci:
+                res = dist.capsule_sphere(A, X[:, first[i] + 1], radius[i], B, radius[j])
+            elif cj:
+                dd, nn, qb, qa = dist.capsule_sphere(B, X[:, first[j] + 1], radius[j], A, radius[i])
+                res = (dd, -nn, qa, qb)
+            else:
+                res = dist.sphere_sphere(A, radius[i], B, radius[j])
+            d[:, m], n[:, m], pa[:, m], pb[:, m] = res
+    return d, n, pa, pb
+
+
+def _obstacles(X: np.ndarray, tab: tuple, env: Environment) -> list[tuple]:
+    """Per obstacle kind: (d, n, pa) (N, O, S...) of every shape against every obstacle."""
+    caps, first, radius, _ = tab
+    S = len(caps)
+    out = []
+    sph, cap = np.nonzero(~caps)[0], np.nonzero(caps)[0]
+    arrays = env.arrays()
+    for kind in ("spheres", "capsules", "boxes"):
+        O = arrays[kind]
+        if not len(O):
+            continue
+        N = X.shape[0]
+        d, n, pa = np.empty((N, len(O), S)), np.empty((N, len(O), S, 3)), np.empty((N, len(O), S, 3))
+        for idx, is_cap in ((sph, False), (cap, True)):
+            if not idx.size:
+                continue
+            A = X[:, None, first[idx]]  # (N, 1, K, 3)
+            B = X[:, None, first[idx] + 1] if is_cap else None
+            r = radius[idx]
+            if kind == "spheres":
+                c, ro = O[None, :, None, :3], O[None, :, None, 3]
+                res = dist.capsule_sphere(A, B, r, c, ro) if is_cap else dist.sphere_sphere(A, r, c, ro)
+            elif kind == "capsules":
+                a, b, ro = O[None, :, None, :3], O[None, :, None, 3:6], O[None, :, None, 6]
+                if is_cap:
+                    res = dist.capsule_capsule(A, B, r, a, b, ro)
+                else:
+                    dd, nn, qb, qa = dist.capsule_sphere(a, b, ro, A, r)
+                    res = (dd, -nn, qa, qb)
+            else:
+                c, h, R = (
+                    O[None, :, None, :3],
+                    O[None, :, None, 3:6],
+                    O[None, :, None, 6:].reshape(1, -1, 1, 3, 3),
+                )
+                res = dist.capsule_box(A, B, r, c, h, R) if is_cap else dist.sphere_box(A, r, c, h, R)
+            d[:, :, idx], n[:, :, idx], pa[:, :, idx] = res[0], res[1], res[2]
+        out.append((d.reshape(N, -1), n.reshape(N, -1, 3), pa.reshape(N, -1, 3)))
+    return out
+
+
+def _gradients(layout: Layout, P: np.ndarray, seg: np.ndarray, p: np.ndarray, n: np.ndarray,
+               G: np.ndarray, sign: float) -> None:  # fmt: skip
+    """Add ``sign * n . dp/dq`` to G (N, M, nq) for points p (N, M, 3) fixed to the links of ``seg`` (M,)."""
+    tree = layout.tree
+    num = tree._num
+    for k in np.unique(seg):
+        if k < 0:
+            continue
+        m = np.nonzero(seg == k)[0]
+        pk, nk = p[:, m], n[:, m]
+        for a in layout.ancestors(int(k)):
+            sa = tree.segments[a]
+            if sa.slot is None:
+                continue
+            s = tree.slots[sa.slot]
+            w = P[:, a, None, :3, num.axis[a]] * num.sign[a]  # (N, 1, 3)
+            col = np.cross(w, pk - P[:, a, None, :3, 3]) if s.revolute else np.broadcast_to(w, pk.shape)
+            G[:, m, s.joint] += sign * float(s.multiplier) * np.einsum("Nmi,Nmi->Nm", nk, col)
+
+
+def evaluate(model: Any, q: Any, env: Any = None, jacobians: bool = False) -> tuple[np.ndarray, Any, bool]:
+    """Signed distances (N, M) of every active pair, in :meth:`Layout.pair_labels` order (self pairs,
+    then each obstacle sphere, capsule, box against every shape), and with ``jacobians`` their
+    gradients (N, M, n); ``single`` says whether q was one configuration."""
+    layout = layout_of(model)
+    env = as_environment(env)
+    tree = layout.tree
+    Q, single = as_batch(q, tree.n, tree.name)
+    L, P = _walk(layout, Q)
+    X = np.concatenate(_shape_points(layout, L), axis=1)
+    tab = _tables(layout)
+    N = Q.shape[0]
+    pairs = np.array(layout.self_pairs, dtype=int).reshape(-1, 2)
+    ds, gs = [], []
+    if len(pairs):
+        d, n, pa, pb = _pair_kinds(X, tab, pairs[:, 0], pairs[:, 1])
+        ds.append(d)
+        if jacobians:
+            G = np.zeros((N, len(pairs), tree.n))
+            _gradients(layout, P, tab[3][pairs[:, 0]], pa, n, G, 1.0)
+            _gradients(layout, P, tab[3][pairs[:, 1]], pb, n, G, -1.0)
+            gs.append(G)
+    for d, n, pa in _obstacles(X, tab, env):
+        ds.append(d)
+        if jacobians:
+            G = np.zeros((N, d.shape[1], tree.n))
+            _gradients(layout, P, np.tile(tab[3], d.shape[1] // len(tab[3])), pa, n, G, 1.0)
+            gs.append(G)
+    D = np.concatenate(ds, axis=1) if ds else np.zeros((N, 0))
+    J = (np.concatenate(gs, axis=1) if gs else np.zeros((N, 0, tree.n))) if jacobians else None
+    return D, J, single
+
+
+def distances(model: Any, q: Any, env: Any = None) -> np.ndarray:
+    """Signed distance (m) of each active pair, (M,) or (N, M); negative when shapes overlap."""
+    D, _, single = evaluate(model, q, env)
+    return D[0] if single else D
+
+
+def distance_jacobians(model: Any, q: Any, env: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distances (M,) and their gradients d d / d q (M, n); batched: (N, M), (N, M, n)."""
+    D, J, single = evaluate(model, q, env, jacobians=True)
+    return (D[0], J[0]) if single else (D, J)
+
+
+def in_collision(model: Any, q: Any, env: Any = None) -> bool | np.ndarray:
+    """Whether any active pair overlaps (signed distance < 0): a bool, or (N,) bools for a batch."""
+    D, _, single = evaluate(model, q, env)
+    hit = (D < 0).any(axis=1)
+    return bool(hit[0]) if single else hit

@@ -1,0 +1,373 @@
+"""Collision geometry from a URDF's ``<collision>`` elements, on the links of a symkin model.
+
+:func:`geometry_from_urdf` reads each ``<link>``'s ``<collision>`` children (through the one URDF
+reader, :mod:`symkin.model.urdf`) and places them, with their ``<origin xyz rpy>``, on the link
+of ``model`` they move with:
+
+- ``<sphere radius>``: a :class:`~symkin.geometry.Sphere`;
+- ``<cylinder radius length>`` (and ``<capsule radius length>``): a
+  :class:`~symkin.geometry.Capsule` along the element's z axis from ``-length/2`` to
+  ``+length/2`` with the same radius, so a cylinder gains rounded caps (``radius`` longer at
+  each end: conservative);
+- ``<box size>``: a grid of spheres, each circumscribing its grid cell (conservative), cells
+  as near cubes as ``max_box_spheres`` allows;
+- ``<mesh filename scale>``: ``mesh_spheres`` spheres fitted by :func:`symkin.geometry.fit.fit_spheres`
+  when ``mesh_spheres > 0``, trimesh is installed and the file resolves (relative to the URDF's
+  folder, ``file://`` paths as such; ``package://`` needs ROS and is not resolved); otherwise
+  skipped with a warning naming the link.
+
+``model`` is a :class:`symkin.Tree` (its links are URDF link names) or a :class:`symkin.Robot`
+from :meth:`symkin.Robot.from_urdf` of the same file, whose links are ``base`` (the chain's
+base link), ``link<k+1>`` (the child link of the k-th movable joint; the constant transform
+between symkin's link frame k and that URDF link frame is measured from the two forward
+kinematics, and checked) and ``ee`` (the chain's end link when fixed joints lead to it). A
+URDF link that is not one of the model's links is attached to its nearest ancestor that is,
+through fixed joints (their transforms composed); one reached only through a movable joint the
+model does not have, or above the model's base, is skipped with a warning.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+from pathlib import Path
+from typing import Any
+from xml.etree import ElementTree
+
+import numpy as np
+
+from symkin.errors import GeometryError, MissingExtraError
+from symkin.model.geometry import Capsule, Geometry, Sphere
+from symkin.model.urdf import (
+    URDFGraph,
+    URDFJoint,
+    joint_axis,
+    joint_origin,
+    load_xml,
+    read_graph,
+    xml_numbers,
+)
+
+__all__ = ["geometry_from_urdf", "urdf_link_names", "urdf_link_frames", "box_spheres"]
+
+_Frame = tuple[str, np.ndarray]  # model link name, 4x4 transform model link frame -> URDF link frame
+
+
+def _rpy_matrix(xyz: Any, rpy: Any) -> np.ndarray:
+    """The homogeneous transform of an URDF ``<origin>``: translation ``xyz``, rotation
+    ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    T = np.eye(4)
+    T[:3, :3] = [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+    T[:3, 3] = [float(v) for v in xyz]
+    return T
+
+
+def _joint_origin(j: URDFJoint) -> np.ndarray:
+    return _rpy_matrix(*joint_origin(j.el, f"joint {j.name!r}"))
+
+
+def _joint_motion(j: URDFJoint, where: str, q: float) -> np.ndarray:
+    """The transform of a movable joint at value ``q`` about / along its unit axis."""
+    u = np.array([float(c) for c in joint_axis(j.el, f"joint {j.name!r}", where, 1e-9)])
+    u /= np.linalg.norm(u)
+    T = np.eye(4)
+    if j.kind == "prismatic":
+        T[:3, 3] = q * u
+        return T
+    K = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
+    T[:3, :3] = np.eye(3) + math.sin(q) * K + (1 - math.cos(q)) * (K @ K)
+    return T
+
+
+def _fixed_up(graph: URDFGraph, link: str, known: dict[str, _Frame]) -> tuple[_Frame | None, str]:
+    """Walk up from ``link`` through fixed joints to the first link in ``known``: its frame with
+    the fixed transforms composed, or (None, why not)."""
+    T = np.eye(4)
+    cur = link
+    while cur not in known:
+        j = graph.parent_joint.get(cur)
+        if j is None:
+            return None, f"it is not below the model's base (the root {cur!r} is reached)"
+        if j.kind != "fixed":
+            return None, f"the {j.kind} joint {j.name!r} above it is not a joint of the model"
+        T = _joint_origin(j) @ T
+        cur = j.parent
+    name, A = known[cur]
+    return (name, A @ T), ""
+
+
+def _tree_frames(graph: URDFGraph, tree: Any) -> dict[str, _Frame]:
+    return {ln: (ln, np.eye(4)) for ln in tree.link_names if ln in graph.children}
+
+
+def _chain_ends(graph: URDFGraph, robot: Any, joints: list[URDFJoint]) -> tuple[str, str]:
+    """The base and end links of the chain ``robot`` was read from: from its source text
+    (``..., chain A -> B``), else the root and the single fixed descendant of the last joint."""
+    m = re.search(r", chain (.+) -> (.+?)$", robot.source or "")
+    if m and m.group(1) in graph.children and m.group(2) in graph.children:
+        return m.group(1), m.group(2)
+    end = joints[-1].child
+    while len(graph.children[end]) == 1 and graph.children[end][0].kind == "fixed":
+        end = graph.children[end][0].child
+    return graph.root(), end
+
+
+def _chain_frames(graph: URDFGraph, robot: Any) -> dict[str, _Frame]:
+    where = graph.where
+    missing = [n for n in robot.joint_names if n not in graph.joints or not graph.joints[n].movable]
+    if missing:
+        raise GeometryError(
+            f"robot {robot.name!r} has joints {missing} that are not movable joints of {where}: read the "
+            "robot with Robot.from_urdf from the same URDF (or use Tree.from_urdf)"
+        )
+    joints = [graph.joints[n] for n in robot.joint_names]
+    base, end = _chain_ends(graph, robot, joints)
+    path = graph.path(base, end)
+    if [j.name for j in path if j.movable] != list(robot.joint_names):
+        raise GeometryError(
+            f"robot {robot.name!r}'s joints {list(robot.joint_names)} are not the movable joints from "
+            f"{base!r} to {end!r} in {where}"
+        )
+
+    def urdf_fk(q: np.ndarray) -> dict[str, np.ndarray]:
+        out, T, k = {base: np.eye(4)}, np.eye(4), 0
+        for j in path:
+            T = T @ _joint_origin(j)
+            if j.movable:
+                T = T @ _joint_motion(j, where, float(q[k]))
+                k += 1
+            out[j.child] = T
+        return out
+
+    rng = np.random.default_rng(0)
+    lo, hi = np.clip(robot.qlim[0], -math.pi, math.pi), np.clip(robot.qlim[1], -math.pi, math.pi)
+    qs = [lo + (hi - lo) * rng.random(robot.n) for _ in range(2)]
+    frames: dict[str, _Frame] = {base: ("base", np.eye(4))}
+    ends: list[np.ndarray] = []
+    for q in qs:
+        fk, L = urdf_fk(q), robot.link_poses(q)
+        C = [np.linalg.inv(L[k]) @ fk[j.child] for k, j in enumerate(joints)]
+        ends.append(np.linalg.inv(robot.fkine(q)) @ fk[end])
+        if len(ends) == 1:
+            first = C
+            continue
+        bad = [k for k in range(robot.n) if not np.allclose(C[k], first[k], atol=1e-7)]
+        if (
+            bad
+            or not np.allclose(ends[0], ends[1], atol=1e-7)
+            or not np.allclose(ends[0], np.eye(4), atol=1e-7)
+        ):
+            raise GeometryError(
+                f"robot {robot.name!r} does not move like the chain {base!r} -> {end!r} of {where} "
+                f"(link frame {bad[0] if bad else 'ee'} differs): read it with Robot.from_urdf from the same "
+                "URDF, without with_base/with_tool"
+            )
+    for k, j in enumerate(joints):
+        frames[j.child] = (f"link{k + 1}", first[k])
+    if end not in frames:
+        frames[end] = ("ee", np.eye(4))
+    return frames
+
+
+def urdf_link_frames(path_or_xml: str | Path, model: Any) -> dict[str, _Frame]:
+    """Per URDF link of ``model``'s kinematics, ``(model link name, T)`` with ``T`` the pose of the
+    URDF link frame in that model link's frame (4x4); links the model cannot carry are absent."""
+    graph = read_graph(path_or_xml)
+    return _link_frames(graph, model)[0]
+
+
+def _link_frames(graph: URDFGraph, model: Any) -> tuple[dict[str, _Frame], dict[str, str]]:
+    from symkin.model.robot import Robot
+    from symkin.model.tree import Tree
+
+    model = getattr(model, "model", model)
+    if isinstance(model, Tree):
+        known = _tree_frames(graph, model)
+    elif isinstance(model, Robot):
+        known = _chain_frames(graph, model)
+    else:
+        raise GeometryError(f"model must be a symkin Robot or Tree, not {type(model).__name__}")
+    frames, why = dict(known), {}
+    for ln in graph.links:
+        if ln in frames:
+            continue
+        found, reason = _fixed_up(graph, ln, known)
+        if found is None:
+            why[ln] = reason
+        else:
+            frames[ln] = found
+    return frames, why
+
+
+def urdf_link_names(path_or_xml: str | Path, model: Any) -> dict[str, str]:
+    """URDF link name -> the name of the ``model`` link it is attached to (for
+    :func:`symkin.geometry.srdf.read_srdf`'s ``names``)."""
+    return {ln: f[0] for ln, f in urdf_link_frames(path_or_xml, model).items()}
+
+
+def box_spheres(half_extents: Any, max_spheres: int = 64) -> list[tuple[np.ndarray, float]]:
+    """Spheres ``(centre, radius)`` covering the box ``|x_i| <= half_extents_i`` (box frame): a grid
+    of at most ``max_spheres`` cells as near cubes as that allows, each sphere through its cell's
+    corners."""
+    h = np.asarray(half_extents, dtype=float)
+    size = 2 * h
+    if max_spheres < 1:
+        raise GeometryError(f"max_box_spheres must be >= 1, got {max_spheres}")
+    positive = size[size > 0]
+    cell = float(positive.min()) if positive.size else 1.0
+    while True:
+        counts = np.maximum(1, np.ceil(size / cell - 1e-9)).astype(int)
+        if counts.prod() <= max_spheres:
+            break
+        cell *= 1.1
+    step = size / counts
+    radius = 0.5 * float(np.linalg.norm(step))
+    axes = [-h[i] + step[i] * (np.arange(counts[i]) + 0.5) for i in range(3)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return [(c, radius) for c in grid]
+
+
+def _mesh_file(filename: str, folder: Path) -> Path | None:
+    if filename.startswith("package://"):
+        return None
+    if filename.startswith("file://"):
+        filename = filename[len("file://") :]
+    p = Path(filename)
+    return p if p.is_absolute() else folder / p
+
+
+def _floats(
+    el: ElementTree.Element, attr: str, count: int, what: str, default: str | None = None
+) -> list[float]:
+    return [float(v) for v in xml_numbers(el.get(attr), count, what, default)]
+
+
+def geometry_from_urdf(
+    path_or_xml: str | Path, model: Any, mesh_spheres: int = 0, max_box_spheres: int = 64
+) -> Geometry:
+    """The ``<collision>`` elements of a URDF (file path or XML text) as a
+    :class:`~symkin.geometry.Geometry` on the links of ``model`` (a :class:`symkin.Tree` or a
+    :class:`symkin.Robot` from :meth:`~symkin.Robot.from_urdf` of the same URDF): shapes in the
+    frames of the model's links, metres; no disabled pairs (see
+    :func:`symkin.geometry.srdf.read_srdf`). Module docstring: which element becomes what."""
+    root, where = load_xml(path_or_xml)
+    graph = read_graph(path_or_xml)
+    frames, why = _link_frames(graph, model)
+    is_file = isinstance(path_or_xml, Path) or not str(path_or_xml).lstrip().lstrip("\ufeff").startswith("<")
+    folder = Path(path_or_xml).parent if is_file else Path.cwd()
+    shapes: list[Sphere | Capsule] = []
+    counts = {"sphere": 0, "cylinder": 0, "capsule": 0, "box": 0, "mesh": 0}
+    skipped: list[str] = []
+    for lel in root.findall("link"):
+        lname = lel.get("name") or ""
+        collisions = lel.findall("collision")
+        if not collisions:
+            continue
+        if lname not in frames:
+            warnings.warn(
+                f"{where}: link {lname!r} has collision geometry but the model has no link for it "
+                f"({why.get(lname, 'not on the model')}): skipped",
+                stacklevel=2,
+            )
+            skipped.append(lname)
+            continue
+        target, A = frames[lname]
+        for i, cel in enumerate(collisions):
+            what = f"link {lname!r} collision {cel.get('name') or i}"
+            o = cel.find("origin")
+            xyz = _floats(o, "xyz", 3, f"{what} origin xyz", "0 0 0") if o is not None else [0.0] * 3
+            rpy = _floats(o, "rpy", 3, f"{what} origin rpy", "0 0 0") if o is not None else [0.0] * 3
+            T = A @ _rpy_matrix(xyz, rpy)
+            g = cel.find("geometry")
+            kids = list(g) if g is not None else []
+            if not kids:
+                warnings.warn(f"{where}: {what} has no <geometry> shape: skipped", stacklevel=2)
+                continue
+            shape = kids[0]
+            tag = shape.tag
+
+            def at(p: Any, T: np.ndarray = T) -> np.ndarray:
+                return T[:3, :3] @ np.asarray(p, dtype=float) + T[:3, 3]
+
+            if tag == "sphere":
+                (r,) = _floats(shape, "radius", 1, f"{what} sphere radius")
+                shapes.append(Sphere(at((0, 0, 0)), r, target))
+            elif tag in ("cylinder", "capsule"):
+                (r,) = _floats(shape, "radius", 1, f"{what} {tag} radius")
+                (length,) = _floats(shape, "length", 1, f"{what} {tag} length")
+                if length < 0:
+                    raise GeometryError(f"{where}: {what} has a negative {tag} length {length}")
+                shapes.append(Capsule(at((0, 0, -length / 2)), at((0, 0, length / 2)), r, target))
+            elif tag == "box":
+                size = _floats(shape, "size", 3, f"{what} box size")
+                if min(size) < 0 or not all(math.isfinite(s) for s in size):
+                    raise GeometryError(f"{where}: {what} has box size {size}; sizes must be finite and >= 0")
+                for c, r in box_spheres(np.array(size) / 2, max_box_spheres):
+                    shapes.append(Sphere(at(c), r, target))
+            elif tag == "mesh":
+                fitted = _mesh(shape, folder, mesh_spheres, where, what)
+                if fitted is None:
+                    skipped.append(lname)
+                    continue
+                shapes.extend(Sphere(at(c), r, target) for c, r in fitted)
+            else:
+                warnings.warn(f"{where}: {what} has an unknown shape <{tag}>: skipped", stacklevel=2)
+                skipped.append(lname)
+                continue
+            counts[tag] += 1
+    made = ", ".join(f"{v} {k}" for k, v in counts.items() if v) or "no shapes"
+    note = f"; skipped on {sorted(set(skipped))}" if skipped else ""
+    return Geometry(tuple(shapes), (), f"<collision> elements of {where} ({made}){note}")
+
+
+def _mesh(
+    shape: ElementTree.Element, folder: Path, mesh_spheres: int, where: str, what: str
+) -> list[tuple[np.ndarray, float]] | None:
+    """Spheres fitted to a ``<mesh>`` (in the collision element's frame), or None with a warning."""
+    filename = shape.get("filename") or ""
+    if mesh_spheres <= 0:
+        warnings.warn(
+            f"{where}: {what} is a mesh ({filename!r}): skipped; pass mesh_spheres > 0 (with trimesh "
+            'installed: pip install "symkin[geometry]") to fit spheres to it',
+            stacklevel=3,
+        )
+        return None
+    path = _mesh_file(filename, folder)
+    if path is None:
+        warnings.warn(
+            f"{where}: {what} is a mesh at {filename!r}; package:// paths are not resolved (no ROS "
+            "package path): skipped",
+            stacklevel=3,
+        )
+        return None
+    if not path.is_file():
+        warnings.warn(f"{where}: {what}: mesh file {str(path)!r} does not exist: skipped", stacklevel=3)
+        return None
+    try:
+        import trimesh
+    except ImportError:
+        warnings.warn(
+            f'{where}: {what} is a mesh; fitting spheres needs trimesh (pip install "symkin[geometry]"): '
+            "skipped",
+            stacklevel=3,
+        )
+        return None
+    from symkin.geometry.fit import fit_spheres
+
+    scale = _floats(shape, "scale", 3, f"{what} mesh scale", "1 1 1")
+    try:
+        mesh = trimesh.load(str(path), force="mesh")
+        mesh.apply_transform(np.diag([*scale, 1.0]))
+    except (MissingExtraError, GeometryError):
+        raise
+    except Exception as exc:  # trimesh raises many kinds for unreadable files
+        warnings.warn(f"{where}: {what}: cannot read mesh {str(path)!r} ({exc}): skipped", stacklevel=3)
+        return None
+    return fit_spheres(mesh, mesh_spheres)

@@ -1,0 +1,270 @@
+"""Collision queries at run time: the compiled FKCC kernel (C, loaded with ctypes) and the functions
+compiled kinematics call (``kin.in_collision``, ``distances``, ``distance_jacobians``,
+``collision_points``, ``motion_valid``).
+
+The C kernel is generated per model and geometry (:mod:`symkin.emit.collision`), compiled once
+into the cache (its key: the C source, which holds every constant of the model and geometry) and
+kept loaded for the 16 models used last. Without the C backend the same queries run on the NumPy
+reference (:mod:`symkin.geometry.reference`); both give the same answers (tested).
+"""
+
+from __future__ import annotations
+
+import ctypes
+from collections import OrderedDict
+from typing import Any
+
+import numpy as np
+
+from symkin.core.arrays import as_batch
+from symkin.core.names import identifier
+from symkin.errors import ParameterError
+from symkin.geometry import reference
+from symkin.geometry.pairs import Layout, as_environment, layout_of
+from symkin.model.geometry import Environment
+
+__all__ = [
+    "Collision",
+    "CollisionKernel",
+    "collision_kernel",
+    "collision_ik",
+    "collision_of",
+    "motion_valid",
+    "env_arrays",
+]
+
+_KERNELS: OrderedDict[str, CollisionKernel] = OrderedDict()  # by the model's and the geometry's keys
+_KEEP = 16
+_P = ctypes.c_void_p  # arrays are passed by address (``ndarray.ctypes.data``)
+_NO_ENV = Environment()
+
+
+def env_arrays(env: Environment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The environment's packed obstacle arrays (memoised on the Environment object)."""
+    return env_args(env)[0]
+
+
+def env_args(env: Environment) -> tuple[tuple[np.ndarray, ...], list[int], np.ndarray, int]:
+    """The packed arrays and the kernel's obstacle arguments (addresses and counts), memoised on
+    the Environment object (frozen: they never change)."""
+    cached = env.__dict__.get("_packed")
+    if cached is None:
+        a = env.arrays()
+        arrays = tuple(np.ascontiguousarray(a[k]) for k in ("spheres", "capsules", "boxes"))
+        for x in arrays:
+            x.setflags(write=False)
+        args = [v for x in arrays for v in (x.ctypes.data, len(x))]
+        packed = np.array(args, dtype=np.int64)
+        cached = (arrays, args, packed, packed.ctypes.data)
+        object.__setattr__(env, "_packed", cached)
+    return cached
+
+
+class CollisionKernel:
+    """The compiled FKCC kernel of one model's geometry (see :mod:`symkin.emit.collision`)."""
+
+    def __init__(self, layout: Layout) -> None:
+        from symkin.emit.c.build import compile_library, load_library
+        from symkin.emit.collision import render_collision
+
+        self.layout = layout
+        self.n = layout.tree.n
+        self.files = render_collision(layout)
+        self.path = compile_library(self.files, f"skcoll_{identifier(layout.tree.name)}")
+        lib = load_library(self.path)
+        i, L = ctypes.c_int, ctypes.c_long
+        lib.skcoll_points.argtypes = [_P, _P]
+        lib.skcoll_in_collision.argtypes = [_P, _P, i, _P, i, _P, i]
+        lib.skcoll_in_collision.restype = ctypes.c_int
+        lib.skcoll_in_collision_packed.argtypes = [_P, _P]
+        lib.skcoll_in_collision_packed.restype = ctypes.c_int
+        self._one = lib.skcoll_in_collision_packed
+        lib.skcoll_in_collision_batch.argtypes = [_P, L, _P, i, _P, i, _P, i, _P]
+        lib.skcoll_distances.argtypes = [_P, _P, i, _P, i, _P, i, _P, _P]
+        lib.skcoll_distances_batch.argtypes = [_P, L, _P, i, _P, i, _P, i, _P, _P]
+        self.lib = lib
+
+    def _q(self, q: Any) -> tuple[np.ndarray, bool]:
+        Q, single = as_batch(q, self.n, self.layout.tree.name)
+        return np.ascontiguousarray(Q, dtype=float), single
+
+    def _env(self, env: Any) -> tuple[Environment, list]:
+        env = _NO_ENV if env is None else env if type(env) is Environment else as_environment(env)
+        return env, env_args(env)[1]
+
+    def n_distances(self, env: Environment) -> int:
+        return len(self.layout.self_pairs) + len(self.layout.shapes) * len(env)
+
+    def points(self, q: Any) -> np.ndarray:
+        """Base-frame shape points (P, 3) or (N, P, 3) (sphere centres, capsule ends)."""
+        Q, single = self._q(q)
+        X = np.empty((Q.shape[0], self.layout.n_points, 3))
+        for k in range(Q.shape[0]):
+            self.lib.skcoll_points(Q[k].ctypes.data, X[k].ctypes.data)
+        return X[0] if single else X
+
+    def in_collision(self, q: Any, env: Any = None) -> bool | np.ndarray:
+        """Whether any active pair overlaps; (N,) bools for a batch (stops at the first overlap)."""
+        if type(q) is np.ndarray and q.shape == (self.n,) and q.dtype == np.float64 and q.flags.c_contiguous:
+            e = env if type(env) is Environment else _NO_ENV if env is None else as_environment(env)
+            packed = e.__dict__.get("_packed") or env_args(e)
+            hit = self._one(q.ctypes.data, packed[3])  # one C call; -1: a joint value NaN, inf or huge
+            if hit >= 0:
+                return hit == 1
+        Q, single = self._q(q)
+        env, args = self._env(env)
+        if single:
+            return bool(self.lib.skcoll_in_collision(Q.ctypes.data, *args))
+        out = np.zeros(Q.shape[0], dtype=np.uint8)
+        self.lib.skcoll_in_collision_batch(Q.ctypes.data, Q.shape[0], *args, out.ctypes.data)
+        return out.astype(bool)
+
+    def distances(self, q: Any, env: Any = None, jacobians: bool = False) -> Any:
+        """Signed distances (M,) or (N, M); with ``jacobians`` also their gradients (M, n) or (N, M, n)."""
+        Q, single = self._q(q)
+        env, args = self._env(env)
+        M, N = self.n_distances(env), Q.shape[0]
+        D = np.empty((N, M))
+        J = np.empty((N, M, self.n)) if jacobians else None
+        Jp = J.ctypes.data if J is not None else None
+        self.lib.skcoll_distances_batch(Q.ctypes.data, N, *args, D.ctypes.data, Jp)
+        if single:
+            return (D[0], J[0]) if jacobians else D[0]  # type: ignore[index]
+        return (D, J) if jacobians else D
+
+
+def collision_kernel(model: Any) -> CollisionKernel:
+    """The compiled kernel of ``model``'s geometry (built and loaded once per geometry and model)."""
+    layout = layout_of(model)
+    key = f"{layout.tree.key}:{layout.tree.geometry.fingerprint()}"
+    kernel = _KERNELS.get(key)
+    if kernel is None:
+        kernel = CollisionKernel(layout)
+        _KERNELS[key] = kernel
+        while len(_KERNELS) > _KEEP:
+            _KERNELS.popitem(last=False)
+    else:
+        _KERNELS.move_to_end(key)
+    return kernel
+
+
+def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05) -> bool:
+    """Whether the straight joint-space motion q0 -> q1 is free of collision, checked at steps of at
+    most ``resolution`` (rad or m, the largest joint change between checks), both ends included.
+    ``check(Q)`` returns (N,) collision verdicts."""
+    try:
+        res = float(resolution)
+    except (TypeError, ValueError):
+        raise ParameterError(f"resolution must be a positive number, got {resolution!r}") from None
+    if not res > 0 or not np.isfinite(res):
+        raise ParameterError(f"resolution must be a positive number, got {resolution!r}")
+    a, _ = as_batch(q0, n, what="q0")
+    b, _ = as_batch(q1, n, what="q1")
+    if a.shape[0] != 1 or b.shape[0] != 1:
+        raise ParameterError("motion_valid takes one configuration for q0 and one for q1")
+    steps = max(1, int(np.ceil(np.abs(b[0] - a[0]).max() / res)))
+    s = np.linspace(0.0, 1.0, steps + 1)[:, None]
+    Q = a[0] + s * (b[0] - a[0])
+    return not bool(np.asarray(check(Q)).any())
+
+
+class Collision:
+    """Collision queries of one model on one backend: the compiled C kernel on ``"c"``, the NumPy
+    reference otherwise (same answers). Made by :meth:`symkin.Kinematics.collision`."""
+
+    def __init__(self, model: Any, backend: str = "c") -> None:
+        self.layout = layout_of(model)
+        self.backend = backend
+        self.kernel = collision_kernel(model) if backend == "c" else None
+        self.n = self.layout.tree.n
+
+    def points(self, q: Any) -> np.ndarray:
+        if self.kernel is not None:
+            return self.kernel.points(q)
+        return reference.points(self.layout.tree, q)
+
+    def in_collision(self, q: Any, env: Any = None) -> bool | np.ndarray:
+        if self.kernel is not None:
+            return self.kernel.in_collision(q, env)
+        return reference.in_collision(self.layout.tree, q, env)
+
+    def distances(self, q: Any, env: Any = None) -> np.ndarray:
+        if self.kernel is not None:
+            return self.kernel.distances(q, env)
+        return reference.distances(self.layout.tree, q, env)
+
+    def distance_jacobians(self, q: Any, env: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        if self.kernel is not None:
+            return self.kernel.distances(q, env, jacobians=True)
+        return reference.distance_jacobians(self.layout.tree, q, env)
+
+    def labels(self, env: Any = None) -> list[tuple[str, int, int]]:
+        return self.layout.pair_labels(as_environment(env))
+
+    def motion_valid(self, q0: Any, q1: Any, env: Any = None, resolution: float = 0.05) -> bool:
+        env = as_environment(env)
+        return motion_valid(lambda Q: self.in_collision(Q, env), q0, q1, self.n, resolution)
+
+
+def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any) -> Any:
+    """``kin.ik(Tep, **kwargs)`` keeping only collision-free solutions: a solution in collision
+    with itself or ``env`` (``True``: self-collision only) is rejected and the target solved again
+    from new random starts (seeds derived from ``seed``), at most ``attempts`` times. A target
+    without a collision-free solution gets ``success=False``, reason "in collision", and the last
+    solution found. Iterations and searches count every attempt."""
+    from symkin.runtime.ik_problem import IKResult
+
+    try:
+        attempts = int(attempts)
+    except (TypeError, ValueError):
+        raise ParameterError(f"collision_attempts must be a positive integer, got {attempts!r}") from None
+    if attempts < 1:
+        raise ParameterError(f"collision_attempts must be a positive integer, got {attempts}")
+    env = Environment() if env is True else as_environment(env)
+    check = kin.collision()
+    first = kin.ik(Tep, **kwargs)
+    batch = first.batch
+    results = [first[i] for i in range(len(first))] if batch else [first]
+    seed = kwargs.pop("seed", None)
+    kwargs.pop("q0", None)
+    base = np.random.SeedSequence(seed).generate_state(1)[0] if seed is not None else None
+    T = np.asarray(Tep, dtype=float).reshape(-1, 4, 4)
+    out = []
+    hits = np.atleast_1d(check.in_collision(first.q, env))  # every first solution in one call
+    for i, r in enumerate(results):
+        if not (r.success and hits[i]):  # free, or unreachable on its own: as the plain solver says
+            out.append(r)
+            continue
+        iters, searches = int(r.iterations), int(r.searches)
+        for a in range(1, attempts):
+            s = None if base is None else int(base) + 7919 * i + a
+            r = kin.ik(T[i], q0=kin.random_q(seed=s), seed=s, **kwargs)
+            iters += int(r.iterations)
+            searches += int(r.searches)
+            if r.success and not check.in_collision(r.q, env):
+                break
+        else:
+            r = IKResult(r.q, False, r.iterations, r.searches, r.residual, "in collision")
+        out.append(IKResult(r.q, r.success, iters, searches, r.residual, r.reason))
+    if not batch:
+        return out[0]
+    return IKResult(
+        np.stack([r.q for r in out]),
+        np.array([r.success for r in out]),
+        np.array([r.iterations for r in out]),
+        np.array([r.searches for r in out]),
+        np.array([r.residual for r in out]),
+        tuple(r.reason for r in out),
+    )
+
+
+def collision_of(kin: Any) -> Collision:
+    """The collision queries of ``kin``: compiled kinematics' own (:meth:`Kinematics.collision`), else
+    the NumPy reference of a Robot or Tree (or of a frame view's model)."""
+    method = getattr(kin, "collision", None)
+    if callable(method):
+        return method()
+    source = getattr(kin, "source", None)
+    if source is not None and callable(getattr(source, "collision", None)):
+        return source.collision()
+    return Collision(source if source is not None else kin, "numpy")

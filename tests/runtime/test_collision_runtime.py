@@ -1,0 +1,135 @@
+"""Collision-aware IK, straight motions and MMC with obstacles (the NEO velocity damper)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin.errors import GeometryError, ParameterError
+from symkin.geometry import Box, Capsule, Environment, Sphere
+
+TABLE = Environment(
+    spheres=(Sphere((0.45, 0.35, 0.25), 0.08),),
+    capsules=(Capsule((0.4, -0.4, 0.0), (0.4, -0.4, 0.5), 0.05),),
+    boxes=(Box((0.5, 0.0, -0.1), (0.5, 0.8, 0.05)),),
+)
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return symkin.load("panda")
+
+
+@pytest.fixture(scope="module")
+def kin(panda):
+    return symkin.compile(panda, backend="c")
+
+
+def _colliding_targets(panda, kin, count, seed=0):
+    """Configurations without self-collision whose arm (not the wrist and hand) hits the table
+    scene, and their poses: other arm postures reach the same pose."""
+    rng = np.random.default_rng(seed)
+    labels = kin.collision_pairs(TABLE)
+    shapes = panda.geometry.shapes
+    hand = np.array([k != "self" and shapes[i].link in ("link6", "link7", "ee") for k, i, _ in labels])
+    out = []
+    while len(out) < count:
+        q = panda.random_q(seed=rng)
+        d = kin.distances(q, TABLE)
+        if kin.in_collision(q, TABLE) and not kin.in_collision(q) and d[hand].min() > 0.05:
+            out.append(q)
+    Q = np.array(out)
+    return Q, kin.fkine(Q)
+
+
+def test_ik_rejects_colliding_solutions(panda, kin):
+    Q, T = _colliding_targets(panda, kin, 8)
+    for q, Tep in zip(Q, T):
+        plain = kin.ik(Tep, q0=q, seed=1)
+        assert plain.success and kin.in_collision(plain.q, TABLE)  # the start is a colliding solution
+        aware = kin.ik(Tep, q0=q, seed=1, collision=TABLE)
+        if aware.success:
+            assert not kin.in_collision(aware.q, TABLE)
+            assert np.abs(kin.fkine(aware.q) - Tep).max() < 1e-5
+            assert aware.iterations > plain.iterations
+        else:
+            assert aware.reason == "in collision"
+    solved = [kin.ik(Tep, q0=q, seed=1, collision=TABLE).success for q, Tep in zip(Q, T)]
+    assert sum(solved) >= 6  # a redundant arm reaches most of these poses another way
+
+
+def test_batch_ik_with_collision(panda, kin):
+    Q, T = _colliding_targets(panda, kin, 6, seed=3)
+    res = kin.ik(T, q0=Q, seed=2, collision=TABLE)
+    assert res.q.shape == (6, 7) and len(res.reason) == 6
+    ok = np.asarray(res.success)
+    assert ok.sum() >= 4
+    assert not kin.in_collision(res.q[ok], TABLE).any()
+    assert np.abs(kin.fkine(res.q[ok]) - T[ok]).max() < 1e-5
+
+
+def test_self_collision_only_and_bad_options(panda, kin):
+    q = panda.qr
+    res = kin.ik(kin.fkine(q), collision=True, seed=0)
+    assert res.success and not kin.in_collision(res.q)
+    with pytest.raises(ParameterError, match="collision_attempts"):
+        kin.ik(kin.fkine(q), collision=TABLE, collision_attempts=0)
+    far = np.eye(4)
+    far[0, 3] = 5.0
+    res = kin.ik(far, collision=TABLE, seed=0, slimit=3)
+    plain = kin.ik(far, seed=0, slimit=3)
+    assert not res.success and res.reason == plain.reason  # unreachable: as the plain solver says
+    with pytest.raises(GeometryError):
+        symkin.compile("puma560", backend="c").ik(np.eye(4), collision=True)
+
+
+def test_motion_valid(panda, kin):
+    q0, q1 = panda.qz.copy(), panda.qr.copy()
+    assert kin.motion_valid(q0, q1, TABLE) is True
+    mid = 0.5 * (q0 + q1)
+    hand = kin.fkine(mid)[:3, 3]
+    wall = Environment(spheres=(Sphere(hand, 0.03),))
+    assert not kin.in_collision(q0, wall) and not kin.in_collision(q1, wall)
+    assert kin.motion_valid(q0, q1, wall) is False
+    assert kin.motion_valid(q0, q0, wall) is True
+    for bad in (0, -1, float("nan"), "fine"):
+        with pytest.raises(ParameterError, match="resolution"):
+            kin.motion_valid(q0, q1, wall, resolution=bad)
+
+
+def _run(kin, controller, q0, Tep, env, steps=120, dt=0.05):
+    q = q0.copy()
+    closest = np.inf
+    for _ in range(steps):
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        if done:
+            break
+        qd, _ = controller.step(q, nu)
+        q = q + dt * qd
+        closest = min(closest, float(kin.distances(q, env)[-len(kin.model.geometry.shapes) :].min()))
+    return q, closest
+
+
+def test_mmc_with_an_obstacle_never_enters_it(panda, kin):
+    q0 = panda.qr.copy()
+    T0 = kin.fkine(q0)
+    Tep = T0.copy()
+    Tep[1, 3] += 0.4
+    centre = 0.5 * (T0[:3, 3] + Tep[:3, 3])
+    env = Environment(spheres=(Sphere(centre, 0.05),))
+    assert kin.distances(q0, env)[-len(panda.geometry.shapes) :].min() > 0.05
+    _, closest_plain = _run(kin, symkin.MMC(kin), q0, Tep, env)
+    assert closest_plain < 0  # the straight path goes through the obstacle
+    mmc = symkin.MMC(kin, collision=env, d_i=0.3, d_s=0.02)
+    assert mmc.backend == "python" and mmc.slack
+    q, closest = _run(kin, mmc, q0, Tep, env)
+    assert closest > 0  # never enters the obstacle (nor its 2 cm safety margin, up to the step size)
+    assert np.linalg.norm(kin.fkine(q)[:3, 3] - Tep[:3, 3]) < np.linalg.norm(T0[:3, 3] - Tep[:3, 3])
+    qp = mmc.build(q0, np.zeros(6))
+    assert qp.n_distance == 32  # the closest pairs within d_i, padded with free rows
+    assert np.isfinite(qp.l[6 + 7 :]).sum() == min(32, (kin.distances(q0, env) < 0.3).sum())
+    with pytest.raises(ParameterError, match="d_i"):
+        symkin.MMC(kin, collision=env, d_i=0.01, d_s=0.05)
+    with pytest.raises(ParameterError, match="collision_rows"):
+        symkin.MMC(kin, collision=env, collision_rows=0)

@@ -1,0 +1,84 @@
+"""``symkin collide`` and ``symkin bench collide``."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin.cli import main
+
+
+def test_collide_free_and_in_collision(capsys):
+    assert main(["collide", "panda", "qr"]) == 0
+    out = capsys.readouterr().out
+    assert "collision-free" in out and "43 shapes" in out
+    hand = symkin.load("panda").fkine(symkin.load("panda").qr)[:3, 3]
+    sphere = " ".join(map(str, [*hand, 0.05]))
+    assert main(["collide", "panda", "qr", "--sphere", sphere]) == 1
+    out = capsys.readouterr().out
+    assert "IN COLLISION" in out and "obstacle sphere 0" in out
+
+
+def test_collide_json_and_env_file(tmp_path, capsys):
+    scene = tmp_path / "scene.json"
+    scene.write_text(
+        json.dumps({"boxes": [[0.5, 0, -0.1, 0.5, 0.8, 0.05]], "spheres": [[0.3, 0.3, 0.3, 0.05]]})
+    )
+    q = "0 -0.3 0 -2.2 0 2.0 0.78"
+    assert main(["collide", "panda", *q.split(), "--env", str(scene), "--json", "--top", "3"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["in_collision"] is False and len(data["closest"]) == 3
+    assert data["pairs"] == len(
+        symkin.compile("panda").collision_pairs(
+            symkin.Environment(
+                spheres=(symkin.Sphere((0.3, 0.3, 0.3), 0.05),),
+                boxes=(symkin.Box((0.5, 0, -0.1), (0.5, 0.8, 0.05)),),
+            )
+        )
+    )
+    d = [row["distance"] for row in data["closest"]]
+    assert d == sorted(d)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["collide", "puma560"], "no collision geometry"),
+        (["collide", "panda", "1", "2"], "7 numbers"),
+        (["collide", "panda", "--sphere", "0 0 nan 0.1"], "finite"),
+        (["collide", "panda", "--sphere", "0 0 0 -0.1"], "radius"),
+        (["collide", "panda", "--env", "/nonexistent/scene.json"], "--env"),
+    ],
+)
+def test_collide_bad_input(argv, message, capsys):
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_bench_collide_runs_and_agrees():
+    from symkin.bench.collide import format_collide, run_collide
+
+    r = run_collide("panda", batch=500, progress=False, ik_targets=10)
+    assert [row["obstacles"] for row in r["rows"]] == [0, 10, 100]
+    assert all(row["batch_ns"] > 0 and row["speedup_batch_vs_numpy"] > 1 for row in r["rows"])
+    assert r["ik"]["aware_solutions_in_collision"] == 0
+    text = format_collide(r)
+    assert "collision-aware" in text and "C batch" in text
+    assert np.isfinite(r["ik"]["ratio"])
+
+
+def test_plot_draws_geometry_and_obstacles(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "panda.png"
+    assert main(["plot", "panda", "--q", "qr", "--sphere", "0.45 0 0.5 0.1", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert out.stat().st_size > 10_000 and "in collision (red)" in text
+    assert main(["plot", "panda", "--q", "qr", "-o", str(out)]) == 0
+    assert "collision-free" in capsys.readouterr().out
+    fig = symkin.load("panda").plot(
+        symkin.load("panda").qr, env=symkin.Environment(boxes=(symkin.Box((0, 0, -1), (1, 1, 0.1)),))
+    )
+    assert len(fig.axes[0].lines) > 12 + 20  # the box's 12 edges and the shapes' wireframes
