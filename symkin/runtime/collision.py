@@ -207,11 +207,11 @@ class Collision:
 
 
 def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any) -> Any:
-    """``kin.ik(Tep, **kwargs)`` keeping only collision-free solutions: a solution in collision
-    with itself or ``env`` (``True``: self-collision only) is rejected and the target solved again
-    from new random starts (seeds derived from ``seed``), at most ``attempts`` times. A target
-    without a collision-free solution gets ``success=False``, reason "in collision", and the last
-    solution found. Iterations and searches count every attempt."""
+    """``kin.ik(Tep, **kwargs)`` keeping only collision-free solutions: the targets whose solution
+    collides with the robot itself or ``env`` (``True``: self-collision only) are solved again,
+    all together, from new random starts (seeded from ``seed``), in at most ``attempts - 1`` more
+    rounds. A target without a collision-free solution gets ``success=False``, reason "in
+    collision", and its last solution. Iterations and searches count every round."""
     from symkin.runtime.ik_problem import IKResult
 
     try:
@@ -224,38 +224,38 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
     check = kin.collision()
     first = kin.ik(Tep, **kwargs)
     batch = first.batch
-    results = [first[i] for i in range(len(first))] if batch else [first]
     seed = kwargs.pop("seed", None)
     kwargs.pop("q0", None)
-    base = np.random.SeedSequence(seed).generate_state(1)[0] if seed is not None else None
     T = np.asarray(Tep, dtype=float).reshape(-1, 4, 4)
-    out = []
-    hits = np.atleast_1d(check.in_collision(first.q, env))  # every first solution in one call
-    for i, r in enumerate(results):
-        if not (r.success and hits[i]):  # free, or unreachable on its own: as the plain solver says
-            out.append(r)
-            continue
-        iters, searches = int(r.iterations), int(r.searches)
-        for a in range(1, attempts):
-            s = None if base is None else int(base) + 7919 * i + a
-            r = kin.ik(T[i], q0=kin.random_q(seed=s), seed=s, **kwargs)
-            iters += int(r.iterations)
-            searches += int(r.searches)
-            if r.success and not check.in_collision(r.q, env):
-                break
-        else:
-            r = IKResult(r.q, False, r.iterations, r.searches, r.residual, "in collision")
-        out.append(IKResult(r.q, r.success, iters, searches, r.residual, r.reason))
+    q = np.array(first.q, dtype=float).reshape(len(T), -1)
+    success = np.atleast_1d(np.array(first.success, dtype=bool))
+    iters = np.atleast_1d(np.array(first.iterations, dtype=int))
+    searches = np.atleast_1d(np.array(first.searches, dtype=int))
+    residual = np.atleast_1d(np.array(first.residual, dtype=float))
+    reason = list(first.reason) if batch else [first.reason]
+    # unreachable targets stay as the plain solver says; colliding solutions are solved again
+    todo = np.flatnonzero(success & np.atleast_1d(check.in_collision(q, env)))
+    rng = np.random.default_rng(None if seed is None else [int(seed), 7919])
+    for _ in range(attempts - 1):
+        if not len(todo):
+            break
+        res = kin.ik(T[todo], q0=kin.random_q(len(todo), seed=rng), seed=int(rng.integers(2**63)), **kwargs)
+        rq = np.asarray(res.q, dtype=float).reshape(len(todo), -1)
+        iters[todo] += np.asarray(res.iterations, dtype=int)
+        searches[todo] += np.asarray(res.searches, dtype=int)
+        q[todo], residual[todo] = rq, np.asarray(res.residual, dtype=float)
+        free = np.asarray(res.success, dtype=bool) & ~np.atleast_1d(check.in_collision(rq, env))
+        for j in np.flatnonzero(free):
+            reason[todo[j]] = "success"
+        todo = todo[~free]
+    success[todo] = False
+    for i in todo:
+        reason[i] = "in collision"
     if not batch:
-        return out[0]
-    return IKResult(
-        np.stack([r.q for r in out]),
-        np.array([r.success for r in out]),
-        np.array([r.iterations for r in out]),
-        np.array([r.searches for r in out]),
-        np.array([r.residual for r in out]),
-        tuple(r.reason for r in out),
-    )
+        return IKResult(
+            q[0], bool(success[0]), int(iters[0]), int(searches[0]), float(residual[0]), reason[0]
+        )
+    return IKResult(q, success, iters, searches, residual, tuple(reason))
 
 
 def collision_of(kin: Any) -> Collision:

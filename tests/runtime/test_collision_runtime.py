@@ -133,3 +133,13 @@ def test_mmc_with_an_obstacle_never_enters_it(panda, kin):
         symkin.MMC(kin, collision=env, d_i=0.01, d_s=0.05)
     with pytest.raises(ParameterError, match="collision_rows"):
         symkin.MMC(kin, collision=env, collision_rows=0)
+
+
+def test_collision_ik_is_reproducible_with_a_seed(panda, kin):
+    Q, T = _colliding_targets(panda, kin, 4, seed=5)
+    a = kin.ik(T, q0=Q, seed=9, collision=TABLE)
+    b = kin.ik(T, q0=Q, seed=9, collision=TABLE)
+    assert np.array_equal(a.q, b.q) and a.reason == b.reason
+    one = kin.ik(T[0], q0=Q[0], seed=9, collision=TABLE)
+    assert one.q.shape == (7,) and isinstance(one.reason, str)
+    assert np.all(np.asarray(a.iterations) >= np.asarray(kin.ik(T, q0=Q, seed=9).iterations))
