@@ -8,7 +8,9 @@ configurations, at the model's named configurations and near them (where singula
 are). Space and body Jacobians and the condition number are compared with the reference. A tree
 runs every row for each of its frames (a row reports the largest error over them), plus its
 ``*_all`` functions, each frame's reference against the serial :class:`symkin.Robot` to it, and
-on C the functions the C controllers call.
+on C the functions the C controllers call. A model with collision geometry adds, on C, the
+collision kernel's distances against the NumPy reference and their gradients against finite
+differences, and whether its verdicts agree with the distances.
 
 Rows marked ``(large q)`` evaluate FK, J and H at revolute angles of up to :data:`LARGE_TURNS`
 turns and next to large multiples of pi/2 (where an argument reduction for sin/cos is hardest).
@@ -168,12 +170,40 @@ def check(
             )
         for frame in model.frames if tree else (None,):
             rows += _frame_rows(kin, model, Q, QL, large_tol, frame, seed)
+        if kin.backend == "c" and model.geometry is not None and model.geometry.shapes:
+            rows += _collision_rows(kin, Q)
     title = (
         f"{model.name} ({len(model.frames)} frames, each row the largest error over them)"
         if tree
         else model.name
     )
     return CheckReport(title, len(Q), _merged(rows))
+
+
+def _collision_rows(kin: Any, Q: np.ndarray) -> list[CheckRow]:
+    """The compiled collision kernel against the NumPy reference (:mod:`symkin.geometry.reference`):
+    signed distances (m, absolute), and their gradients against central differences of the
+    kernel's own distances (pairs more than 1e-4 m apart: a gradient is unique there)."""
+    from symkin.geometry import reference
+    from symkin.model.geometry import Environment, Sphere
+
+    env = Environment(spheres=(Sphere((0.3, 0.2, 0.4), 0.1), Sphere((-0.2, -0.3, 0.2), 0.05)))
+    D, J = kin.distance_jacobians(Q, env)
+    ref = float(np.abs(D - reference.distances(kin.model, Q, env)).max()) if D.size else 0.0
+    verdicts = float(np.mean(kin.in_collision(Q, env) != (D < 0).any(axis=1)))
+    h, fd = FD_STEP, 0.0
+    for k, q in enumerate(Q):
+        for j in range(kin.n):
+            e = np.zeros(kin.n)
+            e[j] = h
+            col = (kin.distances(q + e, env) - kin.distances(q - e, env)) / (2 * h)
+            ok = D[k] > 1e-4
+            if ok.any():
+                fd = max(fd, float(np.abs(J[k][ok, j] - col[ok]).max()))
+    return [
+        CheckRow(kin.backend, "collision distances", ref, fd, REF_TOL),
+        CheckRow(kin.backend, "collision verdicts", verdicts, None, 0.0),
+    ]
 
 
 def _merged(rows: list[CheckRow]) -> tuple[CheckRow, ...]:

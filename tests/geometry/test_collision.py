@@ -320,3 +320,23 @@ def test_tool_and_base_keep_the_shapes_on_their_bodies(panda):
     based = panda.with_base("0.1 0.2 0.3 0 0 0.5")
     T = based.fkine(q) @ np.linalg.inv(panda.fkine(q))  # the base transform
     assert np.abs(points(based, q) - (X @ T[:3, :3].T + T[:3, 3])).max() < 1e-12
+
+
+def test_symkin_check_compares_the_collision_kernel(panda, panda_c, monkeypatch):
+    from symkin.check.kinematics import check
+
+    rows = {r.function: r for r in check(panda, [panda_c], samples=4).rows}
+    assert rows["collision distances"].ok and rows["collision verdicts"].ok
+    kernel = panda_c.collision().kernel
+    true = kernel.distances
+    monkeypatch.setattr(
+        kernel, "distances", lambda q, env=None, jacobians=False: _off(true(q, env, jacobians))
+    )
+    rows = {r.function: r for r in check(panda, [panda_c], samples=4).rows}
+    assert not rows["collision distances"].ok  # a kernel 1 um off is caught
+
+
+def _off(result):
+    if isinstance(result, tuple):
+        return result[0] + 1e-6, result[1]
+    return result + 1e-6
