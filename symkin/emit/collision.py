@@ -41,13 +41,18 @@ def _num(x: float) -> str:
     return r if ("e" in r or "." in r or "n" in r) else r + ".0"
 
 
-def _product(dst: str, src: str | None, C: np.ndarray) -> list[str]:
+def _const(x: float, vec: bool) -> str:
+    """A constant: a double literal, or four lanes of it (``SKV``) in the 4-lane code."""
+    return f"SKV({_num(x)})" if vec else _num(x)
+
+
+def _product(dst: str, src: str | None, C: np.ndarray, vec: bool = False) -> list[str]:
     """C statements for ``dst = src * C`` (3x4 row-major poses, C constant; src None: identity)."""
     lines = []
     for i in range(3):
         for j in range(4):
             if src is None:
-                lines.append(f"{dst}[{4 * i + j}] = {_num(C[i, j])};")
+                lines.append(f"{dst}[{4 * i + j}] = {_const(C[i, j], vec)};")
                 continue
             terms = []
             for m in range(3):
@@ -57,7 +62,7 @@ def _product(dst: str, src: str | None, C: np.ndarray) -> list[str]:
                     terms.append(y if c == 1.0 else f"-{y}" if c == -1.0 else f"{_num(c)} * {y}")
             if j == 3:
                 terms.append(f"{src}[{4 * i + 3}]")
-            value = (" + ".join(terms) if terms else "0.0").replace("+ -", "- ")
+            value = (" + ".join(terms) if terms else _const(0.0, vec)).replace("+ -", "- ")
             lines.append(f"{dst}[{4 * i + j}] = {value};")
     return lines
 
@@ -66,22 +71,26 @@ def _is_identity(C: np.ndarray) -> bool:
     return bool(np.array_equal(C[:3, :4], np.eye(4)[:3]))
 
 
-def _times(dst: str, parent: str | None, A: np.ndarray) -> list[str]:
+def _times(dst: str, parent: str | None, A: np.ndarray, vec: bool = False) -> list[str]:
     """``dst = parent * A``: the constants alone at the base, a copy when A is the identity."""
     if parent is not None and _is_identity(A):
-        return [f"memcpy({dst}, {parent}, 12 * sizeof(double));"]
-    return _product(dst, parent, A)
+        return [f"memcpy({dst}, {parent}, sizeof({dst}));"]
+    return _product(dst, parent, A, vec)
 
 
-def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str) -> list[str]:
-    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``."""
-    lines = [f"memcpy({dst}, {src}, 12 * sizeof(double));"]
+def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool = False) -> list[str]:
+    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; ``vec``: four lanes, sin and
+    cos lane by lane (libm's, as the scalar code: the same numbers)."""
+    lines = [f"memcpy({dst}, {src}, sizeof({dst}));"]
     if not revolute:
         for i in range(3):
             lines.append(f"{dst}[{4 * i + 3}] = {src}[{4 * i + 3}] + ({theta}) * {src}[{4 * i + axis}];")
         return lines
     j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
-    lines.insert(0, f"{{ const double c = cos({theta}), s = sin({theta});")
+    if vec:
+        lines.insert(0, f"{{ v4 c, s; const v4 th_ = {theta}; SKV_SINCOS(th_, s, c);")
+    else:
+        lines.insert(0, f"{{ const double c = cos({theta}), s = sin({theta});")
     for i in range(3):
         a, b = f"{src}[{4 * i + j}]", f"{src}[{4 * i + k}]"
         lines.append(f"{dst}[{4 * i + j}] = c * {a} + s * {b};")
@@ -90,24 +99,25 @@ def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str) -> list[st
     return lines
 
 
-def collision_tables(layout: Any) -> dict[str, Any]:
-    """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
-    tree = layout.tree
+def _fk_lines(tree: Any, vec: bool) -> tuple[list[str], list[tuple]]:
+    """The straight-line link poses T (and PJ, before each joint) of ``tree``; per segment its joint
+    (has joint, q index, multiplier, revolute, axis, sign). ``vec``: the 4-lane code (``qv``, v4)."""
     num = tree._num
     fk: list[str] = []
-    joints = []  # per segment: (has joint, q index, multiplier, revolute, axis, sign)
+    joints = []
+    q = "qv" if vec else "q"
     for k, seg in enumerate(tree.segments):
         parent = None if seg.parent < 0 else f"T[{seg.parent}]"
         A, B = num.A[k], num.B[k]
         fk.append(f"/* segment {k}: link {comment_safe(seg.link, 60)} */")
         if seg.slot is None:
             joints.append((0, 0, 0.0, 0, 0, 1.0))
-            fk += _times(f"T[{k}]", parent, A)
+            fk += _times(f"T[{k}]", parent, A, vec)
             continue
         s = tree.slots[seg.slot]
         sign = num.sign[k]
         mult, off = float(s.multiplier), float(s.offset)
-        theta = f"q[{s.joint}]"
+        theta = f"{q}[{s.joint}]"
         if mult != 1.0:
             theta = f"{_num(mult)} * {theta}"
         if off != 0.0:
@@ -115,14 +125,22 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         if sign < 0:
             theta = f"-({theta})"
         joints.append((1, s.joint, mult, int(s.revolute), num.axis[k], float(sign)))
-        fk += _times(f"PJ[{k}]", parent, A)
+        fk += _times(f"PJ[{k}]", parent, A, vec)
         if _is_identity(B):
-            fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta)
+            fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta, vec)
         else:
-            fk.append("{ double M_[12];")
-            fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta)
-            fk += _product(f"T[{k}]", "M_", B)
+            fk.append("{ v4 M_[12];" if vec else "{ double M_[12];")
+            fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta, vec)
+            fk += _product(f"T[{k}]", "M_", B, vec)
             fk.append("}")
+    return fk, joints
+
+
+def collision_tables(layout: Any) -> dict[str, Any]:
+    """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
+    tree = layout.tree
+    fk, joints = _fk_lines(tree, vec=False)
+    fk4, _ = _fk_lines(tree, vec=True)
     points = []
     for s, k in zip(layout.shapes, layout.segment):
         for p in s.points:
@@ -183,11 +201,12 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                 r_i = _num(radius[i])
                 sphere_code.append(f"    if (skc_spheres_overlap(X[{first[i]}], {r_i}, ob, ro)) return 1;")
         sphere_code.append("}")
-    point_code = []  # X = T[k] * local, straight-line: the local coordinates are constants (0 terms dropped)
+    point_code, point_code4 = [], []  # X = T[k] * local, straight-line (0 terms dropped)
     for i, (k, local) in enumerate(points):
         for r in range(3):
             if k < 0:
                 point_code.append(f"X[{i}][{r}] = {local[r]};")
+                point_code4.append(f"X[{i}][{r}] = SKV({local[r]});")
                 continue
             terms = [
                 f"T[{k}][{4 * r + c}]" if float(local[c]) == 1.0 else f"{local[c]} * T[{k}][{4 * r + c}]"
@@ -195,6 +214,29 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                 if float(local[c]) != 0.0
             ]
             point_code.append(f"X[{i}][{r}] = {' + '.join([*terms, f'T[{k}][{4 * r + 3}]'])};")
+            point_code4.append(point_code[-1])
+    # the 4-lane checks (spheres only): a lane already hit needs nothing more; a link pair or link
+    # is tested only for the lanes whose bounding spheres meet (the same tests as the scalar code)
+    all_spheres = not any(is_cap)
+    self_code4, sphere_code4 = [], []
+    if all_spheres:
+        for (a, b), start, stop in zip(group_links, group_start, group_start[1:]):
+            (pa, ra), (pb, rb) = bounds[a], bounds[b]
+            rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
+            self_code4.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
+            self_code4.append("if (skv_any(need)) {")
+            for i, j in grouped[start:stop]:
+                rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
+                self_code4.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
+            self_code4.append("    if (skv_all(hit)) return hit;")
+            self_code4.append("}")
+        for (pb, rb), group in zip(bounds, members):
+            sphere_code4.append(f"need = ~hit & hit_obstacle(X[{pb}], {rb}, ob, ro);")
+            sphere_code4.append("if (skv_any(need)) {")
+            for i in group:
+                r_i = _num(radius[i])
+                sphere_code4.append(f"    hit |= need & hit_obstacle(X[{first[i]}], {r_i}, ob, ro);")
+            sphere_code4.append("}")
     anc_start, anc = [0], []
     for k in range(len(tree.segments)):
         anc += [a for a in layout.ancestors(k) if tree.segments[a].slot is not None]
@@ -210,6 +252,11 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         "joints": joints,
         "points": points,
         "point_code": point_code,
+        "point_code4": point_code4,
+        "fk4": fk4,
+        "vector_pairs": all_spheres,
+        "self_code4": self_code4,
+        "sphere_code4": sphere_code4,
         "shapes": shapes,
         "pairs": list(layout.self_pairs) or [(0, 0)],
         "npairs": len(layout.self_pairs),

@@ -486,8 +486,7 @@ def _omega_to_rates(gamma: np.ndarray, representation: str) -> np.ndarray:
     g1, g2, g3 = gamma[:, 0], gamma[:, 1], gamma[:, 2]
     z, o = np.zeros_like(g1), np.ones_like(g1)
     if representation == "exp":
-        # inverse of the left Jacobian of SO(3): omega (base frame) = J_l(r) dr/dt
-        # (left Jacobian of SO(3); Lynch and Park, Modern Robotics, 2017, chap 3; theta <= pi here)
+        # A^-1 = J_l(r)^-1, the inverse left Jacobian of SO(3): omega (base frame) = J_l(r) dr/dt, theta <= pi
         th = np.linalg.norm(gamma, axis=-1)
         bad = np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL
         bad &= th > 1.0
@@ -520,7 +519,7 @@ def _raise_singular(bad: np.ndarray, representation: str, angle: str, values: np
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         where = f" (configuration {i} of the batch)" if len(bad) > 1 else ""
-        deg = math.degrees(float(values[i]))
+        deg = round(math.degrees(float(values[i])), 4) + 0.0  # + 0.0: no -0
         raise ConfigurationError(
             f"the analytical Jacobian is singular for {representation} at {angle} = {deg:.6g} deg"
             f"{where}; use another representation"

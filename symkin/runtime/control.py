@@ -120,6 +120,7 @@ def rrmc(
     damping: float = 1e-2,
     singular_tol: float = 1e-6,
     axes: str = "all",
+    qd_null: Any = None,
 ) -> tuple[np.ndarray, StepInfo]:
     """Resolved-rate motion control: qd = J0(q)^-1 nu (eq 35, 6 joints) or J0(q)^+ nu (eq 36, redundant).
 
@@ -130,25 +131,48 @@ def rrmc(
     is scaled down by the same factor so its direction is kept; ``info.scale`` says by how much.
     ``axes`` only chooses which manipulability ``info`` reports.
 
+    ``qd_null`` (n,), rad/s or m/s per joint, adds the null-space motion ``(I - J^+ J) qd_null``
+    (Corke, Robotics, Vision and Control, 3rd ed., 2023, chap 8: a secondary task such as moving
+    away from joint limits for a redundant arm; it leaves the end-effector velocity unchanged).
+    On the damped (singular) step the projector is the damped one, ``I - J^T (J J^T + damping^2 I)^-1
+    J``, and the end-effector velocity changes slightly. The speed-limit scaling applies to the sum.
+
     On compiled C kinematics the step is one C call (:class:`symkin.runtime.mmc_c.CRRMC`, kept per
-    kinematics object and options); elsewhere J0 comes from ``kin.jacob0`` and the step from NumPy.
-    Both solve with the Cholesky factor of J J^T, no SVD.
+    kinematics object and options); elsewhere, and with ``qd_null``, J0 comes from ``kin.jacob0`` and
+    the step from NumPy. Both solve with the Cholesky factor of J J^T, no SVD.
     """
-    try:  # compiled kinematics keep their C controllers (by options) in kin._c_rrmc
-        c = kin._c_rrmc[(qd_max, damping, singular_tol, axes)]
-    except (AttributeError, KeyError, TypeError):
-        c = rrmc_controller(kin, qd_max, damping, singular_tol, axes)
-    if c is not None:
-        return c.fast(q, nu) or c.step(q, nu)  # fast: None for invalid input; step raises the error
+    if qd_null is None:
+        try:  # compiled kinematics keep their C controllers (by options) in kin._c_rrmc
+            c = kin._c_rrmc[(qd_max, damping, singular_tol, axes)]
+        except (AttributeError, KeyError, TypeError):
+            c = rrmc_controller(kin, qd_max, damping, singular_tol, axes)
+        if c is not None:
+            return c.fast(q, nu) or c.step(q, nu)  # fast: None for invalid input; step raises the error
     q = step_q(kin, q)
     nu = step_nu(nu)
     damping = _number(damping, "damping", strict=False)
     singular_tol = _number(singular_tol, "singular_tol", strict=False)
     J = np.asarray(kin.jacob0(q), dtype=float)
     qd, status, method, m = _rrmc_step(J, nu, damping, singular_tol, _axes(axes))
+    if qd_null is not None:
+        qd = qd + _null_motion(J, qd_null, damping if status == "singular" else 0.0)
     qd, scale = scale_to_limits(qd, _speed_limits(kin, kin.n, qd_max))
     res = float(np.abs(J @ qd - nu).max())
     return qd, StepInfo(status, method, m, residual=res, scale=scale)
+
+
+def _null_motion(J: np.ndarray, qd_null: Any, damping: float) -> np.ndarray:
+    """``(I - J^T (J J^T + damping^2 I)^-1 J) qd_null`` (n,): with damping 0 the projection of
+    ``qd_null`` onto the null space of J (full row rank), ``(I - J^+ J) qd_null``."""
+    n = J.shape[1]
+    v = real_array(qd_null, "qd_null", ParameterError)
+    if v.shape != (n,) or not np.isfinite(v).all():
+        raise ParameterError(f"qd_null must be {n} finite numbers, got {qd_null!r}")
+    G = J @ J.T + damping * damping * np.eye(J.shape[0])
+    try:
+        return v - J.T @ np.linalg.solve(G, J @ v)
+    except np.linalg.LinAlgError:  # no damping at a singular J: no null-space step
+        return np.zeros(n)
 
 
 _RRMC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # kin -> {options: CRRMC}, if no kin._c_rrmc
