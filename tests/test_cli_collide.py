@@ -82,3 +82,36 @@ def test_plot_draws_geometry_and_obstacles(tmp_path, capsys):
         symkin.load("panda").qr, env=symkin.Environment(boxes=(symkin.Box((0, 0, -1), (1, 1, 0.1)),))
     )
     assert len(fig.axes[0].lines) > 12 + 20  # the box's 12 edges and the shapes' wireframes
+
+
+ARM_URDF = """<robot name="arm2">
+  <link name="base"><collision><geometry><sphere radius="0.08"/></geometry></collision></link>
+  <link name="upper"><collision><origin xyz="0.2 0 0" rpy="0 1.5707963267948966 0"/>
+    <geometry><cylinder radius="0.04" length="0.3"/></geometry></collision></link>
+  <link name="fore"><collision><origin xyz="0.2 0 0"/><geometry><box size="0.4 0.06 0.06"/></geometry>
+    </collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0.4 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_collide_and_plot_read_a_urdfs_collision_elements(tmp_path, capsys):
+    urdf = tmp_path / "arm2.urdf"
+    urdf.write_text(ARM_URDF)
+    assert main(["collide", str(urdf), "0", "0", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["in_collision"] is False and data["pairs"] >= 1  # base - forearm spheres
+    # the forearm folded back over the base: its box spheres reach the base sphere
+    assert main(["collide", str(urdf), "0", "3.0"]) == 1
+    assert "IN COLLISION" in capsys.readouterr().out
+    assert main(["collide", str(urdf), "0", "0", "--sphere", "0.6 0 0.1 0.05"]) == 1  # on the forearm
+    capsys.readouterr()
+    with_tool = ["collide", str(urdf), "0", "0", "--tool", "tx(0.1)", "--json"]
+    assert main(with_tool) == 0  # a tool keeps the shapes on their links
+    assert json.loads(capsys.readouterr().out)["in_collision"] is False
+    pytest.importorskip("matplotlib")
+    png = tmp_path / "arm2.png"
+    assert main(["plot", str(urdf), "--q", "0 3.0", "-o", str(png)]) == 0
+    assert "in collision (red)" in capsys.readouterr().out and png.stat().st_size > 10_000

@@ -49,7 +49,7 @@ def _label(kind: str, i: int, j: int, shapes: Any) -> str:
 def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
 
-    robot = common.single_chain(args)
+    robot = common.single_chain(args, geometry=True)
     if args.top < 0:
         raise UserError(f"--top must be >= 0, got {args.top}")
     q = _q(args, robot)

@@ -177,10 +177,11 @@ def _end(args: argparse.Namespace, frame: str | None) -> str | None:
     return frame or end
 
 
-def single_chain(args: argparse.Namespace, default: str | None = None) -> Any:
+def single_chain(args: argparse.Namespace, default: str | None = None, geometry: bool = False) -> Any:
     """The serial Robot a command works on: ROBOT (or ``default`` when it is optional and not
     given), ``path.urdf:FRAME``, ``--base-link/--end-link``, then ``--tool``/``--base``; a branching
-    URDF without a frame is a clear error."""
+    URDF without a frame is a clear error. ``geometry``: a URDF's ``<collision>`` elements become
+    the robot's collision geometry (:func:`symkin.geometry.geometry_from_urdf`; meshes skipped)."""
     from symkin.errors import URDFError
     from symkin.model.resolve import resolve_robot
     from symkin.model.robot import Robot
@@ -202,6 +203,11 @@ def single_chain(args: argparse.Namespace, default: str | None = None) -> Any:
                 f"(`symkin list-frames {path}` shows the tree)"
             ) from None
         raise
+    if geometry:
+        from symkin.geometry.urdf import geometry_from_urdf
+
+        shapes = geometry_from_urdf(Path(path).expanduser(), robot)
+        robot = robot.with_geometry(shapes) if shapes.shapes else robot
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 

@@ -42,7 +42,7 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = single_chain(args)
+    robot = single_chain(args, geometry=True)
     if args.q is None:
         q = robot.configs.get("qr", robot.configs["qz"])
     elif args.q.strip() in robot.configs:

@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.workspace.run import require_scale
 
     require_scale(common.scheduler(args))  # before compiling: say which extra is missing at once
-    robot = common.single_chain(args)
+    robot = common.single_chain(args, geometry=args.collision)
     bounds = None if args.bounds is None else common.floats(args.bounds, "--bounds", 6).reshape(3, 2)
     axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
