@@ -1,4 +1,5 @@
-"""``symkin plot``: draw a robot (links, joint frames, optionally the velocity ellipsoid) to a PNG."""
+"""``symkin plot``: draw a robot (links, joint frames, collision shapes and obstacles, optionally the
+velocity ellipsoid) to a PNG."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(sub: Any) -> None:
     s = add_command(
-        sub, "plot", "draw a robot (links, joint frames, optionally the velocity ellipsoid) to a PNG"
+        sub, "plot", "draw a robot (links, frames, collision shapes, obstacles, velocity ellipsoid) as PNG"
     )
     add_robot_argument(s)
     s.add_argument(
