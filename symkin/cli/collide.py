@@ -31,14 +31,6 @@ def add_parser(sub: Any) -> None:
     s.set_defaults(func=run)
 
 
-def _q(args: argparse.Namespace, robot: Any) -> np.ndarray:
-    if not args.q:
-        return np.zeros(robot.n)
-    if len(args.q) == 1 and args.q[0] in robot.configs:
-        return np.asarray(robot.configs[args.q[0]])
-    return common.floats(" ".join(args.q), "Q", robot.n)
-
-
 def _label(kind: str, i: int, j: int, shapes: Any) -> str:
     a = f"{type(shapes[i]).__name__.lower()} {i} ({shapes[i].link})"
     if kind == "self":
@@ -52,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     robot = common.single_chain(args, geometry=True)
     if args.top < 0:
         raise UserError(f"--top must be >= 0, got {args.top}")
-    q = _q(args, robot)
+    q = common.configuration(" ".join(args.q), robot, "Q") if args.q else np.zeros(robot.n)
     env = common.environment_of(args)
     check_cflags_for(args.backend)
     kin = compile_robot(robot, backend=args.backend)

@@ -33,6 +33,7 @@ __all__ = [
     "target",
     "scheduler",
     "floats",
+    "configuration",
     "fmt",
     "add_obstacle_options",
     "environment_of",
@@ -282,6 +283,14 @@ def floats(text: str, what: str, count: int | None = None) -> np.ndarray:
     if not np.isfinite(values).all():
         raise UserError(f"{what} must be finite numbers, got {text!r}")
     return values
+
+
+def configuration(text: str, robot: Any, what: str) -> np.ndarray:
+    """Joint values from option ``what``: a named configuration of ``robot`` (``qr``...) or n numbers."""
+    name = text.strip()
+    if name in robot.configs:
+        return np.asarray(robot.configs[name])
+    return floats(text, what, robot.n)
 
 
 def fmt(a: np.ndarray) -> str:

@@ -11,8 +11,8 @@ from symkin.cli.common import (
     add_command,
     add_obstacle_options,
     add_robot_argument,
+    configuration,
     environment_of,
-    floats,
     fmt,
     single_chain,
 )
@@ -46,10 +46,8 @@ def run(args: argparse.Namespace) -> int:
     robot = single_chain(args, geometry=True)
     if args.q is None:
         q = robot.configs.get("qr", robot.configs["qz"])
-    elif args.q.strip() in robot.configs:
-        q = robot.configs[args.q.strip()]
     else:
-        q = floats(args.q, "--q", robot.n)
+        q = configuration(args.q, robot, "--q")
     try:
         import matplotlib  # noqa: F401
     except ImportError:

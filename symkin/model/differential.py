@@ -43,6 +43,8 @@ __all__ = [
     "jacobm_of",
     "manipulability_one",
     "jacobm_one",
+    "NEAR_PI_L",
+    "angle_axis",
     "REPRESENTATIONS",
     "analytical_of",
     "velocity_transform",
@@ -407,6 +409,44 @@ def _det6_spd(G: list[list[float]]) -> float:
     return det
 
 
+# -- the Euler vector of a rotation (the orientation part of the pose error) ------------------------
+#: |l| (eq 39) below which a rotation with trace < 0 counts as a half turn for :func:`angle_axis`
+NEAR_PI_L = 1e-6
+
+
+def angle_axis(R: Any) -> np.ndarray:
+    """alpha(R) (eqs 38-40): the Euler vector of rotation matrices R (..., 3, 3) -> (..., 3).
+
+    A diagonal R gives 0 for (1, 1, 1) and pi/2 (r11 + 1, r22 + 1, r33 + 1) otherwise (eq 40);
+    other matrices use eq 38, except near pi (trace < 0 and |l| < 1e-6), where l of eq 39 is
+    rounding noise and the axis comes from the symmetric part of R (its sign from l).
+    """
+    R = np.asarray(R, dtype=float)
+    l = np.stack((R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]), -1)
+    tr = np.trace(R, axis1=-2, axis2=-1)
+    nl = np.sqrt((l * l).sum(-1))
+    diag = R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0
+    diag = diag.all(-1)
+    theta = np.arctan2(nl, tr - 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        general = np.where((nl == 0)[..., None], 0.0, (theta / nl)[..., None] * l)
+        ct = (tr - 1.0) / 2.0
+        M = ((R + np.swapaxes(R, -1, -2)) / 2.0 - ct[..., None, None] * np.eye(3)) / (1.0 - ct)[
+            ..., None, None
+        ]
+        d = np.diagonal(M, axis1=-2, axis2=-1)
+        k = np.argmax(d, axis=-1)  # first maximum, like the C code
+        ak = np.sqrt(np.maximum(np.take_along_axis(d, k[..., None], -1), 0.0))
+        col = np.take_along_axis(M, k[..., None, None], -1)[..., 0]
+        ax = col / ak
+        ax = np.where(np.arange(3) == k[..., None], ak, ax)
+        ax = np.where(((ax * l).sum(-1) < 0)[..., None], -ax, ax)
+        near_pi = theta[..., None] * ax
+    eq40 = np.where((tr > 0)[..., None], 0.0, math.pi / 2 * (np.diagonal(R, axis1=-2, axis2=-1) + 1.0))
+    use_general = (tr >= 0) | (nl >= NEAR_PI_L)
+    return np.where(diag[..., None], eq40, np.where(use_general[..., None], general, near_pi))
+
+
 # -- analytical Jacobian, velocity and wrench transforms -------------------------------------------
 #: The orientation representations of :meth:`FrameMethods.jacob0_analytical` (roboticstoolbox-python's
 #: names), gamma = (gamma_1, gamma_2, gamma_3) in rad:
@@ -452,30 +492,7 @@ def _gamma_of(R: np.ndarray, representation: str) -> np.ndarray:
         theta = np.arctan2(np.hypot(R[:, 0, 2], R[:, 1, 2]), R[:, 2, 2])
         psi = np.arctan2(R[:, 2, 1], -R[:, 2, 0])
         return np.stack((phi, theta, psi), axis=-1)
-    return _rotation_vector(R)
-
-
-def _rotation_vector(R: np.ndarray) -> np.ndarray:
-    """Principal rotation vector r = theta n (N, 3), theta in [0, pi], of rotations R (N, 3, 3): the
-    logarithm of SO(3) (Lynch and Park, Modern Robotics, 2017, sec 3.2.3.3), from the skew part
-    ``sin(theta) n`` and, near theta = pi where that vanishes, from the symmetric part
-    ``(1 - cos theta) n n^T``."""
-    c = np.clip((np.trace(R, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
-    sv = 0.5 * np.stack((R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]), axis=-1)
-    s = np.linalg.norm(sv, axis=-1)
-    theta = np.arctan2(s, c)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        k = np.where(theta < 1e-4, 1.0 + theta**2 / 6.0, theta / s)  # theta / sin(theta)
-    r = k[:, None] * sv
-    near_pi = (c < 0.0) & (s < 1e-3)
-    for i in np.flatnonzero(near_pi):
-        B = ((R[i] + R[i].T) / 2.0 - c[i] * np.eye(3)) / (1.0 - c[i])  # n n^T
-        j = int(np.argmax(np.diagonal(B)))
-        n = B[:, j] / math.sqrt(B[j, j])
-        if n @ sv[i] < 0.0:
-            n = -n
-        r[i] = theta[i] * n
-    return r
+    return angle_axis(R)  # the principal rotation vector, theta in [0, pi]
 
 
 def _omega_to_rates(gamma: np.ndarray, representation: str) -> np.ndarray:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import ctypes
 from collections import OrderedDict
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -30,7 +30,8 @@ __all__ = [
     "collision_ik",
     "collision_of",
     "motion_valid",
-    "env_arrays",
+    "env_args",
+    "Packed",
 ]
 
 _KERNELS: OrderedDict[str, CollisionKernel] = OrderedDict()  # by the model's and the geometry's keys
@@ -39,14 +40,20 @@ _P = ctypes.c_void_p  # arrays are passed by address (``ndarray.ctypes.data``)
 _NO_ENV = Environment()
 
 
-def env_arrays(env: Environment) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The environment's packed obstacle arrays (memoised on the Environment object)."""
-    return env_args(env)[0]
+class Packed(NamedTuple):
+    """An environment as the kernel takes it: the packed arrays (spheres, capsules, boxes; see
+    :meth:`Environment.arrays`), the six obstacle arguments (address, count of each), the same as
+    an int64 array and that array's address (the one-call path)."""
+
+    arrays: tuple[np.ndarray, ...]
+    args: list[int]
+    table: np.ndarray
+    address: int
 
 
-def env_args(env: Environment) -> tuple[tuple[np.ndarray, ...], list[int], np.ndarray, int]:
-    """The packed arrays and the kernel's obstacle arguments (addresses and counts), memoised on
-    the Environment object (frozen: they never change)."""
+def env_args(env: Environment) -> Packed:
+    """The packed obstacles of ``env`` (:class:`Packed`), memoised on the Environment object
+    (frozen: they never change)."""
     cached = env.__dict__.get("_packed")
     if cached is None:
         a = env.arrays()
@@ -55,7 +62,7 @@ def env_args(env: Environment) -> tuple[tuple[np.ndarray, ...], list[int], np.nd
             x.setflags(write=False)
         args = [v for x in arrays for v in (x.ctypes.data, len(x))]
         packed = np.array(args, dtype=np.int64)
-        cached = (arrays, args, packed, packed.ctypes.data)
+        cached = Packed(arrays, args, packed, packed.ctypes.data)
         object.__setattr__(env, "_packed", cached)
     return cached
 
@@ -88,9 +95,10 @@ class CollisionKernel:
         Q, single = as_batch(q, self.n, self.layout.tree.name)
         return np.ascontiguousarray(Q, dtype=float), single
 
-    def _env(self, env: Any) -> tuple[Environment, list]:
+    def _env(self, env: Any) -> tuple[Environment, Packed]:
+        """``env`` as an Environment and its packed arguments (:func:`env_args`)."""
         env = _NO_ENV if env is None else env if type(env) is Environment else as_environment(env)
-        return env, env_args(env)[1]
+        return env, env.__dict__.get("_packed") or env_args(env)
 
     def n_distances(self, env: Environment) -> int:
         return len(self.layout.self_pairs) + len(self.layout.shapes) * len(env)
@@ -106,13 +114,13 @@ class CollisionKernel:
     def in_collision(self, q: Any, env: Any = None) -> bool | np.ndarray:
         """Whether any active pair overlaps; (N,) bools for a batch (stops at the first overlap)."""
         if type(q) is np.ndarray and q.shape == (self.n,) and q.dtype == np.float64 and q.flags.c_contiguous:
-            e = env if type(env) is Environment else _NO_ENV if env is None else as_environment(env)
-            packed = e.__dict__.get("_packed") or env_args(e)
-            hit = self._one(q.ctypes.data, packed[3])  # one C call; -1: a joint value NaN, inf or huge
+            hit = self._one(
+                q.ctypes.data, self._env(env)[1][3]
+            )  # one C call; -1: a joint value NaN, inf or huge
             if hit >= 0:
                 return hit == 1
         Q, single = self._q(q)
-        env, args = self._env(env)
+        args = self._env(env)[1].args
         if single:
             return bool(self.lib.skcoll_in_collision(Q.ctypes.data, *args))
         out = np.zeros(Q.shape[0], dtype=np.uint8)
@@ -122,7 +130,8 @@ class CollisionKernel:
     def distances(self, q: Any, env: Any = None, jacobians: bool = False) -> Any:
         """Signed distances (M,) or (N, M); with ``jacobians`` also their gradients (M, n) or (N, M, n)."""
         Q, single = self._q(q)
-        env, args = self._env(env)
+        env, packed = self._env(env)
+        args = packed.args
         M, N = self.n_distances(env), Q.shape[0]
         D = np.empty((N, M))
         J = np.empty((N, M, self.n)) if jacobians else None

@@ -16,6 +16,7 @@ import numpy as np
 
 from symkin.core.arrays import as_batch, name_of, real_array, sample_bounds
 from symkin.errors import ParameterError, PoseError
+from symkin.model.differential import NEAR_PI_L, angle_axis
 
 Method = Literal["NR", "GN", "LM"]
 Damping = Literal["wampler", "chan", "sugihara"]
@@ -24,7 +25,6 @@ DAMPINGS = ("wampler", "chan", "sugihara")
 PINV_RCOND = 1e-12  # singular values <= PINV_RCOND * largest are dropped (same in C)
 POSE_ATOL = 1e-6  # max |R^T R - I| of an accepted target
 _BOTTOM_ATOL = 1e-12
-_NEAR_PI_L = 1e-6
 TWO_PI = 6.283185307179586
 M64 = (1 << 64) - 1
 
@@ -279,39 +279,6 @@ def check_pose(Tep: Any) -> tuple[np.ndarray, bool]:
     return T, single
 
 
-def angle_axis(R: Any) -> np.ndarray:
-    """alpha(R) (eqs 38-40): the Euler vector of rotation matrices R (..., 3, 3) -> (..., 3).
-
-    A diagonal R gives 0 for (1, 1, 1) and pi/2 (r11 + 1, r22 + 1, r33 + 1) otherwise (eq 40);
-    other matrices use eq 38, except near pi (trace < 0 and |l| < 1e-6), where l of eq 39 is
-    rounding noise and the axis comes from the symmetric part of R (its sign from l).
-    """
-    R = np.asarray(R, dtype=float)
-    l = np.stack((R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]), -1)
-    tr = np.trace(R, axis1=-2, axis2=-1)
-    nl = np.sqrt((l * l).sum(-1))
-    diag = R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0
-    diag = diag.all(-1)
-    theta = np.arctan2(nl, tr - 1.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        general = np.where((nl == 0)[..., None], 0.0, (theta / nl)[..., None] * l)
-        ct = (tr - 1.0) / 2.0
-        M = ((R + np.swapaxes(R, -1, -2)) / 2.0 - ct[..., None, None] * np.eye(3)) / (1.0 - ct)[
-            ..., None, None
-        ]
-        d = np.diagonal(M, axis1=-2, axis2=-1)
-        k = np.argmax(d, axis=-1)  # first maximum, like the C code
-        ak = np.sqrt(np.maximum(np.take_along_axis(d, k[..., None], -1), 0.0))
-        col = np.take_along_axis(M, k[..., None, None], -1)[..., 0]
-        ax = col / ak
-        ax = np.where(np.arange(3) == k[..., None], ak, ax)
-        ax = np.where(((ax * l).sum(-1) < 0)[..., None], -ax, ax)
-        near_pi = theta[..., None] * ax
-    eq40 = np.where((tr > 0)[..., None], 0.0, math.pi / 2 * (np.diagonal(R, axis1=-2, axis2=-1) + 1.0))
-    use_general = (tr >= 0) | (nl >= _NEAR_PI_L)
-    return np.where(diag[..., None], eq40, np.where(use_general[..., None], general, near_pi))
-
-
 def _angle_axis_one(R: np.ndarray) -> np.ndarray:
     """:func:`angle_axis` of one (3, 3) matrix with scalar arithmetic (the same branches)."""
     r = R.ravel().tolist()
@@ -322,7 +289,7 @@ def _angle_axis_one(R: np.ndarray) -> np.ndarray:
             return np.zeros(3)
         return math.pi / 2 * (np.array([r[0], r[4], r[8]]) + 1.0)  # eq 40
     nl = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
-    if tr >= 0.0 or nl >= _NEAR_PI_L:  # eq 38
+    if tr >= 0.0 or nl >= NEAR_PI_L:  # eq 38
         if nl == 0.0:
             return np.zeros(3)
         k = math.atan2(nl, tr - 1.0) / nl

@@ -368,7 +368,7 @@ def test_four_lane_batch_gives_the_scalar_verdicts(panda, capsules):
     Q = np.ascontiguousarray(robot.random_q(2001, seed=14))  # a tail of one after the groups of four
     kin = symkin.compile(robot, backend="c")
     for env in (None, Environment(spheres=ENV.spheres), ENV):
-        args = env_args(symkin.geometry.as_environment(env))[1]
+        args = env_args(symkin.geometry.as_environment(env)).args
         outs = []
         for lib in libs:
             out = np.zeros(len(Q), dtype=np.uint8)
