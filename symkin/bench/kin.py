@@ -5,8 +5,10 @@ through ctypes (pointers and output buffers cached) and cffi (when installed), t
 CasADi backends and the numeric reference; roboticstoolbox-python and Pinocchio when installed
 (the ``compare`` extra), all measured in the same run, with ratios; Pinocchio's FK is that of one
 frame (``forwardKinematics`` + ``updateFramePlacement``). Batched: throughput on N random
-configurations on one core. Times are CPU times of the calling thread (``time.thread_time``), so
-that other processes of a shared machine do not count.
+configurations on one core, through the extension (``c``, ``numpy``: validation and output arrays
+included) and through the generated ``<f>_batch`` kernels alone, built as they are (four
+configurations per step) and with ``-DSYMKIN_SCALAR`` (one per step). Times are CPU times of the
+calling thread (``time.thread_time``), so that other processes of a shared machine do not count.
 """
 
 from __future__ import annotations
@@ -206,6 +208,11 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
             fn(Q[:1000])
             best = min(_timed(fn, Q) for _ in range(3))
             batched[b][f] = batch / best / 1e6
+    for label, fns in _c_builds(robot, kins["c"], Q).items():
+        batched[label] = {}
+        for f, fn in fns.items():
+            fn(Q[:1000])
+            batched[label][f] = batch / min(_timed(fn, Q) for _ in range(3)) / 1e6
     ratios = {}
     for peer in ("pinocchio", "rtb"):
         if peer in per_call:
@@ -218,6 +225,36 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
         "batched_M_per_s": batched,
         "speedup_of_c_over": ratios,
     }
+
+
+def _c_builds(robot: Any, kin: Any, Q: np.ndarray) -> dict[str, dict[str, Callable[[np.ndarray], Any]]]:
+    """The generated ``<f>_batch`` entry points through ctypes (outputs preallocated: the kernels
+    alone), of the default build (four configurations per step where the compiler has vector
+    extensions) and of the same sources built with ``-DSYMKIN_SCALAR`` (one per step)."""
+    import symkin
+    from symkin.emit.c.build import compile_library, load_library
+
+    files = symkin.generate(robot, "c")
+    sources = {k: v for k, v in files.items() if not k.endswith("_pymodule.c")}
+    prefix, n = kin.c_prefix, robot.n
+    sizes = {"fkine": (16,), "jacob0": (6 * n,), "fkine_jacob0": (16, 6 * n), "hessian0": (6 * n * n,)}
+    builds = {}
+    for label, flags in (("c kernels, 4 lanes", ()), ("c kernels, scalar", ("-DSYMKIN_SCALAR",))):
+        lib = load_library(compile_library(sources, f"{prefix}_bench{len(flags)}", extra_cflags=flags))
+        fns = {}
+        for f, shape in sizes.items():
+            fn = getattr(lib, f"{prefix}_{f}_batch")
+            fn.restype = None
+            outs = [np.empty(len(Q) * size) for size in shape]
+            args = [ctypes.c_void_p(o.ctypes.data) for o in outs]
+
+            def call(Qb: np.ndarray, fn: Any = fn, args: list = args, outs: list = outs) -> None:
+                Qb = np.ascontiguousarray(Qb, dtype=float)
+                fn(ctypes.c_void_p(Qb.ctypes.data), *args, ctypes.c_ssize_t(len(Qb)))
+
+            fns[f] = call
+        builds[label] = fns
+    return builds
 
 
 def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:
@@ -241,6 +278,10 @@ def format_kin(r: dict) -> str:
     lines.append(f"batched, {r['batch']} configurations, one core (million per second)")
     fs = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
     lines.append(f"{'backend':22} " + " ".join(f"{f:>14}" for f in fs))
-    for b, row in r["batched_M_per_s"].items():
+    rows = r["batched_M_per_s"]
+    for b, row in rows.items():
         lines.append(f"{b:22} " + " ".join(f"{row[f]:14.2f}" for f in fs))
+    four, one = rows.get("c kernels, 4 lanes"), rows.get("c kernels, scalar")
+    if four and one:
+        lines.append(f"{'4 lanes vs scalar':22} " + " ".join(f"{four[f] / one[f]:13.2f}x" for f in fs))
     return "\n".join(lines)

@@ -79,8 +79,8 @@ def _times(dst: str, parent: str | None, A: np.ndarray, vec: bool = False) -> li
 
 
 def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool = False) -> list[str]:
-    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; ``vec``: four lanes, sin and
-    cos lane by lane (libm's, as the scalar code: the same numbers)."""
+    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; ``vec``: four lanes (sin and
+    cos by ``skv_sin``/``skv_cos``: lane by lane the numbers of the scalar ``sk_sin``/``sk_cos``)."""
     lines = [f"memcpy({dst}, {src}, sizeof({dst}));"]
     if not revolute:
         for i in range(3):
@@ -88,9 +88,9 @@ def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool 
         return lines
     j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
     if vec:
-        lines.insert(0, f"{{ v4 c, s; const v4 th_ = {theta}; SKV_SINCOS(th_, s, c);")
+        lines.insert(0, f"{{ const v4 th_ = {theta}, c = skv_cos(th_), s = skv_sin(th_);")
     else:
-        lines.insert(0, f"{{ const double c = cos({theta}), s = sin({theta});")
+        lines.insert(0, f"{{ const double c = sk_cos({theta}), s = sk_sin({theta});")
     for i in range(3):
         a, b = f"{src}[{4 * i + j}]", f"{src}[{4 * i + k}]"
         lines.append(f"{dst}[{4 * i + j}] = c * {a} + s * {b};")
@@ -282,6 +282,8 @@ def render_collision(layout: Any) -> dict[str, str]:
         nshapes=len(layout.shapes),
         nshape_points=layout.n_points,
         source=comment_safe(tree.geometry.source or "user geometry", 200),
+        real="double",
+        libm=False,
         **collision_tables(layout),
     )
     return {"skcoll.c": text, "symkin_collide.h": COLLIDE_HEADER.read_text()}

@@ -58,10 +58,18 @@ class _DoubleLiterals:
 
 
 class CPrinter(_DoubleLiterals, C99CodePrinter):
-    """C99 with exact double literals and multiplications for small powers."""
+    """C99 with exact double literals and multiplications for small powers; sin and cos as the
+    template's ``sk_sin``/``sk_cos`` (the inline kernels of ``c/_sincos.c.j2``, or libm's with
+    ``--libm``)."""
 
     def _print_Pow(self, expr: sp.Pow) -> str:
         return _pow(self, expr, "sqrt")
+
+    def _print_sin(self, expr: sp.sin) -> str:
+        return f"sk_sin({self._print(expr.args[0])})"
+
+    def _print_cos(self, expr: sp.cos) -> str:
+        return f"sk_cos({self._print(expr.args[0])})"
 
 
 class FloatCPrinter(CPrinter):
@@ -79,12 +87,6 @@ class FloatCPrinter(CPrinter):
 
     def _print_Pow(self, expr: sp.Pow) -> str:
         return _pow(self, expr, "sqrtf", one="1.0f")
-
-    def _print_sin(self, expr: sp.sin) -> str:
-        return f"sk_sin({self._print(expr.args[0])})"
-
-    def _print_cos(self, expr: sp.cos) -> str:
-        return f"sk_cos({self._print(expr.args[0])})"
 
 
 class _PyLikePrinter(_DoubleLiterals, PythonCodePrinter):

@@ -101,12 +101,13 @@ def render_tree(
 
     n, F = tree.n, len(tree.frames)
     if backend == "c":
-        from symkin.emit.c.backend import c_variant, module_name
+        from symkin.emit.c.backend import c_variant, four_lane_bodies, module_name
 
         printer, variant = c_variant(tree_prefix(tree), prefix, precision, libm)
         printed = [lower(f, printer) for f in functions]
         prefix = variant["prefix"]
         outs = {f.name: f.outs for f in printed}
+        every = [f for f in printed if f.name.endswith("_all")]  # batch entry points: four lanes
         context = {
             **variant,
             "n": n,
@@ -118,6 +119,7 @@ def render_tree(
             "framed": [(base, outs[f"{base}_0"]) for base in PER_FRAME],
             "framed_docs": FRAMED_DOCS,
             "plain_paths": plain_paths(tree),
+            "lanes": four_lane_bodies(every if precision == "double" else []),
         }
         files = {
             f"{prefix}.h": render("c/tree.h.j2", **context),

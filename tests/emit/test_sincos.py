@@ -1,5 +1,5 @@
 """The C backend's inline sin/cos against mpmath, and `symkin check` at large angles (issue 12,
-item 14). The README's "Accuracy" paragraph quotes the full sweep (1.66 M angles); this is a
+item 14). docs/guide/accuracy.md quotes the full sweep (1.66 M angles); this is a
 bounded sample of the same kinds of angles, hardest cases included."""
 
 from __future__ import annotations

@@ -31,6 +31,11 @@ const char *const symkin_cobra600_joint_names[SYMKIN_COBRA600_N] = {
     "J4",
 };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
 #ifdef SYMKIN_USE_LIBM
 /* The C library's sin and cos (SYMKIN_USE_LIBM). */
 #define sk_sin sin
@@ -43,10 +48,11 @@ const char *const symkin_cobra600_joint_names[SYMKIN_COBRA600_N] = {
  * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
- * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
- * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
- * `symkin compile --libm`) to call the C library's sin and cos instead.
+ * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
+ * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
+ * quadrant), so an angle whose sin and cos are both used is reduced once. Define
+ * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
+ * instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -54,18 +60,16 @@ const char *const symkin_cobra600_joint_names[SYMKIN_COBRA600_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
-#if defined(__GNUC__) || defined(__clang__)
-#define SK_INLINE static inline __attribute__((always_inline))
-#else
-#define SK_INLINE static inline
-#endif
 
 /* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
    the second stage always runs (its rounding error is captured exactly), the third's result is
    selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
 SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
-    const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
+    /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
+       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+    const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
     double w = k * 6.07710050630396597660e-11;
     const double r = t - w;
@@ -136,6 +140,128 @@ SK_INLINE double sk_cos(double x)
 
 #endif /* SYMKIN_USE_LIBM */
 
+/*
+ * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
+ * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
+ * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
+ * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
+ * configuration per step; other compilers and C++ get it.
+ */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
+#define SYMKIN_LANES 4
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* vectors by value: every such function is inlined */
+#endif
+typedef double sk_v4 __attribute__((vector_size(32)));
+typedef long long sk_m4 __attribute__((vector_size(32)));
+#define SKV_SPLAT(x) ((sk_v4){(x), (x), (x), (x)})
+/* out[i] of four consecutive outputs of size S from the lanes of the vector v */
+#define SKV_STORE(out, S, i, v) \
+    do { \
+        const sk_v4 v_ = (v); \
+        (out)[i] = v_[0], (out)[(S) + (i)] = v_[1], (out)[2 * (S) + (i)] = v_[2], (out)[3 * (S) + (i)] = v_[3]; \
+    } while (0)
+
+#ifdef SYMKIN_USE_LIBM
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
+}
+#else
+SK_INLINE sk_v4 skv_abs_(sk_v4 x)
+{
+    return (sk_v4)((sk_m4)x & 0x7fffffffffffffffLL);
+}
+
+/* a where m is 0, b where m is all ones */
+SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
+{
+    return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
+}
+
+/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
+SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
+{
+    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const sk_v4 k = kb - 6755399441055744.0;
+    const sk_v4 t = x - k * 1.57079632673412561417e+00;
+    sk_v4 w = k * 6.07710050630396597660e-11;
+    const sk_v4 r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const sk_v4 y = r - w;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
+    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
+        sk_v4 w3 = k * 2.02226624871116645580e-21;
+        const sk_v4 r3 = r - w3;
+        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+        const sk_v4 y3 = r3 - w3;
+        *r0 = skv_where_(third, y, y3);
+        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
+    }
+    return (sk_m4)kb;
+}
+
+SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+        + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
+}
+
+SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+        + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const sk_v4 hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
+}
+
+/* sk_select_ lane by lane */
+SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
+{
+    const sk_m4 m = 0 - (k & 1);
+    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
+}
+
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) s[l] = sin(x[l]);
+    return s;
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) c[l] = cos(x[l]);
+    return c;
+}
+#endif /* SYMKIN_USE_LIBM */
+#else
+#define SYMKIN_LANES 1
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[4] = { 0, 1, 2, 3 };
@@ -150,21 +276,21 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q1 = q[1];
     const double q2 = q[2];
     const double q3 = q[3];
-    const double x0 = cos(q3);
+    const double x0 = sk_cos(q3);
     const double x1 = q0 + q1;
-    const double x2 = cos(x1);
-    const double x3 = sin(q3);
-    const double x4 = sin(x1);
+    const double x2 = sk_cos(x1);
+    const double x3 = sk_sin(q3);
+    const double x4 = sk_sin(x1);
     const double x5 = x0*x2 + x3*x4;
     const double x6 = x0*x4 - x2*x3;
     T[0] = x5;
     T[1] = x6;
     T[2] = 0.0;
-    T[3] = (0.275)*x2 + (0.325)*cos(q0);
+    T[3] = (0.275)*x2 + (0.325)*sk_cos(q0);
     T[4] = x6;
     T[5] = -x5;
     T[6] = 0.0;
-    T[7] = (0.275)*x4 + (0.325)*sin(q0);
+    T[7] = (0.275)*x4 + (0.325)*sk_sin(q0);
     T[8] = 0.0;
     T[9] = 0.0;
     T[10] = -1.0;
@@ -180,9 +306,50 @@ void symkin_cobra600_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
+{
+    const sk_v4 q0 = {q[0], q[4], q[8], q[12]};
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 q2 = {q[2], q[6], q[10], q[14]};
+    const sk_v4 q3 = {q[3], q[7], q[11], q[15]};
+    const sk_v4 x0 = skv_cos(q3);
+    const sk_v4 x1 = q0 + q1;
+    const sk_v4 x2 = skv_cos(x1);
+    const sk_v4 x3 = skv_sin(q3);
+    const sk_v4 x4 = skv_sin(x1);
+    const sk_v4 x5 = x0*x2 + x3*x4;
+    const sk_v4 x6 = x0*x4 - x2*x3;
+    SKV_STORE(T, 16, 0, x5);
+    SKV_STORE(T, 16, 1, x6);
+    T[2] = T[18] = T[34] = T[50] = 0.0;
+    SKV_STORE(T, 16, 3, (0.275)*x2 + (0.325)*skv_cos(q0));
+    SKV_STORE(T, 16, 4, x6);
+    SKV_STORE(T, 16, 5, -x5);
+    T[6] = T[22] = T[38] = T[54] = 0.0;
+    SKV_STORE(T, 16, 7, (0.275)*x4 + (0.325)*skv_sin(q0));
+    T[8] = T[24] = T[40] = T[56] = 0.0;
+    T[9] = T[25] = T[41] = T[57] = 0.0;
+    T[10] = T[26] = T[42] = T[58] = -1.0;
+    SKV_STORE(T, 16, 11, 0.387 - q2);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+}
+#endif
+
+
 void symkin_cobra600_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_x4_(q + i * 4, T + i * 16);
+#endif
+    for (; i < N; ++i)
         fkine_(q + i * 4, T + i * 16);
 }
 
@@ -193,18 +360,18 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q1 = q[1];
     const double q2 = q[2];
     const double q3 = q[3];
-    const double x0 = cos(q0);
-    const double x1 = sin(q0);
+    const double x0 = sk_cos(q0);
+    const double x1 = sk_sin(q0);
     const double x2 = q0 + q1;
-    const double x3 = cos(x2);
-    const double x4 = sin(x2);
+    const double x3 = sk_cos(x2);
+    const double x4 = sk_sin(x2);
     const double x5 = (0.325)*x0;
     const double x6 = (0.325)*x1;
     const double x7 = (0.275)*x3 + x5;
     const double x8 = (0.275)*x4 + x6;
     const double x9 = 0.387 - q2;
-    const double x10 = cos(q3);
-    const double x11 = sin(q3);
+    const double x10 = sk_cos(q3);
+    const double x11 = sk_sin(q3);
     const double x12 = x10*x3 + x11*x4;
     const double x13 = x10*x4 - x11*x3;
     links[0] = x0;
@@ -278,9 +445,105 @@ void symkin_cobra600_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
+#if SYMKIN_LANES == 4
+/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
+{
+    const sk_v4 q0 = {q[0], q[4], q[8], q[12]};
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 q2 = {q[2], q[6], q[10], q[14]};
+    const sk_v4 q3 = {q[3], q[7], q[11], q[15]};
+    const sk_v4 x0 = skv_cos(q0);
+    const sk_v4 x1 = skv_sin(q0);
+    const sk_v4 x2 = q0 + q1;
+    const sk_v4 x3 = skv_cos(x2);
+    const sk_v4 x4 = skv_sin(x2);
+    const sk_v4 x5 = (0.325)*x0;
+    const sk_v4 x6 = (0.325)*x1;
+    const sk_v4 x7 = (0.275)*x3 + x5;
+    const sk_v4 x8 = (0.275)*x4 + x6;
+    const sk_v4 x9 = 0.387 - q2;
+    const sk_v4 x10 = skv_cos(q3);
+    const sk_v4 x11 = skv_sin(q3);
+    const sk_v4 x12 = x10*x3 + x11*x4;
+    const sk_v4 x13 = x10*x4 - x11*x3;
+    SKV_STORE(links, 64, 0, x0);
+    SKV_STORE(links, 64, 1, -x1);
+    links[2] = links[66] = links[130] = links[194] = 0.0;
+    links[3] = links[67] = links[131] = links[195] = 0.0;
+    SKV_STORE(links, 64, 4, x1);
+    SKV_STORE(links, 64, 5, x0);
+    links[6] = links[70] = links[134] = links[198] = 0.0;
+    links[7] = links[71] = links[135] = links[199] = 0.0;
+    links[8] = links[72] = links[136] = links[200] = 0.0;
+    links[9] = links[73] = links[137] = links[201] = 0.0;
+    links[10] = links[74] = links[138] = links[202] = 1.0;
+    links[11] = links[75] = links[139] = links[203] = 0.0;
+    links[12] = links[76] = links[140] = links[204] = 0.0;
+    links[13] = links[77] = links[141] = links[205] = 0.0;
+    links[14] = links[78] = links[142] = links[206] = 0.0;
+    links[15] = links[79] = links[143] = links[207] = 1.0;
+    SKV_STORE(links, 64, 16, x3);
+    SKV_STORE(links, 64, 17, -x4);
+    links[18] = links[82] = links[146] = links[210] = 0.0;
+    SKV_STORE(links, 64, 19, x5);
+    SKV_STORE(links, 64, 20, x4);
+    SKV_STORE(links, 64, 21, x3);
+    links[22] = links[86] = links[150] = links[214] = 0.0;
+    SKV_STORE(links, 64, 23, x6);
+    links[24] = links[88] = links[152] = links[216] = 0.0;
+    links[25] = links[89] = links[153] = links[217] = 0.0;
+    links[26] = links[90] = links[154] = links[218] = 1.0;
+    links[27] = links[91] = links[155] = links[219] = 0.387;
+    links[28] = links[92] = links[156] = links[220] = 0.0;
+    links[29] = links[93] = links[157] = links[221] = 0.0;
+    links[30] = links[94] = links[158] = links[222] = 0.0;
+    links[31] = links[95] = links[159] = links[223] = 1.0;
+    SKV_STORE(links, 64, 32, x3);
+    SKV_STORE(links, 64, 33, x4);
+    links[34] = links[98] = links[162] = links[226] = 0.0;
+    SKV_STORE(links, 64, 35, x7);
+    SKV_STORE(links, 64, 36, x4);
+    SKV_STORE(links, 64, 37, -x3);
+    links[38] = links[102] = links[166] = links[230] = 0.0;
+    SKV_STORE(links, 64, 39, x8);
+    links[40] = links[104] = links[168] = links[232] = 0.0;
+    links[41] = links[105] = links[169] = links[233] = 0.0;
+    links[42] = links[106] = links[170] = links[234] = -1.0;
+    SKV_STORE(links, 64, 43, x9);
+    links[44] = links[108] = links[172] = links[236] = 0.0;
+    links[45] = links[109] = links[173] = links[237] = 0.0;
+    links[46] = links[110] = links[174] = links[238] = 0.0;
+    links[47] = links[111] = links[175] = links[239] = 1.0;
+    SKV_STORE(links, 64, 48, x12);
+    SKV_STORE(links, 64, 49, x13);
+    links[50] = links[114] = links[178] = links[242] = 0.0;
+    SKV_STORE(links, 64, 51, x7);
+    SKV_STORE(links, 64, 52, x13);
+    SKV_STORE(links, 64, 53, -x12);
+    links[54] = links[118] = links[182] = links[246] = 0.0;
+    SKV_STORE(links, 64, 55, x8);
+    links[56] = links[120] = links[184] = links[248] = 0.0;
+    links[57] = links[121] = links[185] = links[249] = 0.0;
+    links[58] = links[122] = links[186] = links[250] = -1.0;
+    SKV_STORE(links, 64, 59, x9);
+    links[60] = links[124] = links[188] = links[252] = 0.0;
+    links[61] = links[125] = links[189] = links[253] = 0.0;
+    links[62] = links[126] = links[190] = links[254] = 0.0;
+    links[63] = links[127] = links[191] = links[255] = 1.0;
+}
+#endif
+
+
 void symkin_cobra600_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        link_poses_x4_(q + i * 4, links + i * 64);
+#endif
+    for (; i < N; ++i)
         link_poses_(q + i * 4, links + i * 64);
 }
 
@@ -290,13 +553,13 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = (0.275)*sin(x0);
-    const double x2 = (0.275)*cos(x0);
-    J[0] = -x1 - 0.325*sin(q0);
+    const double x1 = (0.275)*sk_sin(x0);
+    const double x2 = (0.275)*sk_cos(x0);
+    J[0] = -x1 - 0.325*sk_sin(q0);
     J[1] = -x1;
     J[2] = 0.0;
     J[3] = 0.0;
-    J[4] = x2 + (0.325)*cos(q0);
+    J[4] = x2 + (0.325)*sk_cos(q0);
     J[5] = x2;
     J[6] = 0.0;
     J[7] = 0.0;
@@ -323,9 +586,52 @@ void symkin_cobra600_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[4], q[8], q[12]};
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = (0.275)*skv_sin(x0);
+    const sk_v4 x2 = (0.275)*skv_cos(x0);
+    SKV_STORE(J, 24, 0, -x1 - 0.325*skv_sin(q0));
+    SKV_STORE(J, 24, 1, -x1);
+    J[2] = J[26] = J[50] = J[74] = 0.0;
+    J[3] = J[27] = J[51] = J[75] = 0.0;
+    SKV_STORE(J, 24, 4, x2 + (0.325)*skv_cos(q0));
+    SKV_STORE(J, 24, 5, x2);
+    J[6] = J[30] = J[54] = J[78] = 0.0;
+    J[7] = J[31] = J[55] = J[79] = 0.0;
+    J[8] = J[32] = J[56] = J[80] = 0.0;
+    J[9] = J[33] = J[57] = J[81] = 0.0;
+    J[10] = J[34] = J[58] = J[82] = -1.0;
+    J[11] = J[35] = J[59] = J[83] = 0.0;
+    J[12] = J[36] = J[60] = J[84] = 0.0;
+    J[13] = J[37] = J[61] = J[85] = 0.0;
+    J[14] = J[38] = J[62] = J[86] = 0.0;
+    J[15] = J[39] = J[63] = J[87] = 0.0;
+    J[16] = J[40] = J[64] = J[88] = 0.0;
+    J[17] = J[41] = J[65] = J[89] = 0.0;
+    J[18] = J[42] = J[66] = J[90] = 0.0;
+    J[19] = J[43] = J[67] = J[91] = 0.0;
+    J[20] = J[44] = J[68] = J[92] = 1.0;
+    J[21] = J[45] = J[69] = J[93] = 1.0;
+    J[22] = J[46] = J[70] = J[94] = 0.0;
+    J[23] = J[47] = J[71] = J[95] = -1.0;
+}
+#endif
+
+
 void symkin_cobra600_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_x4_(q + i * 4, J + i * 24);
+#endif
+    for (; i < N; ++i)
         jacob0_(q + i * 4, J + i * 24);
 }
 
@@ -334,11 +640,11 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
 {
     const double q1 = q[1];
     const double q3 = q[3];
-    const double x0 = sin(q3);
+    const double x0 = sk_sin(q3);
     const double x1 = (0.275)*x0;
-    const double x2 = cos(q3);
-    const double x3 = sin(q1);
-    const double x4 = (0.325)*cos(q1);
+    const double x2 = sk_cos(q3);
+    const double x3 = sk_sin(q1);
+    const double x4 = (0.325)*sk_cos(q1);
     const double x5 = (0.275)*x2;
     J[0] = -x0*x4 - x1 + (0.325)*x2*x3;
     J[1] = -x1;
@@ -371,9 +677,55 @@ void symkin_cobra600_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 q3 = {q[3], q[7], q[11], q[15]};
+    const sk_v4 x0 = skv_sin(q3);
+    const sk_v4 x1 = (0.275)*x0;
+    const sk_v4 x2 = skv_cos(q3);
+    const sk_v4 x3 = skv_sin(q1);
+    const sk_v4 x4 = (0.325)*skv_cos(q1);
+    const sk_v4 x5 = (0.275)*x2;
+    SKV_STORE(J, 24, 0, -x0*x4 - x1 + (0.325)*x2*x3);
+    SKV_STORE(J, 24, 1, -x1);
+    J[2] = J[26] = J[50] = J[74] = 0.0;
+    J[3] = J[27] = J[51] = J[75] = 0.0;
+    SKV_STORE(J, 24, 4, -0.325*x0*x3 - x2*x4 - x5);
+    SKV_STORE(J, 24, 5, -x5);
+    J[6] = J[30] = J[54] = J[78] = 0.0;
+    J[7] = J[31] = J[55] = J[79] = 0.0;
+    J[8] = J[32] = J[56] = J[80] = 0.0;
+    J[9] = J[33] = J[57] = J[81] = 0.0;
+    J[10] = J[34] = J[58] = J[82] = 1.0;
+    J[11] = J[35] = J[59] = J[83] = 0.0;
+    J[12] = J[36] = J[60] = J[84] = 0.0;
+    J[13] = J[37] = J[61] = J[85] = 0.0;
+    J[14] = J[38] = J[62] = J[86] = 0.0;
+    J[15] = J[39] = J[63] = J[87] = 0.0;
+    J[16] = J[40] = J[64] = J[88] = 0.0;
+    J[17] = J[41] = J[65] = J[89] = 0.0;
+    J[18] = J[42] = J[66] = J[90] = 0.0;
+    J[19] = J[43] = J[67] = J[91] = 0.0;
+    J[20] = J[44] = J[68] = J[92] = -1.0;
+    J[21] = J[45] = J[69] = J[93] = -1.0;
+    J[22] = J[46] = J[70] = J[94] = 0.0;
+    J[23] = J[47] = J[71] = J[95] = 1.0;
+}
+#endif
+
+
 void symkin_cobra600_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacobe_x4_(q + i * 4, J + i * 24);
+#endif
+    for (; i < N; ++i)
         jacobe_(q + i * 4, J + i * 24);
 }
 
@@ -383,15 +735,15 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = (0.275)*cos(x0);
+    const double x1 = (0.275)*sk_cos(x0);
     const double x2 = -x1;
-    const double x3 = (0.275)*sin(x0);
+    const double x3 = (0.275)*sk_sin(x0);
     const double x4 = -x3;
-    H[0] = -x1 - 0.325*cos(q0);
+    H[0] = -x1 - 0.325*sk_cos(q0);
     H[1] = x2;
     H[2] = 0.0;
     H[3] = 0.0;
-    H[4] = -x3 - 0.325*sin(q0);
+    H[4] = -x3 - 0.325*sk_sin(q0);
     H[5] = x4;
     H[6] = 0.0;
     H[7] = 0.0;
@@ -490,9 +842,126 @@ void symkin_cobra600_hessian0(const double *q, double *H)
     hessian0_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[4], q[8], q[12]};
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = (0.275)*skv_cos(x0);
+    const sk_v4 x2 = -x1;
+    const sk_v4 x3 = (0.275)*skv_sin(x0);
+    const sk_v4 x4 = -x3;
+    SKV_STORE(H, 96, 0, -x1 - 0.325*skv_cos(q0));
+    SKV_STORE(H, 96, 1, x2);
+    H[2] = H[98] = H[194] = H[290] = 0.0;
+    H[3] = H[99] = H[195] = H[291] = 0.0;
+    SKV_STORE(H, 96, 4, -x3 - 0.325*skv_sin(q0));
+    SKV_STORE(H, 96, 5, x4);
+    H[6] = H[102] = H[198] = H[294] = 0.0;
+    H[7] = H[103] = H[199] = H[295] = 0.0;
+    H[8] = H[104] = H[200] = H[296] = 0.0;
+    H[9] = H[105] = H[201] = H[297] = 0.0;
+    H[10] = H[106] = H[202] = H[298] = 0.0;
+    H[11] = H[107] = H[203] = H[299] = 0.0;
+    H[12] = H[108] = H[204] = H[300] = 0.0;
+    H[13] = H[109] = H[205] = H[301] = 0.0;
+    H[14] = H[110] = H[206] = H[302] = 0.0;
+    H[15] = H[111] = H[207] = H[303] = 0.0;
+    H[16] = H[112] = H[208] = H[304] = 0.0;
+    H[17] = H[113] = H[209] = H[305] = 0.0;
+    H[18] = H[114] = H[210] = H[306] = 0.0;
+    H[19] = H[115] = H[211] = H[307] = 0.0;
+    H[20] = H[116] = H[212] = H[308] = 0.0;
+    H[21] = H[117] = H[213] = H[309] = 0.0;
+    H[22] = H[118] = H[214] = H[310] = 0.0;
+    H[23] = H[119] = H[215] = H[311] = 0.0;
+    SKV_STORE(H, 96, 24, x2);
+    SKV_STORE(H, 96, 25, x2);
+    H[26] = H[122] = H[218] = H[314] = 0.0;
+    H[27] = H[123] = H[219] = H[315] = 0.0;
+    SKV_STORE(H, 96, 28, x4);
+    SKV_STORE(H, 96, 29, x4);
+    H[30] = H[126] = H[222] = H[318] = 0.0;
+    H[31] = H[127] = H[223] = H[319] = 0.0;
+    H[32] = H[128] = H[224] = H[320] = 0.0;
+    H[33] = H[129] = H[225] = H[321] = 0.0;
+    H[34] = H[130] = H[226] = H[322] = 0.0;
+    H[35] = H[131] = H[227] = H[323] = 0.0;
+    H[36] = H[132] = H[228] = H[324] = 0.0;
+    H[37] = H[133] = H[229] = H[325] = 0.0;
+    H[38] = H[134] = H[230] = H[326] = 0.0;
+    H[39] = H[135] = H[231] = H[327] = 0.0;
+    H[40] = H[136] = H[232] = H[328] = 0.0;
+    H[41] = H[137] = H[233] = H[329] = 0.0;
+    H[42] = H[138] = H[234] = H[330] = 0.0;
+    H[43] = H[139] = H[235] = H[331] = 0.0;
+    H[44] = H[140] = H[236] = H[332] = 0.0;
+    H[45] = H[141] = H[237] = H[333] = 0.0;
+    H[46] = H[142] = H[238] = H[334] = 0.0;
+    H[47] = H[143] = H[239] = H[335] = 0.0;
+    H[48] = H[144] = H[240] = H[336] = 0.0;
+    H[49] = H[145] = H[241] = H[337] = 0.0;
+    H[50] = H[146] = H[242] = H[338] = 0.0;
+    H[51] = H[147] = H[243] = H[339] = 0.0;
+    H[52] = H[148] = H[244] = H[340] = 0.0;
+    H[53] = H[149] = H[245] = H[341] = 0.0;
+    H[54] = H[150] = H[246] = H[342] = 0.0;
+    H[55] = H[151] = H[247] = H[343] = 0.0;
+    H[56] = H[152] = H[248] = H[344] = 0.0;
+    H[57] = H[153] = H[249] = H[345] = 0.0;
+    H[58] = H[154] = H[250] = H[346] = 0.0;
+    H[59] = H[155] = H[251] = H[347] = 0.0;
+    H[60] = H[156] = H[252] = H[348] = 0.0;
+    H[61] = H[157] = H[253] = H[349] = 0.0;
+    H[62] = H[158] = H[254] = H[350] = 0.0;
+    H[63] = H[159] = H[255] = H[351] = 0.0;
+    H[64] = H[160] = H[256] = H[352] = 0.0;
+    H[65] = H[161] = H[257] = H[353] = 0.0;
+    H[66] = H[162] = H[258] = H[354] = 0.0;
+    H[67] = H[163] = H[259] = H[355] = 0.0;
+    H[68] = H[164] = H[260] = H[356] = 0.0;
+    H[69] = H[165] = H[261] = H[357] = 0.0;
+    H[70] = H[166] = H[262] = H[358] = 0.0;
+    H[71] = H[167] = H[263] = H[359] = 0.0;
+    H[72] = H[168] = H[264] = H[360] = 0.0;
+    H[73] = H[169] = H[265] = H[361] = 0.0;
+    H[74] = H[170] = H[266] = H[362] = 0.0;
+    H[75] = H[171] = H[267] = H[363] = 0.0;
+    H[76] = H[172] = H[268] = H[364] = 0.0;
+    H[77] = H[173] = H[269] = H[365] = 0.0;
+    H[78] = H[174] = H[270] = H[366] = 0.0;
+    H[79] = H[175] = H[271] = H[367] = 0.0;
+    H[80] = H[176] = H[272] = H[368] = 0.0;
+    H[81] = H[177] = H[273] = H[369] = 0.0;
+    H[82] = H[178] = H[274] = H[370] = 0.0;
+    H[83] = H[179] = H[275] = H[371] = 0.0;
+    H[84] = H[180] = H[276] = H[372] = 0.0;
+    H[85] = H[181] = H[277] = H[373] = 0.0;
+    H[86] = H[182] = H[278] = H[374] = 0.0;
+    H[87] = H[183] = H[279] = H[375] = 0.0;
+    H[88] = H[184] = H[280] = H[376] = 0.0;
+    H[89] = H[185] = H[281] = H[377] = 0.0;
+    H[90] = H[186] = H[282] = H[378] = 0.0;
+    H[91] = H[187] = H[283] = H[379] = 0.0;
+    H[92] = H[188] = H[284] = H[380] = 0.0;
+    H[93] = H[189] = H[285] = H[381] = 0.0;
+    H[94] = H[190] = H[286] = H[382] = 0.0;
+    H[95] = H[191] = H[287] = H[383] = 0.0;
+}
+#endif
+
+
 void symkin_cobra600_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessian0_x4_(q + i * 4, H + i * 96);
+#endif
+    for (; i < N; ++i)
         hessian0_(q + i * 4, H + i * 96);
 }
 
@@ -501,10 +970,10 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
 {
     const double q1 = q[1];
     const double q3 = q[3];
-    const double x0 = cos(q3);
-    const double x1 = (0.325)*cos(q1);
-    const double x2 = sin(q3);
-    const double x3 = (0.325)*sin(q1);
+    const double x0 = sk_cos(q3);
+    const double x1 = (0.325)*sk_cos(q1);
+    const double x2 = sk_sin(q3);
+    const double x3 = (0.325)*sk_sin(q1);
     const double x4 = x0*x1 + x2*x3;
     const double x5 = x1*x2;
     const double x6 = x0*x3;
@@ -613,9 +1082,130 @@ void symkin_cobra600_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 q3 = {q[3], q[7], q[11], q[15]};
+    const sk_v4 x0 = skv_cos(q3);
+    const sk_v4 x1 = (0.325)*skv_cos(q1);
+    const sk_v4 x2 = skv_sin(q3);
+    const sk_v4 x3 = (0.325)*skv_sin(q1);
+    const sk_v4 x4 = x0*x1 + x2*x3;
+    const sk_v4 x5 = x1*x2;
+    const sk_v4 x6 = x0*x3;
+    const sk_v4 x7 = (0.275)*x0;
+    const sk_v4 x8 = (0.275)*x2;
+    H[0] = H[96] = H[192] = H[288] = 0.0;
+    H[1] = H[97] = H[193] = H[289] = 0.0;
+    H[2] = H[98] = H[194] = H[290] = 0.0;
+    H[3] = H[99] = H[195] = H[291] = 0.0;
+    H[4] = H[100] = H[196] = H[292] = 0.0;
+    H[5] = H[101] = H[197] = H[293] = 0.0;
+    H[6] = H[102] = H[198] = H[294] = 0.0;
+    H[7] = H[103] = H[199] = H[295] = 0.0;
+    H[8] = H[104] = H[200] = H[296] = 0.0;
+    H[9] = H[105] = H[201] = H[297] = 0.0;
+    H[10] = H[106] = H[202] = H[298] = 0.0;
+    H[11] = H[107] = H[203] = H[299] = 0.0;
+    H[12] = H[108] = H[204] = H[300] = 0.0;
+    H[13] = H[109] = H[205] = H[301] = 0.0;
+    H[14] = H[110] = H[206] = H[302] = 0.0;
+    H[15] = H[111] = H[207] = H[303] = 0.0;
+    H[16] = H[112] = H[208] = H[304] = 0.0;
+    H[17] = H[113] = H[209] = H[305] = 0.0;
+    H[18] = H[114] = H[210] = H[306] = 0.0;
+    H[19] = H[115] = H[211] = H[307] = 0.0;
+    H[20] = H[116] = H[212] = H[308] = 0.0;
+    H[21] = H[117] = H[213] = H[309] = 0.0;
+    H[22] = H[118] = H[214] = H[310] = 0.0;
+    H[23] = H[119] = H[215] = H[311] = 0.0;
+    SKV_STORE(H, 96, 24, x4);
+    H[25] = H[121] = H[217] = H[313] = 0.0;
+    H[26] = H[122] = H[218] = H[314] = 0.0;
+    H[27] = H[123] = H[219] = H[315] = 0.0;
+    SKV_STORE(H, 96, 28, -x5 + x6);
+    H[29] = H[125] = H[221] = H[317] = 0.0;
+    H[30] = H[126] = H[222] = H[318] = 0.0;
+    H[31] = H[127] = H[223] = H[319] = 0.0;
+    H[32] = H[128] = H[224] = H[320] = 0.0;
+    H[33] = H[129] = H[225] = H[321] = 0.0;
+    H[34] = H[130] = H[226] = H[322] = 0.0;
+    H[35] = H[131] = H[227] = H[323] = 0.0;
+    H[36] = H[132] = H[228] = H[324] = 0.0;
+    H[37] = H[133] = H[229] = H[325] = 0.0;
+    H[38] = H[134] = H[230] = H[326] = 0.0;
+    H[39] = H[135] = H[231] = H[327] = 0.0;
+    H[40] = H[136] = H[232] = H[328] = 0.0;
+    H[41] = H[137] = H[233] = H[329] = 0.0;
+    H[42] = H[138] = H[234] = H[330] = 0.0;
+    H[43] = H[139] = H[235] = H[331] = 0.0;
+    H[44] = H[140] = H[236] = H[332] = 0.0;
+    H[45] = H[141] = H[237] = H[333] = 0.0;
+    H[46] = H[142] = H[238] = H[334] = 0.0;
+    H[47] = H[143] = H[239] = H[335] = 0.0;
+    H[48] = H[144] = H[240] = H[336] = 0.0;
+    H[49] = H[145] = H[241] = H[337] = 0.0;
+    H[50] = H[146] = H[242] = H[338] = 0.0;
+    H[51] = H[147] = H[243] = H[339] = 0.0;
+    H[52] = H[148] = H[244] = H[340] = 0.0;
+    H[53] = H[149] = H[245] = H[341] = 0.0;
+    H[54] = H[150] = H[246] = H[342] = 0.0;
+    H[55] = H[151] = H[247] = H[343] = 0.0;
+    H[56] = H[152] = H[248] = H[344] = 0.0;
+    H[57] = H[153] = H[249] = H[345] = 0.0;
+    H[58] = H[154] = H[250] = H[346] = 0.0;
+    H[59] = H[155] = H[251] = H[347] = 0.0;
+    H[60] = H[156] = H[252] = H[348] = 0.0;
+    H[61] = H[157] = H[253] = H[349] = 0.0;
+    H[62] = H[158] = H[254] = H[350] = 0.0;
+    H[63] = H[159] = H[255] = H[351] = 0.0;
+    H[64] = H[160] = H[256] = H[352] = 0.0;
+    H[65] = H[161] = H[257] = H[353] = 0.0;
+    H[66] = H[162] = H[258] = H[354] = 0.0;
+    H[67] = H[163] = H[259] = H[355] = 0.0;
+    H[68] = H[164] = H[260] = H[356] = 0.0;
+    H[69] = H[165] = H[261] = H[357] = 0.0;
+    H[70] = H[166] = H[262] = H[358] = 0.0;
+    H[71] = H[167] = H[263] = H[359] = 0.0;
+    SKV_STORE(H, 96, 72, -x4 - x7);
+    SKV_STORE(H, 96, 73, -x7);
+    H[74] = H[170] = H[266] = H[362] = 0.0;
+    H[75] = H[171] = H[267] = H[363] = 0.0;
+    SKV_STORE(H, 96, 76, x5 - x6 + x8);
+    SKV_STORE(H, 96, 77, x8);
+    H[78] = H[174] = H[270] = H[366] = 0.0;
+    H[79] = H[175] = H[271] = H[367] = 0.0;
+    H[80] = H[176] = H[272] = H[368] = 0.0;
+    H[81] = H[177] = H[273] = H[369] = 0.0;
+    H[82] = H[178] = H[274] = H[370] = 0.0;
+    H[83] = H[179] = H[275] = H[371] = 0.0;
+    H[84] = H[180] = H[276] = H[372] = 0.0;
+    H[85] = H[181] = H[277] = H[373] = 0.0;
+    H[86] = H[182] = H[278] = H[374] = 0.0;
+    H[87] = H[183] = H[279] = H[375] = 0.0;
+    H[88] = H[184] = H[280] = H[376] = 0.0;
+    H[89] = H[185] = H[281] = H[377] = 0.0;
+    H[90] = H[186] = H[282] = H[378] = 0.0;
+    H[91] = H[187] = H[283] = H[379] = 0.0;
+    H[92] = H[188] = H[284] = H[380] = 0.0;
+    H[93] = H[189] = H[285] = H[381] = 0.0;
+    H[94] = H[190] = H[286] = H[382] = 0.0;
+    H[95] = H[191] = H[287] = H[383] = 0.0;
+}
+#endif
+
+
 void symkin_cobra600_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessiane_x4_(q + i * 4, H + i * 96);
+#endif
+    for (; i < N; ++i)
         hessiane_(q + i * 4, H + i * 96);
 }
 
@@ -626,17 +1216,17 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q1 = q[1];
     const double q2 = q[2];
     const double q3 = q[3];
-    const double x0 = cos(q3);
+    const double x0 = sk_cos(q3);
     const double x1 = q0 + q1;
-    const double x2 = cos(x1);
-    const double x3 = sin(q3);
-    const double x4 = sin(x1);
+    const double x2 = sk_cos(x1);
+    const double x3 = sk_sin(q3);
+    const double x4 = sk_sin(x1);
     const double x5 = x0*x2 + x3*x4;
     const double x6 = x0*x4 - x2*x3;
     const double x7 = (0.275)*x2;
-    const double x8 = x7 + (0.325)*cos(q0);
+    const double x8 = x7 + (0.325)*sk_cos(q0);
     const double x9 = (0.275)*x4;
-    const double x10 = x9 + (0.325)*sin(q0);
+    const double x10 = x9 + (0.325)*sk_sin(q0);
     T[0] = x5;
     T[1] = x6;
     T[2] = 0.0;
@@ -684,9 +1274,78 @@ void symkin_cobra600_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[4], q[8], q[12]};
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 q2 = {q[2], q[6], q[10], q[14]};
+    const sk_v4 q3 = {q[3], q[7], q[11], q[15]};
+    const sk_v4 x0 = skv_cos(q3);
+    const sk_v4 x1 = q0 + q1;
+    const sk_v4 x2 = skv_cos(x1);
+    const sk_v4 x3 = skv_sin(q3);
+    const sk_v4 x4 = skv_sin(x1);
+    const sk_v4 x5 = x0*x2 + x3*x4;
+    const sk_v4 x6 = x0*x4 - x2*x3;
+    const sk_v4 x7 = (0.275)*x2;
+    const sk_v4 x8 = x7 + (0.325)*skv_cos(q0);
+    const sk_v4 x9 = (0.275)*x4;
+    const sk_v4 x10 = x9 + (0.325)*skv_sin(q0);
+    SKV_STORE(T, 16, 0, x5);
+    SKV_STORE(T, 16, 1, x6);
+    T[2] = T[18] = T[34] = T[50] = 0.0;
+    SKV_STORE(T, 16, 3, x8);
+    SKV_STORE(T, 16, 4, x6);
+    SKV_STORE(T, 16, 5, -x5);
+    T[6] = T[22] = T[38] = T[54] = 0.0;
+    SKV_STORE(T, 16, 7, x10);
+    T[8] = T[24] = T[40] = T[56] = 0.0;
+    T[9] = T[25] = T[41] = T[57] = 0.0;
+    T[10] = T[26] = T[42] = T[58] = -1.0;
+    SKV_STORE(T, 16, 11, 0.387 - q2);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+    SKV_STORE(J, 24, 0, -x10);
+    SKV_STORE(J, 24, 1, -x9);
+    J[2] = J[26] = J[50] = J[74] = 0.0;
+    J[3] = J[27] = J[51] = J[75] = 0.0;
+    SKV_STORE(J, 24, 4, x8);
+    SKV_STORE(J, 24, 5, x7);
+    J[6] = J[30] = J[54] = J[78] = 0.0;
+    J[7] = J[31] = J[55] = J[79] = 0.0;
+    J[8] = J[32] = J[56] = J[80] = 0.0;
+    J[9] = J[33] = J[57] = J[81] = 0.0;
+    J[10] = J[34] = J[58] = J[82] = -1.0;
+    J[11] = J[35] = J[59] = J[83] = 0.0;
+    J[12] = J[36] = J[60] = J[84] = 0.0;
+    J[13] = J[37] = J[61] = J[85] = 0.0;
+    J[14] = J[38] = J[62] = J[86] = 0.0;
+    J[15] = J[39] = J[63] = J[87] = 0.0;
+    J[16] = J[40] = J[64] = J[88] = 0.0;
+    J[17] = J[41] = J[65] = J[89] = 0.0;
+    J[18] = J[42] = J[66] = J[90] = 0.0;
+    J[19] = J[43] = J[67] = J[91] = 0.0;
+    J[20] = J[44] = J[68] = J[92] = 1.0;
+    J[21] = J[45] = J[69] = J[93] = 1.0;
+    J[22] = J[46] = J[70] = J[94] = 0.0;
+    J[23] = J[47] = J[71] = J[95] = -1.0;
+}
+#endif
+
+
 void symkin_cobra600_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_jacob0_x4_(q + i * 4, T + i * 16, J + i * 24);
+#endif
+    for (; i < N; ++i)
         fkine_jacob0_(q + i * 4, T + i * 16, J + i * 24);
 }
 
@@ -696,11 +1355,11 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = (0.275)*sin(x0);
-    const double x2 = -x1 - 0.325*sin(q0);
+    const double x1 = (0.275)*sk_sin(x0);
+    const double x2 = -x1 - 0.325*sk_sin(q0);
     const double x3 = -x1;
-    const double x4 = (0.275)*cos(x0);
-    const double x5 = x4 + (0.325)*cos(q0);
+    const double x4 = (0.275)*sk_cos(x0);
+    const double x5 = x4 + (0.325)*sk_cos(q0);
     const double x6 = -x4;
     J[0] = x2;
     J[1] = x3;
@@ -829,9 +1488,152 @@ void symkin_cobra600_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[4], q[8], q[12]};
+    const sk_v4 q1 = {q[1], q[5], q[9], q[13]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = (0.275)*skv_sin(x0);
+    const sk_v4 x2 = -x1 - 0.325*skv_sin(q0);
+    const sk_v4 x3 = -x1;
+    const sk_v4 x4 = (0.275)*skv_cos(x0);
+    const sk_v4 x5 = x4 + (0.325)*skv_cos(q0);
+    const sk_v4 x6 = -x4;
+    SKV_STORE(J, 24, 0, x2);
+    SKV_STORE(J, 24, 1, x3);
+    J[2] = J[26] = J[50] = J[74] = 0.0;
+    J[3] = J[27] = J[51] = J[75] = 0.0;
+    SKV_STORE(J, 24, 4, x5);
+    SKV_STORE(J, 24, 5, x4);
+    J[6] = J[30] = J[54] = J[78] = 0.0;
+    J[7] = J[31] = J[55] = J[79] = 0.0;
+    J[8] = J[32] = J[56] = J[80] = 0.0;
+    J[9] = J[33] = J[57] = J[81] = 0.0;
+    J[10] = J[34] = J[58] = J[82] = -1.0;
+    J[11] = J[35] = J[59] = J[83] = 0.0;
+    J[12] = J[36] = J[60] = J[84] = 0.0;
+    J[13] = J[37] = J[61] = J[85] = 0.0;
+    J[14] = J[38] = J[62] = J[86] = 0.0;
+    J[15] = J[39] = J[63] = J[87] = 0.0;
+    J[16] = J[40] = J[64] = J[88] = 0.0;
+    J[17] = J[41] = J[65] = J[89] = 0.0;
+    J[18] = J[42] = J[66] = J[90] = 0.0;
+    J[19] = J[43] = J[67] = J[91] = 0.0;
+    J[20] = J[44] = J[68] = J[92] = 1.0;
+    J[21] = J[45] = J[69] = J[93] = 1.0;
+    J[22] = J[46] = J[70] = J[94] = 0.0;
+    J[23] = J[47] = J[71] = J[95] = -1.0;
+    SKV_STORE(H, 96, 0, -x5);
+    SKV_STORE(H, 96, 1, x6);
+    H[2] = H[98] = H[194] = H[290] = 0.0;
+    H[3] = H[99] = H[195] = H[291] = 0.0;
+    SKV_STORE(H, 96, 4, x2);
+    SKV_STORE(H, 96, 5, x3);
+    H[6] = H[102] = H[198] = H[294] = 0.0;
+    H[7] = H[103] = H[199] = H[295] = 0.0;
+    H[8] = H[104] = H[200] = H[296] = 0.0;
+    H[9] = H[105] = H[201] = H[297] = 0.0;
+    H[10] = H[106] = H[202] = H[298] = 0.0;
+    H[11] = H[107] = H[203] = H[299] = 0.0;
+    H[12] = H[108] = H[204] = H[300] = 0.0;
+    H[13] = H[109] = H[205] = H[301] = 0.0;
+    H[14] = H[110] = H[206] = H[302] = 0.0;
+    H[15] = H[111] = H[207] = H[303] = 0.0;
+    H[16] = H[112] = H[208] = H[304] = 0.0;
+    H[17] = H[113] = H[209] = H[305] = 0.0;
+    H[18] = H[114] = H[210] = H[306] = 0.0;
+    H[19] = H[115] = H[211] = H[307] = 0.0;
+    H[20] = H[116] = H[212] = H[308] = 0.0;
+    H[21] = H[117] = H[213] = H[309] = 0.0;
+    H[22] = H[118] = H[214] = H[310] = 0.0;
+    H[23] = H[119] = H[215] = H[311] = 0.0;
+    SKV_STORE(H, 96, 24, x6);
+    SKV_STORE(H, 96, 25, x6);
+    H[26] = H[122] = H[218] = H[314] = 0.0;
+    H[27] = H[123] = H[219] = H[315] = 0.0;
+    SKV_STORE(H, 96, 28, x3);
+    SKV_STORE(H, 96, 29, x3);
+    H[30] = H[126] = H[222] = H[318] = 0.0;
+    H[31] = H[127] = H[223] = H[319] = 0.0;
+    H[32] = H[128] = H[224] = H[320] = 0.0;
+    H[33] = H[129] = H[225] = H[321] = 0.0;
+    H[34] = H[130] = H[226] = H[322] = 0.0;
+    H[35] = H[131] = H[227] = H[323] = 0.0;
+    H[36] = H[132] = H[228] = H[324] = 0.0;
+    H[37] = H[133] = H[229] = H[325] = 0.0;
+    H[38] = H[134] = H[230] = H[326] = 0.0;
+    H[39] = H[135] = H[231] = H[327] = 0.0;
+    H[40] = H[136] = H[232] = H[328] = 0.0;
+    H[41] = H[137] = H[233] = H[329] = 0.0;
+    H[42] = H[138] = H[234] = H[330] = 0.0;
+    H[43] = H[139] = H[235] = H[331] = 0.0;
+    H[44] = H[140] = H[236] = H[332] = 0.0;
+    H[45] = H[141] = H[237] = H[333] = 0.0;
+    H[46] = H[142] = H[238] = H[334] = 0.0;
+    H[47] = H[143] = H[239] = H[335] = 0.0;
+    H[48] = H[144] = H[240] = H[336] = 0.0;
+    H[49] = H[145] = H[241] = H[337] = 0.0;
+    H[50] = H[146] = H[242] = H[338] = 0.0;
+    H[51] = H[147] = H[243] = H[339] = 0.0;
+    H[52] = H[148] = H[244] = H[340] = 0.0;
+    H[53] = H[149] = H[245] = H[341] = 0.0;
+    H[54] = H[150] = H[246] = H[342] = 0.0;
+    H[55] = H[151] = H[247] = H[343] = 0.0;
+    H[56] = H[152] = H[248] = H[344] = 0.0;
+    H[57] = H[153] = H[249] = H[345] = 0.0;
+    H[58] = H[154] = H[250] = H[346] = 0.0;
+    H[59] = H[155] = H[251] = H[347] = 0.0;
+    H[60] = H[156] = H[252] = H[348] = 0.0;
+    H[61] = H[157] = H[253] = H[349] = 0.0;
+    H[62] = H[158] = H[254] = H[350] = 0.0;
+    H[63] = H[159] = H[255] = H[351] = 0.0;
+    H[64] = H[160] = H[256] = H[352] = 0.0;
+    H[65] = H[161] = H[257] = H[353] = 0.0;
+    H[66] = H[162] = H[258] = H[354] = 0.0;
+    H[67] = H[163] = H[259] = H[355] = 0.0;
+    H[68] = H[164] = H[260] = H[356] = 0.0;
+    H[69] = H[165] = H[261] = H[357] = 0.0;
+    H[70] = H[166] = H[262] = H[358] = 0.0;
+    H[71] = H[167] = H[263] = H[359] = 0.0;
+    H[72] = H[168] = H[264] = H[360] = 0.0;
+    H[73] = H[169] = H[265] = H[361] = 0.0;
+    H[74] = H[170] = H[266] = H[362] = 0.0;
+    H[75] = H[171] = H[267] = H[363] = 0.0;
+    H[76] = H[172] = H[268] = H[364] = 0.0;
+    H[77] = H[173] = H[269] = H[365] = 0.0;
+    H[78] = H[174] = H[270] = H[366] = 0.0;
+    H[79] = H[175] = H[271] = H[367] = 0.0;
+    H[80] = H[176] = H[272] = H[368] = 0.0;
+    H[81] = H[177] = H[273] = H[369] = 0.0;
+    H[82] = H[178] = H[274] = H[370] = 0.0;
+    H[83] = H[179] = H[275] = H[371] = 0.0;
+    H[84] = H[180] = H[276] = H[372] = 0.0;
+    H[85] = H[181] = H[277] = H[373] = 0.0;
+    H[86] = H[182] = H[278] = H[374] = 0.0;
+    H[87] = H[183] = H[279] = H[375] = 0.0;
+    H[88] = H[184] = H[280] = H[376] = 0.0;
+    H[89] = H[185] = H[281] = H[377] = 0.0;
+    H[90] = H[186] = H[282] = H[378] = 0.0;
+    H[91] = H[187] = H[283] = H[379] = 0.0;
+    H[92] = H[188] = H[284] = H[380] = 0.0;
+    H[93] = H[189] = H[285] = H[381] = 0.0;
+    H[94] = H[190] = H[286] = H[382] = 0.0;
+    H[95] = H[191] = H[287] = H[383] = 0.0;
+}
+#endif
+
+
 void symkin_cobra600_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_hessian0_x4_(q + i * 4, J + i * 24, H + i * 96);
+#endif
+    for (; i < N; ++i)
         jacob0_hessian0_(q + i * 4, J + i * 24, H + i * 96);
 }
 

@@ -30,6 +30,11 @@ const char *const symkin_gantry_joint_names[SYMKIN_GANTRY_N] = {
     "Z",
 };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
 #ifdef SYMKIN_USE_LIBM
 /* The C library's sin and cos (SYMKIN_USE_LIBM). */
 #define sk_sin sin
@@ -42,10 +47,11 @@ const char *const symkin_gantry_joint_names[SYMKIN_GANTRY_N] = {
  * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
- * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
- * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
- * `symkin compile --libm`) to call the C library's sin and cos instead.
+ * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
+ * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
+ * quadrant), so an angle whose sin and cos are both used is reduced once. Define
+ * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
+ * instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -53,18 +59,16 @@ const char *const symkin_gantry_joint_names[SYMKIN_GANTRY_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
-#if defined(__GNUC__) || defined(__clang__)
-#define SK_INLINE static inline __attribute__((always_inline))
-#else
-#define SK_INLINE static inline
-#endif
 
 /* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
    the second stage always runs (its rounding error is captured exactly), the third's result is
    selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
 SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
-    const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
+    /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
+       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+    const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
     double w = k * 6.07710050630396597660e-11;
     const double r = t - w;
@@ -135,6 +139,128 @@ SK_INLINE double sk_cos(double x)
 
 #endif /* SYMKIN_USE_LIBM */
 
+/*
+ * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
+ * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
+ * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
+ * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
+ * configuration per step; other compilers and C++ get it.
+ */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
+#define SYMKIN_LANES 4
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* vectors by value: every such function is inlined */
+#endif
+typedef double sk_v4 __attribute__((vector_size(32)));
+typedef long long sk_m4 __attribute__((vector_size(32)));
+#define SKV_SPLAT(x) ((sk_v4){(x), (x), (x), (x)})
+/* out[i] of four consecutive outputs of size S from the lanes of the vector v */
+#define SKV_STORE(out, S, i, v) \
+    do { \
+        const sk_v4 v_ = (v); \
+        (out)[i] = v_[0], (out)[(S) + (i)] = v_[1], (out)[2 * (S) + (i)] = v_[2], (out)[3 * (S) + (i)] = v_[3]; \
+    } while (0)
+
+#ifdef SYMKIN_USE_LIBM
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
+}
+#else
+SK_INLINE sk_v4 skv_abs_(sk_v4 x)
+{
+    return (sk_v4)((sk_m4)x & 0x7fffffffffffffffLL);
+}
+
+/* a where m is 0, b where m is all ones */
+SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
+{
+    return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
+}
+
+/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
+SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
+{
+    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const sk_v4 k = kb - 6755399441055744.0;
+    const sk_v4 t = x - k * 1.57079632673412561417e+00;
+    sk_v4 w = k * 6.07710050630396597660e-11;
+    const sk_v4 r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const sk_v4 y = r - w;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
+    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
+        sk_v4 w3 = k * 2.02226624871116645580e-21;
+        const sk_v4 r3 = r - w3;
+        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+        const sk_v4 y3 = r3 - w3;
+        *r0 = skv_where_(third, y, y3);
+        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
+    }
+    return (sk_m4)kb;
+}
+
+SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+        + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
+}
+
+SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+        + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const sk_v4 hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
+}
+
+/* sk_select_ lane by lane */
+SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
+{
+    const sk_m4 m = 0 - (k & 1);
+    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
+}
+
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) s[l] = sin(x[l]);
+    return s;
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) c[l] = cos(x[l]);
+    return c;
+}
+#endif /* SYMKIN_USE_LIBM */
+#else
+#define SYMKIN_LANES 1
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[3] = { 0, 1, 2 };
@@ -171,9 +297,42 @@ void symkin_gantry_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
+{
+    const sk_v4 q0 = {q[0], q[3], q[6], q[9]};
+    const sk_v4 q1 = {q[1], q[4], q[7], q[10]};
+    const sk_v4 q2 = {q[2], q[5], q[8], q[11]};
+    T[0] = T[16] = T[32] = T[48] = 1.0;
+    T[1] = T[17] = T[33] = T[49] = 0.0;
+    T[2] = T[18] = T[34] = T[50] = 0.0;
+    SKV_STORE(T, 16, 3, q0);
+    T[4] = T[20] = T[36] = T[52] = 0.0;
+    T[5] = T[21] = T[37] = T[53] = 1.0;
+    T[6] = T[22] = T[38] = T[54] = 0.0;
+    SKV_STORE(T, 16, 7, q1);
+    T[8] = T[24] = T[40] = T[56] = 0.0;
+    T[9] = T[25] = T[41] = T[57] = 0.0;
+    T[10] = T[26] = T[42] = T[58] = 1.0;
+    SKV_STORE(T, 16, 11, q2);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+}
+#endif
+
+
 void symkin_gantry_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_x4_(q + i * 3, T + i * 16);
+#endif
+    for (; i < N; ++i)
         fkine_(q + i * 3, T + i * 16);
 }
 
@@ -238,9 +397,74 @@ void symkin_gantry_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
+#if SYMKIN_LANES == 4
+/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
+{
+    const sk_v4 q0 = {q[0], q[3], q[6], q[9]};
+    const sk_v4 q1 = {q[1], q[4], q[7], q[10]};
+    const sk_v4 q2 = {q[2], q[5], q[8], q[11]};
+    links[0] = links[48] = links[96] = links[144] = 1.0;
+    links[1] = links[49] = links[97] = links[145] = 0.0;
+    links[2] = links[50] = links[98] = links[146] = 0.0;
+    SKV_STORE(links, 48, 3, q0);
+    links[4] = links[52] = links[100] = links[148] = 0.0;
+    links[5] = links[53] = links[101] = links[149] = 1.0;
+    links[6] = links[54] = links[102] = links[150] = 0.0;
+    links[7] = links[55] = links[103] = links[151] = 0.0;
+    links[8] = links[56] = links[104] = links[152] = 0.0;
+    links[9] = links[57] = links[105] = links[153] = 0.0;
+    links[10] = links[58] = links[106] = links[154] = 1.0;
+    links[11] = links[59] = links[107] = links[155] = 0.0;
+    links[12] = links[60] = links[108] = links[156] = 0.0;
+    links[13] = links[61] = links[109] = links[157] = 0.0;
+    links[14] = links[62] = links[110] = links[158] = 0.0;
+    links[15] = links[63] = links[111] = links[159] = 1.0;
+    links[16] = links[64] = links[112] = links[160] = 1.0;
+    links[17] = links[65] = links[113] = links[161] = 0.0;
+    links[18] = links[66] = links[114] = links[162] = 0.0;
+    SKV_STORE(links, 48, 19, q0);
+    links[20] = links[68] = links[116] = links[164] = 0.0;
+    links[21] = links[69] = links[117] = links[165] = 1.0;
+    links[22] = links[70] = links[118] = links[166] = 0.0;
+    SKV_STORE(links, 48, 23, q1);
+    links[24] = links[72] = links[120] = links[168] = 0.0;
+    links[25] = links[73] = links[121] = links[169] = 0.0;
+    links[26] = links[74] = links[122] = links[170] = 1.0;
+    links[27] = links[75] = links[123] = links[171] = 0.0;
+    links[28] = links[76] = links[124] = links[172] = 0.0;
+    links[29] = links[77] = links[125] = links[173] = 0.0;
+    links[30] = links[78] = links[126] = links[174] = 0.0;
+    links[31] = links[79] = links[127] = links[175] = 1.0;
+    links[32] = links[80] = links[128] = links[176] = 1.0;
+    links[33] = links[81] = links[129] = links[177] = 0.0;
+    links[34] = links[82] = links[130] = links[178] = 0.0;
+    SKV_STORE(links, 48, 35, q0);
+    links[36] = links[84] = links[132] = links[180] = 0.0;
+    links[37] = links[85] = links[133] = links[181] = 1.0;
+    links[38] = links[86] = links[134] = links[182] = 0.0;
+    SKV_STORE(links, 48, 39, q1);
+    links[40] = links[88] = links[136] = links[184] = 0.0;
+    links[41] = links[89] = links[137] = links[185] = 0.0;
+    links[42] = links[90] = links[138] = links[186] = 1.0;
+    SKV_STORE(links, 48, 43, q2);
+    links[44] = links[92] = links[140] = links[188] = 0.0;
+    links[45] = links[93] = links[141] = links[189] = 0.0;
+    links[46] = links[94] = links[142] = links[190] = 0.0;
+    links[47] = links[95] = links[143] = links[191] = 1.0;
+}
+#endif
+
+
 void symkin_gantry_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        link_poses_x4_(q + i * 3, links + i * 48);
+#endif
+    for (; i < N; ++i)
         link_poses_(q + i * 3, links + i * 48);
 }
 
@@ -272,9 +496,41 @@ void symkin_gantry_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    J[0] = J[18] = J[36] = J[54] = 1.0;
+    J[1] = J[19] = J[37] = J[55] = 0.0;
+    J[2] = J[20] = J[38] = J[56] = 0.0;
+    J[3] = J[21] = J[39] = J[57] = 0.0;
+    J[4] = J[22] = J[40] = J[58] = 1.0;
+    J[5] = J[23] = J[41] = J[59] = 0.0;
+    J[6] = J[24] = J[42] = J[60] = 0.0;
+    J[7] = J[25] = J[43] = J[61] = 0.0;
+    J[8] = J[26] = J[44] = J[62] = 1.0;
+    J[9] = J[27] = J[45] = J[63] = 0.0;
+    J[10] = J[28] = J[46] = J[64] = 0.0;
+    J[11] = J[29] = J[47] = J[65] = 0.0;
+    J[12] = J[30] = J[48] = J[66] = 0.0;
+    J[13] = J[31] = J[49] = J[67] = 0.0;
+    J[14] = J[32] = J[50] = J[68] = 0.0;
+    J[15] = J[33] = J[51] = J[69] = 0.0;
+    J[16] = J[34] = J[52] = J[70] = 0.0;
+    J[17] = J[35] = J[53] = J[71] = 0.0;
+}
+#endif
+
+
 void symkin_gantry_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_x4_(q + i * 3, J + i * 18);
+#endif
+    for (; i < N; ++i)
         jacob0_(q + i * 3, J + i * 18);
 }
 
@@ -306,9 +562,41 @@ void symkin_gantry_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    J[0] = J[18] = J[36] = J[54] = 1.0;
+    J[1] = J[19] = J[37] = J[55] = 0.0;
+    J[2] = J[20] = J[38] = J[56] = 0.0;
+    J[3] = J[21] = J[39] = J[57] = 0.0;
+    J[4] = J[22] = J[40] = J[58] = 1.0;
+    J[5] = J[23] = J[41] = J[59] = 0.0;
+    J[6] = J[24] = J[42] = J[60] = 0.0;
+    J[7] = J[25] = J[43] = J[61] = 0.0;
+    J[8] = J[26] = J[44] = J[62] = 1.0;
+    J[9] = J[27] = J[45] = J[63] = 0.0;
+    J[10] = J[28] = J[46] = J[64] = 0.0;
+    J[11] = J[29] = J[47] = J[65] = 0.0;
+    J[12] = J[30] = J[48] = J[66] = 0.0;
+    J[13] = J[31] = J[49] = J[67] = 0.0;
+    J[14] = J[32] = J[50] = J[68] = 0.0;
+    J[15] = J[33] = J[51] = J[69] = 0.0;
+    J[16] = J[34] = J[52] = J[70] = 0.0;
+    J[17] = J[35] = J[53] = J[71] = 0.0;
+}
+#endif
+
+
 void symkin_gantry_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacobe_x4_(q + i * 3, J + i * 18);
+#endif
+    for (; i < N; ++i)
         jacobe_(q + i * 3, J + i * 18);
 }
 
@@ -376,9 +664,77 @@ void symkin_gantry_hessian0(const double *q, double *H)
     hessian0_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    H[0] = H[54] = H[108] = H[162] = 0.0;
+    H[1] = H[55] = H[109] = H[163] = 0.0;
+    H[2] = H[56] = H[110] = H[164] = 0.0;
+    H[3] = H[57] = H[111] = H[165] = 0.0;
+    H[4] = H[58] = H[112] = H[166] = 0.0;
+    H[5] = H[59] = H[113] = H[167] = 0.0;
+    H[6] = H[60] = H[114] = H[168] = 0.0;
+    H[7] = H[61] = H[115] = H[169] = 0.0;
+    H[8] = H[62] = H[116] = H[170] = 0.0;
+    H[9] = H[63] = H[117] = H[171] = 0.0;
+    H[10] = H[64] = H[118] = H[172] = 0.0;
+    H[11] = H[65] = H[119] = H[173] = 0.0;
+    H[12] = H[66] = H[120] = H[174] = 0.0;
+    H[13] = H[67] = H[121] = H[175] = 0.0;
+    H[14] = H[68] = H[122] = H[176] = 0.0;
+    H[15] = H[69] = H[123] = H[177] = 0.0;
+    H[16] = H[70] = H[124] = H[178] = 0.0;
+    H[17] = H[71] = H[125] = H[179] = 0.0;
+    H[18] = H[72] = H[126] = H[180] = 0.0;
+    H[19] = H[73] = H[127] = H[181] = 0.0;
+    H[20] = H[74] = H[128] = H[182] = 0.0;
+    H[21] = H[75] = H[129] = H[183] = 0.0;
+    H[22] = H[76] = H[130] = H[184] = 0.0;
+    H[23] = H[77] = H[131] = H[185] = 0.0;
+    H[24] = H[78] = H[132] = H[186] = 0.0;
+    H[25] = H[79] = H[133] = H[187] = 0.0;
+    H[26] = H[80] = H[134] = H[188] = 0.0;
+    H[27] = H[81] = H[135] = H[189] = 0.0;
+    H[28] = H[82] = H[136] = H[190] = 0.0;
+    H[29] = H[83] = H[137] = H[191] = 0.0;
+    H[30] = H[84] = H[138] = H[192] = 0.0;
+    H[31] = H[85] = H[139] = H[193] = 0.0;
+    H[32] = H[86] = H[140] = H[194] = 0.0;
+    H[33] = H[87] = H[141] = H[195] = 0.0;
+    H[34] = H[88] = H[142] = H[196] = 0.0;
+    H[35] = H[89] = H[143] = H[197] = 0.0;
+    H[36] = H[90] = H[144] = H[198] = 0.0;
+    H[37] = H[91] = H[145] = H[199] = 0.0;
+    H[38] = H[92] = H[146] = H[200] = 0.0;
+    H[39] = H[93] = H[147] = H[201] = 0.0;
+    H[40] = H[94] = H[148] = H[202] = 0.0;
+    H[41] = H[95] = H[149] = H[203] = 0.0;
+    H[42] = H[96] = H[150] = H[204] = 0.0;
+    H[43] = H[97] = H[151] = H[205] = 0.0;
+    H[44] = H[98] = H[152] = H[206] = 0.0;
+    H[45] = H[99] = H[153] = H[207] = 0.0;
+    H[46] = H[100] = H[154] = H[208] = 0.0;
+    H[47] = H[101] = H[155] = H[209] = 0.0;
+    H[48] = H[102] = H[156] = H[210] = 0.0;
+    H[49] = H[103] = H[157] = H[211] = 0.0;
+    H[50] = H[104] = H[158] = H[212] = 0.0;
+    H[51] = H[105] = H[159] = H[213] = 0.0;
+    H[52] = H[106] = H[160] = H[214] = 0.0;
+    H[53] = H[107] = H[161] = H[215] = 0.0;
+}
+#endif
+
+
 void symkin_gantry_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessian0_x4_(q + i * 3, H + i * 54);
+#endif
+    for (; i < N; ++i)
         hessian0_(q + i * 3, H + i * 54);
 }
 
@@ -446,9 +802,77 @@ void symkin_gantry_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    H[0] = H[54] = H[108] = H[162] = 0.0;
+    H[1] = H[55] = H[109] = H[163] = 0.0;
+    H[2] = H[56] = H[110] = H[164] = 0.0;
+    H[3] = H[57] = H[111] = H[165] = 0.0;
+    H[4] = H[58] = H[112] = H[166] = 0.0;
+    H[5] = H[59] = H[113] = H[167] = 0.0;
+    H[6] = H[60] = H[114] = H[168] = 0.0;
+    H[7] = H[61] = H[115] = H[169] = 0.0;
+    H[8] = H[62] = H[116] = H[170] = 0.0;
+    H[9] = H[63] = H[117] = H[171] = 0.0;
+    H[10] = H[64] = H[118] = H[172] = 0.0;
+    H[11] = H[65] = H[119] = H[173] = 0.0;
+    H[12] = H[66] = H[120] = H[174] = 0.0;
+    H[13] = H[67] = H[121] = H[175] = 0.0;
+    H[14] = H[68] = H[122] = H[176] = 0.0;
+    H[15] = H[69] = H[123] = H[177] = 0.0;
+    H[16] = H[70] = H[124] = H[178] = 0.0;
+    H[17] = H[71] = H[125] = H[179] = 0.0;
+    H[18] = H[72] = H[126] = H[180] = 0.0;
+    H[19] = H[73] = H[127] = H[181] = 0.0;
+    H[20] = H[74] = H[128] = H[182] = 0.0;
+    H[21] = H[75] = H[129] = H[183] = 0.0;
+    H[22] = H[76] = H[130] = H[184] = 0.0;
+    H[23] = H[77] = H[131] = H[185] = 0.0;
+    H[24] = H[78] = H[132] = H[186] = 0.0;
+    H[25] = H[79] = H[133] = H[187] = 0.0;
+    H[26] = H[80] = H[134] = H[188] = 0.0;
+    H[27] = H[81] = H[135] = H[189] = 0.0;
+    H[28] = H[82] = H[136] = H[190] = 0.0;
+    H[29] = H[83] = H[137] = H[191] = 0.0;
+    H[30] = H[84] = H[138] = H[192] = 0.0;
+    H[31] = H[85] = H[139] = H[193] = 0.0;
+    H[32] = H[86] = H[140] = H[194] = 0.0;
+    H[33] = H[87] = H[141] = H[195] = 0.0;
+    H[34] = H[88] = H[142] = H[196] = 0.0;
+    H[35] = H[89] = H[143] = H[197] = 0.0;
+    H[36] = H[90] = H[144] = H[198] = 0.0;
+    H[37] = H[91] = H[145] = H[199] = 0.0;
+    H[38] = H[92] = H[146] = H[200] = 0.0;
+    H[39] = H[93] = H[147] = H[201] = 0.0;
+    H[40] = H[94] = H[148] = H[202] = 0.0;
+    H[41] = H[95] = H[149] = H[203] = 0.0;
+    H[42] = H[96] = H[150] = H[204] = 0.0;
+    H[43] = H[97] = H[151] = H[205] = 0.0;
+    H[44] = H[98] = H[152] = H[206] = 0.0;
+    H[45] = H[99] = H[153] = H[207] = 0.0;
+    H[46] = H[100] = H[154] = H[208] = 0.0;
+    H[47] = H[101] = H[155] = H[209] = 0.0;
+    H[48] = H[102] = H[156] = H[210] = 0.0;
+    H[49] = H[103] = H[157] = H[211] = 0.0;
+    H[50] = H[104] = H[158] = H[212] = 0.0;
+    H[51] = H[105] = H[159] = H[213] = 0.0;
+    H[52] = H[106] = H[160] = H[214] = 0.0;
+    H[53] = H[107] = H[161] = H[215] = 0.0;
+}
+#endif
+
+
 void symkin_gantry_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessiane_x4_(q + i * 3, H + i * 54);
+#endif
+    for (; i < N; ++i)
         hessiane_(q + i * 3, H + i * 54);
 }
 
@@ -499,9 +923,60 @@ void symkin_gantry_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[3], q[6], q[9]};
+    const sk_v4 q1 = {q[1], q[4], q[7], q[10]};
+    const sk_v4 q2 = {q[2], q[5], q[8], q[11]};
+    T[0] = T[16] = T[32] = T[48] = 1.0;
+    T[1] = T[17] = T[33] = T[49] = 0.0;
+    T[2] = T[18] = T[34] = T[50] = 0.0;
+    SKV_STORE(T, 16, 3, q0);
+    T[4] = T[20] = T[36] = T[52] = 0.0;
+    T[5] = T[21] = T[37] = T[53] = 1.0;
+    T[6] = T[22] = T[38] = T[54] = 0.0;
+    SKV_STORE(T, 16, 7, q1);
+    T[8] = T[24] = T[40] = T[56] = 0.0;
+    T[9] = T[25] = T[41] = T[57] = 0.0;
+    T[10] = T[26] = T[42] = T[58] = 1.0;
+    SKV_STORE(T, 16, 11, q2);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+    J[0] = J[18] = J[36] = J[54] = 1.0;
+    J[1] = J[19] = J[37] = J[55] = 0.0;
+    J[2] = J[20] = J[38] = J[56] = 0.0;
+    J[3] = J[21] = J[39] = J[57] = 0.0;
+    J[4] = J[22] = J[40] = J[58] = 1.0;
+    J[5] = J[23] = J[41] = J[59] = 0.0;
+    J[6] = J[24] = J[42] = J[60] = 0.0;
+    J[7] = J[25] = J[43] = J[61] = 0.0;
+    J[8] = J[26] = J[44] = J[62] = 1.0;
+    J[9] = J[27] = J[45] = J[63] = 0.0;
+    J[10] = J[28] = J[46] = J[64] = 0.0;
+    J[11] = J[29] = J[47] = J[65] = 0.0;
+    J[12] = J[30] = J[48] = J[66] = 0.0;
+    J[13] = J[31] = J[49] = J[67] = 0.0;
+    J[14] = J[32] = J[50] = J[68] = 0.0;
+    J[15] = J[33] = J[51] = J[69] = 0.0;
+    J[16] = J[34] = J[52] = J[70] = 0.0;
+    J[17] = J[35] = J[53] = J[71] = 0.0;
+}
+#endif
+
+
 void symkin_gantry_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_jacob0_x4_(q + i * 3, T + i * 16, J + i * 18);
+#endif
+    for (; i < N; ++i)
         fkine_jacob0_(q + i * 3, T + i * 16, J + i * 18);
 }
 
@@ -587,9 +1062,95 @@ void symkin_gantry_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
+{
+    J[0] = J[18] = J[36] = J[54] = 1.0;
+    J[1] = J[19] = J[37] = J[55] = 0.0;
+    J[2] = J[20] = J[38] = J[56] = 0.0;
+    J[3] = J[21] = J[39] = J[57] = 0.0;
+    J[4] = J[22] = J[40] = J[58] = 1.0;
+    J[5] = J[23] = J[41] = J[59] = 0.0;
+    J[6] = J[24] = J[42] = J[60] = 0.0;
+    J[7] = J[25] = J[43] = J[61] = 0.0;
+    J[8] = J[26] = J[44] = J[62] = 1.0;
+    J[9] = J[27] = J[45] = J[63] = 0.0;
+    J[10] = J[28] = J[46] = J[64] = 0.0;
+    J[11] = J[29] = J[47] = J[65] = 0.0;
+    J[12] = J[30] = J[48] = J[66] = 0.0;
+    J[13] = J[31] = J[49] = J[67] = 0.0;
+    J[14] = J[32] = J[50] = J[68] = 0.0;
+    J[15] = J[33] = J[51] = J[69] = 0.0;
+    J[16] = J[34] = J[52] = J[70] = 0.0;
+    J[17] = J[35] = J[53] = J[71] = 0.0;
+    H[0] = H[54] = H[108] = H[162] = 0.0;
+    H[1] = H[55] = H[109] = H[163] = 0.0;
+    H[2] = H[56] = H[110] = H[164] = 0.0;
+    H[3] = H[57] = H[111] = H[165] = 0.0;
+    H[4] = H[58] = H[112] = H[166] = 0.0;
+    H[5] = H[59] = H[113] = H[167] = 0.0;
+    H[6] = H[60] = H[114] = H[168] = 0.0;
+    H[7] = H[61] = H[115] = H[169] = 0.0;
+    H[8] = H[62] = H[116] = H[170] = 0.0;
+    H[9] = H[63] = H[117] = H[171] = 0.0;
+    H[10] = H[64] = H[118] = H[172] = 0.0;
+    H[11] = H[65] = H[119] = H[173] = 0.0;
+    H[12] = H[66] = H[120] = H[174] = 0.0;
+    H[13] = H[67] = H[121] = H[175] = 0.0;
+    H[14] = H[68] = H[122] = H[176] = 0.0;
+    H[15] = H[69] = H[123] = H[177] = 0.0;
+    H[16] = H[70] = H[124] = H[178] = 0.0;
+    H[17] = H[71] = H[125] = H[179] = 0.0;
+    H[18] = H[72] = H[126] = H[180] = 0.0;
+    H[19] = H[73] = H[127] = H[181] = 0.0;
+    H[20] = H[74] = H[128] = H[182] = 0.0;
+    H[21] = H[75] = H[129] = H[183] = 0.0;
+    H[22] = H[76] = H[130] = H[184] = 0.0;
+    H[23] = H[77] = H[131] = H[185] = 0.0;
+    H[24] = H[78] = H[132] = H[186] = 0.0;
+    H[25] = H[79] = H[133] = H[187] = 0.0;
+    H[26] = H[80] = H[134] = H[188] = 0.0;
+    H[27] = H[81] = H[135] = H[189] = 0.0;
+    H[28] = H[82] = H[136] = H[190] = 0.0;
+    H[29] = H[83] = H[137] = H[191] = 0.0;
+    H[30] = H[84] = H[138] = H[192] = 0.0;
+    H[31] = H[85] = H[139] = H[193] = 0.0;
+    H[32] = H[86] = H[140] = H[194] = 0.0;
+    H[33] = H[87] = H[141] = H[195] = 0.0;
+    H[34] = H[88] = H[142] = H[196] = 0.0;
+    H[35] = H[89] = H[143] = H[197] = 0.0;
+    H[36] = H[90] = H[144] = H[198] = 0.0;
+    H[37] = H[91] = H[145] = H[199] = 0.0;
+    H[38] = H[92] = H[146] = H[200] = 0.0;
+    H[39] = H[93] = H[147] = H[201] = 0.0;
+    H[40] = H[94] = H[148] = H[202] = 0.0;
+    H[41] = H[95] = H[149] = H[203] = 0.0;
+    H[42] = H[96] = H[150] = H[204] = 0.0;
+    H[43] = H[97] = H[151] = H[205] = 0.0;
+    H[44] = H[98] = H[152] = H[206] = 0.0;
+    H[45] = H[99] = H[153] = H[207] = 0.0;
+    H[46] = H[100] = H[154] = H[208] = 0.0;
+    H[47] = H[101] = H[155] = H[209] = 0.0;
+    H[48] = H[102] = H[156] = H[210] = 0.0;
+    H[49] = H[103] = H[157] = H[211] = 0.0;
+    H[50] = H[104] = H[158] = H[212] = 0.0;
+    H[51] = H[105] = H[159] = H[213] = 0.0;
+    H[52] = H[106] = H[160] = H[214] = 0.0;
+    H[53] = H[107] = H[161] = H[215] = 0.0;
+}
+#endif
+
+
 void symkin_gantry_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_hessian0_x4_(q + i * 3, J + i * 18, H + i * 54);
+#endif
+    for (; i < N; ++i)
         jacob0_hessian0_(q + i * 3, J + i * 18, H + i * 54);
 }
 

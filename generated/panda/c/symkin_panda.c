@@ -34,6 +34,11 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
     "panda_joint7",
 };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
 #ifdef SYMKIN_USE_LIBM
 /* The C library's sin and cos (SYMKIN_USE_LIBM). */
 #define sk_sin sin
@@ -46,10 +51,11 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
  * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
- * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
- * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
- * `symkin compile --libm`) to call the C library's sin and cos instead.
+ * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
+ * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
+ * quadrant), so an angle whose sin and cos are both used is reduced once. Define
+ * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
+ * instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -57,18 +63,16 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
-#if defined(__GNUC__) || defined(__clang__)
-#define SK_INLINE static inline __attribute__((always_inline))
-#else
-#define SK_INLINE static inline
-#endif
 
 /* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
    the second stage always runs (its rounding error is captured exactly), the third's result is
    selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
 SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
-    const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
+    /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
+       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+    const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
     double w = k * 6.07710050630396597660e-11;
     const double r = t - w;
@@ -139,6 +143,128 @@ SK_INLINE double sk_cos(double x)
 
 #endif /* SYMKIN_USE_LIBM */
 
+/*
+ * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
+ * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
+ * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
+ * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
+ * configuration per step; other compilers and C++ get it.
+ */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
+#define SYMKIN_LANES 4
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* vectors by value: every such function is inlined */
+#endif
+typedef double sk_v4 __attribute__((vector_size(32)));
+typedef long long sk_m4 __attribute__((vector_size(32)));
+#define SKV_SPLAT(x) ((sk_v4){(x), (x), (x), (x)})
+/* out[i] of four consecutive outputs of size S from the lanes of the vector v */
+#define SKV_STORE(out, S, i, v) \
+    do { \
+        const sk_v4 v_ = (v); \
+        (out)[i] = v_[0], (out)[(S) + (i)] = v_[1], (out)[2 * (S) + (i)] = v_[2], (out)[3 * (S) + (i)] = v_[3]; \
+    } while (0)
+
+#ifdef SYMKIN_USE_LIBM
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
+}
+#else
+SK_INLINE sk_v4 skv_abs_(sk_v4 x)
+{
+    return (sk_v4)((sk_m4)x & 0x7fffffffffffffffLL);
+}
+
+/* a where m is 0, b where m is all ones */
+SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
+{
+    return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
+}
+
+/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
+SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
+{
+    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const sk_v4 k = kb - 6755399441055744.0;
+    const sk_v4 t = x - k * 1.57079632673412561417e+00;
+    sk_v4 w = k * 6.07710050630396597660e-11;
+    const sk_v4 r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const sk_v4 y = r - w;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
+    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
+        sk_v4 w3 = k * 2.02226624871116645580e-21;
+        const sk_v4 r3 = r - w3;
+        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+        const sk_v4 y3 = r3 - w3;
+        *r0 = skv_where_(third, y, y3);
+        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
+    }
+    return (sk_m4)kb;
+}
+
+SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+        + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
+}
+
+SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+        + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const sk_v4 hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
+}
+
+/* sk_select_ lane by lane */
+SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
+{
+    const sk_m4 m = 0 - (k & 1);
+    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
+}
+
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) s[l] = sin(x[l]);
+    return s;
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) c[l] = cos(x[l]);
+    return c;
+}
+#endif /* SYMKIN_USE_LIBM */
+#else
+#define SYMKIN_LANES 1
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -166,10 +292,10 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -177,8 +303,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -188,8 +314,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -202,16 +328,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -227,8 +353,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t66 = -0.1034*t49 + t55;
     const double t67 = -0.1034*t50 + t56;
     const double t68 = -0.1034*t51 + t57;
-    const double t69 = sin(q6 + 0.7853981633974483);
-    const double t70 = -cos(q6 + 0.7853981633974483);
+    const double t69 = sk_sin(q6 + 0.7853981633974483);
+    const double t70 = -sk_cos(q6 + 0.7853981633974483);
     const double t71 = -t41*t70 + t46*t69;
     const double t72 = -t42*t70 + t47*t69;
     const double t73 = -t43*t70 + t48*t69;
@@ -258,9 +384,115 @@ void symkin_panda_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
+{
+    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = t0*t3;
+    const sk_v4 t7 = t1*t3;
+    const sk_v4 t8 = (0.316)*t6;
+    const sk_v4 t9 = (0.316)*t7;
+    const sk_v4 t10 = (0.316)*t2 + 0.333;
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t13 = -t1*t12 + t11*t4;
+    const sk_v4 t14 = t0*t12 + t11*t5;
+    const sk_v4 t15 = -t11*t3;
+    const sk_v4 t16 = -t1*t11 - t12*t4;
+    const sk_v4 t17 = t0*t11 - t12*t5;
+    const sk_v4 t18 = t12*t3;
+    const sk_v4 t19 = (0.0825)*t13 + t8;
+    const sk_v4 t20 = (0.0825)*t14 + t9;
+    const sk_v4 t21 = t10 + (0.0825)*t15;
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t24 = t13*t22 - t23*t6;
+    const sk_v4 t25 = t14*t22 - t23*t7;
+    const sk_v4 t26 = t15*t22 - t2*t23;
+    const sk_v4 t27 = t13*t23 + t22*t6;
+    const sk_v4 t28 = t14*t23 + t22*t7;
+    const sk_v4 t29 = t15*t23 + t2*t22;
+    const sk_v4 t30 = t19 - 0.0825*t24;
+    const sk_v4 t31 = t20 - 0.0825*t25;
+    const sk_v4 t32 = t21 - 0.0825*t26;
+    const sk_v4 t33 = (0.384)*t27 + t30;
+    const sk_v4 t34 = (0.384)*t28 + t31;
+    const sk_v4 t35 = (0.384)*t29 + t32;
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t38 = t16*t37 + t24*t36;
+    const sk_v4 t39 = t17*t37 + t25*t36;
+    const sk_v4 t40 = t18*t37 + t26*t36;
+    const sk_v4 t41 = t16*t36 - t24*t37;
+    const sk_v4 t42 = t17*t36 - t25*t37;
+    const sk_v4 t43 = t18*t36 - t26*t37;
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t46 = -t27*t45 + t38*t44;
+    const sk_v4 t47 = -t28*t45 + t39*t44;
+    const sk_v4 t48 = -t29*t45 + t40*t44;
+    const sk_v4 t49 = t27*t44 + t38*t45;
+    const sk_v4 t50 = t28*t44 + t39*t45;
+    const sk_v4 t51 = t29*t44 + t40*t45;
+    const sk_v4 t52 = t33 + (0.088)*t46;
+    const sk_v4 t53 = t34 + (0.088)*t47;
+    const sk_v4 t54 = t35 + (0.088)*t48;
+    const sk_v4 t55 = -0.107*t49 + t52;
+    const sk_v4 t56 = -0.107*t50 + t53;
+    const sk_v4 t57 = -0.107*t51 + t54;
+    const sk_v4 t66 = -0.1034*t49 + t55;
+    const sk_v4 t67 = -0.1034*t50 + t56;
+    const sk_v4 t68 = -0.1034*t51 + t57;
+    const sk_v4 t69 = skv_sin(q6 + 0.7853981633974483);
+    const sk_v4 t70 = -skv_cos(q6 + 0.7853981633974483);
+    const sk_v4 t71 = -t41*t70 + t46*t69;
+    const sk_v4 t72 = -t42*t70 + t47*t69;
+    const sk_v4 t73 = -t43*t70 + t48*t69;
+    const sk_v4 t74 = -t41*t69 - t46*t70;
+    const sk_v4 t75 = -t42*t69 - t47*t70;
+    const sk_v4 t76 = -t43*t69 - t48*t70;
+    SKV_STORE(T, 16, 0, t71);
+    SKV_STORE(T, 16, 1, t74);
+    SKV_STORE(T, 16, 2, -t49);
+    SKV_STORE(T, 16, 3, t66);
+    SKV_STORE(T, 16, 4, t72);
+    SKV_STORE(T, 16, 5, t75);
+    SKV_STORE(T, 16, 6, -t50);
+    SKV_STORE(T, 16, 7, t67);
+    SKV_STORE(T, 16, 8, t73);
+    SKV_STORE(T, 16, 9, t76);
+    SKV_STORE(T, 16, 10, -t51);
+    SKV_STORE(T, 16, 11, t68);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+}
+#endif
+
+
 void symkin_panda_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_x4_(q + i * 7, T + i * 16);
+#endif
+    for (; i < N; ++i)
         fkine_(q + i * 7, T + i * 16);
 }
 
@@ -274,10 +506,10 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -285,8 +517,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -296,8 +528,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -310,16 +542,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -332,8 +564,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t55 = -0.107*t49 + t52;
     const double t56 = -0.107*t50 + t53;
     const double t57 = -0.107*t51 + t54;
-    const double t58 = cos(q6);
-    const double t59 = sin(q6);
+    const double t58 = sk_cos(q6);
+    const double t59 = sk_sin(q6);
     const double t60 = -t41*t59 + t46*t58;
     const double t61 = -t42*t59 + t47*t58;
     const double t62 = -t43*t59 + t48*t58;
@@ -459,9 +691,208 @@ void symkin_panda_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
+#if SYMKIN_LANES == 4
+/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
+{
+    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = t0*t3;
+    const sk_v4 t7 = t1*t3;
+    const sk_v4 t8 = (0.316)*t6;
+    const sk_v4 t9 = (0.316)*t7;
+    const sk_v4 t10 = (0.316)*t2 + 0.333;
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t13 = -t1*t12 + t11*t4;
+    const sk_v4 t14 = t0*t12 + t11*t5;
+    const sk_v4 t15 = -t11*t3;
+    const sk_v4 t16 = -t1*t11 - t12*t4;
+    const sk_v4 t17 = t0*t11 - t12*t5;
+    const sk_v4 t18 = t12*t3;
+    const sk_v4 t19 = (0.0825)*t13 + t8;
+    const sk_v4 t20 = (0.0825)*t14 + t9;
+    const sk_v4 t21 = t10 + (0.0825)*t15;
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t24 = t13*t22 - t23*t6;
+    const sk_v4 t25 = t14*t22 - t23*t7;
+    const sk_v4 t26 = t15*t22 - t2*t23;
+    const sk_v4 t27 = t13*t23 + t22*t6;
+    const sk_v4 t28 = t14*t23 + t22*t7;
+    const sk_v4 t29 = t15*t23 + t2*t22;
+    const sk_v4 t30 = t19 - 0.0825*t24;
+    const sk_v4 t31 = t20 - 0.0825*t25;
+    const sk_v4 t32 = t21 - 0.0825*t26;
+    const sk_v4 t33 = (0.384)*t27 + t30;
+    const sk_v4 t34 = (0.384)*t28 + t31;
+    const sk_v4 t35 = (0.384)*t29 + t32;
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t38 = t16*t37 + t24*t36;
+    const sk_v4 t39 = t17*t37 + t25*t36;
+    const sk_v4 t40 = t18*t37 + t26*t36;
+    const sk_v4 t41 = t16*t36 - t24*t37;
+    const sk_v4 t42 = t17*t36 - t25*t37;
+    const sk_v4 t43 = t18*t36 - t26*t37;
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t46 = -t27*t45 + t38*t44;
+    const sk_v4 t47 = -t28*t45 + t39*t44;
+    const sk_v4 t48 = -t29*t45 + t40*t44;
+    const sk_v4 t49 = t27*t44 + t38*t45;
+    const sk_v4 t50 = t28*t44 + t39*t45;
+    const sk_v4 t51 = t29*t44 + t40*t45;
+    const sk_v4 t52 = t33 + (0.088)*t46;
+    const sk_v4 t53 = t34 + (0.088)*t47;
+    const sk_v4 t54 = t35 + (0.088)*t48;
+    const sk_v4 t55 = -0.107*t49 + t52;
+    const sk_v4 t56 = -0.107*t50 + t53;
+    const sk_v4 t57 = -0.107*t51 + t54;
+    const sk_v4 t58 = skv_cos(q6);
+    const sk_v4 t59 = skv_sin(q6);
+    const sk_v4 t60 = -t41*t59 + t46*t58;
+    const sk_v4 t61 = -t42*t59 + t47*t58;
+    const sk_v4 t62 = -t43*t59 + t48*t58;
+    const sk_v4 t63 = -t41*t58 - t46*t59;
+    const sk_v4 t64 = -t42*t58 - t47*t59;
+    const sk_v4 t65 = -t43*t58 - t48*t59;
+    SKV_STORE(links, 112, 0, t0);
+    SKV_STORE(links, 112, 1, -t1);
+    links[2] = links[114] = links[226] = links[338] = 0.0;
+    links[3] = links[115] = links[227] = links[339] = 0.0;
+    SKV_STORE(links, 112, 4, t1);
+    SKV_STORE(links, 112, 5, t0);
+    links[6] = links[118] = links[230] = links[342] = 0.0;
+    links[7] = links[119] = links[231] = links[343] = 0.0;
+    links[8] = links[120] = links[232] = links[344] = 0.0;
+    links[9] = links[121] = links[233] = links[345] = 0.0;
+    links[10] = links[122] = links[234] = links[346] = 1.0;
+    links[11] = links[123] = links[235] = links[347] = 0.333;
+    links[12] = links[124] = links[236] = links[348] = 0.0;
+    links[13] = links[125] = links[237] = links[349] = 0.0;
+    links[14] = links[126] = links[238] = links[350] = 0.0;
+    links[15] = links[127] = links[239] = links[351] = 1.0;
+    SKV_STORE(links, 112, 16, t4);
+    SKV_STORE(links, 112, 17, -t1);
+    SKV_STORE(links, 112, 18, t6);
+    links[19] = links[131] = links[243] = links[355] = 0.0;
+    SKV_STORE(links, 112, 20, t5);
+    SKV_STORE(links, 112, 21, t0);
+    SKV_STORE(links, 112, 22, t7);
+    links[23] = links[135] = links[247] = links[359] = 0.0;
+    SKV_STORE(links, 112, 24, -t3);
+    links[25] = links[137] = links[249] = links[361] = 0.0;
+    SKV_STORE(links, 112, 26, t2);
+    links[27] = links[139] = links[251] = links[363] = 0.333;
+    links[28] = links[140] = links[252] = links[364] = 0.0;
+    links[29] = links[141] = links[253] = links[365] = 0.0;
+    links[30] = links[142] = links[254] = links[366] = 0.0;
+    links[31] = links[143] = links[255] = links[367] = 1.0;
+    SKV_STORE(links, 112, 32, t13);
+    SKV_STORE(links, 112, 33, t16);
+    SKV_STORE(links, 112, 34, t6);
+    SKV_STORE(links, 112, 35, t8);
+    SKV_STORE(links, 112, 36, t14);
+    SKV_STORE(links, 112, 37, t17);
+    SKV_STORE(links, 112, 38, t7);
+    SKV_STORE(links, 112, 39, t9);
+    SKV_STORE(links, 112, 40, t15);
+    SKV_STORE(links, 112, 41, t18);
+    SKV_STORE(links, 112, 42, t2);
+    SKV_STORE(links, 112, 43, t10);
+    links[44] = links[156] = links[268] = links[380] = 0.0;
+    links[45] = links[157] = links[269] = links[381] = 0.0;
+    links[46] = links[158] = links[270] = links[382] = 0.0;
+    links[47] = links[159] = links[271] = links[383] = 1.0;
+    SKV_STORE(links, 112, 48, t24);
+    SKV_STORE(links, 112, 49, t16);
+    SKV_STORE(links, 112, 50, t27);
+    SKV_STORE(links, 112, 51, t19);
+    SKV_STORE(links, 112, 52, t25);
+    SKV_STORE(links, 112, 53, t17);
+    SKV_STORE(links, 112, 54, t28);
+    SKV_STORE(links, 112, 55, t20);
+    SKV_STORE(links, 112, 56, t26);
+    SKV_STORE(links, 112, 57, t18);
+    SKV_STORE(links, 112, 58, t29);
+    SKV_STORE(links, 112, 59, t21);
+    links[60] = links[172] = links[284] = links[396] = 0.0;
+    links[61] = links[173] = links[285] = links[397] = 0.0;
+    links[62] = links[174] = links[286] = links[398] = 0.0;
+    links[63] = links[175] = links[287] = links[399] = 1.0;
+    SKV_STORE(links, 112, 64, t38);
+    SKV_STORE(links, 112, 65, t41);
+    SKV_STORE(links, 112, 66, t27);
+    SKV_STORE(links, 112, 67, t33);
+    SKV_STORE(links, 112, 68, t39);
+    SKV_STORE(links, 112, 69, t42);
+    SKV_STORE(links, 112, 70, t28);
+    SKV_STORE(links, 112, 71, t34);
+    SKV_STORE(links, 112, 72, t40);
+    SKV_STORE(links, 112, 73, t43);
+    SKV_STORE(links, 112, 74, t29);
+    SKV_STORE(links, 112, 75, t35);
+    links[76] = links[188] = links[300] = links[412] = 0.0;
+    links[77] = links[189] = links[301] = links[413] = 0.0;
+    links[78] = links[190] = links[302] = links[414] = 0.0;
+    links[79] = links[191] = links[303] = links[415] = 1.0;
+    SKV_STORE(links, 112, 80, t46);
+    SKV_STORE(links, 112, 81, t41);
+    SKV_STORE(links, 112, 82, t49);
+    SKV_STORE(links, 112, 83, t33);
+    SKV_STORE(links, 112, 84, t47);
+    SKV_STORE(links, 112, 85, t42);
+    SKV_STORE(links, 112, 86, t50);
+    SKV_STORE(links, 112, 87, t34);
+    SKV_STORE(links, 112, 88, t48);
+    SKV_STORE(links, 112, 89, t43);
+    SKV_STORE(links, 112, 90, t51);
+    SKV_STORE(links, 112, 91, t35);
+    links[92] = links[204] = links[316] = links[428] = 0.0;
+    links[93] = links[205] = links[317] = links[429] = 0.0;
+    links[94] = links[206] = links[318] = links[430] = 0.0;
+    links[95] = links[207] = links[319] = links[431] = 1.0;
+    SKV_STORE(links, 112, 96, t60);
+    SKV_STORE(links, 112, 97, t63);
+    SKV_STORE(links, 112, 98, -t49);
+    SKV_STORE(links, 112, 99, t55);
+    SKV_STORE(links, 112, 100, t61);
+    SKV_STORE(links, 112, 101, t64);
+    SKV_STORE(links, 112, 102, -t50);
+    SKV_STORE(links, 112, 103, t56);
+    SKV_STORE(links, 112, 104, t62);
+    SKV_STORE(links, 112, 105, t65);
+    SKV_STORE(links, 112, 106, -t51);
+    SKV_STORE(links, 112, 107, t57);
+    links[108] = links[220] = links[332] = links[444] = 0.0;
+    links[109] = links[221] = links[333] = links[445] = 0.0;
+    links[110] = links[222] = links[334] = links[446] = 0.0;
+    links[111] = links[223] = links[335] = links[447] = 1.0;
+}
+#endif
+
+
 void symkin_panda_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        link_poses_x4_(q + i * 7, links + i * 112);
+#endif
+    for (; i < N; ++i)
         link_poses_(q + i * 7, links + i * 112);
 }
 
@@ -474,10 +905,10 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -485,8 +916,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -496,8 +927,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -510,16 +941,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -615,9 +1046,163 @@ void symkin_panda_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = t0*t3;
+    const sk_v4 t7 = t1*t3;
+    const sk_v4 t8 = (0.316)*t6;
+    const sk_v4 t9 = (0.316)*t7;
+    const sk_v4 t10 = (0.316)*t2 + 0.333;
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t13 = -t1*t12 + t11*t4;
+    const sk_v4 t14 = t0*t12 + t11*t5;
+    const sk_v4 t15 = -t11*t3;
+    const sk_v4 t16 = -t1*t11 - t12*t4;
+    const sk_v4 t17 = t0*t11 - t12*t5;
+    const sk_v4 t18 = t12*t3;
+    const sk_v4 t19 = (0.0825)*t13 + t8;
+    const sk_v4 t20 = (0.0825)*t14 + t9;
+    const sk_v4 t21 = t10 + (0.0825)*t15;
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t24 = t13*t22 - t23*t6;
+    const sk_v4 t25 = t14*t22 - t23*t7;
+    const sk_v4 t26 = t15*t22 - t2*t23;
+    const sk_v4 t27 = t13*t23 + t22*t6;
+    const sk_v4 t28 = t14*t23 + t22*t7;
+    const sk_v4 t29 = t15*t23 + t2*t22;
+    const sk_v4 t30 = t19 - 0.0825*t24;
+    const sk_v4 t31 = t20 - 0.0825*t25;
+    const sk_v4 t32 = t21 - 0.0825*t26;
+    const sk_v4 t33 = (0.384)*t27 + t30;
+    const sk_v4 t34 = (0.384)*t28 + t31;
+    const sk_v4 t35 = (0.384)*t29 + t32;
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t38 = t16*t37 + t24*t36;
+    const sk_v4 t39 = t17*t37 + t25*t36;
+    const sk_v4 t40 = t18*t37 + t26*t36;
+    const sk_v4 t41 = t16*t36 - t24*t37;
+    const sk_v4 t42 = t17*t36 - t25*t37;
+    const sk_v4 t43 = t18*t36 - t26*t37;
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t46 = -t27*t45 + t38*t44;
+    const sk_v4 t47 = -t28*t45 + t39*t44;
+    const sk_v4 t48 = -t29*t45 + t40*t44;
+    const sk_v4 t49 = t27*t44 + t38*t45;
+    const sk_v4 t50 = t28*t44 + t39*t45;
+    const sk_v4 t51 = t29*t44 + t40*t45;
+    const sk_v4 t52 = t33 + (0.088)*t46;
+    const sk_v4 t53 = t34 + (0.088)*t47;
+    const sk_v4 t54 = t35 + (0.088)*t48;
+    const sk_v4 t55 = -0.107*t49 + t52;
+    const sk_v4 t56 = -0.107*t50 + t53;
+    const sk_v4 t57 = -0.107*t51 + t54;
+    const sk_v4 t66 = -0.1034*t49 + t55;
+    const sk_v4 t67 = -0.1034*t50 + t56;
+    const sk_v4 t68 = -0.1034*t51 + t57;
+    const sk_v4 t77 = t68 - 0.333;
+    const sk_v4 t78 = t0*t77;
+    const sk_v4 t79 = t1*t77;
+    const sk_v4 t80 = -t0*t66 - t1*t67;
+    const sk_v4 t81 = t66 - t8;
+    const sk_v4 t82 = t67 - t9;
+    const sk_v4 t83 = -t10 + t68;
+    const sk_v4 t84 = -t2*t82 + t7*t83;
+    const sk_v4 t85 = t2*t81 - t6*t83;
+    const sk_v4 t86 = t6*t82 - t7*t81;
+    const sk_v4 t87 = -t19 + t66;
+    const sk_v4 t88 = -t20 + t67;
+    const sk_v4 t89 = -t21 + t68;
+    const sk_v4 t90 = -t17*t89 + t18*t88;
+    const sk_v4 t91 = t16*t89 - t18*t87;
+    const sk_v4 t92 = -t16*t88 + t17*t87;
+    const sk_v4 t93 = -t33 + t66;
+    const sk_v4 t94 = -t34 + t67;
+    const sk_v4 t95 = -t35 + t68;
+    const sk_v4 t96 = t28*t95 - t29*t94;
+    const sk_v4 t97 = -t27*t95 + t29*t93;
+    const sk_v4 t98 = t27*t94 - t28*t93;
+    const sk_v4 t99 = -t42*t95 + t43*t94;
+    const sk_v4 t100 = t41*t95 - t43*t93;
+    const sk_v4 t101 = -t41*t94 + t42*t93;
+    const sk_v4 t102 = -t55 + t66;
+    const sk_v4 t103 = -t56 + t67;
+    const sk_v4 t104 = -t57 + t68;
+    const sk_v4 t105 = t103*t51 - t104*t50;
+    const sk_v4 t106 = -t102*t51 + t104*t49;
+    const sk_v4 t107 = t102*t50 - t103*t49;
+    SKV_STORE(J, 42, 0, -t67);
+    SKV_STORE(J, 42, 1, t78);
+    SKV_STORE(J, 42, 2, t84);
+    SKV_STORE(J, 42, 3, t90);
+    SKV_STORE(J, 42, 4, t96);
+    SKV_STORE(J, 42, 5, t99);
+    SKV_STORE(J, 42, 6, t105);
+    SKV_STORE(J, 42, 7, t66);
+    SKV_STORE(J, 42, 8, t79);
+    SKV_STORE(J, 42, 9, t85);
+    SKV_STORE(J, 42, 10, t91);
+    SKV_STORE(J, 42, 11, t97);
+    SKV_STORE(J, 42, 12, t100);
+    SKV_STORE(J, 42, 13, t106);
+    J[14] = J[56] = J[98] = J[140] = 0.0;
+    SKV_STORE(J, 42, 15, t80);
+    SKV_STORE(J, 42, 16, t86);
+    SKV_STORE(J, 42, 17, t92);
+    SKV_STORE(J, 42, 18, t98);
+    SKV_STORE(J, 42, 19, t101);
+    SKV_STORE(J, 42, 20, t107);
+    J[21] = J[63] = J[105] = J[147] = 0.0;
+    SKV_STORE(J, 42, 22, -t1);
+    SKV_STORE(J, 42, 23, t6);
+    SKV_STORE(J, 42, 24, -t16);
+    SKV_STORE(J, 42, 25, t27);
+    SKV_STORE(J, 42, 26, -t41);
+    SKV_STORE(J, 42, 27, -t49);
+    J[28] = J[70] = J[112] = J[154] = 0.0;
+    SKV_STORE(J, 42, 29, t0);
+    SKV_STORE(J, 42, 30, t7);
+    SKV_STORE(J, 42, 31, -t17);
+    SKV_STORE(J, 42, 32, t28);
+    SKV_STORE(J, 42, 33, -t42);
+    SKV_STORE(J, 42, 34, -t50);
+    J[35] = J[77] = J[119] = J[161] = 1.0;
+    J[36] = J[78] = J[120] = J[162] = 0.0;
+    SKV_STORE(J, 42, 37, t2);
+    SKV_STORE(J, 42, 38, -t18);
+    SKV_STORE(J, 42, 39, t29);
+    SKV_STORE(J, 42, 40, -t43);
+    SKV_STORE(J, 42, 41, -t51);
+}
+#endif
+
+
 void symkin_panda_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_x4_(q + i * 7, J + i * 42);
+#endif
+    for (; i < N; ++i)
         jacob0_(q + i * 7, J + i * 42);
 }
 
@@ -630,18 +1215,18 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
-    const double t69 = sin(q6 + 0.7853981633974483);
-    const double t70 = -cos(q6 + 0.7853981633974483);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
+    const double t69 = sk_sin(q6 + 0.7853981633974483);
+    const double t70 = -sk_cos(q6 + 0.7853981633974483);
     const double t108 = -0.088*t69;
     const double t109 = (0.088)*t70;
     const double t110 = -t45*t69;
@@ -748,9 +1333,140 @@ void symkin_panda_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t69 = skv_sin(q6 + 0.7853981633974483);
+    const sk_v4 t70 = -skv_cos(q6 + 0.7853981633974483);
+    const sk_v4 t108 = -0.088*t69;
+    const sk_v4 t109 = (0.088)*t70;
+    const sk_v4 t110 = -t45*t69;
+    const sk_v4 t111 = t45*t70;
+    const sk_v4 t112 = t44*t69;
+    const sk_v4 t113 = -t44*t70;
+    const sk_v4 t114 = t108 - 0.384*t110;
+    const sk_v4 t115 = t109 - 0.384*t111;
+    const sk_v4 t116 = (0.384)*t44 - 0.2104;
+    const sk_v4 t117 = t112*t36 + t37*t70;
+    const sk_v4 t118 = t113*t36 + t37*t69;
+    const sk_v4 t119 = -t36*t45;
+    const sk_v4 t120 = t114 + (0.0825)*t117;
+    const sk_v4 t121 = t115 + (0.0825)*t118;
+    const sk_v4 t122 = t116 + (0.0825)*t119;
+    const sk_v4 t123 = t112*t37 - t36*t70;
+    const sk_v4 t124 = t113*t37 - t36*t69;
+    const sk_v4 t125 = -t37*t45;
+    const sk_v4 t126 = t110*t23 + t117*t22;
+    const sk_v4 t127 = t111*t23 + t118*t22;
+    const sk_v4 t128 = t119*t22 - t23*t44;
+    const sk_v4 t129 = t120 - 0.0825*t126;
+    const sk_v4 t130 = t121 - 0.0825*t127;
+    const sk_v4 t131 = t122 - 0.0825*t128;
+    const sk_v4 t132 = t110*t22 - t117*t23;
+    const sk_v4 t133 = t111*t22 - t118*t23;
+    const sk_v4 t134 = -t119*t23 - t22*t44;
+    const sk_v4 t135 = t129 - 0.316*t132;
+    const sk_v4 t136 = t130 - 0.316*t133;
+    const sk_v4 t137 = t131 - 0.316*t134;
+    const sk_v4 t138 = t11*t123 + t12*t126;
+    const sk_v4 t139 = t11*t124 + t12*t127;
+    const sk_v4 t140 = t11*t125 + t12*t128;
+    const sk_v4 t141 = t11*t126 - t12*t123;
+    const sk_v4 t142 = t11*t127 - t12*t124;
+    const sk_v4 t143 = t11*t128 - t12*t125;
+    const sk_v4 t144 = t132*t2 - t141*t3;
+    const sk_v4 t145 = t133*t2 - t142*t3;
+    const sk_v4 t146 = t134*t2 - t143*t3;
+    const sk_v4 t153 = (0.2104)*t69;
+    const sk_v4 t154 = -0.2104*t70;
+    const sk_v4 t155 = t108*t69 - t109*t70;
+    const sk_v4 t156 = -t109*t44 + (0.2104)*t111;
+    const sk_v4 t157 = t108*t44 - 0.2104*t110;
+    const sk_v4 t158 = t108*t111 - t109*t110;
+    const sk_v4 t159 = -t121*t125 + t122*t124;
+    const sk_v4 t160 = t120*t125 - t122*t123;
+    const sk_v4 t161 = -t120*t124 + t121*t123;
+    const sk_v4 t162 = t130*t134 - t131*t133;
+    const sk_v4 t163 = -t129*t134 + t131*t132;
+    const sk_v4 t164 = t129*t133 - t130*t132;
+    const sk_v4 t165 = t136*t140 - t137*t139;
+    const sk_v4 t166 = -t135*t140 + t137*t138;
+    const sk_v4 t167 = t135*t139 - t136*t138;
+    const sk_v4 t168 = t136*t146 - t137*t145;
+    const sk_v4 t169 = -t135*t146 + t137*t144;
+    const sk_v4 t170 = t135*t145 - t136*t144;
+    SKV_STORE(J, 42, 0, t168);
+    SKV_STORE(J, 42, 1, t165);
+    SKV_STORE(J, 42, 2, t162);
+    SKV_STORE(J, 42, 3, t159);
+    SKV_STORE(J, 42, 4, t156);
+    SKV_STORE(J, 42, 5, t153);
+    J[6] = J[48] = J[90] = J[132] = 0.0;
+    SKV_STORE(J, 42, 7, t169);
+    SKV_STORE(J, 42, 8, t166);
+    SKV_STORE(J, 42, 9, t163);
+    SKV_STORE(J, 42, 10, t160);
+    SKV_STORE(J, 42, 11, t157);
+    SKV_STORE(J, 42, 12, t154);
+    J[13] = J[55] = J[97] = J[139] = 0.0;
+    SKV_STORE(J, 42, 14, t170);
+    SKV_STORE(J, 42, 15, t167);
+    SKV_STORE(J, 42, 16, t164);
+    SKV_STORE(J, 42, 17, t161);
+    SKV_STORE(J, 42, 18, t158);
+    SKV_STORE(J, 42, 19, t155);
+    J[20] = J[62] = J[104] = J[146] = 0.0;
+    SKV_STORE(J, 42, 21, t144);
+    SKV_STORE(J, 42, 22, t138);
+    SKV_STORE(J, 42, 23, t132);
+    SKV_STORE(J, 42, 24, -t123);
+    SKV_STORE(J, 42, 25, t110);
+    SKV_STORE(J, 42, 26, t70);
+    J[27] = J[69] = J[111] = J[153] = 0.0;
+    SKV_STORE(J, 42, 28, t145);
+    SKV_STORE(J, 42, 29, t139);
+    SKV_STORE(J, 42, 30, t133);
+    SKV_STORE(J, 42, 31, -t124);
+    SKV_STORE(J, 42, 32, t111);
+    SKV_STORE(J, 42, 33, t69);
+    J[34] = J[76] = J[118] = J[160] = 0.0;
+    SKV_STORE(J, 42, 35, t146);
+    SKV_STORE(J, 42, 36, t140);
+    SKV_STORE(J, 42, 37, t134);
+    SKV_STORE(J, 42, 38, -t125);
+    SKV_STORE(J, 42, 39, -t44);
+    J[40] = J[82] = J[124] = J[166] = 0.0;
+    J[41] = J[83] = J[125] = J[167] = 1.0;
+}
+#endif
+
+
 void symkin_panda_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacobe_x4_(q + i * 7, J + i * 42);
+#endif
+    for (; i < N; ++i)
         jacobe_(q + i * 7, J + i * 42);
 }
 
@@ -768,7 +1484,8 @@ void symkin_panda_hessian0(const double *q, double *H)
 
 void symkin_panda_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+    for (; i < N; ++i)
         hessian0_(q + i * 7, H + i * 294);
 }
 
@@ -781,18 +1498,18 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
-    const double t69 = sin(q6 + 0.7853981633974483);
-    const double t70 = -cos(q6 + 0.7853981633974483);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
+    const double t69 = sk_sin(q6 + 0.7853981633974483);
+    const double t70 = -sk_cos(q6 + 0.7853981633974483);
     const double t108 = -0.088*t69;
     const double t109 = (0.088)*t70;
     const double t110 = -t45*t69;
@@ -1329,9 +2046,570 @@ void symkin_panda_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t69 = skv_sin(q6 + 0.7853981633974483);
+    const sk_v4 t70 = -skv_cos(q6 + 0.7853981633974483);
+    const sk_v4 t108 = -0.088*t69;
+    const sk_v4 t109 = (0.088)*t70;
+    const sk_v4 t110 = -t45*t69;
+    const sk_v4 t111 = t45*t70;
+    const sk_v4 t112 = t44*t69;
+    const sk_v4 t113 = -t44*t70;
+    const sk_v4 t114 = t108 - 0.384*t110;
+    const sk_v4 t115 = t109 - 0.384*t111;
+    const sk_v4 t116 = (0.384)*t44 - 0.2104;
+    const sk_v4 t117 = t112*t36 + t37*t70;
+    const sk_v4 t118 = t113*t36 + t37*t69;
+    const sk_v4 t119 = -t36*t45;
+    const sk_v4 t120 = t114 + (0.0825)*t117;
+    const sk_v4 t121 = t115 + (0.0825)*t118;
+    const sk_v4 t122 = t116 + (0.0825)*t119;
+    const sk_v4 t123 = t112*t37 - t36*t70;
+    const sk_v4 t124 = t113*t37 - t36*t69;
+    const sk_v4 t125 = -t37*t45;
+    const sk_v4 t126 = t110*t23 + t117*t22;
+    const sk_v4 t127 = t111*t23 + t118*t22;
+    const sk_v4 t128 = t119*t22 - t23*t44;
+    const sk_v4 t129 = t120 - 0.0825*t126;
+    const sk_v4 t130 = t121 - 0.0825*t127;
+    const sk_v4 t131 = t122 - 0.0825*t128;
+    const sk_v4 t132 = t110*t22 - t117*t23;
+    const sk_v4 t133 = t111*t22 - t118*t23;
+    const sk_v4 t134 = -t119*t23 - t22*t44;
+    const sk_v4 t135 = t129 - 0.316*t132;
+    const sk_v4 t136 = t130 - 0.316*t133;
+    const sk_v4 t137 = t131 - 0.316*t134;
+    const sk_v4 t138 = t11*t123 + t12*t126;
+    const sk_v4 t139 = t11*t124 + t12*t127;
+    const sk_v4 t140 = t11*t125 + t12*t128;
+    const sk_v4 t141 = t11*t126 - t12*t123;
+    const sk_v4 t142 = t11*t127 - t12*t124;
+    const sk_v4 t143 = t11*t128 - t12*t125;
+    const sk_v4 t144 = t132*t2 - t141*t3;
+    const sk_v4 t145 = t133*t2 - t142*t3;
+    const sk_v4 t146 = t134*t2 - t143*t3;
+    const sk_v4 t153 = (0.2104)*t69;
+    const sk_v4 t154 = -0.2104*t70;
+    const sk_v4 t155 = t108*t69 - t109*t70;
+    const sk_v4 t156 = -t109*t44 + (0.2104)*t111;
+    const sk_v4 t157 = t108*t44 - 0.2104*t110;
+    const sk_v4 t158 = t108*t111 - t109*t110;
+    const sk_v4 t159 = -t121*t125 + t122*t124;
+    const sk_v4 t160 = t120*t125 - t122*t123;
+    const sk_v4 t161 = -t120*t124 + t121*t123;
+    const sk_v4 t162 = t130*t134 - t131*t133;
+    const sk_v4 t163 = -t129*t134 + t131*t132;
+    const sk_v4 t164 = t129*t133 - t130*t132;
+    const sk_v4 t165 = t136*t140 - t137*t139;
+    const sk_v4 t166 = -t135*t140 + t137*t138;
+    const sk_v4 t167 = t135*t139 - t136*t138;
+    const sk_v4 t168 = t136*t146 - t137*t145;
+    const sk_v4 t169 = -t135*t146 + t137*t144;
+    const sk_v4 t170 = t135*t145 - t136*t144;
+    const sk_v4 t202 = t145*t167 - t146*t166;
+    const sk_v4 t203 = -t144*t167 + t146*t165;
+    const sk_v4 t204 = t144*t166 - t145*t165;
+    const sk_v4 t205 = t139*t170 - t140*t169;
+    const sk_v4 t206 = -t138*t170 + t140*t168;
+    const sk_v4 t207 = t138*t169 - t139*t168;
+    const sk_v4 t208 = t202 - t205;
+    const sk_v4 t209 = t203 - t206;
+    const sk_v4 t210 = t204 - t207;
+    const sk_v4 t211 = -t139*t146 + t140*t145;
+    const sk_v4 t212 = t138*t146 - t140*t144;
+    const sk_v4 t213 = -t138*t145 + t139*t144;
+    const sk_v4 t241 = t145*t164 - t146*t163;
+    const sk_v4 t242 = -t144*t164 + t146*t162;
+    const sk_v4 t243 = t144*t163 - t145*t162;
+    const sk_v4 t244 = t133*t170 - t134*t169;
+    const sk_v4 t245 = -t132*t170 + t134*t168;
+    const sk_v4 t246 = t132*t169 - t133*t168;
+    const sk_v4 t247 = t241 - t244;
+    const sk_v4 t248 = t242 - t245;
+    const sk_v4 t249 = t243 - t246;
+    const sk_v4 t250 = -t133*t146 + t134*t145;
+    const sk_v4 t251 = t132*t146 - t134*t144;
+    const sk_v4 t252 = -t132*t145 + t133*t144;
+    const sk_v4 t253 = t139*t164 - t140*t163;
+    const sk_v4 t254 = -t138*t164 + t140*t162;
+    const sk_v4 t255 = t138*t163 - t139*t162;
+    const sk_v4 t256 = t133*t167 - t134*t166;
+    const sk_v4 t257 = -t132*t167 + t134*t165;
+    const sk_v4 t258 = t132*t166 - t133*t165;
+    const sk_v4 t259 = t253 - t256;
+    const sk_v4 t260 = t254 - t257;
+    const sk_v4 t261 = t255 - t258;
+    const sk_v4 t262 = -t133*t140 + t134*t139;
+    const sk_v4 t263 = t132*t140 - t134*t138;
+    const sk_v4 t264 = -t132*t139 + t133*t138;
+    const sk_v4 t286 = t145*t161 - t146*t160;
+    const sk_v4 t287 = -t144*t161 + t146*t159;
+    const sk_v4 t288 = t144*t160 - t145*t159;
+    const sk_v4 t289 = -t124*t170 + t125*t169;
+    const sk_v4 t290 = t123*t170 - t125*t168;
+    const sk_v4 t291 = -t123*t169 + t124*t168;
+    const sk_v4 t292 = t286 - t289;
+    const sk_v4 t293 = t287 - t290;
+    const sk_v4 t294 = t288 - t291;
+    const sk_v4 t295 = t124*t146 - t125*t145;
+    const sk_v4 t296 = -t123*t146 + t125*t144;
+    const sk_v4 t297 = t123*t145 - t124*t144;
+    const sk_v4 t298 = t139*t161 - t140*t160;
+    const sk_v4 t299 = -t138*t161 + t140*t159;
+    const sk_v4 t300 = t138*t160 - t139*t159;
+    const sk_v4 t301 = -t124*t167 + t125*t166;
+    const sk_v4 t302 = t123*t167 - t125*t165;
+    const sk_v4 t303 = -t123*t166 + t124*t165;
+    const sk_v4 t304 = t298 - t301;
+    const sk_v4 t305 = t299 - t302;
+    const sk_v4 t306 = t300 - t303;
+    const sk_v4 t307 = t124*t140 - t125*t139;
+    const sk_v4 t308 = -t123*t140 + t125*t138;
+    const sk_v4 t309 = t123*t139 - t124*t138;
+    const sk_v4 t310 = t133*t161 - t134*t160;
+    const sk_v4 t311 = -t132*t161 + t134*t159;
+    const sk_v4 t312 = t132*t160 - t133*t159;
+    const sk_v4 t313 = -t124*t164 + t125*t163;
+    const sk_v4 t314 = t123*t164 - t125*t162;
+    const sk_v4 t315 = -t123*t163 + t124*t162;
+    const sk_v4 t316 = t310 - t313;
+    const sk_v4 t317 = t311 - t314;
+    const sk_v4 t318 = t312 - t315;
+    const sk_v4 t319 = t124*t134 - t125*t133;
+    const sk_v4 t320 = -t123*t134 + t125*t132;
+    const sk_v4 t321 = t123*t133 - t124*t132;
+    const sk_v4 t337 = t145*t158 - t146*t157;
+    const sk_v4 t338 = -t144*t158 + t146*t156;
+    const sk_v4 t339 = t144*t157 - t145*t156;
+    const sk_v4 t340 = t111*t170 + t169*t44;
+    const sk_v4 t341 = -t110*t170 - t168*t44;
+    const sk_v4 t342 = t110*t169 - t111*t168;
+    const sk_v4 t343 = t337 - t340;
+    const sk_v4 t344 = t338 - t341;
+    const sk_v4 t345 = t339 - t342;
+    const sk_v4 t346 = -t111*t146 - t145*t44;
+    const sk_v4 t347 = t110*t146 + t144*t44;
+    const sk_v4 t348 = -t110*t145 + t111*t144;
+    const sk_v4 t349 = t139*t158 - t140*t157;
+    const sk_v4 t350 = -t138*t158 + t140*t156;
+    const sk_v4 t351 = t138*t157 - t139*t156;
+    const sk_v4 t352 = t111*t167 + t166*t44;
+    const sk_v4 t353 = -t110*t167 - t165*t44;
+    const sk_v4 t354 = t110*t166 - t111*t165;
+    const sk_v4 t355 = t349 - t352;
+    const sk_v4 t356 = t350 - t353;
+    const sk_v4 t357 = t351 - t354;
+    const sk_v4 t358 = -t111*t140 - t139*t44;
+    const sk_v4 t359 = t110*t140 + t138*t44;
+    const sk_v4 t360 = -t110*t139 + t111*t138;
+    const sk_v4 t361 = t133*t158 - t134*t157;
+    const sk_v4 t362 = -t132*t158 + t134*t156;
+    const sk_v4 t363 = t132*t157 - t133*t156;
+    const sk_v4 t364 = t111*t164 + t163*t44;
+    const sk_v4 t365 = -t110*t164 - t162*t44;
+    const sk_v4 t366 = t110*t163 - t111*t162;
+    const sk_v4 t367 = t361 - t364;
+    const sk_v4 t368 = t362 - t365;
+    const sk_v4 t369 = t363 - t366;
+    const sk_v4 t370 = -t111*t134 - t133*t44;
+    const sk_v4 t371 = t110*t134 + t132*t44;
+    const sk_v4 t372 = -t110*t133 + t111*t132;
+    const sk_v4 t373 = -t124*t158 + t125*t157;
+    const sk_v4 t374 = t123*t158 - t125*t156;
+    const sk_v4 t375 = -t123*t157 + t124*t156;
+    const sk_v4 t376 = t111*t161 + t160*t44;
+    const sk_v4 t377 = -t110*t161 - t159*t44;
+    const sk_v4 t378 = t110*t160 - t111*t159;
+    const sk_v4 t379 = t373 - t376;
+    const sk_v4 t380 = t374 - t377;
+    const sk_v4 t381 = t375 - t378;
+    const sk_v4 t382 = t111*t125 + t124*t44;
+    const sk_v4 t383 = -t110*t125 - t123*t44;
+    const sk_v4 t384 = t110*t124 - t111*t123;
+    const sk_v4 t394 = t145*t155 - t146*t154;
+    const sk_v4 t395 = -t144*t155 + t146*t153;
+    const sk_v4 t396 = t144*t154 - t145*t153;
+    const sk_v4 t397 = t170*t69;
+    const sk_v4 t398 = -t170*t70;
+    const sk_v4 t399 = -t168*t69 + t169*t70;
+    const sk_v4 t400 = t394 - t397;
+    const sk_v4 t401 = t395 - t398;
+    const sk_v4 t402 = t396 - t399;
+    const sk_v4 t403 = -t146*t69;
+    const sk_v4 t404 = t146*t70;
+    const sk_v4 t405 = t144*t69 - t145*t70;
+    const sk_v4 t406 = t139*t155 - t140*t154;
+    const sk_v4 t407 = -t138*t155 + t140*t153;
+    const sk_v4 t408 = t138*t154 - t139*t153;
+    const sk_v4 t409 = t167*t69;
+    const sk_v4 t410 = -t167*t70;
+    const sk_v4 t411 = -t165*t69 + t166*t70;
+    const sk_v4 t412 = t406 - t409;
+    const sk_v4 t413 = t407 - t410;
+    const sk_v4 t414 = t408 - t411;
+    const sk_v4 t415 = -t140*t69;
+    const sk_v4 t416 = t140*t70;
+    const sk_v4 t417 = t138*t69 - t139*t70;
+    const sk_v4 t418 = t133*t155 - t134*t154;
+    const sk_v4 t419 = -t132*t155 + t134*t153;
+    const sk_v4 t420 = t132*t154 - t133*t153;
+    const sk_v4 t421 = t164*t69;
+    const sk_v4 t422 = -t164*t70;
+    const sk_v4 t423 = -t162*t69 + t163*t70;
+    const sk_v4 t424 = t418 - t421;
+    const sk_v4 t425 = t419 - t422;
+    const sk_v4 t426 = t420 - t423;
+    const sk_v4 t427 = -t134*t69;
+    const sk_v4 t428 = t134*t70;
+    const sk_v4 t429 = t132*t69 - t133*t70;
+    const sk_v4 t430 = -t124*t155 + t125*t154;
+    const sk_v4 t431 = t123*t155 - t125*t153;
+    const sk_v4 t432 = -t123*t154 + t124*t153;
+    const sk_v4 t433 = t161*t69;
+    const sk_v4 t434 = -t161*t70;
+    const sk_v4 t435 = -t159*t69 + t160*t70;
+    const sk_v4 t436 = t430 - t433;
+    const sk_v4 t437 = t431 - t434;
+    const sk_v4 t438 = t432 - t435;
+    const sk_v4 t439 = t125*t69;
+    const sk_v4 t440 = -t125*t70;
+    const sk_v4 t441 = -t123*t69 + t124*t70;
+    const sk_v4 t442 = t111*t155 + t154*t44;
+    const sk_v4 t443 = -t110*t155 - t153*t44;
+    const sk_v4 t444 = t110*t154 - t111*t153;
+    const sk_v4 t445 = t158*t69;
+    const sk_v4 t446 = -t158*t70;
+    const sk_v4 t447 = -t156*t69 + t157*t70;
+    const sk_v4 t448 = t442 - t445;
+    const sk_v4 t449 = t443 - t446;
+    const sk_v4 t450 = t444 - t447;
+    const sk_v4 t451 = t110*t69 - t111*t70;
+    H[0] = H[294] = H[588] = H[882] = 0.0;
+    H[1] = H[295] = H[589] = H[883] = 0.0;
+    H[2] = H[296] = H[590] = H[884] = 0.0;
+    H[3] = H[297] = H[591] = H[885] = 0.0;
+    H[4] = H[298] = H[592] = H[886] = 0.0;
+    H[5] = H[299] = H[593] = H[887] = 0.0;
+    H[6] = H[300] = H[594] = H[888] = 0.0;
+    H[7] = H[301] = H[595] = H[889] = 0.0;
+    H[8] = H[302] = H[596] = H[890] = 0.0;
+    H[9] = H[303] = H[597] = H[891] = 0.0;
+    H[10] = H[304] = H[598] = H[892] = 0.0;
+    H[11] = H[305] = H[599] = H[893] = 0.0;
+    H[12] = H[306] = H[600] = H[894] = 0.0;
+    H[13] = H[307] = H[601] = H[895] = 0.0;
+    H[14] = H[308] = H[602] = H[896] = 0.0;
+    H[15] = H[309] = H[603] = H[897] = 0.0;
+    H[16] = H[310] = H[604] = H[898] = 0.0;
+    H[17] = H[311] = H[605] = H[899] = 0.0;
+    H[18] = H[312] = H[606] = H[900] = 0.0;
+    H[19] = H[313] = H[607] = H[901] = 0.0;
+    H[20] = H[314] = H[608] = H[902] = 0.0;
+    H[21] = H[315] = H[609] = H[903] = 0.0;
+    H[22] = H[316] = H[610] = H[904] = 0.0;
+    H[23] = H[317] = H[611] = H[905] = 0.0;
+    H[24] = H[318] = H[612] = H[906] = 0.0;
+    H[25] = H[319] = H[613] = H[907] = 0.0;
+    H[26] = H[320] = H[614] = H[908] = 0.0;
+    H[27] = H[321] = H[615] = H[909] = 0.0;
+    H[28] = H[322] = H[616] = H[910] = 0.0;
+    H[29] = H[323] = H[617] = H[911] = 0.0;
+    H[30] = H[324] = H[618] = H[912] = 0.0;
+    H[31] = H[325] = H[619] = H[913] = 0.0;
+    H[32] = H[326] = H[620] = H[914] = 0.0;
+    H[33] = H[327] = H[621] = H[915] = 0.0;
+    H[34] = H[328] = H[622] = H[916] = 0.0;
+    H[35] = H[329] = H[623] = H[917] = 0.0;
+    H[36] = H[330] = H[624] = H[918] = 0.0;
+    H[37] = H[331] = H[625] = H[919] = 0.0;
+    H[38] = H[332] = H[626] = H[920] = 0.0;
+    H[39] = H[333] = H[627] = H[921] = 0.0;
+    H[40] = H[334] = H[628] = H[922] = 0.0;
+    H[41] = H[335] = H[629] = H[923] = 0.0;
+    SKV_STORE(H, 294, 42, t208);
+    H[43] = H[337] = H[631] = H[925] = 0.0;
+    H[44] = H[338] = H[632] = H[926] = 0.0;
+    H[45] = H[339] = H[633] = H[927] = 0.0;
+    H[46] = H[340] = H[634] = H[928] = 0.0;
+    H[47] = H[341] = H[635] = H[929] = 0.0;
+    H[48] = H[342] = H[636] = H[930] = 0.0;
+    SKV_STORE(H, 294, 49, t209);
+    H[50] = H[344] = H[638] = H[932] = 0.0;
+    H[51] = H[345] = H[639] = H[933] = 0.0;
+    H[52] = H[346] = H[640] = H[934] = 0.0;
+    H[53] = H[347] = H[641] = H[935] = 0.0;
+    H[54] = H[348] = H[642] = H[936] = 0.0;
+    H[55] = H[349] = H[643] = H[937] = 0.0;
+    SKV_STORE(H, 294, 56, t210);
+    H[57] = H[351] = H[645] = H[939] = 0.0;
+    H[58] = H[352] = H[646] = H[940] = 0.0;
+    H[59] = H[353] = H[647] = H[941] = 0.0;
+    H[60] = H[354] = H[648] = H[942] = 0.0;
+    H[61] = H[355] = H[649] = H[943] = 0.0;
+    H[62] = H[356] = H[650] = H[944] = 0.0;
+    SKV_STORE(H, 294, 63, t211);
+    H[64] = H[358] = H[652] = H[946] = 0.0;
+    H[65] = H[359] = H[653] = H[947] = 0.0;
+    H[66] = H[360] = H[654] = H[948] = 0.0;
+    H[67] = H[361] = H[655] = H[949] = 0.0;
+    H[68] = H[362] = H[656] = H[950] = 0.0;
+    H[69] = H[363] = H[657] = H[951] = 0.0;
+    SKV_STORE(H, 294, 70, t212);
+    H[71] = H[365] = H[659] = H[953] = 0.0;
+    H[72] = H[366] = H[660] = H[954] = 0.0;
+    H[73] = H[367] = H[661] = H[955] = 0.0;
+    H[74] = H[368] = H[662] = H[956] = 0.0;
+    H[75] = H[369] = H[663] = H[957] = 0.0;
+    H[76] = H[370] = H[664] = H[958] = 0.0;
+    SKV_STORE(H, 294, 77, t213);
+    H[78] = H[372] = H[666] = H[960] = 0.0;
+    H[79] = H[373] = H[667] = H[961] = 0.0;
+    H[80] = H[374] = H[668] = H[962] = 0.0;
+    H[81] = H[375] = H[669] = H[963] = 0.0;
+    H[82] = H[376] = H[670] = H[964] = 0.0;
+    H[83] = H[377] = H[671] = H[965] = 0.0;
+    SKV_STORE(H, 294, 84, t247);
+    SKV_STORE(H, 294, 85, t259);
+    H[86] = H[380] = H[674] = H[968] = 0.0;
+    H[87] = H[381] = H[675] = H[969] = 0.0;
+    H[88] = H[382] = H[676] = H[970] = 0.0;
+    H[89] = H[383] = H[677] = H[971] = 0.0;
+    H[90] = H[384] = H[678] = H[972] = 0.0;
+    SKV_STORE(H, 294, 91, t248);
+    SKV_STORE(H, 294, 92, t260);
+    H[93] = H[387] = H[681] = H[975] = 0.0;
+    H[94] = H[388] = H[682] = H[976] = 0.0;
+    H[95] = H[389] = H[683] = H[977] = 0.0;
+    H[96] = H[390] = H[684] = H[978] = 0.0;
+    H[97] = H[391] = H[685] = H[979] = 0.0;
+    SKV_STORE(H, 294, 98, t249);
+    SKV_STORE(H, 294, 99, t261);
+    H[100] = H[394] = H[688] = H[982] = 0.0;
+    H[101] = H[395] = H[689] = H[983] = 0.0;
+    H[102] = H[396] = H[690] = H[984] = 0.0;
+    H[103] = H[397] = H[691] = H[985] = 0.0;
+    H[104] = H[398] = H[692] = H[986] = 0.0;
+    SKV_STORE(H, 294, 105, t250);
+    SKV_STORE(H, 294, 106, t262);
+    H[107] = H[401] = H[695] = H[989] = 0.0;
+    H[108] = H[402] = H[696] = H[990] = 0.0;
+    H[109] = H[403] = H[697] = H[991] = 0.0;
+    H[110] = H[404] = H[698] = H[992] = 0.0;
+    H[111] = H[405] = H[699] = H[993] = 0.0;
+    SKV_STORE(H, 294, 112, t251);
+    SKV_STORE(H, 294, 113, t263);
+    H[114] = H[408] = H[702] = H[996] = 0.0;
+    H[115] = H[409] = H[703] = H[997] = 0.0;
+    H[116] = H[410] = H[704] = H[998] = 0.0;
+    H[117] = H[411] = H[705] = H[999] = 0.0;
+    H[118] = H[412] = H[706] = H[1000] = 0.0;
+    SKV_STORE(H, 294, 119, t252);
+    SKV_STORE(H, 294, 120, t264);
+    H[121] = H[415] = H[709] = H[1003] = 0.0;
+    H[122] = H[416] = H[710] = H[1004] = 0.0;
+    H[123] = H[417] = H[711] = H[1005] = 0.0;
+    H[124] = H[418] = H[712] = H[1006] = 0.0;
+    H[125] = H[419] = H[713] = H[1007] = 0.0;
+    SKV_STORE(H, 294, 126, t292);
+    SKV_STORE(H, 294, 127, t304);
+    SKV_STORE(H, 294, 128, t316);
+    H[129] = H[423] = H[717] = H[1011] = 0.0;
+    H[130] = H[424] = H[718] = H[1012] = 0.0;
+    H[131] = H[425] = H[719] = H[1013] = 0.0;
+    H[132] = H[426] = H[720] = H[1014] = 0.0;
+    SKV_STORE(H, 294, 133, t293);
+    SKV_STORE(H, 294, 134, t305);
+    SKV_STORE(H, 294, 135, t317);
+    H[136] = H[430] = H[724] = H[1018] = 0.0;
+    H[137] = H[431] = H[725] = H[1019] = 0.0;
+    H[138] = H[432] = H[726] = H[1020] = 0.0;
+    H[139] = H[433] = H[727] = H[1021] = 0.0;
+    SKV_STORE(H, 294, 140, t294);
+    SKV_STORE(H, 294, 141, t306);
+    SKV_STORE(H, 294, 142, t318);
+    H[143] = H[437] = H[731] = H[1025] = 0.0;
+    H[144] = H[438] = H[732] = H[1026] = 0.0;
+    H[145] = H[439] = H[733] = H[1027] = 0.0;
+    H[146] = H[440] = H[734] = H[1028] = 0.0;
+    SKV_STORE(H, 294, 147, t295);
+    SKV_STORE(H, 294, 148, t307);
+    SKV_STORE(H, 294, 149, t319);
+    H[150] = H[444] = H[738] = H[1032] = 0.0;
+    H[151] = H[445] = H[739] = H[1033] = 0.0;
+    H[152] = H[446] = H[740] = H[1034] = 0.0;
+    H[153] = H[447] = H[741] = H[1035] = 0.0;
+    SKV_STORE(H, 294, 154, t296);
+    SKV_STORE(H, 294, 155, t308);
+    SKV_STORE(H, 294, 156, t320);
+    H[157] = H[451] = H[745] = H[1039] = 0.0;
+    H[158] = H[452] = H[746] = H[1040] = 0.0;
+    H[159] = H[453] = H[747] = H[1041] = 0.0;
+    H[160] = H[454] = H[748] = H[1042] = 0.0;
+    SKV_STORE(H, 294, 161, t297);
+    SKV_STORE(H, 294, 162, t309);
+    SKV_STORE(H, 294, 163, t321);
+    H[164] = H[458] = H[752] = H[1046] = 0.0;
+    H[165] = H[459] = H[753] = H[1047] = 0.0;
+    H[166] = H[460] = H[754] = H[1048] = 0.0;
+    H[167] = H[461] = H[755] = H[1049] = 0.0;
+    SKV_STORE(H, 294, 168, t343);
+    SKV_STORE(H, 294, 169, t355);
+    SKV_STORE(H, 294, 170, t367);
+    SKV_STORE(H, 294, 171, t379);
+    H[172] = H[466] = H[760] = H[1054] = 0.0;
+    H[173] = H[467] = H[761] = H[1055] = 0.0;
+    H[174] = H[468] = H[762] = H[1056] = 0.0;
+    SKV_STORE(H, 294, 175, t344);
+    SKV_STORE(H, 294, 176, t356);
+    SKV_STORE(H, 294, 177, t368);
+    SKV_STORE(H, 294, 178, t380);
+    H[179] = H[473] = H[767] = H[1061] = 0.0;
+    H[180] = H[474] = H[768] = H[1062] = 0.0;
+    H[181] = H[475] = H[769] = H[1063] = 0.0;
+    SKV_STORE(H, 294, 182, t345);
+    SKV_STORE(H, 294, 183, t357);
+    SKV_STORE(H, 294, 184, t369);
+    SKV_STORE(H, 294, 185, t381);
+    H[186] = H[480] = H[774] = H[1068] = 0.0;
+    H[187] = H[481] = H[775] = H[1069] = 0.0;
+    H[188] = H[482] = H[776] = H[1070] = 0.0;
+    SKV_STORE(H, 294, 189, t346);
+    SKV_STORE(H, 294, 190, t358);
+    SKV_STORE(H, 294, 191, t370);
+    SKV_STORE(H, 294, 192, t382);
+    H[193] = H[487] = H[781] = H[1075] = 0.0;
+    H[194] = H[488] = H[782] = H[1076] = 0.0;
+    H[195] = H[489] = H[783] = H[1077] = 0.0;
+    SKV_STORE(H, 294, 196, t347);
+    SKV_STORE(H, 294, 197, t359);
+    SKV_STORE(H, 294, 198, t371);
+    SKV_STORE(H, 294, 199, t383);
+    H[200] = H[494] = H[788] = H[1082] = 0.0;
+    H[201] = H[495] = H[789] = H[1083] = 0.0;
+    H[202] = H[496] = H[790] = H[1084] = 0.0;
+    SKV_STORE(H, 294, 203, t348);
+    SKV_STORE(H, 294, 204, t360);
+    SKV_STORE(H, 294, 205, t372);
+    SKV_STORE(H, 294, 206, t384);
+    H[207] = H[501] = H[795] = H[1089] = 0.0;
+    H[208] = H[502] = H[796] = H[1090] = 0.0;
+    H[209] = H[503] = H[797] = H[1091] = 0.0;
+    SKV_STORE(H, 294, 210, t400);
+    SKV_STORE(H, 294, 211, t412);
+    SKV_STORE(H, 294, 212, t424);
+    SKV_STORE(H, 294, 213, t436);
+    SKV_STORE(H, 294, 214, t448);
+    H[215] = H[509] = H[803] = H[1097] = 0.0;
+    H[216] = H[510] = H[804] = H[1098] = 0.0;
+    SKV_STORE(H, 294, 217, t401);
+    SKV_STORE(H, 294, 218, t413);
+    SKV_STORE(H, 294, 219, t425);
+    SKV_STORE(H, 294, 220, t437);
+    SKV_STORE(H, 294, 221, t449);
+    H[222] = H[516] = H[810] = H[1104] = 0.0;
+    H[223] = H[517] = H[811] = H[1105] = 0.0;
+    SKV_STORE(H, 294, 224, t402);
+    SKV_STORE(H, 294, 225, t414);
+    SKV_STORE(H, 294, 226, t426);
+    SKV_STORE(H, 294, 227, t438);
+    SKV_STORE(H, 294, 228, t450);
+    H[229] = H[523] = H[817] = H[1111] = 0.0;
+    H[230] = H[524] = H[818] = H[1112] = 0.0;
+    SKV_STORE(H, 294, 231, t403);
+    SKV_STORE(H, 294, 232, t415);
+    SKV_STORE(H, 294, 233, t427);
+    SKV_STORE(H, 294, 234, t439);
+    SKV_STORE(H, 294, 235, t112);
+    H[236] = H[530] = H[824] = H[1118] = 0.0;
+    H[237] = H[531] = H[825] = H[1119] = 0.0;
+    SKV_STORE(H, 294, 238, t404);
+    SKV_STORE(H, 294, 239, t416);
+    SKV_STORE(H, 294, 240, t428);
+    SKV_STORE(H, 294, 241, t440);
+    SKV_STORE(H, 294, 242, t113);
+    H[243] = H[537] = H[831] = H[1125] = 0.0;
+    H[244] = H[538] = H[832] = H[1126] = 0.0;
+    SKV_STORE(H, 294, 245, t405);
+    SKV_STORE(H, 294, 246, t417);
+    SKV_STORE(H, 294, 247, t429);
+    SKV_STORE(H, 294, 248, t441);
+    SKV_STORE(H, 294, 249, t451);
+    H[250] = H[544] = H[838] = H[1132] = 0.0;
+    H[251] = H[545] = H[839] = H[1133] = 0.0;
+    SKV_STORE(H, 294, 252, t169);
+    SKV_STORE(H, 294, 253, t166);
+    SKV_STORE(H, 294, 254, t163);
+    SKV_STORE(H, 294, 255, t160);
+    SKV_STORE(H, 294, 256, t157);
+    SKV_STORE(H, 294, 257, t154);
+    H[258] = H[552] = H[846] = H[1140] = 0.0;
+    SKV_STORE(H, 294, 259, -t168);
+    SKV_STORE(H, 294, 260, -t165);
+    SKV_STORE(H, 294, 261, -t162);
+    SKV_STORE(H, 294, 262, -t159);
+    SKV_STORE(H, 294, 263, -t156);
+    SKV_STORE(H, 294, 264, -t153);
+    H[265] = H[559] = H[853] = H[1147] = 0.0;
+    H[266] = H[560] = H[854] = H[1148] = 0.0;
+    H[267] = H[561] = H[855] = H[1149] = 0.0;
+    H[268] = H[562] = H[856] = H[1150] = 0.0;
+    H[269] = H[563] = H[857] = H[1151] = 0.0;
+    H[270] = H[564] = H[858] = H[1152] = 0.0;
+    H[271] = H[565] = H[859] = H[1153] = 0.0;
+    H[272] = H[566] = H[860] = H[1154] = 0.0;
+    SKV_STORE(H, 294, 273, t145);
+    SKV_STORE(H, 294, 274, t139);
+    SKV_STORE(H, 294, 275, t133);
+    SKV_STORE(H, 294, 276, -t124);
+    SKV_STORE(H, 294, 277, t111);
+    SKV_STORE(H, 294, 278, t69);
+    H[279] = H[573] = H[867] = H[1161] = 0.0;
+    SKV_STORE(H, 294, 280, -t144);
+    SKV_STORE(H, 294, 281, -t138);
+    SKV_STORE(H, 294, 282, -t132);
+    SKV_STORE(H, 294, 283, t123);
+    SKV_STORE(H, 294, 284, -t110);
+    SKV_STORE(H, 294, 285, -t70);
+    H[286] = H[580] = H[874] = H[1168] = 0.0;
+    H[287] = H[581] = H[875] = H[1169] = 0.0;
+    H[288] = H[582] = H[876] = H[1170] = 0.0;
+    H[289] = H[583] = H[877] = H[1171] = 0.0;
+    H[290] = H[584] = H[878] = H[1172] = 0.0;
+    H[291] = H[585] = H[879] = H[1173] = 0.0;
+    H[292] = H[586] = H[880] = H[1174] = 0.0;
+    H[293] = H[587] = H[881] = H[1175] = 0.0;
+}
+#endif
+
+
 void symkin_panda_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessiane_x4_(q + i * 7, H + i * 294);
+#endif
+    for (; i < N; ++i)
         hessiane_(q + i * 7, H + i * 294);
 }
 
@@ -1345,10 +2623,10 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -1356,8 +2634,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -1367,8 +2645,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -1381,16 +2659,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -1406,8 +2684,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t66 = -0.1034*t49 + t55;
     const double t67 = -0.1034*t50 + t56;
     const double t68 = -0.1034*t51 + t57;
-    const double t69 = sin(q6 + 0.7853981633974483);
-    const double t70 = -cos(q6 + 0.7853981633974483);
+    const double t69 = sk_sin(q6 + 0.7853981633974483);
+    const double t70 = -sk_cos(q6 + 0.7853981633974483);
     const double t71 = -t41*t70 + t46*t69;
     const double t72 = -t42*t70 + t47*t69;
     const double t73 = -t43*t70 + t48*t69;
@@ -1510,9 +2788,188 @@ void symkin_panda_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = t0*t3;
+    const sk_v4 t7 = t1*t3;
+    const sk_v4 t8 = (0.316)*t6;
+    const sk_v4 t9 = (0.316)*t7;
+    const sk_v4 t10 = (0.316)*t2 + 0.333;
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t13 = -t1*t12 + t11*t4;
+    const sk_v4 t14 = t0*t12 + t11*t5;
+    const sk_v4 t15 = -t11*t3;
+    const sk_v4 t16 = -t1*t11 - t12*t4;
+    const sk_v4 t17 = t0*t11 - t12*t5;
+    const sk_v4 t18 = t12*t3;
+    const sk_v4 t19 = (0.0825)*t13 + t8;
+    const sk_v4 t20 = (0.0825)*t14 + t9;
+    const sk_v4 t21 = t10 + (0.0825)*t15;
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t24 = t13*t22 - t23*t6;
+    const sk_v4 t25 = t14*t22 - t23*t7;
+    const sk_v4 t26 = t15*t22 - t2*t23;
+    const sk_v4 t27 = t13*t23 + t22*t6;
+    const sk_v4 t28 = t14*t23 + t22*t7;
+    const sk_v4 t29 = t15*t23 + t2*t22;
+    const sk_v4 t30 = t19 - 0.0825*t24;
+    const sk_v4 t31 = t20 - 0.0825*t25;
+    const sk_v4 t32 = t21 - 0.0825*t26;
+    const sk_v4 t33 = (0.384)*t27 + t30;
+    const sk_v4 t34 = (0.384)*t28 + t31;
+    const sk_v4 t35 = (0.384)*t29 + t32;
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t38 = t16*t37 + t24*t36;
+    const sk_v4 t39 = t17*t37 + t25*t36;
+    const sk_v4 t40 = t18*t37 + t26*t36;
+    const sk_v4 t41 = t16*t36 - t24*t37;
+    const sk_v4 t42 = t17*t36 - t25*t37;
+    const sk_v4 t43 = t18*t36 - t26*t37;
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t46 = -t27*t45 + t38*t44;
+    const sk_v4 t47 = -t28*t45 + t39*t44;
+    const sk_v4 t48 = -t29*t45 + t40*t44;
+    const sk_v4 t49 = t27*t44 + t38*t45;
+    const sk_v4 t50 = t28*t44 + t39*t45;
+    const sk_v4 t51 = t29*t44 + t40*t45;
+    const sk_v4 t52 = t33 + (0.088)*t46;
+    const sk_v4 t53 = t34 + (0.088)*t47;
+    const sk_v4 t54 = t35 + (0.088)*t48;
+    const sk_v4 t55 = -0.107*t49 + t52;
+    const sk_v4 t56 = -0.107*t50 + t53;
+    const sk_v4 t57 = -0.107*t51 + t54;
+    const sk_v4 t66 = -0.1034*t49 + t55;
+    const sk_v4 t67 = -0.1034*t50 + t56;
+    const sk_v4 t68 = -0.1034*t51 + t57;
+    const sk_v4 t69 = skv_sin(q6 + 0.7853981633974483);
+    const sk_v4 t70 = -skv_cos(q6 + 0.7853981633974483);
+    const sk_v4 t71 = -t41*t70 + t46*t69;
+    const sk_v4 t72 = -t42*t70 + t47*t69;
+    const sk_v4 t73 = -t43*t70 + t48*t69;
+    const sk_v4 t74 = -t41*t69 - t46*t70;
+    const sk_v4 t75 = -t42*t69 - t47*t70;
+    const sk_v4 t76 = -t43*t69 - t48*t70;
+    const sk_v4 t77 = t68 - 0.333;
+    const sk_v4 t78 = t0*t77;
+    const sk_v4 t79 = t1*t77;
+    const sk_v4 t80 = -t0*t66 - t1*t67;
+    const sk_v4 t81 = t66 - t8;
+    const sk_v4 t82 = t67 - t9;
+    const sk_v4 t83 = -t10 + t68;
+    const sk_v4 t84 = -t2*t82 + t7*t83;
+    const sk_v4 t85 = t2*t81 - t6*t83;
+    const sk_v4 t86 = t6*t82 - t7*t81;
+    const sk_v4 t87 = -t19 + t66;
+    const sk_v4 t88 = -t20 + t67;
+    const sk_v4 t89 = -t21 + t68;
+    const sk_v4 t90 = -t17*t89 + t18*t88;
+    const sk_v4 t91 = t16*t89 - t18*t87;
+    const sk_v4 t92 = -t16*t88 + t17*t87;
+    const sk_v4 t93 = -t33 + t66;
+    const sk_v4 t94 = -t34 + t67;
+    const sk_v4 t95 = -t35 + t68;
+    const sk_v4 t96 = t28*t95 - t29*t94;
+    const sk_v4 t97 = -t27*t95 + t29*t93;
+    const sk_v4 t98 = t27*t94 - t28*t93;
+    const sk_v4 t99 = -t42*t95 + t43*t94;
+    const sk_v4 t100 = t41*t95 - t43*t93;
+    const sk_v4 t101 = -t41*t94 + t42*t93;
+    const sk_v4 t102 = -t55 + t66;
+    const sk_v4 t103 = -t56 + t67;
+    const sk_v4 t104 = -t57 + t68;
+    const sk_v4 t105 = t103*t51 - t104*t50;
+    const sk_v4 t106 = -t102*t51 + t104*t49;
+    const sk_v4 t107 = t102*t50 - t103*t49;
+    SKV_STORE(T, 16, 0, t71);
+    SKV_STORE(T, 16, 1, t74);
+    SKV_STORE(T, 16, 2, -t49);
+    SKV_STORE(T, 16, 3, t66);
+    SKV_STORE(T, 16, 4, t72);
+    SKV_STORE(T, 16, 5, t75);
+    SKV_STORE(T, 16, 6, -t50);
+    SKV_STORE(T, 16, 7, t67);
+    SKV_STORE(T, 16, 8, t73);
+    SKV_STORE(T, 16, 9, t76);
+    SKV_STORE(T, 16, 10, -t51);
+    SKV_STORE(T, 16, 11, t68);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+    SKV_STORE(J, 42, 0, -t67);
+    SKV_STORE(J, 42, 1, t78);
+    SKV_STORE(J, 42, 2, t84);
+    SKV_STORE(J, 42, 3, t90);
+    SKV_STORE(J, 42, 4, t96);
+    SKV_STORE(J, 42, 5, t99);
+    SKV_STORE(J, 42, 6, t105);
+    SKV_STORE(J, 42, 7, t66);
+    SKV_STORE(J, 42, 8, t79);
+    SKV_STORE(J, 42, 9, t85);
+    SKV_STORE(J, 42, 10, t91);
+    SKV_STORE(J, 42, 11, t97);
+    SKV_STORE(J, 42, 12, t100);
+    SKV_STORE(J, 42, 13, t106);
+    J[14] = J[56] = J[98] = J[140] = 0.0;
+    SKV_STORE(J, 42, 15, t80);
+    SKV_STORE(J, 42, 16, t86);
+    SKV_STORE(J, 42, 17, t92);
+    SKV_STORE(J, 42, 18, t98);
+    SKV_STORE(J, 42, 19, t101);
+    SKV_STORE(J, 42, 20, t107);
+    J[21] = J[63] = J[105] = J[147] = 0.0;
+    SKV_STORE(J, 42, 22, -t1);
+    SKV_STORE(J, 42, 23, t6);
+    SKV_STORE(J, 42, 24, -t16);
+    SKV_STORE(J, 42, 25, t27);
+    SKV_STORE(J, 42, 26, -t41);
+    SKV_STORE(J, 42, 27, -t49);
+    J[28] = J[70] = J[112] = J[154] = 0.0;
+    SKV_STORE(J, 42, 29, t0);
+    SKV_STORE(J, 42, 30, t7);
+    SKV_STORE(J, 42, 31, -t17);
+    SKV_STORE(J, 42, 32, t28);
+    SKV_STORE(J, 42, 33, -t42);
+    SKV_STORE(J, 42, 34, -t50);
+    J[35] = J[77] = J[119] = J[161] = 1.0;
+    J[36] = J[78] = J[120] = J[162] = 0.0;
+    SKV_STORE(J, 42, 37, t2);
+    SKV_STORE(J, 42, 38, -t18);
+    SKV_STORE(J, 42, 39, t29);
+    SKV_STORE(J, 42, 40, -t43);
+    SKV_STORE(J, 42, 41, -t51);
+}
+#endif
+
+
 void symkin_panda_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_jacob0_x4_(q + i * 7, T + i * 16, J + i * 42);
+#endif
+    for (; i < N; ++i)
         fkine_jacob0_(q + i * 7, T + i * 16, J + i * 42);
 }
 
@@ -1525,10 +2982,10 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -1536,8 +2993,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = cos(q2);
-    const double t12 = sin(q2);
+    const double t11 = sk_cos(q2);
+    const double t12 = sk_sin(q2);
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -1547,8 +3004,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = cos(q3);
-    const double t23 = -sin(q3);
+    const double t22 = sk_cos(q3);
+    const double t23 = -sk_sin(q3);
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -1561,16 +3018,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = cos(q4);
-    const double t37 = sin(q4);
+    const double t36 = sk_cos(q4);
+    const double t37 = sk_sin(q4);
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = cos(q5);
-    const double t45 = -sin(q5);
+    const double t44 = sk_cos(q5);
+    const double t45 = -sk_sin(q5);
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -2066,9 +3523,563 @@ void symkin_panda_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
+    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
+    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
+    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
+    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
+    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = t0*t3;
+    const sk_v4 t7 = t1*t3;
+    const sk_v4 t8 = (0.316)*t6;
+    const sk_v4 t9 = (0.316)*t7;
+    const sk_v4 t10 = (0.316)*t2 + 0.333;
+    const sk_v4 t11 = skv_cos(q2);
+    const sk_v4 t12 = skv_sin(q2);
+    const sk_v4 t13 = -t1*t12 + t11*t4;
+    const sk_v4 t14 = t0*t12 + t11*t5;
+    const sk_v4 t15 = -t11*t3;
+    const sk_v4 t16 = -t1*t11 - t12*t4;
+    const sk_v4 t17 = t0*t11 - t12*t5;
+    const sk_v4 t18 = t12*t3;
+    const sk_v4 t19 = (0.0825)*t13 + t8;
+    const sk_v4 t20 = (0.0825)*t14 + t9;
+    const sk_v4 t21 = t10 + (0.0825)*t15;
+    const sk_v4 t22 = skv_cos(q3);
+    const sk_v4 t23 = -skv_sin(q3);
+    const sk_v4 t24 = t13*t22 - t23*t6;
+    const sk_v4 t25 = t14*t22 - t23*t7;
+    const sk_v4 t26 = t15*t22 - t2*t23;
+    const sk_v4 t27 = t13*t23 + t22*t6;
+    const sk_v4 t28 = t14*t23 + t22*t7;
+    const sk_v4 t29 = t15*t23 + t2*t22;
+    const sk_v4 t30 = t19 - 0.0825*t24;
+    const sk_v4 t31 = t20 - 0.0825*t25;
+    const sk_v4 t32 = t21 - 0.0825*t26;
+    const sk_v4 t33 = (0.384)*t27 + t30;
+    const sk_v4 t34 = (0.384)*t28 + t31;
+    const sk_v4 t35 = (0.384)*t29 + t32;
+    const sk_v4 t36 = skv_cos(q4);
+    const sk_v4 t37 = skv_sin(q4);
+    const sk_v4 t38 = t16*t37 + t24*t36;
+    const sk_v4 t39 = t17*t37 + t25*t36;
+    const sk_v4 t40 = t18*t37 + t26*t36;
+    const sk_v4 t41 = t16*t36 - t24*t37;
+    const sk_v4 t42 = t17*t36 - t25*t37;
+    const sk_v4 t43 = t18*t36 - t26*t37;
+    const sk_v4 t44 = skv_cos(q5);
+    const sk_v4 t45 = -skv_sin(q5);
+    const sk_v4 t46 = -t27*t45 + t38*t44;
+    const sk_v4 t47 = -t28*t45 + t39*t44;
+    const sk_v4 t48 = -t29*t45 + t40*t44;
+    const sk_v4 t49 = t27*t44 + t38*t45;
+    const sk_v4 t50 = t28*t44 + t39*t45;
+    const sk_v4 t51 = t29*t44 + t40*t45;
+    const sk_v4 t52 = t33 + (0.088)*t46;
+    const sk_v4 t53 = t34 + (0.088)*t47;
+    const sk_v4 t54 = t35 + (0.088)*t48;
+    const sk_v4 t55 = -0.107*t49 + t52;
+    const sk_v4 t56 = -0.107*t50 + t53;
+    const sk_v4 t57 = -0.107*t51 + t54;
+    const sk_v4 t66 = -0.1034*t49 + t55;
+    const sk_v4 t67 = -0.1034*t50 + t56;
+    const sk_v4 t68 = -0.1034*t51 + t57;
+    const sk_v4 t77 = t68 - 0.333;
+    const sk_v4 t78 = t0*t77;
+    const sk_v4 t79 = t1*t77;
+    const sk_v4 t80 = -t0*t66 - t1*t67;
+    const sk_v4 t81 = t66 - t8;
+    const sk_v4 t82 = t67 - t9;
+    const sk_v4 t83 = -t10 + t68;
+    const sk_v4 t84 = -t2*t82 + t7*t83;
+    const sk_v4 t85 = t2*t81 - t6*t83;
+    const sk_v4 t86 = t6*t82 - t7*t81;
+    const sk_v4 t87 = -t19 + t66;
+    const sk_v4 t88 = -t20 + t67;
+    const sk_v4 t89 = -t21 + t68;
+    const sk_v4 t90 = -t17*t89 + t18*t88;
+    const sk_v4 t91 = t16*t89 - t18*t87;
+    const sk_v4 t92 = -t16*t88 + t17*t87;
+    const sk_v4 t93 = -t33 + t66;
+    const sk_v4 t94 = -t34 + t67;
+    const sk_v4 t95 = -t35 + t68;
+    const sk_v4 t96 = t28*t95 - t29*t94;
+    const sk_v4 t97 = -t27*t95 + t29*t93;
+    const sk_v4 t98 = t27*t94 - t28*t93;
+    const sk_v4 t99 = -t42*t95 + t43*t94;
+    const sk_v4 t100 = t41*t95 - t43*t93;
+    const sk_v4 t101 = -t41*t94 + t42*t93;
+    const sk_v4 t102 = -t55 + t66;
+    const sk_v4 t103 = -t56 + t67;
+    const sk_v4 t104 = -t57 + t68;
+    const sk_v4 t105 = t103*t51 - t104*t50;
+    const sk_v4 t106 = -t102*t51 + t104*t49;
+    const sk_v4 t107 = t102*t50 - t103*t49;
+    const sk_v4 t171 = t0*t80;
+    const sk_v4 t172 = t1*t80;
+    const sk_v4 t173 = -t0*t78 - t1*t79;
+    const sk_v4 t174 = t0*t86;
+    const sk_v4 t175 = t1*t86;
+    const sk_v4 t176 = -t0*t84 - t1*t85;
+    const sk_v4 t177 = -t0*t6 - t1*t7;
+    const sk_v4 t178 = t0*t92;
+    const sk_v4 t179 = t1*t92;
+    const sk_v4 t180 = -t0*t90 - t1*t91;
+    const sk_v4 t181 = -t0*t18;
+    const sk_v4 t182 = -t1*t18;
+    const sk_v4 t183 = t0*t16 + t1*t17;
+    const sk_v4 t184 = t0*t98;
+    const sk_v4 t185 = t1*t98;
+    const sk_v4 t186 = -t0*t96 - t1*t97;
+    const sk_v4 t187 = t0*t29;
+    const sk_v4 t188 = t1*t29;
+    const sk_v4 t189 = -t0*t27 - t1*t28;
+    const sk_v4 t190 = t0*t101;
+    const sk_v4 t191 = t1*t101;
+    const sk_v4 t192 = -t0*t99 - t1*t100;
+    const sk_v4 t193 = -t0*t43;
+    const sk_v4 t194 = -t1*t43;
+    const sk_v4 t195 = t0*t41 + t1*t42;
+    const sk_v4 t196 = t0*t107;
+    const sk_v4 t197 = t1*t107;
+    const sk_v4 t198 = -t0*t105 - t1*t106;
+    const sk_v4 t199 = -t0*t51;
+    const sk_v4 t200 = -t1*t51;
+    const sk_v4 t201 = t0*t49 + t1*t50;
+    const sk_v4 t214 = -t2*t85 + t7*t86;
+    const sk_v4 t215 = t2*t84 - t6*t86;
+    const sk_v4 t216 = t6*t85 - t7*t84;
+    const sk_v4 t217 = -t2*t91 + t7*t92;
+    const sk_v4 t218 = t2*t90 - t6*t92;
+    const sk_v4 t219 = t6*t91 - t7*t90;
+    const sk_v4 t220 = t17*t2 - t18*t7;
+    const sk_v4 t221 = -t16*t2 + t18*t6;
+    const sk_v4 t222 = t16*t7 - t17*t6;
+    const sk_v4 t223 = -t2*t97 + t7*t98;
+    const sk_v4 t224 = t2*t96 - t6*t98;
+    const sk_v4 t225 = t6*t97 - t7*t96;
+    const sk_v4 t226 = -t2*t28 + t29*t7;
+    const sk_v4 t227 = t2*t27 - t29*t6;
+    const sk_v4 t228 = -t27*t7 + t28*t6;
+    const sk_v4 t229 = -t100*t2 + t101*t7;
+    const sk_v4 t230 = -t101*t6 + t2*t99;
+    const sk_v4 t231 = t100*t6 - t7*t99;
+    const sk_v4 t232 = t2*t42 - t43*t7;
+    const sk_v4 t233 = -t2*t41 + t43*t6;
+    const sk_v4 t234 = t41*t7 - t42*t6;
+    const sk_v4 t235 = -t106*t2 + t107*t7;
+    const sk_v4 t236 = t105*t2 - t107*t6;
+    const sk_v4 t237 = -t105*t7 + t106*t6;
+    const sk_v4 t238 = t2*t50 - t51*t7;
+    const sk_v4 t239 = -t2*t49 + t51*t6;
+    const sk_v4 t240 = t49*t7 - t50*t6;
+    const sk_v4 t265 = -t17*t92 + t18*t91;
+    const sk_v4 t266 = t16*t92 - t18*t90;
+    const sk_v4 t267 = -t16*t91 + t17*t90;
+    const sk_v4 t268 = -t17*t98 + t18*t97;
+    const sk_v4 t269 = t16*t98 - t18*t96;
+    const sk_v4 t270 = -t16*t97 + t17*t96;
+    const sk_v4 t271 = -t17*t29 + t18*t28;
+    const sk_v4 t272 = t16*t29 - t18*t27;
+    const sk_v4 t273 = -t16*t28 + t17*t27;
+    const sk_v4 t274 = t100*t18 - t101*t17;
+    const sk_v4 t275 = t101*t16 - t18*t99;
+    const sk_v4 t276 = -t100*t16 + t17*t99;
+    const sk_v4 t277 = t17*t43 - t18*t42;
+    const sk_v4 t278 = -t16*t43 + t18*t41;
+    const sk_v4 t279 = t16*t42 - t17*t41;
+    const sk_v4 t280 = t106*t18 - t107*t17;
+    const sk_v4 t281 = -t105*t18 + t107*t16;
+    const sk_v4 t282 = t105*t17 - t106*t16;
+    const sk_v4 t283 = t17*t51 - t18*t50;
+    const sk_v4 t284 = -t16*t51 + t18*t49;
+    const sk_v4 t285 = t16*t50 - t17*t49;
+    const sk_v4 t322 = t28*t98 - t29*t97;
+    const sk_v4 t323 = -t27*t98 + t29*t96;
+    const sk_v4 t324 = t27*t97 - t28*t96;
+    const sk_v4 t325 = -t100*t29 + t101*t28;
+    const sk_v4 t326 = -t101*t27 + t29*t99;
+    const sk_v4 t327 = t100*t27 - t28*t99;
+    const sk_v4 t328 = -t28*t43 + t29*t42;
+    const sk_v4 t329 = t27*t43 - t29*t41;
+    const sk_v4 t330 = -t27*t42 + t28*t41;
+    const sk_v4 t331 = -t106*t29 + t107*t28;
+    const sk_v4 t332 = t105*t29 - t107*t27;
+    const sk_v4 t333 = -t105*t28 + t106*t27;
+    const sk_v4 t334 = -t28*t51 + t29*t50;
+    const sk_v4 t335 = t27*t51 - t29*t49;
+    const sk_v4 t336 = -t27*t50 + t28*t49;
+    const sk_v4 t385 = t100*t43 - t101*t42;
+    const sk_v4 t386 = t101*t41 - t43*t99;
+    const sk_v4 t387 = -t100*t41 + t42*t99;
+    const sk_v4 t388 = t106*t43 - t107*t42;
+    const sk_v4 t389 = -t105*t43 + t107*t41;
+    const sk_v4 t390 = t105*t42 - t106*t41;
+    const sk_v4 t391 = t42*t51 - t43*t50;
+    const sk_v4 t392 = -t41*t51 + t43*t49;
+    const sk_v4 t393 = t41*t50 - t42*t49;
+    const sk_v4 t452 = t106*t51 - t107*t50;
+    const sk_v4 t453 = -t105*t51 + t107*t49;
+    const sk_v4 t454 = t105*t50 - t106*t49;
+    SKV_STORE(J, 42, 0, -t67);
+    SKV_STORE(J, 42, 1, t78);
+    SKV_STORE(J, 42, 2, t84);
+    SKV_STORE(J, 42, 3, t90);
+    SKV_STORE(J, 42, 4, t96);
+    SKV_STORE(J, 42, 5, t99);
+    SKV_STORE(J, 42, 6, t105);
+    SKV_STORE(J, 42, 7, t66);
+    SKV_STORE(J, 42, 8, t79);
+    SKV_STORE(J, 42, 9, t85);
+    SKV_STORE(J, 42, 10, t91);
+    SKV_STORE(J, 42, 11, t97);
+    SKV_STORE(J, 42, 12, t100);
+    SKV_STORE(J, 42, 13, t106);
+    J[14] = J[56] = J[98] = J[140] = 0.0;
+    SKV_STORE(J, 42, 15, t80);
+    SKV_STORE(J, 42, 16, t86);
+    SKV_STORE(J, 42, 17, t92);
+    SKV_STORE(J, 42, 18, t98);
+    SKV_STORE(J, 42, 19, t101);
+    SKV_STORE(J, 42, 20, t107);
+    J[21] = J[63] = J[105] = J[147] = 0.0;
+    SKV_STORE(J, 42, 22, -t1);
+    SKV_STORE(J, 42, 23, t6);
+    SKV_STORE(J, 42, 24, -t16);
+    SKV_STORE(J, 42, 25, t27);
+    SKV_STORE(J, 42, 26, -t41);
+    SKV_STORE(J, 42, 27, -t49);
+    J[28] = J[70] = J[112] = J[154] = 0.0;
+    SKV_STORE(J, 42, 29, t0);
+    SKV_STORE(J, 42, 30, t7);
+    SKV_STORE(J, 42, 31, -t17);
+    SKV_STORE(J, 42, 32, t28);
+    SKV_STORE(J, 42, 33, -t42);
+    SKV_STORE(J, 42, 34, -t50);
+    J[35] = J[77] = J[119] = J[161] = 1.0;
+    J[36] = J[78] = J[120] = J[162] = 0.0;
+    SKV_STORE(J, 42, 37, t2);
+    SKV_STORE(J, 42, 38, -t18);
+    SKV_STORE(J, 42, 39, t29);
+    SKV_STORE(J, 42, 40, -t43);
+    SKV_STORE(J, 42, 41, -t51);
+    SKV_STORE(H, 294, 0, -t66);
+    SKV_STORE(H, 294, 1, -t79);
+    SKV_STORE(H, 294, 2, -t85);
+    SKV_STORE(H, 294, 3, -t91);
+    SKV_STORE(H, 294, 4, -t97);
+    SKV_STORE(H, 294, 5, -t100);
+    SKV_STORE(H, 294, 6, -t106);
+    SKV_STORE(H, 294, 7, -t67);
+    SKV_STORE(H, 294, 8, t78);
+    SKV_STORE(H, 294, 9, t84);
+    SKV_STORE(H, 294, 10, t90);
+    SKV_STORE(H, 294, 11, t96);
+    SKV_STORE(H, 294, 12, t99);
+    SKV_STORE(H, 294, 13, t105);
+    H[14] = H[308] = H[602] = H[896] = 0.0;
+    H[15] = H[309] = H[603] = H[897] = 0.0;
+    H[16] = H[310] = H[604] = H[898] = 0.0;
+    H[17] = H[311] = H[605] = H[899] = 0.0;
+    H[18] = H[312] = H[606] = H[900] = 0.0;
+    H[19] = H[313] = H[607] = H[901] = 0.0;
+    H[20] = H[314] = H[608] = H[902] = 0.0;
+    H[21] = H[315] = H[609] = H[903] = 0.0;
+    SKV_STORE(H, 294, 22, -t0);
+    SKV_STORE(H, 294, 23, -t7);
+    SKV_STORE(H, 294, 24, t17);
+    SKV_STORE(H, 294, 25, -t28);
+    SKV_STORE(H, 294, 26, t42);
+    SKV_STORE(H, 294, 27, t50);
+    H[28] = H[322] = H[616] = H[910] = 0.0;
+    SKV_STORE(H, 294, 29, -t1);
+    SKV_STORE(H, 294, 30, t6);
+    SKV_STORE(H, 294, 31, -t16);
+    SKV_STORE(H, 294, 32, t27);
+    SKV_STORE(H, 294, 33, -t41);
+    SKV_STORE(H, 294, 34, -t49);
+    H[35] = H[329] = H[623] = H[917] = 0.0;
+    H[36] = H[330] = H[624] = H[918] = 0.0;
+    H[37] = H[331] = H[625] = H[919] = 0.0;
+    H[38] = H[332] = H[626] = H[920] = 0.0;
+    H[39] = H[333] = H[627] = H[921] = 0.0;
+    H[40] = H[334] = H[628] = H[922] = 0.0;
+    H[41] = H[335] = H[629] = H[923] = 0.0;
+    SKV_STORE(H, 294, 42, -t79);
+    SKV_STORE(H, 294, 43, t171);
+    SKV_STORE(H, 294, 44, t174);
+    SKV_STORE(H, 294, 45, t178);
+    SKV_STORE(H, 294, 46, t184);
+    SKV_STORE(H, 294, 47, t190);
+    SKV_STORE(H, 294, 48, t196);
+    SKV_STORE(H, 294, 49, t78);
+    SKV_STORE(H, 294, 50, t172);
+    SKV_STORE(H, 294, 51, t175);
+    SKV_STORE(H, 294, 52, t179);
+    SKV_STORE(H, 294, 53, t185);
+    SKV_STORE(H, 294, 54, t191);
+    SKV_STORE(H, 294, 55, t197);
+    H[56] = H[350] = H[644] = H[938] = 0.0;
+    SKV_STORE(H, 294, 57, t173);
+    SKV_STORE(H, 294, 58, t176);
+    SKV_STORE(H, 294, 59, t180);
+    SKV_STORE(H, 294, 60, t186);
+    SKV_STORE(H, 294, 61, t192);
+    SKV_STORE(H, 294, 62, t198);
+    H[63] = H[357] = H[651] = H[945] = 0.0;
+    H[64] = H[358] = H[652] = H[946] = 0.0;
+    SKV_STORE(H, 294, 65, t4);
+    SKV_STORE(H, 294, 66, t181);
+    SKV_STORE(H, 294, 67, t187);
+    SKV_STORE(H, 294, 68, t193);
+    SKV_STORE(H, 294, 69, t199);
+    H[70] = H[364] = H[658] = H[952] = 0.0;
+    H[71] = H[365] = H[659] = H[953] = 0.0;
+    SKV_STORE(H, 294, 72, t5);
+    SKV_STORE(H, 294, 73, t182);
+    SKV_STORE(H, 294, 74, t188);
+    SKV_STORE(H, 294, 75, t194);
+    SKV_STORE(H, 294, 76, t200);
+    H[77] = H[371] = H[665] = H[959] = 0.0;
+    H[78] = H[372] = H[666] = H[960] = 0.0;
+    SKV_STORE(H, 294, 79, t177);
+    SKV_STORE(H, 294, 80, t183);
+    SKV_STORE(H, 294, 81, t189);
+    SKV_STORE(H, 294, 82, t195);
+    SKV_STORE(H, 294, 83, t201);
+    SKV_STORE(H, 294, 84, -t85);
+    SKV_STORE(H, 294, 85, t174);
+    SKV_STORE(H, 294, 86, t214);
+    SKV_STORE(H, 294, 87, t217);
+    SKV_STORE(H, 294, 88, t223);
+    SKV_STORE(H, 294, 89, t229);
+    SKV_STORE(H, 294, 90, t235);
+    SKV_STORE(H, 294, 91, t84);
+    SKV_STORE(H, 294, 92, t175);
+    SKV_STORE(H, 294, 93, t215);
+    SKV_STORE(H, 294, 94, t218);
+    SKV_STORE(H, 294, 95, t224);
+    SKV_STORE(H, 294, 96, t230);
+    SKV_STORE(H, 294, 97, t236);
+    H[98] = H[392] = H[686] = H[980] = 0.0;
+    SKV_STORE(H, 294, 99, t176);
+    SKV_STORE(H, 294, 100, t216);
+    SKV_STORE(H, 294, 101, t219);
+    SKV_STORE(H, 294, 102, t225);
+    SKV_STORE(H, 294, 103, t231);
+    SKV_STORE(H, 294, 104, t237);
+    H[105] = H[399] = H[693] = H[987] = 0.0;
+    H[106] = H[400] = H[694] = H[988] = 0.0;
+    H[107] = H[401] = H[695] = H[989] = 0.0;
+    SKV_STORE(H, 294, 108, t220);
+    SKV_STORE(H, 294, 109, t226);
+    SKV_STORE(H, 294, 110, t232);
+    SKV_STORE(H, 294, 111, t238);
+    H[112] = H[406] = H[700] = H[994] = 0.0;
+    H[113] = H[407] = H[701] = H[995] = 0.0;
+    H[114] = H[408] = H[702] = H[996] = 0.0;
+    SKV_STORE(H, 294, 115, t221);
+    SKV_STORE(H, 294, 116, t227);
+    SKV_STORE(H, 294, 117, t233);
+    SKV_STORE(H, 294, 118, t239);
+    H[119] = H[413] = H[707] = H[1001] = 0.0;
+    H[120] = H[414] = H[708] = H[1002] = 0.0;
+    H[121] = H[415] = H[709] = H[1003] = 0.0;
+    SKV_STORE(H, 294, 122, t222);
+    SKV_STORE(H, 294, 123, t228);
+    SKV_STORE(H, 294, 124, t234);
+    SKV_STORE(H, 294, 125, t240);
+    SKV_STORE(H, 294, 126, -t91);
+    SKV_STORE(H, 294, 127, t178);
+    SKV_STORE(H, 294, 128, t217);
+    SKV_STORE(H, 294, 129, t265);
+    SKV_STORE(H, 294, 130, t268);
+    SKV_STORE(H, 294, 131, t274);
+    SKV_STORE(H, 294, 132, t280);
+    SKV_STORE(H, 294, 133, t90);
+    SKV_STORE(H, 294, 134, t179);
+    SKV_STORE(H, 294, 135, t218);
+    SKV_STORE(H, 294, 136, t266);
+    SKV_STORE(H, 294, 137, t269);
+    SKV_STORE(H, 294, 138, t275);
+    SKV_STORE(H, 294, 139, t281);
+    H[140] = H[434] = H[728] = H[1022] = 0.0;
+    SKV_STORE(H, 294, 141, t180);
+    SKV_STORE(H, 294, 142, t219);
+    SKV_STORE(H, 294, 143, t267);
+    SKV_STORE(H, 294, 144, t270);
+    SKV_STORE(H, 294, 145, t276);
+    SKV_STORE(H, 294, 146, t282);
+    H[147] = H[441] = H[735] = H[1029] = 0.0;
+    H[148] = H[442] = H[736] = H[1030] = 0.0;
+    H[149] = H[443] = H[737] = H[1031] = 0.0;
+    H[150] = H[444] = H[738] = H[1032] = 0.0;
+    SKV_STORE(H, 294, 151, t271);
+    SKV_STORE(H, 294, 152, t277);
+    SKV_STORE(H, 294, 153, t283);
+    H[154] = H[448] = H[742] = H[1036] = 0.0;
+    H[155] = H[449] = H[743] = H[1037] = 0.0;
+    H[156] = H[450] = H[744] = H[1038] = 0.0;
+    H[157] = H[451] = H[745] = H[1039] = 0.0;
+    SKV_STORE(H, 294, 158, t272);
+    SKV_STORE(H, 294, 159, t278);
+    SKV_STORE(H, 294, 160, t284);
+    H[161] = H[455] = H[749] = H[1043] = 0.0;
+    H[162] = H[456] = H[750] = H[1044] = 0.0;
+    H[163] = H[457] = H[751] = H[1045] = 0.0;
+    H[164] = H[458] = H[752] = H[1046] = 0.0;
+    SKV_STORE(H, 294, 165, t273);
+    SKV_STORE(H, 294, 166, t279);
+    SKV_STORE(H, 294, 167, t285);
+    SKV_STORE(H, 294, 168, -t97);
+    SKV_STORE(H, 294, 169, t184);
+    SKV_STORE(H, 294, 170, t223);
+    SKV_STORE(H, 294, 171, t268);
+    SKV_STORE(H, 294, 172, t322);
+    SKV_STORE(H, 294, 173, t325);
+    SKV_STORE(H, 294, 174, t331);
+    SKV_STORE(H, 294, 175, t96);
+    SKV_STORE(H, 294, 176, t185);
+    SKV_STORE(H, 294, 177, t224);
+    SKV_STORE(H, 294, 178, t269);
+    SKV_STORE(H, 294, 179, t323);
+    SKV_STORE(H, 294, 180, t326);
+    SKV_STORE(H, 294, 181, t332);
+    H[182] = H[476] = H[770] = H[1064] = 0.0;
+    SKV_STORE(H, 294, 183, t186);
+    SKV_STORE(H, 294, 184, t225);
+    SKV_STORE(H, 294, 185, t270);
+    SKV_STORE(H, 294, 186, t324);
+    SKV_STORE(H, 294, 187, t327);
+    SKV_STORE(H, 294, 188, t333);
+    H[189] = H[483] = H[777] = H[1071] = 0.0;
+    H[190] = H[484] = H[778] = H[1072] = 0.0;
+    H[191] = H[485] = H[779] = H[1073] = 0.0;
+    H[192] = H[486] = H[780] = H[1074] = 0.0;
+    H[193] = H[487] = H[781] = H[1075] = 0.0;
+    SKV_STORE(H, 294, 194, t328);
+    SKV_STORE(H, 294, 195, t334);
+    H[196] = H[490] = H[784] = H[1078] = 0.0;
+    H[197] = H[491] = H[785] = H[1079] = 0.0;
+    H[198] = H[492] = H[786] = H[1080] = 0.0;
+    H[199] = H[493] = H[787] = H[1081] = 0.0;
+    H[200] = H[494] = H[788] = H[1082] = 0.0;
+    SKV_STORE(H, 294, 201, t329);
+    SKV_STORE(H, 294, 202, t335);
+    H[203] = H[497] = H[791] = H[1085] = 0.0;
+    H[204] = H[498] = H[792] = H[1086] = 0.0;
+    H[205] = H[499] = H[793] = H[1087] = 0.0;
+    H[206] = H[500] = H[794] = H[1088] = 0.0;
+    H[207] = H[501] = H[795] = H[1089] = 0.0;
+    SKV_STORE(H, 294, 208, t330);
+    SKV_STORE(H, 294, 209, t336);
+    SKV_STORE(H, 294, 210, -t100);
+    SKV_STORE(H, 294, 211, t190);
+    SKV_STORE(H, 294, 212, t229);
+    SKV_STORE(H, 294, 213, t274);
+    SKV_STORE(H, 294, 214, t325);
+    SKV_STORE(H, 294, 215, t385);
+    SKV_STORE(H, 294, 216, t388);
+    SKV_STORE(H, 294, 217, t99);
+    SKV_STORE(H, 294, 218, t191);
+    SKV_STORE(H, 294, 219, t230);
+    SKV_STORE(H, 294, 220, t275);
+    SKV_STORE(H, 294, 221, t326);
+    SKV_STORE(H, 294, 222, t386);
+    SKV_STORE(H, 294, 223, t389);
+    H[224] = H[518] = H[812] = H[1106] = 0.0;
+    SKV_STORE(H, 294, 225, t192);
+    SKV_STORE(H, 294, 226, t231);
+    SKV_STORE(H, 294, 227, t276);
+    SKV_STORE(H, 294, 228, t327);
+    SKV_STORE(H, 294, 229, t387);
+    SKV_STORE(H, 294, 230, t390);
+    H[231] = H[525] = H[819] = H[1113] = 0.0;
+    H[232] = H[526] = H[820] = H[1114] = 0.0;
+    H[233] = H[527] = H[821] = H[1115] = 0.0;
+    H[234] = H[528] = H[822] = H[1116] = 0.0;
+    H[235] = H[529] = H[823] = H[1117] = 0.0;
+    H[236] = H[530] = H[824] = H[1118] = 0.0;
+    SKV_STORE(H, 294, 237, t391);
+    H[238] = H[532] = H[826] = H[1120] = 0.0;
+    H[239] = H[533] = H[827] = H[1121] = 0.0;
+    H[240] = H[534] = H[828] = H[1122] = 0.0;
+    H[241] = H[535] = H[829] = H[1123] = 0.0;
+    H[242] = H[536] = H[830] = H[1124] = 0.0;
+    H[243] = H[537] = H[831] = H[1125] = 0.0;
+    SKV_STORE(H, 294, 244, t392);
+    H[245] = H[539] = H[833] = H[1127] = 0.0;
+    H[246] = H[540] = H[834] = H[1128] = 0.0;
+    H[247] = H[541] = H[835] = H[1129] = 0.0;
+    H[248] = H[542] = H[836] = H[1130] = 0.0;
+    H[249] = H[543] = H[837] = H[1131] = 0.0;
+    H[250] = H[544] = H[838] = H[1132] = 0.0;
+    SKV_STORE(H, 294, 251, t393);
+    SKV_STORE(H, 294, 252, -t106);
+    SKV_STORE(H, 294, 253, t196);
+    SKV_STORE(H, 294, 254, t235);
+    SKV_STORE(H, 294, 255, t280);
+    SKV_STORE(H, 294, 256, t331);
+    SKV_STORE(H, 294, 257, t388);
+    SKV_STORE(H, 294, 258, t452);
+    SKV_STORE(H, 294, 259, t105);
+    SKV_STORE(H, 294, 260, t197);
+    SKV_STORE(H, 294, 261, t236);
+    SKV_STORE(H, 294, 262, t281);
+    SKV_STORE(H, 294, 263, t332);
+    SKV_STORE(H, 294, 264, t389);
+    SKV_STORE(H, 294, 265, t453);
+    H[266] = H[560] = H[854] = H[1148] = 0.0;
+    SKV_STORE(H, 294, 267, t198);
+    SKV_STORE(H, 294, 268, t237);
+    SKV_STORE(H, 294, 269, t282);
+    SKV_STORE(H, 294, 270, t333);
+    SKV_STORE(H, 294, 271, t390);
+    SKV_STORE(H, 294, 272, t454);
+    H[273] = H[567] = H[861] = H[1155] = 0.0;
+    H[274] = H[568] = H[862] = H[1156] = 0.0;
+    H[275] = H[569] = H[863] = H[1157] = 0.0;
+    H[276] = H[570] = H[864] = H[1158] = 0.0;
+    H[277] = H[571] = H[865] = H[1159] = 0.0;
+    H[278] = H[572] = H[866] = H[1160] = 0.0;
+    H[279] = H[573] = H[867] = H[1161] = 0.0;
+    H[280] = H[574] = H[868] = H[1162] = 0.0;
+    H[281] = H[575] = H[869] = H[1163] = 0.0;
+    H[282] = H[576] = H[870] = H[1164] = 0.0;
+    H[283] = H[577] = H[871] = H[1165] = 0.0;
+    H[284] = H[578] = H[872] = H[1166] = 0.0;
+    H[285] = H[579] = H[873] = H[1167] = 0.0;
+    H[286] = H[580] = H[874] = H[1168] = 0.0;
+    H[287] = H[581] = H[875] = H[1169] = 0.0;
+    H[288] = H[582] = H[876] = H[1170] = 0.0;
+    H[289] = H[583] = H[877] = H[1171] = 0.0;
+    H[290] = H[584] = H[878] = H[1172] = 0.0;
+    H[291] = H[585] = H[879] = H[1173] = 0.0;
+    H[292] = H[586] = H[880] = H[1174] = 0.0;
+    H[293] = H[587] = H[881] = H[1175] = 0.0;
+}
+#endif
+
+
 void symkin_panda_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_hessian0_x4_(q + i * 7, J + i * 42, H + i * 294);
+#endif
+    for (; i < N; ++i)
         jacob0_hessian0_(q + i * 7, J + i * 42, H + i * 294);
 }
 

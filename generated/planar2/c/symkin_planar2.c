@@ -29,6 +29,11 @@ const char *const symkin_planar2_joint_names[SYMKIN_PLANAR2_N] = {
     "q1",
 };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
 #ifdef SYMKIN_USE_LIBM
 /* The C library's sin and cos (SYMKIN_USE_LIBM). */
 #define sk_sin sin
@@ -41,10 +46,11 @@ const char *const symkin_planar2_joint_names[SYMKIN_PLANAR2_N] = {
  * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
- * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
- * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
- * `symkin compile --libm`) to call the C library's sin and cos instead.
+ * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
+ * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
+ * quadrant), so an angle whose sin and cos are both used is reduced once. Define
+ * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
+ * instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -52,18 +58,16 @@ const char *const symkin_planar2_joint_names[SYMKIN_PLANAR2_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
-#if defined(__GNUC__) || defined(__clang__)
-#define SK_INLINE static inline __attribute__((always_inline))
-#else
-#define SK_INLINE static inline
-#endif
 
 /* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
    the second stage always runs (its rounding error is captured exactly), the third's result is
    selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
 SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
-    const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
+    /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
+       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+    const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
     double w = k * 6.07710050630396597660e-11;
     const double r = t - w;
@@ -134,6 +138,128 @@ SK_INLINE double sk_cos(double x)
 
 #endif /* SYMKIN_USE_LIBM */
 
+/*
+ * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
+ * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
+ * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
+ * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
+ * configuration per step; other compilers and C++ get it.
+ */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
+#define SYMKIN_LANES 4
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* vectors by value: every such function is inlined */
+#endif
+typedef double sk_v4 __attribute__((vector_size(32)));
+typedef long long sk_m4 __attribute__((vector_size(32)));
+#define SKV_SPLAT(x) ((sk_v4){(x), (x), (x), (x)})
+/* out[i] of four consecutive outputs of size S from the lanes of the vector v */
+#define SKV_STORE(out, S, i, v) \
+    do { \
+        const sk_v4 v_ = (v); \
+        (out)[i] = v_[0], (out)[(S) + (i)] = v_[1], (out)[2 * (S) + (i)] = v_[2], (out)[3 * (S) + (i)] = v_[3]; \
+    } while (0)
+
+#ifdef SYMKIN_USE_LIBM
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
+}
+#else
+SK_INLINE sk_v4 skv_abs_(sk_v4 x)
+{
+    return (sk_v4)((sk_m4)x & 0x7fffffffffffffffLL);
+}
+
+/* a where m is 0, b where m is all ones */
+SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
+{
+    return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
+}
+
+/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
+SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
+{
+    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const sk_v4 k = kb - 6755399441055744.0;
+    const sk_v4 t = x - k * 1.57079632673412561417e+00;
+    sk_v4 w = k * 6.07710050630396597660e-11;
+    const sk_v4 r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const sk_v4 y = r - w;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
+    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
+        sk_v4 w3 = k * 2.02226624871116645580e-21;
+        const sk_v4 r3 = r - w3;
+        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+        const sk_v4 y3 = r3 - w3;
+        *r0 = skv_where_(third, y, y3);
+        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
+    }
+    return (sk_m4)kb;
+}
+
+SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+        + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
+}
+
+SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+        + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const sk_v4 hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
+}
+
+/* sk_select_ lane by lane */
+SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
+{
+    const sk_m4 m = 0 - (k & 1);
+    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
+}
+
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) s[l] = sin(x[l]);
+    return s;
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) c[l] = cos(x[l]);
+    return c;
+}
+#endif /* SYMKIN_USE_LIBM */
+#else
+#define SYMKIN_LANES 1
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[2] = { 0, 1 };
@@ -147,16 +273,16 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = cos(x0);
-    const double x2 = sin(x0);
+    const double x1 = sk_cos(x0);
+    const double x2 = sk_sin(x0);
     T[0] = x1;
     T[1] = -x2;
     T[2] = 0.0;
-    T[3] = x1 + cos(q0);
+    T[3] = x1 + sk_cos(q0);
     T[4] = x2;
     T[5] = x1;
     T[6] = 0.0;
-    T[7] = x2 + sin(q0);
+    T[7] = x2 + sk_sin(q0);
     T[8] = 0.0;
     T[9] = 0.0;
     T[10] = 1.0;
@@ -172,9 +298,44 @@ void symkin_planar2_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
+{
+    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = skv_cos(x0);
+    const sk_v4 x2 = skv_sin(x0);
+    SKV_STORE(T, 16, 0, x1);
+    SKV_STORE(T, 16, 1, -x2);
+    T[2] = T[18] = T[34] = T[50] = 0.0;
+    SKV_STORE(T, 16, 3, x1 + skv_cos(q0));
+    SKV_STORE(T, 16, 4, x2);
+    SKV_STORE(T, 16, 5, x1);
+    T[6] = T[22] = T[38] = T[54] = 0.0;
+    SKV_STORE(T, 16, 7, x2 + skv_sin(q0));
+    T[8] = T[24] = T[40] = T[56] = 0.0;
+    T[9] = T[25] = T[41] = T[57] = 0.0;
+    T[10] = T[26] = T[42] = T[58] = 1.0;
+    T[11] = T[27] = T[43] = T[59] = 0.0;
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+}
+#endif
+
+
 void symkin_planar2_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_x4_(q + i * 2, T + i * 16);
+#endif
+    for (; i < N; ++i)
         fkine_(q + i * 2, T + i * 16);
 }
 
@@ -183,11 +344,11 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double x0 = cos(q0);
-    const double x1 = sin(q0);
+    const double x0 = sk_cos(q0);
+    const double x1 = sk_sin(q0);
     const double x2 = q0 + q1;
-    const double x3 = cos(x2);
-    const double x4 = sin(x2);
+    const double x3 = sk_cos(x2);
+    const double x4 = sk_sin(x2);
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -227,9 +388,62 @@ void symkin_planar2_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
+#if SYMKIN_LANES == 4
+/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
+{
+    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    const sk_v4 x0 = skv_cos(q0);
+    const sk_v4 x1 = skv_sin(q0);
+    const sk_v4 x2 = q0 + q1;
+    const sk_v4 x3 = skv_cos(x2);
+    const sk_v4 x4 = skv_sin(x2);
+    SKV_STORE(links, 32, 0, x0);
+    SKV_STORE(links, 32, 1, -x1);
+    links[2] = links[34] = links[66] = links[98] = 0.0;
+    links[3] = links[35] = links[67] = links[99] = 0.0;
+    SKV_STORE(links, 32, 4, x1);
+    SKV_STORE(links, 32, 5, x0);
+    links[6] = links[38] = links[70] = links[102] = 0.0;
+    links[7] = links[39] = links[71] = links[103] = 0.0;
+    links[8] = links[40] = links[72] = links[104] = 0.0;
+    links[9] = links[41] = links[73] = links[105] = 0.0;
+    links[10] = links[42] = links[74] = links[106] = 1.0;
+    links[11] = links[43] = links[75] = links[107] = 0.0;
+    links[12] = links[44] = links[76] = links[108] = 0.0;
+    links[13] = links[45] = links[77] = links[109] = 0.0;
+    links[14] = links[46] = links[78] = links[110] = 0.0;
+    links[15] = links[47] = links[79] = links[111] = 1.0;
+    SKV_STORE(links, 32, 16, x3);
+    SKV_STORE(links, 32, 17, -x4);
+    links[18] = links[50] = links[82] = links[114] = 0.0;
+    SKV_STORE(links, 32, 19, x0);
+    SKV_STORE(links, 32, 20, x4);
+    SKV_STORE(links, 32, 21, x3);
+    links[22] = links[54] = links[86] = links[118] = 0.0;
+    SKV_STORE(links, 32, 23, x1);
+    links[24] = links[56] = links[88] = links[120] = 0.0;
+    links[25] = links[57] = links[89] = links[121] = 0.0;
+    links[26] = links[58] = links[90] = links[122] = 1.0;
+    links[27] = links[59] = links[91] = links[123] = 0.0;
+    links[28] = links[60] = links[92] = links[124] = 0.0;
+    links[29] = links[61] = links[93] = links[125] = 0.0;
+    links[30] = links[62] = links[94] = links[126] = 0.0;
+    links[31] = links[63] = links[95] = links[127] = 1.0;
+}
+#endif
+
+
 void symkin_planar2_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        link_poses_x4_(q + i * 2, links + i * 32);
+#endif
+    for (; i < N; ++i)
         link_poses_(q + i * 2, links + i * 32);
 }
 
@@ -239,11 +453,11 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sin(x0);
-    const double x2 = cos(x0);
-    J[0] = -x1 - sin(q0);
+    const double x1 = sk_sin(x0);
+    const double x2 = sk_cos(x0);
+    J[0] = -x1 - sk_sin(q0);
     J[1] = -x1;
-    J[2] = x2 + cos(q0);
+    J[2] = x2 + sk_cos(q0);
     J[3] = x2;
     J[4] = 0.0;
     J[5] = 0.0;
@@ -260,9 +474,40 @@ void symkin_planar2_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = skv_sin(x0);
+    const sk_v4 x2 = skv_cos(x0);
+    SKV_STORE(J, 12, 0, -x1 - skv_sin(q0));
+    SKV_STORE(J, 12, 1, -x1);
+    SKV_STORE(J, 12, 2, x2 + skv_cos(q0));
+    SKV_STORE(J, 12, 3, x2);
+    J[4] = J[16] = J[28] = J[40] = 0.0;
+    J[5] = J[17] = J[29] = J[41] = 0.0;
+    J[6] = J[18] = J[30] = J[42] = 0.0;
+    J[7] = J[19] = J[31] = J[43] = 0.0;
+    J[8] = J[20] = J[32] = J[44] = 0.0;
+    J[9] = J[21] = J[33] = J[45] = 0.0;
+    J[10] = J[22] = J[34] = J[46] = 1.0;
+    J[11] = J[23] = J[35] = J[47] = 1.0;
+}
+#endif
+
+
 void symkin_planar2_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_x4_(q + i * 2, J + i * 12);
+#endif
+    for (; i < N; ++i)
         jacob0_(q + i * 2, J + i * 12);
 }
 
@@ -270,9 +515,9 @@ void symkin_planar2_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
 {
     const double q1 = q[1];
-    J[0] = sin(q1);
+    J[0] = sk_sin(q1);
     J[1] = 0.0;
-    J[2] = cos(q1) + 1.0;
+    J[2] = sk_cos(q1) + 1.0;
     J[3] = 1.0;
     J[4] = 0.0;
     J[5] = 0.0;
@@ -289,9 +534,36 @@ void symkin_planar2_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    SKV_STORE(J, 12, 0, skv_sin(q1));
+    J[1] = J[13] = J[25] = J[37] = 0.0;
+    SKV_STORE(J, 12, 2, skv_cos(q1) + 1.0);
+    J[3] = J[15] = J[27] = J[39] = 1.0;
+    J[4] = J[16] = J[28] = J[40] = 0.0;
+    J[5] = J[17] = J[29] = J[41] = 0.0;
+    J[6] = J[18] = J[30] = J[42] = 0.0;
+    J[7] = J[19] = J[31] = J[43] = 0.0;
+    J[8] = J[20] = J[32] = J[44] = 0.0;
+    J[9] = J[21] = J[33] = J[45] = 0.0;
+    J[10] = J[22] = J[34] = J[46] = 1.0;
+    J[11] = J[23] = J[35] = J[47] = 1.0;
+}
+#endif
+
+
 void symkin_planar2_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacobe_x4_(q + i * 2, J + i * 12);
+#endif
+    for (; i < N; ++i)
         jacobe_(q + i * 2, J + i * 12);
 }
 
@@ -301,13 +573,13 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = cos(x0);
+    const double x1 = sk_cos(x0);
     const double x2 = -x1;
-    const double x3 = sin(x0);
+    const double x3 = sk_sin(x0);
     const double x4 = -x3;
-    H[0] = -x1 - cos(q0);
+    H[0] = -x1 - sk_cos(q0);
     H[1] = x2;
-    H[2] = -x3 - sin(q0);
+    H[2] = -x3 - sk_sin(q0);
     H[3] = x4;
     H[4] = 0.0;
     H[5] = 0.0;
@@ -336,9 +608,54 @@ void symkin_planar2_hessian0(const double *q, double *H)
     hessian0_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = skv_cos(x0);
+    const sk_v4 x2 = -x1;
+    const sk_v4 x3 = skv_sin(x0);
+    const sk_v4 x4 = -x3;
+    SKV_STORE(H, 24, 0, -x1 - skv_cos(q0));
+    SKV_STORE(H, 24, 1, x2);
+    SKV_STORE(H, 24, 2, -x3 - skv_sin(q0));
+    SKV_STORE(H, 24, 3, x4);
+    H[4] = H[28] = H[52] = H[76] = 0.0;
+    H[5] = H[29] = H[53] = H[77] = 0.0;
+    H[6] = H[30] = H[54] = H[78] = 0.0;
+    H[7] = H[31] = H[55] = H[79] = 0.0;
+    H[8] = H[32] = H[56] = H[80] = 0.0;
+    H[9] = H[33] = H[57] = H[81] = 0.0;
+    H[10] = H[34] = H[58] = H[82] = 0.0;
+    H[11] = H[35] = H[59] = H[83] = 0.0;
+    SKV_STORE(H, 24, 12, x2);
+    SKV_STORE(H, 24, 13, x2);
+    SKV_STORE(H, 24, 14, x4);
+    SKV_STORE(H, 24, 15, x4);
+    H[16] = H[40] = H[64] = H[88] = 0.0;
+    H[17] = H[41] = H[65] = H[89] = 0.0;
+    H[18] = H[42] = H[66] = H[90] = 0.0;
+    H[19] = H[43] = H[67] = H[91] = 0.0;
+    H[20] = H[44] = H[68] = H[92] = 0.0;
+    H[21] = H[45] = H[69] = H[93] = 0.0;
+    H[22] = H[46] = H[70] = H[94] = 0.0;
+    H[23] = H[47] = H[71] = H[95] = 0.0;
+}
+#endif
+
+
 void symkin_planar2_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessian0_x4_(q + i * 2, H + i * 24);
+#endif
+    for (; i < N; ++i)
         hessian0_(q + i * 2, H + i * 24);
 }
 
@@ -358,9 +675,9 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     H[9] = 0.0;
     H[10] = 0.0;
     H[11] = 0.0;
-    H[12] = cos(q1);
+    H[12] = sk_cos(q1);
     H[13] = 0.0;
-    H[14] = -sin(q1);
+    H[14] = -sk_sin(q1);
     H[15] = 0.0;
     H[16] = 0.0;
     H[17] = 0.0;
@@ -377,9 +694,48 @@ void symkin_planar2_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    H[0] = H[24] = H[48] = H[72] = 0.0;
+    H[1] = H[25] = H[49] = H[73] = 0.0;
+    H[2] = H[26] = H[50] = H[74] = 0.0;
+    H[3] = H[27] = H[51] = H[75] = 0.0;
+    H[4] = H[28] = H[52] = H[76] = 0.0;
+    H[5] = H[29] = H[53] = H[77] = 0.0;
+    H[6] = H[30] = H[54] = H[78] = 0.0;
+    H[7] = H[31] = H[55] = H[79] = 0.0;
+    H[8] = H[32] = H[56] = H[80] = 0.0;
+    H[9] = H[33] = H[57] = H[81] = 0.0;
+    H[10] = H[34] = H[58] = H[82] = 0.0;
+    H[11] = H[35] = H[59] = H[83] = 0.0;
+    SKV_STORE(H, 24, 12, skv_cos(q1));
+    H[13] = H[37] = H[61] = H[85] = 0.0;
+    SKV_STORE(H, 24, 14, -skv_sin(q1));
+    H[15] = H[39] = H[63] = H[87] = 0.0;
+    H[16] = H[40] = H[64] = H[88] = 0.0;
+    H[17] = H[41] = H[65] = H[89] = 0.0;
+    H[18] = H[42] = H[66] = H[90] = 0.0;
+    H[19] = H[43] = H[67] = H[91] = 0.0;
+    H[20] = H[44] = H[68] = H[92] = 0.0;
+    H[21] = H[45] = H[69] = H[93] = 0.0;
+    H[22] = H[46] = H[70] = H[94] = 0.0;
+    H[23] = H[47] = H[71] = H[95] = 0.0;
+}
+#endif
+
+
 void symkin_planar2_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessiane_x4_(q + i * 2, H + i * 24);
+#endif
+    for (; i < N; ++i)
         hessiane_(q + i * 2, H + i * 24);
 }
 
@@ -389,11 +745,11 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = cos(x0);
-    const double x2 = sin(x0);
+    const double x1 = sk_cos(x0);
+    const double x2 = sk_sin(x0);
     const double x3 = -x2;
-    const double x4 = x1 + cos(q0);
-    const double x5 = x2 + sin(q0);
+    const double x4 = x1 + sk_cos(q0);
+    const double x5 = x2 + sk_sin(q0);
     T[0] = x1;
     T[1] = x3;
     T[2] = 0.0;
@@ -429,9 +785,59 @@ void symkin_planar2_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = skv_cos(x0);
+    const sk_v4 x2 = skv_sin(x0);
+    const sk_v4 x3 = -x2;
+    const sk_v4 x4 = x1 + skv_cos(q0);
+    const sk_v4 x5 = x2 + skv_sin(q0);
+    SKV_STORE(T, 16, 0, x1);
+    SKV_STORE(T, 16, 1, x3);
+    T[2] = T[18] = T[34] = T[50] = 0.0;
+    SKV_STORE(T, 16, 3, x4);
+    SKV_STORE(T, 16, 4, x2);
+    SKV_STORE(T, 16, 5, x1);
+    T[6] = T[22] = T[38] = T[54] = 0.0;
+    SKV_STORE(T, 16, 7, x5);
+    T[8] = T[24] = T[40] = T[56] = 0.0;
+    T[9] = T[25] = T[41] = T[57] = 0.0;
+    T[10] = T[26] = T[42] = T[58] = 1.0;
+    T[11] = T[27] = T[43] = T[59] = 0.0;
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+    SKV_STORE(J, 12, 0, -x5);
+    SKV_STORE(J, 12, 1, x3);
+    SKV_STORE(J, 12, 2, x4);
+    SKV_STORE(J, 12, 3, x1);
+    J[4] = J[16] = J[28] = J[40] = 0.0;
+    J[5] = J[17] = J[29] = J[41] = 0.0;
+    J[6] = J[18] = J[30] = J[42] = 0.0;
+    J[7] = J[19] = J[31] = J[43] = 0.0;
+    J[8] = J[20] = J[32] = J[44] = 0.0;
+    J[9] = J[21] = J[33] = J[45] = 0.0;
+    J[10] = J[22] = J[34] = J[46] = 1.0;
+    J[11] = J[23] = J[35] = J[47] = 1.0;
+}
+#endif
+
+
 void symkin_planar2_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_jacob0_x4_(q + i * 2, T + i * 16, J + i * 12);
+#endif
+    for (; i < N; ++i)
         fkine_jacob0_(q + i * 2, T + i * 16, J + i * 12);
 }
 
@@ -441,11 +847,11 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q0 = q[0];
     const double q1 = q[1];
     const double x0 = q0 + q1;
-    const double x1 = sin(x0);
-    const double x2 = -x1 - sin(q0);
+    const double x1 = sk_sin(x0);
+    const double x2 = -x1 - sk_sin(q0);
     const double x3 = -x1;
-    const double x4 = cos(x0);
-    const double x5 = x4 + cos(q0);
+    const double x4 = sk_cos(x0);
+    const double x5 = x4 + sk_cos(q0);
     const double x6 = -x4;
     J[0] = x2;
     J[1] = x3;
@@ -490,9 +896,68 @@ void symkin_planar2_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
+    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
+    const sk_v4 x0 = q0 + q1;
+    const sk_v4 x1 = skv_sin(x0);
+    const sk_v4 x2 = -x1 - skv_sin(q0);
+    const sk_v4 x3 = -x1;
+    const sk_v4 x4 = skv_cos(x0);
+    const sk_v4 x5 = x4 + skv_cos(q0);
+    const sk_v4 x6 = -x4;
+    SKV_STORE(J, 12, 0, x2);
+    SKV_STORE(J, 12, 1, x3);
+    SKV_STORE(J, 12, 2, x5);
+    SKV_STORE(J, 12, 3, x4);
+    J[4] = J[16] = J[28] = J[40] = 0.0;
+    J[5] = J[17] = J[29] = J[41] = 0.0;
+    J[6] = J[18] = J[30] = J[42] = 0.0;
+    J[7] = J[19] = J[31] = J[43] = 0.0;
+    J[8] = J[20] = J[32] = J[44] = 0.0;
+    J[9] = J[21] = J[33] = J[45] = 0.0;
+    J[10] = J[22] = J[34] = J[46] = 1.0;
+    J[11] = J[23] = J[35] = J[47] = 1.0;
+    SKV_STORE(H, 24, 0, -x5);
+    SKV_STORE(H, 24, 1, x6);
+    SKV_STORE(H, 24, 2, x2);
+    SKV_STORE(H, 24, 3, x3);
+    H[4] = H[28] = H[52] = H[76] = 0.0;
+    H[5] = H[29] = H[53] = H[77] = 0.0;
+    H[6] = H[30] = H[54] = H[78] = 0.0;
+    H[7] = H[31] = H[55] = H[79] = 0.0;
+    H[8] = H[32] = H[56] = H[80] = 0.0;
+    H[9] = H[33] = H[57] = H[81] = 0.0;
+    H[10] = H[34] = H[58] = H[82] = 0.0;
+    H[11] = H[35] = H[59] = H[83] = 0.0;
+    SKV_STORE(H, 24, 12, x6);
+    SKV_STORE(H, 24, 13, x6);
+    SKV_STORE(H, 24, 14, x3);
+    SKV_STORE(H, 24, 15, x3);
+    H[16] = H[40] = H[64] = H[88] = 0.0;
+    H[17] = H[41] = H[65] = H[89] = 0.0;
+    H[18] = H[42] = H[66] = H[90] = 0.0;
+    H[19] = H[43] = H[67] = H[91] = 0.0;
+    H[20] = H[44] = H[68] = H[92] = 0.0;
+    H[21] = H[45] = H[69] = H[93] = 0.0;
+    H[22] = H[46] = H[70] = H[94] = 0.0;
+    H[23] = H[47] = H[71] = H[95] = 0.0;
+}
+#endif
+
+
 void symkin_planar2_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_hessian0_x4_(q + i * 2, J + i * 12, H + i * 24);
+#endif
+    for (; i < N; ++i)
         jacob0_hessian0_(q + i * 2, J + i * 12, H + i * 24);
 }
 

@@ -33,6 +33,11 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
     "q5",
 };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
 #ifdef SYMKIN_USE_LIBM
 /* The C library's sin and cos (SYMKIN_USE_LIBM). */
 #define sk_sin sin
@@ -45,10 +50,11 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
  * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
- * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
- * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
- * `symkin compile --libm`) to call the C library's sin and cos instead.
+ * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
+ * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
+ * quadrant), so an angle whose sin and cos are both used is reduced once. Define
+ * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
+ * instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -56,18 +62,16 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
-#if defined(__GNUC__) || defined(__clang__)
-#define SK_INLINE static inline __attribute__((always_inline))
-#else
-#define SK_INLINE static inline
-#endif
 
 /* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
    the second stage always runs (its rounding error is captured exactly), the third's result is
    selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
 SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
-    const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
+    /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
+       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+    const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
     double w = k * 6.07710050630396597660e-11;
     const double r = t - w;
@@ -138,6 +142,128 @@ SK_INLINE double sk_cos(double x)
 
 #endif /* SYMKIN_USE_LIBM */
 
+/*
+ * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
+ * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
+ * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
+ * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
+ * configuration per step; other compilers and C++ get it.
+ */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
+#define SYMKIN_LANES 4
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* vectors by value: every such function is inlined */
+#endif
+typedef double sk_v4 __attribute__((vector_size(32)));
+typedef long long sk_m4 __attribute__((vector_size(32)));
+#define SKV_SPLAT(x) ((sk_v4){(x), (x), (x), (x)})
+/* out[i] of four consecutive outputs of size S from the lanes of the vector v */
+#define SKV_STORE(out, S, i, v) \
+    do { \
+        const sk_v4 v_ = (v); \
+        (out)[i] = v_[0], (out)[(S) + (i)] = v_[1], (out)[2 * (S) + (i)] = v_[2], (out)[3 * (S) + (i)] = v_[3]; \
+    } while (0)
+
+#ifdef SYMKIN_USE_LIBM
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
+}
+#else
+SK_INLINE sk_v4 skv_abs_(sk_v4 x)
+{
+    return (sk_v4)((sk_m4)x & 0x7fffffffffffffffLL);
+}
+
+/* a where m is 0, b where m is all ones */
+SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
+{
+    return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
+}
+
+/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
+SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
+{
+    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const sk_v4 k = kb - 6755399441055744.0;
+    const sk_v4 t = x - k * 1.57079632673412561417e+00;
+    sk_v4 w = k * 6.07710050630396597660e-11;
+    const sk_v4 r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const sk_v4 y = r - w;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
+    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
+        sk_v4 w3 = k * 2.02226624871116645580e-21;
+        const sk_v4 r3 = r - w3;
+        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+        const sk_v4 y3 = r3 - w3;
+        *r0 = skv_where_(third, y, y3);
+        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
+    }
+    return (sk_m4)kb;
+}
+
+SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+        + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
+}
+
+SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+        + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const sk_v4 hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
+}
+
+/* sk_select_ lane by lane */
+SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
+{
+    const sk_m4 m = 0 - (k & 1);
+    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
+}
+
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) s[l] = sin(x[l]);
+    return s;
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) c[l] = cos(x[l]);
+    return c;
+}
+#endif /* SYMKIN_USE_LIBM */
+#else
+#define SYMKIN_LANES 1
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -154,25 +280,25 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sin(q0);
-    const double x1 = sin(q3);
+    const double x0 = sk_sin(q0);
+    const double x1 = sk_sin(q3);
     const double x2 = x0*x1;
-    const double x3 = cos(q0);
-    const double x4 = cos(q3);
+    const double x3 = sk_cos(q0);
+    const double x4 = sk_cos(q3);
     const double x5 = q1 + q2;
-    const double x6 = cos(x5);
+    const double x6 = sk_cos(x5);
     const double x7 = -x2 + x3*x4*x6;
-    const double x8 = cos(q4);
-    const double x9 = sin(q4);
-    const double x10 = sin(x5);
+    const double x8 = sk_cos(q4);
+    const double x9 = sk_sin(q4);
+    const double x10 = sk_sin(x5);
     const double x11 = x10*x3;
     const double x12 = -x11*x9 + x7*x8;
-    const double x13 = cos(q5);
+    const double x13 = sk_cos(q5);
     const double x14 = x0*x4;
     const double x15 = x1*x3;
     const double x16 = -x14 - x15*x6;
-    const double x17 = sin(q5);
-    const double x18 = cos(q1);
+    const double x17 = sk_sin(q5);
+    const double x18 = sk_cos(q1);
     const double x19 = x14*x6 + x15;
     const double x20 = x0*x10;
     const double x21 = x19*x8 - x20*x9;
@@ -191,7 +317,7 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     T[8] = x13*x24 - x17*x25;
     T[9] = -x13*x25 - x17*x24;
     T[10] = -x23*x9 + x6*x8;
-    T[11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sin(q1);
+    T[11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sk_sin(q1);
     T[12] = 0.0;
     T[13] = 0.0;
     T[14] = 0.0;
@@ -203,9 +329,71 @@ void symkin_puma560_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 x0 = skv_sin(q0);
+    const sk_v4 x1 = skv_sin(q3);
+    const sk_v4 x2 = x0*x1;
+    const sk_v4 x3 = skv_cos(q0);
+    const sk_v4 x4 = skv_cos(q3);
+    const sk_v4 x5 = q1 + q2;
+    const sk_v4 x6 = skv_cos(x5);
+    const sk_v4 x7 = -x2 + x3*x4*x6;
+    const sk_v4 x8 = skv_cos(q4);
+    const sk_v4 x9 = skv_sin(q4);
+    const sk_v4 x10 = skv_sin(x5);
+    const sk_v4 x11 = x10*x3;
+    const sk_v4 x12 = -x11*x9 + x7*x8;
+    const sk_v4 x13 = skv_cos(q5);
+    const sk_v4 x14 = x0*x4;
+    const sk_v4 x15 = x1*x3;
+    const sk_v4 x16 = -x14 - x15*x6;
+    const sk_v4 x17 = skv_sin(q5);
+    const sk_v4 x18 = skv_cos(q1);
+    const sk_v4 x19 = x14*x6 + x15;
+    const sk_v4 x20 = x0*x10;
+    const sk_v4 x21 = x19*x8 - x20*x9;
+    const sk_v4 x22 = -x2*x6 + x3*x4;
+    const sk_v4 x23 = x10*x4;
+    const sk_v4 x24 = x23*x8 + x6*x9;
+    const sk_v4 x25 = x1*x10;
+    SKV_STORE(T, 16, 0, x12*x13 + x16*x17);
+    SKV_STORE(T, 16, 1, -x12*x17 + x13*x16);
+    SKV_STORE(T, 16, 2, -x11*x8 - x7*x9);
+    SKV_STORE(T, 16, 3, (0.15005)*x0 - 0.4318*x11 + (0.4318)*x18*x3 + (0.0203)*x3*x6);
+    SKV_STORE(T, 16, 4, x13*x21 + x17*x22);
+    SKV_STORE(T, 16, 5, x13*x22 - x17*x21);
+    SKV_STORE(T, 16, 6, -x19*x9 - x20*x8);
+    SKV_STORE(T, 16, 7, (0.4318)*x0*x18 + (0.0203)*x0*x6 - 0.4318*x20 - 0.15005*x3);
+    SKV_STORE(T, 16, 8, x13*x24 - x17*x25);
+    SKV_STORE(T, 16, 9, -x13*x25 - x17*x24);
+    SKV_STORE(T, 16, 10, -x23*x9 + x6*x8);
+    SKV_STORE(T, 16, 11, (0.0203)*x10 + (0.4318)*x6 + (0.4318)*skv_sin(q1));
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+}
+#endif
+
+
 void symkin_puma560_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_x4_(q + i * 6, T + i * 16);
+#endif
+    for (; i < N; ++i)
         fkine_(q + i * 6, T + i * 16);
 }
 
@@ -218,17 +406,17 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = cos(q0);
-    const double x1 = sin(q0);
-    const double x2 = cos(q1);
+    const double x0 = sk_cos(q0);
+    const double x1 = sk_sin(q0);
+    const double x2 = sk_cos(q1);
     const double x3 = x0*x2;
-    const double x4 = sin(q1);
+    const double x4 = sk_sin(q1);
     const double x5 = x1*x2;
     const double x6 = -x0;
     const double x7 = q1 + q2;
-    const double x8 = cos(x7);
+    const double x8 = sk_cos(x7);
     const double x9 = x0*x8;
-    const double x10 = sin(x7);
+    const double x10 = sk_sin(x7);
     const double x11 = x0*x10;
     const double x12 = -x11;
     const double x13 = (0.4318)*x3;
@@ -237,8 +425,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x16 = -x15;
     const double x17 = (0.4318)*x5;
     const double x18 = (0.4318)*x4;
-    const double x19 = sin(q3);
-    const double x20 = cos(q3);
+    const double x19 = sk_sin(q3);
+    const double x20 = sk_cos(q3);
     const double x21 = x0*x20*x8 - x1*x19;
     const double x22 = x1*x20 + x19*x9;
     const double x23 = -x22;
@@ -250,8 +438,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x29 = x10*x20;
     const double x30 = x10*x19;
     const double x31 = (0.0203)*x10 + x18;
-    const double x32 = cos(q4);
-    const double x33 = sin(q4);
+    const double x32 = sk_cos(q4);
+    const double x33 = sk_sin(q4);
     const double x34 = -x11*x33 + x21*x32;
     const double x35 = -x11*x32 - x21*x33;
     const double x36 = -0.4318*x11 + x24;
@@ -261,8 +449,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x40 = x29*x32 + x33*x8;
     const double x41 = -x29*x33 + x32*x8;
     const double x42 = x31 + (0.4318)*x8;
-    const double x43 = cos(q5);
-    const double x44 = sin(q5);
+    const double x43 = sk_cos(q5);
+    const double x44 = sk_sin(q5);
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -366,9 +554,170 @@ void symkin_puma560_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
+#if SYMKIN_LANES == 4
+/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 x0 = skv_cos(q0);
+    const sk_v4 x1 = skv_sin(q0);
+    const sk_v4 x2 = skv_cos(q1);
+    const sk_v4 x3 = x0*x2;
+    const sk_v4 x4 = skv_sin(q1);
+    const sk_v4 x5 = x1*x2;
+    const sk_v4 x6 = -x0;
+    const sk_v4 x7 = q1 + q2;
+    const sk_v4 x8 = skv_cos(x7);
+    const sk_v4 x9 = x0*x8;
+    const sk_v4 x10 = skv_sin(x7);
+    const sk_v4 x11 = x0*x10;
+    const sk_v4 x12 = -x11;
+    const sk_v4 x13 = (0.4318)*x3;
+    const sk_v4 x14 = x1*x8;
+    const sk_v4 x15 = x1*x10;
+    const sk_v4 x16 = -x15;
+    const sk_v4 x17 = (0.4318)*x5;
+    const sk_v4 x18 = (0.4318)*x4;
+    const sk_v4 x19 = skv_sin(q3);
+    const sk_v4 x20 = skv_cos(q3);
+    const sk_v4 x21 = x0*x20*x8 - x1*x19;
+    const sk_v4 x22 = x1*x20 + x19*x9;
+    const sk_v4 x23 = -x22;
+    const sk_v4 x24 = (0.15005)*x1 + x13 + (0.0203)*x9;
+    const sk_v4 x25 = x0*x19 + x14*x20;
+    const sk_v4 x26 = -x0*x20 + x14*x19;
+    const sk_v4 x27 = -x26;
+    const sk_v4 x28 = (0.15005)*x0;
+    const sk_v4 x29 = x10*x20;
+    const sk_v4 x30 = x10*x19;
+    const sk_v4 x31 = (0.0203)*x10 + x18;
+    const sk_v4 x32 = skv_cos(q4);
+    const sk_v4 x33 = skv_sin(q4);
+    const sk_v4 x34 = -x11*x33 + x21*x32;
+    const sk_v4 x35 = -x11*x32 - x21*x33;
+    const sk_v4 x36 = -0.4318*x11 + x24;
+    const sk_v4 x37 = -x15*x33 + x25*x32;
+    const sk_v4 x38 = -x15*x32 - x25*x33;
+    const sk_v4 x39 = (0.4318)*x1*x2 + (0.0203)*x1*x8 - 0.4318*x15 - x28;
+    const sk_v4 x40 = x29*x32 + x33*x8;
+    const sk_v4 x41 = -x29*x33 + x32*x8;
+    const sk_v4 x42 = x31 + (0.4318)*x8;
+    const sk_v4 x43 = skv_cos(q5);
+    const sk_v4 x44 = skv_sin(q5);
+    SKV_STORE(links, 96, 0, x0);
+    SKV_STORE(links, 96, 1, -x1);
+    links[2] = links[98] = links[194] = links[290] = 0.0;
+    links[3] = links[99] = links[195] = links[291] = 0.0;
+    SKV_STORE(links, 96, 4, x1);
+    SKV_STORE(links, 96, 5, x0);
+    links[6] = links[102] = links[198] = links[294] = 0.0;
+    links[7] = links[103] = links[199] = links[295] = 0.0;
+    links[8] = links[104] = links[200] = links[296] = 0.0;
+    links[9] = links[105] = links[201] = links[297] = 0.0;
+    links[10] = links[106] = links[202] = links[298] = 1.0;
+    links[11] = links[107] = links[203] = links[299] = 0.0;
+    links[12] = links[108] = links[204] = links[300] = 0.0;
+    links[13] = links[109] = links[205] = links[301] = 0.0;
+    links[14] = links[110] = links[206] = links[302] = 0.0;
+    links[15] = links[111] = links[207] = links[303] = 1.0;
+    SKV_STORE(links, 96, 16, x3);
+    SKV_STORE(links, 96, 17, -x0*x4);
+    SKV_STORE(links, 96, 18, x1);
+    links[19] = links[115] = links[211] = links[307] = 0.0;
+    SKV_STORE(links, 96, 20, x5);
+    SKV_STORE(links, 96, 21, -x1*x4);
+    SKV_STORE(links, 96, 22, x6);
+    links[23] = links[119] = links[215] = links[311] = 0.0;
+    SKV_STORE(links, 96, 24, x4);
+    SKV_STORE(links, 96, 25, x2);
+    links[26] = links[122] = links[218] = links[314] = 0.0;
+    links[27] = links[123] = links[219] = links[315] = 0.0;
+    links[28] = links[124] = links[220] = links[316] = 0.0;
+    links[29] = links[125] = links[221] = links[317] = 0.0;
+    links[30] = links[126] = links[222] = links[318] = 0.0;
+    links[31] = links[127] = links[223] = links[319] = 1.0;
+    SKV_STORE(links, 96, 32, x9);
+    SKV_STORE(links, 96, 33, x12);
+    SKV_STORE(links, 96, 34, x1);
+    SKV_STORE(links, 96, 35, x13);
+    SKV_STORE(links, 96, 36, x14);
+    SKV_STORE(links, 96, 37, x16);
+    SKV_STORE(links, 96, 38, x6);
+    SKV_STORE(links, 96, 39, x17);
+    SKV_STORE(links, 96, 40, x10);
+    SKV_STORE(links, 96, 41, x8);
+    links[42] = links[138] = links[234] = links[330] = 0.0;
+    SKV_STORE(links, 96, 43, x18);
+    links[44] = links[140] = links[236] = links[332] = 0.0;
+    links[45] = links[141] = links[237] = links[333] = 0.0;
+    links[46] = links[142] = links[238] = links[334] = 0.0;
+    links[47] = links[143] = links[239] = links[335] = 1.0;
+    SKV_STORE(links, 96, 48, x21);
+    SKV_STORE(links, 96, 49, x23);
+    SKV_STORE(links, 96, 50, x12);
+    SKV_STORE(links, 96, 51, x24);
+    SKV_STORE(links, 96, 52, x25);
+    SKV_STORE(links, 96, 53, x27);
+    SKV_STORE(links, 96, 54, x16);
+    SKV_STORE(links, 96, 55, (0.0203)*x14 + x17 - x28);
+    SKV_STORE(links, 96, 56, x29);
+    SKV_STORE(links, 96, 57, -x30);
+    SKV_STORE(links, 96, 58, x8);
+    SKV_STORE(links, 96, 59, x31);
+    links[60] = links[156] = links[252] = links[348] = 0.0;
+    links[61] = links[157] = links[253] = links[349] = 0.0;
+    links[62] = links[158] = links[254] = links[350] = 0.0;
+    links[63] = links[159] = links[255] = links[351] = 1.0;
+    SKV_STORE(links, 96, 64, x34);
+    SKV_STORE(links, 96, 65, x35);
+    SKV_STORE(links, 96, 66, x22);
+    SKV_STORE(links, 96, 67, x36);
+    SKV_STORE(links, 96, 68, x37);
+    SKV_STORE(links, 96, 69, x38);
+    SKV_STORE(links, 96, 70, x26);
+    SKV_STORE(links, 96, 71, x39);
+    SKV_STORE(links, 96, 72, x40);
+    SKV_STORE(links, 96, 73, x41);
+    SKV_STORE(links, 96, 74, x30);
+    SKV_STORE(links, 96, 75, x42);
+    links[76] = links[172] = links[268] = links[364] = 0.0;
+    links[77] = links[173] = links[269] = links[365] = 0.0;
+    links[78] = links[174] = links[270] = links[366] = 0.0;
+    links[79] = links[175] = links[271] = links[367] = 1.0;
+    SKV_STORE(links, 96, 80, x23*x44 + x34*x43);
+    SKV_STORE(links, 96, 81, x23*x43 - x34*x44);
+    SKV_STORE(links, 96, 82, x35);
+    SKV_STORE(links, 96, 83, x36);
+    SKV_STORE(links, 96, 84, x27*x44 + x37*x43);
+    SKV_STORE(links, 96, 85, x27*x43 - x37*x44);
+    SKV_STORE(links, 96, 86, x38);
+    SKV_STORE(links, 96, 87, x39);
+    SKV_STORE(links, 96, 88, -x30*x44 + x40*x43);
+    SKV_STORE(links, 96, 89, -x30*x43 - x40*x44);
+    SKV_STORE(links, 96, 90, x41);
+    SKV_STORE(links, 96, 91, x42);
+    links[92] = links[188] = links[284] = links[380] = 0.0;
+    links[93] = links[189] = links[285] = links[381] = 0.0;
+    links[94] = links[190] = links[286] = links[382] = 0.0;
+    links[95] = links[191] = links[287] = links[383] = 1.0;
+}
+#endif
+
+
 void symkin_puma560_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        link_poses_x4_(q + i * 6, links + i * 96);
+#endif
+    for (; i < N; ++i)
         link_poses_(q + i * 6, links + i * 96);
 }
 
@@ -380,28 +729,28 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sin(q0);
-    const double x1 = (0.4318)*cos(q1);
-    const double x2 = cos(q0);
+    const double x0 = sk_sin(q0);
+    const double x1 = (0.4318)*sk_cos(q1);
+    const double x2 = sk_cos(q0);
     const double x3 = q1 + q2;
-    const double x4 = cos(x3);
+    const double x4 = sk_cos(x3);
     const double x5 = (0.0203)*x4;
-    const double x6 = sin(x3);
+    const double x6 = sk_sin(x3);
     const double x7 = x0*x6;
     const double x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7;
     const double x9 = -x0*x1 + x8;
     const double x10 = (0.4318)*x4 + (0.0203)*x6;
-    const double x11 = x10 + (0.4318)*sin(q1);
+    const double x11 = x10 + (0.4318)*sk_sin(q1);
     const double x12 = x2*x6;
     const double x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5;
     const double x14 = x1*x2 + x13;
-    const double x15 = cos(q3);
+    const double x15 = sk_cos(q3);
     const double x16 = x0*x15;
-    const double x17 = sin(q3);
+    const double x17 = sk_sin(q3);
     const double x18 = x17*x2;
     const double x19 = x0*x17;
-    const double x20 = sin(q4);
-    const double x21 = cos(q4);
+    const double x20 = sk_sin(q4);
+    const double x21 = sk_cos(q4);
     const double x22 = -x2;
     J[0] = x9;
     J[1] = -x11*x2;
@@ -446,9 +795,87 @@ void symkin_puma560_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 x0 = skv_sin(q0);
+    const sk_v4 x1 = (0.4318)*skv_cos(q1);
+    const sk_v4 x2 = skv_cos(q0);
+    const sk_v4 x3 = q1 + q2;
+    const sk_v4 x4 = skv_cos(x3);
+    const sk_v4 x5 = (0.0203)*x4;
+    const sk_v4 x6 = skv_sin(x3);
+    const sk_v4 x7 = x0*x6;
+    const sk_v4 x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7;
+    const sk_v4 x9 = -x0*x1 + x8;
+    const sk_v4 x10 = (0.4318)*x4 + (0.0203)*x6;
+    const sk_v4 x11 = x10 + (0.4318)*skv_sin(q1);
+    const sk_v4 x12 = x2*x6;
+    const sk_v4 x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5;
+    const sk_v4 x14 = x1*x2 + x13;
+    const sk_v4 x15 = skv_cos(q3);
+    const sk_v4 x16 = x0*x15;
+    const sk_v4 x17 = skv_sin(q3);
+    const sk_v4 x18 = x17*x2;
+    const sk_v4 x19 = x0*x17;
+    const sk_v4 x20 = skv_sin(q4);
+    const sk_v4 x21 = skv_cos(q4);
+    const sk_v4 x22 = -x2;
+    SKV_STORE(J, 36, 0, x9);
+    SKV_STORE(J, 36, 1, -x11*x2);
+    SKV_STORE(J, 36, 2, -x10*x2);
+    J[3] = J[39] = J[75] = J[111] = 0.0;
+    J[4] = J[40] = J[76] = J[112] = 0.0;
+    J[5] = J[41] = J[77] = J[113] = 0.0;
+    SKV_STORE(J, 36, 6, x14);
+    SKV_STORE(J, 36, 7, -x0*x11);
+    SKV_STORE(J, 36, 8, -x0*x10);
+    J[9] = J[45] = J[81] = J[117] = 0.0;
+    J[10] = J[46] = J[82] = J[118] = 0.0;
+    J[11] = J[47] = J[83] = J[119] = 0.0;
+    J[12] = J[48] = J[84] = J[120] = 0.0;
+    SKV_STORE(J, 36, 13, -x0*x9 + x14*x2);
+    SKV_STORE(J, 36, 14, -x0*x8 + x13*x2);
+    J[15] = J[51] = J[87] = J[123] = 0.0;
+    J[16] = J[52] = J[88] = J[124] = 0.0;
+    J[17] = J[53] = J[89] = J[125] = 0.0;
+    J[18] = J[54] = J[90] = J[126] = 0.0;
+    SKV_STORE(J, 36, 19, x0);
+    SKV_STORE(J, 36, 20, x0);
+    SKV_STORE(J, 36, 21, -x12);
+    SKV_STORE(J, 36, 22, x16 + x18*x4);
+    SKV_STORE(J, 36, 23, -x12*x21 - x20*(x15*x2*x4 - x19));
+    J[24] = J[60] = J[96] = J[132] = 0.0;
+    SKV_STORE(J, 36, 25, x22);
+    SKV_STORE(J, 36, 26, x22);
+    SKV_STORE(J, 36, 27, -x7);
+    SKV_STORE(J, 36, 28, -x15*x2 + x19*x4);
+    SKV_STORE(J, 36, 29, -x20*(x16*x4 + x18) - x21*x7);
+    J[30] = J[66] = J[102] = J[138] = 1.0;
+    J[31] = J[67] = J[103] = J[139] = 0.0;
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, x4);
+    SKV_STORE(J, 36, 34, x17*x6);
+    SKV_STORE(J, 36, 35, -x15*x20*x6 + x21*x4);
+}
+#endif
+
+
 void symkin_puma560_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_x4_(q + i * 6, J + i * 36);
+#endif
+    for (; i < N; ++i)
         jacob0_(q + i * 6, J + i * 36);
 }
 
@@ -460,26 +887,26 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = cos(q5);
-    const double x1 = sin(q3);
+    const double x0 = sk_cos(q5);
+    const double x1 = sk_sin(q3);
     const double x2 = x0*x1;
-    const double x3 = cos(q4);
-    const double x4 = cos(q3);
-    const double x5 = sin(q5);
+    const double x3 = sk_cos(q4);
+    const double x4 = sk_cos(q3);
+    const double x5 = sk_sin(q5);
     const double x6 = x4*x5;
     const double x7 = x3*x6;
     const double x8 = -x2 - x7;
     const double x9 = q1 + q2;
-    const double x10 = sin(x9);
-    const double x11 = cos(x9);
-    const double x12 = sin(q4);
+    const double x10 = sk_sin(x9);
+    const double x11 = sk_cos(x9);
+    const double x12 = sk_sin(q4);
     const double x13 = x12*x5;
     const double x14 = x10*x8 - x11*x13;
     const double x15 = x12*x4;
     const double x16 = (0.0203)*x15;
-    const double x17 = sin(q2);
+    const double x17 = sk_sin(q2);
     const double x18 = (0.4318)*x3;
-    const double x19 = cos(q2);
+    const double x19 = sk_cos(q2);
     const double x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3;
     const double x21 = -x10*x15 + x11*x3;
     const double x22 = x0*x4;
@@ -541,9 +968,102 @@ void symkin_puma560_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 x0 = skv_cos(q5);
+    const sk_v4 x1 = skv_sin(q3);
+    const sk_v4 x2 = x0*x1;
+    const sk_v4 x3 = skv_cos(q4);
+    const sk_v4 x4 = skv_cos(q3);
+    const sk_v4 x5 = skv_sin(q5);
+    const sk_v4 x6 = x4*x5;
+    const sk_v4 x7 = x3*x6;
+    const sk_v4 x8 = -x2 - x7;
+    const sk_v4 x9 = q1 + q2;
+    const sk_v4 x10 = skv_sin(x9);
+    const sk_v4 x11 = skv_cos(x9);
+    const sk_v4 x12 = skv_sin(q4);
+    const sk_v4 x13 = x12*x5;
+    const sk_v4 x14 = x10*x8 - x11*x13;
+    const sk_v4 x15 = x12*x4;
+    const sk_v4 x16 = (0.0203)*x15;
+    const sk_v4 x17 = skv_sin(q2);
+    const sk_v4 x18 = (0.4318)*x3;
+    const sk_v4 x19 = skv_cos(q2);
+    const sk_v4 x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3;
+    const sk_v4 x21 = -x10*x15 + x11*x3;
+    const sk_v4 x22 = x0*x4;
+    const sk_v4 x23 = -0.15005*x1*x3*x5 + (0.4318)*x13 + (0.0203)*x2 + (0.15005)*x22 + (0.0203)*x7;
+    const sk_v4 x24 = (0.4318)*x12*x17*x5 + (0.4318)*x19*x8 - x23;
+    const sk_v4 x25 = x1*x5;
+    const sk_v4 x26 = -x22 + x25*x3;
+    const sk_v4 x27 = x1*x12;
+    const sk_v4 x28 = -x16 + x18 + (0.15005)*x27;
+    const sk_v4 x29 = -x23;
+    const sk_v4 x30 = x0*x3*x4 - x25;
+    const sk_v4 x31 = x0*x12;
+    const sk_v4 x32 = x10*x30 + x11*x31;
+    const sk_v4 x33 = x2*x3;
+    const sk_v4 x34 = -0.4318*x0*x12 - 0.0203*x0*x3*x4 + (0.0203)*x25 + (0.15005)*x33 + (0.15005)*x6;
+    const sk_v4 x35 = -0.4318*x17*x31 + (0.4318)*x19*x30 - x34;
+    const sk_v4 x36 = -x33 - x6;
+    const sk_v4 x37 = -x34;
+    SKV_STORE(J, 36, 0, x14*x20 - x21*x24);
+    SKV_STORE(J, 36, 1, x20*x26 - x24*x27);
+    SKV_STORE(J, 36, 2, x26*x28 - x27*x29);
+    J[3] = J[39] = J[75] = J[111] = 0.0;
+    J[4] = J[40] = J[76] = J[112] = 0.0;
+    J[5] = J[41] = J[77] = J[113] = 0.0;
+    SKV_STORE(J, 36, 6, -x20*x32 + x21*x35);
+    SKV_STORE(J, 36, 7, x1*x12*x35 - x20*x36);
+    SKV_STORE(J, 36, 8, x1*x12*x37 - x28*x36);
+    J[9] = J[45] = J[81] = J[117] = 0.0;
+    J[10] = J[46] = J[82] = J[118] = 0.0;
+    J[11] = J[47] = J[83] = J[119] = 0.0;
+    SKV_STORE(J, 36, 12, -x14*x35 + x24*x32);
+    SKV_STORE(J, 36, 13, x24*x36 - x26*x35);
+    SKV_STORE(J, 36, 14, -x26*x37 + x29*x36);
+    J[15] = J[51] = J[87] = J[123] = 0.0;
+    J[16] = J[52] = J[88] = J[124] = 0.0;
+    J[17] = J[53] = J[89] = J[125] = 0.0;
+    SKV_STORE(J, 36, 18, x32);
+    SKV_STORE(J, 36, 19, x36);
+    SKV_STORE(J, 36, 20, x36);
+    SKV_STORE(J, 36, 21, x31);
+    SKV_STORE(J, 36, 22, -x5);
+    J[23] = J[59] = J[95] = J[131] = 0.0;
+    SKV_STORE(J, 36, 24, x14);
+    SKV_STORE(J, 36, 25, x26);
+    SKV_STORE(J, 36, 26, x26);
+    SKV_STORE(J, 36, 27, -x13);
+    SKV_STORE(J, 36, 28, -x0);
+    J[29] = J[65] = J[101] = J[137] = 0.0;
+    SKV_STORE(J, 36, 30, x21);
+    SKV_STORE(J, 36, 31, x27);
+    SKV_STORE(J, 36, 32, x27);
+    SKV_STORE(J, 36, 33, x3);
+    J[34] = J[70] = J[106] = J[142] = 0.0;
+    J[35] = J[71] = J[107] = J[143] = 1.0;
+}
+#endif
+
+
 void symkin_puma560_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacobe_x4_(q + i * 6, J + i * 36);
+#endif
+    for (; i < N; ++i)
         jacobe_(q + i * 6, J + i * 36);
 }
 
@@ -555,18 +1075,18 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = cos(q0);
-    const double x1 = (0.4318)*cos(q1);
-    const double x2 = sin(q0);
+    const double x0 = sk_cos(q0);
+    const double x1 = (0.4318)*sk_cos(q1);
+    const double x2 = sk_sin(q0);
     const double x3 = q1 + q2;
-    const double x4 = sin(x3);
+    const double x4 = sk_sin(x3);
     const double x5 = x0*x4;
-    const double x6 = cos(x3);
+    const double x6 = sk_cos(x3);
     const double x7 = x0*x6;
     const double x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7;
     const double x9 = x0*x1 + x8;
     const double x10 = (0.0203)*x4 + (0.4318)*x6;
-    const double x11 = x10 + (0.4318)*sin(q1);
+    const double x11 = x10 + (0.4318)*sk_sin(q1);
     const double x12 = x11*x2;
     const double x13 = x10*x2;
     const double x14 = x2*x6;
@@ -575,14 +1095,14 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x17 = -x1*x2 + x16;
     const double x18 = -x0*x11;
     const double x19 = -x0*x10;
-    const double x20 = cos(q3);
-    const double x21 = sin(q3);
+    const double x20 = sk_cos(q3);
+    const double x21 = sk_sin(q3);
     const double x22 = x2*x21;
     const double x23 = -x0*x20 + x22*x6;
     const double x24 = x0*x21;
     const double x25 = x2*x20;
-    const double x26 = sin(q4);
-    const double x27 = cos(q4);
+    const double x26 = sk_sin(q4);
+    const double x27 = sk_cos(q4);
     const double x28 = x15*x27 + x26*(x24 + x25*x6);
     const double x29 = x24*x6 + x25;
     const double x30 = -x26*(x0*x20*x6 - x22) - x27*x5;
@@ -829,9 +1349,295 @@ void symkin_puma560_hessian0(const double *q, double *H)
     hessian0_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 x0 = skv_cos(q0);
+    const sk_v4 x1 = (0.4318)*skv_cos(q1);
+    const sk_v4 x2 = skv_sin(q0);
+    const sk_v4 x3 = q1 + q2;
+    const sk_v4 x4 = skv_sin(x3);
+    const sk_v4 x5 = x0*x4;
+    const sk_v4 x6 = skv_cos(x3);
+    const sk_v4 x7 = x0*x6;
+    const sk_v4 x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7;
+    const sk_v4 x9 = x0*x1 + x8;
+    const sk_v4 x10 = (0.0203)*x4 + (0.4318)*x6;
+    const sk_v4 x11 = x10 + (0.4318)*skv_sin(q1);
+    const sk_v4 x12 = x11*x2;
+    const sk_v4 x13 = x10*x2;
+    const sk_v4 x14 = x2*x6;
+    const sk_v4 x15 = x2*x4;
+    const sk_v4 x16 = (0.15005)*x0 - 0.0203*x14 + (0.4318)*x15;
+    const sk_v4 x17 = -x1*x2 + x16;
+    const sk_v4 x18 = -x0*x11;
+    const sk_v4 x19 = -x0*x10;
+    const sk_v4 x20 = skv_cos(q3);
+    const sk_v4 x21 = skv_sin(q3);
+    const sk_v4 x22 = x2*x21;
+    const sk_v4 x23 = -x0*x20 + x22*x6;
+    const sk_v4 x24 = x0*x21;
+    const sk_v4 x25 = x2*x20;
+    const sk_v4 x26 = skv_sin(q4);
+    const sk_v4 x27 = skv_cos(q4);
+    const sk_v4 x28 = x15*x27 + x26*(x24 + x25*x6);
+    const sk_v4 x29 = x24*x6 + x25;
+    const sk_v4 x30 = -x26*(x0*x20*x6 - x22) - x27*x5;
+    const sk_v4 x31 = x0*x9 - x17*x2;
+    const sk_v4 x32 = x0*x8 - x16*x2;
+    const sk_v4 x33 = -x0*x32;
+    const sk_v4 x34 = -x2*x32;
+    const sk_v4 x35 = (x0*x0);
+    const sk_v4 x36 = (x2*x2);
+    const sk_v4 x37 = -x10*x35 - x10*x36;
+    const sk_v4 x38 = -x7;
+    const sk_v4 x39 = -x24*x4;
+    const sk_v4 x40 = -x20*x26*x4 + x27*x6;
+    const sk_v4 x41 = -x0*x40;
+    const sk_v4 x42 = -x14;
+    const sk_v4 x43 = -x15*x21;
+    const sk_v4 x44 = -x2*x40;
+    const sk_v4 x45 = -x35*x4 - x36*x4;
+    const sk_v4 x46 = x0*x29 + x2*x23;
+    const sk_v4 x47 = -x28;
+    const sk_v4 x48 = x0*x30 + x2*x47;
+    const sk_v4 x49 = (x4*x4);
+    const sk_v4 x50 = x21*x4;
+    SKV_STORE(H, 216, 0, -x9);
+    SKV_STORE(H, 216, 1, x12);
+    SKV_STORE(H, 216, 2, x13);
+    H[3] = H[219] = H[435] = H[651] = 0.0;
+    H[4] = H[220] = H[436] = H[652] = 0.0;
+    H[5] = H[221] = H[437] = H[653] = 0.0;
+    SKV_STORE(H, 216, 6, x17);
+    SKV_STORE(H, 216, 7, x18);
+    SKV_STORE(H, 216, 8, x19);
+    H[9] = H[225] = H[441] = H[657] = 0.0;
+    H[10] = H[226] = H[442] = H[658] = 0.0;
+    H[11] = H[227] = H[443] = H[659] = 0.0;
+    H[12] = H[228] = H[444] = H[660] = 0.0;
+    H[13] = H[229] = H[445] = H[661] = 0.0;
+    H[14] = H[230] = H[446] = H[662] = 0.0;
+    H[15] = H[231] = H[447] = H[663] = 0.0;
+    H[16] = H[232] = H[448] = H[664] = 0.0;
+    H[17] = H[233] = H[449] = H[665] = 0.0;
+    H[18] = H[234] = H[450] = H[666] = 0.0;
+    SKV_STORE(H, 216, 19, x0);
+    SKV_STORE(H, 216, 20, x0);
+    SKV_STORE(H, 216, 21, x15);
+    SKV_STORE(H, 216, 22, -x23);
+    SKV_STORE(H, 216, 23, x28);
+    H[24] = H[240] = H[456] = H[672] = 0.0;
+    SKV_STORE(H, 216, 25, x2);
+    SKV_STORE(H, 216, 26, x2);
+    SKV_STORE(H, 216, 27, -x5);
+    SKV_STORE(H, 216, 28, x29);
+    SKV_STORE(H, 216, 29, x30);
+    H[30] = H[246] = H[462] = H[678] = 0.0;
+    H[31] = H[247] = H[463] = H[679] = 0.0;
+    H[32] = H[248] = H[464] = H[680] = 0.0;
+    H[33] = H[249] = H[465] = H[681] = 0.0;
+    H[34] = H[250] = H[466] = H[682] = 0.0;
+    H[35] = H[251] = H[467] = H[683] = 0.0;
+    SKV_STORE(H, 216, 36, x12);
+    SKV_STORE(H, 216, 37, -x0*x31);
+    SKV_STORE(H, 216, 38, x33);
+    H[39] = H[255] = H[471] = H[687] = 0.0;
+    H[40] = H[256] = H[472] = H[688] = 0.0;
+    H[41] = H[257] = H[473] = H[689] = 0.0;
+    SKV_STORE(H, 216, 42, x18);
+    SKV_STORE(H, 216, 43, -x2*x31);
+    SKV_STORE(H, 216, 44, x34);
+    H[45] = H[261] = H[477] = H[693] = 0.0;
+    H[46] = H[262] = H[478] = H[694] = 0.0;
+    H[47] = H[263] = H[479] = H[695] = 0.0;
+    H[48] = H[264] = H[480] = H[696] = 0.0;
+    SKV_STORE(H, 216, 49, -x11*x35 - x11*x36);
+    SKV_STORE(H, 216, 50, x37);
+    H[51] = H[267] = H[483] = H[699] = 0.0;
+    H[52] = H[268] = H[484] = H[700] = 0.0;
+    H[53] = H[269] = H[485] = H[701] = 0.0;
+    H[54] = H[270] = H[486] = H[702] = 0.0;
+    H[55] = H[271] = H[487] = H[703] = 0.0;
+    H[56] = H[272] = H[488] = H[704] = 0.0;
+    SKV_STORE(H, 216, 57, x38);
+    SKV_STORE(H, 216, 58, x39);
+    SKV_STORE(H, 216, 59, x41);
+    H[60] = H[276] = H[492] = H[708] = 0.0;
+    H[61] = H[277] = H[493] = H[709] = 0.0;
+    H[62] = H[278] = H[494] = H[710] = 0.0;
+    SKV_STORE(H, 216, 63, x42);
+    SKV_STORE(H, 216, 64, x43);
+    SKV_STORE(H, 216, 65, x44);
+    H[66] = H[282] = H[498] = H[714] = 0.0;
+    H[67] = H[283] = H[499] = H[715] = 0.0;
+    H[68] = H[284] = H[500] = H[716] = 0.0;
+    SKV_STORE(H, 216, 69, x45);
+    SKV_STORE(H, 216, 70, x46);
+    SKV_STORE(H, 216, 71, x48);
+    SKV_STORE(H, 216, 72, x13);
+    SKV_STORE(H, 216, 73, x33);
+    SKV_STORE(H, 216, 74, x33);
+    H[75] = H[291] = H[507] = H[723] = 0.0;
+    H[76] = H[292] = H[508] = H[724] = 0.0;
+    H[77] = H[293] = H[509] = H[725] = 0.0;
+    SKV_STORE(H, 216, 78, x19);
+    SKV_STORE(H, 216, 79, x34);
+    SKV_STORE(H, 216, 80, x34);
+    H[81] = H[297] = H[513] = H[729] = 0.0;
+    H[82] = H[298] = H[514] = H[730] = 0.0;
+    H[83] = H[299] = H[515] = H[731] = 0.0;
+    H[84] = H[300] = H[516] = H[732] = 0.0;
+    SKV_STORE(H, 216, 85, x37);
+    SKV_STORE(H, 216, 86, x37);
+    H[87] = H[303] = H[519] = H[735] = 0.0;
+    H[88] = H[304] = H[520] = H[736] = 0.0;
+    H[89] = H[305] = H[521] = H[737] = 0.0;
+    H[90] = H[306] = H[522] = H[738] = 0.0;
+    H[91] = H[307] = H[523] = H[739] = 0.0;
+    H[92] = H[308] = H[524] = H[740] = 0.0;
+    SKV_STORE(H, 216, 93, x38);
+    SKV_STORE(H, 216, 94, x39);
+    SKV_STORE(H, 216, 95, x41);
+    H[96] = H[312] = H[528] = H[744] = 0.0;
+    H[97] = H[313] = H[529] = H[745] = 0.0;
+    H[98] = H[314] = H[530] = H[746] = 0.0;
+    SKV_STORE(H, 216, 99, x42);
+    SKV_STORE(H, 216, 100, x43);
+    SKV_STORE(H, 216, 101, x44);
+    H[102] = H[318] = H[534] = H[750] = 0.0;
+    H[103] = H[319] = H[535] = H[751] = 0.0;
+    H[104] = H[320] = H[536] = H[752] = 0.0;
+    SKV_STORE(H, 216, 105, x45);
+    SKV_STORE(H, 216, 106, x46);
+    SKV_STORE(H, 216, 107, x48);
+    H[108] = H[324] = H[540] = H[756] = 0.0;
+    H[109] = H[325] = H[541] = H[757] = 0.0;
+    H[110] = H[326] = H[542] = H[758] = 0.0;
+    H[111] = H[327] = H[543] = H[759] = 0.0;
+    H[112] = H[328] = H[544] = H[760] = 0.0;
+    H[113] = H[329] = H[545] = H[761] = 0.0;
+    H[114] = H[330] = H[546] = H[762] = 0.0;
+    H[115] = H[331] = H[547] = H[763] = 0.0;
+    H[116] = H[332] = H[548] = H[764] = 0.0;
+    H[117] = H[333] = H[549] = H[765] = 0.0;
+    H[118] = H[334] = H[550] = H[766] = 0.0;
+    H[119] = H[335] = H[551] = H[767] = 0.0;
+    H[120] = H[336] = H[552] = H[768] = 0.0;
+    H[121] = H[337] = H[553] = H[769] = 0.0;
+    H[122] = H[338] = H[554] = H[770] = 0.0;
+    H[123] = H[339] = H[555] = H[771] = 0.0;
+    H[124] = H[340] = H[556] = H[772] = 0.0;
+    H[125] = H[341] = H[557] = H[773] = 0.0;
+    H[126] = H[342] = H[558] = H[774] = 0.0;
+    H[127] = H[343] = H[559] = H[775] = 0.0;
+    H[128] = H[344] = H[560] = H[776] = 0.0;
+    H[129] = H[345] = H[561] = H[777] = 0.0;
+    SKV_STORE(H, 216, 130, -x22*x49 - x23*x6);
+    SKV_STORE(H, 216, 131, -x15*x40 - x47*x6);
+    H[132] = H[348] = H[564] = H[780] = 0.0;
+    H[133] = H[349] = H[565] = H[781] = 0.0;
+    H[134] = H[350] = H[566] = H[782] = 0.0;
+    H[135] = H[351] = H[567] = H[783] = 0.0;
+    SKV_STORE(H, 216, 136, x24*x49 + x29*x6);
+    SKV_STORE(H, 216, 137, x30*x6 + x40*x5);
+    H[138] = H[354] = H[570] = H[786] = 0.0;
+    H[139] = H[355] = H[571] = H[787] = 0.0;
+    H[140] = H[356] = H[572] = H[788] = 0.0;
+    H[141] = H[357] = H[573] = H[789] = 0.0;
+    SKV_STORE(H, 216, 142, x15*x29 - x23*x5);
+    SKV_STORE(H, 216, 143, x15*x30 - x47*x5);
+    H[144] = H[360] = H[576] = H[792] = 0.0;
+    H[145] = H[361] = H[577] = H[793] = 0.0;
+    H[146] = H[362] = H[578] = H[794] = 0.0;
+    H[147] = H[363] = H[579] = H[795] = 0.0;
+    H[148] = H[364] = H[580] = H[796] = 0.0;
+    H[149] = H[365] = H[581] = H[797] = 0.0;
+    H[150] = H[366] = H[582] = H[798] = 0.0;
+    H[151] = H[367] = H[583] = H[799] = 0.0;
+    H[152] = H[368] = H[584] = H[800] = 0.0;
+    H[153] = H[369] = H[585] = H[801] = 0.0;
+    H[154] = H[370] = H[586] = H[802] = 0.0;
+    H[155] = H[371] = H[587] = H[803] = 0.0;
+    H[156] = H[372] = H[588] = H[804] = 0.0;
+    H[157] = H[373] = H[589] = H[805] = 0.0;
+    H[158] = H[374] = H[590] = H[806] = 0.0;
+    H[159] = H[375] = H[591] = H[807] = 0.0;
+    H[160] = H[376] = H[592] = H[808] = 0.0;
+    H[161] = H[377] = H[593] = H[809] = 0.0;
+    H[162] = H[378] = H[594] = H[810] = 0.0;
+    H[163] = H[379] = H[595] = H[811] = 0.0;
+    H[164] = H[380] = H[596] = H[812] = 0.0;
+    H[165] = H[381] = H[597] = H[813] = 0.0;
+    H[166] = H[382] = H[598] = H[814] = 0.0;
+    SKV_STORE(H, 216, 167, x23*x40 - x47*x50);
+    H[168] = H[384] = H[600] = H[816] = 0.0;
+    H[169] = H[385] = H[601] = H[817] = 0.0;
+    H[170] = H[386] = H[602] = H[818] = 0.0;
+    H[171] = H[387] = H[603] = H[819] = 0.0;
+    H[172] = H[388] = H[604] = H[820] = 0.0;
+    SKV_STORE(H, 216, 173, -x29*x40 + x30*x50);
+    H[174] = H[390] = H[606] = H[822] = 0.0;
+    H[175] = H[391] = H[607] = H[823] = 0.0;
+    H[176] = H[392] = H[608] = H[824] = 0.0;
+    H[177] = H[393] = H[609] = H[825] = 0.0;
+    H[178] = H[394] = H[610] = H[826] = 0.0;
+    SKV_STORE(H, 216, 179, -x23*x30 + x29*x47);
+    H[180] = H[396] = H[612] = H[828] = 0.0;
+    H[181] = H[397] = H[613] = H[829] = 0.0;
+    H[182] = H[398] = H[614] = H[830] = 0.0;
+    H[183] = H[399] = H[615] = H[831] = 0.0;
+    H[184] = H[400] = H[616] = H[832] = 0.0;
+    H[185] = H[401] = H[617] = H[833] = 0.0;
+    H[186] = H[402] = H[618] = H[834] = 0.0;
+    H[187] = H[403] = H[619] = H[835] = 0.0;
+    H[188] = H[404] = H[620] = H[836] = 0.0;
+    H[189] = H[405] = H[621] = H[837] = 0.0;
+    H[190] = H[406] = H[622] = H[838] = 0.0;
+    H[191] = H[407] = H[623] = H[839] = 0.0;
+    H[192] = H[408] = H[624] = H[840] = 0.0;
+    H[193] = H[409] = H[625] = H[841] = 0.0;
+    H[194] = H[410] = H[626] = H[842] = 0.0;
+    H[195] = H[411] = H[627] = H[843] = 0.0;
+    H[196] = H[412] = H[628] = H[844] = 0.0;
+    H[197] = H[413] = H[629] = H[845] = 0.0;
+    H[198] = H[414] = H[630] = H[846] = 0.0;
+    H[199] = H[415] = H[631] = H[847] = 0.0;
+    H[200] = H[416] = H[632] = H[848] = 0.0;
+    H[201] = H[417] = H[633] = H[849] = 0.0;
+    H[202] = H[418] = H[634] = H[850] = 0.0;
+    H[203] = H[419] = H[635] = H[851] = 0.0;
+    H[204] = H[420] = H[636] = H[852] = 0.0;
+    H[205] = H[421] = H[637] = H[853] = 0.0;
+    H[206] = H[422] = H[638] = H[854] = 0.0;
+    H[207] = H[423] = H[639] = H[855] = 0.0;
+    H[208] = H[424] = H[640] = H[856] = 0.0;
+    H[209] = H[425] = H[641] = H[857] = 0.0;
+    H[210] = H[426] = H[642] = H[858] = 0.0;
+    H[211] = H[427] = H[643] = H[859] = 0.0;
+    H[212] = H[428] = H[644] = H[860] = 0.0;
+    H[213] = H[429] = H[645] = H[861] = 0.0;
+    H[214] = H[430] = H[646] = H[862] = 0.0;
+    H[215] = H[431] = H[647] = H[863] = 0.0;
+}
+#endif
+
+
 void symkin_puma560_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessian0_x4_(q + i * 6, H + i * 216);
+#endif
+    for (; i < N; ++i)
         hessian0_(q + i * 6, H + i * 216);
 }
 
@@ -843,17 +1649,17 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sin(q3);
-    const double x1 = sin(q5);
+    const double x0 = sk_sin(q3);
+    const double x1 = sk_sin(q5);
     const double x2 = x0*x1;
-    const double x3 = cos(q3);
-    const double x4 = cos(q4);
-    const double x5 = cos(q5);
+    const double x3 = sk_cos(q3);
+    const double x4 = sk_cos(q4);
+    const double x5 = sk_cos(q5);
     const double x6 = -x2 + x3*x4*x5;
     const double x7 = q1 + q2;
-    const double x8 = sin(x7);
-    const double x9 = cos(x7);
-    const double x10 = sin(q4);
+    const double x8 = sk_sin(x7);
+    const double x9 = sk_cos(x7);
+    const double x10 = sk_sin(q4);
     const double x11 = x10*x5;
     const double x12 = x11*x9 + x6*x8;
     const double x13 = x3*x5;
@@ -869,9 +1675,9 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x23 = x17 + x22;
     const double x24 = -x23;
     const double x25 = x12*x15 - x21*x24;
-    const double x26 = (0.4318)*cos(q2);
+    const double x26 = (0.4318)*sk_cos(q2);
     const double x27 = x19*x26;
-    const double x28 = sin(q2);
+    const double x28 = sk_sin(q2);
     const double x29 = (0.4318)*x20;
     const double x30 = x28*x29;
     const double x31 = (0.0203)*x16;
@@ -1171,9 +1977,349 @@ void symkin_puma560_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 x0 = skv_sin(q3);
+    const sk_v4 x1 = skv_sin(q5);
+    const sk_v4 x2 = x0*x1;
+    const sk_v4 x3 = skv_cos(q3);
+    const sk_v4 x4 = skv_cos(q4);
+    const sk_v4 x5 = skv_cos(q5);
+    const sk_v4 x6 = -x2 + x3*x4*x5;
+    const sk_v4 x7 = q1 + q2;
+    const sk_v4 x8 = skv_sin(x7);
+    const sk_v4 x9 = skv_cos(x7);
+    const sk_v4 x10 = skv_sin(q4);
+    const sk_v4 x11 = x10*x5;
+    const sk_v4 x12 = x11*x9 + x6*x8;
+    const sk_v4 x13 = x3*x5;
+    const sk_v4 x14 = x2*x4;
+    const sk_v4 x15 = -x13 + x14;
+    const sk_v4 x16 = x0*x5;
+    const sk_v4 x17 = x1*x3;
+    const sk_v4 x18 = x17*x4;
+    const sk_v4 x19 = -x16 - x18;
+    const sk_v4 x20 = x1*x10;
+    const sk_v4 x21 = x19*x8 - x20*x9;
+    const sk_v4 x22 = x16*x4;
+    const sk_v4 x23 = x17 + x22;
+    const sk_v4 x24 = -x23;
+    const sk_v4 x25 = x12*x15 - x21*x24;
+    const sk_v4 x26 = (0.4318)*skv_cos(q2);
+    const sk_v4 x27 = x19*x26;
+    const sk_v4 x28 = skv_sin(q2);
+    const sk_v4 x29 = (0.4318)*x20;
+    const sk_v4 x30 = x28*x29;
+    const sk_v4 x31 = (0.0203)*x16;
+    const sk_v4 x32 = (0.15005)*x13;
+    const sk_v4 x33 = (0.15005)*x14;
+    const sk_v4 x34 = (0.0203)*x18;
+    const sk_v4 x35 = x31 + x32 - x33 + x34;
+    const sk_v4 x36 = x29 + x35;
+    const sk_v4 x37 = -x27 - x30 + x36;
+    const sk_v4 x38 = -x37;
+    const sk_v4 x39 = x10*x3;
+    const sk_v4 x40 = -x39*x8 + x4*x9;
+    const sk_v4 x41 = x0*x10;
+    const sk_v4 x42 = -x12*x41 + x24*x40;
+    const sk_v4 x43 = (0.4318)*x4;
+    const sk_v4 x44 = (0.15005)*x41;
+    const sk_v4 x45 = (0.0203)*x39;
+    const sk_v4 x46 = x26*x39 + x28*x43;
+    const sk_v4 x47 = -x44 + x45 + x46;
+    const sk_v4 x48 = -x43 + x47;
+    const sk_v4 x49 = -x48;
+    const sk_v4 x50 = x25*x38 - x42*x49;
+    const sk_v4 x51 = -0.0203*x13*x4 + (0.15005)*x17 + (0.0203)*x2 + (0.15005)*x22;
+    const sk_v4 x52 = -0.4318*x10*x5 + x51;
+    const sk_v4 x53 = x26*x6;
+    const sk_v4 x54 = (0.4318)*x11;
+    const sk_v4 x55 = x28*x54;
+    const sk_v4 x56 = -x53 + x55;
+    const sk_v4 x57 = x52 + x56;
+    const sk_v4 x58 = -x57;
+    const sk_v4 x59 = -x15*x40 + x21*x41;
+    const sk_v4 x60 = x25*x58 - x49*x59;
+    const sk_v4 x61 = x42*x58;
+    const sk_v4 x62 = -x53 + x55;
+    const sk_v4 x63 = -x24*x46 + x41*x62;
+    const sk_v4 x64 = x27 + x30;
+    const sk_v4 x65 = -x64;
+    const sk_v4 x66 = -x15*x62 + x24*x65;
+    const sk_v4 x67 = x15*x46 - x41*x65;
+    const sk_v4 x68 = x31 + x32 - x33 + x34 - x64;
+    const sk_v4 x69 = x51 + x56;
+    const sk_v4 x70 = x11*x68 + x20*x69;
+    const sk_v4 x71 = x10*x40*x5 - x12*x4;
+    const sk_v4 x72 = -x11*x47 + x4*x69;
+    const sk_v4 x73 = -x11*x21 - x12*x20;
+    const sk_v4 x74 = (x10*x10);
+    const sk_v4 x75 = x0*x5*x74 - x24*x4;
+    const sk_v4 x76 = -x11*x15 - x20*x24;
+    const sk_v4 x77 = x44 - x45;
+    const sk_v4 x78 = x43 + x77;
+    const sk_v4 x79 = x11*x35 + x20*x51;
+    const sk_v4 x80 = -x36;
+    const sk_v4 x81 = -x77;
+    const sk_v4 x82 = -x11*x81 + x4*x51;
+    const sk_v4 x83 = x1*x40;
+    const sk_v4 x84 = x10*x83 + x21*x4;
+    const sk_v4 x85 = -x20*x47 - x4*x68;
+    const sk_v4 x86 = x15*x4 + x2*x74;
+    const sk_v4 x87 = -x52;
+    const sk_v4 x88 = -x20*x81 - x35*x4;
+    const sk_v4 x89 = x1*x21 - x12*x5;
+    const sk_v4 x90 = -x1*x37 + x5*x57;
+    const sk_v4 x91 = x1*x15 - x24*x5;
+    const sk_v4 x92 = x10*x2;
+    const sk_v4 x93 = -x1*x36 + x5*x52;
+    const sk_v4 x94 = -x78;
+    const sk_v4 x95 = x10*(x5*x5);
+    const sk_v4 x96 = (x1*x1)*x10;
+    const sk_v4 x97 = -0.4318*x95 - 0.4318*x96;
+    const sk_v4 x98 = -x95 - x96;
+    const sk_v4 x99 = x40*x5;
+    const sk_v4 x100 = x10*x16;
+    const sk_v4 x101 = x48*x5;
+    const sk_v4 x102 = x1*x48;
+    const sk_v4 x103 = -x92;
+    const sk_v4 x104 = -x12;
+    H[0] = H[216] = H[432] = H[648] = 0.0;
+    H[1] = H[217] = H[433] = H[649] = 0.0;
+    H[2] = H[218] = H[434] = H[650] = 0.0;
+    H[3] = H[219] = H[435] = H[651] = 0.0;
+    H[4] = H[220] = H[436] = H[652] = 0.0;
+    H[5] = H[221] = H[437] = H[653] = 0.0;
+    H[6] = H[222] = H[438] = H[654] = 0.0;
+    H[7] = H[223] = H[439] = H[655] = 0.0;
+    H[8] = H[224] = H[440] = H[656] = 0.0;
+    H[9] = H[225] = H[441] = H[657] = 0.0;
+    H[10] = H[226] = H[442] = H[658] = 0.0;
+    H[11] = H[227] = H[443] = H[659] = 0.0;
+    H[12] = H[228] = H[444] = H[660] = 0.0;
+    H[13] = H[229] = H[445] = H[661] = 0.0;
+    H[14] = H[230] = H[446] = H[662] = 0.0;
+    H[15] = H[231] = H[447] = H[663] = 0.0;
+    H[16] = H[232] = H[448] = H[664] = 0.0;
+    H[17] = H[233] = H[449] = H[665] = 0.0;
+    H[18] = H[234] = H[450] = H[666] = 0.0;
+    H[19] = H[235] = H[451] = H[667] = 0.0;
+    H[20] = H[236] = H[452] = H[668] = 0.0;
+    H[21] = H[237] = H[453] = H[669] = 0.0;
+    H[22] = H[238] = H[454] = H[670] = 0.0;
+    H[23] = H[239] = H[455] = H[671] = 0.0;
+    H[24] = H[240] = H[456] = H[672] = 0.0;
+    H[25] = H[241] = H[457] = H[673] = 0.0;
+    H[26] = H[242] = H[458] = H[674] = 0.0;
+    H[27] = H[243] = H[459] = H[675] = 0.0;
+    H[28] = H[244] = H[460] = H[676] = 0.0;
+    H[29] = H[245] = H[461] = H[677] = 0.0;
+    H[30] = H[246] = H[462] = H[678] = 0.0;
+    H[31] = H[247] = H[463] = H[679] = 0.0;
+    H[32] = H[248] = H[464] = H[680] = 0.0;
+    H[33] = H[249] = H[465] = H[681] = 0.0;
+    H[34] = H[250] = H[466] = H[682] = 0.0;
+    H[35] = H[251] = H[467] = H[683] = 0.0;
+    SKV_STORE(H, 216, 36, -x50);
+    H[37] = H[253] = H[469] = H[685] = 0.0;
+    H[38] = H[254] = H[470] = H[686] = 0.0;
+    H[39] = H[255] = H[471] = H[687] = 0.0;
+    H[40] = H[256] = H[472] = H[688] = 0.0;
+    H[41] = H[257] = H[473] = H[689] = 0.0;
+    SKV_STORE(H, 216, 42, x60);
+    H[43] = H[259] = H[475] = H[691] = 0.0;
+    H[44] = H[260] = H[476] = H[692] = 0.0;
+    H[45] = H[261] = H[477] = H[693] = 0.0;
+    H[46] = H[262] = H[478] = H[694] = 0.0;
+    H[47] = H[263] = H[479] = H[695] = 0.0;
+    SKV_STORE(H, 216, 48, x38*x59 - x61);
+    H[49] = H[265] = H[481] = H[697] = 0.0;
+    H[50] = H[266] = H[482] = H[698] = 0.0;
+    H[51] = H[267] = H[483] = H[699] = 0.0;
+    H[52] = H[268] = H[484] = H[700] = 0.0;
+    H[53] = H[269] = H[485] = H[701] = 0.0;
+    SKV_STORE(H, 216, 54, x59);
+    H[55] = H[271] = H[487] = H[703] = 0.0;
+    H[56] = H[272] = H[488] = H[704] = 0.0;
+    H[57] = H[273] = H[489] = H[705] = 0.0;
+    H[58] = H[274] = H[490] = H[706] = 0.0;
+    H[59] = H[275] = H[491] = H[707] = 0.0;
+    SKV_STORE(H, 216, 60, x42);
+    H[61] = H[277] = H[493] = H[709] = 0.0;
+    H[62] = H[278] = H[494] = H[710] = 0.0;
+    H[63] = H[279] = H[495] = H[711] = 0.0;
+    H[64] = H[280] = H[496] = H[712] = 0.0;
+    H[65] = H[281] = H[497] = H[713] = 0.0;
+    SKV_STORE(H, 216, 66, x25);
+    H[67] = H[283] = H[499] = H[715] = 0.0;
+    H[68] = H[284] = H[500] = H[716] = 0.0;
+    H[69] = H[285] = H[501] = H[717] = 0.0;
+    H[70] = H[286] = H[502] = H[718] = 0.0;
+    H[71] = H[287] = H[503] = H[719] = 0.0;
+    SKV_STORE(H, 216, 72, x21*x66 - x40*x63 - x50);
+    SKV_STORE(H, 216, 73, x15*x66 - x41*x63);
+    H[74] = H[290] = H[506] = H[722] = 0.0;
+    H[75] = H[291] = H[507] = H[723] = 0.0;
+    H[76] = H[292] = H[508] = H[724] = 0.0;
+    H[77] = H[293] = H[509] = H[725] = 0.0;
+    SKV_STORE(H, 216, 78, -x12*x66 + x40*x67 + x60);
+    SKV_STORE(H, 216, 79, x0*x10*x67 - x24*x66);
+    H[80] = H[296] = H[512] = H[728] = 0.0;
+    H[81] = H[297] = H[513] = H[729] = 0.0;
+    H[82] = H[298] = H[514] = H[730] = 0.0;
+    H[83] = H[299] = H[515] = H[731] = 0.0;
+    SKV_STORE(H, 216, 84, x12*x63 - x21*x67 + x38*x59 - x61);
+    SKV_STORE(H, 216, 85, -x15*x67 + x24*x63);
+    H[86] = H[302] = H[518] = H[734] = 0.0;
+    H[87] = H[303] = H[519] = H[735] = 0.0;
+    H[88] = H[304] = H[520] = H[736] = 0.0;
+    H[89] = H[305] = H[521] = H[737] = 0.0;
+    SKV_STORE(H, 216, 90, x59);
+    H[91] = H[307] = H[523] = H[739] = 0.0;
+    H[92] = H[308] = H[524] = H[740] = 0.0;
+    H[93] = H[309] = H[525] = H[741] = 0.0;
+    H[94] = H[310] = H[526] = H[742] = 0.0;
+    H[95] = H[311] = H[527] = H[743] = 0.0;
+    SKV_STORE(H, 216, 96, x42);
+    H[97] = H[313] = H[529] = H[745] = 0.0;
+    H[98] = H[314] = H[530] = H[746] = 0.0;
+    H[99] = H[315] = H[531] = H[747] = 0.0;
+    H[100] = H[316] = H[532] = H[748] = 0.0;
+    H[101] = H[317] = H[533] = H[749] = 0.0;
+    SKV_STORE(H, 216, 102, x25);
+    H[103] = H[319] = H[535] = H[751] = 0.0;
+    H[104] = H[320] = H[536] = H[752] = 0.0;
+    H[105] = H[321] = H[537] = H[753] = 0.0;
+    H[106] = H[322] = H[538] = H[754] = 0.0;
+    H[107] = H[323] = H[539] = H[755] = 0.0;
+    SKV_STORE(H, 216, 108, x21*x70 - x38*x73 - x40*x72 + x49*x71);
+    SKV_STORE(H, 216, 109, x15*x70 - x38*x76 - x41*x72 + x49*x75);
+    SKV_STORE(H, 216, 110, x15*x79 - x41*x82 + x75*x78 - x76*x80);
+    H[111] = H[327] = H[543] = H[759] = 0.0;
+    H[112] = H[328] = H[544] = H[760] = 0.0;
+    H[113] = H[329] = H[545] = H[761] = 0.0;
+    SKV_STORE(H, 216, 114, -x12*x70 + x40*x85 - x49*x84 + x58*x73);
+    SKV_STORE(H, 216, 115, x0*x10*x85 - x24*x70 - x49*x86 + x58*x76);
+    SKV_STORE(H, 216, 116, x0*x10*x88 - x24*x79 + x76*x87 - x78*x86);
+    H[117] = H[333] = H[549] = H[765] = 0.0;
+    H[118] = H[334] = H[550] = H[766] = 0.0;
+    H[119] = H[335] = H[551] = H[767] = 0.0;
+    SKV_STORE(H, 216, 120, x12*x72 - x21*x85 + x38*x84 - x58*x71);
+    SKV_STORE(H, 216, 121, -x15*x85 + x24*x72 + x38*x86 - x58*x75);
+    SKV_STORE(H, 216, 122, -x15*x88 + x24*x82 - x75*x87 + x80*x86);
+    H[123] = H[339] = H[555] = H[771] = 0.0;
+    H[124] = H[340] = H[556] = H[772] = 0.0;
+    H[125] = H[341] = H[557] = H[773] = 0.0;
+    SKV_STORE(H, 216, 126, x84);
+    SKV_STORE(H, 216, 127, x86);
+    SKV_STORE(H, 216, 128, x86);
+    H[129] = H[345] = H[561] = H[777] = 0.0;
+    H[130] = H[346] = H[562] = H[778] = 0.0;
+    H[131] = H[347] = H[563] = H[779] = 0.0;
+    SKV_STORE(H, 216, 132, x71);
+    SKV_STORE(H, 216, 133, x75);
+    SKV_STORE(H, 216, 134, x75);
+    H[135] = H[351] = H[567] = H[783] = 0.0;
+    H[136] = H[352] = H[568] = H[784] = 0.0;
+    H[137] = H[353] = H[569] = H[785] = 0.0;
+    SKV_STORE(H, 216, 138, x73);
+    SKV_STORE(H, 216, 139, x76);
+    SKV_STORE(H, 216, 140, x76);
+    H[141] = H[357] = H[573] = H[789] = 0.0;
+    H[142] = H[358] = H[574] = H[790] = 0.0;
+    H[143] = H[359] = H[575] = H[791] = 0.0;
+    SKV_STORE(H, 216, 144, x21*x90 - x38*x89 - x48*x83 - x49*x83);
+    SKV_STORE(H, 216, 145, x15*x90 - x38*x91 - x48*x92 - x49*x92);
+    SKV_STORE(H, 216, 146, x15*x93 - x78*x92 - x80*x91 - x92*x94);
+    SKV_STORE(H, 216, 147, -x20*x97 + x29*x98);
+    H[148] = H[364] = H[580] = H[796] = 0.0;
+    H[149] = H[365] = H[581] = H[797] = 0.0;
+    SKV_STORE(H, 216, 150, -x12*x90 - x48*x99 - x49*x99 + x58*x89);
+    SKV_STORE(H, 216, 151, -x100*x48 - x100*x49 - x24*x90 + x58*x91);
+    SKV_STORE(H, 216, 152, -x100*x78 - x100*x94 - x24*x93 + x87*x91);
+    SKV_STORE(H, 216, 153, -x11*x97 + x54*x98);
+    H[154] = H[370] = H[586] = H[802] = 0.0;
+    H[155] = H[371] = H[587] = H[803] = 0.0;
+    SKV_STORE(H, 216, 156, x101*x21 + x102*x12 + x38*x99 + x58*x83);
+    SKV_STORE(H, 216, 157, x100*x38 + x101*x15 + x102*x24 + x58*x92);
+    SKV_STORE(H, 216, 158, x1*x24*x94 + x100*x80 + x15*x5*x94 + x87*x92);
+    H[159] = H[375] = H[591] = H[807] = 0.0;
+    H[160] = H[376] = H[592] = H[808] = 0.0;
+    H[161] = H[377] = H[593] = H[809] = 0.0;
+    SKV_STORE(H, 216, 162, x99);
+    SKV_STORE(H, 216, 163, x100);
+    SKV_STORE(H, 216, 164, x100);
+    SKV_STORE(H, 216, 165, x4*x5);
+    H[166] = H[382] = H[598] = H[814] = 0.0;
+    H[167] = H[383] = H[599] = H[815] = 0.0;
+    SKV_STORE(H, 216, 168, -x83);
+    SKV_STORE(H, 216, 169, x103);
+    SKV_STORE(H, 216, 170, x103);
+    SKV_STORE(H, 216, 171, -x1*x4);
+    H[172] = H[388] = H[604] = H[820] = 0.0;
+    H[173] = H[389] = H[605] = H[821] = 0.0;
+    SKV_STORE(H, 216, 174, x89);
+    SKV_STORE(H, 216, 175, x91);
+    SKV_STORE(H, 216, 176, x91);
+    SKV_STORE(H, 216, 177, x98);
+    H[178] = H[394] = H[610] = H[826] = 0.0;
+    H[179] = H[395] = H[611] = H[827] = 0.0;
+    SKV_STORE(H, 216, 180, x104*x49 - x40*x57);
+    SKV_STORE(H, 216, 181, x23*x49 - x41*x57);
+    SKV_STORE(H, 216, 182, x23*x78 - x41*x52);
+    H[183] = H[399] = H[615] = H[831] = 0.0;
+    H[184] = H[400] = H[616] = H[832] = 0.0;
+    H[185] = H[401] = H[617] = H[833] = 0.0;
+    SKV_STORE(H, 216, 186, -x21*x49 + x38*x40);
+    SKV_STORE(H, 216, 187, x0*x10*x38 - x15*x49);
+    SKV_STORE(H, 216, 188, x0*x10*x80 - x15*x78);
+    H[189] = H[405] = H[621] = H[837] = 0.0;
+    H[190] = H[406] = H[622] = H[838] = 0.0;
+    H[191] = H[407] = H[623] = H[839] = 0.0;
+    SKV_STORE(H, 216, 192, -x104*x58 + x12*x57);
+    SKV_STORE(H, 216, 193, -x23*x58 + x24*x57);
+    SKV_STORE(H, 216, 194, -x23*x87 + x24*x52);
+    H[195] = H[411] = H[627] = H[843] = 0.0;
+    H[196] = H[412] = H[628] = H[844] = 0.0;
+    H[197] = H[413] = H[629] = H[845] = 0.0;
+    SKV_STORE(H, 216, 198, x21);
+    SKV_STORE(H, 216, 199, x15);
+    SKV_STORE(H, 216, 200, x15);
+    SKV_STORE(H, 216, 201, -x20);
+    SKV_STORE(H, 216, 202, -x5);
+    H[203] = H[419] = H[635] = H[851] = 0.0;
+    SKV_STORE(H, 216, 204, x104);
+    SKV_STORE(H, 216, 205, x23);
+    SKV_STORE(H, 216, 206, x23);
+    SKV_STORE(H, 216, 207, -x11);
+    SKV_STORE(H, 216, 208, x1);
+    H[209] = H[425] = H[641] = H[857] = 0.0;
+    H[210] = H[426] = H[642] = H[858] = 0.0;
+    H[211] = H[427] = H[643] = H[859] = 0.0;
+    H[212] = H[428] = H[644] = H[860] = 0.0;
+    H[213] = H[429] = H[645] = H[861] = 0.0;
+    H[214] = H[430] = H[646] = H[862] = 0.0;
+    H[215] = H[431] = H[647] = H[863] = 0.0;
+}
+#endif
+
+
 void symkin_puma560_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessiane_x4_(q + i * 6, H + i * 216);
+#endif
+    for (; i < N; ++i)
         hessiane_(q + i * 6, H + i * 216);
 }
 
@@ -1186,27 +2332,27 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sin(q0);
-    const double x1 = sin(q3);
+    const double x0 = sk_sin(q0);
+    const double x1 = sk_sin(q3);
     const double x2 = x0*x1;
-    const double x3 = cos(q0);
-    const double x4 = cos(q3);
+    const double x3 = sk_cos(q0);
+    const double x4 = sk_cos(q3);
     const double x5 = q1 + q2;
-    const double x6 = cos(x5);
+    const double x6 = sk_cos(x5);
     const double x7 = -x2 + x3*x4*x6;
-    const double x8 = cos(q4);
-    const double x9 = sin(q4);
-    const double x10 = sin(x5);
+    const double x8 = sk_cos(q4);
+    const double x9 = sk_sin(q4);
+    const double x10 = sk_sin(x5);
     const double x11 = x10*x3;
     const double x12 = -x11*x9 + x7*x8;
-    const double x13 = cos(q5);
+    const double x13 = sk_cos(q5);
     const double x14 = x0*x4;
     const double x15 = x1*x3;
     const double x16 = x14 + x15*x6;
     const double x17 = -x16;
-    const double x18 = sin(q5);
+    const double x18 = sk_sin(q5);
     const double x19 = -x11*x8 - x7*x9;
-    const double x20 = cos(q1);
+    const double x20 = sk_cos(q1);
     const double x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6;
     const double x22 = (0.4318)*x20*x3 + x21;
     const double x23 = x14*x6 + x15;
@@ -1223,7 +2369,7 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double x34 = x1*x10;
     const double x35 = -x32*x9 + x6*x8;
     const double x36 = (0.0203)*x10 + (0.4318)*x6;
-    const double x37 = x36 + (0.4318)*sin(q1);
+    const double x37 = x36 + (0.4318)*sk_sin(q1);
     const double x38 = -x3;
     T[0] = x12*x13 + x17*x18;
     T[1] = -x12*x18 + x13*x17;
@@ -1284,9 +2430,120 @@ void symkin_puma560_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 x0 = skv_sin(q0);
+    const sk_v4 x1 = skv_sin(q3);
+    const sk_v4 x2 = x0*x1;
+    const sk_v4 x3 = skv_cos(q0);
+    const sk_v4 x4 = skv_cos(q3);
+    const sk_v4 x5 = q1 + q2;
+    const sk_v4 x6 = skv_cos(x5);
+    const sk_v4 x7 = -x2 + x3*x4*x6;
+    const sk_v4 x8 = skv_cos(q4);
+    const sk_v4 x9 = skv_sin(q4);
+    const sk_v4 x10 = skv_sin(x5);
+    const sk_v4 x11 = x10*x3;
+    const sk_v4 x12 = -x11*x9 + x7*x8;
+    const sk_v4 x13 = skv_cos(q5);
+    const sk_v4 x14 = x0*x4;
+    const sk_v4 x15 = x1*x3;
+    const sk_v4 x16 = x14 + x15*x6;
+    const sk_v4 x17 = -x16;
+    const sk_v4 x18 = skv_sin(q5);
+    const sk_v4 x19 = -x11*x8 - x7*x9;
+    const sk_v4 x20 = skv_cos(q1);
+    const sk_v4 x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6;
+    const sk_v4 x22 = (0.4318)*x20*x3 + x21;
+    const sk_v4 x23 = x14*x6 + x15;
+    const sk_v4 x24 = x0*x10;
+    const sk_v4 x25 = x23*x8 - x24*x9;
+    const sk_v4 x26 = x2*x6 - x3*x4;
+    const sk_v4 x27 = -x26;
+    const sk_v4 x28 = -x23*x9 - x24*x8;
+    const sk_v4 x29 = -0.0203*x0*x6 + (0.4318)*x24 + (0.15005)*x3;
+    const sk_v4 x30 = -0.4318*x0*x20 + x29;
+    const sk_v4 x31 = -x30;
+    const sk_v4 x32 = x10*x4;
+    const sk_v4 x33 = x32*x8 + x6*x9;
+    const sk_v4 x34 = x1*x10;
+    const sk_v4 x35 = -x32*x9 + x6*x8;
+    const sk_v4 x36 = (0.0203)*x10 + (0.4318)*x6;
+    const sk_v4 x37 = x36 + (0.4318)*skv_sin(q1);
+    const sk_v4 x38 = -x3;
+    SKV_STORE(T, 16, 0, x12*x13 + x17*x18);
+    SKV_STORE(T, 16, 1, -x12*x18 + x13*x17);
+    SKV_STORE(T, 16, 2, x19);
+    SKV_STORE(T, 16, 3, x22);
+    SKV_STORE(T, 16, 4, x13*x25 + x18*x27);
+    SKV_STORE(T, 16, 5, x13*x27 - x18*x25);
+    SKV_STORE(T, 16, 6, x28);
+    SKV_STORE(T, 16, 7, x31);
+    SKV_STORE(T, 16, 8, x13*x33 - x18*x34);
+    SKV_STORE(T, 16, 9, -x13*x34 - x18*x33);
+    SKV_STORE(T, 16, 10, x35);
+    SKV_STORE(T, 16, 11, x37);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+    SKV_STORE(J, 36, 0, x30);
+    SKV_STORE(J, 36, 1, -x3*x37);
+    SKV_STORE(J, 36, 2, -x3*x36);
+    J[3] = J[39] = J[75] = J[111] = 0.0;
+    J[4] = J[40] = J[76] = J[112] = 0.0;
+    J[5] = J[41] = J[77] = J[113] = 0.0;
+    SKV_STORE(J, 36, 6, x22);
+    SKV_STORE(J, 36, 7, -x0*x37);
+    SKV_STORE(J, 36, 8, -x0*x36);
+    J[9] = J[45] = J[81] = J[117] = 0.0;
+    J[10] = J[46] = J[82] = J[118] = 0.0;
+    J[11] = J[47] = J[83] = J[119] = 0.0;
+    J[12] = J[48] = J[84] = J[120] = 0.0;
+    SKV_STORE(J, 36, 13, x0*x31 + x22*x3);
+    SKV_STORE(J, 36, 14, -x0*x29 + x21*x3);
+    J[15] = J[51] = J[87] = J[123] = 0.0;
+    J[16] = J[52] = J[88] = J[124] = 0.0;
+    J[17] = J[53] = J[89] = J[125] = 0.0;
+    J[18] = J[54] = J[90] = J[126] = 0.0;
+    SKV_STORE(J, 36, 19, x0);
+    SKV_STORE(J, 36, 20, x0);
+    SKV_STORE(J, 36, 21, -x11);
+    SKV_STORE(J, 36, 22, x16);
+    SKV_STORE(J, 36, 23, x19);
+    J[24] = J[60] = J[96] = J[132] = 0.0;
+    SKV_STORE(J, 36, 25, x38);
+    SKV_STORE(J, 36, 26, x38);
+    SKV_STORE(J, 36, 27, -x24);
+    SKV_STORE(J, 36, 28, x26);
+    SKV_STORE(J, 36, 29, x28);
+    J[30] = J[66] = J[102] = J[138] = 1.0;
+    J[31] = J[67] = J[103] = J[139] = 0.0;
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, x6);
+    SKV_STORE(J, 36, 34, x34);
+    SKV_STORE(J, 36, 35, x35);
+}
+#endif
+
+
 void symkin_puma560_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_jacob0_x4_(q + i * 6, T + i * 16, J + i * 36);
+#endif
+    for (; i < N; ++i)
         fkine_jacob0_(q + i * 6, T + i * 16, J + i * 36);
 }
 
@@ -1298,18 +2555,18 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sin(q0);
-    const double x1 = (0.4318)*cos(q1);
-    const double x2 = cos(q0);
+    const double x0 = sk_sin(q0);
+    const double x1 = (0.4318)*sk_cos(q1);
+    const double x2 = sk_cos(q0);
     const double x3 = q1 + q2;
-    const double x4 = cos(x3);
+    const double x4 = sk_cos(x3);
     const double x5 = x0*x4;
-    const double x6 = sin(x3);
+    const double x6 = sk_sin(x3);
     const double x7 = x0*x6;
     const double x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7;
     const double x9 = -x0*x1 + x8;
     const double x10 = (0.4318)*x4 + (0.0203)*x6;
-    const double x11 = x10 + (0.4318)*sin(q1);
+    const double x11 = x10 + (0.4318)*sk_sin(q1);
     const double x12 = -x11*x2;
     const double x13 = -x10*x2;
     const double x14 = x2*x6;
@@ -1321,14 +2578,14 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double x20 = -x0*x9 + x17*x2;
     const double x21 = -x0*x8 + x16*x2;
     const double x22 = -x14;
-    const double x23 = cos(q3);
+    const double x23 = sk_cos(q3);
     const double x24 = x0*x23;
-    const double x25 = sin(q3);
+    const double x25 = sk_sin(q3);
     const double x26 = x2*x25;
     const double x27 = x24 + x26*x4;
     const double x28 = x0*x25;
-    const double x29 = sin(q4);
-    const double x30 = cos(q4);
+    const double x29 = sk_sin(q4);
+    const double x30 = sk_cos(q4);
     const double x31 = -x14*x30 - x29*(x2*x23*x4 - x28);
     const double x32 = -x2;
     const double x33 = -x2*x23 + x28*x4;
@@ -1610,9 +2867,333 @@ void symkin_puma560_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 x0 = skv_sin(q0);
+    const sk_v4 x1 = (0.4318)*skv_cos(q1);
+    const sk_v4 x2 = skv_cos(q0);
+    const sk_v4 x3 = q1 + q2;
+    const sk_v4 x4 = skv_cos(x3);
+    const sk_v4 x5 = x0*x4;
+    const sk_v4 x6 = skv_sin(x3);
+    const sk_v4 x7 = x0*x6;
+    const sk_v4 x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7;
+    const sk_v4 x9 = -x0*x1 + x8;
+    const sk_v4 x10 = (0.4318)*x4 + (0.0203)*x6;
+    const sk_v4 x11 = x10 + (0.4318)*skv_sin(q1);
+    const sk_v4 x12 = -x11*x2;
+    const sk_v4 x13 = -x10*x2;
+    const sk_v4 x14 = x2*x6;
+    const sk_v4 x15 = x2*x4;
+    const sk_v4 x16 = (0.15005)*x0 - 0.4318*x14 + (0.0203)*x15;
+    const sk_v4 x17 = x1*x2 + x16;
+    const sk_v4 x18 = x0*x11;
+    const sk_v4 x19 = x0*x10;
+    const sk_v4 x20 = -x0*x9 + x17*x2;
+    const sk_v4 x21 = -x0*x8 + x16*x2;
+    const sk_v4 x22 = -x14;
+    const sk_v4 x23 = skv_cos(q3);
+    const sk_v4 x24 = x0*x23;
+    const sk_v4 x25 = skv_sin(q3);
+    const sk_v4 x26 = x2*x25;
+    const sk_v4 x27 = x24 + x26*x4;
+    const sk_v4 x28 = x0*x25;
+    const sk_v4 x29 = skv_sin(q4);
+    const sk_v4 x30 = skv_cos(q4);
+    const sk_v4 x31 = -x14*x30 - x29*(x2*x23*x4 - x28);
+    const sk_v4 x32 = -x2;
+    const sk_v4 x33 = -x2*x23 + x28*x4;
+    const sk_v4 x34 = x29*(x24*x4 + x26) + x30*x7;
+    const sk_v4 x35 = -x34;
+    const sk_v4 x36 = x25*x6;
+    const sk_v4 x37 = -x23*x29*x6 + x30*x4;
+    const sk_v4 x38 = -x2*x21;
+    const sk_v4 x39 = -x0*x21;
+    const sk_v4 x40 = (x2*x2);
+    const sk_v4 x41 = (x0*x0);
+    const sk_v4 x42 = -x10*x40 - x10*x41;
+    const sk_v4 x43 = -x15;
+    const sk_v4 x44 = -x14*x25;
+    const sk_v4 x45 = -x2*x37;
+    const sk_v4 x46 = -x5;
+    const sk_v4 x47 = -x28*x6;
+    const sk_v4 x48 = -x0*x37;
+    const sk_v4 x49 = -x40*x6 - x41*x6;
+    const sk_v4 x50 = x0*x33 + x2*x27;
+    const sk_v4 x51 = x0*x35 + x2*x31;
+    const sk_v4 x52 = (x6*x6);
+    SKV_STORE(J, 36, 0, x9);
+    SKV_STORE(J, 36, 1, x12);
+    SKV_STORE(J, 36, 2, x13);
+    J[3] = J[39] = J[75] = J[111] = 0.0;
+    J[4] = J[40] = J[76] = J[112] = 0.0;
+    J[5] = J[41] = J[77] = J[113] = 0.0;
+    SKV_STORE(J, 36, 6, x17);
+    SKV_STORE(J, 36, 7, -x18);
+    SKV_STORE(J, 36, 8, -x19);
+    J[9] = J[45] = J[81] = J[117] = 0.0;
+    J[10] = J[46] = J[82] = J[118] = 0.0;
+    J[11] = J[47] = J[83] = J[119] = 0.0;
+    J[12] = J[48] = J[84] = J[120] = 0.0;
+    SKV_STORE(J, 36, 13, x20);
+    SKV_STORE(J, 36, 14, x21);
+    J[15] = J[51] = J[87] = J[123] = 0.0;
+    J[16] = J[52] = J[88] = J[124] = 0.0;
+    J[17] = J[53] = J[89] = J[125] = 0.0;
+    J[18] = J[54] = J[90] = J[126] = 0.0;
+    SKV_STORE(J, 36, 19, x0);
+    SKV_STORE(J, 36, 20, x0);
+    SKV_STORE(J, 36, 21, x22);
+    SKV_STORE(J, 36, 22, x27);
+    SKV_STORE(J, 36, 23, x31);
+    J[24] = J[60] = J[96] = J[132] = 0.0;
+    SKV_STORE(J, 36, 25, x32);
+    SKV_STORE(J, 36, 26, x32);
+    SKV_STORE(J, 36, 27, -x7);
+    SKV_STORE(J, 36, 28, x33);
+    SKV_STORE(J, 36, 29, x35);
+    J[30] = J[66] = J[102] = J[138] = 1.0;
+    J[31] = J[67] = J[103] = J[139] = 0.0;
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, x4);
+    SKV_STORE(J, 36, 34, x36);
+    SKV_STORE(J, 36, 35, x37);
+    SKV_STORE(H, 216, 0, -x17);
+    SKV_STORE(H, 216, 1, x18);
+    SKV_STORE(H, 216, 2, x19);
+    H[3] = H[219] = H[435] = H[651] = 0.0;
+    H[4] = H[220] = H[436] = H[652] = 0.0;
+    H[5] = H[221] = H[437] = H[653] = 0.0;
+    SKV_STORE(H, 216, 6, x9);
+    SKV_STORE(H, 216, 7, x12);
+    SKV_STORE(H, 216, 8, x13);
+    H[9] = H[225] = H[441] = H[657] = 0.0;
+    H[10] = H[226] = H[442] = H[658] = 0.0;
+    H[11] = H[227] = H[443] = H[659] = 0.0;
+    H[12] = H[228] = H[444] = H[660] = 0.0;
+    H[13] = H[229] = H[445] = H[661] = 0.0;
+    H[14] = H[230] = H[446] = H[662] = 0.0;
+    H[15] = H[231] = H[447] = H[663] = 0.0;
+    H[16] = H[232] = H[448] = H[664] = 0.0;
+    H[17] = H[233] = H[449] = H[665] = 0.0;
+    H[18] = H[234] = H[450] = H[666] = 0.0;
+    SKV_STORE(H, 216, 19, x2);
+    SKV_STORE(H, 216, 20, x2);
+    SKV_STORE(H, 216, 21, x7);
+    SKV_STORE(H, 216, 22, -x33);
+    SKV_STORE(H, 216, 23, x34);
+    H[24] = H[240] = H[456] = H[672] = 0.0;
+    SKV_STORE(H, 216, 25, x0);
+    SKV_STORE(H, 216, 26, x0);
+    SKV_STORE(H, 216, 27, x22);
+    SKV_STORE(H, 216, 28, x27);
+    SKV_STORE(H, 216, 29, x31);
+    H[30] = H[246] = H[462] = H[678] = 0.0;
+    H[31] = H[247] = H[463] = H[679] = 0.0;
+    H[32] = H[248] = H[464] = H[680] = 0.0;
+    H[33] = H[249] = H[465] = H[681] = 0.0;
+    H[34] = H[250] = H[466] = H[682] = 0.0;
+    H[35] = H[251] = H[467] = H[683] = 0.0;
+    SKV_STORE(H, 216, 36, x18);
+    SKV_STORE(H, 216, 37, -x2*x20);
+    SKV_STORE(H, 216, 38, x38);
+    H[39] = H[255] = H[471] = H[687] = 0.0;
+    H[40] = H[256] = H[472] = H[688] = 0.0;
+    H[41] = H[257] = H[473] = H[689] = 0.0;
+    SKV_STORE(H, 216, 42, x12);
+    SKV_STORE(H, 216, 43, -x0*x20);
+    SKV_STORE(H, 216, 44, x39);
+    H[45] = H[261] = H[477] = H[693] = 0.0;
+    H[46] = H[262] = H[478] = H[694] = 0.0;
+    H[47] = H[263] = H[479] = H[695] = 0.0;
+    H[48] = H[264] = H[480] = H[696] = 0.0;
+    SKV_STORE(H, 216, 49, -x11*x40 - x11*x41);
+    SKV_STORE(H, 216, 50, x42);
+    H[51] = H[267] = H[483] = H[699] = 0.0;
+    H[52] = H[268] = H[484] = H[700] = 0.0;
+    H[53] = H[269] = H[485] = H[701] = 0.0;
+    H[54] = H[270] = H[486] = H[702] = 0.0;
+    H[55] = H[271] = H[487] = H[703] = 0.0;
+    H[56] = H[272] = H[488] = H[704] = 0.0;
+    SKV_STORE(H, 216, 57, x43);
+    SKV_STORE(H, 216, 58, x44);
+    SKV_STORE(H, 216, 59, x45);
+    H[60] = H[276] = H[492] = H[708] = 0.0;
+    H[61] = H[277] = H[493] = H[709] = 0.0;
+    H[62] = H[278] = H[494] = H[710] = 0.0;
+    SKV_STORE(H, 216, 63, x46);
+    SKV_STORE(H, 216, 64, x47);
+    SKV_STORE(H, 216, 65, x48);
+    H[66] = H[282] = H[498] = H[714] = 0.0;
+    H[67] = H[283] = H[499] = H[715] = 0.0;
+    H[68] = H[284] = H[500] = H[716] = 0.0;
+    SKV_STORE(H, 216, 69, x49);
+    SKV_STORE(H, 216, 70, x50);
+    SKV_STORE(H, 216, 71, x51);
+    SKV_STORE(H, 216, 72, x19);
+    SKV_STORE(H, 216, 73, x38);
+    SKV_STORE(H, 216, 74, x38);
+    H[75] = H[291] = H[507] = H[723] = 0.0;
+    H[76] = H[292] = H[508] = H[724] = 0.0;
+    H[77] = H[293] = H[509] = H[725] = 0.0;
+    SKV_STORE(H, 216, 78, x13);
+    SKV_STORE(H, 216, 79, x39);
+    SKV_STORE(H, 216, 80, x39);
+    H[81] = H[297] = H[513] = H[729] = 0.0;
+    H[82] = H[298] = H[514] = H[730] = 0.0;
+    H[83] = H[299] = H[515] = H[731] = 0.0;
+    H[84] = H[300] = H[516] = H[732] = 0.0;
+    SKV_STORE(H, 216, 85, x42);
+    SKV_STORE(H, 216, 86, x42);
+    H[87] = H[303] = H[519] = H[735] = 0.0;
+    H[88] = H[304] = H[520] = H[736] = 0.0;
+    H[89] = H[305] = H[521] = H[737] = 0.0;
+    H[90] = H[306] = H[522] = H[738] = 0.0;
+    H[91] = H[307] = H[523] = H[739] = 0.0;
+    H[92] = H[308] = H[524] = H[740] = 0.0;
+    SKV_STORE(H, 216, 93, x43);
+    SKV_STORE(H, 216, 94, x44);
+    SKV_STORE(H, 216, 95, x45);
+    H[96] = H[312] = H[528] = H[744] = 0.0;
+    H[97] = H[313] = H[529] = H[745] = 0.0;
+    H[98] = H[314] = H[530] = H[746] = 0.0;
+    SKV_STORE(H, 216, 99, x46);
+    SKV_STORE(H, 216, 100, x47);
+    SKV_STORE(H, 216, 101, x48);
+    H[102] = H[318] = H[534] = H[750] = 0.0;
+    H[103] = H[319] = H[535] = H[751] = 0.0;
+    H[104] = H[320] = H[536] = H[752] = 0.0;
+    SKV_STORE(H, 216, 105, x49);
+    SKV_STORE(H, 216, 106, x50);
+    SKV_STORE(H, 216, 107, x51);
+    H[108] = H[324] = H[540] = H[756] = 0.0;
+    H[109] = H[325] = H[541] = H[757] = 0.0;
+    H[110] = H[326] = H[542] = H[758] = 0.0;
+    H[111] = H[327] = H[543] = H[759] = 0.0;
+    H[112] = H[328] = H[544] = H[760] = 0.0;
+    H[113] = H[329] = H[545] = H[761] = 0.0;
+    H[114] = H[330] = H[546] = H[762] = 0.0;
+    H[115] = H[331] = H[547] = H[763] = 0.0;
+    H[116] = H[332] = H[548] = H[764] = 0.0;
+    H[117] = H[333] = H[549] = H[765] = 0.0;
+    H[118] = H[334] = H[550] = H[766] = 0.0;
+    H[119] = H[335] = H[551] = H[767] = 0.0;
+    H[120] = H[336] = H[552] = H[768] = 0.0;
+    H[121] = H[337] = H[553] = H[769] = 0.0;
+    H[122] = H[338] = H[554] = H[770] = 0.0;
+    H[123] = H[339] = H[555] = H[771] = 0.0;
+    H[124] = H[340] = H[556] = H[772] = 0.0;
+    H[125] = H[341] = H[557] = H[773] = 0.0;
+    H[126] = H[342] = H[558] = H[774] = 0.0;
+    H[127] = H[343] = H[559] = H[775] = 0.0;
+    H[128] = H[344] = H[560] = H[776] = 0.0;
+    H[129] = H[345] = H[561] = H[777] = 0.0;
+    SKV_STORE(H, 216, 130, -x28*x52 - x33*x4);
+    SKV_STORE(H, 216, 131, -x35*x4 - x37*x7);
+    H[132] = H[348] = H[564] = H[780] = 0.0;
+    H[133] = H[349] = H[565] = H[781] = 0.0;
+    H[134] = H[350] = H[566] = H[782] = 0.0;
+    H[135] = H[351] = H[567] = H[783] = 0.0;
+    SKV_STORE(H, 216, 136, x26*x52 + x27*x4);
+    SKV_STORE(H, 216, 137, x14*x37 + x31*x4);
+    H[138] = H[354] = H[570] = H[786] = 0.0;
+    H[139] = H[355] = H[571] = H[787] = 0.0;
+    H[140] = H[356] = H[572] = H[788] = 0.0;
+    H[141] = H[357] = H[573] = H[789] = 0.0;
+    SKV_STORE(H, 216, 142, -x14*x33 + x27*x7);
+    SKV_STORE(H, 216, 143, -x14*x35 + x31*x7);
+    H[144] = H[360] = H[576] = H[792] = 0.0;
+    H[145] = H[361] = H[577] = H[793] = 0.0;
+    H[146] = H[362] = H[578] = H[794] = 0.0;
+    H[147] = H[363] = H[579] = H[795] = 0.0;
+    H[148] = H[364] = H[580] = H[796] = 0.0;
+    H[149] = H[365] = H[581] = H[797] = 0.0;
+    H[150] = H[366] = H[582] = H[798] = 0.0;
+    H[151] = H[367] = H[583] = H[799] = 0.0;
+    H[152] = H[368] = H[584] = H[800] = 0.0;
+    H[153] = H[369] = H[585] = H[801] = 0.0;
+    H[154] = H[370] = H[586] = H[802] = 0.0;
+    H[155] = H[371] = H[587] = H[803] = 0.0;
+    H[156] = H[372] = H[588] = H[804] = 0.0;
+    H[157] = H[373] = H[589] = H[805] = 0.0;
+    H[158] = H[374] = H[590] = H[806] = 0.0;
+    H[159] = H[375] = H[591] = H[807] = 0.0;
+    H[160] = H[376] = H[592] = H[808] = 0.0;
+    H[161] = H[377] = H[593] = H[809] = 0.0;
+    H[162] = H[378] = H[594] = H[810] = 0.0;
+    H[163] = H[379] = H[595] = H[811] = 0.0;
+    H[164] = H[380] = H[596] = H[812] = 0.0;
+    H[165] = H[381] = H[597] = H[813] = 0.0;
+    H[166] = H[382] = H[598] = H[814] = 0.0;
+    SKV_STORE(H, 216, 167, x33*x37 - x35*x36);
+    H[168] = H[384] = H[600] = H[816] = 0.0;
+    H[169] = H[385] = H[601] = H[817] = 0.0;
+    H[170] = H[386] = H[602] = H[818] = 0.0;
+    H[171] = H[387] = H[603] = H[819] = 0.0;
+    H[172] = H[388] = H[604] = H[820] = 0.0;
+    SKV_STORE(H, 216, 173, -x27*x37 + x31*x36);
+    H[174] = H[390] = H[606] = H[822] = 0.0;
+    H[175] = H[391] = H[607] = H[823] = 0.0;
+    H[176] = H[392] = H[608] = H[824] = 0.0;
+    H[177] = H[393] = H[609] = H[825] = 0.0;
+    H[178] = H[394] = H[610] = H[826] = 0.0;
+    SKV_STORE(H, 216, 179, x27*x35 - x31*x33);
+    H[180] = H[396] = H[612] = H[828] = 0.0;
+    H[181] = H[397] = H[613] = H[829] = 0.0;
+    H[182] = H[398] = H[614] = H[830] = 0.0;
+    H[183] = H[399] = H[615] = H[831] = 0.0;
+    H[184] = H[400] = H[616] = H[832] = 0.0;
+    H[185] = H[401] = H[617] = H[833] = 0.0;
+    H[186] = H[402] = H[618] = H[834] = 0.0;
+    H[187] = H[403] = H[619] = H[835] = 0.0;
+    H[188] = H[404] = H[620] = H[836] = 0.0;
+    H[189] = H[405] = H[621] = H[837] = 0.0;
+    H[190] = H[406] = H[622] = H[838] = 0.0;
+    H[191] = H[407] = H[623] = H[839] = 0.0;
+    H[192] = H[408] = H[624] = H[840] = 0.0;
+    H[193] = H[409] = H[625] = H[841] = 0.0;
+    H[194] = H[410] = H[626] = H[842] = 0.0;
+    H[195] = H[411] = H[627] = H[843] = 0.0;
+    H[196] = H[412] = H[628] = H[844] = 0.0;
+    H[197] = H[413] = H[629] = H[845] = 0.0;
+    H[198] = H[414] = H[630] = H[846] = 0.0;
+    H[199] = H[415] = H[631] = H[847] = 0.0;
+    H[200] = H[416] = H[632] = H[848] = 0.0;
+    H[201] = H[417] = H[633] = H[849] = 0.0;
+    H[202] = H[418] = H[634] = H[850] = 0.0;
+    H[203] = H[419] = H[635] = H[851] = 0.0;
+    H[204] = H[420] = H[636] = H[852] = 0.0;
+    H[205] = H[421] = H[637] = H[853] = 0.0;
+    H[206] = H[422] = H[638] = H[854] = 0.0;
+    H[207] = H[423] = H[639] = H[855] = 0.0;
+    H[208] = H[424] = H[640] = H[856] = 0.0;
+    H[209] = H[425] = H[641] = H[857] = 0.0;
+    H[210] = H[426] = H[642] = H[858] = 0.0;
+    H[211] = H[427] = H[643] = H[859] = 0.0;
+    H[212] = H[428] = H[644] = H[860] = 0.0;
+    H[213] = H[429] = H[645] = H[861] = 0.0;
+    H[214] = H[430] = H[646] = H[862] = 0.0;
+    H[215] = H[431] = H[647] = H[863] = 0.0;
+}
+#endif
+
+
 void symkin_puma560_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_hessian0_x4_(q + i * 6, J + i * 36, H + i * 216);
+#endif
+    for (; i < N; ++i)
         jacob0_hessian0_(q + i * 6, J + i * 36, H + i * 216);
 }
 

@@ -33,6 +33,11 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
     "q5",
 };
 
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_INLINE static inline __attribute__((always_inline))
+#else
+#define SK_INLINE static inline
+#endif
 #ifdef SYMKIN_USE_LIBM
 /* The C library's sin and cos (SYMKIN_USE_LIBM). */
 #define sk_sin sin
@@ -45,10 +50,11 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
  * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
- * true value (measured max 0.80 ulp, see the README, "Accuracy"); larger and non-finite arguments
- * go to libm. Forced inline and branch-free (selects, no branch on the quadrant), so an angle
- * whose sin and cos are both used is reduced once. Define SYMKIN_USE_LIBM (or generate with
- * `symkin compile --libm`) to call the C library's sin and cos instead.
+ * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
+ * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
+ * quadrant), so an angle whose sin and cos are both used is reduced once. Define
+ * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
+ * instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -56,18 +62,16 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
-#if defined(__GNUC__) || defined(__clang__)
-#define SK_INLINE static inline __attribute__((always_inline))
-#else
-#define SK_INLINE static inline
-#endif
 
 /* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
    the second stage always runs (its rounding error is captured exactly), the third's result is
    selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
 SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
 {
-    const double k = floor(x * 6.36619772367581382433e-01 + 0.5);
+    /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
+       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+    const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
     double w = k * 6.07710050630396597660e-11;
     const double r = t - w;
@@ -138,6 +142,128 @@ SK_INLINE double sk_cos(double x)
 
 #endif /* SYMKIN_USE_LIBM */
 
+/*
+ * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
+ * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
+ * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
+ * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
+ * configuration per step; other compilers and C++ get it.
+ */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
+#define SYMKIN_LANES 4
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* vectors by value: every such function is inlined */
+#endif
+typedef double sk_v4 __attribute__((vector_size(32)));
+typedef long long sk_m4 __attribute__((vector_size(32)));
+#define SKV_SPLAT(x) ((sk_v4){(x), (x), (x), (x)})
+/* out[i] of four consecutive outputs of size S from the lanes of the vector v */
+#define SKV_STORE(out, S, i, v) \
+    do { \
+        const sk_v4 v_ = (v); \
+        (out)[i] = v_[0], (out)[(S) + (i)] = v_[1], (out)[2 * (S) + (i)] = v_[2], (out)[3 * (S) + (i)] = v_[3]; \
+    } while (0)
+
+#ifdef SYMKIN_USE_LIBM
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
+}
+#else
+SK_INLINE sk_v4 skv_abs_(sk_v4 x)
+{
+    return (sk_v4)((sk_m4)x & 0x7fffffffffffffffLL);
+}
+
+/* a where m is 0, b where m is all ones */
+SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
+{
+    return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
+}
+
+/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
+SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
+{
+    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
+    const sk_v4 k = kb - 6755399441055744.0;
+    const sk_v4 t = x - k * 1.57079632673412561417e+00;
+    sk_v4 w = k * 6.07710050630396597660e-11;
+    const sk_v4 r = t - w;
+    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
+    const sk_v4 y = r - w;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
+    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
+        sk_v4 w3 = k * 2.02226624871116645580e-21;
+        const sk_v4 r3 = r - w3;
+        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+        const sk_v4 y3 = r3 - w3;
+        *r0 = skv_where_(third, y, y3);
+        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
+    }
+    return (sk_m4)kb;
+}
+
+SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 p = x * z * (-1.66666666666666324348e-01 + z * (8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04
+        + z * (2.75573137070700676789e-06 + z * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10)))));
+    return x + (p + y);
+}
+
+SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
+{
+    const sk_v4 z = x * x;
+    const sk_v4 r = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * (2.48015872894767294178e-05
+        + z * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09 + z * -1.13596475577881948265e-11)))));
+    const sk_v4 hz = 0.5 * z, w = 1.0 - hz;
+    return w + (((1.0 - w) - hz) + (z * r - x * y));
+}
+
+/* sk_select_ lane by lane */
+SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
+{
+    const sk_m4 m = 0 - (k & 1);
+    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
+}
+
+SK_INLINE sk_v4 skv_sin(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) s[l] = sin(x[l]);
+    return s;
+}
+
+SK_INLINE sk_v4 skv_cos(sk_v4 x)
+{
+    sk_v4 r0, r1;
+    const sk_m4 k = skv_reduce_(x, &r0, &r1);
+    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
+    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
+    if (far[0] | far[1] | far[2] | far[3])
+        for (int l = 0; l < 4; ++l)
+            if (far[l]) c[l] = cos(x[l]);
+    return c;
+}
+#endif /* SYMKIN_USE_LIBM */
+#else
+#define SYMKIN_LANES 1
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -164,10 +290,10 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -179,24 +305,24 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = cos(q5);
-    const double t32 = sin(q5);
+    const double t31 = sk_cos(q5);
+    const double t32 = sk_sin(q5);
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -229,9 +355,87 @@ void symkin_stanford_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = -t0*t3;
+    const sk_v4 t7 = -t1*t3;
+    const sk_v4 t8 = -0.154*t1;
+    const sk_v4 t9 = (0.154)*t0;
+    const sk_v4 t10 = -q2*t6 + t8;
+    const sk_v4 t11 = -q2*t7 + t9;
+    const sk_v4 t12 = q2*t2 + 0.412;
+    const sk_v4 t13 = (0.0203)*t1 + t10;
+    const sk_v4 t14 = -0.0203*t0 + t11;
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t17 = -t1*t16 + t15*t4;
+    const sk_v4 t18 = t0*t16 + t15*t5;
+    const sk_v4 t19 = -t15*t3;
+    const sk_v4 t20 = -t1*t15 - t16*t4;
+    const sk_v4 t21 = t0*t15 - t16*t5;
+    const sk_v4 t22 = t16*t3;
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t25 = t17*t23 + t24*t6;
+    const sk_v4 t26 = t18*t23 + t24*t7;
+    const sk_v4 t27 = t19*t23 - t2*t24;
+    const sk_v4 t28 = -t17*t24 + t23*t6;
+    const sk_v4 t29 = -t18*t24 + t23*t7;
+    const sk_v4 t30 = -t19*t24 - t2*t23;
+    const sk_v4 t31 = skv_cos(q5);
+    const sk_v4 t32 = skv_sin(q5);
+    const sk_v4 t33 = t20*t32 + t25*t31;
+    const sk_v4 t34 = t21*t32 + t26*t31;
+    const sk_v4 t35 = t22*t32 + t27*t31;
+    const sk_v4 t36 = t20*t31 - t25*t32;
+    const sk_v4 t37 = t21*t31 - t26*t32;
+    const sk_v4 t38 = t22*t31 - t27*t32;
+    const sk_v4 t39 = t13 - 0.263*t28;
+    const sk_v4 t40 = t14 - 0.263*t29;
+    const sk_v4 t41 = t12 - 0.263*t30;
+    SKV_STORE(T, 16, 0, t33);
+    SKV_STORE(T, 16, 1, t36);
+    SKV_STORE(T, 16, 2, -t28);
+    SKV_STORE(T, 16, 3, t39);
+    SKV_STORE(T, 16, 4, t34);
+    SKV_STORE(T, 16, 5, t37);
+    SKV_STORE(T, 16, 6, -t29);
+    SKV_STORE(T, 16, 7, t40);
+    SKV_STORE(T, 16, 8, t35);
+    SKV_STORE(T, 16, 9, t38);
+    SKV_STORE(T, 16, 10, -t30);
+    SKV_STORE(T, 16, 11, t41);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+}
+#endif
+
+
 void symkin_stanford_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_x4_(q + i * 6, T + i * 16);
+#endif
+    for (; i < N; ++i)
         fkine_(q + i * 6, T + i * 16);
 }
 
@@ -244,10 +448,10 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -259,24 +463,24 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = cos(q5);
-    const double t32 = sin(q5);
+    const double t31 = sk_cos(q5);
+    const double t32 = sk_sin(q5);
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -386,9 +590,164 @@ void symkin_stanford_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
+#if SYMKIN_LANES == 4
+/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = -t0*t3;
+    const sk_v4 t7 = -t1*t3;
+    const sk_v4 t8 = -0.154*t1;
+    const sk_v4 t9 = (0.154)*t0;
+    const sk_v4 t10 = -q2*t6 + t8;
+    const sk_v4 t11 = -q2*t7 + t9;
+    const sk_v4 t12 = q2*t2 + 0.412;
+    const sk_v4 t13 = (0.0203)*t1 + t10;
+    const sk_v4 t14 = -0.0203*t0 + t11;
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t17 = -t1*t16 + t15*t4;
+    const sk_v4 t18 = t0*t16 + t15*t5;
+    const sk_v4 t19 = -t15*t3;
+    const sk_v4 t20 = -t1*t15 - t16*t4;
+    const sk_v4 t21 = t0*t15 - t16*t5;
+    const sk_v4 t22 = t16*t3;
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t25 = t17*t23 + t24*t6;
+    const sk_v4 t26 = t18*t23 + t24*t7;
+    const sk_v4 t27 = t19*t23 - t2*t24;
+    const sk_v4 t28 = -t17*t24 + t23*t6;
+    const sk_v4 t29 = -t18*t24 + t23*t7;
+    const sk_v4 t30 = -t19*t24 - t2*t23;
+    const sk_v4 t31 = skv_cos(q5);
+    const sk_v4 t32 = skv_sin(q5);
+    const sk_v4 t33 = t20*t32 + t25*t31;
+    const sk_v4 t34 = t21*t32 + t26*t31;
+    const sk_v4 t35 = t22*t32 + t27*t31;
+    const sk_v4 t36 = t20*t31 - t25*t32;
+    const sk_v4 t37 = t21*t31 - t26*t32;
+    const sk_v4 t38 = t22*t31 - t27*t32;
+    SKV_STORE(links, 96, 0, t0);
+    SKV_STORE(links, 96, 1, -t1);
+    links[2] = links[98] = links[194] = links[290] = 0.0;
+    links[3] = links[99] = links[195] = links[291] = 0.0;
+    SKV_STORE(links, 96, 4, t1);
+    SKV_STORE(links, 96, 5, t0);
+    links[6] = links[102] = links[198] = links[294] = 0.0;
+    links[7] = links[103] = links[199] = links[295] = 0.0;
+    links[8] = links[104] = links[200] = links[296] = 0.0;
+    links[9] = links[105] = links[201] = links[297] = 0.0;
+    links[10] = links[106] = links[202] = links[298] = 1.0;
+    links[11] = links[107] = links[203] = links[299] = 0.0;
+    links[12] = links[108] = links[204] = links[300] = 0.0;
+    links[13] = links[109] = links[205] = links[301] = 0.0;
+    links[14] = links[110] = links[206] = links[302] = 0.0;
+    links[15] = links[111] = links[207] = links[303] = 1.0;
+    SKV_STORE(links, 96, 16, t4);
+    SKV_STORE(links, 96, 17, t6);
+    SKV_STORE(links, 96, 18, -t1);
+    links[19] = links[115] = links[211] = links[307] = 0.0;
+    SKV_STORE(links, 96, 20, t5);
+    SKV_STORE(links, 96, 21, t7);
+    SKV_STORE(links, 96, 22, t0);
+    links[23] = links[119] = links[215] = links[311] = 0.0;
+    SKV_STORE(links, 96, 24, -t3);
+    SKV_STORE(links, 96, 25, -t2);
+    links[26] = links[122] = links[218] = links[314] = 0.0;
+    links[27] = links[123] = links[219] = links[315] = 0.412;
+    links[28] = links[124] = links[220] = links[316] = 0.0;
+    links[29] = links[125] = links[221] = links[317] = 0.0;
+    links[30] = links[126] = links[222] = links[318] = 0.0;
+    links[31] = links[127] = links[223] = links[319] = 1.0;
+    SKV_STORE(links, 96, 32, t1);
+    SKV_STORE(links, 96, 33, t4);
+    SKV_STORE(links, 96, 34, -t6);
+    SKV_STORE(links, 96, 35, t10);
+    SKV_STORE(links, 96, 36, -t0);
+    SKV_STORE(links, 96, 37, t5);
+    SKV_STORE(links, 96, 38, -t7);
+    SKV_STORE(links, 96, 39, t11);
+    links[40] = links[136] = links[232] = links[328] = 0.0;
+    SKV_STORE(links, 96, 41, -t3);
+    SKV_STORE(links, 96, 42, t2);
+    SKV_STORE(links, 96, 43, t12);
+    links[44] = links[140] = links[236] = links[332] = 0.0;
+    links[45] = links[141] = links[237] = links[333] = 0.0;
+    links[46] = links[142] = links[238] = links[334] = 0.0;
+    links[47] = links[143] = links[239] = links[335] = 1.0;
+    SKV_STORE(links, 96, 48, t17);
+    SKV_STORE(links, 96, 49, t20);
+    SKV_STORE(links, 96, 50, -t6);
+    SKV_STORE(links, 96, 51, t13);
+    SKV_STORE(links, 96, 52, t18);
+    SKV_STORE(links, 96, 53, t21);
+    SKV_STORE(links, 96, 54, -t7);
+    SKV_STORE(links, 96, 55, t14);
+    SKV_STORE(links, 96, 56, t19);
+    SKV_STORE(links, 96, 57, t22);
+    SKV_STORE(links, 96, 58, t2);
+    SKV_STORE(links, 96, 59, t12);
+    links[60] = links[156] = links[252] = links[348] = 0.0;
+    links[61] = links[157] = links[253] = links[349] = 0.0;
+    links[62] = links[158] = links[254] = links[350] = 0.0;
+    links[63] = links[159] = links[255] = links[351] = 1.0;
+    SKV_STORE(links, 96, 64, t25);
+    SKV_STORE(links, 96, 65, t28);
+    SKV_STORE(links, 96, 66, t20);
+    SKV_STORE(links, 96, 67, t13);
+    SKV_STORE(links, 96, 68, t26);
+    SKV_STORE(links, 96, 69, t29);
+    SKV_STORE(links, 96, 70, t21);
+    SKV_STORE(links, 96, 71, t14);
+    SKV_STORE(links, 96, 72, t27);
+    SKV_STORE(links, 96, 73, t30);
+    SKV_STORE(links, 96, 74, t22);
+    SKV_STORE(links, 96, 75, t12);
+    links[76] = links[172] = links[268] = links[364] = 0.0;
+    links[77] = links[173] = links[269] = links[365] = 0.0;
+    links[78] = links[174] = links[270] = links[366] = 0.0;
+    links[79] = links[175] = links[271] = links[367] = 1.0;
+    SKV_STORE(links, 96, 80, t33);
+    SKV_STORE(links, 96, 81, t36);
+    SKV_STORE(links, 96, 82, -t28);
+    SKV_STORE(links, 96, 83, t13);
+    SKV_STORE(links, 96, 84, t34);
+    SKV_STORE(links, 96, 85, t37);
+    SKV_STORE(links, 96, 86, -t29);
+    SKV_STORE(links, 96, 87, t14);
+    SKV_STORE(links, 96, 88, t35);
+    SKV_STORE(links, 96, 89, t38);
+    SKV_STORE(links, 96, 90, -t30);
+    SKV_STORE(links, 96, 91, t12);
+    links[92] = links[188] = links[284] = links[380] = 0.0;
+    links[93] = links[189] = links[285] = links[381] = 0.0;
+    links[94] = links[190] = links[286] = links[382] = 0.0;
+    links[95] = links[191] = links[287] = links[383] = 1.0;
+}
+#endif
+
+
 void symkin_stanford_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        link_poses_x4_(q + i * 6, links + i * 96);
+#endif
+    for (; i < N; ++i)
         link_poses_(q + i * 6, links + i * 96);
 }
 
@@ -400,10 +759,10 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -415,16 +774,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
@@ -490,9 +849,111 @@ void symkin_stanford_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = -t0*t3;
+    const sk_v4 t7 = -t1*t3;
+    const sk_v4 t8 = -0.154*t1;
+    const sk_v4 t9 = (0.154)*t0;
+    const sk_v4 t10 = -q2*t6 + t8;
+    const sk_v4 t11 = -q2*t7 + t9;
+    const sk_v4 t12 = q2*t2 + 0.412;
+    const sk_v4 t13 = (0.0203)*t1 + t10;
+    const sk_v4 t14 = -0.0203*t0 + t11;
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t17 = -t1*t16 + t15*t4;
+    const sk_v4 t18 = t0*t16 + t15*t5;
+    const sk_v4 t19 = -t15*t3;
+    const sk_v4 t20 = -t1*t15 - t16*t4;
+    const sk_v4 t21 = t0*t15 - t16*t5;
+    const sk_v4 t22 = t16*t3;
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t28 = -t17*t24 + t23*t6;
+    const sk_v4 t29 = -t18*t24 + t23*t7;
+    const sk_v4 t30 = -t19*t24 - t2*t23;
+    const sk_v4 t39 = t13 - 0.263*t28;
+    const sk_v4 t40 = t14 - 0.263*t29;
+    const sk_v4 t41 = t12 - 0.263*t30;
+    const sk_v4 t42 = t41 - 0.412;
+    const sk_v4 t43 = t0*t42;
+    const sk_v4 t44 = t1*t42;
+    const sk_v4 t45 = -t0*t39 - t1*t40;
+    const sk_v4 t46 = -t13 + t39;
+    const sk_v4 t47 = -t14 + t40;
+    const sk_v4 t48 = -t12 + t41;
+    const sk_v4 t49 = -t2*t47 - t48*t7;
+    const sk_v4 t50 = t2*t46 + t48*t6;
+    const sk_v4 t51 = t46*t7 - t47*t6;
+    const sk_v4 t52 = t21*t48 - t22*t47;
+    const sk_v4 t53 = -t20*t48 + t22*t46;
+    const sk_v4 t54 = t20*t47 - t21*t46;
+    const sk_v4 t55 = -t29*t48 + t30*t47;
+    const sk_v4 t56 = t28*t48 - t30*t46;
+    const sk_v4 t57 = -t28*t47 + t29*t46;
+    SKV_STORE(J, 36, 0, -t40);
+    SKV_STORE(J, 36, 1, t43);
+    SKV_STORE(J, 36, 2, -t6);
+    SKV_STORE(J, 36, 3, t49);
+    SKV_STORE(J, 36, 4, t52);
+    SKV_STORE(J, 36, 5, t55);
+    SKV_STORE(J, 36, 6, t39);
+    SKV_STORE(J, 36, 7, t44);
+    SKV_STORE(J, 36, 8, -t7);
+    SKV_STORE(J, 36, 9, t50);
+    SKV_STORE(J, 36, 10, t53);
+    SKV_STORE(J, 36, 11, t56);
+    J[12] = J[48] = J[84] = J[120] = 0.0;
+    SKV_STORE(J, 36, 13, t45);
+    SKV_STORE(J, 36, 14, t2);
+    SKV_STORE(J, 36, 15, t51);
+    SKV_STORE(J, 36, 16, t54);
+    SKV_STORE(J, 36, 17, t57);
+    J[18] = J[54] = J[90] = J[126] = 0.0;
+    SKV_STORE(J, 36, 19, -t1);
+    J[20] = J[56] = J[92] = J[128] = 0.0;
+    SKV_STORE(J, 36, 21, -t6);
+    SKV_STORE(J, 36, 22, t20);
+    SKV_STORE(J, 36, 23, -t28);
+    J[24] = J[60] = J[96] = J[132] = 0.0;
+    SKV_STORE(J, 36, 25, t0);
+    J[26] = J[62] = J[98] = J[134] = 0.0;
+    SKV_STORE(J, 36, 27, -t7);
+    SKV_STORE(J, 36, 28, t21);
+    SKV_STORE(J, 36, 29, -t29);
+    J[30] = J[66] = J[102] = J[138] = 1.0;
+    J[31] = J[67] = J[103] = J[139] = 0.0;
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, t2);
+    SKV_STORE(J, 36, 34, t22);
+    SKV_STORE(J, 36, 35, -t30);
+}
+#endif
+
+
 void symkin_stanford_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_x4_(q + i * 6, J + i * 36);
+#endif
+    for (; i < N; ++i)
         jacob0_(q + i * 6, J + i * 36);
 }
 
@@ -504,14 +965,14 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
-    const double t31 = cos(q5);
-    const double t32 = sin(q5);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
+    const double t31 = sk_cos(q5);
+    const double t32 = sk_sin(q5);
     const double t58 = t23*t31;
     const double t59 = -t23*t32;
     const double t60 = t24*t31;
@@ -590,9 +1051,107 @@ void symkin_stanford_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
+#if SYMKIN_LANES == 4
+/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t31 = skv_cos(q5);
+    const sk_v4 t32 = skv_sin(q5);
+    const sk_v4 t58 = t23*t31;
+    const sk_v4 t59 = -t23*t32;
+    const sk_v4 t60 = t24*t31;
+    const sk_v4 t61 = -t24*t32;
+    const sk_v4 t62 = -t15*t32 - t16*t58;
+    const sk_v4 t63 = -t15*t31 - t16*t59;
+    const sk_v4 t64 = -t16*t24;
+    const sk_v4 t65 = -0.0203*t62;
+    const sk_v4 t66 = -0.0203*t63;
+    const sk_v4 t67 = -0.0203*t64 - 0.263;
+    const sk_v4 t68 = q2*t60 + t65;
+    const sk_v4 t69 = q2*t61 + t66;
+    const sk_v4 t70 = -q2*t23 + t67;
+    const sk_v4 t71 = t15*t58 - t16*t32;
+    const sk_v4 t72 = t15*t59 - t16*t31;
+    const sk_v4 t73 = t15*t24;
+    const sk_v4 t74 = (0.154)*t62 + t68;
+    const sk_v4 t75 = (0.154)*t63 + t69;
+    const sk_v4 t76 = (0.154)*t64 + t70;
+    const sk_v4 t80 = t2*t60 + t3*t71;
+    const sk_v4 t81 = t2*t61 + t3*t72;
+    const sk_v4 t82 = -t2*t23 + t3*t73;
+    const sk_v4 t83 = t74 + (0.412)*t80;
+    const sk_v4 t84 = t75 + (0.412)*t81;
+    const sk_v4 t85 = t76 + (0.412)*t82;
+    const sk_v4 t86 = (0.263)*t31;
+    const sk_v4 t87 = -0.263*t32;
+    const sk_v4 t88 = -0.263*t61;
+    const sk_v4 t89 = (0.263)*t60;
+    const sk_v4 t90 = t63*t76 - t64*t75;
+    const sk_v4 t91 = -t62*t76 + t64*t74;
+    const sk_v4 t92 = t62*t75 - t63*t74;
+    const sk_v4 t93 = t81*t85 - t82*t84;
+    const sk_v4 t94 = -t80*t85 + t82*t83;
+    const sk_v4 t95 = t80*t84 - t81*t83;
+    SKV_STORE(J, 36, 0, t93);
+    SKV_STORE(J, 36, 1, t90);
+    SKV_STORE(J, 36, 2, -t60);
+    SKV_STORE(J, 36, 3, t88);
+    SKV_STORE(J, 36, 4, t86);
+    J[5] = J[41] = J[77] = J[113] = 0.0;
+    SKV_STORE(J, 36, 6, t94);
+    SKV_STORE(J, 36, 7, t91);
+    SKV_STORE(J, 36, 8, -t61);
+    SKV_STORE(J, 36, 9, t89);
+    SKV_STORE(J, 36, 10, t87);
+    J[11] = J[47] = J[83] = J[119] = 0.0;
+    SKV_STORE(J, 36, 12, t95);
+    SKV_STORE(J, 36, 13, t92);
+    SKV_STORE(J, 36, 14, t23);
+    J[15] = J[51] = J[87] = J[123] = 0.0;
+    J[16] = J[52] = J[88] = J[124] = 0.0;
+    J[17] = J[53] = J[89] = J[125] = 0.0;
+    SKV_STORE(J, 36, 18, -t80);
+    SKV_STORE(J, 36, 19, -t62);
+    J[20] = J[56] = J[92] = J[128] = 0.0;
+    SKV_STORE(J, 36, 21, -t60);
+    SKV_STORE(J, 36, 22, t32);
+    J[23] = J[59] = J[95] = J[131] = 0.0;
+    SKV_STORE(J, 36, 24, -t81);
+    SKV_STORE(J, 36, 25, -t63);
+    J[26] = J[62] = J[98] = J[134] = 0.0;
+    SKV_STORE(J, 36, 27, -t61);
+    SKV_STORE(J, 36, 28, t31);
+    J[29] = J[65] = J[101] = J[137] = 0.0;
+    SKV_STORE(J, 36, 30, -t82);
+    SKV_STORE(J, 36, 31, -t64);
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, t23);
+    J[34] = J[70] = J[106] = J[142] = 0.0;
+    J[35] = J[71] = J[107] = J[143] = 1.0;
+}
+#endif
+
+
 void symkin_stanford_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacobe_x4_(q + i * 6, J + i * 36);
+#endif
+    for (; i < N; ++i)
         jacobe_(q + i * 6, J + i * 36);
 }
 
@@ -610,7 +1169,8 @@ void symkin_stanford_hessian0(const double *q, double *H)
 
 void symkin_stanford_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+    for (; i < N; ++i)
         hessian0_(q + i * 6, H + i * 216);
 }
 
@@ -622,14 +1182,14 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
-    const double t31 = cos(q5);
-    const double t32 = sin(q5);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
+    const double t31 = sk_cos(q5);
+    const double t32 = sk_sin(q5);
     const double t58 = t23*t31;
     const double t59 = -t23*t32;
     const double t60 = t24*t31;
@@ -954,9 +1514,353 @@ void symkin_stanford_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
+#if SYMKIN_LANES == 4
+/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t31 = skv_cos(q5);
+    const sk_v4 t32 = skv_sin(q5);
+    const sk_v4 t58 = t23*t31;
+    const sk_v4 t59 = -t23*t32;
+    const sk_v4 t60 = t24*t31;
+    const sk_v4 t61 = -t24*t32;
+    const sk_v4 t62 = -t15*t32 - t16*t58;
+    const sk_v4 t63 = -t15*t31 - t16*t59;
+    const sk_v4 t64 = -t16*t24;
+    const sk_v4 t65 = -0.0203*t62;
+    const sk_v4 t66 = -0.0203*t63;
+    const sk_v4 t67 = -0.0203*t64 - 0.263;
+    const sk_v4 t68 = q2*t60 + t65;
+    const sk_v4 t69 = q2*t61 + t66;
+    const sk_v4 t70 = -q2*t23 + t67;
+    const sk_v4 t71 = t15*t58 - t16*t32;
+    const sk_v4 t72 = t15*t59 - t16*t31;
+    const sk_v4 t73 = t15*t24;
+    const sk_v4 t74 = (0.154)*t62 + t68;
+    const sk_v4 t75 = (0.154)*t63 + t69;
+    const sk_v4 t76 = (0.154)*t64 + t70;
+    const sk_v4 t80 = t2*t60 + t3*t71;
+    const sk_v4 t81 = t2*t61 + t3*t72;
+    const sk_v4 t82 = -t2*t23 + t3*t73;
+    const sk_v4 t83 = t74 + (0.412)*t80;
+    const sk_v4 t84 = t75 + (0.412)*t81;
+    const sk_v4 t85 = t76 + (0.412)*t82;
+    const sk_v4 t86 = (0.263)*t31;
+    const sk_v4 t87 = -0.263*t32;
+    const sk_v4 t88 = -0.263*t61;
+    const sk_v4 t89 = (0.263)*t60;
+    const sk_v4 t90 = t63*t76 - t64*t75;
+    const sk_v4 t91 = -t62*t76 + t64*t74;
+    const sk_v4 t92 = t62*t75 - t63*t74;
+    const sk_v4 t93 = t81*t85 - t82*t84;
+    const sk_v4 t94 = -t80*t85 + t82*t83;
+    const sk_v4 t95 = t80*t84 - t81*t83;
+    const sk_v4 t115 = -t81*t92 + t82*t91;
+    const sk_v4 t116 = t80*t92 - t82*t90;
+    const sk_v4 t117 = -t80*t91 + t81*t90;
+    const sk_v4 t118 = -t63*t95 + t64*t94;
+    const sk_v4 t119 = t62*t95 - t64*t93;
+    const sk_v4 t120 = -t62*t94 + t63*t93;
+    const sk_v4 t121 = t115 - t118;
+    const sk_v4 t122 = t116 - t119;
+    const sk_v4 t123 = t117 - t120;
+    const sk_v4 t124 = -t63*t82 + t64*t81;
+    const sk_v4 t125 = t62*t82 - t64*t80;
+    const sk_v4 t126 = -t62*t81 + t63*t80;
+    const sk_v4 t127 = -t23*t81 - t61*t82;
+    const sk_v4 t128 = t23*t80 + t60*t82;
+    const sk_v4 t129 = -t60*t81 + t61*t80;
+    const sk_v4 t130 = -t23*t63 - t61*t64;
+    const sk_v4 t131 = t23*t62 + t60*t64;
+    const sk_v4 t132 = -t60*t63 + t61*t62;
+    const sk_v4 t148 = t82*t89;
+    const sk_v4 t149 = -t82*t88;
+    const sk_v4 t150 = -t80*t89 + t81*t88;
+    const sk_v4 t151 = -t23*t94 - t61*t95;
+    const sk_v4 t152 = t23*t93 + t60*t95;
+    const sk_v4 t153 = -t60*t94 + t61*t93;
+    const sk_v4 t154 = t148 - t151;
+    const sk_v4 t155 = t149 - t152;
+    const sk_v4 t156 = t150 - t153;
+    const sk_v4 t157 = t64*t89;
+    const sk_v4 t158 = -t64*t88;
+    const sk_v4 t159 = -t62*t89 + t63*t88;
+    const sk_v4 t160 = -t23*t91 - t61*t92;
+    const sk_v4 t161 = t23*t90 + t60*t92;
+    const sk_v4 t162 = -t60*t91 + t61*t90;
+    const sk_v4 t163 = t157 - t160;
+    const sk_v4 t164 = t158 - t161;
+    const sk_v4 t165 = t159 - t162;
+    const sk_v4 t175 = t82*t87;
+    const sk_v4 t176 = -t82*t86;
+    const sk_v4 t177 = -t80*t87 + t81*t86;
+    const sk_v4 t178 = t31*t95;
+    const sk_v4 t179 = -t32*t95;
+    const sk_v4 t180 = -t31*t93 + t32*t94;
+    const sk_v4 t181 = t175 - t178;
+    const sk_v4 t182 = t176 - t179;
+    const sk_v4 t183 = t177 - t180;
+    const sk_v4 t184 = t31*t82;
+    const sk_v4 t185 = -t32*t82;
+    const sk_v4 t186 = -t31*t80 + t32*t81;
+    const sk_v4 t187 = t64*t87;
+    const sk_v4 t188 = -t64*t86;
+    const sk_v4 t189 = -t62*t87 + t63*t86;
+    const sk_v4 t190 = t31*t92;
+    const sk_v4 t191 = -t32*t92;
+    const sk_v4 t192 = -t31*t90 + t32*t91;
+    const sk_v4 t193 = t187 - t190;
+    const sk_v4 t194 = t188 - t191;
+    const sk_v4 t195 = t189 - t192;
+    const sk_v4 t196 = t31*t64;
+    const sk_v4 t197 = -t32*t64;
+    const sk_v4 t198 = -t31*t62 + t32*t63;
+    const sk_v4 t199 = t31*t60 - t32*t61;
+    const sk_v4 t200 = -t23*t87;
+    const sk_v4 t201 = t23*t86;
+    const sk_v4 t202 = -t60*t87 + t61*t86;
+    const sk_v4 t203 = -t31*t88 + t32*t89;
+    const sk_v4 t204 = t202 - t203;
+    H[0] = H[216] = H[432] = H[648] = 0.0;
+    H[1] = H[217] = H[433] = H[649] = 0.0;
+    H[2] = H[218] = H[434] = H[650] = 0.0;
+    H[3] = H[219] = H[435] = H[651] = 0.0;
+    H[4] = H[220] = H[436] = H[652] = 0.0;
+    H[5] = H[221] = H[437] = H[653] = 0.0;
+    H[6] = H[222] = H[438] = H[654] = 0.0;
+    H[7] = H[223] = H[439] = H[655] = 0.0;
+    H[8] = H[224] = H[440] = H[656] = 0.0;
+    H[9] = H[225] = H[441] = H[657] = 0.0;
+    H[10] = H[226] = H[442] = H[658] = 0.0;
+    H[11] = H[227] = H[443] = H[659] = 0.0;
+    H[12] = H[228] = H[444] = H[660] = 0.0;
+    H[13] = H[229] = H[445] = H[661] = 0.0;
+    H[14] = H[230] = H[446] = H[662] = 0.0;
+    H[15] = H[231] = H[447] = H[663] = 0.0;
+    H[16] = H[232] = H[448] = H[664] = 0.0;
+    H[17] = H[233] = H[449] = H[665] = 0.0;
+    H[18] = H[234] = H[450] = H[666] = 0.0;
+    H[19] = H[235] = H[451] = H[667] = 0.0;
+    H[20] = H[236] = H[452] = H[668] = 0.0;
+    H[21] = H[237] = H[453] = H[669] = 0.0;
+    H[22] = H[238] = H[454] = H[670] = 0.0;
+    H[23] = H[239] = H[455] = H[671] = 0.0;
+    H[24] = H[240] = H[456] = H[672] = 0.0;
+    H[25] = H[241] = H[457] = H[673] = 0.0;
+    H[26] = H[242] = H[458] = H[674] = 0.0;
+    H[27] = H[243] = H[459] = H[675] = 0.0;
+    H[28] = H[244] = H[460] = H[676] = 0.0;
+    H[29] = H[245] = H[461] = H[677] = 0.0;
+    H[30] = H[246] = H[462] = H[678] = 0.0;
+    H[31] = H[247] = H[463] = H[679] = 0.0;
+    H[32] = H[248] = H[464] = H[680] = 0.0;
+    H[33] = H[249] = H[465] = H[681] = 0.0;
+    H[34] = H[250] = H[466] = H[682] = 0.0;
+    H[35] = H[251] = H[467] = H[683] = 0.0;
+    SKV_STORE(H, 216, 36, t121);
+    H[37] = H[253] = H[469] = H[685] = 0.0;
+    H[38] = H[254] = H[470] = H[686] = 0.0;
+    H[39] = H[255] = H[471] = H[687] = 0.0;
+    H[40] = H[256] = H[472] = H[688] = 0.0;
+    H[41] = H[257] = H[473] = H[689] = 0.0;
+    SKV_STORE(H, 216, 42, t122);
+    H[43] = H[259] = H[475] = H[691] = 0.0;
+    H[44] = H[260] = H[476] = H[692] = 0.0;
+    H[45] = H[261] = H[477] = H[693] = 0.0;
+    H[46] = H[262] = H[478] = H[694] = 0.0;
+    H[47] = H[263] = H[479] = H[695] = 0.0;
+    SKV_STORE(H, 216, 48, t123);
+    H[49] = H[265] = H[481] = H[697] = 0.0;
+    H[50] = H[266] = H[482] = H[698] = 0.0;
+    H[51] = H[267] = H[483] = H[699] = 0.0;
+    H[52] = H[268] = H[484] = H[700] = 0.0;
+    H[53] = H[269] = H[485] = H[701] = 0.0;
+    SKV_STORE(H, 216, 54, t124);
+    H[55] = H[271] = H[487] = H[703] = 0.0;
+    H[56] = H[272] = H[488] = H[704] = 0.0;
+    H[57] = H[273] = H[489] = H[705] = 0.0;
+    H[58] = H[274] = H[490] = H[706] = 0.0;
+    H[59] = H[275] = H[491] = H[707] = 0.0;
+    SKV_STORE(H, 216, 60, t125);
+    H[61] = H[277] = H[493] = H[709] = 0.0;
+    H[62] = H[278] = H[494] = H[710] = 0.0;
+    H[63] = H[279] = H[495] = H[711] = 0.0;
+    H[64] = H[280] = H[496] = H[712] = 0.0;
+    H[65] = H[281] = H[497] = H[713] = 0.0;
+    SKV_STORE(H, 216, 66, t126);
+    H[67] = H[283] = H[499] = H[715] = 0.0;
+    H[68] = H[284] = H[500] = H[716] = 0.0;
+    H[69] = H[285] = H[501] = H[717] = 0.0;
+    H[70] = H[286] = H[502] = H[718] = 0.0;
+    H[71] = H[287] = H[503] = H[719] = 0.0;
+    SKV_STORE(H, 216, 72, t127);
+    SKV_STORE(H, 216, 73, t130);
+    H[74] = H[290] = H[506] = H[722] = 0.0;
+    H[75] = H[291] = H[507] = H[723] = 0.0;
+    H[76] = H[292] = H[508] = H[724] = 0.0;
+    H[77] = H[293] = H[509] = H[725] = 0.0;
+    SKV_STORE(H, 216, 78, t128);
+    SKV_STORE(H, 216, 79, t131);
+    H[80] = H[296] = H[512] = H[728] = 0.0;
+    H[81] = H[297] = H[513] = H[729] = 0.0;
+    H[82] = H[298] = H[514] = H[730] = 0.0;
+    H[83] = H[299] = H[515] = H[731] = 0.0;
+    SKV_STORE(H, 216, 84, t129);
+    SKV_STORE(H, 216, 85, t132);
+    H[86] = H[302] = H[518] = H[734] = 0.0;
+    H[87] = H[303] = H[519] = H[735] = 0.0;
+    H[88] = H[304] = H[520] = H[736] = 0.0;
+    H[89] = H[305] = H[521] = H[737] = 0.0;
+    H[90] = H[306] = H[522] = H[738] = 0.0;
+    H[91] = H[307] = H[523] = H[739] = 0.0;
+    H[92] = H[308] = H[524] = H[740] = 0.0;
+    H[93] = H[309] = H[525] = H[741] = 0.0;
+    H[94] = H[310] = H[526] = H[742] = 0.0;
+    H[95] = H[311] = H[527] = H[743] = 0.0;
+    H[96] = H[312] = H[528] = H[744] = 0.0;
+    H[97] = H[313] = H[529] = H[745] = 0.0;
+    H[98] = H[314] = H[530] = H[746] = 0.0;
+    H[99] = H[315] = H[531] = H[747] = 0.0;
+    H[100] = H[316] = H[532] = H[748] = 0.0;
+    H[101] = H[317] = H[533] = H[749] = 0.0;
+    H[102] = H[318] = H[534] = H[750] = 0.0;
+    H[103] = H[319] = H[535] = H[751] = 0.0;
+    H[104] = H[320] = H[536] = H[752] = 0.0;
+    H[105] = H[321] = H[537] = H[753] = 0.0;
+    H[106] = H[322] = H[538] = H[754] = 0.0;
+    H[107] = H[323] = H[539] = H[755] = 0.0;
+    SKV_STORE(H, 216, 108, t154);
+    SKV_STORE(H, 216, 109, t163);
+    H[110] = H[326] = H[542] = H[758] = 0.0;
+    H[111] = H[327] = H[543] = H[759] = 0.0;
+    H[112] = H[328] = H[544] = H[760] = 0.0;
+    H[113] = H[329] = H[545] = H[761] = 0.0;
+    SKV_STORE(H, 216, 114, t155);
+    SKV_STORE(H, 216, 115, t164);
+    H[116] = H[332] = H[548] = H[764] = 0.0;
+    H[117] = H[333] = H[549] = H[765] = 0.0;
+    H[118] = H[334] = H[550] = H[766] = 0.0;
+    H[119] = H[335] = H[551] = H[767] = 0.0;
+    SKV_STORE(H, 216, 120, t156);
+    SKV_STORE(H, 216, 121, t165);
+    H[122] = H[338] = H[554] = H[770] = 0.0;
+    H[123] = H[339] = H[555] = H[771] = 0.0;
+    H[124] = H[340] = H[556] = H[772] = 0.0;
+    H[125] = H[341] = H[557] = H[773] = 0.0;
+    SKV_STORE(H, 216, 126, t127);
+    SKV_STORE(H, 216, 127, t130);
+    H[128] = H[344] = H[560] = H[776] = 0.0;
+    H[129] = H[345] = H[561] = H[777] = 0.0;
+    H[130] = H[346] = H[562] = H[778] = 0.0;
+    H[131] = H[347] = H[563] = H[779] = 0.0;
+    SKV_STORE(H, 216, 132, t128);
+    SKV_STORE(H, 216, 133, t131);
+    H[134] = H[350] = H[566] = H[782] = 0.0;
+    H[135] = H[351] = H[567] = H[783] = 0.0;
+    H[136] = H[352] = H[568] = H[784] = 0.0;
+    H[137] = H[353] = H[569] = H[785] = 0.0;
+    SKV_STORE(H, 216, 138, t129);
+    SKV_STORE(H, 216, 139, t132);
+    H[140] = H[356] = H[572] = H[788] = 0.0;
+    H[141] = H[357] = H[573] = H[789] = 0.0;
+    H[142] = H[358] = H[574] = H[790] = 0.0;
+    H[143] = H[359] = H[575] = H[791] = 0.0;
+    SKV_STORE(H, 216, 144, t181);
+    SKV_STORE(H, 216, 145, t193);
+    SKV_STORE(H, 216, 146, -t58);
+    SKV_STORE(H, 216, 147, t200);
+    H[148] = H[364] = H[580] = H[796] = 0.0;
+    H[149] = H[365] = H[581] = H[797] = 0.0;
+    SKV_STORE(H, 216, 150, t182);
+    SKV_STORE(H, 216, 151, t194);
+    SKV_STORE(H, 216, 152, -t59);
+    SKV_STORE(H, 216, 153, t201);
+    H[154] = H[370] = H[586] = H[802] = 0.0;
+    H[155] = H[371] = H[587] = H[803] = 0.0;
+    SKV_STORE(H, 216, 156, t183);
+    SKV_STORE(H, 216, 157, t195);
+    SKV_STORE(H, 216, 158, -t199);
+    SKV_STORE(H, 216, 159, t204);
+    H[160] = H[376] = H[592] = H[808] = 0.0;
+    H[161] = H[377] = H[593] = H[809] = 0.0;
+    SKV_STORE(H, 216, 162, t184);
+    SKV_STORE(H, 216, 163, t196);
+    H[164] = H[380] = H[596] = H[812] = 0.0;
+    SKV_STORE(H, 216, 165, -t58);
+    H[166] = H[382] = H[598] = H[814] = 0.0;
+    H[167] = H[383] = H[599] = H[815] = 0.0;
+    SKV_STORE(H, 216, 168, t185);
+    SKV_STORE(H, 216, 169, t197);
+    H[170] = H[386] = H[602] = H[818] = 0.0;
+    SKV_STORE(H, 216, 171, -t59);
+    H[172] = H[388] = H[604] = H[820] = 0.0;
+    H[173] = H[389] = H[605] = H[821] = 0.0;
+    SKV_STORE(H, 216, 174, t186);
+    SKV_STORE(H, 216, 175, t198);
+    H[176] = H[392] = H[608] = H[824] = 0.0;
+    SKV_STORE(H, 216, 177, -t199);
+    H[178] = H[394] = H[610] = H[826] = 0.0;
+    H[179] = H[395] = H[611] = H[827] = 0.0;
+    SKV_STORE(H, 216, 180, t94);
+    SKV_STORE(H, 216, 181, t91);
+    SKV_STORE(H, 216, 182, -t61);
+    SKV_STORE(H, 216, 183, t89);
+    SKV_STORE(H, 216, 184, t87);
+    H[185] = H[401] = H[617] = H[833] = 0.0;
+    SKV_STORE(H, 216, 186, -t93);
+    SKV_STORE(H, 216, 187, -t90);
+    SKV_STORE(H, 216, 188, t60);
+    SKV_STORE(H, 216, 189, -t88);
+    SKV_STORE(H, 216, 190, -t86);
+    H[191] = H[407] = H[623] = H[839] = 0.0;
+    H[192] = H[408] = H[624] = H[840] = 0.0;
+    H[193] = H[409] = H[625] = H[841] = 0.0;
+    H[194] = H[410] = H[626] = H[842] = 0.0;
+    H[195] = H[411] = H[627] = H[843] = 0.0;
+    H[196] = H[412] = H[628] = H[844] = 0.0;
+    H[197] = H[413] = H[629] = H[845] = 0.0;
+    SKV_STORE(H, 216, 198, -t81);
+    SKV_STORE(H, 216, 199, -t63);
+    H[200] = H[416] = H[632] = H[848] = 0.0;
+    SKV_STORE(H, 216, 201, -t61);
+    SKV_STORE(H, 216, 202, t31);
+    H[203] = H[419] = H[635] = H[851] = 0.0;
+    SKV_STORE(H, 216, 204, t80);
+    SKV_STORE(H, 216, 205, t62);
+    H[206] = H[422] = H[638] = H[854] = 0.0;
+    SKV_STORE(H, 216, 207, t60);
+    SKV_STORE(H, 216, 208, -t32);
+    H[209] = H[425] = H[641] = H[857] = 0.0;
+    H[210] = H[426] = H[642] = H[858] = 0.0;
+    H[211] = H[427] = H[643] = H[859] = 0.0;
+    H[212] = H[428] = H[644] = H[860] = 0.0;
+    H[213] = H[429] = H[645] = H[861] = 0.0;
+    H[214] = H[430] = H[646] = H[862] = 0.0;
+    H[215] = H[431] = H[647] = H[863] = 0.0;
+}
+#endif
+
+
 void symkin_stanford_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        hessiane_x4_(q + i * 6, H + i * 216);
+#endif
+    for (; i < N; ++i)
         hessiane_(q + i * 6, H + i * 216);
 }
 
@@ -969,10 +1873,10 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -984,24 +1888,24 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = cos(q5);
-    const double t32 = sin(q5);
+    const double t31 = sk_cos(q5);
+    const double t32 = sk_sin(q5);
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -1086,9 +1990,139 @@ void symkin_stanford_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
+#if SYMKIN_LANES == 4
+/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = -t0*t3;
+    const sk_v4 t7 = -t1*t3;
+    const sk_v4 t8 = -0.154*t1;
+    const sk_v4 t9 = (0.154)*t0;
+    const sk_v4 t10 = -q2*t6 + t8;
+    const sk_v4 t11 = -q2*t7 + t9;
+    const sk_v4 t12 = q2*t2 + 0.412;
+    const sk_v4 t13 = (0.0203)*t1 + t10;
+    const sk_v4 t14 = -0.0203*t0 + t11;
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t17 = -t1*t16 + t15*t4;
+    const sk_v4 t18 = t0*t16 + t15*t5;
+    const sk_v4 t19 = -t15*t3;
+    const sk_v4 t20 = -t1*t15 - t16*t4;
+    const sk_v4 t21 = t0*t15 - t16*t5;
+    const sk_v4 t22 = t16*t3;
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t25 = t17*t23 + t24*t6;
+    const sk_v4 t26 = t18*t23 + t24*t7;
+    const sk_v4 t27 = t19*t23 - t2*t24;
+    const sk_v4 t28 = -t17*t24 + t23*t6;
+    const sk_v4 t29 = -t18*t24 + t23*t7;
+    const sk_v4 t30 = -t19*t24 - t2*t23;
+    const sk_v4 t31 = skv_cos(q5);
+    const sk_v4 t32 = skv_sin(q5);
+    const sk_v4 t33 = t20*t32 + t25*t31;
+    const sk_v4 t34 = t21*t32 + t26*t31;
+    const sk_v4 t35 = t22*t32 + t27*t31;
+    const sk_v4 t36 = t20*t31 - t25*t32;
+    const sk_v4 t37 = t21*t31 - t26*t32;
+    const sk_v4 t38 = t22*t31 - t27*t32;
+    const sk_v4 t39 = t13 - 0.263*t28;
+    const sk_v4 t40 = t14 - 0.263*t29;
+    const sk_v4 t41 = t12 - 0.263*t30;
+    const sk_v4 t42 = t41 - 0.412;
+    const sk_v4 t43 = t0*t42;
+    const sk_v4 t44 = t1*t42;
+    const sk_v4 t45 = -t0*t39 - t1*t40;
+    const sk_v4 t46 = -t13 + t39;
+    const sk_v4 t47 = -t14 + t40;
+    const sk_v4 t48 = -t12 + t41;
+    const sk_v4 t49 = -t2*t47 - t48*t7;
+    const sk_v4 t50 = t2*t46 + t48*t6;
+    const sk_v4 t51 = t46*t7 - t47*t6;
+    const sk_v4 t52 = t21*t48 - t22*t47;
+    const sk_v4 t53 = -t20*t48 + t22*t46;
+    const sk_v4 t54 = t20*t47 - t21*t46;
+    const sk_v4 t55 = -t29*t48 + t30*t47;
+    const sk_v4 t56 = t28*t48 - t30*t46;
+    const sk_v4 t57 = -t28*t47 + t29*t46;
+    SKV_STORE(T, 16, 0, t33);
+    SKV_STORE(T, 16, 1, t36);
+    SKV_STORE(T, 16, 2, -t28);
+    SKV_STORE(T, 16, 3, t39);
+    SKV_STORE(T, 16, 4, t34);
+    SKV_STORE(T, 16, 5, t37);
+    SKV_STORE(T, 16, 6, -t29);
+    SKV_STORE(T, 16, 7, t40);
+    SKV_STORE(T, 16, 8, t35);
+    SKV_STORE(T, 16, 9, t38);
+    SKV_STORE(T, 16, 10, -t30);
+    SKV_STORE(T, 16, 11, t41);
+    T[12] = T[28] = T[44] = T[60] = 0.0;
+    T[13] = T[29] = T[45] = T[61] = 0.0;
+    T[14] = T[30] = T[46] = T[62] = 0.0;
+    T[15] = T[31] = T[47] = T[63] = 1.0;
+    SKV_STORE(J, 36, 0, -t40);
+    SKV_STORE(J, 36, 1, t43);
+    SKV_STORE(J, 36, 2, -t6);
+    SKV_STORE(J, 36, 3, t49);
+    SKV_STORE(J, 36, 4, t52);
+    SKV_STORE(J, 36, 5, t55);
+    SKV_STORE(J, 36, 6, t39);
+    SKV_STORE(J, 36, 7, t44);
+    SKV_STORE(J, 36, 8, -t7);
+    SKV_STORE(J, 36, 9, t50);
+    SKV_STORE(J, 36, 10, t53);
+    SKV_STORE(J, 36, 11, t56);
+    J[12] = J[48] = J[84] = J[120] = 0.0;
+    SKV_STORE(J, 36, 13, t45);
+    SKV_STORE(J, 36, 14, t2);
+    SKV_STORE(J, 36, 15, t51);
+    SKV_STORE(J, 36, 16, t54);
+    SKV_STORE(J, 36, 17, t57);
+    J[18] = J[54] = J[90] = J[126] = 0.0;
+    SKV_STORE(J, 36, 19, -t1);
+    J[20] = J[56] = J[92] = J[128] = 0.0;
+    SKV_STORE(J, 36, 21, -t6);
+    SKV_STORE(J, 36, 22, t20);
+    SKV_STORE(J, 36, 23, -t28);
+    J[24] = J[60] = J[96] = J[132] = 0.0;
+    SKV_STORE(J, 36, 25, t0);
+    J[26] = J[62] = J[98] = J[134] = 0.0;
+    SKV_STORE(J, 36, 27, -t7);
+    SKV_STORE(J, 36, 28, t21);
+    SKV_STORE(J, 36, 29, -t29);
+    J[30] = J[66] = J[102] = J[138] = 1.0;
+    J[31] = J[67] = J[103] = J[139] = 0.0;
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, t2);
+    SKV_STORE(J, 36, 34, t22);
+    SKV_STORE(J, 36, 35, -t30);
+}
+#endif
+
+
 void symkin_stanford_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        fkine_jacob0_x4_(q + i * 6, T + i * 16, J + i * 36);
+#endif
+    for (; i < N; ++i)
         fkine_jacob0_(q + i * 6, T + i * 16, J + i * 36);
 }
 
@@ -1100,10 +2134,10 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double t0 = cos(q0);
-    const double t1 = sin(q0);
-    const double t2 = cos(q1);
-    const double t3 = sin(q1);
+    const double t0 = sk_cos(q0);
+    const double t1 = sk_sin(q0);
+    const double t2 = sk_cos(q1);
+    const double t3 = sk_sin(q1);
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -1115,16 +2149,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sin(q3);
-    const double t16 = -cos(q3);
+    const double t15 = sk_sin(q3);
+    const double t16 = -sk_cos(q3);
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = cos(q4);
-    const double t24 = sin(q4);
+    const double t23 = sk_cos(q4);
+    const double t24 = sk_sin(q4);
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
@@ -1452,9 +2486,373 @@ void symkin_stanford_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
+#if SYMKIN_LANES == 4
+/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
+   same operations */
+static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
+{
+    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
+    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
+    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
+    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
+    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
+    const sk_v4 t0 = skv_cos(q0);
+    const sk_v4 t1 = skv_sin(q0);
+    const sk_v4 t2 = skv_cos(q1);
+    const sk_v4 t3 = skv_sin(q1);
+    const sk_v4 t4 = t0*t2;
+    const sk_v4 t5 = t1*t2;
+    const sk_v4 t6 = -t0*t3;
+    const sk_v4 t7 = -t1*t3;
+    const sk_v4 t8 = -0.154*t1;
+    const sk_v4 t9 = (0.154)*t0;
+    const sk_v4 t10 = -q2*t6 + t8;
+    const sk_v4 t11 = -q2*t7 + t9;
+    const sk_v4 t12 = q2*t2 + 0.412;
+    const sk_v4 t13 = (0.0203)*t1 + t10;
+    const sk_v4 t14 = -0.0203*t0 + t11;
+    const sk_v4 t15 = skv_sin(q3);
+    const sk_v4 t16 = -skv_cos(q3);
+    const sk_v4 t17 = -t1*t16 + t15*t4;
+    const sk_v4 t18 = t0*t16 + t15*t5;
+    const sk_v4 t19 = -t15*t3;
+    const sk_v4 t20 = -t1*t15 - t16*t4;
+    const sk_v4 t21 = t0*t15 - t16*t5;
+    const sk_v4 t22 = t16*t3;
+    const sk_v4 t23 = skv_cos(q4);
+    const sk_v4 t24 = skv_sin(q4);
+    const sk_v4 t28 = -t17*t24 + t23*t6;
+    const sk_v4 t29 = -t18*t24 + t23*t7;
+    const sk_v4 t30 = -t19*t24 - t2*t23;
+    const sk_v4 t39 = t13 - 0.263*t28;
+    const sk_v4 t40 = t14 - 0.263*t29;
+    const sk_v4 t41 = t12 - 0.263*t30;
+    const sk_v4 t42 = t41 - 0.412;
+    const sk_v4 t43 = t0*t42;
+    const sk_v4 t44 = t1*t42;
+    const sk_v4 t45 = -t0*t39 - t1*t40;
+    const sk_v4 t46 = -t13 + t39;
+    const sk_v4 t47 = -t14 + t40;
+    const sk_v4 t48 = -t12 + t41;
+    const sk_v4 t49 = -t2*t47 - t48*t7;
+    const sk_v4 t50 = t2*t46 + t48*t6;
+    const sk_v4 t51 = t46*t7 - t47*t6;
+    const sk_v4 t52 = t21*t48 - t22*t47;
+    const sk_v4 t53 = -t20*t48 + t22*t46;
+    const sk_v4 t54 = t20*t47 - t21*t46;
+    const sk_v4 t55 = -t29*t48 + t30*t47;
+    const sk_v4 t56 = t28*t48 - t30*t46;
+    const sk_v4 t57 = -t28*t47 + t29*t46;
+    const sk_v4 t96 = t0*t45;
+    const sk_v4 t97 = t1*t45;
+    const sk_v4 t98 = -t0*t43 - t1*t44;
+    const sk_v4 t99 = t0*t6 + t1*t7;
+    const sk_v4 t100 = t0*t51;
+    const sk_v4 t101 = t1*t51;
+    const sk_v4 t102 = -t0*t49 - t1*t50;
+    const sk_v4 t103 = t0*t54;
+    const sk_v4 t104 = t1*t54;
+    const sk_v4 t105 = -t0*t52 - t1*t53;
+    const sk_v4 t106 = t0*t22;
+    const sk_v4 t107 = t1*t22;
+    const sk_v4 t108 = -t0*t20 - t1*t21;
+    const sk_v4 t109 = t0*t57;
+    const sk_v4 t110 = t1*t57;
+    const sk_v4 t111 = -t0*t55 - t1*t56;
+    const sk_v4 t112 = -t0*t30;
+    const sk_v4 t113 = -t1*t30;
+    const sk_v4 t114 = t0*t28 + t1*t29;
+    const sk_v4 t133 = -t2*t50 - t51*t7;
+    const sk_v4 t134 = t2*t49 + t51*t6;
+    const sk_v4 t135 = t49*t7 - t50*t6;
+    const sk_v4 t136 = -t2*t53 - t54*t7;
+    const sk_v4 t137 = t2*t52 + t54*t6;
+    const sk_v4 t138 = t52*t7 - t53*t6;
+    const sk_v4 t139 = -t2*t21 - t22*t7;
+    const sk_v4 t140 = t2*t20 + t22*t6;
+    const sk_v4 t141 = t20*t7 - t21*t6;
+    const sk_v4 t142 = -t2*t56 - t57*t7;
+    const sk_v4 t143 = t2*t55 + t57*t6;
+    const sk_v4 t144 = t55*t7 - t56*t6;
+    const sk_v4 t145 = t2*t29 + t30*t7;
+    const sk_v4 t146 = -t2*t28 - t30*t6;
+    const sk_v4 t147 = -t28*t7 + t29*t6;
+    const sk_v4 t166 = t21*t54 - t22*t53;
+    const sk_v4 t167 = -t20*t54 + t22*t52;
+    const sk_v4 t168 = t20*t53 - t21*t52;
+    const sk_v4 t169 = t21*t57 - t22*t56;
+    const sk_v4 t170 = -t20*t57 + t22*t55;
+    const sk_v4 t171 = t20*t56 - t21*t55;
+    const sk_v4 t172 = -t21*t30 + t22*t29;
+    const sk_v4 t173 = t20*t30 - t22*t28;
+    const sk_v4 t174 = -t20*t29 + t21*t28;
+    const sk_v4 t205 = -t29*t57 + t30*t56;
+    const sk_v4 t206 = t28*t57 - t30*t55;
+    const sk_v4 t207 = -t28*t56 + t29*t55;
+    SKV_STORE(J, 36, 0, -t40);
+    SKV_STORE(J, 36, 1, t43);
+    SKV_STORE(J, 36, 2, -t6);
+    SKV_STORE(J, 36, 3, t49);
+    SKV_STORE(J, 36, 4, t52);
+    SKV_STORE(J, 36, 5, t55);
+    SKV_STORE(J, 36, 6, t39);
+    SKV_STORE(J, 36, 7, t44);
+    SKV_STORE(J, 36, 8, -t7);
+    SKV_STORE(J, 36, 9, t50);
+    SKV_STORE(J, 36, 10, t53);
+    SKV_STORE(J, 36, 11, t56);
+    J[12] = J[48] = J[84] = J[120] = 0.0;
+    SKV_STORE(J, 36, 13, t45);
+    SKV_STORE(J, 36, 14, t2);
+    SKV_STORE(J, 36, 15, t51);
+    SKV_STORE(J, 36, 16, t54);
+    SKV_STORE(J, 36, 17, t57);
+    J[18] = J[54] = J[90] = J[126] = 0.0;
+    SKV_STORE(J, 36, 19, -t1);
+    J[20] = J[56] = J[92] = J[128] = 0.0;
+    SKV_STORE(J, 36, 21, -t6);
+    SKV_STORE(J, 36, 22, t20);
+    SKV_STORE(J, 36, 23, -t28);
+    J[24] = J[60] = J[96] = J[132] = 0.0;
+    SKV_STORE(J, 36, 25, t0);
+    J[26] = J[62] = J[98] = J[134] = 0.0;
+    SKV_STORE(J, 36, 27, -t7);
+    SKV_STORE(J, 36, 28, t21);
+    SKV_STORE(J, 36, 29, -t29);
+    J[30] = J[66] = J[102] = J[138] = 1.0;
+    J[31] = J[67] = J[103] = J[139] = 0.0;
+    J[32] = J[68] = J[104] = J[140] = 0.0;
+    SKV_STORE(J, 36, 33, t2);
+    SKV_STORE(J, 36, 34, t22);
+    SKV_STORE(J, 36, 35, -t30);
+    SKV_STORE(H, 216, 0, -t39);
+    SKV_STORE(H, 216, 1, -t44);
+    SKV_STORE(H, 216, 2, t7);
+    SKV_STORE(H, 216, 3, -t50);
+    SKV_STORE(H, 216, 4, -t53);
+    SKV_STORE(H, 216, 5, -t56);
+    SKV_STORE(H, 216, 6, -t40);
+    SKV_STORE(H, 216, 7, t43);
+    SKV_STORE(H, 216, 8, -t6);
+    SKV_STORE(H, 216, 9, t49);
+    SKV_STORE(H, 216, 10, t52);
+    SKV_STORE(H, 216, 11, t55);
+    H[12] = H[228] = H[444] = H[660] = 0.0;
+    H[13] = H[229] = H[445] = H[661] = 0.0;
+    H[14] = H[230] = H[446] = H[662] = 0.0;
+    H[15] = H[231] = H[447] = H[663] = 0.0;
+    H[16] = H[232] = H[448] = H[664] = 0.0;
+    H[17] = H[233] = H[449] = H[665] = 0.0;
+    H[18] = H[234] = H[450] = H[666] = 0.0;
+    SKV_STORE(H, 216, 19, -t0);
+    H[20] = H[236] = H[452] = H[668] = 0.0;
+    SKV_STORE(H, 216, 21, t7);
+    SKV_STORE(H, 216, 22, -t21);
+    SKV_STORE(H, 216, 23, t29);
+    H[24] = H[240] = H[456] = H[672] = 0.0;
+    SKV_STORE(H, 216, 25, -t1);
+    H[26] = H[242] = H[458] = H[674] = 0.0;
+    SKV_STORE(H, 216, 27, -t6);
+    SKV_STORE(H, 216, 28, t20);
+    SKV_STORE(H, 216, 29, -t28);
+    H[30] = H[246] = H[462] = H[678] = 0.0;
+    H[31] = H[247] = H[463] = H[679] = 0.0;
+    H[32] = H[248] = H[464] = H[680] = 0.0;
+    H[33] = H[249] = H[465] = H[681] = 0.0;
+    H[34] = H[250] = H[466] = H[682] = 0.0;
+    H[35] = H[251] = H[467] = H[683] = 0.0;
+    SKV_STORE(H, 216, 36, -t44);
+    SKV_STORE(H, 216, 37, t96);
+    SKV_STORE(H, 216, 38, t4);
+    SKV_STORE(H, 216, 39, t100);
+    SKV_STORE(H, 216, 40, t103);
+    SKV_STORE(H, 216, 41, t109);
+    SKV_STORE(H, 216, 42, t43);
+    SKV_STORE(H, 216, 43, t97);
+    SKV_STORE(H, 216, 44, t5);
+    SKV_STORE(H, 216, 45, t101);
+    SKV_STORE(H, 216, 46, t104);
+    SKV_STORE(H, 216, 47, t110);
+    H[48] = H[264] = H[480] = H[696] = 0.0;
+    SKV_STORE(H, 216, 49, t98);
+    SKV_STORE(H, 216, 50, t99);
+    SKV_STORE(H, 216, 51, t102);
+    SKV_STORE(H, 216, 52, t105);
+    SKV_STORE(H, 216, 53, t111);
+    H[54] = H[270] = H[486] = H[702] = 0.0;
+    H[55] = H[271] = H[487] = H[703] = 0.0;
+    H[56] = H[272] = H[488] = H[704] = 0.0;
+    SKV_STORE(H, 216, 57, t4);
+    SKV_STORE(H, 216, 58, t106);
+    SKV_STORE(H, 216, 59, t112);
+    H[60] = H[276] = H[492] = H[708] = 0.0;
+    H[61] = H[277] = H[493] = H[709] = 0.0;
+    H[62] = H[278] = H[494] = H[710] = 0.0;
+    SKV_STORE(H, 216, 63, t5);
+    SKV_STORE(H, 216, 64, t107);
+    SKV_STORE(H, 216, 65, t113);
+    H[66] = H[282] = H[498] = H[714] = 0.0;
+    H[67] = H[283] = H[499] = H[715] = 0.0;
+    H[68] = H[284] = H[500] = H[716] = 0.0;
+    SKV_STORE(H, 216, 69, t99);
+    SKV_STORE(H, 216, 70, t108);
+    SKV_STORE(H, 216, 71, t114);
+    SKV_STORE(H, 216, 72, t7);
+    SKV_STORE(H, 216, 73, t4);
+    H[74] = H[290] = H[506] = H[722] = 0.0;
+    H[75] = H[291] = H[507] = H[723] = 0.0;
+    H[76] = H[292] = H[508] = H[724] = 0.0;
+    H[77] = H[293] = H[509] = H[725] = 0.0;
+    SKV_STORE(H, 216, 78, -t6);
+    SKV_STORE(H, 216, 79, t5);
+    H[80] = H[296] = H[512] = H[728] = 0.0;
+    H[81] = H[297] = H[513] = H[729] = 0.0;
+    H[82] = H[298] = H[514] = H[730] = 0.0;
+    H[83] = H[299] = H[515] = H[731] = 0.0;
+    H[84] = H[300] = H[516] = H[732] = 0.0;
+    SKV_STORE(H, 216, 85, t99);
+    H[86] = H[302] = H[518] = H[734] = 0.0;
+    H[87] = H[303] = H[519] = H[735] = 0.0;
+    H[88] = H[304] = H[520] = H[736] = 0.0;
+    H[89] = H[305] = H[521] = H[737] = 0.0;
+    H[90] = H[306] = H[522] = H[738] = 0.0;
+    H[91] = H[307] = H[523] = H[739] = 0.0;
+    H[92] = H[308] = H[524] = H[740] = 0.0;
+    H[93] = H[309] = H[525] = H[741] = 0.0;
+    H[94] = H[310] = H[526] = H[742] = 0.0;
+    H[95] = H[311] = H[527] = H[743] = 0.0;
+    H[96] = H[312] = H[528] = H[744] = 0.0;
+    H[97] = H[313] = H[529] = H[745] = 0.0;
+    H[98] = H[314] = H[530] = H[746] = 0.0;
+    H[99] = H[315] = H[531] = H[747] = 0.0;
+    H[100] = H[316] = H[532] = H[748] = 0.0;
+    H[101] = H[317] = H[533] = H[749] = 0.0;
+    H[102] = H[318] = H[534] = H[750] = 0.0;
+    H[103] = H[319] = H[535] = H[751] = 0.0;
+    H[104] = H[320] = H[536] = H[752] = 0.0;
+    H[105] = H[321] = H[537] = H[753] = 0.0;
+    H[106] = H[322] = H[538] = H[754] = 0.0;
+    H[107] = H[323] = H[539] = H[755] = 0.0;
+    SKV_STORE(H, 216, 108, -t50);
+    SKV_STORE(H, 216, 109, t100);
+    H[110] = H[326] = H[542] = H[758] = 0.0;
+    SKV_STORE(H, 216, 111, t133);
+    SKV_STORE(H, 216, 112, t136);
+    SKV_STORE(H, 216, 113, t142);
+    SKV_STORE(H, 216, 114, t49);
+    SKV_STORE(H, 216, 115, t101);
+    H[116] = H[332] = H[548] = H[764] = 0.0;
+    SKV_STORE(H, 216, 117, t134);
+    SKV_STORE(H, 216, 118, t137);
+    SKV_STORE(H, 216, 119, t143);
+    H[120] = H[336] = H[552] = H[768] = 0.0;
+    SKV_STORE(H, 216, 121, t102);
+    H[122] = H[338] = H[554] = H[770] = 0.0;
+    SKV_STORE(H, 216, 123, t135);
+    SKV_STORE(H, 216, 124, t138);
+    SKV_STORE(H, 216, 125, t144);
+    H[126] = H[342] = H[558] = H[774] = 0.0;
+    H[127] = H[343] = H[559] = H[775] = 0.0;
+    H[128] = H[344] = H[560] = H[776] = 0.0;
+    H[129] = H[345] = H[561] = H[777] = 0.0;
+    SKV_STORE(H, 216, 130, t139);
+    SKV_STORE(H, 216, 131, t145);
+    H[132] = H[348] = H[564] = H[780] = 0.0;
+    H[133] = H[349] = H[565] = H[781] = 0.0;
+    H[134] = H[350] = H[566] = H[782] = 0.0;
+    H[135] = H[351] = H[567] = H[783] = 0.0;
+    SKV_STORE(H, 216, 136, t140);
+    SKV_STORE(H, 216, 137, t146);
+    H[138] = H[354] = H[570] = H[786] = 0.0;
+    H[139] = H[355] = H[571] = H[787] = 0.0;
+    H[140] = H[356] = H[572] = H[788] = 0.0;
+    H[141] = H[357] = H[573] = H[789] = 0.0;
+    SKV_STORE(H, 216, 142, t141);
+    SKV_STORE(H, 216, 143, t147);
+    SKV_STORE(H, 216, 144, -t53);
+    SKV_STORE(H, 216, 145, t103);
+    H[146] = H[362] = H[578] = H[794] = 0.0;
+    SKV_STORE(H, 216, 147, t136);
+    SKV_STORE(H, 216, 148, t166);
+    SKV_STORE(H, 216, 149, t169);
+    SKV_STORE(H, 216, 150, t52);
+    SKV_STORE(H, 216, 151, t104);
+    H[152] = H[368] = H[584] = H[800] = 0.0;
+    SKV_STORE(H, 216, 153, t137);
+    SKV_STORE(H, 216, 154, t167);
+    SKV_STORE(H, 216, 155, t170);
+    H[156] = H[372] = H[588] = H[804] = 0.0;
+    SKV_STORE(H, 216, 157, t105);
+    H[158] = H[374] = H[590] = H[806] = 0.0;
+    SKV_STORE(H, 216, 159, t138);
+    SKV_STORE(H, 216, 160, t168);
+    SKV_STORE(H, 216, 161, t171);
+    H[162] = H[378] = H[594] = H[810] = 0.0;
+    H[163] = H[379] = H[595] = H[811] = 0.0;
+    H[164] = H[380] = H[596] = H[812] = 0.0;
+    H[165] = H[381] = H[597] = H[813] = 0.0;
+    H[166] = H[382] = H[598] = H[814] = 0.0;
+    SKV_STORE(H, 216, 167, t172);
+    H[168] = H[384] = H[600] = H[816] = 0.0;
+    H[169] = H[385] = H[601] = H[817] = 0.0;
+    H[170] = H[386] = H[602] = H[818] = 0.0;
+    H[171] = H[387] = H[603] = H[819] = 0.0;
+    H[172] = H[388] = H[604] = H[820] = 0.0;
+    SKV_STORE(H, 216, 173, t173);
+    H[174] = H[390] = H[606] = H[822] = 0.0;
+    H[175] = H[391] = H[607] = H[823] = 0.0;
+    H[176] = H[392] = H[608] = H[824] = 0.0;
+    H[177] = H[393] = H[609] = H[825] = 0.0;
+    H[178] = H[394] = H[610] = H[826] = 0.0;
+    SKV_STORE(H, 216, 179, t174);
+    SKV_STORE(H, 216, 180, -t56);
+    SKV_STORE(H, 216, 181, t109);
+    H[182] = H[398] = H[614] = H[830] = 0.0;
+    SKV_STORE(H, 216, 183, t142);
+    SKV_STORE(H, 216, 184, t169);
+    SKV_STORE(H, 216, 185, t205);
+    SKV_STORE(H, 216, 186, t55);
+    SKV_STORE(H, 216, 187, t110);
+    H[188] = H[404] = H[620] = H[836] = 0.0;
+    SKV_STORE(H, 216, 189, t143);
+    SKV_STORE(H, 216, 190, t170);
+    SKV_STORE(H, 216, 191, t206);
+    H[192] = H[408] = H[624] = H[840] = 0.0;
+    SKV_STORE(H, 216, 193, t111);
+    H[194] = H[410] = H[626] = H[842] = 0.0;
+    SKV_STORE(H, 216, 195, t144);
+    SKV_STORE(H, 216, 196, t171);
+    SKV_STORE(H, 216, 197, t207);
+    H[198] = H[414] = H[630] = H[846] = 0.0;
+    H[199] = H[415] = H[631] = H[847] = 0.0;
+    H[200] = H[416] = H[632] = H[848] = 0.0;
+    H[201] = H[417] = H[633] = H[849] = 0.0;
+    H[202] = H[418] = H[634] = H[850] = 0.0;
+    H[203] = H[419] = H[635] = H[851] = 0.0;
+    H[204] = H[420] = H[636] = H[852] = 0.0;
+    H[205] = H[421] = H[637] = H[853] = 0.0;
+    H[206] = H[422] = H[638] = H[854] = 0.0;
+    H[207] = H[423] = H[639] = H[855] = 0.0;
+    H[208] = H[424] = H[640] = H[856] = 0.0;
+    H[209] = H[425] = H[641] = H[857] = 0.0;
+    H[210] = H[426] = H[642] = H[858] = 0.0;
+    H[211] = H[427] = H[643] = H[859] = 0.0;
+    H[212] = H[428] = H[644] = H[860] = 0.0;
+    H[213] = H[429] = H[645] = H[861] = 0.0;
+    H[214] = H[430] = H[646] = H[862] = 0.0;
+    H[215] = H[431] = H[647] = H[863] = 0.0;
+}
+#endif
+
+
 void symkin_stanford_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
-    for (ptrdiff_t i = 0; i < N; ++i)
+    ptrdiff_t i = 0;
+#if SYMKIN_LANES == 4
+    for (; i + 4 <= N; i += 4)
+        jacob0_hessian0_x4_(q + i * 6, J + i * 36, H + i * 216);
+#endif
+    for (; i < N; ++i)
         jacob0_hessian0_(q + i * 6, J + i * 36, H + i * 216);
 }
 

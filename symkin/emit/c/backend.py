@@ -21,7 +21,7 @@ from symkin.core.names import c_string, comment_safe, identifier
 from symkin.emit.templates import Header, chain_tables, render
 from symkin.errors import CompileError
 
-__all__ = ["render_c", "build_c", "compile_c", "c_prefix", "c_variant", "float_error"]
+__all__ = ["render_c", "build_c", "compile_c", "c_prefix", "c_variant", "float_error", "four_lane_bodies"]
 
 
 def c_prefix(robot: Any) -> str:
@@ -70,6 +70,41 @@ def joint_table(robot: Any) -> list[dict[str, str]]:
 
 
 PRECISIONS = ("double", "float")
+
+# a printed C expression's tokens: numbers (0.316, 2.0, 1e-20) and identifiers
+_TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[A-Za-z_]\w*")
+_LANE_CALLS = {"sk_sin": "skv_sin", "sk_cos": "skv_cos"}
+
+
+def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
+    """The four-configuration bodies of the generated functions that are straight-line arithmetic
+    and sin/cos of their inputs (``c/_sincos.c.j2``'s ``skv_sin``/``skv_cos`` in place of
+    ``sk_sin``/``sk_cos``; constants broadcast), by function name: ``lines`` as (name, expression)
+    and ``outs`` as (name, size, ((index, expression, constant), ...)). Functions that call others
+    or run loops (delegates, Hessians, scratch arrays) are left out: their batch stays scalar."""
+    bodies = {}
+    for f in functions:
+        if f.delegate or f.hessians or f.scratch:
+            continue
+        names = {name for name, _ in f.inputs} | {name for name, _ in f.lines}
+
+        def lane(expr: str, names: set[str] = names) -> tuple[str, bool] | None:
+            idents = {t for t in _TOKEN.findall(expr) if not t[0].isdigit() and t[0] != "."}
+            if idents - names - set(_LANE_CALLS):
+                return None
+            for scalar, vector in _LANE_CALLS.items():
+                expr = expr.replace(scalar + "(", vector + "(")
+            return expr, not idents
+
+        lines = [(name, lane(expr)) for name, expr in f.lines]
+        outs = [(o.name, o.size, [(i, lane(expr)) for i, expr in o.values]) for o in f.outs]
+        if any(v is None for _, v in lines) or any(v is None for _, _, vs in outs for _, v in vs):
+            continue
+        bodies[f.name] = {
+            "lines": [(name, f"SKV_SPLAT({e})" if const else e) for name, (e, const) in lines],
+            "outs": [(name, size, [(i, e, const) for i, (e, const) in vs]) for name, size, vs in outs],
+        }
+    return bodies
 
 
 def c_variant(
@@ -123,6 +158,7 @@ def render_c(
         "header": header,
         "chain": chain_tables(robot),
         "hessian_frames": sorted({h.frame for f in printed for h in f.hessians}),
+        "lanes": {} if precision == "float" else four_lane_bodies(printed),
         "joints": joint_table(robot),
         "qd_max": robot.qd_max is not None,
         "licence": LICENCE,

@@ -1,0 +1,139 @@
+"""The generated C's four-lane batch entry points (issue 21): ``<f>_batch`` runs four configurations
+per step through ``<f>_x4_`` with ``skv_sin``/``skv_cos``, a scalar tail, and ``-DSYMKIN_SCALAR`` (or
+C++, or another compiler) for one configuration per step. Every lane must give bit for bit what the
+scalar code gives, so batch and one-at-a-time calls agree exactly, and the inline sin/cos stay
+within 1 ulp (``tests/emit/test_sincos.py`` measures that on the batch path)."""
+
+from __future__ import annotations
+
+import ctypes
+import re
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin.emit.c.build import compile_library, load_library
+from symkin.model.robots import load
+from symkin.runtime.kinematics import KIN_METHODS
+from tests.emit.test_sincos import _angles
+
+ROBOTS = ("panda", "ur5", "stanford", "gantry", "planar2")
+
+
+def _configurations(robot, n: int = 203) -> np.ndarray:
+    Q = robot.random_q(n, seed=5)
+    Q[5] = 1e7  # beyond the inline range: those lanes call libm
+    Q[9, 0] = -0.0
+    Q[10, 0] = 1e-30  # sin x = x
+    Q[11] = np.pi / 2 * np.arange(1, robot.n + 1)  # the third reduction stage in one lane only
+    return Q
+
+
+def _outputs(out) -> tuple[np.ndarray, ...]:
+    return out if isinstance(out, tuple) else (out,)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_batch_equals_one_at_a_time_bit_for_bit(name):
+    """Rows 0-199 go through the four-lane code, 200-202 through the scalar tail; single calls
+    through the scalar code: every entry identical, for every generated function."""
+    kin = symkin.compile(name, backend="c")
+    Q = _configurations(kin.robot)
+    for method in KIN_METHODS:
+        f = getattr(kin, method)
+        batch = _outputs(f(Q))
+        for i in (*range(0, 16), 100, 101, 199, 200, 202):
+            for b, s in zip(batch, _outputs(f(Q[i]))):
+                assert np.array_equal(b[i], s), (name, method, i)
+
+
+def test_the_lanes_are_where_they_pay():
+    """Functions with code of their own (fkine, link_poses, jacob0, jacobe, fkine_jacob0; the
+    Panda's jacob0_hessian0, whose Hessian is written out) get four-lane bodies; hessian0, which
+    calls jacob0_hessian0, keeps a scalar batch. The scalar bodies call the inline sin/cos (sk_sin),
+    not libm's sin directly."""
+    text = symkin.generate(load("panda"), "c")["symkin_panda.c"]
+    for f in ("fkine", "link_poses", "jacob0", "jacobe", "fkine_jacob0", "jacob0_hessian0"):
+        assert f"static void {f}_x4_(" in text, f
+        assert re.search(rf"for \(; i \+ 4 <= N; i \+= 4\)\n\s+{f}_x4_\(", text), f
+    assert "static void hessian0_x4_(" not in text
+    body = text[text.index("static void fkine_(const double") :]
+    body = body[: body.index("\n}\n")]
+    assert "sk_sin(q0)" in body and "sk_cos(q0)" in body
+    assert not re.search(r"(?<![\w])(sin|cos)\(", body)
+    single = symkin.generate(load("panda"), "c", precision="float")["symkin_panda.c"]
+    assert "_x4_" not in single  # single precision: one configuration per step
+
+
+def test_vector_sin_cos_are_the_scalar_ones_on_the_hard_angles():
+    """Rz(q): T[0, 0] = cos q, T[1, 0] = sin q. The doubles nearest k pi/2 (the reduction's third
+    stage), huge, tiny and signed-zero angles, four per step against one at a time."""
+    kin = symkin.compile(symkin.Robot.from_ets("Rz(q)", name="rz_lanes"), backend="c")
+    x = _angles()
+    x = x[: len(x) // 4 * 4]
+    batch = kin.fkine(x[:, None])
+    single = np.array([kin.fkine(np.array([v])) for v in x])
+    assert np.array_equal(batch.view(np.uint64), single.view(np.uint64))  # -0.0 included
+
+
+def test_scalar_build_gives_the_same_numbers():
+    """The same generated C built with -DSYMKIN_SCALAR (one configuration per step) against the
+    default build: identical batch outputs."""
+    robot = load("ur5")
+    files = symkin.generate(robot, "c", prefix="lanes_ur5")
+    sources = {k: v for k, v in files.items() if not k.endswith("_pymodule.c")}
+    Q = np.ascontiguousarray(_configurations(robot, 41))
+    outs = []
+    for name, flags in (("lanes_ur5_vec", ()), ("lanes_ur5_scalar", ("-DSYMKIN_SCALAR",))):
+        lib = load_library(compile_library(sources, name, extra_cflags=flags))
+        T = np.empty((len(Q), 16))
+        J = np.empty((len(Q), 6 * robot.n))
+        fn = lib.lanes_ur5_fkine_jacob0_batch
+        fn.restype = None
+        fn(*(a.ctypes.data_as(ctypes.c_void_p) for a in (Q, T, J)), ctypes.c_ssize_t(len(Q)))
+        outs.append((T, J))
+    (T4, J4), (T1, J1) = outs
+    assert np.array_equal(T4, T1) and np.array_equal(J4, J1)
+    np.testing.assert_allclose(T4[:5].reshape(-1, 4, 4), robot.fkine(Q[:5]), atol=1e-14)
+
+
+@pytest.mark.parametrize("which", ["quadruped", "gripper"])
+def test_tree_batch_equals_one_at_a_time_bit_for_bit(which):
+    """A tree's every-frame functions (fkine_all, jacob0_all, fkine_jacob0_all) run four
+    configurations per step in a batch: identical to one call per configuration, the always-zero
+    entries included (a prismatic joint, mimic joints with multipliers and offsets)."""
+    from tests.model.tree_urdfs import GRIPPER, QUADRUPED
+
+    tree = symkin.Tree.from_urdf({"quadruped": QUADRUPED, "gripper": GRIPPER}[which])
+    kin = symkin.compile(tree, backend="c")
+    text = symkin.generate(tree, "c")
+    assert any("fkine_jacob0_all_x4_(" in t for t in text.values())
+    Q = tree.random_q(43, seed=8)
+    Q[3] = 1e7
+    for method in ("fkine_all", "jacob0_all", "fkine_jacob0_all"):
+        f = getattr(kin, method)
+        batch = _outputs(f(Q))
+        for i in (0, 1, 2, 3, 4, 39, 40, 42):
+            for b, s in zip(batch, _outputs(f(Q[i]))):
+                assert np.array_equal(b[i], s), (which, method, i)
+
+
+def test_tree_batch_writes_the_zero_entries_too():
+    """``<f>_batch`` (not ``_zeroed``) writes every entry, the always-zero ones included, in the
+    four-lane steps as in the scalar tail: outputs poisoned with NaN come back equal to the
+    extension's (zero-filled) batch."""
+    from tests.model.tree_urdfs import QUADRUPED
+
+    tree = symkin.Tree.from_urdf(QUADRUPED)
+    kin = symkin.compile(tree, backend="c")
+    files = symkin.generate(tree, "c", prefix="lanes_tree")
+    sources = {k: v for k, v in files.items() if not k.endswith("_pymodule.c")}
+    lib = load_library(compile_library(sources, "lanes_tree"))
+    Q = np.ascontiguousarray(tree.random_q(10, seed=9))
+    T, J = kin.fkine_jacob0_all(Q)
+    T2, J2 = np.full(T.shape, np.nan), np.full(J.shape, np.nan)
+    fn = lib.lanes_tree_fkine_jacob0_all_batch
+    fn.restype = None
+    fn(*(a.ctypes.data_as(ctypes.c_void_p) for a in (Q, T2, J2)), ctypes.c_ssize_t(len(Q)))
+    assert np.array_equal(T2, T) and np.array_equal(J2, J)
