@@ -172,8 +172,35 @@ def run_table1(
         "backend": backend,
     }
     out["rows"] = rows
+    out["lanes"] = _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None
     out["rtb"] = _time_rtb(robot, n_problems, seed, tol) if rtb else None
     return out
+
+
+def _time_lanes(
+    kin: Any, Tep: np.ndarray, starts: np.ndarray, seed: int, tol: float, tol_on: str
+) -> dict[str, Any] | None:
+    """LM (Chan, lambda 0.1, 100 x 30) as one batch, its four lanes' poses evaluated by one call of
+    the generated four-lane ``fkine_jacob0_batch`` against one scalar ``fkine_jacob0`` per lane:
+    the same solver otherwise, and the same solutions (checked)."""
+    from symkin.runtime.ik_c import CIKSolver
+
+    options = dict(TABLE1_METHODS["LM (Chan lambda=0.1)"], slimit=100, ilimit=30, tol=tol, tol_on=tol_on)
+    four = CIKSolver(kin, starts=starts, **options)
+    one = CIKSolver(kin, fkjac=kin.c_fkjac, starts=starts, **options)
+    if not four._cfg.fkjac_batch:
+        return None
+    times, results = {}, {}
+    for label, solver in (("four_lanes", four), ("scalar", one)):
+        solver.solve(Tep[:8], seed=seed)
+        best = float("inf")
+        for _ in range(3):
+            t0 = time.thread_time()
+            results[label] = solver.solve(Tep, seed=seed)
+            best = min(best, time.thread_time() - t0)
+        times[label] = 1e6 * best / len(Tep)
+    same = results["four_lanes"].q.tobytes() == results["scalar"].q.tobytes()
+    return {"four_lanes_us": times["four_lanes"], "scalar_us": times["scalar"], "same_solutions": same}
 
 
 def _row(
@@ -291,6 +318,14 @@ def format_table1(result: dict[str, Any]) -> str:
         "S, I: searches and iterations allowed; iteration statistics over solved problems; us/it: time "
         "over all iterations (failed searches included)."
     )
+    lanes = result.get("lanes")
+    if lanes:
+        out.append(
+            f"LM (Chan lambda=0.1), 100 x 30, one batch: {lanes['four_lanes_us']:.2f} us/solve with the "
+            f"four-lane kinematics, {lanes['scalar_us']:.2f} with scalar kinematics "
+            f"({lanes['scalar_us'] / lanes['four_lanes_us']:.2f}x); "
+            + ("identical solutions" if lanes["same_solutions"] else "SOLUTIONS DIFFER")
+        )
     rtb = result.get("rtb")
     if rtb:
         if "error" in rtb:

@@ -216,11 +216,17 @@ class Collision:
 
 
 def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any) -> Any:
-    """``kin.ik(Tep, **kwargs)`` keeping only collision-free solutions: the targets whose solution
-    collides with the robot itself or ``env`` (``True``: self-collision only) are solved again,
-    all together, from new random starts (seeded from ``seed``), in at most ``attempts - 1`` more
-    rounds. A target without a collision-free solution gets ``success=False``, reason "in
-    collision", and its last solution. Iterations and searches count every round."""
+    """``kin.ik(Tep, **kwargs)`` keeping only collision-free solutions (with the robot itself and
+    ``env``; ``True``: self-collision only).
+
+    On compiled C kinematics of a chain with a compiled collision kernel, the C solver checks each
+    converged solution with the kernel inside its search loop: one that collides is rejected and
+    the next search starts (from ``starts``, then random), as for joint limits, within ``slimit``
+    searches; the reason of a failure counts the rejected solutions ("... rejected: in
+    collision"). Elsewhere the targets whose solution collides are solved again, all together,
+    from new random starts (seeded from ``seed``), in at most ``attempts - 1`` more rounds; a
+    target without a collision-free solution gets ``success=False``, reason "in collision", and
+    its last solution; iterations and searches count every round."""
     from symkin.runtime.ik_problem import IKResult
 
     try:
@@ -231,6 +237,9 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
         raise ParameterError(f"collision_attempts must be a positive integer, got {attempts}")
     env = Environment() if env is True else as_environment(env)
     check = kin.collision()
+    solver = _c_solver_avoiding(kin, check, env, kwargs)
+    if solver is not None:
+        return solver.solve(Tep, q0=kwargs.get("q0"), seed=kwargs.get("seed"))
     first = kin.ik(Tep, **kwargs)
     batch = first.batch
     seed = kwargs.pop("seed", None)
@@ -265,6 +274,36 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
             q[0], bool(success[0]), int(iters[0]), int(searches[0]), float(residual[0]), reason[0]
         )
     return IKResult(q, success, iters, searches, residual, tuple(reason))
+
+
+_AVOIDING: OrderedDict[tuple, tuple] = OrderedDict()  # (kin id, options, env id) -> (kin, env, solver)
+
+
+def _c_solver_avoiding(kin: Any, check: Collision, env: Environment, kwargs: dict[str, Any]) -> Any:
+    """The C IK solver of ``kin.ik(**kwargs)`` that rejects converged solutions colliding with
+    ``env`` (the kernel's ``skcoll_in_collision_packed`` in its search loop), memoised for the
+    last 16 kinematics, options and environments; None when the C path does not apply (another
+    backend, a frame off the end effector, no C kernel, options the C solver does not take)."""
+    from symkin.runtime.ik import IK_OPTIONS
+    from symkin.runtime.ik_c import CIKSolver, options_key
+    from symkin.runtime.ik_problem import IKOptions
+
+    if check.kernel is None or getattr(kin, "backend", None) != "c" or getattr(kin, "is_tree", True):
+        return None
+    if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or getattr(kin, "n", 99) > 12:
+        return None  # frame=, backend=...: the general path
+    options = IKOptions.of(kin, **{k: v for k, v in kwargs.items() if k in IK_OPTIONS})
+    key = (id(kin), options_key(options), id(env))
+    hit = _AVOIDING.get(key)
+    if hit is not None and hit[0] is kin and hit[1] is env:
+        _AVOIDING.move_to_end(key)
+        return hit[2]
+    fn = check.kernel.lib.skcoll_in_collision_packed
+    solver = CIKSolver(kin, options, collides=(fn, env_args(env)))
+    _AVOIDING[key] = (kin, env, solver)
+    while len(_AVOIDING) > _KEEP:
+        _AVOIDING.popitem(last=False)
+    return solver
 
 
 def collision_of(kin: Any) -> Collision:

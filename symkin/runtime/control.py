@@ -44,6 +44,7 @@ __all__ = [
     "MMCQP",
     "StepInfo",
     "rrmc",
+    "servo_rrmc_step",
     "mmc_qp",
     "mmc_closed_form",
     "joint_velocity_bounds",
@@ -129,7 +130,13 @@ def rrmc(
     least-squares step ``J^T (J J^T + damping^2 I)^-1 nu`` is taken instead and the status is
     ``"singular"``. If |qd_i| exceeds the joint speed limit (``qd_max``, else ``kin.qd_max``), all of qd
     is scaled down by the same factor so its direction is kept; ``info.scale`` says by how much.
-    ``axes`` only chooses which manipulability ``info`` reports.
+
+    ``axes`` is the task: ``"all"`` (the six rows of J0), ``"trans"`` (v), ``"rot"`` (omega) or the
+    row indices of the task (``(0, 1, 5)``: x, y and the rotation about z, what a planar arm
+    controls). With fewer rows the step solves the sub-Jacobian, ``J0[rows] qd = nu[rows]`` (the
+    other entries of ``nu`` are ignored): an under-actuated arm (a planar 3R, fewer than 6 joints)
+    does its task exactly where the full J0 would only give a least-squares compromise, and
+    ``info`` reports the manipulability of those rows and the residual over them.
 
     ``qd_null`` (n,), rad/s or m/s per joint, adds the null-space motion ``(I - J^+ J) qd_null``
     (Corke, Robotics, Vision and Control, 3rd ed., 2023, chap 8: a secondary task such as moving
@@ -141,7 +148,49 @@ def rrmc(
     kinematics object and options); elsewhere, and with ``qd_null``, J0 comes from ``kin.jacob0`` and
     the step from NumPy. Both solve with the Cholesky factor of J J^T, no SVD.
     """
-    if qd_null is None:
+    task = _task_rows(axes)  # for row indices, info's manipulability is that of the task's rows
+    named = axes if isinstance(axes, str) else "all"
+    return _rrmc(kin, q, nu, qd_max, damping, singular_tol, named, qd_null, task)
+
+
+def servo_rrmc_step(kin: Any, qd_max: Any = None, axes: str = "all") -> Any:
+    """The servo loop's RRMC step ``(q, nu) -> (qd, info)``: all six rows of J0 solved (the loop
+    drives the whole pose error), the manipulability of ``axes`` reported."""
+    return lambda q, nu: _rrmc(kin, q, nu, qd_max, 1e-2, 1e-6, axes, None, _AXES["all"])
+
+
+def _task_rows(axes: Any) -> Any:
+    """The rows of J0 and nu a task keeps: a slice for "all", "trans" or "rot", else an index array
+    of distinct rows 0..5 in the order given."""
+    if isinstance(axes, str):
+        return _axes(axes)
+    try:
+        rows = [int(r) for r in axes if isinstance(r, (int, np.integer)) and not isinstance(r, bool)]
+        ok = len(rows) == len(axes) and 0 < len(rows) == len(set(rows)) and all(0 <= r < 6 for r in rows)
+    except TypeError:
+        ok = False
+    if not ok:
+        raise ParameterError(
+            f"axes must be 'all', 'trans', 'rot' or distinct row indices 0..5 of (v, omega), not {axes!r}"
+        )
+    return np.array(rows)
+
+
+def _rrmc(
+    kin: Any,
+    q: Any,
+    nu: Any,
+    qd_max: Any,
+    damping: float,
+    singular_tol: float,
+    axes: str,
+    qd_null: Any,
+    task: Any,
+) -> tuple[np.ndarray, StepInfo]:
+    """:func:`rrmc` solving the rows ``task`` of J0 (a slice or indices) and reporting the
+    manipulability of ``axes``; the servo loop solves all six rows whatever its ``axes``."""
+    full = isinstance(task, slice) and task == _AXES["all"]
+    if qd_null is None and full:
         try:  # compiled kinematics keep their C controllers (by options) in kin._c_rrmc
             c = kin._c_rrmc[(qd_max, damping, singular_tol, axes)]
         except (AttributeError, KeyError, TypeError):
@@ -153,11 +202,11 @@ def rrmc(
     damping = _number(damping, "damping", strict=False)
     singular_tol = _number(singular_tol, "singular_tol", strict=False)
     J = np.asarray(kin.jacob0(q), dtype=float)
-    qd, status, method, m = _rrmc_step(J, nu, damping, singular_tol, _axes(axes))
+    qd, status, method, m = _rrmc_step(J, nu, damping, singular_tol, _axes(axes), task)
     if qd_null is not None:
-        qd = qd + _null_motion(J, qd_null, damping if status == "singular" else 0.0)
+        qd = qd + _null_motion(J[task], qd_null, damping if status == "singular" else 0.0)
     qd, scale = scale_to_limits(qd, _speed_limits(kin, kin.n, qd_max))
-    res = float(np.abs(J @ qd - nu).max())
+    res = float(np.abs(J[task] @ qd - nu[task]).max())
     return qd, StepInfo(status, method, m, residual=res, scale=scale)
 
 
@@ -210,34 +259,41 @@ def rrmc_controller(
 
 
 def _rrmc_step(
-    J: np.ndarray, nu: np.ndarray, damping: float, singular_tol: float, rows: slice
+    J: np.ndarray, nu: np.ndarray, damping: float, singular_tol: float, rows: slice, task: Any = None
 ) -> tuple[np.ndarray, str, str, float]:
-    """(qd, status, method, m) of eqs 35-36 from the Cholesky factor of G = J J^T (no SVD): J is
-    regular when G - singular_tol^2 I is positive definite (its smallest singular value is at least
-    singular_tol); then qd = J^T G^-1 nu (J^-1 nu for a square J) and m = prod diag(L) = sqrt(det G),
-    else the damped step J^T (G + damping^2 I)^-1 nu."""
-    n = J.shape[1]
-    G = J @ J.T
+    """(qd, status, method, m) of eqs 35-36 on the task rows of J and nu (``task``: a slice or
+    indices; default all six) from the Cholesky factor of G = Jt Jt^T (no SVD): Jt is regular when
+    G - singular_tol^2 I is positive definite (its smallest singular value is at least
+    singular_tol); then qd = Jt^T G^-1 nut (Jt^-1 nut for a square Jt) and, for the rows ``rows``
+    of a full task, m = prod diag(L) = sqrt(det G), else the damped step Jt^T (G + damping^2 I)^-1
+    nut. m is the manipulability of the rows ``rows`` of J (all six: of the task rows)."""
+    task = _AXES["all"] if task is None else task
+    full = isinstance(task, slice) and task == _AXES["all"]
+    Jt, nut = J[task], nu[task]
+    k, n = Jt.shape
+    G = Jt @ Jt.T
     L = None
-    if n >= 6:
+    if n >= k:
         with contextlib.suppress(np.linalg.LinAlgError):
-            np.linalg.cholesky(G - singular_tol**2 * np.eye(6))
+            np.linalg.cholesky(G - singular_tol**2 * np.eye(k))
             L = np.linalg.cholesky(G)
-    if rows == _AXES["all"]:
+    if full and rows == _AXES["all"]:
         if L is not None:
             m = float(np.prod(np.diagonal(L)))
         else:
             m = math.sqrt(max(float(np.linalg.det(G)), 0.0)) if n >= 6 else 0.0
-    else:
+    elif full:
         Gr = G[rows, rows]
         m = math.sqrt(max(float(np.linalg.det(Gr)), 0.0))
+    else:  # the task's own rows
+        m = math.sqrt(max(float(np.linalg.det(G)), 0.0)) if n >= k else 0.0
     if L is not None:
-        return J.T @ np.linalg.solve(G, nu), "solved", ("inverse" if n == 6 else "pinv"), m
+        return Jt.T @ np.linalg.solve(G, nut), "solved", ("inverse" if n == k else "pinv"), m
     try:
-        y = np.linalg.solve(G + damping * damping * np.eye(6), nu)
+        y = np.linalg.solve(G + damping * damping * np.eye(k), nut)
     except np.linalg.LinAlgError:  # no damping at a singular J: no step
-        y = np.zeros(6)
-    return J.T @ y, "singular", "damped", m
+        y = np.zeros(k)
+    return Jt.T @ y, "singular", "damped", m
 
 
 # -- MMC: the controller ---------------------------------------------------------------------------

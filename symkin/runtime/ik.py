@@ -184,9 +184,14 @@ def ik(
             (a :class:`symkin.Robot` or a compiled backend); ``revolute`` or ``ets`` tells which
             joints wrap by 2 pi.
         Tep: target pose(s) 0T_e*, (4, 4) or (N, 4, 4); invalid SE(3) raises PoseError.
-        method, damping, lam, pinv: the step (module docstring); ``lam`` is a scalar or (n,).
-        ilimit: iterations per search; slimit: searches.
-        tol, tol_on: converged when ``|e|_We < tol`` (``"e"``) or ``E < tol`` (``"E"``, the paper's).
+        method: the step, ``"NR"``, ``"GN"`` or ``"LM"`` (module docstring).
+        damping: LM's damping, ``"wampler"``, ``"chan"`` or ``"sugihara"`` (module docstring).
+        lam: the damping constant (module docstring), a scalar or (n,).
+        pinv: NR and GN steps through the pseudo-inverse (module docstring).
+        ilimit: iterations per search.
+        slimit: searches.
+        tol: converged when ``|e|_We < tol`` (``tol_on="e"``) or ``E < tol`` (``tol_on="E"``, the paper's).
+        tol_on: ``"e"`` or ``"E"``, see ``tol``.
         q0: first start, (n,) or (N, n) for N targets; then ``starts`` (S, n) for searches 1..S-1
             (search 0 too when q0 is None), then random restarts drawn from ``seed``.
         joint_limits: reject solutions outside ``kin.qlim`` (after wrapping revolute joints).

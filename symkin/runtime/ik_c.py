@@ -39,6 +39,7 @@ __all__ = [
     "ik_library",
     "ik_extension",
     "solver_for",
+    "options_key",
     "ets_table",
 ]
 
@@ -62,20 +63,23 @@ class _Config(ctypes.Structure):
         ("tol", _D),
         ("we", _D * 6),
         *((f, _P) for f in ("lam", "qlo", "qhi", "slo", "shi", "revolute", "starts", "fkjac", "ets")),
+        ("fkjac_batch", _P),
+        ("collides", _P),
+        ("collision_env", _P),
     ]
 
 
-class _Stats(ctypes.Structure):
-    _fields_ = [("residual", _D), *((f, _I32) for f in ("success", "iterations", "searches", "limit_rejects",
-                                                        "singular", "status"))]  # fmt: skip
-
-
-STATS_DTYPE = np.dtype(
-    [
-        ("residual", "f8"),
-        *((f, "i4") for f in ("success", "iterations", "searches", "limit_rejects", "singular", "status")),
-    ]  # fmt: skip
+_STATS = (
+    *("success", "iterations", "searches", "limit_rejects", "singular", "status"),
+    *("collision_rejects", "pad_"),
 )
+
+
+class _Stats(ctypes.Structure):
+    _fields_ = [("residual", _D), *((f, _I32) for f in _STATS)]
+
+
+STATS_DTYPE = np.dtype([("residual", "f8"), *((f, "i4") for f in _STATS)])
 
 
 class _ET(ctypes.Structure):
@@ -234,9 +238,15 @@ class CIKSolver:
     """The C solver for one kinematics and one set of options (see :func:`symkin.runtime.ik.ik`).
 
     Args:
-        kin: ``n``, ``qlim`` and either ``ets`` (table-driven kinematics) or ``c_fkjac``.
+        kin: ``n``, ``qlim`` and either ``ets`` (table-driven kinematics) or ``c_fkjac`` (and
+            ``c_fkjac_batch``, the generated ``fkine_jacob0_batch``: a batch of LM solves then
+            evaluates its four lanes' poses in one four-lane call, the same numbers).
         options: an :class:`IKOptions`, or keyword options of :func:`ik` (method, damping, lam...).
         fkjac: a ``symkin_fkjac_fn`` (ctypes function or address) overriding ``kin``'s kinematics.
+        collides: ``(function, env)``: a ``symkin_collides_fn`` (a compiled collision kernel's
+            ``skcoll_in_collision_packed``) and the :class:`~symkin.runtime.collision.Packed`
+            obstacles it checks against; a converged solution that collides is rejected and the next
+            search starts, as for joint limits (the reason counts them).
         lib: a library exporting the ``symkin_ik_*`` functions (default: :func:`ik_library`).
     """
 
@@ -247,6 +257,7 @@ class CIKSolver:
         *,
         fkjac: Any = None,
         lib: ctypes.CDLL | None = None,
+        collides: Any = None,
         **kwargs: Any,
     ) -> None:
         opt = options if options is not None else IKOptions.of(kin, **kwargs)
@@ -260,9 +271,11 @@ class CIKSolver:
             )
         self.options, self.n, self.kin = opt, opt.n, kin
         self._name = name_of(kin)
+        batch = None
         if fkjac is None:
             fkjac = getattr(kin, "c_fkjac", None)
-        self._fkjac_ref = fkjac
+            batch = getattr(kin, "c_fkjac_batch", None) if fkjac is not None else None
+        self._fkjac_ref, self._batch_ref = fkjac, batch
         self._fkjac_addr = (
             0 if fkjac is None else (fkjac if isinstance(fkjac, int) else ctypes.cast(fkjac, _P).value)
         )
@@ -290,6 +303,11 @@ class CIKSolver:
         for name, arr in self._keep.items():
             setattr(cfg, name, _addr(arr) if arr.size else None)
         cfg.fkjac = self._fkjac_addr or None
+        cfg.fkjac_batch = ctypes.cast(batch, _P).value if batch is not None else None
+        self._collides = collides  # kept alive: the function's library and the packed obstacles
+        if collides is not None:
+            fn, env = collides
+            cfg.collides, cfg.collision_env = ctypes.cast(fn, _P).value, env.address
         cfg.ets = ctypes.addressof(self._ets) if self._ets is not None else None
         self._cfg = cfg
         self._cfg_addr = ctypes.addressof(cfg)
@@ -327,9 +345,9 @@ class CIKSolver:
                 return res
         return self._solve_checked(Tep, q0, seed)
 
-    def _reason(self, residual: float, limit_rejects: int, singular: int) -> str:
+    def _reason(self, residual: float, limit_rejects: int, singular: int, collisions: int = 0) -> str:
         o = self.options
-        return failure_reason(False, residual, limit_rejects, singular, o.ilimit, o.slimit)
+        return failure_reason(False, residual, limit_rejects, singular, o.ilimit, o.slimit, collisions)
 
     def _solve_checked(self, Tep: Any, q0: Any, seed: Any) -> IKResult:
         """:meth:`solve` with every argument validated first (detailed errors) and batches."""
@@ -352,7 +370,11 @@ class CIKSolver:
         )
         if status:
             raise PoseError(f"invalid target pose (code {status})")
-        reason = "success" if st.success else self._reason(st.residual, st.limit_rejects, st.singular)
+        reason = (
+            "success"
+            if st.success
+            else self._reason(st.residual, st.limit_rejects, st.singular, st.collision_rejects)
+        )
         return _result(q, bool(st.success), st.iterations, st.searches, st.residual, reason)
 
     def _check_q0(self, q0: Any) -> np.ndarray:
@@ -382,13 +404,14 @@ class CIKSolver:
         if failed.size:
             o, reasons = self.options, list(reason)
             fs = st[failed]
-            for i, r, lr, sg in zip(
+            for i, r, lr, sg, cr in zip(
                 failed.tolist(),
                 fs["residual"].tolist(),
                 fs["limit_rejects"].tolist(),
                 fs["singular"].tolist(),
+                fs["collision_rejects"].tolist(),
             ):
-                reasons[i] = failure_reason(False, r, lr, sg, o.ilimit, o.slimit)
+                reasons[i] = failure_reason(False, r, lr, sg, o.ilimit, o.slimit, cr)
             reason = tuple(reasons)
         return IKResult(
             q, success, st["iterations"].copy(), st["searches"].copy(), st["residual"].copy(), reason
@@ -434,7 +457,7 @@ class CIKSolver:
 _SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _options_key(opt: IKOptions) -> tuple:
+def options_key(opt: IKOptions) -> tuple:
     arrays = (opt.lam, opt.we, opt.qlim, opt.starts)
     return (opt.method, opt.damping, opt.pinv, opt.ilimit, opt.slimit, opt.tol, opt.tol_on, opt.joint_limits,
             *(a.tobytes() for a in arrays), opt.starts.shape)  # fmt: skip
@@ -446,7 +469,7 @@ def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
         cache = _SOLVERS.setdefault(kin, {})
     except TypeError:  # not weak-referenceable
         return CIKSolver(kin, opt)
-    key = _options_key(opt)
+    key = options_key(opt)
     solver = cache.get(key)
     if solver is None:
         if len(cache) > 64:

@@ -74,7 +74,13 @@ class IKResult:
 
 
 def failure_reason(
-    success: bool, residual: float, limit_rejects: int, singular: int, ilimit: int, slimit: int
+    success: bool,
+    residual: float,
+    limit_rejects: int,
+    singular: int,
+    ilimit: int,
+    slimit: int,
+    collision_rejects: int = 0,
 ) -> str:
     """The ``reason`` text of a result (shared by the NumPy and C solvers)."""
     if success:
@@ -82,6 +88,8 @@ def failure_reason(
     parts = [f"no solution within {slimit} search(es) x {ilimit} iterations (best residual {residual:.3g})"]
     if limit_rejects:
         parts.append(f"{limit_rejects} converged solution(s) rejected for joint limits")
+    if collision_rejects:
+        parts.append(f"{collision_rejects} converged solution(s) rejected: in collision")
     if singular:
         parts.append(f"{singular} search(es) abandoned at a singular or diverging step")
     return "; ".join(parts)

@@ -278,6 +278,16 @@ class Kinematics(FrameMethods):
 
         return getattr(load_library(self.path), f"{self.c_prefix}_fkine_jacob0")
 
+    @cached_property
+    def c_fkjac_batch(self) -> Any:
+        """The C entry point ``fkine_jacob0_batch(q, T, J, N)`` as a ctypes function (C backend, a
+        chain), four configurations per step: a batch of LM solves evaluates its lanes with it."""
+        if self.backend != "c" or self.path is None or self.is_tree:
+            raise AttributeError("c_fkjac_batch exists only for a chain on the C backend")
+        from symkin.emit.c.build import load_library
+
+        return getattr(load_library(self.path), f"{self.c_prefix}_fkine_jacob0_batch")
+
     def ik(self, Tep: Any, frame: Any = None, **kwargs: Any) -> Any:
         """Numerical inverse kinematics of ``frame`` (eqs 37-51); see :func:`symkin.runtime.ik.ik`
         for the options. Off the end effector of a chain (a tree's frame, a chain's link frame) the
@@ -297,8 +307,9 @@ class Kinematics(FrameMethods):
         plus ``q0[j]``) and ``free_joint=(j, values)`` tries the given values; see :meth:`ik_all`.
 
         ``collision=env`` (an Environment or obstacles; ``True``: self-collision only) rejects
-        solutions in collision and solves again from new random starts, at most
-        ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
+        solutions in collision: on the C backend inside the C solver's search loop (the next
+        search starts, within ``slimit``), elsewhere by solving again from new random starts, at
+        most ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
         """
         if "collision" in kwargs or "collision_attempts" in kwargs:
             env = kwargs.pop("collision", None)

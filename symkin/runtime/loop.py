@@ -14,7 +14,7 @@ import numpy as np
 
 from symkin.core.arrays import as_config, name_of, real_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
-from symkin.runtime.control import MMC, StepInfo, rrmc, rrmc_controller
+from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_step
 from symkin.runtime.ik import check_pose, pose_error
 from symkin.runtime.servo import servo_gain, servo_velocity
 
@@ -227,7 +227,7 @@ def _controller(
                 "joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)"
             )
         return (
-            (lambda q, nu: rrmc(kin, q, nu, qd_max=qd_max, axes=axes)),
+            servo_rrmc_step(kin, qd_max, axes),
             "rrmc",
             rrmc_controller(kin, qd_max, axes=axes),
         )

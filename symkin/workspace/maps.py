@@ -189,9 +189,10 @@ def reachability(
         ik_options: options of ``kin.ik`` (``method``, ``damping``, ``lam``, ``ilimit``,
             ``slimit``, ``tol``, ``we``, ``joint_limits``...); default ``MAP_IK_DEFAULTS``: 10
             searches of 30 iterations, ``|e| < 1e-6``.
-        scheduler, workers: where the blocks run (see :mod:`symkin.workspace.run`): None starts
-            a local cluster of ``workers`` processes (default: one per core), ``"tcp://host:8786"``
-            uses an existing cluster, ``"synchronous"`` runs here without Dask.
+        scheduler: where the blocks run (see :mod:`symkin.workspace.run`): None starts a local
+            cluster of ``workers`` processes, ``"tcp://host:8786"`` uses an existing cluster,
+            ``"synchronous"`` runs here without Dask.
+        workers: processes of the local cluster (default: one per core).
         progress: progress bar on stderr (default: when stderr is a terminal).
         overwrite: replace an existing store of symkin's instead of resuming it.
         on_block: called as ``on_block(index, result)`` after each block is written.

@@ -17,7 +17,7 @@ from symkin.bench.mmc import (
     step_timing,
     table1_tasks,
 )
-from symkin.errors import ConfigurationError, PoseError
+from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import (
     MMC,
     StepInfo,
@@ -603,23 +603,57 @@ def test_servo_rejects_invalid_targets(panda):
 # -- RRMC and the servo loop in C -------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["panda", "ur5", "planar3"])
 def test_c_rrmc_agrees_with_the_numpy_rrmc_on_the_reference(name):
-    # the C step (generated J, Cholesky of J J^T) against the NumPy step on the numeric reference
+    # the C step (generated J, Cholesky of J J^T) against the NumPy step on the numeric reference:
+    # all six rows solved, the manipulability of `axes` reported (the servo loop's step)
+    from symkin.runtime.control import servo_rrmc_step
+
     robot = symkin.load(name)
     kin = symkin.compile(robot, backend="c")
     rng = np.random.default_rng(5)
     configs = [robot.qz, *robot.random_q(6, seed=rng)]
     for qd_max in (None, np.inf, 0.3):
         for axes in ("all", "trans", "rot"):
+            c_step, numpy_step = servo_rrmc_step(kin, qd_max, axes), servo_rrmc_step(robot, qd_max, axes)
             for q in configs:
                 nu = rng.normal(0, 0.3, 6)
-                a, ia = rrmc(kin, q, nu, qd_max=qd_max, axes=axes)
-                b, ib = rrmc(robot, q, nu, qd_max=qd_max, axes=axes)
+                a, ia = c_step(q, nu)
+                b, ib = numpy_step(q, nu)
                 assert (ia.status, ia.method, ia.fallback) == (ib.status, ib.method, ib.fallback), (ia, ib)
                 assert_close(a, b, 1e-8, f"qd at {q}")
                 assert_close(ia.manipulability, ib.manipulability, 1e-9, "m")
                 assert_close(ia.scale, ib.scale, 1e-9, "scale")
                 assert_close(ia.residual, np.abs(robot.jacob0(q) @ a - nu).max(), 1e-9, "residual")
     assert rrmc(kin, robot.qz, np.ones(6))[1].method == "damped"  # stretched out: singular
+
+
+def test_rrmc_axes_solve_the_sub_jacobian_of_an_under_actuated_task():
+    """A planar 3R (3 joints) cannot follow a spatial velocity; its task is x, y and the rotation
+    about z: rrmc(axes=(0, 1, 5)) solves J0[[0, 1, 5]] qd = nu[[0, 1, 5]] exactly (the full J0,
+    of rank 3, only by the damped step), "trans" the first three rows of a 6-joint arm, with the
+    manipulability and residual of those rows; bad rows are refused."""
+    robot = symkin.load("planar3")
+    kin = symkin.compile(robot, backend="c")
+    q = np.array([0.3, 0.7, -0.4])
+    nu = np.array([0.1, -0.05, 0.3, 0.2, -0.1, 0.2])  # z, omega_x, omega_y: not the arm's to do
+    for k in (kin, robot):
+        qd, info = rrmc(k, q, nu, qd_max=np.inf, axes=(0, 1, 5))
+        J = robot.jacob0(q)[[0, 1, 5]]
+        assert info.status == "solved" and info.method == "inverse"
+        assert_close(J @ qd, nu[[0, 1, 5]], 1e-12, "the task is done exactly")
+        assert_close(qd, np.linalg.solve(J, nu[[0, 1, 5]]), 1e-12, "Jt^-1 nut")
+        assert_close(info.manipulability, abs(np.linalg.det(J)), 1e-12, "m of the task rows")
+        assert info.residual < 1e-12
+        full, finfo = rrmc(k, q, nu, qd_max=np.inf)  # all six rows: rank 3, the damped step
+        assert finfo.status == "singular" and np.abs(robot.jacob0(q)[[0, 1]] @ full - nu[[0, 1]]).max() > 1e-6
+    ur5 = symkin.load("ur5")
+    q6 = ur5.random_q(seed=3)
+    qd, info = rrmc(ur5, q6, nu, qd_max=np.inf, axes="trans")
+    J = ur5.jacob0(q6)[:3]
+    assert_close(J @ qd, nu[:3], 1e-12, "v") and info.method == "pinv"
+    assert_close(qd, np.linalg.pinv(J) @ nu[:3], 1e-10, "Jv^+ v")
+    for bad in ((0, 0), (6,), (), "xyz", (0.5,), (True, 1)):
+        with pytest.raises(ParameterError, match="axes"):
+            rrmc(ur5, q6, nu, axes=bad)
 
 
 def test_rrmc_is_the_pseudo_inverse_step_away_from_singularities(panda):

@@ -73,7 +73,7 @@ def test_any_q_gives_the_reference_answer_or_its_error_on_every_backend(q, name)
             got, want_a = got**2, want_a**2
         assert got.shape == want_a.shape and np.isfinite(got).all(), backend
         qmax = float(np.abs(np.asarray(q, dtype=float)).max(initial=0.0))
-        tol = 1e-10 + 8 * N * qmax * 2.0**-53  # angle sums round (README, "Accuracy")
+        tol = 1e-10 + 8 * N * qmax * 2.0**-53  # angle sums round (docs/guide/accuracy.md)
         scale = max(1.0, float(np.abs(want_a).max(initial=0.0)))
         assert np.abs(got - want_a).max(initial=0.0) <= tol * scale, backend
 

@@ -199,6 +199,27 @@ def test_c_batch_gives_each_target_what_solving_it_alone_gives(name):
             assert alone.residual == batch.residual[i]
 
 
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_c_batch_on_four_lane_kinematics_keeps_every_iterate(name):
+    """On compiled kinematics a batch of LM solves evaluates its four lanes' poses in one call of
+    the generated four-lane fkine_jacob0_batch: each target must still get, bit for bit, what it
+    gets from a batch without the four-lane call, and target 0 what it gets alone (scalar
+    kinematics), through random restarts and an unreachable target."""
+    kin = symkin.compile(name, backend="c")
+    Tep = kin.fkine(kin.robot.random_q(11, seed=21))
+    Tep[6, :3, 3] += 10.0  # unreachable: every search fails, random restarts
+    four = CIKSolver(kin, slimit=3, ilimit=30)
+    one = CIKSolver(kin, fkjac=kin.c_fkjac, slimit=3, ilimit=30)
+    assert four._cfg.fkjac_batch and not one._cfg.fkjac_batch
+    batch, plain = four.solve(Tep, seed=5), one.solve(Tep, seed=5)
+    assert batch.success.sum() >= 6 and not batch.success[6]  # the Panda rejects some for limits
+    assert batch.q.tobytes() == plain.q.tobytes()
+    assert np.array_equal(batch.iterations, plain.iterations)
+    assert np.array_equal(batch.searches, plain.searches)
+    alone = four.solve(Tep[0], seed=5)  # target 0: the random stream (5, 0), as alone
+    assert alone.q.tobytes() == batch.q[0].tobytes() and alone.iterations == batch.iterations[0]
+
+
 def test_same_seed_reproduces_results():
     Tep = PANDA.fkine(PANDA.random_q(5, seed=6))
     a = ik(PANDA, Tep, backend="c", seed=11)
@@ -547,6 +568,7 @@ def test_table1_benchmark_runs_and_formats():
             assert row["infeasible"] == 0 and row["max_searches"] <= 100
     text = format_table1(result)
     assert "LM (Chan lambda=0.1)" in text and "paper" in text
+    assert result["lanes"]["same_solutions"] and "identical solutions" in text  # four lanes vs scalar
 
 
 def test_keyword_options_reuse_their_solver_and_give_the_functions_results():

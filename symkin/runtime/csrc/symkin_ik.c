@@ -585,6 +585,7 @@ static int start_target(const symkin_ik_config *c, ik_search *t, const double *T
     st->searches = 0;
     st->limit_rejects = 0;
     st->singular = 0;
+    st->collision_rejects = 0;
     st->status = SYMKIN_POSE_OK;
     memset(t->q, 0, sizeof t->q);
     if (c->ilimit < 1) { /* searches that evaluate nothing */
@@ -617,6 +618,10 @@ static int judge(const symkin_ik_config *c, ik_search *t, const double *T, doubl
     if (converged) {
         wrap_into_limits(c, t->q);
         if (!c->joint_limits || within_limits(c, t->q)) {
+            if (c->collides && c->collides(t->q, c->collision_env) != 0) {
+                st->collision_rejects++;
+                return next_search(c, t);
+            }
             st->success = 1;
             st->residual = res;
             memcpy(t->qout, t->q, sizeof(double) * (size_t)c->n);
@@ -764,6 +769,22 @@ static void lm_step_lanes7(const symkin_ik_config *c, const double *we, double J
     lm_step_lanes(7, c, we, J, e, r2, need, dq, failed);
 }
 
+/* T and J of the lanes that evaluate (state SEARCH_EVAL) by one fkjac_batch call over
+ * SYMKIN_LANES configurations: the generated four-lane code gives each lane the numbers of fkjac,
+ * so every target keeps its iterates. */
+static void eval_lanes(const symkin_ik_config *c, const ik_search *t, const int *state,
+                       double T[][16], double J[][6 * NM]) {
+    const int n = c->n;
+    double Q[SYMKIN_LANES * NM], Jb[SYMKIN_LANES * 6 * NM];
+    int busy = 0;
+    while (state[busy] != SEARCH_EVAL) busy++;
+    for (int l = 0; l < SYMKIN_LANES; l++)
+        memcpy(Q + l * n, t[state[l] == SEARCH_EVAL ? l : busy].q, sizeof(double) * (size_t)n);
+    c->fkjac_batch(Q, &T[0][0], Jb, SYMKIN_LANES);
+    for (int l = 0; l < SYMKIN_LANES; l++)
+        if (state[l] == SEARCH_EVAL) memcpy(J[l], Jb + l * 6 * n, sizeof(double) * 6 * (size_t)n);
+}
+
 /* symkin_ik_solve_batch for LM with 6 or 7 joints (the targets' poses are valid). */
 static void solve_batch_lm(const symkin_ik_config *c, int64_t N, const double *Tep, const double *q0,
                            int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st) {
@@ -785,10 +806,12 @@ static void solve_batch_lm(const symkin_ik_config *c, int64_t N, const double *T
             busy |= state[l] == SEARCH_EVAL;
         }
         if (!busy) return;
+        if (c->fkjac_batch) /* the lanes' poses in one call (idle lanes repeat a busy one) */
+            eval_lanes(c, t, state, T, J);
         for (int l = 0; l < SYMKIN_LANES; l++) {
             need[l] = 0;
             if (state[l] != SEARCH_EVAL) continue;
-            kin_eval(c, t[l].q, T[l], J[l]);
+            if (!c->fkjac_batch) kin_eval(c, t[l].q, T[l], J[l]);
             state[l] = judge(c, &t[l], T[l], e[l], &r2[l]);
             need[l] = state[l] == SEARCH_STEP;
             steps |= need[l];

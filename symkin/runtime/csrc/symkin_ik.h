@@ -11,6 +11,7 @@
 #ifndef SYMKIN_IK_H
 #define SYMKIN_IK_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -23,6 +24,14 @@ extern "C" {
  * q: n joint values; T: 16 doubles, row-major 4x4 0T_e; J: 6*n doubles, row-major (6, n),
  * rows (v, omega), v the velocity of the end-effector origin (eqs 31-34). */
 typedef void (*symkin_fkjac_fn)(const double *q, double *T, double *J);
+
+/* The same for N configurations (rows of q; T, J one after another): the generated
+ * <prefix>_fkine_jacob0_batch, which runs four configurations per step. */
+typedef void (*symkin_fkjac_batch_fn)(const double *q, double *T, double *J, ptrdiff_t N);
+
+/* Whether q collides (1), is free (0) or is not a valid configuration (-1), against the packed
+ * obstacles env: a generated collision kernel's skcoll_in_collision_packed. */
+typedef int (*symkin_collides_fn)(const double *q, const long long *env);
 
 /* One elementary transform of a table-driven ETS.
  * axis: 0..2 = tx, ty, tz; 3..5 = Rx, Ry, Rz.
@@ -81,6 +90,10 @@ typedef struct {
     const double *starts;  /* (nstarts, n): search s starts at starts[s]; NULL when nstarts = 0 */
     symkin_fkjac_fn fkjac; /* generated kinematics, or NULL to use ets */
     const symkin_ets *ets;
+    symkin_fkjac_batch_fn fkjac_batch; /* fkjac of several configurations, or NULL: a batch of LM
+                                          solves evaluates its lanes' poses in one call */
+    symkin_collides_fn collides;       /* NULL, or converged q that collide are rejected (the next */
+    const long long *collision_env;    /* search starts, as for joint limits), against this env */
 } symkin_ik_config;
 
 typedef struct {
@@ -91,6 +104,8 @@ typedef struct {
     int32_t limit_rejects; /* converged searches rejected for joint limits */
     int32_t singular;      /* searches abandoned: singular solve or non-finite pose */
     int32_t status;        /* SYMKIN_POSE_* of the target; nothing is solved unless OK */
+    int32_t collision_rejects; /* converged searches rejected: in collision (cfg->collides) */
+    int32_t pad_;
 } symkin_ik_stats;
 
 int32_t symkin_ik_nmax(void);

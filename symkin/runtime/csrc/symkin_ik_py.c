@@ -184,14 +184,15 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
     if (st.success)
         values[5] = Py_NewRef(success_);
     else
-        values[5] = PyObject_CallFunction(reason, "dii", st.residual, (int)st.limit_rejects, (int)st.singular);
+        values[5] = PyObject_CallFunction(reason, "diii", st.residual, (int)st.limit_rejects, (int)st.singular,
+                                          (int)st.collision_rejects);
     return make_result_(values);
 }
 
 /* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
  * are not one valid (4, 4) target, an (n,) finite q0 or None, and an int seed or None (the caller
  * then validates them, raising the detailed error, or solves a batch). reason(residual,
- * limit_rejects, singular) gives the text of a failure. */
+ * limit_rejects, singular, collision_rejects) gives the text of a failure. */
 static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t nargs)
 {
     if (nargs < 3 || nargs > 5) {
