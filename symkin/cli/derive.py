@@ -1,5 +1,5 @@
-"""``symkin derive``: the derivation of FK, Jacobian and Hessian of a chain or tree, or the
-closed-form IK of a chain (Markdown or LaTeX)."""
+"""``symkin derive``: the derivation of FK, Jacobian and Hessian of a chain or tree, the
+closed-form IK of a chain or its singular configurations (Markdown or LaTeX)."""
 
 from __future__ import annotations
 
@@ -21,6 +21,19 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--no-simplify", action="store_true", help="show the literal products of eqs 1, 5, 26-28")
     s.add_argument(
         "--ik", action="store_true", help="write the closed-form inverse kinematics derivation instead"
+    )
+    s.add_argument(
+        "--singularities",
+        action="store_true",
+        help="write the singular configurations instead: det(J) (or the minors of J J^T) factored, each "
+        "factor's meaning, checked numerically",
+    )
+    s.add_argument(
+        "--singular-axes",
+        choices=("auto", "all", "trans", "rot"),
+        default="auto",
+        help="with --singularities, the rows of J: auto is trans for an arm with fewer joints than nonzero "
+        "rows and as many translational rows as joints (a planar 2R arm), else all",
     )
     s.add_argument(
         "--form",
@@ -48,13 +61,19 @@ def run(args: argparse.Namespace) -> int:
     sections = _sections(args.sections)
     output_file(args.output, "-o")
     if isinstance(robot, Tree):
-        if args.ik:
-            raise UserError("--ik derives the closed form of one chain: name it as ROBOT.urdf:FRAME")
+        if args.ik or args.singularities:
+            raise UserError("--ik and --singularities analyse one chain: name it as ROBOT.urdf:FRAME")
         if sections is not None:
             raise UserError("--sections chooses parts of a chain's derivation, not of a tree's")
         from symkin.derive.tree import tree_derivation
 
         text = tree_derivation(robot, fmt=args.format)
+    elif args.singularities:
+        if args.ik or sections is not None:
+            raise UserError("--singularities writes its own report: leave out --ik and --sections")
+        from symkin.derive.singularities import singularities
+
+        text = singularities(robot, axes=args.singular_axes, fmt=args.format).text
     elif args.ik:
         if sections is not None:
             raise UserError("--sections chooses parts of the kinematics derivation, not of --ik")

@@ -202,7 +202,14 @@ class FrameMethods:
         ``tau . dq = w . (J dq)``; Corke, Robotics, Vision and Control, 3rd ed., 2023, chap 8;
         Lynch and Park, Modern Robotics, 2017, sec 5.2). One wrench (6,) applies to every
         configuration of a batch, and one q to every wrench of a batch (N, 6).
+
+        ``frame="base"`` or ``frame="ee"`` on a model without a frame of that name (a chain, say)
+        means the end effector with the wrench in that frame: ``in_frame="base"|"ee"``.
         """
+        if isinstance(frame, str) and frame in ("base", "ee") and frame not in getattr(self, "frames", ()):
+            if in_frame not in ("base", frame):
+                raise ParameterError(f"frame={frame!r} and in_frame={in_frame!r}: two frames for the wrench")
+            in_frame, frame = frame, None
         if in_frame not in ("base", "ee"):
             raise ParameterError(f"in_frame must be 'base' or 'ee', not {in_frame!r}")
         W = real_array(wrench, "wrench", ParameterError, items="6 numbers")

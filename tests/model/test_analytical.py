@@ -313,6 +313,11 @@ def test_joint_torques_are_the_transposed_jacobian_times_the_wrench(panda):
         assert_close(tau[k], panda.jacob0(Q[k]).T @ W[k], 1e-14)
         assert_close(panda.joint_torques(Q[k], W[k]), tau[k], 0)
         assert_close(panda.joint_torques(Q[k], W[k], frame=2), panda.jacob0(Q[k], frame=2).T @ W[k], 1e-14)
+    # frame="base" | "ee" on a chain (no frame of that name): the wrench's frame at the end effector
+    assert_close(panda.joint_torques(Q, W, frame="ee"), np.einsum("Nrj,Nr->Nj", panda.jacobe(Q), W), 1e-14)
+    assert_close(panda.joint_torques(Q, W, frame="base"), tau, 0)
+    with pytest.raises(ParameterError, match="two frames for the wrench"):
+        panda.joint_torques(Q, W, frame="base", in_frame="ee")
     assert_close(panda.joint_torques(Q, W[0]), np.stack([panda.jacob0(q).T @ W[0] for q in Q]), 1e-14)
     assert_close(panda.joint_torques(Q[0], W), np.stack([panda.jacob0(Q[0]).T @ w for w in W]), 1e-14)
     tree = Tree.from_robot(panda)
@@ -372,10 +377,11 @@ def test_bad_in_frame_is_refused(panda):
 def test_analytical_jacobian_matches_roboticstoolbox(panda, rep):
     rtb = pytest.importorskip("roboticstoolbox")
     ref = rtb.models.ETS.Panda()
-    for q in regular_qs(panda, rep, 3, seed=31):
-        assert_close(panda.fkine(q), np.asarray(ref.fkine(q)), 1e-12, "same Panda")
+    robot = symkin.Robot.from_rtb(ref)  # the toolbox's flange is tz(0.103), symkin's panda (Fig. 1) 0.1034
+    for q in regular_qs(robot, rep, 3, seed=31):
+        assert_close(robot.fkine(q), np.asarray(ref.fkine(q)), 1e-12, "same Panda")
         want = np.asarray(ref.jacob0_analytical(q, rep))
-        assert_close(panda.jacob0_analytical(q, rep), want, 1e-9, f"roboticstoolbox {rep}")
+        assert_close(robot.jacob0_analytical(q, rep), want, 1e-9, f"roboticstoolbox {rep}")
 
 
 def test_velocity_transform_matches_spatialmath():
