@@ -12,6 +12,7 @@ from typing import Any
 from symkin.cli import bench, check, collide, dataset, derive, generate, ik, list_frames, plot, reach, servo
 from symkin.cli import compile as compile_command
 from symkin.cli import list as list_command
+from symkin.cli import view as view_command
 from symkin.cli.checks import UserError
 from symkin.cli.common import ROBOT_HELP, Formatter, Parser
 
@@ -20,7 +21,7 @@ __all__ = ["build_parser", "main"]
 #: the commands in the order of ``symkin --help``
 COMMANDS = (
     list_command, compile_command, list_frames, generate, check, derive,
-    ik, servo, collide, plot, bench, reach, dataset,
+    ik, servo, collide, plot, view_command, bench, reach, dataset,
 )  # fmt: skip
 
 

@@ -1,0 +1,80 @@
+"""``symkin view``: a live browser view of a robot (viser, the ``view`` extra): joint sliders, link
+frames, velocity ellipsoid, manipulability, the live Jacobian, collision shapes and a target-pose
+gizmo driving IK. Serves until Ctrl-C (or ``--seconds``)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from symkin.cli.checks import UserError, positive_float
+from symkin.cli.common import (
+    BACKENDS,
+    add_command,
+    add_link_options,
+    add_obstacle_options,
+    add_robot_argument,
+    configuration,
+    environment_of,
+    single_chain,
+)
+
+__all__ = ["add_parser", "run"]
+
+
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a port is an integer in 0..65535, not {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is an integer in 0..65535 (0: any free port), not {port}")
+    return port
+
+
+def add_parser(sub: Any) -> None:
+    s = add_command(
+        sub,
+        "view",
+        "live browser view: joint sliders, frames, velocity ellipsoid, manipulability, J, IK gizmo",
+    )
+    add_robot_argument(s)
+    s.add_argument(
+        "--q",
+        metavar="'Q...'",
+        help="first joint values, or a configuration name like qr (default qr, else qz)",
+    )
+    s.add_argument("--host", default="127.0.0.1", help="address to serve on (0.0.0.0: every interface)")
+    s.add_argument("--port", type=_port, default=8080, help="port to serve on (0: any free port)")
+    s.add_argument("--no-browser", action="store_true", help="do not open the page in a browser")
+    s.add_argument(
+        "--seconds", type=positive_float, help="stop after this many seconds (default: serve until Ctrl-C)"
+    )
+    s.add_argument("--backend", choices=BACKENDS, default="c", help="kinematics backend")
+    add_link_options(s)
+    add_obstacle_options(s)
+    s.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        import viser  # noqa: F401
+    except ImportError:
+        raise UserError("view needs viser: pip install 'symkin[view]'") from None
+    from symkin.runtime.load import compile as compile_robot
+    from symkin.view import view
+
+    robot = single_chain(args, geometry=True)
+    q = None if args.q is None else configuration(args.q, robot, "--q")
+    env = environment_of(args)
+    kin = compile_robot(robot, backend=args.backend)
+    viewer = view(kin, port=args.port, host=args.host, open_browser=not args.no_browser, q=q, env=env)
+    how = f"for {args.seconds:g} s" if args.seconds else "until Ctrl-C"
+    print(f"viewing {robot.name} at {viewer.url} ({how})", flush=True)
+    try:
+        viewer.wait(args.seconds)
+    except KeyboardInterrupt:
+        print("stopped", flush=True)
+    finally:
+        viewer.stop()
+    return 0

@@ -1,0 +1,137 @@
+"""The live view's server (viser, in-process on a free port) and ``symkin view``: the pushed state
+follows the sliders and the IK gizmo, failures keep the pose, the page is served from this process,
+and the command's errors are one line."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+
+import numpy as np
+import pytest
+
+import symkin
+from symkin.cli.main import main
+from tests.conftest import assert_close
+
+viser = pytest.importorskip("viser", reason="the live view needs viser: pip install 'symkin[view]'")
+
+from symkin.view import view  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return symkin.compile(symkin.load("ur5"), backend="c")
+
+
+def test_the_server_serves_its_page_and_set_q_pushes_fk(ur5):
+    with view(ur5, port=0, open_browser=False) as viewer:
+        assert viewer.port > 0 and viewer.url == f"http://127.0.0.1:{viewer.port}"
+        with urllib.request.urlopen(viewer.url, timeout=30) as r:  # the bundled client, no network
+            assert r.status == 200 and b"<html" in r.read(4096).lower()
+        assert_close(viewer.q, ur5.robot.configs["qr"], 0, "q")  # the default first pose
+        q = np.array([0.4, -1.0, 1.2, -0.5, 0.8, 0.3])
+        state = viewer.set_q(q)
+        assert_close(viewer.q, q, 0, "q")
+        assert_close(state.T_links, ur5.link_poses(q), 1e-12, "link frames")
+        assert_close(state.T_ee, ur5.fkine(q), 1e-12, "end effector")
+        assert state.m_trans == pytest.approx(float(ur5.manipulability(q, axes="trans")), rel=1e-9)
+        # joint values beyond the limits are clipped, as a slider would
+        lo, hi = ur5.qlim
+        assert_close(viewer.set_q(hi + 1.0).q, hi, 0, "clipped")
+    assert viewer.stopped
+    with pytest.raises(OSError):
+        urllib.request.urlopen(viewer.url, timeout=5)
+
+
+def test_the_target_gizmo_drives_ik_and_a_failure_keeps_the_pose(ur5):
+    with view(ur5, port=0, open_browser=False) as viewer:
+        q_goal = np.array([0.2, -1.2, 1.4, -0.6, 0.9, 0.1])
+        T = ur5.fkine(q_goal)
+        res = viewer.set_target(T)
+        assert res.success
+        assert_close(ur5.fkine(viewer.q), T, 1e-6, "FK(ik(T))")
+        assert "IK solved" in viewer.message
+        q_solved = viewer.q
+        far = T.copy()
+        far[:3, 3] += [5.0, 0.0, 0.0]  # 5 m away: out of reach
+        res = viewer.set_target(far)
+        assert not res.success
+        assert_close(viewer.q, q_solved, 0, "kept pose")
+        assert "IK failed" in viewer.message
+        viewer.set_q(q_goal)
+        assert viewer.message == ""
+
+
+def test_bad_ports_and_busy_ports_are_errors(ur5):
+    with pytest.raises(symkin.ParameterError, match="0..65535"):
+        view(ur5, port=70000, open_browser=False)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        busy = s.getsockname()[1]
+        with pytest.raises(OSError, match=f"127.0.0.1:{busy}: in use"):
+            view(ur5, port=busy, open_browser=False)
+
+
+def test_show_names_the_parts_it_knows(ur5):
+    with view(ur5, port=0, open_browser=False) as viewer:
+        viewer.show(robot=False, velocity_ellipsoid=False)
+        with pytest.raises(symkin.ParameterError, match="velocity_ellipsoid"):
+            viewer.show(ellipsoid=False)
+
+
+def test_cli_serves_for_seconds_then_stops(capsys):
+    assert main(["view", "planar3", "--no-browser", "--port", "0", "--seconds", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "viewing planar3 at http://127.0.0.1:" in out and "0.5 s" in out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--port", "70000"], "0..65535"),
+        (["--port", "http"], "0..65535"),
+        (["--q", "1 2"], "3"),
+        (["--seconds", "-1"], "positive"),
+    ],
+)
+def test_cli_errors_are_one_line(argv, message, capsys):
+    assert main(["view", "planar3", "--no-browser", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("symkin: error:") and message in err[0]
+
+
+def test_cli_without_the_extra_says_how_to_install_it(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "viser", None)  # import viser fails, as when it is not installed
+    assert main(["view", "planar3", "--no-browser", "--port", "0", "--seconds", "0.1"]) == 2
+    assert capsys.readouterr().err.strip() == "symkin: error: view needs viser: pip install 'symkin[view]'"
+
+
+def test_ctrl_c_stops_the_command_cleanly(tmp_path):
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "symkin", "view", "planar3", "--no-browser", "--port", "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        line = proc.stdout.readline()  # the URL: serving
+        assert "viewing planar3 at http://127.0.0.1:" in line, line + proc.stderr.read()
+        url = line.split(" at ")[1].split()[0]
+        with urllib.request.urlopen(url, timeout=30) as r:
+            assert r.status == 200
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0, err
+    assert out.strip() == "stopped"
+    assert "Traceback" not in err
