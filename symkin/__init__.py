@@ -51,6 +51,8 @@ _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import sy
     "derive": ("symkin.derive.chain", "derivation"),
     "derive_steps": ("symkin.derive.chain", "derive_steps"),
     "Derivation": ("symkin.derive.chain", "Derivation"),
+    "singularities": ("symkin.derive.singularities", "singularities"),
+    "SingularityReport": ("symkin.derive.singularities", "SingularityReport"),
 }
 
 
@@ -99,6 +101,7 @@ __all__ = [
     "Robot",
     "RobotError",
     "ServoResult",
+    "SingularityReport",
     "Sphere",
     "StepInfo",
     "SymkinError",
@@ -129,6 +132,7 @@ __all__ = [
     "rrmc",
     "servo",
     "servo_path",
+    "singularities",
     "symbolic",
     "trapezoidal",
     "write_generated",

@@ -1,6 +1,6 @@
-"""The README's command-line path through `examples/ur5.urdf`: list the tree, compile one chain
-with a tool offset into a folder, load it back, compile the whole tree; every result against the
-built-in UR5 (its DH table) with the same constant transforms appended."""
+"""The user guide's command-line path through `examples/ur5.urdf` (docs/guide/robots.md): list the
+tree, compile one chain with a tool offset into a folder, load it back, compile the whole tree;
+every result against the built-in UR5 (its DH table) with the same constant transforms appended."""
 
 from __future__ import annotations
 
@@ -8,15 +8,15 @@ import numpy as np
 
 import symkin
 from symkin.cli.main import main
-from tests.test_readme import README
+from tests.test_readme import DOCS, ROOT
 
-ROOT = README.parent
+PAGE = DOCS / "guide" / "robots.md"  # moved there from the README
 URDF = ROOT / "examples" / "ur5.urdf"
 TOOL = "0 0 0.1 0 pi/2 0"
 
 
-def test_the_readme_names_the_shipped_urdf_and_these_commands():
-    text = README.read_text()
+def test_the_guide_names_the_shipped_urdf_and_these_commands():
+    text = PAGE.read_text()
     assert f'symkin compile examples/ur5.urdf:tool0 --tool "{TOOL}" -o build/arm' in text
     assert "symkin list-frames examples/ur5.urdf" in text and URDF.is_file()
 

@@ -15,7 +15,7 @@ differences, and whether its verdicts agree with the distances.
 Rows marked ``(large q)`` evaluate FK, J and H at revolute angles of up to :data:`LARGE_TURNS`
 turns and next to large multiples of pi/2 (where an argument reduction for sin/cos is hardest).
 Generated code adds joint angles before sin/cos (``sin(q1 + q2)``), which rounds, so their
-tolerance grows with the angles: ``REF_TOL + 8 n max|q| 2^-53`` (see the README, "Accuracy").
+tolerance grows with the angles: ``REF_TOL + 8 n max|q| 2^-53`` (see docs/guide/accuracy.md).
 """
 
 from __future__ import annotations
