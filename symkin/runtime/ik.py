@@ -241,28 +241,46 @@ _C_SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def _c_solver(kin: Any, args: tuple) -> Any:
     """The C solver for ``ik(kin, ..., backend="c")``, memoised per kinematics object and the
-    arguments as passed when they are hashable, so a repeated call skips validating them."""
+    arguments' values (arrays by their contents: see :func:`_value_key`), so a repeated call skips
+    validating them (validation costs far more than a C solve of one target)."""
     from symkin.runtime.ik_c import solver_for
 
-    solver = solver_for(kin, _options(kin, *args))
     try:
+        key = _value_key(args)
         cache = _C_SOLVERS.setdefault(kin, {})
-        if len(cache) > 64:
-            cache.clear()
-        cache[args] = solver
-    except TypeError:  # unhashable arguments (arrays) or an object without weak references
-        pass
+        solver = cache.get(key)
+    except TypeError:  # an unhashable argument, or an object without weak references
+        key = cache = solver = None
+    if solver is None:
+        solver = solver_for(kin, _options(kin, *args))
+        if cache is not None:
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = solver
     return solver
 
 
+def _value_key(value: Any) -> Any:
+    """``value`` as a hashable key equal for equal values: an array becomes its shape, dtype and
+    bytes (so a changed array is a new key), a list or tuple the tuple of its items' keys; other
+    values stay as they are (TypeError when one is unhashable or an array is large)."""
+    if isinstance(value, np.ndarray):
+        if value.size > 65536 or value.dtype.hasobject:
+            raise TypeError("no key for this array")
+        return ("ndarray", value.shape, value.dtype.str, value.tobytes())
+    if isinstance(value, (list, tuple)):
+        return tuple(_value_key(v) for v in value)
+    hash(value)
+    return value
+
+
 def _options(kin: Any, *args: Any) -> IKOptions:
-    """IKOptions.of, memoised per kinematics object for hashable arguments (validation costs
+    """IKOptions.of, memoised per kinematics object and the arguments' values (validation costs
     tens of microseconds, more than a C solve)."""
     try:
-        key = tuple(tuple(a) if isinstance(a, (list, tuple)) else a for a in args)
-        hash(key)
+        key = _value_key(args)
         cache = _OPTIONS.setdefault(kin, {})
-    except TypeError:  # unhashable arguments (arrays) or an object without weak references
+    except TypeError:  # an unhashable argument, or an object without weak references
         return IKOptions.of(kin, *args)
     opt = cache.get(key)
     if opt is None:

@@ -319,14 +319,16 @@ class CIKSolver:
         )
         self._seeds = random.Random(os.urandom(16))
 
-    def bind(self, fallback: Any) -> Any:
+    def bind(self, fallback: Any, by_options: dict[tuple, Any] | None = None) -> Any:
         """A callable ``ik(Tep, *args, **kwargs)`` for a kinematics object's ``ik``: one target
-        alone solves in one C call (as :attr:`fast`, no Python frame); any other call, or a target
-        that needs checking, goes to ``fallback`` with the same arguments. None when this solver
-        uses another library than the default one."""
+        alone solves in one C call (as :attr:`fast`, no Python frame); so does one target with
+        keyword options (``q0``, ``seed`` and options whose tuple of ``(name, value)`` pairs, in
+        call order, is a key of ``by_options``, whose values are callables this method returned).
+        Any other call, or a target that needs checking, goes to ``fallback`` with the same
+        arguments. None when this solver uses another library than the default one."""
         if self.fast is None:
             return None
-        return ik_extension().bind(self._cfg_addr, self._reason, fallback, self)
+        return ik_extension().bind(self._cfg_addr, self._reason, fallback, self, by_options)
 
     def __repr__(self) -> str:
         o = self.options

@@ -193,7 +193,8 @@ def _count(value: Any, name: str) -> int:
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a)
+    """A read-only copy (never the caller's array: that one stays writable and may change later)."""
+    a = np.array(a, order="C", copy=True)
     a.setflags(write=False)
     return a
 

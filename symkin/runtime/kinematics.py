@@ -120,6 +120,7 @@ class Kinematics(FrameMethods):
             setattr(self, name, fn)
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
         self._ik_by_options: dict[tuple, Any] = {}  # C IK solvers by keyword options (see ik)
+        self._ik_bound: dict[tuple, Any] = {}  # their bound C entry points, looked up by kin.ik in C
         self._paths: dict[str, tuple[list[Any], list[int], bool]] = {}  # a tree's frames (see _path)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
 
@@ -297,8 +298,9 @@ class Kinematics(FrameMethods):
         NumPy and CasADi backends the NumPy solver calls the generated functions. A call with the
         default options goes straight to the C solver; after the first one, ``kin.ik`` is the C
         solver's entry point itself, which solves one target without a Python frame (one target
-        costs little more than the solve itself) and passes any other call on to this method. It
-        is thread-safe.
+        costs little more than the solve itself), also with ``q0=``, ``seed=`` and keyword options
+        seen before (in the same order: their solver, made and validated the first time, is found
+        by its options in C), and passes any other call on to this method. It is thread-safe.
 
         ``method="analytic"``: the closed form (:meth:`ik_all`), returning the solution nearest
         ``q0`` (options ``q0``, ``weights``, ``joint_limits``, ``tol``); ``success=False`` with a
@@ -359,14 +361,15 @@ class Kinematics(FrameMethods):
     def _c_ik_solver(self, options: dict[str, Any]) -> Any:
         """The C IK solver of these keyword options of :meth:`ik`, made and validated once per
         options (None when one is unhashable, an array say). The defaults' solver also becomes
-        ``kin.ik`` itself: one target then costs one C call."""
+        ``kin.ik`` itself, which finds every solver made here by its options: a later call of one
+        target, with no options or options seen before (plus ``q0``, ``seed``), is one C call."""
         if not options:
             if self._ik_solver is None:
                 from symkin.runtime.ik import default_c_solver
 
                 self._ik_solver = solver = default_c_solver(self)
-                self._ik_by_options[()] = self._ik_by_options[(("backend", "c"),)] = solver
-                bound = solver.bind(MethodType(Kinematics.ik, self))
+                bound = solver.bind(MethodType(Kinematics.ik, self), self._ik_bound)
+                self._remember_ik((), solver, bound)
                 if bound is not None:  # later calls of one target: one C call, no Python frame
                     self.__dict__["ik"] = bound
             return self._ik_solver
@@ -379,10 +382,21 @@ class Kinematics(FrameMethods):
             from symkin.runtime.ik import c_solver_with
 
             solver = c_solver_with(self, options)
-            if len(self._ik_by_options) >= 64:
-                self._ik_by_options.clear()
-            self._ik_by_options[key] = self._ik_by_options[(*key, ("backend", "c"))] = solver
+            self._c_ik_solver({})  # kin.ik: the C entry point that finds this solver by its options
+            self._remember_ik(key, solver, solver.bind(MethodType(Kinematics.ik, self)))
         return solver
+
+    def _remember_ik(self, key: tuple, solver: Any, bound: Any) -> None:
+        """Memoise ``solver`` and its bound entry point (None: it has none) under ``key`` and
+        ``key + (("backend", "c"),)``; at most 64 keys (then all but the defaults are dropped)."""
+        if len(self._ik_by_options) >= 64:
+            self._ik_by_options.clear()
+            self._ik_bound.clear()
+            self._remember_ik((), self._ik_solver, self.__dict__.get("ik"))
+        for k in (key, (*key, ("backend", "c"))):
+            self._ik_by_options[k] = solver
+            if bound is not None:
+                self._ik_bound[k] = bound
 
     # -- collision geometry (symkin.runtime.collision) -----------------------------------------------
     def collision(self) -> Any:

@@ -199,25 +199,50 @@ def test_c_batch_gives_each_target_what_solving_it_alone_gives(name):
             assert alone.residual == batch.residual[i]
 
 
-@pytest.mark.parametrize("name", ["ur5", "panda"])
-def test_c_batch_on_four_lane_kinematics_keeps_every_iterate(name):
-    """On compiled kinematics a batch of LM solves evaluates its four lanes' poses in one call of
-    the generated four-lane fkine_jacob0_batch: each target must still get, bit for bit, what it
-    gets from a batch without the four-lane call, and target 0 what it gets alone (scalar
-    kinematics), through random restarts and an unreachable target."""
+@pytest.mark.parametrize(
+    "name, options",
+    [
+        ("ur5", {}),
+        ("panda", {}),
+        ("ur5", {"method": "GN", "pinv": True}),
+        ("panda", {"method": "NR", "pinv": True}),
+        ("planar3", {"method": "GN", "we": [1, 1, 0, 0, 0, 1]}),
+    ],
+)
+def test_c_batch_on_four_lane_kinematics_keeps_every_iterate(name, options):
+    """On compiled kinematics a batch of solves (LM, GN, NR, any joint count) evaluates its four
+    lanes' poses in one call of the generated four-lane fkine_jacob0_batch: each target must
+    still get, bit for bit, what it gets from a batch without the four-lane call, and target 0
+    what it gets alone (scalar kinematics), through random restarts and an unreachable target."""
     kin = symkin.compile(name, backend="c")
     Tep = kin.fkine(kin.robot.random_q(11, seed=21))
     Tep[6, :3, 3] += 10.0  # unreachable: every search fails, random restarts
-    four = CIKSolver(kin, slimit=3, ilimit=30)
-    one = CIKSolver(kin, fkjac=kin.c_fkjac, slimit=3, ilimit=30)
+    four = CIKSolver(kin, slimit=3, ilimit=30, **options)
+    one = CIKSolver(kin, fkjac=kin.c_fkjac, slimit=3, ilimit=30, **options)
     assert four._cfg.fkjac_batch and not one._cfg.fkjac_batch
     batch, plain = four.solve(Tep, seed=5), one.solve(Tep, seed=5)
-    assert batch.success.sum() >= 6 and not batch.success[6]  # the Panda rejects some for limits
+    # successes and failures both happen (Panda: some rejected for limits; NR converges less)
+    assert batch.success.sum() >= (3 if options.get("method") == "NR" else 6) and not batch.success[6]
     assert batch.q.tobytes() == plain.q.tobytes()
     assert np.array_equal(batch.iterations, plain.iterations)
     assert np.array_equal(batch.searches, plain.searches)
     alone = four.solve(Tep[0], seed=5)  # target 0: the random stream (5, 0), as alone
     assert alone.q.tobytes() == batch.q[0].tobytes() and alone.iterations == batch.iterations[0]
+
+
+def test_array_options_are_copied_and_memoised_by_value():
+    # ik(..., starts=array) memoises its validated options by the array's contents: the caller's
+    # array stays writable and unshared, and changing it in place changes the next solve
+    kin = symkin.compile(UR5, backend="c")
+    S = UR5.random_q(3, seed=4)
+    T = UR5.fkine(UR5.random_q(seed=5))
+    a = ik(kin, T, backend="c", starts=S, slimit=1, seed=1)  # one search, from S[0]
+    assert S.flags.writeable
+    S[0] = UR5.random_q(seed=6)
+    b = ik(kin, T, backend="c", starts=S, slimit=1, seed=1)
+    fresh = ik(kin, T, backend="c", starts=S.copy(), slimit=1, seed=1)
+    assert b.q.tobytes() == fresh.q.tobytes() and b.iterations == fresh.iterations
+    assert a.q.tobytes() != b.q.tobytes()
 
 
 def test_same_seed_reproduces_results():
@@ -329,6 +354,51 @@ def test_one_target_call_takes_any_array_and_checks_it():
     import pickle
 
     _assert_solved(UR5, pickle.loads(pickle.dumps(kin)).ik(T), T)
+
+
+def test_keyword_options_seen_before_solve_in_one_c_call():
+    # kin.ik(T, lam=..., seed=..., q0=...) with options seen before runs no Python function (the
+    # bound entry point finds their solver by the options in C) and returns what the solver does
+    import sys
+
+    kin = symkin.compile(UR5, backend="c")
+    q = UR5.random_q(seed=23)
+    T = UR5.fkine(q)
+    options = {"method": "LM", "lam": 0.05, "ilimit": 40}
+    kin.ik(T, **options)  # first call: the solver is made and validated in Python
+    solver = kin._c_ik_solver(dict(options))
+    python_calls: list[str] = []
+
+    def profile(frame, event, arg):
+        if event == "call":
+            python_calls.append(frame.f_code.co_name)
+
+    q0 = q + 0.05
+    sys.setprofile(profile)
+    try:
+        a = kin.ik(T, seed=9, **options)
+        b = kin.ik(T, q0=q0, **options)
+        c = kin.ik(T, seed=9)
+    finally:
+        sys.setprofile(None)
+    assert python_calls == []
+    ref = solver.solve(T, None, 9)
+    assert a.q.tobytes() == ref.q.tobytes() and a.iterations == ref.iterations
+    assert b.q.tobytes() == solver.solve(T, q0, None).q.tobytes()
+    assert c.q.tobytes() == symkin.ik(kin, T, backend="c", seed=9).q.tobytes()
+    assert a.q.tobytes() != c.q.tobytes() or a.iterations != c.iterations  # another solver's search
+    # options in another order are another key: the Python path, the same answer
+    assert kin.ik(T, seed=9, ilimit=40, lam=0.05, method="LM").q.tobytes() == a.q.tobytes()
+    # what the C path does not take still goes through the checks
+    with pytest.raises(ConfigurationError):
+        kin.ik(T, q0=np.full(6, np.nan), **options)
+    with pytest.raises(TypeError):
+        kin.ik(T, lamda=0.1)
+    _assert_solved(UR5, kin.ik(T, lam=np.array(0.05)), T)  # unhashable: the NumPy-checked path
+    # past 64 option sets the memo restarts; kin.ik keeps solving with every set
+    for i in range(70):
+        _assert_solved(UR5, kin.ik(T, lam=0.05 + i * 1e-3, seed=i), T)
+    assert len(kin._ik_by_options) <= 64 and kin.ik(T, seed=9, **options).q.tobytes() == a.q.tobytes()
 
 
 # -- threads ----------------------------------------------------------------------------------

@@ -660,7 +660,7 @@ static void solve_one(const symkin_ik_config *c, const double *Tep, const double
 }
 
 #if defined(__GNUC__)
-/* ---- batches: LM on SYMKIN_LANES targets side by side ------------------------------------ */
+/* ---- batches: SYMKIN_LANES targets side by side ------------------------------------------ */
 /* One LM step is a chain of dependent divisions and square roots (Cholesky, then two triangular
  * solves), so a batch runs SYMKIN_LANES targets at once and takes their steps together, one
  * target per vector lane: the chains overlap, and every lane does exactly the arithmetic of
@@ -785,8 +785,10 @@ static void eval_lanes(const symkin_ik_config *c, const ik_search *t, const int 
         if (state[l] == SEARCH_EVAL) memcpy(J[l], Jb + l * 6 * n, sizeof(double) * 6 * (size_t)n);
 }
 
-/* symkin_ik_solve_batch for LM with 6 or 7 joints (the targets' poses are valid). */
-static void solve_batch_lm(const symkin_ik_config *c, int64_t N, const double *Tep, const double *q0,
+/* symkin_ik_solve_batch on SYMKIN_LANES targets side by side (the targets' poses are valid): the
+ * lanes' FK and J by one fkjac_batch call when the kinematics have one, the steps of LM with 6 or 7
+ * joints by lm_step_lanes, other steps (NR, GN, other joint counts) lane by lane by ik_step. */
+static void solve_batch_lanes(const symkin_ik_config *c, int64_t N, const double *Tep, const double *q0,
                            int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st) {
     const double *we = step_weights(c);
     ik_search t[SYMKIN_LANES];
@@ -817,10 +819,13 @@ static void solve_batch_lm(const symkin_ik_config *c, int64_t N, const double *T
             steps |= need[l];
         }
         if (!steps) continue;
-        if (c->n == 6)
+        if (c->method == SYMKIN_IK_LM && c->n == 6)
             lm_step_lanes6(c, we, J, e, r2, need, dq, failed);
-        else
+        else if (c->method == SYMKIN_IK_LM && c->n == 7)
             lm_step_lanes7(c, we, J, e, r2, need, dq, failed);
+        else
+            for (int l = 0; l < SYMKIN_LANES; l++)
+                if (need[l]) failed[l] = ik_step(c, we, J[l], e[l], r2[l], dq[l]) != 0;
         for (int l = 0; l < SYMKIN_LANES; l++)
             if (need[l]) state[l] = take_step(c, &t[l], dq[l], failed[l]);
     }
@@ -851,8 +856,8 @@ int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const doub
         }
     }
 #if defined(__GNUC__)
-    if (cfg->method == SYMKIN_IK_LM && (cfg->n == 6 || cfg->n == 7)) {
-        solve_batch_lm(cfg, N, Tep, q0, q0_stride, seed, q, st);
+    if (cfg->fkjac_batch || (cfg->method == SYMKIN_IK_LM && (cfg->n == 6 || cfg->n == 7))) {
+        solve_batch_lanes(cfg, N, Tep, q0, q0_stride, seed, q, st);
         return -1;
     }
 #endif

@@ -206,9 +206,12 @@ static PyObject *py_solve(PyObject *self, PyObject *const *argv, Py_ssize_t narg
 }
 
 /* ---- a bound solver: kin.ik of one target in one C call --------------------------------------- */
-/* ik(Tep) solves one valid target with the solver's options in C; any other call (keyword options,
- * a batch, an argument that needs checking) goes to the fallback with the same arguments. The
- * object keeps its owner (which owns the config) alive. */
+/* ik(Tep) solves one valid target with the solver's options in C. ik(Tep, q0=..., seed=..., **options)
+ * looks the options up in by_options (a dict: the tuple of the (name, value) pairs other than q0 and
+ * seed, in call order, as Kinematics.ik keys its solvers -> the bound solver of those options) and
+ * solves with that solver. Any other call (options not seen yet or unhashable, a positional frame, a
+ * batch, an argument that needs checking) goes to the fallback with the same arguments. The object
+ * keeps its owner (which owns the config) alive. */
 typedef struct {
     PyObject_HEAD
     vectorcallfunc vectorcall;
@@ -216,13 +219,71 @@ typedef struct {
     PyObject *reason;
     PyObject *fallback;
     PyObject *owner;
+    PyObject *by_options; /* dict or NULL */
 } bound_ik_;
+
+static PyTypeObject bound_ik_type_;
+
+/* The solution of ik(Tep, **keywords) through by_options: an IKResult, None (go to the fallback) or
+ * NULL with an error set. */
+static PyObject *solve_keywords_(bound_ik_ *b, PyObject *Tep, PyObject *const *values, PyObject *kwnames)
+{
+    const Py_ssize_t nk = PyTuple_GET_SIZE(kwnames);
+    PyObject *q0 = Py_None, *seed = Py_None, *r = NULL;
+    Py_ssize_t m = nk;
+    for (Py_ssize_t i = 0; i < nk; ++i) {
+        PyObject *name = PyTuple_GET_ITEM(kwnames, i);
+        if (PyUnicode_CompareWithASCIIString(name, "q0") == 0) {
+            q0 = values[i];
+            --m;
+        } else if (PyUnicode_CompareWithASCIIString(name, "seed") == 0) {
+            seed = values[i];
+            --m;
+        }
+    }
+    PyObject *key = PyTuple_New(m);
+    if (!key)
+        return NULL;
+    for (Py_ssize_t i = 0, k = 0; i < nk; ++i) {
+        PyObject *name = PyTuple_GET_ITEM(kwnames, i);
+        if (PyUnicode_CompareWithASCIIString(name, "q0") == 0 || PyUnicode_CompareWithASCIIString(name, "seed") == 0)
+            continue;
+        PyObject *pair = PyTuple_Pack(2, name, values[i]);
+        if (!pair)
+            goto done;
+        PyTuple_SET_ITEM(key, k++, pair);
+    }
+    PyObject *bound = PyDict_GetItemWithError(b->by_options, key); /* borrowed */
+    if (!bound) {
+        if (PyErr_Occurred()) { /* an unhashable option (an array, say): the fallback handles it */
+            if (!PyErr_ExceptionMatches(PyExc_TypeError))
+                goto done;
+            PyErr_Clear();
+        }
+        r = Py_NewRef(Py_None);
+    } else if (Py_IS_TYPE(bound, &bound_ik_type_)) {
+        Py_INCREF(bound); /* the dict may drop it while another thread runs (the solve releases the GIL) */
+        r = solve_(((bound_ik_ *)bound)->cfg, ((bound_ik_ *)bound)->reason, Tep, q0, seed);
+        Py_DECREF(bound);
+    } else {
+        r = Py_NewRef(Py_None);
+    }
+done:
+    Py_DECREF(key);
+    return r;
+}
 
 static PyObject *bound_ik_call_(PyObject *op, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
     bound_ik_ *b = (bound_ik_ *)op;
-    if (PyVectorcall_NARGS(nargsf) == 1 && !(kwnames && PyTuple_GET_SIZE(kwnames))) {
-        PyObject *r = solve_(b->cfg, b->reason, args[0], Py_None, Py_None);
+    if (PyVectorcall_NARGS(nargsf) == 1) {
+        PyObject *r;
+        if (!(kwnames && PyTuple_GET_SIZE(kwnames)))
+            r = solve_(b->cfg, b->reason, args[0], Py_None, Py_None);
+        else if (b->by_options)
+            r = solve_keywords_(b, args[0], args + 1, kwnames);
+        else
+            r = Py_NewRef(Py_None);
         if (r != Py_None)
             return r;
         Py_DECREF(r);
@@ -236,6 +297,7 @@ static int bound_ik_traverse_(PyObject *op, visitproc visit, void *arg)
     Py_VISIT(b->reason);
     Py_VISIT(b->fallback);
     Py_VISIT(b->owner);
+    Py_VISIT(b->by_options);
     return 0;
 }
 
@@ -245,6 +307,7 @@ static int bound_ik_clear_(PyObject *op)
     Py_CLEAR(b->reason);
     Py_CLEAR(b->fallback);
     Py_CLEAR(b->owner);
+    Py_CLEAR(b->by_options);
     return 0;
 }
 
@@ -268,12 +331,17 @@ static PyTypeObject bound_ik_type_ = {
     .tp_dealloc = bound_ik_dealloc_,
 };
 
-/* bind(config_address, reason, fallback, owner) -> a callable solving one target per call (above) */
+/* bind(config_address, reason, fallback, owner, by_options=None) -> a callable solving one target
+ * per call (above) */
 static PyObject *py_bind(PyObject *self, PyObject *args)
 {
-    PyObject *addr, *reason, *fallback, *owner;
-    if (!PyArg_ParseTuple(args, "OOOO", &addr, &reason, &fallback, &owner))
+    PyObject *addr, *reason, *fallback, *owner, *by_options = Py_None;
+    if (!PyArg_ParseTuple(args, "OOOO|O", &addr, &reason, &fallback, &owner, &by_options))
         return NULL;
+    if (by_options != Py_None && !PyDict_CheckExact(by_options)) {
+        PyErr_SetString(PyExc_TypeError, "bind() needs a dict by_options, or None");
+        return NULL;
+    }
     const symkin_ik_config *cfg = (const symkin_ik_config *)PyLong_AsVoidPtr(addr);
     if (!cfg) {
         if (!PyErr_Occurred())
@@ -292,6 +360,7 @@ static PyObject *py_bind(PyObject *self, PyObject *args)
     b->reason = Py_NewRef(reason);
     b->fallback = Py_NewRef(fallback);
     b->owner = Py_NewRef(owner);
+    b->by_options = by_options == Py_None ? NULL : Py_NewRef(by_options);
     PyObject_GC_Track((PyObject *)b);
     return (PyObject *)b;
 }
@@ -301,7 +370,8 @@ static PyMethodDef methods_[] = {
     {"solve", (PyCFunction)(void (*)(void))py_solve, METH_FASTCALL,
      "solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult or None"},
     {"bind", (PyCFunction)py_bind, METH_VARARGS,
-     "bind(config_address, reason, fallback, owner) -> ik(Tep, ...) solving one target in C, else fallback"},
+     "bind(config_address, reason, fallback, owner, by_options=None) -> ik(Tep, ...) solving one target in C, "
+     "else fallback"},
     {NULL, NULL, 0, NULL},
 };
 
