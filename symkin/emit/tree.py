@@ -63,6 +63,15 @@ class TreeHeader:
         )
 
 
+LANED_PER_FRAME = ("fkine", "fkine_jacob0")
+
+
+def _frame_fn_base(name: str) -> str | None:
+    """``"fkine_jacob0"`` of ``"fkine_jacob0_3"`` (a per-frame function's base), else None."""
+    base, _, k = name.rpartition("_")
+    return base if k.isdigit() and base in PER_FRAME else None
+
+
 def _frame_fns(tree: Any) -> dict[str, list[str]]:
     return {base: [f"{base}_{k}" for k in range(len(tree.frames))] for base in PER_FRAME}
 
@@ -107,7 +116,9 @@ def render_tree(
         printed = [lower(f, printer) for f in functions]
         prefix = variant["prefix"]
         outs = {f.name: f.outs for f in printed}
-        every = [f for f in printed if f.name.endswith("_all")]  # batch entry points: four lanes
+        # batch entry points with four-lane bodies: the *_all functions and each frame's fkine and
+        # fkine_jacob0 (the per-frame batches of maps, datasets and IK)
+        laned = [f for f in printed if f.name.endswith("_all") or _frame_fn_base(f.name) in LANED_PER_FRAME]
         context = {
             **variant,
             "n": n,
@@ -119,7 +130,7 @@ def render_tree(
             "framed": [(base, outs[f"{base}_0"]) for base in PER_FRAME],
             "framed_docs": FRAMED_DOCS,
             "plain_paths": plain_paths(tree),
-            "lanes": four_lane_bodies(every if precision == "double" else []),
+            "lanes": four_lane_bodies(laned if precision == "double" else []),
         }
         files = {
             f"{prefix}.h": render("c/tree.h.j2", **context),

@@ -119,6 +119,30 @@ def test_tree_batch_equals_one_at_a_time_bit_for_bit(which):
                 assert np.array_equal(b[i], s), (which, method, i)
 
 
+@pytest.mark.parametrize("which", ["quadruped", "gripper"])
+def test_tree_frame_batch_equals_one_at_a_time_bit_for_bit(which):
+    """Each frame's fkine and fkine_jacob0 batch (kin.fkine(Q, frame=...)) runs four
+    configurations per step: identical to one call per configuration for every frame (jacob0
+    and jacobe stay one at a time: the same numbers by construction); and the poses agree with
+    the tree's numeric reference."""
+    from tests.model.tree_urdfs import GRIPPER, QUADRUPED
+
+    tree = symkin.Tree.from_urdf({"quadruped": QUADRUPED, "gripper": GRIPPER}[which])
+    kin = symkin.compile(tree, backend="c")
+    text = "".join(symkin.generate(tree, "c").values())
+    assert "fkine_0_x4_(" in text and "fkine_jacob0_0_x4_(" in text
+    assert not re.search(r"[^_]jacob[0e]_0_x4_\(", text)
+    Q = tree.random_q(23, seed=10)
+    Q[5] = 1e7
+    for frame in tree.frames:
+        T4, J4 = kin.fkine_jacob0(Q, frame=frame)
+        assert np.array_equal(kin.fkine(Q, frame=frame), T4)
+        for i in (0, 3, 4, 5, 19, 20, 22):
+            T1, J1 = kin.fkine_jacob0(Q[i], frame=frame)
+            assert np.array_equal(T4[i], T1) and np.array_equal(J4[i], J1), (which, frame, i)
+        np.testing.assert_allclose(T4[:5], tree.fkine(Q[:5], frame=frame), atol=1e-12)
+
+
 def test_tree_batch_writes_the_zero_entries_too():
     """``<f>_batch`` (not ``_zeroed``) writes every entry, the always-zero ones included, in the
     four-lane steps as in the scalar tail: outputs poisoned with NaN come back equal to the
