@@ -68,6 +68,9 @@ def test_bench_collide_runs_and_agrees():
     text = format_collide(r)
     assert "collision-aware" in text and "C batch" in text
     assert np.isfinite(r["ik"]["ratio"])
+    m = r["mmc"]
+    assert m["c_backend"] == "c" and m["steps_with_obstacle_rows"] > 0 and m["c_us"] > 0
+    assert "MMC past an obstacle" in text
 
 
 def test_plot_draws_geometry_and_obstacles(tmp_path, capsys):

@@ -1,7 +1,8 @@
 """``symkin bench collide``: collision checks per configuration, one call and batched, with the
 robot's sphere model against 0, 10 and 100 obstacle spheres, beside the NumPy reference and (with
 the ``compare`` extra) Pinocchio + coal on the same spheres and capsules, all in the same run; then
-collision-aware IK against plain IK on a table-top scene.
+collision-aware IK against plain IK on a table-top scene, and the MMC step with obstacle rows
+(the velocity dampers of the closest pairs) in C against the Python reference step.
 
 Times are CPU times of the calling thread (``time.thread_time``), best of several repeats.
 Obstacles: spheres of radius 0.05 m at uniform random places in a 1.6 m cube around the base
@@ -184,6 +185,9 @@ def run_collide(
         "plain_solutions_in_collision": int(plain_hits.sum()),
         "aware_solutions_in_collision": int(aware_hits.sum()),
     }
+    if progress:
+        print("  MMC with an obstacle ...", flush=True)
+    mmc = mmc_obstacle_steps(robot, kin) if robot.n >= 6 else None
     layout = kernel.layout
     return {
         "robot": robot.name,
@@ -192,7 +196,52 @@ def run_collide(
         "batch": batch,
         "rows": rows,
         "ik": ik,
+        "mmc": mmc,
         "pinocchio": rows[0].get("pinocchio_ns") is not None,
+    }
+
+
+def mmc_obstacle_steps(robot: Any, kin: Any, repeats: int = 3) -> dict[str, Any]:
+    """us per MMC step along a servo run past an obstacle sphere (on the straight line from the
+    ready pose to a goal 0.4 m along y): the C step with its obstacle rows, the Python reference
+    step (the same QP through the Python OSQP) and the C step without obstacles, each controller
+    replaying the run's (q, nu) states in order (warm starts as in a run); best of ``repeats``."""
+    from symkin.geometry import Environment, Sphere
+    from symkin.runtime.control import MMC
+    from symkin.runtime.servo import p_servo
+
+    q = np.asarray(robot.qr if getattr(robot, "qr", None) is not None else np.zeros(robot.n), dtype=float)
+    T0 = kin.fkine(q)
+    Tep = T0.copy()
+    Tep[1, 3] += 0.4
+    env = Environment(spheres=(Sphere(0.5 * (T0[:3, 3] + Tep[:3, 3]), 0.05),))
+    options = {"collision": env, "d_i": 0.3, "d_s": 0.02}
+    states, guide = [], MMC(kin, backend="python", **options)
+    for _ in range(100):
+        nu, done = p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        if done:
+            break
+        states.append((q, nu))
+        q = q + 0.05 * guide.step(q, nu)[0]
+    best: dict[str, float] = {}
+    near = 0
+    for name, kwargs in (("c", {**options}), ("python", {**options, "backend": "python"}), ("plain", {})):
+        for _ in range(repeats):
+            ctrl = MMC(kin, **kwargs)
+            ctrl.step(*states[0])  # set up (OSQP in Python, the C library's first call)
+            t0 = time.thread_time()
+            infos = [ctrl.step(q, nu)[1] for q, nu in states]
+            best[name] = min(best.get(name, float("inf")), (time.thread_time() - t0) / len(states) * 1e6)
+        if name == "c":
+            near = sum(i.method == "osqp" for i in infos)
+    return {
+        "steps": len(states),
+        "steps_with_obstacle_rows": near,
+        "c_us": best["c"],
+        "python_us": best["python"],
+        "plain_c_us": best["plain"],
+        "speedup_vs_python": best["python"] / best["c"],
+        "c_backend": MMC(kin, **options).backend,
     }
 
 
@@ -224,4 +273,14 @@ def format_collide(r: dict) -> str:
         f"  collision-aware {ik['collision_aware_us']:.1f} us ({ik['aware_success']:.1%} solved, "
         f"{ik['aware_solutions_in_collision']} in collision): {ik['ratio']:.2f}x plain",
     ]
+    m = r.get("mmc")
+    if m:
+        lines += [
+            "",
+            f"MMC past an obstacle sphere, {m['steps']} steps ({m['steps_with_obstacle_rows']} within d_i), "
+            "us per step:",
+            f"  with obstacle rows: {m['c_backend']} {m['c_us']:.1f} us, Python reference "
+            f"{m['python_us']:.1f} us ({m['speedup_vs_python']:.1f}x); without obstacles "
+            f"{m['plain_c_us']:.1f} us",
+        ]
     return "\n".join(lines)

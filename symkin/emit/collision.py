@@ -12,6 +12,8 @@ The pair tests call the primitives of ``runtime/csrc/symkin_collide.h``. Functio
   first one found (environment first, then self pairs).
 - ``skcoll_distances(q, S, ns, C, nc, B, nb, d, J)``: the signed distance of every active pair and,
   when ``J`` is not NULL, its gradient row (M, n).
+- ``skcoll_distance_rows(q, S, ns, C, nc, B, nb, idx, k, J)``: the gradient rows (k, n) of the k
+  pairs ``idx`` (indices into the distances; the MMC step's closest pairs).
 - ``*_batch`` of each over N configurations (rows of Q).
 
 Obstacles come packed as in :meth:`symkin.geometry.Environment.arrays`.

@@ -327,8 +327,10 @@ class MMC:
     ``d_dot >= -xi_d (d - d_s) / (d_i - d_s)`` for every distance below the influence distance
     ``d_i`` (NEO's form, :func:`~symkin.runtime.mmc_qp.distance_dampers`), with ``d_dot = Jd qd``
     from the distance Jacobians (:meth:`symkin.Kinematics.distance_jacobians`), for the
-    ``collision_rows`` (32) closest pairs within ``d_i``. Such steps are solved by OSQP in Python
-    (the C step has no distance rows yet).
+    ``collision_rows`` (32) closest pairs within ``d_i``. When any pair lies within ``d_i`` the
+    step is the QP solved by OSQP (the closed form and the active set know only the bounds). On C
+    kinematics with the C collision kernel and the slack, the whole step (distances, rows, QP) is
+    one C call, like the step without obstacles.
 
     ``slack`` (default: on with ``joint_limits`` or ``collision``) adds a slack ``s`` on the
     equality, weighted by ``slack_weight``, so the QP stays feasible when the dampers or speed
@@ -364,12 +366,11 @@ class MMC:
     ) -> None:
         self._collision = self._env = None
         if collision is not None and collision is not False:
+            from symkin.geometry.pairs import as_environment
             from symkin.runtime.collision import collision_of
 
-            self._collision, self._env = collision_of(kin), collision
-            if backend == "c":
-                raise ConfigurationError("MMC with collision avoidance runs in Python: use backend='auto'")
-            backend = "python"
+            self._collision = collision_of(kin)
+            self._env = as_environment(None if collision is True else collision)
         self.d_i, self.d_s, self.xi_d = (
             _number(d_i, "d_i"),
             _number(d_s, "d_s", strict=False),
@@ -420,7 +421,16 @@ class MMC:
         if backend != "python":
             from symkin.runtime import mmc_c
 
-            if mmc_c.supports(kin):
+            c_collision = self._collision is None or (
+                self.slack and getattr(self._collision, "kernel", None) is not None
+            )
+            if mmc_c.supports(kin) and not c_collision:
+                if backend == "c":
+                    raise ConfigurationError(
+                        "backend='c': the C MMC step with collision avoidance needs the slack "
+                        "(slack=True) and the C collision kernel; this MMC runs in Python (backend='auto')"
+                    )
+            elif mmc_c.supports(kin):
                 try:
                     self._c = mmc_c.CMMC(self)
                 except (CompileError, OSError, RuntimeError) as exc:

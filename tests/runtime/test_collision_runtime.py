@@ -123,11 +123,17 @@ def test_mmc_with_an_obstacle_never_enters_it(panda, kin):
     assert kin.distances(q0, env)[-len(panda.geometry.shapes) :].min() > 0.05
     _, closest_plain = _run(kin, symkin.MMC(kin), q0, Tep, env)
     assert closest_plain < 0  # the straight path goes through the obstacle
-    mmc = symkin.MMC(kin, collision=env, d_i=0.3, d_s=0.02)
-    assert mmc.backend == "python" and mmc.slack
-    q, closest = _run(kin, mmc, q0, Tep, env)
-    assert closest > 0  # never enters the obstacle (nor its 2 cm safety margin, up to the step size)
-    assert np.linalg.norm(kin.fkine(q)[:3, 3] - Tep[:3, 3]) < np.linalg.norm(T0[:3, 3] - Tep[:3, 3])
+    for backend in ("c", "python"):
+        mmc = symkin.MMC(kin, collision=env, d_i=0.3, d_s=0.02, backend=backend)
+        assert mmc.backend == backend and mmc.slack
+        q, closest = _run(kin, mmc, q0, Tep, env)
+        assert closest > 0  # never enters the obstacle (nor its 2 cm safety margin, up to the step size)
+        assert np.linalg.norm(kin.fkine(q)[:3, 3] - Tep[:3, 3]) < np.linalg.norm(T0[:3, 3] - Tep[:3, 3])
+    # the C servo loop with the C collision step
+    run = symkin.servo(kin, q0, Tep, mmc := symkin.MMC(kin, collision=env, d_i=0.3, d_s=0.02), max_steps=200)
+    assert mmc.backend == "c"
+    shapes = len(panda.geometry.shapes)
+    assert kin.distances(run.q, env)[:, -shapes:].min() > 0 and run.arrived
     qp = mmc.build(q0, np.zeros(6))
     assert qp.n_distance == 32  # the closest pairs within d_i, padded with free rows
     assert np.isfinite(qp.l[6 + 7 :]).sum() == min(32, (kin.distances(q0, env) < 0.3).sum())
@@ -135,6 +141,74 @@ def test_mmc_with_an_obstacle_never_enters_it(panda, kin):
         symkin.MMC(kin, collision=env, d_i=0.01, d_s=0.05)
     with pytest.raises(ParameterError, match="collision_rows"):
         symkin.MMC(kin, collision=env, collision_rows=0)
+
+
+def _objective(mmc, kin, q, nu, qd):
+    """The MMC QP's objective at qd (the slack s = nu - J qd): 0.5 lam |qd|^2 - Jm.qd + 0.5 w |s|^2."""
+    J, Jm, _ = mmc.kinematics(q)
+    s = nu - J @ qd
+    return 0.5 * mmc.lam * qd @ qd - Jm @ qd + 0.5 * mmc.slack_weight * s @ s
+
+
+def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
+    """The C step with collision rows (one C call: distances, the closest pairs' dampers, the QP)
+    against the Python step building the same QP from the collision kernel: the first (cold) solve
+    is the same computation; later warm-started OSQP answers are each feasible for the Python QP's
+    rows and reach its objective."""
+    q0 = panda.qr.copy()
+    T0 = kin.fkine(q0)
+    Tep = T0.copy()
+    Tep[:3, 3] += (0.1, 0.4, -0.1)
+    env = Environment(
+        spheres=(Sphere(0.5 * (T0[:3, 3] + Tep[:3, 3]), 0.06),),
+        capsules=(Capsule((0.2, -0.4, 0.0), (0.2, -0.4, 0.6), 0.04),),
+    )
+    options = {"d_i": 0.3, "d_s": 0.02, "collision_rows": 12, "qd_max": 1.5, "joint_limits": True}
+    c = symkin.MMC(kin, collision=env, **options)
+    p = symkin.MMC(kin, collision=env, backend="python", **options)
+    assert c.backend == "c" and p.backend == "python"
+    q, near, first = q0.copy(), 0, True
+    for _ in range(80):
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        if done:
+            break
+        (a, ia), (b, ib) = c.step(q, nu), p.step(q, nu)
+        assert (ia.status, ia.method, ia.fallback) == (ib.status, ib.method, ib.fallback), (ia, ib)
+        qp = p.build(q, nu)
+        rows, lower = qp.A[6 + 7 :, :7], qp.l[6 + 7 :]
+        active = np.isfinite(lower)
+        if ia.method == "osqp":
+            near += 1
+            assert active.any()
+            assert (rows[active] @ a >= lower[active] - 1e-6).all()  # the dampers hold
+            fa, fb = _objective(p, kin, q, nu, a), _objective(p, kin, q, nu, b)
+            assert abs(fa - fb) <= 1e-6 * (1.0 + abs(fb)), (fa, fb)
+            if first:  # both solvers cold: the same OSQP iterations on the same data
+                assert ia.iterations == ib.iterations and np.abs(a - b).max() < 1e-9
+                first = False
+        else:
+            assert not active.any() and np.abs(a - b).max() <= 1e-9 * max(1.0, np.abs(b).max())
+        lo, hi = p.bounds(q)
+        assert (a >= lo - 1e-12).all() and (a <= hi + 1e-12).all()
+        q = q + 0.05 * b
+    assert near >= 5
+
+
+def test_mmc_collision_backends_and_self_collision(panda, kin):
+    # self-collision only (collision=True) runs in C too; without the slack it stays in Python
+    # (the sphere model's closest self pair at qr is 1.2 cm apart: within d_i, above d_s)
+    nu, options = np.r_[0.05, 0, 0, 0, 0, 0], {"collision": True, "d_i": 0.1, "d_s": 0.005}
+    (qd, info), (ref, rinfo) = (
+        symkin.MMC(kin, **options, backend=b).step(panda.qr, nu) for b in ("c", "python")
+    )
+    assert info.ok and rinfo.ok and info.method == "osqp" and np.abs(qd - ref).max() < 1e-9
+    assert symkin.MMC(kin, collision=TABLE).backend == "c"
+    assert symkin.MMC(kin, collision=TABLE, slack=False).backend == "python"
+    with pytest.raises(symkin.errors.ConfigurationError, match="slack"):
+        symkin.MMC(kin, collision=TABLE, slack=False, backend="c")
+    assert symkin.MMC(symkin.compile(panda, backend="numpy"), collision=TABLE).backend == "python"
+    with pytest.raises(GeometryError):
+        symkin.MMC(kin, collision=[1.0])
 
 
 def test_collision_ik_is_reproducible_with_a_seed(panda, kin):

@@ -13,7 +13,11 @@
 
 #include <stdint.h>
 
-#include "mmc_config.h" /* MMC_N */
+#include "mmc_config.h" /* MMC_N, MMC_K */
+
+#ifndef MMC_K
+#define MMC_K 0 /* collision rows of the distance variant (0: the library has none) */
+#endif
 
 #if defined(__GNUC__)
 #define MMC_API __attribute__((visibility("default")))
@@ -29,6 +33,15 @@ typedef void (*symkin_mmc_jh_fn)(const double *q, double *J, double *H);
 typedef void (*symkin_mmc_kin_fn)(const double *q, double *out);
 /* Manipulability of the rows of J0 chosen by axes (0 all, 1 trans, 2 rot) at q (generated). */
 typedef double (*symkin_mmc_m_fn)(const double *q, int axes);
+
+/* The signed distance of every active pair of the robot's geometry and the obstacles S (ns spheres),
+ * C (nc capsules), B (nb boxes) at q, and their gradient rows J (pairs, n) (generated FKCC code,
+ * skcoll_distances of symkin.emit.collision). */
+typedef void (*symkin_mmc_dist_fn)(const double *q, const double *S, int ns, const double *C, int nc,
+                                   const double *B, int nb, double *d, double *J);
+/* The gradient rows J (k, n) of the k pairs idx (skcoll_distance_rows). */
+typedef void (*symkin_mmc_rows_fn)(const double *q, const double *S, int ns, const double *C, int nc,
+                                   const double *B, int nb, const int *idx, int k, double *J);
 
 /* Options and per-controller solver state; one per controller, owned by the caller. An RRMC
  * controller (symkin_rrmc_step) uses j0, axes, singular_tol, damping and qd_max only. */
@@ -54,8 +67,17 @@ typedef struct {
        rho (adapted by OSQP) and the iterate (x, z, y as OSQP holds them, scaled) */
     double rho;
     double x[MMC_N + 6];
-    double z[6 + MMC_N];
-    double y[6 + MMC_N];
+    double z[6 + MMC_N + MMC_K];
+    double y[6 + MMC_N + MMC_K];
+    /* collision avoidance (symkin_mmc6d_step): the distance functions, the obstacles (owned by the
+       caller), a buffer for the distances of all pairs, and the velocity damper
+       d_dot >= -xi_d (d - d_s) / (d_i - d_s) of the MMC_K closest pairs within d_i */
+    symkin_mmc_dist_fn dist;
+    symkin_mmc_rows_fn rows;
+    const double *env_s, *env_c, *env_b;
+    double *dbuf;
+    int32_t env_ns, env_nc, env_nb, pairs;
+    double d_i, d_s, xi_d;
 } symkin_mmc_ctrl;
 
 /* info[0] status */
@@ -75,6 +97,12 @@ enum { MMC_NO_FALLBACK, MMC_FALLBACK_RRMC, MMC_FALLBACK_ZERO };
  */
 MMC_API int symkin_mmc0_step(symkin_mmc_ctrl *c, const double *in, double *out);
 MMC_API int symkin_mmc6_step(symkin_mmc_ctrl *c, const double *in, double *out);
+#if MMC_K
+/* The step with the slack and MMC_K collision rows (MMC(collision=...)): the distances come from
+ * c->dist; when a pair lies within d_i the closed form, the active set and the polish (which know
+ * only the bounds) are skipped and the QP with the damper rows goes to OSQP. */
+MMC_API int symkin_mmc6d_step(symkin_mmc_ctrl *c, const double *in, double *out);
+#endif
 
 /*
  * One resolved-rate step (Haviland and Corke 2023, eqs 35-36; symkin.runtime.control.rrmc): qd = J^T (J J^T)^-1 nu

@@ -8,7 +8,9 @@
  * lies within them, else the active-set solve from the bounds it crosses, else the QP (eq 12) on
  * the embedded OSQP, then the same fallbacks (the RRMC step scaled into the bounds). OSQP's
  * polishing is not part of its embedded code; when OSQP reports "solved", the active-set solve
- * started from OSQP's active set replaces its answer when it verifies.
+ * started from OSQP's active set replaces its answer when it verifies. With MMC_ND (the distance
+ * variant) the QP has ND more rows, the velocity dampers of the closest pairs of the robot's
+ * geometry (MMC._distance_rows); when any pair lies within d_i, only OSQP solves the step.
  */
 #include <math.h>
 #include <string.h>
@@ -19,11 +21,16 @@
 #include "algebra_impl.h"
 #include "types.h"
 
+#ifndef MMC_ND
+#define MMC_ND 0 /* collision rows (the distance variant: MMC_K) */
+#endif
 #define N MMC_N
 #define NS MMC_NS
-#define NX (MMC_N + MMC_NS) /* QP variables: qd (and the slack s) */
-#define NC (6 + MMC_N)      /* QP rows: J qd (+ s) = nu, lower <= qd <= upper */
-#define NNZ_A (7 * N + NS)  /* CSC of [[J, I6], [I_n, 0]]: per qd column 6 J entries and a 1 */
+#define ND MMC_ND
+#define NX (MMC_N + MMC_NS)         /* QP variables: qd (and the slack s) */
+#define NC (6 + MMC_N + MMC_ND)     /* QP rows: J qd (+ s) = nu, lower <= qd <= upper, Jd qd >= dl */
+#define NNZ_A ((7 + ND) * N + NS)   /* CSC of [[J, I6], [I_n, 0], [Jd, 0]]: per qd column 6 J entries,
+                                       a 1 and ND distance rows (dense) */
 
 static const symkin_mmc_ctrl *owner_ = 0; /* the controller whose iterate the solver holds */
 
@@ -393,9 +400,39 @@ static void save_(symkin_mmc_ctrl *c, const OSQPSolver *S)
     c->rho = S->settings->rho;
 }
 
-/* update the embedded OSQP problem, solve; the solution in x (NX) or -1 (status in *status) */
+#if ND
+/* MMC._distance_rows: the gradient rows Jd (ND, N) and the damper lower bounds dl (ND) of the ND
+   closest pairs within d_i (ties by pair order), the other rows zero and free (-inf); returns how
+   many pairs lie within d_i (at most ND) */
+static int distance_rows_(symkin_mmc_ctrl *c, const double *q, double *Jd, double *dl)
+{
+    int idx[ND], cnt = 0;
+    c->dist(q, c->env_s, c->env_ns, c->env_c, c->env_nc, c->env_b, c->env_nb, c->dbuf, 0);
+    const double *d = c->dbuf;
+    for (int p = 0; p < c->pairs; ++p) { /* insertion into the sorted ND closest (stable) */
+        if (!(d[p] < c->d_i) || (cnt == ND && !(d[p] < d[idx[ND - 1]])))
+            continue;
+        int j = cnt < ND ? cnt++ : ND - 1;
+        while (j > 0 && d[idx[j - 1]] > d[p]) {
+            idx[j] = idx[j - 1];
+            --j;
+        }
+        idx[j] = p;
+    }
+    memset(Jd, 0, sizeof(double) * ND * N);
+    if (cnt) /* the gradient rows of the chosen pairs only */
+        c->rows(q, c->env_s, c->env_ns, c->env_c, c->env_nc, c->env_b, c->env_nb, idx, cnt, Jd);
+    for (int j = 0; j < ND; ++j)
+        dl[j] = j < cnt ? -c->xi_d * (d[idx[j]] - c->d_s) / (c->d_i - c->d_s) : -INFINITY;
+    return cnt;
+}
+#endif
+
+/* update the embedded OSQP problem (Jd, dl: the ND distance rows, unused without), solve; the
+   solution in x (NX) or -1 (status in *status) */
 static int osqp_step_(symkin_mmc_ctrl *c, const double *J, const double *Jm, const double *nu,
-                      const double *lo, const double *hi, double *x, int *status, int *iters)
+                      const double *lo, const double *hi, const double *Jd, const double *dl, double *x,
+                      int *status, int *iters)
 {
     OSQPSolver *S = &MMC_SOLVER;
     OSQPFloat qv[NX], l[NC], u[NC], Px[NX], Ax[NNZ_A];
@@ -409,11 +446,17 @@ static int osqp_step_(symkin_mmc_ctrl *c, const double *J, const double *Jm, con
         l[6 + k] = fmax_(lo[k], -OSQP_INFTY);
         u[6 + k] = fmin_(hi[k], OSQP_INFTY);
         for (int i = 0; i < 6; ++i)
-            Ax[7 * k + i] = J[i * N + k];
-        Ax[7 * k + 6] = 1.0;
+            Ax[(7 + ND) * k + i] = J[i * N + k];
+        Ax[(7 + ND) * k + 6] = 1.0;
+        for (int j = 0; j < ND; ++j)
+            Ax[(7 + ND) * k + 7 + j] = Jd[j * N + k];
+    }
+    for (int j = 0; j < ND; ++j) {
+        l[6 + N + j] = fmax_(dl[j], -OSQP_INFTY);
+        u[6 + N + j] = OSQP_INFTY;
     }
     for (int i = 0; i < NS; ++i)
-        Ax[7 * N + i] = 1.0;
+        Ax[(7 + ND) * N + i] = 1.0;
     *status = MMC_ERROR;
     *iters = 0;
     if (owner_ != c || c->fresh) { /* take the solver over: this controller's rho and iterate */
@@ -575,7 +618,14 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
         }
     }
     bounds_(c, q, lo, hi);
-    if (c->closed_form && have_b) {
+#if ND
+    double Jd[ND * N], dl[ND];
+    const int near = distance_rows_(c, q, Jd, dl) > 0;
+#else
+    const double *Jd = 0, *dl = 0;
+    const int near = 0;
+#endif
+    if (c->closed_form && have_b && !near) {
         /* z + J^+ (nu - J z), z = Jm / lam; with the slack z + J^T (J J^T + lam / w I)^-1 (nu - J z) */
         double z[N], t[6], sum = 0.0;
         int inside = 1;
@@ -643,10 +693,10 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     }
     double x[NX];
     int status, iters, polished = 0;
-    int ok = osqp_step_(c, J, Jm, nu, lo, hi, x, &status, &iters) == 0;
+    int ok = osqp_step_(c, J, Jm, nu, lo, hi, Jd, dl, x, &status, &iters) == 0;
     if (!ok && status == MMC_SOLVED)
         status = MMC_ERROR;
-    if (ok && c->polish && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
+    if (ok && c->polish && !near && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
         /* OSQP's polish: the active-set solve from OSQP's active set; when it settles it is the
            exact solution, also of a QP that OSQP left unfinished */
         int act[N];

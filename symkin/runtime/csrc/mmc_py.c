@@ -26,7 +26,7 @@
 
 #define NQ MMC_N
 #define NOUT (MMC_N + MMC_NINFO)
-enum { KIND_MMC0 = 0, KIND_RRMC = 1, KIND_MMC6 = 6 };
+enum { KIND_MMC0 = 0, KIND_RRMC = 1, KIND_MMC6 = 6, KIND_MMC6D = 7 };
 typedef int (*step_fn_)(symkin_mmc_ctrl *, const double *, double *);
 
 /* StepInfo and the texts of its codes, from setup() */
@@ -41,6 +41,9 @@ static step_fn_ step_of_(long kind)
     return kind == KIND_MMC0 ? symkin_mmc0_step
            : kind == KIND_MMC6 ? symkin_mmc6_step
            : kind == KIND_RRMC ? symkin_rrmc_step
+#if MMC_K
+           : kind == KIND_MMC6D ? symkin_mmc6d_step
+#endif
                                : NULL;
 }
 
