@@ -30,6 +30,8 @@ from symkin.runtime.mmc_qp import (
     _axes,
     active_of,
     active_of_osqp,
+    active_rows_of,
+    active_set_rows_solve,
     active_set_solve,
     distance_dampers,
     joint_velocity_bounds,
@@ -327,10 +329,11 @@ class MMC:
     ``d_dot >= -xi_d (d - d_s) / (d_i - d_s)`` for every distance below the influence distance
     ``d_i`` (NEO's form, :func:`~symkin.runtime.mmc_qp.distance_dampers`), with ``d_dot = Jd qd``
     from the distance Jacobians (:meth:`symkin.Kinematics.distance_jacobians`), for the
-    ``collision_rows`` (32) closest pairs within ``d_i``. When any pair lies within ``d_i`` the
-    step is the QP solved by OSQP (the closed form and the active set know only the bounds). On C
-    kinematics with the C collision kernel and the slack, the whole step (distances, rows, QP) is
-    one C call, like the step without obstacles.
+    ``collision_rows`` (32) closest pairs within ``d_i``. When any pair lies within ``d_i`` and
+    there is a slack, the step is first the active-set solve with the rows
+    (:func:`~symkin.runtime.mmc_qp.active_set_rows_solve`, from the bounds the closed form crosses),
+    else OSQP polished by the same solve. On C kinematics with the C collision kernel and the
+    slack, the whole step (distances, rows, QP) is one C call, like the step without obstacles.
 
     ``slack`` (default: on with ``joint_limits`` or ``collision``) adds a slack ``s`` on the
     equality, weighted by ``slack_weight``, so the QP stays feasible when the dampers or speed
@@ -559,6 +562,14 @@ class MMC:
                 done = self._active_set(J, Jm, nu, lower, upper, m, qd)
                 if done is not None:
                     return done
+        elif self.closed_form and B is not None and self.active_set and self.slack:
+            # obstacle rows: the active-set solve with the rows, from the bounds the closed form crosses
+            # (the rows it violates join one at a time)
+            qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
+            act, rows = active_of(qd, lower, upper), np.zeros(len(dl), dtype=bool)
+            done = self._active_set_rows(J, Jm, nu, lower, upper, m, Jd, dl, act, rows)
+            if done is not None:
+                return done
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
         return self._solve(qp, s_min, try_closed_form=False)
 
@@ -584,6 +595,19 @@ class MMC:
         res = float(np.abs(J @ qd - nu).max())
         return qd, StepInfo("solved", "active_set", m, solves, residual=res, slack=slack)
 
+    def _active_set_rows(
+        self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
+        Jd: np.ndarray, dl: np.ndarray, act: np.ndarray, rows: np.ndarray,
+    ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
+        """The active-set solution with the obstacle rows (slack only), or None."""
+        found = active_set_rows_solve(J, Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act, rows)
+        if found is None:
+            return None
+        x, solves = found
+        qd = np.clip(x[: self.n], lower, upper)
+        res, slack = float(np.abs(J @ qd - nu).max()), float(np.linalg.norm(x[self.n :]))
+        return qd, StepInfo("solved", "active_set", m, solves, residual=res, slack=slack)
+
     def solve(self, qp: MMCQP) -> tuple[np.ndarray, StepInfo]:
         """Solve a QP from :meth:`build`."""
         w = np.linalg.eigvalsh(qp.J @ qp.J.T) if self.n >= 6 else np.zeros(1)
@@ -606,7 +630,20 @@ class MMC:
                     return done
         x, status, iters = self._osqp(qp)
         n = self.n
-        polish = self._polish and not (qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
+        near = bool(qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
+        polish = self._polish and not near
+        if x is not None and status in ("solved", "inaccurate", "max_iter") and self._polish and near:
+            # the same polish with the obstacle rows (slack only): from OSQP's active bounds and rows
+            y = self._raw.solution.y if self._raw is not None else np.zeros(qp.A.shape[0])
+            if qp.has_slack:
+                Jd, dl = qp.A[6 + n :, :n], qp.l[6 + n :]
+                act = active_of_osqp(x[:n], y[6 : 6 + n], lower, upper)
+                found = active_set_rows_solve(
+                    J, qp.Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act,
+                    active_rows_of(x[:n], Jd, dl, y[6 + n :]),
+                )  # fmt: skip
+                if found is not None:
+                    x, status = found[0], "solved"
         if x is not None and status in ("solved", "inaccurate", "max_iter") and polish:
             # polish: the active-set solve from OSQP's active set, which when it settles is the exact
             # solution, also of a QP that OSQP left unfinished (see OSQP_SETTINGS)

@@ -32,6 +32,8 @@ __all__ = [
     "active_set_solve",
     "active_of",
     "active_of_osqp",
+    "active_rows_of",
+    "active_set_rows_solve",
 ]
 
 _AXES = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
@@ -278,4 +280,113 @@ def active_set_solve(
         if not (np.abs(J @ x + s - nu).max() <= nu_tol and np.isfinite(x).all()):
             return None
         return (np.concatenate((x, s)) if has_slack else x), it
+    return None
+
+
+def active_rows_of(
+    qd: np.ndarray, Jd: np.ndarray, d_lower: np.ndarray, y: np.ndarray | None = None
+) -> np.ndarray:
+    """Active-set guess of the distance rows ``Jd qd >= d_lower`` (free rows: ``-inf``): the rows that
+    ``qd`` violates or meets, or with OSQP's multipliers ``y`` of those rows its polish rule
+    (active where ``Jd qd - d_lower < -y``)."""
+    r = Jd @ qd - d_lower
+    rows = r < -1e-12 * (1.0 + np.abs(d_lower)) if y is None else r < -y
+    return rows & np.isfinite(d_lower)
+
+
+def _chol_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(L L^T)^-1 b."""
+    return np.linalg.solve(L.T, np.linalg.solve(L, b))
+
+
+def active_set_rows_solve(
+    J: np.ndarray,
+    Jm: np.ndarray,
+    nu: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    lam: float,
+    slack_weight: float,
+    Jd: np.ndarray,
+    d_lower: np.ndarray,
+    act: np.ndarray,
+    rows: np.ndarray,
+    max_iter: int | None = None,
+) -> tuple[np.ndarray, int] | None:
+    """Solve the MMC QP with the slack and the distance rows ``Jd qd >= d_lower`` (MMC(collision=...))
+    from the active-set guesses ``act`` (bounds, see :func:`active_of`) and ``rows`` (bool, see
+    :func:`active_rows_of`).
+
+    With the slack eliminated (``s = nu - J qd``) the cost is ``0.5 qd^T H qd - g.qd``, ``H = lam I +
+    w J^T J``, ``g = Jm + w J^T nu``. Holding the active bounds and rows as equalities, the free joints
+    and the rows' multipliers ``mu`` solve ``H_FF qd_F = g_F - H_FA b_A + Jd_RF^T mu``,
+    ``Jd_RF qd_F = d_R - Jd_RA b_A`` (through the Schur complement ``Jd_RF H_FF^-1 Jd_RF^T``). Free
+    joints beyond a bound and violated rows join the set, active bounds and rows whose multiplier
+    has the wrong sign leave it (the primal-dual iteration of :func:`active_set_solve`; rows join
+    one at a time, the most violated first, so the active rows stay independent); when nothing
+    changes every optimality condition holds: the point is the unique solution, exact to rounding.
+    Returns ``(x, solves)``, ``x = (qd, s)`` (n + 6,), or None when the set did not settle within
+    ``max_iter`` (default 4n + 4) solves or the active rows are dependent on the free joints.
+    """
+    n = J.shape[1]
+    act = np.array(act, dtype=int)
+    finite = np.isfinite(d_lower)
+    rows = np.asarray(rows, dtype=bool) & finite
+    w = slack_weight
+    H = w * (J.T @ J)
+    H.flat[:: n + 1] += lam
+    g = Jm + w * (J.T @ nu)
+    scale = float(np.abs(g).max(initial=0.0))
+    limit = 4 * n + 4 if max_iter is None else max_iter
+    for it in range(1, limit + 1):
+        free = act == 0
+        R = np.flatnonzero(rows)
+        if len(R) > np.count_nonzero(free):  # more active rows than free joints: dependent
+            return None
+        x = np.where(act > 0, upper, lower).astype(float)
+        x[free] = 0.0
+        try:
+            Lf = np.linalg.cholesky(H[np.ix_(free, free)])
+            rhs = g[free] - H[np.ix_(free, ~free)] @ x[~free]
+            xf = _chol_solve(Lf, rhs)
+            mu = np.zeros(0)
+            if len(R):
+                B = Jd[np.ix_(R, free)]
+                Y = _chol_solve(Lf, B.T)
+                Ls = np.linalg.cholesky(B @ Y)
+                t0 = d_lower[R] - Jd[np.ix_(R, ~free)] @ x[~free]
+                mu = np.zeros(len(R))
+                for _ in range(2):  # the solve, then one refinement (H's condition is about w / lam)
+                    dmu = _chol_solve(Ls, t0 - B @ xf)
+                    mu, xf = mu + dmu, xf + Y @ dmu
+        except np.linalg.LinAlgError:
+            return None
+        x[free] = xf
+        grad = H @ x - g - Jd[R].T @ mu  # the bounds' multipliers: >= 0 at a lower bound, <= 0 at an upper
+        tol = 1e-12 * (1.0 + np.abs(x))
+        below = free & (x < lower - tol)
+        above = free & (x > upper + tol)
+        wrong = (np.abs(act) == 1) & (act * grad > 1e-12 * (1.0 + scale + lam * np.abs(x)))
+        r = Jd[finite] @ x - d_lower[finite]
+        r_scale = 1.0 + np.abs(d_lower[finite]) + np.abs(Jd[finite]) @ np.abs(x)
+        join = np.zeros_like(rows)
+        violated = ~rows[finite] & (r < -1e-12 * r_scale)
+        if violated.any():  # the most violated row joins (one at a time: a set of rows stays independent)
+            depth = np.where(violated, r / np.maximum(np.linalg.norm(Jd[finite], axis=1), 1e-300), np.inf)
+            join[np.flatnonzero(finite)[int(np.argmin(depth))]] = True
+        leave = np.zeros_like(rows)
+        leave[R] = mu < -1e-12 * (1.0 + scale)
+        if below.any() or above.any() or wrong.any() or join.any() or leave.any():
+            act = np.where(below, -1, np.where(above, 1, np.where(wrong, 0, act)))
+            rows = (rows | join) & ~leave
+            continue
+        # verify: the Schur complement may be numerically singular (rows dependent on the free joints)
+        r_tol = 1e-8 * r_scale
+        if not (
+            np.isfinite(x).all()
+            and (r >= -r_tol).all()
+            and (np.abs(r[rows[finite]]) <= r_tol[rows[finite]]).all()
+        ):
+            return None
+        return np.concatenate((x, nu - J @ x)), it
     return None

@@ -373,6 +373,178 @@ static void osqp_active_(const double *x, const double *y, const double *lo, con
     }
 }
 
+#if ND
+/*
+ * active_set_rows_solve of mmc_qp.py (the slack variant with the ND distance rows Jd qd >= dl, free
+ * rows -inf): with s = nu - J qd eliminated the cost is 0.5 qd^T H qd - g.qd, H = lam I + w J^T J,
+ * g = Jm + w J^T nu. Holding the active bounds (act) and rows (rows) as equalities, the free joints
+ * and the rows' multipliers mu solve H_FF qd_F = g_F - H_FA b_A + Jd_RF^T mu, Jd_RF qd_F = dl_R -
+ * Jd_RA b_A (Schur complement, one refinement). Free joints beyond a bound and the most violated
+ * row join, active bounds and rows whose multiplier has the wrong sign leave; when nothing
+ * changes the point is the QP's unique solution, written to x (NX). Returns the number of solves,
+ * or 0 (not settled within max_iter, dependent rows, or the check failed).
+ */
+static int active_set_rows_(const double *J, const double *Jm, const double *nu, const double *lo,
+                            const double *hi, double lam, double w, const double *Jd, const double *dl,
+                            int *act, int *rows, int max_iter, double *x)
+{
+    double H[N * N], g[N], scale = 0.0;
+    for (int i = 0; i < N; ++i) {
+        double gi = 0.0;
+        for (int r = 0; r < 6; ++r)
+            gi += J[r * N + i] * nu[r];
+        g[i] = Jm[i] + w * gi;
+        scale = fmax_(scale, fabs(g[i]));
+        for (int j = 0; j <= i; ++j) {
+            double h = 0.0;
+            for (int r = 0; r < 6; ++r)
+                h += J[r * N + i] * J[r * N + j];
+            H[i * N + j] = H[j * N + i] = w * h + (i == j ? lam : 0.0);
+        }
+    }
+    for (int j = 0; j < ND; ++j)
+        rows[j] = rows[j] && isfinite(dl[j]);
+    for (int iter = 1; iter <= max_iter; ++iter) {
+        int F[N], R[ND], nf = 0, nr = 0;
+        double xs[N], mu[N], HF[N * N], Lf[N * N], xf[N];
+        for (int k = 0; k < N; ++k) {
+            if (!act[k])
+                F[nf++] = k;
+            xs[k] = act[k] ? (act[k] > 0 ? hi[k] : lo[k]) : 0.0;
+        }
+        for (int j = 0; j < ND; ++j)
+            if (rows[j])
+                R[nr++] = j;
+        if (nr > nf) /* more active rows than free joints: dependent */
+            return 0;
+        for (int a = 0; a < nf; ++a) {
+            double t = g[F[a]];
+            for (int k = 0; k < N; ++k)
+                if (act[k])
+                    t -= H[F[a] * N + k] * xs[k];
+            xf[a] = t;
+            for (int b = 0; b < nf; ++b)
+                HF[a * nf + b] = H[F[a] * N + F[b]];
+        }
+        if (!chol_(HF, nf, 0.0, Lf))
+            return 0;
+        chol_solve_(Lf, nf, xf);
+        if (nr) {
+            double B[N * N], Y[N * N], S[N * N], Ls[N * N], t0[N], e[N];
+            for (int r = 0; r < nr; ++r) {
+                double col[N], t = dl[R[r]];
+                for (int k = 0; k < N; ++k)
+                    if (act[k])
+                        t -= Jd[R[r] * N + k] * xs[k];
+                t0[r] = t;
+                for (int a = 0; a < nf; ++a)
+                    col[a] = B[r * nf + a] = Jd[R[r] * N + F[a]];
+                chol_solve_(Lf, nf, col);
+                for (int a = 0; a < nf; ++a)
+                    Y[a * nr + r] = col[a];
+            }
+            for (int r = 0; r < nr; ++r)
+                for (int q2 = 0; q2 < nr; ++q2) {
+                    double v = 0.0;
+                    for (int a = 0; a < nf; ++a)
+                        v += B[r * nf + a] * Y[a * nr + q2];
+                    S[r * nr + q2] = v;
+                }
+            if (!chol_(S, nr, 0.0, Ls))
+                return 0;
+            for (int r = 0; r < nr; ++r)
+                mu[r] = 0.0;
+            for (int pass = 0; pass < 2; ++pass) { /* the solve, then one refinement */
+                for (int r = 0; r < nr; ++r) {
+                    double v = t0[r];
+                    for (int a = 0; a < nf; ++a)
+                        v -= B[r * nf + a] * xf[a];
+                    e[r] = v;
+                }
+                chol_solve_(Ls, nr, e);
+                for (int r = 0; r < nr; ++r)
+                    mu[r] += e[r];
+                for (int a = 0; a < nf; ++a) {
+                    double v = 0.0;
+                    for (int r = 0; r < nr; ++r)
+                        v += Y[a * nr + r] * e[r];
+                    xf[a] += v;
+                }
+            }
+        }
+        for (int a = 0; a < nf; ++a)
+            xs[F[a]] = xf[a];
+        int changed = 0, newact[N], join = -1;
+        double deepest = INFINITY;
+        for (int k = 0; k < N; ++k) {
+            double grad = -g[k]; /* H x - g - Jd_R^T mu: the bounds' multipliers */
+            for (int j = 0; j < N; ++j)
+                grad += H[k * N + j] * xs[j];
+            for (int r = 0; r < nr; ++r)
+                grad -= Jd[R[r] * N + k] * mu[r];
+            double tol = 1e-12 * (1.0 + fabs(xs[k]));
+            newact[k] = act[k];
+            if (!act[k] && xs[k] < lo[k] - tol)
+                newact[k] = -1;
+            else if (!act[k] && xs[k] > hi[k] + tol)
+                newact[k] = 1;
+            else if ((act[k] == 1 || act[k] == -1) &&
+                     act[k] * grad > 1e-12 * (1.0 + scale + lam * fabs(xs[k])))
+                newact[k] = 0;
+            changed |= newact[k] != act[k];
+        }
+        double rres[ND], rtol[ND];
+        for (int j = 0; j < ND; ++j) {
+            if (!isfinite(dl[j]))
+                continue;
+            double v = -dl[j], ax = 0.0, nrm = 0.0;
+            for (int k = 0; k < N; ++k) {
+                v += Jd[j * N + k] * xs[k];
+                ax += fabs(Jd[j * N + k]) * fabs(xs[k]);
+                nrm += Jd[j * N + k] * Jd[j * N + k];
+            }
+            rres[j] = v;
+            rtol[j] = 1.0 + fabs(dl[j]) + ax;
+            if (!rows[j] && v < -1e-12 * rtol[j]) {
+                double depth = v / fmax_(sqrt(nrm), 1e-300);
+                if (depth < deepest) {
+                    deepest = depth;
+                    join = j;
+                }
+            }
+        }
+        int leave = 0;
+        for (int r = 0; r < nr; ++r)
+            leave |= mu[r] < -1e-12 * (1.0 + scale);
+        if (changed || join >= 0 || leave) {
+            memcpy(act, newact, sizeof newact);
+            if (join >= 0)
+                rows[join] = 1;
+            for (int r = 0; r < nr; ++r)
+                if (mu[r] < -1e-12 * (1.0 + scale))
+                    rows[R[r]] = 0;
+            continue;
+        }
+        for (int k = 0; k < N; ++k) /* verify (the Schur complement may be numerically singular) */
+            if (!isfinite(xs[k]))
+                return 0;
+        for (int j = 0; j < ND; ++j)
+            if (isfinite(dl[j]) && (!(rres[j] >= -1e-8 * rtol[j]) || (rows[j] && !(fabs(rres[j]) <= 1e-8 * rtol[j]))))
+                return 0;
+        for (int k = 0; k < N; ++k)
+            x[k] = xs[k];
+        for (int i = 0; i < NS; ++i) {
+            double v = nu[i];
+            for (int k = 0; k < N; ++k)
+                v -= J[i * N + k] * xs[k];
+            x[N + i] = v;
+        }
+        return iter;
+    }
+    return 0;
+}
+#endif
+
 static int status_of_(OSQPInt s)
 {
     switch (s) {
@@ -625,7 +797,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     const double *Jd = 0, *dl = 0;
     const int near = 0;
 #endif
-    if (c->closed_form && have_b && !near) {
+    if (c->closed_form && have_b && (!near || c->active_set)) {
         /* z + J^+ (nu - J z), z = Jm / lam; with the slack z + J^T (J J^T + lam / w I)^-1 (nu - J z) */
         double z[N], t[6], sum = 0.0;
         int inside = 1;
@@ -654,6 +826,27 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
             if (c->bounded && !(s >= lo[k] - 1e-12 && s <= hi[k] + 1e-12))
                 inside = 0;
         }
+#if ND
+        if (near) { /* obstacle rows: the active-set solve with them, from the bounds qd crosses */
+            int act[N], rows[ND], its;
+            double x[NX];
+            active_of_(qd, lo, hi, act);
+            memset(rows, 0, sizeof rows);
+            its = active_set_rows_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, Jd, dl, act, rows, 4 * N + 4, x);
+            if (its) {
+                double slack = 0.0;
+                for (int k = 0; k < N; ++k)
+                    qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
+                for (int i = N; i < NX; ++i)
+                    slack += x[i] * x[i];
+                write_info_(out, MMC_SOLVED, MMC_ACTIVE_SET, m, its, MMC_NO_FALLBACK, residual_(J, qd, nu),
+                            sqrt(slack), 1.0, 0);
+                return 0;
+            }
+            inside = 0;
+            sum = NAN; /* on to OSQP */
+        }
+#endif
         if (inside && isfinite(sum)) {
             double res = 0.0, slack = 0.0;
             for (int i = 0; i < 6; ++i) {
@@ -667,7 +860,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
                         1.0, 0);
             return 0;
         }
-        if (c->active_set) { /* the bounds the closed form crosses, as equalities, then corrected */
+        if (c->active_set && !near) { /* the bounds the closed form crosses, as equalities, then corrected */
             int act[N], its;
             double x[NX];
             active_of_(qd, lo, hi, act);
@@ -696,6 +889,23 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     int ok = osqp_step_(c, J, Jm, nu, lo, hi, Jd, dl, x, &status, &iters) == 0;
     if (!ok && status == MMC_SOLVED)
         status = MMC_ERROR;
+#if ND
+    if (ok && c->polish && near && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
+        /* the same polish with the obstacle rows: from OSQP's active bounds and rows */
+        int act[N], rows[ND];
+        const OSQPFloat *y = MMC_SOLVER.solution->y;
+        osqp_active_(x, y, lo, hi, act);
+        for (int j = 0; j < ND; ++j) {
+            double r = -dl[j];
+            for (int k = 0; k < N; ++k)
+                r += Jd[j * N + k] * x[k];
+            rows[j] = isfinite(dl[j]) && r < -y[6 + N + j];
+        }
+        polished = active_set_rows_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, Jd, dl, act, rows, 4 * N + 4, x) > 0;
+        if (polished)
+            status = MMC_SOLVED;
+    }
+#endif
     if (ok && c->polish && !near && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
         /* OSQP's polish: the active-set solve from OSQP's active set; when it settles it is the
            exact solution, also of a QP that OSQP left unfinished */
