@@ -118,3 +118,29 @@ def test_collide_and_plot_read_a_urdfs_collision_elements(tmp_path, capsys):
     png = tmp_path / "arm2.png"
     assert main(["plot", str(urdf), "--q", "0 3.0", "-o", str(png)]) == 0
     assert "in collision (red)" in capsys.readouterr().out and png.stat().st_size > 10_000
+
+
+def test_servo_with_collision_goes_around_an_obstacle(capsys):
+    """`symkin servo --collision --sphere ...` servos with MMC and the obstacle's dampers (the C
+    step); the straight servo through the same sphere's place enters it."""
+    panda = symkin.load("panda")
+    kin = symkin.compile(panda, backend="c")
+    T0 = kin.fkine(panda.qr)
+    goal = T0[:3, 3] + (0.0, 0.4, 0.0)
+    centre = T0[:3, 3] + (0.0, 0.2, 0.0)
+    sphere = symkin.Environment(spheres=(symkin.Sphere(centre, 0.05),))
+    pose = " ".join(map(str, [*goal, np.pi, 0.0, -np.pi / 4]))
+    plain = symkin.servo(kin, panda.qr, np.r_[np.c_[T0[:3, :3], goal], [[0, 0, 0, 1]]], max_steps=500)
+    shapes = len(panda.geometry.shapes)
+    assert kin.distances(plain.q, sphere)[:, -shapes:].min() < 0  # straight through the sphere
+    argv = ["servo", "panda", "--pose", pose, "--collision", "--sphere", " ".join(map(str, [*centre, 0.05]))]
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["arrived"] and data["closest_obstacle"] > 0 and data["controller_backend"] == "c"
+    assert main(argv) == 0 and "closest approach to an obstacle" in capsys.readouterr().out
+    assert main(["servo", "panda", "--pose", pose, "--sphere", "0 0 0 0.1"]) == 2
+    assert "add --collision" in capsys.readouterr().err
+    assert main(["servo", "panda", "--pose", pose, "--collision", "--controller", "rrmc"]) == 2
+    assert "MMC" in capsys.readouterr().err
+    assert main(["servo", "panda", "--pose", pose, "--collision", "--d-i", "0.01", "--d-s", "0.05"]) == 2
+    assert "--d-i" in capsys.readouterr().err

@@ -29,6 +29,15 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--max-steps", type=int_at_least(0), default=500, help="give up after this many steps")
     s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
+    s.add_argument(
+        "--collision",
+        action="store_true",
+        help="MMC: avoid self-collisions and the obstacles given (the robot's geometry; NEO's velocity "
+        "dampers on the closest pairs)",
+    )
+    s.add_argument("--d-i", type=positive_float, default=0.3, help="--collision: influence distance (m)")
+    s.add_argument("--d-s", type=positive_float, default=0.02, help="--collision: safety distance (m)")
+    common.add_obstacle_options(s)
     s.set_defaults(func=run)
 
 
@@ -36,17 +45,36 @@ def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
     from symkin.runtime.loop import servo
 
-    robot = common.single_chain(args)
+    robot = common.single_chain(args, geometry=args.collision)
+    env = common.environment_of(args)
+    if len(env) and not args.collision:
+        raise UserError("--sphere, --capsule, --box and --env are obstacles of --collision: add --collision")
+    if args.collision and args.controller != "mmc":
+        raise UserError("--collision needs the MMC controller (--controller mmc)")
+    if args.collision and not args.d_i > args.d_s:
+        raise UserError(f"--d-i ({args.d_i}) must exceed --d-s ({args.d_s})")
     Tep = common.target(args, robot)
     need_matplotlib(args.plot)
     check_cflags_for(args.backend)
     q0 = common.floats(args.q0, "--q0", robot.n) if args.q0 else robot.configs.get("qr", robot.configs["qz"])
     kin = compile_robot(robot, backend=args.backend)
+    controller: Any = args.controller
+    if args.collision:
+        from symkin.runtime.control import MMC
+
+        controller = MMC(
+            kin,
+            joint_limits=args.joint_limits,
+            dt=args.dt,
+            collision=env if len(env) else True,
+            d_i=args.d_i,
+            d_s=args.d_s,
+        )
     res = servo(
         kin,
         q0,
         Tep,
-        controller=args.controller,
+        controller=controller,
         dt=args.dt,
         max_steps=args.max_steps,
         joint_limits=args.joint_limits,
@@ -60,6 +88,12 @@ def run(args: argparse.Namespace) -> int:
         "mean_manipulability": float(np.mean(res.manipulability)),
         "q_final": res.q[-1].tolist(),
     }
+    if args.collision:  # the closest approach along the path: obstacles, and all pairs
+        D = np.asarray(kin.distances(np.asarray(res.q), env))
+        shapes = len(robot.geometry.shapes)
+        summary["closest_obstacle"] = float(D[:, -shapes * len(env) :].min()) if len(env) else None
+        summary["closest_pair"] = float(D.min())
+        summary["controller_backend"] = controller.backend
     if args.plot:
         _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}")
         summary["plot"] = args.plot
@@ -71,6 +105,13 @@ def run(args: argparse.Namespace) -> int:
             f"(dt {args.dt} s); mean manipulability {summary['mean_manipulability']:.4f}"
         )
         print(f"q final = {common.fmt(res.q[-1])}")
+        if args.collision:
+            near = summary["closest_obstacle"]
+            print(
+                (f"closest approach to an obstacle {near:.4f} m; " if near is not None else "")
+                + f"closest pair {summary['closest_pair']:.4f} m (signed distances; MMC step in "
+                f"{summary['controller_backend']})"
+            )
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0 if res.arrived else 1
