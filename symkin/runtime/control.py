@@ -368,6 +368,7 @@ class MMC:
         collision_rows: int = 32,
     ) -> None:
         self._collision = self._env = None
+        self._warm: tuple[np.ndarray, np.ndarray] | None = None  # the last obstacle step's active sets
         if collision is not None and collision is not False:
             from symkin.geometry.pairs import as_environment
             from symkin.runtime.collision import collision_of
@@ -510,13 +511,14 @@ class MMC:
         nu = step_nu(nu)
         J, Jm, m = self.kinematics(q)
         lower, upper = self.bounds(q)
-        Jd, dl = self._distance_rows(q)
+        Jd, dl, _ = self._distance_rows(q)
         return mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
 
-    def _distance_rows(self, q: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Collision avoidance rows (Jd, lower bounds on d_dot) at q; (None, None) without collision."""
+    def _distance_rows(self, q: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray]:
+        """Collision avoidance rows (Jd, lower bounds on d_dot, the pairs of the rows: indices into
+        the distances) at q; (None, None, []) without collision."""
         if self._collision is None:
-            return None, None
+            return None, None, np.zeros(0, dtype=int)
         d, Jd = self._collision.distance_jacobians(q, self._env)
         K = min(self.collision_rows, len(d))
         near = np.flatnonzero(d < self.d_i)
@@ -524,7 +526,7 @@ class MMC:
         rows, lower = np.zeros((K, self.n)), np.full(K, -np.inf)  # K rows always: OSQP's sparsity is fixed
         rows[: len(near)] = Jd[near]
         lower[: len(near)] = distance_dampers(d[near], self.d_i, self.d_s, self.xi_d)
-        return rows, lower
+        return rows, lower, near
 
     def step(self, q: Any, nu: Any) -> tuple[np.ndarray, StepInfo]:
         """Joint velocity qd (n,) for the spatial velocity nu (6,) at q (n,), and how it was found.
@@ -547,8 +549,9 @@ class MMC:
     def _step(self, q: np.ndarray, nu: np.ndarray) -> tuple[np.ndarray, StepInfo]:
         J, Jm, m, s_min, B = self._terms(q)
         lower, upper = self.bounds(q)
-        Jd, dl = self._distance_rows(q)
+        Jd, dl, pairs = self._distance_rows(q)
         near = dl is not None and bool(np.isfinite(dl).any())
+        warm, self._warm = self._warm, None
         if self.closed_form and B is not None and not near:
             if self.slack:
                 qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
@@ -563,15 +566,23 @@ class MMC:
                 if done is not None:
                     return done
         elif self.closed_form and B is not None and self.active_set and self.slack:
-            # obstacle rows: the active-set solve with the rows, from the bounds the closed form crosses
-            # (the rows it violates join one at a time)
+            # obstacle rows: the active-set solve with the rows, first from the last step's active
+            # bounds and pairs (a servo run's next step usually keeps them), then from the bounds
+            # the closed form crosses (the rows it violates join one at a time)
+            starts = []
+            if warm is not None:
+                act = np.where(lower == upper, 2, np.where(warm[0] == 2, 0, warm[0]))
+                rows = np.zeros(len(dl), dtype=bool)
+                rows[: len(pairs)] = np.isin(pairs, warm[1])
+                starts.append((act, rows))
             qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
-            act, rows = active_of(qd, lower, upper), np.zeros(len(dl), dtype=bool)
-            done = self._active_set_rows(J, Jm, nu, lower, upper, m, Jd, dl, act, rows)
-            if done is not None:
-                return done
+            starts.append((active_of(qd, lower, upper), np.zeros(len(dl), dtype=bool)))
+            for act, rows in starts:
+                done = self._active_set_rows(J, Jm, nu, lower, upper, m, Jd, dl, act, rows, pairs)
+                if done is not None:
+                    return done
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
-        return self._solve(qp, s_min, try_closed_form=False)
+        return self._solve(qp, s_min, try_closed_form=False, pairs=pairs)
 
     def _closed_form_info(
         self, J: np.ndarray, qd: np.ndarray, nu: np.ndarray, m: float
@@ -597,13 +608,15 @@ class MMC:
 
     def _active_set_rows(
         self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
-        Jd: np.ndarray, dl: np.ndarray, act: np.ndarray, rows: np.ndarray,
+        Jd: np.ndarray, dl: np.ndarray, act: np.ndarray, rows: np.ndarray, pairs: np.ndarray,
     ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
-        """The active-set solution with the obstacle rows (slack only), or None."""
+        """The active-set solution with the obstacle rows (slack only), or None; remembers its active
+        bounds and pairs for the next step."""
         found = active_set_rows_solve(J, Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act, rows)
         if found is None:
             return None
-        x, solves = found
+        x, solves, act, rows = found
+        self._warm = (act, pairs[rows[: len(pairs)]])
         qd = np.clip(x[: self.n], lower, upper)
         res, slack = float(np.abs(J @ qd - nu).max()), float(np.linalg.norm(x[self.n :]))
         return qd, StepInfo("solved", "active_set", m, solves, residual=res, slack=slack)
@@ -613,7 +626,9 @@ class MMC:
         w = np.linalg.eigvalsh(qp.J @ qp.J.T) if self.n >= 6 else np.zeros(1)
         return self._solve(qp, math.sqrt(max(float(w[0]), 0.0)), self.closed_form)
 
-    def _solve(self, qp: MMCQP, s_min: float, try_closed_form: bool) -> tuple[np.ndarray, StepInfo]:
+    def _solve(
+        self, qp: MMCQP, s_min: float, try_closed_form: bool, pairs: np.ndarray | None = None
+    ) -> tuple[np.ndarray, StepInfo]:
         J, nu, m = qp.J, qp.l[:6], qp.manipulability
         lower, upper = qp.lower, qp.upper
         if qp.n_distance and np.isfinite(qp.l[6 + self.n :]).any():
@@ -644,6 +659,8 @@ class MMC:
                 )  # fmt: skip
                 if found is not None:
                     x, status = found[0], "solved"
+                    if pairs is not None:  # the next step starts from this active set
+                        self._warm = (found[2], pairs[found[3][: len(pairs)]])
         if x is not None and status in ("solved", "inaccurate", "max_iter") and polish:
             # polish: the active-set solve from OSQP's active set, which when it settles is the exact
             # solution, also of a QP that OSQP left unfinished (see OSQP_SETTINGS)

@@ -294,6 +294,10 @@ def _ctrl_type(n: int, nd: int = 0) -> type[ctypes.Structure]:
                 *((f, _P) for f in ("dist", "rows", "env_s", "env_c", "env_b", "dbuf")),
                 *((f, _I32) for f in ("env_ns", "env_nc", "env_nb", "pairs")),
                 *((f, _D) for f in ("d_i", "d_s", "xi_d")),
+                ("warm", _I32),
+                ("nwarm", _I32),
+                ("wact", _I32 * n),
+                ("wpair", _I32 * max(nd, 1)),
             ]
         },
     )

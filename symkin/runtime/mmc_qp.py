@@ -312,7 +312,7 @@ def active_set_rows_solve(
     act: np.ndarray,
     rows: np.ndarray,
     max_iter: int | None = None,
-) -> tuple[np.ndarray, int] | None:
+) -> tuple[np.ndarray, int, np.ndarray, np.ndarray] | None:
     """Solve the MMC QP with the slack and the distance rows ``Jd qd >= d_lower`` (MMC(collision=...))
     from the active-set guesses ``act`` (bounds, see :func:`active_of`) and ``rows`` (bool, see
     :func:`active_rows_of`).
@@ -325,7 +325,8 @@ def active_set_rows_solve(
     has the wrong sign leave it (the primal-dual iteration of :func:`active_set_solve`; rows join
     one at a time, the most violated first, so the active rows stay independent); when nothing
     changes every optimality condition holds: the point is the unique solution, exact to rounding.
-    Returns ``(x, solves)``, ``x = (qd, s)`` (n + 6,), or None when the set did not settle within
+    Returns ``(x, solves, act, rows)``, ``x = (qd, s)`` (n + 6,) and the settled active bounds and
+    rows (the guesses' forms), or None when the set did not settle within
     ``max_iter`` (default 4n + 4) solves or the active rows are dependent on the free joints.
     """
     n = J.shape[1]
@@ -388,5 +389,5 @@ def active_set_rows_solve(
             and (np.abs(r[rows[finite]]) <= r_tol[rows[finite]]).all()
         ):
             return None
-        return np.concatenate((x, nu - J @ x)), it
+        return np.concatenate((x, nu - J @ x)), it, act, rows
     return None

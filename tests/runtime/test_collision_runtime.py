@@ -161,7 +161,7 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
     c = symkin.MMC(kin, collision=env, **options)
     p = symkin.MMC(kin, collision=env, backend="python", **options)
     assert c.backend == "c" and p.backend == "python"
-    q, near, methods = q0.copy(), 0, set()
+    q, near, methods, warm = q0.copy(), 0, [], 0
     for k in range(80):
         nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
         if done:
@@ -174,7 +174,8 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
         active = np.isfinite(lower)
         if active.any():
             near += 1
-            methods.add(ia.method)
+            methods.append(ia.method)
+            warm += ia.method == "active_set" and ia.iterations == 1  # the last step's set held
             assert (rows[active] @ a >= lower[active] - 1e-8).all()  # the dampers hold
             if k % 5 == 0:
                 solver = osqp.OSQP()
@@ -187,7 +188,7 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
         lo, hi = p.bounds(q)
         assert (a >= lo - 1e-12).all() and (a <= hi + 1e-12).all()
         q = q + 0.05 * b
-    assert near >= 5 and "active_set" in methods
+    assert near >= 5 and methods.count("active_set") >= 0.8 * near and warm >= 0.5 * near
 
 
 def test_mmc_collision_backends_and_self_collision(panda, kin):

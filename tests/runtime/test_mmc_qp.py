@@ -63,7 +63,7 @@ def test_active_set_with_rows_matches_tight_osqp_on_random_qps():
             if found is None:
                 continue
         settled += 1
-        x, _ = found
+        x = found[0]
         assert np.abs(x[:7] - ref.x[:7]).max() < 1e-6
         assert (x[:7] >= lower).all() and (x[:7] <= upper).all()
         finite = np.isfinite(dl)

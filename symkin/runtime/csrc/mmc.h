@@ -78,6 +78,11 @@ typedef struct {
     double *dbuf;
     int32_t env_ns, env_nc, env_nb, pairs;
     double d_i, d_s, xi_d;
+    /* the last obstacle step's settled active set (warm start of the next): warm (0/1), nwarm
+       pairs, the bounds (-1 lower, 1 upper, 2 fixed, 0 free) and the active pairs' indices */
+    int32_t warm, nwarm;
+    int32_t wact[MMC_N];
+    int32_t wpair[MMC_K > 0 ? MMC_K : 1];
 } symkin_mmc_ctrl;
 
 /* info[0] status */

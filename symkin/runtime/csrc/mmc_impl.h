@@ -545,6 +545,20 @@ static int active_set_rows_(const double *J, const double *Jm, const double *nu,
 }
 #endif
 
+#if ND
+/* keep a settled active set (bounds, and the pairs of the active rows) for the next step */
+static void remember_(symkin_mmc_ctrl *c, const int *act, const int *rows, const int *pid, int npid)
+{
+    c->warm = 1;
+    c->nwarm = 0;
+    for (int k = 0; k < N; ++k)
+        c->wact[k] = act[k];
+    for (int j = 0; j < npid; ++j)
+        if (rows[j])
+            c->wpair[c->nwarm++] = pid[j];
+}
+#endif
+
 static int status_of_(OSQPInt s)
 {
     switch (s) {
@@ -574,11 +588,11 @@ static void save_(symkin_mmc_ctrl *c, const OSQPSolver *S)
 
 #if ND
 /* MMC._distance_rows: the gradient rows Jd (ND, N) and the damper lower bounds dl (ND) of the ND
-   closest pairs within d_i (ties by pair order), the other rows zero and free (-inf); returns how
-   many pairs lie within d_i (at most ND) */
-static int distance_rows_(symkin_mmc_ctrl *c, const double *q, double *Jd, double *dl)
+   closest pairs within d_i (ties by pair order), the other rows zero and free (-inf), and the
+   rows' pairs in idx; returns how many pairs lie within d_i (at most ND) */
+static int distance_rows_(symkin_mmc_ctrl *c, const double *q, double *Jd, double *dl, int *idx)
 {
-    int idx[ND], cnt = 0;
+    int cnt = 0;
     c->dist(q, c->env_s, c->env_ns, c->env_c, c->env_nc, c->env_b, c->env_nb, c->dbuf, 0);
     const double *d = c->dbuf;
     for (int p = 0; p < c->pairs; ++p) { /* insertion into the sorted ND closest (stable) */
@@ -792,7 +806,9 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     bounds_(c, q, lo, hi);
 #if ND
     double Jd[ND * N], dl[ND];
-    const int near = distance_rows_(c, q, Jd, dl) > 0;
+    int pid[ND];
+    const int npid = distance_rows_(c, q, Jd, dl, pid), near = npid > 0, warm = c->warm;
+    c->warm = 0; /* set again when this step's active set settles */
 #else
     const double *Jd = 0, *dl = 0;
     const int near = 0;
@@ -827,13 +843,27 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
                 inside = 0;
         }
 #if ND
-        if (near) { /* obstacle rows: the active-set solve with them, from the bounds qd crosses */
-            int act[N], rows[ND], its;
+        if (near) { /* obstacle rows: the active-set solve with them, first from the last step's
+                       active bounds and pairs, then from the bounds the closed form crosses */
+            int act[N], rows[ND], its = 0;
             double x[NX];
-            active_of_(qd, lo, hi, act);
-            memset(rows, 0, sizeof rows);
-            its = active_set_rows_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, Jd, dl, act, rows, 4 * N + 4, x);
+            if (warm) {
+                for (int k = 0; k < N; ++k)
+                    act[k] = lo[k] == hi[k] ? 2 : c->wact[k] == 2 ? 0 : c->wact[k];
+                for (int j = 0; j < ND; ++j) {
+                    rows[j] = 0;
+                    for (int w = 0; j < npid && w < c->nwarm; ++w)
+                        rows[j] |= c->wpair[w] == pid[j];
+                }
+                its = active_set_rows_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, Jd, dl, act, rows, 4 * N + 4, x);
+            }
+            if (!its) {
+                active_of_(qd, lo, hi, act);
+                memset(rows, 0, sizeof rows);
+                its = active_set_rows_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, Jd, dl, act, rows, 4 * N + 4, x);
+            }
             if (its) {
+                remember_(c, act, rows, pid, npid);
                 double slack = 0.0;
                 for (int k = 0; k < N; ++k)
                     qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
@@ -902,8 +932,10 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
             rows[j] = isfinite(dl[j]) && r < -y[6 + N + j];
         }
         polished = active_set_rows_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, Jd, dl, act, rows, 4 * N + 4, x) > 0;
-        if (polished)
+        if (polished) {
             status = MMC_SOLVED;
+            remember_(c, act, rows, pid, npid); /* the next step starts from this active set */
+        }
     }
 #endif
     if (ok && c->polish && !near && (status == MMC_SOLVED || status == MMC_INACCURATE || status == MMC_MAX_ITER)) {
