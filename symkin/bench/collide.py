@@ -224,7 +224,9 @@ def mmc_obstacle_steps(robot: Any, kin: Any, repeats: int = 3) -> dict[str, Any]
         states.append((q, nu))
         q = q + 0.05 * guide.step(q, nu)[0]
     best: dict[str, float] = {}
-    near = sum(bool((kin.distances(q, env) < options["d_i"]).any()) for q, _ in states)
+    is_self = np.array([kind == "self" for kind, _, _ in kin.collision_pairs(env)])
+    d_i = np.where(is_self, guide.d_i_self, guide.d_i)  # self pairs: their own influence distance
+    near = sum(bool((kin.distances(q, env) < d_i).any()) for q, _ in states)
     by_osqp = 0
     for name, kwargs in (("c", {**options}), ("python", {**options, "backend": "python"}), ("plain", {})):
         for _ in range(repeats):

@@ -329,11 +329,16 @@ class MMC:
     ``d_dot >= -xi_d (d - d_s) / (d_i - d_s)`` for every distance below the influence distance
     ``d_i`` (NEO's form, :func:`~symkin.runtime.mmc_qp.distance_dampers`), with ``d_dot = Jd qd``
     from the distance Jacobians (:meth:`symkin.Kinematics.distance_jacobians`), for the
-    ``collision_rows`` (32) closest pairs within ``d_i``. When any pair lies within ``d_i`` and
-    there is a slack, the step is first the active-set solve with the rows
-    (:func:`~symkin.runtime.mmc_qp.active_set_rows_solve`, from the bounds the closed form crosses),
-    else OSQP polished by the same solve. On C kinematics with the C collision kernel and the
-    slack, the whole step (distances, rows, QP) is one C call, like the step without obstacles.
+    ``collision_rows`` (32) closest pairs within ``d_i``. Pairs of the robot's own shapes use
+    ``d_i_self`` (0.05 m) and ``d_s_self`` (0: the sphere models already pad the links): sphere
+    models hold pairs that stay a few centimetres apart at every configuration (the built-in
+    Panda's closest self pair is 1.2 cm apart at qr), which obstacle margins would push apart
+    forever and which would crowd the obstacles out of the rows. When any pair lies within its
+    ``d_i`` and there is a slack, the step is first the active-set solve with the rows
+    (:func:`~symkin.runtime.mmc_qp.active_set_rows_solve`, from the last step's settled set, then
+    from the bounds the closed form crosses), else OSQP polished by the same solve. On C
+    kinematics with the C collision kernel and the slack, the whole step (distances, rows, QP) is
+    one C call, like the step without obstacles.
 
     ``slack`` (default: on with ``joint_limits`` or ``collision``) adds a slack ``s`` on the
     equality, weighted by ``slack_weight``, so the QP stays feasible when the dampers or speed
@@ -366,6 +371,8 @@ class MMC:
         d_s: float = 0.05,
         xi_d: float = 1.0,
         collision_rows: int = 32,
+        d_i_self: float = 0.05,
+        d_s_self: float = 0.0,
     ) -> None:
         self._collision = self._env = None
         self._warm: tuple[np.ndarray, np.ndarray] | None = None  # the last obstacle step's active sets
@@ -382,6 +389,12 @@ class MMC:
         )
         if self._collision is not None and not self.d_i > self.d_s:
             raise ParameterError(f"d_i ({d_i}) must exceed d_s ({d_s})")
+        self.d_i_self, self.d_s_self = (
+            _number(d_i_self, "d_i_self"),
+            _number(d_s_self, "d_s_self", strict=False),
+        )
+        if self._collision is not None and not self.d_i_self > self.d_s_self:
+            raise ParameterError(f"d_i_self ({d_i_self}) must exceed d_s_self ({d_s_self})")
         if (
             isinstance(collision_rows, bool)
             or not isinstance(collision_rows, (int, np.integer))
@@ -426,13 +439,16 @@ class MMC:
             from symkin.runtime import mmc_c
 
             c_collision = self._collision is None or (
-                self.slack and getattr(self._collision, "kernel", None) is not None
+                self.slack
+                and getattr(self._collision, "kernel", None) is not None
+                and self._collision.n == self.n  # the kernel takes this controller's joint values
             )
             if mmc_c.supports(kin) and not c_collision:
                 if backend == "c":
                     raise ConfigurationError(
                         "backend='c': the C MMC step with collision avoidance needs the slack "
-                        "(slack=True) and the C collision kernel; this MMC runs in Python (backend='auto')"
+                        "(slack=True) and the C collision kernel of the controller's joints; this MMC "
+                        "runs in Python (backend='auto')"
                     )
             elif mmc_c.supports(kin):
                 try:
@@ -521,11 +537,14 @@ class MMC:
             return None, None, np.zeros(0, dtype=int)
         d, Jd = self._collision.distance_jacobians(q, self._env)
         K = min(self.collision_rows, len(d))
-        near = np.flatnonzero(d < self.d_i)
-        near = near[np.argsort(d[near], kind="stable")[:K]]  # the closest pairs within d_i
+        is_self = np.arange(len(d)) < len(self._collision.layout.self_pairs)  # self pairs come first
+        d_i = np.where(is_self, self.d_i_self, self.d_i)
+        near = np.flatnonzero(d < d_i)
+        near = near[np.argsort(d[near], kind="stable")[:K]]  # the closest pairs within their d_i
         rows, lower = np.zeros((K, self.n)), np.full(K, -np.inf)  # K rows always: OSQP's sparsity is fixed
         rows[: len(near)] = Jd[near]
-        lower[: len(near)] = distance_dampers(d[near], self.d_i, self.d_s, self.xi_d)
+        d_s = np.where(is_self[near], self.d_s_self, self.d_s)
+        lower[: len(near)] = distance_dampers(d[near], d_i[near], d_s, self.xi_d)
         return rows, lower, near
 
     def step(self, q: Any, nu: Any) -> tuple[np.ndarray, StepInfo]:

@@ -293,7 +293,8 @@ def _ctrl_type(n: int, nd: int = 0) -> type[ctypes.Structure]:
                 ("y", _D * (6 + n + nd)),
                 *((f, _P) for f in ("dist", "rows", "env_s", "env_c", "env_b", "dbuf")),
                 *((f, _I32) for f in ("env_ns", "env_nc", "env_nb", "pairs")),
-                *((f, _D) for f in ("d_i", "d_s", "xi_d")),
+                *((f, _D) for f in ("d_i", "d_s", "xi_d", "d_i_self", "d_s_self")),
+                ("self_pairs", _I32),
                 ("warm", _I32),
                 ("nwarm", _I32),
                 ("wact", _I32 * n),
@@ -399,6 +400,8 @@ class CMMC(_CController):
         self.kind = _KIND_MMC6D if nd else _KIND_MMC6 if mmc.slack else _KIND_MMC0
         if nd:
             self._distance_inputs(check.kernel, mmc._env, mmc.d_i, mmc.d_s, mmc.xi_d)
+            c.d_i_self, c.d_s_self = mmc.d_i_self, mmc.d_s_self
+            c.self_pairs = len(check.kernel.layout.self_pairs)
         self.fast = functools.partial(self._ext.step, self._addr, self.kind)
 
     def _distance_inputs(self, kernel: Any, env: Any, d_i: float, d_s: float, xi_d: float) -> None:

@@ -136,7 +136,12 @@ def test_mmc_with_an_obstacle_never_enters_it(panda, kin):
     assert kin.distances(run.q, env)[:, -shapes:].min() > 0 and run.arrived
     qp = mmc.build(q0, np.zeros(6))
     assert qp.n_distance == 32  # the closest pairs within d_i, padded with free rows
-    assert np.isfinite(qp.l[6 + 7 :]).sum() == min(32, (kin.distances(q0, env) < 0.3).sum())
+    d = kin.distances(q0, env)
+    is_self = np.array([kind == "self" for kind, _, _ in kin.collision_pairs(env)])
+    within = np.where(is_self, d < 0.05, d < 0.3)  # self pairs: d_i_self (0.05)
+    assert np.isfinite(qp.l[6 + 7 :]).sum() == min(32, within.sum()) and (within & ~is_self).any()
+    with pytest.raises(ParameterError, match="d_i_self"):
+        symkin.MMC(kin, collision=env, d_i_self=0.01, d_s_self=0.02)
     with pytest.raises(ParameterError, match="d_i"):
         symkin.MMC(kin, collision=env, d_i=0.01, d_s=0.05)
     with pytest.raises(ParameterError, match="collision_rows"):
@@ -193,8 +198,9 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
 
 def test_mmc_collision_backends_and_self_collision(panda, kin):
     # self-collision only (collision=True) runs in C too; without the slack it stays in Python
-    # (the sphere model's closest self pair at qr is 1.2 cm apart: within d_i, above d_s)
-    nu, options = np.r_[0.05, 0, 0, 0, 0, 0], {"collision": True, "d_i": 0.1, "d_s": 0.005}
+    # (the sphere model's closest self pair at qr is 1.2 cm apart: within d_i_self, above d_s_self;
+    # with the obstacles' d_s = 0.05 it would have to part at every step)
+    nu, options = np.r_[0.05, 0, 0, 0, 0, 0], {"collision": True}
     (qd, info), (ref, rinfo) = (
         symkin.MMC(kin, **options, backend=b).step(panda.qr, nu) for b in ("c", "python")
     )

@@ -78,6 +78,8 @@ typedef struct {
     double *dbuf;
     int32_t env_ns, env_nc, env_nb, pairs;
     double d_i, d_s, xi_d;
+    double d_i_self, d_s_self; /* the self pairs' (the first self_pairs of the distances) */
+    int32_t self_pairs;
     /* the last obstacle step's settled active set (warm start of the next): warm (0/1), nwarm
        pairs, the bounds (-1 lower, 1 upper, 2 fixed, 0 free) and the active pairs' indices */
     int32_t warm, nwarm;

@@ -588,15 +588,17 @@ static void save_(symkin_mmc_ctrl *c, const OSQPSolver *S)
 
 #if ND
 /* MMC._distance_rows: the gradient rows Jd (ND, N) and the damper lower bounds dl (ND) of the ND
-   closest pairs within d_i (ties by pair order), the other rows zero and free (-inf), and the
-   rows' pairs in idx; returns how many pairs lie within d_i (at most ND) */
+   closest pairs within their d_i (d_i_self for self pairs; ties by pair order), the other rows
+   zero and free (-inf), and the rows' pairs in idx; returns how many pairs lie within their d_i
+   (at most ND) */
 static int distance_rows_(symkin_mmc_ctrl *c, const double *q, double *Jd, double *dl, int *idx)
 {
     int cnt = 0;
     c->dist(q, c->env_s, c->env_ns, c->env_c, c->env_nc, c->env_b, c->env_nb, c->dbuf, 0);
     const double *d = c->dbuf;
     for (int p = 0; p < c->pairs; ++p) { /* insertion into the sorted ND closest (stable) */
-        if (!(d[p] < c->d_i) || (cnt == ND && !(d[p] < d[idx[ND - 1]])))
+        const double d_i = p < c->self_pairs ? c->d_i_self : c->d_i;
+        if (!(d[p] < d_i) || (cnt == ND && !(d[p] < d[idx[ND - 1]])))
             continue;
         int j = cnt < ND ? cnt++ : ND - 1;
         while (j > 0 && d[idx[j - 1]] > d[p]) {
@@ -608,8 +610,11 @@ static int distance_rows_(symkin_mmc_ctrl *c, const double *q, double *Jd, doubl
     memset(Jd, 0, sizeof(double) * ND * N);
     if (cnt) /* the gradient rows of the chosen pairs only */
         c->rows(q, c->env_s, c->env_ns, c->env_c, c->env_nc, c->env_b, c->env_nb, idx, cnt, Jd);
-    for (int j = 0; j < ND; ++j)
-        dl[j] = j < cnt ? -c->xi_d * (d[idx[j]] - c->d_s) / (c->d_i - c->d_s) : -INFINITY;
+    for (int j = 0; j < ND; ++j) {
+        const int self = j < cnt && idx[j] < c->self_pairs;
+        const double d_i = self ? c->d_i_self : c->d_i, d_s = self ? c->d_s_self : c->d_s;
+        dl[j] = j < cnt ? -c->xi_d * (d[idx[j]] - d_s) / (d_i - d_s) : -INFINITY;
+    }
     return cnt;
 }
 #endif
