@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import numpy as np
@@ -120,7 +121,7 @@ def test_collide_and_plot_read_a_urdfs_collision_elements(tmp_path, capsys):
     assert "in collision (red)" in capsys.readouterr().out and png.stat().st_size > 10_000
 
 
-def test_servo_with_collision_goes_around_an_obstacle(capsys):
+def test_servo_with_collision_goes_around_an_obstacle(capsys, tmp_path):
     """`symkin servo --collision --sphere ...` servos with MMC and the obstacle's dampers (the C
     step); the straight servo through the same sphere's place enters it."""
     panda = symkin.load("panda")
@@ -138,6 +139,10 @@ def test_servo_with_collision_goes_around_an_obstacle(capsys):
     data = json.loads(capsys.readouterr().out)
     assert data["arrived"] and data["closest_obstacle"] > 0 and data["controller_backend"] == "c"
     assert main(argv) == 0 and "closest approach to an obstacle" in capsys.readouterr().out
+    if importlib.util.find_spec("matplotlib") is not None:  # the clearance panel
+        png = tmp_path / "servo.png"
+        assert main([*argv, "--plot", str(png)]) == 0 and png.stat().st_size > 10_000
+        capsys.readouterr()
     assert main(["servo", "panda", "--pose", pose, "--sphere", "0 0 0 0.1"]) == 2
     assert "add --collision" in capsys.readouterr().err
     assert main(["servo", "panda", "--pose", pose, "--collision", "--controller", "rrmc"]) == 2

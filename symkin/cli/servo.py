@@ -95,7 +95,12 @@ def run(args: argparse.Namespace) -> int:
         summary["closest_pair"] = float(D.min())
         summary["controller_backend"] = controller.backend
     if args.plot:
-        _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}")
+        clearance = None
+        if args.collision:  # per step: the closest obstacle (or, self only, the closest pair)
+            D = np.asarray(kin.distances(np.asarray(res.q), env))
+            clearance = D[:, -len(robot.geometry.shapes) * len(env) :] if len(env) else D
+            clearance = (clearance.min(axis=1), args.d_s if len(env) else 0.0)
+        _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}", clearance)
         summary["plot"] = args.plot
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -117,7 +122,9 @@ def run(args: argparse.Namespace) -> int:
     return 0 if res.arrived else 1
 
 
-def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
+def _plot_servo(res: Any, dt: float, path: str, title: str, clearance: Any = None) -> None:
+    """Manipulability and error against time; with ``clearance`` ((steps,) distances, the safety
+    distance) a third panel with the closest approach."""
     try:
         import matplotlib
 
@@ -126,13 +133,22 @@ def _plot_servo(res: Any, dt: float, path: str, title: str) -> None:
     except ImportError:
         raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
     t = np.arange(len(res.manipulability)) * dt
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    panels = 2 if clearance is None else 3
+    fig, axes = plt.subplots(panels, 1, figsize=(7, 2.5 * panels), sharex=True)
+    a1, a2 = axes[0], axes[1]
     a1.plot(t, res.manipulability)
     a1.set_ylabel("manipulability")
     a1.set_title(title)
     a2.plot(np.arange(len(res.e)) * dt, np.abs(np.asarray(res.e)).sum(axis=1))
     a2.set_ylabel("sum |e|")
-    a2.set_xlabel("time (s)")
+    if clearance is not None:
+        d, d_s = clearance
+        axes[2].plot(np.arange(len(d)) * dt, d, label="closest distance")
+        axes[2].axhline(d_s, color="tab:orange", linestyle="--", label="safety distance")
+        axes[2].axhline(0.0, color="tab:red", linewidth=0.8, label="contact")
+        axes[2].set_ylabel("clearance (m)")
+        axes[2].legend(loc="best", fontsize="small")
+    axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
