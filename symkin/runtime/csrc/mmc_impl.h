@@ -152,6 +152,17 @@ static double det_(const double *G, int r)
     return d;
 }
 
+/* the slack s = nu - J qd of the equality (NS values: none without the slack) */
+static void slack_of_(const double *J, const double *nu, const double *qd, double *s)
+{
+    for (int i = 0; i < NS; ++i) {
+        double v = nu[i];
+        for (int k = 0; k < N; ++k)
+            v -= J[i * N + k] * qd[k];
+        s[i] = v;
+    }
+}
+
 static double residual_(const double *J, const double *qd, const double *nu)
 {
     double res = 0.0;
@@ -533,12 +544,7 @@ static int active_set_rows_(const double *J, const double *Jm, const double *nu,
                 return 0;
         for (int k = 0; k < N; ++k)
             x[k] = xs[k];
-        for (int i = 0; i < NS; ++i) {
-            double v = nu[i];
-            for (int k = 0; k < N; ++k)
-                v -= J[i * N + k] * xs[k];
-            x[N + i] = v;
-        }
+        slack_of_(J, nu, xs, x + N);
         return iter;
     }
     return 0;
@@ -978,12 +984,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
         double xw[NX], yw[NC];
         for (int k = 0; k < N; ++k)
             xw[k] = qd[k];
-        for (int i = 0; i < NS; ++i) {
-            double s = nu[i];
-            for (int k = 0; k < N; ++k)
-                s -= J[i * N + k] * qd[k];
-            xw[N + i] = s;
-        }
+        slack_of_(J, nu, qd, xw + N);
         memset(yw, 0, sizeof yw);
         osqp_warm_start(&MMC_SOLVER, xw, yw);
         save_(c, &MMC_SOLVER);
