@@ -24,7 +24,8 @@ RUN_COMMAND = (
     "symkin compile panda --backend c -o build/panda"
 )
 TEST_COMMAND = (
-    'python3 -m venv .venv && . .venv/bin/activate && pip install ".[test,scale]" && python -m pytest -q'
+    'python3 -m venv .venv && . .venv/bin/activate && pip install ".[test,scale]" && '
+    "python -m pytest -q -n auto"
 )
 
 OPTIONAL = ("roboticstoolbox",)  # blocks showing the compare extra run where it is installed
@@ -69,4 +70,5 @@ def test_readme_and_docs_are_free_of_internal_labels():
 
 def test_readme_names_the_test_command_that_ci_runs():
     ci = (ROOT / ".ci" / "run").read_text()
-    assert "python -m pytest -q" in README.read_text() and "python -m pytest -q" in ci
+    assert "python -m pytest -q -n auto" in README.read_text()
+    assert "python -m pytest -q -p no:cacheprovider -n auto" in ci
