@@ -3,9 +3,11 @@
 For robots of n joints and one set of OSQP settings, :func:`mmc_library` compiles (cached by
 :func:`symkin.emit.c.build.compile_library`) the sources that ``osqp.OSQP.codegen(parameters=
 "matrices")`` emits for the MMC QP (OSQP's embedded mode: no allocation, matrices updated in place),
-once without and once with the equality slack, the C step of :meth:`symkin.runtime.control.MMC.step`
-for each, the resolved-rate step of :func:`symkin.runtime.control.rrmc` and a small CPython extension
-(``mmc_py.c``) that calls a step, or runs a whole servo loop, in one call from Python. The OSQP
+once without and once with the equality slack (and, for ``MMC(collision=...)``, once more with
+the slack and K collision rows: a library per n and K), the C step of
+:meth:`symkin.runtime.control.MMC.step` for each, the resolved-rate step of
+:func:`symkin.runtime.control.rrmc` and a small CPython extension (``mmc_py.c``) that calls a step,
+or runs a whole servo loop, in one call from Python. The OSQP
 sources are kept in the cache as well, so a warm process neither imports osqp nor generates them. A
 robot's kinematics enter as pointers to its generated functions (from the compiled C
 :class:`~symkin.runtime.kinematics.Kinematics`), so robots with the same number of joints share one

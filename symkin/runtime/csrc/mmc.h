@@ -4,7 +4,8 @@
  * A library for robots of MMC_N joints (mmc_config.h) holds the embedded OSQP sources emitted by
  * osqp.OSQP.codegen for the MMC QP without slack (solver mmcqp0_solver) and with the equality
  * slack (mmcqp6_solver), and mmc_impl.h compiled once for each (mmc_s0.c, mmc_s6.c, which define
- * MMC_NS, MMC_SOLVER and MMC_FN). The robot's kinematics come as a function pointer to its
+ * MMC_NS, MMC_SOLVER and MMC_FN); a library with MMC_K > 0 (MMC with collision avoidance) also
+ * holds the variant with the slack and MMC_K distance rows (mmcqp6d_solver, mmc_s6d.c). The robot's kinematics come as a function pointer to its
  * generated jacob0_hessian0. See symkin/runtime/mmc_c.py; the Python reference is
  * symkin.runtime.control.MMC.
  */
