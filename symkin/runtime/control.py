@@ -619,11 +619,7 @@ class MMC:
         found = active_set_solve(J, Jm, nu, lower, upper, self.lam, w, active_of(qd, lower, upper))
         if found is None:
             return None
-        x, solves = found
-        qd = np.clip(x[: self.n], lower, upper)
-        slack = float(np.linalg.norm(x[self.n :])) if w is not None else 0.0
-        res = float(np.abs(J @ qd - nu).max())
-        return qd, StepInfo("solved", "active_set", m, solves, residual=res, slack=slack)
+        return self._active_set_answer(J, nu, lower, upper, m, *found)
 
     def _active_set_rows(
         self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
@@ -636,6 +632,13 @@ class MMC:
             return None
         x, solves, act, rows = found
         self._warm = (act, pairs[rows[: len(pairs)]])
+        return self._active_set_answer(J, nu, lower, upper, m, x, solves)
+
+    def _active_set_answer(
+        self, J: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float, x: np.ndarray,
+        solves: int,
+    ) -> tuple[np.ndarray, StepInfo]:  # fmt: skip
+        """An active-set solution x (qd, or (qd, s)) as the step's answer: qd clipped into the bounds."""
         qd = np.clip(x[: self.n], lower, upper)
         res, slack = float(np.abs(J @ qd - nu).max()), float(np.linalg.norm(x[self.n :]))
         return qd, StepInfo("solved", "active_set", m, solves, residual=res, slack=slack)

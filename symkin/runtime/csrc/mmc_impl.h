@@ -10,7 +10,9 @@
  * polishing is not part of its embedded code; when OSQP reports "solved", the active-set solve
  * started from OSQP's active set replaces its answer when it verifies. With MMC_ND (the distance
  * variant) the QP has ND more rows, the velocity dampers of the closest pairs of the robot's
- * geometry (MMC._distance_rows); when any pair lies within d_i, only OSQP solves the step.
+ * geometry (MMC._distance_rows); when any pair lies within its d_i, the active-set solve that
+ * knows the rows (from the last step's set, then from the closed form's bounds) comes first, else
+ * OSQP polished by the same solve.
  */
 #include <math.h>
 #include <string.h>
@@ -214,6 +216,19 @@ static void write_info_(double *out, int status, int method, double m, int iters
     info[6] = slack;
     info[7] = scale;
     info[8] = polished;
+}
+
+/* an active-set solution x (NX) as the step's answer: qd clipped into the bounds, the info */
+static void active_set_answer_(double *out, const double *J, const double *nu, const double *lo,
+                               const double *hi, const double *x, double m, int its)
+{
+    double slack = 0.0, *qd = out;
+    for (int k = 0; k < N; ++k)
+        qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
+    for (int i = N; i < NX; ++i)
+        slack += x[i] * x[i];
+    write_info_(out, MMC_SOLVED, MMC_ACTIVE_SET, m, its, MMC_NO_FALLBACK, residual_(J, qd, nu), sqrt(slack),
+                1.0, 0);
 }
 
 /* MMC._fallback: the RRMC step (inverse/pinv, or damped when singular) scaled into the bounds */
@@ -524,16 +539,15 @@ static int active_set_rows_(const double *J, const double *Jm, const double *nu,
                 }
             }
         }
-        int leave = 0;
-        for (int r = 0; r < nr; ++r)
-            leave |= mu[r] < -1e-12 * (1.0 + scale);
-        if (changed || join >= 0 || leave) {
+        for (int r = 0; r < nr; ++r) /* rows whose multiplier has the wrong sign leave */
+            if (mu[r] < -1e-12 * (1.0 + scale)) {
+                rows[R[r]] = 0;
+                changed = 1;
+            }
+        if (changed || join >= 0) {
             memcpy(act, newact, sizeof newact);
             if (join >= 0)
                 rows[join] = 1;
-            for (int r = 0; r < nr; ++r)
-                if (mu[r] < -1e-12 * (1.0 + scale))
-                    rows[R[r]] = 0;
             continue;
         }
         for (int k = 0; k < N; ++k) /* verify (the Schur complement may be numerically singular) */
@@ -875,13 +889,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
             }
             if (its) {
                 remember_(c, act, rows, pid, npid);
-                double slack = 0.0;
-                for (int k = 0; k < N; ++k)
-                    qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
-                for (int i = N; i < NX; ++i)
-                    slack += x[i] * x[i];
-                write_info_(out, MMC_SOLVED, MMC_ACTIVE_SET, m, its, MMC_NO_FALLBACK, residual_(J, qd, nu),
-                            sqrt(slack), 1.0, 0);
+                active_set_answer_(out, J, nu, lo, hi, x, m, its);
                 return 0;
             }
             inside = 0;
@@ -907,13 +915,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
             active_of_(qd, lo, hi, act);
             its = active_set_(J, Jm, nu, lo, hi, c->lam, c->slack_weight, act, 2 * N + 2, x);
             if (its) {
-                double slack = 0.0;
-                for (int k = 0; k < N; ++k)
-                    qd[k] = fmin_(fmax_(x[k], lo[k]), hi[k]);
-                for (int i = N; i < NX; ++i)
-                    slack += x[i] * x[i];
-                write_info_(out, MMC_SOLVED, MMC_ACTIVE_SET, m, its, MMC_NO_FALLBACK,
-                            residual_(J, qd, nu), sqrt(slack), 1.0, 0);
+                active_set_answer_(out, J, nu, lo, hi, x, m, its);
                 return 0;
             }
         }
