@@ -7,7 +7,9 @@ CasADi backends and the numeric reference; roboticstoolbox-python and Pinocchio 
 frame (``forwardKinematics`` + ``updateFramePlacement``). Batched: throughput on N random
 configurations on one core, through the extension (``c``, ``numpy``: validation and output arrays
 included) and through the generated ``<f>_batch`` kernels alone, built as they are (four
-configurations per step) and with ``-DSYMKIN_SCALAR`` (one per step). Times are CPU times of the
+configurations per step) and with ``-DSYMKIN_SCALAR`` (one per step), and the four-lane kernels
+called on blocks of 1 000 configurations whose outputs stay in the cache (their arithmetic
+throughput, without a large batch's memory traffic). Times are CPU times of the
 calling thread (``time.thread_time``), so that other processes of a shared machine do not count.
 """
 
@@ -254,7 +256,24 @@ def _c_builds(robot: Any, kin: Any, Q: np.ndarray) -> dict[str, dict[str, Callab
 
             fns[f] = call
         builds[label] = fns
+        if not flags:  # the same kernels on blocks whose outputs stay in the cache
+            builds[f"4 lanes, {BLOCK} per call"] = {f: _in_blocks(fn) for f, fn in fns.items()}
     return builds
+
+
+BLOCK = 1000  # configurations per call of the cache-resident rows of bench kin
+
+
+def _in_blocks(call: Callable[[np.ndarray], Any]) -> Callable[[np.ndarray], None]:
+    """``call`` on consecutive blocks of BLOCK rows, every block's outputs in the first rows of the
+    output arrays: the kernels' throughput without the memory traffic of a large batch."""
+
+    def blocks(Qb: np.ndarray) -> None:
+        Qb = np.ascontiguousarray(Qb, dtype=float)
+        for i in range(0, len(Qb), BLOCK):
+            call(Qb[i : i + BLOCK])
+
+    return blocks
 
 
 def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:

@@ -82,7 +82,8 @@ def _times(dst: str, parent: str | None, A: np.ndarray, vec: bool = False) -> li
 
 def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool = False) -> list[str]:
     """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; ``vec``: four lanes (sin and
-    cos by ``skv_sin``/``skv_cos``: lane by lane the numbers of the scalar ``sk_sin``/``sk_cos``)."""
+    cos by the branch-free ``skv_sin_``/``skv_cos_``: lane by lane the numbers of the scalar
+    ``sk_sin``/``sk_cos``, the lanes those cannot compute marked in ``far``)."""
     lines = [f"memcpy({dst}, {src}, sizeof({dst}));"]
     if not revolute:
         for i in range(3):
@@ -90,7 +91,7 @@ def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool 
         return lines
     j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
     if vec:
-        lines.insert(0, f"{{ const v4 th_ = {theta}, c = skv_cos(th_), s = skv_sin(th_);")
+        lines.insert(0, f"{{ const v4 th_ = {theta}, c = skv_cos_(th_, far), s = skv_sin_(th_, far);")
     else:
         lines.insert(0, f"{{ const double c = sk_cos({theta}), s = sk_sin({theta});")
     for i in range(3):

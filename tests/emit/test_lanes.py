@@ -161,3 +161,28 @@ def test_tree_batch_writes_the_zero_entries_too():
     fn.restype = None
     fn(*(a.ctypes.data_as(ctypes.c_void_p) for a in (Q, T2, J2)), ctypes.c_ssize_t(len(Q)))
     assert np.array_equal(T2, T) and np.array_equal(J2, J)
+
+
+def test_lane_calls_find_whole_arguments():
+    """sin/cos calls become the branch-free lane kernels with their whole (nested) argument."""
+    from symkin.emit.c.backend import lane_calls
+
+    assert lane_calls("-sk_sin(q6 + 0.785)") == "-skv_sin_(q6 + 0.785, &far_)"
+    assert (
+        lane_calls("t1*sk_cos((0.5)*(q0 + q1)) + sk_sin(sk_cos(q2))")
+        == "t1*skv_cos_((0.5)*(q0 + q1), &far_) + skv_sin_(skv_cos_(q2, &far_), &far_)"
+    )
+    assert lane_calls("t3*t4") == "t3*t4"
+
+
+def test_a_far_lane_sends_its_four_configurations_through_the_scalar_code():
+    """The four-lane bodies are straight-line code; a lane beyond the inline range makes the body
+    compute its four configurations with the scalar code, so the blocks with one huge angle still
+    give, in every lane, what one call gives."""
+    kin = symkin.compile("ur5", backend="c")
+    Q = kin.robot.random_q(8, seed=2)
+    Q[6, 2] = 3e9
+    Q[1, 4] = -2e6
+    T = kin.fkine(Q)
+    for i in range(8):
+        assert np.array_equal(T[i], kin.fkine(Q[i])), i

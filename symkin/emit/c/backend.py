@@ -73,15 +73,64 @@ PRECISIONS = ("double", "float")
 
 # a printed C expression's tokens: numbers (0.316, 2.0, 1e-20) and identifiers
 _TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[A-Za-z_]\w*")
-_LANE_CALLS = {"sk_sin": "skv_sin", "sk_cos": "skv_cos"}
+_LANE_CALLS = ("sk_sin", "sk_cos")
+
+
+def lane_calls(expr: str) -> str:
+    """``expr`` with each ``sk_sin(x)``/``sk_cos(x)`` as ``skv_sin_(x, &far_)``/``skv_cos_(x,
+    &far_)``: the branch-free four-lane kernels, which mark in ``far_`` the lanes the scalar code
+    must compute (``c/_sincos.c.j2``)."""
+    out, i = [], 0
+    while True:
+        j = min((k for k in (expr.find(c + "(", i) for c in _LANE_CALLS) if k >= 0), default=-1)
+        if j < 0:
+            return "".join(out) + expr[i:]
+        name = expr[j : expr.index("(", j)]
+        depth, k = 0, j + len(name)
+        while True:
+            depth += {"(": 1, ")": -1}.get(expr[k], 0)
+            if depth == 0:
+                break
+            k += 1
+        arg = lane_calls(expr[j + len(name) + 1 : k])
+        out += [expr[i:j], "skv", name[2:], "_(", arg, ", &far_)"]
+        i = k + 1
+
+
+def _blocks(size: int, values: list[tuple[int, str, bool]]) -> list[dict[str, Any]]:
+    """Stores of an output of ``size`` entries four at a time: blocks of four consecutive entries
+    (the last one overlapping its predecessor when 4 does not divide ``size``), each with its four
+    vector expressions (constants broadcast) and whether all four are the constant 0. Empty for
+    fewer than four entries or when some entry has no value: then the stores go entry by entry."""
+    by = {i: (e, const) for i, e, const in values}
+    if size < 4 or len(by) != size:
+        return []
+    starts = [*range(0, size - 3, 4)]
+    if starts[-1] + 4 < size:
+        starts.append(size - 4)
+    blocks = []
+    for s in starts:
+        entries = [by[s + t] for t in range(4)]
+        blocks.append(
+            {
+                "start": s,
+                "exprs": [f"SKV_SPLAT({e})" if const else e for e, const in entries],
+                "zero": all(const and e == "0.0" for e, const in entries),
+            }
+        )
+    return blocks
 
 
 def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
     """The four-configuration bodies of the generated functions that are straight-line arithmetic
-    and sin/cos of their inputs (``c/_sincos.c.j2``'s ``skv_sin``/``skv_cos`` in place of
-    ``sk_sin``/``sk_cos``; constants broadcast), by function name: ``lines`` as (name, expression)
-    and ``outs`` as (name, size, ((index, expression, constant), ...)). Functions that call others
-    or run loops (delegates, Hessians, scratch arrays) are left out: their batch stays scalar."""
+    and sin/cos of their inputs (``c/_sincos.c.j2``'s branch-free ``skv_sin_``/``skv_cos_`` in
+    place of ``sk_sin``/``sk_cos``; constants broadcast), by function name: ``lines`` as (name,
+    expression), every expression that calls sin/cos among them, and ``outs`` as (name, size,
+    ((index, expression, constant), ...), blocks) with ``blocks`` the stores four entries at a time
+    (:func:`_blocks`; empty for outputs of fewer than four entries); ``trig``: whether the body
+    calls sin/cos (then lanes out of the kernels' range send the four configurations through the
+    scalar code). Functions that call others or run loops (delegates, Hessians, scratch arrays)
+    are left out: their batch stays scalar."""
     bodies = {}
     for f in functions:
         if f.delegate or f.hessians or f.scratch:
@@ -92,17 +141,26 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
             idents = {t for t in _TOKEN.findall(expr) if not t[0].isdigit() and t[0] != "."}
             if idents - names - set(_LANE_CALLS):
                 return None
-            for scalar, vector in _LANE_CALLS.items():
-                expr = expr.replace(scalar + "(", vector + "(")
-            return expr, not idents
+            return lane_calls(expr), not idents
 
         lines = [(name, lane(expr)) for name, expr in f.lines]
         outs = [(o.name, o.size, [(i, lane(expr)) for i, expr in o.values]) for o in f.outs]
         if any(v is None for _, v in lines) or any(v is None for _, _, vs in outs for _, v in vs):
             continue
+        body_lines = [(name, f"SKV_SPLAT({e})" if const else e) for name, (e, const) in lines]
+        body_outs = []
+        for name, size, vs in outs:
+            values = []
+            for i, (e, const) in vs:
+                if "far_" in e:  # sin/cos before the range check: into a line of its own
+                    body_lines.append((f"{name}_{i}_", e))
+                    e = f"{name}_{i}_"
+                values.append((i, e, const))
+            body_outs.append((name, size, values, _blocks(size, values)))
         bodies[f.name] = {
-            "lines": [(name, f"SKV_SPLAT({e})" if const else e) for name, (e, const) in lines],
-            "outs": [(name, size, [(i, e, const) for i, (e, const) in vs]) for name, size, vs in outs],
+            "lines": body_lines,
+            "outs": body_outs,
+            "trig": any("far_" in e for _, e in body_lines),
         }
     return bodies
 
