@@ -76,20 +76,27 @@ def _is_identity(C: np.ndarray) -> bool:
 def _times(dst: str, parent: str | None, A: np.ndarray, vec: bool = False) -> list[str]:
     """``dst = parent * A``: the constants alone at the base, a copy when A is the identity."""
     if parent is not None and _is_identity(A):
-        return [f"memcpy({dst}, {parent}, sizeof({dst}));"]
+        return _copy(dst, parent, range(12))
     return _product(dst, parent, A, vec)
+
+
+def _copy(dst: str, src: str, entries: Any) -> list[str]:
+    """``dst[e] = src[e]`` for each entry e, one statement each (a memcpy of 12 four-lane entries
+    is a library call the compiler does not inline)."""
+    return [f"{dst}[{e}] = {src}[{e}];" for e in entries]
 
 
 def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool = False) -> list[str]:
     """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; ``vec``: four lanes (sin and
     cos by the branch-free ``skv_sin_``/``skv_cos_``: lane by lane the numbers of the scalar
     ``sk_sin``/``sk_cos``, the lanes those cannot compute marked in ``far``)."""
-    lines = [f"memcpy({dst}, {src}, sizeof({dst}));"]
     if not revolute:
+        lines = _copy(dst, src, [e for e in range(12) if e % 4 != 3])
         for i in range(3):
             lines.append(f"{dst}[{4 * i + 3}] = {src}[{4 * i + 3}] + ({theta}) * {src}[{4 * i + axis}];")
         return lines
     j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
+    lines = _copy(dst, src, [e for e in range(12) if e % 4 not in (j, k)])
     if vec:
         lines.insert(0, f"{{ const v4 th_ = {theta}, c = skv_cos_(th_, far), s = skv_sin_(th_, far);")
     else:
