@@ -146,6 +146,44 @@ def _fk_lines(tree: Any, vec: bool) -> tuple[list[str], list[tuple]]:
     return fk, joints
 
 
+SPHERE_FIRST = 3  # a sphere with this many partners on the other link is first tried on its bound
+
+
+def _outer_side(pairs: list[tuple[int, int]], link_of: dict[int, int], a: int) -> tuple[dict, int]:
+    """The sphere pairs of two links (``a`` and the other) by sphere of the side with fewer spheres:
+    {sphere: [partners]} and the index (0: link a, 1: the other) of that side."""
+    split = [(i, j) if link_of[i] == a else (j, i) for i, j in pairs]  # (on link a, on the other)
+    side = 0 if len({p[0] for p in split}) <= len({p[1] for p in split}) else 1
+    partners: dict[int, list[int]] = {}
+    for p in split:
+        partners.setdefault(p[side], []).append(p[1 - side])
+    return partners, side
+
+
+def _by_sphere(
+    pairs: list[tuple[int, int]], link_of: dict[int, int], a: int, bounds: list, is_cap: list[bool]
+) -> list[tuple[int, tuple[int, str], list[int]]]:
+    """The spheres of two links' sphere pairs worth testing first against the other link's bounding
+    sphere (all spheres, at least SPHERE_FIRST partners): (sphere, that bound, its partners). A
+    sphere that misses the other link's bounding sphere misses every shape inside it."""
+    if any(is_cap[i] or is_cap[j] for i, j in pairs):
+        return []
+    partners, _ = _outer_side(pairs, link_of, a)
+    out = []
+    for outer, inner in partners.items():
+        if len(inner) >= SPHERE_FIRST:
+            out.append((outer, bounds[link_of[inner[0]]], inner))
+    return out
+
+
+def _unsorted(
+    pairs: list[tuple[int, int]], link_of: dict[int, int], a: int, bounds: list, is_cap: list[bool]
+) -> list[tuple[int, int]]:
+    """The pairs :func:`_by_sphere` leaves to be tested one by one, in their order."""
+    first = {outer for outer, _, _ in _by_sphere(pairs, link_of, a, bounds, is_cap)}
+    return [(i, j) for i, j in pairs if i not in first and j not in first]
+
+
 def collision_tables(layout: Any) -> dict[str, Any]:
     """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
     tree = layout.tree
@@ -186,7 +224,8 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         link_shapes += group
         link_start.append(len(link_shapes))
     # in_collision's checks as straight-line code: per pair of links, their bounding spheres, then
-    # each shape pair (two spheres: squared distance against the constant squared radius sum)
+    # each shape pair (two spheres: squared distance against the constant squared radius sum); a
+    # sphere with SPHERE_FIRST or more partners on the other link meets that link's bound first
     first = layout.point_index
     radius = [float(x.radius) for x in layout.shapes]
     is_cap = [isinstance(x, Capsule) for x in layout.shapes]
@@ -194,7 +233,14 @@ def collision_tables(layout: Any) -> dict[str, Any]:
     for (a, b), start, stop in zip(group_links, group_start, group_start[1:]):
         (pa, ra), (pb, rb) = bounds[a], bounds[b]
         self_code.append(f"if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{")
-        for i, j in grouped[start:stop]:
+        for outer, bound, inner in _by_sphere(grouped[start:stop], link_of, a, bounds, is_cap):
+            xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
+            self_code.append(f"    if (sphere_hit({xo}, X[{bound[0]}], {_num(rr_o)})) {{")
+            for j in inner:
+                rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
+                self_code.append(f"        if (sphere_hit({xo}, X[{first[j]}], {_num(rr)})) return 1;")
+            self_code.append("    }")
+        for i, j in _unsorted(grouped[start:stop], link_of, a, bounds, is_cap):
             if is_cap[i] or is_cap[j]:
                 self_code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
             else:
@@ -235,7 +281,15 @@ def collision_tables(layout: Any) -> dict[str, Any]:
             rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
             self_code4.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
             self_code4.append("if (skv_any(need)) {")
-            for i, j in grouped[start:stop]:
+            for outer, bound, inner in _by_sphere(grouped[start:stop], link_of, a, bounds, is_cap):
+                xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
+                self_code4.append(f"    near = need & hit2({xo}, X[{bound[0]}], {_num(rr_o)});")
+                self_code4.append("    if (skv_any(near)) {")
+                for j in inner:
+                    rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
+                    self_code4.append(f"        hit |= near & hit2({xo}, X[{first[j]}], {_num(rr)});")
+                self_code4.append("    }")
+            for i, j in _unsorted(grouped[start:stop], link_of, a, bounds, is_cap):
                 rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
                 self_code4.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
             self_code4.append("    if (skv_all(hit)) return hit;")

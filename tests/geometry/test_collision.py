@@ -380,3 +380,33 @@ def test_four_lane_batch_gives_the_scalar_verdicts(panda, capsules):
         assert np.array_equal(outs[0], outs[1])
         assert 0 < outs[0].mean() < 1
         assert np.array_equal(outs[0][:200], [kin.in_collision(q, env) for q in Q[:200]])
+
+
+def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
+    """The generated self checks try a sphere with several partners on the other link against that
+    link's bounding sphere first; every active self pair must still be tested exactly once, in the
+    scalar and in the four-lane code, and each sphere-first test must use the other link's bound."""
+    import re
+    from collections import Counter
+
+    from symkin.emit.collision import collision_tables
+
+    layout = layout_of(panda)
+    tables = collision_tables(layout)
+    bound_points = {p for p, _ in tables["bounds"]}
+    point = layout.point_index
+    expected = Counter(frozenset((point[i], point[j])) for i, j in layout.self_pairs)
+    for code, call in ((tables["self_code"], "sphere_hit"), (tables["self_code4"], "hit2")):
+        found = Counter()
+        firsts = 0
+        for line in code:
+            m = re.search(rf"{call}\(X\[(\d+)\], X\[(\d+)\]", line)
+            if not m:
+                continue
+            a, b = int(m.group(1)), int(m.group(2))
+            if b in bound_points:
+                firsts += a not in bound_points  # a sphere against a link's bound
+                continue
+            found[frozenset((a, b))] += 1
+        assert found == expected
+        assert firsts > 0  # the Panda model has spheres with three or more partners
