@@ -149,39 +149,24 @@ def _fk_lines(tree: Any, vec: bool) -> tuple[list[str], list[tuple]]:
 SPHERE_FIRST = 3  # a sphere with this many partners on the other link is first tried on its bound
 
 
-def _outer_side(pairs: list[tuple[int, int]], link_of: dict[int, int], a: int) -> tuple[dict, int]:
-    """The sphere pairs of two links (``a`` and the other) by sphere of the side with fewer spheres:
-    {sphere: [partners]} and the index (0: link a, 1: the other) of that side."""
+def _sphere_first(
+    pairs: list[tuple[int, int]], link_of: dict[int, int], a: int, bounds: list, is_cap: list[bool]
+) -> tuple[list[tuple[int, tuple[int, str], list[int]]], list[tuple[int, int]]]:
+    """The self pairs of link ``a`` and one other link, planned: (firsts, rest). ``firsts``: the
+    spheres, on the side with fewer spheres, that have at least SPHERE_FIRST partners, each with
+    the other link's bound and its partners; such a sphere is tested against that bounding sphere
+    first (missing it, it misses every shape inside). ``rest``: the pairs to test one by one, in
+    their order. Links with capsules keep every pair in ``rest``."""
+    if any(is_cap[i] or is_cap[j] for i, j in pairs):
+        return [], list(pairs)
     split = [(i, j) if link_of[i] == a else (j, i) for i, j in pairs]  # (on link a, on the other)
     side = 0 if len({p[0] for p in split}) <= len({p[1] for p in split}) else 1
     partners: dict[int, list[int]] = {}
     for p in split:
         partners.setdefault(p[side], []).append(p[1 - side])
-    return partners, side
-
-
-def _by_sphere(
-    pairs: list[tuple[int, int]], link_of: dict[int, int], a: int, bounds: list, is_cap: list[bool]
-) -> list[tuple[int, tuple[int, str], list[int]]]:
-    """The spheres of two links' sphere pairs worth testing first against the other link's bounding
-    sphere (all spheres, at least SPHERE_FIRST partners): (sphere, that bound, its partners). A
-    sphere that misses the other link's bounding sphere misses every shape inside it."""
-    if any(is_cap[i] or is_cap[j] for i, j in pairs):
-        return []
-    partners, _ = _outer_side(pairs, link_of, a)
-    out = []
-    for outer, inner in partners.items():
-        if len(inner) >= SPHERE_FIRST:
-            out.append((outer, bounds[link_of[inner[0]]], inner))
-    return out
-
-
-def _unsorted(
-    pairs: list[tuple[int, int]], link_of: dict[int, int], a: int, bounds: list, is_cap: list[bool]
-) -> list[tuple[int, int]]:
-    """The pairs :func:`_by_sphere` leaves to be tested one by one, in their order."""
-    first = {outer for outer, _, _ in _by_sphere(pairs, link_of, a, bounds, is_cap)}
-    return [(i, j) for i, j in pairs if i not in first and j not in first]
+    firsts = [(o, bounds[link_of[js[0]]], js) for o, js in partners.items() if len(js) >= SPHERE_FIRST]
+    done = {o for o, _, _ in firsts}
+    return firsts, [(i, j) for i, j in pairs if i not in done and j not in done]
 
 
 def collision_tables(layout: Any) -> dict[str, Any]:
@@ -233,14 +218,15 @@ def collision_tables(layout: Any) -> dict[str, Any]:
     for (a, b), start, stop in zip(group_links, group_start, group_start[1:]):
         (pa, ra), (pb, rb) = bounds[a], bounds[b]
         self_code.append(f"if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{")
-        for outer, bound, inner in _by_sphere(grouped[start:stop], link_of, a, bounds, is_cap):
+        firsts, rest = _sphere_first(grouped[start:stop], link_of, a, bounds, is_cap)
+        for outer, bound, inner in firsts:
             xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
             self_code.append(f"    if (sphere_hit({xo}, X[{bound[0]}], {_num(rr_o)})) {{")
             for j in inner:
                 rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
                 self_code.append(f"        if (sphere_hit({xo}, X[{first[j]}], {_num(rr)})) return 1;")
             self_code.append("    }")
-        for i, j in _unsorted(grouped[start:stop], link_of, a, bounds, is_cap):
+        for i, j in rest:
             if is_cap[i] or is_cap[j]:
                 self_code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
             else:
@@ -281,7 +267,8 @@ def collision_tables(layout: Any) -> dict[str, Any]:
             rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
             self_code4.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
             self_code4.append("if (skv_any(need)) {")
-            for outer, bound, inner in _by_sphere(grouped[start:stop], link_of, a, bounds, is_cap):
+            firsts, rest = _sphere_first(grouped[start:stop], link_of, a, bounds, is_cap)
+            for outer, bound, inner in firsts:
                 xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
                 self_code4.append(f"    near = need & hit2({xo}, X[{bound[0]}], {_num(rr_o)});")
                 self_code4.append("    if (skv_any(near)) {")
@@ -289,7 +276,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                     rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
                     self_code4.append(f"        hit |= near & hit2({xo}, X[{first[j]}], {_num(rr)});")
                 self_code4.append("    }")
-            for i, j in _unsorted(grouped[start:stop], link_of, a, bounds, is_cap):
+            for i, j in rest:
                 rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
                 self_code4.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
             self_code4.append("    if (skv_all(hit)) return hit;")
