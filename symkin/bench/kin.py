@@ -247,33 +247,36 @@ def _c_builds(robot: Any, kin: Any, Q: np.ndarray) -> dict[str, dict[str, Callab
         for f, shape in sizes.items():
             fn = getattr(lib, f"{prefix}_{f}_batch")
             fn.restype = None
+            fn.argtypes = [ctypes.c_void_p] * (1 + len(shape)) + [ctypes.c_ssize_t]
             outs = [np.empty(len(Q) * size) for size in shape]
-            args = [ctypes.c_void_p(o.ctypes.data) for o in outs]
-
-            def call(Qb: np.ndarray, fn: Any = fn, args: list = args, outs: list = outs) -> None:
-                Qb = np.ascontiguousarray(Qb, dtype=float)
-                fn(ctypes.c_void_p(Qb.ctypes.data), *args, ctypes.c_ssize_t(len(Qb)))
-
-            fns[f] = call
+            fns[f] = _KernelCall(fn, outs, n)
         builds[label] = fns
         if not flags:  # the same kernels on blocks whose outputs stay in the cache
-            builds[f"4 lanes, {BLOCK} per call"] = {f: _in_blocks(fn) for f, fn in fns.items()}
+            builds[f"4 lanes, {BLOCK} per call"] = {f: fn.blocks for f, fn in fns.items()}
     return builds
 
 
 BLOCK = 1000  # configurations per call of the cache-resident rows of bench kin
 
 
-def _in_blocks(call: Callable[[np.ndarray], Any]) -> Callable[[np.ndarray], None]:
-    """``call`` on consecutive blocks of BLOCK rows, every block's outputs in the first rows of the
-    output arrays: the kernels' throughput without the memory traffic of a large batch."""
+class _KernelCall:
+    """One ``<f>_batch`` kernel with its preallocated output arrays ``outs``: called on Q,
+    all rows in one call; ``blocks(Q)``: BLOCK rows per call, every block's outputs in the first
+    rows of the output arrays (the kernels' throughput without a large batch's memory traffic)."""
 
-    def blocks(Qb: np.ndarray) -> None:
-        Qb = np.ascontiguousarray(Qb, dtype=float)
-        for i in range(0, len(Qb), BLOCK):
-            call(Qb[i : i + BLOCK])
+    def __init__(self, fn: Any, outs: list[np.ndarray], n: int) -> None:
+        self.fn, self.arrays, self.row = fn, outs, 8 * n  # the arrays stay alive with the call
+        self.outs = [o.ctypes.data for o in outs]
 
-    return blocks
+    def __call__(self, Q: np.ndarray) -> None:
+        Q = np.ascontiguousarray(Q, dtype=float)
+        self.fn(Q.ctypes.data, *self.outs, len(Q))
+
+    def blocks(self, Q: np.ndarray) -> None:
+        Q = np.ascontiguousarray(Q, dtype=float)
+        fn, outs, base, step = self.fn, self.outs, Q.ctypes.data, self.row * BLOCK
+        for i in range(0, len(Q), BLOCK):
+            fn(base + (i // BLOCK) * step, *outs, min(BLOCK, len(Q) - i))
 
 
 def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:
