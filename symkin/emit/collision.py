@@ -266,12 +266,12 @@ def collision_tables(layout: Any) -> dict[str, Any]:
             (pa, ra), (pb, rb) = bounds[a], bounds[b]
             rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
             self_code4.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
-            self_code4.append("if (skv_any(need)) {")
+            self_code4.append("if (skv_any_(need)) {")
             firsts, rest = _sphere_first(grouped[start:stop], link_of, a, bounds, is_cap)
             for outer, bound, inner in firsts:
                 xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
                 self_code4.append(f"    near = need & hit2({xo}, X[{bound[0]}], {_num(rr_o)});")
-                self_code4.append("    if (skv_any(near)) {")
+                self_code4.append("    if (skv_any_(near)) {")
                 for j in inner:
                     rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
                     self_code4.append(f"        hit |= near & hit2({xo}, X[{first[j]}], {_num(rr)});")
@@ -279,11 +279,11 @@ def collision_tables(layout: Any) -> dict[str, Any]:
             for i, j in rest:
                 rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
                 self_code4.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
-            self_code4.append("    if (skv_all(hit)) return hit;")
+            self_code4.append("    if (skv_all_(hit)) return hit;")
             self_code4.append("}")
         for (pb, rb), group in zip(bounds, members):
             sphere_code4.append(f"need = ~hit & hit_obstacle(X[{pb}], {rb}, ob, ro);")
-            sphere_code4.append("if (skv_any(need)) {")
+            sphere_code4.append("if (skv_any_(need)) {")
             for i in group:
                 r_i = _num(radius[i])
                 sphere_code4.append(f"    hit |= need & hit_obstacle(X[{first[i]}], {r_i}, ob, ro);")

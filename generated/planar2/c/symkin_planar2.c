@@ -317,13 +317,22 @@ SK_INLINE sk_v4 skv_cos_(sk_v4 x, sk_m4 *far)
 }
 #endif /* SYMKIN_USE_LIBM */
 
-/* whether any lane of m is set */
+/* whether any lane of the mask m (lanes all ones or all zeros) is set; whether all are */
 SK_INLINE int skv_any_(sk_m4 m)
 {
 #ifdef __AVX__
     return __builtin_ia32_movmskpd256((sk_v4)m) != 0;
 #else
     return (m[0] | m[1] | m[2] | m[3]) != 0;
+#endif
+}
+
+SK_INLINE int skv_all_(sk_m4 m)
+{
+#ifdef __AVX__
+    return __builtin_ia32_movmskpd256((sk_v4)m) == 15;
+#else
+    return (m[0] & m[1] & m[2] & m[3]) != 0;
 #endif
 }
 

@@ -125,12 +125,13 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
     """The four-configuration bodies of the generated functions that are straight-line arithmetic
     and sin/cos of their inputs (``c/_sincos.c.j2``'s branch-free ``skv_sin_``/``skv_cos_`` in
     place of ``sk_sin``/``sk_cos``; constants broadcast), by function name: ``lines`` as (name,
-    expression), every expression that calls sin/cos among them, and ``outs`` as (name, size,
-    ((index, expression, constant), ...), blocks) with ``blocks`` the stores four entries at a time
-    (:func:`_blocks`; empty for outputs of fewer than four entries); ``trig``: whether the body
-    calls sin/cos (then lanes out of the kernels' range send the four configurations through the
-    scalar code). Functions that call others or run loops (delegates, Hessians, scratch arrays)
-    are left out: their batch stays scalar."""
+    expression), ending with the output entries that call sin/cos (so that every call comes before
+    the body's range check), and ``outs`` as (name, size, ((index, expression, constant), ...),
+    blocks) with ``blocks`` the stores four entries at a time (:func:`_blocks`; empty for outputs
+    of fewer than four entries); ``trig``: whether the body calls sin/cos (then a lane out of the
+    kernels' range sends the four configurations through the scalar code). Functions that call
+    others or run loops (delegates, Hessians, scratch arrays) are left out: their batch stays
+    scalar."""
     bodies = {}
     for f in functions:
         if f.delegate or f.hessians or f.scratch:
