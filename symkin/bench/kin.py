@@ -274,9 +274,9 @@ class _KernelCall:
 
     def blocks(self, Q: np.ndarray) -> None:
         Q = np.ascontiguousarray(Q, dtype=float)
-        fn, outs, base, step = self.fn, self.outs, Q.ctypes.data, self.row * BLOCK
+        fn, outs, base = self.fn, self.outs, Q.ctypes.data
         for i in range(0, len(Q), BLOCK):
-            fn(base + (i // BLOCK) * step, *outs, min(BLOCK, len(Q) - i))
+            fn(base + i * self.row, *outs, min(BLOCK, len(Q) - i))
 
 
 def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:

@@ -1,5 +1,5 @@
 """The generated C's four-lane batch entry points (issue 21): ``<f>_batch`` runs four configurations
-per step through ``<f>_x4_`` with ``skv_sin``/``skv_cos``, a scalar tail, and ``-DSYMKIN_SCALAR`` (or
+per step through ``<f>_x4_`` with ``skv_sin_``/``skv_cos_``, a scalar tail, and ``-DSYMKIN_SCALAR`` (or
 C++, or another compiler) for one configuration per step. Every lane must give bit for bit what the
 scalar code gives, so batch and one-at-a-time calls agree exactly, and the inline sin/cos stay
 within 1 ulp (``tests/emit/test_sincos.py`` measures that on the batch path)."""

@@ -141,11 +141,12 @@ SK_INLINE double sk_cos(double x)
 
 /*
  * Four configurations per step (the batch entry points): GCC/clang vector extensions, AVX2 under
- * -march=native on x86-64, two SSE2 halves otherwise. skv_sin and skv_cos do lane by lane exactly
- * the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build uses
- * -ffp-contract=off), so a lane's result is bit for bit the scalar result; lanes beyond the
- * inline range (and NaN) call libm, as the scalar code does. Define SYMKIN_SCALAR for one
- * configuration per step; other compilers and C++ get it.
+ * -march=native on x86-64, two SSE2 halves otherwise. skv_sin_ and skv_cos_ do lane by lane
+ * exactly the operations of sk_sin and sk_cos, in the same order (no fused multiply-add: the build
+ * uses -ffp-contract=off), so a lane's result is bit for bit the scalar result; the lanes they
+ * cannot compute (beyond the inline range, NaN, next to a multiple of pi/2) they mark for the
+ * scalar code. Define SYMKIN_SCALAR for one configuration per step; other compilers and C++ get
+ * it.
  */
 #if (defined(__GNUC__) || defined(__clang__)) && !defined(__cplusplus) && !defined(SYMKIN_SCALAR)
 #define SYMKIN_LANES 4
@@ -163,19 +164,18 @@ typedef long long sk_m4 __attribute__((vector_size(32)));
     } while (0)
 
 #ifdef SYMKIN_USE_LIBM
-SK_INLINE sk_v4 skv_sin(sk_v4 x)
+/* libm lane by lane: no lane needs the scalar code (far is left as it is) */
+SK_INLINE sk_v4 skv_sin_(sk_v4 x, sk_m4 *far)
 {
+    (void)far;
     return (sk_v4){sin(x[0]), sin(x[1]), sin(x[2]), sin(x[3])};
 }
 
-SK_INLINE sk_v4 skv_cos(sk_v4 x)
+SK_INLINE sk_v4 skv_cos_(sk_v4 x, sk_m4 *far)
 {
+    (void)far;
     return (sk_v4){cos(x[0]), cos(x[1]), cos(x[2]), cos(x[3])};
 }
-
-/* The lane bodies' forms: no lane needs the scalar code (far is left as it is). */
-#define skv_sin_(x, far) skv_sin(x)
-#define skv_cos_(x, far) skv_cos(x)
 #else
 SK_INLINE sk_v4 skv_abs_(sk_v4 x)
 {
@@ -186,30 +186,6 @@ SK_INLINE sk_v4 skv_abs_(sk_v4 x)
 SK_INLINE sk_v4 skv_where_(sk_m4 m, sk_v4 a, sk_v4 b)
 {
     return (sk_v4)(((sk_m4)a & ~m) | ((sk_m4)b & m));
-}
-
-/* sk_reduce_ lane by lane; returns k (mod 4 in the low bits) */
-SK_INLINE sk_m4 skv_reduce_(sk_v4 x, sk_v4 *r0, sk_v4 *r1)
-{
-    const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
-    const sk_v4 k = kb - 6755399441055744.0;
-    const sk_v4 t = x - k * 1.57079632673412561417e+00;
-    sk_v4 w = k * 6.07710050630396597660e-11;
-    const sk_v4 r = t - w;
-    w = k * 2.02226624879595063154e-21 - ((t - r) - w);
-    const sk_v4 y = r - w;
-    *r0 = y;
-    *r1 = (r - y) - w;
-    const sk_m4 third = skv_abs_(y) < skv_abs_(x) * 1.7763568394002504646778106689453125e-15;
-    if (third[0] | third[1] | third[2] | third[3]) { /* rare: next to a multiple of pi/2 */
-        sk_v4 w3 = k * 2.02226624871116645580e-21;
-        const sk_v4 r3 = r - w3;
-        w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-        const sk_v4 y3 = r3 - w3;
-        *r0 = skv_where_(third, y, y3);
-        *r1 = skv_where_(third, (r - y) - w, (r3 - y3) - w3);
-    }
-    return (sk_m4)kb;
 }
 
 SK_INLINE sk_v4 skv_ksin_(sk_v4 x, sk_v4 y)
@@ -229,48 +205,17 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
     return w + (((1.0 - w) - hz) + (z * r - x * y));
 }
 
-/* sk_select_ lane by lane */
-SK_INLINE sk_v4 skv_select_(sk_m4 k, sk_v4 a, sk_v4 b)
-{
-    const sk_m4 m = 0 - (k & 1);
-    return (sk_v4)((((sk_m4)a & ~m) | ((sk_m4)b & m)) ^ ((k & 2) << 62));
-}
-
-SK_INLINE sk_v4 skv_sin(sk_v4 x)
-{
-    sk_v4 r0, r1;
-    const sk_m4 k = skv_reduce_(x, &r0, &r1);
-    sk_v4 s = skv_select_(k, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
-    s = skv_where_(skv_abs_(x) < 1.490116119384765625e-08, s, x);
-    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
-    if (far[0] | far[1] | far[2] | far[3])
-        for (int l = 0; l < 4; ++l)
-            if (far[l]) s[l] = sin(x[l]);
-    return s;
-}
-
-SK_INLINE sk_v4 skv_cos(sk_v4 x)
-{
-    sk_v4 r0, r1;
-    const sk_m4 k = skv_reduce_(x, &r0, &r1);
-    sk_v4 c = skv_select_(k + 1, skv_ksin_(r0, r1), skv_kcos_(r0, r1));
-    const sk_m4 far = ~(skv_abs_(x) <= 1.6e6);
-    if (far[0] | far[1] | far[2] | far[3])
-        for (int l = 0; l < 4; ++l)
-            if (far[l]) c[l] = cos(x[l]);
-    return c;
-}
-
 /*
- * The lane bodies' sin and cos (f_x4_ of the batch entry points): the same operations as skv_sin
- * and skv_cos without their branches. The lanes whose argument is beyond the inline range (or
- * NaN) or next to a multiple of pi/2 (where the reduction needs its third stage) are marked in
+ * The lane bodies' sin and cos (f_x4_ of the batch entry points): sk_reduce_, the kernels and
+ * sk_select_ lane by lane, without branches. The lanes whose argument is beyond the inline range
+ * (or NaN) or next to a multiple of pi/2 (where the reduction needs its third stage) are marked in
  * *far instead; a body with such a lane computes its four configurations with the scalar code,
  * which gives the same numbers in the other lanes. Straight-line code lets the compiler
- * interleave the angles of a body: a Panda's four-lane FK ran 14% faster without the branches of
- * skv_sin and skv_cos, and 6% faster again with blends in place of skv_select_ (first-generation
- * EPYC, 2026-12-03).
+ * interleave the angles of a body: a Panda's four-lane FK ran 14% faster than with the branchy
+ * lane kernels these replaced, and 6% faster again with blends in place of bit selects
+ * (first-generation EPYC, 2026-12-03).
  */
+/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -298,7 +243,7 @@ SK_INLINE sk_v4 skv_blend_(sk_m4 m, sk_v4 a, sk_v4 b)
 #endif
 }
 
-/* skv_select_ by blends: the same bits */
+/* sk_select_ by blends: the same bits */
 SK_INLINE sk_v4 skv_sin_(sk_v4 x, sk_m4 *far)
 {
     sk_v4 r0, r1;
