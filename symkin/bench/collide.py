@@ -1,5 +1,5 @@
 """``symkin bench collide``: collision checks per configuration, one call and batched, with the
-robot's sphere model against 0, 10 and 100 obstacle spheres, beside the NumPy reference and (with
+robot's sphere model against 0, 10 and 100 obstacle spheres, beside the generated NumPy module and (with
 the ``compare`` extra) Pinocchio + coal on the same spheres and capsules, all in the same run; then
 collision-aware IK against plain IK on a table-top scene, and the MMC step with obstacle rows
 (the velocity dampers of the closest pairs) in C against the Python reference step.
@@ -117,7 +117,7 @@ def _batch_ns(f: Any, N: int, repeats: int = 3) -> float:
 
 
 def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> dict[str, Any]:
-    """One row: per call, batched, distances, the NumPy reference and Pinocchio + coal on ``env``."""
+    """One row: per call, batched, distances, the generated NumPy module and Pinocchio + coal on ``env``."""
     batch = len(Q)
     row: dict[str, Any] = {"obstacles": len(env)}
     row["one_call_ns"] = per_call_us(lambda: kernel.in_collision(Q[0], env), budget=0.1) * 1e3

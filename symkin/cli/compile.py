@@ -57,7 +57,7 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.compiler.compile import generate
+    from symkin.compiler.compile import generate, generate_collision
     from symkin.runtime.load import compile as compile_model
 
     model = chain_or_tree(args)
@@ -70,9 +70,14 @@ def run(args: argparse.Namespace) -> int:
     t_gen = time.perf_counter() - t0
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        for name, text in sorted(files.items()):
+        # the collision code of the model's geometry (its kernel's symbols are skcoll_*: not with a prefix)
+        plain = options.get("prefix") is None and args.precision == "double"
+        extra = generate_collision(model, args.backend, command) if plain else {}
+        for name, text in sorted({**files, **extra}.items()):
             (out / name).write_text(text)
-        written = f"wrote {len(files)} files to {out}/: {', '.join(sorted(files))}"
+        written = (
+            f"wrote {len(files) + len(extra)} files to {out}/: {', '.join(sorted(files) + sorted(extra))}"
+        )
         from symkin.compiler.manifest import write_manifest
 
         manifest = write_manifest(model, args.backend, files, out, args.precision)

@@ -31,30 +31,39 @@ from symkin.core.version import __version__
 from symkin.emit.templates import render
 from symkin.model.geometry import Capsule
 
-__all__ = ["render_collision", "collision_tables"]
+__all__ = ["render_collision", "render_collision_numpy", "collision_module_name", "collision_tables"]
 
 # the distance primitives, shared with the C runtime (the MMC step with obstacle constraints)
 COLLIDE_HEADER = Path(__file__).resolve().parent.parent / "runtime" / "csrc" / "symkin_collide.h"
 
 
 def _num(x: float) -> str:
-    """A C double literal that reads back exactly."""
+    """A C (and Python) double literal that reads back exactly."""
     r = repr(float(x))
     return r if ("e" in r or "." in r or "n" in r) else r + ".0"
 
 
-def _const(x: float, vec: bool) -> str:
+# The straight-line link poses are written in three dialects: "c" (one configuration, double),
+# "c4" (four configurations in the lanes of a v4) and "py" (NumPy: each entry an (N,) array).
+Dialect = str
+
+
+def _const(x: float, lang: Dialect) -> str:
     """A constant: a double literal, or four lanes of it (``SKV``) in the 4-lane code."""
-    return f"SKV({_num(x)})" if vec else _num(x)
+    return f"SKV({_num(x)})" if lang == "c4" else _num(x)
 
 
-def _product(dst: str, src: str | None, C: np.ndarray, vec: bool = False) -> list[str]:
-    """C statements for ``dst = src * C`` (3x4 row-major poses, C constant; src None: identity)."""
+def _stmt(text: str, lang: Dialect) -> str:
+    return text if lang == "py" else text + ";"
+
+
+def _product(dst: str, src: str | None, C: np.ndarray, lang: Dialect = "c") -> list[str]:
+    """Statements for ``dst = src * C`` (3x4 row-major poses, C constant; src None: identity)."""
     lines = []
     for i in range(3):
         for j in range(4):
             if src is None:
-                lines.append(f"{dst}[{4 * i + j}] = {_const(C[i, j], vec)};")
+                lines.append(_stmt(f"{dst}[{4 * i + j}] = {_const(C[i, j], lang)}", lang))
                 continue
             terms = []
             for m in range(3):
@@ -64,8 +73,8 @@ def _product(dst: str, src: str | None, C: np.ndarray, vec: bool = False) -> lis
                     terms.append(y if c == 1.0 else f"-{y}" if c == -1.0 else f"{_num(c)} * {y}")
             if j == 3:
                 terms.append(f"{src}[{4 * i + 3}]")
-            value = (" + ".join(terms) if terms else _const(0.0, vec)).replace("+ -", "- ")
-            lines.append(f"{dst}[{4 * i + j}] = {value};")
+            value = (" + ".join(terms) if terms else _const(0.0, lang)).replace("+ -", "- ")
+            lines.append(_stmt(f"{dst}[{4 * i + j}] = {value}", lang))
     return lines
 
 
@@ -73,56 +82,60 @@ def _is_identity(C: np.ndarray) -> bool:
     return bool(np.array_equal(C[:3, :4], np.eye(4)[:3]))
 
 
-def _times(dst: str, parent: str | None, A: np.ndarray, vec: bool = False) -> list[str]:
+def _times(dst: str, parent: str | None, A: np.ndarray, lang: Dialect = "c") -> list[str]:
     """``dst = parent * A``: the constants alone at the base, a copy when A is the identity."""
     if parent is not None and _is_identity(A):
-        return _copy(dst, parent, range(12))
-    return _product(dst, parent, A, vec)
+        return _copy(dst, parent, range(12), lang)
+    return _product(dst, parent, A, lang)
 
 
-def _copy(dst: str, src: str, entries: Any) -> list[str]:
+def _copy(dst: str, src: str, entries: Any, lang: Dialect = "c") -> list[str]:
     """``dst[e] = src[e]`` for each entry e, one statement each (a memcpy of 12 four-lane entries
     is a library call the compiler does not inline)."""
-    return [f"{dst}[{e}] = {src}[{e}];" for e in entries]
+    return [_stmt(f"{dst}[{e}] = {src}[{e}]", lang) for e in entries]
 
 
-def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, vec: bool = False) -> list[str]:
-    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; ``vec``: four lanes (sin and
+def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, lang: Dialect = "c") -> list[str]:
+    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; "c4": four lanes (sin and
     cos by the branch-free ``skv_sin_``/``skv_cos_``: lane by lane the numbers of the scalar
     ``sk_sin``/``sk_cos``, the lanes those cannot compute marked in ``far``)."""
     if not revolute:
-        lines = _copy(dst, src, [e for e in range(12) if e % 4 != 3])
+        lines = _copy(dst, src, [e for e in range(12) if e % 4 != 3], lang)
         for i in range(3):
-            lines.append(f"{dst}[{4 * i + 3}] = {src}[{4 * i + 3}] + ({theta}) * {src}[{4 * i + axis}];")
+            a = 4 * i + 3
+            lines.append(_stmt(f"{dst}[{a}] = {src}[{a}] + ({theta}) * {src}[{4 * i + axis}]", lang))
         return lines
     j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
-    lines = _copy(dst, src, [e for e in range(12) if e % 4 not in (j, k)])
-    if vec:
-        lines.insert(0, f"{{ const v4 th_ = {theta}, c = skv_cos_(th_, far), s = skv_sin_(th_, far);")
-    else:
-        lines.insert(0, f"{{ const double c = sk_cos({theta}), s = sk_sin({theta});")
+    lines = _copy(dst, src, [e for e in range(12) if e % 4 not in (j, k)], lang)
+    lines[:0] = {
+        "c": [f"{{ const double c = sk_cos({theta}), s = sk_sin({theta});"],
+        "c4": [f"{{ const v4 th_ = {theta}, c = skv_cos_(th_, far), s = skv_sin_(th_, far);"],
+        "py": [f"th_ = {theta}", "c, s = cos(th_), sin(th_)"],
+    }[lang]
     for i in range(3):
         a, b = f"{src}[{4 * i + j}]", f"{src}[{4 * i + k}]"
-        lines.append(f"{dst}[{4 * i + j}] = c * {a} + s * {b};")
-        lines.append(f"{dst}[{4 * i + k}] = c * {b} - s * {a};")
-    lines.append("}")
+        lines.append(_stmt(f"{dst}[{4 * i + j}] = c * {a} + s * {b}", lang))
+        lines.append(_stmt(f"{dst}[{4 * i + k}] = c * {b} - s * {a}", lang))
+    if lang != "py":
+        lines.append("}")
     return lines
 
 
-def _fk_lines(tree: Any, vec: bool) -> tuple[list[str], list[tuple]]:
+def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple]]:
     """The straight-line link poses T (and PJ, before each joint) of ``tree``; per segment its joint
-    (has joint, q index, multiplier, revolute, axis, sign). ``vec``: the 4-lane code (``qv``, v4)."""
+    (has joint, q index, multiplier, revolute, axis, sign). "c4": the 4-lane code (``qv``, v4)."""
     num = tree._num
     fk: list[str] = []
     joints = []
-    q = "qv" if vec else "q"
+    q = "qv" if lang == "c4" else "q"
     for k, seg in enumerate(tree.segments):
         parent = None if seg.parent < 0 else f"T[{seg.parent}]"
         A, B = num.A[k], num.B[k]
-        fk.append(f"/* segment {k}: link {comment_safe(seg.link, 60)} */")
+        comment = f"segment {k}: link {comment_safe(seg.link, 60)}"
+        fk.append(f"# {comment}" if lang == "py" else f"/* {comment} */")
         if seg.slot is None:
             joints.append((0, 0, 0.0, 0, 0, 1.0))
-            fk += _times(f"T[{k}]", parent, A, vec)
+            fk += _times(f"T[{k}]", parent, A, lang)
             continue
         s = tree.slots[seg.slot]
         sign = num.sign[k]
@@ -135,14 +148,15 @@ def _fk_lines(tree: Any, vec: bool) -> tuple[list[str], list[tuple]]:
         if sign < 0:
             theta = f"-({theta})"
         joints.append((1, s.joint, mult, int(s.revolute), num.axis[k], float(sign)))
-        fk += _times(f"PJ[{k}]", parent, A, vec)
+        fk += _times(f"PJ[{k}]", parent, A, lang)
         if _is_identity(B):
-            fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta, vec)
+            fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta, lang)
         else:
-            fk.append("{ v4 M_[12];" if vec else "{ double M_[12];")
-            fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta, vec)
-            fk += _product(f"T[{k}]", "M_", B, vec)
-            fk.append("}")
+            fk.append({"c": "{ double M_[12];", "c4": "{ v4 M_[12];", "py": "M_ = empty((12, N))"}[lang])
+            fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta, lang)
+            fk += _product(f"T[{k}]", "M_", B, lang)
+            if lang != "py":
+                fk.append("}")
     return fk, joints
 
 
@@ -169,11 +183,32 @@ def _sphere_first(
     return firsts, [(i, j) for i, j in pairs if i not in done and j not in done]
 
 
+def _point_lines(points: list[tuple[int, list[str]]], lang: Dialect) -> list[str]:
+    """``X[i][r]`` = link pose ``T[k]`` applied to each point (k, local coordinates), straight-line
+    (0 terms dropped; a point on the base link is its constant coordinates)."""
+    lines = []
+    for i, (k, local) in enumerate(points):
+        for r in range(3):
+            if k < 0:
+                lines.append(_stmt(f"X[{i}][{r}] = {_const(float(local[r]), lang)}", lang))
+                continue
+            terms = [
+                f"T[{k}][{4 * r + c}]" if float(local[c]) == 1.0 else f"{local[c]} * T[{k}][{4 * r + c}]"
+                for c in range(3)
+                if float(local[c]) != 0.0
+            ]
+            value = " + ".join([*terms, f"T[{k}][{4 * r + 3}]"])
+            if lang == "py":  # the C text keeps "+ -" (its bytes are checked in)
+                value = value.replace("+ -", "- ")
+            lines.append(_stmt(f"X[{i}][{r}] = {value}", lang))
+    return lines
+
+
 def collision_tables(layout: Any) -> dict[str, Any]:
     """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
     tree = layout.tree
-    fk, joints = _fk_lines(tree, vec=False)
-    fk4, _ = _fk_lines(tree, vec=True)
+    fk, joints = _fk_lines(tree, "c")
+    fk4, _ = _fk_lines(tree, "c4")
     points = []
     for s, k in zip(layout.shapes, layout.segment):
         for p in s.points:
@@ -243,20 +278,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                 r_i = _num(radius[i])
                 sphere_code.append(f"    if (skc_spheres_overlap(X[{first[i]}], {r_i}, ob, ro)) return 1;")
         sphere_code.append("}")
-    point_code, point_code4 = [], []  # X = T[k] * local, straight-line (0 terms dropped)
-    for i, (k, local) in enumerate(points):
-        for r in range(3):
-            if k < 0:
-                point_code.append(f"X[{i}][{r}] = {local[r]};")
-                point_code4.append(f"X[{i}][{r}] = SKV({local[r]});")
-                continue
-            terms = [
-                f"T[{k}][{4 * r + c}]" if float(local[c]) == 1.0 else f"{local[c]} * T[{k}][{4 * r + c}]"
-                for c in range(3)
-                if float(local[c]) != 0.0
-            ]
-            point_code.append(f"X[{i}][{r}] = {' + '.join([*terms, f'T[{k}][{4 * r + 3}]'])};")
-            point_code4.append(point_code[-1])
+    point_code, point_code4 = _point_lines(points, "c"), _point_lines(points, "c4")
     # the 4-lane checks (spheres only): a lane already hit needs nothing more; a link pair or link
     # is tested only for the lanes whose bounding spheres meet (the same tests as the scalar code)
     all_spheres = not any(is_cap)
@@ -338,3 +360,67 @@ def render_collision(layout: Any) -> dict[str, str]:
         **collision_tables(layout),
     )
     return {"skcoll.c": text, "symkin_collide.h": COLLIDE_HEADER.read_text()}
+
+
+def collision_module_name(model_name: str) -> str:
+    """The generated NumPy collision module's name: ``symkin_<robot>_collision``."""
+    return f"symkin_{identifier(model_name)}_collision"
+
+
+def _py_tuple(items: list[str], indent: int = 8, width: int = 100) -> str:
+    """A Python tuple literal of ``items`` (their source text), wrapped to ``width`` columns."""
+    if not items:
+        return "()"
+    lines, line = [], ""
+    for x in items:
+        if line and indent + len(line) + len(x) + 2 > width:
+            lines.append(line.rstrip())
+            line = ""
+        line += x + ", "
+    lines.append(line.rstrip())
+    pad = " " * indent
+    return "(\n" + "".join(f"{pad}{x}\n" for x in lines) + " " * (indent - 4) + ")"
+
+
+def render_collision_numpy(layout: Any, command: str = "symkin generate") -> dict[str, str]:
+    """The generated NumPy collision module of ``layout``: ``{"symkin_<robot>_collision.py": ...}``,
+    link poses and shape points as straight-line NumPy code vectorised over configurations, the
+    geometry as literal :class:`symkin.geometry.reference.Tables`, the pair math from
+    :func:`symkin.geometry.reference.evaluate_frames`."""
+    from symkin.geometry.reference import Tables
+
+    tree = layout.tree
+    tables = Tables.of(layout)
+    points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
+    module = collision_module_name(tree.name)
+    text = render(
+        "numpy/collision.py.j2",
+        module=module,
+        robot=comment_safe(tree.name, 80),
+        name_literal=ascii(tree.name),
+        version=__version__,
+        command=comment_safe(command, 200),
+        source=comment_safe(tree.geometry.source or "user geometry", 200),
+        n=tree.n,
+        nseg=max(len(tree.segments), 1),
+        nshapes=len(layout.shapes),
+        npoints=layout.n_points,
+        npairs=len(layout.self_pairs),
+        tables={
+            "caps": _py_tuple([str(x) for x in tables.caps]),
+            "first": _py_tuple([str(x) for x in tables.first]),
+            "radius": _py_tuple([_num(x) for x in tables.radius]),
+            "segment": _py_tuple([str(x) for x in tables.segment]),
+            "self_pairs": _py_tuple([f"({i}, {j})" for i, j in tables.self_pairs]),
+            "joints": _py_tuple(
+                [
+                    "None" if j is None else f"({j[0]}, {_num(j[1])}, {j[2]}, {j[3]}, {_num(j[4])})"
+                    for j in tables.joints
+                ]
+            ),
+            "ancestors": _py_tuple([repr(tuple(x)) for x in tables.ancestors]),
+        },
+        fk=_fk_lines(tree, "py")[0],
+        point_code=_point_lines(points, "py"),
+    )
+    return {f"{module}.py": text}

@@ -8,10 +8,16 @@ with ``dx/dq_j = w_j x (x - o_j)`` for each revolute joint j on the link's path 
 eqs 31-34 with x in place of the end effector). A pair's distance gradient is
 ``n . (dpa/dq - dpb/dq)`` (``pa``, ``pb`` the closest core points, ``n`` the unit normal from B
 to A). The compiled C kernel (:mod:`symkin.emit.collision`) is checked against this module.
+
+The pair math (:func:`evaluate_frames`) takes the geometry as plain numbers (:class:`Tables`):
+the generated NumPy collision module (``templates/numpy/collision.py.j2``) holds them as literals
+and calls it with its own straight-line link poses.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -21,11 +27,81 @@ from symkin.geometry import distance as dist
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Capsule, Environment
 
-__all__ = ["points", "evaluate", "distances", "distance_jacobians", "in_collision"]
+__all__ = [
+    "points",
+    "evaluate",
+    "evaluate_frames",
+    "distances",
+    "distance_jacobians",
+    "in_collision",
+    "Tables",
+]
 
 
-def _walk(layout: Layout, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return layout.tree._walk(Q)
+@dataclass(frozen=True)
+class Tables:
+    """A model's geometry and joints as plain numbers, all the pair math needs.
+
+    Attributes:
+        n: number of joints.
+        caps: per shape, whether it is a capsule (two points) rather than a sphere (one).
+        first: per shape, the index of its first point among the stacked points.
+        radius: per shape, its radius (m).
+        segment: per shape, the segment whose link carries it (-1: the base link).
+        self_pairs: (i, j) shape indices checked against each other.
+        joints: per segment, its joint: (q index, multiplier, revolute, axis 0-2, sign), or None.
+        ancestors: per segment, the segments with a joint from it up to the base (itself first).
+    """
+
+    n: int
+    caps: tuple[bool, ...]
+    first: tuple[int, ...]
+    radius: tuple[float, ...]
+    segment: tuple[int, ...]
+    self_pairs: tuple[tuple[int, int], ...]
+    joints: tuple[tuple[int, float, bool, int, float] | None, ...]
+    ancestors: tuple[tuple[int, ...], ...]
+
+    @classmethod
+    def of(cls, layout: Layout) -> Tables:
+        """The tables of ``layout`` (memoised on it)."""
+        cached = layout.__dict__.get("_tables")
+        if cached is not None:
+            return cached
+        tree = layout.tree
+        num = tree._num
+        joints: list[tuple[int, float, bool, int, float] | None] = []
+        for k, seg in enumerate(tree.segments):
+            s = None if seg.slot is None else tree.slots[seg.slot]
+            joints.append(
+                None
+                if s is None
+                else (s.joint, float(s.multiplier), bool(s.revolute), int(num.axis[k]), float(num.sign[k]))
+            )
+        out = cls(
+            n=tree.n,
+            caps=tuple(isinstance(s, Capsule) for s in layout.shapes),
+            first=layout.point_index,
+            radius=tuple(float(s.radius) for s in layout.shapes),
+            segment=layout.segment,
+            self_pairs=layout.self_pairs,
+            joints=tuple(joints),
+            ancestors=tuple(
+                tuple(a for a in layout.ancestors(k) if joints[a] is not None) for k in range(len(joints))
+            ),
+        )
+        object.__setattr__(layout, "_tables", out)
+        return out
+
+    @cached_property
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """caps (bool), first, radius, segment as arrays."""
+        return (
+            np.array(self.caps, dtype=bool),
+            np.array(self.first, dtype=int),
+            np.array(self.radius, dtype=float),
+            np.array(self.segment, dtype=int),
+        )
 
 
 def _shape_points(layout: Layout, L: np.ndarray) -> list[np.ndarray]:
@@ -45,17 +121,9 @@ def points(model: Any, q: Any) -> np.ndarray:
     capsule's two segment ends, in shape order."""
     layout = layout_of(model)
     Q, single = as_batch(q, layout.tree.n, layout.tree.name)
-    L, _ = _walk(layout, Q)
+    L, _ = layout.tree._walk(Q)
     X = np.concatenate(_shape_points(layout, L), axis=1)
     return X[0] if single else X
-
-
-def _tables(layout: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per shape: capsule (bool), first point index, radius, segment (-1 base)."""
-    caps = np.array([isinstance(s, Capsule) for s in layout.shapes], dtype=bool)
-    first = np.array(layout.point_index, dtype=int)
-    radius = np.array([s.radius for s in layout.shapes], dtype=float)
-    return caps, first, radius, np.array(layout.segment, dtype=int)
 
 
 def _pair_kinds(X: np.ndarray, tab: tuple, I: np.ndarray, J: np.ndarray) -> tuple:
@@ -124,56 +192,62 @@ def _obstacles(X: np.ndarray, tab: tuple, env: Environment) -> list[tuple]:
     return out
 
 
-def _gradients(layout: Layout, P: np.ndarray, seg: np.ndarray, p: np.ndarray, n: np.ndarray,
+def _gradients(tab: Tables, P: np.ndarray, seg: np.ndarray, p: np.ndarray, n: np.ndarray,
                G: np.ndarray, sign: float) -> None:  # fmt: skip
-    """Add ``sign * n . dp/dq`` to G (N, M, nq) for points p (N, M, 3) fixed to the links of ``seg`` (M,)."""
-    tree = layout.tree
-    num = tree._num
+    """Add ``sign * n . dp/dq`` to G (N, M, nq) for points p (N, M, 3) fixed to the links of
+    ``seg`` (M,); P (N, S, 3 or 4, 4): each segment's frame just before its joint."""
     for k in np.unique(seg):
         if k < 0:
             continue
         m = np.nonzero(seg == k)[0]
         pk, nk = p[:, m], n[:, m]
-        for a in layout.ancestors(int(k)):
-            sa = tree.segments[a]
-            if sa.slot is None:
-                continue
-            s = tree.slots[sa.slot]
-            w = P[:, a, None, :3, num.axis[a]] * num.sign[a]  # (N, 1, 3)
-            col = np.cross(w, pk - P[:, a, None, :3, 3]) if s.revolute else np.broadcast_to(w, pk.shape)
-            G[:, m, s.joint] += sign * float(s.multiplier) * np.einsum("Nmi,Nmi->Nm", nk, col)
+        for a in tab.ancestors[k]:
+            joint, mult, revolute, axis, sgn = tab.joints[a]  # type: ignore[misc]
+            w = P[:, a, None, :3, axis] * sgn  # (N, 1, 3)
+            col = np.cross(w, pk - P[:, a, None, :3, 3]) if revolute else np.broadcast_to(w, pk.shape)
+            G[:, m, joint] += sign * mult * np.einsum("Nmi,Nmi->Nm", nk, col)
+
+
+def evaluate_frames(
+    tab: Tables, X: np.ndarray, P: np.ndarray, env: Any = None, jacobians: bool = False
+) -> tuple[np.ndarray, Any]:
+    """Signed distances (N, M) of every active pair, in :meth:`Layout.pair_labels` order (self pairs,
+    then each obstacle sphere, capsule, box against every shape), and with ``jacobians`` their
+    gradients (N, M, n), from the shape points X (N, P, 3) and the joint frames P (N, S, 3 or 4,
+    4) of N configurations."""
+    env = as_environment(env)
+    arrays = tab.arrays
+    N = X.shape[0]
+    pairs = np.array(tab.self_pairs, dtype=int).reshape(-1, 2)
+    ds, gs = [], []
+    if len(pairs):
+        d, n, pa, pb = _pair_kinds(X, arrays, pairs[:, 0], pairs[:, 1])
+        ds.append(d)
+        if jacobians:
+            G = np.zeros((N, len(pairs), tab.n))
+            _gradients(tab, P, arrays[3][pairs[:, 0]], pa, n, G, 1.0)
+            _gradients(tab, P, arrays[3][pairs[:, 1]], pb, n, G, -1.0)
+            gs.append(G)
+    for d, n, pa in _obstacles(X, arrays, env):
+        ds.append(d)
+        if jacobians:
+            G = np.zeros((N, d.shape[1], tab.n))
+            _gradients(tab, P, np.tile(arrays[3], d.shape[1] // len(arrays[3])), pa, n, G, 1.0)
+            gs.append(G)
+    D = np.concatenate(ds, axis=1) if ds else np.zeros((N, 0))
+    J = (np.concatenate(gs, axis=1) if gs else np.zeros((N, 0, tab.n))) if jacobians else None
+    return D, J
 
 
 def evaluate(model: Any, q: Any, env: Any = None, jacobians: bool = False) -> tuple[np.ndarray, Any, bool]:
-    """Signed distances (N, M) of every active pair, in :meth:`Layout.pair_labels` order (self pairs,
-    then each obstacle sphere, capsule, box against every shape), and with ``jacobians`` their
-    gradients (N, M, n); ``single`` says whether q was one configuration."""
+    """:func:`evaluate_frames` on the link poses of the tree's numeric walk; ``single`` says whether
+    q was one configuration."""
     layout = layout_of(model)
-    env = as_environment(env)
     tree = layout.tree
     Q, single = as_batch(q, tree.n, tree.name)
-    L, P = _walk(layout, Q)
+    L, P = tree._walk(Q)
     X = np.concatenate(_shape_points(layout, L), axis=1)
-    tab = _tables(layout)
-    N = Q.shape[0]
-    pairs = np.array(layout.self_pairs, dtype=int).reshape(-1, 2)
-    ds, gs = [], []
-    if len(pairs):
-        d, n, pa, pb = _pair_kinds(X, tab, pairs[:, 0], pairs[:, 1])
-        ds.append(d)
-        if jacobians:
-            G = np.zeros((N, len(pairs), tree.n))
-            _gradients(layout, P, tab[3][pairs[:, 0]], pa, n, G, 1.0)
-            _gradients(layout, P, tab[3][pairs[:, 1]], pb, n, G, -1.0)
-            gs.append(G)
-    for d, n, pa in _obstacles(X, tab, env):
-        ds.append(d)
-        if jacobians:
-            G = np.zeros((N, d.shape[1], tree.n))
-            _gradients(layout, P, np.tile(tab[3], d.shape[1] // len(tab[3])), pa, n, G, 1.0)
-            gs.append(G)
-    D = np.concatenate(ds, axis=1) if ds else np.zeros((N, 0))
-    J = (np.concatenate(gs, axis=1) if gs else np.zeros((N, 0, tree.n))) if jacobians else None
+    D, J = evaluate_frames(Tables.of(layout), X, P, env, jacobians)
     return D, J, single
 
 

@@ -4,8 +4,10 @@ compiled kinematics call (``kin.in_collision``, ``distances``, ``distance_jacobi
 
 The C kernel is generated per model and geometry (:mod:`symkin.emit.collision`), compiled once
 into the cache (its key: the C source, which holds every constant of the model and geometry) and
-kept loaded for the 16 models used last. Without the C backend the same queries run on the NumPy
-reference (:mod:`symkin.geometry.reference`); both give the same answers (tested).
+kept loaded for the 16 models used last. Without the C backend the same queries run in the
+generated NumPy module (:func:`symkin.emit.collision.render_collision_numpy`: straight-line link
+poses vectorised over configurations, the pair math of :mod:`symkin.geometry.reference`); both give
+the same answers (tested).
 """
 
 from __future__ import annotations
@@ -19,7 +21,6 @@ import numpy as np
 from symkin.core.arrays import as_batch
 from symkin.core.names import identifier
 from symkin.errors import ParameterError
-from symkin.geometry import reference
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Environment
 
@@ -29,6 +30,7 @@ __all__ = [
     "collision_kernel",
     "collision_ik",
     "collision_of",
+    "collision_module",
     "motion_valid",
     "env_args",
     "Packed",
@@ -177,35 +179,51 @@ def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05)
     return not bool(np.asarray(check(Q)).any())
 
 
+def collision_module(layout: Layout) -> Any:
+    """The generated NumPy collision module of ``layout``
+    (:func:`symkin.emit.collision.render_collision_numpy`), imported once per layout (its bytecode
+    cached by content)."""
+    module = layout.__dict__.get("_numpy_module")
+    if module is None:
+        from symkin.core.cache import cache_dir
+        from symkin.emit.collision import render_collision_numpy
+        from symkin.emit.numpy.backend import load_numpy
+
+        module = load_numpy(render_collision_numpy(layout), cache_dir() / "numpy")
+        object.__setattr__(layout, "_numpy_module", module)
+    return module
+
+
 class Collision:
-    """Collision queries of one model on one backend: the compiled C kernel on ``"c"``, the NumPy
-    reference otherwise (same answers). Made by :meth:`symkin.Kinematics.collision`."""
+    """Collision queries of one model on one backend: the compiled C kernel on ``"c"``, the
+    generated NumPy module otherwise (same answers, tested). Made by :meth:`symkin.Kinematics.collision`."""
 
     def __init__(self, model: Any, backend: str = "c") -> None:
         self.layout = layout_of(model)
         self.backend = backend
         self.kernel = collision_kernel(model) if backend == "c" else None
+        self.module = None if self.kernel is not None else collision_module(self.layout)
         self.n = self.layout.tree.n
 
     def points(self, q: Any) -> np.ndarray:
         if self.kernel is not None:
             return self.kernel.points(q)
-        return reference.points(self.layout.tree, q)
+        return self.module.points(q)
 
     def in_collision(self, q: Any, env: Any = None) -> bool | np.ndarray:
         if self.kernel is not None:
             return self.kernel.in_collision(q, env)
-        return reference.in_collision(self.layout.tree, q, env)
+        return self.module.in_collision(q, env)
 
     def distances(self, q: Any, env: Any = None) -> np.ndarray:
         if self.kernel is not None:
             return self.kernel.distances(q, env)
-        return reference.distances(self.layout.tree, q, env)
+        return self.module.distances(q, env)
 
     def distance_jacobians(self, q: Any, env: Any = None) -> tuple[np.ndarray, np.ndarray]:
         if self.kernel is not None:
             return self.kernel.distances(q, env, jacobians=True)
-        return reference.distance_jacobians(self.layout.tree, q, env)
+        return self.module.distance_jacobians(q, env)
 
     def labels(self, env: Any = None) -> list[tuple[str, int, int]]:
         return self.layout.pair_labels(as_environment(env))
@@ -308,7 +326,7 @@ def _c_solver_avoiding(kin: Any, check: Collision, env: Environment, kwargs: dic
 
 def collision_of(kin: Any) -> Collision:
     """The collision queries of ``kin``: compiled kinematics' own (:meth:`Kinematics.collision`), else
-    the NumPy reference of a Robot or Tree (or of a frame view's model)."""
+    the generated NumPy module of a Robot or Tree (or of a frame view's model)."""
     method = getattr(kin, "collision", None)
     if callable(method):
         return method()

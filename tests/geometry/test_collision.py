@@ -211,7 +211,7 @@ def test_near_contact_verdicts(panda, panda_c):
             assert bool(in_collision(panda, q, env)) is hit
 
 
-def test_numpy_backend_uses_the_reference(panda, panda_c):
+def test_numpy_backend_matches_the_c_kernel(panda, panda_c):
     kin = symkin.compile(panda, backend="numpy")
     Q = panda.random_q(50, seed=8)
     assert np.abs(kin.distances(Q, ENV) - panda_c.distances(Q, ENV)).max() < 1e-12
