@@ -31,6 +31,7 @@ __all__ = [
     "points",
     "evaluate",
     "evaluate_frames",
+    "collides_frames",
     "distances",
     "distance_jacobians",
     "in_collision",
@@ -237,6 +238,48 @@ def evaluate_frames(
     D = np.concatenate(ds, axis=1) if ds else np.zeros((N, 0))
     J = (np.concatenate(gs, axis=1) if gs else np.zeros((N, 0, tab.n))) if jacobians else None
     return D, J
+
+
+CHUNK = 2048  # configurations per step of collides_frames (its (chunk, pairs, 3) temporaries)
+
+
+def collides_frames(tab: Tables, X: np.ndarray, env: Any = None) -> np.ndarray:
+    """Whether any active pair overlaps, (N,) bools, from the shape points X (N, P, 3): the
+    verdicts of ``evaluate_frames(...)[0] < 0`` with less work. Two spheres are compared by their
+    squared distance against the squared sum of their radii (as the C kernel does; no normals, no
+    closest points); a pair with a capsule or a box is measured."""
+    env = as_environment(env)
+    arrays = tab.arrays
+    caps, first, radius, _ = arrays
+    pairs = np.array(tab.self_pairs, dtype=int).reshape(-1, 2)
+    two = ~caps[pairs[:, 0]] & ~caps[pairs[:, 1]]
+    I, J, others = pairs[two, 0], pairs[two, 1], pairs[~two]
+    rr = (radius[I] + radius[J]) ** 2
+    sph = np.nonzero(~caps)[0]
+    O = env.arrays()["spheres"]
+    rro = (radius[sph][:, None] + O[None, :, 3]) ** 2  # (K, M)
+    # measured: capsule shapes against obstacle spheres, every shape against capsules and boxes
+    measured = Environment(env.spheres if caps.any() else (), env.capsules, env.boxes)
+    hit = np.zeros(X.shape[0], dtype=bool)
+    for start in range(0, X.shape[0], CHUNK):
+        Y = X[start : start + CHUNK]
+        h = np.zeros(Y.shape[0], dtype=bool)
+        if len(I):
+            h |= (_squared(Y[:, first[I]] - Y[:, first[J]]) < rr).any(axis=1)
+        if len(others):
+            h |= (_pair_kinds(Y, arrays, others[:, 0], others[:, 1])[0] < 0).any(axis=1)
+        if len(O) and len(sph):
+            d2 = _squared(Y[:, first[sph], None, :] - O[None, None, :, :3])  # (n, K, M)
+            h |= (d2 < rro).any(axis=(1, 2))
+        for d, _, _ in _obstacles(Y, arrays, measured):
+            h |= (d < 0).any(axis=1)
+        hit[start : start + CHUNK] = h
+    return hit
+
+
+def _squared(v: np.ndarray) -> np.ndarray:
+    """Squared length over the last axis."""
+    return np.einsum("...i,...i->...", v, v)
 
 
 def evaluate(model: Any, q: Any, env: Any = None, jacobians: bool = False) -> tuple[np.ndarray, Any, bool]:

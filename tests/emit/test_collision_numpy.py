@@ -146,3 +146,30 @@ def test_compile_output_folder_holds_the_collision_code(tmp_path):
         text=True,
     )
     assert run.returncode == 0, run.stderr
+
+
+def test_in_collision_exact_near_contact_and_in_chunks(monkeypatch):
+    """Obstacle spheres 1e-9 m outside and inside a shape give the exact verdict; a batch longer
+    than one chunk gives the verdicts of the distances."""
+    panda = symkin.load("panda")
+    module = collision_module(layout_of(panda))
+    rng = np.random.default_rng(5)
+    tested = 0
+    for q in panda.random_q(30, seed=6):
+        if module.in_collision(q):
+            continue
+        i = int(rng.integers(len(panda.geometry.shapes)))
+        c = module.points(q)[layout_of(panda).point_index[i]]
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        for gap, hit in ((1e-9, False), (-1e-9, True)):
+            env = Environment(spheres=(Sphere(c + u * (panda.geometry.shapes[i].radius + 0.05 + gap), 0.05),))
+            d = np.delete(module.distances(q, env), len(layout_of(panda).self_pairs) + i)
+            if (d < 1e-6).any():
+                continue  # another shape is as close: not a clean test of shape i
+            assert module.in_collision(q, env) is hit
+            tested += 1
+    assert tested >= 10
+    monkeypatch.setattr(reference, "CHUNK", 7)
+    Q = panda.random_q(40, seed=7)
+    assert (module.in_collision(Q, ENV) == (module.distances(Q, ENV) < 0).any(axis=1)).all()
