@@ -31,7 +31,13 @@ from symkin.core.version import __version__
 from symkin.emit.templates import render
 from symkin.model.geometry import Capsule
 
-__all__ = ["render_collision", "render_collision_numpy", "collision_module_name", "collision_tables"]
+__all__ = [
+    "render_collision",
+    "render_collision_numpy",
+    "render_collision_casadi",
+    "collision_module_name",
+    "collision_tables",
+]
 
 # the distance primitives, shared with the C runtime (the MMC step with obstacle constraints)
 COLLIDE_HEADER = Path(__file__).resolve().parent.parent / "runtime" / "csrc" / "symkin_collide.h"
@@ -152,7 +158,7 @@ def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple]]:
         if _is_identity(B):
             fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta, lang)
         else:
-            fk.append({"c": "{ double M_[12];", "c4": "{ v4 M_[12];", "py": "M_ = empty((12, N))"}[lang])
+            fk.append({"c": "{ double M_[12];", "c4": "{ v4 M_[12];", "py": "M_ = [0.0] * 12"}[lang])
             fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta, lang)
             fk += _product(f"T[{k}]", "M_", B, lang)
             if lang != "py":
@@ -387,14 +393,26 @@ def render_collision_numpy(layout: Any, command: str = "symkin generate") -> dic
     link poses and shape points as straight-line NumPy code vectorised over configurations, the
     geometry as literal :class:`symkin.geometry.reference.Tables`, the pair math from
     :func:`symkin.geometry.reference.evaluate_frames`."""
+    return _render_python(layout, "numpy", command)
+
+
+def render_collision_casadi(layout: Any, command: str = "symkin generate") -> dict[str, str]:
+    """The generated CasADi collision module of ``layout``:
+    ``{"symkin_<robot>_collision_casadi.py": ...}``, the same straight-line link poses and shape
+    points on CasADi expressions; ``function(env)`` builds the distances' ``casadi.Function``
+    (:func:`symkin.emit.casadi.collision.distances_function`)."""
+    return _render_python(layout, "casadi", command)
+
+
+def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
     from symkin.geometry.reference import Tables
 
     tree = layout.tree
     tables = Tables.of(layout)
     points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
-    module = collision_module_name(tree.name)
+    module = collision_module_name(tree.name) + ("_casadi" if backend == "casadi" else "")
     text = render(
-        "numpy/collision.py.j2",
+        f"{backend}/collision.py.j2",
         module=module,
         robot=comment_safe(tree.name, 80),
         name_literal=ascii(tree.name),

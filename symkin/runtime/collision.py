@@ -179,18 +179,23 @@ def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05)
     return not bool(np.asarray(check(Q)).any())
 
 
-def collision_module(layout: Layout) -> Any:
-    """The generated NumPy collision module of ``layout``
-    (:func:`symkin.emit.collision.render_collision_numpy`), imported once per layout (its bytecode
+def collision_module(layout: Layout, backend: str = "numpy") -> Any:
+    """The generated collision module of ``layout`` for ``backend`` ("numpy":
+    :func:`symkin.emit.collision.render_collision_numpy`; "casadi":
+    :func:`~symkin.emit.collision.render_collision_casadi`), imported once per layout (its bytecode
     cached by content)."""
-    module = layout.__dict__.get("_numpy_module")
+    memo = layout.__dict__.get("_modules")
+    if memo is None:
+        memo = {}
+        object.__setattr__(layout, "_modules", memo)
+    module = memo.get(backend)
     if module is None:
         from symkin.core.cache import cache_dir
-        from symkin.emit.collision import render_collision_numpy
+        from symkin.emit import collision as emit
         from symkin.emit.numpy.backend import load_numpy
 
-        module = load_numpy(render_collision_numpy(layout), cache_dir() / "numpy")
-        object.__setattr__(layout, "_numpy_module", module)
+        render = emit.render_collision_casadi if backend == "casadi" else emit.render_collision_numpy
+        module = memo[backend] = load_numpy(render(layout), cache_dir() / backend)
     return module
 
 

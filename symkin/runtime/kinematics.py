@@ -401,7 +401,7 @@ class Kinematics(FrameMethods):
     # -- collision geometry (symkin.runtime.collision) -----------------------------------------------
     def collision(self) -> Any:
         """The collision queries of the model's geometry: the compiled FKCC kernel on the C backend,
-        the NumPy reference on the others (built once; GeometryError when the model has none)."""
+        the generated NumPy module on the others (built once; GeometryError when the model has none)."""
         checker = self.__dict__.get("_collision")
         if checker is None:
             from symkin.runtime.collision import Collision
@@ -437,16 +437,17 @@ class Kinematics(FrameMethods):
     def collision_function(self, env: Any = None) -> Any:
         """The distances of :meth:`distances` as a ``casadi.Function`` ``q -> d`` (SX, closed forms;
         a capsule against a box is refused): constraints ``d >= margin`` for ``casadi.Opti``
-        problems, CasADi's derivatives. Built once per environment (any backend)."""
-        from symkin.emit.casadi.collision import collision_function
+        problems, CasADi's derivatives; built by the generated CasADi collision module, once per
+        environment (any backend)."""
         from symkin.geometry.pairs import as_environment, layout_of
+        from symkin.runtime.collision import collision_module
 
         env = as_environment(env)
         memo = self.__dict__.setdefault("_collision_functions", {})
         if env not in memo:
             if len(memo) >= 8:
                 memo.clear()
-            memo[env] = collision_function(layout_of(self.model), env)
+            memo[env] = collision_module(layout_of(self.model), "casadi").function(env)
         return memo[env]
 
     def motion_valid(self, q0: Any, q1: Any, env: Any = None, resolution: float = 0.05) -> bool:

@@ -1,6 +1,7 @@
-"""The generated NumPy collision module (``templates/numpy/collision.py.j2``): straight-line link
-poses and shape points, checked against the NumPy reference, whose link poses come from the tree's
-numeric O(n) walk (a different computation); the files ``symkin generate`` and ``compile -o`` write."""
+"""The generated NumPy and CasADi collision modules (``templates/{numpy,casadi}/collision.py.j2``):
+straight-line link poses and shape points, checked against the NumPy reference, whose link poses
+come from the tree's numeric O(n) walk (a different computation); the files ``symkin generate`` and
+``compile -o`` write."""
 
 from __future__ import annotations
 
@@ -129,12 +130,14 @@ def test_compile_output_folder_holds_the_collision_code(tmp_path):
     assert {"symkin_panda_collision.c", "symkin_collide.h", "symkin_panda.c"} <= paths
     paths = {p.name for p in symkin.write_generated(panda, "numpy", tmp_path / "py")}
     assert "symkin_panda_collision.py" in paths
+    paths = {p.name for p in symkin.write_generated(panda, "casadi", tmp_path / "ca")}
+    assert "symkin_panda_collision_casadi.py" in paths
     assert symkin.load_compiled(tmp_path / "c").fkine(np.zeros(7)).shape == (4, 4)
     from symkin.cli.main import main
 
     assert main(["compile", "ur5", "--backend", "numpy", "-o", str(tmp_path / "cli")]) == 0
     assert (tmp_path / "cli" / "symkin_ur5_collision.py").is_file()
-    assert generate_collision(panda, "casadi") == {}
+    assert list(generate_collision(panda, "casadi")) == ["symkin_panda_collision_casadi.py"]
     assert generate_collision(symkin.load("puma560"), "c") == {}
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
@@ -173,3 +176,19 @@ def test_in_collision_exact_near_contact_and_in_chunks(monkeypatch):
     monkeypatch.setattr(reference, "CHUNK", 7)
     Q = panda.random_q(40, seed=7)
     assert (module.in_collision(Q, ENV) == (module.distances(Q, ENV) < 0).any(axis=1)).all()
+
+
+@pytest.mark.parametrize("name", ["gripper", "gantry", "ur5"])
+def test_generated_casadi_points_and_distances_match_the_reference(name):
+    import casadi as ca
+
+    model = MODELS[name]()
+    layout = layout_of(model)
+    module = collision_module(layout, "casadi")
+    q = ca.SX.sym("q", model.n)
+    X = ca.Function("X", [q], [ca.vertcat(*[ca.horzcat(*p) for p in module.points(q)])])
+    env = Environment(spheres=ENV.spheres, capsules=ENV.capsules)
+    f = module.function(env)
+    for x in model.random_q(10, seed=8):
+        assert np.abs(np.array(X(x)) - reference.points(model, x)).max() < 1e-12
+        assert np.abs(np.array(f(x)).ravel() - reference.distances(model, x, env)).max() < 1e-12

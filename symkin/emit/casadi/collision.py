@@ -2,8 +2,8 @@
 signed distance of every active pair in the order of ``kin.collision_pairs(env)``, for
 ``casadi.Opti`` problems (``opti.subject_to(f(q) >= margin)``) and CasADi's derivatives.
 
-The link poses are built from the model's segments (constant transforms as numbers, the joints'
-rotations and translations in ``q``), the shape points are the link poses applied to them, and the
+The shape points come from the generated CasADi collision module
+(``templates/casadi/collision.py.j2``: straight-line link poses with the constants folded in), the
 pair distances are the closed forms of :mod:`symkin.geometry.distance` written with CasADi's
 ``if_else``/``fmin``/``fmax``: sphere-sphere, capsule-sphere, capsule-capsule (Ericson's closest
 points of two segments) and sphere-box (the box's signed distance field). A capsule against a box
@@ -18,33 +18,10 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import GeometryError
-from symkin.model.geometry import Capsule
 
-__all__ = ["collision_function"]
+__all__ = ["distances_function"]
 
 SEG_EPS, PAR_EPS = 1e-24, 1e-14  # as symkin.geometry.distance
-
-
-def _link_poses(ca: Any, tree: Any, q: Any) -> list[Any]:
-    """(4, 4) SX pose of each segment's link, depth first."""
-    num = tree._num
-    L: list[Any] = []
-    for k, seg in enumerate(tree.segments):
-        T = ca.DM(num.A[k]) if seg.parent < 0 else L[seg.parent] @ ca.DM(num.A[k])
-        if seg.slot is not None:
-            s = tree.slots[seg.slot]
-            theta = num.sign[k] * (float(s.multiplier) * q[s.joint] + float(s.offset))
-            M = ca.SX.eye(4)
-            axis = num.axis[k]
-            if s.revolute:
-                j, i = [(1, 2), (2, 0), (0, 1)][axis]
-                c, sn = ca.cos(theta), ca.sin(theta)
-                M[j, j], M[i, i], M[j, i], M[i, j] = c, c, -sn, sn
-            else:
-                M[axis, 3] = theta
-            T = T @ M @ ca.DM(num.B[k])
-        L.append(T)
-    return L
 
 
 def _norm(ca: Any, v: Any) -> Any:
@@ -104,27 +81,27 @@ def _pair(ca: Any, A: Any, ra: float, cap_a: bool, B: Any, rb: float, cap_b: boo
     return _norm(ca, A[0] - B[0]) - ra - rb
 
 
-def collision_function(layout: Any, env: Any, name: str = "distances") -> Any:
-    """``casadi.Function`` ``name``: q (n,) -> d (M,), the signed distances of ``layout``'s active
-    pairs and of every shape against each obstacle of ``env`` (an Environment), in the order of
-    :meth:`symkin.geometry.pairs.Layout.pair_labels`."""
+def distances_function(points: Any, tables: Any, env: Any = None, name: str = "distances") -> Any:
+    """``casadi.Function`` ``name``: q (n,) -> d (M,), the signed distances of the active pairs and of
+    every shape against each obstacle of ``env`` (None, an Environment or obstacles), in the order of
+    :meth:`symkin.geometry.pairs.Layout.pair_labels`. ``points(q)``: the shape points as lists
+    [x, y, z] of CasADi expressions (a generated collision module's ``points``); ``tables``: the
+    geometry (:class:`symkin.geometry.reference.Tables`)."""
     import casadi as ca
 
-    tree = layout.tree
-    if env.boxes and any(isinstance(s, Capsule) for s in layout.shapes):
+    from symkin.geometry.pairs import as_environment
+
+    env = as_environment(env)
+    caps, radius = tables.caps, tables.radius
+    if env.boxes and any(caps):
         raise GeometryError(
             "the CasADi distances have no closed form for a capsule against a box; give the boxes "
             "as spheres (symkin.geometry.fit_spheres) or use kin.distances"
         )
-    q = ca.SX.sym("q", tree.n)
-    L = _link_poses(ca, tree, q)
-    pts = []
-    for s, k in zip(layout.shapes, layout.segment):
-        local = [ca.DM(np.array(p)) for p in s.points]
-        pts.append(local if k < 0 else [L[k][:3, :3] @ p + L[k][:3, 3] for p in local])
-    caps = [isinstance(s, Capsule) for s in layout.shapes]
-    radius = [s.radius for s in layout.shapes]
-    out = [_pair(ca, pts[i], radius[i], caps[i], pts[j], radius[j], caps[j]) for i, j in layout.self_pairs]
+    q = ca.SX.sym("q", tables.n)
+    X = points(q)
+    pts = [[ca.vertcat(*X[f + k]) for k in range(2 if c else 1)] for f, c in zip(tables.first, caps)]
+    out = [_pair(ca, pts[i], radius[i], caps[i], pts[j], radius[j], caps[j]) for i, j in tables.self_pairs]
     for o in env.spheres:
         B = [ca.DM(np.array(o.center))]
         out += [_pair(ca, pts[i], radius[i], caps[i], B, o.radius, False) for i in range(len(pts))]
