@@ -6,6 +6,8 @@ reported in result objects, not raised.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 
 class SymkinError(Exception):
     """Root of every error symkin raises on purpose."""
@@ -74,3 +76,10 @@ class MissingExtraError(SymkinError, ImportError):
 class GeometryError(SymkinError, ValueError):
     """Invalid collision geometry or environment: a shape on an unknown link, a negative radius,
     NaN or infinite numbers, an unknown shape kind."""
+
+
+def check_choice(value: object, choices: Sequence[str], what: str) -> None:
+    """Raise SymkinError ``unknown <what> <value>: choose one of ...`` unless ``value`` is one of
+    ``choices``."""
+    if value not in choices:
+        raise SymkinError(f"unknown {what} {value!r}: choose one of {', '.join(choices)}")

@@ -255,16 +255,10 @@ def target(args: argparse.Namespace, robot: Any) -> np.ndarray:
         return robot.fkine(floats(args.target_q, "--target-q", robot.n))
     if args.matrix is not None:
         return floats(args.matrix, "--matrix", 16).reshape(4, 4)
-    x, y, z, r, p, yaw = floats(args.pose, "--pose", 6)
-    cr, sr, cp, sp_, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(yaw), np.sin(yaw)
-    T = np.eye(4)
-    T[:3, :3] = [
-        [cy * cp, cy * sp_ * sr - sy * cr, cy * sp_ * cr + sy * sr],
-        [sy * cp, sy * sp_ * sr + cy * cr, sy * sp_ * cr - cy * sr],
-        [-sp_, cp * sr, cp * cr],
-    ]
-    T[:3, 3] = [x, y, z]
-    return T
+    from symkin.model.transform import rpy_matrix
+
+    pose = floats(args.pose, "--pose", 6)
+    return rpy_matrix(pose[:3], pose[3:])
 
 
 def scheduler(args: argparse.Namespace) -> Any:

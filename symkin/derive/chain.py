@@ -47,7 +47,7 @@ from symkin.derive.common import (  # noqa: F401
     shared_context,
 )
 from symkin.emit.templates import render
-from symkin.errors import SymkinError
+from symkin.errors import SymkinError, check_choice
 from symkin.model.ets import ET, ETS, Axis
 from symkin.model.latex import et_latex, ets_latex
 from symkin.model.robot import Robot
@@ -385,15 +385,11 @@ def derive_steps(
             ``("fk", "jacobian")``); default all. The results are computed in full either way.
     """
     shown = _shown_sections(sections)
-    if fmt not in FORMATS:
-        raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
-    if form not in FORMS:
-        raise SymkinError(f"unknown form {form!r}: choose one of {', '.join(FORMS)}")
-    from symkin.model.resolve import resolve_robot
+    check_choice(fmt, FORMATS, "format")
+    check_choice(form, FORMS, "form")
+    from symkin.model.resolve import robot_with_joints
 
-    robot = resolve_robot(robot)
-    if robot.n == 0:
-        raise SymkinError(f"robot {robot.name!r} has no joints: nothing to derive")
+    robot = robot_with_joints(robot, "nothing to derive")
     if form == "auto":
         from symkin.symbolic.functions import expanded_if_small
 

@@ -29,6 +29,7 @@ __all__ = [
     "constants",
     "et_matrix",
     "latex_document",
+    "mp_function",
     "ops_of",
 ]
 
@@ -46,6 +47,30 @@ DISPLAY_MAX_OPS = 900  # larger expressions are not printed
 
 
 MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # a rotation about axis i mixes columns (j, k)
+
+
+def mp_function(
+    lines: Sequence[tuple[sp.Symbol, sp.Expr]], inputs: Sequence[sp.Symbol], outputs: list[sp.Expr]
+) -> Any:
+    """A straight-line program (``lines`` of named intermediates, only those ``outputs`` need) as
+    one Python function of ``inputs`` returning the outputs, evaluated with mpmath (joint symbols
+    ``q_k``, constants ``l_k`` and intermediates ``tk`` are valid Python names as they are)."""
+    import mpmath
+    from sympy.printing.pycode import MpmathPrinter
+
+    from symkin.symbolic.program import needed_lines
+
+    printer = MpmathPrinter({"fully_qualified_modules": True})
+    needed = set(needed_lines(lines, outputs))
+    body = [f"    {s} = {printer.doprint(e)}" for i, (s, e) in enumerate(lines) if i in needed]
+    src = (
+        f"def f({', '.join(str(s) for s in inputs)}):\n"
+        + "\n".join(body)
+        + f"\n    return [{', '.join(printer.doprint(e) for e in outputs)}]\n"
+    )
+    scope: dict[str, Any] = {"mpmath": mpmath}
+    exec(compile(src, "<symkin program>", "exec"), scope)  # noqa: S102 - our own printed code
+    return scope["f"]
 
 
 def ops_of(expr: Any) -> int:

@@ -18,12 +18,11 @@ from typing import Any
 
 import mpmath
 import sympy as sp
-from sympy.printing.pycode import MpmathPrinter
 
 from symkin.model.ets import ETS, Axis
 from symkin.model.latex import ets_latex
 from symkin.model.robot import Robot
-from symkin.symbolic.program import KinematicProgram, derive_program, needed_lines
+from symkin.symbolic.program import KinematicProgram, derive_program
 
 __all__ = ["program_derivation", "program_context", "LINES_PER_BLOCK"]
 
@@ -70,22 +69,6 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> Any:
 # Checks at random points, 30 digits
 
 
-def _mp_function(kp: KinematicProgram, inputs: Sequence[sp.Symbol], outputs: list[sp.Expr]) -> Any:
-    """The program as one Python function of ``inputs`` evaluated with mpmath (joint symbols
-    ``q_k``, constants ``l_k`` and intermediates ``tk`` are valid Python names as they are)."""
-    printer = MpmathPrinter({"fully_qualified_modules": True})
-    needed = set(needed_lines(kp.lines, outputs))
-    body = [f"    {s} = {printer.doprint(e)}" for i, (s, e) in enumerate(kp.lines) if i in needed]
-    src = (
-        f"def f({', '.join(str(s) for s in inputs)}):\n"
-        + "\n".join(body)
-        + f"\n    return [{', '.join(printer.doprint(e) for e in outputs)}]\n"
-    )
-    scope: dict[str, Any] = {"mpmath": mpmath}
-    exec(compile(src, "<symkin program>", "exec"), scope)  # noqa: S102 - our own printed code
-    return scope["f"]
-
-
 def _et_mp(axis: Axis, value: Any) -> Any:
     M = mpmath.eye(4)
     i = axis.index
@@ -114,6 +97,8 @@ def _checks(
 ) -> dict[str, str]:
     """Compare the program with the literal products of eqs 1, 5 and 26-28, and its Hessian with
     central differences of its Jacobian along a random direction, at 3 random points to 30 digits."""
+    from symkin.derive.common import mp_function
+
     n = len(q)
     consts = list(values)
     assert kp.H0 is not None
@@ -121,8 +106,8 @@ def _checks(
     rng = random.Random(1)
     worst = {"eq 1: T": 0.0, "eq 5: link frames": 0.0, "eqs 26-28 and 31-34: J0": 0.0, "eq 20: H0": 0.0}
     with mpmath.workdps(30):
-        f = _mp_function(kp, list(q) + consts, outs)
-        fj = _mp_function(kp, list(q) + consts, list(kp.J0))
+        f = mp_function(kp.lines, list(q) + consts, outs)
+        fj = mp_function(kp.lines, list(q) + consts, list(kp.J0))
         cvals = [mpmath.mpf(sp.N(values[c], 40)) for c in consts]
         mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
         for _ in range(3):

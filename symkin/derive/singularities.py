@@ -28,7 +28,7 @@ import sympy as sp
 
 from symkin.derive.common import FORMATS, Printer, latex_document
 from symkin.emit.templates import render
-from symkin.errors import SymkinError
+from symkin.errors import check_choice
 from symkin.model.latex import display_name
 from symkin.model.robot import Robot
 from symkin.symbolic.singularities import MAX_TERMS, SingularFactor, SingularFactors, singular_factors
@@ -117,8 +117,7 @@ def singularities(
     :func:`symkin.symbolic.singularities.singular_factors`); ``seed``: the random configurations
     of the checks; ``max_terms``: a minor whose determinant has more terms is not factored.
     """
-    if fmt not in FORMATS:
-        raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
+    check_choice(fmt, FORMATS, "format")
     from symkin.model.resolve import resolve_robot
 
     robot = resolve_robot(robot)

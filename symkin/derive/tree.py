@@ -50,23 +50,16 @@ def _num(r: Any) -> str:
 def _checks(tree: Tree, tp: Any, samples: int = 3) -> float:
     """Largest difference of the program's poses and Jacobians from the numeric reference."""
     import mpmath
-    from sympy.printing.pycode import MpmathPrinter
 
-    printer = MpmathPrinter({"fully_qualified_modules": True})
+    from symkin.derive.common import mp_function
+
     outs = [x for T in tp.T for x in T] + [x for J in tp.J0 for x in J]
-    body = [f"    {s} = {printer.doprint(e)}" for s, e in tp.lines]
-    src = (
-        f"def f({', '.join(str(s) for s in tp.q)}):\n"
-        + "\n".join(body)
-        + f"\n    return [{', '.join(printer.doprint(e) for e in outs)}]\n"
-    )
-    scope: dict[str, Any] = {"mpmath": mpmath}
-    exec(compile(src, "<symkin tree program>", "exec"), scope)  # noqa: S102 - our own printed code
+    f = mp_function(tp.lines, tp.q, outs)
     worst = 0.0
     F, n = len(tree.frames), tree.n
     for q in tree.random_q(samples, seed=1):
         with mpmath.workdps(30):
-            got = np.array([float(v) for v in scope["f"](*[mpmath.mpf(float(x)) for x in q])])
+            got = np.array([float(v) for v in f(*[mpmath.mpf(float(x)) for x in q])])
         T, J = tree.fkine_jacob0_all(q)
         ref = np.concatenate((T.reshape(-1), J.reshape(-1)))
         assert got.size == 16 * F + 6 * n * F
@@ -79,12 +72,11 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     from symkin.core.version import __version__
     from symkin.derive.common import FORMATS, Printer, latex_document
     from symkin.emit.templates import render
-    from symkin.errors import SymkinError
+    from symkin.errors import SymkinError, check_choice
     from symkin.symbolic.kinematics import const_to_sympy
     from symkin.symbolic.tree_program import derive_tree_program, safe_text
 
-    if fmt not in FORMATS:
-        raise SymkinError(f"unknown format {fmt!r}: choose one of {', '.join(FORMATS)}")
+    check_choice(fmt, FORMATS, "format")
     if tree.n == 0:
         raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
     q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(tree.n))

@@ -57,24 +57,40 @@ class _DoubleLiterals:
         return float_literal(float(expr))
 
 
-class CPrinter(_DoubleLiterals, C99CodePrinter):
+class _Calls:
+    """Powers as products (:func:`_pow`), square roots, sines and cosines as calls of the names
+    :meth:`_fn` gives them in the generated code (mixed into each printer)."""
+
+    one = "1.0"  # the literal 1 of negative powers
+
+    def _fn(self, name: str) -> str:
+        """The generated code's name of the function ``name`` (``sqrt``, ``sin`` or ``cos``)."""
+        return name
+
+    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
+        return _pow(self, expr, self._fn("sqrt"), one=self.one)
+
+    def _print_sin(self, expr: sp.sin) -> str:
+        return f"{self._fn('sin')}({self._print(expr.args[0])})"  # type: ignore[attr-defined]
+
+    def _print_cos(self, expr: sp.cos) -> str:
+        return f"{self._fn('cos')}({self._print(expr.args[0])})"  # type: ignore[attr-defined]
+
+
+class CPrinter(_DoubleLiterals, _Calls, C99CodePrinter):
     """C99 with exact double literals and multiplications for small powers; sin and cos as the
     template's ``sk_sin``/``sk_cos`` (the inline kernels of ``c/_sincos.c.j2``, or libm's with
     ``--libm``)."""
 
-    def _print_Pow(self, expr: sp.Pow) -> str:
-        return _pow(self, expr, "sqrt")
-
-    def _print_sin(self, expr: sp.sin) -> str:
-        return f"sk_sin({self._print(expr.args[0])})"
-
-    def _print_cos(self, expr: sp.cos) -> str:
-        return f"sk_cos({self._print(expr.args[0])})"
+    def _fn(self, name: str) -> str:
+        return name if name == "sqrt" else f"sk_{name}"
 
 
 class FloatCPrinter(CPrinter):
     """Single-precision C: ``f``-suffixed literals (the double rounded to float by the compiler),
     ``sqrtf``; ``sk_sin``/``sk_cos`` map to ``sinf``/``cosf`` in the template."""
+
+    one = "1.0f"
 
     def _print_Rational(self, expr: sp.Rational) -> str:
         return float_literal(float(expr)) + "f"
@@ -85,21 +101,15 @@ class FloatCPrinter(CPrinter):
     def _print_Float(self, expr: sp.Float) -> str:
         return float_literal(float(expr)) + "f"
 
-    def _print_Pow(self, expr: sp.Pow) -> str:
-        return _pow(self, expr, "sqrtf", one="1.0f")
+    def _fn(self, name: str) -> str:
+        return "sqrtf" if name == "sqrt" else super()._fn(name)
 
 
-class _PyLikePrinter(_DoubleLiterals, PythonCodePrinter):
+class _PyLikePrinter(_DoubleLiterals, _Calls, PythonCodePrinter):
     module = "np"
 
-    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
-        return _pow(self, expr, f"{self.module}.sqrt")
-
-    def _print_sin(self, expr: sp.sin) -> str:
-        return f"{self.module}.sin({self._print(expr.args[0])})"
-
-    def _print_cos(self, expr: sp.cos) -> str:
-        return f"{self.module}.cos({self._print(expr.args[0])})"
+    def _fn(self, name: str) -> str:
+        return f"{self.module}.{name}"
 
 
 class NumPyPrinter(_PyLikePrinter):
@@ -141,14 +151,8 @@ class MathPrinter(_PositiveFirst, _PyLikePrinter):
     into the generated module (a global each: faster than ``math.cos`` per call), ``-a + b`` as
     ``b - a``."""
 
-    def _print_Pow(self, expr: sp.Pow, rational: bool = False) -> str:
-        return _pow(self, expr, "sqrt")
-
-    def _print_sin(self, expr: sp.sin) -> str:
-        return f"sin({self._print(expr.args[0])})"
-
-    def _print_cos(self, expr: sp.cos) -> str:
-        return f"cos({self._print(expr.args[0])})"
+    def _fn(self, name: str) -> str:
+        return name
 
 
 class CasADiPrinter(_PyLikePrinter):

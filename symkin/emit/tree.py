@@ -153,13 +153,7 @@ def render_tree(
         module = f"symkin_{identifier(tree.name)}_tree"
         text = render(
             "numpy/tree.py.j2",
-            module=module,
-            n=n,
-            F=F,
-            functions=printed_py,
-            header=TreeHeader.of(tree, functions, command, ascii(tree.name)),
-            name_literal=ascii(tree.name),
-            frame_literals=[ascii(f) for f in tree.frames],
+            **_python_context(tree, functions, command, module, printed_py),
             frame_fns=_frame_fns(tree),
             framed_docs=FRAMED_DOCS,
             paths=_paths(tree),
@@ -176,14 +170,19 @@ def render_tree(
         ]
         printed_ca.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": table})
     module = f"symkin_{identifier(tree.name)}_tree_casadi"
-    text = render(
-        "casadi/tree.py.j2",
-        module=module,
-        n=n,
-        F=F,
-        functions=printed_ca,
-        header=TreeHeader.of(tree, functions, command, ascii(tree.name)),
-        name_literal=ascii(tree.name),
-        frame_literals=[ascii(f) for f in tree.frames],
-    )
+    text = render("casadi/tree.py.j2", **_python_context(tree, functions, command, module, printed_ca))
     return {f"{module}.py": text}
+
+
+def _python_context(tree: Any, functions: list, command: str, module: str, printed: list) -> dict[str, Any]:
+    """The template variables the NumPy and CasADi trees share (``printed``: the functions as
+    each template takes them)."""
+    return {
+        "module": module,
+        "n": tree.n,
+        "F": len(tree.frames),
+        "functions": printed,
+        "header": TreeHeader.of(tree, functions, command, ascii(tree.name)),
+        "name_literal": ascii(tree.name),
+        "frame_literals": [ascii(f) for f in tree.frames],
+    }

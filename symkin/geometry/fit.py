@@ -9,13 +9,13 @@ at most the sample spacing's share.
 
 from __future__ import annotations
 
-import operator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from symkin.errors import GeometryError, MissingExtraError
+from symkin.model.geometry import as_index
 
 __all__ = ["fit_spheres", "mesh_points"]
 
@@ -149,12 +149,7 @@ def fit_spheres(
     triangle then goes whole into the sphere it makes grow least, so the spheres contain the whole
     surface, not only the sampled points. Spheres are sorted by radius, largest first.
     """
-    if isinstance(n, (bool, np.bool_)):
-        raise GeometryError(f"n must be a whole number >= 1, not {n!r}")
-    try:
-        k = operator.index(n)
-    except TypeError:
-        raise GeometryError(f"n must be a whole number >= 1, not {n!r}") from None
+    k = as_index(n, f"n must be a whole number >= 1, not {n!r}")
     if k < 1:
         raise GeometryError(f"n must be >= 1, got {k}")
     obj = _load(mesh_or_points)

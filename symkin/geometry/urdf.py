@@ -39,6 +39,7 @@ import numpy as np
 
 from symkin.errors import GeometryError, MissingExtraError
 from symkin.model.geometry import Capsule, Geometry, Sphere
+from symkin.model.transform import rpy_matrix
 from symkin.model.urdf import (
     URDFGraph,
     URDFJoint,
@@ -54,23 +55,8 @@ __all__ = ["geometry_from_urdf", "urdf_link_names", "urdf_link_frames", "box_sph
 _Frame = tuple[str, np.ndarray]  # model link name, 4x4 transform model link frame -> URDF link frame
 
 
-def _rpy_matrix(xyz: Any, rpy: Any) -> np.ndarray:
-    """The homogeneous transform of an URDF ``<origin>``: translation ``xyz``, rotation
-    ``Rz(yaw) Ry(pitch) Rx(roll)``."""
-    r, p, y = (float(v) for v in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    T = np.eye(4)
-    T[:3, :3] = [
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr],
-    ]
-    T[:3, 3] = [float(v) for v in xyz]
-    return T
-
-
 def _joint_origin(j: URDFJoint) -> np.ndarray:
-    return _rpy_matrix(*joint_origin(j.el, f"joint {j.name!r}"))
+    return rpy_matrix(*joint_origin(j.el, f"joint {j.name!r}"))
 
 
 def _joint_motion(j: URDFJoint, where: str, q: float) -> np.ndarray:
@@ -284,7 +270,7 @@ def geometry_from_urdf(
             o = cel.find("origin")
             xyz = _floats(o, "xyz", 3, f"{what} origin xyz", "0 0 0") if o is not None else [0.0] * 3
             rpy = _floats(o, "rpy", 3, f"{what} origin rpy", "0 0 0") if o is not None else [0.0] * 3
-            T = A @ _rpy_matrix(xyz, rpy)
+            T = A @ rpy_matrix(xyz, rpy)
             g = cel.find("geometry")
             kids = list(g) if g is not None else []
             if not kids:

@@ -43,7 +43,7 @@ import numpy as np
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
 
-__all__ = ["DHLink", "dh_args", "dh_file_args", "dh_table_args", "angle_const", "length_const"]
+__all__ = ["DHLink", "dh_args", "dh_file_args", "dh_table_args", "angle_const", "length_const", "robot_args"]
 
 Number: TypeAlias = float | int | Fraction | str | Const
 
@@ -196,6 +196,28 @@ def _const_ets(ets: ETS | ET | str | Sequence[ET] | None, what: str) -> list[ET]
     return [e for e in out if not e.const.is_zero]
 
 
+def robot_args(
+    chain: Sequence[ET],
+    name: str,
+    qlim: Any,
+    configs: Mapping[str, Any] | None,
+    joint_names: Sequence[str] | None,
+    qd_max: Any,
+    source: str,
+) -> dict[str, Any]:
+    """The :class:`~symkin.Robot` arguments of an imported ``chain`` (the importers' own arguments,
+    the configurations and joint names copied)."""
+    return dict(
+        ets=ETS(tuple(chain)),
+        name=name,
+        qlim=qlim,
+        configs=dict(configs or {}),
+        joint_names=tuple(joint_names or ()),
+        qd_max=qd_max,
+        source=source,
+    )
+
+
 def dh_args(
     links: Sequence[DHLink | Mapping[str, Any]],
     modified: bool = False,
@@ -240,15 +262,8 @@ def dh_args(
         qlim = np.array(lim, dtype=float).T
     if joint_names is None and all(r.name for r in rows):
         joint_names = [str(r.name) for r in rows]
-    return dict(
-        ets=ETS(tuple(chain)),
-        name=name,
-        qlim=qlim,
-        configs=dict(configs or {}),
-        joint_names=tuple(joint_names or ()),
-        qd_max=qd_max,
-        source=source or ("modified" if modified else "standard") + f" DH table, {n} links",
-    )
+    source = source or ("modified" if modified else "standard") + f" DH table, {n} links"
+    return robot_args(chain, name, qlim, configs, joint_names, qd_max, source)
 
 
 def _limit(value: Any, j: int) -> float:

@@ -35,6 +35,7 @@ __all__ = [
     "Environment",
     "Shape",
     "link_name",
+    "as_index",
     "check_geometry",
     "rename_links",
 ]
@@ -64,6 +65,17 @@ def _radius(value: Any, what: str = "radius") -> float:
     return r
 
 
+def as_index(value: Any, message: str) -> int:
+    """``value`` as an int (an integer or anything with ``__index__``, never a bool), else a
+    GeometryError with ``message``."""
+    if not isinstance(value, (bool, np.bool_)):
+        try:
+            return operator.index(value)
+        except TypeError:
+            pass
+    raise GeometryError(message) from None
+
+
 def link_name(link: Any) -> str:
     """A shape's link as a name: text is kept, an integer k (a chain's link frame k) becomes
     ``"link<k+1>"``."""
@@ -71,12 +83,7 @@ def link_name(link: Any) -> str:
         if not link or "\0" in link:
             raise GeometryError(f"a link name must be non-empty text without NUL, got {link!r}")
         return link
-    if isinstance(link, (bool, np.bool_)):
-        raise GeometryError(f"a link must be a name or a link frame index, not {link!r}")
-    try:
-        k = operator.index(link)
-    except TypeError:
-        raise GeometryError(f"a link must be a name or a link frame index, not {link!r}") from None
+    k = as_index(link, f"a link must be a name or a link frame index, not {link!r}")
     if k < 0:
         raise GeometryError(f"a link frame index must be >= 0, got {k}")
     return f"link{k + 1}"

@@ -26,8 +26,8 @@ import numpy as np
 
 from symkin.core.arrays import as_config
 from symkin.errors import RobotError
-from symkin.model.dh import angle_const
-from symkin.model.ets import ET, ETS, Axis, Const
+from symkin.model.dh import angle_const, robot_args
+from symkin.model.ets import ET, Axis, Const
 from symkin.model.kinematics import NumericKinematics
 from symkin.model.urdf import axis_ets, snap_atan2, translation_ets
 
@@ -213,15 +213,8 @@ def poe_args(
         joints += _screw_ets(S, j, tol)
     chain = joints + home if frame == "space" else home + joints
     chain = simplify_constants(chain, tol)
-    args = dict(
-        ets=ETS(tuple(chain)),
-        name=name,
-        qlim=qlim,
-        configs=dict(configs or {}),
-        joint_names=tuple(joint_names or ()),
-        qd_max=qd_max,
-        source=source or f"product of exponentials ({frame} form), {len(Sx)} screws",
-    )
+    source = source or f"product of exponentials ({frame} form), {len(Sx)} screws"
+    args = robot_args(chain, name, qlim, configs, joint_names, qd_max, source)
     T0 = NumericKinematics.of(args["ets"]).fkine(np.zeros((1, len(Sx))))[0]
     if np.abs(T0 - Mf).max() > _CHECK:  # guard against a decomposition bug: T(0) must be M
         raise RobotError(

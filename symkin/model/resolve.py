@@ -10,11 +10,11 @@ import os
 from pathlib import Path
 from typing import Any
 
-from symkin.errors import RobotError
+from symkin.errors import RobotError, SymkinError
 from symkin.model.ets import ETS
 from symkin.model.robot import Robot
 
-__all__ = ["resolve_robot"]
+__all__ = ["resolve_robot", "robot_with_joints"]
 
 _URDF_SUFFIXES = (".urdf", ".xml", ".xacro")  # .xacro: refused by the URDF reader, with how to expand it
 
@@ -32,6 +32,15 @@ def resolve_robot(spec: str | Robot | ETS, tool: Any = None, base: Any = None) -
         robot = robot.with_tool(tool)
     if base is not None:
         robot = robot.with_base(base)
+    return robot
+
+
+def robot_with_joints(spec: str | Robot | ETS, purpose: str = "") -> Robot:
+    """:func:`resolve_robot` of ``spec``; a SymkinError when the robot has no joints (``purpose``,
+    what they are needed for, ends its message)."""
+    robot = resolve_robot(spec)
+    if robot.n == 0:
+        raise SymkinError(f"robot {robot.name!r} has no joints" + (f": {purpose}" if purpose else ""))
     return robot
 
 

@@ -28,7 +28,16 @@ import numpy as np
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
 
-__all__ = ["constant_ets", "se3_ets", "rpy_ets", "length_const", "type_name", "SNAP_TOL", "LENGTH_TOL"]
+__all__ = [
+    "constant_ets",
+    "se3_ets",
+    "rpy_ets",
+    "rpy_matrix",
+    "length_const",
+    "type_name",
+    "SNAP_TOL",
+    "LENGTH_TOL",
+]
 
 SNAP_TOL = 1e-9  # rad: angles this close to k pi / m (m <= 12) become exact
 LENGTH_TOL = 2e-15  # lengths this close (relative to max(1, |x|)) to a shorter decimal become it
@@ -128,6 +137,21 @@ def rpy_ets(xyz: Sequence[Const], rpy: Sequence[Const] = ()) -> list[ET]:
             ET(a, const=c) for a, c in ((Axis.Rz, yaw), (Axis.Ry, pitch), (Axis.Rx, roll)) if not c.is_zero
         ]
     return out
+
+
+def rpy_matrix(xyz: Any, rpy: Any) -> np.ndarray:
+    """The 4x4 homogeneous transform (floats) of translation ``xyz`` and fixed-axis roll, pitch,
+    yaw ``rpy`` (rad): rotation ``Rz(yaw) Ry(pitch) Rx(roll)``, as a URDF ``<origin>``."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    T = np.eye(4)
+    T[:3, :3] = [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+    T[:3, 3] = [float(v) for v in xyz]
+    return T
 
 
 def _text_ets(text: str, what: str, snap_tol: float) -> list[ET]:

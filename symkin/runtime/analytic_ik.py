@@ -37,6 +37,8 @@ __all__ = [
     "ik_inputs",
     "check_weights",
     "invalid_input",
+    "nearest_pick",
+    "picks_result",
     "VERIFY_TOL",
     "DUPLICATE_TOL",
 ]
@@ -79,6 +81,40 @@ def invalid_input(what: str, value: Any, n: int) -> None:
             "use ik_all(T) without it"
         )
     raise ConfigurationError(f"{what} must be {n} finite numbers; got {value!r}"[:300])
+
+
+Pick = tuple[np.ndarray, bool, float, str]  # one target's q, success, residual and reason
+
+
+def nearest_pick(
+    rows: np.ndarray, fallback: np.ndarray, target: np.ndarray, fk: Any, tol: float
+) -> tuple[np.ndarray, bool, float, str | None]:
+    """The first (nearest) of the closed-form solutions ``rows`` for ``target`` as (q, success,
+    residual, reason); with no rows ``fallback``, failed, and reason None (the caller says why)."""
+    q = rows[0] if len(rows) else fallback
+    r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), target)))
+    if not len(rows):
+        return q, False, r, None
+    success = r < tol
+    reason = "success" if success else f"closed-form solution has residual {r:.3g} >= tol {tol:g}"
+    return q, success, r, reason
+
+
+def picks_result(picks: list[Pick], single: bool, n: int) -> IKResult:
+    """The IKResult of the picks of one target (``single``) or of N targets (0 iterations and one
+    search each)."""
+    if single:
+        q, success, r, reason = picks[0]
+        return IKResult(q, success, 0, 1, r, reason)
+    N = len(picks)
+    return IKResult(
+        np.array([p[0] for p in picks]).reshape(N, n),  # (0, n) for no targets
+        np.array([p[1] for p in picks], dtype=bool),
+        np.zeros(N, int),
+        np.ones(N, int),
+        np.array([p[2] for p in picks], dtype=float),
+        tuple(p[3] for p in picks),
+    )
 
 
 class AnalyticIK:
@@ -209,34 +245,14 @@ class AnalyticIK:
         N = len(T)
         allq = self.ik_all(T, Q0, joint_limits, w)
         fk = fkine or self.robot.fkine
-        qs, ok, res, why = [], [], [], []
+        picks: list[Pick] = []
         for i in range(N):
             rows = allq[i]
             rows = rows[~np.isnan(rows[:, 0])] if rows.size else rows
-            if len(rows):
-                q = rows[0]
-                r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), T[i])))
-                success = r < tol
-                reason = "success" if success else f"closed-form solution has residual {r:.3g} >= tol {tol:g}"
-            else:
-                q = np.zeros(self.n) if Q0 is None else np.array(Q0[i])
-                r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), T[i])))
-                success = False
-                reason = self._why(T[i], joint_limits)
-            qs.append(q)
-            ok.append(success)
-            res.append(r)
-            why.append(reason)
-        if single:
-            return IKResult(qs[0], ok[0], 0, 1, res[0], why[0])
-        return IKResult(
-            np.array(qs).reshape(N, self.n),  # (0, n) for no targets
-            np.array(ok, dtype=bool),
-            np.zeros(N, int),
-            np.ones(N, int),
-            np.array(res, dtype=float),
-            tuple(why),
-        )
+            fallback = np.zeros(self.n) if Q0 is None else np.array(Q0[i])
+            q, success, r, reason = nearest_pick(rows, fallback, T[i], fk, tol)
+            picks.append((q, success, r, reason or self._why(T[i], joint_limits)))
+        return picks_result(picks, single, self.n)
 
     def _why(self, T: np.ndarray, joint_limits: bool) -> str:
         if joint_limits:

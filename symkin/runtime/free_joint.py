@@ -31,8 +31,8 @@ from symkin.errors import ConfigurationError, NoAnalyticIKError, PoseError, Symk
 from symkin.model.ets import ET, ETS
 from symkin.model.kinematics import const_matrix
 from symkin.model.robot import Robot
-from symkin.runtime.analytic_ik import DUPLICATE_TOL, check_weights
-from symkin.runtime.ik import IKResult, check_pose, pose_error
+from symkin.runtime.analytic_ik import DUPLICATE_TOL, Pick, check_weights, nearest_pick, picks_result
+from symkin.runtime.ik import IKResult, check_pose
 
 __all__ = ["FreeJointIK", "sub_robot", "free_joint_solver", "parse_free_joint", "FREE_SWEEP"]
 
@@ -253,40 +253,21 @@ class FreeJointIK:
         N, n = len(T), self.robot.n
         Q0 = None if q0 is None else as_rows(q0, n, N, single, self.robot.name, "q0")
         weights = None if weights is None else check_weights(weights, n)
-        qs, ok, res, why = [], [], [], []
+        picks: list[Pick] = []
         for i in range(N):
             q0i = None if Q0 is None else Q0[i]
             v = self.sweep(q0i) if values is None else self.values(values)
             rows = self.ik_all(T[i], v, q0i, joint_limits, weights)
             if values is None and q0i is not None and len(rows):
                 rows = self._refine(T[i], rows, v, q0i, joint_limits, weights)
-            if len(rows):
-                q = rows[0]
-                r = float(np.linalg.norm(pose_error(self.robot.fkine(q), T[i])))
-                success, reason = r < tol, "success"
-                if not success:
-                    reason = f"closed-form solution has residual {r:.3g} >= tol {tol:g}"
-            else:
-                q = np.zeros(n) if q0i is None else np.array(q0i)
-                r = float(np.linalg.norm(pose_error(self.robot.fkine(q), T[i])))
-                success = False
+            fallback = np.zeros(n) if q0i is None else np.array(q0i)
+            q, success, r, reason = nearest_pick(rows, fallback, T[i], self.robot.fkine, tol)
+            if reason is None:
                 reason = f"no closed-form solution for the {len(v)} value(s) of joint {self.joint} tried" + (
                     " within the joint limits" if joint_limits else ""
                 )
-            qs.append(q)
-            ok.append(success)
-            res.append(r)
-            why.append(reason)
-        if single:
-            return IKResult(qs[0], ok[0], 0, 1, res[0], why[0])
-        return IKResult(
-            np.array(qs).reshape(N, n),  # (0, n) for no targets
-            np.array(ok, dtype=bool),
-            np.zeros(N, int),
-            np.ones(N, int),
-            np.array(res, dtype=float),
-            tuple(why),
-        )
+            picks.append((q, success, r, reason))
+        return picks_result(picks, single, n)
 
 
 def _poses(T: Any) -> tuple[np.ndarray, bool]:

@@ -138,7 +138,10 @@ def _ik_build() -> tuple[Path, str]:
 
     from symkin.emit.c.build import compile_library
 
-    sources = {**ik_sources(), "symkin_ik_py.c": (CSRC / "symkin_ik_py.c").read_text()}
+    sources = {
+        **ik_sources(),
+        **{name: (CSRC / name).read_text() for name in ("symkin_ik_py.c", "symkin_pyarray.h")},
+    }
     digest = hashlib.sha256("\0".join(sources[k] for k in sorted(sources)).encode()).hexdigest()[:12]
     module = f"_symkin_ik_{digest}"
     flags = (

@@ -43,6 +43,8 @@ from symkin.errors import ConfigurationError
 __all__ = ["CMMC", "CRRMC", "mmc_library", "mmc_extension", "mmc_sources", "osqp_sources", "supports"]
 
 CSRC = Path(__file__).resolve().parent / "csrc"
+# the library's files from csrc: the MMC and RRMC steps and the extension module
+_CSRC_FILES = ("mmc.h", "mmc_impl.h", "mmc_py.c", "symkin_pose.h", "symkin_pyarray.h")
 _P = ctypes.c_void_p
 _I32, _D = ctypes.c_int32, ctypes.c_double
 _STATUS = ("solved", "singular", "infeasible", "max_iter", "inaccurate", "error")
@@ -198,8 +200,8 @@ def _wrapper(ns: int, nd: int = 0) -> str:
 def mmc_sources(n: int, settings: dict[str, Any], distance_rows: int = 0) -> dict[str, str]:
     """Sources of the MMC library for n joints and these OSQP settings: OSQP's embedded sources with
     the two workspaces, ``mmc.h``, ``mmc_impl.h``, ``mmc_config.h``, ``mmc_s0.c``/``mmc_s6.c``, and
-    the extension ``mmc_py.c`` with ``symkin_pose.h``; with ``distance_rows`` (K > 0) also the
-    variant with K collision rows (``mmc_s6d.c``, its workspace)."""
+    the extension ``mmc_py.c`` with ``symkin_pose.h`` and ``symkin_pyarray.h``; with
+    ``distance_rows`` (K > 0) also the variant with K collision rows (``mmc_s6d.c``, its workspace)."""
     return _sources(int(n), _settings_key(settings), int(distance_rows))
 
 
@@ -213,7 +215,7 @@ def _sources(n: int, key: tuple[tuple[str, Any], ...], nd: int = 0) -> dict[str,
     return {
         **out,
         "mmc_config.h": f"#ifndef MMC_CONFIG_H\n#define MMC_CONFIG_H\n{config}#endif\n",
-        **{name: (CSRC / name).read_text() for name in ("mmc.h", "mmc_impl.h", "mmc_py.c", "symkin_pose.h")},
+        **{name: (CSRC / name).read_text() for name in _CSRC_FILES},
         "mmc_s0.c": _wrapper(0),
         "mmc_s6.c": _wrapper(6),
         **({"mmc_s6d.c": _wrapper(6, nd)} if nd else {}),

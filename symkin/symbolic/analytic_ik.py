@@ -254,6 +254,74 @@ class _Builder:
         x = dot(p1, p2) - dot(axis, p1) * dot(axis, p2)
         self.add("sp1", var, k, {"y": y, "x": x}, title, st)
 
+    def sp2(self, k1: int, k2: int, u: Vec, v: Vec, u_tex: str, v_tex: str) -> None:
+        """Subproblem 2, ``R(h_k1, -q_k1) u = R(h_k2, q_k2) v``, as subproblem 4 for joint k1 then
+        1 for joint k2; ``u_tex`` and ``v_tex`` write u and v in the statements."""
+        h, L = self.g.h, self.label
+        self.sp4(
+            self.name(k1),
+            k1,
+            h[k2],
+            u,
+            _neg(h[k1]),
+            dot(h[k2], v),
+            f"Subproblem 2 (4 then 1) for {L(k1)}",
+            rf"h_{k2 + 1}^T R(h_{k1 + 1}, -{L(k1)})\,{u_tex} = h_{k2 + 1}^T {v_tex}",
+        )
+        self.sp1(
+            self.name(k2),
+            k2,
+            h[k2],
+            v,
+            _vec(self.joint_rot(k1, -1) * _mat(u)),
+            f"Subproblem 1 for {L(k2)}",
+            rf"R(h_{k2 + 1}, {L(k2)})\, {v_tex} = R(h_{k1 + 1}, -{L(k1)})\,{u_tex}",
+        )
+
+    def elbow(
+        self, k: int, p_in: Vec, p_out: Vec, d: Vec, tex: tuple[str, str, str], where: str = ""
+    ) -> None:
+        """The elbow joint k by subproblem 3, ``|R(h_k, q_k) p_out + p_in| = |d|``, then joint k - 1
+        by subproblem 1, ``R(h_k-1, q_k-1) (p_in + R(h_k, q_k) p_out) = d``; ``tex`` writes p_in,
+        p_out and d in the statements (p_in, p_out as subscripts of p), ``where`` ends the first."""
+        h, L = self.g.h, self.label
+        t_in, t_out, t_d = tex
+        self.sp3(
+            self.name(k),
+            k,
+            p_out,
+            _neg(p_in),
+            h[k],
+            _norm2(d),
+            f"Subproblem 3 for {L(k)} (elbow)",
+            rf"\| R(h_{k + 1}, {L(k)})\, p_{{{t_out}}} + p_{{{t_in}}} \| = \| {t_d} \|{where}",
+        )
+        self.sp1(
+            self.name(k - 1),
+            k - 1,
+            h[k - 1],
+            add(p_in, _vec(self.joint_rot(k) * _mat(p_out))),
+            d,
+            f"Subproblem 1 for {L(k - 1)}",
+            rf"R(h_{k}, {L(k - 1)})\,(p_{{{t_in}}} + R(h_{k + 1}, {L(k)})\, p_{{{t_out}}}) = {t_d}",
+        )
+
+    def from_sum(self, k: int, var: str, var_tex: str) -> None:
+        """Joint k + 2 of the parallel axes k, k + 1, k + 2 from their summed angle ``var``:
+        ``q_k+2 = sigma_k+2 (var - q_k - sigma_k+1 q_k+1)``, the sigmas +-1 as the axes point
+        the way of axis k or not."""
+        h, L = self.g.h, self.label
+        s1, s2 = _same(h[k], h[k + 1]), _same(h[k], h[k + 2])
+        total, q0, q1 = (sp.Symbol(x, real=True) for x in (var, self.name(k), self.name(k + 1)))
+        self.add(
+            "lin",
+            self.name(k + 2),
+            k + 2,
+            {"value": s2 * (total - q0 - s1 * q1)},
+            f"{L(k + 2)} from the summed angle",
+            rf"{L(k + 2)} = \sigma_{k + 3} ({var_tex} - {L(k)} - \sigma_{k + 2} {L(k + 1)})",
+        )
+
 
 def _neg(v: Vec) -> Vec:
     return (-v[0], -v[1], -v[2])
@@ -278,27 +346,7 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
             rf"h_2^T R(h_1, -{L(0)})\,(w - p_1) = h_2^T (p_{{12}} + p_{{23}} + p_{{34}})",
         )
         v = sub(_vec(b.joint_rot(0, -1) * _mat(u)), p12)
-        b.sp3(
-            b.name(2),
-            2,
-            p34,
-            _neg(p23),
-            h[2],
-            _norm2(v),
-            f"Subproblem 3 for {L(2)} (elbow)",
-            rf"\| R(h_3, {L(2)})\, p_{{34}} + p_{{23}} \| = \| v \|,\quad "
-            rf"v = R(h_1, -{L(0)})(w - p_1) - p_{{12}}",
-        )
-        inner = add(p23, _vec(b.joint_rot(2) * _mat(p34)))
-        b.sp1(
-            b.name(1),
-            1,
-            h[1],
-            inner,
-            v,
-            f"Subproblem 1 for {L(1)}",
-            rf"R(h_2, {L(1)})\,(p_{{23}} + R(h_3, {L(2)})\, p_{{34}}) = v",
-        )
+        b.elbow(2, p23, p34, v, ("23", "34", "v"), rf",\quad v = R(h_1, -{L(0)})(w - p_1) - p_{{12}}")
         return
     if s.position == "intersect12":
         o = s.shoulder
@@ -330,25 +378,7 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
                 rf"\| p_{{o3}} + {L(2)}\, h_3 + p_{{34}} \| = \| w - o \|",
             )
             v = add(c, scale(q2, h[2]))
-        b.sp4(
-            b.name(0),
-            0,
-            h[1],
-            u,
-            _neg(h[0]),
-            dot(h[1], v),
-            f"Subproblem 2 (4 then 1) for {L(0)}",
-            rf"h_2^T R(h_1, -{L(0)})\,(w - o) = h_2^T v",
-        )
-        b.sp1(
-            b.name(1),
-            1,
-            h[1],
-            v,
-            _vec(b.joint_rot(0, -1) * _mat(u)),
-            f"Subproblem 1 for {L(1)}",
-            rf"R(h_2, {L(1)})\, v = R(h_1, -{L(0)})\,(w - o)",
-        )
+        b.sp2(0, 1, u, v, "(w - o)", "v")
         return
     o = s.elbow
     assert o is not None and s.position == "intersect23"
@@ -365,25 +395,7 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
         rf"\| R(h_1, -{L(0)})\,(w - p_1) - p_{{1o}} \| = \| p_{{o4}} \|",
     )
     v = sub(_vec(b.joint_rot(0, -1) * _mat(u)), p12)
-    b.sp4(
-        b.name(1),
-        1,
-        h[2],
-        v,
-        _neg(h[1]),
-        dot(h[2], p34),
-        f"Subproblem 2 (4 then 1) for {L(1)}",
-        rf"h_3^T R(h_2, -{L(1)})\, v = h_3^T p_{{o4}}",
-    )
-    b.sp1(
-        b.name(2),
-        2,
-        h[2],
-        p34,
-        _vec(b.joint_rot(1, -1) * _mat(v)),
-        f"Subproblem 1 for {L(2)}",
-        rf"R(h_3, {L(2)})\, p_{{o4}} = R(h_2, -{L(1)})\, v",
-    )
+    b.sp2(1, 2, v, p34, " v", "p_{o4}")
 
 
 def _summed_rot(b: _Builder, k1: int, k2: int) -> sp.Matrix:
@@ -411,42 +423,31 @@ def _summed_rot(b: _Builder, k1: int, k2: int) -> sp.Matrix:
 def _wrist(b: _Builder, R0n: sp.Matrix) -> None:
     """Steps for the spherical wrist, joints 3, 4, 5 (chain order), given joints 0-2."""
     h = b.g.h
-    L = b.label
     if b.g.revolute[1] and b.g.revolute[2] and parallel(h[1], h[2]):
         R03 = b.joint_rot(0) * _summed_rot(b, 1, 2)
     else:
         R03 = b.joint_rot(0) * b.joint_rot(1) * b.joint_rot(2)
     v = _vec(R03.T * (R0n * _mat(h[5])))
-    b.sp4(
-        b.name(3),
-        3,
-        h[4],
-        v,
-        _neg(h[3]),
-        dot(h[4], h[5]),
-        f"Subproblem 2 (4 then 1) for {L(3)}",
-        rf"h_5^T R(h_4, -{L(3)})\, R_{{03}}^T R_{{06}} h_6 = h_5^T h_6",
-    )
-    rv = _vec(b.joint_rot(3, -1) * _mat(v))
-    b.sp1(
-        b.name(4),
-        4,
-        h[4],
-        h[5],
-        rv,
-        f"Subproblem 1 for {L(4)}",
-        rf"R(h_5, {L(4)})\, h_6 = R(h_4, -{L(3)})\, R_{{03}}^T R_{{06}} h_6",
-    )
+    b.sp2(3, 4, v, h[5], " R_{03}^T R_{06} h_6", "h_6")
+    _last_joint(b, [b.joint_rot(3, -1), R03.T, R0n])
+
+
+def _last_joint(b: _Builder, back: list[sp.Matrix]) -> None:
+    """Subproblem 1 for joint 5 (chain order), ``R(h_6, q_6) e = R_56 e`` for an ``e`` perpendicular
+    to h_6, given joints 0-4: ``R_56 e = R(h_5, -q_5) B_1 B_2 ... e`` for the rotations ``back``."""
+    h = b.g.h
     e = _perp(h[5])
-    r56e = _vec(b.joint_rot(4, -1) * (b.joint_rot(3, -1) * (R03.T * (R0n * _mat(e)))))
+    r56e = _mat(e)
+    for R in reversed(back):
+        r56e = R * r56e
     b.sp1(
         b.name(5),
         5,
         h[5],
         e,
-        r56e,
-        f"Subproblem 1 for {L(5)}",
-        rf"R(h_6, {L(5)})\, e = R_{{56}} e,\quad e \perp h_6",
+        _vec(b.joint_rot(4, -1) * r56e),
+        f"Subproblem 1 for {b.label(5)}",
+        rf"R(h_6, {b.label(5)})\, e = R_{{56}} e,\quad e \perp h_6",
     )
 
 
@@ -492,54 +493,16 @@ def _three_parallel(b: _Builder, s: Structure, R0n: sp.Matrix, pt: Vec, tM: Vec)
         r"Subproblem 1 for $\theta$, the summed rotation of the parallel axes 2, 3, 4",
         rf"R(h_2, \theta)\, R(h_5, {L(4)})\, h_6 = R(h_1, -{L(0)})\, R_{{06}} h_6",
     )
-    e = _perp(h[5])
-    r56e = _vec(b.joint_rot(4, -1) * (b.rot(h[1], "th", -1) * (R10 * (R0n * _mat(e)))))
-    b.sp1(
-        b.name(5),
-        5,
-        h[5],
-        e,
-        r56e,
-        f"Subproblem 1 for {L(5)}",
-        rf"R(h_6, {L(5)})\, e = R_{{56}} e,\quad e \perp h_6",
-    )
+    _last_joint(b, [b.rot(h[1], "th", -1), R10, R0n])
     d_inner = sub(sub(_vec(R10 * _mat(p06)), p12), _vec(b.rot(h[1], "th") * _mat(p45)))
-    b.sp3(
-        b.name(2),
-        2,
-        p34,
-        _neg(p23),
-        h[2],
-        _norm2(d_inner),
-        f"Subproblem 3 for {L(2)} (elbow)",
-        rf"\| R(h_3, {L(2)})\, p_{{34}} + p_{{23}} \| = \| d \|,\quad "
-        rf"d = R(h_1, -{L(0)}) p_{{16}} - p_{{12}} - R(h_2, \theta)\, p_{{45}}",
-    )
-    b.sp1(
-        b.name(1),
-        1,
-        h[1],
-        add(p23, _vec(b.joint_rot(2) * _mat(p34))),
-        d_inner,
-        f"Subproblem 1 for {L(1)}",
-        rf"R(h_2, {L(1)})\,(p_{{23}} + R(h_3, {L(2)})\, p_{{34}}) = d",
-    )
-    s2, s3 = _same(h[1], h[2]), _same(h[1], h[3])
-    th, q1, q2 = (sp.Symbol(x, real=True) for x in ("th", b.name(1), b.name(2)))
-    b.add(
-        "lin",
-        b.name(3),
-        3,
-        {"value": s3 * (th - q1 - s2 * q2)},
-        f"{L(3)} from the summed angle",
-        rf"{L(3)} = \sigma_4 (\theta - {L(1)} - \sigma_3 {L(2)})",
-    )
+    where = rf",\quad d = R(h_1, -{L(0)}) p_{{16}} - p_{{12}} - R(h_2, \theta)\, p_{{45}}"
+    b.elbow(2, p23, p34, d_inner, ("23", "34", "d"), where)
+    b.from_sum(1, "th", r"\theta")
 
 
 def _planar(b: _Builder, R0n: sp.Matrix, pt: Vec, tM: Vec) -> None:
     g = b.g
     h, p = g.h, g.p
-    L = b.label
     if g.n == 3:
         e = _perp(h[0])
         b.sp1(
@@ -557,36 +520,9 @@ def _planar(b: _Builder, R0n: sp.Matrix, pt: Vec, tM: Vec) -> None:
         u = sub(pt, p[0])
         tip = tM
     p12, p2t = sub(p[1], p[0]), sub(tip, p[1])
-    b.sp3(
-        b.name(1),
-        1,
-        p2t,
-        _neg(p12),
-        h[1],
-        _norm2(u),
-        f"Subproblem 3 for {L(1)} (elbow)",
-        rf"\| R(h_2, {L(1)})\, p_{{2t}} + p_{{12}} \| = \| u \|",
-    )
-    b.sp1(
-        b.name(0),
-        0,
-        h[0],
-        add(p12, _vec(b.joint_rot(1) * _mat(p2t))),
-        u,
-        f"Subproblem 1 for {L(0)}",
-        rf"R(h_1, {L(0)})\,(p_{{12}} + R(h_2, {L(1)})\, p_{{2t}}) = u",
-    )
+    b.elbow(1, p12, p2t, u, ("12", "2t", "u"))
     if g.n == 3:
-        s1, s2 = _same(h[0], h[1]), _same(h[0], h[2])
-        phi, q0, q1 = (sp.Symbol(x, real=True) for x in ("phi", b.name(0), b.name(1)))
-        b.add(
-            "lin",
-            b.name(2),
-            2,
-            {"value": s2 * (phi - q0 - s1 * q1)},
-            f"{L(2)} from the summed angle",
-            rf"{L(2)} = \sigma_3 (\varphi - {L(0)} - \sigma_2 {L(1)})",
-        )
+        b.from_sum(0, "phi", r"\varphi")
 
 
 def _fk(b: _Builder) -> tuple[sp.Expr, ...]:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.errors import SymkinError
+from symkin.errors import check_choice
 from symkin.model.ets import ETS
 from symkin.model.robot import Robot
 
@@ -38,13 +38,10 @@ def symbolic(robot: Robot | ETS | str, form: str = "expanded") -> Any:
     and ``links`` (the pose right after each joint, chain order). ``form="program"`` adds ``lines``,
     the named intermediates the matrices are written in (see the module docstring).
     """
-    if form not in FORMS:
-        raise SymkinError(f"unknown form {form!r}: choose one of {', '.join(FORMS)}")
-    from symkin.model.resolve import resolve_robot
+    check_choice(form, FORMS, "form")
+    from symkin.model.resolve import robot_with_joints
 
-    robot = resolve_robot(robot)
-    if robot.n == 0:
-        raise SymkinError(f"robot {robot.name!r} has no joints")
+    robot = robot_with_joints(robot)
     from symkin.symbolic.kinematics import const_to_sympy, derive, joint_symbols
 
     if form == "expanded":

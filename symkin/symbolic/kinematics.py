@@ -27,6 +27,7 @@ from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import tree_size
 from symkin.symbolic.fold import Fixed, fold_constants
+from symkin.symbolic.program import walk_joints
 
 __all__ = ["SymbolicKinematics", "ExpansionTooLargeError", "derive", "const_to_sympy", "joint_symbols"]
 
@@ -131,23 +132,9 @@ def _walk(
     origin just before it, and (into ``links``) the pose right after it."""
     pose = _Pose()
     frames: list[Frame] = []
-    for e in elements:
-        if isinstance(e, Fixed):
-            pose.transform(e if sign > 0 else e.inverse())
-            continue
-        i = e.axis.index
-        if e.is_joint:
-            value = sign * qs[e.joint] * e.sign
-            frames.append((e.joint, e.axis.is_rotation, [x * e.sign for x in pose.column(i)], list(pose.p)))
-        else:
-            value = sign * constant(e.const)
-            if value == 0:
-                continue
-        if e.axis.is_rotation:
-            pose.rotate(i, value)
-        else:
-            pose.translate(i, value)
-        if links is not None and e.is_joint:
+    for frame in walk_joints(pose, elements, qs, constant, sign):
+        frames.append(frame)
+        if links is not None:
             links.append(pose.matrix())
     return pose, frames
 

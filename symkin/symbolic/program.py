@@ -24,8 +24,9 @@ into loops.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import sympy as sp
 
@@ -33,7 +34,15 @@ from symkin.model.ets import ET, ETS, Const
 from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, count_ops, floatify
 from symkin.symbolic.fold import Fixed, fold_constants
 
-__all__ = ["Program", "KinematicProgram", "derive_program", "HessianLoop", "program_code"]
+__all__ = [
+    "Program",
+    "KinematicProgram",
+    "derive_program",
+    "HessianLoop",
+    "program_code",
+    "move",
+    "walk_joints",
+]
 
 _MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
 _HALF_PI = sp.pi / 2
@@ -158,42 +167,41 @@ class _Walk:
 Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, signed axis, origin)
 
 
-def _walk(
-    P: Program,
-    ets: Sequence[ET | Fixed],
+def move(pose: Any, e: ET, value: sp.Expr) -> None:
+    """Rotate the running ``pose`` of a walk (with ``rotate`` and ``translate`` by an axis index)
+    about the axis of ``e``, or translate it along that axis, by ``value``."""
+    if e.axis.is_rotation:
+        pose.rotate(e.axis.index, value)
+    else:
+        pose.translate(e.axis.index, value)
+
+
+def walk_joints(
+    pose: Any,
+    elements: Iterable[ET | Fixed],
     qs: Sequence[sp.Symbol],
     constant: Callable[[Const], sp.Expr],
-    inverse: bool,
-    links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] | None = None,
-    marks: list[tuple[str, int]] | None = None,
-) -> tuple[_Walk, list[Frame]]:
-    """Walk the chain (or, ``inverse``, the inverse chain from the end effector), recording each
-    joint's axis and origin just before it and (into ``links``) the pose right after it."""
-    W = _Walk(P)
-    frames: list[Frame] = []
-    sign = -1 if inverse else 1
-    for e in reversed(tuple(ets)) if inverse else ets:
+    sign: int,
+) -> Iterator[Frame]:
+    """Apply ``elements`` in order to the running ``pose`` (``sign=-1``: their inverses; constants
+    that are 0 skipped), and after each joint yield its frame: (joint, revolute, signed axis,
+    origin) just before it."""
+    for e in elements:
         if isinstance(e, Fixed):
-            W.transform(e.inverse() if inverse else e)
+            pose.transform(e if sign > 0 else e.inverse())
             continue
-        i = e.axis.index
+        frame: Frame | None = None
         if e.is_joint:
             value = sign * qs[e.joint] * e.sign
-            axis = [x * e.sign for x in W.column(i)]
-            frames.append((e.joint, e.axis.is_rotation, axis, list(W.p)))
+            axis = [x * e.sign for x in pose.column(e.axis.index)]
+            frame = (e.joint, e.axis.is_rotation, axis, list(pose.p))
         else:
             value = sign * constant(e.const)
             if value == 0:
                 continue
-        if e.axis.is_rotation:
-            W.rotate(i, value)
-        else:
-            W.translate(i, value)
-        if links is not None and e.is_joint:
-            links.append(W.pose())
-            if marks is not None:
-                marks.append((f"link {len(links) - 1}", len(P.lines)))
-    return W, frames
+        move(pose, e, value)
+        if frame is not None:
+            yield frame
 
 
 def _matrix(cols: list[list[sp.Expr]], p: list[sp.Expr]) -> sp.Matrix:
@@ -252,7 +260,12 @@ def derive_program(
     links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] = []
     marks: list[tuple[str, int]] = []
     elements = fold_constants(ets) if fold else tuple(ets)
-    W, frames = _walk(P, elements, qs, constant, False, links, marks)
+    W = _Walk(P)
+    frames: list[Frame] = []
+    for frame in walk_joints(W, elements, qs, constant, 1):  # the link frames as they are passed
+        frames.append(frame)
+        links.append(W.pose())
+        marks.append((f"link {len(links) - 1}", len(P.lines)))
     cols, pe = W.pose()
     marks.append(("T", len(P.lines)))
     zero3 = [sp.Integer(0)] * 3
@@ -263,7 +276,7 @@ def derive_program(
         J0[3:, j] = sp.Matrix(w if revolute else zero3)
     marks.append(("J0", len(P.lines)))
     # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
-    _, inv = _walk(P, elements, qs, constant, True)
+    inv = list(walk_joints(_Walk(P), reversed(elements), qs, constant, -1))
     Je = sp.zeros(6, n)
     for j, revolute, u, p in inv:
         v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'

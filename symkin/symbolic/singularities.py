@@ -33,7 +33,7 @@ import numpy as np
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from symkin.errors import SymkinError
+from symkin.errors import SymkinError, check_choice
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops, tree_size
 from symkin.symbolic.kinematics import _cross, _walk, const_to_sympy, joint_symbols
@@ -112,8 +112,7 @@ def singular_factors(robot: Robot | str, axes: str = "auto", max_terms: int = MA
 
     started = time.perf_counter()
     robot = resolve_robot(robot)
-    if axes not in AXES:
-        raise SymkinError(f"unknown axes {axes!r}: choose one of {', '.join(AXES)}")
+    check_choice(axes, AXES, "axes")
     n = robot.n
     if n == 0:
         raise SymkinError(f"robot {robot.name!r} has no joints: no Jacobian to factor")

@@ -21,7 +21,7 @@ import sympy as sp
 from symkin.model.ets import ET, Const
 from symkin.symbolic.cse import OpCounts
 from symkin.symbolic.fold import Fixed, fold_constants
-from symkin.symbolic.program import Program, _cross, _matrix, _Walk, program_code
+from symkin.symbolic.program import Program, _cross, _matrix, _Walk, move, program_code
 
 __all__ = ["TreeProgram", "derive_tree_program", "tree_functions", "TREE_FUNCTIONS"]
 
@@ -116,10 +116,7 @@ def derive_tree_program(
                 value = constant(e.const)
                 if value == 0:
                     continue
-            if e.axis.is_rotation:
-                W.rotate(i, value)
-            else:
-                W.translate(i, value)
+            move(W, e, value)
         walks.append(W)
         links.append(_matrix(*W.pose()))  # dead code in the kernels unless a frame needs it
         marks.append((f"segment {k}", len(P.lines)))

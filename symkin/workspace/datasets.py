@@ -22,12 +22,10 @@ from symkin.workspace.blocks import SampleSpec, sample_block
 from symkin.workspace.maps import kinematics_of
 from symkin.workspace.run import client_for, require_scale, run_blocks
 from symkin.workspace.store import (
-    damaged_blocks,
     open_store,
     open_stored,
     read_array,
-    read_marks,
-    reset_blocks,
+    resume_marks,
     robot_attrs,
     zarr_module,
 )
@@ -112,13 +110,7 @@ def samples(
     spec = SampleSpec(n, chunk, seed, sample)
     rows = np.minimum(chunk, n - chunk * np.arange(blocks))
     q_arr, pose_arr, done_arr = group["q"], group["pose"], group["done"]
-    done = read_marks(done_arr)
-    damaged = damaged_blocks([q_arr, pose_arr], (blocks,)) if done.any() else set()
-    redo = sorted(i for i in damaged if done[i])
-    if damaged:  # unmarked before the reset: an interruption cannot leave a reset block marked done
-        done[redo] = 0
-        done_arr[...] = done
-        reset_blocks([q_arr, pose_arr], (blocks,), damaged)
+    done, redo = resume_marks([q_arr, pose_arr], (blocks,), done_arr)
     todo = [i for i in range(blocks) if done[i] != rows[i]]
 
     def write(i: int, result: dict[str, Any]) -> None:

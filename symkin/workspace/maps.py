@@ -26,12 +26,10 @@ from symkin.workspace.blocks import ReachSpec, reach_block
 from symkin.workspace.grid import VoxelGrid, reach_ball, so3_uniform
 from symkin.workspace.run import client_for, require_scale, run_blocks
 from symkin.workspace.store import (
-    damaged_blocks,
     open_store,
     open_stored,
     read_array,
-    read_marks,
-    reset_blocks,
+    resume_marks,
     robot_attrs,
     unreadable_chunks,
 )
@@ -245,13 +243,8 @@ def reachability(
     if solutions:
         arrays["solutions"] = group["solutions"]
     done_array = group["done"]
-    done = read_marks(done_array).astype(bool).ravel()
-    damaged = damaged_blocks(list(arrays.values()), grid.chunks) if done.any() else set()
-    redo = sorted(i for i in damaged if done[i])
-    if damaged:  # unmarked before the reset: an interruption cannot leave a reset block marked done
-        done[redo] = False
-        done_array[...] = done.reshape(grid.chunks)
-        reset_blocks(list(arrays.values()), grid.chunks, damaged)
+    done, redo = resume_marks(list(arrays.values()), grid.chunks, done_array)
+    done = done.astype(bool)
     todo = [i for i in range(grid.n_chunks) if not done[i]]
 
     written: list[int] = []  # blocks written whose done marks are not yet stored

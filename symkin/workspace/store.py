@@ -33,6 +33,7 @@ __all__ = [
     "read_marks",
     "damaged_blocks",
     "reset_blocks",
+    "resume_marks",
     "MARK",
 ]
 
@@ -280,6 +281,21 @@ def reset_blocks(arrays: list[Any], blocks: tuple[int, ...], indices: set[int]) 
         lead = tuple(int(k) for k in np.unravel_index(i, blocks))
         for array in arrays:
             array[_chunk_selection(array, lead)] = array.fill_value
+
+
+def resume_marks(arrays: list[Any], blocks: tuple[int, ...], marks: Any) -> tuple[np.ndarray, list[int]]:
+    """The ``done`` marks of a resumed store (:func:`read_marks` of ``marks``, flat over the chunk
+    grid ``blocks``) once the blocks of ``arrays`` with an unreadable chunk (:func:`damaged_blocks`)
+    are unmarked, in ``marks`` too, and then reset (:func:`reset_blocks`): (the marks, the blocks
+    that were marked done and are to be computed again)."""
+    done = read_marks(marks).ravel()
+    damaged = damaged_blocks(arrays, blocks) if done.any() else set()
+    redo = sorted(i for i in damaged if done[i])
+    if damaged:  # unmarked before the reset: an interruption cannot leave a reset block marked done
+        done[redo] = 0
+        marks[...] = done.reshape(blocks)
+        reset_blocks(arrays, blocks, damaged)
+    return done, redo
 
 
 def _chunk_selection(array: Any, coords: tuple[int, ...]) -> tuple[slice, ...]:

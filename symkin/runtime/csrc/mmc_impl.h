@@ -606,6 +606,34 @@ static void save_(symkin_mmc_ctrl *c, const OSQPSolver *S)
     c->rho = S->settings->rho;
 }
 
+/* a step's input check: 1 when q (N) has a value that is not finite, 2 when nu (6) has, else 0 */
+static int bad_input_(const double *q, const double *nu)
+{
+    for (int k = 0; k < N; ++k)
+        if (!isfinite(q[k]))
+            return 1;
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(nu[i]))
+            return 2;
+    return 0;
+}
+
+/* 1 with G = J J^T's Cholesky factor in L when J is regular: its smallest singular value is at
+   least tol (G - tol^2 I is PD); else 0 */
+static int regular_(const double *G, double tol, double *L)
+{
+    return N >= 6 && chol_(G, 6, -tol * tol, L) && chol_(G, 6, 0.0, L);
+}
+
+/* m = sqrt(det(J J^T)) from the Cholesky factor L (6x6) of J J^T: the product of its diagonal */
+static double chol_manipulability_(const double *L)
+{
+    double m = 1.0;
+    for (int i = 0; i < 6; ++i)
+        m *= L[i * 6 + i];
+    return m;
+}
+
 #if ND
 /* MMC._distance_rows: the gradient rows Jd (ND, N) and the damper lower bounds dl (ND) of the ND
    closest pairs within their d_i (d_i_self for self pairs; ties by pair order), the other rows
@@ -721,24 +749,17 @@ static double det3_(const double *G)
 int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
 {
     const double *q = in, *nu = in + N;
-    for (int k = 0; k < N; ++k)
-        if (!isfinite(q[k]))
-            return 1;
-    for (int i = 0; i < 6; ++i)
-        if (!isfinite(nu[i]))
-            return 2;
+    int bad = bad_input_(q, nu);
+    if (bad)
+        return bad;
     double J[6 * N], G[36], L[36], y[6], m = 0.0, *qd = out;
     c->polished = 0;
     c->j0(q, J);
     gram_(J, 0, 6, G);
-    /* regular when the smallest singular value of J is at least singular_tol: J J^T - tol^2 I is PD */
-    double tol = c->singular_tol;
-    int regular = N >= 6 && chol_(G, 6, -tol * tol, L) && chol_(G, 6, 0.0, L);
+    int regular = regular_(G, c->singular_tol, L);
     if (c->axes == 0) {
         if (regular) {
-            m = 1.0;
-            for (int i = 0; i < 6; ++i)
-                m *= L[i * 6 + i];
+            m = chol_manipulability_(L);
         } else if (N >= 6) {
             double d = det_(G, 6);
             m = d > 0.0 ? sqrt(d) : 0.0;
@@ -782,28 +803,22 @@ int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
 int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
 {
     const double *q = in, *nu = in + N;
-    for (int k = 0; k < N; ++k)
-        if (!isfinite(q[k]))
-            return 1;
-    for (int i = 0; i < 6; ++i)
-        if (!isfinite(nu[i]))
-            return 2;
+    int bad = bad_input_(q, nu);
+    if (bad)
+        return bad;
     double J[6 * N], H[N * 6 * N], G[36], L[36], B[6 * N], Jm[N], lo[N], hi[N];
     double *qd = out;
     c->polished = 0;
     c->jh(q, J, H);
     gram_(J, 0, 6, G);
-    /* singular when the smallest singular value of J is below singular_tol: J J^T - tol^2 I not PD */
-    double tol = c->singular_tol;
-    int have_b = N >= 6 && chol_(G, 6, -tol * tol, L) && chol_(G, 6, 0.0, L);
+    /* not when J is singular: its smallest singular value below singular_tol */
+    int have_b = regular_(G, c->singular_tol, L);
     double m = 0.0;
     if (have_b)
         solve_rows_(L, 6, J, 0, B);
     if (c->axes == 0) {
         if (have_b) {
-            m = 1.0;
-            for (int i = 0; i < 6; ++i)
-                m *= L[i * 6 + i];
+            m = chol_manipulability_(L);
             jacobm_(H, B, 0, 6, m, Jm);
         } else { /* singular: only m is reported (the QP is not solved) */
             double d = det_(G, 6);

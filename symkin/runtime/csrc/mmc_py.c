@@ -15,6 +15,7 @@
 
 #include "mmc.h"
 #include "symkin_pose.h"
+#include "symkin_pyarray.h"
 
 #ifndef SYMKIN_MMC_MODULE
 #error "compile with -DSYMKIN_MMC_MODULE=<module name>"
@@ -120,31 +121,11 @@ done:
     return r;
 }
 
-/* arg as a C-contiguous native float64 array of shape (d0,), or NULL without an error set.
- * Only arrays of booleans, integers or floats convert here: anything else (lists, complex,
- * strings, objects) gives NULL, and the caller's Python checks convert it or raise their error. */
+/* arg as a C-contiguous native float64 array of shape (d0,), or NULL without an error set
+ * (symkin_pyarray.h) */
 static PyArrayObject *as_vector_(PyObject *arg, npy_intp d0)
 {
-    PyArrayObject *a;
-    if (PyArray_CheckExact(arg) && PyArray_TYPE((PyArrayObject *)arg) == NPY_DOUBLE &&
-        PyArray_ISCARRAY_RO((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
-        a = (PyArrayObject *)arg;
-        Py_INCREF(a);
-    } else {
-        if (!PyArray_Check(arg) || !(PyArray_ISBOOL((PyArrayObject *)arg) ||
-                                     PyArray_ISINTEGER((PyArrayObject *)arg) || PyArray_ISFLOAT((PyArrayObject *)arg)))
-            return NULL;
-        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_NOTSWAPPED);
-        if (!a) {
-            PyErr_Clear();
-            return NULL;
-        }
-    }
-    if (PyArray_NDIM(a) != 1 || PyArray_DIM(a, 0) != d0) {
-        Py_DECREF(a);
-        return NULL;
-    }
-    return a;
+    return as_doubles_(arg, 1, d0, 0);
 }
 
 static PyObject *new_array_(int nd, npy_intp d0, npy_intp d1, const double *data)

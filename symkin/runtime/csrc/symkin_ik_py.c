@@ -14,6 +14,7 @@
 #include <stddef.h>
 
 #include "symkin_ik.h"
+#include "symkin_pyarray.h"
 
 #ifndef SYMKIN_IK_MODULE
 #error "compile with -DSYMKIN_IK_MODULE=<module name>"
@@ -91,34 +92,6 @@ done:
     for (int i = 0; i < SK_NFIELDS; ++i)
         Py_XDECREF(values[i]);
     return r;
-}
-
-/* arg as a C-contiguous, aligned, native float64 array of shape (d0,) (nd 1) or (d0, d1) (nd 2), or
- * NULL without an error set when it is anything else. Only arrays of booleans, integers or floats
- * convert here (exact casts): anything else (lists, long double, complex, strings, objects) gives
- * NULL, and the caller's Python checks (symkin.core.arrays.real_array) convert it or raise. */
-static PyArrayObject *as_doubles_(PyObject *arg, int nd, npy_intp d0, npy_intp d1)
-{
-    PyArrayObject *a;
-    if (PyArray_CheckExact(arg) && PyArray_TYPE((PyArrayObject *)arg) == NPY_DOUBLE &&
-        PyArray_ISCARRAY_RO((PyArrayObject *)arg) && PyArray_ISNOTSWAPPED((PyArrayObject *)arg)) {
-        a = (PyArrayObject *)arg;
-        Py_INCREF(a);
-    } else {
-        if (!PyArray_Check(arg) || !(PyArray_ISBOOL((PyArrayObject *)arg) ||
-                                     PyArray_ISINTEGER((PyArrayObject *)arg) || PyArray_ISFLOAT((PyArrayObject *)arg)))
-            return NULL;
-        a = (PyArrayObject *)PyArray_FROM_OTF(arg, NPY_DOUBLE, NPY_ARRAY_IN_ARRAY | NPY_ARRAY_NOTSWAPPED);
-        if (!a) {
-            PyErr_Clear();
-            return NULL;
-        }
-    }
-    if (PyArray_NDIM(a) != nd || PyArray_DIM(a, 0) != d0 || (nd == 2 && PyArray_DIM(a, 1) != d1)) {
-        Py_DECREF(a);
-        return NULL;
-    }
-    return a;
 }
 
 /* One target (see py_solve): an IKResult, None when the arguments need checking, or NULL with an
