@@ -63,9 +63,6 @@ class TreeHeader:
         )
 
 
-LANED_PER_FRAME = ("fkine", "fkine_jacob0")
-
-
 def _frame_fn_base(name: str) -> str | None:
     """``"fkine_jacob0"`` of ``"fkine_jacob0_3"`` (a per-frame function's base), else None."""
     base, _, k = name.rpartition("_")
@@ -116,9 +113,9 @@ def render_tree(
         printed = [lower(f, printer) for f in functions]
         prefix = variant["prefix"]
         outs = {f.name: f.outs for f in printed}
-        # batch entry points with four-lane bodies: the *_all functions and each frame's fkine and
-        # fkine_jacob0 (the per-frame batches of maps, datasets and IK)
-        laned = [f for f in printed if f.name.endswith("_all") or _frame_fn_base(f.name) in LANED_PER_FRAME]
+        # batch entry points with four-lane bodies: the *_all functions and each frame's fkine,
+        # jacob0, jacobe and fkine_jacob0 (the per-frame batches of maps, datasets and IK)
+        laned = [f for f in printed if f.name.endswith("_all") or _frame_fn_base(f.name) is not None]
         context = {
             **variant,
             "n": n,

@@ -121,26 +121,31 @@ def test_tree_batch_equals_one_at_a_time_bit_for_bit(which):
 
 @pytest.mark.parametrize("which", ["quadruped", "gripper"])
 def test_tree_frame_batch_equals_one_at_a_time_bit_for_bit(which):
-    """Each frame's fkine and fkine_jacob0 batch (kin.fkine(Q, frame=...)) runs four
-    configurations per step: identical to one call per configuration for every frame (jacob0
-    and jacobe stay one at a time: the same numbers by construction); and the poses agree with
-    the tree's numeric reference."""
+    """Each frame's fkine, jacob0, jacobe and fkine_jacob0 batch (kin.fkine(Q, frame=...), ...)
+    runs four configurations per step: identical to one call per configuration for every frame;
+    and the poses and Jacobians agree with the tree's numeric reference."""
     from tests.model.tree_urdfs import GRIPPER, QUADRUPED
 
     tree = symkin.Tree.from_urdf({"quadruped": QUADRUPED, "gripper": GRIPPER}[which])
     kin = symkin.compile(tree, backend="c")
     text = "".join(symkin.generate(tree, "c").values())
-    assert "fkine_0_x4_(" in text and "fkine_jacob0_0_x4_(" in text
-    assert not re.search(r"[^_]jacob[0e]_0_x4_\(", text)
+    for base in ("fkine", "jacob0", "jacobe", "fkine_jacob0"):
+        assert re.search(rf"(^|[^_]){base}_0_x4_\(", text, re.M), base
     Q = tree.random_q(23, seed=10)
     Q[5] = 1e7
     for frame in tree.frames:
         T4, J4 = kin.fkine_jacob0(Q, frame=frame)
         assert np.array_equal(kin.fkine(Q, frame=frame), T4)
+        assert np.array_equal(kin.jacob0(Q, frame=frame), J4)
+        Je4 = kin.jacobe(Q, frame=frame)
         for i in (0, 3, 4, 5, 19, 20, 22):
             T1, J1 = kin.fkine_jacob0(Q[i], frame=frame)
             assert np.array_equal(T4[i], T1) and np.array_equal(J4[i], J1), (which, frame, i)
+            assert np.array_equal(kin.jacob0(Q[i], frame=frame), J1), (which, frame, i)
+            assert np.array_equal(Je4[i], kin.jacobe(Q[i], frame=frame)), (which, frame, i)
         np.testing.assert_allclose(T4[:5], tree.fkine(Q[:5], frame=frame), atol=1e-12)
+        np.testing.assert_allclose(J4[:5], tree.jacob0(Q[:5], frame=frame), atol=1e-12)
+        np.testing.assert_allclose(Je4[:5], tree.jacobe(Q[:5], frame=frame), atol=1e-12)
 
 
 def test_tree_batch_writes_the_zero_entries_too():
