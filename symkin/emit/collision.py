@@ -63,85 +63,167 @@ def _stmt(text: str, lang: Dialect) -> str:
     return text if lang == "py" else text + ";"
 
 
-def _product(dst: str, src: str | None, C: np.ndarray, lang: Dialect = "c") -> list[str]:
-    """Statements for ``dst = src * C`` (3x4 row-major poses, C constant; src None: identity)."""
-    lines = []
-    for i in range(3):
-        for j in range(4):
-            if src is None:
-                lines.append(_stmt(f"{dst}[{4 * i + j}] = {_const(C[i, j], lang)}", lang))
-                continue
-            terms = []
-            for m in range(3):
-                c = C[m, j]
-                if c != 0.0:
-                    y = f"{src}[{4 * i + m}]"
-                    terms.append(y if c == 1.0 else f"-{y}" if c == -1.0 else f"{_num(c)} * {y}")
-            if j == 3:
-                terms.append(f"{src}[{4 * i + 3}]")
-            value = (" + ".join(terms) if terms else _const(0.0, lang)).replace("+ -", "- ")
-            lines.append(_stmt(f"{dst}[{4 * i + j}] = {value}", lang))
-    return lines
+# An entry of a pose as the emitter knows it: a number (known when the code is generated) or the
+# name of the entry that holds it at run time ("T[3][5]").
+Value = float | str
+
+
+def _sum(parts: list[tuple[float | None, Value]]) -> tuple[Value | None, str]:
+    """``sum(c * v)`` of (coefficient c or None for 1, value v) in order, terms with a zero value
+    dropped: (the value when it is known without code: a number, or one entry unchanged; else None,
+    and the expression's text)."""
+    parts = [(c, v) for c, v in parts if not (isinstance(v, float) and v == 0.0)]
+    if not parts:
+        return 0.0, "0.0"
+    if all(isinstance(v, float) for _, v in parts):
+        total = None
+        for c, v in parts:
+            x = float(v) if c is None else c * float(v)  # type: ignore[arg-type]
+            total = x if total is None else total + x
+        return total, _num(total)  # type: ignore[arg-type]
+    if len(parts) == 1 and parts[0][0] in (None, 1.0):
+        return parts[0][1], str(parts[0][1])
+    terms = []
+    for c, v in parts:
+        if isinstance(v, float):
+            terms.append(_num(v if c is None else c * v))
+        elif c is None or c == 1.0:
+            terms.append(v)
+        else:
+            terms.append(f"-{v}" if c == -1.0 else f"{_num(c)} * {v}")
+    return None, " + ".join(terms).replace("+ -", "- ")
 
 
 def _is_identity(C: np.ndarray) -> bool:
     return bool(np.array_equal(C[:3, :4], np.eye(4)[:3]))
 
 
-def _times(dst: str, parent: str | None, A: np.ndarray, lang: Dialect = "c") -> list[str]:
-    """``dst = parent * A``: the constants alone at the base, a copy when A is the identity."""
-    if parent is not None and _is_identity(A):
-        return _copy(dst, parent, range(12), lang)
-    return _product(dst, parent, A, lang)
+def _difference(x: str, y: str) -> str:
+    """The text of ``x - y`` for term texts x, y ("" for zero; y may start with a minus)."""
+    if not y:
+        return x
+    if not x:
+        return y[1:] if y.startswith("-") else f"-{y}" if " " not in y else f"-({y})"
+    return f"{x} + {y[1:]}" if y.startswith("-") else f"{x} - {y}"
 
 
-def _copy(dst: str, src: str, entries: Any, lang: Dialect = "c") -> list[str]:
-    """``dst[e] = src[e]`` for each entry e, one statement each (a memcpy of 12 four-lane entries
-    is a library call the compiler does not inline)."""
-    return [_stmt(f"{dst}[{e}] = {src}[{e}]", lang) for e in entries]
+def _factor(f: str, v: Value) -> str:
+    """The text of ``f * v`` (f the name of a number: "c", "s"); "" when v is zero."""
+    if isinstance(v, float):
+        return "" if v == 0.0 else f if v == 1.0 else f"-{f}" if v == -1.0 else f"{f} * {_num(v)}"
+    return f"{f} * {v}"
 
 
-def _joint(dst: str, src: str, axis: int, revolute: bool, theta: str, lang: Dialect = "c") -> list[str]:
-    """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; "c4": four lanes (sin and
-    cos by the branch-free ``skv_sin_``/``skv_cos_``: lane by lane the numbers of the scalar
-    ``sk_sin``/``sk_cos``, the lanes those cannot compute marked in ``far``)."""
-    if not revolute:
-        lines = _copy(dst, src, [e for e in range(12) if e % 4 != 3], lang)
+class _Poses:
+    """Straight-line code of link poses (3x4 row-major, 12 entries each) with the numbers known at
+    generation time folded in: an entry that is a number is not computed (a product with it is a
+    number, a term with a zero dropped), an entry equal to another is not copied. ``keep``: every
+    entry is also stored (the scalar and NumPy code hand T and PJ to the distance gradients); the
+    four-lane code stores only what it computes."""
+
+    def __init__(self, lang: Dialect, keep: bool) -> None:
+        self.lang, self.keep = lang, keep
+        self.lines: list[str] = []
+        self.vals: dict[str, list[Value]] = {}
+
+    def _set(self, dst: str, e: int, value: Value | None, text: str, out: list[Value]) -> None:
+        if value is None or (isinstance(value, str) and value.startswith("M")):
+            # computed here, or a temporary's entry (M<k>_ stays inside the function): stored
+            self.lines.append(_stmt(f"{dst}[{e}] = {text}", self.lang))
+            value = f"{dst}[{e}]"
+        elif self.keep:
+            self.lines.append(
+                _stmt(
+                    f"{dst}[{e}] = {_const(value, self.lang) if isinstance(value, float) else value}",
+                    self.lang,
+                )
+            )
+        out.append(value)
+
+    def product(self, dst: str, src: str | None, C: np.ndarray) -> None:
+        """``dst = src * C`` (C constant; src None: the identity)."""
+        S = self.vals[src] if src is not None else [float(x) for x in np.eye(4)[:3].ravel()]
+        out: list[Value] = []
         for i in range(3):
-            a = 4 * i + 3
-            lines.append(_stmt(f"{dst}[{a}] = {src}[{a}] + ({theta}) * {src}[{4 * i + axis}]", lang))
-        return lines
-    j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
-    lines = _copy(dst, src, [e for e in range(12) if e % 4 not in (j, k)], lang)
-    lines[:0] = {
-        "c": [f"{{ const double c = sk_cos({theta}), s = sk_sin({theta});"],
-        "c4": [f"{{ const v4 th_ = {theta}, c = skv_cos_(th_, far), s = skv_sin_(th_, far);"],
-        "py": [f"th_ = {theta}", "c, s = cos(th_), sin(th_)"],
-    }[lang]
-    for i in range(3):
-        a, b = f"{src}[{4 * i + j}]", f"{src}[{4 * i + k}]"
-        lines.append(_stmt(f"{dst}[{4 * i + j}] = c * {a} + s * {b}", lang))
-        lines.append(_stmt(f"{dst}[{4 * i + k}] = c * {b} - s * {a}", lang))
-    if lang != "py":
-        lines.append("}")
-    return lines
+            for j in range(4):
+                parts: list[tuple[float | None, Value]] = [
+                    (float(C[m, j]), S[4 * i + m]) for m in range(3) if C[m, j] != 0.0
+                ]
+                if j == 3:
+                    parts.append((None, S[4 * i + 3]))
+                self._set(dst, 4 * i + j, *_sum(parts), out)
+        self.vals[dst] = out
+
+    def joint(self, dst: str, src: str, axis: int, revolute: bool, theta: str) -> None:
+        """``dst = src * Rot_axis(theta)`` or ``src * Trans_axis(theta)``; "c4": four lanes (sin
+        and cos by the branch-free ``skv_sin_``/``skv_cos_``: lane by lane the numbers of the
+        scalar ``sk_sin``/``sk_cos``, the lanes those cannot compute marked in ``far``)."""
+        S, lang = self.vals[src], self.lang
+        out: list[Value] = list(S)
+        if not revolute:
+            for i in range(3):
+                e, x = 4 * i + 3, S[4 * i + axis]
+                if isinstance(x, float):
+                    value, text = _sum(
+                        [(None, S[e])]
+                        + (
+                            []
+                            if x == 0.0
+                            else [(None, f"({theta})" if x == 1.0 else f"{_num(x)} * ({theta})")]
+                        )
+                    )
+                else:
+                    value, text = _sum([(None, S[e]), (None, f"({theta}) * {x}")])
+                out[e] = value if value is not None else f"{dst}[{e}]"
+                if value is None:
+                    self.lines.append(_stmt(f"{dst}[{e}] = {text}", lang))
+        else:
+            j, k = [(1, 2), (2, 0), (0, 1)][axis]  # Rot_axis: e_j -> c e_j + s e_k, e_k -> -s e_j + c e_k
+            self.lines += {
+                "c": [f"{{ const double c = sk_cos({theta}), s = sk_sin({theta});"],
+                "c4": [f"{{ const v4 th_ = {theta}, c = skv_cos_(th_, far), s = skv_sin_(th_, far);"],
+                "py": [f"th_ = {theta}", "c, s = cos(th_), sin(th_)"],
+            }[lang]
+            for i in range(3):
+                a, b = S[4 * i + j], S[4 * i + k]
+                rows = (
+                    (4 * i + j, " + ".join(t for t in (_factor("c", a), _factor("s", b)) if t)),
+                    (4 * i + k, _difference(_factor("c", b), _factor("s", a))),
+                )
+                for e, text in rows:
+                    if not text:
+                        out[e] = 0.0
+                        continue
+                    self.lines.append(_stmt(f"{dst}[{e}] = {text.replace('+ -', '- ')}", lang))
+                    out[e] = f"{dst}[{e}]"
+            if lang != "py":
+                self.lines.append("}")
+        if self.keep:  # the entries the joint leaves as they were, stored too
+            for e in range(12):
+                if out[e] == S[e]:
+                    v = S[e]
+                    self.lines.append(
+                        _stmt(f"{dst}[{e}] = {_const(v, lang) if isinstance(v, float) else v}", lang)
+                    )
+        self.vals[dst] = out
 
 
-def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple]]:
+def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple], dict[str, list[Value]]]:
     """The straight-line link poses T (and PJ, before each joint) of ``tree``; per segment its joint
-    (has joint, q index, multiplier, revolute, axis, sign). "c4": the 4-lane code (``qv``, v4)."""
+    (has joint, q index, multiplier, revolute, axis, sign); the value of each entry of each pose
+    (:class:`_Poses`). "c4": the 4-lane code (``qv``, v4), which stores only the computed entries."""
     num = tree._num
-    fk: list[str] = []
+    poses = _Poses(lang, keep=lang != "c4")
     joints = []
     q = "qv" if lang == "c4" else "q"
     for k, seg in enumerate(tree.segments):
         parent = None if seg.parent < 0 else f"T[{seg.parent}]"
         A, B = num.A[k], num.B[k]
         comment = f"segment {k}: link {comment_safe(seg.link, 60)}"
-        fk.append(f"# {comment}" if lang == "py" else f"/* {comment} */")
+        poses.lines.append(f"# {comment}" if lang == "py" else f"/* {comment} */")
         if seg.slot is None:
             joints.append((0, 0, 0.0, 0, 0, 1.0))
-            fk += _times(f"T[{k}]", parent, A, lang)
+            poses.product(f"T[{k}]", parent, A)
             continue
         s = tree.slots[seg.slot]
         sign = num.sign[k]
@@ -154,16 +236,17 @@ def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple]]:
         if sign < 0:
             theta = f"-({theta})"
         joints.append((1, s.joint, mult, int(s.revolute), num.axis[k], float(sign)))
-        fk += _times(f"PJ[{k}]", parent, A, lang)
+        poses.product(f"PJ[{k}]", parent, A)
         if _is_identity(B):
-            fk += _joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta, lang)
-        else:
-            fk.append({"c": "{ double M_[12];", "c4": "{ v4 M_[12];", "py": "M_ = [0.0] * 12"}[lang])
-            fk += _joint("M_", f"PJ[{k}]", num.axis[k], s.revolute, theta, lang)
-            fk += _product(f"T[{k}]", "M_", B, lang)
-            if lang != "py":
-                fk.append("}")
-    return fk, joints
+            poses.joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta)
+        else:  # the joint's pose in M<k>_, then the constant after it
+            m = f"M{k}_"
+            poses.lines.append(
+                {"c": f"double {m}[12];", "c4": f"v4 {m}[12];", "py": f"{m} = [0.0] * 12"}[lang]
+            )
+            poses.joint(m, f"PJ[{k}]", num.axis[k], s.revolute, theta)
+            poses.product(f"T[{k}]", m, B)
+    return poses.lines, joints, poses.vals
 
 
 SPHERE_FIRST = 3  # a sphere with this many partners on the other link is first tried on its bound
@@ -189,32 +272,31 @@ def _sphere_first(
     return firsts, [(i, j) for i, j in pairs if i not in done and j not in done]
 
 
-def _point_lines(points: list[tuple[int, list[str]]], lang: Dialect) -> list[str]:
+def _point_lines(
+    points: list[tuple[int, list[str]]], lang: Dialect, vals: dict[str, list[Value]]
+) -> list[str]:
     """``X[i][r]`` = link pose ``T[k]`` applied to each point (k, local coordinates), straight-line
-    (0 terms dropped; a point on the base link is its constant coordinates)."""
+    with the poses' known entries folded in (``vals`` of :func:`_fk_lines`; a point on the base link
+    is its constant coordinates)."""
     lines = []
     for i, (k, local) in enumerate(points):
+        T = vals[f"T[{k}]"] if k >= 0 else [float(x) for x in np.eye(4)[:3].ravel()]
         for r in range(3):
-            if k < 0:
-                lines.append(_stmt(f"X[{i}][{r}] = {_const(float(local[r]), lang)}", lang))
-                continue
-            terms = [
-                f"T[{k}][{4 * r + c}]" if float(local[c]) == 1.0 else f"{local[c]} * T[{k}][{4 * r + c}]"
-                for c in range(3)
-                if float(local[c]) != 0.0
+            parts: list[tuple[float | None, Value]] = [
+                (float(local[c]), T[4 * r + c]) for c in range(3) if float(local[c]) != 0.0
             ]
-            value = " + ".join([*terms, f"T[{k}][{4 * r + 3}]"])
-            if lang == "py":  # the C text keeps "+ -" (its bytes are checked in)
-                value = value.replace("+ -", "- ")
-            lines.append(_stmt(f"X[{i}][{r}] = {value}", lang))
+            value, text = _sum([*parts, (None, T[4 * r + 3])])
+            if isinstance(value, float):
+                text = _const(value, lang)
+            lines.append(_stmt(f"X[{i}][{r}] = {text}", lang))
     return lines
 
 
 def collision_tables(layout: Any) -> dict[str, Any]:
     """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
     tree = layout.tree
-    fk, joints = _fk_lines(tree, "c")
-    fk4, _ = _fk_lines(tree, "c4")
+    fk, joints, vals = _fk_lines(tree, "c")
+    fk4, _, vals4 = _fk_lines(tree, "c4")
     points = []
     for s, k in zip(layout.shapes, layout.segment):
         for p in s.points:
@@ -284,7 +366,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                 r_i = _num(radius[i])
                 sphere_code.append(f"    if (skc_spheres_overlap(X[{first[i]}], {r_i}, ob, ro)) return 1;")
         sphere_code.append("}")
-    point_code, point_code4 = _point_lines(points, "c"), _point_lines(points, "c4")
+    point_code, point_code4 = _point_lines(points, "c", vals), _point_lines(points, "c4", vals4)
     # the 4-lane checks (spheres only): a lane already hit needs nothing more; a link pair or link
     # is tested only for the lanes whose bounding spheres meet (the same tests as the scalar code)
     all_spheres = not any(is_cap)
@@ -411,6 +493,7 @@ def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
     tables = Tables.of(layout)
     points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
     module = collision_module_name(tree.name) + ("_casadi" if backend == "casadi" else "")
+    fk, _, vals = _fk_lines(tree, "py")
     text = render(
         f"{backend}/collision.py.j2",
         module=module,
@@ -438,7 +521,7 @@ def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
             ),
             "ancestors": _py_tuple([repr(tuple(x)) for x in tables.ancestors]),
         },
-        fk=_fk_lines(tree, "py")[0],
-        point_code=_point_lines(points, "py"),
+        fk=fk,
+        point_code=_point_lines(points, "py", vals),
     )
     return {f"{module}.py": text}
