@@ -21,6 +21,7 @@ Obstacles come packed as in :meth:`symkin.geometry.Environment.arrays`.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,7 @@ def _stmt(text: str, lang: Dialect) -> str:
 # An entry of a pose as the emitter knows it: a number (known when the code is generated) or the
 # name of the entry that holds it at run time ("T[3][5]").
 Value = float | str
+_ENTRY = re.compile(r"[A-Za-z_][A-Za-z_0-9]*\[\d+\](\[\d+\])?")  # the name of one entry
 
 
 def _sum(parts: list[tuple[float | None, Value]]) -> tuple[Value | None, str]:
@@ -81,7 +83,7 @@ def _sum(parts: list[tuple[float | None, Value]]) -> tuple[Value | None, str]:
             x = float(v) if c is None else c * float(v)  # type: ignore[arg-type]
             total = x if total is None else total + x
         return total, _num(total)  # type: ignore[arg-type]
-    if len(parts) == 1 and parts[0][0] in (None, 1.0):
+    if len(parts) == 1 and parts[0][0] in (None, 1.0) and _ENTRY.fullmatch(str(parts[0][1])):
         return parts[0][1], str(parts[0][1])
     terms = []
     for c, v in parts:

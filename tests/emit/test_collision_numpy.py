@@ -38,6 +38,17 @@ def _gripper():
     return tree.with_geometry(Geometry(shapes))
 
 
+def _quadruped():
+    """General joint axes (a constant transform after the joint), a prismatic tail, spheres only."""
+    from tests.model.tree_urdfs import QUADRUPED
+
+    tree = symkin.Tree.from_urdf(QUADRUPED)
+    shapes = tuple(
+        Sphere((0.03 * (k % 3), 0.02, -0.05), 0.04, link) for k, link in enumerate(tree.link_names)
+    )
+    return tree.with_geometry(Geometry(shapes))
+
+
 def _gantry():
     """Prismatic joints, a shape on the base link."""
     robot = symkin.load("gantry")
@@ -58,6 +69,7 @@ MODELS = {
     "lbr_iiwa14": lambda: symkin.load("lbr_iiwa14"),
     "gripper": _gripper,
     "gantry": _gantry,
+    "quadruped": _quadruped,
 }
 
 
@@ -178,7 +190,7 @@ def test_in_collision_exact_near_contact_and_in_chunks(monkeypatch):
     assert (module.in_collision(Q, ENV) == (module.distances(Q, ENV) < 0).any(axis=1)).all()
 
 
-@pytest.mark.parametrize("name", ["gripper", "gantry", "ur5"])
+@pytest.mark.parametrize("name", ["gripper", "gantry", "quadruped", "ur5"])
 def test_generated_casadi_points_and_distances_match_the_reference(name):
     import casadi as ca
 
@@ -192,3 +204,16 @@ def test_generated_casadi_points_and_distances_match_the_reference(name):
     for x in model.random_q(10, seed=8):
         assert np.abs(np.array(X(x)) - reference.points(model, x)).max() < 1e-12
         assert np.abs(np.array(f(x)).ravel() - reference.distances(model, x, env)).max() < 1e-12
+
+
+@pytest.mark.parametrize("name", ["gantry", "gripper", "quadruped"])
+def test_c_kernel_of_prismatic_and_mimic_joints_matches_the_reference(name):
+    """The C kernel's folded link poses (prismatic joints, multipliers, offsets, constant
+    transforms after the joint) against the reference."""
+    model = MODELS[name]()
+    kin = symkin.compile(model, backend="c")
+    env = Environment(spheres=ENV.spheres)
+    Q = model.random_q(200, seed=9)
+    assert np.abs(kin.distances(Q, env) - reference.distances(model, Q, env)).max() < 1e-12
+    assert (kin.in_collision(Q, env) == reference.in_collision(model, Q, env)).all()
+    assert np.abs(kin.collision_points(Q) - reference.points(model, Q)).max() < 1e-12
