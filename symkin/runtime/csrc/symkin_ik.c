@@ -524,6 +524,18 @@ static double weighted_r2(const symkin_ik_config *c, const double *e) {
     return r2;
 }
 
+/* dst[0 .. m) = src[0 .. m), inline for the sizes of 6- and 7-joint arms (q, J): a call to memcpy
+ * costs more than copying 6 or 7 doubles. */
+SYMKIN_INLINE void copy_(double *dst, const double *src, int m) {
+    switch (m) {
+    case 6: __builtin_memcpy(dst, src, 6 * sizeof(double)); return;
+    case 7: __builtin_memcpy(dst, src, 7 * sizeof(double)); return;
+    case 36: __builtin_memcpy(dst, src, 36 * sizeof(double)); return;
+    case 42: __builtin_memcpy(dst, src, 42 * sizeof(double)); return;
+    default: memcpy(dst, src, sizeof(double) * (size_t)m);
+    }
+}
+
 /* ---- the search loop ---------------------------------------------------------------------- */
 /* One target's search as a state machine, so that a batch can run several side by side:
  * start_target, then repeatedly evaluate the kinematics at t->q and judge the result, taking a
@@ -545,9 +557,9 @@ enum { SEARCH_DONE, SEARCH_EVAL, SEARCH_STEP }; /* what a target needs next */
 static void start_search(const symkin_ik_config *c, ik_search *t) {
     const int n = c->n;
     if (t->s == 0 && t->q0)
-        memcpy(t->q, t->q0, sizeof(double) * (size_t)n);
+        copy_(t->q, t->q0, n);
     else if (t->s < c->nstarts)
-        memcpy(t->q, c->starts + (int64_t)t->s * n, sizeof(double) * (size_t)n);
+        copy_(t->q, c->starts + (int64_t)t->s * n, n);
     else
         random_q(c, &t->rng, t->q);
     t->st->searches = t->s + 1;
@@ -556,9 +568,9 @@ static void start_search(const symkin_ik_config *c, ik_search *t) {
 
 /* No search left: qout is the best iterate found. */
 static int give_up(const symkin_ik_config *c, ik_search *t) {
-    if (t->have_best) memcpy(t->q, t->best_q, sizeof(double) * (size_t)c->n);
+    if (t->have_best) copy_(t->q, t->best_q, c->n);
     wrap_into_limits(c, t->q);
-    memcpy(t->qout, t->q, sizeof(double) * (size_t)c->n);
+    copy_(t->qout, t->q, c->n);
     t->st->residual = t->best;
     return SEARCH_DONE;
 }
@@ -612,7 +624,7 @@ static int judge(const symkin_ik_config *c, ik_search *t, const double *T, doubl
     if (res < t->best) {
         t->best = res;
         t->have_best = 1;
-        memcpy(t->best_q, t->q, sizeof(double) * (size_t)c->n);
+        copy_(t->best_q, t->q, c->n);
     }
     int converged = c->tol_on_E ? 0.5 * rr < c->tol : res < c->tol;
     if (converged) {
@@ -624,7 +636,7 @@ static int judge(const symkin_ik_config *c, ik_search *t, const double *T, doubl
             }
             st->success = 1;
             st->residual = res;
-            memcpy(t->qout, t->q, sizeof(double) * (size_t)c->n);
+            copy_(t->qout, t->q, c->n);
             return SEARCH_DONE;
         }
         st->limit_rejects++;
@@ -779,10 +791,10 @@ static void eval_lanes(const symkin_ik_config *c, const ik_search *t, const int 
     int busy = 0;
     while (state[busy] != SEARCH_EVAL) busy++;
     for (int l = 0; l < SYMKIN_LANES; l++)
-        memcpy(Q + l * n, t[state[l] == SEARCH_EVAL ? l : busy].q, sizeof(double) * (size_t)n);
+        copy_(Q + l * n, t[state[l] == SEARCH_EVAL ? l : busy].q, n);
     c->fkjac_batch(Q, &T[0][0], Jb, SYMKIN_LANES);
     for (int l = 0; l < SYMKIN_LANES; l++)
-        if (state[l] == SEARCH_EVAL) memcpy(J[l], Jb + l * 6 * n, sizeof(double) * 6 * (size_t)n);
+        if (state[l] == SEARCH_EVAL) copy_(J[l], Jb + l * 6 * n, 6 * n);
 }
 
 /* symkin_ik_solve_batch on SYMKIN_LANES targets side by side (the targets' poses are valid): the
