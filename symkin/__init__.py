@@ -4,7 +4,7 @@ Pipeline: model (ETS, Robot, DH/URDF/PoE importers, built-in robots) -> symbolic
 emit (C, NumPy, CasADi from jinja2 templates) -> runtime (compiled kinematics, IK, control).
 """
 
-from symkin.compiler.compile import BACKENDS, generate, write_generated
+from symkin.compiler.compile import BACKENDS, generate, generate_collision, write_generated
 from symkin.core.version import __version__  # noqa: E402
 from symkin.errors import (
     CompileError,
@@ -116,6 +116,7 @@ __all__ = [
     "derive",
     "derive_steps",
     "generate",
+    "generate_collision",
     "geometry",
     "ik",
     "jtraj",
