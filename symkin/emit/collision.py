@@ -162,20 +162,17 @@ class _Poses:
         scalar ``sk_sin``/``sk_cos``, the lanes those cannot compute marked in ``far``)."""
         S, lang = self.vals[src], self.lang
         out: list[Value] = list(S)
-        if not revolute:
+        if not revolute:  # the origin moves by theta along the axis: row i gains theta * S[i][axis]
             for i in range(3):
                 e, x = 4 * i + 3, S[4 * i + axis]
-                if isinstance(x, float):
-                    value, text = _sum(
-                        [(None, S[e])]
-                        + (
-                            []
-                            if x == 0.0
-                            else [(None, f"({theta})" if x == 1.0 else f"{_num(x)} * ({theta})")]
-                        )
-                    )
-                else:
-                    value, text = _sum([(None, S[e]), (None, f"({theta}) * {x}")])
+                move = (
+                    f"({theta}) * {x}"
+                    if isinstance(x, str)
+                    else None
+                    if x == 0.0
+                    else f"{_num(x)} * ({theta})"
+                )
+                value, text = _sum([(None, S[e])] + ([] if move is None else [(None, move)]))
                 out[e] = value if value is not None else f"{dst}[{e}]"
                 if value is None:
                     self.lines.append(_stmt(f"{dst}[{e}] = {text}", lang))
