@@ -14,7 +14,9 @@ or a list of Sphere, Capsule and Box obstacles. Distances come in the order of
 capsule and box.
 """
 
-from numpy import cos, empty, sin, zeros
+import math
+
+from numpy import array, cos, empty, sin, zeros
 
 from symkin.core.arrays import as_batch
 from symkin.geometry.reference import Tables, collides_frames, evaluate_frames
@@ -304,33 +306,276 @@ def frames(Q):
     return X.transpose(2, 0, 1), PJ.transpose(2, 0, 1).reshape(N, 7, 3, 4)
 
 
+def frames_one(q):
+    """``frames`` of one configuration q (a list of 6 floats), in Python floats (``math.cos``,
+    ``math.sin``: a NumPy call per entry costs more than the arithmetic); arrays of N = 1."""
+    cos, sin = math.cos, math.sin
+    T = [[0.0] * 12 for _ in range(7)]
+    PJ = [[0.0] * 12 for _ in range(7)]
+    # segment 0: link link1
+    PJ[0][0] = 1.0
+    PJ[0][1] = 0.0
+    PJ[0][2] = 0.0
+    PJ[0][3] = 0.0
+    PJ[0][4] = 0.0
+    PJ[0][5] = 1.0
+    PJ[0][6] = 0.0
+    PJ[0][7] = 0.0
+    PJ[0][8] = 0.0
+    PJ[0][9] = 0.0
+    PJ[0][10] = 1.0
+    PJ[0][11] = 0.0
+    th_ = q[0]
+    c, s = cos(th_), sin(th_)
+    T[0][0] = c
+    T[0][1] = -s
+    T[0][4] = s
+    T[0][5] = c
+    T[0][2] = 0.0
+    T[0][3] = 0.0
+    T[0][6] = 0.0
+    T[0][7] = 0.0
+    T[0][8] = 0.0
+    T[0][9] = 0.0
+    T[0][10] = 1.0
+    T[0][11] = 0.0
+    # segment 1: link link2
+    PJ[1][0] = T[0][0]
+    PJ[1][1] = 0.0
+    PJ[1][2] = -T[0][1]
+    PJ[1][3] = 0.0
+    PJ[1][4] = T[0][4]
+    PJ[1][5] = 0.0
+    PJ[1][6] = -T[0][5]
+    PJ[1][7] = 0.0
+    PJ[1][8] = 0.0
+    PJ[1][9] = 1.0
+    PJ[1][10] = 0.0
+    PJ[1][11] = 0.1519
+    th_ = q[1]
+    c, s = cos(th_), sin(th_)
+    T[1][0] = c * T[0][0]
+    T[1][1] = -(s * T[0][0])
+    T[1][4] = c * T[0][4]
+    T[1][5] = -(s * T[0][4])
+    T[1][8] = s
+    T[1][9] = c
+    T[1][2] = PJ[1][2]
+    T[1][3] = 0.0
+    T[1][6] = PJ[1][6]
+    T[1][7] = 0.0
+    T[1][10] = 0.0
+    T[1][11] = 0.1519
+    # segment 2: link link3
+    PJ[2][0] = T[1][0]
+    PJ[2][1] = T[1][1]
+    PJ[2][2] = PJ[1][2]
+    PJ[2][3] = -0.24365 * T[1][0]
+    PJ[2][4] = T[1][4]
+    PJ[2][5] = T[1][5]
+    PJ[2][6] = PJ[1][6]
+    PJ[2][7] = -0.24365 * T[1][4]
+    PJ[2][8] = T[1][8]
+    PJ[2][9] = T[1][9]
+    PJ[2][10] = 0.0
+    PJ[2][11] = -0.24365 * T[1][8] + 0.1519
+    th_ = q[2]
+    c, s = cos(th_), sin(th_)
+    T[2][0] = c * T[1][0] + s * T[1][1]
+    T[2][1] = c * T[1][1] - s * T[1][0]
+    T[2][4] = c * T[1][4] + s * T[1][5]
+    T[2][5] = c * T[1][5] - s * T[1][4]
+    T[2][8] = c * T[1][8] + s * T[1][9]
+    T[2][9] = c * T[1][9] - s * T[1][8]
+    T[2][2] = PJ[1][2]
+    T[2][3] = PJ[2][3]
+    T[2][6] = PJ[1][6]
+    T[2][7] = PJ[2][7]
+    T[2][10] = 0.0
+    T[2][11] = PJ[2][11]
+    # segment 3: link link4
+    PJ[3][0] = T[2][0]
+    PJ[3][1] = T[2][1]
+    PJ[3][2] = PJ[1][2]
+    PJ[3][3] = -0.21325 * T[2][0] + PJ[2][3]
+    PJ[3][4] = T[2][4]
+    PJ[3][5] = T[2][5]
+    PJ[3][6] = PJ[1][6]
+    PJ[3][7] = -0.21325 * T[2][4] + PJ[2][7]
+    PJ[3][8] = T[2][8]
+    PJ[3][9] = T[2][9]
+    PJ[3][10] = 0.0
+    PJ[3][11] = -0.21325 * T[2][8] + PJ[2][11]
+    th_ = q[3]
+    c, s = cos(th_), sin(th_)
+    T[3][0] = c * T[2][0] + s * T[2][1]
+    T[3][1] = c * T[2][1] - s * T[2][0]
+    T[3][4] = c * T[2][4] + s * T[2][5]
+    T[3][5] = c * T[2][5] - s * T[2][4]
+    T[3][8] = c * T[2][8] + s * T[2][9]
+    T[3][9] = c * T[2][9] - s * T[2][8]
+    T[3][2] = PJ[1][2]
+    T[3][3] = PJ[3][3]
+    T[3][6] = PJ[1][6]
+    T[3][7] = PJ[3][7]
+    T[3][10] = 0.0
+    T[3][11] = PJ[3][11]
+    # segment 4: link link5
+    PJ[4][0] = T[3][0]
+    PJ[4][1] = PJ[1][2]
+    PJ[4][2] = -T[3][1]
+    PJ[4][3] = 0.11235 * PJ[1][2] + PJ[3][3]
+    PJ[4][4] = T[3][4]
+    PJ[4][5] = PJ[1][6]
+    PJ[4][6] = -T[3][5]
+    PJ[4][7] = 0.11235 * PJ[1][6] + PJ[3][7]
+    PJ[4][8] = T[3][8]
+    PJ[4][9] = 0.0
+    PJ[4][10] = -T[3][9]
+    PJ[4][11] = PJ[3][11]
+    th_ = q[4]
+    c, s = cos(th_), sin(th_)
+    T[4][0] = c * T[3][0] + s * PJ[1][2]
+    T[4][1] = c * PJ[1][2] - s * T[3][0]
+    T[4][4] = c * T[3][4] + s * PJ[1][6]
+    T[4][5] = c * PJ[1][6] - s * T[3][4]
+    T[4][8] = c * T[3][8]
+    T[4][9] = -(s * T[3][8])
+    T[4][2] = PJ[4][2]
+    T[4][3] = PJ[4][3]
+    T[4][6] = PJ[4][6]
+    T[4][7] = PJ[4][7]
+    T[4][10] = PJ[4][10]
+    T[4][11] = PJ[3][11]
+    # segment 5: link link6
+    PJ[5][0] = T[4][0]
+    PJ[5][1] = -PJ[4][2]
+    PJ[5][2] = T[4][1]
+    PJ[5][3] = 0.08535 * PJ[4][2] + PJ[4][3]
+    PJ[5][4] = T[4][4]
+    PJ[5][5] = -PJ[4][6]
+    PJ[5][6] = T[4][5]
+    PJ[5][7] = 0.08535 * PJ[4][6] + PJ[4][7]
+    PJ[5][8] = T[4][8]
+    PJ[5][9] = -PJ[4][10]
+    PJ[5][10] = T[4][9]
+    PJ[5][11] = 0.08535 * PJ[4][10] + PJ[3][11]
+    th_ = q[5]
+    c, s = cos(th_), sin(th_)
+    T[5][0] = c * T[4][0] + s * PJ[5][1]
+    T[5][1] = c * PJ[5][1] - s * T[4][0]
+    T[5][4] = c * T[4][4] + s * PJ[5][5]
+    T[5][5] = c * PJ[5][5] - s * T[4][4]
+    T[5][8] = c * T[4][8] + s * PJ[5][9]
+    T[5][9] = c * PJ[5][9] - s * T[4][8]
+    T[5][2] = T[4][1]
+    T[5][3] = PJ[5][3]
+    T[5][6] = T[4][5]
+    T[5][7] = PJ[5][7]
+    T[5][10] = T[4][9]
+    T[5][11] = PJ[5][11]
+    # segment 6: link ee
+    T[6][0] = T[5][0]
+    T[6][1] = T[5][1]
+    T[6][2] = T[4][1]
+    T[6][3] = 0.0819 * T[4][1] + PJ[5][3]
+    T[6][4] = T[5][4]
+    T[6][5] = T[5][5]
+    T[6][6] = T[4][5]
+    T[6][7] = 0.0819 * T[4][5] + PJ[5][7]
+    T[6][8] = T[5][8]
+    T[6][9] = T[5][9]
+    T[6][10] = T[4][9]
+    T[6][11] = 0.0819 * T[4][9] + PJ[5][11]
+    X = [[0.0] * 3 for _ in range(19)]
+    X[0][0] = 0.0
+    X[0][1] = 0.0
+    X[0][2] = 0.04557
+    X[1][0] = 0.0
+    X[1][1] = 0.0
+    X[1][2] = 0.1519
+    X[2][0] = -0.05391 * T[0][1]
+    X[2][1] = -0.05391 * T[0][5]
+    X[2][2] = 0.1519
+    X[3][0] = 0.1198 * PJ[1][2]
+    X[3][1] = 0.1198 * PJ[1][6]
+    X[3][2] = 0.1519
+    X[4][0] = -0.043857 * T[1][0] + 0.1198 * PJ[1][2]
+    X[4][1] = -0.043857 * T[1][4] + 0.1198 * PJ[1][6]
+    X[4][2] = -0.043857 * T[1][8] + 0.1519
+    X[5][0] = -0.12547975 * T[1][0] + 0.1198 * PJ[1][2]
+    X[5][1] = -0.12547975 * T[1][4] + 0.1198 * PJ[1][6]
+    X[5][2] = -0.12547975 * T[1][8] + 0.1519
+    X[6][0] = -0.2071025 * T[1][0] + 0.1198 * PJ[1][2]
+    X[6][1] = -0.2071025 * T[1][4] + 0.1198 * PJ[1][6]
+    X[6][2] = -0.2071025 * T[1][8] + 0.1519
+    X[7][0] = -0.24365 * T[1][0] + 0.1198 * PJ[1][2]
+    X[7][1] = -0.24365 * T[1][4] + 0.1198 * PJ[1][6]
+    X[7][2] = -0.24365 * T[1][8] + 0.1519
+    X[8][0] = 0.027300000000000005 * PJ[1][2] + PJ[2][3]
+    X[8][1] = 0.027300000000000005 * PJ[1][6] + PJ[2][7]
+    X[8][2] = PJ[2][11]
+    X[9][0] = -0.04265 * T[2][0] + 0.027300000000000005 * PJ[1][2] + PJ[2][3]
+    X[9][1] = -0.04265 * T[2][4] + 0.027300000000000005 * PJ[1][6] + PJ[2][7]
+    X[9][2] = -0.04265 * T[2][8] + PJ[2][11]
+    X[10][0] = -0.09027583333333333 * T[2][0] + 0.027300000000000005 * PJ[1][2] + PJ[2][3]
+    X[10][1] = -0.09027583333333333 * T[2][4] + 0.027300000000000005 * PJ[1][6] + PJ[2][7]
+    X[10][2] = -0.09027583333333333 * T[2][8] + PJ[2][11]
+    X[11][0] = -0.13790166666666664 * T[2][0] + 0.027300000000000005 * PJ[1][2] + PJ[2][3]
+    X[11][1] = -0.13790166666666664 * T[2][4] + 0.027300000000000005 * PJ[1][6] + PJ[2][7]
+    X[11][2] = -0.13790166666666664 * T[2][8] + PJ[2][11]
+    X[12][0] = -0.18552749999999998 * T[2][0] + 0.027300000000000005 * PJ[1][2] + PJ[2][3]
+    X[12][1] = -0.18552749999999998 * T[2][4] + 0.027300000000000005 * PJ[1][6] + PJ[2][7]
+    X[12][2] = -0.18552749999999998 * T[2][8] + PJ[2][11]
+    X[13][0] = 0.050557500000000005 * PJ[1][2] + PJ[3][3]
+    X[13][1] = 0.050557500000000005 * PJ[1][6] + PJ[3][7]
+    X[13][2] = PJ[3][11]
+    X[14][0] = 0.11235 * PJ[1][2] + PJ[3][3]
+    X[14][1] = 0.11235 * PJ[1][6] + PJ[3][7]
+    X[14][2] = PJ[3][11]
+    X[15][0] = 0.029872499999999996 * PJ[4][2] + PJ[4][3]
+    X[15][1] = 0.029872499999999996 * PJ[4][6] + PJ[4][7]
+    X[15][2] = 0.029872499999999996 * PJ[4][10] + PJ[3][11]
+    X[16][0] = 0.08535 * PJ[4][2] + PJ[4][3]
+    X[16][1] = 0.08535 * PJ[4][6] + PJ[4][7]
+    X[16][2] = 0.08535 * PJ[4][10] + PJ[3][11]
+    X[17][0] = 0.036855 * T[4][1] + PJ[5][3]
+    X[17][1] = 0.036855 * T[4][5] + PJ[5][7]
+    X[17][2] = 0.036855 * T[4][9] + PJ[5][11]
+    X[18][0] = -0.01 * T[4][1] + T[6][3]
+    X[18][1] = -0.01 * T[4][5] + T[6][7]
+    X[18][2] = -0.01 * T[4][9] + T[6][11]
+    return array(X).reshape(1, 19, 3), array(PJ).reshape(1, 7, 3, 4)
+
+
 def _batch(q):
-    return as_batch(q, N_JOINTS, ROBOT_NAME)
+    """(X, PJ) of q, one configuration or a batch, and whether it was one."""
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    return (frames_one(Q[0].tolist()) if Q.shape[0] == 1 else frames(Q)), single
 
 
 def points(q):
     """Base-frame shape points, (19, 3) or (N, 19, 3)."""
-    Q, single = _batch(q)
-    X = frames(Q)[0]
+    (X, _), single = _batch(q)
     return X[0] if single else X
 
 
 def distances(q, env=None):
     """Signed distance (m) of each active pair, (M,) or (N, M); negative where shapes overlap."""
-    Q, single = _batch(q)
-    D, _ = evaluate_frames(TABLES, *frames(Q), env)
+    XP, single = _batch(q)
+    D, _ = evaluate_frames(TABLES, *XP, env)
     return D[0] if single else D
 
 
 def distance_jacobians(q, env=None):
     """Signed distances (M,) and their gradients d d / d q (M, 6); batched: (N, M), (N, M, 6)."""
-    Q, single = _batch(q)
-    D, J = evaluate_frames(TABLES, *frames(Q), env, jacobians=True)
+    XP, single = _batch(q)
+    D, J = evaluate_frames(TABLES, *XP, env, jacobians=True)
     return (D[0], J[0]) if single else (D, J)
 
 
 def in_collision(q, env=None):
     """Whether any active pair overlaps: a bool, or (N,) bools for a batch."""
-    Q, single = _batch(q)
-    hit = collides_frames(TABLES, frames(Q)[0], env)
+    (X, _), single = _batch(q)
+    hit = collides_frames(TABLES, X, env)
     return bool(hit[0]) if single else hit
