@@ -30,6 +30,7 @@ import numpy as np
 from symkin.core.names import comment_safe, identifier
 from symkin.core.version import __version__
 from symkin.emit.templates import render
+from symkin.geometry.reference import Tables
 from symkin.model.geometry import Capsule
 
 __all__ = [
@@ -207,13 +208,12 @@ class _Poses:
         self.vals[dst] = out
 
 
-def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple], dict[str, list[Value]]]:
-    """The straight-line link poses T (and PJ, before each joint) of ``tree``; per segment its joint
-    (has joint, q index, multiplier, revolute, axis, sign); the value of each entry of each pose
-    (:class:`_Poses`). "c4": the 4-lane code (``qv``, v4), which stores only the computed entries."""
+def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], dict[str, list[Value]]]:
+    """The straight-line link poses T (and PJ, before each joint) of ``tree`` and the value of each
+    entry of each pose (:class:`_Poses`). "c4": the 4-lane code (``qv``, v4), which stores only the
+    computed entries."""
     num = tree._num
     poses = _Poses(lang, keep=lang != "c4")
-    joints = []
     q = "qv" if lang == "c4" else "q"
     for k, seg in enumerate(tree.segments):
         parent = None if seg.parent < 0 else f"T[{seg.parent}]"
@@ -221,7 +221,6 @@ def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple], dict[st
         comment = f"segment {k}: link {comment_safe(seg.link, 60)}"
         poses.lines.append(f"# {comment}" if lang == "py" else f"/* {comment} */")
         if seg.slot is None:
-            joints.append((0, 0, 0.0, 0, 0, 1.0))
             poses.product(f"T[{k}]", parent, A)
             continue
         s = tree.slots[seg.slot]
@@ -234,7 +233,6 @@ def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple], dict[st
             theta = f"{theta} + {_num(off)}"
         if sign < 0:
             theta = f"-({theta})"
-        joints.append((1, s.joint, mult, int(s.revolute), num.axis[k], float(sign)))
         poses.product(f"PJ[{k}]", parent, A)
         if _is_identity(B):
             poses.joint(f"T[{k}]", f"PJ[{k}]", num.axis[k], s.revolute, theta)
@@ -245,7 +243,7 @@ def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], list[tuple], dict[st
             )
             poses.joint(m, f"PJ[{k}]", num.axis[k], s.revolute, theta)
             poses.product(f"T[{k}]", m, B)
-    return poses.lines, joints, poses.vals
+    return poses.lines, poses.vals
 
 
 SPHERE_FIRST = 3  # a sphere with this many partners on the other link is first tried on its bound
@@ -294,8 +292,13 @@ def _point_lines(
 def collision_tables(layout: Any) -> dict[str, Any]:
     """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
     tree = layout.tree
-    fk, joints, vals = _fk_lines(tree, "c")
-    fk4, _, vals4 = _fk_lines(tree, "c4")
+    tables = Tables.of(layout)
+    fk, vals = _fk_lines(tree, "c")
+    fk4, vals4 = _fk_lines(tree, "c4")
+    # per segment: has a joint, q index, multiplier, revolute, axis, sign (the distance gradients)
+    joints = [
+        (0, 0, 0.0, 0, 0, 1.0) if j is None else (1, j[0], j[1], int(j[2]), j[3], j[4]) for j in tables.joints
+    ]
     points = []
     for s, k in zip(layout.shapes, layout.segment):
         for p in s.points:
@@ -397,10 +400,8 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                 r_i = _num(radius[i])
                 sphere_code4.append(f"    hit |= need & hit_obstacle(X[{first[i]}], {r_i}, ob, ro);")
             sphere_code4.append("}")
-    anc_start, anc = [0], []
-    for k in range(len(tree.segments)):
-        anc += [a for a in layout.ancestors(k) if tree.segments[a].slot is not None]
-        anc_start.append(len(anc))
+    anc = [a for path in tables.ancestors for a in path]
+    anc_start = np.cumsum([0] + [len(path) for path in tables.ancestors]).tolist()
     shapes = [
         (int(isinstance(s, Capsule)), layout.point_index[i], _num(s.radius), layout.segment[i])
         for i, s in enumerate(layout.shapes)
@@ -486,13 +487,11 @@ def render_collision_casadi(layout: Any, command: str = "symkin generate") -> di
 
 
 def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
-    from symkin.geometry.reference import Tables
-
     tree = layout.tree
     tables = Tables.of(layout)
     points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
     module = collision_module_name(tree.name) + ("_casadi" if backend == "casadi" else "")
-    fk, _, vals = _fk_lines(tree, "py")
+    fk, vals = _fk_lines(tree, "py")
     text = render(
         f"{backend}/collision.py.j2",
         module=module,
