@@ -57,7 +57,7 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.compiler.compile import generate, generate_collision
+    from symkin.compiler.compile import generate, write_files
     from symkin.runtime.load import compile as compile_model
 
     model = chain_or_tree(args)
@@ -69,19 +69,12 @@ def run(args: argparse.Namespace) -> int:
     files = generate(model, args.backend, command, **options)
     t_gen = time.perf_counter() - t0
     if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        # the collision code of the model's geometry (its kernel's symbols are skcoll_*: not with a prefix)
-        plain = options.get("prefix") is None and args.precision == "double"
-        extra = generate_collision(model, args.backend, command) if plain else {}
-        for name, text in sorted({**files, **extra}.items()):
-            (out / name).write_text(text)
-        written = (
-            f"wrote {len(files) + len(extra)} files to {out}/: {', '.join(sorted(files) + sorted(extra))}"
+        paths = write_files(model, args.backend, files, out, command, options.get("prefix"), args.precision)
+        manifest = paths.pop(len(files))  # the generated files, the manifest, the collision code
+        print(
+            f"wrote {len(paths)} files to {out}/: {', '.join(p.name for p in paths)} "
+            f"(and {manifest.name}, which symkin.load_compiled reads)"
         )
-        from symkin.compiler.manifest import write_manifest
-
-        manifest = write_manifest(model, args.backend, files, out, args.precision)
-        print(f"{written} (and {manifest.name}, which symkin.load_compiled reads)")
     if args.precision == "float":
         from symkin.emit.c.backend import float_error
 

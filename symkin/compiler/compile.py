@@ -51,6 +51,7 @@ __all__ = [
     "load_artifact",
     "tree_derivation_functions",
     "write_generated",
+    "write_files",
 ]
 
 BACKENDS = ("c", "numpy", "casadi")
@@ -270,24 +271,37 @@ def write_generated(
     libm: bool = False,
 ) -> list[Path]:
     """Generate and write the files of ``robot`` (a chain or a tree) for ``backend`` into
-    ``folder``, with the manifest :func:`symkin.load_compiled` reads back (``<stem>.symkin.json``),
-    and the collision code of its geometry (:func:`generate_collision`; not with ``prefix`` or
-    ``precision="float"``); returns the paths (options as :func:`generate`)."""
+    ``folder`` (:func:`write_files`); returns the paths (options as :func:`generate`)."""
+    files = generate(robot, backend, command, strategy, prefix, precision, libm)
+    return write_files(robot, backend, files, folder, command, prefix, precision)
+
+
+def write_files(
+    robot: Model,
+    backend: str,
+    files: dict[str, str],
+    folder: str | Path,
+    command: str | None = None,
+    prefix: str | None = None,
+    precision: str = "double",
+) -> list[Path]:
+    """Write ``files`` (generated for ``robot`` on ``backend``) into ``folder``, then the manifest
+    :func:`symkin.load_compiled` reads back (``<stem>.symkin.json``), then the collision code of
+    the robot's geometry (:func:`generate_collision`; not with ``prefix`` or ``precision="float"``:
+    the collision kernel's symbols are ``skcoll_*``); returns the paths in that order."""
     from symkin.compiler.manifest import write_manifest
 
-    files = generate(robot, backend, command, strategy, prefix, precision, libm)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    extra = generate_collision(robot, backend, command) if prefix is None and precision == "double" else {}
     out = []
     for name, text in sorted(files.items()):
-        path = folder / name
-        path.write_text(text)
-        out.append(path)
+        (folder / name).write_text(text)
+        out.append(folder / name)
     out.append(write_manifest(robot, backend, files, folder, precision))
-    if prefix is None and precision == "double":  # the collision kernel's symbols are skcoll_*
-        for name, text in sorted(generate_collision(robot, backend, command).items()):
-            (folder / name).write_text(text)
-            out.append(folder / name)
+    for name, text in sorted(extra.items()):
+        (folder / name).write_text(text)
+        out.append(folder / name)
     return out
 
 
