@@ -30,6 +30,7 @@ import numpy as np
 from symkin.core.names import comment_safe, identifier
 from symkin.core.version import __version__
 from symkin.emit.templates import render
+from symkin.geometry.clearance import proved_apart, reach_sphere
 from symkin.geometry.reference import Tables
 from symkin.model.geometry import Capsule
 
@@ -289,6 +290,73 @@ def _point_lines(
     return lines
 
 
+def _self_code(groups: dict, plan: tuple) -> list[str]:
+    """The scalar self checks (C lines, ``return 1`` on a hit) of ``groups`` ((link a, link b) ->
+    shape pairs; ``plan``: bounds, link of each shape, first points, radii, which are capsules): per
+    pair of links, their bounding spheres, then each shape pair (two spheres: squared distance
+    against the constant squared radius sum); a sphere with SPHERE_FIRST or more partners on the
+    other link meets that link's bound first."""
+    bounds, link_of, first, radius, is_cap = plan
+    code = []
+    for (a, b), pairs in sorted(groups.items()):
+        (pa, ra), (pb, rb) = bounds[a], bounds[b]
+        code.append(f"if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{")
+        firsts, rest = _sphere_first(pairs, link_of, a, bounds, is_cap)
+        for outer, bound, inner in firsts:
+            xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
+            code.append(f"    if (sphere_hit({xo}, X[{bound[0]}], {_num(rr_o)})) {{")
+            for j in inner:
+                rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
+                code.append(f"        if (sphere_hit({xo}, X[{first[j]}], {_num(rr)})) return 1;")
+            code.append("    }")
+        for i, j in rest:
+            if is_cap[i] or is_cap[j]:
+                code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
+            else:
+                rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
+                code.append(f"    if (sphere_hit(X[{first[i]}], X[{first[j]}], {_num(rr)})) return 1;")
+        code.append("}")
+    return code
+
+
+def _self_code4(groups: dict, plan: tuple) -> list[str]:
+    """The four-lane self checks of ``groups`` (spheres only): a lane already hit needs nothing
+    more; a pair of links is tested only for the lanes whose bounding spheres meet (the same
+    tests as :func:`_self_code`)."""
+    bounds, link_of, first, radius, is_cap = plan
+    code = []
+    for (a, b), pairs in sorted(groups.items()):
+        (pa, ra), (pb, rb) = bounds[a], bounds[b]
+        rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
+        code.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
+        code.append("if (skv_any_(need)) {")
+        firsts, rest = _sphere_first(pairs, link_of, a, bounds, is_cap)
+        for outer, bound, inner in firsts:
+            xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
+            code.append(f"    near = need & hit2({xo}, X[{bound[0]}], {_num(rr_o)});")
+            code.append("    if (skv_any_(near)) {")
+            for j in inner:
+                rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
+                code.append(f"        hit |= near & hit2({xo}, X[{first[j]}], {_num(rr)});")
+            code.append("    }")
+        for i, j in rest:
+            rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
+            code.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
+        code.append("    if (skv_all_(hit)) return hit;")
+        code.append("}")
+    return code
+
+
+def _limits(qlim: np.ndarray) -> list[tuple[int, str | None, str | None]]:
+    """Per joint with a finite limit: (index, lower or None, upper or None) as C numbers."""
+    out = []
+    for j, (lo, hi) in enumerate(zip(*np.asarray(qlim, dtype=float))):
+        lo_s, hi_s = (_num(float(x)) if np.isfinite(x) else None for x in (lo, hi))
+        if lo_s is not None or hi_s is not None:
+            out.append((j, lo_s, hi_s))
+    return out
+
+
 def collision_tables(layout: Any) -> dict[str, Any]:
     """Everything the template needs, from a :class:`symkin.geometry.pairs.Layout`."""
     tree = layout.tree
@@ -310,7 +378,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
     members: list[list[int]] = [[] for _ in links]
     for i, s in enumerate(layout.shapes):
         members[links.index(s.link)].append(i)
-    bounds = []
+    bounds, reach = [], []
     for group in members:
         P = np.array([p for i in group for p in layout.shapes[i].points])
         c = 0.5 * (P.min(axis=0) + P.max(axis=0))
@@ -319,45 +387,30 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         r = float(np.nextafter(r, np.inf))  # rounding may not shrink the bound below a shape
         bounds.append((len(points), _num(r)))
         points.append((layout.segment[group[0]], [_num(x) for x in c]))
+        # where the bound can be at all within the joint limits: the batch drops the obstacles
+        # beyond it for the link (radius -1: no such bound)
+        sphere = reach_sphere(layout, layout.segment[group[0]], c, r)
+        reach.append(
+            ([_num(x) for x in sphere[0]], _num(float(np.nextafter(sphere[1], np.inf))))
+            if sphere is not None
+            else (["0.0", "0.0", "0.0"], "-1.0")
+        )
     link_of = {i: links.index(s.link) for i, s in enumerate(layout.shapes)}
+    # self pairs proved apart within the joint limits are checked only for q outside them
+    proved = proved_apart(layout)
     groups: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    groups_proved: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for i, j in layout.self_pairs:
         a, b = sorted((link_of[i], link_of[j]))
-        groups.setdefault((a, b), []).append((i, j))
-    group_links, group_start, grouped = [], [0], []
-    for key in sorted(groups):
-        group_links.append(key)
-        grouped += groups[key]
-        group_start.append(len(grouped))
+        (groups_proved if (i, j) in proved else groups).setdefault((a, b), []).append((i, j))
     link_start, link_shapes = [0], []
     for group in members:
         link_shapes += group
         link_start.append(len(link_shapes))
-    # in_collision's checks as straight-line code: per pair of links, their bounding spheres, then
-    # each shape pair (two spheres: squared distance against the constant squared radius sum); a
-    # sphere with SPHERE_FIRST or more partners on the other link meets that link's bound first
+    # in_collision's checks as straight-line code (_self_code, _self_code4; obstacles below)
     first = layout.point_index
     radius = [float(x.radius) for x in layout.shapes]
     is_cap = [isinstance(x, Capsule) for x in layout.shapes]
-    self_code = []
-    for (a, b), start, stop in zip(group_links, group_start, group_start[1:]):
-        (pa, ra), (pb, rb) = bounds[a], bounds[b]
-        self_code.append(f"if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{")
-        firsts, rest = _sphere_first(grouped[start:stop], link_of, a, bounds, is_cap)
-        for outer, bound, inner in firsts:
-            xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
-            self_code.append(f"    if (sphere_hit({xo}, X[{bound[0]}], {_num(rr_o)})) {{")
-            for j in inner:
-                rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
-                self_code.append(f"        if (sphere_hit({xo}, X[{first[j]}], {_num(rr)})) return 1;")
-            self_code.append("    }")
-        for i, j in rest:
-            if is_cap[i] or is_cap[j]:
-                self_code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
-            else:
-                rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
-                self_code.append(f"    if (sphere_hit(X[{first[i]}], X[{first[j]}], {_num(rr)})) return 1;")
-        self_code.append("}")
     sphere_code = []  # against obstacle sphere ob (centre ob, radius ro)
     for (pb, rb), group in zip(bounds, members):
         sphere_code.append(f"if (skc_spheres_overlap(X[{pb}], {rb}, ob, ro)) {{")
@@ -369,37 +422,24 @@ def collision_tables(layout: Any) -> dict[str, Any]:
                 sphere_code.append(f"    if (skc_spheres_overlap(X[{first[i]}], {r_i}, ob, ro)) return 1;")
         sphere_code.append("}")
     point_code, point_code4 = _point_lines(points, "c", vals), _point_lines(points, "c4", vals4)
-    # the 4-lane checks (spheres only): a lane already hit needs nothing more; a link pair or link
-    # is tested only for the lanes whose bounding spheres meet (the same tests as the scalar code)
+    # the 4-lane obstacle checks (spheres only): a lane already hit needs nothing more; a link is
+    # tested only for the lanes whose bounding sphere meets the obstacle (as the scalar code)
     all_spheres = not any(is_cap)
-    self_code4, sphere_code4 = [], []
-    if all_spheres:
-        for (a, b), start, stop in zip(group_links, group_start, group_start[1:]):
-            (pa, ra), (pb, rb) = bounds[a], bounds[b]
-            rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
-            self_code4.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
-            self_code4.append("if (skv_any_(need)) {")
-            firsts, rest = _sphere_first(grouped[start:stop], link_of, a, bounds, is_cap)
-            for outer, bound, inner in firsts:
-                xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
-                self_code4.append(f"    near = need & hit2({xo}, X[{bound[0]}], {_num(rr_o)});")
-                self_code4.append("    if (skv_any_(near)) {")
-                for j in inner:
-                    rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
-                    self_code4.append(f"        hit |= near & hit2({xo}, X[{first[j]}], {_num(rr)});")
-                self_code4.append("    }")
-            for i, j in rest:
-                rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
-                self_code4.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
-            self_code4.append("    if (skv_all_(hit)) return hit;")
-            self_code4.append("}")
-        for (pb, rb), group in zip(bounds, members):
-            sphere_code4.append(f"need = ~hit & hit_obstacle(X[{pb}], {rb}, ob, ro);")
-            sphere_code4.append("if (skv_any_(need)) {")
+    sphere_code4: list[str] = []
+    plan = (bounds, link_of, first, radius, is_cap)
+    if all_spheres:  # link by link, the obstacles within its reach (idx[start[l]..start[l + 1]])
+        for l, ((pb, rb), group) in enumerate(zip(bounds, members)):
+            sphere_code4.append(f"for (int t = start[{l}]; t < start[{l + 1}]; ++t) {{")
+            sphere_code4.append("    const double *ob = S + 4 * idx[t];")
+            sphere_code4.append("    const double ro = ob[3];")
+            sphere_code4.append(f"    need = ~hit & hit_obstacle(X[{pb}], {rb}, ob, ro);")
+            sphere_code4.append("    if (skv_any_(need)) {")
             for i in group:
                 r_i = _num(radius[i])
-                sphere_code4.append(f"    hit |= need & hit_obstacle(X[{first[i]}], {r_i}, ob, ro);")
+                sphere_code4.append(f"        hit |= need & hit_obstacle(X[{first[i]}], {r_i}, ob, ro);")
+            sphere_code4.append("    }")
             sphere_code4.append("}")
+            sphere_code4.append("if (skv_all_(hit)) return hit;")
     anc = [a for path in tables.ancestors for a in path]
     anc_start = np.cumsum([0] + [len(path) for path in tables.ancestors]).tolist()
     shapes = [
@@ -416,16 +456,19 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         "point_code4": point_code4,
         "fk4": fk4,
         "vector_pairs": all_spheres,
-        "self_code4": self_code4,
+        "self_code4": _self_code4(groups, plan) if all_spheres else [],
+        "limits": _limits(tree.qlim),
         "sphere_code4": sphere_code4,
         "shapes": shapes,
         "pairs": list(layout.self_pairs) or [(0, 0)],
         "npairs": len(layout.self_pairs),
         "nlinks": len(links),
         "bounds": bounds,
+        "reach": reach,
         "link_start": link_start,
         "link_shapes": link_shapes,
-        "self_code": self_code,
+        "self_code": _self_code(groups, plan),
+        "self_code_proved": _self_code(groups_proved, plan),
         "sphere_code": sphere_code,
         "anc_start": anc_start,
         "anc": anc or [0],

@@ -6,11 +6,14 @@ from, and the NumPy reference of the queries the compiled kernel answers (:mod:`
 - Sources: :func:`geometry_from_urdf` (``<collision>``), :func:`read_srdf` (disabled pairs),
   :func:`fit_spheres` (spheres covering a mesh or points), :func:`builtin_geometry` (the built-in
   arms' sphere models, attached by :func:`symkin.load`).
-- :func:`layout_of`: the model's bodies and active pairs.
+- :func:`layout_of`: the model's bodies and active pairs; :func:`proved_apart`: the self pairs no
+  configuration within the joint limits brings into contact (a proof, not a sample), and
+  :func:`reach_sphere`: where a shape can be at all; the compiled batch check skips both.
 - :func:`points`, :func:`distances`, :func:`distance_jacobians`, :func:`in_collision`: the reference.
 - :mod:`symkin.geometry.distance`: signed distances of sphere, capsule and box pairs.
 """
 
+from symkin.geometry.clearance import proved_apart, reach_sphere
 from symkin.geometry.fit import fit_spheres
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.geometry.reference import distance_jacobians, distances, in_collision, points
@@ -35,5 +38,7 @@ __all__ = [
     "in_collision",
     "layout_of",
     "points",
+    "proved_apart",
+    "reach_sphere",
     "read_srdf",
 ]

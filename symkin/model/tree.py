@@ -62,7 +62,7 @@ def frame_position(frame: Any, frames: Sequence[str], name: str = "tree") -> int
     )
 
 
-def _joint_matrices(axis: int, prismatic: bool, x: np.ndarray) -> np.ndarray:
+def joint_matrices(axis: int, prismatic: bool, x: np.ndarray) -> np.ndarray:
     """(N, 4, 4) elementary transforms about/along ``axis`` by ``x`` (N,)."""
     M = np.zeros((len(x), 4, 4))
     M[:, range(4), range(4)] = 1.0
@@ -385,7 +385,7 @@ class Tree(FrameMethods):
                 continue
             s = self.slots[seg.slot]
             theta = float(s.multiplier) * Q[:, s.joint] + float(s.offset)
-            M = _joint_matrices(num.axis[k], not s.revolute, num.sign[k] * theta)
+            M = joint_matrices(num.axis[k], not s.revolute, num.sign[k] * theta)
             L[:, k] = P[:, k] @ M @ num.B[k]
         return L, P
 

@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include "symkin_collide.h"
 
@@ -307,6 +308,10 @@ static const int pairs[167][2] = { { 0, 5 }, { 0, 6 }, { 0, 7 }, { 0, 8 }, { 0, 
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 23, 24, 25, 26, 27, 28, 29, 30, 31 };
 static const double bound_radius[N_LINKS] = { 0.13562071897723668, 0.15125000000000002, 0.173449505221304, 0.15012500000000004, 0.173449505221304, 0.10075000000000003, 0.10204163456597994, 0.05500000000000001, 0.05000000000000001 };
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.0675 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.13562071897737335, 0.4000000000004011, 0.6043990104432135, 0.7962500000007976, 1.0043990104436138, 1.101250000001103, 1.2690832691332306, 1.2800000000012814, 1.3410000000013425 };
 static const int link_start[N_LINKS + 1] = { 0, 2, 5, 9, 12, 16, 18, 21, 22, 23 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -707,10 +712,26 @@ static inline int sphere_hit(const double a[3], const double b[3], double rr)
     return dx * dx + dy * dy + dz * dz < rr;
 }
 
-/* whether the configuration of points X collides (environment first, then self pairs) */
-static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
-                    int nb)
+/* whether q is outside the joint limits (or NaN): only then can the self pairs proved apart within
+   them (symkin.geometry.clearance) meet */
+static int outside_limits(const double *q)
 {
+    if (!(q[0] >= -2.9670597283903604 && q[0] <= 2.9670597283903604)) return 1;
+    if (!(q[1] >= -2.0943951023931953 && q[1] <= 2.0943951023931953)) return 1;
+    if (!(q[2] >= -2.9670597283903604 && q[2] <= 2.9670597283903604)) return 1;
+    if (!(q[3] >= -2.0943951023931953 && q[3] <= 2.0943951023931953)) return 1;
+    if (!(q[4] >= -2.9670597283903604 && q[4] <= 2.9670597283903604)) return 1;
+    if (!(q[5] >= -2.0943951023931953 && q[5] <= 2.0943951023931953)) return 1;
+    if (!(q[6] >= -3.0543261909900767 && q[6] <= 3.0543261909900767)) return 1;
+    return 0;
+}
+
+/* whether the configuration of points X collides (environment first, then self pairs; the pairs
+   proved apart within the joint limits only when the configuration is outside them) */
+static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
+                    int nb, int outside)
+{
+    (void)outside;
     for (int o = 0; o < ns; ++o) {  /* obstacle spheres: each link's bound, then its shapes */
         const double *ob = S + 4 * o;
         const double ro = ob[3];
@@ -767,45 +788,11 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
                     if (overlaps(X, link_shapes[s], -1, kind + 2, ob)) return 1;
             }
     /* self pairs, by pairs of links */
-    if (skc_spheres_overlap(X[23], 0.13562071897723668, X[25], 0.173449505221304)) {
-        if (sphere_hit(X[0], X[25], 0.06940564180134988)) {
-            if (sphere_hit(X[0], X[5], 0.029756249999999995)) return 1;
-            if (sphere_hit(X[0], X[6], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[7], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[8], 0.027224999999999992)) return 1;
-        }
-        if (sphere_hit(X[1], X[25], 0.05626360527723143)) {
-            if (sphere_hit(X[1], X[5], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[1], X[6], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[1], X[7], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[1], X[8], 0.019251562499999996)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[23], 0.13562071897723668, X[26], 0.15012500000000004)) {
-        if (sphere_hit(X[0], X[26], 0.05766001562500002)) {
-            if (sphere_hit(X[0], X[9], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[10], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[11], 0.027224999999999992)) return 1;
-        }
-        if (sphere_hit(X[1], X[26], 0.045742515625000015)) {
-            if (sphere_hit(X[1], X[9], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[1], X[10], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[1], X[11], 0.019251562499999996)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[23], 0.13562071897723668, X[27], 0.173449505221304)) {
-        if (sphere_hit(X[0], X[27], 0.06940564180134988)) {
-            if (sphere_hit(X[0], X[12], 0.029756249999999995)) return 1;
-            if (sphere_hit(X[0], X[13], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[14], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[15], 0.027224999999999992)) return 1;
-        }
-        if (sphere_hit(X[1], X[27], 0.05626360527723143)) {
-            if (sphere_hit(X[1], X[12], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[1], X[13], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[1], X[14], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[1], X[15], 0.019251562499999996)) return 1;
-        }
+        if (sphere_hit(X[0], X[14], 0.027224999999999992)) return 1;
+        if (sphere_hit(X[0], X[15], 0.027224999999999992)) return 1;
+        if (sphere_hit(X[1], X[14], 0.019251562499999996)) return 1;
+        if (sphere_hit(X[1], X[15], 0.019251562499999996)) return 1;
     }
     if (skc_spheres_overlap(X[23], 0.13562071897723668, X[28], 0.10075000000000003)) {
         if (sphere_hit(X[0], X[16], 0.026001562500000002)) return 1;
@@ -832,43 +819,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
     if (skc_spheres_overlap(X[23], 0.13562071897723668, X[31], 0.05000000000000001)) {
         if (sphere_hit(X[0], X[22], 0.019600000000000003)) return 1;
         if (sphere_hit(X[1], X[22], 0.012939062500000001)) return 1;
-    }
-    if (skc_spheres_overlap(X[24], 0.15125000000000002, X[26], 0.15012500000000004)) {
-        if (sphere_hit(X[2], X[26], 0.050681265625000006)) {
-            if (sphere_hit(X[2], X[9], 0.0225)) return 1;
-            if (sphere_hit(X[2], X[10], 0.0225)) return 1;
-            if (sphere_hit(X[2], X[11], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[3], X[26], 0.050681265625000006)) {
-            if (sphere_hit(X[3], X[9], 0.0225)) return 1;
-            if (sphere_hit(X[3], X[10], 0.0225)) return 1;
-            if (sphere_hit(X[3], X[11], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[4], X[26], 0.050681265625000006)) {
-            if (sphere_hit(X[4], X[9], 0.0225)) return 1;
-            if (sphere_hit(X[4], X[10], 0.0225)) return 1;
-            if (sphere_hit(X[4], X[11], 0.0225)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[24], 0.15125000000000002, X[27], 0.173449505221304)) {
-        if (sphere_hit(X[2], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[2], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[2], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[2], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[2], X[15], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[3], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[3], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[3], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[3], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[3], X[15], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[4], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[4], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[4], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[4], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[4], X[15], 0.0225)) return 1;
-        }
     }
     if (skc_spheres_overlap(X[24], 0.15125000000000002, X[28], 0.10075000000000003)) {
         if (sphere_hit(X[16], X[24], 0.049506250000000016)) {
@@ -913,66 +863,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             if (sphere_hit(X[22], X[4], 0.015625)) return 1;
         }
     }
-    if (skc_spheres_overlap(X[25], 0.173449505221304, X[27], 0.173449505221304)) {
-        if (sphere_hit(X[5], X[27], 0.06551014922303032)) {
-            if (sphere_hit(X[5], X[12], 0.027225000000000003)) return 1;
-            if (sphere_hit(X[5], X[13], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[5], X[14], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[5], X[15], 0.024806250000000002)) return 1;
-        }
-        if (sphere_hit(X[6], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[6], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[6], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[6], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[6], X[15], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[7], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[7], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[7], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[7], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[7], X[15], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[8], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[8], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[8], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[8], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[8], X[15], 0.0225)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[25], 0.173449505221304, X[28], 0.10075000000000003)) {
-        if (sphere_hit(X[16], X[25], 0.05987784785555099)) {
-            if (sphere_hit(X[16], X[5], 0.0236390625)) return 1;
-            if (sphere_hit(X[16], X[6], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[16], X[7], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[16], X[8], 0.021389062499999997)) return 1;
-        }
-        if (sphere_hit(X[17], X[25], 0.05987784785555099)) {
-            if (sphere_hit(X[17], X[5], 0.0236390625)) return 1;
-            if (sphere_hit(X[17], X[6], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[17], X[7], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[17], X[8], 0.021389062499999997)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[25], 0.173449505221304, X[29], 0.10204163456597994)) {
-        if (sphere_hit(X[18], X[25], 0.061727156644710755)) {
-            if (sphere_hit(X[18], X[5], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[18], X[6], 0.0225)) return 1;
-            if (sphere_hit(X[18], X[7], 0.0225)) return 1;
-            if (sphere_hit(X[18], X[8], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[19], X[25], 0.058056664066391206)) {
-            if (sphere_hit(X[19], X[5], 0.022500000000000006)) return 1;
-            if (sphere_hit(X[19], X[6], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[19], X[7], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[19], X[8], 0.020306250000000005)) return 1;
-        }
-        if (sphere_hit(X[20], X[25], 0.05626360527723143)) {
-            if (sphere_hit(X[20], X[5], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[20], X[6], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[20], X[7], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[20], X[8], 0.019251562499999996)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[25], 0.173449505221304, X[30], 0.05500000000000001)) {
         if (sphere_hit(X[21], X[25], 0.0521891764358586)) {
             if (sphere_hit(X[21], X[5], 0.018906250000000003)) return 1;
@@ -989,92 +879,227 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             if (sphere_hit(X[22], X[8], 0.015625)) return 1;
         }
     }
-    if (skc_spheres_overlap(X[26], 0.15012500000000004, X[28], 0.10075000000000003)) {
-        if (sphere_hit(X[16], X[26], 0.04900689062500002)) {
-            if (sphere_hit(X[16], X[9], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[16], X[10], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[16], X[11], 0.021389062499999997)) return 1;
-        }
-        if (sphere_hit(X[17], X[26], 0.04900689062500002)) {
-            if (sphere_hit(X[17], X[9], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[17], X[10], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[17], X[11], 0.021389062499999997)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[26], 0.15012500000000004, X[29], 0.10204163456597994)) {
-        if (sphere_hit(X[9], X[29], 0.03134374036979398)) {
-            if (sphere_hit(X[9], X[18], 0.0225)) return 1;
-            if (sphere_hit(X[9], X[19], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[9], X[20], 0.019251562499999996)) return 1;
-        }
-        if (sphere_hit(X[10], X[29], 0.03134374036979398)) {
-            if (sphere_hit(X[10], X[18], 0.0225)) return 1;
-            if (sphere_hit(X[10], X[19], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[10], X[20], 0.019251562499999996)) return 1;
-        }
-        if (sphere_hit(X[11], X[29], 0.03134374036979398)) {
-            if (sphere_hit(X[11], X[18], 0.0225)) return 1;
-            if (sphere_hit(X[11], X[19], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[11], X[20], 0.019251562499999996)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[26], 0.15012500000000004, X[30], 0.05500000000000001)) {
-        if (sphere_hit(X[21], X[26], 0.04207626562500001)) {
-            if (sphere_hit(X[21], X[9], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[21], X[10], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[21], X[11], 0.016900000000000002)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[26], 0.15012500000000004, X[31], 0.05000000000000001)) {
-        if (sphere_hit(X[22], X[26], 0.04005001562500002)) {
-            if (sphere_hit(X[22], X[9], 0.015625)) return 1;
-            if (sphere_hit(X[22], X[10], 0.015625)) return 1;
-            if (sphere_hit(X[22], X[11], 0.015625)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[27], 0.173449505221304, X[29], 0.10204163456597994)) {
-        if (sphere_hit(X[18], X[27], 0.061727156644710755)) {
-            if (sphere_hit(X[18], X[12], 0.024806250000000002)) return 1;
-            if (sphere_hit(X[18], X[13], 0.0225)) return 1;
-            if (sphere_hit(X[18], X[14], 0.0225)) return 1;
-            if (sphere_hit(X[18], X[15], 0.0225)) return 1;
-        }
-        if (sphere_hit(X[19], X[27], 0.058056664066391206)) {
-            if (sphere_hit(X[19], X[12], 0.022500000000000006)) return 1;
-            if (sphere_hit(X[19], X[13], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[19], X[14], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[19], X[15], 0.020306250000000005)) return 1;
-        }
-        if (sphere_hit(X[20], X[27], 0.05626360527723143)) {
-            if (sphere_hit(X[20], X[12], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[20], X[13], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[20], X[14], 0.019251562499999996)) return 1;
-            if (sphere_hit(X[20], X[15], 0.019251562499999996)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[27], 0.173449505221304, X[30], 0.05500000000000001)) {
-        if (sphere_hit(X[21], X[27], 0.0521891764358586)) {
-            if (sphere_hit(X[21], X[12], 0.018906250000000003)) return 1;
-            if (sphere_hit(X[21], X[13], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[21], X[14], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[21], X[15], 0.016900000000000002)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[27], 0.173449505221304, X[31], 0.05000000000000001)) {
-        if (sphere_hit(X[22], X[27], 0.04992968138364558)) {
-            if (sphere_hit(X[22], X[12], 0.017556250000000002)) return 1;
-            if (sphere_hit(X[22], X[13], 0.015625)) return 1;
-            if (sphere_hit(X[22], X[14], 0.015625)) return 1;
-            if (sphere_hit(X[22], X[15], 0.015625)) return 1;
-        }
+        if (sphere_hit(X[11], X[22], 0.015625)) return 1;
     }
     if (skc_spheres_overlap(X[28], 0.10075000000000003, X[30], 0.05500000000000001)) {
-        if (sphere_hit(X[16], X[21], 0.0159390625)) return 1;
         if (sphere_hit(X[17], X[21], 0.0159390625)) return 1;
     }
     if (skc_spheres_overlap(X[28], 0.10075000000000003, X[31], 0.05000000000000001)) {
-        if (sphere_hit(X[16], X[22], 0.0147015625)) return 1;
         if (sphere_hit(X[17], X[22], 0.0147015625)) return 1;
+    }
+    if (outside) {
+        if (skc_spheres_overlap(X[23], 0.13562071897723668, X[25], 0.173449505221304)) {
+            if (sphere_hit(X[0], X[25], 0.06940564180134988)) {
+                if (sphere_hit(X[0], X[5], 0.029756249999999995)) return 1;
+                if (sphere_hit(X[0], X[6], 0.027224999999999992)) return 1;
+                if (sphere_hit(X[0], X[7], 0.027224999999999992)) return 1;
+                if (sphere_hit(X[0], X[8], 0.027224999999999992)) return 1;
+            }
+            if (sphere_hit(X[1], X[25], 0.05626360527723143)) {
+                if (sphere_hit(X[1], X[5], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[1], X[6], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[1], X[7], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[1], X[8], 0.019251562499999996)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[23], 0.13562071897723668, X[26], 0.15012500000000004)) {
+            if (sphere_hit(X[0], X[26], 0.05766001562500002)) {
+                if (sphere_hit(X[0], X[9], 0.027224999999999992)) return 1;
+                if (sphere_hit(X[0], X[10], 0.027224999999999992)) return 1;
+                if (sphere_hit(X[0], X[11], 0.027224999999999992)) return 1;
+            }
+            if (sphere_hit(X[1], X[26], 0.045742515625000015)) {
+                if (sphere_hit(X[1], X[9], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[1], X[10], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[1], X[11], 0.019251562499999996)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[23], 0.13562071897723668, X[27], 0.173449505221304)) {
+            if (sphere_hit(X[0], X[12], 0.029756249999999995)) return 1;
+            if (sphere_hit(X[0], X[13], 0.027224999999999992)) return 1;
+            if (sphere_hit(X[1], X[12], 0.021389062499999997)) return 1;
+            if (sphere_hit(X[1], X[13], 0.019251562499999996)) return 1;
+        }
+        if (skc_spheres_overlap(X[24], 0.15125000000000002, X[26], 0.15012500000000004)) {
+            if (sphere_hit(X[2], X[26], 0.050681265625000006)) {
+                if (sphere_hit(X[2], X[9], 0.0225)) return 1;
+                if (sphere_hit(X[2], X[10], 0.0225)) return 1;
+                if (sphere_hit(X[2], X[11], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[3], X[26], 0.050681265625000006)) {
+                if (sphere_hit(X[3], X[9], 0.0225)) return 1;
+                if (sphere_hit(X[3], X[10], 0.0225)) return 1;
+                if (sphere_hit(X[3], X[11], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[4], X[26], 0.050681265625000006)) {
+                if (sphere_hit(X[4], X[9], 0.0225)) return 1;
+                if (sphere_hit(X[4], X[10], 0.0225)) return 1;
+                if (sphere_hit(X[4], X[11], 0.0225)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[24], 0.15125000000000002, X[27], 0.173449505221304)) {
+            if (sphere_hit(X[2], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[2], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[2], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[2], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[2], X[15], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[3], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[3], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[3], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[3], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[3], X[15], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[4], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[4], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[4], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[4], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[4], X[15], 0.0225)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[25], 0.173449505221304, X[27], 0.173449505221304)) {
+            if (sphere_hit(X[5], X[27], 0.06551014922303032)) {
+                if (sphere_hit(X[5], X[12], 0.027225000000000003)) return 1;
+                if (sphere_hit(X[5], X[13], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[5], X[14], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[5], X[15], 0.024806250000000002)) return 1;
+            }
+            if (sphere_hit(X[6], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[6], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[6], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[6], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[6], X[15], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[7], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[7], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[7], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[7], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[7], X[15], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[8], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[8], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[8], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[8], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[8], X[15], 0.0225)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[25], 0.173449505221304, X[28], 0.10075000000000003)) {
+            if (sphere_hit(X[16], X[25], 0.05987784785555099)) {
+                if (sphere_hit(X[16], X[5], 0.0236390625)) return 1;
+                if (sphere_hit(X[16], X[6], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[16], X[7], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[16], X[8], 0.021389062499999997)) return 1;
+            }
+            if (sphere_hit(X[17], X[25], 0.05987784785555099)) {
+                if (sphere_hit(X[17], X[5], 0.0236390625)) return 1;
+                if (sphere_hit(X[17], X[6], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[17], X[7], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[17], X[8], 0.021389062499999997)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[25], 0.173449505221304, X[29], 0.10204163456597994)) {
+            if (sphere_hit(X[18], X[25], 0.061727156644710755)) {
+                if (sphere_hit(X[18], X[5], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[18], X[6], 0.0225)) return 1;
+                if (sphere_hit(X[18], X[7], 0.0225)) return 1;
+                if (sphere_hit(X[18], X[8], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[19], X[25], 0.058056664066391206)) {
+                if (sphere_hit(X[19], X[5], 0.022500000000000006)) return 1;
+                if (sphere_hit(X[19], X[6], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[19], X[7], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[19], X[8], 0.020306250000000005)) return 1;
+            }
+            if (sphere_hit(X[20], X[25], 0.05626360527723143)) {
+                if (sphere_hit(X[20], X[5], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[20], X[6], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[20], X[7], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[20], X[8], 0.019251562499999996)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[26], 0.15012500000000004, X[28], 0.10075000000000003)) {
+            if (sphere_hit(X[16], X[26], 0.04900689062500002)) {
+                if (sphere_hit(X[16], X[9], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[16], X[10], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[16], X[11], 0.021389062499999997)) return 1;
+            }
+            if (sphere_hit(X[17], X[26], 0.04900689062500002)) {
+                if (sphere_hit(X[17], X[9], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[17], X[10], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[17], X[11], 0.021389062499999997)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[26], 0.15012500000000004, X[29], 0.10204163456597994)) {
+            if (sphere_hit(X[9], X[29], 0.03134374036979398)) {
+                if (sphere_hit(X[9], X[18], 0.0225)) return 1;
+                if (sphere_hit(X[9], X[19], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[9], X[20], 0.019251562499999996)) return 1;
+            }
+            if (sphere_hit(X[10], X[29], 0.03134374036979398)) {
+                if (sphere_hit(X[10], X[18], 0.0225)) return 1;
+                if (sphere_hit(X[10], X[19], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[10], X[20], 0.019251562499999996)) return 1;
+            }
+            if (sphere_hit(X[11], X[29], 0.03134374036979398)) {
+                if (sphere_hit(X[11], X[18], 0.0225)) return 1;
+                if (sphere_hit(X[11], X[19], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[11], X[20], 0.019251562499999996)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[26], 0.15012500000000004, X[30], 0.05500000000000001)) {
+            if (sphere_hit(X[21], X[26], 0.04207626562500001)) {
+                if (sphere_hit(X[21], X[9], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[21], X[10], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[21], X[11], 0.016900000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[26], 0.15012500000000004, X[31], 0.05000000000000001)) {
+            if (sphere_hit(X[9], X[22], 0.015625)) return 1;
+            if (sphere_hit(X[10], X[22], 0.015625)) return 1;
+        }
+        if (skc_spheres_overlap(X[27], 0.173449505221304, X[29], 0.10204163456597994)) {
+            if (sphere_hit(X[18], X[27], 0.061727156644710755)) {
+                if (sphere_hit(X[18], X[12], 0.024806250000000002)) return 1;
+                if (sphere_hit(X[18], X[13], 0.0225)) return 1;
+                if (sphere_hit(X[18], X[14], 0.0225)) return 1;
+                if (sphere_hit(X[18], X[15], 0.0225)) return 1;
+            }
+            if (sphere_hit(X[19], X[27], 0.058056664066391206)) {
+                if (sphere_hit(X[19], X[12], 0.022500000000000006)) return 1;
+                if (sphere_hit(X[19], X[13], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[19], X[14], 0.020306250000000005)) return 1;
+                if (sphere_hit(X[19], X[15], 0.020306250000000005)) return 1;
+            }
+            if (sphere_hit(X[20], X[27], 0.05626360527723143)) {
+                if (sphere_hit(X[20], X[12], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[20], X[13], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[20], X[14], 0.019251562499999996)) return 1;
+                if (sphere_hit(X[20], X[15], 0.019251562499999996)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[27], 0.173449505221304, X[30], 0.05500000000000001)) {
+            if (sphere_hit(X[21], X[27], 0.0521891764358586)) {
+                if (sphere_hit(X[21], X[12], 0.018906250000000003)) return 1;
+                if (sphere_hit(X[21], X[13], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[21], X[14], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[21], X[15], 0.016900000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[27], 0.173449505221304, X[31], 0.05000000000000001)) {
+            if (sphere_hit(X[22], X[27], 0.04992968138364558)) {
+                if (sphere_hit(X[22], X[12], 0.017556250000000002)) return 1;
+                if (sphere_hit(X[22], X[13], 0.015625)) return 1;
+                if (sphere_hit(X[22], X[14], 0.015625)) return 1;
+                if (sphere_hit(X[22], X[15], 0.015625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[28], 0.10075000000000003, X[30], 0.05500000000000001)) {
+            if (sphere_hit(X[16], X[21], 0.0159390625)) return 1;
+        }
+        if (skc_spheres_overlap(X[28], 0.10075000000000003, X[31], 0.05000000000000001)) {
+            if (sphere_hit(X[16], X[22], 0.0147015625)) return 1;
+        }
     }
     return 0;
 }
@@ -1084,7 +1109,7 @@ int skcoll_in_collision(const double *q, const double *S, int ns, const double *
     double T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     fk(q, T, PJ);
     points_of(T, PJ, X);
-    return collides(X, S, ns, C, nc, B, nb);
+    return collides(X, S, ns, C, nc, B, nb, outside_limits(q));
 }
 
 /* skcoll_in_collision with the obstacles packed as {spheres, ns, capsules, nc, boxes, nb} (addresses
@@ -1306,14 +1331,42 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[31][1] = -0.025 * PJ[6][6] + T[7][7];
     X[31][2] = -0.025 * PJ[6][10] + T[7][11];
 }
-/* verdicts of four configurations (rows of Q) */
-static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, unsigned char *out)
+/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
+   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
+   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
 {
+    int t = 0;
+    for (int l = 0; l < N_LINKS; ++l) {
+        start[l] = t;
+        for (int o = 0; o < ns; ++o) {
+            const double *ob = S + 4 * o;
+            const double dx = ob[0] - reach_centre[l][0], dy = ob[1] - reach_centre[l][1],
+                         dz = ob[2] - reach_centre[l][2], rr = reach_radius[l] + ob[3];
+            if (reach_radius[l] < 0.0 || !(dx * dx + dy * dy + dz * dz > rr * rr * (1.0 + 1e-9))) idx[t++] = o;
+        }
+    }
+    start[N_LINKS] = t;
+}
+
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
+                          int nb, const int *idx, const int *start, unsigned char *out)
+{
+    (void)idx; (void)start;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
+    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
+       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
     m4 far = {0, 0, 0, 0};
+    far |= ~((qv[0] >= -2.9670597283903604) & (qv[0] <= 2.9670597283903604));
+    far |= ~((qv[1] >= -2.0943951023931953) & (qv[1] <= 2.0943951023931953));
+    far |= ~((qv[2] >= -2.9670597283903604) & (qv[2] <= 2.9670597283903604));
+    far |= ~((qv[3] >= -2.0943951023931953) & (qv[3] <= 2.0943951023931953));
+    far |= ~((qv[4] >= -2.9670597283903604) & (qv[4] <= 2.9670597283903604));
+    far |= ~((qv[5] >= -2.0943951023931953) & (qv[5] <= 2.0943951023931953));
+    far |= ~((qv[6] >= -3.0543261909900767) & (qv[6] <= 3.0543261909900767));
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1323,20 +1376,30 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        for (int o = 0; o < ns && !skv_all_(hit); ++o) {
-            const double *ob = S + 4 * o;
+        for (int t = start[0]; t < start[1]; ++t) {
+            const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
             need = ~hit & hit_obstacle(X[23], 0.13562071897723668, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[0], 0.09, ob, ro);
                 hit |= need & hit_obstacle(X[1], 0.06375, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[1]; t < start[2]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[24], 0.15125000000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[2], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[3], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[4], 0.075, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[2]; t < start[3]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[25], 0.173449505221304, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[5], 0.0825, ob, ro);
@@ -1344,12 +1407,22 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[7], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[8], 0.075, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[3]; t < start[4]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[26], 0.15012500000000004, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[9], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[10], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[11], 0.075, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[4]; t < start[5]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[27], 0.173449505221304, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[12], 0.0825, ob, ro);
@@ -1357,21 +1430,41 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[14], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[15], 0.075, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[5]; t < start[6]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[28], 0.10075000000000003, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[16], 0.07125, ob, ro);
                 hit |= need & hit_obstacle(X[17], 0.07125, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[6]; t < start[7]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[29], 0.10204163456597994, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[18], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[19], 0.0675, ob, ro);
                 hit |= need & hit_obstacle(X[20], 0.06375, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[7]; t < start[8]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[30], 0.05500000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[21], 0.055, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[8]; t < start[9]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[31], 0.05000000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[22], 0.05, ob, ro);
@@ -1379,56 +1472,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         if (skv_all_(hit)) goto done;
         /* self pairs, by pairs of links */
-        need = ~hit & hit2(X[23], X[25], 0.09552440348613621);
-        if (skv_any_(need)) {
-            near = need & hit2(X[0], X[25], 0.06940564180134988);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[5], 0.029756249999999995);
-                hit |= near & hit2(X[0], X[6], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[7], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[8], 0.027224999999999992);
-            }
-            near = need & hit2(X[1], X[25], 0.05626360527723143);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[5], 0.021389062499999997);
-                hit |= near & hit2(X[1], X[6], 0.019251562499999996);
-                hit |= near & hit2(X[1], X[7], 0.019251562499999996);
-                hit |= near & hit2(X[1], X[8], 0.019251562499999996);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[23], X[26], 0.08165061591381793);
-        if (skv_any_(need)) {
-            near = need & hit2(X[0], X[26], 0.05766001562500002);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[9], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[10], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[11], 0.027224999999999992);
-            }
-            near = need & hit2(X[1], X[26], 0.045742515625000015);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[9], 0.019251562499999996);
-                hit |= near & hit2(X[1], X[10], 0.019251562499999996);
-                hit |= near & hit2(X[1], X[11], 0.019251562499999996);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[23], X[27], 0.09552440348613621);
         if (skv_any_(need)) {
-            near = need & hit2(X[0], X[27], 0.06940564180134988);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[12], 0.029756249999999995);
-                hit |= near & hit2(X[0], X[13], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[14], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[15], 0.027224999999999992);
-            }
-            near = need & hit2(X[1], X[27], 0.05626360527723143);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[12], 0.021389062499999997);
-                hit |= near & hit2(X[1], X[13], 0.019251562499999996);
-                hit |= near & hit2(X[1], X[14], 0.019251562499999996);
-                hit |= near & hit2(X[1], X[15], 0.019251562499999996);
-            }
+            hit |= need & hit2(X[0], X[14], 0.027224999999999992);
+            hit |= need & hit2(X[0], X[15], 0.027224999999999992);
+            hit |= need & hit2(X[1], X[14], 0.019251562499999996);
+            hit |= need & hit2(X[1], X[15], 0.019251562499999996);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[23], X[28], 0.055871116789815815);
@@ -1465,53 +1514,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         if (skv_any_(need)) {
             hit |= need & hit2(X[0], X[22], 0.019600000000000003);
             hit |= need & hit2(X[1], X[22], 0.012939062500000001);
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[24], X[26], 0.09082689062500003);
-        if (skv_any_(need)) {
-            near = need & hit2(X[2], X[26], 0.050681265625000006);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[9], 0.0225);
-                hit |= near & hit2(X[2], X[10], 0.0225);
-                hit |= near & hit2(X[2], X[11], 0.0225);
-            }
-            near = need & hit2(X[3], X[26], 0.050681265625000006);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[3], X[9], 0.0225);
-                hit |= near & hit2(X[3], X[10], 0.0225);
-                hit |= near & hit2(X[3], X[11], 0.0225);
-            }
-            near = need & hit2(X[4], X[26], 0.050681265625000006);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[4], X[9], 0.0225);
-                hit |= near & hit2(X[4], X[10], 0.0225);
-                hit |= near & hit2(X[4], X[11], 0.0225);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[24], X[27], 0.10542976869095964);
-        if (skv_any_(need)) {
-            near = need & hit2(X[2], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[2], X[13], 0.0225);
-                hit |= near & hit2(X[2], X[14], 0.0225);
-                hit |= near & hit2(X[2], X[15], 0.0225);
-            }
-            near = need & hit2(X[3], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[3], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[3], X[13], 0.0225);
-                hit |= near & hit2(X[3], X[14], 0.0225);
-                hit |= near & hit2(X[3], X[15], 0.0225);
-            }
-            near = need & hit2(X[4], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[4], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[4], X[13], 0.0225);
-                hit |= near & hit2(X[4], X[14], 0.0225);
-                hit |= near & hit2(X[4], X[15], 0.0225);
-            }
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[24], X[28], 0.06350400000000003);
@@ -1572,81 +1574,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             }
             if (skv_all_(hit)) goto done;
         }
-        need = ~hit & hit2(X[25], X[27], 0.12033892344606066);
-        if (skv_any_(need)) {
-            near = need & hit2(X[5], X[27], 0.06551014922303032);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[5], X[12], 0.027225000000000003);
-                hit |= near & hit2(X[5], X[13], 0.024806250000000002);
-                hit |= near & hit2(X[5], X[14], 0.024806250000000002);
-                hit |= near & hit2(X[5], X[15], 0.024806250000000002);
-            }
-            near = need & hit2(X[6], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[6], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[6], X[13], 0.0225);
-                hit |= near & hit2(X[6], X[14], 0.0225);
-                hit |= near & hit2(X[6], X[15], 0.0225);
-            }
-            near = need & hit2(X[7], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[7], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[7], X[13], 0.0225);
-                hit |= near & hit2(X[7], X[14], 0.0225);
-                hit |= near & hit2(X[7], X[15], 0.0225);
-            }
-            near = need & hit2(X[8], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[8], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[8], X[13], 0.0225);
-                hit |= near & hit2(X[8], X[14], 0.0225);
-                hit |= near & hit2(X[8], X[15], 0.0225);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[25], X[28], 0.07518536866360795);
-        if (skv_any_(need)) {
-            near = need & hit2(X[16], X[25], 0.05987784785555099);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[16], X[5], 0.0236390625);
-                hit |= near & hit2(X[16], X[6], 0.021389062499999997);
-                hit |= near & hit2(X[16], X[7], 0.021389062499999997);
-                hit |= near & hit2(X[16], X[8], 0.021389062499999997);
-            }
-            near = need & hit2(X[17], X[25], 0.05987784785555099);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[17], X[5], 0.0236390625);
-                hit |= near & hit2(X[17], X[6], 0.021389062499999997);
-                hit |= near & hit2(X[17], X[7], 0.021389062499999997);
-                hit |= near & hit2(X[17], X[8], 0.021389062499999997);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[25], X[29], 0.07589536810129682);
-        if (skv_any_(need)) {
-            near = need & hit2(X[18], X[25], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[18], X[5], 0.024806250000000002);
-                hit |= near & hit2(X[18], X[6], 0.0225);
-                hit |= near & hit2(X[18], X[7], 0.0225);
-                hit |= near & hit2(X[18], X[8], 0.0225);
-            }
-            near = need & hit2(X[19], X[25], 0.058056664066391206);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[19], X[5], 0.022500000000000006);
-                hit |= near & hit2(X[19], X[6], 0.020306250000000005);
-                hit |= near & hit2(X[19], X[7], 0.020306250000000005);
-                hit |= near & hit2(X[19], X[8], 0.020306250000000005);
-            }
-            near = need & hit2(X[20], X[25], 0.05626360527723143);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[20], X[5], 0.021389062499999997);
-                hit |= near & hit2(X[20], X[6], 0.019251562499999996);
-                hit |= near & hit2(X[20], X[7], 0.019251562499999996);
-                hit |= near & hit2(X[20], X[8], 0.019251562499999996);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[25], X[30], 0.05218917643585862);
         if (skv_any_(need)) {
             near = need & hit2(X[21], X[25], 0.0521891764358586);
@@ -1669,120 +1596,18 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             }
             if (skv_all_(hit)) goto done;
         }
-        need = ~hit & hit2(X[26], X[28], 0.06293826562500003);
-        if (skv_any_(need)) {
-            near = need & hit2(X[16], X[26], 0.04900689062500002);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[16], X[9], 0.021389062499999997);
-                hit |= near & hit2(X[16], X[10], 0.021389062499999997);
-                hit |= near & hit2(X[16], X[11], 0.021389062499999997);
-            }
-            near = need & hit2(X[17], X[26], 0.04900689062500002);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[17], X[9], 0.021389062499999997);
-                hit |= near & hit2(X[17], X[10], 0.021389062499999997);
-                hit |= near & hit2(X[17], X[11], 0.021389062499999997);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[26], X[29], 0.0635880115883325);
-        if (skv_any_(need)) {
-            near = need & hit2(X[9], X[29], 0.03134374036979398);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[9], X[18], 0.0225);
-                hit |= near & hit2(X[9], X[19], 0.020306250000000005);
-                hit |= near & hit2(X[9], X[20], 0.019251562499999996);
-            }
-            near = need & hit2(X[10], X[29], 0.03134374036979398);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[10], X[18], 0.0225);
-                hit |= near & hit2(X[10], X[19], 0.020306250000000005);
-                hit |= near & hit2(X[10], X[20], 0.019251562499999996);
-            }
-            near = need & hit2(X[11], X[29], 0.03134374036979398);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[11], X[18], 0.0225);
-                hit |= near & hit2(X[11], X[19], 0.020306250000000005);
-                hit |= near & hit2(X[11], X[20], 0.019251562499999996);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[26], X[30], 0.042076265625000026);
-        if (skv_any_(need)) {
-            near = need & hit2(X[21], X[26], 0.04207626562500001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[21], X[9], 0.016900000000000002);
-                hit |= near & hit2(X[21], X[10], 0.016900000000000002);
-                hit |= near & hit2(X[21], X[11], 0.016900000000000002);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[26], X[31], 0.04005001562500002);
         if (skv_any_(need)) {
-            near = need & hit2(X[22], X[26], 0.04005001562500002);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[22], X[9], 0.015625);
-                hit |= near & hit2(X[22], X[10], 0.015625);
-                hit |= near & hit2(X[22], X[11], 0.015625);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[27], X[29], 0.07589536810129682);
-        if (skv_any_(need)) {
-            near = need & hit2(X[18], X[27], 0.061727156644710755);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[18], X[12], 0.024806250000000002);
-                hit |= near & hit2(X[18], X[13], 0.0225);
-                hit |= near & hit2(X[18], X[14], 0.0225);
-                hit |= near & hit2(X[18], X[15], 0.0225);
-            }
-            near = need & hit2(X[19], X[27], 0.058056664066391206);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[19], X[12], 0.022500000000000006);
-                hit |= near & hit2(X[19], X[13], 0.020306250000000005);
-                hit |= near & hit2(X[19], X[14], 0.020306250000000005);
-                hit |= near & hit2(X[19], X[15], 0.020306250000000005);
-            }
-            near = need & hit2(X[20], X[27], 0.05626360527723143);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[20], X[12], 0.021389062499999997);
-                hit |= near & hit2(X[20], X[13], 0.019251562499999996);
-                hit |= near & hit2(X[20], X[14], 0.019251562499999996);
-                hit |= near & hit2(X[20], X[15], 0.019251562499999996);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[27], X[30], 0.05218917643585862);
-        if (skv_any_(need)) {
-            near = need & hit2(X[21], X[27], 0.0521891764358586);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[21], X[12], 0.018906250000000003);
-                hit |= near & hit2(X[21], X[13], 0.016900000000000002);
-                hit |= near & hit2(X[21], X[14], 0.016900000000000002);
-                hit |= near & hit2(X[21], X[15], 0.016900000000000002);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[27], X[31], 0.04992968138364558);
-        if (skv_any_(need)) {
-            near = need & hit2(X[22], X[27], 0.04992968138364558);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[22], X[12], 0.017556250000000002);
-                hit |= near & hit2(X[22], X[13], 0.015625);
-                hit |= near & hit2(X[22], X[14], 0.015625);
-                hit |= near & hit2(X[22], X[15], 0.015625);
-            }
+            hit |= need & hit2(X[11], X[22], 0.015625);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[28], X[30], 0.024258062500000017);
         if (skv_any_(need)) {
-            hit |= need & hit2(X[16], X[21], 0.0159390625);
             hit |= need & hit2(X[17], X[21], 0.0159390625);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[28], X[31], 0.022725562500000015);
         if (skv_any_(need)) {
-            hit |= need & hit2(X[16], X[22], 0.0147015625);
             hit |= need & hit2(X[17], X[22], 0.0147015625);
             if (skv_all_(hit)) goto done;
         }
@@ -1794,7 +1619,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1807,8 +1632,14 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    for (; k + 4 <= N; k += 4)
-        in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, out + k);
+    int small[16 * N_LINKS], start[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    if (idx) { /* no memory for the lists: one configuration at a time below */
+        reachable(S, ns, idx, start);
+        for (; k + 4 <= N; k += 4)
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+        if (idx != small) free(idx);
+    }
 #endif
     for (; k < N; ++k)
         out[k] = (unsigned char)skcoll_in_collision(Q + k * N_Q, S, ns, C, nc, B, nb);

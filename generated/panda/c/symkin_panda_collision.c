@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include "symkin_collide.h"
 
@@ -307,6 +308,10 @@ static const int pairs[600][2] = { { 0, 8 }, { 0, 9 }, { 0, 10 }, { 0, 11 }, { 0
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 43, 44, 45, 46, 47, 48, 49, 50, 51 };
 static const double bound_radius[N_LINKS] = { 0.14700877125495693, 0.17, 0.15776472678623427, 0.15570039966835872, 0.1450104159433875, 0.20357054015361234, 0.11012205669071391, 0.09274917217635377, 0.10708214556237387 };
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.095 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 } };
+static const double reach_radius[N_LINKS] = { 0.14700877125510498, 0.2650000000002661, 0.2327647267864681, 0.5572957412477672, 0.6122604159440009, 1.0938909366508482, 0.9465064460977214, 1.0799959345867152, 1.1892832815074645 };
 static const int link_start[N_LINKS + 1] = { 0, 3, 8, 12, 18, 22, 28, 31, 34, 43 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -767,10 +772,26 @@ static inline int sphere_hit(const double a[3], const double b[3], double rr)
     return dx * dx + dy * dy + dz * dz < rr;
 }
 
-/* whether the configuration of points X collides (environment first, then self pairs) */
-static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
-                    int nb)
+/* whether q is outside the joint limits (or NaN): only then can the self pairs proved apart within
+   them (symkin.geometry.clearance) meet */
+static int outside_limits(const double *q)
 {
+    if (!(q[0] >= -2.8973 && q[0] <= 2.8973)) return 1;
+    if (!(q[1] >= -1.7628 && q[1] <= 1.7628)) return 1;
+    if (!(q[2] >= -2.8973 && q[2] <= 2.8973)) return 1;
+    if (!(q[3] >= -3.0718 && q[3] <= -0.0698)) return 1;
+    if (!(q[4] >= -2.8973 && q[4] <= 2.8973)) return 1;
+    if (!(q[5] >= -0.0175 && q[5] <= 3.7525)) return 1;
+    if (!(q[6] >= -2.8973 && q[6] <= 2.8973)) return 1;
+    return 0;
+}
+
+/* whether the configuration of points X collides (environment first, then self pairs; the pairs
+   proved apart within the joint limits only when the configuration is outside them) */
+static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
+                    int nb, int outside)
+{
+    (void)outside;
     for (int o = 0; o < ns; ++o) {  /* obstacle spheres: each link's bound, then its shapes */
         const double *ob = S + 4 * o;
         const double ro = ob[3];
@@ -847,71 +868,8 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
                     if (overlaps(X, link_shapes[s], -1, kind + 2, ob)) return 1;
             }
     /* self pairs, by pairs of links */
-    if (skc_spheres_overlap(X[43], 0.14700877125495693, X[45], 0.15776472678623427)) {
-        if (sphere_hit(X[0], X[45], 0.06138735983945731)) {
-            if (sphere_hit(X[0], X[8], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[9], 0.027224999999999992)) return 1;
-            if (sphere_hit(X[0], X[10], 0.0256)) return 1;
-            if (sphere_hit(X[0], X[11], 0.024025)) return 1;
-        }
-        if (sphere_hit(X[1], X[45], 0.051876770768007945)) {
-            if (sphere_hit(X[1], X[8], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[1], X[9], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[1], X[10], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[1], X[11], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[2], X[45], 0.054179418035870286)) {
-            if (sphere_hit(X[2], X[8], 0.0225)) return 1;
-            if (sphere_hit(X[2], X[9], 0.0225)) return 1;
-            if (sphere_hit(X[2], X[10], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[2], X[11], 0.019600000000000003)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[43], 0.14700877125495693, X[46], 0.15570039966835872)) {
-        if (sphere_hit(X[0], X[46], 0.06036868639719121)) {
-            if (sphere_hit(X[0], X[12], 0.024025)) return 1;
-            if (sphere_hit(X[0], X[13], 0.024025)) return 1;
-            if (sphere_hit(X[0], X[14], 0.024025)) return 1;
-            if (sphere_hit(X[0], X[15], 0.024025)) return 1;
-            if (sphere_hit(X[0], X[16], 0.024025)) return 1;
-            if (sphere_hit(X[0], X[17], 0.024025)) return 1;
-        }
-        if (sphere_hit(X[1], X[46], 0.05094067041045686)) {
-            if (sphere_hit(X[1], X[12], 0.018225)) return 1;
-            if (sphere_hit(X[1], X[13], 0.018225)) return 1;
-            if (sphere_hit(X[1], X[14], 0.018225)) return 1;
-            if (sphere_hit(X[1], X[15], 0.018225)) return 1;
-            if (sphere_hit(X[1], X[16], 0.018225)) return 1;
-            if (sphere_hit(X[1], X[17], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[2], X[46], 0.05322267440714044)) {
-            if (sphere_hit(X[2], X[12], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[2], X[13], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[2], X[14], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[2], X[15], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[2], X[16], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[2], X[17], 0.019600000000000003)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[43], 0.14700877125495693, X[47], 0.1450104159433875)) {
-        if (sphere_hit(X[0], X[47], 0.055229895601884)) {
-            if (sphere_hit(X[0], X[18], 0.0256)) return 1;
-            if (sphere_hit(X[0], X[19], 0.0256)) return 1;
-            if (sphere_hit(X[0], X[20], 0.024025)) return 1;
-            if (sphere_hit(X[0], X[21], 0.024025)) return 1;
-        }
-        if (sphere_hit(X[1], X[47], 0.04622947896414851)) {
-            if (sphere_hit(X[1], X[18], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[1], X[19], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[1], X[20], 0.018225)) return 1;
-            if (sphere_hit(X[1], X[21], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[2], X[47], 0.048404583123582375)) {
-            if (sphere_hit(X[2], X[18], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[2], X[19], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[2], X[20], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[2], X[21], 0.019600000000000003)) return 1;
-        }
+        if (sphere_hit(X[1], X[21], 0.018225)) return 1;
     }
     if (skc_spheres_overlap(X[43], 0.14700877125495693, X[48], 0.20357054015361234)) {
         if (sphere_hit(X[0], X[48], 0.08618366204608371)) {
@@ -1006,78 +964,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             if (sphere_hit(X[2], X[40], 0.010000000000000002)) return 1;
             if (sphere_hit(X[2], X[41], 0.009025)) return 1;
             if (sphere_hit(X[2], X[42], 0.009025)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[44], 0.17, X[46], 0.15570039966835872)) {
-        if (sphere_hit(X[3], X[46], 0.05322267440714044)) {
-            if (sphere_hit(X[3], X[12], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[3], X[13], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[3], X[14], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[3], X[15], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[3], X[16], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[3], X[17], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[4], X[46], 0.05322267440714044)) {
-            if (sphere_hit(X[4], X[12], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[4], X[13], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[4], X[14], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[4], X[15], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[4], X[16], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[4], X[17], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[5], X[46], 0.05322267440714044)) {
-            if (sphere_hit(X[5], X[12], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[5], X[13], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[5], X[14], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[5], X[15], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[5], X[16], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[5], X[17], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[6], X[46], 0.05322267440714044)) {
-            if (sphere_hit(X[6], X[12], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[6], X[13], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[6], X[14], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[6], X[15], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[6], X[16], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[6], X[17], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[7], X[46], 0.05094067041045686)) {
-            if (sphere_hit(X[7], X[12], 0.018225)) return 1;
-            if (sphere_hit(X[7], X[13], 0.018225)) return 1;
-            if (sphere_hit(X[7], X[14], 0.018225)) return 1;
-            if (sphere_hit(X[7], X[15], 0.018225)) return 1;
-            if (sphere_hit(X[7], X[16], 0.018225)) return 1;
-            if (sphere_hit(X[7], X[17], 0.018225)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[44], 0.17, X[47], 0.1450104159433875)) {
-        if (sphere_hit(X[18], X[44], 0.05760000000000001)) {
-            if (sphere_hit(X[18], X[3], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[18], X[4], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[18], X[5], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[18], X[6], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[18], X[7], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[19], X[44], 0.05760000000000001)) {
-            if (sphere_hit(X[19], X[3], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[19], X[4], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[19], X[5], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[19], X[6], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[19], X[7], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[20], X[44], 0.05522500000000001)) {
-            if (sphere_hit(X[20], X[3], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[20], X[4], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[20], X[5], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[20], X[6], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[20], X[7], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[21], X[44], 0.05522500000000001)) {
-            if (sphere_hit(X[21], X[3], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[21], X[4], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[21], X[5], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[21], X[6], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[21], X[7], 0.018225)) return 1;
         }
     }
     if (skc_spheres_overlap(X[44], 0.17, X[48], 0.20357054015361234)) {
@@ -1225,85 +1111,20 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             if (sphere_hit(X[7], X[42], 0.008100000000000001)) return 1;
         }
     }
-    if (skc_spheres_overlap(X[45], 0.15776472678623427, X[47], 0.1450104159433875)) {
-        if (sphere_hit(X[8], X[47], 0.048404583123582375)) {
-            if (sphere_hit(X[8], X[18], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[8], X[19], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[8], X[20], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[8], X[21], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[9], X[47], 0.048404583123582375)) {
-            if (sphere_hit(X[9], X[18], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[9], X[19], 0.021025000000000005)) return 1;
-            if (sphere_hit(X[9], X[20], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[9], X[21], 0.019600000000000003)) return 1;
-        }
-        if (sphere_hit(X[10], X[47], 0.04622947896414851)) {
-            if (sphere_hit(X[10], X[18], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[10], X[19], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[10], X[20], 0.018225)) return 1;
-            if (sphere_hit(X[10], X[21], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[11], X[47], 0.04410437480471463)) {
-            if (sphere_hit(X[11], X[18], 0.018225)) return 1;
-            if (sphere_hit(X[11], X[19], 0.018225)) return 1;
-            if (sphere_hit(X[11], X[20], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[11], X[21], 0.016900000000000002)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[45], 0.15776472678623427, X[48], 0.20357054015361234)) {
-        if (sphere_hit(X[8], X[48], 0.07760154584147534)) {
-            if (sphere_hit(X[8], X[22], 0.015625)) return 1;
-            if (sphere_hit(X[8], X[23], 0.015625)) return 1;
-            if (sphere_hit(X[8], X[24], 0.015625)) return 1;
-            if (sphere_hit(X[8], X[25], 0.018225)) return 1;
-            if (sphere_hit(X[8], X[26], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[8], X[27], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[9], X[48], 0.07760154584147534)) {
-            if (sphere_hit(X[9], X[22], 0.015625)) return 1;
-            if (sphere_hit(X[9], X[23], 0.015625)) return 1;
-            if (sphere_hit(X[9], X[24], 0.015625)) return 1;
-            if (sphere_hit(X[9], X[25], 0.018225)) return 1;
-            if (sphere_hit(X[9], X[26], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[9], X[27], 0.018225)) return 1;
-        }
-        if (sphere_hit(X[10], X[48], 0.07484084043993924)) {
-            if (sphere_hit(X[10], X[22], 0.014400000000000003)) return 1;
-            if (sphere_hit(X[10], X[23], 0.014400000000000003)) return 1;
-            if (sphere_hit(X[10], X[24], 0.014400000000000003)) return 1;
-            if (sphere_hit(X[10], X[25], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[10], X[26], 0.018225)) return 1;
-            if (sphere_hit(X[10], X[27], 0.016900000000000002)) return 1;
-        }
-        if (sphere_hit(X[11], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[11], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[11], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[11], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[11], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[11], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[11], X[27], 0.015625)) return 1;
-        }
+        if (sphere_hit(X[8], X[24], 0.015625)) return 1;
+        if (sphere_hit(X[9], X[24], 0.015625)) return 1;
+        if (sphere_hit(X[10], X[23], 0.014400000000000003)) return 1;
+        if (sphere_hit(X[11], X[22], 0.013225)) return 1;
     }
     if (skc_spheres_overlap(X[45], 0.15776472678623427, X[49], 0.11012205669071391)) {
-        if (sphere_hit(X[28], X[45], 0.0496241235001456)) {
-            if (sphere_hit(X[28], X[8], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[28], X[9], 0.019600000000000003)) return 1;
-            if (sphere_hit(X[28], X[10], 0.018225)) return 1;
-            if (sphere_hit(X[28], X[11], 0.016900000000000002)) return 1;
-        }
-        if (sphere_hit(X[29], X[45], 0.04742147623228325)) {
-            if (sphere_hit(X[29], X[8], 0.018225)) return 1;
-            if (sphere_hit(X[29], X[9], 0.018225)) return 1;
-            if (sphere_hit(X[29], X[10], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[29], X[11], 0.015625)) return 1;
-        }
         if (sphere_hit(X[30], X[45], 0.04742147623228325)) {
             if (sphere_hit(X[30], X[8], 0.018225)) return 1;
             if (sphere_hit(X[30], X[9], 0.018225)) return 1;
             if (sphere_hit(X[30], X[10], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[30], X[11], 0.015625)) return 1;
         }
+        if (sphere_hit(X[8], X[29], 0.018225)) return 1;
+        if (sphere_hit(X[9], X[29], 0.018225)) return 1;
     }
     if (skc_spheres_overlap(X[45], 0.15776472678623427, X[50], 0.09274917217635377)) {
         if (sphere_hit(X[31], X[45], 0.04526882896442091)) {
@@ -1369,108 +1190,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             if (sphere_hit(X[11], X[40], 0.0081)) return 1;
             if (sphere_hit(X[11], X[41], 0.007225000000000001)) return 1;
             if (sphere_hit(X[11], X[42], 0.007225000000000001)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[46], 0.15570039966835872, X[48], 0.20357054015361234)) {
-        if (sphere_hit(X[12], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[12], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[12], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[12], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[12], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[12], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[12], X[27], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[13], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[13], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[13], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[13], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[13], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[13], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[13], X[27], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[14], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[14], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[14], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[14], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[14], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[14], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[14], X[27], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[15], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[15], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[15], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[15], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[15], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[15], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[15], X[27], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[16], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[16], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[16], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[16], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[16], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[16], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[16], X[27], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[17], X[48], 0.07213013503840311)) {
-            if (sphere_hit(X[17], X[22], 0.013225)) return 1;
-            if (sphere_hit(X[17], X[23], 0.013225)) return 1;
-            if (sphere_hit(X[17], X[24], 0.013225)) return 1;
-            if (sphere_hit(X[17], X[25], 0.015625)) return 1;
-            if (sphere_hit(X[17], X[26], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[17], X[27], 0.015625)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[46], 0.15570039966835872, X[49], 0.11012205669071391)) {
-        if (sphere_hit(X[28], X[46], 0.04870866641377328)) {
-            if (sphere_hit(X[28], X[12], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[28], X[13], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[28], X[14], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[28], X[15], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[28], X[16], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[28], X[17], 0.016900000000000002)) return 1;
-        }
-        if (sphere_hit(X[29], X[46], 0.046526662417089686)) {
-            if (sphere_hit(X[29], X[12], 0.015625)) return 1;
-            if (sphere_hit(X[29], X[13], 0.015625)) return 1;
-            if (sphere_hit(X[29], X[14], 0.015625)) return 1;
-            if (sphere_hit(X[29], X[15], 0.015625)) return 1;
-            if (sphere_hit(X[29], X[16], 0.015625)) return 1;
-            if (sphere_hit(X[29], X[17], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[30], X[46], 0.046526662417089686)) {
-            if (sphere_hit(X[30], X[12], 0.015625)) return 1;
-            if (sphere_hit(X[30], X[13], 0.015625)) return 1;
-            if (sphere_hit(X[30], X[14], 0.015625)) return 1;
-            if (sphere_hit(X[30], X[15], 0.015625)) return 1;
-            if (sphere_hit(X[30], X[16], 0.015625)) return 1;
-            if (sphere_hit(X[30], X[17], 0.015625)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[46], 0.15570039966835872, X[50], 0.09274917217635377)) {
-        if (sphere_hit(X[31], X[46], 0.044394658420406095)) {
-            if (sphere_hit(X[31], X[12], 0.0144)) return 1;
-            if (sphere_hit(X[31], X[13], 0.0144)) return 1;
-            if (sphere_hit(X[31], X[14], 0.0144)) return 1;
-            if (sphere_hit(X[31], X[15], 0.0144)) return 1;
-            if (sphere_hit(X[31], X[16], 0.0144)) return 1;
-            if (sphere_hit(X[31], X[17], 0.0144)) return 1;
-        }
-        if (sphere_hit(X[32], X[46], 0.044394658420406095)) {
-            if (sphere_hit(X[32], X[12], 0.0144)) return 1;
-            if (sphere_hit(X[32], X[13], 0.0144)) return 1;
-            if (sphere_hit(X[32], X[14], 0.0144)) return 1;
-            if (sphere_hit(X[32], X[15], 0.0144)) return 1;
-            if (sphere_hit(X[32], X[16], 0.0144)) return 1;
-            if (sphere_hit(X[32], X[17], 0.0144)) return 1;
-        }
-        if (sphere_hit(X[33], X[46], 0.03636664243367175)) {
-            if (sphere_hit(X[33], X[12], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[33], X[13], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[33], X[14], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[33], X[15], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[33], X[16], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[33], X[17], 0.010000000000000002)) return 1;
         }
     }
     if (skc_spheres_overlap(X[46], 0.15570039966835872, X[51], 0.10708214556237387)) {
@@ -1541,86 +1260,8 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             if (sphere_hit(X[17], X[42], 0.007225000000000001)) return 1;
         }
     }
-    if (skc_spheres_overlap(X[47], 0.1450104159433875, X[49], 0.11012205669071391)) {
-        if (sphere_hit(X[28], X[47], 0.04410437480471463)) {
-            if (sphere_hit(X[28], X[18], 0.018225)) return 1;
-            if (sphere_hit(X[28], X[19], 0.018225)) return 1;
-            if (sphere_hit(X[28], X[20], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[28], X[21], 0.016900000000000002)) return 1;
-        }
-        if (sphere_hit(X[29], X[47], 0.04202927064528075)) {
-            if (sphere_hit(X[29], X[18], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[29], X[19], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[29], X[20], 0.015625)) return 1;
-            if (sphere_hit(X[29], X[21], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[30], X[47], 0.04202927064528075)) {
-            if (sphere_hit(X[30], X[18], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[30], X[19], 0.016900000000000002)) return 1;
-            if (sphere_hit(X[30], X[20], 0.015625)) return 1;
-            if (sphere_hit(X[30], X[21], 0.015625)) return 1;
-        }
-    }
-    if (skc_spheres_overlap(X[47], 0.1450104159433875, X[50], 0.09274917217635377)) {
-        if (sphere_hit(X[31], X[47], 0.04000416648584688)) {
-            if (sphere_hit(X[31], X[18], 0.015625)) return 1;
-            if (sphere_hit(X[31], X[19], 0.015625)) return 1;
-            if (sphere_hit(X[31], X[20], 0.0144)) return 1;
-            if (sphere_hit(X[31], X[21], 0.0144)) return 1;
-        }
-        if (sphere_hit(X[32], X[47], 0.04000416648584688)) {
-            if (sphere_hit(X[32], X[18], 0.015625)) return 1;
-            if (sphere_hit(X[32], X[19], 0.015625)) return 1;
-            if (sphere_hit(X[32], X[20], 0.0144)) return 1;
-            if (sphere_hit(X[32], X[21], 0.0144)) return 1;
-        }
-        if (sphere_hit(X[33], X[47], 0.03240374984811138)) {
-            if (sphere_hit(X[33], X[18], 0.011025000000000002)) return 1;
-            if (sphere_hit(X[33], X[19], 0.011025000000000002)) return 1;
-            if (sphere_hit(X[33], X[20], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[33], X[21], 0.010000000000000002)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[47], 0.1450104159433875, X[51], 0.10708214556237387)) {
-        if (sphere_hit(X[18], X[51], 0.03135808627697378)) {
-            if (sphere_hit(X[18], X[34], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[18], X[35], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[18], X[36], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[18], X[37], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[18], X[38], 0.012100000000000003)) return 1;
-            if (sphere_hit(X[18], X[39], 0.009025)) return 1;
-            if (sphere_hit(X[18], X[40], 0.009025)) return 1;
-            if (sphere_hit(X[18], X[41], 0.008100000000000001)) return 1;
-            if (sphere_hit(X[18], X[42], 0.008100000000000001)) return 1;
-        }
-        if (sphere_hit(X[19], X[51], 0.03135808627697378)) {
-            if (sphere_hit(X[19], X[34], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[19], X[35], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[19], X[36], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[19], X[37], 0.010816000000000003)) return 1;
-            if (sphere_hit(X[19], X[38], 0.012100000000000003)) return 1;
-            if (sphere_hit(X[19], X[39], 0.009025)) return 1;
-            if (sphere_hit(X[19], X[40], 0.009025)) return 1;
-            if (sphere_hit(X[19], X[41], 0.008100000000000001)) return 1;
-            if (sphere_hit(X[19], X[42], 0.008100000000000001)) return 1;
-        }
-        if (sphere_hit(X[20], X[51], 0.029612264821350036)) {
-            if (sphere_hit(X[20], X[34], 0.009801)) return 1;
-            if (sphere_hit(X[20], X[35], 0.009801)) return 1;
-            if (sphere_hit(X[20], X[36], 0.009801)) return 1;
-            if (sphere_hit(X[20], X[37], 0.009801)) return 1;
-            if (sphere_hit(X[20], X[38], 0.011025000000000002)) return 1;
-            if (sphere_hit(X[20], X[39], 0.0081)) return 1;
-            if (sphere_hit(X[20], X[40], 0.0081)) return 1;
-            if (sphere_hit(X[20], X[41], 0.007225000000000001)) return 1;
-            if (sphere_hit(X[20], X[42], 0.007225000000000001)) return 1;
-        }
         if (sphere_hit(X[21], X[51], 0.029612264821350036)) {
-            if (sphere_hit(X[21], X[34], 0.009801)) return 1;
-            if (sphere_hit(X[21], X[35], 0.009801)) return 1;
-            if (sphere_hit(X[21], X[36], 0.009801)) return 1;
-            if (sphere_hit(X[21], X[37], 0.009801)) return 1;
-            if (sphere_hit(X[21], X[38], 0.011025000000000002)) return 1;
             if (sphere_hit(X[21], X[39], 0.0081)) return 1;
             if (sphere_hit(X[21], X[40], 0.0081)) return 1;
             if (sphere_hit(X[21], X[41], 0.007225000000000001)) return 1;
@@ -1628,71 +1269,467 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         }
     }
     if (skc_spheres_overlap(X[48], 0.20357054015361234, X[51], 0.10708214556237387)) {
-        if (sphere_hit(X[22], X[51], 0.024674800454478816)) {
-            if (sphere_hit(X[22], X[34], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[22], X[35], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[22], X[36], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[22], X[37], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[22], X[38], 0.0081)) return 1;
-            if (sphere_hit(X[22], X[39], 0.0056250000000000015)) return 1;
-            if (sphere_hit(X[22], X[40], 0.0056250000000000015)) return 1;
-            if (sphere_hit(X[22], X[41], 0.004900000000000001)) return 1;
-            if (sphere_hit(X[22], X[42], 0.004900000000000001)) return 1;
+        if (sphere_hit(X[34], X[48], 0.056439761548879135)) {
+            if (sphere_hit(X[34], X[23], 0.007056000000000001)) return 1;
+            if (sphere_hit(X[34], X[24], 0.007056000000000001)) return 1;
+            if (sphere_hit(X[34], X[25], 0.008836)) return 1;
         }
-        if (sphere_hit(X[23], X[51], 0.024674800454478816)) {
-            if (sphere_hit(X[23], X[34], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[23], X[35], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[23], X[36], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[23], X[37], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[23], X[38], 0.0081)) return 1;
-            if (sphere_hit(X[23], X[39], 0.0056250000000000015)) return 1;
-            if (sphere_hit(X[23], X[40], 0.0056250000000000015)) return 1;
-            if (sphere_hit(X[23], X[41], 0.004900000000000001)) return 1;
-            if (sphere_hit(X[23], X[42], 0.004900000000000001)) return 1;
+        if (sphere_hit(X[37], X[48], 0.056439761548879135)) {
+            if (sphere_hit(X[37], X[23], 0.007056000000000001)) return 1;
+            if (sphere_hit(X[37], X[24], 0.007056000000000001)) return 1;
+            if (sphere_hit(X[37], X[25], 0.008836)) return 1;
         }
-        if (sphere_hit(X[24], X[51], 0.024674800454478816)) {
-            if (sphere_hit(X[24], X[34], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[24], X[35], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[24], X[36], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[24], X[37], 0.007056000000000001)) return 1;
-            if (sphere_hit(X[24], X[38], 0.0081)) return 1;
-            if (sphere_hit(X[24], X[39], 0.0056250000000000015)) return 1;
-            if (sphere_hit(X[24], X[40], 0.0056250000000000015)) return 1;
-            if (sphere_hit(X[24], X[41], 0.004900000000000001)) return 1;
-            if (sphere_hit(X[24], X[42], 0.004900000000000001)) return 1;
+        if (sphere_hit(X[27], X[38], 0.010000000000000002)) return 1;
+    }
+    if (outside) {
+        if (skc_spheres_overlap(X[43], 0.14700877125495693, X[45], 0.15776472678623427)) {
+            if (sphere_hit(X[0], X[45], 0.06138735983945731)) {
+                if (sphere_hit(X[0], X[8], 0.027224999999999992)) return 1;
+                if (sphere_hit(X[0], X[9], 0.027224999999999992)) return 1;
+                if (sphere_hit(X[0], X[10], 0.0256)) return 1;
+                if (sphere_hit(X[0], X[11], 0.024025)) return 1;
+            }
+            if (sphere_hit(X[1], X[45], 0.051876770768007945)) {
+                if (sphere_hit(X[1], X[8], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[1], X[9], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[1], X[10], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[1], X[11], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[2], X[45], 0.054179418035870286)) {
+                if (sphere_hit(X[2], X[8], 0.0225)) return 1;
+                if (sphere_hit(X[2], X[9], 0.0225)) return 1;
+                if (sphere_hit(X[2], X[10], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[2], X[11], 0.019600000000000003)) return 1;
+            }
         }
-        if (sphere_hit(X[25], X[51], 0.027916443365726296)) {
-            if (sphere_hit(X[25], X[34], 0.008836)) return 1;
-            if (sphere_hit(X[25], X[35], 0.008836)) return 1;
-            if (sphere_hit(X[25], X[36], 0.008836)) return 1;
-            if (sphere_hit(X[25], X[37], 0.008836)) return 1;
-            if (sphere_hit(X[25], X[38], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[25], X[39], 0.007224999999999999)) return 1;
-            if (sphere_hit(X[25], X[40], 0.007224999999999999)) return 1;
-            if (sphere_hit(X[25], X[41], 0.0064)) return 1;
-            if (sphere_hit(X[25], X[42], 0.0064)) return 1;
+        if (skc_spheres_overlap(X[43], 0.14700877125495693, X[46], 0.15570039966835872)) {
+            if (sphere_hit(X[0], X[46], 0.06036868639719121)) {
+                if (sphere_hit(X[0], X[12], 0.024025)) return 1;
+                if (sphere_hit(X[0], X[13], 0.024025)) return 1;
+                if (sphere_hit(X[0], X[14], 0.024025)) return 1;
+                if (sphere_hit(X[0], X[15], 0.024025)) return 1;
+                if (sphere_hit(X[0], X[16], 0.024025)) return 1;
+                if (sphere_hit(X[0], X[17], 0.024025)) return 1;
+            }
+            if (sphere_hit(X[1], X[46], 0.05094067041045686)) {
+                if (sphere_hit(X[1], X[12], 0.018225)) return 1;
+                if (sphere_hit(X[1], X[13], 0.018225)) return 1;
+                if (sphere_hit(X[1], X[14], 0.018225)) return 1;
+                if (sphere_hit(X[1], X[15], 0.018225)) return 1;
+                if (sphere_hit(X[1], X[16], 0.018225)) return 1;
+                if (sphere_hit(X[1], X[17], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[2], X[46], 0.05322267440714044)) {
+                if (sphere_hit(X[2], X[12], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[2], X[13], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[2], X[14], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[2], X[15], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[2], X[16], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[2], X[17], 0.019600000000000003)) return 1;
+            }
         }
-        if (sphere_hit(X[26], X[51], 0.029612264821350036)) {
-            if (sphere_hit(X[26], X[34], 0.009801)) return 1;
-            if (sphere_hit(X[26], X[35], 0.009801)) return 1;
-            if (sphere_hit(X[26], X[36], 0.009801)) return 1;
-            if (sphere_hit(X[26], X[37], 0.009801)) return 1;
-            if (sphere_hit(X[26], X[38], 0.011025000000000002)) return 1;
-            if (sphere_hit(X[26], X[39], 0.0081)) return 1;
-            if (sphere_hit(X[26], X[40], 0.0081)) return 1;
-            if (sphere_hit(X[26], X[41], 0.007225000000000001)) return 1;
-            if (sphere_hit(X[26], X[42], 0.007225000000000001)) return 1;
+        if (skc_spheres_overlap(X[43], 0.14700877125495693, X[47], 0.1450104159433875)) {
+            if (sphere_hit(X[0], X[47], 0.055229895601884)) {
+                if (sphere_hit(X[0], X[18], 0.0256)) return 1;
+                if (sphere_hit(X[0], X[19], 0.0256)) return 1;
+                if (sphere_hit(X[0], X[20], 0.024025)) return 1;
+                if (sphere_hit(X[0], X[21], 0.024025)) return 1;
+            }
+            if (sphere_hit(X[1], X[47], 0.04622947896414851)) {
+                if (sphere_hit(X[1], X[18], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[1], X[19], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[1], X[20], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[2], X[47], 0.048404583123582375)) {
+                if (sphere_hit(X[2], X[18], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[2], X[19], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[2], X[20], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[2], X[21], 0.019600000000000003)) return 1;
+            }
         }
-        if (sphere_hit(X[27], X[51], 0.027916443365726296)) {
-            if (sphere_hit(X[27], X[34], 0.008836)) return 1;
-            if (sphere_hit(X[27], X[35], 0.008836)) return 1;
-            if (sphere_hit(X[27], X[36], 0.008836)) return 1;
-            if (sphere_hit(X[27], X[37], 0.008836)) return 1;
-            if (sphere_hit(X[27], X[38], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[27], X[39], 0.007224999999999999)) return 1;
-            if (sphere_hit(X[27], X[40], 0.007224999999999999)) return 1;
-            if (sphere_hit(X[27], X[41], 0.0064)) return 1;
-            if (sphere_hit(X[27], X[42], 0.0064)) return 1;
+        if (skc_spheres_overlap(X[44], 0.17, X[46], 0.15570039966835872)) {
+            if (sphere_hit(X[3], X[46], 0.05322267440714044)) {
+                if (sphere_hit(X[3], X[12], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[3], X[13], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[3], X[14], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[3], X[15], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[3], X[16], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[3], X[17], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[4], X[46], 0.05322267440714044)) {
+                if (sphere_hit(X[4], X[12], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[4], X[13], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[4], X[14], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[4], X[15], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[4], X[16], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[4], X[17], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[5], X[46], 0.05322267440714044)) {
+                if (sphere_hit(X[5], X[12], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[5], X[13], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[5], X[14], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[5], X[15], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[5], X[16], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[5], X[17], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[6], X[46], 0.05322267440714044)) {
+                if (sphere_hit(X[6], X[12], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[6], X[13], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[6], X[14], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[6], X[15], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[6], X[16], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[6], X[17], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[7], X[46], 0.05094067041045686)) {
+                if (sphere_hit(X[7], X[12], 0.018225)) return 1;
+                if (sphere_hit(X[7], X[13], 0.018225)) return 1;
+                if (sphere_hit(X[7], X[14], 0.018225)) return 1;
+                if (sphere_hit(X[7], X[15], 0.018225)) return 1;
+                if (sphere_hit(X[7], X[16], 0.018225)) return 1;
+                if (sphere_hit(X[7], X[17], 0.018225)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[44], 0.17, X[47], 0.1450104159433875)) {
+            if (sphere_hit(X[18], X[44], 0.05760000000000001)) {
+                if (sphere_hit(X[18], X[3], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[18], X[4], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[18], X[5], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[18], X[6], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[18], X[7], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[19], X[44], 0.05760000000000001)) {
+                if (sphere_hit(X[19], X[3], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[19], X[4], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[19], X[5], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[19], X[6], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[19], X[7], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[20], X[44], 0.05522500000000001)) {
+                if (sphere_hit(X[20], X[3], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[20], X[4], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[20], X[5], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[20], X[6], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[20], X[7], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[21], X[44], 0.05522500000000001)) {
+                if (sphere_hit(X[21], X[3], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[21], X[4], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[21], X[5], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[21], X[6], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[21], X[7], 0.018225)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[45], 0.15776472678623427, X[47], 0.1450104159433875)) {
+            if (sphere_hit(X[8], X[47], 0.048404583123582375)) {
+                if (sphere_hit(X[8], X[18], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[8], X[19], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[8], X[20], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[8], X[21], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[9], X[47], 0.048404583123582375)) {
+                if (sphere_hit(X[9], X[18], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[9], X[19], 0.021025000000000005)) return 1;
+                if (sphere_hit(X[9], X[20], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[9], X[21], 0.019600000000000003)) return 1;
+            }
+            if (sphere_hit(X[10], X[47], 0.04622947896414851)) {
+                if (sphere_hit(X[10], X[18], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[10], X[19], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[10], X[20], 0.018225)) return 1;
+                if (sphere_hit(X[10], X[21], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[11], X[47], 0.04410437480471463)) {
+                if (sphere_hit(X[11], X[18], 0.018225)) return 1;
+                if (sphere_hit(X[11], X[19], 0.018225)) return 1;
+                if (sphere_hit(X[11], X[20], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[11], X[21], 0.016900000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[45], 0.15776472678623427, X[48], 0.20357054015361234)) {
+            if (sphere_hit(X[8], X[48], 0.07760154584147534)) {
+                if (sphere_hit(X[8], X[22], 0.015625)) return 1;
+                if (sphere_hit(X[8], X[23], 0.015625)) return 1;
+                if (sphere_hit(X[8], X[25], 0.018225)) return 1;
+                if (sphere_hit(X[8], X[26], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[8], X[27], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[9], X[48], 0.07760154584147534)) {
+                if (sphere_hit(X[9], X[22], 0.015625)) return 1;
+                if (sphere_hit(X[9], X[23], 0.015625)) return 1;
+                if (sphere_hit(X[9], X[25], 0.018225)) return 1;
+                if (sphere_hit(X[9], X[26], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[9], X[27], 0.018225)) return 1;
+            }
+            if (sphere_hit(X[10], X[48], 0.07484084043993924)) {
+                if (sphere_hit(X[10], X[22], 0.014400000000000003)) return 1;
+                if (sphere_hit(X[10], X[24], 0.014400000000000003)) return 1;
+                if (sphere_hit(X[10], X[25], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[10], X[26], 0.018225)) return 1;
+                if (sphere_hit(X[10], X[27], 0.016900000000000002)) return 1;
+            }
+            if (sphere_hit(X[11], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[11], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[11], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[11], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[11], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[11], X[27], 0.015625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[45], 0.15776472678623427, X[49], 0.11012205669071391)) {
+            if (sphere_hit(X[28], X[45], 0.0496241235001456)) {
+                if (sphere_hit(X[28], X[8], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[28], X[9], 0.019600000000000003)) return 1;
+                if (sphere_hit(X[28], X[10], 0.018225)) return 1;
+                if (sphere_hit(X[28], X[11], 0.016900000000000002)) return 1;
+            }
+            if (sphere_hit(X[10], X[29], 0.016900000000000002)) return 1;
+            if (sphere_hit(X[11], X[29], 0.015625)) return 1;
+            if (sphere_hit(X[11], X[30], 0.015625)) return 1;
+        }
+        if (skc_spheres_overlap(X[46], 0.15570039966835872, X[48], 0.20357054015361234)) {
+            if (sphere_hit(X[12], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[12], X[22], 0.013225)) return 1;
+                if (sphere_hit(X[12], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[12], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[12], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[12], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[12], X[27], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[13], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[13], X[22], 0.013225)) return 1;
+                if (sphere_hit(X[13], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[13], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[13], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[13], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[13], X[27], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[14], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[14], X[22], 0.013225)) return 1;
+                if (sphere_hit(X[14], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[14], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[14], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[14], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[14], X[27], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[15], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[15], X[22], 0.013225)) return 1;
+                if (sphere_hit(X[15], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[15], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[15], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[15], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[15], X[27], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[16], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[16], X[22], 0.013225)) return 1;
+                if (sphere_hit(X[16], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[16], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[16], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[16], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[16], X[27], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[17], X[48], 0.07213013503840311)) {
+                if (sphere_hit(X[17], X[22], 0.013225)) return 1;
+                if (sphere_hit(X[17], X[23], 0.013225)) return 1;
+                if (sphere_hit(X[17], X[24], 0.013225)) return 1;
+                if (sphere_hit(X[17], X[25], 0.015625)) return 1;
+                if (sphere_hit(X[17], X[26], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[17], X[27], 0.015625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[46], 0.15570039966835872, X[49], 0.11012205669071391)) {
+            if (sphere_hit(X[28], X[46], 0.04870866641377328)) {
+                if (sphere_hit(X[28], X[12], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[28], X[13], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[28], X[14], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[28], X[15], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[28], X[16], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[28], X[17], 0.016900000000000002)) return 1;
+            }
+            if (sphere_hit(X[29], X[46], 0.046526662417089686)) {
+                if (sphere_hit(X[29], X[12], 0.015625)) return 1;
+                if (sphere_hit(X[29], X[13], 0.015625)) return 1;
+                if (sphere_hit(X[29], X[14], 0.015625)) return 1;
+                if (sphere_hit(X[29], X[15], 0.015625)) return 1;
+                if (sphere_hit(X[29], X[16], 0.015625)) return 1;
+                if (sphere_hit(X[29], X[17], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[30], X[46], 0.046526662417089686)) {
+                if (sphere_hit(X[30], X[12], 0.015625)) return 1;
+                if (sphere_hit(X[30], X[13], 0.015625)) return 1;
+                if (sphere_hit(X[30], X[14], 0.015625)) return 1;
+                if (sphere_hit(X[30], X[15], 0.015625)) return 1;
+                if (sphere_hit(X[30], X[16], 0.015625)) return 1;
+                if (sphere_hit(X[30], X[17], 0.015625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[46], 0.15570039966835872, X[50], 0.09274917217635377)) {
+            if (sphere_hit(X[31], X[46], 0.044394658420406095)) {
+                if (sphere_hit(X[31], X[12], 0.0144)) return 1;
+                if (sphere_hit(X[31], X[13], 0.0144)) return 1;
+                if (sphere_hit(X[31], X[14], 0.0144)) return 1;
+                if (sphere_hit(X[31], X[15], 0.0144)) return 1;
+                if (sphere_hit(X[31], X[16], 0.0144)) return 1;
+                if (sphere_hit(X[31], X[17], 0.0144)) return 1;
+            }
+            if (sphere_hit(X[32], X[46], 0.044394658420406095)) {
+                if (sphere_hit(X[32], X[12], 0.0144)) return 1;
+                if (sphere_hit(X[32], X[13], 0.0144)) return 1;
+                if (sphere_hit(X[32], X[14], 0.0144)) return 1;
+                if (sphere_hit(X[32], X[15], 0.0144)) return 1;
+                if (sphere_hit(X[32], X[16], 0.0144)) return 1;
+                if (sphere_hit(X[32], X[17], 0.0144)) return 1;
+            }
+            if (sphere_hit(X[33], X[46], 0.03636664243367175)) {
+                if (sphere_hit(X[33], X[12], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[33], X[13], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[33], X[14], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[33], X[15], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[33], X[16], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[33], X[17], 0.010000000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[47], 0.1450104159433875, X[49], 0.11012205669071391)) {
+            if (sphere_hit(X[28], X[47], 0.04410437480471463)) {
+                if (sphere_hit(X[28], X[18], 0.018225)) return 1;
+                if (sphere_hit(X[28], X[19], 0.018225)) return 1;
+                if (sphere_hit(X[28], X[20], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[28], X[21], 0.016900000000000002)) return 1;
+            }
+            if (sphere_hit(X[29], X[47], 0.04202927064528075)) {
+                if (sphere_hit(X[29], X[18], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[29], X[19], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[29], X[20], 0.015625)) return 1;
+                if (sphere_hit(X[29], X[21], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[30], X[47], 0.04202927064528075)) {
+                if (sphere_hit(X[30], X[18], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[30], X[19], 0.016900000000000002)) return 1;
+                if (sphere_hit(X[30], X[20], 0.015625)) return 1;
+                if (sphere_hit(X[30], X[21], 0.015625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[47], 0.1450104159433875, X[50], 0.09274917217635377)) {
+            if (sphere_hit(X[31], X[47], 0.04000416648584688)) {
+                if (sphere_hit(X[31], X[18], 0.015625)) return 1;
+                if (sphere_hit(X[31], X[19], 0.015625)) return 1;
+                if (sphere_hit(X[31], X[20], 0.0144)) return 1;
+                if (sphere_hit(X[31], X[21], 0.0144)) return 1;
+            }
+            if (sphere_hit(X[32], X[47], 0.04000416648584688)) {
+                if (sphere_hit(X[32], X[18], 0.015625)) return 1;
+                if (sphere_hit(X[32], X[19], 0.015625)) return 1;
+                if (sphere_hit(X[32], X[20], 0.0144)) return 1;
+                if (sphere_hit(X[32], X[21], 0.0144)) return 1;
+            }
+            if (sphere_hit(X[33], X[47], 0.03240374984811138)) {
+                if (sphere_hit(X[33], X[18], 0.011025000000000002)) return 1;
+                if (sphere_hit(X[33], X[19], 0.011025000000000002)) return 1;
+                if (sphere_hit(X[33], X[20], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[33], X[21], 0.010000000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[47], 0.1450104159433875, X[51], 0.10708214556237387)) {
+            if (sphere_hit(X[18], X[51], 0.03135808627697378)) {
+                if (sphere_hit(X[18], X[34], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[18], X[35], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[18], X[36], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[18], X[37], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[18], X[38], 0.012100000000000003)) return 1;
+                if (sphere_hit(X[18], X[39], 0.009025)) return 1;
+                if (sphere_hit(X[18], X[40], 0.009025)) return 1;
+                if (sphere_hit(X[18], X[41], 0.008100000000000001)) return 1;
+                if (sphere_hit(X[18], X[42], 0.008100000000000001)) return 1;
+            }
+            if (sphere_hit(X[19], X[51], 0.03135808627697378)) {
+                if (sphere_hit(X[19], X[34], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[19], X[35], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[19], X[36], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[19], X[37], 0.010816000000000003)) return 1;
+                if (sphere_hit(X[19], X[38], 0.012100000000000003)) return 1;
+                if (sphere_hit(X[19], X[39], 0.009025)) return 1;
+                if (sphere_hit(X[19], X[40], 0.009025)) return 1;
+                if (sphere_hit(X[19], X[41], 0.008100000000000001)) return 1;
+                if (sphere_hit(X[19], X[42], 0.008100000000000001)) return 1;
+            }
+            if (sphere_hit(X[20], X[51], 0.029612264821350036)) {
+                if (sphere_hit(X[20], X[34], 0.009801)) return 1;
+                if (sphere_hit(X[20], X[35], 0.009801)) return 1;
+                if (sphere_hit(X[20], X[36], 0.009801)) return 1;
+                if (sphere_hit(X[20], X[37], 0.009801)) return 1;
+                if (sphere_hit(X[20], X[38], 0.011025000000000002)) return 1;
+                if (sphere_hit(X[20], X[39], 0.0081)) return 1;
+                if (sphere_hit(X[20], X[40], 0.0081)) return 1;
+                if (sphere_hit(X[20], X[41], 0.007225000000000001)) return 1;
+                if (sphere_hit(X[20], X[42], 0.007225000000000001)) return 1;
+            }
+            if (sphere_hit(X[21], X[51], 0.029612264821350036)) {
+                if (sphere_hit(X[21], X[34], 0.009801)) return 1;
+                if (sphere_hit(X[21], X[35], 0.009801)) return 1;
+                if (sphere_hit(X[21], X[36], 0.009801)) return 1;
+                if (sphere_hit(X[21], X[37], 0.009801)) return 1;
+                if (sphere_hit(X[21], X[38], 0.011025000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[48], 0.20357054015361234, X[51], 0.10708214556237387)) {
+            if (sphere_hit(X[22], X[51], 0.024674800454478816)) {
+                if (sphere_hit(X[22], X[34], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[22], X[35], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[22], X[36], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[22], X[37], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[22], X[38], 0.0081)) return 1;
+                if (sphere_hit(X[22], X[39], 0.0056250000000000015)) return 1;
+                if (sphere_hit(X[22], X[40], 0.0056250000000000015)) return 1;
+                if (sphere_hit(X[22], X[41], 0.004900000000000001)) return 1;
+                if (sphere_hit(X[22], X[42], 0.004900000000000001)) return 1;
+            }
+            if (sphere_hit(X[23], X[51], 0.024674800454478816)) {
+                if (sphere_hit(X[23], X[35], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[23], X[36], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[23], X[38], 0.0081)) return 1;
+                if (sphere_hit(X[23], X[39], 0.0056250000000000015)) return 1;
+                if (sphere_hit(X[23], X[40], 0.0056250000000000015)) return 1;
+                if (sphere_hit(X[23], X[41], 0.004900000000000001)) return 1;
+                if (sphere_hit(X[23], X[42], 0.004900000000000001)) return 1;
+            }
+            if (sphere_hit(X[24], X[51], 0.024674800454478816)) {
+                if (sphere_hit(X[24], X[35], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[24], X[36], 0.007056000000000001)) return 1;
+                if (sphere_hit(X[24], X[38], 0.0081)) return 1;
+                if (sphere_hit(X[24], X[39], 0.0056250000000000015)) return 1;
+                if (sphere_hit(X[24], X[40], 0.0056250000000000015)) return 1;
+                if (sphere_hit(X[24], X[41], 0.004900000000000001)) return 1;
+                if (sphere_hit(X[24], X[42], 0.004900000000000001)) return 1;
+            }
+            if (sphere_hit(X[25], X[51], 0.027916443365726296)) {
+                if (sphere_hit(X[25], X[35], 0.008836)) return 1;
+                if (sphere_hit(X[25], X[36], 0.008836)) return 1;
+                if (sphere_hit(X[25], X[38], 0.010000000000000002)) return 1;
+                if (sphere_hit(X[25], X[39], 0.007224999999999999)) return 1;
+                if (sphere_hit(X[25], X[40], 0.007224999999999999)) return 1;
+                if (sphere_hit(X[25], X[41], 0.0064)) return 1;
+                if (sphere_hit(X[25], X[42], 0.0064)) return 1;
+            }
+            if (sphere_hit(X[26], X[51], 0.029612264821350036)) {
+                if (sphere_hit(X[26], X[34], 0.009801)) return 1;
+                if (sphere_hit(X[26], X[35], 0.009801)) return 1;
+                if (sphere_hit(X[26], X[36], 0.009801)) return 1;
+                if (sphere_hit(X[26], X[37], 0.009801)) return 1;
+                if (sphere_hit(X[26], X[38], 0.011025000000000002)) return 1;
+                if (sphere_hit(X[26], X[39], 0.0081)) return 1;
+                if (sphere_hit(X[26], X[40], 0.0081)) return 1;
+                if (sphere_hit(X[26], X[41], 0.007225000000000001)) return 1;
+                if (sphere_hit(X[26], X[42], 0.007225000000000001)) return 1;
+            }
+            if (sphere_hit(X[27], X[51], 0.027916443365726296)) {
+                if (sphere_hit(X[27], X[34], 0.008836)) return 1;
+                if (sphere_hit(X[27], X[35], 0.008836)) return 1;
+                if (sphere_hit(X[27], X[36], 0.008836)) return 1;
+                if (sphere_hit(X[27], X[37], 0.008836)) return 1;
+                if (sphere_hit(X[27], X[39], 0.007224999999999999)) return 1;
+                if (sphere_hit(X[27], X[40], 0.007224999999999999)) return 1;
+                if (sphere_hit(X[27], X[41], 0.0064)) return 1;
+                if (sphere_hit(X[27], X[42], 0.0064)) return 1;
+            }
         }
     }
     return 0;
@@ -1703,7 +1740,7 @@ int skcoll_in_collision(const double *q, const double *S, int ns, const double *
     double T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     fk(q, T, PJ);
     points_of(T, PJ, X);
-    return collides(X, S, ns, C, nc, B, nb);
+    return collides(X, S, ns, C, nc, B, nb, outside_limits(q));
 }
 
 /* skcoll_in_collision with the obstacles packed as {spheres, ns, capsules, nc, boxes, nb} (addresses
@@ -1988,14 +2025,42 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[51][1] = -0.049 * PJ[6][6] + T[7][7];
     X[51][2] = -0.049 * PJ[6][10] + T[7][11];
 }
-/* verdicts of four configurations (rows of Q) */
-static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, unsigned char *out)
+/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
+   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
+   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
 {
+    int t = 0;
+    for (int l = 0; l < N_LINKS; ++l) {
+        start[l] = t;
+        for (int o = 0; o < ns; ++o) {
+            const double *ob = S + 4 * o;
+            const double dx = ob[0] - reach_centre[l][0], dy = ob[1] - reach_centre[l][1],
+                         dz = ob[2] - reach_centre[l][2], rr = reach_radius[l] + ob[3];
+            if (reach_radius[l] < 0.0 || !(dx * dx + dy * dy + dz * dz > rr * rr * (1.0 + 1e-9))) idx[t++] = o;
+        }
+    }
+    start[N_LINKS] = t;
+}
+
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
+                          int nb, const int *idx, const int *start, unsigned char *out)
+{
+    (void)idx; (void)start;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
+    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
+       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
     m4 far = {0, 0, 0, 0};
+    far |= ~((qv[0] >= -2.8973) & (qv[0] <= 2.8973));
+    far |= ~((qv[1] >= -1.7628) & (qv[1] <= 1.7628));
+    far |= ~((qv[2] >= -2.8973) & (qv[2] <= 2.8973));
+    far |= ~((qv[3] >= -3.0718) & (qv[3] <= -0.0698));
+    far |= ~((qv[4] >= -2.8973) & (qv[4] <= 2.8973));
+    far |= ~((qv[5] >= -0.0175) & (qv[5] <= 3.7525));
+    far |= ~((qv[6] >= -2.8973) & (qv[6] <= 2.8973));
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -2005,8 +2070,8 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        for (int o = 0; o < ns && !skv_all_(hit); ++o) {
-            const double *ob = S + 4 * o;
+        for (int t = start[0]; t < start[1]; ++t) {
+            const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
             need = ~hit & hit_obstacle(X[43], 0.14700877125495693, ob, ro);
             if (skv_any_(need)) {
@@ -2014,6 +2079,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[1], 0.07, ob, ro);
                 hit |= need & hit_obstacle(X[2], 0.075, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[1]; t < start[2]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[44], 0.17, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[3], 0.075, ob, ro);
@@ -2022,6 +2092,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[6], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[7], 0.07, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[2]; t < start[3]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[45], 0.15776472678623427, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[8], 0.075, ob, ro);
@@ -2029,6 +2104,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[10], 0.07, ob, ro);
                 hit |= need & hit_obstacle(X[11], 0.065, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[3]; t < start[4]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[46], 0.15570039966835872, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[12], 0.065, ob, ro);
@@ -2038,6 +2118,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[16], 0.065, ob, ro);
                 hit |= need & hit_obstacle(X[17], 0.065, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[4]; t < start[5]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[47], 0.1450104159433875, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[18], 0.07, ob, ro);
@@ -2045,6 +2130,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[20], 0.065, ob, ro);
                 hit |= need & hit_obstacle(X[21], 0.065, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[5]; t < start[6]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[48], 0.20357054015361234, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[22], 0.05, ob, ro);
@@ -2054,18 +2144,33 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[26], 0.065, ob, ro);
                 hit |= need & hit_obstacle(X[27], 0.06, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[6]; t < start[7]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[49], 0.11012205669071391, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[28], 0.065, ob, ro);
                 hit |= need & hit_obstacle(X[29], 0.06, ob, ro);
                 hit |= need & hit_obstacle(X[30], 0.06, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[7]; t < start[8]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[50], 0.09274917217635377, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[31], 0.055, ob, ro);
                 hit |= need & hit_obstacle(X[32], 0.055, ob, ro);
                 hit |= need & hit_obstacle(X[33], 0.035, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[8]; t < start[9]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[51], 0.10708214556237387, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[34], 0.034, ob, ro);
@@ -2081,85 +2186,9 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         if (skv_all_(hit)) goto done;
         /* self pairs, by pairs of links */
-        need = ~hit & hit2(X[43], X[45], 0.09288688510826397);
-        if (skv_any_(need)) {
-            near = need & hit2(X[0], X[45], 0.06138735983945731);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[8], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[9], 0.027224999999999992);
-                hit |= near & hit2(X[0], X[10], 0.0256);
-                hit |= near & hit2(X[0], X[11], 0.024025);
-            }
-            near = need & hit2(X[1], X[45], 0.051876770768007945);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[8], 0.021025000000000005);
-                hit |= near & hit2(X[1], X[9], 0.021025000000000005);
-                hit |= near & hit2(X[1], X[10], 0.019600000000000003);
-                hit |= near & hit2(X[1], X[11], 0.018225);
-            }
-            near = need & hit2(X[2], X[45], 0.054179418035870286);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[8], 0.0225);
-                hit |= near & hit2(X[2], X[9], 0.0225);
-                hit |= near & hit2(X[2], X[10], 0.021025000000000005);
-                hit |= near & hit2(X[2], X[11], 0.019600000000000003);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[43], X[46], 0.09163284216108111);
-        if (skv_any_(need)) {
-            near = need & hit2(X[0], X[46], 0.06036868639719121);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[12], 0.024025);
-                hit |= near & hit2(X[0], X[13], 0.024025);
-                hit |= near & hit2(X[0], X[14], 0.024025);
-                hit |= near & hit2(X[0], X[15], 0.024025);
-                hit |= near & hit2(X[0], X[16], 0.024025);
-                hit |= near & hit2(X[0], X[17], 0.024025);
-            }
-            near = need & hit2(X[1], X[46], 0.05094067041045686);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[12], 0.018225);
-                hit |= near & hit2(X[1], X[13], 0.018225);
-                hit |= near & hit2(X[1], X[14], 0.018225);
-                hit |= near & hit2(X[1], X[15], 0.018225);
-                hit |= near & hit2(X[1], X[16], 0.018225);
-                hit |= near & hit2(X[1], X[17], 0.018225);
-            }
-            near = need & hit2(X[2], X[46], 0.05322267440714044);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[12], 0.019600000000000003);
-                hit |= near & hit2(X[2], X[13], 0.019600000000000003);
-                hit |= near & hit2(X[2], X[14], 0.019600000000000003);
-                hit |= near & hit2(X[2], X[15], 0.019600000000000003);
-                hit |= near & hit2(X[2], X[16], 0.019600000000000003);
-                hit |= near & hit2(X[2], X[17], 0.019600000000000003);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[43], X[47], 0.08527520569198171);
         if (skv_any_(need)) {
-            near = need & hit2(X[0], X[47], 0.055229895601884);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[18], 0.0256);
-                hit |= near & hit2(X[0], X[19], 0.0256);
-                hit |= near & hit2(X[0], X[20], 0.024025);
-                hit |= near & hit2(X[0], X[21], 0.024025);
-            }
-            near = need & hit2(X[1], X[47], 0.04622947896414851);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[18], 0.019600000000000003);
-                hit |= near & hit2(X[1], X[19], 0.019600000000000003);
-                hit |= near & hit2(X[1], X[20], 0.018225);
-                hit |= near & hit2(X[1], X[21], 0.018225);
-            }
-            near = need & hit2(X[2], X[47], 0.048404583123582375);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[18], 0.021025000000000005);
-                hit |= near & hit2(X[2], X[19], 0.021025000000000005);
-                hit |= near & hit2(X[2], X[20], 0.019600000000000003);
-                hit |= near & hit2(X[2], X[21], 0.019600000000000003);
-            }
+            hit |= need & hit2(X[1], X[21], 0.018225);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[43], X[48], 0.12290585358770656);
@@ -2274,91 +2303,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= near & hit2(X[2], X[40], 0.010000000000000002);
                 hit |= near & hit2(X[2], X[41], 0.009025);
                 hit |= near & hit2(X[2], X[42], 0.009025);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[44], X[46], 0.10608075034412862);
-        if (skv_any_(need)) {
-            near = need & hit2(X[3], X[46], 0.05322267440714044);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[3], X[12], 0.019600000000000003);
-                hit |= near & hit2(X[3], X[13], 0.019600000000000003);
-                hit |= near & hit2(X[3], X[14], 0.019600000000000003);
-                hit |= near & hit2(X[3], X[15], 0.019600000000000003);
-                hit |= near & hit2(X[3], X[16], 0.019600000000000003);
-                hit |= near & hit2(X[3], X[17], 0.019600000000000003);
-            }
-            near = need & hit2(X[4], X[46], 0.05322267440714044);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[4], X[12], 0.019600000000000003);
-                hit |= near & hit2(X[4], X[13], 0.019600000000000003);
-                hit |= near & hit2(X[4], X[14], 0.019600000000000003);
-                hit |= near & hit2(X[4], X[15], 0.019600000000000003);
-                hit |= near & hit2(X[4], X[16], 0.019600000000000003);
-                hit |= near & hit2(X[4], X[17], 0.019600000000000003);
-            }
-            near = need & hit2(X[5], X[46], 0.05322267440714044);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[5], X[12], 0.019600000000000003);
-                hit |= near & hit2(X[5], X[13], 0.019600000000000003);
-                hit |= near & hit2(X[5], X[14], 0.019600000000000003);
-                hit |= near & hit2(X[5], X[15], 0.019600000000000003);
-                hit |= near & hit2(X[5], X[16], 0.019600000000000003);
-                hit |= near & hit2(X[5], X[17], 0.019600000000000003);
-            }
-            near = need & hit2(X[6], X[46], 0.05322267440714044);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[6], X[12], 0.019600000000000003);
-                hit |= near & hit2(X[6], X[13], 0.019600000000000003);
-                hit |= near & hit2(X[6], X[14], 0.019600000000000003);
-                hit |= near & hit2(X[6], X[15], 0.019600000000000003);
-                hit |= near & hit2(X[6], X[16], 0.019600000000000003);
-                hit |= near & hit2(X[6], X[17], 0.019600000000000003);
-            }
-            near = need & hit2(X[7], X[46], 0.05094067041045686);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[7], X[12], 0.018225);
-                hit |= near & hit2(X[7], X[13], 0.018225);
-                hit |= near & hit2(X[7], X[14], 0.018225);
-                hit |= near & hit2(X[7], X[15], 0.018225);
-                hit |= near & hit2(X[7], X[16], 0.018225);
-                hit |= near & hit2(X[7], X[17], 0.018225);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[44], X[47], 0.09923156215282601);
-        if (skv_any_(need)) {
-            near = need & hit2(X[18], X[44], 0.05760000000000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[18], X[3], 0.021025000000000005);
-                hit |= near & hit2(X[18], X[4], 0.021025000000000005);
-                hit |= near & hit2(X[18], X[5], 0.021025000000000005);
-                hit |= near & hit2(X[18], X[6], 0.021025000000000005);
-                hit |= near & hit2(X[18], X[7], 0.019600000000000003);
-            }
-            near = need & hit2(X[19], X[44], 0.05760000000000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[19], X[3], 0.021025000000000005);
-                hit |= near & hit2(X[19], X[4], 0.021025000000000005);
-                hit |= near & hit2(X[19], X[5], 0.021025000000000005);
-                hit |= near & hit2(X[19], X[6], 0.021025000000000005);
-                hit |= near & hit2(X[19], X[7], 0.019600000000000003);
-            }
-            near = need & hit2(X[20], X[44], 0.05522500000000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[20], X[3], 0.019600000000000003);
-                hit |= near & hit2(X[20], X[4], 0.019600000000000003);
-                hit |= near & hit2(X[20], X[5], 0.019600000000000003);
-                hit |= near & hit2(X[20], X[6], 0.019600000000000003);
-                hit |= near & hit2(X[20], X[7], 0.018225);
-            }
-            near = need & hit2(X[21], X[44], 0.05522500000000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[21], X[3], 0.019600000000000003);
-                hit |= near & hit2(X[21], X[4], 0.019600000000000003);
-                hit |= near & hit2(X[21], X[5], 0.019600000000000003);
-                hit |= near & hit2(X[21], X[6], 0.019600000000000003);
-                hit |= near & hit2(X[21], X[7], 0.018225);
             }
             if (skv_all_(hit)) goto done;
         }
@@ -2531,101 +2475,24 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             }
             if (skv_all_(hit)) goto done;
         }
-        need = ~hit & hit2(X[45], X[47], 0.09167278705494286);
-        if (skv_any_(need)) {
-            near = need & hit2(X[8], X[47], 0.048404583123582375);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[8], X[18], 0.021025000000000005);
-                hit |= near & hit2(X[8], X[19], 0.021025000000000005);
-                hit |= near & hit2(X[8], X[20], 0.019600000000000003);
-                hit |= near & hit2(X[8], X[21], 0.019600000000000003);
-            }
-            near = need & hit2(X[9], X[47], 0.048404583123582375);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[9], X[18], 0.021025000000000005);
-                hit |= near & hit2(X[9], X[19], 0.021025000000000005);
-                hit |= near & hit2(X[9], X[20], 0.019600000000000003);
-                hit |= near & hit2(X[9], X[21], 0.019600000000000003);
-            }
-            near = need & hit2(X[10], X[47], 0.04622947896414851);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[10], X[18], 0.019600000000000003);
-                hit |= near & hit2(X[10], X[19], 0.019600000000000003);
-                hit |= near & hit2(X[10], X[20], 0.018225);
-                hit |= near & hit2(X[10], X[21], 0.018225);
-            }
-            near = need & hit2(X[11], X[47], 0.04410437480471463);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[11], X[18], 0.018225);
-                hit |= near & hit2(X[11], X[19], 0.018225);
-                hit |= near & hit2(X[11], X[20], 0.016900000000000002);
-                hit |= near & hit2(X[11], X[21], 0.016900000000000002);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[45], X[48], 0.13056317513449023);
         if (skv_any_(need)) {
-            near = need & hit2(X[8], X[48], 0.07760154584147534);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[8], X[22], 0.015625);
-                hit |= near & hit2(X[8], X[23], 0.015625);
-                hit |= near & hit2(X[8], X[24], 0.015625);
-                hit |= near & hit2(X[8], X[25], 0.018225);
-                hit |= near & hit2(X[8], X[26], 0.019600000000000003);
-                hit |= near & hit2(X[8], X[27], 0.018225);
-            }
-            near = need & hit2(X[9], X[48], 0.07760154584147534);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[9], X[22], 0.015625);
-                hit |= near & hit2(X[9], X[23], 0.015625);
-                hit |= near & hit2(X[9], X[24], 0.015625);
-                hit |= near & hit2(X[9], X[25], 0.018225);
-                hit |= near & hit2(X[9], X[26], 0.019600000000000003);
-                hit |= near & hit2(X[9], X[27], 0.018225);
-            }
-            near = need & hit2(X[10], X[48], 0.07484084043993924);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[10], X[22], 0.014400000000000003);
-                hit |= near & hit2(X[10], X[23], 0.014400000000000003);
-                hit |= near & hit2(X[10], X[24], 0.014400000000000003);
-                hit |= near & hit2(X[10], X[25], 0.016900000000000002);
-                hit |= near & hit2(X[10], X[26], 0.018225);
-                hit |= near & hit2(X[10], X[27], 0.016900000000000002);
-            }
-            near = need & hit2(X[11], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[11], X[22], 0.013225);
-                hit |= near & hit2(X[11], X[23], 0.013225);
-                hit |= near & hit2(X[11], X[24], 0.013225);
-                hit |= near & hit2(X[11], X[25], 0.015625);
-                hit |= near & hit2(X[11], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[11], X[27], 0.015625);
-            }
+            hit |= need & hit2(X[8], X[24], 0.015625);
+            hit |= need & hit2(X[9], X[24], 0.015625);
+            hit |= need & hit2(X[10], X[23], 0.014400000000000003);
+            hit |= need & hit2(X[11], X[22], 0.013225);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[45], X[49], 0.0717633287616253);
         if (skv_any_(need)) {
-            near = need & hit2(X[28], X[45], 0.0496241235001456);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[28], X[8], 0.019600000000000003);
-                hit |= near & hit2(X[28], X[9], 0.019600000000000003);
-                hit |= near & hit2(X[28], X[10], 0.018225);
-                hit |= near & hit2(X[28], X[11], 0.016900000000000002);
-            }
-            near = need & hit2(X[29], X[45], 0.04742147623228325);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[29], X[8], 0.018225);
-                hit |= near & hit2(X[29], X[9], 0.018225);
-                hit |= near & hit2(X[29], X[10], 0.016900000000000002);
-                hit |= near & hit2(X[29], X[11], 0.015625);
-            }
             near = need & hit2(X[30], X[45], 0.04742147623228325);
             if (skv_any_(near)) {
                 hit |= near & hit2(X[30], X[8], 0.018225);
                 hit |= near & hit2(X[30], X[9], 0.018225);
                 hit |= near & hit2(X[30], X[10], 0.016900000000000002);
-                hit |= near & hit2(X[30], X[11], 0.015625);
             }
+            hit |= need & hit2(X[8], X[29], 0.018225);
+            hit |= need & hit2(X[9], X[29], 0.018225);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[45], X[50], 0.06275721357343776);
@@ -2705,126 +2572,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             }
             if (skv_all_(hit)) goto done;
         }
-        need = ~hit & hit2(X[46], X[48], 0.12907560820056235);
-        if (skv_any_(need)) {
-            near = need & hit2(X[12], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[12], X[22], 0.013225);
-                hit |= near & hit2(X[12], X[23], 0.013225);
-                hit |= near & hit2(X[12], X[24], 0.013225);
-                hit |= near & hit2(X[12], X[25], 0.015625);
-                hit |= near & hit2(X[12], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[12], X[27], 0.015625);
-            }
-            near = need & hit2(X[13], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[13], X[22], 0.013225);
-                hit |= near & hit2(X[13], X[23], 0.013225);
-                hit |= near & hit2(X[13], X[24], 0.013225);
-                hit |= near & hit2(X[13], X[25], 0.015625);
-                hit |= near & hit2(X[13], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[13], X[27], 0.015625);
-            }
-            near = need & hit2(X[14], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[14], X[22], 0.013225);
-                hit |= near & hit2(X[14], X[23], 0.013225);
-                hit |= near & hit2(X[14], X[24], 0.013225);
-                hit |= near & hit2(X[14], X[25], 0.015625);
-                hit |= near & hit2(X[14], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[14], X[27], 0.015625);
-            }
-            near = need & hit2(X[15], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[15], X[22], 0.013225);
-                hit |= near & hit2(X[15], X[23], 0.013225);
-                hit |= near & hit2(X[15], X[24], 0.013225);
-                hit |= near & hit2(X[15], X[25], 0.015625);
-                hit |= near & hit2(X[15], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[15], X[27], 0.015625);
-            }
-            near = need & hit2(X[16], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[16], X[22], 0.013225);
-                hit |= near & hit2(X[16], X[23], 0.013225);
-                hit |= near & hit2(X[16], X[24], 0.013225);
-                hit |= near & hit2(X[16], X[25], 0.015625);
-                hit |= near & hit2(X[16], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[16], X[27], 0.015625);
-            }
-            near = need & hit2(X[17], X[48], 0.07213013503840311);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[17], X[22], 0.013225);
-                hit |= near & hit2(X[17], X[23], 0.013225);
-                hit |= near & hit2(X[17], X[24], 0.013225);
-                hit |= near & hit2(X[17], X[25], 0.015625);
-                hit |= near & hit2(X[17], X[26], 0.016900000000000002);
-                hit |= near & hit2(X[17], X[27], 0.015625);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[46], X[49], 0.07066157830477109);
-        if (skv_any_(need)) {
-            near = need & hit2(X[28], X[46], 0.04870866641377328);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[28], X[12], 0.016900000000000002);
-                hit |= near & hit2(X[28], X[13], 0.016900000000000002);
-                hit |= near & hit2(X[28], X[14], 0.016900000000000002);
-                hit |= near & hit2(X[28], X[15], 0.016900000000000002);
-                hit |= near & hit2(X[28], X[16], 0.016900000000000002);
-                hit |= near & hit2(X[28], X[17], 0.016900000000000002);
-            }
-            near = need & hit2(X[29], X[46], 0.046526662417089686);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[29], X[12], 0.015625);
-                hit |= near & hit2(X[29], X[13], 0.015625);
-                hit |= near & hit2(X[29], X[14], 0.015625);
-                hit |= near & hit2(X[29], X[15], 0.015625);
-                hit |= near & hit2(X[29], X[16], 0.015625);
-                hit |= near & hit2(X[29], X[17], 0.015625);
-            }
-            near = need & hit2(X[30], X[46], 0.046526662417089686);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[30], X[12], 0.015625);
-                hit |= near & hit2(X[30], X[13], 0.015625);
-                hit |= near & hit2(X[30], X[14], 0.015625);
-                hit |= near & hit2(X[30], X[15], 0.015625);
-                hit |= near & hit2(X[30], X[16], 0.015625);
-                hit |= near & hit2(X[30], X[17], 0.015625);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[46], X[50], 0.06172718974982096);
-        if (skv_any_(need)) {
-            near = need & hit2(X[31], X[46], 0.044394658420406095);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[31], X[12], 0.0144);
-                hit |= near & hit2(X[31], X[13], 0.0144);
-                hit |= near & hit2(X[31], X[14], 0.0144);
-                hit |= near & hit2(X[31], X[15], 0.0144);
-                hit |= near & hit2(X[31], X[16], 0.0144);
-                hit |= near & hit2(X[31], X[17], 0.0144);
-            }
-            near = need & hit2(X[32], X[46], 0.044394658420406095);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[32], X[12], 0.0144);
-                hit |= near & hit2(X[32], X[13], 0.0144);
-                hit |= near & hit2(X[32], X[14], 0.0144);
-                hit |= near & hit2(X[32], X[15], 0.0144);
-                hit |= near & hit2(X[32], X[16], 0.0144);
-                hit |= near & hit2(X[32], X[17], 0.0144);
-            }
-            near = need & hit2(X[33], X[46], 0.03636664243367175);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[33], X[12], 0.010000000000000002);
-                hit |= near & hit2(X[33], X[13], 0.010000000000000002);
-                hit |= near & hit2(X[33], X[14], 0.010000000000000002);
-                hit |= near & hit2(X[33], X[15], 0.010000000000000002);
-                hit |= near & hit2(X[33], X[16], 0.010000000000000002);
-                hit |= near & hit2(X[33], X[17], 0.010000000000000002);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[46], X[51], 0.06905466607794201);
         if (skv_any_(need)) {
             near = need & hit2(X[12], X[51], 0.029612264821350036);
@@ -2901,101 +2648,10 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             }
             if (skv_all_(hit)) goto done;
         }
-        need = ~hit & hit2(X[47], X[49], 0.06509257859239052);
-        if (skv_any_(need)) {
-            near = need & hit2(X[28], X[47], 0.04410437480471463);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[28], X[18], 0.018225);
-                hit |= near & hit2(X[28], X[19], 0.018225);
-                hit |= near & hit2(X[28], X[20], 0.016900000000000002);
-                hit |= near & hit2(X[28], X[21], 0.016900000000000002);
-            }
-            near = need & hit2(X[29], X[47], 0.04202927064528075);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[29], X[18], 0.016900000000000002);
-                hit |= near & hit2(X[29], X[19], 0.016900000000000002);
-                hit |= near & hit2(X[29], X[20], 0.015625);
-                hit |= near & hit2(X[29], X[21], 0.015625);
-            }
-            near = need & hit2(X[30], X[47], 0.04202927064528075);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[30], X[18], 0.016900000000000002);
-                hit |= near & hit2(X[30], X[19], 0.016900000000000002);
-                hit |= near & hit2(X[30], X[20], 0.015625);
-                hit |= near & hit2(X[30], X[21], 0.015625);
-            }
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[47], X[50], 0.056529621742869025);
-        if (skv_any_(need)) {
-            near = need & hit2(X[31], X[47], 0.04000416648584688);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[31], X[18], 0.015625);
-                hit |= near & hit2(X[31], X[19], 0.015625);
-                hit |= near & hit2(X[31], X[20], 0.0144);
-                hit |= near & hit2(X[31], X[21], 0.0144);
-            }
-            near = need & hit2(X[32], X[47], 0.04000416648584688);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[32], X[18], 0.015625);
-                hit |= near & hit2(X[32], X[19], 0.015625);
-                hit |= near & hit2(X[32], X[20], 0.0144);
-                hit |= near & hit2(X[32], X[21], 0.0144);
-            }
-            near = need & hit2(X[33], X[47], 0.03240374984811138);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[33], X[18], 0.011025000000000002);
-                hit |= near & hit2(X[33], X[19], 0.011025000000000002);
-                hit |= near & hit2(X[33], X[20], 0.010000000000000002);
-                hit |= near & hit2(X[33], X[21], 0.010000000000000002);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[47], X[51], 0.06355065956653608);
         if (skv_any_(need)) {
-            near = need & hit2(X[18], X[51], 0.03135808627697378);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[18], X[34], 0.010816000000000003);
-                hit |= near & hit2(X[18], X[35], 0.010816000000000003);
-                hit |= near & hit2(X[18], X[36], 0.010816000000000003);
-                hit |= near & hit2(X[18], X[37], 0.010816000000000003);
-                hit |= near & hit2(X[18], X[38], 0.012100000000000003);
-                hit |= near & hit2(X[18], X[39], 0.009025);
-                hit |= near & hit2(X[18], X[40], 0.009025);
-                hit |= near & hit2(X[18], X[41], 0.008100000000000001);
-                hit |= near & hit2(X[18], X[42], 0.008100000000000001);
-            }
-            near = need & hit2(X[19], X[51], 0.03135808627697378);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[19], X[34], 0.010816000000000003);
-                hit |= near & hit2(X[19], X[35], 0.010816000000000003);
-                hit |= near & hit2(X[19], X[36], 0.010816000000000003);
-                hit |= near & hit2(X[19], X[37], 0.010816000000000003);
-                hit |= near & hit2(X[19], X[38], 0.012100000000000003);
-                hit |= near & hit2(X[19], X[39], 0.009025);
-                hit |= near & hit2(X[19], X[40], 0.009025);
-                hit |= near & hit2(X[19], X[41], 0.008100000000000001);
-                hit |= near & hit2(X[19], X[42], 0.008100000000000001);
-            }
-            near = need & hit2(X[20], X[51], 0.029612264821350036);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[20], X[34], 0.009801);
-                hit |= near & hit2(X[20], X[35], 0.009801);
-                hit |= near & hit2(X[20], X[36], 0.009801);
-                hit |= near & hit2(X[20], X[37], 0.009801);
-                hit |= near & hit2(X[20], X[38], 0.011025000000000002);
-                hit |= near & hit2(X[20], X[39], 0.0081);
-                hit |= near & hit2(X[20], X[40], 0.0081);
-                hit |= near & hit2(X[20], X[41], 0.007225000000000001);
-                hit |= near & hit2(X[20], X[42], 0.007225000000000001);
-            }
             near = need & hit2(X[21], X[51], 0.029612264821350036);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[21], X[34], 0.009801);
-                hit |= near & hit2(X[21], X[35], 0.009801);
-                hit |= near & hit2(X[21], X[36], 0.009801);
-                hit |= near & hit2(X[21], X[37], 0.009801);
-                hit |= near & hit2(X[21], X[38], 0.011025000000000002);
                 hit |= near & hit2(X[21], X[39], 0.0081);
                 hit |= near & hit2(X[21], X[40], 0.0081);
                 hit |= near & hit2(X[21], X[41], 0.007225000000000001);
@@ -3005,78 +2661,19 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[48], X[51], 0.0965050911425553);
         if (skv_any_(need)) {
-            near = need & hit2(X[22], X[51], 0.024674800454478816);
+            near = need & hit2(X[34], X[48], 0.056439761548879135);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[22], X[34], 0.007056000000000001);
-                hit |= near & hit2(X[22], X[35], 0.007056000000000001);
-                hit |= near & hit2(X[22], X[36], 0.007056000000000001);
-                hit |= near & hit2(X[22], X[37], 0.007056000000000001);
-                hit |= near & hit2(X[22], X[38], 0.0081);
-                hit |= near & hit2(X[22], X[39], 0.0056250000000000015);
-                hit |= near & hit2(X[22], X[40], 0.0056250000000000015);
-                hit |= near & hit2(X[22], X[41], 0.004900000000000001);
-                hit |= near & hit2(X[22], X[42], 0.004900000000000001);
+                hit |= near & hit2(X[34], X[23], 0.007056000000000001);
+                hit |= near & hit2(X[34], X[24], 0.007056000000000001);
+                hit |= near & hit2(X[34], X[25], 0.008836);
             }
-            near = need & hit2(X[23], X[51], 0.024674800454478816);
+            near = need & hit2(X[37], X[48], 0.056439761548879135);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[23], X[34], 0.007056000000000001);
-                hit |= near & hit2(X[23], X[35], 0.007056000000000001);
-                hit |= near & hit2(X[23], X[36], 0.007056000000000001);
-                hit |= near & hit2(X[23], X[37], 0.007056000000000001);
-                hit |= near & hit2(X[23], X[38], 0.0081);
-                hit |= near & hit2(X[23], X[39], 0.0056250000000000015);
-                hit |= near & hit2(X[23], X[40], 0.0056250000000000015);
-                hit |= near & hit2(X[23], X[41], 0.004900000000000001);
-                hit |= near & hit2(X[23], X[42], 0.004900000000000001);
+                hit |= near & hit2(X[37], X[23], 0.007056000000000001);
+                hit |= near & hit2(X[37], X[24], 0.007056000000000001);
+                hit |= near & hit2(X[37], X[25], 0.008836);
             }
-            near = need & hit2(X[24], X[51], 0.024674800454478816);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[24], X[34], 0.007056000000000001);
-                hit |= near & hit2(X[24], X[35], 0.007056000000000001);
-                hit |= near & hit2(X[24], X[36], 0.007056000000000001);
-                hit |= near & hit2(X[24], X[37], 0.007056000000000001);
-                hit |= near & hit2(X[24], X[38], 0.0081);
-                hit |= near & hit2(X[24], X[39], 0.0056250000000000015);
-                hit |= near & hit2(X[24], X[40], 0.0056250000000000015);
-                hit |= near & hit2(X[24], X[41], 0.004900000000000001);
-                hit |= near & hit2(X[24], X[42], 0.004900000000000001);
-            }
-            near = need & hit2(X[25], X[51], 0.027916443365726296);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[25], X[34], 0.008836);
-                hit |= near & hit2(X[25], X[35], 0.008836);
-                hit |= near & hit2(X[25], X[36], 0.008836);
-                hit |= near & hit2(X[25], X[37], 0.008836);
-                hit |= near & hit2(X[25], X[38], 0.010000000000000002);
-                hit |= near & hit2(X[25], X[39], 0.007224999999999999);
-                hit |= near & hit2(X[25], X[40], 0.007224999999999999);
-                hit |= near & hit2(X[25], X[41], 0.0064);
-                hit |= near & hit2(X[25], X[42], 0.0064);
-            }
-            near = need & hit2(X[26], X[51], 0.029612264821350036);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[26], X[34], 0.009801);
-                hit |= near & hit2(X[26], X[35], 0.009801);
-                hit |= near & hit2(X[26], X[36], 0.009801);
-                hit |= near & hit2(X[26], X[37], 0.009801);
-                hit |= near & hit2(X[26], X[38], 0.011025000000000002);
-                hit |= near & hit2(X[26], X[39], 0.0081);
-                hit |= near & hit2(X[26], X[40], 0.0081);
-                hit |= near & hit2(X[26], X[41], 0.007225000000000001);
-                hit |= near & hit2(X[26], X[42], 0.007225000000000001);
-            }
-            near = need & hit2(X[27], X[51], 0.027916443365726296);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[27], X[34], 0.008836);
-                hit |= near & hit2(X[27], X[35], 0.008836);
-                hit |= near & hit2(X[27], X[36], 0.008836);
-                hit |= near & hit2(X[27], X[37], 0.008836);
-                hit |= near & hit2(X[27], X[38], 0.010000000000000002);
-                hit |= near & hit2(X[27], X[39], 0.007224999999999999);
-                hit |= near & hit2(X[27], X[40], 0.007224999999999999);
-                hit |= near & hit2(X[27], X[41], 0.0064);
-                hit |= near & hit2(X[27], X[42], 0.0064);
-            }
+            hit |= need & hit2(X[27], X[38], 0.010000000000000002);
             if (skv_all_(hit)) goto done;
         }
     done:
@@ -3087,7 +2684,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -3100,8 +2697,14 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    for (; k + 4 <= N; k += 4)
-        in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, out + k);
+    int small[16 * N_LINKS], start[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    if (idx) { /* no memory for the lists: one configuration at a time below */
+        reachable(S, ns, idx, start);
+        for (; k + 4 <= N; k += 4)
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+        if (idx != small) free(idx);
+    }
 #endif
     for (; k < N; ++k)
         out[k] = (unsigned char)skcoll_in_collision(Q + k * N_Q, S, ns, C, nc, B, nb);

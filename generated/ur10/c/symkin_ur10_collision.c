@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include "symkin_collide.h"
 
@@ -307,6 +308,10 @@ static const int pairs[127][2] = { { 0, 3 }, { 0, 4 }, { 0, 5 }, { 0, 6 }, { 0, 
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 24, 25, 26, 27, 28, 29, 30, 31 };
 static const double bound_radius[N_LINKS] = { 0.08550000000000002, 0.14471172500000004, 0.4010000000000001, 0.33920050000000007, 0.10308377500000003, 0.09560250000000002, 0.05800000000000001, 0.04930000000000001 };
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.038189999999999995 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.08550000000008653, 0.28137388363417654, 0.9057267153788727, 1.3322353441423187, 1.5335410000015348, 1.6492410000016506, 1.6907310000016924, 1.7427410000017443 };
 static const int link_start[N_LINKS + 1] = { 0, 1, 3, 10, 18, 20, 22, 23, 24 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -680,10 +685,25 @@ static inline int sphere_hit(const double a[3], const double b[3], double rr)
     return dx * dx + dy * dy + dz * dz < rr;
 }
 
-/* whether the configuration of points X collides (environment first, then self pairs) */
-static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
-                    int nb)
+/* whether q is outside the joint limits (or NaN): only then can the self pairs proved apart within
+   them (symkin.geometry.clearance) meet */
+static int outside_limits(const double *q)
 {
+    if (!(q[0] >= -6.283185307179586 && q[0] <= 6.283185307179586)) return 1;
+    if (!(q[1] >= -6.283185307179586 && q[1] <= 6.283185307179586)) return 1;
+    if (!(q[2] >= -6.283185307179586 && q[2] <= 6.283185307179586)) return 1;
+    if (!(q[3] >= -6.283185307179586 && q[3] <= 6.283185307179586)) return 1;
+    if (!(q[4] >= -6.283185307179586 && q[4] <= 6.283185307179586)) return 1;
+    if (!(q[5] >= -6.283185307179586 && q[5] <= 6.283185307179586)) return 1;
+    return 0;
+}
+
+/* whether the configuration of points X collides (environment first, then self pairs; the pairs
+   proved apart within the joint limits only when the configuration is outside them) */
+static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
+                    int nb, int outside)
+{
+    (void)outside;
     for (int o = 0; o < ns; ++o) {  /* obstacle spheres: each link's bound, then its shapes */
         const double *ob = S + 4 * o;
         const double ro = ob[3];
@@ -739,20 +759,8 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
                     if (overlaps(X, link_shapes[s], -1, kind + 2, ob)) return 1;
             }
     /* self pairs, by pairs of links */
-    if (skc_spheres_overlap(X[24], 0.08550000000000002, X[26], 0.4010000000000001)) {
-        if (sphere_hit(X[0], X[26], 0.2366822500000001)) {
-            if (sphere_hit(X[0], X[3], 0.03258025)) return 1;
-            if (sphere_hit(X[0], X[4], 0.027639062500000002)) return 1;
-            if (sphere_hit(X[0], X[5], 0.027639062500000002)) return 1;
-            if (sphere_hit(X[0], X[6], 0.027639062500000002)) return 1;
-            if (sphere_hit(X[0], X[7], 0.027639062500000002)) return 1;
-            if (sphere_hit(X[0], X[8], 0.027639062500000002)) return 1;
-            if (sphere_hit(X[0], X[9], 0.030888062500000008)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[24], 0.08550000000000002, X[27], 0.33920050000000007)) {
         if (sphere_hit(X[0], X[27], 0.1803705147002501)) {
-            if (sphere_hit(X[0], X[10], 0.030888062500000008)) return 1;
             if (sphere_hit(X[0], X[11], 0.022650250000000007)) return 1;
             if (sphere_hit(X[0], X[12], 0.022650250000000007)) return 1;
             if (sphere_hit(X[0], X[13], 0.022650250000000007)) return 1;
@@ -777,26 +785,8 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         if (sphere_hit(X[0], X[23], 0.01817104)) return 1;
     }
     if (skc_spheres_overlap(X[25], 0.14471172500000004, X[27], 0.33920050000000007)) {
-        if (sphere_hit(X[1], X[27], 0.1885300742002501)) {
-            if (sphere_hit(X[1], X[10], 0.0343175625)) return 1;
-            if (sphere_hit(X[1], X[11], 0.0256)) return 1;
-            if (sphere_hit(X[1], X[12], 0.0256)) return 1;
-            if (sphere_hit(X[1], X[13], 0.0256)) return 1;
-            if (sphere_hit(X[1], X[14], 0.0256)) return 1;
-            if (sphere_hit(X[1], X[15], 0.0256)) return 1;
-            if (sphere_hit(X[1], X[16], 0.0256)) return 1;
-            if (sphere_hit(X[1], X[17], 0.0256)) return 1;
-        }
-        if (sphere_hit(X[2], X[27], 0.1885300742002501)) {
-            if (sphere_hit(X[2], X[10], 0.0343175625)) return 1;
-            if (sphere_hit(X[2], X[11], 0.0256)) return 1;
-            if (sphere_hit(X[2], X[12], 0.0256)) return 1;
-            if (sphere_hit(X[2], X[13], 0.0256)) return 1;
-            if (sphere_hit(X[2], X[14], 0.0256)) return 1;
-            if (sphere_hit(X[2], X[15], 0.0256)) return 1;
-            if (sphere_hit(X[2], X[16], 0.0256)) return 1;
-            if (sphere_hit(X[2], X[17], 0.0256)) return 1;
-        }
+        if (sphere_hit(X[1], X[17], 0.0256)) return 1;
+        if (sphere_hit(X[2], X[17], 0.0256)) return 1;
     }
     if (skc_spheres_overlap(X[25], 0.14471172500000004, X[28], 0.10308377500000003)) {
         if (sphere_hit(X[1], X[18], 0.023409)) return 1;
@@ -819,43 +809,21 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         if (sphere_hit(X[2], X[23], 0.020822490000000003)) return 1;
     }
     if (skc_spheres_overlap(X[26], 0.4010000000000001, X[28], 0.10308377500000003)) {
-        if (sphere_hit(X[18], X[26], 0.21068100000000006)) {
-            if (sphere_hit(X[18], X[3], 0.023409)) return 1;
-            if (sphere_hit(X[18], X[4], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[18], X[5], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[18], X[6], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[18], X[7], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[18], X[8], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[18], X[9], 0.0219780625)) return 1;
-        }
-        if (sphere_hit(X[19], X[26], 0.21068100000000006)) {
-            if (sphere_hit(X[19], X[3], 0.023409)) return 1;
-            if (sphere_hit(X[19], X[4], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[19], X[5], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[19], X[6], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[19], X[7], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[19], X[8], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[19], X[9], 0.0219780625)) return 1;
-        }
+        if (sphere_hit(X[3], X[18], 0.023409)) return 1;
+        if (sphere_hit(X[3], X[19], 0.023409)) return 1;
+        if (sphere_hit(X[4], X[19], 0.019251562500000003)) return 1;
     }
     if (skc_spheres_overlap(X[26], 0.4010000000000001, X[29], 0.09560250000000002)) {
         if (sphere_hit(X[20], X[26], 0.21068100000000006)) {
             if (sphere_hit(X[20], X[3], 0.023409)) return 1;
             if (sphere_hit(X[20], X[4], 0.019251562500000003)) return 1;
             if (sphere_hit(X[20], X[5], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[20], X[6], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[20], X[7], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[20], X[8], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[20], X[9], 0.0219780625)) return 1;
         }
         if (sphere_hit(X[21], X[26], 0.21068100000000006)) {
             if (sphere_hit(X[21], X[3], 0.023409)) return 1;
             if (sphere_hit(X[21], X[4], 0.019251562500000003)) return 1;
             if (sphere_hit(X[21], X[5], 0.019251562500000003)) return 1;
             if (sphere_hit(X[21], X[6], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[21], X[7], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[21], X[8], 0.019251562500000003)) return 1;
-            if (sphere_hit(X[21], X[9], 0.0219780625)) return 1;
         }
     }
     if (skc_spheres_overlap(X[26], 0.4010000000000001, X[30], 0.05800000000000001)) {
@@ -881,33 +849,12 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         }
     }
     if (skc_spheres_overlap(X[27], 0.33920050000000007, X[29], 0.09560250000000002)) {
-        if (sphere_hit(X[20], X[27], 0.15776823720025004)) {
-            if (sphere_hit(X[20], X[10], 0.0219780625)) return 1;
-            if (sphere_hit(X[20], X[11], 0.015129)) return 1;
-            if (sphere_hit(X[20], X[12], 0.015129)) return 1;
-            if (sphere_hit(X[20], X[13], 0.015129)) return 1;
-            if (sphere_hit(X[20], X[14], 0.015129)) return 1;
-            if (sphere_hit(X[20], X[15], 0.015129)) return 1;
-            if (sphere_hit(X[20], X[16], 0.015129)) return 1;
-            if (sphere_hit(X[20], X[17], 0.015129)) return 1;
-        }
-        if (sphere_hit(X[21], X[27], 0.15776823720025004)) {
-            if (sphere_hit(X[21], X[10], 0.0219780625)) return 1;
-            if (sphere_hit(X[21], X[11], 0.015129)) return 1;
-            if (sphere_hit(X[21], X[12], 0.015129)) return 1;
-            if (sphere_hit(X[21], X[13], 0.015129)) return 1;
-            if (sphere_hit(X[21], X[14], 0.015129)) return 1;
-            if (sphere_hit(X[21], X[15], 0.015129)) return 1;
-            if (sphere_hit(X[21], X[16], 0.015129)) return 1;
-            if (sphere_hit(X[21], X[17], 0.015129)) return 1;
-        }
+        if (sphere_hit(X[16], X[21], 0.015129)) return 1;
+        if (sphere_hit(X[17], X[20], 0.015129)) return 1;
+        if (sphere_hit(X[17], X[21], 0.015129)) return 1;
     }
     if (skc_spheres_overlap(X[27], 0.33920050000000007, X[30], 0.05800000000000001)) {
         if (sphere_hit(X[22], X[27], 0.15776823720025004)) {
-            if (sphere_hit(X[22], X[10], 0.0219780625)) return 1;
-            if (sphere_hit(X[22], X[11], 0.015129)) return 1;
-            if (sphere_hit(X[22], X[12], 0.015129)) return 1;
-            if (sphere_hit(X[22], X[13], 0.015129)) return 1;
             if (sphere_hit(X[22], X[14], 0.015129)) return 1;
             if (sphere_hit(X[22], X[15], 0.015129)) return 1;
             if (sphere_hit(X[22], X[16], 0.015129)) return 1;
@@ -916,9 +863,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
     }
     if (skc_spheres_overlap(X[27], 0.33920050000000007, X[31], 0.04930000000000001)) {
         if (sphere_hit(X[23], X[27], 0.15093263850025007)) {
-            if (sphere_hit(X[23], X[10], 0.019474202500000003)) return 1;
-            if (sphere_hit(X[23], X[11], 0.013064490000000003)) return 1;
-            if (sphere_hit(X[23], X[12], 0.013064490000000003)) return 1;
             if (sphere_hit(X[23], X[13], 0.013064490000000003)) return 1;
             if (sphere_hit(X[23], X[14], 0.013064490000000003)) return 1;
             if (sphere_hit(X[23], X[15], 0.013064490000000003)) return 1;
@@ -927,12 +871,116 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         }
     }
     if (skc_spheres_overlap(X[28], 0.10308377500000003, X[30], 0.05800000000000001)) {
-        if (sphere_hit(X[18], X[22], 0.013456000000000001)) return 1;
         if (sphere_hit(X[19], X[22], 0.013456000000000001)) return 1;
     }
     if (skc_spheres_overlap(X[28], 0.10308377500000003, X[31], 0.04930000000000001)) {
         if (sphere_hit(X[18], X[23], 0.01151329)) return 1;
-        if (sphere_hit(X[19], X[23], 0.01151329)) return 1;
+    }
+    if (outside) {
+        if (skc_spheres_overlap(X[24], 0.08550000000000002, X[26], 0.4010000000000001)) {
+            if (sphere_hit(X[0], X[26], 0.2366822500000001)) {
+                if (sphere_hit(X[0], X[3], 0.03258025)) return 1;
+                if (sphere_hit(X[0], X[4], 0.027639062500000002)) return 1;
+                if (sphere_hit(X[0], X[5], 0.027639062500000002)) return 1;
+                if (sphere_hit(X[0], X[6], 0.027639062500000002)) return 1;
+                if (sphere_hit(X[0], X[7], 0.027639062500000002)) return 1;
+                if (sphere_hit(X[0], X[8], 0.027639062500000002)) return 1;
+                if (sphere_hit(X[0], X[9], 0.030888062500000008)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[24], 0.08550000000000002, X[27], 0.33920050000000007)) {
+            if (sphere_hit(X[0], X[10], 0.030888062500000008)) return 1;
+        }
+        if (skc_spheres_overlap(X[25], 0.14471172500000004, X[27], 0.33920050000000007)) {
+            if (sphere_hit(X[1], X[27], 0.1885300742002501)) {
+                if (sphere_hit(X[1], X[10], 0.0343175625)) return 1;
+                if (sphere_hit(X[1], X[11], 0.0256)) return 1;
+                if (sphere_hit(X[1], X[12], 0.0256)) return 1;
+                if (sphere_hit(X[1], X[13], 0.0256)) return 1;
+                if (sphere_hit(X[1], X[14], 0.0256)) return 1;
+                if (sphere_hit(X[1], X[15], 0.0256)) return 1;
+                if (sphere_hit(X[1], X[16], 0.0256)) return 1;
+            }
+            if (sphere_hit(X[2], X[27], 0.1885300742002501)) {
+                if (sphere_hit(X[2], X[10], 0.0343175625)) return 1;
+                if (sphere_hit(X[2], X[11], 0.0256)) return 1;
+                if (sphere_hit(X[2], X[12], 0.0256)) return 1;
+                if (sphere_hit(X[2], X[13], 0.0256)) return 1;
+                if (sphere_hit(X[2], X[14], 0.0256)) return 1;
+                if (sphere_hit(X[2], X[15], 0.0256)) return 1;
+                if (sphere_hit(X[2], X[16], 0.0256)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[26], 0.4010000000000001, X[28], 0.10308377500000003)) {
+            if (sphere_hit(X[18], X[26], 0.21068100000000006)) {
+                if (sphere_hit(X[18], X[4], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[18], X[5], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[18], X[6], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[18], X[7], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[18], X[8], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[18], X[9], 0.0219780625)) return 1;
+            }
+            if (sphere_hit(X[19], X[26], 0.21068100000000006)) {
+                if (sphere_hit(X[19], X[5], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[19], X[6], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[19], X[7], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[19], X[8], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[19], X[9], 0.0219780625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[26], 0.4010000000000001, X[29], 0.09560250000000002)) {
+            if (sphere_hit(X[20], X[26], 0.21068100000000006)) {
+                if (sphere_hit(X[20], X[6], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[20], X[7], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[20], X[8], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[20], X[9], 0.0219780625)) return 1;
+            }
+            if (sphere_hit(X[21], X[26], 0.21068100000000006)) {
+                if (sphere_hit(X[21], X[7], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[21], X[8], 0.019251562500000003)) return 1;
+                if (sphere_hit(X[21], X[9], 0.0219780625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[27], 0.33920050000000007, X[29], 0.09560250000000002)) {
+            if (sphere_hit(X[20], X[27], 0.15776823720025004)) {
+                if (sphere_hit(X[20], X[10], 0.0219780625)) return 1;
+                if (sphere_hit(X[20], X[11], 0.015129)) return 1;
+                if (sphere_hit(X[20], X[12], 0.015129)) return 1;
+                if (sphere_hit(X[20], X[13], 0.015129)) return 1;
+                if (sphere_hit(X[20], X[14], 0.015129)) return 1;
+                if (sphere_hit(X[20], X[15], 0.015129)) return 1;
+                if (sphere_hit(X[20], X[16], 0.015129)) return 1;
+            }
+            if (sphere_hit(X[21], X[27], 0.15776823720025004)) {
+                if (sphere_hit(X[21], X[10], 0.0219780625)) return 1;
+                if (sphere_hit(X[21], X[11], 0.015129)) return 1;
+                if (sphere_hit(X[21], X[12], 0.015129)) return 1;
+                if (sphere_hit(X[21], X[13], 0.015129)) return 1;
+                if (sphere_hit(X[21], X[14], 0.015129)) return 1;
+                if (sphere_hit(X[21], X[15], 0.015129)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[27], 0.33920050000000007, X[30], 0.05800000000000001)) {
+            if (sphere_hit(X[22], X[27], 0.15776823720025004)) {
+                if (sphere_hit(X[22], X[10], 0.0219780625)) return 1;
+                if (sphere_hit(X[22], X[11], 0.015129)) return 1;
+                if (sphere_hit(X[22], X[12], 0.015129)) return 1;
+                if (sphere_hit(X[22], X[13], 0.015129)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[27], 0.33920050000000007, X[31], 0.04930000000000001)) {
+            if (sphere_hit(X[23], X[27], 0.15093263850025007)) {
+                if (sphere_hit(X[23], X[10], 0.019474202500000003)) return 1;
+                if (sphere_hit(X[23], X[11], 0.013064490000000003)) return 1;
+                if (sphere_hit(X[23], X[12], 0.013064490000000003)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[28], 0.10308377500000003, X[30], 0.05800000000000001)) {
+            if (sphere_hit(X[18], X[22], 0.013456000000000001)) return 1;
+        }
+        if (skc_spheres_overlap(X[28], 0.10308377500000003, X[31], 0.04930000000000001)) {
+            if (sphere_hit(X[19], X[23], 0.01151329)) return 1;
+        }
     }
     return 0;
 }
@@ -942,7 +990,7 @@ int skcoll_in_collision(const double *q, const double *S, int ns, const double *
     double T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     fk(q, T, PJ);
     points_of(T, PJ, X);
-    return collides(X, S, ns, C, nc, B, nb);
+    return collides(X, S, ns, C, nc, B, nb, outside_limits(q));
 }
 
 /* skcoll_in_collision with the obstacles packed as {spheres, ns, capsules, nc, boxes, nb} (addresses
@@ -1153,14 +1201,41 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[31][1] = -0.01 * T[4][5] + T[6][7];
     X[31][2] = -0.01 * T[4][9] + T[6][11];
 }
-/* verdicts of four configurations (rows of Q) */
-static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, unsigned char *out)
+/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
+   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
+   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
 {
+    int t = 0;
+    for (int l = 0; l < N_LINKS; ++l) {
+        start[l] = t;
+        for (int o = 0; o < ns; ++o) {
+            const double *ob = S + 4 * o;
+            const double dx = ob[0] - reach_centre[l][0], dy = ob[1] - reach_centre[l][1],
+                         dz = ob[2] - reach_centre[l][2], rr = reach_radius[l] + ob[3];
+            if (reach_radius[l] < 0.0 || !(dx * dx + dy * dy + dz * dz > rr * rr * (1.0 + 1e-9))) idx[t++] = o;
+        }
+    }
+    start[N_LINKS] = t;
+}
+
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
+                          int nb, const int *idx, const int *start, unsigned char *out)
+{
+    (void)idx; (void)start;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
+    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
+       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
     m4 far = {0, 0, 0, 0};
+    far |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
+    far |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
+    far |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
+    far |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
+    far |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
+    far |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1170,18 +1245,28 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        for (int o = 0; o < ns && !skv_all_(hit); ++o) {
-            const double *ob = S + 4 * o;
+        for (int t = start[0]; t < start[1]; ++t) {
+            const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
             need = ~hit & hit_obstacle(X[24], 0.08550000000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[0], 0.0855, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[1]; t < start[2]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[25], 0.14471172500000004, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[1], 0.095, ob, ro);
                 hit |= need & hit_obstacle(X[2], 0.095, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[2]; t < start[3]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[26], 0.4010000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[3], 0.095, ob, ro);
@@ -1192,6 +1277,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[8], 0.08075, ob, ro);
                 hit |= need & hit_obstacle(X[9], 0.09025, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[3]; t < start[4]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[27], 0.33920050000000007, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[10], 0.09025, ob, ro);
@@ -1203,20 +1293,40 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[16], 0.065, ob, ro);
                 hit |= need & hit_obstacle(X[17], 0.065, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[4]; t < start[5]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[28], 0.10308377500000003, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[18], 0.058, ob, ro);
                 hit |= need & hit_obstacle(X[19], 0.058, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[5]; t < start[6]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[29], 0.09560250000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[20], 0.058, ob, ro);
                 hit |= need & hit_obstacle(X[21], 0.058, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[6]; t < start[7]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[30], 0.05800000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[22], 0.058, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[7]; t < start[8]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[31], 0.04930000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[23], 0.049300000000000004, ob, ro);
@@ -1224,25 +1334,10 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         if (skv_all_(hit)) goto done;
         /* self pairs, by pairs of links */
-        need = ~hit & hit2(X[24], X[26], 0.2366822500000001);
-        if (skv_any_(need)) {
-            near = need & hit2(X[0], X[26], 0.2366822500000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[3], 0.03258025);
-                hit |= near & hit2(X[0], X[4], 0.027639062500000002);
-                hit |= near & hit2(X[0], X[5], 0.027639062500000002);
-                hit |= near & hit2(X[0], X[6], 0.027639062500000002);
-                hit |= near & hit2(X[0], X[7], 0.027639062500000002);
-                hit |= near & hit2(X[0], X[8], 0.027639062500000002);
-                hit |= near & hit2(X[0], X[9], 0.030888062500000008);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[24], X[27], 0.1803705147002501);
         if (skv_any_(need)) {
             near = need & hit2(X[0], X[27], 0.1803705147002501);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[10], 0.030888062500000008);
                 hit |= near & hit2(X[0], X[11], 0.022650250000000007);
                 hit |= near & hit2(X[0], X[12], 0.022650250000000007);
                 hit |= near & hit2(X[0], X[13], 0.022650250000000007);
@@ -1277,28 +1372,8 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[25], X[27], 0.2341710415044507);
         if (skv_any_(need)) {
-            near = need & hit2(X[1], X[27], 0.1885300742002501);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[10], 0.0343175625);
-                hit |= near & hit2(X[1], X[11], 0.0256);
-                hit |= near & hit2(X[1], X[12], 0.0256);
-                hit |= near & hit2(X[1], X[13], 0.0256);
-                hit |= near & hit2(X[1], X[14], 0.0256);
-                hit |= near & hit2(X[1], X[15], 0.0256);
-                hit |= near & hit2(X[1], X[16], 0.0256);
-                hit |= near & hit2(X[1], X[17], 0.0256);
-            }
-            near = need & hit2(X[2], X[27], 0.1885300742002501);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[10], 0.0343175625);
-                hit |= near & hit2(X[2], X[11], 0.0256);
-                hit |= near & hit2(X[2], X[12], 0.0256);
-                hit |= near & hit2(X[2], X[13], 0.0256);
-                hit |= near & hit2(X[2], X[14], 0.0256);
-                hit |= near & hit2(X[2], X[15], 0.0256);
-                hit |= near & hit2(X[2], X[16], 0.0256);
-                hit |= near & hit2(X[2], X[17], 0.0256);
-            }
+            hit |= need & hit2(X[1], X[17], 0.0256);
+            hit |= need & hit2(X[2], X[17], 0.0256);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[25], X[28], 0.06140260982025003);
@@ -1331,26 +1406,9 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[26], X[28], 0.2541004522182507);
         if (skv_any_(need)) {
-            near = need & hit2(X[18], X[26], 0.21068100000000006);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[18], X[3], 0.023409);
-                hit |= near & hit2(X[18], X[4], 0.019251562500000003);
-                hit |= near & hit2(X[18], X[5], 0.019251562500000003);
-                hit |= near & hit2(X[18], X[6], 0.019251562500000003);
-                hit |= near & hit2(X[18], X[7], 0.019251562500000003);
-                hit |= near & hit2(X[18], X[8], 0.019251562500000003);
-                hit |= near & hit2(X[18], X[9], 0.0219780625);
-            }
-            near = need & hit2(X[19], X[26], 0.21068100000000006);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[19], X[3], 0.023409);
-                hit |= near & hit2(X[19], X[4], 0.019251562500000003);
-                hit |= near & hit2(X[19], X[5], 0.019251562500000003);
-                hit |= near & hit2(X[19], X[6], 0.019251562500000003);
-                hit |= near & hit2(X[19], X[7], 0.019251562500000003);
-                hit |= near & hit2(X[19], X[8], 0.019251562500000003);
-                hit |= near & hit2(X[19], X[9], 0.0219780625);
-            }
+            hit |= need & hit2(X[3], X[18], 0.023409);
+            hit |= need & hit2(X[3], X[19], 0.023409);
+            hit |= need & hit2(X[4], X[19], 0.019251562500000003);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[26], X[29], 0.24661404300625012);
@@ -1360,10 +1418,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= near & hit2(X[20], X[3], 0.023409);
                 hit |= near & hit2(X[20], X[4], 0.019251562500000003);
                 hit |= near & hit2(X[20], X[5], 0.019251562500000003);
-                hit |= near & hit2(X[20], X[6], 0.019251562500000003);
-                hit |= near & hit2(X[20], X[7], 0.019251562500000003);
-                hit |= near & hit2(X[20], X[8], 0.019251562500000003);
-                hit |= near & hit2(X[20], X[9], 0.0219780625);
             }
             near = need & hit2(X[21], X[26], 0.21068100000000006);
             if (skv_any_(near)) {
@@ -1371,9 +1425,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= near & hit2(X[21], X[4], 0.019251562500000003);
                 hit |= near & hit2(X[21], X[5], 0.019251562500000003);
                 hit |= near & hit2(X[21], X[6], 0.019251562500000003);
-                hit |= near & hit2(X[21], X[7], 0.019251562500000003);
-                hit |= near & hit2(X[21], X[8], 0.019251562500000003);
-                hit |= near & hit2(X[21], X[9], 0.0219780625);
             }
             if (skv_all_(hit)) goto done;
         }
@@ -1407,38 +1458,15 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[27], X[29], 0.18905364880900008);
         if (skv_any_(need)) {
-            near = need & hit2(X[20], X[27], 0.15776823720025004);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[20], X[10], 0.0219780625);
-                hit |= near & hit2(X[20], X[11], 0.015129);
-                hit |= near & hit2(X[20], X[12], 0.015129);
-                hit |= near & hit2(X[20], X[13], 0.015129);
-                hit |= near & hit2(X[20], X[14], 0.015129);
-                hit |= near & hit2(X[20], X[15], 0.015129);
-                hit |= near & hit2(X[20], X[16], 0.015129);
-                hit |= near & hit2(X[20], X[17], 0.015129);
-            }
-            near = need & hit2(X[21], X[27], 0.15776823720025004);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[21], X[10], 0.0219780625);
-                hit |= near & hit2(X[21], X[11], 0.015129);
-                hit |= near & hit2(X[21], X[12], 0.015129);
-                hit |= near & hit2(X[21], X[13], 0.015129);
-                hit |= near & hit2(X[21], X[14], 0.015129);
-                hit |= near & hit2(X[21], X[15], 0.015129);
-                hit |= near & hit2(X[21], X[16], 0.015129);
-                hit |= near & hit2(X[21], X[17], 0.015129);
-            }
+            hit |= need & hit2(X[16], X[21], 0.015129);
+            hit |= need & hit2(X[17], X[20], 0.015129);
+            hit |= need & hit2(X[17], X[21], 0.015129);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[27], X[30], 0.15776823720025004);
         if (skv_any_(need)) {
             near = need & hit2(X[22], X[27], 0.15776823720025004);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[22], X[10], 0.0219780625);
-                hit |= near & hit2(X[22], X[11], 0.015129);
-                hit |= near & hit2(X[22], X[12], 0.015129);
-                hit |= near & hit2(X[22], X[13], 0.015129);
                 hit |= near & hit2(X[22], X[14], 0.015129);
                 hit |= near & hit2(X[22], X[15], 0.015129);
                 hit |= near & hit2(X[22], X[16], 0.015129);
@@ -1450,9 +1478,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         if (skv_any_(need)) {
             near = need & hit2(X[23], X[27], 0.15093263850025007);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[23], X[10], 0.019474202500000003);
-                hit |= near & hit2(X[23], X[11], 0.013064490000000003);
-                hit |= near & hit2(X[23], X[12], 0.013064490000000003);
                 hit |= near & hit2(X[23], X[13], 0.013064490000000003);
                 hit |= near & hit2(X[23], X[14], 0.013064490000000003);
                 hit |= near & hit2(X[23], X[15], 0.013064490000000003);
@@ -1463,14 +1488,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[28], X[30], 0.02594798256825064);
         if (skv_any_(need)) {
-            hit |= need & hit2(X[18], X[22], 0.013456000000000001);
             hit |= need & hit2(X[19], X[22], 0.013456000000000001);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[28], X[31], 0.023220814883250642);
         if (skv_any_(need)) {
             hit |= need & hit2(X[18], X[23], 0.01151329);
-            hit |= need & hit2(X[19], X[23], 0.01151329);
             if (skv_all_(hit)) goto done;
         }
     done:
@@ -1481,7 +1504,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1494,8 +1517,14 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    for (; k + 4 <= N; k += 4)
-        in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, out + k);
+    int small[16 * N_LINKS], start[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    if (idx) { /* no memory for the lists: one configuration at a time below */
+        reachable(S, ns, idx, start);
+        for (; k + 4 <= N; k += 4)
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+        if (idx != small) free(idx);
+    }
 #endif
     for (; k < N; ++k)
         out[k] = (unsigned char)skcoll_in_collision(Q + k * N_Q, S, ns, C, nc, B, nb);

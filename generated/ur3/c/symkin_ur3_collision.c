@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include "symkin_collide.h"
 
@@ -307,6 +308,10 @@ static const int pairs[92][2] = { { 0, 3 }, { 0, 4 }, { 0, 5 }, { 0, 6 }, { 0, 7
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 19, 20, 21, 22, 23, 24, 25, 26 };
 static const double bound_radius[N_LINKS] = { 0.054000000000000006, 0.08695500000000002, 0.18182500000000004, 0.14976375, 0.07089625000000001, 0.06773875000000001, 0.04000000000000001, 0.03400000000000001 };
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.04557 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.05400000000005502, 0.24122807615094335, 0.5045856760643678, 0.642011233494592, 0.7611500000007623, 0.8465000000008477, 0.8833550000008845, 0.9324000000009337 };
 static const int link_start[N_LINKS + 1] = { 0, 1, 3, 8, 13, 15, 17, 18, 19 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -665,10 +670,25 @@ static inline int sphere_hit(const double a[3], const double b[3], double rr)
     return dx * dx + dy * dy + dz * dz < rr;
 }
 
-/* whether the configuration of points X collides (environment first, then self pairs) */
-static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
-                    int nb)
+/* whether q is outside the joint limits (or NaN): only then can the self pairs proved apart within
+   them (symkin.geometry.clearance) meet */
+static int outside_limits(const double *q)
 {
+    if (!(q[0] >= -6.283185307179586 && q[0] <= 6.283185307179586)) return 1;
+    if (!(q[1] >= -6.283185307179586 && q[1] <= 6.283185307179586)) return 1;
+    if (!(q[2] >= -6.283185307179586 && q[2] <= 6.283185307179586)) return 1;
+    if (!(q[3] >= -6.283185307179586 && q[3] <= 6.283185307179586)) return 1;
+    if (!(q[4] >= -6.283185307179586 && q[4] <= 6.283185307179586)) return 1;
+    if (!(q[5] >= -6.283185307179586 && q[5] <= 6.283185307179586)) return 1;
+    return 0;
+}
+
+/* whether the configuration of points X collides (environment first, then self pairs; the pairs
+   proved apart within the joint limits only when the configuration is outside them) */
+static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
+                    int nb, int outside)
+{
+    (void)outside;
     for (int o = 0; o < ns; ++o) {  /* obstacle spheres: each link's bound, then its shapes */
         const double *ob = S + 4 * o;
         const double ro = ob[3];
@@ -719,15 +739,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
                     if (overlaps(X, link_shapes[s], -1, kind + 2, ob)) return 1;
             }
     /* self pairs, by pairs of links */
-    if (skc_spheres_overlap(X[19], 0.054000000000000006, X[21], 0.18182500000000004)) {
-        if (sphere_hit(X[0], X[21], 0.055613430625000015)) {
-            if (sphere_hit(X[0], X[3], 0.012995999999999997)) return 1;
-            if (sphere_hit(X[0], X[4], 0.011024999999999998)) return 1;
-            if (sphere_hit(X[0], X[5], 0.011024999999999998)) return 1;
-            if (sphere_hit(X[0], X[6], 0.011024999999999998)) return 1;
-            if (sphere_hit(X[0], X[7], 0.012320999999999997)) return 1;
-        }
-    }
     if (skc_spheres_overlap(X[19], 0.054000000000000006, X[22], 0.14976375)) {
         if (sphere_hit(X[0], X[22], 0.041519665814062495)) {
             if (sphere_hit(X[0], X[8], 0.012320999999999997)) return 1;
@@ -752,20 +763,10 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         if (sphere_hit(X[0], X[18], 0.007743999999999999)) return 1;
     }
     if (skc_spheres_overlap(X[20], 0.08695500000000002, X[22], 0.14976375)) {
-        if (sphere_hit(X[1], X[22], 0.0440008308140625)) {
-            if (sphere_hit(X[1], X[8], 0.013688999999999998)) return 1;
-            if (sphere_hit(X[1], X[9], 0.010404000000000002)) return 1;
-            if (sphere_hit(X[1], X[10], 0.010404000000000002)) return 1;
-            if (sphere_hit(X[1], X[11], 0.010404000000000002)) return 1;
-            if (sphere_hit(X[1], X[12], 0.010404000000000002)) return 1;
-        }
-        if (sphere_hit(X[2], X[22], 0.0440008308140625)) {
-            if (sphere_hit(X[2], X[8], 0.013688999999999998)) return 1;
-            if (sphere_hit(X[2], X[9], 0.010404000000000002)) return 1;
-            if (sphere_hit(X[2], X[10], 0.010404000000000002)) return 1;
-            if (sphere_hit(X[2], X[11], 0.010404000000000002)) return 1;
-            if (sphere_hit(X[2], X[12], 0.010404000000000002)) return 1;
-        }
+        if (sphere_hit(X[1], X[11], 0.010404000000000002)) return 1;
+        if (sphere_hit(X[1], X[12], 0.010404000000000002)) return 1;
+        if (sphere_hit(X[2], X[11], 0.010404000000000002)) return 1;
+        if (sphere_hit(X[2], X[12], 0.010404000000000002)) return 1;
     }
     if (skc_spheres_overlap(X[20], 0.08695500000000002, X[23], 0.07089625000000001)) {
         if (sphere_hit(X[1], X[13], 0.010000000000000002)) return 1;
@@ -788,20 +789,13 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         if (sphere_hit(X[2], X[18], 0.008836)) return 1;
     }
     if (skc_spheres_overlap(X[21], 0.18182500000000004, X[23], 0.07089625000000001)) {
-        if (sphere_hit(X[13], X[21], 0.049206330625000023)) {
-            if (sphere_hit(X[13], X[3], 0.010000000000000002)) return 1;
-            if (sphere_hit(X[13], X[4], 0.008281)) return 1;
-            if (sphere_hit(X[13], X[5], 0.008281)) return 1;
-            if (sphere_hit(X[13], X[6], 0.008281)) return 1;
-            if (sphere_hit(X[13], X[7], 0.009409)) return 1;
-        }
         if (sphere_hit(X[14], X[21], 0.049206330625000023)) {
             if (sphere_hit(X[14], X[3], 0.010000000000000002)) return 1;
             if (sphere_hit(X[14], X[4], 0.008281)) return 1;
             if (sphere_hit(X[14], X[5], 0.008281)) return 1;
-            if (sphere_hit(X[14], X[6], 0.008281)) return 1;
-            if (sphere_hit(X[14], X[7], 0.009409)) return 1;
         }
+        if (sphere_hit(X[3], X[13], 0.010000000000000002)) return 1;
+        if (sphere_hit(X[4], X[13], 0.008281)) return 1;
     }
     if (skc_spheres_overlap(X[21], 0.18182500000000004, X[24], 0.06773875000000001)) {
         if (sphere_hit(X[15], X[21], 0.049206330625000023)) {
@@ -838,20 +832,8 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         }
     }
     if (skc_spheres_overlap(X[22], 0.14976375, X[24], 0.06773875000000001)) {
-        if (sphere_hit(X[15], X[22], 0.036010280814062504)) {
-            if (sphere_hit(X[15], X[8], 0.009409)) return 1;
-            if (sphere_hit(X[15], X[9], 0.006724000000000001)) return 1;
-            if (sphere_hit(X[15], X[10], 0.006724000000000001)) return 1;
-            if (sphere_hit(X[15], X[11], 0.006724000000000001)) return 1;
-            if (sphere_hit(X[15], X[12], 0.006724000000000001)) return 1;
-        }
-        if (sphere_hit(X[16], X[22], 0.036010280814062504)) {
-            if (sphere_hit(X[16], X[8], 0.009409)) return 1;
-            if (sphere_hit(X[16], X[9], 0.006724000000000001)) return 1;
-            if (sphere_hit(X[16], X[10], 0.006724000000000001)) return 1;
-            if (sphere_hit(X[16], X[11], 0.006724000000000001)) return 1;
-            if (sphere_hit(X[16], X[12], 0.006724000000000001)) return 1;
-        }
+        if (sphere_hit(X[11], X[16], 0.006724000000000001)) return 1;
+        if (sphere_hit(X[12], X[15], 0.006724000000000001)) return 1;
     }
     if (skc_spheres_overlap(X[22], 0.14976375, X[25], 0.04000000000000001)) {
         if (sphere_hit(X[17], X[22], 0.036010280814062504)) {
@@ -872,12 +854,60 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         }
     }
     if (skc_spheres_overlap(X[23], 0.07089625000000001, X[25], 0.04000000000000001)) {
-        if (sphere_hit(X[13], X[17], 0.0064)) return 1;
         if (sphere_hit(X[14], X[17], 0.0064)) return 1;
     }
-    if (skc_spheres_overlap(X[23], 0.07089625000000001, X[26], 0.03400000000000001)) {
-        if (sphere_hit(X[13], X[18], 0.005476000000000002)) return 1;
-        if (sphere_hit(X[14], X[18], 0.005476000000000002)) return 1;
+    if (outside) {
+        if (skc_spheres_overlap(X[19], 0.054000000000000006, X[21], 0.18182500000000004)) {
+            if (sphere_hit(X[0], X[21], 0.055613430625000015)) {
+                if (sphere_hit(X[0], X[3], 0.012995999999999997)) return 1;
+                if (sphere_hit(X[0], X[4], 0.011024999999999998)) return 1;
+                if (sphere_hit(X[0], X[5], 0.011024999999999998)) return 1;
+                if (sphere_hit(X[0], X[6], 0.011024999999999998)) return 1;
+                if (sphere_hit(X[0], X[7], 0.012320999999999997)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[20], 0.08695500000000002, X[22], 0.14976375)) {
+            if (sphere_hit(X[1], X[22], 0.0440008308140625)) {
+                if (sphere_hit(X[1], X[8], 0.013688999999999998)) return 1;
+                if (sphere_hit(X[1], X[9], 0.010404000000000002)) return 1;
+                if (sphere_hit(X[1], X[10], 0.010404000000000002)) return 1;
+            }
+            if (sphere_hit(X[2], X[22], 0.0440008308140625)) {
+                if (sphere_hit(X[2], X[8], 0.013688999999999998)) return 1;
+                if (sphere_hit(X[2], X[9], 0.010404000000000002)) return 1;
+                if (sphere_hit(X[2], X[10], 0.010404000000000002)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[21], 0.18182500000000004, X[23], 0.07089625000000001)) {
+            if (sphere_hit(X[13], X[21], 0.049206330625000023)) {
+                if (sphere_hit(X[13], X[5], 0.008281)) return 1;
+                if (sphere_hit(X[13], X[6], 0.008281)) return 1;
+                if (sphere_hit(X[13], X[7], 0.009409)) return 1;
+            }
+            if (sphere_hit(X[6], X[14], 0.008281)) return 1;
+            if (sphere_hit(X[7], X[14], 0.009409)) return 1;
+        }
+        if (skc_spheres_overlap(X[22], 0.14976375, X[24], 0.06773875000000001)) {
+            if (sphere_hit(X[15], X[22], 0.036010280814062504)) {
+                if (sphere_hit(X[15], X[8], 0.009409)) return 1;
+                if (sphere_hit(X[15], X[9], 0.006724000000000001)) return 1;
+                if (sphere_hit(X[15], X[10], 0.006724000000000001)) return 1;
+                if (sphere_hit(X[15], X[11], 0.006724000000000001)) return 1;
+            }
+            if (sphere_hit(X[16], X[22], 0.036010280814062504)) {
+                if (sphere_hit(X[16], X[8], 0.009409)) return 1;
+                if (sphere_hit(X[16], X[9], 0.006724000000000001)) return 1;
+                if (sphere_hit(X[16], X[10], 0.006724000000000001)) return 1;
+                if (sphere_hit(X[16], X[12], 0.006724000000000001)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[23], 0.07089625000000001, X[25], 0.04000000000000001)) {
+            if (sphere_hit(X[13], X[17], 0.0064)) return 1;
+        }
+        if (skc_spheres_overlap(X[23], 0.07089625000000001, X[26], 0.03400000000000001)) {
+            if (sphere_hit(X[13], X[18], 0.005476000000000002)) return 1;
+            if (sphere_hit(X[14], X[18], 0.005476000000000002)) return 1;
+        }
     }
     return 0;
 }
@@ -887,7 +917,7 @@ int skcoll_in_collision(const double *q, const double *S, int ns, const double *
     double T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     fk(q, T, PJ);
     points_of(T, PJ, X);
-    return collides(X, S, ns, C, nc, B, nb);
+    return collides(X, S, ns, C, nc, B, nb, outside_limits(q));
 }
 
 /* skcoll_in_collision with the obstacles packed as {spheres, ns, capsules, nc, boxes, nb} (addresses
@@ -1083,14 +1113,41 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[26][1] = -0.01 * T[4][5] + T[6][7];
     X[26][2] = -0.01 * T[4][9] + T[6][11];
 }
-/* verdicts of four configurations (rows of Q) */
-static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, unsigned char *out)
+/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
+   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
+   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
 {
+    int t = 0;
+    for (int l = 0; l < N_LINKS; ++l) {
+        start[l] = t;
+        for (int o = 0; o < ns; ++o) {
+            const double *ob = S + 4 * o;
+            const double dx = ob[0] - reach_centre[l][0], dy = ob[1] - reach_centre[l][1],
+                         dz = ob[2] - reach_centre[l][2], rr = reach_radius[l] + ob[3];
+            if (reach_radius[l] < 0.0 || !(dx * dx + dy * dy + dz * dz > rr * rr * (1.0 + 1e-9))) idx[t++] = o;
+        }
+    }
+    start[N_LINKS] = t;
+}
+
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
+                          int nb, const int *idx, const int *start, unsigned char *out)
+{
+    (void)idx; (void)start;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
+    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
+       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
     m4 far = {0, 0, 0, 0};
+    far |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
+    far |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
+    far |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
+    far |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
+    far |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
+    far |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1100,18 +1157,28 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        for (int o = 0; o < ns && !skv_all_(hit); ++o) {
-            const double *ob = S + 4 * o;
+        for (int t = start[0]; t < start[1]; ++t) {
+            const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
             need = ~hit & hit_obstacle(X[19], 0.054000000000000006, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[0], 0.054, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[1]; t < start[2]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[20], 0.08695500000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[1], 0.06, ob, ro);
                 hit |= need & hit_obstacle(X[2], 0.06, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[2]; t < start[3]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[21], 0.18182500000000004, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[3], 0.06, ob, ro);
@@ -1120,6 +1187,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[6], 0.051, ob, ro);
                 hit |= need & hit_obstacle(X[7], 0.056999999999999995, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[3]; t < start[4]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[22], 0.14976375, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[8], 0.056999999999999995, ob, ro);
@@ -1128,20 +1200,40 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[11], 0.042, ob, ro);
                 hit |= need & hit_obstacle(X[12], 0.042, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[4]; t < start[5]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[23], 0.07089625000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[13], 0.04, ob, ro);
                 hit |= need & hit_obstacle(X[14], 0.04, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[5]; t < start[6]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[24], 0.06773875000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[15], 0.04, ob, ro);
                 hit |= need & hit_obstacle(X[16], 0.04, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[6]; t < start[7]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[25], 0.04000000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[17], 0.04, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[7]; t < start[8]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[26], 0.03400000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[18], 0.034, ob, ro);
@@ -1149,18 +1241,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         if (skv_all_(hit)) goto done;
         /* self pairs, by pairs of links */
-        need = ~hit & hit2(X[19], X[21], 0.05561343062500003);
-        if (skv_any_(need)) {
-            near = need & hit2(X[0], X[21], 0.055613430625000015);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[3], 0.012995999999999997);
-                hit |= near & hit2(X[0], X[4], 0.011024999999999998);
-                hit |= near & hit2(X[0], X[5], 0.011024999999999998);
-                hit |= near & hit2(X[0], X[6], 0.011024999999999998);
-                hit |= near & hit2(X[0], X[7], 0.012320999999999997);
-            }
-            if (skv_all_(hit)) goto done;
-        }
         need = ~hit & hit2(X[19], X[22], 0.04151966581406251);
         if (skv_any_(need)) {
             near = need & hit2(X[0], X[22], 0.041519665814062495);
@@ -1197,22 +1277,10 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[20], X[22], 0.056035766601562516);
         if (skv_any_(need)) {
-            near = need & hit2(X[1], X[22], 0.0440008308140625);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[8], 0.013688999999999998);
-                hit |= near & hit2(X[1], X[9], 0.010404000000000002);
-                hit |= near & hit2(X[1], X[10], 0.010404000000000002);
-                hit |= near & hit2(X[1], X[11], 0.010404000000000002);
-                hit |= near & hit2(X[1], X[12], 0.010404000000000002);
-            }
-            near = need & hit2(X[2], X[22], 0.0440008308140625);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[8], 0.013688999999999998);
-                hit |= near & hit2(X[2], X[9], 0.010404000000000002);
-                hit |= near & hit2(X[2], X[10], 0.010404000000000002);
-                hit |= near & hit2(X[2], X[11], 0.010404000000000002);
-                hit |= near & hit2(X[2], X[12], 0.010404000000000002);
-            }
+            hit |= need & hit2(X[1], X[11], 0.010404000000000002);
+            hit |= need & hit2(X[1], X[12], 0.010404000000000002);
+            hit |= need & hit2(X[2], X[11], 0.010404000000000002);
+            hit |= need & hit2(X[2], X[12], 0.010404000000000002);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[20], X[23], 0.024917017126562507);
@@ -1245,22 +1313,14 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[21], X[23], 0.06386803020156254);
         if (skv_any_(need)) {
-            near = need & hit2(X[13], X[21], 0.049206330625000023);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[13], X[3], 0.010000000000000002);
-                hit |= near & hit2(X[13], X[4], 0.008281);
-                hit |= near & hit2(X[13], X[5], 0.008281);
-                hit |= near & hit2(X[13], X[6], 0.008281);
-                hit |= near & hit2(X[13], X[7], 0.009409);
-            }
             near = need & hit2(X[14], X[21], 0.049206330625000023);
             if (skv_any_(near)) {
                 hit |= near & hit2(X[14], X[3], 0.010000000000000002);
                 hit |= near & hit2(X[14], X[4], 0.008281);
                 hit |= near & hit2(X[14], X[5], 0.008281);
-                hit |= near & hit2(X[14], X[6], 0.008281);
-                hit |= near & hit2(X[14], X[7], 0.009409);
             }
+            hit |= need & hit2(X[3], X[13], 0.010000000000000002);
+            hit |= need & hit2(X[4], X[13], 0.008281);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[21], X[24], 0.06228206531406253);
@@ -1309,22 +1369,8 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[22], X[24], 0.047307337506250005);
         if (skv_any_(need)) {
-            near = need & hit2(X[15], X[22], 0.036010280814062504);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[15], X[8], 0.009409);
-                hit |= near & hit2(X[15], X[9], 0.006724000000000001);
-                hit |= near & hit2(X[15], X[10], 0.006724000000000001);
-                hit |= near & hit2(X[15], X[11], 0.006724000000000001);
-                hit |= near & hit2(X[15], X[12], 0.006724000000000001);
-            }
-            near = need & hit2(X[16], X[22], 0.036010280814062504);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[16], X[8], 0.009409);
-                hit |= near & hit2(X[16], X[9], 0.006724000000000001);
-                hit |= near & hit2(X[16], X[10], 0.006724000000000001);
-                hit |= near & hit2(X[16], X[11], 0.006724000000000001);
-                hit |= near & hit2(X[16], X[12], 0.006724000000000001);
-            }
+            hit |= need & hit2(X[11], X[16], 0.006724000000000001);
+            hit |= need & hit2(X[12], X[15], 0.006724000000000001);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[22], X[25], 0.036010280814062504);
@@ -1353,14 +1399,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[23], X[25], 0.012297978264062504);
         if (skv_any_(need)) {
-            hit |= need & hit2(X[13], X[17], 0.0064);
             hit |= need & hit2(X[14], X[17], 0.0064);
-            if (skv_all_(hit)) goto done;
-        }
-        need = ~hit & hit2(X[23], X[26], 0.011003223264062506);
-        if (skv_any_(need)) {
-            hit |= need & hit2(X[13], X[18], 0.005476000000000002);
-            hit |= need & hit2(X[14], X[18], 0.005476000000000002);
             if (skv_all_(hit)) goto done;
         }
     done:
@@ -1371,7 +1410,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1384,8 +1423,14 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    for (; k + 4 <= N; k += 4)
-        in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, out + k);
+    int small[16 * N_LINKS], start[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    if (idx) { /* no memory for the lists: one configuration at a time below */
+        reachable(S, ns, idx, start);
+        for (; k + 4 <= N; k += 4)
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+        if (idx != small) free(idx);
+    }
 #endif
     for (; k < N; ++k)
         out[k] = (unsigned char)skcoll_in_collision(Q + k * N_Q, S, ns, C, nc, B, nb);

@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include "symkin_collide.h"
 
@@ -307,6 +308,10 @@ static const int pairs[113][2] = { { 0, 3 }, { 0, 4 }, { 0, 5 }, { 0, 6 }, { 0, 
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 22, 23, 24, 25, 26, 27, 28, 29 };
 static const double bound_radius[N_LINKS] = { 0.06750000000000002, 0.10556625000000001, 0.28750000000000003, 0.24187875, 0.07701625000000002, 0.07776125000000002, 0.04700000000000001, 0.039950000000000006 };
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.0267477 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.06750000000006853, 0.1998192230040404, 0.6288721489441377, 0.9274290940838855, 1.062559000001064, 1.1572090000011586, 1.1942440000011956, 1.2424590000012439 };
 static const int link_start[N_LINKS + 1] = { 0, 1, 3, 9, 16, 18, 20, 21, 22 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -674,10 +679,25 @@ static inline int sphere_hit(const double a[3], const double b[3], double rr)
     return dx * dx + dy * dy + dz * dz < rr;
 }
 
-/* whether the configuration of points X collides (environment first, then self pairs) */
-static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
-                    int nb)
+/* whether q is outside the joint limits (or NaN): only then can the self pairs proved apart within
+   them (symkin.geometry.clearance) meet */
+static int outside_limits(const double *q)
 {
+    if (!(q[0] >= -6.283185307179586 && q[0] <= 6.283185307179586)) return 1;
+    if (!(q[1] >= -6.283185307179586 && q[1] <= 6.283185307179586)) return 1;
+    if (!(q[2] >= -6.283185307179586 && q[2] <= 6.283185307179586)) return 1;
+    if (!(q[3] >= -6.283185307179586 && q[3] <= 6.283185307179586)) return 1;
+    if (!(q[4] >= -6.283185307179586 && q[4] <= 6.283185307179586)) return 1;
+    if (!(q[5] >= -6.283185307179586 && q[5] <= 6.283185307179586)) return 1;
+    return 0;
+}
+
+/* whether the configuration of points X collides (environment first, then self pairs; the pairs
+   proved apart within the joint limits only when the configuration is outside them) */
+static int collides(double X[N_POINTS][3], const double *S, int ns, const double *C, int nc, const double *B,
+                    int nb, int outside)
+{
+    (void)outside;
     for (int o = 0; o < ns; ++o) {  /* obstacle spheres: each link's bound, then its shapes */
         const double *ob = S + 4 * o;
         const double ro = ob[3];
@@ -732,18 +752,11 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
             }
     /* self pairs, by pairs of links */
     if (skc_spheres_overlap(X[22], 0.06750000000000002, X[24], 0.28750000000000003)) {
-        if (sphere_hit(X[0], X[24], 0.12602500000000003)) {
-            if (sphere_hit(X[0], X[3], 0.020306250000000005)) return 1;
-            if (sphere_hit(X[0], X[4], 0.0172265625)) return 1;
-            if (sphere_hit(X[0], X[5], 0.0172265625)) return 1;
-            if (sphere_hit(X[0], X[6], 0.0172265625)) return 1;
-            if (sphere_hit(X[0], X[7], 0.0172265625)) return 1;
-            if (sphere_hit(X[0], X[8], 0.019251562499999996)) return 1;
-        }
+        if (sphere_hit(X[0], X[3], 0.020306250000000005)) return 1;
+        if (sphere_hit(X[0], X[4], 0.0172265625)) return 1;
     }
     if (skc_spheres_overlap(X[22], 0.06750000000000002, X[25], 0.24187875)) {
         if (sphere_hit(X[0], X[25], 0.09571521095156252)) {
-            if (sphere_hit(X[0], X[9], 0.019251562499999996)) return 1;
             if (sphere_hit(X[0], X[10], 0.013806250000000003)) return 1;
             if (sphere_hit(X[0], X[11], 0.013806250000000003)) return 1;
             if (sphere_hit(X[0], X[12], 0.013806250000000003)) return 1;
@@ -767,24 +780,9 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         if (sphere_hit(X[0], X[21], 0.0115455025)) return 1;
     }
     if (skc_spheres_overlap(X[23], 0.10556625000000001, X[25], 0.24187875)) {
-        if (sphere_hit(X[1], X[25], 0.10041214220156248)) {
-            if (sphere_hit(X[1], X[9], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[1], X[10], 0.015625)) return 1;
-            if (sphere_hit(X[1], X[11], 0.015625)) return 1;
-            if (sphere_hit(X[1], X[12], 0.015625)) return 1;
-            if (sphere_hit(X[1], X[13], 0.015625)) return 1;
-            if (sphere_hit(X[1], X[14], 0.015625)) return 1;
-            if (sphere_hit(X[1], X[15], 0.015625)) return 1;
-        }
-        if (sphere_hit(X[2], X[25], 0.10041214220156248)) {
-            if (sphere_hit(X[2], X[9], 0.021389062499999997)) return 1;
-            if (sphere_hit(X[2], X[10], 0.015625)) return 1;
-            if (sphere_hit(X[2], X[11], 0.015625)) return 1;
-            if (sphere_hit(X[2], X[12], 0.015625)) return 1;
-            if (sphere_hit(X[2], X[13], 0.015625)) return 1;
-            if (sphere_hit(X[2], X[14], 0.015625)) return 1;
-            if (sphere_hit(X[2], X[15], 0.015625)) return 1;
-        }
+        if (sphere_hit(X[1], X[14], 0.015625)) return 1;
+        if (sphere_hit(X[1], X[15], 0.015625)) return 1;
+        if (sphere_hit(X[2], X[15], 0.015625)) return 1;
     }
     if (skc_spheres_overlap(X[23], 0.10556625000000001, X[26], 0.07701625000000002)) {
         if (sphere_hit(X[1], X[16], 0.014884)) return 1;
@@ -807,39 +805,22 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         if (sphere_hit(X[2], X[21], 0.0132135025)) return 1;
     }
     if (skc_spheres_overlap(X[24], 0.28750000000000003, X[26], 0.07701625000000002)) {
-        if (sphere_hit(X[16], X[24], 0.11189025000000001)) {
-            if (sphere_hit(X[16], X[3], 0.014884)) return 1;
-            if (sphere_hit(X[16], X[4], 0.0122655625)) return 1;
-            if (sphere_hit(X[16], X[5], 0.0122655625)) return 1;
-            if (sphere_hit(X[16], X[6], 0.0122655625)) return 1;
-            if (sphere_hit(X[16], X[7], 0.0122655625)) return 1;
-            if (sphere_hit(X[16], X[8], 0.013983062499999999)) return 1;
-        }
-        if (sphere_hit(X[17], X[24], 0.11189025000000001)) {
-            if (sphere_hit(X[17], X[3], 0.014884)) return 1;
-            if (sphere_hit(X[17], X[4], 0.0122655625)) return 1;
-            if (sphere_hit(X[17], X[5], 0.0122655625)) return 1;
-            if (sphere_hit(X[17], X[6], 0.0122655625)) return 1;
-            if (sphere_hit(X[17], X[7], 0.0122655625)) return 1;
-            if (sphere_hit(X[17], X[8], 0.013983062499999999)) return 1;
-        }
+        if (sphere_hit(X[3], X[16], 0.014884)) return 1;
+        if (sphere_hit(X[3], X[17], 0.014884)) return 1;
+        if (sphere_hit(X[4], X[16], 0.0122655625)) return 1;
+        if (sphere_hit(X[4], X[17], 0.0122655625)) return 1;
     }
     if (skc_spheres_overlap(X[24], 0.28750000000000003, X[27], 0.07776125000000002)) {
         if (sphere_hit(X[18], X[24], 0.11189025000000001)) {
             if (sphere_hit(X[18], X[3], 0.014884)) return 1;
             if (sphere_hit(X[18], X[4], 0.0122655625)) return 1;
             if (sphere_hit(X[18], X[5], 0.0122655625)) return 1;
-            if (sphere_hit(X[18], X[6], 0.0122655625)) return 1;
-            if (sphere_hit(X[18], X[7], 0.0122655625)) return 1;
-            if (sphere_hit(X[18], X[8], 0.013983062499999999)) return 1;
         }
         if (sphere_hit(X[19], X[24], 0.11189025000000001)) {
             if (sphere_hit(X[19], X[3], 0.014884)) return 1;
             if (sphere_hit(X[19], X[4], 0.0122655625)) return 1;
             if (sphere_hit(X[19], X[5], 0.0122655625)) return 1;
             if (sphere_hit(X[19], X[6], 0.0122655625)) return 1;
-            if (sphere_hit(X[19], X[7], 0.0122655625)) return 1;
-            if (sphere_hit(X[19], X[8], 0.013983062499999999)) return 1;
         }
     }
     if (skc_spheres_overlap(X[24], 0.28750000000000003, X[28], 0.04700000000000001)) {
@@ -863,30 +844,12 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
         }
     }
     if (skc_spheres_overlap(X[25], 0.24187875, X[27], 0.07776125000000002)) {
-        if (sphere_hit(X[18], X[25], 0.08345093220156251)) {
-            if (sphere_hit(X[18], X[9], 0.013983062499999999)) return 1;
-            if (sphere_hit(X[18], X[10], 0.009409)) return 1;
-            if (sphere_hit(X[18], X[11], 0.009409)) return 1;
-            if (sphere_hit(X[18], X[12], 0.009409)) return 1;
-            if (sphere_hit(X[18], X[13], 0.009409)) return 1;
-            if (sphere_hit(X[18], X[14], 0.009409)) return 1;
-            if (sphere_hit(X[18], X[15], 0.009409)) return 1;
-        }
-        if (sphere_hit(X[19], X[25], 0.08345093220156251)) {
-            if (sphere_hit(X[19], X[9], 0.013983062499999999)) return 1;
-            if (sphere_hit(X[19], X[10], 0.009409)) return 1;
-            if (sphere_hit(X[19], X[11], 0.009409)) return 1;
-            if (sphere_hit(X[19], X[12], 0.009409)) return 1;
-            if (sphere_hit(X[19], X[13], 0.009409)) return 1;
-            if (sphere_hit(X[19], X[14], 0.009409)) return 1;
-            if (sphere_hit(X[19], X[15], 0.009409)) return 1;
-        }
+        if (sphere_hit(X[14], X[19], 0.009409)) return 1;
+        if (sphere_hit(X[15], X[18], 0.009409)) return 1;
+        if (sphere_hit(X[15], X[19], 0.009409)) return 1;
     }
     if (skc_spheres_overlap(X[25], 0.24187875, X[28], 0.04700000000000001)) {
         if (sphere_hit(X[20], X[25], 0.08345093220156251)) {
-            if (sphere_hit(X[20], X[9], 0.013983062499999999)) return 1;
-            if (sphere_hit(X[20], X[10], 0.009409)) return 1;
-            if (sphere_hit(X[20], X[11], 0.009409)) return 1;
             if (sphere_hit(X[20], X[12], 0.009409)) return 1;
             if (sphere_hit(X[20], X[13], 0.009409)) return 1;
             if (sphere_hit(X[20], X[14], 0.009409)) return 1;
@@ -895,8 +858,6 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
     }
     if (skc_spheres_overlap(X[25], 0.24187875, X[29], 0.039950000000000006)) {
         if (sphere_hit(X[21], X[25], 0.07942744432656251)) {
-            if (sphere_hit(X[21], X[9], 0.012365439999999998)) return 1;
-            if (sphere_hit(X[21], X[10], 0.0080910025)) return 1;
             if (sphere_hit(X[21], X[11], 0.0080910025)) return 1;
             if (sphere_hit(X[21], X[12], 0.0080910025)) return 1;
             if (sphere_hit(X[21], X[13], 0.0080910025)) return 1;
@@ -910,7 +871,90 @@ static int collides(double X[N_POINTS][3], const double *S, int ns, const double
     }
     if (skc_spheres_overlap(X[26], 0.07701625000000002, X[29], 0.039950000000000006)) {
         if (sphere_hit(X[16], X[21], 0.0075603025)) return 1;
-        if (sphere_hit(X[17], X[21], 0.0075603025)) return 1;
+    }
+    if (outside) {
+        if (skc_spheres_overlap(X[22], 0.06750000000000002, X[24], 0.28750000000000003)) {
+            if (sphere_hit(X[0], X[24], 0.12602500000000003)) {
+                if (sphere_hit(X[0], X[5], 0.0172265625)) return 1;
+                if (sphere_hit(X[0], X[6], 0.0172265625)) return 1;
+                if (sphere_hit(X[0], X[7], 0.0172265625)) return 1;
+                if (sphere_hit(X[0], X[8], 0.019251562499999996)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[22], 0.06750000000000002, X[25], 0.24187875)) {
+            if (sphere_hit(X[0], X[9], 0.019251562499999996)) return 1;
+        }
+        if (skc_spheres_overlap(X[23], 0.10556625000000001, X[25], 0.24187875)) {
+            if (sphere_hit(X[1], X[25], 0.10041214220156248)) {
+                if (sphere_hit(X[1], X[9], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[1], X[10], 0.015625)) return 1;
+                if (sphere_hit(X[1], X[11], 0.015625)) return 1;
+                if (sphere_hit(X[1], X[12], 0.015625)) return 1;
+                if (sphere_hit(X[1], X[13], 0.015625)) return 1;
+            }
+            if (sphere_hit(X[2], X[25], 0.10041214220156248)) {
+                if (sphere_hit(X[2], X[9], 0.021389062499999997)) return 1;
+                if (sphere_hit(X[2], X[10], 0.015625)) return 1;
+                if (sphere_hit(X[2], X[11], 0.015625)) return 1;
+                if (sphere_hit(X[2], X[12], 0.015625)) return 1;
+                if (sphere_hit(X[2], X[13], 0.015625)) return 1;
+                if (sphere_hit(X[2], X[14], 0.015625)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[24], 0.28750000000000003, X[26], 0.07701625000000002)) {
+            if (sphere_hit(X[16], X[24], 0.11189025000000001)) {
+                if (sphere_hit(X[16], X[5], 0.0122655625)) return 1;
+                if (sphere_hit(X[16], X[6], 0.0122655625)) return 1;
+                if (sphere_hit(X[16], X[7], 0.0122655625)) return 1;
+                if (sphere_hit(X[16], X[8], 0.013983062499999999)) return 1;
+            }
+            if (sphere_hit(X[17], X[24], 0.11189025000000001)) {
+                if (sphere_hit(X[17], X[5], 0.0122655625)) return 1;
+                if (sphere_hit(X[17], X[6], 0.0122655625)) return 1;
+                if (sphere_hit(X[17], X[7], 0.0122655625)) return 1;
+                if (sphere_hit(X[17], X[8], 0.013983062499999999)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[24], 0.28750000000000003, X[27], 0.07776125000000002)) {
+            if (sphere_hit(X[18], X[24], 0.11189025000000001)) {
+                if (sphere_hit(X[18], X[6], 0.0122655625)) return 1;
+                if (sphere_hit(X[18], X[7], 0.0122655625)) return 1;
+                if (sphere_hit(X[18], X[8], 0.013983062499999999)) return 1;
+            }
+            if (sphere_hit(X[7], X[19], 0.0122655625)) return 1;
+            if (sphere_hit(X[8], X[19], 0.013983062499999999)) return 1;
+        }
+        if (skc_spheres_overlap(X[25], 0.24187875, X[27], 0.07776125000000002)) {
+            if (sphere_hit(X[18], X[25], 0.08345093220156251)) {
+                if (sphere_hit(X[18], X[9], 0.013983062499999999)) return 1;
+                if (sphere_hit(X[18], X[10], 0.009409)) return 1;
+                if (sphere_hit(X[18], X[11], 0.009409)) return 1;
+                if (sphere_hit(X[18], X[12], 0.009409)) return 1;
+                if (sphere_hit(X[18], X[13], 0.009409)) return 1;
+                if (sphere_hit(X[18], X[14], 0.009409)) return 1;
+            }
+            if (sphere_hit(X[19], X[25], 0.08345093220156251)) {
+                if (sphere_hit(X[19], X[9], 0.013983062499999999)) return 1;
+                if (sphere_hit(X[19], X[10], 0.009409)) return 1;
+                if (sphere_hit(X[19], X[11], 0.009409)) return 1;
+                if (sphere_hit(X[19], X[12], 0.009409)) return 1;
+                if (sphere_hit(X[19], X[13], 0.009409)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[25], 0.24187875, X[28], 0.04700000000000001)) {
+            if (sphere_hit(X[20], X[25], 0.08345093220156251)) {
+                if (sphere_hit(X[20], X[9], 0.013983062499999999)) return 1;
+                if (sphere_hit(X[20], X[10], 0.009409)) return 1;
+                if (sphere_hit(X[20], X[11], 0.009409)) return 1;
+            }
+        }
+        if (skc_spheres_overlap(X[25], 0.24187875, X[29], 0.039950000000000006)) {
+            if (sphere_hit(X[9], X[21], 0.012365439999999998)) return 1;
+            if (sphere_hit(X[10], X[21], 0.0080910025)) return 1;
+        }
+        if (skc_spheres_overlap(X[26], 0.07701625000000002, X[29], 0.039950000000000006)) {
+            if (sphere_hit(X[17], X[21], 0.0075603025)) return 1;
+        }
     }
     return 0;
 }
@@ -920,7 +964,7 @@ int skcoll_in_collision(const double *q, const double *S, int ns, const double *
     double T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     fk(q, T, PJ);
     points_of(T, PJ, X);
-    return collides(X, S, ns, C, nc, B, nb);
+    return collides(X, S, ns, C, nc, B, nb, outside_limits(q));
 }
 
 /* skcoll_in_collision with the obstacles packed as {spheres, ns, capsules, nc, boxes, nb} (addresses
@@ -1125,14 +1169,41 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[29][1] = -0.01 * T[4][5] + T[6][7];
     X[29][2] = -0.01 * T[4][9] + T[6][11];
 }
-/* verdicts of four configurations (rows of Q) */
-static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, unsigned char *out)
+/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
+   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
+   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
 {
+    int t = 0;
+    for (int l = 0; l < N_LINKS; ++l) {
+        start[l] = t;
+        for (int o = 0; o < ns; ++o) {
+            const double *ob = S + 4 * o;
+            const double dx = ob[0] - reach_centre[l][0], dy = ob[1] - reach_centre[l][1],
+                         dz = ob[2] - reach_centre[l][2], rr = reach_radius[l] + ob[3];
+            if (reach_radius[l] < 0.0 || !(dx * dx + dy * dy + dz * dz > rr * rr * (1.0 + 1e-9))) idx[t++] = o;
+        }
+    }
+    start[N_LINKS] = t;
+}
+
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
+                          int nb, const int *idx, const int *start, unsigned char *out)
+{
+    (void)idx; (void)start;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
+    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
+       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
     m4 far = {0, 0, 0, 0};
+    far |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
+    far |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
+    far |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
+    far |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
+    far |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
+    far |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1142,18 +1213,28 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        for (int o = 0; o < ns && !skv_all_(hit); ++o) {
-            const double *ob = S + 4 * o;
+        for (int t = start[0]; t < start[1]; ++t) {
+            const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
             need = ~hit & hit_obstacle(X[22], 0.06750000000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[0], 0.0675, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[1]; t < start[2]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[23], 0.10556625000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[1], 0.075, ob, ro);
                 hit |= need & hit_obstacle(X[2], 0.075, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[2]; t < start[3]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[24], 0.28750000000000003, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[3], 0.075, ob, ro);
@@ -1163,6 +1244,11 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[7], 0.06375, ob, ro);
                 hit |= need & hit_obstacle(X[8], 0.07125, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[3]; t < start[4]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[25], 0.24187875, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[9], 0.07125, ob, ro);
@@ -1173,20 +1259,40 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= need & hit_obstacle(X[14], 0.05, ob, ro);
                 hit |= need & hit_obstacle(X[15], 0.05, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[4]; t < start[5]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[26], 0.07701625000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[16], 0.047, ob, ro);
                 hit |= need & hit_obstacle(X[17], 0.047, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[5]; t < start[6]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[27], 0.07776125000000002, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[18], 0.047, ob, ro);
                 hit |= need & hit_obstacle(X[19], 0.047, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[6]; t < start[7]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[28], 0.04700000000000001, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[20], 0.047, ob, ro);
             }
+        }
+        if (skv_all_(hit)) goto done;
+        for (int t = start[7]; t < start[8]; ++t) {
+            const double *ob = S + 4 * idx[t];
+            const double ro = ob[3];
             need = ~hit & hit_obstacle(X[29], 0.039950000000000006, ob, ro);
             if (skv_any_(need)) {
                 hit |= need & hit_obstacle(X[21], 0.03995, ob, ro);
@@ -1196,22 +1302,14 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         /* self pairs, by pairs of links */
         need = ~hit & hit2(X[22], X[24], 0.12602500000000003);
         if (skv_any_(need)) {
-            near = need & hit2(X[0], X[24], 0.12602500000000003);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[3], 0.020306250000000005);
-                hit |= near & hit2(X[0], X[4], 0.0172265625);
-                hit |= near & hit2(X[0], X[5], 0.0172265625);
-                hit |= near & hit2(X[0], X[6], 0.0172265625);
-                hit |= near & hit2(X[0], X[7], 0.0172265625);
-                hit |= near & hit2(X[0], X[8], 0.019251562499999996);
-            }
+            hit |= need & hit2(X[0], X[3], 0.020306250000000005);
+            hit |= need & hit2(X[0], X[4], 0.0172265625);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[22], X[25], 0.09571521095156252);
         if (skv_any_(need)) {
             near = need & hit2(X[0], X[25], 0.09571521095156252);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[0], X[9], 0.019251562499999996);
                 hit |= near & hit2(X[0], X[10], 0.013806250000000003);
                 hit |= near & hit2(X[0], X[11], 0.013806250000000003);
                 hit |= near & hit2(X[0], X[12], 0.013806250000000003);
@@ -1245,26 +1343,9 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[23], X[25], 0.12071802802500001);
         if (skv_any_(need)) {
-            near = need & hit2(X[1], X[25], 0.10041214220156248);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[1], X[9], 0.021389062499999997);
-                hit |= near & hit2(X[1], X[10], 0.015625);
-                hit |= near & hit2(X[1], X[11], 0.015625);
-                hit |= near & hit2(X[1], X[12], 0.015625);
-                hit |= near & hit2(X[1], X[13], 0.015625);
-                hit |= near & hit2(X[1], X[14], 0.015625);
-                hit |= near & hit2(X[1], X[15], 0.015625);
-            }
-            near = need & hit2(X[2], X[25], 0.10041214220156248);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[2], X[9], 0.021389062499999997);
-                hit |= near & hit2(X[2], X[10], 0.015625);
-                hit |= near & hit2(X[2], X[11], 0.015625);
-                hit |= near & hit2(X[2], X[12], 0.015625);
-                hit |= near & hit2(X[2], X[13], 0.015625);
-                hit |= near & hit2(X[2], X[14], 0.015625);
-                hit |= near & hit2(X[2], X[15], 0.015625);
-            }
+            hit |= need & hit2(X[1], X[14], 0.015625);
+            hit |= need & hit2(X[1], X[15], 0.015625);
+            hit |= need & hit2(X[2], X[15], 0.015625);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[23], X[26], 0.033336369306250016);
@@ -1297,24 +1378,10 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[24], X[26], 0.13287209651406254);
         if (skv_any_(need)) {
-            near = need & hit2(X[16], X[24], 0.11189025000000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[16], X[3], 0.014884);
-                hit |= near & hit2(X[16], X[4], 0.0122655625);
-                hit |= near & hit2(X[16], X[5], 0.0122655625);
-                hit |= near & hit2(X[16], X[6], 0.0122655625);
-                hit |= near & hit2(X[16], X[7], 0.0122655625);
-                hit |= near & hit2(X[16], X[8], 0.013983062499999999);
-            }
-            near = need & hit2(X[17], X[24], 0.11189025000000001);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[17], X[3], 0.014884);
-                hit |= near & hit2(X[17], X[4], 0.0122655625);
-                hit |= near & hit2(X[17], X[5], 0.0122655625);
-                hit |= near & hit2(X[17], X[6], 0.0122655625);
-                hit |= near & hit2(X[17], X[7], 0.0122655625);
-                hit |= near & hit2(X[17], X[8], 0.013983062499999999);
-            }
+            hit |= need & hit2(X[3], X[16], 0.014884);
+            hit |= need & hit2(X[3], X[17], 0.014884);
+            hit |= need & hit2(X[4], X[16], 0.0122655625);
+            hit |= need & hit2(X[4], X[17], 0.0122655625);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[24], X[27], 0.13341578075156252);
@@ -1324,9 +1391,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= near & hit2(X[18], X[3], 0.014884);
                 hit |= near & hit2(X[18], X[4], 0.0122655625);
                 hit |= near & hit2(X[18], X[5], 0.0122655625);
-                hit |= near & hit2(X[18], X[6], 0.0122655625);
-                hit |= near & hit2(X[18], X[7], 0.0122655625);
-                hit |= near & hit2(X[18], X[8], 0.013983062499999999);
             }
             near = need & hit2(X[19], X[24], 0.11189025000000001);
             if (skv_any_(near)) {
@@ -1334,8 +1398,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
                 hit |= near & hit2(X[19], X[4], 0.0122655625);
                 hit |= near & hit2(X[19], X[5], 0.0122655625);
                 hit |= near & hit2(X[19], X[6], 0.0122655625);
-                hit |= near & hit2(X[19], X[7], 0.0122655625);
-                hit |= near & hit2(X[19], X[8], 0.013983062499999999);
             }
             if (skv_all_(hit)) goto done;
         }
@@ -1367,35 +1429,15 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         }
         need = ~hit & hit2(X[25], X[27], 0.10216972960000002);
         if (skv_any_(need)) {
-            near = need & hit2(X[18], X[25], 0.08345093220156251);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[18], X[9], 0.013983062499999999);
-                hit |= near & hit2(X[18], X[10], 0.009409);
-                hit |= near & hit2(X[18], X[11], 0.009409);
-                hit |= near & hit2(X[18], X[12], 0.009409);
-                hit |= near & hit2(X[18], X[13], 0.009409);
-                hit |= near & hit2(X[18], X[14], 0.009409);
-                hit |= near & hit2(X[18], X[15], 0.009409);
-            }
-            near = need & hit2(X[19], X[25], 0.08345093220156251);
-            if (skv_any_(near)) {
-                hit |= near & hit2(X[19], X[9], 0.013983062499999999);
-                hit |= near & hit2(X[19], X[10], 0.009409);
-                hit |= near & hit2(X[19], X[11], 0.009409);
-                hit |= near & hit2(X[19], X[12], 0.009409);
-                hit |= near & hit2(X[19], X[13], 0.009409);
-                hit |= near & hit2(X[19], X[14], 0.009409);
-                hit |= near & hit2(X[19], X[15], 0.009409);
-            }
+            hit |= need & hit2(X[14], X[19], 0.009409);
+            hit |= need & hit2(X[15], X[18], 0.009409);
+            hit |= need & hit2(X[15], X[19], 0.009409);
             if (skv_all_(hit)) goto done;
         }
         need = ~hit & hit2(X[25], X[28], 0.08345093220156251);
         if (skv_any_(need)) {
             near = need & hit2(X[20], X[25], 0.08345093220156251);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[20], X[9], 0.013983062499999999);
-                hit |= near & hit2(X[20], X[10], 0.009409);
-                hit |= near & hit2(X[20], X[11], 0.009409);
                 hit |= near & hit2(X[20], X[12], 0.009409);
                 hit |= near & hit2(X[20], X[13], 0.009409);
                 hit |= near & hit2(X[20], X[14], 0.009409);
@@ -1407,8 +1449,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         if (skv_any_(need)) {
             near = need & hit2(X[21], X[25], 0.07942744432656251);
             if (skv_any_(near)) {
-                hit |= near & hit2(X[21], X[9], 0.012365439999999998);
-                hit |= near & hit2(X[21], X[10], 0.0080910025);
                 hit |= near & hit2(X[21], X[11], 0.0080910025);
                 hit |= near & hit2(X[21], X[12], 0.0080910025);
                 hit |= near & hit2(X[21], X[13], 0.0080910025);
@@ -1426,7 +1466,6 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         need = ~hit & hit2(X[26], X[29], 0.013681103639062504);
         if (skv_any_(need)) {
             hit |= need & hit2(X[16], X[21], 0.0075603025);
-            hit |= need & hit2(X[17], X[21], 0.0075603025);
             if (skv_all_(hit)) goto done;
         }
     done:
@@ -1437,7 +1476,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1450,8 +1489,14 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    for (; k + 4 <= N; k += 4)
-        in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, out + k);
+    int small[16 * N_LINKS], start[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    if (idx) { /* no memory for the lists: one configuration at a time below */
+        reachable(S, ns, idx, start);
+        for (; k + 4 <= N; k += 4)
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+        if (idx != small) free(idx);
+    }
 #endif
     for (; k < N; ++k)
         out[k] = (unsigned char)skcoll_in_collision(Q + k * N_Q, S, ns, C, nc, B, nb);

@@ -1,0 +1,249 @@
+"""Self pairs that no configuration within the joint limits brings into contact, proved by
+branch and bound over the joints between the two links.
+
+Many self pairs of a sphere model can never meet: a Panda's link 1 and link 3 are held apart by
+the elbow whatever q2 and q3 are. MoveIt finds such pairs by sampling ("Never" in an SRDF);
+sampling can miss the rare configuration that does touch. Here a pair is kept out of the fast
+check only with a proof. The distance ``d(q)`` of two spheres depends on the joints on the path
+between their links alone (the rest move both rigidly), and it is Lipschitz: turning revolute
+joint j by dtheta moves a point x by at most ``|x - o_j| dtheta``, and ``|x - o_j|`` is at most the
+lengths of the constant translations between joint j and x (rotations keep lengths), plus the
+strokes of any prismatic joints in between. So on a box of joint values with centre c and
+half-widths h, ``d >= d(c) - sum_j L_j h_j``. Boxes whose bound is not above ``margin`` are halved
+along the joint that contributes most; a pair is proved when every box of the limits is, and
+refused as soon as a box centre comes within ``margin`` (a configuration in the limits where the
+pair nearly or really touches) or the work exceeds a budget.
+
+The proof holds for q within ``tree.qlim``; the C kernel checks the proved pairs too whenever a
+configuration is outside those limits, so its verdicts are exact for every q.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.core.cache import cache_dir, write_atomic
+from symkin.core.version import __version__
+from symkin.geometry.pairs import Layout
+from symkin.model.geometry import Capsule
+from symkin.model.tree import joint_matrices
+
+__all__ = ["proved_apart", "reach_sphere"]
+
+MARGIN = 1e-6  # m: proved pairs stay at least this far apart (far above rounding in the kernel)
+BUDGET = 40_000  # box evaluations per pair of links before giving up on its unproved pairs
+_SAMPLES = 2048  # random configurations tried first (fixed seed: the same pairs every time)
+_CROWD = 2048  # open boxes of one pair beyond which it is given up
+_MAX_RANGE = 1e3  # a joint range wider than this (rad or m) is not boxed
+
+
+def _path(layout: Layout, seg: int, stop: set[int]) -> list[int]:
+    """Segments from ``seg`` up to (not including) the first one in ``stop``, deepest first."""
+    return [k for k in layout.ancestors(seg) if k not in stop]
+
+
+def _reach(tree: Any, path: list[int], lo: np.ndarray, hi: np.ndarray) -> list[float]:
+    """Per segment of ``path`` (deepest first), a bound on the distance from its joint origin to
+    the end of the path's last link frame: the translations after it and their strokes."""
+    num, out, acc = tree._num, [], 0.0
+    for k in path:
+        acc += float(np.linalg.norm(num.B[k][:3, 3]))
+        seg = tree.segments[k]
+        slot = None if seg.slot is None else tree.slots[seg.slot]
+        out.append(acc)
+        if slot is not None and not slot.revolute:  # the stroke of this prismatic joint
+            m, o = float(slot.multiplier), float(slot.offset)
+            acc += max(abs(m * lo[slot.joint] + o), abs(m * hi[slot.joint] + o))
+        acc += float(np.linalg.norm(num.A[k][:3, 3]))
+    return out
+
+
+def _lipschitz(tree: Any, path: list[int], reach: list[float], extra: float, n: int) -> np.ndarray:
+    """(n,) bound of |d x / d q_k| for a point ``extra`` away from the path's last link frame."""
+    L = np.zeros(n)
+    for k, r in zip(path, reach):
+        seg = tree.segments[k]
+        if seg.slot is None:
+            continue
+        slot = tree.slots[seg.slot]
+        L[slot.joint] += abs(float(slot.multiplier)) * ((r + extra) if slot.revolute else 1.0)
+    return L
+
+
+def _relative_walk(tree: Any, path: list[int], Q: np.ndarray) -> np.ndarray:
+    """(N, 4, 4) pose of the last link of ``path`` (deepest first) in the frame of the link the
+    path hangs from, at joint values Q (N, n)."""
+    num = tree._num
+    T = np.broadcast_to(np.eye(4), (Q.shape[0], 4, 4))
+    for k in reversed(path):
+        seg = tree.segments[k]
+        T = T @ num.A[k]
+        if seg.slot is not None:
+            s = tree.slots[seg.slot]
+            theta = float(s.multiplier) * Q[:, s.joint] + float(s.offset)
+            T = T @ joint_matrices(num.axis[k], not s.revolute, num.sign[k] * theta)
+        T = T @ num.B[k]
+    return T
+
+
+def _prove(
+    layout: Layout, pairs: list[tuple[int, int]], lo: np.ndarray, hi: np.ndarray
+) -> set[tuple[int, int]]:
+    """The pairs of one pair of links (spheres) proved apart over the box [lo, hi]."""
+    tree = layout.tree
+    a, b = layout.segment[pairs[0][0]], layout.segment[pairs[0][1]]
+    common = set(layout.ancestors(a)) & set(layout.ancestors(b))
+    pa, pb = _path(layout, a, common), _path(layout, b, common)
+    ra, rb = _reach(tree, pa, lo, hi), _reach(tree, pb, lo, hi)
+    xa = np.array([layout.shapes[i].points[0] for i, _ in pairs])
+    xb = np.array([layout.shapes[j].points[0] for _, j in pairs])
+    L = np.array(
+        [
+            _lipschitz(tree, pa, ra, float(np.linalg.norm(x)), tree.n)
+            + _lipschitz(tree, pb, rb, float(np.linalg.norm(y)), tree.n)
+            for x, y in zip(xa, xb)
+        ]
+    )  # (pairs, n)
+    dims = np.flatnonzero(L.any(axis=0))
+    width = hi[dims] - lo[dims]
+    if len(dims) and (~np.isfinite(width) | (width > _MAX_RANGE)).any():
+        return set()
+    ua, ia = np.unique(xa, axis=0, return_inverse=True)
+    ub, ib = np.unique(xb, axis=0, return_inverse=True)
+    ua, ub, ia, ib = ua.T, ub.T, ia.ravel(), ib.ravel()
+    R = np.array([layout.shapes[i].radius + layout.shapes[j].radius for i, j in pairs])
+
+    def distance(Q: np.ndarray) -> np.ndarray:  # (N, pairs) at joint values Q (N, n)
+        Ta, Tb = _relative_walk(tree, pa, Q), _relative_walk(tree, pb, Q)
+        ca = Ta[:, :3, :3] @ ua + Ta[:, :3, 3:]  # (N, 3, points)
+        cb = Tb[:, :3, :3] @ ub + Tb[:, :3, 3:]
+        e = ca[:, :, ia] - cb[:, :, ib]
+        return np.sqrt(np.einsum("Nrk,Nrk->Nk", e, e)) - R
+
+    # configurations where a pair (nearly) touches refute it at once: a fixed set of random ones
+    Q = np.zeros((_SAMPLES, tree.n))
+    Q[:, dims] = lo[dims] + width * np.random.default_rng(0).random((_SAMPLES, len(dims)))
+    alive = (distance(Q) >= MARGIN).all(axis=0)
+    centre = np.zeros((1, tree.n))
+    centre[0, dims] = 0.5 * (lo[dims] + hi[dims])
+    half = np.zeros((1, tree.n))
+    half[0, dims] = 0.5 * width
+    open_ = alive[None, :].copy()  # per box, the live pairs not yet proved on it
+    spent = 0
+    while len(centre) and alive.any():
+        spent += len(centre)
+        if spent > BUDGET:
+            alive &= ~open_.any(axis=0)
+            break
+        d = distance(centre)
+        alive &= ~(open_ & (d < MARGIN)).any(axis=0)
+        open_ &= alive & (d - half @ L.T < MARGIN)
+        crowded = open_.sum(axis=0) > _CROWD  # the pair's near contacts need ever more boxes
+        alive &= ~crowded
+        open_ &= ~crowded
+        keep = open_.any(axis=1)
+        centre, half, open_ = centre[keep], half[keep], open_[keep]
+        # halve each box along the joint contributing most to its open pairs' bound
+        k = np.argmax(half * (open_.astype(float) @ L), axis=1)
+        rows = np.arange(len(centre))
+        half[rows, k] *= 0.5
+        lower, upper = centre.copy(), centre.copy()
+        lower[rows, k] -= half[rows, k]
+        upper[rows, k] += half[rows, k]
+        centre = np.concatenate([lower, upper])
+        half = np.concatenate([half, half])
+        open_ = np.concatenate([open_, open_])
+    return {p for p, ok in zip(pairs, alive) if ok}
+
+
+def proved_apart(layout: Layout) -> frozenset[tuple[int, int]]:
+    """The self pairs of ``layout`` (two spheres) that no q within ``layout.tree.qlim`` brings
+    closer than :data:`MARGIN`, proved by the branch and bound of this module. Pairs with a
+    capsule are not tried. Memoised on the layout and kept in the compile cache
+    (``clearance/<key>.json``; a file that does not parse or names other pairs is recomputed)."""
+    cached = layout.__dict__.get("_proved_apart")
+    if cached is not None:
+        return cached
+    key = _key(layout)
+    path = cache_dir() / "clearance" / f"{key}.json"
+    result = _read(path, key, layout)
+    if result is None:
+        result = _compute(layout)
+        with contextlib.suppress(OSError):
+            write_atomic(path, json.dumps({"key": key, "pairs": sorted(result)}))
+    object.__setattr__(layout, "_proved_apart", result)
+    return result
+
+
+def _key(layout: Layout) -> str:
+    """sha256 of what the proof depends on: the tree, its limits, the geometry, this module's
+    constants and symkin's version."""
+    tree = layout.tree
+    h = hashlib.sha256()
+    h.update(
+        f"{tree.key}|{tree.geometry.fingerprint()}|{MARGIN}|{BUDGET}|{_SAMPLES}|{_CROWD}|{__version__}".encode()
+    )
+    h.update(np.ascontiguousarray(tree.qlim, dtype="<f8").tobytes())
+    return h.hexdigest()
+
+
+def _read(path: Path, key: str, layout: Layout) -> frozenset[tuple[int, int]] | None:
+    try:
+        data = json.loads(path.read_text())
+        pairs = frozenset((int(i), int(j)) for i, j in data["pairs"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if data.get("key") != key or not pairs <= set(layout.self_pairs):
+        return None
+    return pairs
+
+
+def _compute(layout: Layout) -> frozenset[tuple[int, int]]:
+    lo, hi = (np.asarray(x, dtype=float) for x in layout.tree.qlim)
+    groups: dict[tuple[str, str], list[tuple[int, int]]] = {}
+    for i, j in layout.self_pairs:
+        if isinstance(layout.shapes[i], Capsule) or isinstance(layout.shapes[j], Capsule):
+            continue
+        groups.setdefault((layout.shapes[i].link, layout.shapes[j].link), []).append((i, j))
+    out: set[tuple[int, int]] = set()
+    for pairs in groups.values():
+        out |= _prove(layout, pairs, lo, hi)
+    return frozenset(out)
+
+
+def reach_sphere(layout: Layout, segment: int, point: Any, radius: float) -> tuple[np.ndarray, float] | None:
+    """A sphere (centre in the base frame, radius) holding the sphere (``point`` on ``segment``'s
+    link, ``radius``) in every configuration within ``layout.tree.qlim``: centred on the origin of
+    the first joint on the link's path (which no joint moves), as large as the translations and
+    strokes from there to the point allow (rounded up). None when a stroke is unbounded."""
+    tree = layout.tree
+    lo, hi = (np.asarray(x, dtype=float) for x in tree.qlim)
+    path = layout.ancestors(segment)
+    moving = [k for k in path if tree.segments[k].slot is not None]
+    if not moving:  # nothing moves the point: its own place
+        L, _ = tree._walk(np.zeros((1, tree.n)))
+        T = np.eye(4) if segment < 0 else L[0, segment]
+        return T[:3, :3] @ np.asarray(point, dtype=float) + T[:3, 3], _up(float(radius))
+    top = moving[-1]
+    path = path[: path.index(top) + 1]
+    reach = _reach(tree, path, lo, hi)[-1]
+    slot = tree.slots[tree.segments[top].slot]
+    if not slot.revolute:
+        m, o = float(slot.multiplier), float(slot.offset)
+        reach += max(abs(m * lo[slot.joint] + o), abs(m * hi[slot.joint] + o))
+    R = reach + float(np.linalg.norm(point)) + float(radius)
+    if not np.isfinite(R):
+        return None
+    _, P = tree._walk(np.zeros((1, tree.n)))
+    return P[0, top, :3, 3].copy(), _up(R)
+
+
+def _up(r: float) -> float:
+    """``r`` with room for the rounding of the points it must hold (a relative 1e-12)."""
+    return r * (1.0 + 1e-12) + 1e-15
