@@ -22,7 +22,7 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``symkin list-frames path.urdf``: the tree with joint and link names, leaves marked."""
-    from symkin.model.urdf_tree import describe_urdf
+    from symkin.model.urdf import describe_urdf
 
     rows = describe_urdf(Path(args.urdf).expanduser(), base_link=args.base_link)
     if args.json:

@@ -167,8 +167,9 @@ def tree_derivation_functions(tree: Tree) -> list:
     """Derive the tree program of ``tree`` and build its emitted functions (imports sympy)."""
 
     def derive() -> list:
+        from symkin.symbolic.functions import tree_functions
         from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
-        from symkin.symbolic.tree_program import derive_tree_program, tree_functions
+        from symkin.symbolic.program import derive_tree_program
 
         return tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy, fold=True))
 

@@ -1,12 +1,13 @@
 """The derivation of a kinematic tree: the shared walk once, then each frame's pose and Jacobian.
 
-The tree is walked depth first exactly as the compiler does (:mod:`symkin.symbolic.tree_program`):
-each link frame from its parent link's, every new quantity named (``zeta_k``), so a part several
-frames share (a torso, a hip) appears once, with the frames it serves. Then each frame's pose and
-the nonzero columns of its Jacobian (Haviland and Corke, Manipulator Differential Kinematics,
-Part 1, 2023, eqs 31-34, frame f in place of the end effector; a mimic joint's column added by the
-chain rule). The named quantities are evaluated at random points and compared with the numeric
-reference :class:`symkin.Tree` (an independent walk with 4x4 matrices).
+The tree is walked depth first exactly as the compiler does
+(:func:`symkin.symbolic.program.derive_tree_program`): each link frame from its parent link's,
+every new quantity named (``zeta_k``), so a part several frames share (a torso, a hip) appears
+once, with the frames it serves. Then each frame's pose and the nonzero columns of its Jacobian
+(Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eqs 31-34, frame f in
+place of the end effector; a mimic joint's column added by the chain rule). The named quantities
+are evaluated at random points and compared with the numeric reference :class:`symkin.Tree` (an
+independent walk with 4x4 matrices).
 """
 
 from __future__ import annotations
@@ -74,7 +75,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     from symkin.emit.templates import render
     from symkin.errors import SymkinError, check_choice
     from symkin.symbolic.kinematics import const_to_sympy
-    from symkin.symbolic.tree_program import derive_tree_program, safe_text
+    from symkin.symbolic.program import derive_tree_program, safe_text
 
     check_choice(fmt, FORMATS, "format")
     if tree.n == 0:

@@ -1,4 +1,4 @@
-"""Emit a tree kernel: the functions of :func:`symkin.symbolic.tree_program.tree_functions` as C
+"""Emit a tree kernel: the functions of :func:`symkin.symbolic.functions.tree_functions` as C
 (a ``.c``/``.h`` pair and a CPython extension), a NumPy module or a CasADi module.
 
 One generated function per entry point, each the straight-line code its outputs need: the
@@ -14,7 +14,7 @@ from typing import Any
 
 from symkin.core.names import c_string, comment_safe, identifier
 from symkin.emit.templates import render
-from symkin.symbolic.tree_program import PER_FRAME
+from symkin.symbolic.program import PER_FRAME
 
 __all__ = ["render_tree", "tree_prefix", "TreeHeader", "FRAMED_DOCS"]
 
@@ -50,7 +50,7 @@ class TreeHeader:
     @classmethod
     def of(cls, tree: Any, functions: list, command: str, literal: str) -> TreeHeader:
         from symkin.core.version import __version__
-        from symkin.symbolic.tree_program import total_ops
+        from symkin.symbolic.program import total_ops
 
         return cls(
             robot=identifier(tree.name),

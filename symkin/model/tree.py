@@ -181,8 +181,8 @@ class Tree(FrameMethods):
         (default the root link) on the path to at least one of ``frames`` (link names, default
         every leaf link below ``base_link``, depth first). Fixed joints are folded, continuous
         joints are revolute, mimic joints follow their joint exactly; see
-        :mod:`symkin.model.urdf_tree`. ``snap_tol`` as in :func:`symkin.model.urdf.urdf_args`."""
-        from symkin.model.urdf_tree import urdf_tree_args
+        :mod:`symkin.model.urdf`. ``snap_tol`` as in :func:`symkin.model.urdf.urdf_args`."""
+        from symkin.model.urdf import urdf_tree_args
 
         return cls(**urdf_tree_args(path_or_xml, frames, base_link, snap_tol, name))
 

@@ -34,7 +34,16 @@ from symkin.symbolic.kinematics import (
     derive,
     joint_symbols,
 )
-from symkin.symbolic.program import HessianLoop, KinematicProgram, derive_program, program_code
+from symkin.symbolic.program import (
+    PER_FRAME,
+    TREE_FUNCTIONS,
+    HessianLoop,
+    KinematicProgram,
+    TreeProgram,
+    derive_program,
+    program_code,
+    safe_text,
+)
 
 __all__ = [
     "KinFunction",
@@ -50,6 +59,7 @@ __all__ = [
     "expanded_if_small",
     "total_counts",
     "fk_j_h_counts",
+    "tree_functions",
 ]
 
 FUNCTION_DOCS: dict[str, str] = {  # "Part 1": Haviland and Corke 2023; "MMC": Haviland and Corke 2020
@@ -184,6 +194,33 @@ def _program(kp: KinematicProgram) -> list[KinFunction]:
         "hessian0", FUNCTION_DOCS["hessian0"], replace(both, scratch=("J",)), delegate="jacob0_hessian0"
     )
     return [functions[name] for name in FUNCTION_DOCS]
+
+
+def tree_functions(tp: TreeProgram) -> list[KinFunction]:
+    """The emitted functions of a tree kernel
+    (:data:`~symkin.symbolic.program.TREE_FUNCTIONS`, then per frame
+    :data:`~symkin.symbolic.program.PER_FRAME`), each the lines its outputs need."""
+    T, J0 = tp.T, tp.J0
+    out = [
+        KinFunction("fkine_all", TREE_FUNCTIONS["fkine_all"], program_code(tp, {"T": T})),  # type: ignore[arg-type]
+        KinFunction("jacob0_all", TREE_FUNCTIONS["jacob0_all"], program_code(tp, {"J": J0})),  # type: ignore[arg-type]
+        KinFunction(
+            "fkine_jacob0_all",
+            TREE_FUNCTIONS["fkine_jacob0_all"],
+            program_code(tp, {"T": T, "J": J0}),  # type: ignore[arg-type]
+        ),
+    ]
+    for k, frame in enumerate(tp.frames):
+        spec = {
+            "fkine": {"T": T[k]},
+            "jacob0": {"J": J0[k]},
+            "jacobe": {"J": tp.Je[k]},
+            "fkine_jacob0": {"T": T[k], "J": J0[k]},
+        }
+        for base, outs in spec.items():
+            doc = PER_FRAME[base].format(k=k, name=safe_text(frame))
+            out.append(KinFunction(f"{base}_{k}", doc, program_code(tp, outs)))  # type: ignore[arg-type]
+    return out
 
 
 def derive_kinematics(robot: Robot, strategy: str | None = None) -> SymbolicKinematics | KinematicProgram:

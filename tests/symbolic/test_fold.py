@@ -21,8 +21,7 @@ from symkin.symbolic import kinematics as symbolic_kinematics
 from symkin.symbolic.fold import MAX_RUN, Fixed, fold_constants
 from symkin.symbolic.functions import EXPANDED_MAX_NODES, expanded_if_small
 from symkin.symbolic.kinematics import ExpansionTooLargeError, const_to_sympy, derive, joint_symbols
-from symkin.symbolic.program import derive_program
-from symkin.symbolic.tree_program import derive_tree_program
+from symkin.symbolic.program import derive_program, derive_tree_program
 from tests.conftest import assert_close
 from tests.symbolic.test_kinematics import assert_expanded_matches_reference
 from tests.symbolic.test_program import assert_program_matches_reference, evaluator

@@ -115,7 +115,7 @@ def test_constant_and_mirror_tests_need_no_expansion():
     thousands of terms."""
     import sympy as sp
 
-    from symkin.emit.analytic_ik_c import _sign_under
+    from symkin.emit.analytic_ik import _sign_under
     from symkin.symbolic.ik_geometry import is_constant, value_at
 
     c, s, r = sp.symbols("c0 s0 r11", real=True)

@@ -8,7 +8,7 @@ import numpy as np
 from symkin import Tree
 from symkin.compiler.compile import tree_derivation_functions
 from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
-from symkin.symbolic.tree_program import derive_tree_program
+from symkin.symbolic.program import derive_tree_program
 from tests.model.tree_urdfs import GRIPPER, joint, urdf
 
 
