@@ -121,7 +121,7 @@ def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> di
     batch = len(Q)
     row: dict[str, Any] = {"obstacles": len(env)}
     row["one_call_ns"] = per_call_us(lambda: kernel.in_collision(Q[0], env), budget=0.1) * 1e3
-    row["batch_ns"] = _batch_ns(lambda: kernel.in_collision(Q, env), batch, 10)  # a few ms each
+    row["batch_ns"] = _batch_ns(lambda: kernel.in_collision(Q, env), batch, 40)  # a few ms each
     row["batch_distances_ns"] = _batch_ns(lambda: kernel.distances(Q, env), batch, 1)
     small = Q[: max(batch // 20, 1)]
     row["numpy_batch_ns"] = _batch_ns(lambda: numpy_kin.in_collision(small, env), len(small), 1)
