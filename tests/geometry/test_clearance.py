@@ -140,3 +140,24 @@ def test_the_proof_is_kept_in_the_cache_and_a_damaged_file_is_recomputed(tmp_pat
         assert json.loads(path.read_text())["pairs"] == [[0, 1]]
     # other limits are another proof: with contact possible, nothing is proved
     assert proved_apart(layout_of(_two_link(3.1))) == frozenset()
+
+
+@pytest.mark.parametrize("name", ["gripper", "quadruped"])
+def test_proofs_on_trees_with_mimic_and_prismatic_joints(name):
+    """A gripper (branches, a mimic joint with a multiplier) and a quadruped (general axes, a
+    prismatic tail): the proved pairs keep their distance on random configurations, and each shape
+    stays in its reach sphere."""
+    from tests.emit.test_collision_numpy import MODELS
+
+    model = MODELS[name]()
+    layout = layout_of(model)
+    proved = proved_apart(layout)
+    assert proved
+    index = [k for k, pair in enumerate(layout.self_pairs) if pair in proved]
+    Q = model.random_q(20_000, seed=5)
+    d = distances(model, Q)[:, : len(layout.self_pairs)]
+    assert d[:, index].min() >= MARGIN
+    X = points(model, Q[:2000])
+    for i, s in enumerate(layout.shapes):
+        centre, R = reach_sphere(layout, layout.segment[i], s.points[0], s.radius)
+        assert (np.linalg.norm(X[:, layout.point_index[i]] - centre, axis=-1) + s.radius).max() <= R
