@@ -52,6 +52,11 @@ def _num(x: float) -> str:
     return r if ("e" in r or "." in r or "n" in r) else r + ".0"
 
 
+def _py_num(x: float) -> str:
+    """A Python float literal that reads back exactly, infinities as float("inf")."""
+    return _num(x) if np.isfinite(x) else ('float("inf")' if x > 0 else 'float("-inf")')
+
+
 # The straight-line link poses are written in three dialects: "c" (one configuration, double),
 # "c4" (four configurations in the lanes of a v4) and "py" (NumPy: each entry an (N,) array).
 Dialect = str
@@ -498,6 +503,14 @@ def collision_module_name(model_name: str) -> str:
     return f"symkin_{identifier(model_name)}_collision"
 
 
+def _py_rows(rows: Any) -> str:
+    """A tuple literal of tuples of floats, one row per line."""
+    lines = "".join(
+        f"        ({', '.join(_py_num(x) for x in row)}{',' * (len(row) == 1)}),\n" for row in rows
+    )
+    return "(\n" + lines + "    )"
+
+
 def _py_tuple(items: list[str], indent: int = 8, width: int = 100) -> str:
     """A Python tuple literal of ``items`` (their source text), wrapped to ``width`` columns."""
     if not items:
@@ -532,6 +545,7 @@ def render_collision_casadi(layout: Any, command: str = "symkin generate") -> di
 def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
     tree = layout.tree
     tables = Tables.of(layout)
+    proved = proved_apart(layout)  # the generated in_collision skips them within the limits
     points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
     module = collision_module_name(tree.name) + ("_casadi" if backend == "casadi" else "")
     fk, vals = _fk_lines(tree, "py")
@@ -561,6 +575,8 @@ def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
                 ]
             ),
             "ancestors": _py_tuple([repr(tuple(x)) for x in tables.ancestors]),
+            "proved": _py_tuple([f"({i}, {j})" for i, j in sorted(proved)]),
+            "qlim": "None" if not proved else _py_rows(tree.qlim),
         },
         fk=fk,
         point_code=_point_lines(points, "py", vals),

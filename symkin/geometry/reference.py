@@ -52,6 +52,9 @@ class Tables:
         self_pairs: (i, j) shape indices checked against each other.
         joints: per segment, its joint: (q index, multiplier, revolute, axis 0-2, sign), or None.
         ancestors: per segment, the segments with a joint from it up to the base (itself first).
+        proved: self pairs proved apart within ``qlim`` (:func:`symkin.geometry.proved_apart`):
+            :func:`collides_frames` given the joint values skips them for rows within the limits.
+        qlim: the joint limits (lower row, upper row) the proof holds for, or None.
     """
 
     n: int
@@ -62,6 +65,8 @@ class Tables:
     self_pairs: tuple[tuple[int, int], ...]
     joints: tuple[tuple[int, float, bool, int, float] | None, ...]
     ancestors: tuple[tuple[int, ...], ...]
+    proved: tuple[tuple[int, int], ...] = ()
+    qlim: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     @classmethod
     def of(cls, layout: Layout) -> Tables:
@@ -243,18 +248,31 @@ def evaluate_frames(
 CHUNK = 2048  # configurations per step of collides_frames (its (chunk, pairs, 3) temporaries)
 
 
-def collides_frames(tab: Tables, X: np.ndarray, env: Any = None) -> np.ndarray:
+def _sphere_pairs(tab: Tables, pairs: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """I, J and the squared radius sums of ``pairs`` (two spheres each)."""
+    radius = tab.arrays[2]
+    P = np.array(pairs, dtype=int).reshape(-1, 2)
+    return P[:, 0], P[:, 1], (radius[P[:, 0]] + radius[P[:, 1]]) ** 2
+
+
+def collides_frames(tab: Tables, X: np.ndarray, env: Any = None, Q: np.ndarray | None = None) -> np.ndarray:
     """Whether any active pair overlaps, (N,) bools, from the shape points X (N, P, 3): the
     verdicts of ``evaluate_frames(...)[0] < 0`` with less work. Two spheres are compared by their
     squared distance against the squared sum of their radii (as the C kernel does; no normals, no
-    closest points); a pair with a capsule or a box is measured."""
+    closest points); a pair with a capsule or a box is measured. Given the joint values Q (N, n),
+    the pairs ``tab.proved`` are tried only for the rows outside ``tab.qlim`` (the same verdicts:
+    within the limits they cannot meet)."""
     env = as_environment(env)
     arrays = tab.arrays
     caps, first, radius, _ = arrays
-    pairs = np.array(tab.self_pairs, dtype=int).reshape(-1, 2)
-    two = ~caps[pairs[:, 0]] & ~caps[pairs[:, 1]]
-    I, J, others = pairs[two, 0], pairs[two, 1], pairs[~two]
-    rr = (radius[I] + radius[J]) ** 2
+    proved = set(tab.proved) if Q is not None and tab.qlim is not None else set()
+    two = [p for p in tab.self_pairs if not caps[p[0]] and not caps[p[1]]]
+    others = np.array([p for p in tab.self_pairs if caps[p[0]] or caps[p[1]]], dtype=int).reshape(-1, 2)
+    I, J, rr = _sphere_pairs(tab, [p for p in two if p not in proved])
+    I2, J2, rr2 = _sphere_pairs(tab, [p for p in two if p in proved])
+    if len(I2):
+        lo, hi = np.asarray(tab.qlim, dtype=float)
+        outside = ~((lo <= Q) & (hi >= Q)).all(axis=1)  # NaN rows too
     sph = np.nonzero(~caps)[0]
     O = env.arrays()["spheres"]
     rro = (radius[sph][:, None] + O[None, :, 3]) ** 2  # (K, M)
@@ -266,6 +284,11 @@ def collides_frames(tab: Tables, X: np.ndarray, env: Any = None) -> np.ndarray:
         h = np.zeros(Y.shape[0], dtype=bool)
         if len(I):
             h |= (_squared(Y[:, first[I]] - Y[:, first[J]]) < rr).any(axis=1)
+        if len(I2):
+            rows = np.flatnonzero(outside[start : start + CHUNK])
+            if len(rows):
+                Z = Y[rows]
+                h[rows] |= (_squared(Z[:, first[I2]] - Z[:, first[J2]]) < rr2).any(axis=1)
         if len(others):
             h |= (_pair_kinds(Y, arrays, others[:, 0], others[:, 1])[0] < 0).any(axis=1)
         if len(O) and len(sph):

@@ -161,3 +161,20 @@ def test_proofs_on_trees_with_mimic_and_prismatic_joints(name):
     for i, s in enumerate(layout.shapes):
         centre, R = reach_sphere(layout, layout.segment[i], s.points[0], s.radius)
         assert (np.linalg.norm(X[:, layout.point_index[i]] - centre, axis=-1) + s.radius).max() <= R
+
+
+def test_the_generated_numpy_module_checks_proved_pairs_outside_the_limits():
+    """The generated NumPy module skips the proved pairs only for rows within the limits: the
+    two-link robot's collisions beyond its limit are found, in a batch and one at a time."""
+    from symkin.runtime.collision import collision_module
+
+    robot = _two_link(2.9)
+    module = collision_module(layout_of(robot), "numpy")
+    assert module.TABLES.proved == ((0, 1),)
+    rng = np.random.default_rng(1)
+    Q = np.column_stack([rng.uniform(-1, 1, 103), rng.uniform(-3.1, 3.1, 103)])
+    Q[5] = [0.2, 3.05]
+    expected = np.array([in_collision(robot, q) for q in Q])
+    assert expected[5] and 0 < expected.mean() < 0.5
+    assert np.array_equal(module.in_collision(Q), expected)
+    assert module.in_collision(Q[5]) and not module.in_collision([0.2, 2.5])

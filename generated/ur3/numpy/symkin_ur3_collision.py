@@ -59,6 +59,15 @@ TABLES = Tables(
         (0,), (1, 0), (2, 1, 0), (3, 2, 1, 0), (4, 3, 2, 1, 0), (5, 4, 3, 2, 1, 0),
         (5, 4, 3, 2, 1, 0),
     ),
+    proved=(
+        (0, 3), (0, 4), (0, 5), (0, 6), (0, 7), (1, 8), (1, 9), (1, 10), (2, 8), (2, 9), (2, 10),
+        (5, 13), (6, 13), (6, 14), (7, 13), (7, 14), (8, 15), (8, 16), (9, 15), (9, 16), (10, 15),
+        (10, 16), (11, 15), (12, 16), (13, 17), (13, 18), (14, 18),
+    ),
+    qlim=(
+        (-6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586, -6.283185307179586),
+        (6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586, 6.283185307179586),
+    ),
 )
 
 
@@ -576,6 +585,7 @@ def distance_jacobians(q, env=None):
 
 def in_collision(q, env=None):
     """Whether any active pair overlaps: a bool, or (N,) bools for a batch."""
-    (X, _), single = _batch(q)
-    hit = collides_frames(TABLES, X, env)
+    Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)
+    X, _ = frames_one(Q[0].tolist()) if Q.shape[0] == 1 else frames(Q)
+    hit = collides_frames(TABLES, X, env, Q)
     return bool(hit[0]) if single else hit
