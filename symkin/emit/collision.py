@@ -9,7 +9,10 @@ The pair tests call the primitives of ``runtime/csrc/symkin_collide.h``. Functio
 
 - ``skcoll_points(q, X)``: shape points in the base frame, (P, 3).
 - ``skcoll_in_collision(q, S, ns, C, nc, B, nb)``: 1 when any active pair overlaps; stops at the
-  first one found (environment first, then self pairs).
+  first one found (environment first, then self pairs). The self pairs proved apart within the
+  joint limits (:func:`symkin.geometry.proved_apart`) are tried only for q outside them; the batch
+  tests each link only against the obstacle spheres within its reach sphere
+  (:func:`symkin.geometry.reach_sphere`).
 - ``skcoll_distances(q, S, ns, C, nc, B, nb, d, J)``: the signed distance of every active pair and,
   when ``J`` is not NULL, its gradient row (M, n).
 - ``skcoll_distance_rows(q, S, ns, C, nc, B, nb, idx, k, J)``: the gradient rows (k, n) of the k

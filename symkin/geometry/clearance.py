@@ -14,8 +14,10 @@ along the joint that contributes most; a pair is proved when every box of the li
 refused as soon as a box centre comes within ``margin`` (a configuration in the limits where the
 pair nearly or really touches) or the work exceeds a budget.
 
-The proof holds for q within ``tree.qlim``; the C kernel checks the proved pairs too whenever a
-configuration is outside those limits, so its verdicts are exact for every q.
+The proof holds for q within ``tree.qlim``; the C kernel and the generated NumPy module check
+the proved pairs too whenever a configuration is outside those limits (or NaN), so their verdicts
+are exact for every q. :func:`reach_sphere` bounds where a shape can be at all, for the C batch's
+per-link obstacle lists.
 """
 
 from __future__ import annotations
