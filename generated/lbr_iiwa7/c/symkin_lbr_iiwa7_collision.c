@@ -308,10 +308,6 @@ static const int pairs[167][2] = { { 0, 5 }, { 0, 6 }, { 0, 7 }, { 0, 8 }, { 0, 
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 23, 24, 25, 26, 27, 28, 29, 30, 31 };
 static const double bound_radius[N_LINKS] = { 0.13562071897723668, 0.15125000000000002, 0.173449505221304, 0.15012500000000004, 0.173449505221304, 0.10075000000000003, 0.10204163456597994, 0.05500000000000001, 0.05000000000000001 };
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
-static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.0675 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.13562071897737335, 0.4000000000004011, 0.6043990104432135, 0.7962500000007976, 1.0043990104436138, 1.101250000001103, 1.2690832691332306, 1.2800000000012814, 1.3410000000013425 };
 static const int link_start[N_LINKS + 1] = { 0, 2, 5, 9, 12, 16, 18, 21, 22, 23 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -1331,6 +1327,11 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[31][1] = -0.025 * PJ[6][6] + T[7][7];
     X[31][2] = -0.025 * PJ[6][10] + T[7][11];
 }
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.0675 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.13562071897737335, 0.4000000000004011, 0.6043990104432135, 0.7962500000007976, 1.0043990104436138, 1.101250000001103, 1.2690832691332306, 1.2800000000012814, 1.3410000000013425 };
+
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
    obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
@@ -1376,6 +1377,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
+        (void)near;
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];

@@ -308,10 +308,6 @@ static const int pairs[600][2] = { { 0, 8 }, { 0, 9 }, { 0, 10 }, { 0, 11 }, { 0
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 43, 44, 45, 46, 47, 48, 49, 50, 51 };
 static const double bound_radius[N_LINKS] = { 0.14700877125495693, 0.17, 0.15776472678623427, 0.15570039966835872, 0.1450104159433875, 0.20357054015361234, 0.11012205669071391, 0.09274917217635377, 0.10708214556237387 };
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
-static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.095 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 } };
-static const double reach_radius[N_LINKS] = { 0.14700877125510498, 0.2650000000002661, 0.2327647267864681, 0.5572957412477672, 0.6122604159440009, 1.0938909366508482, 0.9465064460977214, 1.0799959345867152, 1.1892832815074645 };
 static const int link_start[N_LINKS + 1] = { 0, 3, 8, 12, 18, 22, 28, 31, 34, 43 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -2025,6 +2021,11 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[51][1] = -0.049 * PJ[6][6] + T[7][7];
     X[51][2] = -0.049 * PJ[6][10] + T[7][11];
 }
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.095 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 } };
+static const double reach_radius[N_LINKS] = { 0.14700877125510498, 0.2650000000002661, 0.2327647267864681, 0.5572957412477672, 0.6122604159440009, 1.0938909366508482, 0.9465064460977214, 1.0799959345867152, 1.1892832815074645 };
+
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
    obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
@@ -2070,6 +2071,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
+        (void)near;
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];

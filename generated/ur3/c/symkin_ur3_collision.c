@@ -308,10 +308,6 @@ static const int pairs[92][2] = { { 0, 3 }, { 0, 4 }, { 0, 5 }, { 0, 6 }, { 0, 7
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 19, 20, 21, 22, 23, 24, 25, 26 };
 static const double bound_radius[N_LINKS] = { 0.054000000000000006, 0.08695500000000002, 0.18182500000000004, 0.14976375, 0.07089625000000001, 0.06773875000000001, 0.04000000000000001, 0.03400000000000001 };
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
-static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.04557 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.05400000000005502, 0.24122807615094335, 0.5045856760643678, 0.642011233494592, 0.7611500000007623, 0.8465000000008477, 0.8833550000008845, 0.9324000000009337 };
 static const int link_start[N_LINKS + 1] = { 0, 1, 3, 8, 13, 15, 17, 18, 19 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -1113,6 +1109,11 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[26][1] = -0.01 * T[4][5] + T[6][7];
     X[26][2] = -0.01 * T[4][9] + T[6][11];
 }
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.04557 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.05400000000005502, 0.24122807615094335, 0.5045856760643678, 0.642011233494592, 0.7611500000007623, 0.8465000000008477, 0.8833550000008845, 0.9324000000009337 };
+
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
    obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
@@ -1157,6 +1158,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
+        (void)near;
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];

@@ -308,10 +308,6 @@ static const int pairs[113][2] = { { 0, 3 }, { 0, 4 }, { 0, 5 }, { 0, 6 }, { 0, 
 /* per link with shapes: its bounding sphere (point, radius) and its shapes link_shapes[link_start[l] ..) */
 static const int bound_point[N_LINKS] = { 22, 23, 24, 25, 26, 27, 28, 29 };
 static const double bound_radius[N_LINKS] = { 0.06750000000000002, 0.10556625000000001, 0.28750000000000003, 0.24187875, 0.07701625000000002, 0.07776125000000002, 0.04700000000000001, 0.039950000000000006 };
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
-static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.0267477 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.06750000000006853, 0.1998192230040404, 0.6288721489441377, 0.9274290940838855, 1.062559000001064, 1.1572090000011586, 1.1942440000011956, 1.2424590000012439 };
 static const int link_start[N_LINKS + 1] = { 0, 1, 3, 9, 16, 18, 20, 21, 22 };
 static const int link_shapes[N_SHAPES] = { 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21 };
 /* per segment: its joint's q index, multiplier, revolute, axis, sign (for the distance gradients) */
@@ -1169,6 +1165,11 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[29][1] = -0.01 * T[4][5] + T[6][7];
     X[29][2] = -0.01 * T[4][9] + T[6][11];
 }
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
+   link only against the obstacle spheres that meet it */
+static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.0267477 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
+static const double reach_radius[N_LINKS] = { 0.06750000000006853, 0.1998192230040404, 0.6288721489441377, 0.9274290940838855, 1.062559000001064, 1.1572090000011586, 1.1942440000011956, 1.2424590000012439 };
+
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
    obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
@@ -1213,6 +1214,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
+        (void)near;
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
