@@ -298,60 +298,58 @@ def _point_lines(
     return lines
 
 
-def _self_code(groups: dict, plan: tuple) -> list[str]:
-    """The scalar self checks (C lines, ``return 1`` on a hit) of ``groups`` ((link a, link b) ->
-    shape pairs; ``plan``: bounds, link of each shape, first points, radii, which are capsules): per
-    pair of links, their bounding spheres, then each shape pair (two spheres: squared distance
-    against the constant squared radius sum); a sphere with SPHERE_FIRST or more partners on the
-    other link meets that link's bound first."""
+# The self checks' C lines, scalar (return 1 on a hit) and four-lane (spheres only: a lane already
+# hit needs nothing more, a test runs only for the lanes whose bounds meet): a pair of links' bounds,
+# a sphere against the other link's bound, then a shape pair inside that test and one on its own.
+_SELF_LINES = {
+    False: {
+        "link": "if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{",
+        "first": "    if (sphere_hit({a}, {b}, {rr})) {{",
+        "inner": "        if (sphere_hit({a}, {b}, {rr})) return 1;",
+        "pair": "    if (sphere_hit({a}, {b}, {rr})) return 1;",
+        "end": "}}",
+    },
+    True: {
+        "link": "need = ~hit & hit2(X[{pa}], X[{pb}], {rr});\nif (skv_any_(need)) {{",
+        "first": "    near = need & hit2({a}, {b}, {rr});\n    if (skv_any_(near)) {{",
+        "inner": "        hit |= near & hit2({a}, {b}, {rr});",
+        "pair": "    hit |= need & hit2({a}, {b}, {rr});",
+        "end": "    if (skv_all_(hit)) return hit;\n}}",
+    },
+}
+
+
+def _self_code(groups: dict, plan: tuple, lanes: bool = False) -> list[str]:
+    """The self checks (C lines, :data:`_SELF_LINES`) of ``groups`` ((link a, link b) -> shape
+    pairs; ``plan``: bounds, link of each shape, first points, radii, which are capsules): per pair
+    of links, their bounding spheres, then each shape pair (two spheres: squared distance against
+    the constant squared radius sum); a sphere with SPHERE_FIRST or more partners on the other link
+    meets that link's bound first."""
     bounds, link_of, first, radius, is_cap = plan
+    form = _SELF_LINES[lanes]
     code = []
+
+    def add(kind: str, **values: Any) -> None:
+        code.extend(form[kind].format(**values).split("\n"))
+
     for (a, b), pairs in sorted(groups.items()):
         (pa, ra), (pb, rb) = bounds[a], bounds[b]
-        code.append(f"if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{")
+        add("link", pa=pa, ra=ra, pb=pb, rb=rb, rr=_num((float(ra) + float(rb)) * (float(ra) + float(rb))))
         firsts, rest = _sphere_first(pairs, link_of, a, bounds, is_cap)
         for outer, bound, inner in firsts:
             xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
-            code.append(f"    if (sphere_hit({xo}, X[{bound[0]}], {_num(rr_o)})) {{")
+            add("first", a=xo, b=f"X[{bound[0]}]", rr=_num(rr_o))
             for j in inner:
                 rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
-                code.append(f"        if (sphere_hit({xo}, X[{first[j]}], {_num(rr)})) return 1;")
+                add("inner", a=xo, b=f"X[{first[j]}]", rr=_num(rr))
             code.append("    }")
         for i, j in rest:
-            if is_cap[i] or is_cap[j]:
+            if is_cap[i] or is_cap[j]:  # scalar code only (the lanes take spheres only)
                 code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
             else:
                 rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
-                code.append(f"    if (sphere_hit(X[{first[i]}], X[{first[j]}], {_num(rr)})) return 1;")
-        code.append("}")
-    return code
-
-
-def _self_code4(groups: dict, plan: tuple) -> list[str]:
-    """The four-lane self checks of ``groups`` (spheres only): a lane already hit needs nothing
-    more; a pair of links is tested only for the lanes whose bounding spheres meet (the same
-    tests as :func:`_self_code`)."""
-    bounds, link_of, first, radius, is_cap = plan
-    code = []
-    for (a, b), pairs in sorted(groups.items()):
-        (pa, ra), (pb, rb) = bounds[a], bounds[b]
-        rr = (float(ra) + float(rb)) * (float(ra) + float(rb))
-        code.append(f"need = ~hit & hit2(X[{pa}], X[{pb}], {_num(rr)});")
-        code.append("if (skv_any_(need)) {")
-        firsts, rest = _sphere_first(pairs, link_of, a, bounds, is_cap)
-        for outer, bound, inner in firsts:
-            xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
-            code.append(f"    near = need & hit2({xo}, X[{bound[0]}], {_num(rr_o)});")
-            code.append("    if (skv_any_(near)) {")
-            for j in inner:
-                rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
-                code.append(f"        hit |= near & hit2({xo}, X[{first[j]}], {_num(rr)});")
-            code.append("    }")
-        for i, j in rest:
-            rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
-            code.append(f"    hit |= need & hit2(X[{first[i]}], X[{first[j]}], {_num(rr)});")
-        code.append("    if (skv_all_(hit)) return hit;")
-        code.append("}")
+                add("pair", a=f"X[{first[i]}]", b=f"X[{first[j]}]", rr=_num(rr))
+        add("end")
     return code
 
 
@@ -399,7 +397,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         # beyond it for the link (radius -1: no such bound)
         sphere = reach_sphere(layout, layout.segment[group[0]], c, r)
         reach.append(
-            ([_num(x) for x in sphere[0]], _num(float(np.nextafter(sphere[1], np.inf))))
+            ([_num(x) for x in sphere[0]], _num(sphere[1]))  # rounded up by reach_sphere
             if sphere is not None
             else (["0.0", "0.0", "0.0"], "-1.0")
         )
@@ -464,7 +462,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         "point_code4": point_code4,
         "fk4": fk4,
         "vector_pairs": all_spheres,
-        "self_code4": _self_code4(groups, plan) if all_spheres else [],
+        "self_code4": _self_code(groups, plan, lanes=True) if all_spheres else [],
         "limits": _limits(tree.qlim),
         "sphere_code4": sphere_code4,
         "shapes": shapes,

@@ -1330,7 +1330,7 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
 /* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
    link only against the obstacle spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.070875 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.14168386613469838, 0.42400000000042515, 0.6386649695807911, 0.8400000000008412, 1.0498990104436594, 1.1460000000011479, 1.3140832691332756, 1.3200000000013214, 1.3810000000013825 };
+static const double reach_radius[N_LINKS] = { 0.14168386613469836, 0.4240000000004251, 0.638664969580791, 0.8400000000008411, 1.0498990104436592, 1.1460000000011477, 1.3140832691332753, 1.3200000000013212, 1.3810000000013822 };
 
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an

@@ -1330,7 +1330,7 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
 /* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
    link only against the obstacle spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.0675 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.13562071897737335, 0.4000000000004011, 0.6043990104432135, 0.7962500000007976, 1.0043990104436138, 1.101250000001103, 1.2690832691332306, 1.2800000000012814, 1.3410000000013425 };
+static const double reach_radius[N_LINKS] = { 0.13562071897737332, 0.40000000000040103, 0.6043990104432134, 0.7962500000007975, 1.0043990104436136, 1.1012500000011027, 1.2690832691332303, 1.2800000000012812, 1.3410000000013422 };
 
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an

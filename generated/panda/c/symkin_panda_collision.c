@@ -2024,7 +2024,7 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
 /* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
    link only against the obstacle spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.095 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 } };
-static const double reach_radius[N_LINKS] = { 0.14700877125510498, 0.2650000000002661, 0.2327647267864681, 0.5572957412477672, 0.6122604159440009, 1.0938909366508482, 0.9465064460977214, 1.0799959345867152, 1.1892832815074645 };
+static const double reach_radius[N_LINKS] = { 0.14700877125510495, 0.265000000000266, 0.23276472678646806, 0.557295741247767, 0.6122604159440008, 1.093890936650848, 0.9465064460977213, 1.079995934586715, 1.1892832815074643 };
 
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an

@@ -1200,7 +1200,7 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
 /* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
    link only against the obstacle spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.038189999999999995 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.08550000000008653, 0.28137388363417654, 0.9057267153788727, 1.3322353441423187, 1.5335410000015348, 1.6492410000016506, 1.6907310000016924, 1.7427410000017443 };
+static const double reach_radius[N_LINKS] = { 0.08550000000008652, 0.2813738836341765, 0.9057267153788726, 1.3322353441423185, 1.5335410000015346, 1.6492410000016504, 1.6907310000016922, 1.742741000001744 };
 
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an

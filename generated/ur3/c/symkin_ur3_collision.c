@@ -1112,7 +1112,7 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
 /* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
    link only against the obstacle spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.04557 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.05400000000005502, 0.24122807615094335, 0.5045856760643678, 0.642011233494592, 0.7611500000007623, 0.8465000000008477, 0.8833550000008845, 0.9324000000009337 };
+static const double reach_radius[N_LINKS] = { 0.05400000000005501, 0.24122807615094333, 0.5045856760643677, 0.6420112334945919, 0.7611500000007622, 0.8465000000008476, 0.8833550000008844, 0.9324000000009336 };
 
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an

@@ -1168,7 +1168,7 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
 /* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
    link only against the obstacle spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.0267477 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
-static const double reach_radius[N_LINKS] = { 0.06750000000006853, 0.1998192230040404, 0.6288721489441377, 0.9274290940838855, 1.062559000001064, 1.1572090000011586, 1.1942440000011956, 1.2424590000012439 };
+static const double reach_radius[N_LINKS] = { 0.06750000000006852, 0.19981922300404037, 0.6288721489441376, 0.9274290940838854, 1.0625590000010638, 1.1572090000011583, 1.1942440000011953, 1.2424590000012437 };
 
 /* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
    idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
