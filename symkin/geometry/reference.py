@@ -109,6 +109,25 @@ class Tables:
             np.array(self.segment, dtype=int),
         )
 
+    @cached_property
+    def self_split(self) -> tuple[tuple, tuple, np.ndarray]:
+        """The self pairs for :func:`collides_frames`: two spheres not proved apart (I, J, squared
+        radius sums), two spheres proved apart (the same), and the pairs with a capsule (K, 2)."""
+        caps, radius = self.arrays[0], self.arrays[2]
+        proved = set(self.proved)
+
+        def spheres(pairs: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            P = np.array(pairs, dtype=int).reshape(-1, 2)
+            return P[:, 0], P[:, 1], (radius[P[:, 0]] + radius[P[:, 1]]) ** 2
+
+        two = [p for p in self.self_pairs if not caps[p[0]] and not caps[p[1]]]
+        others = [p for p in self.self_pairs if caps[p[0]] or caps[p[1]]]
+        return (
+            spheres([p for p in two if p not in proved]),
+            spheres([p for p in two if p in proved]),
+            np.array(others, dtype=int).reshape(-1, 2),
+        )
+
 
 def _shape_points(layout: Layout, L: np.ndarray) -> list[np.ndarray]:
     """Per shape, its points in the base frame, (N, k, 3) with k = 1 (sphere) or 2 (capsule)."""
@@ -248,13 +267,6 @@ def evaluate_frames(
 CHUNK = 2048  # configurations per step of collides_frames (its (chunk, pairs, 3) temporaries)
 
 
-def _sphere_pairs(tab: Tables, pairs: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """I, J and the squared radius sums of ``pairs`` (two spheres each)."""
-    radius = tab.arrays[2]
-    P = np.array(pairs, dtype=int).reshape(-1, 2)
-    return P[:, 0], P[:, 1], (radius[P[:, 0]] + radius[P[:, 1]]) ** 2
-
-
 def collides_frames(tab: Tables, X: np.ndarray, env: Any = None, Q: np.ndarray | None = None) -> np.ndarray:
     """Whether any active pair overlaps, (N,) bools, from the shape points X (N, P, 3): the
     verdicts of ``evaluate_frames(...)[0] < 0`` with less work. Two spheres are compared by their
@@ -265,12 +277,9 @@ def collides_frames(tab: Tables, X: np.ndarray, env: Any = None, Q: np.ndarray |
     env = as_environment(env)
     arrays = tab.arrays
     caps, first, radius, _ = arrays
-    proved = set(tab.proved) if Q is not None and tab.qlim is not None else set()
-    two = [p for p in tab.self_pairs if not caps[p[0]] and not caps[p[1]]]
-    others = np.array([p for p in tab.self_pairs if caps[p[0]] or caps[p[1]]], dtype=int).reshape(-1, 2)
-    I, J, rr = _sphere_pairs(tab, [p for p in two if p not in proved])
-    I2, J2, rr2 = _sphere_pairs(tab, [p for p in two if p in proved])
-    if len(I2):
+    (I, J, rr), (I2, J2, rr2), others = tab.self_split
+    outside = None  # every row tries the proved pairs, unless Q says which are within the limits
+    if len(I2) and Q is not None and tab.qlim is not None:
         lo, hi = np.asarray(tab.qlim, dtype=float)
         outside = ~((lo <= Q) & (hi >= Q)).all(axis=1)  # NaN rows too
     sph = np.nonzero(~caps)[0]
@@ -285,9 +294,9 @@ def collides_frames(tab: Tables, X: np.ndarray, env: Any = None, Q: np.ndarray |
         if len(I):
             h |= (_squared(Y[:, first[I]] - Y[:, first[J]]) < rr).any(axis=1)
         if len(I2):
-            rows = np.flatnonzero(outside[start : start + CHUNK])
-            if len(rows):
-                Z = Y[rows]
+            rows = slice(None) if outside is None else np.flatnonzero(outside[start : start + CHUNK])
+            Z = Y[rows]
+            if len(Z):
                 h[rows] |= (_squared(Z[:, first[I2]] - Z[:, first[J2]]) < rr2).any(axis=1)
         if len(others):
             h |= (_pair_kinds(Y, arrays, others[:, 0], others[:, 1])[0] < 0).any(axis=1)
