@@ -32,7 +32,7 @@ import sympy as sp
 
 from symkin.core.names import c_string, comment_safe, identifier
 from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
-from symkin.emit.printers import CPrinter, NumPyPrinter
+from symkin.emit.printers import CPrinter, MathModulePrinter, NumPyPrinter
 from symkin.emit.templates import render
 from symkin.symbolic.analytic_ik import AnalyticIK, Step, given_symbols, pose_symbols
 from symkin.symbolic.cse import floatify
@@ -43,19 +43,13 @@ __all__ = ["render_analytic", "ik_prefix", "BACKEND_DIALECT", "body_c", "branch_
 BACKEND_DIALECT = {"c": "c", "numpy": "numpy", "casadi": "python"}
 
 
-class _MathPrinter(NumPyPrinter):
-    """Scalar Python with the math module."""
-
-    module = "math"
-
-
 def ik_prefix(robot_name: str) -> str:
     return f"symkin_{identifier(robot_name)}_ik"
 
 
 def _body(plan: AnalyticIK, dialect: str) -> str:
     """The NumPy or plain-Python body: every step in order, a loop per two-branch step."""
-    pr = NumPyPrinter() if dialect == "numpy" else _MathPrinter()
+    pr = NumPyPrinter() if dialect == "numpy" else MathModulePrinter()
     out = Out([], 1)
     later = used_later(plan)
     flag = "0"
@@ -390,7 +384,7 @@ def _emit_region(
 
 def _fk_code(plan: AnalyticIK, dialect: str) -> tuple[list[str], list[str]]:
     """Straight-line code for the 3x4 pose of q (for verifying flagged candidates)."""
-    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else _MathPrinter())
+    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else MathModulePrinter())
     temps, values = cse_lines(list(plan.fk), "f")
     lines = []
     for sym, e in temps:
@@ -403,7 +397,7 @@ def _fk_code(plan: AnalyticIK, dialect: str) -> tuple[list[str], list[str]]:
 def _pose_lines(plan: AnalyticIK, dialect: str) -> list[str]:
     """The pose the steps solve for from the target as given, when the arm's constant ends were
     moved to the target (``plan.pose_map``; no lines otherwise)."""
-    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else _MathPrinter())
+    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else MathModulePrinter())
     decl = "const double " if dialect == "c" else ""
     end = ";" if dialect == "c" else ""
     return [f"    {decl}{sym} = {pr.doprint(floatify(e))}{end}" for sym, e in plan.pose_map]

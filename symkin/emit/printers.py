@@ -15,6 +15,7 @@ __all__ = [
     "CPrinter",
     "FloatCPrinter",
     "NumPyPrinter",
+    "MathModulePrinter",
     "NumPyKinPrinter",
     "MathPrinter",
     "CasADiPrinter",
@@ -115,7 +116,12 @@ class _PyLikePrinter(_DoubleLiterals, _Calls, PythonCodePrinter):
 class NumPyPrinter(_PyLikePrinter):
     """Elementwise NumPy expressions (``np.cos``) for the batched Python backend."""
 
-    module = "np"
+
+class MathModulePrinter(NumPyPrinter):
+    """Scalar Python with the math module (``math.cos``): a tree's and the closed-form IK's code
+    for one configuration."""
+
+    module = "math"
 
 
 class _PositiveFirst:

@@ -138,14 +138,11 @@ def render_tree(
         ext = render("c/tree_module.c.j2", module=module_name(files), **context)
         return {**files, f"{prefix}_pymodule.c": ext}
     if backend == "numpy":
-        from symkin.emit.printers import NumPyPrinter
-
-        class _MathPrinter(NumPyPrinter):
-            module = "math"
+        from symkin.emit.printers import MathModulePrinter, NumPyPrinter
 
         printed_py = []
         for f in functions:
-            vec, one = lower(f, NumPyPrinter()), lower(f, _MathPrinter())
+            vec, one = lower(f, NumPyPrinter()), lower(f, MathModulePrinter())
             printed_py.append({**vec.__dict__, "scalar_lines": one.lines, "scalar_outs": one.outs})
         module = f"symkin_{identifier(tree.name)}_tree"
         text = render(
@@ -156,16 +153,13 @@ def render_tree(
             paths=_paths(tree),
         )
         return {f"{module}.py": text}
+    from symkin.emit.casadi.backend import casadi_outs
     from symkin.emit.printers import CasADiPrinter
 
     printed_ca = []
     for f in functions:
         p = lower(f, CasADiPrinter())
-        table = [
-            {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
-            for o in p.outs
-        ]
-        printed_ca.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": table})
+        printed_ca.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": casadi_outs(p.outs)})
     module = f"symkin_{identifier(tree.name)}_tree_casadi"
     text = render("casadi/tree.py.j2", **_python_context(tree, functions, command, module, printed_ca))
     return {f"{module}.py": text}

@@ -13,6 +13,15 @@ from symkin.emit.templates import chain_tables, render_python_module
 __all__ = ["render_casadi"]
 
 
+def casadi_outs(outs: list) -> list[dict[str, Any]]:
+    """The printed outputs as the CasADi templates write them: name, entries, and the rows and
+    columns of the SX matrix (a 3-D output stacked)."""
+    return [
+        {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
+        for o in outs
+    ]
+
+
 def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>_casadi.py``."""
     from symkin.emit.lowering import lower
@@ -21,20 +30,13 @@ def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
     printed = []
     for f in functions:
         p = lower(f, CasADiPrinter())
-
-        def table(outs):  # noqa: ANN001, ANN202
-            return [
-                {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
-                for o in outs
-            ]
-
         printed.append(
             {
                 "name": p.name,
                 "inputs": p.inputs,
                 "lines": p.lines,
-                "outs": table(p.outs),
-                "scratch": table(p.scratch),
+                "outs": casadi_outs(p.outs),
+                "scratch": casadi_outs(p.scratch),
                 "hessians": p.hessians,
                 "delegate": p.delegate,
                 "delegate_pick": p.delegate_pick,
