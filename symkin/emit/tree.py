@@ -153,13 +153,9 @@ def render_tree(
             paths=_paths(tree),
         )
         return {f"{module}.py": text}
-    from symkin.emit.casadi.backend import casadi_outs
-    from symkin.emit.printers import CasADiPrinter
+    from symkin.emit.casadi.backend import casadi_function
 
-    printed_ca = []
-    for f in functions:
-        p = lower(f, CasADiPrinter())
-        printed_ca.append({"name": p.name, "inputs": p.inputs, "lines": p.lines, "outs": casadi_outs(p.outs)})
+    printed_ca = [casadi_function(f) for f in functions]
     module = f"symkin_{identifier(tree.name)}_tree_casadi"
     text = render("casadi/tree.py.j2", **_python_context(tree, functions, command, module, printed_ca))
     return {f"{module}.py": text}

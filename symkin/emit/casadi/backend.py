@@ -13,35 +13,36 @@ from symkin.emit.templates import chain_tables, render_python_module
 __all__ = ["render_casadi"]
 
 
-def casadi_outs(outs: list) -> list[dict[str, Any]]:
-    """The printed outputs as the CasADi templates write them: name, entries, and the rows and
-    columns of the SX matrix (a 3-D output stacked)."""
-    return [
-        {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
-        for o in outs
-    ]
+def casadi_function(f: Any) -> dict[str, Any]:
+    """Function ``f`` lowered for the CasADi templates (chains and trees): its inputs, lines,
+    Hessians and delegate, and its outputs and scratch arrays as SX matrices (name, entries, rows,
+    columns; a 3-D output stacked)."""
+    from symkin.emit.lowering import lower
+    from symkin.emit.printers import CasADiPrinter
+
+    p = lower(f, CasADiPrinter())
+
+    def table(outs: tuple) -> list[dict[str, Any]]:
+        return [
+            {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
+            for o in outs
+        ]
+
+    return {
+        "name": p.name,
+        "inputs": p.inputs,
+        "lines": p.lines,
+        "outs": table(p.outs),
+        "scratch": table(p.scratch),
+        "hessians": p.hessians,
+        "delegate": p.delegate,
+        "delegate_pick": p.delegate_pick,
+    }
 
 
 def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
     """The generated module ``symkin_<robot>_casadi.py``."""
-    from symkin.emit.lowering import lower
-    from symkin.emit.printers import CasADiPrinter
-
-    printed = []
-    for f in functions:
-        p = lower(f, CasADiPrinter())
-        printed.append(
-            {
-                "name": p.name,
-                "inputs": p.inputs,
-                "lines": p.lines,
-                "outs": casadi_outs(p.outs),
-                "scratch": casadi_outs(p.scratch),
-                "hessians": p.hessians,
-                "delegate": p.delegate,
-                "delegate_pick": p.delegate_pick,
-            }
-        )
+    printed = [casadi_function(f) for f in functions]
     return render_python_module(
         "casadi/module.py.j2",
         robot,
