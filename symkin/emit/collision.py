@@ -373,10 +373,7 @@ def collision_tables(layout: Any) -> dict[str, Any]:
     joints = [
         (0, 0, 0.0, 0, 0, 1.0) if j is None else (1, j[0], j[1], int(j[2]), j[3], j[4]) for j in tables.joints
     ]
-    points = []
-    for s, k in zip(layout.shapes, layout.segment):
-        for p in s.points:
-            points.append((k, [_num(x) for x in p]))
+    points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
     # one bounding sphere per link (its shapes' points' box centre, the radius enclosing every shape):
     # in_collision tests a link's shapes only when its bounding sphere meets the obstacle or the
     # other link's bounding sphere; appended to the points after the shapes' own
