@@ -24,14 +24,13 @@ from __future__ import annotations
 
 import math
 import os
-import subprocess
-import sys
 import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import best_of, fresh_python, interleaved, optional
 from symkin.bench.kin import per_call_us, pinocchio_model, rtb_ets
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
@@ -79,16 +78,6 @@ def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float,
     return out
 
 
-def _best_of(f: Callable[[], Any], rounds: int) -> float:
-    """Best wall time (s) of ``rounds`` calls of f."""
-    best = math.inf
-    for _ in range(rounds):
-        t0 = CLOCK()
-        f()
-        best = min(best, CLOCK() - t0)
-    return best
-
-
 # -- IK ----------------------------------------------------------------------------------------
 def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: bool) -> dict[str, Any]:
     """One target per ``kin.ik(T)`` call against the batch ``kin.ik(T_all)`` (default options: LM
@@ -99,17 +88,12 @@ def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: 
     kin.ik(Tep[:4])
     kin.ik(targets[0])
     out: dict[str, Any] = {"targets": n_targets}
-    batch = single = math.inf
-    results: list[Any] = []
-    for _ in range(rounds):  # interleaved, so both see the same machine
-        t0 = CLOCK()
-        res = kin.ik(Tep)
-        batch = min(batch, CLOCK() - t0)
-        t0 = CLOCK()
-        results = [kin.ik(T) for T in targets]
-        single = min(single, CLOCK() - t0)
-    out["batch_us"] = 1e6 * batch / n_targets
-    out["single_us"] = 1e6 * single / n_targets
+    best, last = interleaved(
+        {"batch": lambda: kin.ik(Tep), "single": lambda: [kin.ik(T) for T in targets]}, rounds
+    )
+    res, results = last["batch"], last["single"]
+    out["batch_us"] = 1e6 * best["batch"] / n_targets
+    out["single_us"] = 1e6 * best["single"] / n_targets
     out["batch_success"] = float(np.mean(res.success))
     out["single_success"] = float(np.mean([r.success for r in results]))
     out["mean_iterations"] = float(np.mean([r.iterations for r in results]))
@@ -118,9 +102,8 @@ def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: 
 
 
 def _rtb_ik(robot: Any, targets: list[np.ndarray]) -> dict[str, Any] | None:
-    try:
-        import roboticstoolbox as rtb
-    except ImportError:
+    rtb = optional("roboticstoolbox")
+    if rtb is None:
         return None
     try:
         ets = rtb_ets(rtb, robot)
@@ -148,30 +131,21 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
         "NR pinv": {"method": "NR", "pinv": True},
         "GN pinv": {"method": "GN", "pinv": True},
     }
-    batch = {label: math.inf for label in methods}
-    single = dict(batch)
-    its: dict[str, tuple[int, int]] = {}
-    success: dict[str, float] = {}
-    for options in methods.values():
+    paths: dict[tuple[str, str], Callable[[], Any]] = {}
+    for label, options in methods.items():
         kin.ik(Tep[:2], seed=seed, **options)
-    for _ in range(rounds):  # the methods in turn, so that each sees the same machine
-        for label, options in methods.items():
-            t0 = CLOCK()
-            res = kin.ik(Tep, seed=seed, **options)
-            batch[label] = min(batch[label], CLOCK() - t0)
-            t0 = CLOCK()
-            sols = [kin.ik(T, seed=seed, **options) for T in Tep]
-            single[label] = min(single[label], CLOCK() - t0)
-            its[label] = (int(np.sum(res.iterations)), sum(int(s.iterations) for s in sols))
-            success[label] = float(np.mean(res.success))
-    return {
-        label: {
-            "batch_us_per_iteration": 1e6 * batch[label] / its[label][0],
-            "success": success[label],
-            "single_us_per_iteration": 1e6 * single[label] / its[label][1],
+        paths[(label, "batch")] = lambda o=options: kin.ik(Tep, seed=seed, **o)
+        paths[(label, "single")] = lambda o=options: [kin.ik(T, seed=seed, **o) for T in Tep]
+    best, last = interleaved(paths, rounds)  # the methods in turn, so that each sees the same machine
+    out = {}
+    for label in methods:
+        res, sols = last[(label, "batch")], last[(label, "single")]
+        out[label] = {
+            "batch_us_per_iteration": 1e6 * best[(label, "batch")] / int(np.sum(res.iterations)),
+            "success": float(np.mean(res.success)),
+            "single_us_per_iteration": 1e6 * best[(label, "single")] / sum(int(s.iterations) for s in sols),
         }
-        for label in methods
-    }
+    return out
 
 
 # -- control -------------------------------------------------------------------------------------
@@ -204,7 +178,7 @@ def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float 
                 return sum(servo(kin, q0, T, name, qd_max=np.inf, backend=backend).steps for q0, T in subset)
 
             total = run()
-            loops[name][backend] = total / _best_of(run, rounds)
+            loops[name][backend] = total / best_of(run, rounds, CLOCK)
             loops[name][f"{backend}_steps"] = total
     return {"step_us": steps, "servo_steps_per_s": loops, "tasks": n_tasks}
 
@@ -298,15 +272,8 @@ def startup(robot: str, runs: int) -> dict[str, Any]:
         ("import_s", _IMPORT.format(m="symkin")),
         ("first_jacob0_s", _FIRST.format(robot=robot)),
     ):
-        times = []
-        for k in range(runs + 1):  # the first run is a warm-up (page cache, byte code)
-            res = subprocess.run(
-                [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
-            )
-            if res.returncode != 0:
-                raise RuntimeError(f"{code!r} failed: {res.stderr.strip()[-400:]}")
-            if k:
-                times.append(float(res.stdout.strip().splitlines()[-1]))
+        fresh_python(code, env, 300)  # a warm-up (page cache, byte code)
+        times = [float(fresh_python(code, env, 300)) for _ in range(runs)]
         out[key] = {"min": min(times), "median": float(np.median(times))}
     pycache.cleanup()
     return out

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import best_of, interleaved, optional
 from symkin.bench.kin import per_call_us
 
 __all__ = ["run_collide", "format_collide", "random_spheres", "table_scene", "pinocchio_collision"]
@@ -46,10 +47,8 @@ def pinocchio_collision(robot: Any, env: Any) -> Any:
     spheres (the same active pairs, in the order of ``kin.distances``), or None without Pinocchio;
     ``check.distances(q)`` gives coal's distance of every pair. Pinocchio's model is the robot's
     serial chain (``symkin.bench.kin.pinocchio_model``)."""
-    try:
-        import coal  # type: ignore[import-not-found]
-        import pinocchio as pin  # type: ignore[import-not-found]
-    except ImportError:
+    coal, pin = optional("coal"), optional("pinocchio")
+    if coal is None or pin is None:
         return None
     from symkin.bench.kin import pinocchio_model
     from symkin.geometry.pairs import layout_of
@@ -108,12 +107,7 @@ def _rotation_to(z: np.ndarray) -> np.ndarray:
 
 
 def _batch_ns(f: Any, N: int, repeats: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.thread_time()
-        f()
-        best = min(best, time.thread_time() - t0)
-    return best / N * 1e9
+    return best_of(f, repeats) / N * 1e9
 
 
 def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> dict[str, Any]:
@@ -165,14 +159,12 @@ def run_collide(
         if not kin.in_collision(q, scene):
             targets.append(kin.fkine(q))
     T = np.array(targets)
-    t_plain = t_aware = float("inf")
-    for _ in range(3):  # alternating, best of three: the two share the machine's drift
-        t0 = time.thread_time()
-        plain = kin.ik(T, seed=seed)
-        t_plain = min(t_plain, time.thread_time() - t0)
-        t0 = time.thread_time()
-        aware = kin.ik(T, seed=seed, collision=scene)
-        t_aware = min(t_aware, time.thread_time() - t0)
+    # alternating, best of three: the two share the machine's drift
+    best, last = interleaved(
+        {"plain": lambda: kin.ik(T, seed=seed), "aware": lambda: kin.ik(T, seed=seed, collision=scene)}
+    )
+    t_plain, t_aware = best["plain"], best["aware"]
+    plain, aware = last["plain"], last["aware"]
     plain_hits = kin.in_collision(plain.q, scene) & np.asarray(plain.success)
     aware_hits = kin.in_collision(aware.q, scene) & np.asarray(aware.success)
     ik = {

@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import interleaved, optional
+
 __all__ = ["run_table1", "format_table1", "table1_problems", "TABLE1_METHODS", "PAPER_TABLE1", "SETTINGS"]
 
 SETTINGS: dict[str, tuple[int, int]] = {"a": (1, 500), "b": (100, 30)}  # (searches, iterations)
@@ -190,17 +192,17 @@ def _time_lanes(
     one = CIKSolver(kin, fkjac=kin.c_fkjac, starts=starts, **options)
     if not four._cfg.fkjac_batch:
         return None
-    times, results = {}, {}
-    for label, solver in (("four_lanes", four), ("scalar", one)):
+    for solver in (four, one):
         solver.solve(Tep[:8], seed=seed)
-        best = float("inf")
-        for _ in range(3):
-            t0 = time.thread_time()
-            results[label] = solver.solve(Tep, seed=seed)
-            best = min(best, time.thread_time() - t0)
-        times[label] = 1e6 * best / len(Tep)
+    best, results = interleaved(
+        {"four_lanes": lambda: four.solve(Tep, seed=seed), "scalar": lambda: one.solve(Tep, seed=seed)}
+    )
     same = results["four_lanes"].q.tobytes() == results["scalar"].q.tobytes()
-    return {"four_lanes_us": times["four_lanes"], "scalar_us": times["scalar"], "same_solutions": same}
+    return {
+        "four_lanes_us": 1e6 * best["four_lanes"] / len(Tep),
+        "scalar_us": 1e6 * best["scalar"] / len(Tep),
+        "same_solutions": same,
+    }
 
 
 def _row(
@@ -237,9 +239,8 @@ def _row(
 
 def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, Any] | None:
     """roboticstoolbox-python's C++ ``ik_LM`` (Chan, lambda 0.1, 100 x 30) on the same problems."""
-    try:
-        import roboticstoolbox as rtb  # optional; not a dependency
-    except ImportError:
+    rtb = optional("roboticstoolbox")  # optional; not a dependency
+    if rtb is None:
         return None
     try:
         from symkin.bench.kin import rtb_ets

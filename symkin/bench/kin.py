@@ -22,9 +22,12 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import optional, rows_per_s
+
 __all__ = ["run_kin", "format_kin", "per_call_us", "pinocchio_model", "rtb_ets"]
 
 FUNCS = ("fkine", "jacob0", "hessian0")
+BATCH_FUNCS = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
 
 
 def per_call_us(
@@ -79,9 +82,8 @@ def _ctypes_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]]:
 
 
 def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
-    try:
-        import cffi
-    except ImportError:
+    cffi = optional("cffi")
+    if cffi is None:
         return None
     from symkin.emit.c.backend import c_prefix
 
@@ -105,9 +107,8 @@ def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
 
 def pinocchio_model(robot: Any) -> tuple[Any, Any, int] | None:
     """A Pinocchio model of an ETS robot (joints along +-x/y/z), its data and the end-effector frame id."""
-    try:
-        import pinocchio as pin
-    except ImportError:
+    pin = optional("pinocchio")
+    if pin is None:
         return None
     from symkin.model.kinematics import const_matrix
 
@@ -153,10 +154,7 @@ def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], A
             return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
 
         peers["pinocchio"] = {"fkine": fk, "jacob0": jac, "hessian0": hess}
-    try:
-        import roboticstoolbox as rtb
-    except ImportError:
-        rtb = None
+    rtb = optional("roboticstoolbox")
     if rtb is not None:
         ets = rtb_ets(rtb, robot)
         peers["rtb"] = {
@@ -202,19 +200,9 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
     for p, f in bar(items, progress, desc="per call"):
         per_call[p][f] = per_call_us(paths[p][f], clock=time.thread_time)
     Q = robot.random_q(batch, seed=seed + 1)
-    batched: dict[str, dict[str, float]] = {}
-    for b in ("c", "numpy"):
-        batched[b] = {}
-        for f in ("fkine", "jacob0", "fkine_jacob0", "hessian0"):
-            fn = getattr(kins[b], f)
-            fn(Q[:1000])
-            best = min(_timed(fn, Q) for _ in range(3))
-            batched[b][f] = batch / best / 1e6
-    for label, fns in _c_builds(robot, kins["c"], Q).items():
-        batched[label] = {}
-        for f, fn in fns.items():
-            fn(Q[:1000])
-            batched[label][f] = batch / min(_timed(fn, Q) for _ in range(3)) / 1e6
+    kernels = {b: {f: getattr(kins[b], f) for f in BATCH_FUNCS} for b in ("c", "numpy")}
+    kernels.update(_c_builds(robot, kins["c"], Q))
+    batched = {label: {f: rows_per_s(fn, Q) / 1e6 for f, fn in fns.items()} for label, fns in kernels.items()}
     ratios = {}
     for peer in ("pinocchio", "rtb"):
         if peer in per_call:
@@ -279,12 +267,6 @@ class _KernelCall:
             fn(base + i * self.row, *outs, min(BLOCK, len(Q) - i))
 
 
-def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:
-    t = time.thread_time()
-    fn(Q)
-    return time.thread_time() - t
-
-
 def format_kin(r: dict) -> str:
     lines = [f"symkin bench kin: {r['robot']} ({r['n']} joints), one configuration per call from Python", ""]
     lines.append(f"{'path':22} " + " ".join(f"{f + ' (us)':>14}" for f in FUNCS))
@@ -298,7 +280,7 @@ def format_kin(r: dict) -> str:
         )
     lines.append("")
     lines.append(f"batched, {r['batch']} configurations, one core (million per second)")
-    fs = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
+    fs = BATCH_FUNCS
     lines.append(f"{'backend':22} " + " ".join(f"{f:>14}" for f in fs))
     rows = r["batched_M_per_s"]
     for b, row in rows.items():

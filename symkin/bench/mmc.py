@@ -14,11 +14,13 @@ import json
 import math
 import time
 import warnings
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import optional
 from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
 
@@ -85,12 +87,6 @@ def table1_tasks(kin: Any, n_tasks: int, rng: np.random.Generator) -> tuple[np.n
 def _summary(runs: list[ServoResult]) -> dict[str, Any]:
     times = np.concatenate([r.step_time for r in runs]) if runs else np.zeros(0)
     infos = [i for r in runs for i in r.info]
-    methods: dict[str, int] = {}
-    statuses: dict[str, int] = {}
-    for i in infos:
-        key = i.method if i.fallback is None else f"fallback_{i.fallback}"
-        methods[key] = methods.get(key, 0) + 1
-        statuses[i.status] = statuses.get(i.status, 0) + 1
     return {
         "mean_manipulability": float(np.mean([r.mean_manipulability for r in runs])),
         "final_manipulability": float(np.mean([r.final_manipulability for r in runs])),
@@ -98,10 +94,15 @@ def _summary(runs: list[ServoResult]) -> dict[str, Any]:
         "left_limits": int(sum(r.left_limits for r in runs)),
         "mean_steps": float(np.mean([r.steps for r in runs])),
         "step_us_median": float(np.median(times) * 1e6) if times.size else float("nan"),
-        "step_methods": methods,
-        "step_status": statuses,
+        "step_methods": _methods(infos),
+        "step_status": dict(Counter(i.status for i in infos)),
         "max_slack": float(max((i.slack for i in infos), default=0.0)),
     }
+
+
+def _methods(infos: Any) -> dict[str, int]:
+    """How many steps each method settled (``fallback_<reason>`` for a fallback step)."""
+    return dict(Counter(i.method if i.fallback is None else f"fallback_{i.fallback}" for i in infos))
 
 
 def _pct(new: float, old: float) -> float:
@@ -385,15 +386,7 @@ def step_timing(
         if getattr(model, "backend", None) == "c"
         else symkin.compile(getattr(model, "robot", model), "c")
     )
-    peers = None
-    if rtb:
-        try:
-            import qpsolvers
-            import roboticstoolbox
-        except ImportError:
-            peers = None
-        else:
-            peers = (roboticstoolbox, qpsolvers)
+    peers = (optional("roboticstoolbox"), optional("qpsolvers")) if rtb else (None, None)
     rng = np.random.default_rng([seed, index])
     q0s, Teps = table1_tasks(kin, n_tasks, rng)
     out: dict[str, Any] = {"robot": kin.name, "n_tasks": n_tasks, "lam": lam, "configs": {}}
@@ -415,7 +408,7 @@ def step_timing(
             "c": lambda o=options: MMC(kin, **o).step,
             "python": lambda o=options: MMC(kin, backend="python", **o).step,
         }
-        if peers is not None:
+        if all(peers):
             makers["rtb_qpsolvers"] = lambda c=ctrl: rtb_mmc(*peers, kin.robot, c)
             makers["rtb_kinematics"] = lambda c=ctrl: rtb_mmc(*peers, kin.robot, c).kinematics
         times: dict[str, list[float]] = {k: [] for k in makers}
@@ -430,10 +423,7 @@ def step_timing(
                         got.append(fn(q, nu))
                         ts.append(time.perf_counter() - t0)
                     answers.setdefault(key, got)
-        methods: dict[str, int] = {}
-        for _, info in answers["c"]:
-            label = info.method if info.fallback is None else f"fallback_{info.fallback}"
-            methods[label] = methods.get(label, 0) + 1
+        methods = _methods(info for _, info in answers["c"])
         med = {k: float(np.median(v) * 1e6) for k, v in times.items()}
         res_c = {
             "steps": len(states),
