@@ -101,11 +101,8 @@ def run(args: argparse.Namespace) -> int:
 def _command(args: argparse.Namespace, model: Any) -> tuple[str, dict[str, Any]]:
     """The command recorded in the generated files of a chain or tree, and the options of
     ``generate``; the C-only options are refused for another backend or without ``-o``."""
-    if isinstance(model, Tree):
-        frames = ",".join(model.frames)
-        command = f"symkin compile {model.identifier} --frames {frames} --backend {args.backend}"
-    else:
-        command = f"symkin compile {model.identifier} --backend {args.backend}"
+    frames = f" --frames {','.join(model.frames)}" if isinstance(model, Tree) else ""
+    command = f"symkin compile {model.identifier}{frames} --backend {args.backend}"
     c_only = (("--prefix", args.prefix), ("--precision", args.precision != "double"), ("--libm", args.libm))
     for flag, given in c_only:
         if given and args.backend != "c":
@@ -120,12 +117,7 @@ def _command(args: argparse.Namespace, model: Any) -> tuple[str, dict[str, Any]]
         command += " --libm"
     if args.strategy:
         command += f" --strategy {args.strategy}"
-    options = {
-        "strategy": args.strategy,
-        "prefix": args.prefix,
-        "precision": args.precision,
-        "libm": args.libm,
-    }
+    options = dict(strategy=args.strategy, prefix=args.prefix, precision=args.precision, libm=args.libm)
     return command, options
 
 
