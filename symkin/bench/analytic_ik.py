@@ -135,35 +135,36 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
         best_of(lambda: kin_np.ik_all(T[:m], joint_limits=False), 2, time.process_time) / m * 1e6
     )
     sols = [b[~np.isnan(b[:, 0])] for b in batch]
-    row["mean_solutions"] = float(np.mean([len(s) for s in sols]))
-    errs = [float(np.abs(robot.fkine(s) - T[i]).max()) for i, s in enumerate(sols) if len(s)]
-    row["max_fk_error"] = max(errs, default=0.0)
     sampled = sampled_solutions(kin, T, starts, seed) if starts else None
+    row.update(_solution_sets("", sols, robot, T, sampled, rev))
     if sampled is not None:
-        row["agree"] = sum(
-            all(_contains(sols[i], q, rev) for q in sampled[i])
-            and (not len(sols[i]) or np.abs(robot.fkine(sols[i]) - T[i]).max() <= EXACT_TOL)
-            for i in range(n)
-        )
         row["sampled_mean"] = float(np.mean([len(s) for s in sampled]))
     if bot is not None:
         res = [bot.calculate_IK(T[i]) for i in range(n)]
         exact = [np.array([q for q, ls in zip(r.Q, r.is_LS) if not ls]).reshape(-1, robot.n) for r in res]
-        row["eaik_mean_solutions"] = float(np.mean([len(e) for e in exact]))
-        row["eaik_max_fk_error"] = max(
-            (float(np.abs(robot.fkine(e) - T[i]).max()) for i, e in enumerate(exact) if len(e)),
-            default=0.0,
-        )
-        if sampled is not None:
-            row["eaik_agree"] = sum(
-                all(_contains(exact[i], q, rev) for q in sampled[i])
-                and (not len(exact[i]) or np.abs(robot.fkine(exact[i]) - T[i]).max() <= EXACT_TOL)
-                for i in range(n)
-            )
+        row.update(_solution_sets("eaik_", exact, robot, T, sampled, rev))
         row["speedup_one"] = row["eaik_one_us"] / row["c_one_us"]
         if "eaik_batch_us" in row:
             row["speedup_batch"] = row["eaik_batch_us"] / row["c_batch_us"]
     return robot, row
+
+
+def _solution_sets(
+    prefix: str, sets: list[np.ndarray], robot: Any, T: np.ndarray, sampled: list | None, rev: np.ndarray
+) -> dict[str, Any]:
+    """One solver's solutions of every pose: their mean count, the largest FK error of any and, with
+    ``sampled``, the poses that agree (none missed, none spurious; module docstring)."""
+    errors = [float(np.abs(robot.fkine(s) - T[i]).max()) if len(s) else 0.0 for i, s in enumerate(sets)]
+    out = {
+        f"{prefix}mean_solutions": float(np.mean([len(s) for s in sets])),
+        f"{prefix}max_fk_error": max(errors, default=0.0),
+    }
+    if sampled is not None:
+        out[f"{prefix}agree"] = sum(
+            all(_contains(s, q, rev) for q in sampled[i]) and errors[i] <= EXACT_TOL
+            for i, s in enumerate(sets)
+        )
+    return out
 
 
 def _getter(r: dict[str, Any]) -> Any:

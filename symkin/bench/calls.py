@@ -354,13 +354,14 @@ def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def format_calls(r: dict[str, Any]) -> str:
     """Plain text of :func:`run_calls`'s result."""
     ik, pinv, ctl = r["ik"], r["pinv"], r["control"]
-    lines = [f"symkin bench calls: {r['robot']} (IK, backends, start-up), {r['control_robot']} (control)", ""]
-    lines.append(f"IK, {ik['targets']} targets, LM Chan lambda 0.1, 100 x 30, |e| < 1e-6 (us per solve):")
-    lines.append(f"  batched kin.ik(T_all)      {ik['batch_us']:8.2f}   success {ik['batch_success']:.3f}")
-    lines.append(
+    lines = [
+        f"symkin bench calls: {r['robot']} (IK, backends, start-up), {r['control_robot']} (control)",
+        "",
+        f"IK, {ik['targets']} targets, LM Chan lambda 0.1, 100 x 30, |e| < 1e-6 (us per solve):",
+        f"  batched kin.ik(T_all)      {ik['batch_us']:8.2f}   success {ik['batch_success']:.3f}",
         f"  one kin.ik(T) per target   {ik['single_us']:8.2f}   success {ik['single_success']:.3f}   "
-        f"({ik['single_us'] / ik['batch_us']:.2f}x batched; mean iterations {ik['mean_iterations']:.1f})"
-    )
+        f"({ik['single_us'] / ik['batch_us']:.2f}x batched; mean iterations {ik['mean_iterations']:.1f})",
+    ]
     rtb = ik.get("rtb")
     if rtb and "us" in rtb:
         lines.append(
@@ -369,8 +370,7 @@ def format_calls(r: dict[str, Any]) -> str:
         )
     elif rtb:
         lines.append(f"  RTB ik_LM: not timed ({rtb['error']})")
-    lines.append("")
-    lines.append("IK per iteration (us): batched / one target per call")
+    lines += ["", "IK per iteration (us): batched / one target per call"]
     lm = pinv["LM"]
     for label, row in pinv.items():
         lines.append(
@@ -379,20 +379,16 @@ def format_calls(r: dict[str, Any]) -> str:
             f"{row['single_us_per_iteration'] / lm['single_us_per_iteration']:.2f}x LM)   "
             f"success {row['success']:.3f}"
         )
-    lines.append("")
-    lines.append("Control steps from Python (us):")
-    for label, us in ctl["step_us"].items():
-        lines.append(f"  {label:36} {us:8.2f}")
+    lines += ["", "Control steps from Python (us):"]
+    lines += [f"  {label:36} {us:8.2f}" for label, us in ctl["step_us"].items()]
     lines.append(f"servo, {ctl['tasks']} Table I tasks (steps per second):")
     for name, row in ctl["servo_steps_per_s"].items():
         lines.append(
             f"  {name:5} loop in C {row['c']:10.0f}   loop in Python {row['python']:8.0f}   "
             f"({row['c'] / row['python']:.1f}x)"
         )
-    lines.append("")
-    lines.append("One configuration per call (us):")
     funcs = ("fkine", "jacob0", "manipulability")
-    lines.append(f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs))
+    lines += ["", "One configuration per call (us):", f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs)]
     for label, row in r["numpy"].items():
         lines.append(f"  {label:24}" + "".join(f"{row[f]:16.2f}" if f in row else " " * 16 for f in funcs))
     if "pinocchio" in r["numpy"]:
@@ -408,17 +404,15 @@ def format_calls(r: dict[str, Any]) -> str:
         lines.append(
             f"    {f:16} {row['backend']:8.2f} vs {row['raw']:8.2f}   ({row['backend'] / row['raw']:.2f}x)"
         )
-    lines.append("")
     st = r["startup"]
-    lines.append("Fresh interpreter, wall time (s, fastest / median):")
+    lines += ["", "Fresh interpreter, wall time (s, fastest / median):"]
     for key, label in (
         ("import_numpy_s", "import numpy"),
         ("import_s", "import symkin"),
         ("first_jacob0_s", "import, compile (warm), first jacob0"),
     ):
         lines.append(f"  {label:38} {st[key]['min']:.3f} / {st[key]['median']:.3f}")
-    lines.append("")
-    lines.append("Goals (targets for one call at a time):")
+    lines += ["", "Goals (targets for one call at a time):"]
     for key, c in r["checks"].items():
         v = c["value"]
         shown = "n/a" if v is None else (f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}")

@@ -85,14 +85,6 @@ def table1_problems(
     return q, np.asarray(robot.fkine(q)), starts
 
 
-def _robot(robot: Any) -> Any:
-    if robot is None or isinstance(robot, str):
-        from symkin.model.robots import load
-
-        return load(robot or "ur5")
-    return robot
-
-
 def run_table1(
     robot: Any = "ur5",
     n_problems: int = 10000,
@@ -124,9 +116,10 @@ def run_table1(
         among solved problems) and ``paper`` (the published row or None).
     """
     from symkin.core.progress import bar as progress_bar
+    from symkin.model.resolve import resolve_robot
     from symkin.runtime.ik import ik
 
-    robot = _robot(robot)
+    robot = resolve_robot("ur5" if robot is None else robot)
     labels = list(TABLE1_METHODS) if methods is None else list(methods)
     unknown = [m for m in labels if m not in TABLE1_METHODS]
     if unknown:

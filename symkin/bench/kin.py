@@ -56,17 +56,20 @@ def per_call_us(
     return best * 1e6
 
 
+def _sizes(n: int) -> dict[str, int]:
+    """The output size of each of FUNCS for n joints."""
+    return {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}
+
+
 def _ctypes_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]]:
     """The C entry points through ctypes with cached pointers and buffers (the best ctypes can do)."""
     from symkin.emit.c.backend import c_prefix
 
     lib = ctypes.CDLL(str(kin.path))
     prefix = c_prefix(kin.robot)
-    n = kin.n
     qbuf = np.ascontiguousarray(q, dtype=float)
-    sizes = {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}
     calls = {}
-    for name, size in sizes.items():
+    for name, size in _sizes(kin.n).items():
         out = np.empty(size)
         fn = getattr(lib, f"{prefix}_{name}")
         fn.restype = None
@@ -91,9 +94,8 @@ def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
     prefix = c_prefix(kin.robot)
     ffi.cdef("".join(f"void {prefix}_{f}(const double *q, double *out);" for f in FUNCS))
     lib = ffi.dlopen(str(kin.path))
-    n = kin.n
     calls = {}
-    for name, size in {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}.items():
+    for name, size in _sizes(kin.n).items():
         fn = getattr(lib, f"{prefix}_{name}")
 
         def call(fn: Any = fn, size: int = size) -> np.ndarray:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from symkin.bench.common import optional
+from symkin.core.progress import bar
 from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
 
@@ -28,7 +29,6 @@ __all__ = [
     "run_table1",
     "format_table1",
     "plot_task",
-    "step_breakdown",
     "step_timing",
     "format_step_timing",
     "rtb_mmc",
@@ -163,13 +163,8 @@ def run_table1(
         if joint_limits:
             controllers["mmc_jl"] = MMC(kin, lam=lam, qd_max=qd_max, joint_limits=True, dt=dt)
         runs: dict[str, list[ServoResult]] = {k: [] for k in controllers}
-        tasks = range(n_tasks)
-        if progress:
-            from symkin.core.progress import bar
-
-            tasks = bar(tasks, desc=f"Table I {name}", unit="task", leave=True)
         t0 = time.perf_counter()
-        for t in tasks:
+        for t in bar(range(n_tasks), progress, desc=f"Table I {name}", unit="task", leave=True):
             for key, ctrl in controllers.items():
                 runs[key].append(
                     servo(
@@ -257,51 +252,6 @@ def format_table1(result: dict[str, Any]) -> str:
             lines += ["", format_step_timing(r["step_timing"])]
     lines += ["", pr["note"]]
     return "\n".join(lines)
-
-
-def step_breakdown(robot: Any, n_samples: int = 300, seed: int = 0, lam: float = 0.005) -> dict[str, float]:
-    """Median microseconds of the parts of one MMC step at random configurations (Table I protocol).
-
-    ``J_H`` (the robot's J0 and H0), ``J_H_Jm`` (plus the singularity check, Jm and m in numpy),
-    ``build`` (that + bounds + QP assembly), ``solve_closed_form``
-    (singularity check + closed form), ``solve_osqp`` (OSQP forced: update + solve + polish, no speed
-    limits) and ``solve_osqp_speed_limits`` (OSQP with the robot's speed limits, half of them, and
-    a nu large enough to make some bounds active).
-    """
-    kin = _robot(robot)
-    rng = np.random.default_rng(seed)
-    q0s, Teps = table1_tasks(kin, n_samples, rng)
-    nus = np.array([np.r_[T[:3, 3] - kin.fkine(q)[:3, 3], rng.normal(0, 0.5, 3)] for q, T in zip(q0s, Teps)])
-    cf = MMC(kin, lam=lam, qd_max=np.inf)
-    qpf = MMC(kin, lam=lam, qd_max=np.inf, closed_form=False)
-    half = getattr(kin, "qd_max", None)
-    qpl = MMC(kin, lam=lam, qd_max=None if half is None else 0.5 * np.asarray(half), closed_form=False)
-
-    def med(f: Any) -> float:
-        ts = []
-        for q, nu in zip(q0s, nus):
-            t0 = time.perf_counter()
-            f(q, nu)
-            ts.append(time.perf_counter() - t0)
-        return float(np.median(ts) * 1e6)
-
-    qps = {}
-
-    def build(q: np.ndarray, nu: np.ndarray) -> None:
-        qps[q.tobytes()] = cf.build(q, nu)
-
-    jh = getattr(kin, "jacob0_hessian0", None)
-    out = {
-        "J_H": med(lambda q, nu: jh(q) if jh is not None else (kin.jacob0(q), kin.hessian0(q))),
-        "J_H_Jm": med(lambda q, nu: cf.kinematics(q)),
-        "build": med(build),
-        "solve_closed_form": med(lambda q, nu: cf.solve(qps[q.tobytes()])),
-        "solve_osqp": med(lambda q, nu: qpf.solve(qps[q.tobytes()])),
-    }
-    qps_l = {q.tobytes(): qpl.build(q, nu) for q, nu in zip(q0s, nus)}
-    out["solve_osqp_speed_limits"] = med(lambda q, nu: qpl.solve(qps_l[q.tobytes()]))
-    out["step_total_closed_form"] = out["build"] + out["solve_closed_form"]
-    return out
 
 
 #: configurations of :func:`step_timing`: MMC options (lam and dt added) beside the Table I protocol

@@ -361,22 +361,18 @@ def format_sweep(r: dict) -> str:
         f"most {max(snaps, default=0.0):.1e} from the file as written"
     )
     if own:
-        lines.append("")
-        lines.append(f"the sweep's own chains (fixed joints with rpy, long fixed chains): {len(own)}")
+        lines += ["", f"the sweep's own chains (fixed joints with rpy, long fixed chains): {len(own)}"]
         for row in own:
             times = ", ".join(f"{b} {t:.1f} s" for b, t in row["compile_s"].items())
             err = max(row["error"].values(), default=float("nan"))
             pin = "" if row.get("pinocchio") is None else f", from Pinocchio {row['pinocchio']:.1e}"
             lines.append(f"  {row['urdf']} ({row['n']} joints): compile {times}; FK/J error {err:.1e}{pin}")
     fails = [row for row in rows + own if row["failure"]]
-    lines.append("")
-    lines.append(f"failures: {len(fails)}" + ("" if fails else " (every chain compiled and matched)"))
-    for row in fails:
-        lines.append(f"  {row['urdf']}:{row['leaf']}: {row['failure']}")
+    lines += ["", f"failures: {len(fails)}" + ("" if fails else " (every chain compiled and matched)")]
+    lines += [f"  {row['urdf']}:{row['leaf']}: {row['failure']}" for row in fails]
     if r["unreadable"]:
         lines.append(f"URDF files or chains symkin refuses ({len(r['unreadable'])}), with the reason:")
-        for name, why in r["unreadable"]:
-            lines.append(f"  {name}: {why}")
+        lines += [f"  {name}: {why}" for name, why in r["unreadable"]]
     return "\n".join(lines)
 
 
