@@ -256,6 +256,13 @@ def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, A
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
+#: the cells of a row of format_table1 after the method, in order (the paper's without "infeasible")
+_CELLS = {"searches_allowed": "{}", "iterations_allowed": "{}", "mean_iterations": "{:.2f}",
+          "median_iterations": "{:.0f}", "infeasible": "{}", "infeasible_pct": "{:.2f}%",
+          "mean_searches": "{:.2f}", "max_searches": "{:.0f}", "us_per_solve": "{:.1f}",
+          "us_per_iteration": "{:.3f}", "max_error": "{:.1e}"}  # fmt: skip
+
+
 def format_table1(result: dict[str, Any]) -> str:
     """A plain-text table of :func:`run_table1`'s result, the paper's figures beside ours."""
     crit = "E" if result["tol_on"] == "E" else "|e|"
@@ -269,35 +276,8 @@ def format_table1(result: dict[str, Any]) -> str:
     lines = []
     for r in result["rows"]:
         p = r["paper"]
-        paper = (
-            [
-                "",
-                f"{p['mean_iterations']:.2f}",
-                f"{p['median_iterations']:.0f}",
-                f"{p['infeasible_pct']:.2f}%",
-                f"{p['mean_searches']:.2f}",
-                f"{p['max_searches']:.0f}",
-            ]  # fmt: skip
-            if p
-            else ["", "-", "-", "-", "-", "-"]
-        )
-        lines.append(
-            [
-                r["method"],
-                str(r["searches_allowed"]),
-                str(r["iterations_allowed"]),
-                f"{r['mean_iterations']:.2f}",
-                f"{r['median_iterations']:.0f}",
-                str(r["infeasible"]),
-                f"{r['infeasible_pct']:.2f}%",
-                f"{r['mean_searches']:.2f}",
-                str(r["max_searches"]),
-                f"{r['us_per_solve']:.1f}",
-                f"{r['us_per_iteration']:.3f}",
-                f"{r['max_error']:.1e}",
-                *paper,
-            ]  # fmt: skip
-        )
+        paper = [_CELLS[k].format(p[k]) if p else "-" for k in _PAPER_KEYS if k != "infeasible"]
+        lines.append([r["method"], *(cell.format(r[k]) for k, cell in _CELLS.items()), "", *paper])
     widths = [max(len(c), *(len(x[i]) for x in lines)) if lines else len(c) for i, c in enumerate(cols)]
 
     def fmt(cells: list[str]) -> str:
