@@ -126,11 +126,7 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
     """Microseconds per iteration (pose evaluation) of LM, NR and GN with the pseudo-inverse, over the
     same targets, batched (as Table 1 runs them) and one target per call."""
     Tep = np.asarray(robot.fkine(robot.random_q(n_targets, seed=seed + 1)))
-    methods = {
-        "LM": {},
-        "NR pinv": {"method": "NR", "pinv": True},
-        "GN pinv": {"method": "GN", "pinv": True},
-    }
+    methods = {"LM": {}, "NR pinv": {"method": "NR", "pinv": True}, "GN pinv": {"method": "GN", "pinv": True}}
     paths: dict[tuple[str, str], Callable[[], Any]] = {}
     for label, options in methods.items():
         kin.ik(Tep[:2], seed=seed, **options)

@@ -63,10 +63,7 @@ def _sizes(n: int) -> dict[str, int]:
 
 def _ctypes_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]]:
     """The C entry points through ctypes with cached pointers and buffers (the best ctypes can do)."""
-    from symkin.emit.c.backend import c_prefix
-
-    lib = ctypes.CDLL(str(kin.path))
-    prefix = c_prefix(kin.robot)
+    lib, prefix = ctypes.CDLL(str(kin.path)), kin.c_prefix
     qbuf = np.ascontiguousarray(q, dtype=float)
     calls = {}
     for name, size in _sizes(kin.n).items():
@@ -88,10 +85,7 @@ def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
     cffi = optional("cffi")
     if cffi is None:
         return None
-    from symkin.emit.c.backend import c_prefix
-
-    ffi = cffi.FFI()
-    prefix = c_prefix(kin.robot)
+    ffi, prefix = cffi.FFI(), kin.c_prefix
     ffi.cdef("".join(f"void {prefix}_{f}(const double *q, double *out);" for f in FUNCS))
     lib = ffi.dlopen(str(kin.path))
     calls = {}

@@ -172,12 +172,9 @@ def run_table1(
                     )
                 )
         res = {key: _summary(r) for key, r in runs.items()}
-        res["improvement_mean_pct"] = _pct(
-            res["mmc"]["mean_manipulability"], res["rrmc"]["mean_manipulability"]
-        )
-        res["improvement_final_pct"] = _pct(
-            res["mmc"]["final_manipulability"], res["rrmc"]["final_manipulability"]
-        )
+        for which in ("mean", "final"):
+            m = f"{which}_manipulability"
+            res[f"improvement_{which}_pct"] = _pct(res["mmc"][m], res["rrmc"][m])
         res["mmc_not_below_rrmc_final"] = int(
             sum(
                 m.final_manipulability >= r.final_manipulability - 1e-9
@@ -430,12 +427,7 @@ def format_step_timing(timing: dict[str, Any]) -> str:
 
 
 def plot_task(
-    robot: Any,
-    q0: Any,
-    Tep: Any,
-    path: str | Path,
-    title: str | None = None,
-    **servo_options: Any,
+    robot: Any, q0: Any, Tep: Any, path: str | Path, title: str | None = None, **servo_options: Any
 ) -> dict[str, ServoResult]:
     """Servo one task with RRMC and MMC and write manipulability against time as a PNG (Fig. 3 of the MMC
     paper).

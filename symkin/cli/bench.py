@@ -226,8 +226,6 @@ def _urdf(args: argparse.Namespace) -> tuple[int, dict]:
 
 
 def _jsonable(x: Any) -> Any:
-    if isinstance(x, np.ndarray):
+    if isinstance(x, (np.ndarray, np.generic)):
         return x.tolist()
-    if isinstance(x, np.generic):
-        return x.item()
     raise TypeError(f"not JSON serialisable: {type(x).__name__}")

@@ -101,14 +101,10 @@ def add_robot_argument(s: argparse.ArgumentParser, default: str | None = None) -
     else:
         s.add_argument("robot", metavar="ROBOT", nargs="?", default=None, help=f"{ROBOT_HELP} ({default})")
     s.add_argument(
-        "--tool",
-        metavar="T",
-        help="append this constant transform after the end effector: " + TRANSFORM_HELP,
+        "--tool", metavar="T", help="append this constant transform after the end effector: " + TRANSFORM_HELP
     )
     s.add_argument(
-        "--base",
-        metavar="T",
-        help="place this constant transform before the first link: " + TRANSFORM_HELP,
+        "--base", metavar="T", help="place this constant transform before the first link: " + TRANSFORM_HELP
     )
 
 
