@@ -137,15 +137,13 @@ def run_table1(
     Step times are the controllers' (kinematics and solve) with whatever kinematics the robot
     object provides.
     """
+    loop = {"gain": gain, "dt": dt, "threshold": threshold, "max_steps": max_steps}  # of every servo run
     out: dict[str, Any] = {
         "protocol": {
             "n_tasks": n_tasks,
             "seed": seed,
             "lam": lam,
-            "gain": gain,
-            "dt": dt,
-            "threshold": threshold,
-            "max_steps": max_steps,
+            **loop,
             "qd_max": None if qd_max is None else np.broadcast_to(qd_max, (1,)).tolist()[0],
             "note": PROTOCOL_NOTE,
         },
@@ -166,11 +164,7 @@ def run_table1(
         t0 = time.perf_counter()
         for t in bar(range(n_tasks), progress, desc=f"Table I {name}", unit="task", leave=True):
             for key, ctrl in controllers.items():
-                runs[key].append(
-                    servo(
-                        kin, q0s[t], Teps[t], ctrl, dt=dt, gain=gain, threshold=threshold, max_steps=max_steps
-                    )
-                )
+                runs[key].append(servo(kin, q0s[t], Teps[t], ctrl, **loop))
         res = {key: _summary(r) for key, r in runs.items()}
         for which in ("mean", "final"):
             m = f"{which}_manipulability"
@@ -192,9 +186,8 @@ def run_table1(
         res["source"] = getattr(kin, "source", "")
         if timing:
             res["step_timing"] = step_timing(
-                kin, min(n_tasks, timing_tasks), seed=seed, index=index, lam=lam, dt=dt, gain=gain,
-                threshold=threshold, max_steps=max_steps,
-            )  # fmt: skip
+                kin, min(n_tasks, timing_tasks), seed=seed, index=index, lam=lam, **loop
+            )
         out["robots"][name] = res
     return out
 

@@ -41,17 +41,6 @@ def erd_robots_dir() -> Path | None:
     return path if path.is_dir() else None
 
 
-def tree_case(name: str) -> Any:
-    """The :class:`symkin.Tree` of one of :data:`TREE_CASES` (None without example-robot-data)."""
-    from symkin.model.tree import Tree
-
-    root = erd_robots_dir()
-    if root is None:
-        return None
-    urdf, frames = TREE_CASES[name]
-    return Tree.from_urdf(root / urdf, frames=frames)
-
-
 def cold_compile_seconds(urdf: Path, frames: tuple[str, ...]) -> float:
     """Seconds to import symkin, read the URDF and compile its tree to C in a fresh process with
     an empty cache (derive, generate, gcc, load)."""
@@ -132,6 +121,7 @@ def run_tree_kin(
 ) -> dict:
     """Measure every case of :data:`TREE_CASES` (see the module docstring); ``{"skipped": why}``
     without example-robot-data."""
+    from symkin.model.tree import Tree
     from symkin.runtime.load import compile as compile_model
 
     root = erd_robots_dir()
@@ -140,7 +130,7 @@ def run_tree_kin(
     rows = []
     for name in cases:
         urdf, frames = TREE_CASES[name]
-        tree = tree_case(name)
+        tree = Tree.from_urdf(root / urdf, frames=frames)
         t0 = time.perf_counter()
         kin = compile_model(tree, "c")
         warm = time.perf_counter() - t0
