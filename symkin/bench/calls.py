@@ -259,19 +259,18 @@ def startup(robot: str, runs: int) -> dict[str, Any]:
     import symkin
 
     symkin.compile(robot)  # warm the cache
-    pycache = tempfile.TemporaryDirectory(prefix="symkin-bench-pycache-")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    env["PYTHONPYCACHEPREFIX"] = pycache.name
     out: dict[str, Any] = {}
-    for key, code in (
-        ("import_numpy_s", _IMPORT.format(m="numpy")),
-        ("import_s", _IMPORT.format(m="symkin")),
-        ("first_jacob0_s", _FIRST.format(robot=robot)),
-    ):
-        fresh_python(code, env, 300)  # a warm-up (page cache, byte code)
-        times = [float(fresh_python(code, env, 300)) for _ in range(runs)]
-        out[key] = {"min": min(times), "median": float(np.median(times))}
-    pycache.cleanup()
+    with tempfile.TemporaryDirectory(prefix="symkin-bench-pycache-") as pycache:
+        env["PYTHONPYCACHEPREFIX"] = pycache
+        for key, code in (
+            ("import_numpy_s", _IMPORT.format(m="numpy")),
+            ("import_s", _IMPORT.format(m="symkin")),
+            ("first_jacob0_s", _FIRST.format(robot=robot)),
+        ):
+            fresh_python(code, env, 300)  # a warm-up (page cache, byte code)
+            times = [float(fresh_python(code, env, 300)) for _ in range(runs)]
+            out[key] = {"min": min(times), "median": float(np.median(times))}
     return out
 
 
@@ -319,15 +318,14 @@ def run_calls(
 
 def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
     ik, pinv, ctl, npy, cas, st = (r[k] for k in ("ik", "pinv", "control", "numpy", "casadi", "startup"))
+    lm = pinv["LM"]["single_us_per_iteration"]
     fig: dict[str, float | None] = {
         "ik_single_over_batch": ik["single_us"] / ik["batch_us"],
         "ik_rtb_over_single": (ik["rtb"]["us"] / ik["single_us"])
         if ik.get("rtb") and "us" in ik["rtb"]
         else None,
-        "pinv_nr_over_lm_per_iteration": pinv["NR pinv"]["single_us_per_iteration"]
-        / pinv["LM"]["single_us_per_iteration"],
-        "pinv_gn_over_lm_per_iteration": pinv["GN pinv"]["single_us_per_iteration"]
-        / pinv["LM"]["single_us_per_iteration"],
+        "pinv_nr_over_lm_per_iteration": pinv["NR pinv"]["single_us_per_iteration"] / lm,
+        "pinv_gn_over_lm_per_iteration": pinv["GN pinv"]["single_us_per_iteration"] / lm,
         "rrmc_step_us": ctl["step_us"]["rrmc (C)"],
         "servo_rrmc_steps_per_s": ctl["servo_steps_per_s"]["rrmc"]["c"],
         "servo_mmc_steps_per_s": ctl["servo_steps_per_s"]["mmc"]["c"],

@@ -128,12 +128,10 @@ def run(args: argparse.Namespace) -> int:
         )
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
         return 0
-    if args.batch is None:
-        args.batch = 100_000
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
-        result = run_kin(spec or "panda", batch=args.batch, progress=not args.json)
+        result = run_kin(spec or "panda", batch=args.batch or 100_000, progress=not args.json)
         if not args.json:
             print(format_kin(result), flush=True)
         result["trees"] = _trees(args)
@@ -205,7 +203,7 @@ def _trees(args: argparse.Namespace) -> dict:
     """The tree rows of ``bench kin`` / ``bench tree`` (printed unless --json)."""
     from symkin.bench.tree import format_tree_kin, run_tree_kin
 
-    trees = run_tree_kin(batch=args.batch, seed=args.seed, cold=not args.no_cold)
+    trees = run_tree_kin(batch=args.batch or 100_000, seed=args.seed, cold=not args.no_cold)
     if not args.json:
         print(format_tree_kin(trees))
     return trees
