@@ -68,7 +68,6 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     from symkin.symbolic.functions import build_functions, derive_kinematics, fk_j_h_counts
 
     robot = random_chain(int(spec), seed) if spec.isdigit() else resolve_robot(spec)
-    out: dict[str, Any] = {"robot": robot.name, "n": robot.n}
     cpu0 = _cpu_s()
     t0 = time.perf_counter()
     derived = derive_kinematics(robot)
@@ -91,7 +90,9 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     cpu6 = _cpu_s()
     by_name = {f.name: f.code.counts for f in functions}
     own, child = _peak_mb()
-    out.update(
+    return dict(
+        robot=robot.name,
+        n=robot.n,
         strategy=functions[0].code.strategy,
         derive_s=t1 - t0,
         cse_s=t2 - t1,
@@ -109,7 +110,6 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
         gcc_peak_mb=child,
         jacob0_error=err,
     )
-    return out
 
 
 def measure(spec: str, seed: int = 0, timeout: float = 1800) -> dict[str, Any]:

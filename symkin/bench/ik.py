@@ -14,6 +14,7 @@ thread (``time.thread_time``), so that other processes of a shared machine do no
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Iterable
 from typing import Any
@@ -148,28 +149,26 @@ def run_table1(
                 bar.update(N)
                 continue  # needs a square J
             parts, elapsed = [], 0.0
-            ik(solver, Tep[:1], backend=backend, starts=starts, seed=seed, **options)  # build / warm up
+            solve = functools.partial(ik, solver, backend=backend, starts=starts, seed=seed, **options)
+            solve(Tep[:1])  # build / warm up
             for i in range(0, N, chunk):
                 t0 = time.thread_time()
-                parts.append(
-                    ik(solver, Tep[i : i + chunk], backend=backend, starts=starts, seed=seed, **options)
-                )
+                parts.append(solve(Tep[i : i + chunk]))
                 elapsed += time.thread_time() - t0
                 bar.update(len(Tep[i : i + chunk]))
             rows.append(_row(robot, Tep, label, setting, parts, elapsed))
     bar.close()
-    out = {
+    return {
         "robot": robot.name,
         "n_problems": N,
         "seed": seed,
         "tol": tol,
         "tol_on": tol_on,
         "backend": backend,
+        "rows": rows,
+        "lanes": _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None,
+        "rtb": _time_rtb(robot, n_problems, seed, tol) if rtb else None,
     }
-    out["rows"] = rows
-    out["lanes"] = _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None
-    out["rtb"] = _time_rtb(robot, n_problems, seed, tol) if rtb else None
-    return out
 
 
 def _time_lanes(

@@ -199,10 +199,8 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
     kernels = {b: {f: getattr(kins[b], f) for f in BATCH_FUNCS} for b in ("c", "numpy")}
     kernels.update(_c_builds(robot, kins["c"], Q))
     batched = {label: {f: rows_per_s(fn, Q) / 1e6 for f, fn in fns.items()} for label, fns in kernels.items()}
-    ratios = {}
-    for peer in ("pinocchio", "rtb"):
-        if peer in per_call:
-            ratios[peer] = {f: per_call[peer][f] / per_call["c (extension)"][f] for f in FUNCS}
+    ext = per_call["c (extension)"]
+    ratios = {p: {f: per_call[p][f] / ext[f] for f in FUNCS} for p in ("pinocchio", "rtb") if p in per_call}
     return {
         "robot": robot.name,
         "n": robot.n,
