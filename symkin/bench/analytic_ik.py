@@ -48,12 +48,11 @@ def _contains(rows: np.ndarray, q: np.ndarray, rev: np.ndarray) -> bool:
 def sampled_solutions(kin: Any, T: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
     """Distinct solutions of each pose in T (N, 4, 4) found by ``starts`` single LM searches."""
     N = len(T)
-    rng = np.random.default_rng(seed)
     rev = np.array([e.is_revolute for e in kin.robot.ets.joints])
     lo = np.where(rev, -np.pi, kin.qlim[0])
     hi = np.where(rev, np.pi, kin.qlim[1])
     TT = np.repeat(T, starts, axis=0)
-    Q0 = rng.uniform(lo, hi, size=(N * starts, kin.n))
+    Q0 = np.random.default_rng(seed).uniform(lo, hi, size=(N * starts, kin.n))
     res = kin.ik(TT, q0=Q0, slimit=1, ilimit=60, tol=1e-12, joint_limits=False, seed=seed)
     out = []
     for i in range(N):
@@ -110,8 +109,7 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
     kin = symkin.compile(robot, "c")
     solver = compile_analytic(robot, "c")
     kin_np = compile_analytic(robot, "numpy")
-    rng = np.random.default_rng(seed)
-    Q = rng.uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
+    Q = np.random.default_rng(seed).uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
     T = np.ascontiguousarray(robot.fkine(Q))
     rev = np.array([e.is_revolute for e in robot.ets.joints])
     row: dict[str, Any] = {"derive_s": t_derive, "kind": solver.kind, "S": solver.max_solutions}

@@ -165,9 +165,8 @@ def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float 
     }
     q0s, Teps = table1_tasks(kin, n_tasks, np.random.default_rng([seed, 1]))
     tasks = list(zip(q0s, Teps))
-    loops: dict[str, dict[str, float]] = {}
-    for name in ("rrmc", "mmc"):
-        loops[name] = {}
+    loops: dict[str, dict[str, float]] = {"rrmc": {}, "mmc": {}}
+    for name in loops:
         for backend, subset in (("c", tasks), ("python", tasks[: max(1, n_tasks // 10)])):
 
             def run(backend: str = backend, subset: list = subset, name: str = name) -> int:

@@ -106,19 +106,15 @@ def _rotation_to(z: np.ndarray) -> np.ndarray:
     return np.column_stack((x, np.cross(z, x), z))
 
 
-def _batch_ns(f: Any, N: int, repeats: int = 3) -> float:
-    return best_of(f, repeats) / N * 1e9
-
-
 def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> dict[str, Any]:
     """One row: per call, batched, distances, the generated NumPy module and Pinocchio + coal on ``env``."""
     batch = len(Q)
     row: dict[str, Any] = {"obstacles": len(env)}
     row["one_call_ns"] = per_call_us(lambda: kernel.in_collision(Q[0], env), budget=0.1) * 1e3
-    row["batch_ns"] = _batch_ns(lambda: kernel.in_collision(Q, env), batch, 40)  # a few ms each
-    row["batch_distances_ns"] = _batch_ns(lambda: kernel.distances(Q, env), batch, 1)
+    row["batch_ns"] = best_of(lambda: kernel.in_collision(Q, env), 40) / batch * 1e9  # a few ms each
+    row["batch_distances_ns"] = best_of(lambda: kernel.distances(Q, env), 1) / batch * 1e9
     small = Q[: max(batch // 20, 1)]
-    row["numpy_batch_ns"] = _batch_ns(lambda: numpy_kin.in_collision(small, env), len(small), 1)
+    row["numpy_batch_ns"] = best_of(lambda: numpy_kin.in_collision(small, env), 1) / len(small) * 1e9
     hits = kernel.in_collision(Q, env)
     row["colliding"] = float(np.mean(hits))
     peer = pinocchio_collision(robot, env)
@@ -126,7 +122,7 @@ def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> di
         few = Q[: min(batch, 2000)]
         verdicts = np.array([peer(q) for q in few])
         row["pinocchio_agrees"] = float(np.mean(verdicts == hits[: len(few)]))
-        row["pinocchio_ns"] = _batch_ns(lambda: [peer(q) for q in few], len(few), 1)
+        row["pinocchio_ns"] = best_of(lambda: [peer(q) for q in few], 1) / len(few) * 1e9
         row["speedup_batch_vs_pinocchio"] = row["pinocchio_ns"] / row["batch_ns"]
     row["speedup_batch_vs_numpy"] = row["numpy_batch_ns"] / row["batch_ns"]
     return row

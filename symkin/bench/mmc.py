@@ -320,12 +320,9 @@ def step_timing(
     """
     import symkin
 
-    model = _robot(robot)
-    kin = (
-        model
-        if getattr(model, "backend", None) == "c"
-        else symkin.compile(getattr(model, "robot", model), "c")
-    )
+    kin = _robot(robot)
+    if getattr(kin, "backend", None) != "c":
+        kin = symkin.compile(getattr(kin, "robot", kin), "c")
     peers = (optional("roboticstoolbox"), optional("qpsolvers")) if rtb else (None, None)
     rng = np.random.default_rng([seed, index])
     q0s, Teps = table1_tasks(kin, n_tasks, rng)
@@ -439,8 +436,7 @@ def plot_task(
     results = {c: servo(kin, q0, Tep, c, **servo_options) for c in ("rrmc", "mmc")}
     fig, ax = plt.subplots(figsize=(6.0, 3.2), dpi=150)
     for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
-        r = results[key]
-        ax.plot(r.t, r.manipulability, style, label=label, linewidth=1.6)
+        ax.plot(results[key].t, results[key].manipulability, style, label=label, linewidth=1.6)
     ax.set_xlabel("Time (s)")
     ax.set_ylabel("Manipulability")
     ax.set_title(title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing")

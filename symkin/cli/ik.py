@@ -124,8 +124,5 @@ def _report(args: argparse.Namespace, res: Any, dt: float, how: str) -> int:
 def _result_dict(res: Any) -> dict:
     import dataclasses
 
-    out = {}
-    for f in dataclasses.fields(res):
-        v = getattr(res, f.name)
-        out[f.name] = v.tolist() if isinstance(v, (np.ndarray, np.generic)) else v
-    return out
+    values = {f.name: getattr(res, f.name) for f in dataclasses.fields(res)}
+    return {k: v.tolist() if isinstance(v, (np.ndarray, np.generic)) else v for k, v in values.items()}
