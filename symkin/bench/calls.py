@@ -22,6 +22,7 @@ fresh interpreters (the fastest and the median of several). Trust the ratios.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import time
@@ -56,12 +57,6 @@ GOALS: dict[str, tuple[str, float]] = {
     "import_s": ("<=", 0.3),
     "first_jacob0_s": ("<=", 0.5),
 }
-
-
-def _us(f: Callable[[], Any], budget: float) -> float:
-    """Microseconds per call of f (best of several rounds within about ``budget`` seconds, CPU time
-    of this thread)."""
-    return per_call_us(f, budget=budget, clock=CLOCK)
 
 
 def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float, rounds: int = 4) -> dict:
@@ -157,11 +152,12 @@ def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float 
     q = robot.random_q(seed=rng)
     nu = rng.normal(0.0, 0.1, 6)
     mmc = MMC(kin, qd_max=np.inf)
+    us = functools.partial(per_call_us, budget=budget, clock=CLOCK)  # microseconds per call
     steps = {
-        "jacob0 (yardstick)": _us(lambda: kin.jacob0(q), budget),
-        "rrmc (C)": _us(lambda: rrmc(kin, q, nu, qd_max=np.inf), budget),
-        "MMC.step (C)": _us(lambda: mmc.step(q, nu), budget),
-        "rrmc (NumPy, reference kinematics)": _us(lambda: rrmc(robot, q, nu, qd_max=np.inf), budget),
+        "jacob0 (yardstick)": us(lambda: kin.jacob0(q)),
+        "rrmc (C)": us(lambda: rrmc(kin, q, nu, qd_max=np.inf)),
+        "MMC.step (C)": us(lambda: mmc.step(q, nu)),
+        "rrmc (NumPy, reference kinematics)": us(lambda: rrmc(robot, q, nu, qd_max=np.inf)),
     }
     q0s, Teps = table1_tasks(kin, n_tasks, np.random.default_rng([seed, 1]))
     tasks = list(zip(q0s, Teps))
