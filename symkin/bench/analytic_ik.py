@@ -5,11 +5,10 @@ limits). Measured in one run: the derivation time (sympy, cold), the C solver pe
 and one call at a time from Python, the NumPy backend batched, and, when the ``compare`` extra is
 installed, EAIK (Ostermeier et al., 2024; subproblem decomposition after IK-Geo, C++) one call at
 a time and batched on one thread, with the ratio. Times are per pose: the least process CPU time
-of 5 passes over all poses, symkin's and EAIK's passes interleaved (:func:`_interleaved`) so both
-see the same load on the machine; one call at a time means a loop that drops each result before
-the next call. Solution counts and
-the largest forward-kinematics error (numeric reference ``Robot.fkine``) of every returned
-solution, for both.
+of 5 passes over all poses, symkin's and EAIK's passes interleaved
+(:func:`symkin.bench.common.interleaved`) so both see the same load on the machine; one call at a
+time means a loop that drops each result before the next call. Solution counts and the largest
+forward-kinematics error (numeric reference ``Robot.fkine``) of every returned solution, for both.
 
 Branch completeness: per pose, ``starts`` numerical LM searches (C solver, one search each, from
 random configurations, no joint limits) sample the solution set; a pose agrees when every sampled
@@ -19,11 +18,12 @@ pose to 1e-10 (none spurious). The same count is made for EAIK's exact solutions
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Any
 
 import numpy as np
+
+from symkin.bench.common import best_of, interleaved, optional
 
 __all__ = ["run_analytic", "format_analytic", "sampled_solutions"]
 
@@ -31,33 +31,10 @@ MATCH_TOL = 1e-6  # rad or m: a sampled solution matches a closed-form one
 EXACT_TOL = 1e-10  # FK error of a returned solution
 
 
-def _best(f: Any, repeat: int = 5) -> float:
-    """The least CPU time of the process (``time.process_time``: time the shared machine gives to
-    other jobs is not counted, threads of a peer library are) over ``repeat`` runs of ``f``."""
-    best = math.inf
-    for _ in range(repeat):
-        t = time.process_time()
-        f()
-        best = min(best, time.process_time() - t)
-    return best
-
-
 def _each(f: Any, items: list[Any]) -> None:
     """One call per item, each result dropped before the next call (as a control loop would)."""
     for x in items:
         f(x)
-
-
-def _interleaved(timed: dict[str, Any], repeat: int = 5) -> dict[str, float]:
-    """The least process CPU time of each function over ``repeat`` rounds, each round running every
-    function once in turn, so symkin and its peer see the same load on the shared machine."""
-    best = dict.fromkeys(timed, math.inf)
-    for _ in range(repeat):
-        for key, f in timed.items():
-            t = time.process_time()
-            f()
-            best[key] = min(best[key], time.process_time() - t)
-    return best
 
 
 def _wrap(d: np.ndarray, rev: np.ndarray) -> np.ndarray:
@@ -71,12 +48,11 @@ def _contains(rows: np.ndarray, q: np.ndarray, rev: np.ndarray) -> bool:
 def sampled_solutions(kin: Any, T: np.ndarray, starts: int, seed: int) -> list[np.ndarray]:
     """Distinct solutions of each pose in T (N, 4, 4) found by ``starts`` single LM searches."""
     N = len(T)
-    rng = np.random.default_rng(seed)
     rev = np.array([e.is_revolute for e in kin.robot.ets.joints])
     lo = np.where(rev, -np.pi, kin.qlim[0])
     hi = np.where(rev, np.pi, kin.qlim[1])
     TT = np.repeat(T, starts, axis=0)
-    Q0 = rng.uniform(lo, hi, size=(N * starts, kin.n))
+    Q0 = np.random.default_rng(seed).uniform(lo, hi, size=(N * starts, kin.n))
     res = kin.ik(TT, q0=Q0, slimit=1, ilimit=60, tol=1e-12, joint_limits=False, seed=seed)
     out = []
     for i in range(N):
@@ -91,9 +67,8 @@ def sampled_solutions(kin: Any, T: np.ndarray, starts: int, seed: int) -> list[n
 
 def _eaik_robot(robot: Any) -> Any:
     """EAIK's robot from symkin's exact joint geometry (IK-Geo H, P convention), or None."""
-    try:
-        import eaik.pybindings.EAIK as EAIK  # noqa: N811
-    except ImportError:
+    EAIK = optional("eaik.pybindings.EAIK")  # noqa: N806
+    if EAIK is None:
         return None
     from symkin.symbolic.ik_geometry import geometry, snap
 
@@ -134,8 +109,7 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
     kin = symkin.compile(robot, "c")
     solver = compile_analytic(robot, "c")
     kin_np = compile_analytic(robot, "numpy")
-    rng = np.random.default_rng(seed)
-    Q = rng.uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
+    Q = np.random.default_rng(seed).uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
     T = np.ascontiguousarray(robot.fkine(Q))
     rev = np.array([e.is_revolute for e in robot.ets.joints])
     row: dict[str, Any] = {"derive_s": t_derive, "kind": solver.kind, "S": solver.max_solutions}
@@ -151,39 +125,44 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
         timed["eaik_one_us"] = lambda: _each(bot.calculate_IK, one)
         if hasattr(bot, "calculate_IK_batched"):
             timed["eaik_batch_us"] = lambda: bot.calculate_IK_batched(one, 1)
-    row.update({k: v / n * 1e6 for k, v in _interleaved(timed).items()})
+    # the least process CPU time (time the shared machine gives to other jobs is not counted,
+    # threads of a peer library are)
+    row.update({k: v / n * 1e6 for k, v in interleaved(timed, 5, time.process_time)[0].items()})
     m = min(n, 200)
-    row["numpy_batch_us"] = _best(lambda: kin_np.ik_all(T[:m], joint_limits=False), 2) / m * 1e6
+    row["numpy_batch_us"] = (
+        best_of(lambda: kin_np.ik_all(T[:m], joint_limits=False), 2, time.process_time) / m * 1e6
+    )
     sols = [b[~np.isnan(b[:, 0])] for b in batch]
-    row["mean_solutions"] = float(np.mean([len(s) for s in sols]))
-    errs = [float(np.abs(robot.fkine(s) - T[i]).max()) for i, s in enumerate(sols) if len(s)]
-    row["max_fk_error"] = max(errs, default=0.0)
     sampled = sampled_solutions(kin, T, starts, seed) if starts else None
+    row.update(_solution_sets("", sols, robot, T, sampled, rev))
     if sampled is not None:
-        row["agree"] = sum(
-            all(_contains(sols[i], q, rev) for q in sampled[i])
-            and (not len(sols[i]) or np.abs(robot.fkine(sols[i]) - T[i]).max() <= EXACT_TOL)
-            for i in range(n)
-        )
         row["sampled_mean"] = float(np.mean([len(s) for s in sampled]))
     if bot is not None:
         res = [bot.calculate_IK(T[i]) for i in range(n)]
         exact = [np.array([q for q, ls in zip(r.Q, r.is_LS) if not ls]).reshape(-1, robot.n) for r in res]
-        row["eaik_mean_solutions"] = float(np.mean([len(e) for e in exact]))
-        row["eaik_max_fk_error"] = max(
-            (float(np.abs(robot.fkine(e) - T[i]).max()) for i, e in enumerate(exact) if len(e)),
-            default=0.0,
-        )
-        if sampled is not None:
-            row["eaik_agree"] = sum(
-                all(_contains(exact[i], q, rev) for q in sampled[i])
-                and (not len(exact[i]) or np.abs(robot.fkine(exact[i]) - T[i]).max() <= EXACT_TOL)
-                for i in range(n)
-            )
+        row.update(_solution_sets("eaik_", exact, robot, T, sampled, rev))
         row["speedup_one"] = row["eaik_one_us"] / row["c_one_us"]
         if "eaik_batch_us" in row:
             row["speedup_batch"] = row["eaik_batch_us"] / row["c_batch_us"]
     return robot, row
+
+
+def _solution_sets(
+    prefix: str, sets: list[np.ndarray], robot: Any, T: np.ndarray, sampled: list | None, rev: np.ndarray
+) -> dict[str, Any]:
+    """One solver's solutions of every pose: their mean count, the largest FK error of any and, with
+    ``sampled``, the poses that agree (none missed, none spurious; module docstring)."""
+    errors = [float(np.abs(robot.fkine(s) - T[i]).max()) if len(s) else 0.0 for i, s in enumerate(sets)]
+    out = {
+        f"{prefix}mean_solutions": float(np.mean([len(s) for s in sets])),
+        f"{prefix}max_fk_error": max(errors, default=0.0),
+    }
+    if sampled is not None:
+        out[f"{prefix}agree"] = sum(
+            all(_contains(s, q, rev) for q in sampled[i]) and errors[i] <= EXACT_TOL
+            for i, s in enumerate(sets)
+        )
+    return out
 
 
 def _getter(r: dict[str, Any]) -> Any:

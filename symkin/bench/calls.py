@@ -22,16 +22,16 @@ fresh interpreters (the fastest and the median of several). Trust the ratios.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
-import subprocess
-import sys
 import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import best_of, fresh_python, interleaved, optional
 from symkin.bench.kin import per_call_us, pinocchio_model, rtb_ets
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
@@ -59,12 +59,6 @@ GOALS: dict[str, tuple[str, float]] = {
 }
 
 
-def _us(f: Callable[[], Any], budget: float) -> float:
-    """Microseconds per call of f (best of several rounds within about ``budget`` seconds, CPU time
-    of this thread)."""
-    return per_call_us(f, budget=budget, clock=CLOCK)
-
-
 def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float, rounds: int = 4) -> dict:
     """Microseconds per call of each path, measured in turn for ``rounds`` rounds (about ``budget``
     seconds per path in all) and the best round kept: a burst of load on a shared machine then hits
@@ -79,16 +73,6 @@ def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float,
     return out
 
 
-def _best_of(f: Callable[[], Any], rounds: int) -> float:
-    """Best wall time (s) of ``rounds`` calls of f."""
-    best = math.inf
-    for _ in range(rounds):
-        t0 = CLOCK()
-        f()
-        best = min(best, CLOCK() - t0)
-    return best
-
-
 # -- IK ----------------------------------------------------------------------------------------
 def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: bool) -> dict[str, Any]:
     """One target per ``kin.ik(T)`` call against the batch ``kin.ik(T_all)`` (default options: LM
@@ -99,17 +83,12 @@ def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: 
     kin.ik(Tep[:4])
     kin.ik(targets[0])
     out: dict[str, Any] = {"targets": n_targets}
-    batch = single = math.inf
-    results: list[Any] = []
-    for _ in range(rounds):  # interleaved, so both see the same machine
-        t0 = CLOCK()
-        res = kin.ik(Tep)
-        batch = min(batch, CLOCK() - t0)
-        t0 = CLOCK()
-        results = [kin.ik(T) for T in targets]
-        single = min(single, CLOCK() - t0)
-    out["batch_us"] = 1e6 * batch / n_targets
-    out["single_us"] = 1e6 * single / n_targets
+    best, last = interleaved(
+        {"batch": lambda: kin.ik(Tep), "single": lambda: [kin.ik(T) for T in targets]}, rounds
+    )
+    res, results = last["batch"], last["single"]
+    out["batch_us"] = 1e6 * best["batch"] / n_targets
+    out["single_us"] = 1e6 * best["single"] / n_targets
     out["batch_success"] = float(np.mean(res.success))
     out["single_success"] = float(np.mean([r.success for r in results]))
     out["mean_iterations"] = float(np.mean([r.iterations for r in results]))
@@ -118,9 +97,8 @@ def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: 
 
 
 def _rtb_ik(robot: Any, targets: list[np.ndarray]) -> dict[str, Any] | None:
-    try:
-        import roboticstoolbox as rtb
-    except ImportError:
+    rtb = optional("roboticstoolbox")
+    if rtb is None:
         return None
     try:
         ets = rtb_ets(rtb, robot)
@@ -143,35 +121,22 @@ def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: 
     """Microseconds per iteration (pose evaluation) of LM, NR and GN with the pseudo-inverse, over the
     same targets, batched (as Table 1 runs them) and one target per call."""
     Tep = np.asarray(robot.fkine(robot.random_q(n_targets, seed=seed + 1)))
-    methods = {
-        "LM": {},
-        "NR pinv": {"method": "NR", "pinv": True},
-        "GN pinv": {"method": "GN", "pinv": True},
-    }
-    batch = {label: math.inf for label in methods}
-    single = dict(batch)
-    its: dict[str, tuple[int, int]] = {}
-    success: dict[str, float] = {}
-    for options in methods.values():
+    methods = {"LM": {}, "NR pinv": {"method": "NR", "pinv": True}, "GN pinv": {"method": "GN", "pinv": True}}
+    paths: dict[tuple[str, str], Callable[[], Any]] = {}
+    for label, options in methods.items():
         kin.ik(Tep[:2], seed=seed, **options)
-    for _ in range(rounds):  # the methods in turn, so that each sees the same machine
-        for label, options in methods.items():
-            t0 = CLOCK()
-            res = kin.ik(Tep, seed=seed, **options)
-            batch[label] = min(batch[label], CLOCK() - t0)
-            t0 = CLOCK()
-            sols = [kin.ik(T, seed=seed, **options) for T in Tep]
-            single[label] = min(single[label], CLOCK() - t0)
-            its[label] = (int(np.sum(res.iterations)), sum(int(s.iterations) for s in sols))
-            success[label] = float(np.mean(res.success))
-    return {
-        label: {
-            "batch_us_per_iteration": 1e6 * batch[label] / its[label][0],
-            "success": success[label],
-            "single_us_per_iteration": 1e6 * single[label] / its[label][1],
+        paths[(label, "batch")] = lambda o=options: kin.ik(Tep, seed=seed, **o)
+        paths[(label, "single")] = lambda o=options: [kin.ik(T, seed=seed, **o) for T in Tep]
+    best, last = interleaved(paths, rounds)  # the methods in turn, so that each sees the same machine
+    out = {}
+    for label in methods:
+        res, sols = last[(label, "batch")], last[(label, "single")]
+        out[label] = {
+            "batch_us_per_iteration": 1e6 * best[(label, "batch")] / int(np.sum(res.iterations)),
+            "success": float(np.mean(res.success)),
+            "single_us_per_iteration": 1e6 * best[(label, "single")] / sum(int(s.iterations) for s in sols),
         }
-        for label in methods
-    }
+    return out
 
 
 # -- control -------------------------------------------------------------------------------------
@@ -187,24 +152,24 @@ def control_calls(kin: Any, seed: int, n_tasks: int, rounds: int, budget: float 
     q = robot.random_q(seed=rng)
     nu = rng.normal(0.0, 0.1, 6)
     mmc = MMC(kin, qd_max=np.inf)
+    us = functools.partial(per_call_us, budget=budget, clock=CLOCK)  # microseconds per call
     steps = {
-        "jacob0 (yardstick)": _us(lambda: kin.jacob0(q), budget),
-        "rrmc (C)": _us(lambda: rrmc(kin, q, nu, qd_max=np.inf), budget),
-        "MMC.step (C)": _us(lambda: mmc.step(q, nu), budget),
-        "rrmc (NumPy, reference kinematics)": _us(lambda: rrmc(robot, q, nu, qd_max=np.inf), budget),
+        "jacob0 (yardstick)": us(lambda: kin.jacob0(q)),
+        "rrmc (C)": us(lambda: rrmc(kin, q, nu, qd_max=np.inf)),
+        "MMC.step (C)": us(lambda: mmc.step(q, nu)),
+        "rrmc (NumPy, reference kinematics)": us(lambda: rrmc(robot, q, nu, qd_max=np.inf)),
     }
     q0s, Teps = table1_tasks(kin, n_tasks, np.random.default_rng([seed, 1]))
     tasks = list(zip(q0s, Teps))
-    loops: dict[str, dict[str, float]] = {}
-    for name in ("rrmc", "mmc"):
-        loops[name] = {}
+    loops: dict[str, dict[str, float]] = {"rrmc": {}, "mmc": {}}
+    for name in loops:
         for backend, subset in (("c", tasks), ("python", tasks[: max(1, n_tasks // 10)])):
 
             def run(backend: str = backend, subset: list = subset, name: str = name) -> int:
                 return sum(servo(kin, q0, T, name, qd_max=np.inf, backend=backend).steps for q0, T in subset)
 
             total = run()
-            loops[name][backend] = total / _best_of(run, rounds)
+            loops[name][backend] = total / best_of(run, rounds, CLOCK)
             loops[name][f"{backend}_steps"] = total
     return {"step_us": steps, "servo_steps_per_s": loops, "tasks": n_tasks}
 
@@ -289,26 +254,18 @@ def startup(robot: str, runs: int) -> dict[str, Any]:
     import symkin
 
     symkin.compile(robot)  # warm the cache
-    pycache = tempfile.TemporaryDirectory(prefix="symkin-bench-pycache-")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    env["PYTHONPYCACHEPREFIX"] = pycache.name
     out: dict[str, Any] = {}
-    for key, code in (
-        ("import_numpy_s", _IMPORT.format(m="numpy")),
-        ("import_s", _IMPORT.format(m="symkin")),
-        ("first_jacob0_s", _FIRST.format(robot=robot)),
-    ):
-        times = []
-        for k in range(runs + 1):  # the first run is a warm-up (page cache, byte code)
-            res = subprocess.run(
-                [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300
-            )
-            if res.returncode != 0:
-                raise RuntimeError(f"{code!r} failed: {res.stderr.strip()[-400:]}")
-            if k:
-                times.append(float(res.stdout.strip().splitlines()[-1]))
-        out[key] = {"min": min(times), "median": float(np.median(times))}
-    pycache.cleanup()
+    with tempfile.TemporaryDirectory(prefix="symkin-bench-pycache-") as pycache:
+        env["PYTHONPYCACHEPREFIX"] = pycache
+        for key, code in (
+            ("import_numpy_s", _IMPORT.format(m="numpy")),
+            ("import_s", _IMPORT.format(m="symkin")),
+            ("first_jacob0_s", _FIRST.format(robot=robot)),
+        ):
+            fresh_python(code, env, 300)  # a warm-up (page cache, byte code)
+            times = [float(fresh_python(code, env, 300)) for _ in range(runs)]
+            out[key] = {"min": min(times), "median": float(np.median(times))}
     return out
 
 
@@ -356,15 +313,14 @@ def run_calls(
 
 def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
     ik, pinv, ctl, npy, cas, st = (r[k] for k in ("ik", "pinv", "control", "numpy", "casadi", "startup"))
+    lm = pinv["LM"]["single_us_per_iteration"]
     fig: dict[str, float | None] = {
         "ik_single_over_batch": ik["single_us"] / ik["batch_us"],
         "ik_rtb_over_single": (ik["rtb"]["us"] / ik["single_us"])
         if ik.get("rtb") and "us" in ik["rtb"]
         else None,
-        "pinv_nr_over_lm_per_iteration": pinv["NR pinv"]["single_us_per_iteration"]
-        / pinv["LM"]["single_us_per_iteration"],
-        "pinv_gn_over_lm_per_iteration": pinv["GN pinv"]["single_us_per_iteration"]
-        / pinv["LM"]["single_us_per_iteration"],
+        "pinv_nr_over_lm_per_iteration": pinv["NR pinv"]["single_us_per_iteration"] / lm,
+        "pinv_gn_over_lm_per_iteration": pinv["GN pinv"]["single_us_per_iteration"] / lm,
         "rrmc_step_us": ctl["step_us"]["rrmc (C)"],
         "servo_rrmc_steps_per_s": ctl["servo_steps_per_s"]["rrmc"]["c"],
         "servo_mmc_steps_per_s": ctl["servo_steps_per_s"]["mmc"]["c"],
@@ -387,13 +343,14 @@ def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def format_calls(r: dict[str, Any]) -> str:
     """Plain text of :func:`run_calls`'s result."""
     ik, pinv, ctl = r["ik"], r["pinv"], r["control"]
-    lines = [f"symkin bench calls: {r['robot']} (IK, backends, start-up), {r['control_robot']} (control)", ""]
-    lines.append(f"IK, {ik['targets']} targets, LM Chan lambda 0.1, 100 x 30, |e| < 1e-6 (us per solve):")
-    lines.append(f"  batched kin.ik(T_all)      {ik['batch_us']:8.2f}   success {ik['batch_success']:.3f}")
-    lines.append(
+    lines = [
+        f"symkin bench calls: {r['robot']} (IK, backends, start-up), {r['control_robot']} (control)",
+        "",
+        f"IK, {ik['targets']} targets, LM Chan lambda 0.1, 100 x 30, |e| < 1e-6 (us per solve):",
+        f"  batched kin.ik(T_all)      {ik['batch_us']:8.2f}   success {ik['batch_success']:.3f}",
         f"  one kin.ik(T) per target   {ik['single_us']:8.2f}   success {ik['single_success']:.3f}   "
-        f"({ik['single_us'] / ik['batch_us']:.2f}x batched; mean iterations {ik['mean_iterations']:.1f})"
-    )
+        f"({ik['single_us'] / ik['batch_us']:.2f}x batched; mean iterations {ik['mean_iterations']:.1f})",
+    ]
     rtb = ik.get("rtb")
     if rtb and "us" in rtb:
         lines.append(
@@ -402,8 +359,7 @@ def format_calls(r: dict[str, Any]) -> str:
         )
     elif rtb:
         lines.append(f"  RTB ik_LM: not timed ({rtb['error']})")
-    lines.append("")
-    lines.append("IK per iteration (us): batched / one target per call")
+    lines += ["", "IK per iteration (us): batched / one target per call"]
     lm = pinv["LM"]
     for label, row in pinv.items():
         lines.append(
@@ -412,20 +368,16 @@ def format_calls(r: dict[str, Any]) -> str:
             f"{row['single_us_per_iteration'] / lm['single_us_per_iteration']:.2f}x LM)   "
             f"success {row['success']:.3f}"
         )
-    lines.append("")
-    lines.append("Control steps from Python (us):")
-    for label, us in ctl["step_us"].items():
-        lines.append(f"  {label:36} {us:8.2f}")
+    lines += ["", "Control steps from Python (us):"]
+    lines += [f"  {label:36} {us:8.2f}" for label, us in ctl["step_us"].items()]
     lines.append(f"servo, {ctl['tasks']} Table I tasks (steps per second):")
     for name, row in ctl["servo_steps_per_s"].items():
         lines.append(
             f"  {name:5} loop in C {row['c']:10.0f}   loop in Python {row['python']:8.0f}   "
             f"({row['c'] / row['python']:.1f}x)"
         )
-    lines.append("")
-    lines.append("One configuration per call (us):")
     funcs = ("fkine", "jacob0", "manipulability")
-    lines.append(f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs))
+    lines += ["", "One configuration per call (us):", f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs)]
     for label, row in r["numpy"].items():
         lines.append(f"  {label:24}" + "".join(f"{row[f]:16.2f}" if f in row else " " * 16 for f in funcs))
     if "pinocchio" in r["numpy"]:
@@ -441,17 +393,15 @@ def format_calls(r: dict[str, Any]) -> str:
         lines.append(
             f"    {f:16} {row['backend']:8.2f} vs {row['raw']:8.2f}   ({row['backend'] / row['raw']:.2f}x)"
         )
-    lines.append("")
     st = r["startup"]
-    lines.append("Fresh interpreter, wall time (s, fastest / median):")
+    lines += ["", "Fresh interpreter, wall time (s, fastest / median):"]
     for key, label in (
         ("import_numpy_s", "import numpy"),
         ("import_s", "import symkin"),
         ("first_jacob0_s", "import, compile (warm), first jacob0"),
     ):
         lines.append(f"  {label:38} {st[key]['min']:.3f} / {st[key]['median']:.3f}")
-    lines.append("")
-    lines.append("Goals (targets for one call at a time):")
+    lines += ["", "Goals (targets for one call at a time):"]
     for key, c in r["checks"].items():
         v = c["value"]
         shown = "n/a" if v is None else (f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}")

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import best_of, interleaved, optional
 from symkin.bench.kin import per_call_us
 
 __all__ = ["run_collide", "format_collide", "random_spheres", "table_scene", "pinocchio_collision"]
@@ -46,10 +47,8 @@ def pinocchio_collision(robot: Any, env: Any) -> Any:
     spheres (the same active pairs, in the order of ``kin.distances``), or None without Pinocchio;
     ``check.distances(q)`` gives coal's distance of every pair. Pinocchio's model is the robot's
     serial chain (``symkin.bench.kin.pinocchio_model``)."""
-    try:
-        import coal  # type: ignore[import-not-found]
-        import pinocchio as pin  # type: ignore[import-not-found]
-    except ImportError:
+    coal, pin = optional("coal"), optional("pinocchio")
+    if coal is None or pin is None:
         return None
     from symkin.bench.kin import pinocchio_model
     from symkin.geometry.pairs import layout_of
@@ -107,24 +106,15 @@ def _rotation_to(z: np.ndarray) -> np.ndarray:
     return np.column_stack((x, np.cross(z, x), z))
 
 
-def _batch_ns(f: Any, N: int, repeats: int = 3) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.thread_time()
-        f()
-        best = min(best, time.thread_time() - t0)
-    return best / N * 1e9
-
-
 def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> dict[str, Any]:
     """One row: per call, batched, distances, the generated NumPy module and Pinocchio + coal on ``env``."""
     batch = len(Q)
     row: dict[str, Any] = {"obstacles": len(env)}
     row["one_call_ns"] = per_call_us(lambda: kernel.in_collision(Q[0], env), budget=0.1) * 1e3
-    row["batch_ns"] = _batch_ns(lambda: kernel.in_collision(Q, env), batch, 40)  # a few ms each
-    row["batch_distances_ns"] = _batch_ns(lambda: kernel.distances(Q, env), batch, 1)
+    row["batch_ns"] = best_of(lambda: kernel.in_collision(Q, env), 40) / batch * 1e9  # a few ms each
+    row["batch_distances_ns"] = best_of(lambda: kernel.distances(Q, env), 1) / batch * 1e9
     small = Q[: max(batch // 20, 1)]
-    row["numpy_batch_ns"] = _batch_ns(lambda: numpy_kin.in_collision(small, env), len(small), 1)
+    row["numpy_batch_ns"] = best_of(lambda: numpy_kin.in_collision(small, env), 1) / len(small) * 1e9
     hits = kernel.in_collision(Q, env)
     row["colliding"] = float(np.mean(hits))
     peer = pinocchio_collision(robot, env)
@@ -132,7 +122,7 @@ def _row(robot: Any, kernel: Any, numpy_kin: Any, Q: np.ndarray, env: Any) -> di
         few = Q[: min(batch, 2000)]
         verdicts = np.array([peer(q) for q in few])
         row["pinocchio_agrees"] = float(np.mean(verdicts == hits[: len(few)]))
-        row["pinocchio_ns"] = _batch_ns(lambda: [peer(q) for q in few], len(few), 1)
+        row["pinocchio_ns"] = best_of(lambda: [peer(q) for q in few], 1) / len(few) * 1e9
         row["speedup_batch_vs_pinocchio"] = row["pinocchio_ns"] / row["batch_ns"]
     row["speedup_batch_vs_numpy"] = row["numpy_batch_ns"] / row["batch_ns"]
     return row
@@ -165,21 +155,18 @@ def run_collide(
         if not kin.in_collision(q, scene):
             targets.append(kin.fkine(q))
     T = np.array(targets)
-    t_plain = t_aware = float("inf")
-    for _ in range(3):  # alternating, best of three: the two share the machine's drift
-        t0 = time.thread_time()
-        plain = kin.ik(T, seed=seed)
-        t_plain = min(t_plain, time.thread_time() - t0)
-        t0 = time.thread_time()
-        aware = kin.ik(T, seed=seed, collision=scene)
-        t_aware = min(t_aware, time.thread_time() - t0)
+    # alternating, best of three: the two share the machine's drift
+    best, last = interleaved(
+        {"plain": lambda: kin.ik(T, seed=seed), "aware": lambda: kin.ik(T, seed=seed, collision=scene)}
+    )
+    plain, aware = last["plain"], last["aware"]
     plain_hits = kin.in_collision(plain.q, scene) & np.asarray(plain.success)
     aware_hits = kin.in_collision(aware.q, scene) & np.asarray(aware.success)
     ik = {
         "targets": len(T),
-        "plain_us": t_plain / len(T) * 1e6,
-        "collision_aware_us": t_aware / len(T) * 1e6,
-        "ratio": t_aware / t_plain,
+        "plain_us": best["plain"] / len(T) * 1e6,
+        "collision_aware_us": best["aware"] / len(T) * 1e6,
+        "ratio": best["aware"] / best["plain"],
         "plain_success": float(np.mean(plain.success)),
         "aware_success": float(np.mean(aware.success)),
         "plain_solutions_in_collision": int(plain_hits.sum()),

@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import os
 import resource
-import subprocess
 import sys
 import tempfile
 import time
@@ -21,6 +20,8 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+
+from symkin.bench.common import fresh_python
 
 __all__ = ["random_chain", "measure", "run_compile", "format_compile", "plot_compile", "DEFAULT_JOINTS"]
 
@@ -67,7 +68,6 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     from symkin.symbolic.functions import build_functions, derive_kinematics, fk_j_h_counts
 
     robot = random_chain(int(spec), seed) if spec.isdigit() else resolve_robot(spec)
-    out: dict[str, Any] = {"robot": robot.name, "n": robot.n}
     cpu0 = _cpu_s()
     t0 = time.perf_counter()
     derived = derive_kinematics(robot)
@@ -90,7 +90,9 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     cpu6 = _cpu_s()
     by_name = {f.name: f.code.counts for f in functions}
     own, child = _peak_mb()
-    out.update(
+    return dict(
+        robot=robot.name,
+        n=robot.n,
         strategy=functions[0].code.strategy,
         derive_s=t1 - t0,
         cse_s=t2 - t1,
@@ -108,24 +110,18 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
         gcc_peak_mb=child,
         jacob0_error=err,
     )
-    return out
 
 
 def measure(spec: str, seed: int = 0, timeout: float = 1800) -> dict[str, Any]:
     """Measure one cold compile (``spec``: a joint count for :func:`random_chain`, or a robot) in a
     fresh Python process with an empty cache, so neither imports nor caches carry over."""
+    code = (
+        "import json, sys; from symkin.bench.compile import _measure_here; "
+        f"print(json.dumps(_measure_here({spec!r}, {seed})))"
+    )
     with tempfile.TemporaryDirectory(prefix="symkin-bench-") as cache:
         env = {**os.environ, "SYMKIN_CACHE": cache}
-        code = (
-            "import json, sys; from symkin.bench.compile import _measure_here; "
-            f"print(json.dumps(_measure_here({spec!r}, {seed})))"
-        )
-        proc = subprocess.run(
-            [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=timeout
-        )
-    if proc.returncode != 0:
-        raise RuntimeError(f"measuring {spec} failed:\n{proc.stderr.strip()[-2000:]}")
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+        return json.loads(fresh_python(code, env, timeout, what=f"measuring {spec}"))
 
 
 def run_compile(

@@ -14,11 +14,14 @@ thread (``time.thread_time``), so that other processes of a shared machine do no
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
+
+from symkin.bench.common import interleaved, optional
 
 __all__ = ["run_table1", "format_table1", "table1_problems", "TABLE1_METHODS", "PAPER_TABLE1", "SETTINGS"]
 
@@ -83,14 +86,6 @@ def table1_problems(
     return q, np.asarray(robot.fkine(q)), starts
 
 
-def _robot(robot: Any) -> Any:
-    if robot is None or isinstance(robot, str):
-        from symkin.model.robots import load
-
-        return load(robot or "ur5")
-    return robot
-
-
 def run_table1(
     robot: Any = "ur5",
     n_problems: int = 10000,
@@ -122,9 +117,10 @@ def run_table1(
         among solved problems) and ``paper`` (the published row or None).
     """
     from symkin.core.progress import bar as progress_bar
+    from symkin.model.resolve import resolve_robot
     from symkin.runtime.ik import ik
 
-    robot = _robot(robot)
+    robot = resolve_robot("ur5" if robot is None else robot)
     labels = list(TABLE1_METHODS) if methods is None else list(methods)
     unknown = [m for m in labels if m not in TABLE1_METHODS]
     if unknown:
@@ -153,28 +149,26 @@ def run_table1(
                 bar.update(N)
                 continue  # needs a square J
             parts, elapsed = [], 0.0
-            ik(solver, Tep[:1], backend=backend, starts=starts, seed=seed, **options)  # build / warm up
+            solve = functools.partial(ik, solver, backend=backend, starts=starts, seed=seed, **options)
+            solve(Tep[:1])  # build / warm up
             for i in range(0, N, chunk):
                 t0 = time.thread_time()
-                parts.append(
-                    ik(solver, Tep[i : i + chunk], backend=backend, starts=starts, seed=seed, **options)
-                )
+                parts.append(solve(Tep[i : i + chunk]))
                 elapsed += time.thread_time() - t0
                 bar.update(len(Tep[i : i + chunk]))
             rows.append(_row(robot, Tep, label, setting, parts, elapsed))
     bar.close()
-    out = {
+    return {
         "robot": robot.name,
         "n_problems": N,
         "seed": seed,
         "tol": tol,
         "tol_on": tol_on,
         "backend": backend,
+        "rows": rows,
+        "lanes": _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None,
+        "rtb": _time_rtb(robot, n_problems, seed, tol) if rtb else None,
     }
-    out["rows"] = rows
-    out["lanes"] = _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None
-    out["rtb"] = _time_rtb(robot, n_problems, seed, tol) if rtb else None
-    return out
 
 
 def _time_lanes(
@@ -190,17 +184,17 @@ def _time_lanes(
     one = CIKSolver(kin, fkjac=kin.c_fkjac, starts=starts, **options)
     if not four._cfg.fkjac_batch:
         return None
-    times, results = {}, {}
-    for label, solver in (("four_lanes", four), ("scalar", one)):
+    for solver in (four, one):
         solver.solve(Tep[:8], seed=seed)
-        best = float("inf")
-        for _ in range(3):
-            t0 = time.thread_time()
-            results[label] = solver.solve(Tep, seed=seed)
-            best = min(best, time.thread_time() - t0)
-        times[label] = 1e6 * best / len(Tep)
+    best, results = interleaved(
+        {"four_lanes": lambda: four.solve(Tep, seed=seed), "scalar": lambda: one.solve(Tep, seed=seed)}
+    )
     same = results["four_lanes"].q.tobytes() == results["scalar"].q.tobytes()
-    return {"four_lanes_us": times["four_lanes"], "scalar_us": times["scalar"], "same_solutions": same}
+    return {
+        "four_lanes_us": 1e6 * best["four_lanes"] / len(Tep),
+        "scalar_us": 1e6 * best["scalar"] / len(Tep),
+        "same_solutions": same,
+    }
 
 
 def _row(
@@ -237,9 +231,8 @@ def _row(
 
 def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, Any] | None:
     """roboticstoolbox-python's C++ ``ik_LM`` (Chan, lambda 0.1, 100 x 30) on the same problems."""
-    try:
-        import roboticstoolbox as rtb  # optional; not a dependency
-    except ImportError:
+    rtb = optional("roboticstoolbox")  # optional; not a dependency
+    if rtb is None:
         return None
     try:
         from symkin.bench.kin import rtb_ets
@@ -262,6 +255,13 @@ def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, A
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
+#: the cells of a row of format_table1 after the method, in order (the paper's without "infeasible")
+_CELLS = {"searches_allowed": "{}", "iterations_allowed": "{}", "mean_iterations": "{:.2f}",
+          "median_iterations": "{:.0f}", "infeasible": "{}", "infeasible_pct": "{:.2f}%",
+          "mean_searches": "{:.2f}", "max_searches": "{:.0f}", "us_per_solve": "{:.1f}",
+          "us_per_iteration": "{:.3f}", "max_error": "{:.1e}"}  # fmt: skip
+
+
 def format_table1(result: dict[str, Any]) -> str:
     """A plain-text table of :func:`run_table1`'s result, the paper's figures beside ours."""
     crit = "E" if result["tol_on"] == "E" else "|e|"
@@ -275,35 +275,8 @@ def format_table1(result: dict[str, Any]) -> str:
     lines = []
     for r in result["rows"]:
         p = r["paper"]
-        paper = (
-            [
-                "",
-                f"{p['mean_iterations']:.2f}",
-                f"{p['median_iterations']:.0f}",
-                f"{p['infeasible_pct']:.2f}%",
-                f"{p['mean_searches']:.2f}",
-                f"{p['max_searches']:.0f}",
-            ]  # fmt: skip
-            if p
-            else ["", "-", "-", "-", "-", "-"]
-        )
-        lines.append(
-            [
-                r["method"],
-                str(r["searches_allowed"]),
-                str(r["iterations_allowed"]),
-                f"{r['mean_iterations']:.2f}",
-                f"{r['median_iterations']:.0f}",
-                str(r["infeasible"]),
-                f"{r['infeasible_pct']:.2f}%",
-                f"{r['mean_searches']:.2f}",
-                str(r["max_searches"]),
-                f"{r['us_per_solve']:.1f}",
-                f"{r['us_per_iteration']:.3f}",
-                f"{r['max_error']:.1e}",
-                *paper,
-            ]  # fmt: skip
-        )
+        paper = [_CELLS[k].format(p[k]) if p else "-" for k in _PAPER_KEYS if k != "infeasible"]
+        lines.append([r["method"], *(cell.format(r[k]) for k, cell in _CELLS.items()), "", *paper])
     widths = [max(len(c), *(len(x[i]) for x in lines)) if lines else len(c) for i, c in enumerate(cols)]
 
     def fmt(cells: list[str]) -> str:

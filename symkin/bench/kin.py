@@ -22,9 +22,12 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import optional, rows_per_s
+
 __all__ = ["run_kin", "format_kin", "per_call_us", "pinocchio_model", "rtb_ets"]
 
 FUNCS = ("fkine", "jacob0", "hessian0")
+BATCH_FUNCS = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
 
 
 def per_call_us(
@@ -53,17 +56,17 @@ def per_call_us(
     return best * 1e6
 
 
+def _sizes(n: int) -> dict[str, int]:
+    """The output size of each of FUNCS for n joints."""
+    return {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}
+
+
 def _ctypes_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]]:
     """The C entry points through ctypes with cached pointers and buffers (the best ctypes can do)."""
-    from symkin.emit.c.backend import c_prefix
-
-    lib = ctypes.CDLL(str(kin.path))
-    prefix = c_prefix(kin.robot)
-    n = kin.n
+    lib, prefix = ctypes.CDLL(str(kin.path)), kin.c_prefix
     qbuf = np.ascontiguousarray(q, dtype=float)
-    sizes = {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}
     calls = {}
-    for name, size in sizes.items():
+    for name, size in _sizes(kin.n).items():
         out = np.empty(size)
         fn = getattr(lib, f"{prefix}_{name}")
         fn.restype = None
@@ -79,19 +82,14 @@ def _ctypes_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]]:
 
 
 def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
-    try:
-        import cffi
-    except ImportError:
+    cffi = optional("cffi")
+    if cffi is None:
         return None
-    from symkin.emit.c.backend import c_prefix
-
-    ffi = cffi.FFI()
-    prefix = c_prefix(kin.robot)
+    ffi, prefix = cffi.FFI(), kin.c_prefix
     ffi.cdef("".join(f"void {prefix}_{f}(const double *q, double *out);" for f in FUNCS))
     lib = ffi.dlopen(str(kin.path))
-    n = kin.n
     calls = {}
-    for name, size in {"fkine": 16, "jacob0": 6 * n, "hessian0": n * 6 * n}.items():
+    for name, size in _sizes(kin.n).items():
         fn = getattr(lib, f"{prefix}_{name}")
 
         def call(fn: Any = fn, size: int = size) -> np.ndarray:
@@ -105,9 +103,8 @@ def _cffi_calls(kin: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
 
 def pinocchio_model(robot: Any) -> tuple[Any, Any, int] | None:
     """A Pinocchio model of an ETS robot (joints along +-x/y/z), its data and the end-effector frame id."""
-    try:
-        import pinocchio as pin
-    except ImportError:
+    pin = optional("pinocchio")
+    if pin is None:
         return None
     from symkin.model.kinematics import const_matrix
 
@@ -153,10 +150,7 @@ def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], A
             return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
 
         peers["pinocchio"] = {"fkine": fk, "jacob0": jac, "hessian0": hess}
-    try:
-        import roboticstoolbox as rtb
-    except ImportError:
-        rtb = None
+    rtb = optional("roboticstoolbox")
     if rtb is not None:
         ets = rtb_ets(rtb, robot)
         peers["rtb"] = {
@@ -202,23 +196,11 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
     for p, f in bar(items, progress, desc="per call"):
         per_call[p][f] = per_call_us(paths[p][f], clock=time.thread_time)
     Q = robot.random_q(batch, seed=seed + 1)
-    batched: dict[str, dict[str, float]] = {}
-    for b in ("c", "numpy"):
-        batched[b] = {}
-        for f in ("fkine", "jacob0", "fkine_jacob0", "hessian0"):
-            fn = getattr(kins[b], f)
-            fn(Q[:1000])
-            best = min(_timed(fn, Q) for _ in range(3))
-            batched[b][f] = batch / best / 1e6
-    for label, fns in _c_builds(robot, kins["c"], Q).items():
-        batched[label] = {}
-        for f, fn in fns.items():
-            fn(Q[:1000])
-            batched[label][f] = batch / min(_timed(fn, Q) for _ in range(3)) / 1e6
-    ratios = {}
-    for peer in ("pinocchio", "rtb"):
-        if peer in per_call:
-            ratios[peer] = {f: per_call[peer][f] / per_call["c (extension)"][f] for f in FUNCS}
+    kernels = {b: {f: getattr(kins[b], f) for f in BATCH_FUNCS} for b in ("c", "numpy")}
+    kernels.update(_c_builds(robot, kins["c"], Q))
+    batched = {label: {f: rows_per_s(fn, Q) / 1e6 for f, fn in fns.items()} for label, fns in kernels.items()}
+    ext = per_call["c (extension)"]
+    ratios = {p: {f: per_call[p][f] / ext[f] for f in FUNCS} for p in ("pinocchio", "rtb") if p in per_call}
     return {
         "robot": robot.name,
         "n": robot.n,
@@ -279,12 +261,6 @@ class _KernelCall:
             fn(base + i * self.row, *outs, min(BLOCK, len(Q) - i))
 
 
-def _timed(fn: Callable[[np.ndarray], Any], Q: np.ndarray) -> float:
-    t = time.thread_time()
-    fn(Q)
-    return time.thread_time() - t
-
-
 def format_kin(r: dict) -> str:
     lines = [f"symkin bench kin: {r['robot']} ({r['n']} joints), one configuration per call from Python", ""]
     lines.append(f"{'path':22} " + " ".join(f"{f + ' (us)':>14}" for f in FUNCS))
@@ -298,7 +274,7 @@ def format_kin(r: dict) -> str:
         )
     lines.append("")
     lines.append(f"batched, {r['batch']} configurations, one core (million per second)")
-    fs = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
+    fs = BATCH_FUNCS
     lines.append(f"{'backend':22} " + " ".join(f"{f:>14}" for f in fs))
     rows = r["batched_M_per_s"]
     for b, row in rows.items():

@@ -14,11 +14,14 @@ import json
 import math
 import time
 import warnings
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import optional
+from symkin.core.progress import bar
 from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
 
@@ -26,7 +29,6 @@ __all__ = [
     "run_table1",
     "format_table1",
     "plot_task",
-    "step_breakdown",
     "step_timing",
     "format_step_timing",
     "rtb_mmc",
@@ -85,12 +87,6 @@ def table1_tasks(kin: Any, n_tasks: int, rng: np.random.Generator) -> tuple[np.n
 def _summary(runs: list[ServoResult]) -> dict[str, Any]:
     times = np.concatenate([r.step_time for r in runs]) if runs else np.zeros(0)
     infos = [i for r in runs for i in r.info]
-    methods: dict[str, int] = {}
-    statuses: dict[str, int] = {}
-    for i in infos:
-        key = i.method if i.fallback is None else f"fallback_{i.fallback}"
-        methods[key] = methods.get(key, 0) + 1
-        statuses[i.status] = statuses.get(i.status, 0) + 1
     return {
         "mean_manipulability": float(np.mean([r.mean_manipulability for r in runs])),
         "final_manipulability": float(np.mean([r.final_manipulability for r in runs])),
@@ -98,10 +94,15 @@ def _summary(runs: list[ServoResult]) -> dict[str, Any]:
         "left_limits": int(sum(r.left_limits for r in runs)),
         "mean_steps": float(np.mean([r.steps for r in runs])),
         "step_us_median": float(np.median(times) * 1e6) if times.size else float("nan"),
-        "step_methods": methods,
-        "step_status": statuses,
+        "step_methods": _methods(infos),
+        "step_status": dict(Counter(i.status for i in infos)),
         "max_slack": float(max((i.slack for i in infos), default=0.0)),
     }
+
+
+def _methods(infos: Any) -> dict[str, int]:
+    """How many steps each method settled (``fallback_<reason>`` for a fallback step)."""
+    return dict(Counter(i.method if i.fallback is None else f"fallback_{i.fallback}" for i in infos))
 
 
 def _pct(new: float, old: float) -> float:
@@ -136,15 +137,13 @@ def run_table1(
     Step times are the controllers' (kinematics and solve) with whatever kinematics the robot
     object provides.
     """
+    loop = {"gain": gain, "dt": dt, "threshold": threshold, "max_steps": max_steps}  # of every servo run
     out: dict[str, Any] = {
         "protocol": {
             "n_tasks": n_tasks,
             "seed": seed,
             "lam": lam,
-            "gain": gain,
-            "dt": dt,
-            "threshold": threshold,
-            "max_steps": max_steps,
+            **loop,
             "qd_max": None if qd_max is None else np.broadcast_to(qd_max, (1,)).tolist()[0],
             "note": PROTOCOL_NOTE,
         },
@@ -162,26 +161,14 @@ def run_table1(
         if joint_limits:
             controllers["mmc_jl"] = MMC(kin, lam=lam, qd_max=qd_max, joint_limits=True, dt=dt)
         runs: dict[str, list[ServoResult]] = {k: [] for k in controllers}
-        tasks = range(n_tasks)
-        if progress:
-            from symkin.core.progress import bar
-
-            tasks = bar(tasks, desc=f"Table I {name}", unit="task", leave=True)
         t0 = time.perf_counter()
-        for t in tasks:
+        for t in bar(range(n_tasks), progress, desc=f"Table I {name}", unit="task", leave=True):
             for key, ctrl in controllers.items():
-                runs[key].append(
-                    servo(
-                        kin, q0s[t], Teps[t], ctrl, dt=dt, gain=gain, threshold=threshold, max_steps=max_steps
-                    )
-                )
+                runs[key].append(servo(kin, q0s[t], Teps[t], ctrl, **loop))
         res = {key: _summary(r) for key, r in runs.items()}
-        res["improvement_mean_pct"] = _pct(
-            res["mmc"]["mean_manipulability"], res["rrmc"]["mean_manipulability"]
-        )
-        res["improvement_final_pct"] = _pct(
-            res["mmc"]["final_manipulability"], res["rrmc"]["final_manipulability"]
-        )
+        for which in ("mean", "final"):
+            m = f"{which}_manipulability"
+            res[f"improvement_{which}_pct"] = _pct(res["mmc"][m], res["rrmc"][m])
         res["mmc_not_below_rrmc_final"] = int(
             sum(
                 m.final_manipulability >= r.final_manipulability - 1e-9
@@ -199,9 +186,8 @@ def run_table1(
         res["source"] = getattr(kin, "source", "")
         if timing:
             res["step_timing"] = step_timing(
-                kin, min(n_tasks, timing_tasks), seed=seed, index=index, lam=lam, dt=dt, gain=gain,
-                threshold=threshold, max_steps=max_steps,
-            )  # fmt: skip
+                kin, min(n_tasks, timing_tasks), seed=seed, index=index, lam=lam, **loop
+            )
         out["robots"][name] = res
     return out
 
@@ -256,51 +242,6 @@ def format_table1(result: dict[str, Any]) -> str:
             lines += ["", format_step_timing(r["step_timing"])]
     lines += ["", pr["note"]]
     return "\n".join(lines)
-
-
-def step_breakdown(robot: Any, n_samples: int = 300, seed: int = 0, lam: float = 0.005) -> dict[str, float]:
-    """Median microseconds of the parts of one MMC step at random configurations (Table I protocol).
-
-    ``J_H`` (the robot's J0 and H0), ``J_H_Jm`` (plus the singularity check, Jm and m in numpy),
-    ``build`` (that + bounds + QP assembly), ``solve_closed_form``
-    (singularity check + closed form), ``solve_osqp`` (OSQP forced: update + solve + polish, no speed
-    limits) and ``solve_osqp_speed_limits`` (OSQP with the robot's speed limits, half of them, and
-    a nu large enough to make some bounds active).
-    """
-    kin = _robot(robot)
-    rng = np.random.default_rng(seed)
-    q0s, Teps = table1_tasks(kin, n_samples, rng)
-    nus = np.array([np.r_[T[:3, 3] - kin.fkine(q)[:3, 3], rng.normal(0, 0.5, 3)] for q, T in zip(q0s, Teps)])
-    cf = MMC(kin, lam=lam, qd_max=np.inf)
-    qpf = MMC(kin, lam=lam, qd_max=np.inf, closed_form=False)
-    half = getattr(kin, "qd_max", None)
-    qpl = MMC(kin, lam=lam, qd_max=None if half is None else 0.5 * np.asarray(half), closed_form=False)
-
-    def med(f: Any) -> float:
-        ts = []
-        for q, nu in zip(q0s, nus):
-            t0 = time.perf_counter()
-            f(q, nu)
-            ts.append(time.perf_counter() - t0)
-        return float(np.median(ts) * 1e6)
-
-    qps = {}
-
-    def build(q: np.ndarray, nu: np.ndarray) -> None:
-        qps[q.tobytes()] = cf.build(q, nu)
-
-    jh = getattr(kin, "jacob0_hessian0", None)
-    out = {
-        "J_H": med(lambda q, nu: jh(q) if jh is not None else (kin.jacob0(q), kin.hessian0(q))),
-        "J_H_Jm": med(lambda q, nu: cf.kinematics(q)),
-        "build": med(build),
-        "solve_closed_form": med(lambda q, nu: cf.solve(qps[q.tobytes()])),
-        "solve_osqp": med(lambda q, nu: qpf.solve(qps[q.tobytes()])),
-    }
-    qps_l = {q.tobytes(): qpl.build(q, nu) for q, nu in zip(q0s, nus)}
-    out["solve_osqp_speed_limits"] = med(lambda q, nu: qpl.solve(qps_l[q.tobytes()]))
-    out["step_total_closed_form"] = out["build"] + out["solve_closed_form"]
-    return out
 
 
 #: configurations of :func:`step_timing`: MMC options (lam and dt added) beside the Table I protocol
@@ -379,21 +320,10 @@ def step_timing(
     """
     import symkin
 
-    model = _robot(robot)
-    kin = (
-        model
-        if getattr(model, "backend", None) == "c"
-        else symkin.compile(getattr(model, "robot", model), "c")
-    )
-    peers = None
-    if rtb:
-        try:
-            import qpsolvers
-            import roboticstoolbox
-        except ImportError:
-            peers = None
-        else:
-            peers = (roboticstoolbox, qpsolvers)
+    kin = _robot(robot)
+    if getattr(kin, "backend", None) != "c":
+        kin = symkin.compile(getattr(kin, "robot", kin), "c")
+    peers = (optional("roboticstoolbox"), optional("qpsolvers")) if rtb else (None, None)
     rng = np.random.default_rng([seed, index])
     q0s, Teps = table1_tasks(kin, n_tasks, rng)
     out: dict[str, Any] = {"robot": kin.name, "n_tasks": n_tasks, "lam": lam, "configs": {}}
@@ -415,7 +345,7 @@ def step_timing(
             "c": lambda o=options: MMC(kin, **o).step,
             "python": lambda o=options: MMC(kin, backend="python", **o).step,
         }
-        if peers is not None:
+        if all(peers):
             makers["rtb_qpsolvers"] = lambda c=ctrl: rtb_mmc(*peers, kin.robot, c)
             makers["rtb_kinematics"] = lambda c=ctrl: rtb_mmc(*peers, kin.robot, c).kinematics
         times: dict[str, list[float]] = {k: [] for k in makers}
@@ -430,10 +360,7 @@ def step_timing(
                         got.append(fn(q, nu))
                         ts.append(time.perf_counter() - t0)
                     answers.setdefault(key, got)
-        methods: dict[str, int] = {}
-        for _, info in answers["c"]:
-            label = info.method if info.fallback is None else f"fallback_{info.fallback}"
-            methods[label] = methods.get(label, 0) + 1
+        methods = _methods(info for _, info in answers["c"])
         med = {k: float(np.median(v) * 1e6) for k, v in times.items()}
         res_c = {
             "steps": len(states),
@@ -490,12 +417,7 @@ def format_step_timing(timing: dict[str, Any]) -> str:
 
 
 def plot_task(
-    robot: Any,
-    q0: Any,
-    Tep: Any,
-    path: str | Path,
-    title: str | None = None,
-    **servo_options: Any,
+    robot: Any, q0: Any, Tep: Any, path: str | Path, title: str | None = None, **servo_options: Any
 ) -> dict[str, ServoResult]:
     """Servo one task with RRMC and MMC and write manipulability against time as a PNG (Fig. 3 of the MMC
     paper).
@@ -514,8 +436,7 @@ def plot_task(
     results = {c: servo(kin, q0, Tep, c, **servo_options) for c in ("rrmc", "mmc")}
     fig, ax = plt.subplots(figsize=(6.0, 3.2), dpi=150)
     for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
-        r = results[key]
-        ax.plot(r.t, r.manipulability, style, label=label, linewidth=1.6)
+        ax.plot(results[key].t, results[key].manipulability, style, label=label, linewidth=1.6)
     ax.set_xlabel("Time (s)")
     ax.set_ylabel("Manipulability")
     ax.set_title(title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing")

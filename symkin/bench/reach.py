@@ -136,13 +136,11 @@ def run_reach(
                     "cpu_all": cpu[key]}  # fmt: skip
     # CPU time is what other processes on a shared machine do not inflate (much): all the CPU of
     # the client, the scheduler (same process) and the workers, per problem, against batch IK
-    out["cpu_efficiency_1"] = out["batch"]["cpu_seconds"] / out["workers_1"]["cpu_seconds"]
-    out["cpu_efficiency_2"] = out["batch"]["cpu_seconds"] / out["workers_2"]["cpu_seconds"]
+    for w in (1, 2):
+        out[f"cpu_efficiency_{w}"] = out["batch"]["cpu_seconds"] / out[f"workers_{w}"]["cpu_seconds"]
+        out[f"per_core_vs_batch_{w}"] = out[f"workers_{w}"]["rate"] / w / out["batch"]["rate"]
     out["blocks"] = (maps[1].stats or {})["blocks"]
-    r1, r2 = out["workers_1"]["rate"], out["workers_2"]["rate"]
-    out["speedup_2_vs_1"] = r2 / r1
-    out["per_core_vs_batch_1"] = r1 / out["batch"]["rate"]
-    out["per_core_vs_batch_2"] = r2 / 2 / out["batch"]["rate"]
+    out["speedup_2_vs_1"] = out["workers_2"]["rate"] / out["workers_1"]["rate"]
     other = reachability(kin, resolution, orientations, seed=seed, chunk=6, workers=2, progress=False)
     out["identical_1_2_workers"] = _same(maps[1], maps[2])
     out["identical_chunk_8_6"] = _same(maps[2], other)

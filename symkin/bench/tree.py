@@ -11,8 +11,6 @@ cold compile time (a fresh process with an empty cache). Needs the ``compare`` e
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 import tempfile
 import time
 from importlib import metadata
@@ -21,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import best_of, fresh_python, optional, rows_per_s
 from symkin.bench.kin import per_call_us
 
 __all__ = ["erd_robots_dir", "TREE_CASES", "run_tree_kin", "format_tree_kin", "cold_compile_seconds"]
@@ -42,17 +41,6 @@ def erd_robots_dir() -> Path | None:
     return path if path.is_dir() else None
 
 
-def tree_case(name: str) -> Any:
-    """The :class:`symkin.Tree` of one of :data:`TREE_CASES` (None without example-robot-data)."""
-    from symkin.model.tree import Tree
-
-    root = erd_robots_dir()
-    if root is None:
-        return None
-    urdf, frames = TREE_CASES[name]
-    return Tree.from_urdf(root / urdf, frames=frames)
-
-
 def cold_compile_seconds(urdf: Path, frames: tuple[str, ...]) -> float:
     """Seconds to import symkin, read the URDF and compile its tree to C in a fresh process with
     an empty cache (derive, generate, gcc, load)."""
@@ -62,11 +50,7 @@ def cold_compile_seconds(urdf: Path, frames: tuple[str, ...]) -> float:
         "symkin.compile(tree, 'c'); print(time.perf_counter() - t)"
     )
     with tempfile.TemporaryDirectory() as tmp:
-        env = {**os.environ, "SYMKIN_CACHE": tmp}
-        out = subprocess.run(
-            [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
-        )
-    return float(out.stdout.strip().splitlines()[-1])
+        return float(fresh_python(code, {**os.environ, "SYMKIN_CACHE": tmp}))
 
 
 def pinocchio_q(model: Any, names: Any, q: np.ndarray) -> np.ndarray:
@@ -86,9 +70,8 @@ def pinocchio_q(model: Any, names: Any, q: np.ndarray) -> np.ndarray:
 
 
 def _pinocchio(urdf: Path, frames: tuple[str, ...], q: np.ndarray, tree: Any) -> dict[str, Any] | None:
-    try:
-        import pinocchio as pin
-    except ImportError:
+    pin = optional("pinocchio")
+    if pin is None:
         return None
     model = pin.buildModelFromUrdf(str(urdf))
     data = model.createData()
@@ -138,6 +121,7 @@ def run_tree_kin(
 ) -> dict:
     """Measure every case of :data:`TREE_CASES` (see the module docstring); ``{"skipped": why}``
     without example-robot-data."""
+    from symkin.model.tree import Tree
     from symkin.runtime.load import compile as compile_model
 
     root = erd_robots_dir()
@@ -146,7 +130,7 @@ def run_tree_kin(
     rows = []
     for name in cases:
         urdf, frames = TREE_CASES[name]
-        tree = tree_case(name)
+        tree = Tree.from_urdf(root / urdf, frames=frames)
         t0 = time.perf_counter()
         kin = compile_model(tree, "c")
         warm = time.perf_counter() - t0
@@ -170,14 +154,9 @@ def run_tree_kin(
         }
         Q = tree.random_q(batch, seed=seed + 1)
         for fname in ("fkine_jacob0_all", "fkine_all"):
-            fn = getattr(kin, fname)
-            fn(Q[:1000])
-            best = min(_timed(fn, Q) for _ in range(3))
-            row[f"batch_{fname}_per_s"] = batch / best
+            row[f"batch_{fname}_per_s"] = rows_per_s(getattr(kin, fname), Q, time.perf_counter)
         shapes = ((batch, len(tree.frames), 4, 4), (batch, len(tree.frames), 6, tree.n))
-        row["batch_write_ceiling_per_s"] = batch / min(
-            _timed(lambda _, s=shapes: _fill(s), Q) for _ in range(3)
-        )
+        row["batch_write_ceiling_per_s"] = batch / best_of(lambda s=shapes: _fill(s), 3, time.perf_counter)
         row["bytes_per_tree"] = 8 * (16 + 6 * tree.n) * len(tree.frames)
         row["pinocchio"] = _pinocchio(root / urdf, tree.frames, q, tree)
         if cold:
@@ -190,12 +169,6 @@ def _fill(shapes: Any) -> None:
     """Allocate and write arrays of the output's size: the memory ceiling of a batch call."""
     for shape in shapes:
         np.empty(shape).fill(1.0)
-
-
-def _timed(fn: Any, Q: np.ndarray) -> float:
-    t0 = time.perf_counter()
-    fn(Q)
-    return time.perf_counter() - t0
 
 
 def format_tree_kin(r: dict) -> str:

@@ -18,16 +18,17 @@ before it and between its joints, and with 2000 fixed links of quarter turns and
 from __future__ import annotations
 
 import os
-import sys
 import tempfile
 import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+from unittest import mock
 
 import numpy as np
 
+from symkin.bench.common import optional
 from symkin.bench.tree import erd_robots_dir, pinocchio_q
 
 __all__ = ["Chain", "find_chains", "run_sweep", "format_sweep", "plot_sweep", "synthetic_urdfs", "TOL"]
@@ -162,9 +163,8 @@ def _pin_errors(
 ) -> float | None:
     """Largest difference from Pinocchio's placement and LOCAL_WORLD_ALIGNED Jacobian of the leaf,
     both taken relative to the chain's base link; None when Pinocchio cannot load the URDF."""
-    try:
-        import pinocchio as pin
-    except ImportError:
+    pin = optional("pinocchio")
+    if pin is None:
         return None
     mimic = chain.model.__class__.__name__ == "Tree"
     key = (chain.urdf, mimic)
@@ -206,6 +206,7 @@ def run_sweep(
     """Compile and check every distinct chain (module docstring); the summary and each chain's row.
     ``limit`` takes the first chains of the collection; ``synthetic`` adds :func:`synthetic_urdfs`."""
     from symkin.compiler.compile import BACKENDS
+    from symkin.core.progress import bar
     from symkin.runtime.load import compile as compile_model
 
     for b in backends:
@@ -222,7 +223,6 @@ def run_sweep(
     t_find = time.perf_counter() - t_find
     chains = chains[:limit] if limit else chains
     pin_cache: dict = {}
-    old = os.environ.get("SYMKIN_CACHE")
     with tempfile.TemporaryDirectory() as tmp:
         own = Path(tmp) / "synthetic"
         own.mkdir()
@@ -231,24 +231,11 @@ def run_sweep(
         extra = find_chains(own)[0]
         for ch in extra:
             ch.synthetic = True
-        bar = None
-        if progress and sys.stderr.isatty():
-            from tqdm.auto import tqdm
-
-            bar = tqdm(total=len(chains) + len(extra), desc="chains", leave=False)
-        os.environ["SYMKIN_CACHE"] = str(Path(tmp) / "cache")  # every compile derives, generates and builds
-        try:
-            for ch, where in [(c, root) for c in chains] + [(c, own) for c in extra]:
+        todo = [(c, root) for c in chains] + [(c, own) for c in extra]
+        # a fresh cache: every compile derives, generates and builds
+        with mock.patch.dict(os.environ, {"SYMKIN_CACHE": str(Path(tmp) / "cache")}):
+            for ch, where in bar(todo, progress, desc="chains"):
                 _one(ch, backends, compile_model, where, pin_cache, seed)
-                if bar is not None:
-                    bar.update(1)
-        finally:
-            if old is None:
-                os.environ.pop("SYMKIN_CACHE", None)
-            else:
-                os.environ["SYMKIN_CACHE"] = old
-            if bar is not None:
-                bar.close()
     rows = [
         {"urdf": c.urdf, "base": c.base, "leaf": c.leaf, "n": c.n,
          "mimic": c.model.__class__.__name__ == "Tree", "same_as": c.also, "compile_s": c.compile_s,
@@ -374,22 +361,18 @@ def format_sweep(r: dict) -> str:
         f"most {max(snaps, default=0.0):.1e} from the file as written"
     )
     if own:
-        lines.append("")
-        lines.append(f"the sweep's own chains (fixed joints with rpy, long fixed chains): {len(own)}")
+        lines += ["", f"the sweep's own chains (fixed joints with rpy, long fixed chains): {len(own)}"]
         for row in own:
             times = ", ".join(f"{b} {t:.1f} s" for b, t in row["compile_s"].items())
             err = max(row["error"].values(), default=float("nan"))
             pin = "" if row.get("pinocchio") is None else f", from Pinocchio {row['pinocchio']:.1e}"
             lines.append(f"  {row['urdf']} ({row['n']} joints): compile {times}; FK/J error {err:.1e}{pin}")
     fails = [row for row in rows + own if row["failure"]]
-    lines.append("")
-    lines.append(f"failures: {len(fails)}" + ("" if fails else " (every chain compiled and matched)"))
-    for row in fails:
-        lines.append(f"  {row['urdf']}:{row['leaf']}: {row['failure']}")
+    lines += ["", f"failures: {len(fails)}" + ("" if fails else " (every chain compiled and matched)")]
+    lines += [f"  {row['urdf']}:{row['leaf']}: {row['failure']}" for row in fails]
     if r["unreadable"]:
         lines.append(f"URDF files or chains symkin refuses ({len(r['unreadable'])}), with the reason:")
-        for name, why in r["unreadable"]:
-            lines.append(f"  {name}: {why}")
+        lines += [f"  {name}: {why}" for name, why in r["unreadable"]]
     return "\n".join(lines)
 
 

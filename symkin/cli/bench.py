@@ -128,12 +128,10 @@ def run(args: argparse.Namespace) -> int:
         )
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
         return 0
-    if args.batch is None:
-        args.batch = 100_000
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
-        result = run_kin(spec or "panda", batch=args.batch, progress=not args.json)
+        result = run_kin(spec or "panda", batch=args.batch or 100_000, progress=not args.json)
         if not args.json:
             print(format_kin(result), flush=True)
         result["trees"] = _trees(args)
@@ -163,24 +161,22 @@ def run(args: argparse.Namespace) -> int:
         )
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_table1(result))
         return 0
-    from symkin.bench.mmc import format_table1 as format_mmc
-    from symkin.bench.mmc import plot_task
-    from symkin.bench.mmc import run_table1 as run_mmc
+    from symkin.bench import mmc
     from symkin.runtime.load import compile as compile_robot
 
     if spec is None:
         robots: tuple[Any, ...] = ("panda", "lbr_iiwa7", "sawyer")
     else:
         robots = (compile_robot(single_chain(args), backend="c"),) if custom else (spec,)
-    result = run_mmc(robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json)
-    print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_mmc(result))
+    result = mmc.run_table1(
+        robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json
+    )
+    print(json.dumps(result, indent=2, default=_jsonable) if args.json else mmc.format_table1(result))
     if args.plot:
-        from symkin.bench.mmc import table1_tasks
-
         first = robots[0]
         kin = compile_robot(single_chain(args, first), backend="c") if isinstance(first, str) else first
-        q0, Tep = table1_tasks(kin, 1, np.random.default_rng(args.seed))
-        plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
+        q0, Tep = mmc.table1_tasks(kin, 1, np.random.default_rng(args.seed))
+        mmc.plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
         if not args.json:
             print(f"plot written to {args.plot}")
     return 0
@@ -205,7 +201,7 @@ def _trees(args: argparse.Namespace) -> dict:
     """The tree rows of ``bench kin`` / ``bench tree`` (printed unless --json)."""
     from symkin.bench.tree import format_tree_kin, run_tree_kin
 
-    trees = run_tree_kin(batch=args.batch, seed=args.seed, cold=not args.no_cold)
+    trees = run_tree_kin(batch=args.batch or 100_000, seed=args.seed, cold=not args.no_cold)
     if not args.json:
         print(format_tree_kin(trees))
     return trees
@@ -226,8 +222,6 @@ def _urdf(args: argparse.Namespace) -> tuple[int, dict]:
 
 
 def _jsonable(x: Any) -> Any:
-    if isinstance(x, np.ndarray):
+    if isinstance(x, (np.ndarray, np.generic)):
         return x.tolist()
-    if isinstance(x, np.generic):
-        return x.item()
     raise TypeError(f"not JSON serialisable: {type(x).__name__}")

@@ -101,14 +101,10 @@ def add_robot_argument(s: argparse.ArgumentParser, default: str | None = None) -
     else:
         s.add_argument("robot", metavar="ROBOT", nargs="?", default=None, help=f"{ROBOT_HELP} ({default})")
     s.add_argument(
-        "--tool",
-        metavar="T",
-        help="append this constant transform after the end effector: " + TRANSFORM_HELP,
+        "--tool", metavar="T", help="append this constant transform after the end effector: " + TRANSFORM_HELP
     )
     s.add_argument(
-        "--base",
-        metavar="T",
-        help="place this constant transform before the first link: " + TRANSFORM_HELP,
+        "--base", metavar="T", help="place this constant transform before the first link: " + TRANSFORM_HELP
     )
 
 
@@ -298,9 +294,6 @@ def damaged(summary: dict) -> str:
 
 
 # -- obstacles (collide, plot, reach) --------------------------------------------------------------
-_OBSTACLES = {"sphere": 4, "capsule": 7, "box": 6}
-
-
 def add_obstacle_options(s: argparse.ArgumentParser) -> None:
     """--sphere, --capsule, --box (repeatable) and --env FILE: obstacles in the base frame."""
     s.add_argument("--sphere", action="append", default=[], metavar="'X Y Z R'", help="an obstacle sphere")
@@ -319,17 +312,19 @@ def add_obstacle_options(s: argparse.ArgumentParser) -> None:
     )
 
 
-def _rows(items: list[str], what: str) -> list[np.ndarray]:
-    return [floats(text, f"--{what}", _OBSTACLES[what]) for text in items]
-
-
 def environment_of(args: argparse.Namespace) -> Any:
     """The obstacles of --sphere, --capsule, --box and --env."""
     from symkin.model.geometry import Box, Capsule, Environment, Sphere
 
-    spheres = [Sphere(v[:3], v[3]) for v in _rows(args.sphere, "sphere")]
-    capsules = [Capsule(v[:3], v[3:6], v[6]) for v in _rows(args.capsule, "capsule")]
-    boxes = [Box(v[:3], v[3:]) for v in _rows(args.box, "box")]
+    kinds = {  # option: (key in --env, numbers, the shape of them)
+        "sphere": ("spheres", 4, lambda v: Sphere(v[:3], v[3])),
+        "capsule": ("capsules", 7, lambda v: Capsule(v[:3], v[3:6], v[6])),
+        "box": ("boxes", 6, lambda v: Box(v[:3], v[3:])),
+    }
+    shapes = {
+        what: [make(floats(text, f"--{what}", size)) for text in getattr(args, what)]
+        for what, (_, size, make) in kinds.items()
+    }
     if args.env:
         path = Path(args.env).expanduser()
         try:
@@ -338,14 +333,10 @@ def environment_of(args: argparse.Namespace) -> Any:
             raise UserError(f"--env {path}: {exc}") from None
         if not isinstance(data, dict) or set(data) - {"spheres", "capsules", "boxes"}:
             raise UserError(f"--env {path}: a JSON object with keys spheres, capsules, boxes")
-        for key, size, make, out in (
-            ("spheres", 4, lambda v: Sphere(v[:3], v[3]), spheres),
-            ("capsules", 7, lambda v: Capsule(v[:3], v[3:6], v[6]), capsules),
-            ("boxes", 6, lambda v: Box(v[:3], v[3:]), boxes),
-        ):
+        for what, (key, size, make) in kinds.items():
             for row in data.get(key, []):
                 v = np.asarray(row, dtype=float) if isinstance(row, list) else np.zeros(0)
                 if v.shape != (size,):
                     raise UserError(f"--env {path}: each of {key} needs {size} numbers, got {row!r}")
-                out.append(make(v))
-    return Environment(tuple(spheres), tuple(capsules), tuple(boxes))
+                shapes[what].append(make(v))
+    return Environment(*(tuple(shapes[what]) for what in kinds))

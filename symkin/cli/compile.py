@@ -101,31 +101,22 @@ def run(args: argparse.Namespace) -> int:
 def _command(args: argparse.Namespace, model: Any) -> tuple[str, dict[str, Any]]:
     """The command recorded in the generated files of a chain or tree, and the options of
     ``generate``; the C-only options are refused for another backend or without ``-o``."""
-    if isinstance(model, Tree):
-        frames = ",".join(model.frames)
-        command = f"symkin compile {model.identifier} --frames {frames} --backend {args.backend}"
-    else:
-        command = f"symkin compile {model.identifier} --backend {args.backend}"
-    c_only = (("--prefix", args.prefix), ("--precision", args.precision != "double"), ("--libm", args.libm))
-    for flag, given in c_only:
+    frames = f" --frames {','.join(model.frames)}" if isinstance(model, Tree) else ""
+    command = f"symkin compile {model.identifier}{frames} --backend {args.backend}"
+    c_only = {  # flag: what it adds to the recorded command ("" when not given)
+        "--prefix": f" --prefix {args.prefix}" if args.prefix else "",
+        "--precision": f" --precision {args.precision}" if args.precision != "double" else "",
+        "--libm": " --libm" if args.libm else "",
+    }
+    for flag, given in c_only.items():
         if given and args.backend != "c":
             raise UserError(f"{flag} applies to the C backend only")
         if given and not args.output:
             raise UserError(f"{flag} shapes the files written with -o DIR; give -o too")
-    if args.prefix:
-        command += f" --prefix {args.prefix}"
-    if args.precision != "double":
-        command += f" --precision {args.precision}"
-    if args.libm:
-        command += " --libm"
+        command += given
     if args.strategy:
         command += f" --strategy {args.strategy}"
-    options = {
-        "strategy": args.strategy,
-        "prefix": args.prefix,
-        "precision": args.precision,
-        "libm": args.libm,
-    }
+    options = dict(strategy=args.strategy, prefix=args.prefix, precision=args.precision, libm=args.libm)
     return command, options
 
 

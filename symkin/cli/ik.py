@@ -60,32 +60,21 @@ def run(args: argparse.Namespace) -> int:
         return _ik_analytic(args, compile_robot(robot, backend=args.backend), Tep)
     kin = compile_robot(robot, backend=args.backend)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
-    if args.damping:
-        kwargs["damping"] = args.damping
     if args.q0 is not None:
         kwargs["q0"] = common.floats(args.q0, "--q0", robot.n)
     if args.we is not None:
         kwargs["we"] = _weights(args.we)
-    if args.lam is not None:
-        kwargs["lam"] = args.lam
-    if args.tol is not None:
-        kwargs["tol"] = args.tol
-    if args.ilimit is not None:
-        kwargs["ilimit"] = args.ilimit
-    if args.slimit is not None:
-        kwargs["slimit"] = args.slimit
+    for name in ("damping", "lam", "tol", "ilimit", "slimit"):  # the solver's defaults unless given
+        if getattr(args, name) is not None:
+            kwargs[name] = getattr(args, name)
     t = time.perf_counter()
     res = kin.ik(Tep, **kwargs)
     dt = time.perf_counter() - t
-    if args.json:
-        print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
-    else:
+    if not args.json:
         print(f"target:\n{common.fmt(Tep)}")
-        status = "solved" if res.success else f"not solved: {res.reason}"
-        print(f"{status} in {res.iterations} iterations, {res.searches} searches, {dt * 1e3:.2f} ms")
-        print(f"q = {common.fmt(res.q)}")
-        print(f"residual = {res.residual:.3e}")
-    return 0 if res.success else 1
+    return _report(
+        args, res, dt, f"in {res.iterations} iterations, {res.searches} searches, {dt * 1e3:.2f} ms"
+    )
 
 
 def _weights(text: str) -> np.ndarray:
@@ -107,15 +96,7 @@ def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
         extra = {} if args.tol is None else {"tol": args.tol}
         res = kin.ik(Tep, method="analytic", q0=q0, **extra)
         dt = time.perf_counter() - t
-        if args.json:
-            print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
-        else:
-            status = "solved" if res.success else f"not solved: {res.reason}"
-            print(
-                f"{status} (closed form) in {dt * 1e3:.3f} ms\n"
-                f"q = {common.fmt(res.q)}\nresidual = {res.residual:.3e}"
-            )
-        return 0 if res.success else 1
+        return _report(args, res, dt, f"(closed form) in {dt * 1e3:.3f} ms")
     sols = kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits)
     dt = time.perf_counter() - t
     errors = [float(np.abs(kin.robot.fkine(q) - Tep).max()) for q in sols]
@@ -130,11 +111,18 @@ def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
     return 0 if len(sols) else 1
 
 
+def _report(args: argparse.Namespace, res: Any, dt: float, how: str) -> int:
+    """One IK result (``how``: the solver's effort) as JSON or text; the exit status."""
+    if args.json:
+        print(json.dumps({**_result_dict(res), "seconds": dt}, indent=2))
+    else:
+        status = "solved" if res.success else f"not solved: {res.reason}"
+        print(f"{status} {how}\nq = {common.fmt(res.q)}\nresidual = {res.residual:.3e}")
+    return 0 if res.success else 1
+
+
 def _result_dict(res: Any) -> dict:
     import dataclasses
 
-    out = {}
-    for f in dataclasses.fields(res):
-        v = getattr(res, f.name)
-        out[f.name] = v.tolist() if isinstance(v, (np.ndarray, np.generic)) else v
-    return out
+    values = {f.name: getattr(res, f.name) for f in dataclasses.fields(res)}
+    return {k: v.tolist() if isinstance(v, (np.ndarray, np.generic)) else v for k, v in values.items()}

@@ -6,25 +6,17 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from symkin.cli import common
 from symkin.cli.checks import UserError
-from symkin.cli.common import (
-    add_command,
-    add_obstacle_options,
-    add_robot_argument,
-    configuration,
-    environment_of,
-    fmt,
-    single_chain,
-)
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(
+    s = common.add_command(
         sub, "plot", "draw a robot (links, frames, collision shapes, obstacles, velocity ellipsoid) as PNG"
     )
-    add_robot_argument(s)
+    common.add_robot_argument(s)
     s.add_argument(
         "--q", metavar="'Q...'", help="joint values, or a configuration name like qr (default qr, else qz)"
     )
@@ -38,21 +30,21 @@ def add_parser(sub: Any) -> None:
         action="store_true",
         help="leave out the collision shapes (drawn when the robot has them)",
     )
-    add_obstacle_options(s)
+    common.add_obstacle_options(s)
     s.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = single_chain(args, geometry=True)
+    robot = common.single_chain(args, geometry=True)
     if args.q is None:
         q = robot.configs.get("qr", robot.configs["qz"])
     else:
-        q = configuration(args.q, robot, "--q")
+        q = common.configuration(args.q, robot, "--q")
     try:
         import matplotlib  # noqa: F401
     except ImportError:
         raise UserError("plot needs matplotlib: pip install 'symkin[plot]'") from None
-    env = environment_of(args)
+    env = common.environment_of(args)
     highlight: list[int] = []
     note = ""
     if robot.geometry is not None and not args.no_geometry:
@@ -69,5 +61,5 @@ def run(args: argparse.Namespace) -> int:
         q, frames=not args.no_frames, ellipsoid=args.ellipsoid, path=out, geometry=not args.no_geometry,
         env=env if len(env) else None, highlight=highlight,
     )  # fmt: skip
-    print(f"wrote {out}: {robot.name} at q = {fmt(q)}{note}")
+    print(f"wrote {out}: {robot.name} at q = {common.fmt(q)}{note}")
     return 0

@@ -88,18 +88,16 @@ def run(args: argparse.Namespace) -> int:
         "mean_manipulability": float(np.mean(res.manipulability)),
         "q_final": res.q[-1].tolist(),
     }
+    clearance = None
     if args.collision:  # the closest approach along the path: obstacles, and all pairs
         D = np.asarray(kin.distances(np.asarray(res.q), env))
-        shapes = len(robot.geometry.shapes)
-        summary["closest_obstacle"] = float(D[:, -shapes * len(env) :].min()) if len(env) else None
+        # per step: the closest obstacle (or, self only, the closest pair)
+        near = (D[:, -len(robot.geometry.shapes) * len(env) :] if len(env) else D).min(axis=1)
+        clearance = (near, args.d_s if len(env) else 0.0)
+        summary["closest_obstacle"] = float(near.min()) if len(env) else None
         summary["closest_pair"] = float(D.min())
         summary["controller_backend"] = controller.backend
     if args.plot:
-        clearance = None
-        if args.collision:  # per step: the closest obstacle (or, self only, the closest pair)
-            D = np.asarray(kin.distances(np.asarray(res.q), env))
-            clearance = D[:, -len(robot.geometry.shapes) * len(env) :] if len(env) else D
-            clearance = (clearance.min(axis=1), args.d_s if len(env) else 0.0)
         _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}", clearance)
         summary["plot"] = args.plot
     if args.json:
@@ -124,14 +122,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _plot_servo(res: Any, dt: float, path: str, title: str, clearance: Any = None) -> None:
     """Manipulability and error against time; with ``clearance`` ((steps,) distances, the safety
-    distance) a third panel with the closest approach."""
-    try:
-        import matplotlib
+    distance) a third panel with the closest approach; matplotlib was checked by need_matplotlib."""
+    import matplotlib
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise UserError("--plot needs matplotlib: pip install 'symkin[plot]'") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     t = np.arange(len(res.manipulability)) * dt
     panels = 2 if clearance is None else 3
     fig, axes = plt.subplots(panels, 1, figsize=(7, 2.5 * panels), sharex=True)

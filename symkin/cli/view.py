@@ -7,17 +7,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from symkin.cli import common
 from symkin.cli.checks import UserError, positive_float
-from symkin.cli.common import (
-    BACKENDS,
-    add_command,
-    add_link_options,
-    add_obstacle_options,
-    add_robot_argument,
-    configuration,
-    environment_of,
-    single_chain,
-)
 
 __all__ = ["add_parser", "run"]
 
@@ -33,12 +24,12 @@ def _port(text: str) -> int:
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(
+    s = common.add_command(
         sub,
         "view",
         "live browser view: joint sliders, frames, velocity ellipsoid, manipulability, J, IK gizmo",
     )
-    add_robot_argument(s)
+    common.add_robot_argument(s)
     s.add_argument(
         "--q",
         metavar="'Q...'",
@@ -50,9 +41,9 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--seconds", type=positive_float, help="stop after this many seconds (default: serve until Ctrl-C)"
     )
-    s.add_argument("--backend", choices=BACKENDS, default="c", help="kinematics backend")
-    add_link_options(s)
-    add_obstacle_options(s)
+    s.add_argument("--backend", choices=common.BACKENDS, default="c", help="kinematics backend")
+    common.add_link_options(s)
+    common.add_obstacle_options(s)
     s.set_defaults(func=run)
 
 
@@ -64,9 +55,9 @@ def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
     from symkin.view import view
 
-    robot = single_chain(args, geometry=True)
-    q = None if args.q is None else configuration(args.q, robot, "--q")
-    env = environment_of(args)
+    robot = common.single_chain(args, geometry=True)
+    q = None if args.q is None else common.configuration(args.q, robot, "--q")
+    env = common.environment_of(args)
     kin = compile_robot(robot, backend=args.backend)
     viewer = view(kin, port=args.port, host=args.host, open_browser=not args.no_browser, q=q, env=env)
     how = f"for {args.seconds:g} s" if args.seconds else "until Ctrl-C"

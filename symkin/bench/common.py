@@ -1,0 +1,66 @@
+"""What the benchmarks share: timing (the best of several rounds, paths measured in turn), peer
+libraries that may be missing, and a fresh Python interpreter for start-up and cold-compile figures."""
+
+from __future__ import annotations
+
+import importlib
+import math
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Hashable
+from types import ModuleType
+from typing import Any
+
+__all__ = ["best_of", "interleaved", "rows_per_s", "optional", "fresh_python"]
+
+
+def interleaved(
+    paths: dict[Any, Callable[[], Any]], rounds: int = 3, clock: Callable[[], float] = time.thread_time
+) -> tuple[dict[Any, float], dict[Any, Any]]:
+    """The least ``clock`` time (s) of one call of each path over ``rounds`` rounds, each round
+    calling every path once in turn (so that a burst of load on a shared machine hits every path of
+    a comparison, not just one), and each path's result of the last round.
+
+    ``time.thread_time`` (the default) counts only the calling thread's CPU time, so that other
+    processes of a shared machine do not count; ``time.process_time`` counts a peer library's
+    threads too; ``time.perf_counter`` is wall time."""
+    best: dict[Hashable, float] = dict.fromkeys(paths, math.inf)
+    last: dict[Hashable, Any] = {}
+    for _ in range(rounds):
+        for key, f in paths.items():
+            t0 = clock()
+            last[key] = f()
+            best[key] = min(best[key], clock() - t0)
+    return best, last
+
+
+def best_of(f: Callable[[], Any], rounds: int = 3, clock: Callable[[], float] = time.thread_time) -> float:
+    """The least ``clock`` time (s) of ``rounds`` calls of f (:func:`interleaved` with one path)."""
+    return interleaved({None: f}, rounds, clock)[0][None]
+
+
+def rows_per_s(fn: Callable[[Any], Any], Q: Any, clock: Callable[[], float] = time.thread_time) -> float:
+    """Rows of ``Q`` per second through one call ``fn(Q)``: the best of three, after a warm-up on
+    the first 1000 rows."""
+    fn(Q[:1000])
+    return len(Q) / best_of(lambda: fn(Q), 3, clock)
+
+
+def optional(name: str) -> ModuleType | None:
+    """The module ``name`` of a peer library (the ``compare`` extra), or None when not installed."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        return None
+
+
+def fresh_python(code: str, env: dict[str, str], timeout: float | None = None, what: str = "") -> str:
+    """The last line ``code`` prints, run by a fresh interpreter (``python -c``) with ``env``; a
+    RuntimeError (``what`` failed, with the end of its stderr) when it fails."""
+    proc = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=timeout
+    )
+    if proc.returncode != 0:
+        raise RuntimeError(f"{what or repr(code)} failed:\n{proc.stderr.strip()[-2000:]}")
+    return proc.stdout.strip().splitlines()[-1]
