@@ -29,6 +29,7 @@ from symkin.core.arrays import as_rows, real_array
 from symkin.errors import ConfigurationError
 from symkin.model.resolve import resolve_robot
 from symkin.runtime.ik import IKResult, check_pose, pose_error
+from symkin.runtime.ik_problem import shift_into
 from symkin.runtime.memo import memoised
 
 __all__ = [
@@ -205,13 +206,7 @@ class AnalyticIK:
                 continue
             for j in np.flatnonzero(self._rev):
                 ref = 0.0 if q0 is None else float(q0[j])
-                x = ref + math.remainder(float(q[j]) - ref, _TWO_PI)
-                y = x
-                if y < lo[j]:
-                    y += _TWO_PI * math.ceil((lo[j] - y) / _TWO_PI)
-                elif y > hi[j]:
-                    y -= _TWO_PI * math.ceil((y - hi[j]) / _TWO_PI)
-                q[j] = y if lo[j] <= y <= hi[j] else x
+                q[j] = shift_into(ref + math.remainder(float(q[j]) - ref, _TWO_PI), lo[j], hi[j])
             if drop and ((q < lo) | (q > hi)).any():
                 continue
             if any(self._same(q, k) for k in kept):

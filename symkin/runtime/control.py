@@ -24,6 +24,7 @@ import numpy as np
 
 from symkin.core.arrays import real_array
 from symkin.errors import CompileError, ConfigurationError, ParameterError
+from symkin.runtime.memo import bounded, per_object
 from symkin.runtime.mmc_qp import (
     _AXES,
     MMCQP,
@@ -236,28 +237,18 @@ def rrmc_controller(
     per kinematics object and hashable options, or None when ``kin`` is not compiled C kinematics."""
     from symkin.runtime import mmc_c
 
-    key = (qd_max, damping, singular_tol, axes)
-    cache = getattr(kin, "_c_rrmc", None)
-    try:
-        if not isinstance(cache, dict):
-            cache = _RRMC.setdefault(kin, {})
-        return cache[key]
-    except (KeyError, TypeError):  # new options; unhashable options or kin
-        pass
     if not mmc_c.supports(kin):
         return None
-    _axes(axes)
-    damping = _number(damping, "damping", strict=False)
-    singular_tol = _number(singular_tol, "singular_tol", strict=False)
-    c = mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), damping, singular_tol, axes)
-    try:
-        if isinstance(cache, dict):
-            if len(cache) > 64:
-                cache.clear()
-            cache[key] = c
-    except TypeError:  # unhashable options (an array qd_max): a new C controller per call
-        pass
-    return c
+
+    def make() -> Any:
+        _axes(axes)
+        d = _number(damping, "damping", strict=False)
+        tol = _number(singular_tol, "singular_tol", strict=False)
+        return mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), d, tol, axes)
+
+    key = (qd_max, damping, singular_tol, axes)  # unhashable (an array qd_max): a new C controller per call
+    cache = getattr(kin, "_c_rrmc", None)
+    return bounded(cache, key, make) if isinstance(cache, dict) else per_object(_RRMC, kin, key, make)
 
 
 def _rrmc_step(

@@ -32,6 +32,7 @@ import numpy as np
 from symkin.core.arrays import as_config, as_rows, name_of, real_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
+from symkin.runtime.memo import per_object
 
 __all__ = [
     "CIKSolver",
@@ -470,14 +471,4 @@ def options_key(opt: IKOptions) -> tuple:
 
 def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
     """A :class:`CIKSolver` for ``kin`` and ``opt``, memoised per kinematics object and options."""
-    try:
-        cache = _SOLVERS.setdefault(kin, {})
-    except TypeError:  # not weak-referenceable
-        return CIKSolver(kin, opt)
-    key = options_key(opt)
-    solver = cache.get(key)
-    if solver is None:
-        if len(cache) > 64:
-            cache.clear()
-        solver = cache[key] = CIKSolver(kin, opt)
-    return solver
+    return per_object(_SOLVERS, kin, options_key(opt), lambda: CIKSolver(kin, opt))

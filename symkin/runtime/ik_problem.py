@@ -216,6 +216,17 @@ def revolute_mask(kin: Any) -> np.ndarray:
     return np.asarray(rev, dtype=bool).reshape(int(kin.n))
 
 
+def shift_into(x: float, lo: float, hi: float) -> float:
+    """x moved by the multiple of 2 pi that brings it into [lo, hi], if there is one, else x (the
+    rule of the C code for a revolute joint)."""
+    y = x
+    if y < lo:
+        y += TWO_PI * math.ceil((lo - y) / TWO_PI)
+    elif y > hi:
+        y -= TWO_PI * math.ceil((y - hi) / TWO_PI)
+    return y if lo <= y <= hi else x
+
+
 def sample_range(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:
     """(2, n) range random restarts are drawn from (:func:`symkin.core.arrays.sample_bounds`)."""
     return sample_bounds(qlim, revolute)
