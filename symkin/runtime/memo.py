@@ -8,7 +8,7 @@ from collections import OrderedDict
 from collections.abc import Callable, Hashable, MutableMapping
 from typing import Any
 
-__all__ = ["LOADED_MAX", "memoised", "clear", "bounded", "per_object"]
+__all__ = ["LOADED_MAX", "memoised", "clear", "lru", "bounded", "per_object"]
 
 LOADED_MAX = 256  # objects kept; the least recently used goes first
 _LOADED: OrderedDict[Hashable, Any] = OrderedDict()
@@ -16,14 +16,18 @@ _LOADED: OrderedDict[Hashable, Any] = OrderedDict()
 
 def memoised(key: Hashable, make: Callable[[], Any], use: bool = True) -> Any:
     """The object memoised under ``key``, else ``make()`` (memoised when ``use``)."""
-    if use and key in _LOADED:
-        _LOADED.move_to_end(key)
-        return _LOADED[key]
-    obj = make()
-    if use:
-        _LOADED[key] = obj
-        while len(_LOADED) > LOADED_MAX:
-            _LOADED.popitem(last=False)
+    return lru(_LOADED, key, make, LOADED_MAX) if use else make()
+
+
+def lru(store: OrderedDict, key: Hashable, make: Callable[[], Any], keep: int) -> Any:
+    """``store[key]`` (now the most recently used), else ``make()`` stored there, the least recently
+    used entries dropped beyond ``keep``."""
+    if key in store:
+        store.move_to_end(key)
+        return store[key]
+    obj = store[key] = make()
+    while len(store) > keep:
+        store.popitem(last=False)
     return obj
 
 
