@@ -642,14 +642,14 @@ class MMC:
     def _solve(
         self, qp: MMCQP, s_min: float, try_closed_form: bool, pairs: np.ndarray | None = None
     ) -> tuple[np.ndarray, StepInfo]:
-        J, nu, m = qp.J, qp.l[:6], qp.manipulability
+        J, nu, m, n = qp.J, qp.l[:6], qp.manipulability, self.n
         lower, upper = qp.lower, qp.upper
-        if qp.n_distance and np.isfinite(qp.l[6 + self.n :]).any():
-            try_closed_form = False  # the closed form and the active set know only the bounds
+        w = self.slack_weight if qp.has_slack else None
+        near = bool(qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
         if s_min < self.singular_tol:
             return self._fallback(qp, "singular", "closed_form", 0)
-        if try_closed_form:
-            qd = mmc_closed_form(J, qp.Jm, nu, self.lam, self.slack_weight if qp.has_slack else None)
+        if try_closed_form and not near:  # the closed form and the active set know only the bounds
+            qd = mmc_closed_form(J, qp.Jm, nu, self.lam, w)
             if np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
                 return self._closed_form_info(J, qd, nu, m)
             if self.active_set:
@@ -657,34 +657,24 @@ class MMC:
                 if done is not None:
                     return done
         x, status, iters = self._osqp(qp)
-        n = self.n
-        near = bool(qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
-        polish = self._polish and not near
-        if x is not None and status in ("solved", "inaccurate", "max_iter") and self._polish and near:
-            # the same polish with the obstacle rows (slack only): from OSQP's active bounds and rows
+        usable = x is not None and status in ("solved", "inaccurate", "max_iter")
+        if usable and self._polish and (qp.has_slack or not near):
+            # polish: the active-set solve from OSQP's active set (and, near obstacles, with the slack
+            # only, its active rows), which when it settles is the exact solution, also of a QP that
+            # OSQP left unfinished (see OSQP_SETTINGS)
             y = self._raw.solution.y if self._raw is not None else np.zeros(qp.A.shape[0])
-            if qp.has_slack:
+            act = active_of_osqp(x[:n], y[6 : 6 + n], lower, upper)
+            if near:
                 Jd, dl = qp.A[6 + n :, :n], qp.l[6 + n :]
-                act = active_of_osqp(x[:n], y[6 : 6 + n], lower, upper)
-                found = active_set_rows_solve(
-                    J, qp.Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act,
-                    active_rows_of(x[:n], Jd, dl, y[6 + n :]),
-                )  # fmt: skip
-                if found is not None:
-                    x, status = found[0], "solved"
-                    if pairs is not None:  # the next step starts from this active set
-                        self._warm = (found[2], pairs[found[3][: len(pairs)]])
-        if x is not None and status in ("solved", "inaccurate", "max_iter") and polish:
-            # polish: the active-set solve from OSQP's active set, which when it settles is the exact
-            # solution, also of a QP that OSQP left unfinished (see OSQP_SETTINGS)
-            y = self._raw.solution.y[6 : 6 + n] if self._raw is not None else np.zeros(n)
-            w = self.slack_weight if qp.has_slack else None
-            found = active_set_solve(
-                J, qp.Jm, nu, lower, upper, self.lam, w, active_of_osqp(x[:n], y, lower, upper)
-            )
+                rows = active_rows_of(x[:n], Jd, dl, y[6 + n :])
+                found = active_set_rows_solve(J, qp.Jm, nu, lower, upper, self.lam, w, Jd, dl, act, rows)
+                if found is not None and pairs is not None:  # the next step starts from this active set
+                    self._warm = (found[2], pairs[found[3][: len(pairs)]])
+            else:
+                found = active_set_solve(J, qp.Jm, nu, lower, upper, self.lam, w, act)
             if found is not None:
                 x, status = found[0], "solved"
-        if x is not None and status in ("solved", "inaccurate", "max_iter"):
+        if usable:
             qd = np.clip(x[:n], lower, upper)  # remove solver-tolerance overshoot of the bounds
             res = float(np.abs(J @ qd - nu).max())
             # an unfinished iterate, clipped into the bounds, is kept when the QP has a slack (the
