@@ -405,20 +405,11 @@ class CIKSolver:
             check_pose(T)
             raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
         success = st["success"].astype(bool)
-        reason: tuple[str, ...] = ("success",) * N
-        failed = np.flatnonzero(~success)
-        if failed.size:
-            o, reasons = self.options, list(reason)
-            fs = st[failed]
-            for i, r, lr, sg, cr in zip(
-                failed.tolist(),
-                fs["residual"].tolist(),
-                fs["limit_rejects"].tolist(),
-                fs["singular"].tolist(),
-                fs["collision_rejects"].tolist(),
-            ):
-                reasons[i] = failure_reason(False, r, lr, sg, o.ilimit, o.slimit, cr)
-            reason = tuple(reasons)
+        columns = ("success", "residual", "limit_rejects", "singular", "collision_rejects")
+        reason = tuple(
+            "success" if ok else self._reason(r, lr, sg, cr)
+            for ok, r, lr, sg, cr in zip(*(st[c].tolist() for c in columns))
+        )
         return IKResult(
             q, success, st["iterations"].copy(), st["searches"].copy(), st["residual"].copy(), reason
         )

@@ -266,6 +266,11 @@ def mmc_extension(n: int, settings: dict[str, Any]) -> Any:
     return _library(int(n), _settings_key(settings))[1]
 
 
+# the int32 fields of symkin_mmc_ctrl after its kinematics (mmc.h)
+_CTRL_FLAGS = ("axes", "closed_form", "active_set", "joint_limits", "bounded", "polish", "has_dt", "fresh",
+               "polished", "pad_")  # fmt: skip
+
+
 @lru_cache(maxsize=16)
 def _ctrl_type(n: int, nd: int = 0) -> type[ctypes.Structure]:
     return type(
@@ -274,21 +279,7 @@ def _ctrl_type(n: int, nd: int = 0) -> type[ctypes.Structure]:
         {
             "_fields_": [
                 *((f, _P) for f in ("jh", "j0", "fk", "manip")),
-                *(
-                    (f, _I32)
-                    for f in (
-                        "axes",
-                        "closed_form",
-                        "active_set",
-                        "joint_limits",
-                        "bounded",
-                        "polish",
-                        "has_dt",
-                        "fresh",
-                        "polished",
-                        "pad_",
-                    )
-                ),
+                *((f, _I32) for f in _CTRL_FLAGS),
                 *((f, _D) for f in ("lam", "slack_weight", "xi", "dt", "singular_tol", "damping", "rho0")),
                 *((f, _D * n) for f in ("qlo", "qhi", "qd_max", "rho_i", "rho_s")),
                 ("rho", _D),
@@ -386,15 +377,10 @@ class CMMC(_CController):
             )
         super().__init__(mmc.kin, mmc.n, mmc.settings, mmc.axes, mmc.qd_max, nd)
         n, c = self.n, self._ctrl
-        c.closed_form, c.joint_limits, c.bounded = (
-            int(mmc.closed_form),
-            int(mmc.joint_limits),
-            int(mmc._bounded),
-        )
-        c.polish = int(bool(mmc.settings.get("polishing", True)))
+        c.closed_form, c.joint_limits = int(mmc.closed_form), int(mmc.joint_limits)
+        c.bounded, c.polish = int(mmc._bounded), int(bool(mmc.settings.get("polishing", True)))
         c.has_dt, c.dt = int(mmc.dt is not None), float(mmc.dt or 0.0)
-        c.fresh = 1
-        c.active_set = int(mmc.active_set)
+        c.fresh, c.active_set = 1, int(mmc.active_set)
         c.lam, c.slack_weight, c.xi = mmc.lam, mmc.slack_weight, mmc.xi
         c.singular_tol, c.damping = mmc.singular_tol, 1e-2
         c.rho0 = c.rho = _codegen(n, mmc.slack, _settings_key(mmc.settings), nd)[1]
