@@ -20,10 +20,6 @@
 #ifndef SYMKIN_MMC_MODULE
 #error "compile with -DSYMKIN_MMC_MODULE=<module name>"
 #endif
-#define SK_STR2_(x) #x
-#define SK_STR_(x) SK_STR2_(x)
-#define SK_CAT2_(a, b) a##b
-#define SK_CAT_(a, b) SK_CAT2_(a, b)
 
 #define NQ MMC_N
 #define NOUT (MMC_N + MMC_NINFO)
@@ -121,13 +117,6 @@ done:
     return r;
 }
 
-/* arg as a C-contiguous native float64 array of shape (d0,), or NULL without an error set
- * (symkin_pyarray.h) */
-static PyArrayObject *as_vector_(PyObject *arg, npy_intp d0)
-{
-    return as_doubles_(arg, 1, d0, 0);
-}
-
 static PyObject *new_array_(int nd, npy_intp d0, npy_intp d1, const double *data)
 {
     npy_intp dims[2] = {d0, d1};
@@ -174,7 +163,7 @@ static PyObject *py_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs
         return NULL;
     }
     double in[NQ + 6], out[NOUT];
-    PyArrayObject *q = as_vector_(args[2], NQ), *nu = q ? as_vector_(args[3], 6) : NULL;
+    PyArrayObject *q = as_doubles_(args[2], 1, NQ, 0), *nu = q ? as_doubles_(args[3], 1, 6, 0) : NULL;
     if (!nu) {
         Py_XDECREF(q);
         Py_RETURN_NONE;
@@ -284,8 +273,8 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
         Py_DECREF(T);
         Py_RETURN_NONE;
     }
-    PyArrayObject *q0 = as_vector_(args[3], NQ);
-    PyArrayObject *pa = q0 ? as_vector_(args[4], 13) : NULL;
+    PyArrayObject *q0 = as_doubles_(args[3], 1, NQ, 0);
+    PyArrayObject *pa = q0 ? as_doubles_(args[4], 1, 13, 0) : NULL;
     if (!pa) {
         Py_DECREF(T);
         Py_XDECREF(q0);

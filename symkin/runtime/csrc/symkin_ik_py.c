@@ -19,10 +19,6 @@
 #ifndef SYMKIN_IK_MODULE
 #error "compile with -DSYMKIN_IK_MODULE=<module name>"
 #endif
-#define SK_STR2_(x) #x
-#define SK_STR_(x) SK_STR2_(x)
-#define SK_CAT2_(a, b) a##b
-#define SK_CAT_(a, b) SK_CAT2_(a, b)
 
 #define SK_NFIELDS 6 /* IKResult: q, success, iterations, searches, residual, reason */
 static PyObject *result_type_ = NULL;

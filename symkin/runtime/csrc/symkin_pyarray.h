@@ -1,9 +1,16 @@
 /*
- * symkin_pyarray.h: the argument conversion the CPython entry points share (mmc_py.c,
- * symkin_ik_py.c). Include it after <Python.h> and <numpy/arrayobject.h>.
+ * symkin_pyarray.h: what the CPython entry points share (mmc_py.c, symkin_ik_py.c): the macros
+ * naming the module and the argument conversion. Include it after <Python.h> and
+ * <numpy/arrayobject.h>.
  */
 #ifndef SYMKIN_PYARRAY_H
 #define SYMKIN_PYARRAY_H
+
+/* the module's name and init function from -DSYMKIN_*_MODULE=<module name> */
+#define SK_STR2_(x) #x
+#define SK_STR_(x) SK_STR2_(x)
+#define SK_CAT2_(a, b) a##b
+#define SK_CAT_(a, b) SK_CAT2_(a, b)
 
 /* arg as a C-contiguous, aligned, native float64 array of shape (d0,) (nd 1) or (d0, d1) (nd 2), or
  * NULL without an error set when it is anything else. Only arrays of booleans, integers or floats
