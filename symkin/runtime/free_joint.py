@@ -155,17 +155,14 @@ class FreeJointIK:
         gap = np.diff(key[order])
         repeat = np.zeros(len(v), dtype=bool)
         repeat[order[1:]] = gap <= DUPLICATE_TOL
-        if self._rev[self.joint] and key[order[0]] + _TWO_PI - key[order[-1]] <= DUPLICATE_TOL:
-            repeat[order[-1]] = True
+        # the largest and the smallest value equal mod 2 pi: one group across the wrap
+        wraps = bool(self._rev[self.joint]) and key[order[0]] + _TWO_PI - key[order[-1]] <= DUPLICATE_TOL
+        repeat[order[-1]] |= wraps
         if not repeat.any():
             return v
         # keep the first occurrence in the given order of each group of repeats
         group = np.cumsum(np.r_[True, gap > DUPLICATE_TOL])[np.argsort(order)]
-        if (
-            self._rev[self.joint]
-            and repeat[order[-1]]
-            and key[order[0]] + _TWO_PI - key[order[-1]] <= DUPLICATE_TOL
-        ):
+        if wraps:
             group[group == group.max()] = 1
         _, first = np.unique(group, return_index=True)
         return v[np.sort(first)]
