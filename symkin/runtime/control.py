@@ -587,10 +587,13 @@ class MMC:
                 starts.append((act, rows))
             qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
             starts.append((active_of(qd, lower, upper), np.zeros(len(dl), dtype=bool)))
+            w = self.slack_weight
             for act, rows in starts:
-                done = self._active_set_rows(J, Jm, nu, lower, upper, m, Jd, dl, act, rows, pairs)
-                if done is not None:
-                    return done
+                found = active_set_rows_solve(J, Jm, nu, lower, upper, self.lam, w, Jd, dl, act, rows)
+                if found is not None:  # its active bounds and pairs start the next step
+                    x, solves, act, rows = found
+                    self._warm = (act, pairs[rows[: len(pairs)]])
+                    return self._active_set_answer(J, nu, lower, upper, m, x, solves)
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
         return self._solve(qp, s_min, try_closed_form=False, pairs=pairs)
 
@@ -611,19 +614,6 @@ class MMC:
         if found is None:
             return None
         return self._active_set_answer(J, nu, lower, upper, m, *found)
-
-    def _active_set_rows(
-        self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
-        Jd: np.ndarray, dl: np.ndarray, act: np.ndarray, rows: np.ndarray, pairs: np.ndarray,
-    ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
-        """The active-set solution with the obstacle rows (slack only), or None; remembers its active
-        bounds and pairs for the next step."""
-        found = active_set_rows_solve(J, Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act, rows)
-        if found is None:
-            return None
-        x, solves, act, rows = found
-        self._warm = (act, pairs[rows[: len(pairs)]])
-        return self._active_set_answer(J, nu, lower, upper, m, x, solves)
 
     def _active_set_answer(
         self, J: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float, x: np.ndarray,
