@@ -17,6 +17,7 @@ No sympy here.
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
 from types import ModuleType
@@ -212,9 +213,7 @@ class AnalyticIK:
             if any(self._same(q, k) for k in kept):
                 continue
             d = 0.0 if q0 is None else float(((1.0 if w is None else w) * (q - q0) ** 2).sum())
-            at = len(kept)
-            while at > 0 and dist[at - 1] > d:
-                at -= 1
+            at = bisect.bisect_right(dist, d)  # after the rows as near (stable)
             kept.insert(at, q)
             dist.insert(at, d)
         return np.array(kept).reshape(len(kept), self.n)

@@ -217,19 +217,13 @@ def _result_maker() -> Any:
         type(s).__name__ == "member_descriptor" for s in slots
     ):
         return IKResult
-    sq, ss, si, se, sr, sn = (s.__set__ for s in slots)  # type: ignore[union-attr]
+    setters = [s.__set__ for s in slots]  # type: ignore[union-attr]
     new = object.__new__
 
-    def make(
-        q: np.ndarray, success: bool, iterations: int, searches: int, residual: float, reason: str
-    ) -> Any:
+    def make(*values: Any) -> Any:  # q, success, iterations, searches, residual, reason
         r = new(IKResult)
-        sq(r, q)
-        ss(r, success)
-        si(r, iterations)
-        se(r, searches)
-        sr(r, residual)
-        sn(r, reason)
+        for set_value, value in zip(setters, values, strict=True):
+            set_value(r, value)
         return r
 
     return make
