@@ -89,11 +89,12 @@ Pick = tuple[np.ndarray, bool, float, str]  # one target's q, success, residual 
 
 
 def nearest_pick(
-    rows: np.ndarray, fallback: np.ndarray, target: np.ndarray, fk: Any, tol: float
+    rows: np.ndarray, q0: np.ndarray | None, target: np.ndarray, fk: Any, tol: float
 ) -> tuple[np.ndarray, bool, float, str | None]:
-    """The first (nearest) of the closed-form solutions ``rows`` for ``target`` as (q, success,
-    residual, reason); with no rows ``fallback``, failed, and reason None (the caller says why)."""
-    q = rows[0] if len(rows) else fallback
+    """The first (nearest) of the closed-form solutions ``rows`` (k, n) for ``target`` as (q,
+    success, residual, reason); with no rows ``q0`` (zeros without it), failed, and reason None
+    (the caller says why)."""
+    q = rows[0] if len(rows) else np.zeros(rows.shape[1]) if q0 is None else np.array(q0)
     r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), target)))
     if not len(rows):
         return q, False, r, None
@@ -243,8 +244,7 @@ class AnalyticIK:
         for i in range(N):
             rows = allq[i]
             rows = rows[~np.isnan(rows[:, 0])] if rows.size else rows
-            fallback = np.zeros(self.n) if Q0 is None else np.array(Q0[i])
-            q, success, r, reason = nearest_pick(rows, fallback, T[i], fk, tol)
+            q, success, r, reason = nearest_pick(rows, None if Q0 is None else Q0[i], T[i], fk, tol)
             picks.append((q, success, r, reason or self._why(T[i], joint_limits)))
         return picks_result(picks, single, self.n)
 

@@ -257,8 +257,7 @@ class FreeJointIK:
             rows = self.ik_all(T[i], v, q0i, joint_limits, weights)
             if values is None and q0i is not None and len(rows):
                 rows = self._refine(T[i], rows, v, q0i, joint_limits, weights)
-            fallback = np.zeros(n) if q0i is None else np.array(q0i)
-            q, success, r, reason = nearest_pick(rows, fallback, T[i], self.robot.fkine, tol)
+            q, success, r, reason = nearest_pick(rows, q0i, T[i], self.robot.fkine, tol)
             if reason is None:
                 reason = f"no closed-form solution for the {len(v)} value(s) of joint {self.joint} tried" + (
                     " within the joint limits" if joint_limits else ""
