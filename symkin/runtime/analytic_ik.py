@@ -30,7 +30,7 @@ from symkin.core.arrays import as_rows, real_array
 from symkin.errors import ConfigurationError
 from symkin.model.resolve import resolve_robot
 from symkin.runtime.ik import IKResult, check_pose, pose_error
-from symkin.runtime.ik_problem import shift_into
+from symkin.runtime.ik_problem import shift_into, stacked
 from symkin.runtime.memo import memoised
 
 __all__ = [
@@ -106,18 +106,8 @@ def nearest_pick(
 def picks_result(picks: list[Pick], single: bool, n: int) -> IKResult:
     """The IKResult of the picks of one target (``single``) or of N targets (0 iterations and one
     search each)."""
-    if single:
-        q, success, r, reason = picks[0]
-        return IKResult(q, success, 0, 1, r, reason)
-    N = len(picks)
-    return IKResult(
-        np.array([p[0] for p in picks]).reshape(N, n),  # (0, n) for no targets
-        np.array([p[1] for p in picks], dtype=bool),
-        np.zeros(N, int),
-        np.ones(N, int),
-        np.array([p[2] for p in picks], dtype=float),
-        tuple(p[3] for p in picks),
-    )
+    rows = [(q, success, 0, 1, r, reason) for q, success, r, reason in picks]
+    return IKResult(*rows[0]) if single else stacked(rows, n)
 
 
 class AnalyticIK:

@@ -63,6 +63,7 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     revolute_mask,
     sample_range,
     shift_into,
+    stacked,
 )
 from symkin.runtime.memo import per_object
 
@@ -216,15 +217,7 @@ def ik(
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
     ]
-    if single:
-        return IKResult(*out[0])
-    if not out:  # no targets: empty arrays, like the C solver
-        z = np.zeros(0, dtype=int)
-        return IKResult(np.zeros((0, opt.n)), np.zeros(0, dtype=bool), z, z.copy(), np.zeros(0), ())
-    q, success, iterations, searches, residual, reason = zip(*out, strict=True)
-    return IKResult(
-        np.array(q), np.array(success), np.array(iterations), np.array(searches), np.array(residual), reason
-    )
+    return IKResult(*out[0]) if single else stacked(out, opt.n)  # no targets: empty arrays, like the C solver
 
 
 _OPTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

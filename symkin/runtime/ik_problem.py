@@ -73,6 +73,17 @@ class IKResult:
         )
 
 
+def stacked(rows: list[tuple], n: int) -> IKResult:
+    """The IKResult of N targets from their (q, success, iterations, searches, residual, reason)
+    rows: arrays with a leading (N,) axis ((0, n) and (0,) for no targets)."""
+    q, success, iterations, searches, residual, reason = zip(*rows, strict=True) if rows else ((),) * 6
+    return IKResult(
+        np.array(q, dtype=float).reshape(len(rows), n), np.array(success, dtype=bool),
+        np.array(iterations, dtype=int), np.array(searches, dtype=int), np.array(residual, dtype=float),
+        tuple(reason),
+    )  # fmt: skip
+
+
 def failure_reason(
     success: bool,
     residual: float,
