@@ -163,7 +163,7 @@ def _endpoints(q0: Any, qf: Any, vector: bool) -> tuple[np.ndarray, np.ndarray, 
 
 
 def _boundary(v: Any, n: int, what: str) -> np.ndarray:
-    """A boundary velocity: None (zero), a number for every axis, or (n,)."""
+    """A boundary velocity (or another value per axis): None (zero), a number for every axis, or (n,)."""
     if v is None:
         return np.zeros(n)
     a = _finite(v, what)
@@ -277,13 +277,7 @@ def trapezoidal(q0: Any, qf: Any, t: Any, V: Any = None) -> Trajectory:
     if V is None:
         v = 1.5 * d / T
     else:
-        Va = _finite(V, "V")
-        if Va.ndim == 0:
-            Va = np.full(a.size, float(Va))
-        elif Va.shape != a.shape:
-            raise ParameterError(
-                f"V must be a number or {a.size} numbers (one per axis), got shape {Va.shape}"
-            )
+        Va = _boundary(V, a.size, "V")
         v = np.abs(Va) * np.sign(d)
         for j in range(a.size):
             where = "" if scalar else f" (axis {j})"
