@@ -283,15 +283,10 @@ class CIKSolver:
             if ets is None:
                 raise TypeError("CIKSolver needs kinematics: kin.ets (a Robot), kin.c_fkjac or fkjac=")
             self._table, self._ets = ets_table(ets)
-        self._keep = {
-            "lam": np.ascontiguousarray(opt.lam, dtype=float),
-            "qlo": np.ascontiguousarray(opt.qlim[0], dtype=float),
-            "qhi": np.ascontiguousarray(opt.qlim[1], dtype=float),
-            "slo": np.ascontiguousarray(opt.sample[0], dtype=float),
-            "shi": np.ascontiguousarray(opt.sample[1], dtype=float),
-            "revolute": np.ascontiguousarray(opt.revolute, dtype=np.int32),
-            "starts": np.ascontiguousarray(opt.starts, dtype=float),
-        }
+        (qlo, qhi), (slo, shi) = opt.qlim, opt.sample
+        arrays = {"lam": opt.lam, "qlo": qlo, "qhi": qhi, "slo": slo, "shi": shi, "starts": opt.starts}
+        self._keep = {name: np.ascontiguousarray(a, dtype=float) for name, a in arrays.items()}
+        self._keep["revolute"] = np.ascontiguousarray(opt.revolute, dtype=np.int32)
         cfg = _Config()
         cfg.n, cfg.method, cfg.damping = opt.n, _METHOD[opt.method], _DAMPING[opt.damping]
         cfg.pinv, cfg.ilimit, cfg.slimit = int(opt.pinv), opt.ilimit, opt.slimit
