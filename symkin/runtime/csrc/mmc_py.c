@@ -216,12 +216,9 @@ typedef struct {
 
 static void buf_free_(servo_buf_ *b)
 {
-    PyMem_Free(b->Q);
-    PyMem_Free(b->E);
-    PyMem_Free(b->M);
-    PyMem_Free(b->QD);
-    PyMem_Free(b->info);
-    PyMem_Free(b->times);
+    double *fields[6] = {b->Q, b->E, b->M, b->QD, b->info, b->times};
+    for (int i = 0; i < 6; ++i)
+        PyMem_Free(fields[i]);
     memset(b, 0, sizeof *b);
 }
 
@@ -288,14 +285,15 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
     const int cap_mode = (int)par[8], axes = (int)par[11];
     const double max_steps = par[12];
     servo_buf_ b = {0};
+    PyObject *r = NULL;
     Py_ssize_t steps = 0;
     int arrived = 0;
     if (buf_grow_(&b, 64) < 0)
-        goto fail;
+        goto done;
     memcpy(b.Q, PyArray_DATA(q0), sizeof(double) * NQ);
     for (;;) {
         if (steps == b.cap && buf_grow_(&b, 2 * b.cap) < 0) /* room for one more step */
-            goto fail;
+            goto done;
         const double *q = b.Q + steps * NQ;
         double T_[16], *e = b.E + steps * 6, in[NQ + 6], out[NOUT], sum = 0.0;
         c->fk(q, T_);
@@ -323,7 +321,7 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
         if (rc) {
             PyErr_Format(PyExc_FloatingPointError, "servo: non-finite %s at step %zd", rc == 1 ? "q" : "nu",
                          steps);
-            goto fail;
+            goto done;
         }
         zero_unless_finite_(in + NQ, out);
         memcpy(b.QD + steps * NQ, out, sizeof(double) * NQ);
@@ -334,7 +332,7 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
             qn[k] = q[k] + dt * out[k];
         ++steps;
         if (steps % 4096 == 0 && PyErr_CheckSignals() < 0)
-            goto fail;
+            goto done;
     }
     b.M[steps] = c->manip(b.Q + steps * NQ, axes);
     long violations = 0;
@@ -349,31 +347,25 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
     {
         PyObject *infos = PyTuple_New(steps);
         if (!infos)
-            goto fail;
+            goto done;
         for (Py_ssize_t k = 0; k < steps; ++k) {
             PyObject *info = make_info_(b.info + k * MMC_NINFO);
             if (!info) {
                 Py_DECREF(infos);
-                goto fail;
+                goto done;
             }
             PyTuple_SET_ITEM(infos, k, info);
         }
-        PyObject *r = Py_BuildValue("(NNNNNNOl)", new_array_(2, steps + 1, NQ, b.Q),
-                                    new_array_(2, steps, NQ, b.QD), new_array_(2, steps + 1, 6, b.E),
-                                    new_array_(1, steps + 1, 0, b.M), infos, new_array_(1, steps, 0, b.times),
-                                    arrived ? Py_True : Py_False, violations);
-        buf_free_(&b);
-        Py_DECREF(T);
-        Py_DECREF(q0);
-        Py_DECREF(pa);
-        return r;
+        r = Py_BuildValue("(NNNNNNOl)", new_array_(2, steps + 1, NQ, b.Q), new_array_(2, steps, NQ, b.QD),
+                          new_array_(2, steps + 1, 6, b.E), new_array_(1, steps + 1, 0, b.M), infos,
+                          new_array_(1, steps, 0, b.times), arrived ? Py_True : Py_False, violations);
     }
-fail:
+done: /* the result, or NULL after an error */
     buf_free_(&b);
     Py_DECREF(T);
     Py_DECREF(q0);
     Py_DECREF(pa);
-    return NULL;
+    return r;
 }
 
 static PyMethodDef methods_[] = {
