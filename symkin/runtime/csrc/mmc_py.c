@@ -28,7 +28,6 @@ typedef int (*step_fn_)(symkin_mmc_ctrl *, const double *, double *);
 
 /* StepInfo and the texts of its codes, from setup() */
 static PyObject *info_type_ = NULL, *names_ = NULL; /* names: (statuses, methods, fallbacks) */
-static PyObject *fields_[8];
 static PyObject *slots_[8]; /* StepInfo's member descriptors when it has __slots__, else NULL */
 static const char *field_names_[8] = {"status",   "method",   "manipulability", "iterations",
                                       "fallback", "residual", "slack",          "scale"};
@@ -60,20 +59,7 @@ static PyObject *py_setup(PyObject *self, PyObject *args)
     names_ = PyTuple_Pack(3, st, me, fb);
     if (!names_)
         return NULL;
-    int fast = 1;
-    for (int i = 0; i < 8; ++i) {
-        if (!fields_[i] && !(fields_[i] = PyUnicode_InternFromString(field_names_[i])))
-            return NULL;
-        Py_CLEAR(slots_[i]);
-        PyObject *d = PyType_Check(type) ? PyDict_GetItem(((PyTypeObject *)type)->tp_dict, fields_[i]) : NULL;
-        if (d && Py_IS_TYPE(d, &PyMemberDescr_Type))
-            slots_[i] = Py_NewRef(d);
-        else
-            fast = 0;
-    }
-    if (!fast)
-        for (int i = 0; i < 8; ++i)
-            Py_CLEAR(slots_[i]);
+    member_slots_(type, field_names_, 8, slots_);
     Py_RETURN_NONE;
 }
 
@@ -89,7 +75,7 @@ static PyObject *code_name_(int which, double code)
 }
 
 /* StepInfo from the step's info values (status, method, m, iterations, fallback, residual, slack,
- * scale, polished), set as object.__setattr__ does (it is a frozen dataclass) */
+ * scale, polished) */
 static PyObject *make_info_(const double *info)
 {
     PyObject *v[8];
@@ -101,20 +87,7 @@ static PyObject *make_info_(const double *info)
     v[5] = PyFloat_FromDouble(info[5]);
     v[6] = PyFloat_FromDouble(info[6]);
     v[7] = PyFloat_FromDouble(info[7]);
-    PyTypeObject *t = (PyTypeObject *)info_type_;
-    PyObject *r = NULL;
-    for (int i = 0; i < 8; ++i)
-        if (!v[i])
-            goto done;
-    r = t->tp_alloc(t, 0);
-    for (int i = 0; r && i < 8; ++i)
-        if ((slots_[0] ? Py_TYPE(slots_[i])->tp_descr_set(slots_[i], r, v[i])
-                       : PyObject_GenericSetAttr(r, fields_[i], v[i])) < 0)
-            Py_CLEAR(r);
-done:
-    for (int i = 0; i < 8; ++i)
-        Py_XDECREF(v[i]);
-    return r;
+    return new_record_(info_type_, slots_, v, 8);
 }
 
 static PyObject *new_array_(int nd, npy_intp d0, npy_intp d1, const double *data)
