@@ -366,17 +366,12 @@ class MMC:
 
             self._collision = collision_of(kin)
             self._env = as_environment(None if collision is True else collision)
-        self.d_i, self.d_s, self.xi_d = (
-            _number(d_i, "d_i"),
-            _number(d_s, "d_s", strict=False),
-            _number(xi_d, "xi_d"),
-        )
+        self.d_i, self.d_s = _number(d_i, "d_i"), _number(d_s, "d_s", strict=False)
+        self.xi_d = _number(xi_d, "xi_d")
         if self._collision is not None and not self.d_i > self.d_s:
             raise ParameterError(f"d_i ({d_i}) must exceed d_s ({d_s})")
-        self.d_i_self, self.d_s_self = (
-            _number(d_i_self, "d_i_self"),
-            _number(d_s_self, "d_s_self", strict=False),
-        )
+        self.d_i_self = _number(d_i_self, "d_i_self")
+        self.d_s_self = _number(d_s_self, "d_s_self", strict=False)
         if self._collision is not None and not self.d_i_self > self.d_s_self:
             raise ParameterError(f"d_i_self ({d_i_self}) must exceed d_s_self ({d_s_self})")
         if (
