@@ -64,13 +64,9 @@ class IKResult:
         if not self.batch:
             raise TypeError("a single IKResult cannot be indexed; it is not a batch")
         return IKResult(
-            self.q[i],
-            bool(self.success[i]),
-            int(self.iterations[i]),
-            int(self.searches[i]),
-            float(self.residual[i]),
-            self.reason[i],
-        )
+            self.q[i], bool(self.success[i]), int(self.iterations[i]), int(self.searches[i]),
+            float(self.residual[i]), self.reason[i],
+        )  # fmt: skip
 
 
 def stacked(rows: list[tuple], n: int) -> IKResult:
@@ -85,14 +81,9 @@ def stacked(rows: list[tuple], n: int) -> IKResult:
 
 
 def failure_reason(
-    success: bool,
-    residual: float,
-    limit_rejects: int,
-    singular: int,
-    ilimit: int,
-    slimit: int,
+    success: bool, residual: float, limit_rejects: int, singular: int, ilimit: int, slimit: int,
     collision_rejects: int = 0,
-) -> str:
+) -> str:  # fmt: skip
     """The ``reason`` text of a result (shared by the NumPy and C solvers)."""
     if success:
         return "success"
