@@ -39,7 +39,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import as_rows, name_of
+from symkin.core.arrays import as_config, as_rows, name_of
 from symkin.errors import ParameterError, PoseError
 from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     DAMPINGS,
@@ -212,7 +212,7 @@ def ik(
     if backend != "numpy":
         raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
-    Q0 = _start_rows(q0, opt.n, len(T), single, name_of(kin))
+    Q0 = None if q0 is None else as_rows(q0, opt.n, len(T), single, name_of(kin), "q0")  # the rule of q
     seed = new_seed() if seed is None else int(seed) & M64
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
@@ -266,14 +266,6 @@ def _options(kin: Any, *args: Any) -> IKOptions:
     return _memo(_OPTIONS, kin, args, lambda: IKOptions.of(kin, *args))
 
 
-def _start_rows(q0: Any, n: int, N: int, single: bool, name: str = "robot") -> np.ndarray | None:
-    """q0 as (N, n) rows (one per target), or None: the joint-value rule of q
-    (:func:`symkin.model.robot.as_rows`), shared with the C solver and the closed form."""
-    if q0 is None:
-        return None
-    return as_rows(q0, n, N, single, name, "q0")
-
-
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
     """The iterates q_0 .. q_steps of one search from q0, not stopping at convergence:
     (k + 1, n), fewer rows if a step fails. For checking solvers against each other."""
@@ -281,7 +273,7 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
-    q = _start_rows(q0, opt.n, 1, True, name_of(kin))[0].copy()  # type: ignore[index]
+    q = as_config(q0, opt.n, name_of(kin), "q0").copy()  # the rule of q, as the C solver's trace
     out = [q.copy()]
     for _ in range(int(steps)):
         Te, J = _fkjac(kin, q)
