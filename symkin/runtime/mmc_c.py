@@ -237,12 +237,8 @@ def _library(n: int, key: tuple[tuple[str, Any], ...], nd: int = 0) -> tuple[cty
     )
     path = compile_library(sources, f"symkin_mmc{n}" + (f"d{nd}" if nd else ""), extra_cflags=flags)
     lib = ctypes.PyDLL(str(path))  # the GIL stays held during calls: the embedded solvers are shared
-    for name in (
-        "symkin_mmc0_step",
-        "symkin_mmc6_step",
-        "symkin_rrmc_step",
-        *(("symkin_mmc6d_step",) if nd else ()),
-    ):
+    steps = ("symkin_mmc0_step", "symkin_mmc6_step", "symkin_rrmc_step", "symkin_mmc6d_step")
+    for name in steps[: 4 if nd else 3]:  # the last with collision rows only
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = ctypes.c_int, [_P, _P, _P]
     lib.symkin_mmc_layout.restype, lib.symkin_mmc_layout.argtypes = None, [_P]
