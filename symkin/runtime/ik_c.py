@@ -55,18 +55,12 @@ _AXES = ("tx", "ty", "tz", "Rx", "Ry", "Rz")
 
 class _Config(ctypes.Structure):
     _fields_ = [
-        *(
-            (f, _I32)
-            for f in ("n", "method", "damping", "pinv", "ilimit", "slimit", "tol_on_E", "joint_limits")
-        ),
-        ("nstarts", _I32),
-        ("pad_", _I32),
+        *((f, _I32) for f in ("n", "method", "damping", "pinv", "ilimit", "slimit", "tol_on_E")),
+        *((f, _I32) for f in ("joint_limits", "nstarts", "pad_")),
         ("tol", _D),
         ("we", _D * 6),
         *((f, _P) for f in ("lam", "qlo", "qhi", "slo", "shi", "revolute", "starts", "fkjac", "ets")),
-        ("fkjac_batch", _P),
-        ("collides", _P),
-        ("collision_env", _P),
+        *((f, _P) for f in ("fkjac_batch", "collides", "collision_env")),
     ]
 
 
