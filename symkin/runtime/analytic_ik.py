@@ -17,6 +17,7 @@ No sympy here.
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
 from types import ModuleType
@@ -29,6 +30,7 @@ from symkin.core.arrays import as_rows, real_array
 from symkin.errors import ConfigurationError
 from symkin.model.resolve import resolve_robot
 from symkin.runtime.ik import IKResult, check_pose, pose_error
+from symkin.runtime.ik_problem import shift_into, stacked
 from symkin.runtime.memo import memoised
 
 __all__ = [
@@ -87,11 +89,12 @@ Pick = tuple[np.ndarray, bool, float, str]  # one target's q, success, residual 
 
 
 def nearest_pick(
-    rows: np.ndarray, fallback: np.ndarray, target: np.ndarray, fk: Any, tol: float
+    rows: np.ndarray, q0: np.ndarray | None, target: np.ndarray, fk: Any, tol: float
 ) -> tuple[np.ndarray, bool, float, str | None]:
-    """The first (nearest) of the closed-form solutions ``rows`` for ``target`` as (q, success,
-    residual, reason); with no rows ``fallback``, failed, and reason None (the caller says why)."""
-    q = rows[0] if len(rows) else fallback
+    """The first (nearest) of the closed-form solutions ``rows`` (k, n) for ``target`` as (q,
+    success, residual, reason); with no rows ``q0`` (zeros without it), failed, and reason None
+    (the caller says why)."""
+    q = rows[0] if len(rows) else np.zeros(rows.shape[1]) if q0 is None else np.array(q0)
     r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), target)))
     if not len(rows):
         return q, False, r, None
@@ -103,18 +106,8 @@ def nearest_pick(
 def picks_result(picks: list[Pick], single: bool, n: int) -> IKResult:
     """The IKResult of the picks of one target (``single``) or of N targets (0 iterations and one
     search each)."""
-    if single:
-        q, success, r, reason = picks[0]
-        return IKResult(q, success, 0, 1, r, reason)
-    N = len(picks)
-    return IKResult(
-        np.array([p[0] for p in picks]).reshape(N, n),  # (0, n) for no targets
-        np.array([p[1] for p in picks], dtype=bool),
-        np.zeros(N, int),
-        np.ones(N, int),
-        np.array([p[2] for p in picks], dtype=float),
-        tuple(p[3] for p in picks),
-    )
+    rows = [(q, success, 0, 1, r, reason) for q, success, r, reason in picks]
+    return IKResult(*rows[0]) if single else stacked(rows, n)
 
 
 class AnalyticIK:
@@ -205,21 +198,13 @@ class AnalyticIK:
                 continue
             for j in np.flatnonzero(self._rev):
                 ref = 0.0 if q0 is None else float(q0[j])
-                x = ref + math.remainder(float(q[j]) - ref, _TWO_PI)
-                y = x
-                if y < lo[j]:
-                    y += _TWO_PI * math.ceil((lo[j] - y) / _TWO_PI)
-                elif y > hi[j]:
-                    y -= _TWO_PI * math.ceil((y - hi[j]) / _TWO_PI)
-                q[j] = y if lo[j] <= y <= hi[j] else x
+                q[j] = shift_into(ref + math.remainder(float(q[j]) - ref, _TWO_PI), lo[j], hi[j])
             if drop and ((q < lo) | (q > hi)).any():
                 continue
             if any(self._same(q, k) for k in kept):
                 continue
             d = 0.0 if q0 is None else float(((1.0 if w is None else w) * (q - q0) ** 2).sum())
-            at = len(kept)
-            while at > 0 and dist[at - 1] > d:
-                at -= 1
+            at = bisect.bisect_right(dist, d)  # after the rows as near (stable)
             kept.insert(at, q)
             dist.insert(at, d)
         return np.array(kept).reshape(len(kept), self.n)
@@ -249,8 +234,7 @@ class AnalyticIK:
         for i in range(N):
             rows = allq[i]
             rows = rows[~np.isnan(rows[:, 0])] if rows.size else rows
-            fallback = np.zeros(self.n) if Q0 is None else np.array(Q0[i])
-            q, success, r, reason = nearest_pick(rows, fallback, T[i], fk, tol)
+            q, success, r, reason = nearest_pick(rows, None if Q0 is None else Q0[i], T[i], fk, tol)
             picks.append((q, success, r, reason or self._why(T[i], joint_limits)))
         return picks_result(picks, single, self.n)
 

@@ -23,6 +23,7 @@ from symkin.core.names import identifier
 from symkin.errors import ParameterError
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Environment
+from symkin.runtime.memo import lru
 
 __all__ = [
     "Collision",
@@ -143,20 +144,15 @@ class CollisionKernel:
             return (D[0], J[0]) if jacobians else D[0]  # type: ignore[index]
         return (D, J) if jacobians else D
 
+    def distance_jacobians(self, q: Any, env: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        return self.distances(q, env, jacobians=True)
+
 
 def collision_kernel(model: Any) -> CollisionKernel:
     """The compiled kernel of ``model``'s geometry (built and loaded once per geometry and model)."""
     layout = layout_of(model)
     key = f"{layout.tree.key}:{layout.tree.geometry.fingerprint()}"
-    kernel = _KERNELS.get(key)
-    if kernel is None:
-        kernel = CollisionKernel(layout)
-        _KERNELS[key] = kernel
-        while len(_KERNELS) > _KEEP:
-            _KERNELS.popitem(last=False)
-    else:
-        _KERNELS.move_to_end(key)
-    return kernel
+    return lru(_KERNELS, key, lambda: CollisionKernel(layout), _KEEP)
 
 
 def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05) -> bool:
@@ -208,27 +204,20 @@ class Collision:
         self.backend = backend
         self.kernel = collision_kernel(model) if backend == "c" else None
         self.module = None if self.kernel is not None else collision_module(self.layout)
+        self._queries: Any = self.kernel if self.kernel is not None else self.module  # the same methods
         self.n = self.layout.tree.n
 
     def points(self, q: Any) -> np.ndarray:
-        if self.kernel is not None:
-            return self.kernel.points(q)
-        return self.module.points(q)
+        return self._queries.points(q)
 
     def in_collision(self, q: Any, env: Any = None) -> bool | np.ndarray:
-        if self.kernel is not None:
-            return self.kernel.in_collision(q, env)
-        return self.module.in_collision(q, env)
+        return self._queries.in_collision(q, env)
 
     def distances(self, q: Any, env: Any = None) -> np.ndarray:
-        if self.kernel is not None:
-            return self.kernel.distances(q, env)
-        return self.module.distances(q, env)
+        return self._queries.distances(q, env)
 
     def distance_jacobians(self, q: Any, env: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        if self.kernel is not None:
-            return self.kernel.distances(q, env, jacobians=True)
-        return self.module.distance_jacobians(q, env)
+        return self._queries.distance_jacobians(q, env)
 
     def labels(self, env: Any = None) -> list[tuple[str, int, int]]:
         return self.layout.pair_labels(as_environment(env))
@@ -292,11 +281,8 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
     success[todo] = False
     for i in todo:
         reason[i] = "in collision"
-    if not batch:
-        return IKResult(
-            q[0], bool(success[0]), int(iters[0]), int(searches[0]), float(residual[0]), reason[0]
-        )
-    return IKResult(q, success, iters, searches, residual, tuple(reason))
+    result = IKResult(q, success, iters, searches, residual, tuple(reason))
+    return result if batch else result[0]
 
 
 _AVOIDING: OrderedDict[tuple, tuple] = OrderedDict()  # (kin id, options, env id) -> (kin, env, solver)
@@ -316,17 +302,16 @@ def _c_solver_avoiding(kin: Any, check: Collision, env: Environment, kwargs: dic
     if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or getattr(kin, "n", 99) > 12:
         return None  # frame=, backend=...: the general path
     options = IKOptions.of(kin, **{k: v for k, v in kwargs.items() if k in IK_OPTIONS})
-    key = (id(kin), options_key(options), id(env))
-    hit = _AVOIDING.get(key)
-    if hit is not None and hit[0] is kin and hit[1] is env:
-        _AVOIDING.move_to_end(key)
-        return hit[2]
     fn = check.kernel.lib.skcoll_in_collision_packed
-    solver = CIKSolver(kin, options, collides=(fn, env_args(env)))
-    _AVOIDING[key] = (kin, env, solver)
-    while len(_AVOIDING) > _KEEP:
-        _AVOIDING.popitem(last=False)
-    return solver
+
+    def make() -> tuple:
+        return kin, env, CIKSolver(kin, options, collides=(fn, env_args(env)))
+
+    key = (id(kin), options_key(options), id(env))
+    hit = lru(_AVOIDING, key, make, _KEEP)
+    if hit[0] is not kin or hit[1] is not env:  # another object under a reused id
+        hit = _AVOIDING[key] = make()
+    return hit[2]
 
 
 def collision_of(kin: Any) -> Collision:

@@ -24,6 +24,7 @@ import numpy as np
 
 from symkin.core.arrays import real_array
 from symkin.errors import CompileError, ConfigurationError, ParameterError
+from symkin.runtime.memo import bounded, per_object
 from symkin.runtime.mmc_qp import (
     _AXES,
     MMCQP,
@@ -179,16 +180,9 @@ def _task_rows(axes: Any) -> Any:
 
 
 def _rrmc(
-    kin: Any,
-    q: Any,
-    nu: Any,
-    qd_max: Any,
-    damping: float,
-    singular_tol: float,
-    axes: str,
-    qd_null: Any,
+    kin: Any, q: Any, nu: Any, qd_max: Any, damping: float, singular_tol: float, axes: str, qd_null: Any,
     task: Any,
-) -> tuple[np.ndarray, StepInfo]:
+) -> tuple[np.ndarray, StepInfo]:  # fmt: skip
     """:func:`rrmc` solving the rows ``task`` of J0 (a slice or indices) and reporting the
     manipulability of ``axes``; the servo loop solves all six rows whatever its ``axes``."""
     full = isinstance(task, slice) and task == _AXES["all"]
@@ -236,28 +230,18 @@ def rrmc_controller(
     per kinematics object and hashable options, or None when ``kin`` is not compiled C kinematics."""
     from symkin.runtime import mmc_c
 
-    key = (qd_max, damping, singular_tol, axes)
-    cache = getattr(kin, "_c_rrmc", None)
-    try:
-        if not isinstance(cache, dict):
-            cache = _RRMC.setdefault(kin, {})
-        return cache[key]
-    except (KeyError, TypeError):  # new options; unhashable options or kin
-        pass
     if not mmc_c.supports(kin):
         return None
-    _axes(axes)
-    damping = _number(damping, "damping", strict=False)
-    singular_tol = _number(singular_tol, "singular_tol", strict=False)
-    c = mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), damping, singular_tol, axes)
-    try:
-        if isinstance(cache, dict):
-            if len(cache) > 64:
-                cache.clear()
-            cache[key] = c
-    except TypeError:  # unhashable options (an array qd_max): a new C controller per call
-        pass
-    return c
+
+    def make() -> Any:
+        _axes(axes)
+        d = _number(damping, "damping", strict=False)
+        tol = _number(singular_tol, "singular_tol", strict=False)
+        return mmc_c.CRRMC(kin, _speed_limits(kin, int(kin.n), qd_max), d, tol, axes)
+
+    key = (qd_max, damping, singular_tol, axes)  # unhashable (an array qd_max): a new C controller per call
+    cache = getattr(kin, "_c_rrmc", None)
+    return bounded(cache, key, make) if isinstance(cache, dict) else per_object(_RRMC, kin, key, make)
 
 
 def _rrmc_step(
@@ -382,17 +366,12 @@ class MMC:
 
             self._collision = collision_of(kin)
             self._env = as_environment(None if collision is True else collision)
-        self.d_i, self.d_s, self.xi_d = (
-            _number(d_i, "d_i"),
-            _number(d_s, "d_s", strict=False),
-            _number(xi_d, "xi_d"),
-        )
+        self.d_i, self.d_s = _number(d_i, "d_i"), _number(d_s, "d_s", strict=False)
+        self.xi_d = _number(xi_d, "xi_d")
         if self._collision is not None and not self.d_i > self.d_s:
             raise ParameterError(f"d_i ({d_i}) must exceed d_s ({d_s})")
-        self.d_i_self, self.d_s_self = (
-            _number(d_i_self, "d_i_self"),
-            _number(d_s_self, "d_s_self", strict=False),
-        )
+        self.d_i_self = _number(d_i_self, "d_i_self")
+        self.d_s_self = _number(d_s_self, "d_s_self", strict=False)
         if self._collision is not None and not self.d_i_self > self.d_s_self:
             raise ParameterError(f"d_i_self ({d_i_self}) must exceed d_s_self ({d_s_self})")
         if (
@@ -596,10 +575,13 @@ class MMC:
                 starts.append((act, rows))
             qd = mmc_closed_form(J, Jm, nu, self.lam, self.slack_weight)
             starts.append((active_of(qd, lower, upper), np.zeros(len(dl), dtype=bool)))
+            w = self.slack_weight
             for act, rows in starts:
-                done = self._active_set_rows(J, Jm, nu, lower, upper, m, Jd, dl, act, rows, pairs)
-                if done is not None:
-                    return done
+                found = active_set_rows_solve(J, Jm, nu, lower, upper, self.lam, w, Jd, dl, act, rows)
+                if found is not None:  # its active bounds and pairs start the next step
+                    x, solves, act, rows = found
+                    self._warm = (act, pairs[rows[: len(pairs)]])
+                    return self._active_set_answer(J, nu, lower, upper, m, x, solves)
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
         return self._solve(qp, s_min, try_closed_form=False, pairs=pairs)
 
@@ -621,19 +603,6 @@ class MMC:
             return None
         return self._active_set_answer(J, nu, lower, upper, m, *found)
 
-    def _active_set_rows(
-        self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
-        Jd: np.ndarray, dl: np.ndarray, act: np.ndarray, rows: np.ndarray, pairs: np.ndarray,
-    ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
-        """The active-set solution with the obstacle rows (slack only), or None; remembers its active
-        bounds and pairs for the next step."""
-        found = active_set_rows_solve(J, Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act, rows)
-        if found is None:
-            return None
-        x, solves, act, rows = found
-        self._warm = (act, pairs[rows[: len(pairs)]])
-        return self._active_set_answer(J, nu, lower, upper, m, x, solves)
-
     def _active_set_answer(
         self, J: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float, x: np.ndarray,
         solves: int,
@@ -651,14 +620,14 @@ class MMC:
     def _solve(
         self, qp: MMCQP, s_min: float, try_closed_form: bool, pairs: np.ndarray | None = None
     ) -> tuple[np.ndarray, StepInfo]:
-        J, nu, m = qp.J, qp.l[:6], qp.manipulability
+        J, nu, m, n = qp.J, qp.l[:6], qp.manipulability, self.n
         lower, upper = qp.lower, qp.upper
-        if qp.n_distance and np.isfinite(qp.l[6 + self.n :]).any():
-            try_closed_form = False  # the closed form and the active set know only the bounds
+        w = self.slack_weight if qp.has_slack else None
+        near = bool(qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
         if s_min < self.singular_tol:
             return self._fallback(qp, "singular", "closed_form", 0)
-        if try_closed_form:
-            qd = mmc_closed_form(J, qp.Jm, nu, self.lam, self.slack_weight if qp.has_slack else None)
+        if try_closed_form and not near:  # the closed form and the active set know only the bounds
+            qd = mmc_closed_form(J, qp.Jm, nu, self.lam, w)
             if np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
                 return self._closed_form_info(J, qd, nu, m)
             if self.active_set:
@@ -666,34 +635,24 @@ class MMC:
                 if done is not None:
                     return done
         x, status, iters = self._osqp(qp)
-        n = self.n
-        near = bool(qp.n_distance and np.isfinite(qp.l[6 + n :]).any())
-        polish = self._polish and not near
-        if x is not None and status in ("solved", "inaccurate", "max_iter") and self._polish and near:
-            # the same polish with the obstacle rows (slack only): from OSQP's active bounds and rows
+        usable = x is not None and status in ("solved", "inaccurate", "max_iter")
+        if usable and self._polish and (qp.has_slack or not near):
+            # polish: the active-set solve from OSQP's active set (and, near obstacles, with the slack
+            # only, its active rows), which when it settles is the exact solution, also of a QP that
+            # OSQP left unfinished (see OSQP_SETTINGS)
             y = self._raw.solution.y if self._raw is not None else np.zeros(qp.A.shape[0])
-            if qp.has_slack:
+            act = active_of_osqp(x[:n], y[6 : 6 + n], lower, upper)
+            if near:
                 Jd, dl = qp.A[6 + n :, :n], qp.l[6 + n :]
-                act = active_of_osqp(x[:n], y[6 : 6 + n], lower, upper)
-                found = active_set_rows_solve(
-                    J, qp.Jm, nu, lower, upper, self.lam, self.slack_weight, Jd, dl, act,
-                    active_rows_of(x[:n], Jd, dl, y[6 + n :]),
-                )  # fmt: skip
-                if found is not None:
-                    x, status = found[0], "solved"
-                    if pairs is not None:  # the next step starts from this active set
-                        self._warm = (found[2], pairs[found[3][: len(pairs)]])
-        if x is not None and status in ("solved", "inaccurate", "max_iter") and polish:
-            # polish: the active-set solve from OSQP's active set, which when it settles is the exact
-            # solution, also of a QP that OSQP left unfinished (see OSQP_SETTINGS)
-            y = self._raw.solution.y[6 : 6 + n] if self._raw is not None else np.zeros(n)
-            w = self.slack_weight if qp.has_slack else None
-            found = active_set_solve(
-                J, qp.Jm, nu, lower, upper, self.lam, w, active_of_osqp(x[:n], y, lower, upper)
-            )
+                rows = active_rows_of(x[:n], Jd, dl, y[6 + n :])
+                found = active_set_rows_solve(J, qp.Jm, nu, lower, upper, self.lam, w, Jd, dl, act, rows)
+                if found is not None and pairs is not None:  # the next step starts from this active set
+                    self._warm = (found[2], pairs[found[3][: len(pairs)]])
+            else:
+                found = active_set_solve(J, qp.Jm, nu, lower, upper, self.lam, w, act)
             if found is not None:
                 x, status = found[0], "solved"
-        if x is not None and status in ("solved", "inaccurate", "max_iter"):
+        if usable:
             qd = np.clip(x[:n], lower, upper)  # remove solver-tolerance overshoot of the bounds
             res = float(np.abs(J @ qd - nu).max())
             # an unfinished iterate, clipped into the bounds, is kept when the QP has a slack (the

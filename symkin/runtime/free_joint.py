@@ -155,17 +155,14 @@ class FreeJointIK:
         gap = np.diff(key[order])
         repeat = np.zeros(len(v), dtype=bool)
         repeat[order[1:]] = gap <= DUPLICATE_TOL
-        if self._rev[self.joint] and key[order[0]] + _TWO_PI - key[order[-1]] <= DUPLICATE_TOL:
-            repeat[order[-1]] = True
+        # the largest and the smallest value equal mod 2 pi: one group across the wrap
+        wraps = bool(self._rev[self.joint]) and key[order[0]] + _TWO_PI - key[order[-1]] <= DUPLICATE_TOL
+        repeat[order[-1]] |= wraps
         if not repeat.any():
             return v
         # keep the first occurrence in the given order of each group of repeats
         group = np.cumsum(np.r_[True, gap > DUPLICATE_TOL])[np.argsort(order)]
-        if (
-            self._rev[self.joint]
-            and repeat[order[-1]]
-            and key[order[0]] + _TWO_PI - key[order[-1]] <= DUPLICATE_TOL
-        ):
+        if wraps:
             group[group == group.max()] = 1
         _, first = np.unique(group, return_index=True)
         return v[np.sort(first)]
@@ -260,8 +257,7 @@ class FreeJointIK:
             rows = self.ik_all(T[i], v, q0i, joint_limits, weights)
             if values is None and q0i is not None and len(rows):
                 rows = self._refine(T[i], rows, v, q0i, joint_limits, weights)
-            fallback = np.zeros(n) if q0i is None else np.array(q0i)
-            q, success, r, reason = nearest_pick(rows, fallback, T[i], self.robot.fkine, tol)
+            q, success, r, reason = nearest_pick(rows, q0i, T[i], self.robot.fkine, tol)
             if reason is None:
                 reason = f"no closed-form solution for the {len(v)} value(s) of joint {self.joint} tried" + (
                     " within the joint limits" if joint_limits else ""

@@ -39,7 +39,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import as_rows, name_of
+from symkin.core.arrays import as_config, as_rows, name_of
 from symkin.errors import ParameterError, PoseError
 from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     DAMPINGS,
@@ -62,7 +62,10 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     pose_error,
     revolute_mask,
     sample_range,
+    shift_into,
+    stacked,
 )
+from symkin.runtime.memo import per_object
 
 __all__ = [
     "IKResult",
@@ -84,13 +87,7 @@ def wrap_into_limits(q: np.ndarray, opt: IKOptions) -> np.ndarray:
     q = q.copy()
     lo, hi = opt.qlim
     for j in np.flatnonzero(opt.revolute):
-        x = float(q[j])
-        if x < lo[j]:
-            x += TWO_PI * math.ceil((lo[j] - x) / TWO_PI)
-        elif x > hi[j]:
-            x -= TWO_PI * math.ceil((x - hi[j]) / TWO_PI)
-        if lo[j] <= x <= hi[j]:
-            q[j] = x
+        q[j] = shift_into(float(q[j]), lo[j], hi[j])
     return q
 
 
@@ -210,29 +207,17 @@ def ik(
         kin = task_kinematics(kin, frame)
     args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts)
     if backend == "c":
-        try:
-            solver = _C_SOLVERS[kin][args]
-        except (KeyError, TypeError):
-            solver = _c_solver(kin, args)
-        return solver.solve(Tep, q0, seed)
+        return _c_solver(kin, args).solve(Tep, q0, seed)
     opt = _options(kin, *args)
     if backend != "numpy":
         raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
-    Q0 = _start_rows(q0, opt.n, len(T), single, name_of(kin))
+    Q0 = None if q0 is None else as_rows(q0, opt.n, len(T), single, name_of(kin), "q0")  # the rule of q
     seed = new_seed() if seed is None else int(seed) & M64
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
     ]
-    if single:
-        return IKResult(*out[0])
-    if not out:  # no targets: empty arrays, like the C solver
-        z = np.zeros(0, dtype=int)
-        return IKResult(np.zeros((0, opt.n)), np.zeros(0, dtype=bool), z, z.copy(), np.zeros(0), ())
-    q, success, iterations, searches, residual, reason = zip(*out, strict=True)
-    return IKResult(
-        np.array(q), np.array(success), np.array(iterations), np.array(searches), np.array(residual), reason
-    )
+    return IKResult(*out[0]) if single else stacked(out, opt.n)  # no targets: empty arrays, like the C solver
 
 
 _OPTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -243,21 +228,22 @@ def _c_solver(kin: Any, args: tuple) -> Any:
     """The C solver for ``ik(kin, ..., backend="c")``, memoised per kinematics object and the
     arguments' values (arrays by their contents: see :func:`_value_key`), so a repeated call skips
     validating them (validation costs far more than a C solve of one target)."""
-    from symkin.runtime.ik_c import solver_for
+    try:  # the arguments as given: found without making their key
+        return _C_SOLVERS[kin][args]
+    except (KeyError, TypeError):
+        from symkin.runtime.ik_c import solver_for
 
+        return _memo(_C_SOLVERS, kin, args, lambda: solver_for(kin, _options(kin, *args)))
+
+
+def _memo(table: weakref.WeakKeyDictionary, kin: Any, args: tuple, make: Any) -> Any:
+    """``make()`` memoised in ``table`` per kinematics object and the arguments' values; made afresh
+    when an argument is unhashable or ``kin`` takes no weak reference."""
     try:
         key = _value_key(args)
-        cache = _C_SOLVERS.setdefault(kin, {})
-        solver = cache.get(key)
-    except TypeError:  # an unhashable argument, or an object without weak references
-        key = cache = solver = None
-    if solver is None:
-        solver = solver_for(kin, _options(kin, *args))
-        if cache is not None:
-            if len(cache) > 64:
-                cache.clear()
-            cache[key] = solver
-    return solver
+    except TypeError:
+        return make()
+    return per_object(table, kin, key, make)
 
 
 def _value_key(value: Any) -> Any:
@@ -277,25 +263,7 @@ def _value_key(value: Any) -> Any:
 def _options(kin: Any, *args: Any) -> IKOptions:
     """IKOptions.of, memoised per kinematics object and the arguments' values (validation costs
     tens of microseconds, more than a C solve)."""
-    try:
-        key = _value_key(args)
-        cache = _OPTIONS.setdefault(kin, {})
-    except TypeError:  # an unhashable argument, or an object without weak references
-        return IKOptions.of(kin, *args)
-    opt = cache.get(key)
-    if opt is None:
-        if len(cache) > 64:
-            cache.clear()
-        opt = cache[key] = IKOptions.of(kin, *args)
-    return opt
-
-
-def _start_rows(q0: Any, n: int, N: int, single: bool, name: str = "robot") -> np.ndarray | None:
-    """q0 as (N, n) rows (one per target), or None: the joint-value rule of q
-    (:func:`symkin.model.robot.as_rows`), shared with the C solver and the closed form."""
-    if q0 is None:
-        return None
-    return as_rows(q0, n, N, single, name, "q0")
+    return _memo(_OPTIONS, kin, args, lambda: IKOptions.of(kin, *args))
 
 
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
@@ -305,7 +273,7 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
-    q = _start_rows(q0, opt.n, 1, True, name_of(kin))[0].copy()  # type: ignore[index]
+    q = as_config(q0, opt.n, name_of(kin), "q0").copy()  # the rule of q, as the C solver's trace
     out = [q.copy()]
     for _ in range(int(steps)):
         Te, J = _fkjac(kin, q)
@@ -331,11 +299,7 @@ def c_solver_with(kin: Any, options: dict[str, Any]) -> Any:
     """The C solver of ``ik(kin, Tep, backend="c", **options)`` (``options``: names of
     :data:`IK_OPTIONS`, the others at their defaults), memoised like any other."""
     defaults = _ik_defaults()
-    args = tuple(options[k] if k in options else defaults[k] for k in IK_OPTIONS)
-    try:
-        return _C_SOLVERS[kin][args]
-    except (KeyError, TypeError):
-        return _c_solver(kin, args)
+    return _c_solver(kin, tuple(options[k] if k in options else defaults[k] for k in IK_OPTIONS))
 
 
 def default_c_solver(kin: Any) -> Any:

@@ -32,6 +32,7 @@ import numpy as np
 from symkin.core.arrays import as_config, as_rows, name_of, real_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
+from symkin.runtime.memo import per_object
 
 __all__ = [
     "CIKSolver",
@@ -54,18 +55,12 @@ _AXES = ("tx", "ty", "tz", "Rx", "Ry", "Rz")
 
 class _Config(ctypes.Structure):
     _fields_ = [
-        *(
-            (f, _I32)
-            for f in ("n", "method", "damping", "pinv", "ilimit", "slimit", "tol_on_E", "joint_limits")
-        ),
-        ("nstarts", _I32),
-        ("pad_", _I32),
+        *((f, _I32) for f in ("n", "method", "damping", "pinv", "ilimit", "slimit", "tol_on_E")),
+        *((f, _I32) for f in ("joint_limits", "nstarts", "pad_")),
         ("tol", _D),
         ("we", _D * 6),
         *((f, _P) for f in ("lam", "qlo", "qhi", "slo", "shi", "revolute", "starts", "fkjac", "ets")),
-        ("fkjac_batch", _P),
-        ("collides", _P),
-        ("collision_env", _P),
+        *((f, _P) for f in ("fkjac_batch", "collides", "collision_env")),
     ]
 
 
@@ -216,19 +211,13 @@ def _result_maker() -> Any:
         type(s).__name__ == "member_descriptor" for s in slots
     ):
         return IKResult
-    sq, ss, si, se, sr, sn = (s.__set__ for s in slots)  # type: ignore[union-attr]
+    setters = [s.__set__ for s in slots]  # type: ignore[union-attr]
     new = object.__new__
 
-    def make(
-        q: np.ndarray, success: bool, iterations: int, searches: int, residual: float, reason: str
-    ) -> Any:
+    def make(*values: Any) -> Any:  # q, success, iterations, searches, residual, reason
         r = new(IKResult)
-        sq(r, q)
-        ss(r, success)
-        si(r, iterations)
-        se(r, searches)
-        sr(r, residual)
-        sn(r, reason)
+        for set_value, value in zip(setters, values, strict=True):
+            set_value(r, value)
         return r
 
     return make
@@ -288,15 +277,10 @@ class CIKSolver:
             if ets is None:
                 raise TypeError("CIKSolver needs kinematics: kin.ets (a Robot), kin.c_fkjac or fkjac=")
             self._table, self._ets = ets_table(ets)
-        self._keep = {
-            "lam": np.ascontiguousarray(opt.lam, dtype=float),
-            "qlo": np.ascontiguousarray(opt.qlim[0], dtype=float),
-            "qhi": np.ascontiguousarray(opt.qlim[1], dtype=float),
-            "slo": np.ascontiguousarray(opt.sample[0], dtype=float),
-            "shi": np.ascontiguousarray(opt.sample[1], dtype=float),
-            "revolute": np.ascontiguousarray(opt.revolute, dtype=np.int32),
-            "starts": np.ascontiguousarray(opt.starts, dtype=float),
-        }
+        (qlo, qhi), (slo, shi) = opt.qlim, opt.sample
+        arrays = {"lam": opt.lam, "qlo": qlo, "qhi": qhi, "slo": slo, "shi": shi, "starts": opt.starts}
+        self._keep = {name: np.ascontiguousarray(a, dtype=float) for name, a in arrays.items()}
+        self._keep["revolute"] = np.ascontiguousarray(opt.revolute, dtype=np.int32)
         cfg = _Config()
         cfg.n, cfg.method, cfg.damping = opt.n, _METHOD[opt.method], _DAMPING[opt.damping]
         cfg.pinv, cfg.ilimit, cfg.slimit = int(opt.pinv), opt.ilimit, opt.slimit
@@ -404,20 +388,11 @@ class CIKSolver:
             check_pose(T)
             raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
         success = st["success"].astype(bool)
-        reason: tuple[str, ...] = ("success",) * N
-        failed = np.flatnonzero(~success)
-        if failed.size:
-            o, reasons = self.options, list(reason)
-            fs = st[failed]
-            for i, r, lr, sg, cr in zip(
-                failed.tolist(),
-                fs["residual"].tolist(),
-                fs["limit_rejects"].tolist(),
-                fs["singular"].tolist(),
-                fs["collision_rejects"].tolist(),
-            ):
-                reasons[i] = failure_reason(False, r, lr, sg, o.ilimit, o.slimit, cr)
-            reason = tuple(reasons)
+        columns = ("success", "residual", "limit_rejects", "singular", "collision_rejects")
+        reason = tuple(
+            "success" if ok else self._reason(r, lr, sg, cr)
+            for ok, r, lr, sg, cr in zip(*(st[c].tolist() for c in columns))
+        )
         return IKResult(
             q, success, st["iterations"].copy(), st["searches"].copy(), st["residual"].copy(), reason
         )
@@ -470,14 +445,4 @@ def options_key(opt: IKOptions) -> tuple:
 
 def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:
     """A :class:`CIKSolver` for ``kin`` and ``opt``, memoised per kinematics object and options."""
-    try:
-        cache = _SOLVERS.setdefault(kin, {})
-    except TypeError:  # not weak-referenceable
-        return CIKSolver(kin, opt)
-    key = options_key(opt)
-    solver = cache.get(key)
-    if solver is None:
-        if len(cache) > 64:
-            cache.clear()
-        solver = cache[key] = CIKSolver(kin, opt)
-    return solver
+    return per_object(_SOLVERS, kin, options_key(opt), lambda: CIKSolver(kin, opt))

@@ -64,24 +64,26 @@ class IKResult:
         if not self.batch:
             raise TypeError("a single IKResult cannot be indexed; it is not a batch")
         return IKResult(
-            self.q[i],
-            bool(self.success[i]),
-            int(self.iterations[i]),
-            int(self.searches[i]),
-            float(self.residual[i]),
-            self.reason[i],
-        )
+            self.q[i], bool(self.success[i]), int(self.iterations[i]), int(self.searches[i]),
+            float(self.residual[i]), self.reason[i],
+        )  # fmt: skip
+
+
+def stacked(rows: list[tuple], n: int) -> IKResult:
+    """The IKResult of N targets from their (q, success, iterations, searches, residual, reason)
+    rows: arrays with a leading (N,) axis ((0, n) and (0,) for no targets)."""
+    q, success, iterations, searches, residual, reason = zip(*rows, strict=True) if rows else ((),) * 6
+    return IKResult(
+        np.array(q, dtype=float).reshape(len(rows), n), np.array(success, dtype=bool),
+        np.array(iterations, dtype=int), np.array(searches, dtype=int), np.array(residual, dtype=float),
+        tuple(reason),
+    )  # fmt: skip
 
 
 def failure_reason(
-    success: bool,
-    residual: float,
-    limit_rejects: int,
-    singular: int,
-    ilimit: int,
-    slimit: int,
+    success: bool, residual: float, limit_rejects: int, singular: int, ilimit: int, slimit: int,
     collision_rejects: int = 0,
-) -> str:
+) -> str:  # fmt: skip
     """The ``reason`` text of a result (shared by the NumPy and C solvers)."""
     if success:
         return "success"
@@ -214,6 +216,17 @@ def revolute_mask(kin: Any) -> np.ndarray:
     if rev is None:
         return np.zeros(int(kin.n), dtype=bool)
     return np.asarray(rev, dtype=bool).reshape(int(kin.n))
+
+
+def shift_into(x: float, lo: float, hi: float) -> float:
+    """x moved by the multiple of 2 pi that brings it into [lo, hi], if there is one, else x (the
+    rule of the C code for a revolute joint)."""
+    y = x
+    if y < lo:
+        y += TWO_PI * math.ceil((lo - y) / TWO_PI)
+    elif y > hi:
+        y -= TWO_PI * math.ceil((y - hi) / TWO_PI)
+    return y if lo <= y <= hi else x
 
 
 def sample_range(qlim: np.ndarray, revolute: np.ndarray) -> np.ndarray:

@@ -322,12 +322,13 @@ class Kinematics(FrameMethods):
                 if frame is not None:
                     kwargs["frame"] = frame
                 return collision_ik(self, Tep, env, attempts, **kwargs)
+        q0, seed = kwargs.get("q0"), kwargs.get("seed")
+        options = {k: v for k, v in kwargs.items() if k not in ("q0", "seed")}  # what a C solver is made of
         if frame is None and self._ik_by_options:  # options seen before: straight to their C solver
-            q0, seed = kwargs.pop("q0", None), kwargs.pop("seed", None)
             try:
-                solver = self._ik_by_options[tuple(kwargs.items())]
+                solver = self._ik_by_options[tuple(options.items())]
             except (KeyError, TypeError):  # new or unhashable options: made and checked below
-                kwargs.update({k: v for k, v in (("q0", q0), ("seed", seed)) if v is not None})
+                pass
             else:
                 return solver.solve(Tep, q0, seed)
         if frame is not None or self.is_tree:
@@ -335,12 +336,10 @@ class Kinematics(FrameMethods):
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         fast = kwargs.keys() <= _FAST_KEYS and kwargs.get("method") != "analytic"
         if c_loop and fast and kwargs.get("backend", "c") == "c":
-            q0, seed = kwargs.pop("q0", None), kwargs.pop("seed", None)
-            kwargs.pop("backend", None)
-            solver = self._c_ik_solver(kwargs)
-            if solver is not None:
+            options.pop("backend", None)
+            solver = self._c_ik_solver(options)
+            if solver is not None:  # None: an unhashable option
                 return solver.solve(Tep, q0, seed)
-            kwargs.update({k: v for k, v in (("q0", q0), ("seed", seed)) if v is not None})  # unhashable
         if kwargs.get("method") == "analytic":
             options = {k: v for k, v in kwargs.items() if k != "method"}
             unknown = sorted(set(options) - {"q0", "weights", "joint_limits", "tol", "free_joint"})

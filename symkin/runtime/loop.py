@@ -196,20 +196,10 @@ def servo(
         if bar is not None:
             bar.close()
     M.append(float(kin.manipulability(q, axes=axes)))
-    Qa = np.array(Q)
+    Qa, QDa = np.array(Q), np.array(QD).reshape(len(QD), n)
     viol = int((((Qa[1:] < qlo) | (Qa[1:] > qhi)).any(axis=1)).sum())
-    return ServoResult(
-        q=Qa,
-        qd=np.array(QD).reshape(len(QD), n),
-        e=np.array(E),
-        manipulability=np.array(M, dtype=float),
-        info=tuple(infos),
-        step_time=np.array(times),
-        arrived=arrived,
-        limit_violations=viol,
-        dt=float(dt),
-        controller=name,
-    )
+    M = np.array(M, dtype=float)
+    return ServoResult(Qa, QDa, np.array(E), M, tuple(infos), np.array(times), arrived, viol, float(dt), name)
 
 
 def _controller(
@@ -226,11 +216,7 @@ def _controller(
             raise ParameterError(
                 "joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)"
             )
-        return (
-            servo_rrmc_step(kin, qd_max, axes),
-            "rrmc",
-            rrmc_controller(kin, qd_max, axes=axes),
-        )
+        return servo_rrmc_step(kin, qd_max, axes), "rrmc", rrmc_controller(kin, qd_max, axes=axes)
     if callable(controller):
         return controller, getattr(controller, "__name__", type(controller).__name__), None
     raise ParameterError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")

@@ -163,7 +163,7 @@ def _endpoints(q0: Any, qf: Any, vector: bool) -> tuple[np.ndarray, np.ndarray, 
 
 
 def _boundary(v: Any, n: int, what: str) -> np.ndarray:
-    """A boundary velocity: None (zero), a number for every axis, or (n,)."""
+    """A boundary velocity (or another value per axis): None (zero), a number for every axis, or (n,)."""
     if v is None:
         return np.zeros(n)
     a = _finite(v, what)
@@ -277,13 +277,7 @@ def trapezoidal(q0: Any, qf: Any, t: Any, V: Any = None) -> Trajectory:
     if V is None:
         v = 1.5 * d / T
     else:
-        Va = _finite(V, "V")
-        if Va.ndim == 0:
-            Va = np.full(a.size, float(Va))
-        elif Va.shape != a.shape:
-            raise ParameterError(
-                f"V must be a number or {a.size} numbers (one per axis), got shape {Va.shape}"
-            )
+        Va = _boundary(V, a.size, "V")
         v = np.abs(Va) * np.sign(d)
         for j in range(a.size):
             where = "" if scalar else f" (axis {j})"
@@ -397,7 +391,7 @@ def mstraj(
         raise ParameterError(f"tacc must be >= 0, got {acc_t.tolist()}")
     v_start, v_end = _boundary(qd0, n, "qd0"), _boundary(qdf, n, "qdf")
 
-    Q, QD, QDD = [start[None]], [v_start[None]], [np.zeros((1, n))]
+    pieces = [(start[None], v_start[None], np.zeros((1, n)))]  # (q, qd, qdd) of each piece
     q_prev, v_prev, last = start, v_start, start
     clock = 0
     segtime, arrive, slowest = np.zeros(ns), np.zeros(ns), np.full(ns, -1)
@@ -428,30 +422,20 @@ def mstraj(
         v = dq / tseg
         if kx > 0:  # the blend from the previous segment's velocity into this one's
             tau = np.arange(1, kx + 1) * dt
-            q, qd, qdd = _quintic(last, q_prev + ka2 * dt * v, v_prev, v, kx * dt, tau)
-            Q += [q]
-            QD += [qd]
-            QDD += [qdd]
+            pieces.append(_quintic(last, q_prev + ka2 * dt * v, v_prev, v, kx * dt, tau))
         clock += kx
         k = np.arange(ka2 + 1, round(tseg / dt) - ka2 + 1)  # the linear part
         s = (k * dt / tseg)[:, None]
-        Q += [(1 - s) * q_prev + s * q_next]
-        QD += [np.broadcast_to(v, (len(k), n))]
-        QDD += [np.zeros((len(k), n))]
-        last = Q[-1][-1]
+        pieces.append(((1 - s) * q_prev + s * q_next, np.broadcast_to(v, (len(k), n)), np.zeros((len(k), n))))
+        last = pieces[-1][0][-1]
         clock += len(k)
         q_prev, v_prev = q_next, v
     if ka2 > 0:  # the final blend to rest (or qdf) at the last via point
         tau = np.arange(1, ka2 + 1) * dt
-        q, qd, qdd = _quintic(last, q_prev, v_prev, v_end, ka2 * dt, tau)
-        Q += [q]
-        QD += [qd]
-        QDD += [qdd]
-    q_all = np.concatenate(Q)
+        pieces.append(_quintic(last, q_prev, v_prev, v_end, ka2 * dt, tau))
+    q_all, qd_all, qdd_all = (np.concatenate(p) for p in zip(*pieces))
     info = {"via": W.copy(), "segtime": segtime, "arrive": arrive, "slowest": slowest}
-    return Trajectory(
-        "mstraj", dt * np.arange(len(q_all)), q_all, np.concatenate(QD), np.concatenate(QDD), True, info
-    )
+    return Trajectory("mstraj", dt * np.arange(len(q_all)), q_all, qd_all, qdd_all, True, info)
 
 
 # -- Cartesian --------------------------------------------------------------------------------

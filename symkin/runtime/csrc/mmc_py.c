@@ -20,10 +20,6 @@
 #ifndef SYMKIN_MMC_MODULE
 #error "compile with -DSYMKIN_MMC_MODULE=<module name>"
 #endif
-#define SK_STR2_(x) #x
-#define SK_STR_(x) SK_STR2_(x)
-#define SK_CAT2_(a, b) a##b
-#define SK_CAT_(a, b) SK_CAT2_(a, b)
 
 #define NQ MMC_N
 #define NOUT (MMC_N + MMC_NINFO)
@@ -32,7 +28,6 @@ typedef int (*step_fn_)(symkin_mmc_ctrl *, const double *, double *);
 
 /* StepInfo and the texts of its codes, from setup() */
 static PyObject *info_type_ = NULL, *names_ = NULL; /* names: (statuses, methods, fallbacks) */
-static PyObject *fields_[8];
 static PyObject *slots_[8]; /* StepInfo's member descriptors when it has __slots__, else NULL */
 static const char *field_names_[8] = {"status",   "method",   "manipulability", "iterations",
                                       "fallback", "residual", "slack",          "scale"};
@@ -64,20 +59,7 @@ static PyObject *py_setup(PyObject *self, PyObject *args)
     names_ = PyTuple_Pack(3, st, me, fb);
     if (!names_)
         return NULL;
-    int fast = 1;
-    for (int i = 0; i < 8; ++i) {
-        if (!fields_[i] && !(fields_[i] = PyUnicode_InternFromString(field_names_[i])))
-            return NULL;
-        Py_CLEAR(slots_[i]);
-        PyObject *d = PyType_Check(type) ? PyDict_GetItem(((PyTypeObject *)type)->tp_dict, fields_[i]) : NULL;
-        if (d && Py_IS_TYPE(d, &PyMemberDescr_Type))
-            slots_[i] = Py_NewRef(d);
-        else
-            fast = 0;
-    }
-    if (!fast)
-        for (int i = 0; i < 8; ++i)
-            Py_CLEAR(slots_[i]);
+    member_slots_(type, field_names_, 8, slots_);
     Py_RETURN_NONE;
 }
 
@@ -93,7 +75,7 @@ static PyObject *code_name_(int which, double code)
 }
 
 /* StepInfo from the step's info values (status, method, m, iterations, fallback, residual, slack,
- * scale, polished), set as object.__setattr__ does (it is a frozen dataclass) */
+ * scale, polished) */
 static PyObject *make_info_(const double *info)
 {
     PyObject *v[8];
@@ -105,27 +87,7 @@ static PyObject *make_info_(const double *info)
     v[5] = PyFloat_FromDouble(info[5]);
     v[6] = PyFloat_FromDouble(info[6]);
     v[7] = PyFloat_FromDouble(info[7]);
-    PyTypeObject *t = (PyTypeObject *)info_type_;
-    PyObject *r = NULL;
-    for (int i = 0; i < 8; ++i)
-        if (!v[i])
-            goto done;
-    r = t->tp_alloc(t, 0);
-    for (int i = 0; r && i < 8; ++i)
-        if ((slots_[0] ? Py_TYPE(slots_[i])->tp_descr_set(slots_[i], r, v[i])
-                       : PyObject_GenericSetAttr(r, fields_[i], v[i])) < 0)
-            Py_CLEAR(r);
-done:
-    for (int i = 0; i < 8; ++i)
-        Py_XDECREF(v[i]);
-    return r;
-}
-
-/* arg as a C-contiguous native float64 array of shape (d0,), or NULL without an error set
- * (symkin_pyarray.h) */
-static PyArrayObject *as_vector_(PyObject *arg, npy_intp d0)
-{
-    return as_doubles_(arg, 1, d0, 0);
+    return new_record_(info_type_, slots_, v, 8);
 }
 
 static PyObject *new_array_(int nd, npy_intp d0, npy_intp d1, const double *data)
@@ -174,7 +136,7 @@ static PyObject *py_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs
         return NULL;
     }
     double in[NQ + 6], out[NOUT];
-    PyArrayObject *q = as_vector_(args[2], NQ), *nu = q ? as_vector_(args[3], 6) : NULL;
+    PyArrayObject *q = as_doubles_(args[2], 1, NQ, 0), *nu = q ? as_doubles_(args[3], 1, 6, 0) : NULL;
     if (!nu) {
         Py_XDECREF(q);
         Py_RETURN_NONE;
@@ -227,12 +189,9 @@ typedef struct {
 
 static void buf_free_(servo_buf_ *b)
 {
-    PyMem_Free(b->Q);
-    PyMem_Free(b->E);
-    PyMem_Free(b->M);
-    PyMem_Free(b->QD);
-    PyMem_Free(b->info);
-    PyMem_Free(b->times);
+    double *fields[6] = {b->Q, b->E, b->M, b->QD, b->info, b->times};
+    for (int i = 0; i < 6; ++i)
+        PyMem_Free(fields[i]);
     memset(b, 0, sizeof *b);
 }
 
@@ -284,8 +243,8 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
         Py_DECREF(T);
         Py_RETURN_NONE;
     }
-    PyArrayObject *q0 = as_vector_(args[3], NQ);
-    PyArrayObject *pa = q0 ? as_vector_(args[4], 13) : NULL;
+    PyArrayObject *q0 = as_doubles_(args[3], 1, NQ, 0);
+    PyArrayObject *pa = q0 ? as_doubles_(args[4], 1, 13, 0) : NULL;
     if (!pa) {
         Py_DECREF(T);
         Py_XDECREF(q0);
@@ -299,14 +258,15 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
     const int cap_mode = (int)par[8], axes = (int)par[11];
     const double max_steps = par[12];
     servo_buf_ b = {0};
+    PyObject *r = NULL;
     Py_ssize_t steps = 0;
     int arrived = 0;
     if (buf_grow_(&b, 64) < 0)
-        goto fail;
+        goto done;
     memcpy(b.Q, PyArray_DATA(q0), sizeof(double) * NQ);
     for (;;) {
         if (steps == b.cap && buf_grow_(&b, 2 * b.cap) < 0) /* room for one more step */
-            goto fail;
+            goto done;
         const double *q = b.Q + steps * NQ;
         double T_[16], *e = b.E + steps * 6, in[NQ + 6], out[NOUT], sum = 0.0;
         c->fk(q, T_);
@@ -334,7 +294,7 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
         if (rc) {
             PyErr_Format(PyExc_FloatingPointError, "servo: non-finite %s at step %zd", rc == 1 ? "q" : "nu",
                          steps);
-            goto fail;
+            goto done;
         }
         zero_unless_finite_(in + NQ, out);
         memcpy(b.QD + steps * NQ, out, sizeof(double) * NQ);
@@ -345,7 +305,7 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
             qn[k] = q[k] + dt * out[k];
         ++steps;
         if (steps % 4096 == 0 && PyErr_CheckSignals() < 0)
-            goto fail;
+            goto done;
     }
     b.M[steps] = c->manip(b.Q + steps * NQ, axes);
     long violations = 0;
@@ -360,31 +320,25 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
     {
         PyObject *infos = PyTuple_New(steps);
         if (!infos)
-            goto fail;
+            goto done;
         for (Py_ssize_t k = 0; k < steps; ++k) {
             PyObject *info = make_info_(b.info + k * MMC_NINFO);
             if (!info) {
                 Py_DECREF(infos);
-                goto fail;
+                goto done;
             }
             PyTuple_SET_ITEM(infos, k, info);
         }
-        PyObject *r = Py_BuildValue("(NNNNNNOl)", new_array_(2, steps + 1, NQ, b.Q),
-                                    new_array_(2, steps, NQ, b.QD), new_array_(2, steps + 1, 6, b.E),
-                                    new_array_(1, steps + 1, 0, b.M), infos, new_array_(1, steps, 0, b.times),
-                                    arrived ? Py_True : Py_False, violations);
-        buf_free_(&b);
-        Py_DECREF(T);
-        Py_DECREF(q0);
-        Py_DECREF(pa);
-        return r;
+        r = Py_BuildValue("(NNNNNNOl)", new_array_(2, steps + 1, NQ, b.Q), new_array_(2, steps, NQ, b.QD),
+                          new_array_(2, steps + 1, 6, b.E), new_array_(1, steps + 1, 0, b.M), infos,
+                          new_array_(1, steps, 0, b.times), arrived ? Py_True : Py_False, violations);
     }
-fail:
+done: /* the result, or NULL after an error */
     buf_free_(&b);
     Py_DECREF(T);
     Py_DECREF(q0);
     Py_DECREF(pa);
-    return NULL;
+    return r;
 }
 
 static PyMethodDef methods_[] = {

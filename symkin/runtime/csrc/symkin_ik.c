@@ -445,44 +445,17 @@ SYMKIN_INLINE int nr_gn_step(int n, const symkin_ik_config *c, const double *we,
     return lu_solve(n, A, dq);
 }
 
-static int nr_gn_step6(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
-    return nr_gn_step(6, c, we, J, e, dq);
-}
-
-static int nr_gn_step7(const symkin_ik_config *c, const double *we, const double *J, const double *e, double *dq) {
-    return nr_gn_step(7, c, we, J, e, dq);
-}
-
-static int nr_gn_step_any(const symkin_ik_config *c, const double *we, const double *J, const double *e,
-                          double *dq) {
-    return nr_gn_step(c->n, c, we, J, e, dq);
-}
-
-static int lm_step6(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
-                    double *dq) {
-    return lm_step(6, c, we, J, e, r2, dq);
-}
-
-static int lm_step7(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
-                    double *dq) {
-    return lm_step(7, c, we, J, e, r2, dq);
-}
-
-static int lm_step_any(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
-                       double *dq) {
-    return lm_step(c->n, c, we, J, e, r2, dq);
-}
-
+/* The step of eqs 45-51, with n = 6 and n = 7 as constants (their loops unrolled) besides any n. */
 static int ik_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
                    double *dq) {
     if (c->method == SYMKIN_IK_LM) {
-        if (c->n == 6) return lm_step6(c, we, J, e, r2, dq);
-        if (c->n == 7) return lm_step7(c, we, J, e, r2, dq);
-        return lm_step_any(c, we, J, e, r2, dq);
+        if (c->n == 6) return lm_step(6, c, we, J, e, r2, dq);
+        if (c->n == 7) return lm_step(7, c, we, J, e, r2, dq);
+        return lm_step(c->n, c, we, J, e, r2, dq);
     }
-    if (c->n == 6) return nr_gn_step6(c, we, J, e, dq);
-    if (c->n == 7) return nr_gn_step7(c, we, J, e, dq);
-    return nr_gn_step_any(c, we, J, e, dq);
+    if (c->n == 6) return nr_gn_step(6, c, we, J, e, dq);
+    if (c->n == 7) return nr_gn_step(7, c, we, J, e, dq);
+    return nr_gn_step(c->n, c, we, J, e, dq);
 }
 
 /* The weights for the steps: NULL when We = I (multiplying by 1 changes nothing). */
@@ -771,16 +744,6 @@ SYMKIN_INLINE void lm_step_lanes(int n, const symkin_ik_config *c, const double 
     }
 }
 
-static void lm_step_lanes6(const symkin_ik_config *c, const double *we, double J[][6 * NM], double e[][6],
-                           const double *r2, const int *need, double dq[][NM], int *failed) {
-    lm_step_lanes(6, c, we, J, e, r2, need, dq, failed);
-}
-
-static void lm_step_lanes7(const symkin_ik_config *c, const double *we, double J[][6 * NM], double e[][6],
-                           const double *r2, const int *need, double dq[][NM], int *failed) {
-    lm_step_lanes(7, c, we, J, e, r2, need, dq, failed);
-}
-
 /* T and J of the lanes that evaluate (state SEARCH_EVAL) by one fkjac_batch call over
  * SYMKIN_LANES configurations: the generated four-lane code gives each lane the numbers of fkjac,
  * so every target keeps its iterates. */
@@ -831,10 +794,10 @@ static void solve_batch_lanes(const symkin_ik_config *c, int64_t N, const double
             steps |= need[l];
         }
         if (!steps) continue;
-        if (c->method == SYMKIN_IK_LM && c->n == 6)
-            lm_step_lanes6(c, we, J, e, r2, need, dq, failed);
+        if (c->method == SYMKIN_IK_LM && c->n == 6) /* n as a constant, as in ik_step */
+            lm_step_lanes(6, c, we, J, e, r2, need, dq, failed);
         else if (c->method == SYMKIN_IK_LM && c->n == 7)
-            lm_step_lanes7(c, we, J, e, r2, need, dq, failed);
+            lm_step_lanes(7, c, we, J, e, r2, need, dq, failed);
         else
             for (int l = 0; l < SYMKIN_LANES; l++)
                 if (need[l]) failed[l] = ik_step(c, we, J[l], e[l], r2[l], dq[l]) != 0;

@@ -19,10 +19,6 @@
 #ifndef SYMKIN_IK_MODULE
 #error "compile with -DSYMKIN_IK_MODULE=<module name>"
 #endif
-#define SK_STR2_(x) #x
-#define SK_STR_(x) SK_STR2_(x)
-#define SK_CAT2_(a, b) a##b
-#define SK_CAT_(a, b) SK_CAT2_(a, b)
 
 #define SK_NFIELDS 6 /* IKResult: q, success, iterations, searches, residual, reason */
 static PyObject *result_type_ = NULL;
@@ -52,46 +48,9 @@ static PyObject *py_setup(PyObject *self, PyObject *args)
         return NULL;
     }
     Py_XDECREF(result_type_);
-    Py_INCREF(type);
-    result_type_ = type;
-    int fast = 1;
-    for (int i = 0; i < SK_NFIELDS; ++i) {
-        Py_CLEAR(slots_[i]);
-        PyObject *d = PyDict_GetItemString(((PyTypeObject *)type)->tp_dict, names[i]); /* borrowed */
-        if (d && Py_IS_TYPE(d, &PyMemberDescr_Type)) {
-            Py_INCREF(d);
-            slots_[i] = d;
-        } else {
-            fast = 0;
-        }
-    }
-    if (!fast)
-        for (int i = 0; i < SK_NFIELDS; ++i)
-            Py_CLEAR(slots_[i]);
+    result_type_ = Py_NewRef(type);
     seed_state_ = (uint64_t)entropy;
-    return PyBool_FromLong(fast);
-}
-
-/* IKResult(q, success, iterations, searches, residual, reason); steals the references of values */
-static PyObject *make_result_(PyObject **values)
-{
-    PyObject *r = NULL;
-    for (int i = 0; i < SK_NFIELDS; ++i)
-        if (!values[i])
-            goto done;
-    if (slots_[0]) {
-        PyTypeObject *t = (PyTypeObject *)result_type_;
-        r = t->tp_alloc(t, 0);
-        for (int i = 0; r && i < SK_NFIELDS; ++i)
-            if (Py_TYPE(slots_[i])->tp_descr_set(slots_[i], r, values[i]) < 0)
-                Py_CLEAR(r);
-    } else {
-        r = PyObject_Vectorcall(result_type_, values, SK_NFIELDS, NULL);
-    }
-done:
-    for (int i = 0; i < SK_NFIELDS; ++i)
-        Py_XDECREF(values[i]);
-    return r;
+    return PyBool_FromLong(member_slots_(type, names, SK_NFIELDS, slots_));
 }
 
 /* One target (see py_solve): an IKResult, None when the arguments need checking, or NULL with an
@@ -159,7 +118,7 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
     else
         values[5] = PyObject_CallFunction(reason, "diii", st.residual, (int)st.limit_rejects, (int)st.singular,
                                           (int)st.collision_rejects);
-    return make_result_(values);
+    return new_record_(result_type_, slots_, values, SK_NFIELDS);
 }
 
 /* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
