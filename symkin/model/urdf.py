@@ -205,11 +205,9 @@ def joint_origin(jel: ElementTree.Element, what: str) -> tuple[list[Fraction], l
     """``(xyz, rpy)`` of a joint's ``<origin>`` (zeros when absent), exact and within
     +-:data:`MAX_URDF_VALUE`; ``what`` names the joint in messages. Shared by both readers."""
     origin = jel.find("origin")
-    xyz = xml_numbers(
-        origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0", MAX_URDF_VALUE
-    )
-    rpy = xml_numbers(
-        origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0", MAX_URDF_VALUE
+    attrs = {} if origin is None else origin.attrib
+    xyz, rpy = (
+        xml_numbers(attrs.get(k), 3, f"{what} origin {k}", "0 0 0", MAX_URDF_VALUE) for k in ("xyz", "rpy")
     )
     return xyz, rpy
 
@@ -445,16 +443,17 @@ class URDFGraph:
         """Links below ``base`` without children, depth first."""
         return [j.child for j in self.depth_first(base) if not self.children[j.child]]
 
-    def path(self, base: str, link: str) -> list[URDFJoint]:
-        """The joints from ``base`` down to ``link``, in order."""
+    def path(self, base: str, link: str, what: str = "link") -> list[URDFJoint]:
+        """The joints from ``base`` down to ``link`` (``what`` in the message when it is not below it),
+        in order."""
         out: list[URDFJoint] = []
         ln = link
         while ln != base:
             j = self.parent_joint.get(ln)
             if j is None:
                 raise URDFError(
-                    f"{self.where}: link {link!r} is not below base_link {base!r} (walking up from "
-                    f"{link!r} reached the root {ln!r})"
+                    f"{self.where}: {what} {link!r} is not below base_link {base!r} (no path down to it: "
+                    f"walking up from {link!r} reached the root {ln!r})"
                 )
             out.append(j)
             ln = j.parent
@@ -578,21 +577,9 @@ def urdf_args(
         end_link = leaves[0]
     else:
         graph.check_link(end_link, "end_link")
-    path: list[URDFJoint] = []
-    ln = end_link
-    while ln != base_link:
-        if ln not in graph.parent_joint:
-            raise URDFError(
-                f"{where}: there is no path from base_link {base_link!r} down to end_link {end_link!r} "
-                f"(walking up from {end_link!r} reached the root {ln!r})"
-            )
-        path.append(graph.parent_joint[ln])
-        ln = graph.parent_joint[ln].parent
-    path.reverse()
-
     chain: list[ET] = []
     lower, upper, qd, names = [], [], [], []
-    for j in path:
+    for j in graph.path(base_link, end_link, "end_link"):
         what = f"joint {j.name!r}"
         if j.kind in ("floating", "planar"):
             raise URDFError(
@@ -761,10 +748,7 @@ def describe_urdf(path_or_xml: str | Path, base_link: str | None = None) -> list
     """The tree below ``base_link`` as rows (depth, link, joint, text) for ``symkin list-frames``:
     each link with the joint that leads to it (type, axis kind, mimic), depth first."""
     graph = read_graph(path_or_xml)
-    if base_link is None:
-        base_link = graph.root()
-    else:
-        graph.check_link(base_link, "base_link")
+    base_link = graph.base(base_link)
     depth = {base_link: 0}
     rows = [(0, base_link, "", "base")]
     movable = 0
