@@ -56,6 +56,7 @@ from xml.parsers import expat
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 from symkin.model.slots import Segment, Slot
+from symkin.model.transform import rpy_ets
 
 __all__ = [
     "URDFGraph",
@@ -542,11 +543,7 @@ def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> lis
     joint index ``slot``."""
     what = f"joint {j.name!r}"
     xyz, rpy = joint_origin(j.el, what)
-    out = translation_ets(xyz)
-    for axis, ang in ((Axis.Rz, rpy[2]), (Axis.Ry, rpy[1]), (Axis.Rx, rpy[0])):
-        c = snap_angle(ang, snap_tol)
-        if not c.is_zero:
-            out.append(ET(axis, const=c))
+    out = rpy_ets([Const(v) for v in xyz], [snap_angle(a, snap_tol) for a in rpy])
     if not j.movable:
         return out
     u = joint_axis(j.el, what, graph.where, snap_tol)
