@@ -297,8 +297,7 @@ def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
     if J.shape[-1] < J.shape[-2]:  # m = 0 for every q: so is its gradient
         return np.zeros((J.shape[0], J.shape[-1]))
     A = J @ np.swapaxes(J, 1, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular A
-        m = np.sqrt(np.maximum(np.nan_to_num(np.linalg.det(A), nan=0.0), 0.0))
+    m = manipulability_of(J)
     try:
         Ainv = np.linalg.inv(A)
         if not np.isfinite(Ainv).all():
@@ -548,10 +547,6 @@ def wrench_transform(T: Any) -> np.ndarray:
     3 and 8; Lynch and Park, Modern Robotics, 2017, sec 3.4, rows swapped). PoseError for a T
     that is not SE(3).
     """
-    A = _as_se3(T)
-    R, t = A[..., :3, :3], A[..., :3, 3]
-    X = np.zeros((*A.shape[:-2], 6, 6))
-    X[..., :3, :3] = R
-    X[..., 3:, 3:] = R
-    X[..., 3:, :3] = _skew(t) @ R
+    X = velocity_transform(T)
+    X[..., 3:, :3], X[..., :3, 3:] = X[..., :3, 3:], 0.0  # [t]x R moved to the lower left block
     return X

@@ -109,12 +109,7 @@ def atan2_const(sy: Fraction, sx: Fraction) -> Const:
 
 def translation_ets(p: Sequence[Const | Fraction]) -> list[ET]:
     """``tx(px) ty(py) tz(pz)`` without the zero terms."""
-    out = []
-    for axis, v in zip(_TRANS, p):
-        c = v if isinstance(v, Const) else Const(Fraction(v))
-        if not c.is_zero:
-            out.append(ET(axis, const=c))
-    return out
+    return rpy_ets([v if isinstance(v, Const) else Const(Fraction(v)) for v in p])
 
 
 def axis_ets(u: Sequence[Fraction], joint: int, revolute: bool) -> list[ET]:
