@@ -253,8 +253,7 @@ def _frame_rows(
     Jd = at("jacob0_dot")(Q, qd)
     fd_Jd = (at("jacob0")(Q + h * qd) - at("jacob0")(Q - h * qd)) / (2 * h)
     rows.append(CheckRow(b, "jacob0_dot", _rel(Jd, at("jacob0_dot", ref)(Q, qd)), _rel(fd_Jd, Jd)))
-    rows.append(CheckRow(b, "jacobs", _rel(at("jacobs")(Q), at("jacobs", ref)(Q)), None))
-    rows.append(CheckRow(b, "jacobb", _rel(at("jacobb")(Q), at("jacobb", ref)(Q)), None))
+    rows += [CheckRow(b, name, _rel(at(name)(Q), at(name, ref)(Q)), None) for name in ("jacobs", "jacobb")]
     c_ref = at("cond", ref)(Q)
     fine = c_ref < 1e6  # the condition number itself is ill-conditioned near a singularity
     if fine.any():

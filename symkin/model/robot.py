@@ -358,11 +358,7 @@ class Robot(FrameMethods):
         the k-th joint along the chain).
         """
         Q, single = self._batch(q)
-        if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            T = self._num.link_poses(Q)[:, k]
-        else:
-            T = self._num.fkine(Q)
+        T = self._num.fkine(Q) if frame is None else self._num.link_poses(Q)[:, self.frame_name(frame)]
         return T[0] if single else T
 
     def link_poses(self, q: Any) -> np.ndarray:
@@ -383,11 +379,10 @@ class Robot(FrameMethods):
         the k-th joint along the chain, as :meth:`link_poses`); columns of later joints are 0.
         """
         Q, single = self._batch(q)
-        if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            J = frame_jacobian(self._num.link_poses(Q), k, self._chain)
-        else:
+        if frame is None:
             J = self._num.jacob0(Q)
+        else:
+            J = frame_jacobian(self._num.link_poses(Q), self.frame_name(frame), self._chain)
         return J[0] if single else J
 
     def jacobe(self, q: Any, frame: int | None = None) -> np.ndarray:
@@ -397,20 +392,17 @@ class Robot(FrameMethods):
         the Jacobian of link frame k expressed in that frame.
         """
         Q, single = self._batch(q)
-        if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            Je = frame_jacobian(self._num.link_poses(Q), k, self._chain, ee=True)
+        if frame is None:
+            Je = rotate_rows(*self._num.fkine_jacob0(Q))
         else:
-            T, J = self._num.fkine_jacob0(Q)
-            Je = rotate_rows(T, J)
+            Je = frame_jacobian(self._num.link_poses(Q), self.frame_name(frame), self._chain, ee=True)
         return Je[0] if single else Je
 
     def fkine_jacob0(self, q: Any, frame: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Pose and base-frame Jacobian from one pass: ((4, 4), (6, n)) or batched."""
         Q, single = self._batch(q)
         if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            L = self._num.link_poses(Q)
+            k, L = self.frame_name(frame), self._num.link_poses(Q)
             T, J = L[:, k], frame_jacobian(L, k, self._chain)
         else:
             T, J = self._num.fkine_jacob0(Q)

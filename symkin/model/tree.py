@@ -429,10 +429,8 @@ class Tree(FrameMethods):
 
     def jacobe(self, q: Any, frame: Any = None) -> np.ndarray:
         """Jacobian of ``frame`` expressed in that frame (eq 16): ``blkdiag(R^T, R^T) J0``."""
-        f = self.frame_position(frame)
         Q, single = self._batch(q)
-        L, P = self._walk(Q)
-        J = rotate_rows(L[:, self.frame_segments[f]], self._jacobian(L, P, f))
+        J = rotate_rows(*self.fkine_jacob0(Q, frame))
         return J[0] if single else J
 
     def fkine_jacob0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
