@@ -533,6 +533,11 @@ def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
     return lo, hi, v if v > 0 else math.nan
 
 
+def _limit_lists(limits: Sequence[tuple[float, float, float]]) -> list[list[float]]:
+    """The lower limits, upper limits and velocities of :func:`joint_limits` rows, as three lists."""
+    return [[row[i] for row in limits] for i in range(3)]
+
+
 def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> list[ET]:
     """The exact ETs of joint ``j`` in a chain or a tree: its origin, then (movable) the joint as
     joint index ``slot``."""
@@ -570,7 +575,7 @@ def urdf_args(
     else:
         graph.check_link(end_link, "end_link")
     chain: list[ET] = []
-    lower, upper, qd, names = [], [], [], []
+    names, limits = [], []
     for j in graph.path(base_link, end_link, "end_link"):
         what = f"joint {j.name!r}"
         if j.kind in ("floating", "planar"):
@@ -585,22 +590,18 @@ def urdf_args(
                 "(each joint must be independent): choose another end_link or edit the URDF"
             )
         chain += joint_ets(graph, j, len(names), snap_tol)
-        if not j.movable:
-            continue
-        names.append(j.name)
-        lo, hi, v = joint_limits(j, where)
-        lower.append(lo)
-        upper.append(hi)
-        qd.append(v)
+        if j.movable:
+            names.append(j.name)
+            limits.append(joint_limits(j, where))
     if not names:
         raise URDFError(
             f"{where}: no revolute, continuous or prismatic joint between {base_link!r} and {end_link!r}"
         )
-    robot_name = name or graph.name
+    lower, upper, qd = _limit_lists(limits)
     qd_max = None if any(math.isnan(v) for v in qd) else qd
     return dict(
         ets=ETS(tuple(chain)),
-        name=robot_name,
+        name=name or graph.name,
         qlim=[lower, upper],
         joint_names=tuple(names),
         qd_max=qd_max,
@@ -698,12 +699,7 @@ def urdf_tree_args(
     rank = {j.name: i for r in graph.roots for i, j in enumerate(graph.depth_first(r))}
     names = sorted(independent, key=lambda n: rank[n])
     index = {n: i for i, n in enumerate(names)}
-    lower, upper, vel = [], [], []
-    for n in names:
-        lo, hi, v = joint_limits(graph.joints[n], where)
-        lower.append(lo)
-        upper.append(hi)
-        vel.append(v)
+    lower, upper, vel = _limit_lists([joint_limits(graph.joints[n], where) for n in names])
     segments: list[Segment] = []
     slots: list[Slot] = []
     seg_of: dict[str, int] = {}  # by child link
@@ -721,9 +717,8 @@ def urdf_tree_args(
             slots.append(
                 Slot(j.name, len(segments) - 1, index[src.name], m, c, j.kind != "prismatic", src.name)
             )
-    robot_name = name or graph.name
     return dict(
-        name=robot_name,
+        name=name or graph.name,
         base_link=base_link,
         segments=tuple(segments),
         slots=tuple(slots),
