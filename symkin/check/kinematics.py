@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.model.differential import rotate_rows
 from symkin.model.robot import Robot
 from symkin.runtime.kinematics import Kinematics
 
@@ -193,9 +194,7 @@ def _collision_rows(kin: Any, Q: np.ndarray) -> list[CheckRow]:
     verdicts = float(np.mean(kin.in_collision(Q, env) != (D < 0).any(axis=1)))
     h, fd = FD_STEP, 0.0
     for k, q in enumerate(Q):
-        for j in range(kin.n):
-            e = np.zeros(kin.n)
-            e[j] = h
+        for j, e in enumerate(np.eye(kin.n) * h):
             col = (kin.distances(q + e, env) - kin.distances(q - e, env)) / (2 * h)
             ok = D[k] > 1e-4
             if ok.any():
@@ -238,8 +237,7 @@ def _frame_rows(
     # J0 from FK: columns are (dp/dq, vee(dR/dq R^T)); Je the same in the end-effector frame
     fd_J0 = np.swapaxes(_vee_rate(*_shifted(at("fkine"), Q, h), T[:, None], h), 1, 2)
     rows.append(CheckRow(b, "jacob0", _rel(J0, at("jacob0", ref)(Q)), _rel(fd_J0, J0)))
-    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
-    fd_Je = np.concatenate((Rt @ fd_J0[:, :3], Rt @ fd_J0[:, 3:]), axis=1)
+    fd_Je = rotate_rows(T, fd_J0)
     rows.append(CheckRow(b, "jacobe", _rel(Je, at("jacobe", ref)(Q)), _rel(fd_Je, Je)))
     for name, jac in (("hessian0", at("jacob0")), ("hessiane", at("jacobe"))):
         H = at(name)(Q)
