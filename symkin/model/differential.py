@@ -367,8 +367,7 @@ def angle_axis(R: Any) -> np.ndarray:
     l = np.stack((R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]), -1)
     tr = np.trace(R, axis1=-2, axis2=-1)
     nl = np.sqrt((l * l).sum(-1))
-    diag = R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0
-    diag = diag.all(-1)
+    diag = (R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0).all(-1)
     theta = np.arctan2(nl, tr - 1.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         general = np.where((nl == 0)[..., None], 0.0, (theta / nl)[..., None] * l)
@@ -447,8 +446,7 @@ def _omega_to_rates(gamma: np.ndarray, representation: str) -> np.ndarray:
     if representation == "exp":
         # A^-1 = J_l(r)^-1, the inverse left Jacobian of SO(3): omega (base frame) = J_l(r) dr/dt, theta <= pi
         th = np.linalg.norm(gamma, axis=-1)
-        bad = np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL
-        bad &= th > 1.0
+        bad = (np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL) & (th > 1.0)
         _raise_singular(bad, representation, "rotation angle", th)
         with np.errstate(divide="ignore", invalid="ignore"):
             big = (1.0 - (th / 2.0) / np.tan(th / 2.0)) / th**2

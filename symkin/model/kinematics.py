@@ -207,8 +207,7 @@ class NumericKinematics:
         wb = Jw[:, :, None, :]
         X = cross(wb, Jv[:, None, :, :])  # (N, b, a, 3)
         Y = cross(wb, Jw[:, None, :, :])
-        b_idx, a_idx = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-        lower = (b_idx <= a_idx)[None, :, :, None]
+        lower = np.triu(np.ones((n, n), dtype=bool))[None, :, :, None]  # b <= a
         # b > a: (w_a x Jv_b ; 0) = -(Jv_b x w_a) -> use X transposed: X[:, a, b] = w_a x Jv_b
         Xt = np.swapaxes(X, 1, 2)
         Hv = np.where(lower, X, Xt)
