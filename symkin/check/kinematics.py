@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.model.differential import rotate_rows
 from symkin.model.robot import Robot
 from symkin.runtime.kinematics import Kinematics
 
@@ -193,9 +194,7 @@ def _collision_rows(kin: Any, Q: np.ndarray) -> list[CheckRow]:
     verdicts = float(np.mean(kin.in_collision(Q, env) != (D < 0).any(axis=1)))
     h, fd = FD_STEP, 0.0
     for k, q in enumerate(Q):
-        for j in range(kin.n):
-            e = np.zeros(kin.n)
-            e[j] = h
+        for j, e in enumerate(np.eye(kin.n) * h):
             col = (kin.distances(q + e, env) - kin.distances(q - e, env)) / (2 * h)
             ok = D[k] > 1e-4
             if ok.any():
@@ -238,8 +237,7 @@ def _frame_rows(
     # J0 from FK: columns are (dp/dq, vee(dR/dq R^T)); Je the same in the end-effector frame
     fd_J0 = np.swapaxes(_vee_rate(*_shifted(at("fkine"), Q, h), T[:, None], h), 1, 2)
     rows.append(CheckRow(b, "jacob0", _rel(J0, at("jacob0", ref)(Q)), _rel(fd_J0, J0)))
-    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
-    fd_Je = np.concatenate((Rt @ fd_J0[:, :3], Rt @ fd_J0[:, 3:]), axis=1)
+    fd_Je = rotate_rows(T, fd_J0)
     rows.append(CheckRow(b, "jacobe", _rel(Je, at("jacobe", ref)(Q)), _rel(fd_Je, Je)))
     for name, jac in (("hessian0", at("jacob0")), ("hessiane", at("jacobe"))):
         H = at(name)(Q)
@@ -253,8 +251,7 @@ def _frame_rows(
     Jd = at("jacob0_dot")(Q, qd)
     fd_Jd = (at("jacob0")(Q + h * qd) - at("jacob0")(Q - h * qd)) / (2 * h)
     rows.append(CheckRow(b, "jacob0_dot", _rel(Jd, at("jacob0_dot", ref)(Q, qd)), _rel(fd_Jd, Jd)))
-    rows.append(CheckRow(b, "jacobs", _rel(at("jacobs")(Q), at("jacobs", ref)(Q)), None))
-    rows.append(CheckRow(b, "jacobb", _rel(at("jacobb")(Q), at("jacobb", ref)(Q)), None))
+    rows += [CheckRow(b, name, _rel(at(name)(Q), at(name, ref)(Q)), None) for name in ("jacobs", "jacobb")]
     c_ref = at("cond", ref)(Q)
     fine = c_ref < 1e6  # the condition number itself is ill-conditioned near a singularity
     if fine.any():

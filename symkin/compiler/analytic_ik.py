@@ -14,9 +14,9 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from symkin.compiler.compile import Artifact, cache_key, cached_entry
+from symkin.compiler.compile import Artifact, cache_key, cached_entry, check_backend
 from symkin.core.cache import cache_dir
-from symkin.errors import NoAnalyticIKError, SymkinError
+from symkin.errors import NoAnalyticIKError
 from symkin.model.robot import Robot
 
 __all__ = ["analytic_key", "build_analytic", "generate_analytic", "analytic_refusal", "NoAnalyticIKError"]
@@ -35,8 +35,7 @@ def generate_analytic(
     from symkin.emit.analytic_ik import render_analytic
     from symkin.symbolic.analytic_ik import derive_analytic
 
-    if backend not in ("c", "numpy", "casadi"):
-        raise SymkinError(f"unknown backend {backend!r}: choose one of c, numpy, casadi")
+    check_backend(backend)
     try:
         plan = derive_analytic(robot)
     except NoAnalyticIKError as exc:

@@ -92,7 +92,10 @@ def check_strategy(strategy: str | None, model: Any = None) -> None:
         raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
 
 
-def _check_model(model: Any) -> None:
+def _check_model(model: Any, backend: str, strategy: str | None) -> None:
+    """The checks before a compile: ``backend``, ``strategy`` and ``model`` (a chain or tree with joints)."""
+    check_backend(backend)
+    check_strategy(strategy, model)
     if not isinstance(model, (Robot, Tree)):
         raise TypeError(
             f"compile() needs a Robot, a Tree, a built-in robot name or ETS text, not {type(model).__name__}"
@@ -197,9 +200,7 @@ def generate(
     ``precision="float"`` for single-precision code (no Python module; for microcontrollers);
     ``libm`` to call the C library's sin and cos instead of the inline kernels.
     """
-    check_backend(backend)
-    check_strategy(strategy, robot)
-    _check_model(robot)
+    _check_model(robot, backend, strategy)
     if (prefix is not None or precision != "double" or libm) and backend != "c":
         raise SymkinError(f"prefix, precision and libm apply to the C backend only, not {backend!r}")
     if prefix is not None:
@@ -359,8 +360,6 @@ def build(
     model: Model, backend: str = "c", cache: bool = True, strategy: str | None = None, key: str | None = None
 ) -> Artifact:
     """Generate (or take from the cache), build and load ``model``'s code on ``backend``."""
-    check_backend(backend)
-    check_strategy(strategy, model)
-    _check_model(model)
+    _check_model(model, backend, strategy)
     key = key or cache_key(model, backend, strategy)
     return load_artifact(cached_files(model, backend, key, cache, strategy), backend)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 import sys
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -112,18 +112,7 @@ def _tree_data(tree: Tree) -> dict[str, Any]:
                 "joints": joints,
             }
         )
-    slots = [
-        {
-            "name": s.name,
-            "segment": s.segment,
-            "joint": s.joint,
-            "multiplier": str(s.multiplier),
-            "offset": str(s.offset),
-            "revolute": s.revolute,
-            "mimics": s.mimics,
-        }
-        for s in tree.slots
-    ]
+    slots = [{**asdict(s), "multiplier": str(s.multiplier), "offset": str(s.offset)} for s in tree.slots]
     return {
         "name": tree.name,
         "base_link": tree.base_link,

@@ -32,11 +32,7 @@ def _line(link: str, a: Sequence[float], b: Sequence[float], count: int, r: floa
     """``count`` spheres of radius ``r`` evenly from ``a`` to ``b`` (both ends included)."""
     if count == 1:
         return [(link, *(0.5 * (p + q) for p, q in zip(a, b)), r)]  # type: ignore[list-item]
-    out = []
-    for i in range(count):
-        t = i / (count - 1)
-        out.append((link, *(p + t * (q - p) for p, q in zip(a, b)), r))
-    return out  # type: ignore[return-value]
+    return [(link, *(p + i / (count - 1) * (q - p) for p, q in zip(a, b)), r) for i in range(count)]  # type: ignore[return-value]
 
 
 # ---------------------------------------------------------------------------------------------

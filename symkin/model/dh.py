@@ -42,12 +42,12 @@ import numpy as np
 
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
+from symkin.model.transform import angle_const as float_angle
 
 __all__ = ["DHLink", "dh_args", "dh_file_args", "dh_table_args", "angle_const", "length_const", "robot_args"]
 
 Number: TypeAlias = float | int | Fraction | str | Const
 
-_PI_DENOMINATORS = range(1, 13)
 _SNAP_TOL = 1e-12
 
 
@@ -82,11 +82,7 @@ def angle_const(value: Any, what: str = "angle", tol: float = _SNAP_TOL) -> Cons
     """
     x = _real(value, what)
     if isinstance(x, float):
-        for m in _PI_DENOMINATORS:
-            k = round(x * m / math.pi)
-            if abs(x - k * math.pi / m) <= tol:
-                return Const.pi_times(Fraction(k, m))
-        return Const(Fraction(repr(x)))
+        return float_angle(x, tol)
     return x if isinstance(x, Const) else Const(x)
 
 

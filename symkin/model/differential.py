@@ -13,8 +13,8 @@ Maximising Manipulability During Resolved-Rate Motion Control (arXiv, 2020).
 For one configuration the batched helpers (``numpy.linalg.det`` and ``inv`` over a stack) cost
 more than the kinematics: :func:`manipulability_one` takes ``m = sqrt(det(Jr Jr^T))`` from the
 closed form for the 3 x 3 Gram matrix of ``axes="trans"``/``"rot"`` and, for the 6 x 6 one of
-``axes="all"``, from symmetric Gaussian elimination written out as straight-line code (the product
-of the pivots; a non-positive pivot means a singular Jacobian and m = 0).
+``axes="all"``, from symmetric Gaussian elimination on Python floats (the product of the pivots; a
+non-positive pivot means a singular Jacobian and m = 0).
 """
 
 from __future__ import annotations
@@ -297,8 +297,7 @@ def jacobm_of(J: np.ndarray, H: np.ndarray) -> np.ndarray:
     if J.shape[-1] < J.shape[-2]:  # m = 0 for every q: so is its gradient
         return np.zeros((J.shape[0], J.shape[-1]))
     A = J @ np.swapaxes(J, 1, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):  # LAPACK's LU of an exactly singular A
-        m = np.sqrt(np.maximum(np.nan_to_num(np.linalg.det(A), nan=0.0), 0.0))
+    m = manipulability_of(J)
     try:
         Ainv = np.linalg.inv(A)
         if not np.isfinite(Ainv).all():
@@ -336,83 +335,19 @@ def jacobm_one(Jr: np.ndarray, Hr: np.ndarray) -> np.ndarray:
 
 
 def _det6_spd(G: list[list[float]]) -> float:
-    """det G of a symmetric 6 x 6 G (nested lists) by Gaussian elimination on its upper triangle,
-    written out; 0 at a non-positive pivot (G singular or not positive definite)."""
-    a00, a01, a02, a03, a04, a05 = G[0]
-    _, a11, a12, a13, a14, a15 = G[1]
-    _, _, a22, a23, a24, a25 = G[2]
-    _, _, _, a33, a34, a35 = G[3]
-    _, _, _, _, a44, a45 = G[4]
-    _, _, _, _, _, a55 = G[5]
+    """det G of a symmetric 6 x 6 G (nested lists, overwritten) by Gaussian elimination on its upper
+    triangle; 0 at a non-positive pivot (G singular or not positive definite)."""
     det = 1.0
-    if not a00 > 0.0:
-        return 0.0
-    det *= a00
-    f = a01 / a00
-    a11 -= f * a01
-    a12 -= f * a02
-    a13 -= f * a03
-    a14 -= f * a04
-    a15 -= f * a05
-    f = a02 / a00
-    a22 -= f * a02
-    a23 -= f * a03
-    a24 -= f * a04
-    a25 -= f * a05
-    f = a03 / a00
-    a33 -= f * a03
-    a34 -= f * a04
-    a35 -= f * a05
-    f = a04 / a00
-    a44 -= f * a04
-    a45 -= f * a05
-    f = a05 / a00
-    a55 -= f * a05
-    if not a11 > 0.0:
-        return 0.0
-    det *= a11
-    f = a12 / a11
-    a22 -= f * a12
-    a23 -= f * a13
-    a24 -= f * a14
-    a25 -= f * a15
-    f = a13 / a11
-    a33 -= f * a13
-    a34 -= f * a14
-    a35 -= f * a15
-    f = a14 / a11
-    a44 -= f * a14
-    a45 -= f * a15
-    f = a15 / a11
-    a55 -= f * a15
-    if not a22 > 0.0:
-        return 0.0
-    det *= a22
-    f = a23 / a22
-    a33 -= f * a23
-    a34 -= f * a24
-    a35 -= f * a25
-    f = a24 / a22
-    a44 -= f * a24
-    a45 -= f * a25
-    f = a25 / a22
-    a55 -= f * a25
-    if not a33 > 0.0:
-        return 0.0
-    det *= a33
-    f = a34 / a33
-    a44 -= f * a34
-    a45 -= f * a35
-    f = a35 / a33
-    a55 -= f * a35
-    if not a44 > 0.0:
-        return 0.0
-    det *= a44
-    f = a45 / a44
-    a55 -= f * a45
-    if not a55 > 0.0:
-        return 0.0
-    det *= a55
+    for k, row in enumerate(G):
+        pivot = row[k]
+        if not pivot > 0.0:
+            return 0.0
+        det *= pivot
+        for i in range(k + 1, len(G)):  # eliminate column k from row i, upper triangle only
+            f = row[i] / pivot
+            below = G[i]
+            for j in range(i, len(G)):
+                below[j] -= f * row[j]
     return det
 
 
@@ -432,8 +367,7 @@ def angle_axis(R: Any) -> np.ndarray:
     l = np.stack((R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]), -1)
     tr = np.trace(R, axis1=-2, axis2=-1)
     nl = np.sqrt((l * l).sum(-1))
-    diag = R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0
-    diag = diag.all(-1)
+    diag = (R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0).all(-1)
     theta = np.arctan2(nl, tr - 1.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         general = np.where((nl == 0)[..., None], 0.0, (theta / nl)[..., None] * l)
@@ -512,8 +446,7 @@ def _omega_to_rates(gamma: np.ndarray, representation: str) -> np.ndarray:
     if representation == "exp":
         # A^-1 = J_l(r)^-1, the inverse left Jacobian of SO(3): omega (base frame) = J_l(r) dr/dt, theta <= pi
         th = np.linalg.norm(gamma, axis=-1)
-        bad = np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL
-        bad &= th > 1.0
+        bad = (np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL) & (th > 1.0)
         _raise_singular(bad, representation, "rotation angle", th)
         with np.errstate(divide="ignore", invalid="ignore"):
             big = (1.0 - (th / 2.0) / np.tan(th / 2.0)) / th**2
@@ -612,10 +545,6 @@ def wrench_transform(T: Any) -> np.ndarray:
     3 and 8; Lynch and Park, Modern Robotics, 2017, sec 3.4, rows swapped). PoseError for a T
     that is not SE(3).
     """
-    A = _as_se3(T)
-    R, t = A[..., :3, :3], A[..., :3, 3]
-    X = np.zeros((*A.shape[:-2], 6, 6))
-    X[..., :3, :3] = R
-    X[..., 3:, 3:] = R
-    X[..., 3:, :3] = _skew(t) @ R
+    X = velocity_transform(T)
+    X[..., 3:, :3], X[..., :3, 3:] = X[..., :3, 3:], 0.0  # [t]x R moved to the lower left block
     return X

@@ -167,15 +167,6 @@ _DBL_MAX = Fraction(sys.float_info.max)
 MAX_CONST_CHARS = 1000  # longest constant text accepted (a float's exact decimal has under 800)
 
 
-class _Lin:
-    """a + b*pi + atan2 during parsing (internal)."""
-
-    __slots__ = ("c",)
-
-    def __init__(self, c: Const) -> None:
-        self.c = c
-
-
 def _parse_const(arg: str, text: str, pos: int) -> Const:
     """Parse ``arg`` (found at ``pos`` of ``text``) into an exact Const.
 
@@ -209,6 +200,17 @@ def _parse_const(arg: str, text: str, pos: int) -> Const:
     return c
 
 
+def _is_call(node: ast.AST, name: str, nargs: int) -> bool:
+    """Whether ``node`` is the call ``name(...)`` with ``nargs`` positional arguments and no keywords."""
+    return (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Name)
+        and node.func.id == name
+        and len(node.args) == nargs
+        and not node.keywords
+    )
+
+
 def _evaluate(tree: ast.Expression, fail: Any) -> Const:
     """The exact value of a parsed constant expression (see :func:`_parse_const`)."""
 
@@ -217,13 +219,7 @@ def _evaluate(tree: ast.Expression, fail: Any) -> Const:
         while isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
             neg ^= isinstance(node.op, ast.USub)
             node = node.operand
-        if (
-            isinstance(node, ast.Call)
-            and isinstance(node.func, ast.Name)
-            and node.func.id == "sqrt"
-            and len(node.args) == 1
-            and not node.keywords
-        ):
+        if _is_call(node, "sqrt", 1):
             r = num(node.args[0])
             if r < 0:
                 raise fail("sqrt of a negative number")
@@ -271,13 +267,7 @@ def _evaluate(tree: ast.Expression, fail: Any) -> Const:
             if left.atan2 is not None and d != 1:
                 raise fail("atan2 may only be added, not scaled")
             return Const(left.a / d, left.b / d, left.atan2)
-        if (
-            isinstance(node, ast.Call)
-            and isinstance(node.func, ast.Name)
-            and node.func.id == "atan2"
-            and len(node.args) == 2
-            and not node.keywords
-        ):
+        if _is_call(node, "atan2", 2):
             y, x = surd_arg(node.args[0]), surd_arg(node.args[1])
             if y == 0 and x == 0:
                 raise fail("atan2(0, 0) is undefined")

@@ -15,6 +15,7 @@ import numpy as np
 
 from symkin.errors import FrameError
 from symkin.model.differential import FrameMethods, chain_hessian, rotate_rows
+from symkin.model.kinematics import cross
 
 __all__ = ["frame_index", "ChainTables", "frame_jacobian", "LinkFrames"]
 
@@ -68,12 +69,7 @@ def frame_jacobian(L: np.ndarray, k: int, chain: ChainTables, ee: bool = False) 
     w = columns[:, a, chain.axis[a], :] * chain.sign[a][:, None]  # (N, k+1, 3) signed joint axes
     r = L[:, k, None, :3, 3] - L[:, : k + 1, :3, 3]
     rev = chain.revolute[a][:, None]
-    cross = np.stack(
-        (w[..., 1] * r[..., 2] - w[..., 2] * r[..., 1],
-         w[..., 2] * r[..., 0] - w[..., 0] * r[..., 2],
-         w[..., 0] * r[..., 1] - w[..., 1] * r[..., 0]), axis=-1,
-    )  # fmt: skip
-    v = np.where(rev, cross, w)
+    v = np.where(rev, cross(w, r), w)
     o = np.where(rev, w, 0.0)
     if ee:
         R = L[:, k, :3, :3]

@@ -86,14 +86,12 @@ class NumericKinematics:
         chain = list(ets)
         P = np.eye(4)
         pos = [i for i, e in enumerate(chain) if e.is_joint]
+        for e in chain[: pos[0] if pos else len(chain)]:
+            P = P @ const_matrix(e.axis, e.const)
         if not pos:
-            for e in chain:
-                P = P @ const_matrix(e.axis, e.const)
             z = np.zeros((0, 3, 4, 4))
             e_ = np.zeros(0, dtype=int)
             return cls(0, P, z, e_.astype(bool), e_, e_, e_, z)
-        for e in chain[: pos[0]]:
-            P = P @ const_matrix(e.axis, e.const)
         K, Kj, rev, ax, sg, order = [], [], [], [], [], []
         for k, p in enumerate(pos):
             e = chain[p]
@@ -209,8 +207,7 @@ class NumericKinematics:
         wb = Jw[:, :, None, :]
         X = cross(wb, Jv[:, None, :, :])  # (N, b, a, 3)
         Y = cross(wb, Jw[:, None, :, :])
-        b_idx, a_idx = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-        lower = (b_idx <= a_idx)[None, :, :, None]
+        lower = np.triu(np.ones((n, n), dtype=bool))[None, :, :, None]  # b <= a
         # b > a: (w_a x Jv_b ; 0) = -(Jv_b x w_a) -> use X transposed: X[:, a, b] = w_a x Jv_b
         Xt = np.swapaxes(X, 1, 2)
         Hv = np.where(lower, X, Xt)

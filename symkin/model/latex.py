@@ -19,14 +19,7 @@ if TYPE_CHECKING:
 
 __all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex", "display_name"]
 
-AXIS_LATEX = {
-    "tx": "t_x",
-    "ty": "t_y",
-    "tz": "t_z",
-    "Rx": "R_x",
-    "Ry": "R_y",
-    "Rz": "R_z",
-}
+AXIS_LATEX = {name: f"{name[0]}_{name[1]}" for name in ("tx", "ty", "tz", "Rx", "Ry", "Rz")}  # tx: t_x
 _TEXT_ESCAPES = {
     "\\": r"\textbackslash{}",
     "{": r"\{",

@@ -166,13 +166,10 @@ def plot_robot(
     allp = np.concatenate(points)
     centre = (allp.max(axis=0) + allp.min(axis=0)) / 2
     half = max(float(np.ptp(allp, axis=0).max()) / 2, 0.1 * span) * 1.1
-    ax.set_xlim(centre[0] - half, centre[0] + half)
-    ax.set_ylim(centre[1] - half, centre[1] + half)
-    ax.set_zlim(centre[2] - half, centre[2] + half)
+    for axis, c in zip("xyz", centre):
+        getattr(ax, f"set_{axis}lim")(c - half, c + half)
+        getattr(ax, f"set_{axis}label")(f"{axis} (m)")
     ax.set_box_aspect((1, 1, 1))
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_zlabel("z (m)")
     ax.view_init(elev=elev, azim=azim)
     ax.set_title(heading, fontsize=9)
     if path is not None:

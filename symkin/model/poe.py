@@ -26,9 +26,10 @@ import numpy as np
 
 from symkin.core.arrays import as_config
 from symkin.errors import RobotError
-from symkin.model.dh import angle_const, robot_args
-from symkin.model.ets import ET, Axis, Const
+from symkin.model.dh import robot_args
+from symkin.model.ets import ET, Const
 from symkin.model.kinematics import NumericKinematics
+from symkin.model.transform import zyx_ets
 from symkin.model.urdf import axis_ets, snap_atan2, translation_ets
 
 __all__ = ["poe_args", "poe_of"]
@@ -72,22 +73,6 @@ def _matrix(a: Any, shape: tuple[int, ...] | None, what: str, tol: float) -> lis
     return [
         [_exact(x, f"{what}[{i}, {j}]", tol) for j, x in enumerate(row)] for i, row in enumerate(arr.tolist())
     ]
-
-
-def _rotation_ets(R: np.ndarray, tol: float) -> list[ET]:
-    """``Rz(a) Ry(b) Rx(c)`` (ZYX Euler) equal to the rotation ``R``; zero angles dropped."""
-    cb = math.hypot(R[0, 0], R[1, 0])
-    b = math.atan2(-R[2, 0], cb)
-    if cb > 1e-9:
-        a, c = math.atan2(R[1, 0], R[0, 0]), math.atan2(R[2, 1], R[2, 2])
-    else:  # gimbal lock: b = +-pi/2, put the whole rotation about z into a
-        a, c = math.atan2(-R[0, 1], R[1, 1]), 0.0
-    out = []
-    for axis, ang in ((Axis.Rz, a), (Axis.Ry, b), (Axis.Rx, c)):
-        k = angle_const(ang, "angle of M", tol)
-        if not k.is_zero:
-            out.append(ET(axis, const=k))
-    return out
 
 
 def _merge(a: Const, b: Const) -> Const | None:
@@ -207,7 +192,7 @@ def poe_args(
     if arr.ndim != 2 or arr.shape[1] != 6 or arr.shape[0] == 0:
         raise RobotError(f"screws must have shape (n, 6), rows (omega, v), got shape {arr.shape}")
     Sx = _matrix(arr, None, "screws", tol)
-    home = translation_ets([Mx[0][3], Mx[1][3], Mx[2][3]]) + _rotation_ets(R, tol)
+    home = translation_ets([Mx[0][3], Mx[1][3], Mx[2][3]]) + zyx_ets(R, tol)
     joints: list[ET] = []
     for j, S in enumerate(Sx):
         joints += _screw_ets(S, j, tol)

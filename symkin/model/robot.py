@@ -55,6 +55,15 @@ def _product(ets: Sequence[Any]) -> np.ndarray:
     return T
 
 
+def _not_ets(value: Any, expected: str, rtb_call: str) -> RobotError:
+    """The error for an ``ets`` that is not ``expected``, pointing a roboticstoolbox one to ``rtb_call``."""
+    from symkin.model.transform import type_name
+
+    rtb = "roboticstoolbox" in type_name(value)
+    hint = f"; for a roboticstoolbox robot or ETS use {rtb_call}" if rtb else ""
+    return RobotError(f"ets must be {expected}, not {type_name(value)}{hint}")
+
+
 def _readonly(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=float)
     a.setflags(write=False)
@@ -89,14 +98,7 @@ class Robot(FrameMethods):
 
     def __post_init__(self) -> None:
         if not isinstance(self.ets, ETS):
-            from symkin.model.transform import type_name
-
-            hint = (
-                "; for a roboticstoolbox robot or ETS use Robot.from_rtb"
-                if "roboticstoolbox" in type_name(self.ets)
-                else ""
-            )
-            raise RobotError(f"ets must be a symkin.ETS, not {type_name(self.ets)}{hint}")
+            raise _not_ets(self.ets, "a symkin.ETS", "Robot.from_rtb")
         n = self.ets.n
         if not isinstance(self.name, str) or not self.name:
             raise RobotError("a robot name must be a non-empty string")
@@ -156,14 +158,7 @@ class Robot(FrameMethods):
         if isinstance(ets, str):
             ets = ETS.parse(ets)
         elif not isinstance(ets, ETS):
-            from symkin.model.transform import type_name
-
-            hint = (
-                "; for a roboticstoolbox robot or ETS use Robot.from_rtb(...)"
-                if "roboticstoolbox" in type_name(ets)
-                else ""
-            )
-            raise RobotError(f"ets must be a symkin.ETS or ETS text, not {type_name(ets)}{hint}")
+            raise _not_ets(ets, "a symkin.ETS or ETS text", "Robot.from_rtb(...)")
         return cls(ets, name=name or "robot", qlim=qlim, **kwargs)
 
     @classmethod
@@ -216,27 +211,26 @@ class Robot(FrameMethods):
         :mod:`symkin.model.transform`) or a roboticstoolbox ETS without joints. The new robot's
         ``fkine(q)`` is ``self.fkine(q) @ T_tool``; limits, names and configurations are kept.
         """
-        from symkin.model.transform import constant_ets
-
-        extra = constant_ets(tool, "tool")
-        note = f"tool {ETS(tuple(extra))}" if extra else ""
-        moves = {"ee": np.linalg.inv(_product(extra))}  # the hand's shapes stay on the hand
-        return self._with(self.ets.ets + tuple(extra), note, name, moves)
+        return self._with("tool", tool, name)
 
     def with_base(self, base: Any, name: str | None = None) -> Robot:
         """A new robot with the constant transform ``base`` placed before the first link, so its
         ``fkine(q)`` is ``T_base @ self.fkine(q)``; ``base`` in any form :meth:`with_tool` takes."""
+        return self._with("base", base, name)
+
+    def _with(self, where: str, transform: Any, name: str | None) -> Robot:
+        """The robot with the constant ``transform`` as its ``where`` ("tool" or "base")."""
         from symkin.model.transform import constant_ets
 
-        extra = constant_ets(base, "base")
-        note = f"base {ETS(tuple(extra))}" if extra else ""
-        moves = {"base": _product(extra)}  # the base's shapes move with the arm
-        return self._with(tuple(extra) + self.ets.ets, note, name, moves)
-
-    def _with(self, ets: tuple, note: str, name: str | None, moves: dict[str, np.ndarray]) -> Robot:
-        if not note and name is None:
+        extra = tuple(constant_ets(transform, where))
+        if not extra and name is None:
             return self
+        if where == "tool":  # the hand's shapes stay on the hand
+            ets, moves = self.ets.ets + extra, {"ee": np.linalg.inv(_product(extra))}
+        else:  # the base's shapes move with the arm
+            ets, moves = extra + self.ets.ets, {"base": _product(extra)}
         configs = {k: v for k, v in self.configs.items() if k != "qz"}
+        note = f"{where} {ETS(extra)}" if extra else ""
         source = "; ".join(s for s in (self.source, note) if s)
         return Robot(
             ETS(ets),
@@ -321,9 +315,6 @@ class Robot(FrameMethods):
     def _chain(self) -> ChainTables:
         return ChainTables.of(self.ets)
 
-    def _batch(self, q: Any) -> tuple[np.ndarray, bool]:
-        return as_batch(q, self.n, self.name)
-
     def check_q(self, q: Any, limits: bool = False) -> np.ndarray:
         """``q`` as a float array after validation; with ``limits``, reject values outside qlim."""
         Q, single = self._batch(q)
@@ -367,11 +358,7 @@ class Robot(FrameMethods):
         the k-th joint along the chain).
         """
         Q, single = self._batch(q)
-        if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            T = self._num.link_poses(Q)[:, k]
-        else:
-            T = self._num.fkine(Q)
+        T = self._num.fkine(Q) if frame is None else self._num.link_poses(Q)[:, self.frame_name(frame)]
         return T[0] if single else T
 
     def link_poses(self, q: Any) -> np.ndarray:
@@ -392,11 +379,10 @@ class Robot(FrameMethods):
         the k-th joint along the chain, as :meth:`link_poses`); columns of later joints are 0.
         """
         Q, single = self._batch(q)
-        if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            J = frame_jacobian(self._num.link_poses(Q), k, self._chain)
-        else:
+        if frame is None:
             J = self._num.jacob0(Q)
+        else:
+            J = frame_jacobian(self._num.link_poses(Q), self.frame_name(frame), self._chain)
         return J[0] if single else J
 
     def jacobe(self, q: Any, frame: int | None = None) -> np.ndarray:
@@ -406,20 +392,17 @@ class Robot(FrameMethods):
         the Jacobian of link frame k expressed in that frame.
         """
         Q, single = self._batch(q)
-        if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            Je = frame_jacobian(self._num.link_poses(Q), k, self._chain, ee=True)
+        if frame is None:
+            Je = rotate_rows(*self._num.fkine_jacob0(Q))
         else:
-            T, J = self._num.fkine_jacob0(Q)
-            Je = rotate_rows(T, J)
+            Je = frame_jacobian(self._num.link_poses(Q), self.frame_name(frame), self._chain, ee=True)
         return Je[0] if single else Je
 
     def fkine_jacob0(self, q: Any, frame: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Pose and base-frame Jacobian from one pass: ((4, 4), (6, n)) or batched."""
         Q, single = self._batch(q)
         if frame is not None:
-            k = frame_index(frame, self.n, self.name)
-            L = self._num.link_poses(Q)
+            k, L = self.frame_name(frame), self._num.link_poses(Q)
             T, J = L[:, k], frame_jacobian(L, k, self._chain)
         else:
             T, J = self._num.fkine_jacob0(Q)

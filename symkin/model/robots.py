@@ -10,7 +10,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Callable
-from functools import cache
+from functools import cache, partial
 from pathlib import Path
 
 import numpy as np
@@ -80,16 +80,12 @@ def _ur(
     )
 
 
-def _ur3() -> Robot:
-    return _ur("ur3", 0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819, [180, 180, 180, 360, 360, 360])
-
-
-def _ur5() -> Robot:
-    return _ur("ur5", 0.089159, -0.425, -0.39225, 0.10915, 0.09465, 0.0823, [180] * 6)
-
-
-def _ur10() -> Robot:
-    return _ur("ur10", 0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922, [120, 120, 180, 180, 180, 180])
+#: The arguments of :func:`_ur` after the name: d1, a2, a3, d4, d5, d6 (m), joint speeds (deg/s).
+_UR = {
+    "ur3": (0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819, [180, 180, 180, 360, 360, 360]),
+    "ur5": (0.089159, -0.425, -0.39225, 0.10915, 0.09465, 0.0823, [180] * 6),
+    "ur10": (0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922, [120, 120, 180, 180, 180, 180]),
+}
 
 
 def _puma560() -> Robot:
@@ -138,12 +134,11 @@ def _lbr_iiwa(name: str, model: str, d1: float, d3: float, speeds: list[float]) 
     )
 
 
-def _lbr_iiwa7() -> Robot:
-    return _lbr_iiwa("lbr_iiwa7", "LBR iiwa 7 R800", 0.34, 0.4, [98, 98, 100, 130, 140, 180, 180])
-
-
-def _lbr_iiwa14() -> Robot:
-    return _lbr_iiwa("lbr_iiwa14", "LBR iiwa 14 R820", 0.36, 0.42, [85, 85, 100, 75, 130, 135, 135])
+#: The arguments of :func:`_lbr_iiwa` after the name: model, d1, d3 (m), joint speeds (deg/s).
+_LBR_IIWA = {
+    "lbr_iiwa7": ("LBR iiwa 7 R800", 0.34, 0.4, [98, 98, 100, 130, 140, 180, 180]),
+    "lbr_iiwa14": ("LBR iiwa 14 R820", 0.36, 0.42, [85, 85, 100, 75, 130, 135, 135]),
+}
 
 
 #: Sawyer: the robot's joint value q_j against the angle theta_j of the DH table,
@@ -254,12 +249,9 @@ def _stanford() -> Robot:
 
 _BUILDERS: dict[str, Callable[[], Robot]] = {
     "panda": _panda,
-    "ur3": _ur3,
-    "ur5": _ur5,
-    "ur10": _ur10,
+    **{name: partial(_ur, name, *args) for name, args in _UR.items()},
     "puma560": _puma560,
-    "lbr_iiwa7": _lbr_iiwa7,
-    "lbr_iiwa14": _lbr_iiwa14,
+    **{name: partial(_lbr_iiwa, name, *args) for name, args in _LBR_IIWA.items()},
     "sawyer": _sawyer,
     "planar2": lambda: _planar(2),
     "planar3": lambda: _planar(3),

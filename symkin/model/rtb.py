@@ -116,15 +116,10 @@ def _from_robot(robot: Any, name: str | None, start: Any, end: Any, snap_tol: fl
         chain = chain + se3_ets(getattr(tool, "A", tool), "the robot's tool", snap_tol)
     order = sorted(j for j, _ in info)  # roboticstoolbox joint index of symkin joint 0..n-1
     n = len(order)
-    qlim_all = np.asarray(robot.qlim, dtype=float) if robot.qlim is not None else None
-    qlim = None
-    if (
-        qlim_all is not None
-        and qlim_all.ndim == 2
-        and qlim_all.shape[0] == 2
-        and qlim_all.shape[1] > max(order)
-    ):
-        qlim = _limits(qlim_all[:, order], n)
+    try:  # the robot's limits of these joints, if it has a usable (2, >= n) table
+        qlim = _limits(np.asarray(robot.qlim, dtype=float)[:, order], n)
+    except IndexError:  # no table, or fewer columns than joints
+        qlim = None
     configs = {}
     for key, value in dict(getattr(robot, "configs", None) or {}).items():
         v = np.asarray(value, dtype=float).ravel()

@@ -32,6 +32,7 @@ __all__ = [
     "constant_ets",
     "se3_ets",
     "rpy_ets",
+    "zyx_ets",
     "rpy_matrix",
     "length_const",
     "type_name",
@@ -89,18 +90,19 @@ def _rotation_ets(R: np.ndarray, tol: float) -> list[ET]:
             j, k = ((1, 2), (2, 0), (0, 1))[i]
             c = angle_const(math.atan2(R[k, j], R[j, j]), tol)
             return [] if c.is_zero else [ET(axis, const=c)]
+    return zyx_ets(R, tol)
+
+
+def zyx_ets(R: np.ndarray, tol: float = SNAP_TOL) -> list[ET]:
+    """``Rz(yaw) Ry(pitch) Rx(roll)`` (ZYX Euler angles, each snapped by :func:`angle_const`) equal
+    to the rotation ``R``; zero angles dropped."""
     cp = math.hypot(R[0, 0], R[1, 0])
     pitch = math.atan2(-R[2, 0], cp)
     if cp > 1e-9:
         yaw, roll = math.atan2(R[1, 0], R[0, 0]), math.atan2(R[2, 1], R[2, 2])
     else:  # gimbal lock: pitch = +-pi/2, the rotation about z goes into yaw
         yaw, roll = math.atan2(-R[0, 1], R[1, 1]), 0.0
-    out = []
-    for axis, angle in ((Axis.Rz, yaw), (Axis.Ry, pitch), (Axis.Rx, roll)):
-        c = angle_const(angle, tol)
-        if not c.is_zero:
-            out.append(ET(axis, const=c))
-    return out
+    return rpy_ets((), [angle_const(a, tol) for a in (roll, pitch, yaw)])
 
 
 def se3_ets(T: Any, what: str = "transform", snap_tol: float = SNAP_TOL) -> list[ET]:
@@ -122,10 +124,7 @@ def se3_ets(T: Any, what: str = "transform", snap_tol: float = SNAP_TOL) -> list
     R = M[:3, :3]
     if np.abs(R.T @ R - np.eye(3)).max() > _ORTHO_TOL or abs(np.linalg.det(R) - 1) > _ORTHO_TOL:
         raise RobotError(f"{what}: the upper-left 3x3 block is not a rotation matrix (orthonormal, det +1)")
-    out = [
-        ET(a, const=c) for a, c in zip(_TRANS, (length_const(float(v)) for v in M[:3, 3])) if not c.is_zero
-    ]
-    return out + _rotation_ets(R, snap_tol)
+    return rpy_ets([length_const(float(v)) for v in M[:3, 3]]) + _rotation_ets(R, snap_tol)
 
 
 def rpy_ets(xyz: Sequence[Const], rpy: Sequence[Const] = ()) -> list[ET]:

@@ -361,10 +361,7 @@ class Tree(FrameMethods):
         revolute = np.array([k not in prismatic for k in range(self.n)], dtype=bool)
         return sample_q(self.qlim, revolute, N, seed)
 
-    def within_limits(self, q: Any) -> np.ndarray | bool:
-        Q, single = self._batch(q)
-        ok = ((self.qlim[0] <= Q) & (self.qlim[1] >= Q)).all(axis=-1)
-        return bool(ok[0]) if single else ok
+    within_limits = Robot.within_limits
 
     # -- numeric reference kinematics ------------------------------------------------------
     @cached_property
@@ -428,17 +425,12 @@ class Tree(FrameMethods):
     def jacob0(self, q: Any, frame: Any = None) -> np.ndarray:
         """Base-frame Jacobian of ``frame`` (module docstring): (6, n) or (N, 6, n), rows (v, omega);
         zero columns for the joints off its path."""
-        f = self.frame_position(frame)
-        Q, single = self._batch(q)
-        J = self._jacobian(*self._walk(Q), f)
-        return J[0] if single else J
+        return self.fkine_jacob0(q, frame)[1]
 
     def jacobe(self, q: Any, frame: Any = None) -> np.ndarray:
         """Jacobian of ``frame`` expressed in that frame (eq 16): ``blkdiag(R^T, R^T) J0``."""
-        f = self.frame_position(frame)
         Q, single = self._batch(q)
-        L, P = self._walk(Q)
-        J = rotate_rows(L[:, self.frame_segments[f]], self._jacobian(L, P, f))
+        J = rotate_rows(*self.fkine_jacob0(Q, frame))
         return J[0] if single else J
 
     def fkine_jacob0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
@@ -457,10 +449,7 @@ class Tree(FrameMethods):
 
     def jacob0_all(self, q: Any) -> np.ndarray:
         """Base-frame Jacobians of every frame: (F, 6, n) or (N, F, 6, n)."""
-        Q, single = self._batch(q)
-        L, P = self._walk(Q)
-        J = np.stack([self._jacobian(L, P, f) for f in range(len(self.frames))], axis=1)
-        return J[0] if single else J
+        return self.fkine_jacob0_all(q)[1]
 
     def fkine_jacob0_all(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`fkine_all` and :meth:`jacob0_all` from one pass."""

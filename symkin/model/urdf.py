@@ -56,6 +56,7 @@ from xml.parsers import expat
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 from symkin.model.slots import Segment, Slot
+from symkin.model.transform import rpy_ets
 
 __all__ = [
     "URDFGraph",
@@ -108,12 +109,7 @@ def atan2_const(sy: Fraction, sx: Fraction) -> Const:
 
 def translation_ets(p: Sequence[Const | Fraction]) -> list[ET]:
     """``tx(px) ty(py) tz(pz)`` without the zero terms."""
-    out = []
-    for axis, v in zip(_TRANS, p):
-        c = v if isinstance(v, Const) else Const(Fraction(v))
-        if not c.is_zero:
-            out.append(ET(axis, const=c))
-    return out
+    return rpy_ets([v if isinstance(v, Const) else Const(Fraction(v)) for v in p])
 
 
 def axis_ets(u: Sequence[Fraction], joint: int, revolute: bool) -> list[ET]:
@@ -205,11 +201,9 @@ def joint_origin(jel: ElementTree.Element, what: str) -> tuple[list[Fraction], l
     """``(xyz, rpy)`` of a joint's ``<origin>`` (zeros when absent), exact and within
     +-:data:`MAX_URDF_VALUE`; ``what`` names the joint in messages. Shared by both readers."""
     origin = jel.find("origin")
-    xyz = xml_numbers(
-        origin.get("xyz") if origin is not None else None, 3, f"{what} origin xyz", "0 0 0", MAX_URDF_VALUE
-    )
-    rpy = xml_numbers(
-        origin.get("rpy") if origin is not None else None, 3, f"{what} origin rpy", "0 0 0", MAX_URDF_VALUE
+    attrs = {} if origin is None else origin.attrib
+    xyz, rpy = (
+        xml_numbers(attrs.get(k), 3, f"{what} origin {k}", "0 0 0", MAX_URDF_VALUE) for k in ("xyz", "rpy")
     )
     return xyz, rpy
 
@@ -445,16 +439,17 @@ class URDFGraph:
         """Links below ``base`` without children, depth first."""
         return [j.child for j in self.depth_first(base) if not self.children[j.child]]
 
-    def path(self, base: str, link: str) -> list[URDFJoint]:
-        """The joints from ``base`` down to ``link``, in order."""
+    def path(self, base: str, link: str, what: str = "link") -> list[URDFJoint]:
+        """The joints from ``base`` down to ``link`` (``what`` in the message when it is not below it),
+        in order."""
         out: list[URDFJoint] = []
         ln = link
         while ln != base:
             j = self.parent_joint.get(ln)
             if j is None:
                 raise URDFError(
-                    f"{self.where}: link {link!r} is not below base_link {base!r} (walking up from "
-                    f"{link!r} reached the root {ln!r})"
+                    f"{self.where}: {what} {link!r} is not below base_link {base!r} (no path down to it: "
+                    f"walking up from {link!r} reached the root {ln!r})"
                 )
             out.append(j)
             ln = j.parent
@@ -538,16 +533,17 @@ def joint_limits(j: URDFJoint, where: str) -> tuple[float, float, float]:
     return lo, hi, v if v > 0 else math.nan
 
 
+def _limit_lists(limits: Sequence[tuple[float, float, float]]) -> list[list[float]]:
+    """The lower limits, upper limits and velocities of :func:`joint_limits` rows, as three lists."""
+    return [[row[i] for row in limits] for i in range(3)]
+
+
 def joint_ets(graph: URDFGraph, j: URDFJoint, slot: int, snap_tol: float) -> list[ET]:
     """The exact ETs of joint ``j`` in a chain or a tree: its origin, then (movable) the joint as
     joint index ``slot``."""
     what = f"joint {j.name!r}"
     xyz, rpy = joint_origin(j.el, what)
-    out = translation_ets(xyz)
-    for axis, ang in ((Axis.Rz, rpy[2]), (Axis.Ry, rpy[1]), (Axis.Rx, rpy[0])):
-        c = snap_angle(ang, snap_tol)
-        if not c.is_zero:
-            out.append(ET(axis, const=c))
+    out = rpy_ets([Const(v) for v in xyz], [snap_angle(a, snap_tol) for a in rpy])
     if not j.movable:
         return out
     u = joint_axis(j.el, what, graph.where, snap_tol)
@@ -578,21 +574,9 @@ def urdf_args(
         end_link = leaves[0]
     else:
         graph.check_link(end_link, "end_link")
-    path: list[URDFJoint] = []
-    ln = end_link
-    while ln != base_link:
-        if ln not in graph.parent_joint:
-            raise URDFError(
-                f"{where}: there is no path from base_link {base_link!r} down to end_link {end_link!r} "
-                f"(walking up from {end_link!r} reached the root {ln!r})"
-            )
-        path.append(graph.parent_joint[ln])
-        ln = graph.parent_joint[ln].parent
-    path.reverse()
-
     chain: list[ET] = []
-    lower, upper, qd, names = [], [], [], []
-    for j in path:
+    names, limits = [], []
+    for j in graph.path(base_link, end_link, "end_link"):
         what = f"joint {j.name!r}"
         if j.kind in ("floating", "planar"):
             raise URDFError(
@@ -606,22 +590,18 @@ def urdf_args(
                 "(each joint must be independent): choose another end_link or edit the URDF"
             )
         chain += joint_ets(graph, j, len(names), snap_tol)
-        if not j.movable:
-            continue
-        names.append(j.name)
-        lo, hi, v = joint_limits(j, where)
-        lower.append(lo)
-        upper.append(hi)
-        qd.append(v)
+        if j.movable:
+            names.append(j.name)
+            limits.append(joint_limits(j, where))
     if not names:
         raise URDFError(
             f"{where}: no revolute, continuous or prismatic joint between {base_link!r} and {end_link!r}"
         )
-    robot_name = name or graph.name
+    lower, upper, qd = _limit_lists(limits)
     qd_max = None if any(math.isnan(v) for v in qd) else qd
     return dict(
         ets=ETS(tuple(chain)),
-        name=robot_name,
+        name=name or graph.name,
         qlim=[lower, upper],
         joint_names=tuple(names),
         qd_max=qd_max,
@@ -719,12 +699,7 @@ def urdf_tree_args(
     rank = {j.name: i for r in graph.roots for i, j in enumerate(graph.depth_first(r))}
     names = sorted(independent, key=lambda n: rank[n])
     index = {n: i for i, n in enumerate(names)}
-    lower, upper, vel = [], [], []
-    for n in names:
-        lo, hi, v = joint_limits(graph.joints[n], where)
-        lower.append(lo)
-        upper.append(hi)
-        vel.append(v)
+    lower, upper, vel = _limit_lists([joint_limits(graph.joints[n], where) for n in names])
     segments: list[Segment] = []
     slots: list[Slot] = []
     seg_of: dict[str, int] = {}  # by child link
@@ -742,9 +717,8 @@ def urdf_tree_args(
             slots.append(
                 Slot(j.name, len(segments) - 1, index[src.name], m, c, j.kind != "prismatic", src.name)
             )
-    robot_name = name or graph.name
     return dict(
-        name=robot_name,
+        name=name or graph.name,
         base_link=base_link,
         segments=tuple(segments),
         slots=tuple(slots),
@@ -761,10 +735,7 @@ def describe_urdf(path_or_xml: str | Path, base_link: str | None = None) -> list
     """The tree below ``base_link`` as rows (depth, link, joint, text) for ``symkin list-frames``:
     each link with the joint that leads to it (type, axis kind, mimic), depth first."""
     graph = read_graph(path_or_xml)
-    if base_link is None:
-        base_link = graph.root()
-    else:
-        graph.check_link(base_link, "base_link")
+    base_link = graph.base(base_link)
     depth = {base_link: 0}
     rows = [(0, base_link, "", "base")]
     movable = 0
