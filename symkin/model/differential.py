@@ -13,8 +13,8 @@ Maximising Manipulability During Resolved-Rate Motion Control (arXiv, 2020).
 For one configuration the batched helpers (``numpy.linalg.det`` and ``inv`` over a stack) cost
 more than the kinematics: :func:`manipulability_one` takes ``m = sqrt(det(Jr Jr^T))`` from the
 closed form for the 3 x 3 Gram matrix of ``axes="trans"``/``"rot"`` and, for the 6 x 6 one of
-``axes="all"``, from symmetric Gaussian elimination on Python floats (the product of the pivots; a
-non-positive pivot means a singular Jacobian and m = 0).
+``axes="all"``, from symmetric Gaussian elimination written out as straight-line code (the product
+of the pivots; a non-positive pivot means a singular Jacobian and m = 0).
 """
 
 from __future__ import annotations
@@ -335,19 +335,83 @@ def jacobm_one(Jr: np.ndarray, Hr: np.ndarray) -> np.ndarray:
 
 
 def _det6_spd(G: list[list[float]]) -> float:
-    """det G of a symmetric 6 x 6 G (nested lists, overwritten) by Gaussian elimination on its upper
-    triangle; 0 at a non-positive pivot (G singular or not positive definite)."""
+    """det G of a symmetric 6 x 6 G (nested lists) by Gaussian elimination on its upper triangle,
+    written out; 0 at a non-positive pivot (G singular or not positive definite)."""
+    a00, a01, a02, a03, a04, a05 = G[0]
+    _, a11, a12, a13, a14, a15 = G[1]
+    _, _, a22, a23, a24, a25 = G[2]
+    _, _, _, a33, a34, a35 = G[3]
+    _, _, _, _, a44, a45 = G[4]
+    _, _, _, _, _, a55 = G[5]
     det = 1.0
-    for k, row in enumerate(G):
-        pivot = row[k]
-        if not pivot > 0.0:
-            return 0.0
-        det *= pivot
-        for i in range(k + 1, len(G)):  # eliminate column k from row i, upper triangle only
-            f = row[i] / pivot
-            below = G[i]
-            for j in range(i, len(G)):
-                below[j] -= f * row[j]
+    if not a00 > 0.0:
+        return 0.0
+    det *= a00
+    f = a01 / a00
+    a11 -= f * a01
+    a12 -= f * a02
+    a13 -= f * a03
+    a14 -= f * a04
+    a15 -= f * a05
+    f = a02 / a00
+    a22 -= f * a02
+    a23 -= f * a03
+    a24 -= f * a04
+    a25 -= f * a05
+    f = a03 / a00
+    a33 -= f * a03
+    a34 -= f * a04
+    a35 -= f * a05
+    f = a04 / a00
+    a44 -= f * a04
+    a45 -= f * a05
+    f = a05 / a00
+    a55 -= f * a05
+    if not a11 > 0.0:
+        return 0.0
+    det *= a11
+    f = a12 / a11
+    a22 -= f * a12
+    a23 -= f * a13
+    a24 -= f * a14
+    a25 -= f * a15
+    f = a13 / a11
+    a33 -= f * a13
+    a34 -= f * a14
+    a35 -= f * a15
+    f = a14 / a11
+    a44 -= f * a14
+    a45 -= f * a15
+    f = a15 / a11
+    a55 -= f * a15
+    if not a22 > 0.0:
+        return 0.0
+    det *= a22
+    f = a23 / a22
+    a33 -= f * a23
+    a34 -= f * a24
+    a35 -= f * a25
+    f = a24 / a22
+    a44 -= f * a24
+    a45 -= f * a25
+    f = a25 / a22
+    a55 -= f * a25
+    if not a33 > 0.0:
+        return 0.0
+    det *= a33
+    f = a34 / a33
+    a44 -= f * a34
+    a45 -= f * a35
+    f = a35 / a33
+    a55 -= f * a35
+    if not a44 > 0.0:
+        return 0.0
+    det *= a44
+    f = a45 / a44
+    a55 -= f * a45
+    if not a55 > 0.0:
+        return 0.0
+    det *= a55
     return det
 
 
