@@ -256,10 +256,19 @@ def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, A
 
 
 #: the cells of a row of format_table1 after the method, in order (the paper's without "infeasible")
-_CELLS = {"searches_allowed": "{}", "iterations_allowed": "{}", "mean_iterations": "{:.2f}",
-          "median_iterations": "{:.0f}", "infeasible": "{}", "infeasible_pct": "{:.2f}%",
-          "mean_searches": "{:.2f}", "max_searches": "{:.0f}", "us_per_solve": "{:.1f}",
-          "us_per_iteration": "{:.3f}", "max_error": "{:.1e}"}  # fmt: skip
+_CELLS = {
+    "searches_allowed": "{}",
+    "iterations_allowed": "{}",
+    "mean_iterations": "{:.2f}",
+    "median_iterations": "{:.0f}",
+    "infeasible": "{}",
+    "infeasible_pct": "{:.2f}%",
+    "mean_searches": "{:.2f}",
+    "max_searches": "{:.0f}",
+    "us_per_solve": "{:.1f}",
+    "us_per_iteration": "{:.3f}",
+    "max_error": "{:.1e}",
+}
 
 
 def format_table1(result: dict[str, Any]) -> str:

@@ -180,9 +180,16 @@ def _task_rows(axes: Any) -> Any:
 
 
 def _rrmc(
-    kin: Any, q: Any, nu: Any, qd_max: Any, damping: float, singular_tol: float, axes: str, qd_null: Any,
+    kin: Any,
+    q: Any,
+    nu: Any,
+    qd_max: Any,
+    damping: float,
+    singular_tol: float,
+    axes: str,
+    qd_null: Any,
     task: Any,
-) -> tuple[np.ndarray, StepInfo]:  # fmt: skip
+) -> tuple[np.ndarray, StepInfo]:
     """:func:`rrmc` solving the rows ``task`` of J0 (a slice or indices) and reporting the
     manipulability of ``axes``; the servo loop solves all six rows whatever its ``axes``."""
     full = isinstance(task, slice) and task == _AXES["all"]

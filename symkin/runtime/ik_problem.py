@@ -64,9 +64,13 @@ class IKResult:
         if not self.batch:
             raise TypeError("a single IKResult cannot be indexed; it is not a batch")
         return IKResult(
-            self.q[i], bool(self.success[i]), int(self.iterations[i]), int(self.searches[i]),
-            float(self.residual[i]), self.reason[i],
-        )  # fmt: skip
+            self.q[i],
+            bool(self.success[i]),
+            int(self.iterations[i]),
+            int(self.searches[i]),
+            float(self.residual[i]),
+            self.reason[i],
+        )
 
 
 def stacked(rows: list[tuple], n: int) -> IKResult:
@@ -74,16 +78,24 @@ def stacked(rows: list[tuple], n: int) -> IKResult:
     rows: arrays with a leading (N,) axis ((0, n) and (0,) for no targets)."""
     q, success, iterations, searches, residual, reason = zip(*rows, strict=True) if rows else ((),) * 6
     return IKResult(
-        np.array(q, dtype=float).reshape(len(rows), n), np.array(success, dtype=bool),
-        np.array(iterations, dtype=int), np.array(searches, dtype=int), np.array(residual, dtype=float),
+        np.array(q, dtype=float).reshape(len(rows), n),
+        np.array(success, dtype=bool),
+        np.array(iterations, dtype=int),
+        np.array(searches, dtype=int),
+        np.array(residual, dtype=float),
         tuple(reason),
-    )  # fmt: skip
+    )
 
 
 def failure_reason(
-    success: bool, residual: float, limit_rejects: int, singular: int, ilimit: int, slimit: int,
+    success: bool,
+    residual: float,
+    limit_rejects: int,
+    singular: int,
+    ilimit: int,
+    slimit: int,
     collision_rejects: int = 0,
-) -> str:  # fmt: skip
+) -> str:
     """The ``reason`` text of a result (shared by the NumPy and C solvers)."""
     if success:
         return "success"

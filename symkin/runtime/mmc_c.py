@@ -258,8 +258,18 @@ def mmc_extension(n: int, settings: dict[str, Any]) -> Any:
 
 
 # the int32 fields of symkin_mmc_ctrl after its kinematics (mmc.h)
-_CTRL_FLAGS = ("axes", "closed_form", "active_set", "joint_limits", "bounded", "polish", "has_dt", "fresh",
-               "polished", "pad_")  # fmt: skip
+_CTRL_FLAGS = (
+    "axes",
+    "closed_form",
+    "active_set",
+    "joint_limits",
+    "bounded",
+    "polish",
+    "has_dt",
+    "fresh",
+    "polished",
+    "pad_",
+)
 
 
 @lru_cache(maxsize=16)

@@ -229,9 +229,16 @@ def active_of_osqp(x: np.ndarray, y: np.ndarray, lower: np.ndarray, upper: np.nd
 
 
 def active_set_solve(
-    J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, lam: float,
-    slack_weight: float | None, act: np.ndarray, max_iter: int | None = None,
-) -> tuple[np.ndarray, int] | None:  # fmt: skip
+    J: np.ndarray,
+    Jm: np.ndarray,
+    nu: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    lam: float,
+    slack_weight: float | None,
+    act: np.ndarray,
+    max_iter: int | None = None,
+) -> tuple[np.ndarray, int] | None:
     """Solve the MMC QP from the active-set guess ``act`` (see :func:`active_of`).
 
     Returns ``(x, solves)`` with ``x = qd`` (n,) or ``(qd, s)`` (n + 6,), or None when the set did
@@ -293,10 +300,19 @@ def _chol_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def active_set_rows_solve(
-    J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, lam: float,
-    slack_weight: float, Jd: np.ndarray, d_lower: np.ndarray, act: np.ndarray, rows: np.ndarray,
+    J: np.ndarray,
+    Jm: np.ndarray,
+    nu: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    lam: float,
+    slack_weight: float,
+    Jd: np.ndarray,
+    d_lower: np.ndarray,
+    act: np.ndarray,
+    rows: np.ndarray,
     max_iter: int | None = None,
-) -> tuple[np.ndarray, int, np.ndarray, np.ndarray] | None:  # fmt: skip
+) -> tuple[np.ndarray, int, np.ndarray, np.ndarray] | None:
     """Solve the MMC QP with the slack and the distance rows ``Jd qd >= d_lower`` (MMC(collision=...))
     from the active-set guesses ``act`` (bounds, see :func:`active_of`) and ``rows`` (bool, see
     :func:`active_rows_of`).
