@@ -60,6 +60,7 @@ __all__ = [
 
 _MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
 _HALF_PI = sp.pi / 2
+_ZERO3 = [sp.Integer(0)] * 3
 
 
 def _is_cheap(e: sp.Expr) -> bool:
@@ -73,17 +74,19 @@ class Program:
     """Straight-line code under construction: ``lines`` of (symbol, expression), in order.
 
     :meth:`let` names an expression (or returns the name it already has) and keeps numbers,
-    symbols and negated symbols as they are.
+    symbols and negated symbols as they are. With ``inline`` nothing is named: every value stays
+    one expression (the expanded derivation, :mod:`symkin.symbolic.kinematics`, walks so).
     """
 
-    def __init__(self, prefix: str = "t") -> None:
+    def __init__(self, prefix: str = "t", inline: bool = False) -> None:
         self.prefix = prefix
+        self.inline = inline
         self.lines: list[tuple[sp.Symbol, sp.Expr]] = []
         self._names: dict[sp.Expr, sp.Symbol] = {}
 
     def let(self, expr: sp.Expr | int) -> sp.Expr:
         expr = sp.sympify(expr)
-        if _is_cheap(expr):
+        if self.inline or _is_cheap(expr):
             return expr
         name = self._names.get(expr)
         if name is not None:
@@ -222,6 +225,25 @@ def _matrix(cols: list[list[sp.Expr]], p: list[sp.Expr]) -> sp.Matrix:
     return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], p[r]] for r in range(3)] + [[0, 0, 0, 1]])
 
 
+def _jacobian_column(
+    P: Program, revolute: bool, w: list[sp.Expr], p: list[sp.Expr], pe: Sequence[sp.Expr]
+) -> tuple[list[sp.Expr], list[sp.Expr]]:
+    """(v, omega) of a joint with signed axis ``w`` through ``p`` for the point ``pe`` (eqs 31-34):
+    ``(w x (pe - p); w)`` when revolute, ``(w; 0)`` when prismatic."""
+    if not revolute:
+        return w, _ZERO3
+    return _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])), w
+
+
+def _base_jacobian(P: Program, frames: Iterable[Frame], pe: Sequence[sp.Expr], n: int) -> sp.Matrix:
+    """The base-frame Jacobian (6 x n) of the point ``pe`` from the joints' ``frames``."""
+    J0 = sp.zeros(6, n)
+    for j, revolute, w, p in frames:
+        v, o = _jacobian_column(P, revolute, w, p, pe)
+        J0[:3, j], J0[3:, j] = sp.Matrix(v), sp.Matrix(o)
+    return J0
+
+
 @dataclass(frozen=True, eq=False)
 class KinematicProgram:
     """The kinematics of a chain as a straight-line program.
@@ -282,20 +304,14 @@ def derive_program(
         marks.append((f"link {len(links) - 1}", len(P.lines)))
     cols, pe = W.pose()
     marks.append(("T", len(P.lines)))
-    zero3 = [sp.Integer(0)] * 3
-    J0 = sp.zeros(6, n)
-    for j, revolute, w, p in frames:
-        v = _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])) if revolute else w
-        J0[:3, j] = sp.Matrix(v)
-        J0[3:, j] = sp.Matrix(w if revolute else zero3)
+    J0 = _base_jacobian(P, frames, pe, n)
     marks.append(("J0", len(P.lines)))
     # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
     inv = list(walk_joints(_Walk(P), reversed(elements), qs, constant, -1))
     Je = sp.zeros(6, n)
     for j, revolute, u, p in inv:
         v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'
-        Je[:3, j] = sp.Matrix(v)
-        Je[3:, j] = sp.Matrix(u if revolute else zero3)
+        Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(u if revolute else _ZERO3)
     marks.append(("Je", len(P.lines)))
     order = tuple(f[0] for f in frames)
     H0 = He = None
@@ -320,9 +336,10 @@ def derive_program(
 
 
 def _hessians(
-    P: Program, J0: sp.Matrix, Je: sp.Matrix, order: tuple[int, ...]
+    P: Program, J0: sp.Matrix, Je: sp.Matrix | None, order: Sequence[int]
 ) -> tuple[tuple[sp.Matrix, ...], tuple[sp.Matrix, ...]]:
-    """Both Hessians by the rules of :class:`HessianLoop`, each cross product a named value."""
+    """Both Hessians (He only with ``Je``, else zeros) by the rules of :class:`HessianLoop`, each
+    cross product a value of ``P``; ``order`` is the joint index of each joint along the chain."""
     n = len(order)
     H0 = [sp.zeros(6, n) for _ in range(n)]
     He = [sp.zeros(6, n) for _ in range(n)]
@@ -339,6 +356,8 @@ def _hessians(
             H0[b][3:, a] = sp.Matrix(_cross(P, wb, wa))
             if a != b:
                 H0[a][:3, b] = sp.Matrix(x)
+        if Je is None:
+            continue
         vb, wb = col(Je, b)
         for a in order[:kb]:
             va, wa = col(Je, a)
@@ -485,7 +504,6 @@ def derive_tree_program(
         walks.append(W)
         links.append(_matrix(*W.pose()))  # dead code in the kernels unless a frame needs it
         marks.append((f"segment {k}", len(P.lines)))
-    zero3 = [sp.Integer(0)] * 3
     Ts, J0s, Jes = [], [], []
     for f, frame in enumerate(tree.frames):  # type: ignore[attr-defined]
         cols, pe = walks[tree.frame_segments[f]].pose()  # type: ignore[attr-defined]
@@ -493,8 +511,7 @@ def derive_tree_program(
         for k in tree.path_slots(frame):  # type: ignore[attr-defined]
             s = slots[k]
             w, p = joint_axes[k]
-            v = _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])) if s.revolute else w
-            o = w if s.revolute else zero3
+            v, o = _jacobian_column(P, s.revolute, w, p, pe)
             m = sp.Rational(s.multiplier)
             if m != 1:
                 v, o = P.vec([m * x for x in v]), P.vec([m * x for x in o])

@@ -36,7 +36,8 @@ from sympy.polys.matrices import DomainMatrix
 from symkin.errors import SymkinError, check_choice
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops, tree_size
-from symkin.symbolic.kinematics import _cross, _walk, const_to_sympy, joint_symbols
+from symkin.symbolic.kinematics import _walk, const_to_sympy, joint_symbols
+from symkin.symbolic.program import _jacobian_column
 
 __all__ = ["SingularFactor", "SingularFactors", "singular_factors", "AXES", "MAX_TERMS"]
 
@@ -213,8 +214,8 @@ def _shortest_jacobian(
         for name, p in points:
             J = sp.zeros(len(rows), n)
             for j, (_, revolute, w, o) in frames.items():
-                v = _cross(w, [a - b for a, b in zip(p, o)]) if revolute else list(w)
-                col = [*v, *(w if revolute else [0, 0, 0])]
+                v, omega = _jacobian_column(pose.P, revolute, w, o, p)
+                col = [*v, *omega]
                 for i, r in enumerate(rows):
                     J[i, j] = col[r]
             ops = tree_size(list(J), sizes)
