@@ -39,7 +39,7 @@ from typing import Any
 import sympy as sp
 
 from symkin.model.ets import ET, ETS, Const
-from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, count_ops, floatify
+from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, _flat, _total, floatify
 from symkin.symbolic.fold import Fixed, fold_constants
 
 __all__ = [
@@ -388,22 +388,11 @@ def program_code(
     hessians: tuple[HessianLoop, ...] = (),
 ) -> CSEResult:
     """The lines of ``kp`` that ``outputs`` need, as straight-line code (see :class:`CSEResult`)."""
-    flat: dict[str, tuple[tuple[int, ...], tuple[sp.Expr, ...]]] = {}
     memo: dict[sp.Basic, sp.Expr] = {}
-    for name, value in outputs.items():
-        mats = value if isinstance(value, tuple) else (value,)
-        shape = mats[0].shape if not isinstance(value, tuple) else (len(mats), *mats[0].shape)
-        flat[name] = (tuple(shape), tuple(floatify(x, memo) for m in mats for x in m))
-    keep = needed_lines(kp.lines, [e for _, exprs in flat.values() for e in exprs])
-    lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in keep)
-    counts = OpCounts()
-    for _, e in lines:
-        counts = counts + count_ops(e)
-    for _, exprs in flat.values():
-        for e in exprs:
-            counts = counts + count_ops(e)
-    for h in hessians:
-        counts = counts + h.counts
+    flat = _flat(outputs, memo)
+    entries = [e for _, exprs in flat.values() for e in exprs]
+    lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in needed_lines(kp.lines, entries))
+    counts = sum((h.counts for h in hessians), _total([e for _, e in lines] + entries))
     return CSEResult(lines, flat, counts, kp.q, scratch, hessians, "program")
 
 
