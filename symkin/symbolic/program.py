@@ -32,7 +32,7 @@ and time grow linearly with the number of segments plus, per frame, the joints o
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -382,8 +382,8 @@ def needed_lines(lines: Sequence[tuple[sp.Symbol, sp.Expr]], roots: list[sp.Expr
 
 
 def program_code(
-    kp: KinematicProgram,
-    outputs: dict[str, sp.Matrix | tuple[sp.Matrix, ...]],
+    kp: KinematicProgram | TreeProgram,
+    outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...]],
     scratch: tuple[str, ...] = (),
     hessians: tuple[HessianLoop, ...] = (),
 ) -> CSEResult:
