@@ -4,11 +4,13 @@ LaTeX document writer."""
 
 from __future__ import annotations
 
+import itertools
+import operator
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Literal
+from typing import Any
 
 import sympy as sp
 
@@ -28,14 +30,12 @@ __all__ = [
     "Printer",
     "constants",
     "et_matrix",
+    "generator",
+    "products",
     "latex_document",
     "mp_function",
     "ops_of",
 ]
-
-Fmt = Literal["markdown", "latex"]
-Form = Literal["auto", "expanded", "program"]
-
 
 #: The parts of a written derivation, in order (``derive --sections fk,jacobian``). The heading and
 #: the joint table are always written. In the program form a part that uses named quantities also
@@ -203,22 +203,22 @@ def constants(ets: ETS, symbolic: bool) -> Constants:
     return Constants(ETS(tuple(out)), tuple(eta), names, values, factor, placeholders)
 
 
-def et_matrix(axis: Axis, eta: sp.Expr) -> sp.Matrix:
-    """The elementary transform of Fig. 2."""
-    M = sp.eye(4)
+def et_matrix(axis: Axis, eta: Any, lib: Any = sp) -> Any:
+    """The elementary transform of Fig. 2 (a sympy matrix, or with ``lib=mpmath`` an mpmath one)."""
+    M = lib.eye(4)
     i = axis.index
     if axis.is_rotation:
         j, k = MIX[i]
-        M[j, j] = M[k, k] = sp.cos(eta)
-        M[j, k], M[k, j] = -sp.sin(eta), sp.sin(eta)
+        M[j, j] = M[k, k] = lib.cos(eta)
+        M[j, k], M[k, j] = -lib.sin(eta), lib.sin(eta)
     else:
         M[i, 3] = eta
     return M
 
 
-def generator(axis: Axis) -> sp.Matrix:
-    """[G] of eqs 20-25: dE/deta = [G] E."""
-    G = sp.zeros(4, 4)
+def generator(axis: Axis, lib: Any = sp) -> Any:
+    """[G] of eqs 20-25: dE/deta = [G] E (a sympy matrix, or with ``lib=mpmath`` an mpmath one)."""
+    G = lib.zeros(4, 4)
     i = axis.index
     if axis.is_rotation:
         j, k = MIX[i]
@@ -226,6 +226,14 @@ def generator(axis: Axis) -> sp.Matrix:
     else:
         G[i, 3] = 1
     return G
+
+
+def products(E: Sequence[Any], eye: Any) -> tuple[list[Any], list[Any]]:
+    """The prefix products ``E_1 ... E_k`` (k = 0 .. M, the first ``eye``) and the suffix products
+    ``E_k ... E_M`` (k = 1 .. M + 1, the last ``eye``) of the factors ``E``."""
+    prefix = list(itertools.accumulate(E, operator.mul, initial=eye))
+    suffix = list(itertools.accumulate(reversed(E), lambda acc, M: M * acc, initial=eye))
+    return prefix, suffix[::-1]
 
 
 class Printer:

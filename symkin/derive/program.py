@@ -19,7 +19,7 @@ from typing import Any
 import mpmath
 import sympy as sp
 
-from symkin.model.ets import ETS, Axis
+from symkin.model.ets import ETS
 from symkin.model.latex import ets_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.program import KinematicProgram, derive_program
@@ -69,35 +69,12 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> Any:
 # Checks at random points, 30 digits
 
 
-def _et_mp(axis: Axis, value: Any) -> Any:
-    M = mpmath.eye(4)
-    i = axis.index
-    if axis.is_rotation:
-        j, k = {0: (1, 2), 1: (2, 0), 2: (0, 1)}[i]
-        c, s = mpmath.cos(value), mpmath.sin(value)
-        M[j, j], M[j, k], M[k, j], M[k, k] = c, -s, s, c
-    else:
-        M[i, 3] = value
-    return M
-
-
-def _generator_mp(axis: Axis) -> Any:
-    G = mpmath.zeros(4, 4)
-    i = axis.index
-    if axis.is_rotation:
-        j, k = {0: (1, 2), 1: (2, 0), 2: (0, 1)}[i]
-        G[k, j], G[j, k] = 1, -1
-    else:
-        G[i, 3] = 1
-    return G
-
-
 def _checks(
     kp: KinematicProgram, ets: ETS, eta: list[sp.Expr], q: tuple[sp.Symbol, ...], values: dict
 ) -> dict[str, str]:
     """Compare the program with the literal products of eqs 1, 5 and 26-28, and its Hessian with
     central differences of its Jacobian along a random direction, at 3 random points to 30 digits."""
-    from symkin.derive.common import mp_function
+    from symkin.derive.common import et_matrix, generator, mp_function, products
 
     n = len(q)
     consts = list(values)
@@ -113,14 +90,9 @@ def _checks(
         for _ in range(3):
             qv = [mpmath.mpf(rng.randint(100, 2000)) / 1000 for _ in q]
             sub = dict(zip(q, qv)) | dict(zip(consts, cvals))
-            E = [_et_mp(e.axis, mpmath.mpf(sp.N(eta[k].xreplace(sub), 40))) for k, e in enumerate(ets)]
-            prefix = [mpmath.eye(4)]
-            for M in E:
-                prefix.append(prefix[-1] * M)
-            suffix = [mpmath.eye(4)]
-            for M in reversed(E):
-                suffix.append(M * suffix[-1])
-            suffix.reverse()
+            values = [mpmath.mpf(sp.N(x.xreplace(sub), 40)) for x in eta]
+            E = [et_matrix(e.axis, v, mpmath) for e, v in zip(ets, values)]
+            prefix, suffix = products(E, mpmath.eye(4))
             got = f(*qv, *cvals)
             T = prefix[-1]
             k = 16
@@ -138,7 +110,7 @@ def _checks(
             k += 6 * n
             for j in range(n):
                 e = ets[mu[j]]
-                dT = prefix[mu[j]] * (e.sign * _generator_mp(e.axis)) * E[mu[j]] * suffix[mu[j] + 1]
+                dT = prefix[mu[j]] * (e.sign * generator(e.axis, mpmath)) * E[mu[j]] * suffix[mu[j] + 1]
                 S = dT[:3, :3] * T[:3, :3].T
                 col = [dT[0, 3], dT[1, 3], dT[2, 3], S[2, 1], S[0, 2], S[1, 0]]
                 worst["eqs 26-28 and 31-34: J0"] = max(
