@@ -237,12 +237,13 @@ def products(E: Sequence[Any], eye: Any) -> tuple[list[Any], list[Any]]:
 
 
 class Printer:
-    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals."""
+    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals; the
+    intermediates of a program (``named``: (symbol, expression) in order) print as ``zeta_k``."""
 
-    def __init__(self, q: Sequence[sp.Symbol]) -> None:
+    def __init__(self, q: Sequence[sp.Symbol], named: Sequence[tuple[sp.Symbol, sp.Expr]] = ()) -> None:
         self.index = {s: j + 1 for j, s in enumerate(q)}
         self.used: dict[sp.Symbol, tuple[str, str]] = {}  # abbreviation -> (latex, meaning)
-        self.names: dict[sp.Symbol, str] = {}
+        self.names: dict[sp.Symbol, str] = {s: f"\\zeta_{{{i}}}" for i, (s, _) in enumerate(named)}
 
     def _abbreviation(self, f: sp.Expr) -> sp.Symbol | None:
         idx = []

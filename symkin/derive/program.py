@@ -145,10 +145,8 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
     q, n, ets = D.q, len(D.q), D.robot.ets
     C = constants(ets, bool(D.constants))
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-    P = Printer(q)
-    for i, (s, _) in enumerate(D.intermediates):
-        P.names[s] = f"\\zeta_{{{i}}}"
-    lines = [(s, e) for s, e in D.intermediates]
+    P = Printer(q, D.intermediates)
+    lines = list(D.intermediates)
     ends = dict(D.sections)
     ctx: dict[str, Any] = {**shared_context(D, P, C), "nodes": len(lines)}
     order = [e.joint for e in ets if e.joint is not None]

@@ -22,7 +22,6 @@ from symkin.model.tree import Tree
 
 __all__ = ["tree_derivation"]
 
-LINES_PER_BLOCK = 12
 CHECK_TOL = 1e-12
 
 
@@ -72,6 +71,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
     from symkin.core.version import __version__
     from symkin.derive.common import FORMATS, Printer, latex_document
+    from symkin.derive.program import _blocks
     from symkin.emit.templates import render
     from symkin.errors import SymkinError, check_choice
     from symkin.symbolic.kinematics import const_to_sympy
@@ -82,9 +82,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
         raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
     q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(tree.n))
     tp = derive_tree_program(tree, q, const_to_sympy, frame_jacobians=False)
-    P = Printer(q)
-    for i, (s, _) in enumerate(tp.lines):
-        P.names[s] = f"\\zeta_{{{i}}}"
+    P = Printer(q, tp.lines)
     ends = dict(tp.marks)
     users: dict[int, list[str]] = {}
     for f in tree.frames:
@@ -111,9 +109,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
                 "title": f"link {k + 1}, `{safe_text(seg.link)}` (joint `{safe_text(seg.name)}` from "
                 f"`{parent}`); on the path to {', '.join(f'`{u}`' for u in users.get(k, []))}",
                 "product": f"{lhs} = {before}{factors}",
-                "lines": [
-                    _block(P, rows[i : i + LINES_PER_BLOCK]) for i in range(0, len(rows), LINES_PER_BLOCK)
-                ],
+                "lines": _blocks(P, rows),
                 "matrix": f"{lhs} = {P.matrix(tp.links[k])}",
             }
         )
@@ -130,9 +126,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
             {
                 "name": safe_text(name),
                 "link": tree.frame_segments[f] + 1,
-                "lines": [
-                    _block(P, rows[i : i + LINES_PER_BLOCK]) for i in range(0, len(rows), LINES_PER_BLOCK)
-                ],
+                "lines": _blocks(P, rows),
                 "pose": f"{{}}^{{0}}T_{{\\mathrm{{{tree.frame_segments[f] + 1}}}}} = {P.matrix(tp.T[f])}",
                 "columns": cols,
                 "zero": tree.n - len(cols),
@@ -161,8 +155,3 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     if fmt == "latex":  # subsections as plain paragraphs
         return latex_document("\n".join(ln[4:] if ln.startswith("### ") else ln for ln in text.splitlines()))
     return text
-
-
-def _block(P: Any, rows: Any) -> str:
-    body = r" \\ ".join(f"{P.names[s]} &= {P(e)}" for s, e in rows)
-    return r"\begin{aligned} " + body + r" \end{aligned}"
