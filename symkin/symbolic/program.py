@@ -457,6 +457,7 @@ def derive_tree_program(
     P = Program()
     walks: list[_Walk] = []
     joint_axes: dict[int, tuple[list[sp.Expr], list[sp.Expr]]] = {}  # slot -> (signed axis, origin)
+    thetas = [sp.Rational(s.multiplier) * qs[s.joint] + sp.Rational(s.offset) for s in slots]  # by slot
     links: list[sp.Matrix | None] = []
     marks: list[tuple[str, int]] = []
     children = [0] * len(segments)
@@ -475,21 +476,8 @@ def derive_tree_program(
             continue
         carried.append(())
         W = _Walk(P) if seg.parent < 0 else walks[seg.parent].fork()
-        for e in fold_constants(ets) if fold else ets:
-            if isinstance(e, Fixed):
-                W.transform(e)
-                continue
-            i = e.axis.index
-            if e.is_joint:
-                s = slots[seg.slot]
-                theta = sp.Rational(s.multiplier) * qs[s.joint] + sp.Rational(s.offset)
-                joint_axes[seg.slot] = ([x * e.sign for x in W.column(i)], list(W.p))
-                value = e.sign * theta
-            else:
-                value = constant(e.const)
-                if value == 0:
-                    continue
-            move(W, e, value)
+        for slot, _, w, p in walk_joints(W, fold_constants(ets) if fold else ets, thetas, constant, 1):
+            joint_axes[slot] = (w, p)
         walks.append(W)
         links.append(_matrix(*W.pose()))  # dead code in the kernels unless a frame needs it
         marks.append((f"segment {k}", len(P.lines)))
