@@ -231,10 +231,7 @@ def _matrix_ops(M: sp.Matrix) -> int:
 
 def _worst(results: Any) -> str:
     results = list(results)
-    for level in ("failed", "numeric", "symbolic"):
-        if level in results:
-            return level
-    return "symbolic"
+    return next((level for level in ("failed", "numeric") if level in results), "symbolic")
 
 
 # ---------------------------------------------------------------------------------------------

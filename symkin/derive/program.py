@@ -82,6 +82,10 @@ def _checks(
     outs = [*kp.T, *(x for L in kp.links for x in L), *kp.J0, *(x for H in kp.H0 for x in H)]
     rng = random.Random(1)
     worst = {"eq 1: T": 0.0, "eq 5: link frames": 0.0, "eqs 26-28 and 31-34: J0": 0.0, "eq 20: H0": 0.0}
+
+    def diff(key: str, a: Sequence[Any], b: Sequence[Any]) -> None:  # the largest |a - b| so far
+        worst[key] = max(worst[key], float(max((abs(x - y) for x, y in zip(a, b)), default=0)))
+
     with mpmath.workdps(30):
         f = mp_function(kp.lines, list(q) + consts, outs)
         fj = mp_function(kp.lines, list(q) + consts, list(kp.J0))
@@ -96,15 +100,10 @@ def _checks(
             got = f(*qv, *cvals)
             T = prefix[-1]
             k = 16
-            worst["eq 1: T"] = max(
-                worst["eq 1: T"], _diff(got[:16], [T[r, c] for r in range(4) for c in range(4)])
-            )
+            diff("eq 1: T", got[:16], [T[r, c] for r in range(4) for c in range(4)])
             for j in kp.order:  # chain order
                 P = prefix[mu[j] + 1]
-                worst["eq 5: link frames"] = max(
-                    worst["eq 5: link frames"],
-                    _diff(got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)]),
-                )
+                diff("eq 5: link frames", got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)])
                 k += 16
             J = got[k : k + 6 * n]
             k += 6 * n
@@ -113,9 +112,7 @@ def _checks(
                 dT = prefix[mu[j]] * (e.sign * generator(e.axis, mpmath)) * E[mu[j]] * suffix[mu[j] + 1]
                 S = dT[:3, :3] * T[:3, :3].T
                 col = [dT[0, 3], dT[1, 3], dT[2, 3], S[2, 1], S[0, 2], S[1, 0]]
-                worst["eqs 26-28 and 31-34: J0"] = max(
-                    worst["eqs 26-28 and 31-34: J0"], _diff([J[r * n + j] for r in range(6)], col)
-                )
+                diff("eqs 26-28 and 31-34: J0", [J[r * n + j] for r in range(6)], col)
             # eq 20 along a random direction v: sum_i v_i H_i = dJ(q + h v)/dh, by central differences
             H = got[k:]
             v = [mpmath.mpf(rng.randint(-1000, 1000)) / 1000 for _ in q]
@@ -124,14 +121,10 @@ def _checks(
             Jd = fj(*[a - h * b for a, b in zip(qv, v)], *cvals)
             fd = [(a - b) / (2 * h) for a, b in zip(Ju, Jd)]
             Hv = [sum(v[i] * H[i * 6 * n + m] for i in range(n)) for m in range(6 * n)]
-            worst["eq 20: H0"] = max(worst["eq 20: H0"], _diff(Hv, fd))
+            diff("eq 20: H0", Hv, fd)
     # central differences with step 1e-12 at 30 digits are exact to about 1e-18
     bound = {"eq 20: H0": 1e-15}
     return {k: ("numeric" if v < bound.get(k, 1e-20) else "failed") for k, v in worst.items()}
-
-
-def _diff(a: Sequence[Any], b: Sequence[Any]) -> float:
-    return float(max((abs(x - y) for x, y in zip(a, b)), default=0))
 
 
 # ---------------------------------------------------------------------------------------------

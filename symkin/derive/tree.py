@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from symkin.model.ets import rational_text
 from symkin.model.latex import AXIS_LATEX, et_latex
 from symkin.model.tree import Tree
 
@@ -35,16 +36,10 @@ def _factor(e: Any) -> str:
 def _theta(s: Any) -> str:
     q = f"q_{{{s.joint + 1}}}"
     m, c = s.multiplier, s.offset
-    text = q if m == 1 else f"-{q}" if m == -1 else f"{_num(m)}\\, {q}"
+    text = q if m == 1 else f"-{q}" if m == -1 else f"{rational_text(m)}\\, {q}"
     if c != 0:
-        text += f" {'+' if c > 0 else '-'} {_num(abs(c))}"
+        text += f" {'+' if c > 0 else '-'} {rational_text(abs(c))}"
     return text
-
-
-def _num(r: Any) -> str:
-    from symkin.model.ets import rational_text
-
-    return rational_text(r)
 
 
 def _checks(tree: Tree, tp: Any, samples: int = 3) -> float:
