@@ -18,6 +18,7 @@ from symkin.model.ets import ET, ETS, Axis, Const, rational_text
 from symkin.model.latex import text_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops
+from symkin.symbolic.fold import MIX
 from symkin.symbolic.kinematics import const_to_sympy
 
 __all__ = [
@@ -44,9 +45,6 @@ SECTIONS = ("ets", "transforms", "links", "fk", "derivatives", "jacobian", "hess
 
 
 DISPLAY_MAX_OPS = 900  # larger expressions are not printed
-
-
-MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # a rotation about axis i mixes columns (j, k)
 
 
 def mp_function(

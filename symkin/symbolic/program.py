@@ -40,7 +40,7 @@ import sympy as sp
 
 from symkin.model.ets import ET, ETS, Const
 from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, _flat, _total, floatify
-from symkin.symbolic.fold import Fixed, fold_constants
+from symkin.symbolic.fold import MIX, Fixed, fold_constants
 
 __all__ = [
     "Program",
@@ -58,7 +58,6 @@ __all__ = [
     "total_ops",
 ]
 
-_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
 _HALF_PI = sp.pi / 2
 _ZERO3 = [sp.Integer(0)] * 3
 
@@ -143,7 +142,7 @@ class _Walk:
     def column(self, i: int) -> list[sp.Expr]:
         if self.axis is None or self.axis == i:
             return self.cols[i]
-        j, k = _MIX[self.axis]
+        j, k = MIX[self.axis]
         c, s = self._cs()
         cj, ck = self.cols[j], self.cols[k]
         if i == j:
