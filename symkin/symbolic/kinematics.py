@@ -95,9 +95,7 @@ def _ee_frame(
         v = _cross(u, r) if revolute else u
         w = u if revolute else zero3
         cols.append((v, w, r))
-        for row in range(3):
-            Je[row, j] = v[row]
-            Je[row + 3, j] = w[row]
+        Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(w)
     He = [sp.zeros(6, n) for _ in range(n)]
     for kb, (jb, rev_b, ub, pb) in enumerate(ordered):
         for ka, (ja, rev_a, ua, pa) in enumerate(ordered[:kb]):
@@ -112,9 +110,7 @@ def _ee_frame(
                 dw = du
             else:
                 dv, dw = du, zero3
-            for row in range(3):
-                He[jb][row, ja] = dv[row]
-                He[jb][row + 3, ja] = dw[row]
+            He[jb][:3, ja], He[jb][3:, ja] = sp.Matrix(dv), sp.Matrix(dw)
     return Je, He
 
 

@@ -32,6 +32,7 @@ and time grow linearly with the number of segments plus, per frame, the joints o
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -313,9 +314,7 @@ def derive_program(
         Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(u if revolute else _ZERO3)
     marks.append(("Je", len(P.lines)))
     order = tuple(f[0] for f in frames)
-    H0 = He = None
-    if hessians:
-        H0, He = _hessians(P, J0, Je, order)
+    H0, He = _hessians(P, J0, Je, order) if hessians else (None, None)
     marks.append(("H", len(P.lines)))
     return KinematicProgram(
         name=name,
@@ -459,10 +458,7 @@ def derive_tree_program(
     thetas = [sp.Rational(s.multiplier) * qs[s.joint] + sp.Rational(s.offset) for s in slots]  # by slot
     links: list[sp.Matrix | None] = []
     marks: list[tuple[str, int]] = []
-    children = [0] * len(segments)
-    for seg in segments:
-        if seg.parent >= 0:
-            children[seg.parent] += 1
+    children = Counter(seg.parent for seg in segments)
     ends = set(tree.frame_segments)  # type: ignore[attr-defined]
     carried: list[tuple[ET, ...]] = []  # per segment: constants left for its child to walk
     for k, seg in enumerate(segments):

@@ -133,9 +133,7 @@ def singular_factors(robot: Robot | str, axes: str = "auto", max_terms: int = MA
     _, info = sp.parallel_poly_from_expr(entries, *s, *c, *prismatic)
     dom = info.domain.get_field()[tuple(s + c + prismatic)]  # polynomials over QQ (or an algebraic field)
     D = DomainMatrix([[dom.from_sympy(entries[r * n + k]) for k in range(n)] for r in range(m)], (m, n), dom)
-    if m == n:
-        subsets = [(tuple(range(m)), tuple(range(n)))]
-    elif m < n:
+    if m <= n:
         subsets = [(tuple(range(m)), cols) for cols in itertools.combinations(range(n), m)]
     else:
         subsets = [(rs, tuple(range(n))) for rs in itertools.combinations(range(m), n)]
