@@ -116,7 +116,8 @@ def _cross(P: Program, a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Ex
 
 
 class _Walk:
-    """The running pose of a walk along the chain, every column and origin a named value."""
+    """The running pose of a walk along the chain, every column and origin a value of ``P`` (named,
+    or one expression when ``P`` is inline)."""
 
     def __init__(self, P: Program) -> None:
         self.P = P
