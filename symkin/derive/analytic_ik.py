@@ -19,18 +19,7 @@ from symkin.symbolic.analytic_ik import derive_analytic
 __all__ = ["ik_derivation"]
 
 DISPLAY_MAX_OPS = 400  # larger coefficients are summarised by their size
-_NAMES = {
-    "A": "A",
-    "B": "B",
-    "C": "C",
-    "y": "y",
-    "x": "x",
-    "b": "b",
-    "D": "D",
-    "value": r"\text{value}",
-    "c": r"\cos",
-    "s": r"\sin",
-}
+_NAMES = {"value": r"\text{value}", "c": r"\cos", "s": r"\sin"}  # A, B, C, x, y, b, D: as they are
 
 
 def _short(x: sp.Basic) -> sp.Basic:
@@ -98,7 +87,7 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
         )
         if st.kind == "sum":
             label = st.var
-        exprs = [(_NAMES[k], _latex(v)) for k, v in st.exprs]
+        exprs = [(_NAMES.get(k, k), _latex(v)) for k, v in st.exprs]
         steps.append({"title": st.title.replace("$", ""), "statement": st.statement, "exprs": exprs,
                       "result": _RESULT[st.kind].format(v=label)})  # fmt: skip
     text = {

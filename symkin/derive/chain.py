@@ -34,7 +34,6 @@ from symkin.derive.common import (  # noqa: F401
     CHECK_TEXT,
     DISPLAY_MAX_OPS,
     FORMATS,
-    MIX,
     SECTIONS,
     Constants,
     Derivation,
@@ -44,6 +43,7 @@ from symkin.derive.common import (  # noqa: F401
     generator,
     latex_document,
     ops_of,
+    products,
     shared_context,
 )
 from symkin.emit.templates import render
@@ -63,10 +63,6 @@ SYMBOLIC_CHECK_MAX_OPS = 1500  # larger differences are checked at random points
 MATRIX_MAX_OPS = 160  # larger matrices are printed entry by entry
 FULL_MAX_N = 4  # dT/dq_j matrices and Hessian blocks are printed up to this many joints
 _XYZ = "xyz"
-
-
-# ---------------------------------------------------------------------------------------------
-# Results
 
 
 # ---------------------------------------------------------------------------------------------
@@ -164,12 +160,7 @@ def _steps(robot: Robot, symbolic_constants: bool, simplify: bool) -> Derivation
     eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
     E = [et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-    prefix, suffix = [sp.eye(4)], [sp.eye(4)]
-    for M in E:
-        prefix.append(prefix[-1] * M)
-    for M in reversed(E):
-        suffix.append(M * suffix[-1])
-    suffix.reverse()
+    prefix, suffix = products(E, sp.eye(4))
     T_raw = prefix[-1]
     dT_raw = [prefix[mu[j]] * E[mu[j]].diff(q[j]) * suffix[mu[j] + 1] for j in range(n)]
 
@@ -240,18 +231,7 @@ def _matrix_ops(M: sp.Matrix) -> int:
 
 def _worst(results: Any) -> str:
     results = list(results)
-    for level in ("failed", "numeric", "symbolic"):
-        if level in results:
-            return level
-    return "symbolic"
-
-
-# ---------------------------------------------------------------------------------------------
-# Printing expressions
-
-
-# ---------------------------------------------------------------------------------------------
-# Markdown (from templates/derive/derivation.md.j2) and its LaTeX document
+    return next((level for level in ("failed", "numeric") if level in results), "symbolic")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -4,11 +4,13 @@ LaTeX document writer."""
 
 from __future__ import annotations
 
+import itertools
+import operator
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Literal
+from typing import Any
 
 import sympy as sp
 
@@ -16,6 +18,7 @@ from symkin.model.ets import ET, ETS, Axis, Const, rational_text
 from symkin.model.latex import text_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops
+from symkin.symbolic.fold import MIX
 from symkin.symbolic.kinematics import const_to_sympy
 
 __all__ = [
@@ -28,14 +31,12 @@ __all__ = [
     "Printer",
     "constants",
     "et_matrix",
+    "generator",
+    "products",
     "latex_document",
     "mp_function",
     "ops_of",
 ]
-
-Fmt = Literal["markdown", "latex"]
-Form = Literal["auto", "expanded", "program"]
-
 
 #: The parts of a written derivation, in order (``derive --sections fk,jacobian``). The heading and
 #: the joint table are always written. In the program form a part that uses named quantities also
@@ -44,9 +45,6 @@ SECTIONS = ("ets", "transforms", "links", "fk", "derivatives", "jacobian", "hess
 
 
 DISPLAY_MAX_OPS = 900  # larger expressions are not printed
-
-
-MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # a rotation about axis i mixes columns (j, k)
 
 
 def mp_function(
@@ -203,22 +201,22 @@ def constants(ets: ETS, symbolic: bool) -> Constants:
     return Constants(ETS(tuple(out)), tuple(eta), names, values, factor, placeholders)
 
 
-def et_matrix(axis: Axis, eta: sp.Expr) -> sp.Matrix:
-    """The elementary transform of Fig. 2."""
-    M = sp.eye(4)
+def et_matrix(axis: Axis, eta: Any, lib: Any = sp) -> Any:
+    """The elementary transform of Fig. 2 (a sympy matrix, or with ``lib=mpmath`` an mpmath one)."""
+    M = lib.eye(4)
     i = axis.index
     if axis.is_rotation:
         j, k = MIX[i]
-        M[j, j] = M[k, k] = sp.cos(eta)
-        M[j, k], M[k, j] = -sp.sin(eta), sp.sin(eta)
+        M[j, j] = M[k, k] = lib.cos(eta)
+        M[j, k], M[k, j] = -lib.sin(eta), lib.sin(eta)
     else:
         M[i, 3] = eta
     return M
 
 
-def generator(axis: Axis) -> sp.Matrix:
-    """[G] of eqs 20-25: dE/deta = [G] E."""
-    G = sp.zeros(4, 4)
+def generator(axis: Axis, lib: Any = sp) -> Any:
+    """[G] of eqs 20-25: dE/deta = [G] E (a sympy matrix, or with ``lib=mpmath`` an mpmath one)."""
+    G = lib.zeros(4, 4)
     i = axis.index
     if axis.is_rotation:
         j, k = MIX[i]
@@ -228,13 +226,22 @@ def generator(axis: Axis) -> sp.Matrix:
     return G
 
 
-class Printer:
-    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals."""
+def products(E: Sequence[Any], eye: Any) -> tuple[list[Any], list[Any]]:
+    """The prefix products ``E_1 ... E_k`` (k = 0 .. M, the first ``eye``) and the suffix products
+    ``E_k ... E_M`` (k = 1 .. M + 1, the last ``eye``) of the factors ``E``."""
+    prefix = list(itertools.accumulate(E, operator.mul, initial=eye))
+    suffix = list(itertools.accumulate(reversed(E), lambda acc, M: M * acc, initial=eye))
+    return prefix, suffix[::-1]
 
-    def __init__(self, q: Sequence[sp.Symbol]) -> None:
+
+class Printer:
+    """sympy -> LaTeX with textbook abbreviations ``c_{12} = cos(q_1 + q_2)`` and decimals; the
+    intermediates of a program (``named``: (symbol, expression) in order) print as ``zeta_k``."""
+
+    def __init__(self, q: Sequence[sp.Symbol], named: Sequence[tuple[sp.Symbol, sp.Expr]] = ()) -> None:
         self.index = {s: j + 1 for j, s in enumerate(q)}
         self.used: dict[sp.Symbol, tuple[str, str]] = {}  # abbreviation -> (latex, meaning)
-        self.names: dict[sp.Symbol, str] = {}
+        self.names: dict[sp.Symbol, str] = {s: f"\\zeta_{{{i}}}" for i, (s, _) in enumerate(named)}
 
     def _abbreviation(self, f: sp.Expr) -> sp.Symbol | None:
         idx = []

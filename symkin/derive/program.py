@@ -19,7 +19,7 @@ from typing import Any
 import mpmath
 import sympy as sp
 
-from symkin.model.ets import ETS, Axis
+from symkin.model.ets import ETS
 from symkin.model.latex import ets_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.program import KinematicProgram, derive_program
@@ -69,35 +69,12 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> Any:
 # Checks at random points, 30 digits
 
 
-def _et_mp(axis: Axis, value: Any) -> Any:
-    M = mpmath.eye(4)
-    i = axis.index
-    if axis.is_rotation:
-        j, k = {0: (1, 2), 1: (2, 0), 2: (0, 1)}[i]
-        c, s = mpmath.cos(value), mpmath.sin(value)
-        M[j, j], M[j, k], M[k, j], M[k, k] = c, -s, s, c
-    else:
-        M[i, 3] = value
-    return M
-
-
-def _generator_mp(axis: Axis) -> Any:
-    G = mpmath.zeros(4, 4)
-    i = axis.index
-    if axis.is_rotation:
-        j, k = {0: (1, 2), 1: (2, 0), 2: (0, 1)}[i]
-        G[k, j], G[j, k] = 1, -1
-    else:
-        G[i, 3] = 1
-    return G
-
-
 def _checks(
     kp: KinematicProgram, ets: ETS, eta: list[sp.Expr], q: tuple[sp.Symbol, ...], values: dict
 ) -> dict[str, str]:
     """Compare the program with the literal products of eqs 1, 5 and 26-28, and its Hessian with
     central differences of its Jacobian along a random direction, at 3 random points to 30 digits."""
-    from symkin.derive.common import mp_function
+    from symkin.derive.common import et_matrix, generator, mp_function, products
 
     n = len(q)
     consts = list(values)
@@ -105,6 +82,10 @@ def _checks(
     outs = [*kp.T, *(x for L in kp.links for x in L), *kp.J0, *(x for H in kp.H0 for x in H)]
     rng = random.Random(1)
     worst = {"eq 1: T": 0.0, "eq 5: link frames": 0.0, "eqs 26-28 and 31-34: J0": 0.0, "eq 20: H0": 0.0}
+
+    def diff(key: str, a: Sequence[Any], b: Sequence[Any]) -> None:  # the largest |a - b| so far
+        worst[key] = max(worst[key], float(max((abs(x - y) for x, y in zip(a, b)), default=0)))
+
     with mpmath.workdps(30):
         f = mp_function(kp.lines, list(q) + consts, outs)
         fj = mp_function(kp.lines, list(q) + consts, list(kp.J0))
@@ -113,37 +94,25 @@ def _checks(
         for _ in range(3):
             qv = [mpmath.mpf(rng.randint(100, 2000)) / 1000 for _ in q]
             sub = dict(zip(q, qv)) | dict(zip(consts, cvals))
-            E = [_et_mp(e.axis, mpmath.mpf(sp.N(eta[k].xreplace(sub), 40))) for k, e in enumerate(ets)]
-            prefix = [mpmath.eye(4)]
-            for M in E:
-                prefix.append(prefix[-1] * M)
-            suffix = [mpmath.eye(4)]
-            for M in reversed(E):
-                suffix.append(M * suffix[-1])
-            suffix.reverse()
+            values = [mpmath.mpf(sp.N(x.xreplace(sub), 40)) for x in eta]
+            E = [et_matrix(e.axis, v, mpmath) for e, v in zip(ets, values)]
+            prefix, suffix = products(E, mpmath.eye(4))
             got = f(*qv, *cvals)
             T = prefix[-1]
             k = 16
-            worst["eq 1: T"] = max(
-                worst["eq 1: T"], _diff(got[:16], [T[r, c] for r in range(4) for c in range(4)])
-            )
+            diff("eq 1: T", got[:16], [T[r, c] for r in range(4) for c in range(4)])
             for j in kp.order:  # chain order
                 P = prefix[mu[j] + 1]
-                worst["eq 5: link frames"] = max(
-                    worst["eq 5: link frames"],
-                    _diff(got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)]),
-                )
+                diff("eq 5: link frames", got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)])
                 k += 16
             J = got[k : k + 6 * n]
             k += 6 * n
             for j in range(n):
                 e = ets[mu[j]]
-                dT = prefix[mu[j]] * (e.sign * _generator_mp(e.axis)) * E[mu[j]] * suffix[mu[j] + 1]
+                dT = prefix[mu[j]] * (e.sign * generator(e.axis, mpmath)) * E[mu[j]] * suffix[mu[j] + 1]
                 S = dT[:3, :3] * T[:3, :3].T
                 col = [dT[0, 3], dT[1, 3], dT[2, 3], S[2, 1], S[0, 2], S[1, 0]]
-                worst["eqs 26-28 and 31-34: J0"] = max(
-                    worst["eqs 26-28 and 31-34: J0"], _diff([J[r * n + j] for r in range(6)], col)
-                )
+                diff("eqs 26-28 and 31-34: J0", [J[r * n + j] for r in range(6)], col)
             # eq 20 along a random direction v: sum_i v_i H_i = dJ(q + h v)/dh, by central differences
             H = got[k:]
             v = [mpmath.mpf(rng.randint(-1000, 1000)) / 1000 for _ in q]
@@ -152,14 +121,10 @@ def _checks(
             Jd = fj(*[a - h * b for a, b in zip(qv, v)], *cvals)
             fd = [(a - b) / (2 * h) for a, b in zip(Ju, Jd)]
             Hv = [sum(v[i] * H[i * 6 * n + m] for i in range(n)) for m in range(6 * n)]
-            worst["eq 20: H0"] = max(worst["eq 20: H0"], _diff(Hv, fd))
+            diff("eq 20: H0", Hv, fd)
     # central differences with step 1e-12 at 30 digits are exact to about 1e-18
     bound = {"eq 20: H0": 1e-15}
     return {k: ("numeric" if v < bound.get(k, 1e-20) else "failed") for k, v in worst.items()}
-
-
-def _diff(a: Sequence[Any], b: Sequence[Any]) -> float:
-    return float(max((abs(x - y) for x, y in zip(a, b)), default=0))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -173,10 +138,8 @@ def program_context(D: Any) -> tuple[dict[str, Any], str]:
     q, n, ets = D.q, len(D.q), D.robot.ets
     C = constants(ets, bool(D.constants))
     mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-    P = Printer(q)
-    for i, (s, _) in enumerate(D.intermediates):
-        P.names[s] = f"\\zeta_{{{i}}}"
-    lines = [(s, e) for s, e in D.intermediates]
+    P = Printer(q, D.intermediates)
+    lines = list(D.intermediates)
     ends = dict(D.sections)
     ctx: dict[str, Any] = {**shared_context(D, P, C), "nodes": len(lines)}
     order = [e.joint for e in ets if e.joint is not None]

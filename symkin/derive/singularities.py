@@ -416,15 +416,10 @@ def _markdown(R: SingularityReport) -> str:
     items = []
     for k, s in enumerate(R.singularities):
         f = s.factor
-        cond = P(f.expr.xreplace(rename))
-        if f.kind == "sin":
-            j = f.joints[0] + 1
-            cond += rf" = 0 \;(q_{{{j}}} = 0 \text{{ or }} \pi)"
-        elif f.kind == "cos":
-            j = f.joints[0] + 1
-            cond += rf" = 0 \;(q_{{{j}}} = \pm\pi/2)"
-        else:
-            cond += " = 0"
+        roots = {"sin": r"0 \text{ or } \pi", "cos": r"\pm\pi/2"}.get(f.kind)
+        cond = P(f.expr.xreplace(rename)) + " = 0"
+        if roots:
+            cond += rf" \;(q_{{{f.joints[0] + 1}}} = {roots})"
         power = f" (power {f.multiplicity})" if f.multiplicity > 1 else ""
         meaning = "; ".join(s.meaning) if s.meaning else "the joint twists become linearly dependent"
         if s.checked:

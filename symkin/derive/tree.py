@@ -17,12 +17,12 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from symkin.model.ets import rational_text
 from symkin.model.latex import AXIS_LATEX, et_latex
 from symkin.model.tree import Tree
 
 __all__ = ["tree_derivation"]
 
-LINES_PER_BLOCK = 12
 CHECK_TOL = 1e-12
 
 
@@ -36,16 +36,10 @@ def _factor(e: Any) -> str:
 def _theta(s: Any) -> str:
     q = f"q_{{{s.joint + 1}}}"
     m, c = s.multiplier, s.offset
-    text = q if m == 1 else f"-{q}" if m == -1 else f"{_num(m)}\\, {q}"
+    text = q if m == 1 else f"-{q}" if m == -1 else f"{rational_text(m)}\\, {q}"
     if c != 0:
-        text += f" {'+' if c > 0 else '-'} {_num(abs(c))}"
+        text += f" {'+' if c > 0 else '-'} {rational_text(abs(c))}"
     return text
-
-
-def _num(r: Any) -> str:
-    from symkin.model.ets import rational_text
-
-    return rational_text(r)
 
 
 def _checks(tree: Tree, tp: Any, samples: int = 3) -> float:
@@ -72,6 +66,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
     from symkin.core.version import __version__
     from symkin.derive.common import FORMATS, Printer, latex_document
+    from symkin.derive.program import _blocks
     from symkin.emit.templates import render
     from symkin.errors import SymkinError, check_choice
     from symkin.symbolic.kinematics import const_to_sympy
@@ -82,9 +77,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
         raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
     q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(tree.n))
     tp = derive_tree_program(tree, q, const_to_sympy, frame_jacobians=False)
-    P = Printer(q)
-    for i, (s, _) in enumerate(tp.lines):
-        P.names[s] = f"\\zeta_{{{i}}}"
+    P = Printer(q, tp.lines)
     ends = dict(tp.marks)
     users: dict[int, list[str]] = {}
     for f in tree.frames:
@@ -111,9 +104,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
                 "title": f"link {k + 1}, `{safe_text(seg.link)}` (joint `{safe_text(seg.name)}` from "
                 f"`{parent}`); on the path to {', '.join(f'`{u}`' for u in users.get(k, []))}",
                 "product": f"{lhs} = {before}{factors}",
-                "lines": [
-                    _block(P, rows[i : i + LINES_PER_BLOCK]) for i in range(0, len(rows), LINES_PER_BLOCK)
-                ],
+                "lines": _blocks(P, rows),
                 "matrix": f"{lhs} = {P.matrix(tp.links[k])}",
             }
         )
@@ -130,9 +121,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
             {
                 "name": safe_text(name),
                 "link": tree.frame_segments[f] + 1,
-                "lines": [
-                    _block(P, rows[i : i + LINES_PER_BLOCK]) for i in range(0, len(rows), LINES_PER_BLOCK)
-                ],
+                "lines": _blocks(P, rows),
                 "pose": f"{{}}^{{0}}T_{{\\mathrm{{{tree.frame_segments[f] + 1}}}}} = {P.matrix(tp.T[f])}",
                 "columns": cols,
                 "zero": tree.n - len(cols),
@@ -161,8 +150,3 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     if fmt == "latex":  # subsections as plain paragraphs
         return latex_document("\n".join(ln[4:] if ln.startswith("### ") else ln for ln in text.splitlines()))
     return text
-
-
-def _block(P: Any, rows: Any) -> str:
-    body = r" \\ ".join(f"{P.names[s]} &= {P(e)}" for s, e in rows)
-    return r"\begin{aligned} " + body + r" \end{aligned}"

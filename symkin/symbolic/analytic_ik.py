@@ -30,6 +30,7 @@ its translation stays on the chain.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from fractions import Fraction
 
@@ -120,10 +121,7 @@ class AnalyticIK:
 
     @property
     def max_solutions(self) -> int:
-        s = 1
-        for st in self.steps:
-            s *= st.branches
-        return s
+        return math.prod(st.branches for st in self.steps)
 
 
 def pose_symbols() -> tuple[sp.Matrix, sp.Matrix]:
@@ -218,9 +216,8 @@ class _Builder:
         """rot(h_k, +-q_k) for a revolute joint, the identity for a prismatic one."""
         return self.rot(self.g.h[k], self.name(k), sign) if self.g.revolute[k] else sp.eye(3)
 
-    def add(
-        self, kind: str, var: str, k: int | None, exprs: dict[str, sp.Expr], title: str, statement: str
-    ) -> None:
+    def add(self, kind: str, k: int | str, exprs: dict[str, sp.Expr], title: str, statement: str) -> None:
+        """A step solving joint ``k`` (chain position), or the auxiliary angle named ``k``."""
         exprs = {key: _tidy(v) for key, v in exprs.items()}
         constant = (
             not (exprs.get("A", 1).free_symbols | exprs.get("B", 1).free_symbols) if kind == "sp4" else False
@@ -230,36 +227,33 @@ class _Builder:
                 f"{title}: the equation does not depend on the angle (degenerate geometry); "
                 "use the numerical IK instead: kin.ik(T)"
             )
-        joint = None if k is None else self.g.joint[k]
-        revolute = True if k is None else self.g.revolute[k]
+        if isinstance(k, str):
+            var, joint, revolute = k, None, True
+        else:
+            var, joint, revolute = self.name(k), self.g.joint[k], self.g.revolute[k]
         self.steps.append(Step(kind, var, joint, revolute, tuple(exprs.items()), title, statement))
 
     # -- subproblems ---------------------------------------------------------------------------
-    def sp4(
-        self, var: str, k: int | None, h: Vec, p: Vec, axis: Vec, d: sp.Expr, title: str, st: str
-    ) -> None:
+    def sp4(self, k: int | str, h: Vec, p: Vec, axis: Vec, d: sp.Expr, title: str, st: str) -> None:
         A = dot(h, cross(axis, p))
         B = dot(h, sub(p, scale(dot(axis, p), axis)))
         C = d - dot(h, axis) * dot(axis, p)
-        self.add("sp4", var, k, {"A": A, "B": B, "C": C}, title, st)
+        self.add("sp4", k, {"A": A, "B": B, "C": C}, title, st)
 
-    def sp3(
-        self, var: str, k: int | None, p1: Vec, p2: Vec, axis: Vec, d2: sp.Expr, title: str, st: str
-    ) -> None:
+    def sp3(self, k: int | str, p1: Vec, p2: Vec, axis: Vec, d2: sp.Expr, title: str, st: str) -> None:
         """|rot(axis, t) p1 - p2|^2 = d2."""
-        self.sp4(var, k, p2, p1, axis, (_norm2(p1) + _norm2(p2) - d2) / 2, title, st)
+        self.sp4(k, p2, p1, axis, (_norm2(p1) + _norm2(p2) - d2) / 2, title, st)
 
-    def sp1(self, var: str, k: int | None, axis: Vec, p1: Vec, p2: Vec, title: str, st: str) -> None:
+    def sp1(self, k: int | str, axis: Vec, p1: Vec, p2: Vec, title: str, st: str) -> None:
         y = dot(axis, cross(p1, p2))
         x = dot(p1, p2) - dot(axis, p1) * dot(axis, p2)
-        self.add("sp1", var, k, {"y": y, "x": x}, title, st)
+        self.add("sp1", k, {"y": y, "x": x}, title, st)
 
     def sp2(self, k1: int, k2: int, u: Vec, v: Vec, u_tex: str, v_tex: str) -> None:
         """Subproblem 2, ``R(h_k1, -q_k1) u = R(h_k2, q_k2) v``, as subproblem 4 for joint k1 then
         1 for joint k2; ``u_tex`` and ``v_tex`` write u and v in the statements."""
         h, L = self.g.h, self.label
         self.sp4(
-            self.name(k1),
             k1,
             h[k2],
             u,
@@ -269,7 +263,6 @@ class _Builder:
             rf"h_{k2 + 1}^T R(h_{k1 + 1}, -{L(k1)})\,{u_tex} = h_{k2 + 1}^T {v_tex}",
         )
         self.sp1(
-            self.name(k2),
             k2,
             h[k2],
             v,
@@ -287,7 +280,6 @@ class _Builder:
         h, L = self.g.h, self.label
         t_in, t_out, t_d = tex
         self.sp3(
-            self.name(k),
             k,
             p_out,
             _neg(p_in),
@@ -297,7 +289,6 @@ class _Builder:
             rf"\| R(h_{k + 1}, {L(k)})\, p_{{{t_out}}} + p_{{{t_in}}} \| = \| {t_d} \|{where}",
         )
         self.sp1(
-            self.name(k - 1),
             k - 1,
             h[k - 1],
             add(p_in, _vec(self.joint_rot(k) * _mat(p_out))),
@@ -315,7 +306,6 @@ class _Builder:
         total, q0, q1 = (sp.Symbol(x, real=True) for x in (var, self.name(k), self.name(k + 1)))
         self.add(
             "lin",
-            self.name(k + 2),
             k + 2,
             {"value": s2 * (total - q0 - s1 * q1)},
             f"{L(k + 2)} from the summed angle",
@@ -336,7 +326,6 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
         u = sub(w, p[0])
         p12, p23, p34 = sub(p[1], p[0]), sub(p[2], p[1]), sub(w0, p[2])
         b.sp4(
-            b.name(0),
             0,
             h[1],
             u,
@@ -355,7 +344,6 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
         p23, p34 = sub(p[2], o), sub(w0, p[2])
         if g.revolute[2]:
             b.sp3(
-                b.name(2),
                 2,
                 p34,
                 _neg(p23),
@@ -371,7 +359,6 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
             bb = dot(h[2], c)
             b.add(
                 "quad",
-                b.name(2),
                 2,
                 {"b": bb, "D": bb * bb - _norm2(c) + _norm2(u)},
                 f"Prismatic {L(2)} from the distance to the shoulder o (axes 1 and 2 meet there)",
@@ -385,7 +372,6 @@ def _position(b: _Builder, s: Structure, w: Vec, w0: Vec) -> None:
     u = sub(w, p[0])
     p12, p34 = sub(o, p[0]), sub(w0, o)
     b.sp3(
-        b.name(0),
         0,
         u,
         p12,
@@ -411,7 +397,6 @@ def _summed_rot(b: _Builder, k1: int, k2: int) -> sp.Matrix:
     b.add(
         "sum",
         var,
-        None,
         {"c": c1 * c2 - sigma * s1 * s2, "s": s1 * c2 + sigma * c1 * s2},
         f"The summed angle {b.label(k1)} {sign} {b.label(k2)} of the parallel axes {k1 + 1} and {k2 + 1}",
         rf"R(h_{k1 + 1}, {b.label(k1)})\, R(h_{k2 + 1}, {b.label(k2)}) = "
@@ -441,7 +426,6 @@ def _last_joint(b: _Builder, back: list[sp.Matrix]) -> None:
     for R in reversed(back):
         r56e = R * r56e
     b.sp1(
-        b.name(5),
         5,
         h[5],
         e,
@@ -464,7 +448,6 @@ def _three_parallel(b: _Builder, s: Structure, R0n: sp.Matrix, pt: Vec, tM: Vec)
     p12, p23, p34, p45, p6T = sub(p[1], p[0]), sub(p[2], p[1]), sub(p[3], p[2]), sub(o, p[3]), sub(tM, o)
     p06 = sub(sub(pt, p[0]), _vec(R0n * _mat(p6T)))
     b.sp4(
-        b.name(0),
         0,
         h[1],
         p06,
@@ -475,7 +458,6 @@ def _three_parallel(b: _Builder, s: Structure, R0n: sp.Matrix, pt: Vec, tM: Vec)
     )
     R10 = b.joint_rot(0, -1)
     b.sp4(
-        b.name(4),
         4,
         h[1],
         h[5],
@@ -486,7 +468,6 @@ def _three_parallel(b: _Builder, s: Structure, R0n: sp.Matrix, pt: Vec, tM: Vec)
     )
     b.sp1(
         "th",
-        None,
         h[1],
         _vec(b.joint_rot(4) * _mat(h[5])),
         _vec(R10 * (R0n * _mat(h[5]))),
@@ -507,7 +488,6 @@ def _planar(b: _Builder, R0n: sp.Matrix, pt: Vec, tM: Vec) -> None:
         e = _perp(h[0])
         b.sp1(
             "phi",
-            None,
             h[0],
             e,
             _vec(R0n * _mat(e)),
@@ -622,13 +602,8 @@ def derive_analytic(robot: Robot) -> AnalyticIK:
         _position(b, s, pt, tM)
     else:
         _planar(b, R0n, pt, tM)
-    outputs = [""] * g.n
-    for st in b.steps:
-        if st.joint is not None:
-            outputs[st.joint] = st.var
-    rev = [False] * g.n
-    for k, j in enumerate(g.joint):
-        rev[j] = g.revolute[k]
+    solved = {st.joint: st.var for st in b.steps if st.joint is not None}
+    rev = [r for _, r in sorted(zip(g.joint, g.revolute))]  # by joint index
     fk = _fk(_Builder(g0))
     B = None if base is None else fixed_matrix(base)
     E = None if tool is None else fixed_matrix(tool)
@@ -642,7 +617,7 @@ def derive_analytic(robot: Robot) -> AnalyticIK:
         s,
         g,
         tuple(b.steps),
-        tuple(outputs),
+        tuple(solved.get(j, "") for j in range(g.n)),
         g.n < 6,
         fk,
         tuple(rev),

@@ -7,7 +7,8 @@ write into each generated file's header (so a diff shows when simplification got
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import itertools
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import sympy as sp
@@ -174,31 +175,35 @@ class CSEResult:
     strategy: str = "expanded"
 
 
+def _flat(
+    outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...]], memo: dict[sp.Basic, sp.Expr]
+) -> dict[str, tuple[tuple[int, ...], tuple[sp.Expr, ...]]]:
+    """Each output (a matrix, or a tuple of equal-shape matrices for a 3-D array) as its shape and
+    its entries (:func:`floatify`, sharing ``memo``) in row-major order."""
+    flat = {}
+    for name, value in outputs.items():
+        mats = value if isinstance(value, tuple) else (value,)
+        shape = (len(mats), *mats[0].shape) if isinstance(value, tuple) else mats[0].shape
+        flat[name] = (tuple(shape), tuple(floatify(x, memo) for m in mats for x in m))
+    return flat
+
+
+def _total(exprs: Iterable[sp.Expr]) -> OpCounts:
+    return sum((count_ops(e) for e in exprs), OpCounts())
+
+
 def cse_outputs(
     outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...]],
     inputs: tuple[sp.Symbol, ...],
     prefix: str = "x",
 ) -> CSEResult:
     """One CSE over all ``outputs`` (a matrix, or a tuple of equal-shape matrices for a 3-D array)."""
-    flat: list[sp.Expr] = []
-    shapes: dict[str, tuple[tuple[int, ...], int, int]] = {}
-    memo: dict[sp.Basic, sp.Expr] = {}
-    for name, value in outputs.items():
-        mats = value if isinstance(value, tuple) else (value,)
-        shape = mats[0].shape if not isinstance(value, tuple) else (len(mats), *mats[0].shape)
-        start = len(flat)
-        for m in mats:
-            flat.extend(floatify(x, memo) for x in m)
-        shapes[name] = (tuple(shape), start, len(flat))
-    symbols = sp.numbered_symbols(prefix)
-    repl, reduced = sp.cse(flat, symbols=symbols, order="none", optimizations=None)
-    counts = OpCounts()
-    for _, e in repl:
-        counts = counts + count_ops(e)
-    for e in reduced:
-        counts = counts + count_ops(e)
-    out = {name: (shape, tuple(reduced[a:b])) for name, (shape, a, b) in shapes.items()}
-    return CSEResult(tuple(repl), out, counts, tuple(inputs))
+    flat = _flat(outputs, {})
+    entries = [e for _, exprs in flat.values() for e in exprs]
+    repl, reduced = sp.cse(entries, symbols=sp.numbered_symbols(prefix), order="none", optimizations=None)
+    rest = iter(reduced)
+    out = {name: (shape, tuple(itertools.islice(rest, len(exprs)))) for name, (shape, exprs) in flat.items()}
+    return CSEResult(tuple(repl), out, _total([e for _, e in repl] + reduced), tuple(inputs))
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,7 @@ Num = Fraction | float | mpmath.mpf
 # this one). A longer run (fixed joints in a row) is folded even when exact: walked one transform
 # at a time it costs a few named values per translation, folded three.
 MAX_RUN = 10
-_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
+MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
 
 
 def _mp(x: Num) -> mpmath.mpf:
@@ -144,7 +144,7 @@ class Fixed:
                 d = _number(e.const, digits)
                 t = [_sum((p, _mul(d, x))) for p, x in zip(t, cols[i])]
                 continue
-            j, kk = _MIX[i]
+            j, kk = MIX[i]
             cj, ck = cols[j], cols[kk]
             k = e.const.quarter_turns
             if k is not None:  # a signed swap of two columns

@@ -157,36 +157,26 @@ def _expanded(sk: SymbolicKinematics) -> list[KinFunction]:
 
 
 def _program(kp: KinematicProgram) -> list[KinFunction]:
+    J0, Je = {"J": kp.J0}, {"J": kp.Je}
+    hessians: dict[str, tuple[dict, tuple[str, ...], tuple[HessianLoop, ...]]]
     if kp.H0 is not None and kp.He is not None:  # written out
-        h0: dict = {"H": kp.H0}
-        he: dict = {"H": kp.He}
-        spec: dict[str, tuple[dict, tuple[str, ...], tuple[HessianLoop, ...]]] = {
-            "hessian0": (h0, (), ()),
-            "hessiane": (he, (), ()),
-            "jacob0_hessian0": ({"J": kp.J0, **h0}, (), ()),
-        }
+        hessians = {"hessiane": ({"H": kp.He}, (), ()), "jacob0_hessian0": ({**J0, "H": kp.H0}, (), ())}
     else:  # loops over the Jacobian columns
-        loop0 = HessianLoop("H", "J", "base", kp.order)
-        loope = HessianLoop("H", "J", "ee", kp.order)
-        spec = {
-            "hessian0": ({"J": kp.J0}, ("J",), (loop0,)),
-            "hessiane": ({"J": kp.Je}, ("J",), (loope,)),
-            "jacob0_hessian0": ({"J": kp.J0}, (), (loop0,)),
+        hessians = {
+            "hessiane": (Je, ("J",), (HessianLoop("H", "J", "ee", kp.order),)),
+            "jacob0_hessian0": (J0, (), (HessianLoop("H", "J", "base", kp.order),)),
         }
     spec = {
         "fkine": ({"T": kp.T}, (), ()),
         "link_poses": ({"links": kp.links}, (), ()),
-        "jacob0": ({"J": kp.J0}, (), ()),
-        "jacobe": ({"J": kp.Je}, (), ()),
-        "hessian0": spec["hessian0"],
-        "hessiane": spec["hessiane"],
-        "fkine_jacob0": ({"T": kp.T, "J": kp.J0}, (), ()),
-        "jacob0_hessian0": spec["jacob0_hessian0"],
+        "jacob0": (J0, (), ()),
+        "jacobe": (Je, (), ()),
+        "fkine_jacob0": ({"T": kp.T, **J0}, (), ()),
+        **hessians,
     }
     functions = {
         name: KinFunction(name, FUNCTION_DOCS[name], program_code(kp, outs, scratch, loops))
         for name, (outs, scratch, loops) in spec.items()
-        if name != "hessian0"
     }
     # hessian0 calls jacob0_hessian0 (its Jacobian a local array): the Hessian code compiles once
     both = functions["jacob0_hessian0"].code
@@ -201,15 +191,8 @@ def tree_functions(tp: TreeProgram) -> list[KinFunction]:
     (:data:`~symkin.symbolic.program.TREE_FUNCTIONS`, then per frame
     :data:`~symkin.symbolic.program.PER_FRAME`), each the lines its outputs need."""
     T, J0 = tp.T, tp.J0
-    out = [
-        KinFunction("fkine_all", TREE_FUNCTIONS["fkine_all"], program_code(tp, {"T": T})),  # type: ignore[arg-type]
-        KinFunction("jacob0_all", TREE_FUNCTIONS["jacob0_all"], program_code(tp, {"J": J0})),  # type: ignore[arg-type]
-        KinFunction(
-            "fkine_jacob0_all",
-            TREE_FUNCTIONS["fkine_jacob0_all"],
-            program_code(tp, {"T": T, "J": J0}),  # type: ignore[arg-type]
-        ),
-    ]
+    every = {"fkine_all": {"T": T}, "jacob0_all": {"J": J0}, "fkine_jacob0_all": {"T": T, "J": J0}}
+    out = [KinFunction(name, TREE_FUNCTIONS[name], program_code(tp, outs)) for name, outs in every.items()]
     for k, frame in enumerate(tp.frames):
         spec = {
             "fkine": {"T": T[k]},
@@ -219,7 +202,7 @@ def tree_functions(tp: TreeProgram) -> list[KinFunction]:
         }
         for base, outs in spec.items():
             doc = PER_FRAME[base].format(k=k, name=safe_text(frame))
-            out.append(KinFunction(f"{base}_{k}", doc, program_code(tp, outs)))  # type: ignore[arg-type]
+            out.append(KinFunction(f"{base}_{k}", doc, program_code(tp, outs)))
     return out
 
 

@@ -37,7 +37,7 @@ import sympy as sp
 from symkin.errors import NoAnalyticIKError
 from symkin.model.ets import ET, ETS, Const
 from symkin.symbolic.cse import _postorder
-from symkin.symbolic.fold import Fixed, fold_constants
+from symkin.symbolic.fold import Fixed, _mp, fold_constants
 from symkin.symbolic.kinematics import const_to_sympy
 
 __all__ = [
@@ -122,11 +122,13 @@ def fold_ik(ets: ETS) -> tuple[ET | Fixed, ...]:
 def fixed_matrix(f: Fixed) -> sp.Matrix:
     """The 4x4 matrix of a folded run (Rationals where exact, else :data:`IK_DIGITS`-digit Floats)."""
     cols, t = f.exprs
+    return _pose(sp.Matrix(cols).T, t)
+
+
+def _pose(R: sp.Matrix, t: Iterable[sp.Expr]) -> sp.Matrix:
+    """The 4x4 pose of rotation ``R`` and translation ``t``."""
     M = sp.eye(4)
-    for j in range(3):
-        for i in range(3):
-            M[i, j] = cols[j][i]
-        M[j, 3] = t[j]
+    M[:3, :3], M[:3, 3] = R, sp.Matrix(list(t))
     return M
 
 
@@ -170,10 +172,7 @@ def geometry(ets: ETS | Iterable[ET | Fixed]) -> Geometry:
             t = t + R[:, i] * value
             if inexact:
                 t = t.applyfunc(_number)
-    M = sp.eye(4)
-    M[:3, :3] = R
-    M[:3, 3] = t
-    return Geometry(tuple(joint), tuple(rev), tuple(hs), tuple(ps), M)
+    return Geometry(tuple(joint), tuple(rev), tuple(hs), tuple(ps), _pose(R, t))
 
 
 def reverse(g: Geometry) -> Geometry:
@@ -185,15 +184,12 @@ def reverse(g: Geometry) -> Geometry:
     tM = g.M[:3, 3]
     hs = tuple(tuple(-(RM.T * sp.Matrix(h))) for h in reversed(g.h))
     ps = tuple(tuple(sp.simplify(x) for x in RM.T * (sp.Matrix(p) - tM)) for p in reversed(g.p))
-    M = sp.eye(4)
-    M[:3, :3] = RM.T
-    M[:3, 3] = -RM.T * tM
     return Geometry(
         tuple(reversed(g.joint)),
         tuple(reversed(g.revolute)),
         hs,  # type: ignore[arg-type]
         ps,  # type: ignore[arg-type]
-        M.applyfunc(sp.simplify),
+        _pose(RM.T, -RM.T * tM).applyfunc(sp.simplify),
     )
 
 
@@ -211,8 +207,7 @@ def value_at(x: sp.Expr, point: Mapping[sp.Basic, Fraction | float | mpmath.mpf]
     with mpmath.workdps(_PROBE_DIGITS):
         for e in _postorder([x]):
             if e.is_Symbol:
-                x0 = point[e]
-                v = mpmath.mpf(x0.numerator) / x0.denominator if isinstance(x0, Fraction) else mpmath.mpf(x0)
+                v = _mp(point[e])
             elif e.is_Rational:
                 v = mpmath.mpf(int(e.p)) / int(e.q)
             elif e.is_Float:

@@ -27,12 +27,9 @@ from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import tree_size
 from symkin.symbolic.fold import Fixed, fold_constants
-from symkin.symbolic.program import walk_joints
+from symkin.symbolic.program import Frame, Program, _base_jacobian, _hessians, _matrix, _Walk, walk_joints
 
 __all__ = ["SymbolicKinematics", "ExpansionTooLargeError", "derive", "const_to_sympy", "joint_symbols"]
-
-_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
-_HALF_PI = sp.pi / 2
 
 
 def const_to_sympy(c: Const) -> sp.Expr:
@@ -53,72 +50,8 @@ def joint_symbols(n: int) -> tuple[sp.Symbol, ...]:
     return tuple(sp.Symbol(f"q{j}", real=True) for j in range(n))
 
 
-def _cos_sin(angle: sp.Expr) -> tuple[sp.Expr, sp.Expr]:
-    """cos and sin of an angle, exact (0, +-1) when it is a constant multiple of pi/2."""
-    if angle.is_number:
-        k = angle / _HALF_PI
-        if k.is_integer:
-            return ((1, 0), (0, 1), (-1, 0), (0, -1))[int(k) % 4]
-    return sp.cos(angle), sp.sin(angle)
-
-
 def _cross(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Expr]:
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-class _Pose:
-    """Running pose: accumulated rotation columns, translation, and a pending rotation."""
-
-    def __init__(self) -> None:
-        self.cols: list[list[sp.Expr]] = [[sp.Integer(int(i == j)) for i in range(3)] for j in range(3)]
-        self.p: list[sp.Expr] = [sp.Integer(0)] * 3
-        self.axis: int | None = None  # axis of the pending rotation
-        self.angle: sp.Expr = sp.Integer(0)
-
-    def effective(self) -> list[list[sp.Expr]]:
-        """The three rotation columns including the pending rotation."""
-        if self.axis is None:
-            return [list(c) for c in self.cols]
-        j, k = _MIX[self.axis]
-        c, s = _cos_sin(self.angle)
-        cols = [list(col) for col in self.cols]
-        cj, ck = self.cols[j], self.cols[k]
-        cols[j] = [c * x + s * y for x, y in zip(cj, ck)]
-        cols[k] = [c * y - s * x for x, y in zip(cj, ck)]
-        return cols
-
-    def column(self, i: int) -> list[sp.Expr]:
-        """Column i of the effective rotation (a rotation about i leaves column i unchanged)."""
-        if self.axis is None or self.axis == i:
-            return list(self.cols[i])
-        return self.effective()[i]
-
-    def flush(self) -> None:
-        if self.axis is not None:
-            self.cols = self.effective()
-            self.axis, self.angle = None, sp.Integer(0)
-
-    def rotate(self, i: int, angle: sp.Expr) -> None:
-        if self.axis is not None and self.axis != i:
-            self.flush()
-        self.axis = i
-        self.angle = self.angle + angle
-
-    def translate(self, i: int, d: sp.Expr) -> None:
-        col = self.column(i)
-        self.p = [p + d * x for p, x in zip(self.p, col)]
-
-    def transform(self, f: Fixed) -> None:
-        """Apply a folded constant transform (:mod:`symkin.symbolic.fold`)."""
-        self.flush()
-        self.cols, self.p = f.apply(self.cols, self.p)
-
-    def matrix(self) -> sp.Matrix:
-        cols = self.effective()
-        return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], self.p[r]] for r in range(3)] + [[0, 0, 0, 1]])
-
-
-Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, axis, origin)
 
 
 def _walk(
@@ -127,15 +60,16 @@ def _walk(
     constant: Callable[[Const], sp.Expr],
     sign: int,
     links: list[sp.Matrix] | None = None,
-) -> tuple[_Pose, list[Frame]]:
-    """Apply ``elements`` in order (``sign=-1``: their inverses), recording each joint's axis and
-    origin just before it, and (into ``links``) the pose right after it."""
-    pose = _Pose()
+) -> tuple[_Walk, list[Frame]]:
+    """Apply ``elements`` in order (``sign=-1``: their inverses) to a pose whose every entry is one
+    expression, recording each joint's axis and origin just before it, and (into ``links``) the pose
+    right after it."""
+    pose = _Walk(Program(inline=True))
     frames: list[Frame] = []
     for frame in walk_joints(pose, elements, qs, constant, sign):
         frames.append(frame)
         if links is not None:
-            links.append(pose.matrix())
+            links.append(_matrix(*pose.pose()))
     return pose, frames
 
 
@@ -161,9 +95,7 @@ def _ee_frame(
         v = _cross(u, r) if revolute else u
         w = u if revolute else zero3
         cols.append((v, w, r))
-        for row in range(3):
-            Je[row, j] = v[row]
-            Je[row + 3, j] = w[row]
+        Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(w)
     He = [sp.zeros(6, n) for _ in range(n)]
     for kb, (jb, rev_b, ub, pb) in enumerate(ordered):
         for ka, (ja, rev_a, ua, pa) in enumerate(ordered[:kb]):
@@ -178,9 +110,7 @@ def _ee_frame(
                 dw = du
             else:
                 dv, dw = du, zero3
-            for row in range(3):
-                He[jb][row, ja] = dv[row]
-                He[jb][row + 3, ja] = dw[row]
+            He[jb][:3, ja], He[jb][3:, ja] = sp.Matrix(dv), sp.Matrix(dw)
     return Je, He
 
 
@@ -249,43 +179,12 @@ def derive(
 
     links: list[sp.Matrix] = []
     pose, frames = _walk(elements, qs, constant, 1, links)
-    T = pose.matrix()
+    cols, pe = pose.pose()
+    T = _matrix(cols, pe)
     budget(T)
-    pe = [T[r, 3] for r in range(3)]
-
-    zero3 = [sp.Integer(0)] * 3
-    Jv: list[list[sp.Expr]] = []
-    Jw: list[list[sp.Expr]] = []
-    for _, revolute, w, p in frames:
-        if revolute:
-            Jv.append(_cross(w, [a - b for a, b in zip(pe, p)]))
-            Jw.append(w)
-        else:
-            Jv.append(w)
-            Jw.append(zero3)
-    order = [f[0] for f in frames]
-    J0 = sp.zeros(6, n)
-    for k, j in enumerate(order):
-        for r in range(3):
-            J0[r, j] = Jv[k][r]
-            J0[r + 3, j] = Jw[k][r]
+    J0 = _base_jacobian(pose.P, frames, pe, n)
     budget(J0)
-
-    H0 = [sp.zeros(6, n) for _ in range(n)]
-    for kb, jb in enumerate(order):
-        for ka, ja in enumerate(order):
-            if kb <= ka:
-                if not frames[kb][1]:
-                    continue
-                dv, dw = _cross(Jw[kb], Jv[ka]), _cross(Jw[kb], Jw[ka])
-            else:
-                if not frames[ka][1]:
-                    continue
-                dv, dw = _cross(Jw[ka], Jv[kb]), zero3
-            for r in range(3):
-                H0[jb][r, ja] = dv[r]
-                H0[jb][r + 3, ja] = dw[r]
-
+    H0, _ = _hessians(pose.P, J0, None, [f[0] for f in frames])
     budget(x for h in H0 for x in h)
     Je, He = _ee_frame(elements, qs, constant)
     return SymbolicKinematics(name, ets, qs, T, tuple(links), J0, Je, tuple(H0), tuple(He))

@@ -32,15 +32,16 @@ and time grow linearly with the number of segments plus, per frame, the joints o
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections import Counter
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import sympy as sp
 
 from symkin.model.ets import ET, ETS, Const
-from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, count_ops, floatify
-from symkin.symbolic.fold import Fixed, fold_constants
+from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, _flat, _total, floatify
+from symkin.symbolic.fold import MIX, Fixed, fold_constants
 
 __all__ = [
     "Program",
@@ -58,8 +59,8 @@ __all__ = [
     "total_ops",
 ]
 
-_MIX = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # rotation about axis i mixes columns (j, k)
 _HALF_PI = sp.pi / 2
+_ZERO3 = [sp.Integer(0)] * 3
 
 
 def _is_cheap(e: sp.Expr) -> bool:
@@ -73,17 +74,19 @@ class Program:
     """Straight-line code under construction: ``lines`` of (symbol, expression), in order.
 
     :meth:`let` names an expression (or returns the name it already has) and keeps numbers,
-    symbols and negated symbols as they are.
+    symbols and negated symbols as they are. With ``inline`` nothing is named: every value stays
+    one expression (the expanded derivation, :mod:`symkin.symbolic.kinematics`, walks so).
     """
 
-    def __init__(self, prefix: str = "t") -> None:
+    def __init__(self, prefix: str = "t", inline: bool = False) -> None:
         self.prefix = prefix
+        self.inline = inline
         self.lines: list[tuple[sp.Symbol, sp.Expr]] = []
         self._names: dict[sp.Expr, sp.Symbol] = {}
 
     def let(self, expr: sp.Expr | int) -> sp.Expr:
         expr = sp.sympify(expr)
-        if _is_cheap(expr):
+        if self.inline or _is_cheap(expr):
             return expr
         name = self._names.get(expr)
         if name is not None:
@@ -113,7 +116,8 @@ def _cross(P: Program, a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Ex
 
 
 class _Walk:
-    """The running pose of a walk along the chain, every column and origin a named value."""
+    """The running pose of a walk along the chain, every column and origin a value of ``P`` (named,
+    or one expression when ``P`` is inline)."""
 
     def __init__(self, P: Program) -> None:
         self.P = P
@@ -140,7 +144,7 @@ class _Walk:
     def column(self, i: int) -> list[sp.Expr]:
         if self.axis is None or self.axis == i:
             return self.cols[i]
-        j, k = _MIX[self.axis]
+        j, k = MIX[self.axis]
         c, s = self._cs()
         cj, ck = self.cols[j], self.cols[k]
         if i == j:
@@ -222,6 +226,25 @@ def _matrix(cols: list[list[sp.Expr]], p: list[sp.Expr]) -> sp.Matrix:
     return sp.Matrix([[cols[0][r], cols[1][r], cols[2][r], p[r]] for r in range(3)] + [[0, 0, 0, 1]])
 
 
+def _jacobian_column(
+    P: Program, revolute: bool, w: list[sp.Expr], p: list[sp.Expr], pe: Sequence[sp.Expr]
+) -> tuple[list[sp.Expr], list[sp.Expr]]:
+    """(v, omega) of a joint with signed axis ``w`` through ``p`` for the point ``pe`` (eqs 31-34):
+    ``(w x (pe - p); w)`` when revolute, ``(w; 0)`` when prismatic."""
+    if not revolute:
+        return w, _ZERO3
+    return _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])), w
+
+
+def _base_jacobian(P: Program, frames: Iterable[Frame], pe: Sequence[sp.Expr], n: int) -> sp.Matrix:
+    """The base-frame Jacobian (6 x n) of the point ``pe`` from the joints' ``frames``."""
+    J0 = sp.zeros(6, n)
+    for j, revolute, w, p in frames:
+        v, o = _jacobian_column(P, revolute, w, p, pe)
+        J0[:3, j], J0[3:, j] = sp.Matrix(v), sp.Matrix(o)
+    return J0
+
+
 @dataclass(frozen=True, eq=False)
 class KinematicProgram:
     """The kinematics of a chain as a straight-line program.
@@ -282,25 +305,17 @@ def derive_program(
         marks.append((f"link {len(links) - 1}", len(P.lines)))
     cols, pe = W.pose()
     marks.append(("T", len(P.lines)))
-    zero3 = [sp.Integer(0)] * 3
-    J0 = sp.zeros(6, n)
-    for j, revolute, w, p in frames:
-        v = _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])) if revolute else w
-        J0[:3, j] = sp.Matrix(v)
-        J0[3:, j] = sp.Matrix(w if revolute else zero3)
+    J0 = _base_jacobian(P, frames, pe, n)
     marks.append(("J0", len(P.lines)))
     # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
     inv = list(walk_joints(_Walk(P), reversed(elements), qs, constant, -1))
     Je = sp.zeros(6, n)
     for j, revolute, u, p in inv:
         v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'
-        Je[:3, j] = sp.Matrix(v)
-        Je[3:, j] = sp.Matrix(u if revolute else zero3)
+        Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(u if revolute else _ZERO3)
     marks.append(("Je", len(P.lines)))
     order = tuple(f[0] for f in frames)
-    H0 = He = None
-    if hessians:
-        H0, He = _hessians(P, J0, Je, order)
+    H0, He = _hessians(P, J0, Je, order) if hessians else (None, None)
     marks.append(("H", len(P.lines)))
     return KinematicProgram(
         name=name,
@@ -320,9 +335,10 @@ def derive_program(
 
 
 def _hessians(
-    P: Program, J0: sp.Matrix, Je: sp.Matrix, order: tuple[int, ...]
+    P: Program, J0: sp.Matrix, Je: sp.Matrix | None, order: Sequence[int]
 ) -> tuple[tuple[sp.Matrix, ...], tuple[sp.Matrix, ...]]:
-    """Both Hessians by the rules of :class:`HessianLoop`, each cross product a named value."""
+    """Both Hessians (He only with ``Je``, else zeros) by the rules of :class:`HessianLoop`, each
+    cross product a value of ``P``; ``order`` is the joint index of each joint along the chain."""
     n = len(order)
     H0 = [sp.zeros(6, n) for _ in range(n)]
     He = [sp.zeros(6, n) for _ in range(n)]
@@ -339,6 +355,8 @@ def _hessians(
             H0[b][3:, a] = sp.Matrix(_cross(P, wb, wa))
             if a != b:
                 H0[a][:3, b] = sp.Matrix(x)
+        if Je is None:
+            continue
         vb, wb = col(Je, b)
         for a in order[:kb]:
             va, wa = col(Je, a)
@@ -363,28 +381,17 @@ def needed_lines(lines: Sequence[tuple[sp.Symbol, sp.Expr]], roots: list[sp.Expr
 
 
 def program_code(
-    kp: KinematicProgram,
-    outputs: dict[str, sp.Matrix | tuple[sp.Matrix, ...]],
+    kp: KinematicProgram | TreeProgram,
+    outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...]],
     scratch: tuple[str, ...] = (),
     hessians: tuple[HessianLoop, ...] = (),
 ) -> CSEResult:
     """The lines of ``kp`` that ``outputs`` need, as straight-line code (see :class:`CSEResult`)."""
-    flat: dict[str, tuple[tuple[int, ...], tuple[sp.Expr, ...]]] = {}
     memo: dict[sp.Basic, sp.Expr] = {}
-    for name, value in outputs.items():
-        mats = value if isinstance(value, tuple) else (value,)
-        shape = mats[0].shape if not isinstance(value, tuple) else (len(mats), *mats[0].shape)
-        flat[name] = (tuple(shape), tuple(floatify(x, memo) for m in mats for x in m))
-    keep = needed_lines(kp.lines, [e for _, exprs in flat.values() for e in exprs])
-    lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in keep)
-    counts = OpCounts()
-    for _, e in lines:
-        counts = counts + count_ops(e)
-    for _, exprs in flat.values():
-        for e in exprs:
-            counts = counts + count_ops(e)
-    for h in hessians:
-        counts = counts + h.counts
+    flat = _flat(outputs, memo)
+    entries = [e for _, exprs in flat.values() for e in exprs]
+    lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in needed_lines(kp.lines, entries))
+    counts = sum((h.counts for h in hessians), _total([e for _, e in lines] + entries))
     return CSEResult(lines, flat, counts, kp.q, scratch, hessians, "program")
 
 
@@ -449,12 +456,10 @@ def derive_tree_program(
     P = Program()
     walks: list[_Walk] = []
     joint_axes: dict[int, tuple[list[sp.Expr], list[sp.Expr]]] = {}  # slot -> (signed axis, origin)
+    thetas = [sp.Rational(s.multiplier) * qs[s.joint] + sp.Rational(s.offset) for s in slots]  # by slot
     links: list[sp.Matrix | None] = []
     marks: list[tuple[str, int]] = []
-    children = [0] * len(segments)
-    for seg in segments:
-        if seg.parent >= 0:
-            children[seg.parent] += 1
+    children = Counter(seg.parent for seg in segments)
     ends = set(tree.frame_segments)  # type: ignore[attr-defined]
     carried: list[tuple[ET, ...]] = []  # per segment: constants left for its child to walk
     for k, seg in enumerate(segments):
@@ -467,25 +472,11 @@ def derive_tree_program(
             continue
         carried.append(())
         W = _Walk(P) if seg.parent < 0 else walks[seg.parent].fork()
-        for e in fold_constants(ets) if fold else ets:
-            if isinstance(e, Fixed):
-                W.transform(e)
-                continue
-            i = e.axis.index
-            if e.is_joint:
-                s = slots[seg.slot]
-                theta = sp.Rational(s.multiplier) * qs[s.joint] + sp.Rational(s.offset)
-                joint_axes[seg.slot] = ([x * e.sign for x in W.column(i)], list(W.p))
-                value = e.sign * theta
-            else:
-                value = constant(e.const)
-                if value == 0:
-                    continue
-            move(W, e, value)
+        for slot, _, w, p in walk_joints(W, fold_constants(ets) if fold else ets, thetas, constant, 1):
+            joint_axes[slot] = (w, p)
         walks.append(W)
         links.append(_matrix(*W.pose()))  # dead code in the kernels unless a frame needs it
         marks.append((f"segment {k}", len(P.lines)))
-    zero3 = [sp.Integer(0)] * 3
     Ts, J0s, Jes = [], [], []
     for f, frame in enumerate(tree.frames):  # type: ignore[attr-defined]
         cols, pe = walks[tree.frame_segments[f]].pose()  # type: ignore[attr-defined]
@@ -493,8 +484,7 @@ def derive_tree_program(
         for k in tree.path_slots(frame):  # type: ignore[attr-defined]
             s = slots[k]
             w, p = joint_axes[k]
-            v = _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])) if s.revolute else w
-            o = w if s.revolute else zero3
+            v, o = _jacobian_column(P, s.revolute, w, p, pe)
             m = sp.Rational(s.multiplier)
             if m != 1:
                 v, o = P.vec([m * x for x in v]), P.vec([m * x for x in o])

@@ -36,7 +36,8 @@ from sympy.polys.matrices import DomainMatrix
 from symkin.errors import SymkinError, check_choice
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops, tree_size
-from symkin.symbolic.kinematics import _cross, _walk, const_to_sympy, joint_symbols
+from symkin.symbolic.kinematics import _walk, const_to_sympy, joint_symbols
+from symkin.symbolic.program import _jacobian_column
 
 __all__ = ["SingularFactor", "SingularFactors", "singular_factors", "AXES", "MAX_TERMS"]
 
@@ -132,9 +133,7 @@ def singular_factors(robot: Robot | str, axes: str = "auto", max_terms: int = MA
     _, info = sp.parallel_poly_from_expr(entries, *s, *c, *prismatic)
     dom = info.domain.get_field()[tuple(s + c + prismatic)]  # polynomials over QQ (or an algebraic field)
     D = DomainMatrix([[dom.from_sympy(entries[r * n + k]) for k in range(n)] for r in range(m)], (m, n), dom)
-    if m == n:
-        subsets = [(tuple(range(m)), tuple(range(n)))]
-    elif m < n:
+    if m <= n:
         subsets = [(tuple(range(m)), cols) for cols in itertools.combinations(range(n), m)]
     else:
         subsets = [(rs, tuple(range(n))) for rs in itertools.combinations(range(m), n)]
@@ -213,8 +212,8 @@ def _shortest_jacobian(
         for name, p in points:
             J = sp.zeros(len(rows), n)
             for j, (_, revolute, w, o) in frames.items():
-                v = _cross(w, [a - b for a, b in zip(p, o)]) if revolute else list(w)
-                col = [*v, *(w if revolute else [0, 0, 0])]
+                v, omega = _jacobian_column(pose.P, revolute, w, o, p)
+                col = [*v, *omega]
                 for i, r in enumerate(rows):
                     J[i, j] = col[r]
             ops = tree_size(list(J), sizes)
