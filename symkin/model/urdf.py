@@ -271,22 +271,31 @@ class _XacroError(Exception):
     """A xacro construct, described for the message."""
 
 
-def _xacro_in_element(name: str, attrs: dict[str, str]) -> None:
-    """Raise _XacroError for an element (raw, unprocessed names) that only xacro gives meaning to:
-    a ``xacro:`` element or attribute, a declaration of the xacro namespace
-    (``http://www.ros.org/wiki/xacro``, under any prefix) or a ``${...}`` / ``$(...)`` substitution
-    in an attribute."""
-    if name.startswith("xacro:"):
-        raise _XacroError(f"it has the element <{name}>")
-    for key, value in attrs.items():
-        if key.startswith("xacro:"):
-            raise _XacroError(f"it has the attribute {key!r} in <{name}>")
-        if (key == "xmlns" or key.startswith("xmlns:")) and "ros.org/wiki/xacro" in value:
-            raise _XacroError(f"it declares the xacro namespace, {key}={value!r}")
-        for mark in ("${", "$("):
-            if mark in value:
-                shown = value if len(value) <= 60 else value[:57] + "..."
-                raise _XacroError(f"it has the substitution {shown!r} in attribute {key!r} of <{name}>")
+class _XacroScan:
+    """The prescan's element handler: raise _XacroError for what only xacro gives meaning to, in
+    names as written (no namespace processing): an element or attribute under the ``xacro:``
+    prefix or a prefix bound to the xacro namespace (``http://www.ros.org/wiki/xacro``), a default
+    namespace that is xacro's, or a ``${...}`` / ``$(...)`` substitution in an attribute. A
+    declaration alone is not xacro: expanded files (example-robot-data's baxter.urdf) keep it."""
+
+    def __init__(self) -> None:
+        self.prefixes = {"xacro"}
+
+    def __call__(self, name: str, attrs: dict[str, str]) -> None:
+        for key, value in attrs.items():
+            if key.startswith("xmlns") and "ros.org/wiki/xacro" in value:
+                if key == "xmlns":
+                    raise _XacroError(f"its default namespace is xacro's, xmlns={value!r}")
+                self.prefixes.add(key.partition(":")[2])
+        if name.partition(":")[0] in self.prefixes and ":" in name:
+            raise _XacroError(f"it has the element <{name}>")
+        for key, value in attrs.items():
+            if key.partition(":")[0] in self.prefixes and ":" in key:
+                raise _XacroError(f"it has the attribute {key!r} in <{name}>")
+            for mark in ("${", "$("):
+                if mark in value:
+                    shown = value if len(value) <= 60 else value[:57] + "..."
+                    raise _XacroError(f"it has the substitution {shown!r} in attribute {key!r} of <{name}>")
 
 
 def _xacro_error(where: str, found: str, path: Path | None = None) -> URDFError:
@@ -316,7 +325,7 @@ def _prescan(text: str, where: str, path: Path | None = None) -> None:
     parser = expat.ParserCreate()
     parser.StartDoctypeDeclHandler = _refuse
     parser.EntityDeclHandler = _refuse
-    parser.StartElementHandler = _xacro_in_element
+    parser.StartElementHandler = _XacroScan()
     try:
         parser.Parse(text, True)
     except _RefusedError:

@@ -421,9 +421,10 @@ def _readers():
 @pytest.mark.parametrize(
     ("text", "found"),
     [
-        (XACRO_ARM, "xmlns:xacro"),  # read as XML, it was a 1-joint robot: the macros were dropped
+        (XACRO_ARM, "<xacro:property>"),  # read as XML, it was a 1-joint robot: the macros were dropped
         (XACRO_ARM.replace(' xmlns:xacro="http://www.ros.org/wiki/xacro"', ""), "<xacro:property>"),
-        (XACRO_ARM.replace("xacro:", "x:").replace("xmlns:xacro", "xmlns:x"), "xmlns:x"),  # any prefix
+        (XACRO_ARM.replace("xacro:", "x:").replace("xmlns:xacro", "xmlns:x"), "<x:property>"),  # any prefix
+        (XACRO_ARM.replace("xmlns:xacro", "xmlns"), "default namespace is xacro's"),
         (urdf(["a", "b"], [joint("j", "a", "b", xyz="0 0 ${len}")]), "'0 0 ${len}' in attribute 'xyz'"),
         (urdf(["a", "b"], [joint("j", "a", "b", extra='<x xacro:if="1"/>')]), "xacro:if"),
         (urdf(["a", "$(arg b)"], [joint("j", "a", "$(arg b)")]), "$(arg b)"),
@@ -436,6 +437,19 @@ def test_xacro_text_is_refused_with_how_to_expand_it(text: str, found: str) -> N
         msg = str(info.value)
         assert "xacro, not plain URDF" in msg and found in msg, msg
         assert "`xacro file.urdf.xacro > file.urdf`" in msg
+
+
+def test_an_expanded_urdf_that_keeps_the_xacro_declaration_is_read() -> None:
+    """xacro's output keeps the namespace declaration of its input (example-robot-data's baxter.urdf
+    does): with no xacro element, attribute or substitution left, it is plain URDF."""
+    text = urdf(["a", "b"], [joint("j", "a", "b", xyz="0 0 0.5")]).replace(
+        "<robot ", '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" ', 1
+    )
+    assert 'xmlns:xacro="http://www.ros.org/wiki/xacro"' in text
+    for read in _readers():
+        model = read(text)
+        assert model.n == 1
+        assert np.allclose(model.fkine(np.zeros(1))[:3, 3], [0, 0, 0.5])
 
 
 def test_xacro_files_are_refused_by_content_and_name(tmp_path: Path) -> None:
