@@ -297,7 +297,7 @@ def _c_solver_avoiding(kin: Any, check: Collision, env: Environment, kwargs: dic
     from symkin.runtime.ik_c import CIKSolver, options_key
     from symkin.runtime.ik_problem import IKOptions
 
-    if check.kernel is None or getattr(kin, "backend", None) != "c" or getattr(kin, "is_tree", True):
+    if check.kernel is None or getattr(kin, "backend", None) != "c" or len(getattr(kin, "frames", ())) != 1:
         return None
     if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or getattr(kin, "n", 99) > 12:
         return None  # frame=, backend=...: the general path

@@ -17,6 +17,7 @@ from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_step
 from symkin.runtime.ik import check_pose, pose_error
 from symkin.runtime.servo import servo_gain, servo_velocity
+from symkin.runtime.task import task_kinematics
 
 __all__ = ["servo", "ServoResult"]
 
@@ -127,10 +128,7 @@ def servo(
     kinematics), or link frame k of a chain; the joints off its path do not move (the loop then
     runs in Python, except for a C tree's frame without mimic joints).
     """
-    if frame is not None or getattr(kin, "_symkin_tree", False):
-        from symkin.runtime.task import task_kinematics
-
-        kin = task_kinematics(kin, frame)
+    kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
     if backend not in ("auto", "c", "python"):
         raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
     n = int(kin.n)

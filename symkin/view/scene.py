@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from symkin.errors import ParameterError
+from symkin.errors import ParameterError, SymkinError
 from symkin.model.differential import manipulability_one
 from symkin.model.kinematics import const_matrix
 
@@ -57,13 +57,14 @@ class Scene:
     :class:`~symkin.Environment`, or None) checked against the robot's collision geometry."""
 
     def __init__(self, kin: Any, env: Any = None) -> None:
-        if getattr(kin, "is_tree", False):
+        try:
+            self.robot = kin.model.chain()
+        except SymkinError:  # several frames, or a mimic joint on the path
             raise ParameterError(
                 f"the live view draws a serial chain; {kin.name} is a tree: pick one frame "
                 "(ROBOT.urdf:FRAME or --end-link)"
-            )
+            ) from None
         self.kin = kin
-        self.robot = kin.robot
         self.n = int(kin.n)
         self.env = env if env is not None and len(env) else None
         self._prefix, self._after = _chain_offsets(self.robot)

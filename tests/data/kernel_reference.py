@@ -52,8 +52,10 @@ ENV = Environment(
 def _tree_fixtures() -> dict[str, Any]:
     from tests.model import tree_urdfs as t
 
-    trees = {name: symkin.Tree.from_urdf(getattr(t, name.upper())) for name in
-             ("quadruped", "arm_camera", "gripper", "gripper_free", "dual_arm")}  # fmt: skip
+    trees = {
+        name: symkin.Tree.from_urdf(getattr(t, name.upper()))
+        for name in ("quadruped", "arm_camera", "gripper", "gripper_free", "dual_arm")
+    }
     trees["ur5_as_tree"] = symkin.Tree.from_robot(symkin.load("ur5"))
     return trees
 
@@ -156,8 +158,12 @@ def _same(kind: str, name: str, model: Any) -> tuple[str, Any]:
         table["fkine_jacob0_all.0"], table["fkine_jacob0_all.1"] = table["fkine_all"], table["jacob0_all"]
         table.update({f"jacob0_hessian0@{f}.0": f"jacob0@{f}" for f in range(F)})
         return name, table.get(name)
-    table = {"fkine_jacob0.0": "fkine", "fkine_jacob0.1": "jacob0", "jacob0_hessian0.0": "jacob0",
-             "jacob0_hessian0.1": "hessian0"}  # fmt: skip
+    table = {
+        "fkine_jacob0.0": "fkine",
+        "fkine_jacob0.1": "jacob0",
+        "jacob0_hessian0.0": "jacob0",
+        "jacob0_hessian0.1": "hessian0",
+    }
     table.update({f"fkine@{k}": ("link_poses", k) for k in range(model.n)})
     return name, table.get(name)
 
@@ -173,8 +179,18 @@ def kinematics_outputs(model: Any, backend: str, Q: np.ndarray) -> dict[str, np.
         for name in ("fkine_all", "jacob0_all", "fkine_jacob0_all"):
             calls[name] = getattr(kin, name)
     else:
-        for name in ("fkine", "jacob0", "jacobe", "hessian0", "hessiane", "fkine_jacob0",
-                     "jacob0_hessian0", "link_poses", "manipulability", "jacobm"):  # fmt: skip
+        for name in (
+            "fkine",
+            "jacob0",
+            "jacobe",
+            "hessian0",
+            "hessiane",
+            "fkine_jacob0",
+            "jacob0_hessian0",
+            "link_poses",
+            "manipulability",
+            "jacobm",
+        ):
             calls[name] = getattr(kin, name)
         for k in range(model.n):
             for name in ("fkine", "jacob0", "jacobe"):
