@@ -312,11 +312,18 @@ class Kinematics(FrameMethods):
         solutions in collision: on the C backend inside the C solver's search loop (the next
         search starts, within ``slimit``), elsewhere by solving again from new random starts, at
         most ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
+        With ``method="QP"`` on a chain's C kinematics each step also keeps the MMC's collision
+        rows (:func:`symkin.runtime.ik_qp_c.collision_qp_ik`).
         """
         if "collision" in kwargs or "collision_attempts" in kwargs:
             env = kwargs.pop("collision", None)
             attempts = kwargs.pop("collision_attempts", 20)
             if env is not None and env is not False:
+                qp = str(kwargs.get("method", "")).upper() == "QP"
+                if qp and frame is None and self.backend == "c" and not self.is_tree:
+                    from symkin.runtime.ik_qp_c import collision_qp_ik  # the QP keeps the MMC's rows
+
+                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)
                 from symkin.runtime.collision import collision_ik
 
                 if frame is not None:

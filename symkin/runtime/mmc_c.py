@@ -44,7 +44,7 @@ __all__ = ["CMMC", "CRRMC", "mmc_library", "mmc_extension", "mmc_sources", "osqp
 
 CSRC = Path(__file__).resolve().parent / "csrc"
 # the library's files from csrc: the MMC and RRMC steps and the extension module
-_CSRC_FILES = ("mmc.h", "mmc_impl.h", "mmc_py.c", "symkin_pose.h", "symkin_pyarray.h")
+_CSRC_FILES = ("mmc.h", "mmc_impl.h", "mmc_py.c", "mmc_ik.h", "mmc_ik.c", "symkin_pose.h", "symkin_pyarray.h")
 _P = ctypes.c_void_p
 _I32, _D = ctypes.c_int32, ctypes.c_double
 _STATUS = ("solved", "singular", "infeasible", "max_iter", "inaccurate", "error")
@@ -268,6 +268,8 @@ _CTRL_FLAGS = (
     "has_dt",
     "fresh",
     "polished",
+    "no_jm",
+    "singular_qp",
     "pad_",
 )
 
