@@ -745,21 +745,29 @@ class MMC:
 
     def _fallback(self, qp: MMCQP, status: str, method: str, iters: int) -> tuple[np.ndarray, StepInfo]:
         """The RRMC step scaled into [lower, upper] (or zero), never NaN."""
-        J, nu = qp.J, qp.l[:6]
-        lower, upper = qp.lower, qp.upper
-        qd, _, _, _ = _rrmc_step(J, nu, 1e-2, self.singular_tol, self._rows)
-        fallback = "rrmc"
-        if not np.isfinite(qd).all():
-            qd, fallback = np.zeros(self.n), "zero"
-        scale = 1.0
-        if (lower <= 0).all() and (upper >= 0).all():
-            with np.errstate(divide="ignore", invalid="ignore"):
-                r = np.where(qd > upper, upper / qd, np.where(qd < lower, lower / qd, 1.0))
-            scale = float(np.clip(r, 0.0, 1.0).min())
-            qd = qd * scale
-        qd = np.clip(qd, lower, upper)
-        res = float(np.abs(J @ qd - nu).max())
+        qd, fallback, scale = fallback_step(qp, self.singular_tol, self._rows)
+        res = float(np.abs(qp.J @ qd - qp.l[:6]).max())
         return qd, StepInfo(status, method, qp.manipulability, iters, fallback, res, scale=scale)
+
+
+def fallback_step(qp: MMCQP, singular_tol: float = 1e-6, rows: Any = None) -> tuple[np.ndarray, str, float]:
+    """(qd (n,), fallback, scale): the step of a QP no solver answered (a singular J, an infeasible
+    or failed QP): the RRMC step (eqs 35-36, damped 1e-2 at a singular J) for ``qp.J`` and the
+    equality's ``nu``, scaled down as a whole into the bounds when they contain 0, then clipped
+    into them; ``fallback`` is ``"rrmc"``, or ``"zero"`` when that step is not finite."""
+    J, nu = qp.J, qp.l[:6]
+    lower, upper = qp.lower, qp.upper
+    qd, _, _, _ = _rrmc_step(J, nu, 1e-2, singular_tol, _AXES["all"] if rows is None else rows)
+    fallback = "rrmc"
+    if not np.isfinite(qd).all():
+        qd, fallback = np.zeros(qp.n), "zero"
+    scale = 1.0
+    if (lower <= 0).all() and (upper >= 0).all():
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(qd > upper, upper / qd, np.where(qd < lower, lower / qd, 1.0))
+        scale = float(np.clip(r, 0.0, 1.0).min())
+        qd = qd * scale
+    return np.clip(qd, lower, upper), fallback, scale
 
 
 def _csc_order(pattern: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -251,7 +251,7 @@ class CIKSolver:
             ``collision`` the MMC's row options: :class:`~symkin.runtime.ik_qp_c.QPStep`).
 
     Method ``"QP"`` needs compiled C kinematics (its step is the MMC's, :mod:`symkin.runtime.ik_qp_c`)
-    and solves with the GIL held, through the library's ctypes calls.
+    and solves with the GIL held (the embedded OSQP solvers of its step are shared).
     """
 
     def __init__(
@@ -270,6 +270,7 @@ class CIKSolver:
         if options is not None and kwargs:
             raise TypeError("pass either options or keyword options, not both")
         self._qp = None
+        own = lib is None  # the default library, with the extension's one-target entry point
         if opt.method == "QP":  # the QP step: an MMC controller's, with the GIL held
             from symkin.runtime.ik_qp_c import QPStep
 
@@ -323,11 +324,7 @@ class CIKSolver:
         # one target: the extension's solve when the library is the default one (it has it), else
         # symkin_ik_solve through ctypes; either way with buffers per call (thread-safe)
         # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
-        self.fast = (
-            functools.partial(ik_extension().solve, self._cfg_addr, self._reason)
-            if lib is None and self._qp is None
-            else None
-        )
+        self.fast = functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if own else None
         self._seeds = random.Random(os.urandom(16))
 
     def bind(self, fallback: Any, by_options: dict[tuple, Any] | None = None) -> Any:
@@ -350,7 +347,8 @@ class CIKSolver:
     def solve(self, Tep: Any, q0: Any = None, seed: int | None = None) -> IKResult:
         """Solve one target (4, 4) or a batch (N, 4, 4); same arguments and result as :func:`ik`.
 
-        Thread-safe: one target is solved without the GIL, with buffers of its own.
+        Thread-safe: one target is solved without the GIL (with it for method "QP"), with buffers of
+        its own.
         """
         if self.fast is not None:
             res = self.fast(Tep, q0, seed)

@@ -51,6 +51,8 @@ from symkin.runtime.ik_problem import TWO_PI, IKOptions
 from symkin.runtime.mmc_qp import (
     MMCQP,
     active_of,
+    active_of_osqp,
+    active_rows_of,
     active_set_rows_solve,
     active_set_solve,
     joint_velocity_bounds,
@@ -59,7 +61,16 @@ from symkin.runtime.mmc_qp import (
     mmc_qp,
 )
 
-__all__ = ["ik_qp", "solve_ik_qp", "qp_bounds", "qp_step", "SINGULAR_TOL"]
+__all__ = [
+    "ik_qp",
+    "build_ik_qp",
+    "solve_ik_qp",
+    "qp_bounds",
+    "damped_limits",
+    "qp_step",
+    "manipulability_term",
+    "SINGULAR_TOL",
+]
 
 #: a J whose smallest singular value is below this has no manipulability term (Jm = 0), as in C
 SINGULAR_TOL = 1e-6
@@ -130,45 +141,62 @@ def ik_qp(
 
 
 def solve_ik_qp(qp: MMCQP) -> np.ndarray:
-    """The step qd (n,) of a QP from :func:`ik_qp`: the closed form when it lies within the bounds,
-    else the active-set solve (exact when it settles), else OSQP; clipped into the bounds (OSQP's
-    tolerance). Raises LinAlgError when no solver answers."""
+    """The step qd (n,) of a QP from :func:`ik_qp`, as the C step finds it: the closed form when it
+    lies within the bounds (and there are no collision rows within reach), else the active-set
+    solve (exact when it settles), else OSQP polished by the active-set solve from OSQP's active
+    set; clipped into the bounds (OSQP's tolerance). When no solver answers (only an infeasible QP:
+    collision rows against the bounds), the RRMC step scaled into the bounds
+    (:func:`symkin.runtime.control.fallback_step`)."""
+    from symkin.runtime.control import fallback_step
+
     n, J, nu = qp.n, qp.J, qp.l[:6]
     lam, w = float(qp.P[0, 0]), float(qp.P[n, n])
     jm = -qp.c[:n]
     lower, upper = qp.lower, qp.upper
-    qd = mmc_closed_form(J, jm, nu, lam, w)
     Jd, dl = qp.A[6 + n :, :n], qp.l[6 + n :]
-    if qp.n_distance and np.isfinite(dl).any():
-        rows = np.zeros(qp.n_distance, dtype=bool)
-        found = active_set_rows_solve(
-            J, jm, nu, lower, upper, lam, w, Jd, dl, active_of(qd, lower, upper), rows
-        )
+    near = bool(qp.n_distance and np.isfinite(dl).any())
+    qd = mmc_closed_form(J, jm, nu, lam, w)
+    act = active_of(qd, lower, upper)
+    if near:
+        found = active_set_rows_solve(J, jm, nu, lower, upper, lam, w, Jd, dl, act, np.zeros(len(dl), bool))
     elif np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
         return qd
     else:
-        found = active_set_solve(J, jm, nu, lower, upper, lam, w, active_of(qd, lower, upper))
-    x = found[0] if found is not None else _osqp(qp)
-    return np.clip(x[:n], lower, upper)
+        found = active_set_solve(J, jm, nu, lower, upper, lam, w, act)
+    if found is None:
+        x, y = _osqp(qp)
+        if x is None:
+            return fallback_step(qp)[0]
+        act = active_of_osqp(x[:n], y[6 : 6 + n], lower, upper)
+        if near:
+            rows = active_rows_of(x[:n], Jd, dl, y[6 + n :])
+            found = active_set_rows_solve(J, jm, nu, lower, upper, lam, w, Jd, dl, act, rows)
+        else:
+            found = active_set_solve(J, jm, nu, lower, upper, lam, w, act)
+        if found is None:
+            return np.clip(x[:n], lower, upper)
+    return np.clip(found[0][:n], lower, upper)
 
 
-def _osqp(qp: MMCQP) -> np.ndarray:
-    """The QP solved by OSQP (set up for this one problem, polished)."""
+def _osqp(qp: MMCQP) -> tuple[np.ndarray | None, np.ndarray]:
+    """(x, y): OSQP's solution and multipliers of the QP (set up for this one problem, cold), or
+    (None, _) when it is not usable (infeasible, failed)."""
     import osqp
     import scipy.sparse as sp
 
+    from symkin.runtime.control import _OSQP_STATUS
     from symkin.runtime.step import OSQP_SETTINGS
 
     inf = float(osqp.constant("OSQP_INFTY"))
     solver = osqp.OSQP()
-    settings = {**OSQP_SETTINGS, "polishing": True, "warm_starting": False}
+    settings = {**OSQP_SETTINGS, "polishing": False, "warm_starting": False}
     l, u = np.maximum(qp.l, -inf), np.minimum(qp.u, inf)
     solver.setup(sp.csc_matrix(qp.P), qp.c, sp.csc_matrix(qp.A), l, u, **settings)
     res = solver.solve(raise_error=False)
+    status = _OSQP_STATUS.get(osqp.SolverStatus(res.info.status_val).name, "error")
     x = np.asarray(res.x, dtype=float)
-    if x.shape != (qp.P.shape[0],) or not np.isfinite(x).all():
-        raise np.linalg.LinAlgError(f"OSQP found no step ({res.info.status})")
-    return x
+    usable = status in ("solved", "inaccurate", "max_iter") and x.shape == (qp.P.shape[0],)
+    return (x if usable and np.isfinite(x).all() else None), np.asarray(res.y, dtype=float)
 
 
 def manipulability_term(kin: Any, q: np.ndarray, J: np.ndarray) -> np.ndarray | None:
@@ -179,6 +207,27 @@ def manipulability_term(kin: Any, q: np.ndarray, J: np.ndarray) -> np.ndarray | 
     jh = getattr(kin, "jacob0_hessian0", None)
     H = jh(q)[1] if jh is not None else kin.hessian0(q)
     return manipulability_jacobian(J, np.asarray(H, dtype=float))[0]
+
+
+def build_ik_qp(kin: Any, q: Any, Tep: Any, frame: Any = None, **options: Any) -> MMCQP:
+    """The QP (:func:`ik_qp`) of the step of ``ik(kin, Tep, method="QP", **options)`` at q (n,): J0,
+    the pose error and, when ``manipulability > 0``, Jm from ``kin`` (any kinematics :func:`ik`
+    takes; ``frame`` as there)."""
+    from symkin.core.arrays import as_config, name_of
+    from symkin.errors import PoseError
+    from symkin.runtime.ik_problem import check_pose, pose_error
+    from symkin.runtime.task import task_kinematics
+
+    if frame is not None or getattr(kin, "_symkin_tree", False):
+        kin = task_kinematics(kin, frame)
+    opt = IKOptions.of(kin, method="QP", **options)
+    q = as_config(q, opt.n, name_of(kin), "q")
+    T, single = check_pose(Tep)
+    if not single:
+        raise PoseError("build_ik_qp takes one target pose (4, 4)")
+    J = np.asarray(kin.jacob0(q), dtype=float)
+    e = pose_error(np.asarray(kin.fkine(q), dtype=float), T[0])
+    return ik_qp(q, J, e, opt, manipulability_term(kin, q, J) if opt.manipulability > 0 else None)
 
 
 def qp_step(kin: Any, opt: IKOptions, q: np.ndarray, J: np.ndarray, e: np.ndarray) -> np.ndarray:

@@ -20,12 +20,15 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import ConfigurationError
+from symkin.errors import ConfigurationError, ParameterError
 from symkin.runtime.ik_problem import IKOptions
 
 __all__ = ["QPStep", "collision_qp_ik"]
 
 _P, _I32, _D = ctypes.c_void_p, ctypes.c_int32, ctypes.c_double
+
+
+_STEP = ctypes.PYFUNCTYPE(ctypes.c_int, _P, _P, _P, _P, _P)  # symkin_ik_step_fn, called with the GIL held
 
 
 class _Ctx(ctypes.Structure):  # symkin_mmc_ik_ctx (mmc_ik.h)
@@ -71,6 +74,17 @@ class QPStep:
         self._ctx = _Ctx(ctypes.addressof(c), int(environment is not None), 0, opt.slack_gain / scale)
         self.context = ctypes.addressof(self._ctx)
         self.function = int(ctypes.cast(lib.symkin_mmc_ik_step, _P).value or 0)
+        self.n = opt.n
+
+    def step(self, q: Any, e: Any) -> np.ndarray | None:
+        """The step qd (n,) at q (n,) for the pose error e (6,) there (one C call, the search loop's),
+        or None when there is none (e zero or not finite, or the step failed)."""
+        q, e = (np.ascontiguousarray(x, dtype=float) for x in (q, e))
+        if q.shape != (self.n,) or e.shape != (6,):
+            raise ParameterError(f"step takes q ({self.n},) and e (6,), got {q.shape} and {e.shape}")
+        dq = np.empty(self.n)
+        failed = _STEP(self.function)(self.context, q.ctypes.data, None, e.ctypes.data, dq.ctypes.data)
+        return None if failed else dq
 
 
 _SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # kin -> {key: (env, solver)}
