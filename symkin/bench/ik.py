@@ -235,7 +235,7 @@ def _row(
     solved = iterations[success]
     err = np.linalg.norm(pose_error(robot.fkine(q[success]), Tep[success]), axis=-1) if success.any() else []
     slimit, ilimit = SETTINGS[setting]
-    paper = PAPER_TABLE1.get((label, setting))
+    paper = PAPER_TABLE1.get((label, setting)) if robot.name == "ur5" else None  # the paper solved a UR5
     return {
         "method": label,
         "setting": setting,

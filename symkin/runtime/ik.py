@@ -220,9 +220,11 @@ def ik(
         frame: the frame whose pose is the task: a tree's frame name (:class:`symkin.Tree` or
             its compiled kinematics) or link frame k of a chain; the joints off its path are free
             (they keep their start values).
-        slack_gain, manipulability, xi, rho_i, rho_s: method="QP" only: the slack's gain
-            lambda_delta, the manipulability term's weight (0: none), the joint-limit dampers' gain
-            and their influence and stop distances (:mod:`symkin.runtime.ik_qp`).
+        slack_gain: method="QP": the slack's gain lambda_delta (:mod:`symkin.runtime.ik_qp`).
+        manipulability: method="QP": the manipulability term's weight (0: none).
+        xi: method="QP": the joint-limit velocity dampers' gain.
+        rho_i: method="QP": their influence distance (rad or m), a scalar or (n,).
+        rho_s: method="QP": their stop distance (rad or m), a scalar or (n,).
 
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.

@@ -222,18 +222,12 @@ def _qp_options(
     manipulability: Any, xi: Any, rho_i: Any, rho_s: Any,
 ) -> tuple[float, float, float, np.ndarray, np.ndarray]:  # fmt: skip
     """The QP options, validated: (slack_gain, manipulability, xi, rho_i (n,), rho_s (n,))."""
-    slack_gain = _real(slack_gain, "slack_gain", positive=True)
-    manipulability = _real(manipulability, "manipulability", positive=False)
-    xi = _real(xi, "xi", positive=True)
-    rho = []
-    for value, name in ((rho_i, "rho_i"), (rho_s, "rho_s")):
-        try:
-            a = np.broadcast_to(real_array(value, name, ParameterError), (n,)).copy()
-        except ValueError:
-            raise ParameterError(f"{name} must be a number or {n} numbers, got {value!r}") from None
-        if not (np.isfinite(a).all() and (a >= 0).all()):
-            raise ParameterError(f"{name} must be finite and >= 0, got {value!r}")
-        rho.append(_ro(a))
+    from symkin.runtime.control import _number, _per_joint  # the MMC's checks of the same quantities
+
+    slack_gain = _number(slack_gain, "slack_gain")
+    manipulability = _number(manipulability, "manipulability", strict=False)
+    xi = _number(xi, "xi")
+    rho = [_ro(_per_joint(rho_i, n, "rho_i")), _ro(_per_joint(rho_s, n, "rho_s"))]
     if method == "QP":
         if not (lam == lam[0]).all() or not lam[0] > 0:
             raise ParameterError(
@@ -247,17 +241,6 @@ def _qp_options(
         if joint_limits and not (rho[0] > rho[1]).all():
             raise ParameterError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s}) for every joint")
     return slack_gain, manipulability, xi, rho[0], rho[1]
-
-
-def _real(value: Any, name: str, positive: bool) -> float:
-    """A finite number, > 0 (``positive``) or >= 0, else ParameterError."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    if isinstance(value, (bool, np.bool_)) or not (math.isfinite(x) and (x > 0 if positive else x >= 0)):
-        raise ParameterError(f"{name} must be finite and {'>' if positive else '>='} 0, got {value!r}")
-    return x
 
 
 def _count(value: Any, name: str) -> int:

@@ -112,8 +112,9 @@ def ik_qp(
         opt: the options (``IKOptions.of(kin, method="QP", ...)``).
         Jm: the manipulability Jacobian at q (n,) (MMC paper eq 11); None or
             ``opt.manipulability == 0``: no manipulability term.
-        Jd, d_lower: collision rows ``Jd qd >= d_lower`` ((M, n), (M,); see
+        Jd: collision rows ``Jd qd >= d_lower`` (M, n) (see
             :func:`~symkin.runtime.mmc_qp.distance_dampers`), or None.
+        d_lower: their lower bounds (M,), ``-inf`` for a free row.
 
     Returns:
         an :class:`~symkin.runtime.mmc_qp.MMCQP`: P (n + 6, n + 6) = diag(lam 1_n,
