@@ -28,9 +28,10 @@ the other methods, and a solution outside them is never returned as a success.
 
 The parameters map onto roboticstoolbox-python's ``IK_QP(kj, ks, kq, km, ps, pi)`` and Part 2's
 notebook as ``lam = kj`` (lambda_q), ``slack_gain = ks`` (lambda_delta), ``xi = 1 / kq`` (1 /
-lambda_Sigma), ``manipulability = 1 / km`` (1 / lambda_m), ``rho_s = ps``, ``rho_i = pi``; without
-our step bound, RTB's dampers are the same rows (:func:`ik_qp` with ``xi <= rho_i - rho_s``, where
-the damper is the tighter of the two, has RTB's matrices).
+lambda_Sigma), ``manipulability = 1 / km`` (1 / lambda_m), ``rho_s = ps``, ``rho_i = pi``. RTB's
+dampers are the same rows, without the step bound and on every joint (symkin leaves a revolute
+joint whose range spans a full turn undamped: :func:`damped_limits`); with ``xi <= rho_i -
+rho_s`` the damper is the tighter of the two, and :func:`ik_qp` has RTB's matrices (tested).
 
 The QP is the MMC's (:func:`symkin.runtime.mmc_qp.mmc_qp` with the slack): the same closed form,
 active-set solve and, in C, the same embedded OSQP (:mod:`symkin.runtime.mmc_c`); with the MMC's
