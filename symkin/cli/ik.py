@@ -24,8 +24,7 @@ def add_parser(sub: Any) -> None:
         "--method",
         choices=("NR", "GN", "LM", "QP", "analytic"),
         default="LM",
-        help="solver (QP: a quadratic program per step with the joint limits as velocity dampers and "
-        "a slack, Manipulator Differential Kinematics, Part 2)",
+        help="solver (QP: one QP per step, joint-limit dampers and a slack, Part 2)",
     )
     s.add_argument(
         "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"

@@ -42,6 +42,7 @@ __all__ = [
     "solver_for",
     "options_key",
     "ets_table",
+    "register_qp_step",
 ]
 
 CSRC = Path(__file__).resolve().parent / "csrc"
@@ -233,6 +234,19 @@ def _result_maker() -> Any:
 _result = _result_maker()
 
 
+_QP_STEP: Any = None  # QPStep of symkin.runtime.ik_qp_c, which registers it (it sits above this module)
+
+
+def register_qp_step(make: Any) -> None:
+    """Register the maker of method "QP"'s step: ``make(kin, options, environment, **collision)``
+    returns an object with ``function`` and ``context`` (a ``symkin_ik_step_fn`` and its argument)
+    that keeps them alive. :mod:`symkin.runtime.ik_qp_c` registers its :class:`QPStep` when it is
+    imported: the step is the MMC library's (:mod:`symkin.runtime.mmc_c`), whose collision rows
+    depend on modules that depend on this one."""
+    global _QP_STEP
+    _QP_STEP = make
+
+
 class CIKSolver:
     """The C solver for one kinematics and one set of options (see :func:`symkin.runtime.ik.ik`).
 
@@ -272,9 +286,9 @@ class CIKSolver:
         self._qp = None
         own = lib is None  # the default library, with the extension's one-target entry point
         if opt.method == "QP":  # the QP step: an MMC controller's, with the GIL held
-            from symkin.runtime.ik_qp_c import QPStep
-
-            self._qp = QPStep(kin, opt, environment, **(collision or {}))
+            if _QP_STEP is None:  # pragma: no cover - registered when symkin.runtime.kinematics loads
+                raise ConfigurationError("method='QP' in C needs symkin.runtime.ik_qp_c (import symkin)")
+            self._qp = _QP_STEP(kin, opt, environment, **(collision or {}))
             lib = lib if lib is not None else ik_library_gil()
         self.lib = bind(lib) if lib is not None else ik_library()
         nmax = self.lib.symkin_ik_nmax()

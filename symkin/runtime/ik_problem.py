@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import as_batch, name_of, real_array, sample_bounds
+from symkin.core.arrays import as_batch, finite_number, name_of, per_joint, real_array, sample_bounds
 from symkin.errors import ParameterError, PoseError
 from symkin.model.differential import NEAR_PI_L, angle_axis
 
@@ -222,12 +222,10 @@ def _qp_options(
     manipulability: Any, xi: Any, rho_i: Any, rho_s: Any,
 ) -> tuple[float, float, float, np.ndarray, np.ndarray]:  # fmt: skip
     """The QP options, validated: (slack_gain, manipulability, xi, rho_i (n,), rho_s (n,))."""
-    from symkin.runtime.control import _number, _per_joint  # the MMC's checks of the same quantities
-
-    slack_gain = _number(slack_gain, "slack_gain")
-    manipulability = _number(manipulability, "manipulability", strict=False)
-    xi = _number(xi, "xi")
-    rho = [_ro(_per_joint(rho_i, n, "rho_i")), _ro(_per_joint(rho_s, n, "rho_s"))]
+    slack_gain = finite_number(slack_gain, "slack_gain")  # the MMC's checks of the same quantities
+    manipulability = finite_number(manipulability, "manipulability", strict=False)
+    xi = finite_number(xi, "xi")
+    rho = [_ro(per_joint(rho_i, n, "rho_i")), _ro(per_joint(rho_s, n, "rho_s"))]
     if method == "QP":
         if not (lam == lam[0]).all() or not lam[0] > 0:
             raise ParameterError(

@@ -56,6 +56,7 @@ from symkin.runtime.mmc_qp import (
     active_rows_of,
     active_set_rows_solve,
     active_set_solve,
+    fallback_step,
     joint_velocity_bounds,
     manipulability_jacobian,
     mmc_closed_form,
@@ -148,9 +149,7 @@ def solve_ik_qp(qp: MMCQP) -> np.ndarray:
     solve (exact when it settles), else OSQP polished by the active-set solve from OSQP's active
     set; clipped into the bounds (OSQP's tolerance). When no solver answers (only an infeasible QP:
     collision rows against the bounds), the RRMC step scaled into the bounds
-    (:func:`symkin.runtime.control.fallback_step`)."""
-    from symkin.runtime.control import fallback_step
-
+    (:func:`symkin.runtime.mmc_qp.fallback_step`)."""
     n, J, nu = qp.n, qp.J, qp.l[:6]
     lam, w = float(qp.P[0, 0]), float(qp.P[n, n])
     jm = -qp.c[:n]
@@ -186,8 +185,7 @@ def _osqp(qp: MMCQP) -> tuple[np.ndarray | None, np.ndarray]:
     import osqp
     import scipy.sparse as sp
 
-    from symkin.runtime.control import _OSQP_STATUS
-    from symkin.runtime.step import OSQP_SETTINGS
+    from symkin.runtime.step import OSQP_SETTINGS, OSQP_STATUS
 
     inf = float(osqp.constant("OSQP_INFTY"))
     solver = osqp.OSQP()
@@ -195,7 +193,7 @@ def _osqp(qp: MMCQP) -> tuple[np.ndarray | None, np.ndarray]:
     l, u = np.maximum(qp.l, -inf), np.minimum(qp.u, inf)
     solver.setup(sp.csc_matrix(qp.P), qp.c, sp.csc_matrix(qp.A), l, u, **settings)
     res = solver.solve(raise_error=False)
-    status = _OSQP_STATUS.get(osqp.SolverStatus(res.info.status_val).name, "error")
+    status = OSQP_STATUS.get(osqp.SolverStatus(res.info.status_val).name, "error")
     x = np.asarray(res.x, dtype=float)
     usable = status in ("solved", "inaccurate", "max_iter") and x.shape == (qp.P.shape[0],)
     return (x if usable and np.isfinite(x).all() else None), np.asarray(res.y, dtype=float)

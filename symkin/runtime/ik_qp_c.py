@@ -9,7 +9,10 @@ divided by w (the controller's ``lam`` is ``lam / w`` and the step sets the slac
 its joint limits are those the dampers keep (:func:`~symkin.runtime.ik_qp.damped_limits`).
 
 The embedded OSQP solvers of an MMC library are shared by its controllers, so a QP solve holds the
-GIL (the IK library is called through :class:`ctypes.PyDLL`).
+GIL (the IK library is called through :class:`ctypes.PyDLL`). The MMC machinery sits above the C IK
+solver (its collision rows use modules that use the solver), so this module registers
+:class:`QPStep` with :func:`symkin.runtime.ik_c.register_qp_step` when it is imported (by
+:mod:`symkin.runtime.kinematics`, with every compiled kinematics).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError
+from symkin.runtime.ik_c import register_qp_step
 from symkin.runtime.ik_problem import IKOptions
 
 __all__ = ["QPStep", "collision_qp_ik"]
@@ -129,3 +133,6 @@ def collision_qp_ik(kin: Any, Tep: Any, collision: Any, collision_attempts: Any 
 
 #: the MMC's collision-row options that kin.ik(method="QP", collision=...) takes
 ROW_OPTIONS = ("d_i", "d_s", "xi_d", "collision_rows", "d_i_self", "d_s_self")
+
+
+register_qp_step(QPStep)

@@ -28,6 +28,7 @@ from symkin.model.robot import Robot
 from symkin.model.slots import hessian_of_columns
 from symkin.runtime.casadi_calls import chain_functions, tree_functions
 from symkin.runtime.ik import IK_OPTIONS, ik
+from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
 
 __all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
@@ -321,9 +322,7 @@ class Kinematics(FrameMethods):
             if env is not None and env is not False:
                 qp = str(kwargs.get("method", "")).upper() == "QP"
                 if qp and frame is None and self.backend == "c" and not self.is_tree:
-                    from symkin.runtime.ik_qp_c import collision_qp_ik  # the QP keeps the MMC's rows
-
-                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)
+                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)  # the QP keeps the MMC's rows
                 from symkin.runtime.collision import collision_ik
 
                 if frame is not None:

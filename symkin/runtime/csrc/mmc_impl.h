@@ -189,9 +189,10 @@ static void bounds_(const symkin_mmc_ctrl *c, const double *q, double *lo, doubl
                 u = fmin_(u, c->xi * (d_hi - c->rho_s[i]) / width);
             if (d_lo < c->rho_i[i])
                 l = fmax_(l, -c->xi * (d_lo - c->rho_s[i]) / width);
-            if (c->has_dt) {
-                u = fmin_(u, (d_hi - c->rho_s[i]) / c->dt);
-                l = fmax_(l, -(d_lo - c->rho_s[i]) / c->dt);
+            if (c->has_dt) { /* the dampers only tighten the step bound (a push-back too) */
+                const double lo_dt = -(d_lo - c->rho_s[i]) / c->dt, hi_dt = (d_hi - c->rho_s[i]) / c->dt;
+                u = fmin_(fmax_(u, lo_dt), hi_dt);
+                l = fmin_(fmax_(l, lo_dt), hi_dt);
             }
             u = fmax_(u, -a);
             l = fmin_(l, a);
