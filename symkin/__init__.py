@@ -35,6 +35,7 @@ from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
 from symkin.runtime.load import compile, load_compiled
 from symkin.runtime.loop import ServoResult, servo
+from symkin.runtime.qrmc import QRMC, qrmc
 from symkin.runtime.servo import p_servo
 from symkin.runtime.trajectory import (
     PathResult,
@@ -98,6 +99,7 @@ __all__ = [
     "ParameterError",
     "PathResult",
     "PoseError",
+    "QRMC",
     "Robot",
     "RobotError",
     "ServoResult",
@@ -128,6 +130,7 @@ __all__ = [
     "p_servo",
     "poe_of",
     "pose_error",
+    "qrmc",
     "quintic",
     "resolve_robot",
     "rrmc",

@@ -194,7 +194,8 @@ def rates_derivatives(gamma: np.ndarray, representation: str) -> np.ndarray:
         EK = np.einsum("kab,Nbc->Nkac", E, K)
         KE = np.einsum("Nab,kbc->Nkac", K, E)
         KK = K @ K
-        return -E[None] / 2.0 + c[:, None, None, None] * (EK + KE) + (d[:, None] * gamma)[:, :, None, None] * KK[:, None]
+        dK2 = (d[:, None] * gamma)[:, :, None, None] * KK[:, None]
+        return -E[None] / 2.0 + c[:, None, None, None] * (EK + KE) + dK2
     if representation == "eul":  # rows (-c1 cot2, -s1 cot2, 1), (-s1, c1, 0), (c1 / s2, s1 / s2, 0)
         c1, s1, s2, c2 = np.cos(g1), np.sin(g1), np.sin(g2), np.cos(g2)
         d1 = ((s1 * c2 / s2, -c1 * c2 / s2, z), (-c1, -s1, z), (-s1 / s2, c1 / s2, z))

@@ -71,7 +71,8 @@ def test_rate_matrix_derivatives_are_those_of_the_rate_matrices(rep):
 
 def test_exp_hessian_near_the_zero_rotation():
     robot = Robot.from_ets("Rx(q0) Ry(q1) Rz(q2) tx(0.1)")
-    for q in (np.zeros(3), np.array([1e-5, -2e-5, 3e-5]), np.array([0.1, 0.12, -0.05]), np.array([0.15, 0.1, 0])):
+    for q in ([0.0, 0, 0], [1e-5, -2e-5, 3e-5], [0.1, 0.12, -0.05], [0.15, 0.1, 0]):
+        q = np.array(q)
         Ha = robot.hessian0_analytical(q, "exp")
         assert np.isfinite(Ha).all()
         assert scaled_error(Ha, fd_hessian(robot, q, "exp", h=1e-6)) < 1e-7, f"q = {q}"
@@ -121,9 +122,10 @@ def test_singular_representations_are_refused_like_the_analytical_jacobian():
     arm = Robot.from_ets("Ry(q0) tz(0.5) Ry(q1) tz(0.4)")
     q = np.array([0.3, math.pi / 2 - 0.3])
     for rep in ("rpy/xyz", "rpy/zyx"):
-        with pytest.raises(ConfigurationError, match=rf"analytical Jacobian is singular for {rep} at pitch = 90"):
+        with pytest.raises(ConfigurationError, match=rf"analytical Jacobian is singular for {rep} at pitch"):
             arm.jacob0_analytical(q, rep)
-        with pytest.raises(ConfigurationError, match=rf"analytical Hessian is singular for {rep} at pitch = 90 deg.*another"):
+        message = rf"analytical Hessian is singular for {rep} at pitch = 90 deg.*another"
+        with pytest.raises(ConfigurationError, match=message):
             arm.hessian0_analytical(q, rep)
         with pytest.raises(ConfigurationError, match=r"pitch = -90 deg \(configuration 1 of the batch\)"):
             arm.hessian0_analytical(np.array([[0.1, 0.2], [-1.0, 1.0 - math.pi / 2]]), rep)
@@ -151,9 +153,9 @@ def test_analytical_hessian_matches_roboticstoolbox_numerical_derivative(rep):
     robot = Robot.from_rtb(ref)
     qd = np.linspace(0.8, -0.5, robot.n)
     for q in regular_qs(robot, rep, 3, seed=67):
-        if rep == "exp":  # away from theta = pi, where the principal rotation vector jumps
-            if np.linalg.norm(extract(rep, robot.fkine(q)[:3, :3])) > math.pi - 0.3:
-                continue
+        # the rotation vector away from theta = pi, where the principal one jumps
+        if rep == "exp" and np.linalg.norm(extract(rep, robot.fkine(q)[:3, :3])) > math.pi - 0.3:
+            continue
         want = np.asarray(ref.jacob0_dot(q, qd, representation=rep))
         got = np.tensordot(robot.hessian0_analytical(q, rep), qd, axes=(0, 0))
         assert scaled_error(got, want) < 2e-6, f"roboticstoolbox {rep}"
