@@ -48,7 +48,14 @@ from symkin.runtime.memo import per_object
 from symkin.runtime.mmc_qp import _axes
 from symkin.runtime.step import StepInfo, step_nu, step_q
 
-__all__ = ["QRMC", "qrmc", "QuadraticSolution", "quadratic_rate_solve", "quadratic_residual"]
+__all__ = [
+    "QRMC",
+    "qrmc",
+    "QuadraticSolution",
+    "quadratic_rate_solve",
+    "quadratic_residual",
+    "quadratic_jacobian",
+]
 
 
 @dataclass(frozen=True)
@@ -66,6 +73,13 @@ class QuadraticSolution:
 def quadratic_residual(J: np.ndarray, H: np.ndarray, nu: np.ndarray, horizon: float, qd: Any) -> np.ndarray:
     """``g(qd) = J qd + (h/2) (H qd) qd - nu`` (6,): J (6, n), H (n, 6, n) with ``H[i] = dJ/dq_i``."""
     return _g(J, H, nu, horizon, np.asarray(qd, dtype=float))
+
+
+def quadratic_jacobian(J: np.ndarray, H: np.ndarray, horizon: float, qd: Any) -> np.ndarray:
+    """``J~ = dg/dqd = J + (h/2) ((H qd) + [H_j qd]_j)`` (6, n), the derivative of
+    :func:`quadratic_residual`: column j of the last term is ``H[j] qd``."""
+    x = np.asarray(qd, dtype=float)
+    return J + 0.5 * horizon * (np.tensordot(x, H, axes=(0, 0)) + np.tensordot(H, x, axes=(2, 0)).T)
 
 
 def _g(J: np.ndarray, H: np.ndarray, nu: np.ndarray, horizon: float, x: np.ndarray) -> np.ndarray:
@@ -97,13 +111,13 @@ def _levenberg_marquardt(
     """(the last accepted iterate from x, its max |g|, trials): see the module docstring; a trial is
     accepted when it lowers |g| (2-norm), mu then falls tenfold (to 0 below damping^2 / 1000), else it
     grows tenfold (from damping^2); mu = 0 needs a regular J~."""
-    d2, half_h = o.damping * o.damping, 0.5 * o.horizon
+    d2 = o.damping * o.damping
     mu, taken = 0.0, 0
     g = _g(J, H, nu, o.horizon, x)
-    cost = float(g @ g)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflowing cost ends the search
+        cost = float(g @ g)
     while taken < o.iterations and not float(np.abs(g).max()) <= limit and math.isfinite(cost):
-        A = np.tensordot(x, H, axes=(0, 0))
-        Jt = J + half_h * (A + np.tensordot(H, x, axes=(2, 0)).T)  # + [H_j x]_j (columns j)
+        Jt = quadratic_jacobian(J, H, o.horizon, x)
         G = Jt @ Jt.T
         if mu == 0.0 and not _regular(G, o.singular_tol):
             mu = d2
@@ -114,7 +128,8 @@ def _levenberg_marquardt(
         taken += 1
         x_new = x - Jt.T @ np.linalg.solve(L.T, np.linalg.solve(L, g))
         g_new = _g(J, H, nu, o.horizon, x_new)
-        cost_new = float(g_new @ g_new)
+        with np.errstate(over="ignore", invalid="ignore"):
+            cost_new = float(g_new @ g_new)
         if cost_new < cost:
             x, g, cost = x_new, g_new, cost_new
             mu = 0.0 if mu < d2 * 1e-3 else mu / 10.0
