@@ -1,7 +1,8 @@
 """What every frame's kinematics derive from its pose T, Jacobian J0 and Hessian H0 (numpy only).
 
 The numeric helpers (manipulability, its Jacobian, condition number, space Jacobian, dJ/dt,
-the end-effector-frame Hessian, the Hessian of a serial path from its Jacobian's columns) and
+the end-effector-frame Hessian, the Hessian of a serial path from its Jacobian's columns; the
+orientation representations and analytic forms are in :mod:`symkin.model.orientation`) and
 :class:`FrameMethods`, the methods every kinematics object has once it gives ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0`` and ``jacob0_hessian0`` of a frame: the numeric references
 (:class:`symkin.Robot`, :class:`symkin.Tree`) and the compiled :class:`symkin.Kinematics` share them.

@@ -6,7 +6,8 @@ For robots of n joints and one set of OSQP settings, :func:`mmc_library` compile
 once without and once with the equality slack (and, for ``MMC(collision=...)``, once more with
 the slack and K collision rows: a library per n and K), the C step of
 :meth:`symkin.runtime.control.MMC.step` for each, the resolved-rate step of
-:func:`symkin.runtime.control.rrmc` and a small CPython extension (``mmc_py.c``) that calls a step,
+:func:`symkin.runtime.control.rrmc`, the quadratic-rate step of :mod:`symkin.runtime.qrmc`
+(``qrmc.h``, ``qrmc_impl.h``; :mod:`symkin.runtime.qrmc_c`) and a small CPython extension (``mmc_py.c``) that calls a step,
 or runs a whole servo loop, in one call from Python. The OSQP
 sources are kept in the cache as well, so a warm process neither imports osqp nor generates them. A
 robot's kinematics enter as pointers to its generated functions (from the compiled C
