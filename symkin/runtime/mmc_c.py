@@ -7,8 +7,8 @@ once without and once with the equality slack (and, for ``MMC(collision=...)``, 
 the slack and K collision rows: a library per n and K), the C step of
 :meth:`symkin.runtime.control.MMC.step` for each, the resolved-rate step of
 :func:`symkin.runtime.control.rrmc`, the quadratic-rate step of :mod:`symkin.runtime.qrmc`
-(``qrmc.h``, ``qrmc_impl.h``; :mod:`symkin.runtime.qrmc_c`) and a small CPython extension (``mmc_py.c``) that calls a step,
-or runs a whole servo loop, in one call from Python. The OSQP
+(``qrmc.h``, ``qrmc_impl.h``; :mod:`symkin.runtime.qrmc_c`) and a small CPython extension
+(``mmc_py.c``) that calls a step, or runs a whole servo loop, in one call from Python. The OSQP
 sources are kept in the cache as well, so a warm process neither imports osqp nor generates them. A
 robot's kinematics enter as pointers to its generated functions (from the compiled C
 :class:`~symkin.runtime.kinematics.Kinematics`), so robots with the same number of joints share one
