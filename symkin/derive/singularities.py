@@ -11,7 +11,9 @@ configuration): two axes that become parallel or collinear (a wrist singularity 
 among the last three joints), parallel axes that come to lie in one plane (an elbow: the arm
 stretched out or folded back), a point (where two axes meet, or the end effector) that comes to
 lie on an axis or in the plane of two axes (a shoulder singularity when the first axis is
-involved). Otherwise the text says that the joint twists become dependent.
+involved), or two such points that come to coincide. Otherwise the text says that the joint twists
+become dependent. Conversely, random lines through joint space must find no rank drop that no
+factor explains (:mod:`symkin.derive.singular_lines`): the list is complete, not only correct.
 """
 
 from __future__ import annotations
@@ -125,11 +127,12 @@ class SingularityReport:
         configurations, the lines, and ``ok`` or ``NOT ok``."""
         A = self.analysis
         rename = {q: sp.Symbol(f"q{j + 1}") for j, q in enumerate(A.q)}
-        out = [f"{A.name}: {len(self.singularities)} conditions ({A.method}, {A.minors} minors)"]
+        minors = f"{A.minors} minor" + ("s" if A.minors != 1 else "")
+        out = [f"{A.name}: {len(self.singularities)} conditions ({A.method}, {minors})"]
         for k, s in enumerate(self.singularities):
             cond = f"{sp.sstr(s.factor.expr.xreplace(rename))} = 0"
             if s.checked:
-                check = f"singular, rank {s.rank} of {len(A.rows)}, sigma_min <= {s.sigma_at_solutions:.1e}"
+                check = f"singular, rank {s.rank} of {A.full_rank}, sigma_min <= {s.sigma_at_solutions:.1e}"
             elif len(s.solutions):
                 check = f"NOT singular at its solutions (sigma_min {s.sigma_at_solutions:.1e})"
             else:
@@ -504,7 +507,7 @@ def _markdown(R: SingularityReport) -> str:
         if s.checked:
             sig = _sci(s.sigma_at_solutions)
             check = (
-                f"singular (rank {s.rank} of {len(A.rows)}): $\\sigma_{{min}} \\le {sig}$ at "
+                f"singular (rank {s.rank} of {A.full_rank}): $\\sigma_{{min}} \\le {sig}$ at "
                 f"{len(s.solutions)} solutions"
             )
             lo, hi = robot.qlim

@@ -110,6 +110,11 @@ class SingularFactors:
     axis_exprs: tuple[tuple[bool, tuple[sp.Expr, ...], tuple[sp.Expr, ...]], ...]
     seconds: float
 
+    @property
+    def full_rank(self) -> int:
+        """The rank of J (its rows used) away from the singular configurations: min(m, n)."""
+        return min(len(self.rows), len(self.q))
+
 
 def singular_factors(robot: Robot | str, axes: str = "auto", max_terms: int = MAX_TERMS) -> SingularFactors:
     """Factor the determinant (or the maximal minors) of ``robot``'s Jacobian; see the module docstring.
