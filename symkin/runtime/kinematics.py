@@ -29,6 +29,7 @@ from symkin.model.frames import resolve_frame
 from symkin.model.tree import as_tree
 from symkin.runtime.casadi_calls import casadi_methods
 from symkin.runtime.ik import IK_OPTIONS, ik
+from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
 
 __all__ = ["Kinematics", "KIN_METHODS", "load_kinematics", "kinematics_of"]
@@ -288,11 +289,16 @@ class Kinematics(FrameMethods):
         solutions in collision: on the C backend inside the C solver's search loop (the next
         search starts, within ``slimit``), elsewhere by solving again from new random starts, at
         most ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
+        With ``method="QP"`` on a chain's C kinematics each step also keeps the MMC's collision
+        rows (:func:`symkin.runtime.ik_qp_c.collision_qp_ik`).
         """
         if "collision" in kwargs or "collision_attempts" in kwargs:
             env = kwargs.pop("collision", None)
             attempts = kwargs.pop("collision_attempts", 20)
             if env is not None and env is not False:
+                qp = str(kwargs.get("method", "")).upper() == "QP"
+                if qp and frame is None and self.backend == "c" and len(self.frames) == 1:
+                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)  # the QP keeps the MMC's rows
                 from symkin.runtime.collision import collision_ik
 
                 if frame is not None:
