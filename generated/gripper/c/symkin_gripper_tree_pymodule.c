@@ -88,8 +88,8 @@ bad:
     return (PyArrayObject *)bad_q_(arg);
 }
 
-/* A new output array; zeroed (calloc: the kernel's zero pages) when zero is set. */
-static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape, int zero)
+/* A new output array (N of them unless single). */
+static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape)
 {
     npy_intp dims[5];
     int k = 0;
@@ -97,7 +97,18 @@ static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape,
         dims[k++] = N;
     for (int i = 0; i < nd; ++i)
         dims[k++] = shape[i];
-    return zero ? PyArray_ZEROS(k, dims, NPY_DOUBLE, 0) : PyArray_SimpleNew(k, dims, NPY_DOUBLE);
+    return PyArray_SimpleNew(k, dims, NPY_DOUBLE);
+}
+
+/* The same, a batch zeroed (calloc: the kernel's zero pages) for the *_batch_zeroed functions. */
+static PyObject *new_zeroed_(int single, npy_intp N, int nd, const npy_intp *shape)
+{
+    if (single)
+        return new_out_(1, N, nd, shape);
+    npy_intp dims[5] = {N};
+    for (int i = 0; i < nd; ++i)
+        dims[i + 1] = shape[i];
+    return PyArray_ZEROS(nd + 1, dims, NPY_DOUBLE, 0);
 }
 
 /* The optional arguments after q of f(q, <names[0]>=None, ...), positional or by keyword (values
@@ -181,7 +192,7 @@ static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t narg
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "fkine(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -191,7 +202,7 @@ static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t narg
     if (!qa)
         return NULL;
     static const npy_intp shape_T[] = { 4, 4 };
-    PyObject *out_T = new_out_(single, N, 2, shape_T, 0);
+    PyObject *out_T = new_out_(single, N, 2, shape_T);
     if (!out_T) {
         Py_XDECREF(out_T);
         Py_DECREF(qa);
@@ -219,7 +230,7 @@ static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nar
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "jacob0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -229,7 +240,7 @@ static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nar
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 6, 2 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     if (!out_J) {
         Py_XDECREF(out_J);
         Py_DECREF(qa);
@@ -257,7 +268,7 @@ static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nar
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "jacobe(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -267,7 +278,7 @@ static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nar
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 6, 2 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     if (!out_J) {
         Py_XDECREF(out_J);
         Py_DECREF(qa);
@@ -295,7 +306,7 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "fkine_jacob0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -305,9 +316,9 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize
     if (!qa)
         return NULL;
     static const npy_intp shape_T[] = { 4, 4 };
-    PyObject *out_T = new_out_(single, N, 2, shape_T, 0);
+    PyObject *out_T = new_out_(single, N, 2, shape_T);
     static const npy_intp shape_J[] = { 6, 2 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     if (!out_T || !out_J) {
         Py_XDECREF(out_T);
         Py_XDECREF(out_J);
@@ -339,7 +350,7 @@ static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t n
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "hessian0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -349,7 +360,7 @@ static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t n
     if (!qa)
         return NULL;
     static const npy_intp shape_H[] = { 2, 6, 2 };
-    PyObject *out_H = new_out_(single, N, 3, shape_H, 0);
+    PyObject *out_H = new_out_(single, N, 3, shape_H);
     if (!out_H) {
         Py_XDECREF(out_H);
         Py_DECREF(qa);
@@ -377,7 +388,7 @@ static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t n
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "hessiane(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -387,7 +398,7 @@ static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t n
     if (!qa)
         return NULL;
     static const npy_intp shape_H[] = { 2, 6, 2 };
-    PyObject *out_H = new_out_(single, N, 3, shape_H, 0);
+    PyObject *out_H = new_out_(single, N, 3, shape_H);
     if (!out_H) {
         Py_XDECREF(out_H);
         Py_DECREF(qa);
@@ -415,7 +426,7 @@ static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ss
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "jacob0_hessian0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
+    int link = -1;
     const int k = frame_arg_(frame_obj, &link);
     if (k == -2)
         return NULL;
@@ -425,9 +436,9 @@ static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ss
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 6, 2 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     static const npy_intp shape_H[] = { 2, 6, 2 };
-    PyObject *out_H = new_out_(single, N, 3, shape_H, 0);
+    PyObject *out_H = new_out_(single, N, 3, shape_H);
     if (!out_J || !out_H) {
         Py_XDECREF(out_J);
         Py_XDECREF(out_H);
@@ -457,7 +468,7 @@ static PyObject *py_fkine_all(PyObject *self, PyObject *arg)
     if (!qa)
         return NULL;
     static const npy_intp shape_T[] = { 2, 4, 4 };
-    PyObject *out_T = new_out_(single, N, 3, shape_T, !single);
+    PyObject *out_T = new_zeroed_(single, N, 3, shape_T);
     if (!out_T) {
         Py_XDECREF(out_T);
         Py_DECREF(qa);
@@ -483,7 +494,7 @@ static PyObject *py_jacob0_all(PyObject *self, PyObject *arg)
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 2, 6, 2 };
-    PyObject *out_J = new_out_(single, N, 3, shape_J, !single);
+    PyObject *out_J = new_zeroed_(single, N, 3, shape_J);
     if (!out_J) {
         Py_XDECREF(out_J);
         Py_DECREF(qa);
@@ -509,9 +520,9 @@ static PyObject *py_fkine_jacob0_all(PyObject *self, PyObject *arg)
     if (!qa)
         return NULL;
     static const npy_intp shape_T[] = { 2, 4, 4 };
-    PyObject *out_T = new_out_(single, N, 3, shape_T, !single);
+    PyObject *out_T = new_zeroed_(single, N, 3, shape_T);
     static const npy_intp shape_J[] = { 2, 6, 2 };
-    PyObject *out_J = new_out_(single, N, 3, shape_J, !single);
+    PyObject *out_J = new_zeroed_(single, N, 3, shape_J);
     if (!out_T || !out_J) {
         Py_XDECREF(out_T);
         Py_XDECREF(out_J);
@@ -607,7 +618,7 @@ static PyObject *py_manipulability(PyObject *self, PyObject *const *args, Py_ssi
         Py_DECREF(qa);
         return PyFloat_FromDouble(m);
     }
-    PyObject *out = new_out_(0, N, 0, NULL, 0);
+    PyObject *out = new_out_(0, N, 0, NULL);
     if (out) {
         double *o = (double *)PyArray_DATA((PyArrayObject *)out);
         for (npy_intp i = 0; i < N; ++i)
@@ -638,7 +649,7 @@ static PyObject *py_jacobm(PyObject *self, PyObject *const *args, Py_ssize_t nar
         return NULL;
     const double *q = (const double *)PyArray_DATA(qa);
     static const npy_intp shape[] = { NQ };
-    PyObject *out = new_out_(single, N, 1, shape, 0);
+    PyObject *out = new_out_(single, N, 1, shape);
     if (out) {
         double *o = (double *)PyArray_DATA((PyArrayObject *)out);
         for (npy_intp i = 0; i < N; ++i)

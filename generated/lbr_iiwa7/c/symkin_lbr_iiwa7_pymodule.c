@@ -91,8 +91,8 @@ bad:
     return (PyArrayObject *)bad_q_(arg);
 }
 
-/* A new output array; zeroed (calloc: the kernel's zero pages) when zero is set. */
-static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape, int zero)
+/* A new output array (N of them unless single). */
+static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape)
 {
     npy_intp dims[5];
     int k = 0;
@@ -100,7 +100,7 @@ static PyObject *new_out_(int single, npy_intp N, int nd, const npy_intp *shape,
         dims[k++] = N;
     for (int i = 0; i < nd; ++i)
         dims[k++] = shape[i];
-    return zero ? PyArray_ZEROS(k, dims, NPY_DOUBLE, 0) : PyArray_SimpleNew(k, dims, NPY_DOUBLE);
+    return PyArray_SimpleNew(k, dims, NPY_DOUBLE);
 }
 
 /* The optional arguments after q of f(q, <names[0]>=None, ...), positional or by keyword (values
@@ -179,9 +179,8 @@ static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t narg
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "fkine(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     npy_intp N;
     int single;
@@ -189,7 +188,7 @@ static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t narg
     if (!qa)
         return NULL;
     static const npy_intp shape_T[] = { 4, 4 };
-    PyObject *out_T = new_out_(single, N, 2, shape_T, 0);
+    PyObject *out_T = new_out_(single, N, 2, shape_T);
     if (!out_T) {
         Py_XDECREF(out_T);
         Py_DECREF(qa);
@@ -219,9 +218,8 @@ static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nar
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "jacob0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     npy_intp N;
     int single;
@@ -229,7 +227,7 @@ static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nar
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 6, 7 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     if (!out_J) {
         Py_XDECREF(out_J);
         Py_DECREF(qa);
@@ -259,9 +257,8 @@ static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nar
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "jacobe(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     npy_intp N;
     int single;
@@ -269,7 +266,7 @@ static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nar
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 6, 7 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     if (!out_J) {
         Py_XDECREF(out_J);
         Py_DECREF(qa);
@@ -299,9 +296,8 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "fkine_jacob0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     if (link >= 0)
         return PyObject_CallMethod(links_, "fkine_jacob0", "OO", args[0], frame_obj);
@@ -311,9 +307,9 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize
     if (!qa)
         return NULL;
     static const npy_intp shape_T[] = { 4, 4 };
-    PyObject *out_T = new_out_(single, N, 2, shape_T, 0);
+    PyObject *out_T = new_out_(single, N, 2, shape_T);
     static const npy_intp shape_J[] = { 6, 7 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     if (!out_T || !out_J) {
         Py_XDECREF(out_T);
         Py_XDECREF(out_J);
@@ -340,9 +336,8 @@ static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t n
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "hessian0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     if (link >= 0)
         return PyObject_CallMethod(links_, "hessian0", "OO", args[0], frame_obj);
@@ -352,7 +347,7 @@ static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t n
     if (!qa)
         return NULL;
     static const npy_intp shape_H[] = { 7, 6, 7 };
-    PyObject *out_H = new_out_(single, N, 3, shape_H, 0);
+    PyObject *out_H = new_out_(single, N, 3, shape_H);
     if (!out_H) {
         Py_XDECREF(out_H);
         Py_DECREF(qa);
@@ -375,9 +370,8 @@ static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t n
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "hessiane(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     if (link >= 0)
         return PyObject_CallMethod(links_, "hessiane", "OO", args[0], frame_obj);
@@ -387,7 +381,7 @@ static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t n
     if (!qa)
         return NULL;
     static const npy_intp shape_H[] = { 7, 6, 7 };
-    PyObject *out_H = new_out_(single, N, 3, shape_H, 0);
+    PyObject *out_H = new_out_(single, N, 3, shape_H);
     if (!out_H) {
         Py_XDECREF(out_H);
         Py_DECREF(qa);
@@ -410,9 +404,8 @@ static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ss
     PyObject *frame_obj;
     if (!opt_args_(args, nargs, kwnames, "jacob0_hessian0(q, frame=None)", 1, frame_names_, &frame_obj))
         return NULL;
-    int link;
-    const int k = frame_arg_(frame_obj, &link);
-    if (k == -2)
+    int link = -1;
+    if (frame_obj && frame_obj != Py_None && frame_arg_(frame_obj, &link) == -2) /* None: the one frame */
         return NULL;
     if (link >= 0)
         return PyObject_CallMethod(links_, "jacob0_hessian0", "OO", args[0], frame_obj);
@@ -422,9 +415,9 @@ static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ss
     if (!qa)
         return NULL;
     static const npy_intp shape_J[] = { 6, 7 };
-    PyObject *out_J = new_out_(single, N, 2, shape_J, 0);
+    PyObject *out_J = new_out_(single, N, 2, shape_J);
     static const npy_intp shape_H[] = { 7, 6, 7 };
-    PyObject *out_H = new_out_(single, N, 3, shape_H, 0);
+    PyObject *out_H = new_out_(single, N, 3, shape_H);
     if (!out_J || !out_H) {
         Py_XDECREF(out_J);
         Py_XDECREF(out_H);
@@ -454,7 +447,7 @@ static PyObject *py_link_poses(PyObject *self, PyObject *arg)
     if (!qa)
         return NULL;
     static const npy_intp shape_links[] = { 7, 4, 4 };
-    PyObject *out_links = new_out_(single, N, 3, shape_links, 0);
+    PyObject *out_links = new_out_(single, N, 3, shape_links);
     if (!out_links) {
         Py_XDECREF(out_links);
         Py_DECREF(qa);
@@ -544,7 +537,7 @@ static PyObject *py_manipulability(PyObject *self, PyObject *const *args, Py_ssi
         Py_DECREF(qa);
         return PyFloat_FromDouble(m);
     }
-    PyObject *out = new_out_(0, N, 0, NULL, 0);
+    PyObject *out = new_out_(0, N, 0, NULL);
     if (out) {
         double *o = (double *)PyArray_DATA((PyArrayObject *)out);
         for (npy_intp i = 0; i < N; ++i)
@@ -577,7 +570,7 @@ static PyObject *py_jacobm(PyObject *self, PyObject *const *args, Py_ssize_t nar
         return NULL;
     const double *q = (const double *)PyArray_DATA(qa);
     static const npy_intp shape[] = { NQ };
-    PyObject *out = new_out_(single, N, 1, shape, 0);
+    PyObject *out = new_out_(single, N, 1, shape);
     if (out) {
         double *o = (double *)PyArray_DATA((PyArrayObject *)out);
         for (npy_intp i = 0; i < N; ++i)
