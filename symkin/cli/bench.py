@@ -9,7 +9,14 @@ from typing import Any
 import numpy as np
 
 from symkin.cli.checks import UserError, at_least_1, check_cflags_for, need_matplotlib, positive_float
-from symkin.cli.common import Deprecated, add_command, add_robot_argument, single_chain
+from symkin.cli.common import (
+    Deprecated,
+    add_command,
+    add_robot_argument,
+    add_srdf_option,
+    single_chain,
+    with_srdf,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -71,6 +78,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
     )
+    add_srdf_option(s, " (collide)")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=run, robot_option=None)
 
@@ -84,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
     check_cflags_for("c")
     if args.plot and args.what not in ("mmc", "compile", "urdf"):
         raise UserError(f"--plot is for `symkin bench mmc`, `compile` and `urdf`, not `{args.what}`")
+    if args.srdf is not None and args.what != "collide":
+        raise UserError(f"--srdf is for `symkin bench collide`, not `{args.what}`")
     if args.what in ("tree", "urdf") and args.robot is not None:
         raise UserError(f"bench {args.what} measures its own robots; it takes no ROBOT")
     need_matplotlib(args.plot)
@@ -123,9 +133,8 @@ def run(args: argparse.Namespace) -> int:
     if args.what == "collide":
         from symkin.bench.collide import format_collide, run_collide
 
-        result = run_collide(
-            single_chain(args, "panda"), batch=args.batch or 20_000, seed=args.seed, progress=not args.json
-        )
+        robot = with_srdf(args, single_chain(args, "panda", geometry=True))
+        result = run_collide(robot, batch=args.batch or 20_000, seed=args.seed, progress=not args.json)
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
         return 0
     if args.what == "kin":

@@ -38,6 +38,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--d-i", type=positive_float, default=0.3, help="--collision: influence distance (m)")
     s.add_argument("--d-s", type=positive_float, default=0.02, help="--collision: safety distance (m)")
     common.add_obstacle_options(s)
+    common.add_srdf_option(s, " (with --collision)")
     s.set_defaults(func=run)
 
 
@@ -47,8 +48,8 @@ def run(args: argparse.Namespace) -> int:
 
     robot = common.single_chain(args, geometry=args.collision)
     env = common.environment_of(args)
-    if len(env) and not args.collision:
-        raise UserError("--sphere, --capsule, --box and --env are obstacles of --collision: add --collision")
+    common.need_collision(args, env)
+    robot = common.with_srdf(args, robot)
     if args.collision and args.controller != "mmc":
         raise UserError("--collision needs the MMC controller (--controller mmc)")
     if args.collision and not args.d_i > args.d_s:
