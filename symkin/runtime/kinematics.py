@@ -29,6 +29,7 @@ from symkin.model.robot import Robot
 from symkin.model.slots import hessian_of_columns
 from symkin.runtime.casadi_calls import chain_functions, tree_functions
 from symkin.runtime.ik import IK_OPTIONS, ik
+from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
 
 __all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
@@ -314,7 +315,9 @@ class Kinematics(FrameMethods):
         search starts, within ``slimit``; its solver is made once and found by its options, an
         equal environment included, so one target is one C call like the plain solve), elsewhere
         by solving again from new random starts, at most ``collision_attempts`` (20) times; see
-        :func:`symkin.runtime.collision.collision_ik`.
+        :func:`symkin.runtime.collision.collision_ik`. With ``method="QP"`` on a chain's C
+        kinematics each step also keeps the MMC's collision rows
+        (:func:`symkin.runtime.ik_qp_c.collision_qp_ik`).
         """
         q0, seed = kwargs.get("q0"), kwargs.get("seed")
         options = {k: v for k, v in kwargs.items() if k not in ("q0", "seed")}  # what a C solver is made of
@@ -329,6 +332,9 @@ class Kinematics(FrameMethods):
             env = kwargs.pop("collision", None)
             attempts = kwargs.pop("collision_attempts", 20)
             if env is not None and env is not False:
+                qp = str(kwargs.get("method", "")).upper() == "QP"
+                if qp and frame is None and self.backend == "c" and not self.is_tree:
+                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)  # the QP keeps the MMC's rows
                 from symkin.runtime.collision import collision_ik, collision_solver
 
                 if frame is not None:
