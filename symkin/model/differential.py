@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import AXES_ROWS, as_batch, axes_rows, real_array
-from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.core.pose import as_poses
+from symkin.errors import ConfigurationError, ParameterError
 from symkin.model.kinematics import cross
 
 __all__ = [
@@ -557,18 +558,9 @@ def analytical_of(T: np.ndarray, J: np.ndarray, representation: str = "rpy/xyz")
 
 
 def _as_se3(T: Any) -> np.ndarray:
-    A = real_array(T, "T", PoseError)
-    if A.ndim not in (2, 3) or A.shape[-2:] != (4, 4):
-        raise PoseError(f"T must be a (4, 4) or (N, 4, 4) homogeneous transform, got shape {A.shape}")
-    if not np.isfinite(A).all():
-        raise PoseError("T holds NaN or infinite values")
-    R = A[..., :3, :3]
-    if (
-        np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max(initial=0.0) > 1e-6
-        or (np.linalg.det(R) <= 0.0).any()
-    ):
-        raise PoseError("T must be a homogeneous transform: its rotation part is not orthonormal")
-    return A
+    """T (4, 4) or (N, 4, 4) by the one pose rule (:func:`symkin.core.pose.as_poses`), same shape."""
+    A, single = as_poses(T, "T")
+    return A[0] if single else A
 
 
 def _skew(p: np.ndarray) -> np.ndarray:

@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_config, as_rows, name_of, real_array
+from symkin.core.arrays import as_config, as_rows, name_of
+from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
 from symkin.runtime.memo import per_object
@@ -344,7 +345,7 @@ class CIKSolver:
             seed = self._seeds.getrandbits(64)
         else:
             seed = int(seed) & _M64
-        T = np.ascontiguousarray(real_array(Tep, "a target pose", PoseError))  # no complex, strings...
+        T = np.ascontiguousarray(pose_array(Tep))  # the pose rule's conversion: no complex, strings...
         if T.shape != (4, 4):
             return self._solve_batch(T, q0, seed)
         check_pose(T)  # the detailed PoseError

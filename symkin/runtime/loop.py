@@ -13,9 +13,10 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import as_config, name_of, real_array
+from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_step
-from symkin.runtime.ik import check_pose, pose_error
+from symkin.runtime.ik import check_pose, pose_error_of
 from symkin.runtime.servo import servo_gain, servo_velocity
 
 __all__ = ["servo", "ServoResult"]
@@ -139,7 +140,7 @@ def servo(
         raise ParameterError(f"dt must be a positive finite number, got {dt!r}")
     if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 0:
         raise ParameterError(f"max_steps must be an integer >= 0, got {max_steps!r}")
-    T = real_array(Tep, "a target pose", PoseError) if isinstance(Tep, np.ndarray) else None  # as check_pose
+    T = pose_array(Tep) if isinstance(Tep, np.ndarray) else None  # converted as check_pose does
     if T is None or T.shape != (4, 4):  # the C loop checks the pose itself
         T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
         if not single:
@@ -177,7 +178,7 @@ def servo(
     bar = _progress(progress, max_steps, name)
     try:
         for _ in range(max_steps + 1):
-            e = pose_error(kin.fkine(q), Tep)
+            e = pose_error_of(kin.fkine(q), Tep)
             E.append(e)
             nu, arrived = servo_velocity(e, k, threshold, nu_max)
             if arrived or len(QD) == max_steps:

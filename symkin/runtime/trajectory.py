@@ -32,8 +32,9 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import as_config, name_of, real_array
-from symkin.errors import MissingExtraError, ParameterError, PoseError
-from symkin.runtime.ik_problem import check_pose, pose_error
+from symkin.core.pose import as_pose, as_poses
+from symkin.errors import MissingExtraError, ParameterError
+from symkin.runtime.ik_problem import pose_error_of
 from symkin.runtime.servo import servo_gain
 
 __all__ = [
@@ -439,22 +440,6 @@ def mstraj(
 
 
 # -- Cartesian --------------------------------------------------------------------------------
-def _se3(T: Any, what: str) -> np.ndarray:
-    """A validated (4, 4) pose (a numpy array, or anything with a ``.A`` array such as spatialmath's SE3)."""
-    if not isinstance(T, np.ndarray) and hasattr(T, "A"):
-        T = T.A
-    try:
-        T_all, single = check_pose(T)
-    except PoseError as exc:
-        msg = str(exc)
-        raise PoseError(
-            msg.replace("the target", what) if "the target" in msg else f"{what}: {msg}"
-        ) from None
-    if not single:
-        raise PoseError(f"{what} must be one pose (4, 4), got shape {np.shape(T)}")
-    return T_all[0]
-
-
 def _quaternion(R: np.ndarray) -> np.ndarray:
     """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method, w >= 0 where it can)."""
     tr = np.trace(R)
@@ -513,7 +498,7 @@ def ctraj(T0: Any, T1: Any, t: Any = None, s: Any = None) -> np.ndarray:
     ``trapezoidal(0, 1, t / t[-1])``. Or give ``s`` (N,) itself. ``s = 0`` and ``s = 1`` give ``T0``
     and ``T1`` exactly. PoseError for a T0 or T1 that is not SE(3).
     """
-    A, B = _se3(T0, "T0"), _se3(T1, "T1")
+    A, B = as_pose(T0, "T0"), as_pose(T1, "T1")
     if (t is None) == (s is None):
         raise ParameterError("give exactly one of t (samples or times) and s (path parameters in [0, 1])")
     if t is not None:
@@ -610,12 +595,7 @@ def servo_path(
     """
     n = int(kin.n)
     q = as_config(q0, n, name_of(kin), "q0").copy()
-    if not isinstance(poses, np.ndarray) and hasattr(poses, "A"):  # spatialmath SE3 with N values
-        poses = np.asarray(poses.A)
-    try:
-        P, single = check_pose(poses)
-    except PoseError as exc:
-        raise PoseError(f"poses: {exc}") from None
+    P, single = as_poses(poses, "poses")  # the one pose rule (a spatialmath SE3 with N values too)
     if single or len(P) == 0:
         raise ParameterError(f"poses must be a path of N >= 1 poses, shape (N, 4, 4), got {np.shape(poses)}")
     dt = 1.0 if dt is None else _positive(dt, "dt")
@@ -626,12 +606,12 @@ def servo_path(
     Q, QD, E = np.zeros((N, n)), np.zeros((N - 1, n)), np.zeros((N, 6))
     for i in range(N):
         Q[i] = q
-        E[i] = pose_error(np.asarray(kin.fkine(q, **kw), dtype=float), P[i])
+        E[i] = pose_error_of(np.asarray(kin.fkine(q, **kw), dtype=float), P[i])
         if i == N - 1:
             break
         nu = k * E[i]
         if feedforward:
-            nu = nu + pose_error(P[i], P[i + 1]) / dt
+            nu = nu + pose_error_of(P[i], P[i + 1]) / dt
         J = np.asarray(kin.jacob0(q, **kw), dtype=float)
         if lam > 0:
             qd = J.T @ np.linalg.solve(J @ J.T + lam**2 * np.eye(6), nu)
