@@ -29,6 +29,7 @@ from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load, load_dh_file
+from symkin.model.spatial import joint_torques, velocity_transform, wrench_transform
 from symkin.model.tree import Tree
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import IKResult, ik, pose_error
@@ -119,6 +120,7 @@ __all__ = [
     "generate_collision",
     "geometry",
     "ik",
+    "joint_torques",
     "jtraj",
     "list_robots",
     "load",
@@ -136,5 +138,7 @@ __all__ = [
     "singularities",
     "symbolic",
     "trapezoidal",
+    "velocity_transform",
+    "wrench_transform",
     "write_generated",
 ]

@@ -373,7 +373,7 @@ class CIKSolver:
 
     def _solve_batch(self, T: np.ndarray, q0: Any, seed: int) -> IKResult:
         if T.ndim != 3 or T.shape[1:] != (4, 4):
-            raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
+            check_pose(T)  # the rule's PoseError for the shape
         T = np.ascontiguousarray(T, dtype=float)
         N, n = len(T), self.n
         stride, Q0 = 0, None

@@ -104,7 +104,7 @@ def _run(kin, controller, q0, Tep, env, steps=120, dt=0.05):
     q = q0.copy()
     closest = np.inf
     for _ in range(steps):
-        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         qd, _ = controller.step(q, nu)
@@ -168,7 +168,7 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
     assert c.backend == "c" and p.backend == "python"
     q, near, methods, warm = q0.copy(), 0, [], 0
     for k in range(80):
-        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         (a, ia), (b, ib) = c.step(q, nu), p.step(q, nu)
