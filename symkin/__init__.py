@@ -31,22 +31,14 @@ from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load, load_dh_file
 from symkin.model.spatial import joint_torques, velocity_transform, wrench_transform
 from symkin.model.tree import Tree
+from symkin.runtime.cartesian import PathResult, ctraj, servo_path
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
 from symkin.runtime.load import compile, load_compiled
 from symkin.runtime.loop import ServoResult, servo
 from symkin.runtime.servo import p_servo
-from symkin.runtime.trajectory import (
-    PathResult,
-    Trajectory,
-    ctraj,
-    jtraj,
-    mstraj,
-    quintic,
-    servo_path,
-    trapezoidal,
-)
+from symkin.runtime.trajectory import Trajectory, jtraj, mstraj, quintic, trapezoidal
 
 _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
     "derive": ("symkin.derive.chain", "derivation"),

@@ -19,8 +19,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from symkin.core.arrays import as_batch
-from symkin.core.pose import as_poses
 from symkin.core.names import identifier
+from symkin.core.pose import as_poses
 from symkin.errors import ParameterError
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Environment

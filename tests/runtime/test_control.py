@@ -122,7 +122,9 @@ def test_p_servo_gain_forms_arrival_and_caps():
     nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=0.1, frame="base")  # eq 43: |k e| capped, direction kept
     assert_close(np.linalg.norm(nu), 0.1, 1e-12, "|nu|")
     assert_close(nu / np.linalg.norm(nu), np.array([0.3, 0, 0, 0, 0, 0.2]) / math.hypot(0.3, 0.2), 1e-12)
-    nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=(0.1, 1.0), frame="base")  # translation and rotation capped separately
+    nu, _ = p_servo(
+        Te, Tep, gain=1.0, nu_max=(0.1, 1.0), frame="base"
+    )  # translation and rotation capped separately
     assert_close(nu, [0.1, 0, 0, 0, 0, 0.2], 1e-12, "separate caps")
     nu, arrived = p_servo(Te, Tep, threshold=0.6, frame="base")
     assert arrived and not nu.any()
