@@ -176,9 +176,10 @@ def poe_args(
     """
     if frame not in _FRAMES:
         raise RobotError(f"frame must be one of {list(_FRAMES)}, not {frame!r}")
-    Mx = _matrix(M, (4, 4), "M", tol)
+    checked = as_pose(M, "M", RobotError)  # the one pose rule first, then PoE's exact numbers
+    Mx = _matrix(M if isinstance(M, (np.ndarray, list, tuple)) else checked, (4, 4), "M", tol)
     Mf = np.array([[float(x) for x in row] for row in Mx])
-    as_pose(Mf, "M", RobotError)  # the one pose rule, on the snapped entries
+    as_pose(Mf, "M", RobotError)  # and on the snapped entries
     R = Mf[:3, :3]
     arr = np.asarray(screws, dtype=object)
     if arr.ndim == 1 and arr.shape == (6,):

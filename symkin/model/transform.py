@@ -205,8 +205,8 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
     elif _is_rtb(value):
         chain, _ = rtb_ets(value, snap_tol)
         out = chain
-    elif isinstance(getattr(value, "A", None), np.ndarray) and np.shape(value.A) == (4, 4):
-        out = se3_ets(value.A, what, snap_tol)
+    elif isinstance(getattr(value, "A", None), (np.ndarray, list)):  # spatialmath SE3: the pose rule
+        out = se3_ets(value, what, snap_tol)
     else:
         raise RobotError(
             f"{what} must be constant ETS text, 'x y z roll pitch yaw', a symkin ETS or ET, a 4x4 matrix, a "
