@@ -18,16 +18,6 @@ TABLE = Environment(
 )
 
 
-@pytest.fixture(scope="module")
-def panda():
-    return symkin.load("panda")
-
-
-@pytest.fixture(scope="module")
-def kin(panda):
-    return symkin.compile(panda, backend="c")
-
-
 def _colliding_targets(panda, kin, count, seed=0):
     """Configurations without self-collision whose arm (not the wrist and hand) hits the table
     scene, and their poses: other arm postures reach the same pose."""

@@ -18,16 +18,6 @@ from symkin.geometry import Environment, Sphere
 from symkin.runtime.loop import SERVO_HALVINGS
 
 
-@pytest.fixture(scope="module")
-def panda():
-    return symkin.load("panda")
-
-
-@pytest.fixture(scope="module")
-def kin(panda):
-    return symkin.compile(panda, backend="c")
-
-
 def enclosed_scene(panda, kin, seed: int) -> tuple[np.ndarray, np.ndarray, Environment]:
     """A free start, a random target pose and eight spheres around the target's position (a ring of
     six and one above and below, radius 0.6 r at distance r, r in [0.08, 0.2] m)."""
