@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import finite_number as _number
+from symkin.core.arrays import per_joint as _per_joint
 from symkin.core.arrays import real_array
 from symkin.errors import CompileError, ConfigurationError, ParameterError
 from symkin.runtime.memo import bounded, per_object
@@ -35,12 +37,14 @@ from symkin.runtime.mmc_qp import (
     active_set_rows_solve,
     active_set_solve,
     distance_dampers,
+    fallback_step,
     joint_velocity_bounds,
     manipulability_jacobian,
     mmc_closed_form,
     mmc_qp,
 )
 from symkin.runtime.step import OSQP_SETTINGS, StepInfo, step_nu, step_q
+from symkin.runtime.step import OSQP_STATUS as _OSQP_STATUS
 
 __all__ = [
     "MMC",
@@ -53,41 +57,6 @@ __all__ = [
     "joint_velocity_bounds",
     "manipulability_jacobian",
 ]
-
-_OSQP_STATUS = {
-    "OSQP_SOLVED": "solved",
-    "OSQP_SOLVED_INACCURATE": "inaccurate",
-    "OSQP_PRIMAL_INFEASIBLE": "infeasible",
-    "OSQP_PRIMAL_INFEASIBLE_INACCURATE": "infeasible",
-    "OSQP_DUAL_INFEASIBLE": "error",
-    "OSQP_DUAL_INFEASIBLE_INACCURATE": "error",
-    "OSQP_MAX_ITER_REACHED": "max_iter",
-    "OSQP_TIME_LIMIT_REACHED": "max_iter",
-}
-
-
-def _number(value: Any, name: str, minimum: float = 0.0, strict: bool = True) -> float:
-    """``value`` as a finite float > ``minimum`` (``>=`` when not ``strict``), else ParameterError."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and (x > minimum if strict else x >= minimum)):
-        raise ParameterError(
-            f"{name} must be finite and {'>' if strict else '>='} {minimum:g}, got {value!r}"
-        )
-    return x
-
-
-def _per_joint(value: Any, n: int, name: str) -> np.ndarray:
-    """A scalar or (n,) parameter as finite (n,) floats >= 0, else ParameterError."""
-    try:
-        a = np.broadcast_to(real_array(value, name, ParameterError), (n,)).copy()
-    except ValueError:
-        raise ParameterError(f"{name} must be a number or {n} numbers, got {value!r}") from None
-    if not (np.isfinite(a).all() and (a >= 0).all()):
-        raise ParameterError(f"{name} must be finite and >= 0, got {a.tolist()}")
-    return a
 
 
 def _speed_limits(kin: Any, n: int, qd_max: Any) -> np.ndarray:
@@ -749,20 +718,8 @@ class MMC:
 
     def _fallback(self, qp: MMCQP, status: str, method: str, iters: int) -> tuple[np.ndarray, StepInfo]:
         """The RRMC step scaled into [lower, upper] (or zero), never NaN."""
-        J, nu = qp.J, qp.l[:6]
-        lower, upper = qp.lower, qp.upper
-        qd, _, _, _ = _rrmc_step(J, nu, 1e-2, self.singular_tol, self._rows)
-        fallback = "rrmc"
-        if not np.isfinite(qd).all():
-            qd, fallback = np.zeros(self.n), "zero"
-        scale = 1.0
-        if (lower <= 0).all() and (upper >= 0).all():
-            with np.errstate(divide="ignore", invalid="ignore"):
-                r = np.where(qd > upper, upper / qd, np.where(qd < lower, lower / qd, 1.0))
-            scale = float(np.clip(r, 0.0, 1.0).min())
-            qd = qd * scale
-        qd = np.clip(qd, lower, upper)
-        res = float(np.abs(J @ qd - nu).max())
+        qd, fallback, scale = fallback_step(qp, self.singular_tol)
+        res = float(np.abs(qp.J @ qd - qp.l[:6]).max())
         return qd, StepInfo(status, method, qp.manipulability, iters, fallback, res, scale=scale)
 
 

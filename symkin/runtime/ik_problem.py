@@ -14,14 +14,19 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import as_batch, name_of, real_array, sample_bounds
+from symkin.core.arrays import as_batch, finite_number, name_of, per_joint, real_array, sample_bounds
 from symkin.core.pose import as_poses, pose_array
 from symkin.errors import ParameterError, PoseError
 from symkin.model.differential import NEAR_PI_L, angle_axis
 
-Method = Literal["NR", "GN", "LM"]
+Method = Literal["NR", "GN", "LM", "QP"]
 Damping = Literal["wampler", "chan", "sugihara"]
-METHODS = ("NR", "GN", "LM")
+METHODS = ("NR", "GN", "LM", "QP")
+#: lam when it is not given: LM's damping, the QP's joint-velocity weight (symkin.runtime.ik_qp)
+DEFAULT_LAM = {"QP": 0.01}
+LM_LAM = 0.1
+QP_RHO_I = 0.9  # rad or m: the QP's joint-limit dampers act within this distance of a limit
+QP_RHO_S = 0.01  # rad or m: ... and stop a joint this far from it
 DAMPINGS = ("wampler", "chan", "sugihara")
 PINV_RCOND = 1e-12  # singular values <= PINV_RCOND * largest are dropped (same in C)
 TWO_PI = 6.283185307179586
@@ -128,6 +133,13 @@ class IKOptions:
     sample: np.ndarray  # (2, n) finite range of random restarts
     revolute: np.ndarray  # (n,) bool
     starts: np.ndarray  # (S, n)
+    # method="QP" (symkin.runtime.ik_qp): the slack's gain, the manipulability term's weight and
+    # the joint-limit velocity dampers' gain, influence and stop distances
+    slack_gain: float = 1.0
+    manipulability: float = 0.0
+    xi: float = 1.0
+    rho_i: np.ndarray | None = None  # (n,)
+    rho_s: np.ndarray | None = None  # (n,)
 
     @classmethod
     def of(
@@ -135,7 +147,7 @@ class IKOptions:
         kin: Any,
         method: str = "LM",
         damping: str = "chan",
-        lam: float | Sequence[float] = 0.1,
+        lam: float | Sequence[float] | None = None,
         pinv: bool = False,
         ilimit: int = 30,
         slimit: int = 100,
@@ -144,6 +156,11 @@ class IKOptions:
         joint_limits: bool = True,
         we: Sequence[float] | None = None,
         starts: Any = None,
+        slack_gain: float = 1.0,
+        manipulability: float = 0.0,
+        xi: float = 1.0,
+        rho_i: float | Sequence[float] = QP_RHO_I,
+        rho_s: float | Sequence[float] = QP_RHO_S,
     ) -> IKOptions:
         n = int(kin.n)
         if n < 1:
@@ -151,6 +168,8 @@ class IKOptions:
         method = str(method).upper()
         if method not in METHODS:
             raise ParameterError(f"method must be one of {METHODS}, not {method!r}")
+        if lam is None:
+            lam = DEFAULT_LAM.get(method, LM_LAM)
         damping = str(damping).lower()
         if damping not in DAMPINGS:
             raise ParameterError(f"damping must be one of {DAMPINGS}, not {damping!r}")
@@ -187,13 +206,38 @@ class IKOptions:
         rev = revolute_mask(kin)
         # start configurations: the joint-value rule of q (as_batch), (n,) or (S, n)
         S = np.zeros((0, n)) if starts is None else as_batch(starts, n, name_of(kin), "starts")[0]
+        qp = _qp_options(n, method, lam_a, we_a, joint_limits, slack_gain, manipulability, xi, rho_i, rho_s)
         return cls(
             n, method, damping, _ro(lam_a), bool(pinv), int(ilimit), int(slimit), float(tol), tol_on,
-            bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S),
+            bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S), *qp,
         )  # fmt: skip
 
 
 MAX_ITERATIONS = 2**31 - 1  # ilimit * slimit: the C solver counts iterations in int32
+
+
+def _qp_options(
+    n: int, method: str, lam: np.ndarray, we: np.ndarray, joint_limits: Any, slack_gain: Any,
+    manipulability: Any, xi: Any, rho_i: Any, rho_s: Any,
+) -> tuple[float, float, float, np.ndarray, np.ndarray]:  # fmt: skip
+    """The QP options, validated: (slack_gain, manipulability, xi, rho_i (n,), rho_s (n,))."""
+    slack_gain = finite_number(slack_gain, "slack_gain")  # the MMC's checks of the same quantities
+    manipulability = finite_number(manipulability, "manipulability", strict=False)
+    xi = finite_number(xi, "xi")
+    rho = [_ro(per_joint(rho_i, n, "rho_i")), _ro(per_joint(rho_s, n, "rho_s"))]
+    if method == "QP":
+        if not (lam == lam[0]).all() or not lam[0] > 0:
+            raise ParameterError(
+                f"method='QP' takes lam as one number > 0 (its joint-velocity weight), got {lam}"
+            )
+        if not (we > 0).all():
+            raise ParameterError(
+                f"method='QP' needs every weight of we > 0, got {we.tolist()}: its QP asks for the whole "
+                "pose error (we weighs the residual only); for position-only IK use LM"
+            )
+        if joint_limits and not (rho[0] > rho[1]).all():
+            raise ParameterError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s}) for every joint")
+    return slack_gain, manipulability, xi, rho[0], rho[1]
 
 
 def _count(value: Any, name: str) -> int:

@@ -28,6 +28,7 @@ from symkin.model.robot import Robot
 from symkin.model.slots import hessian_of_columns
 from symkin.runtime.casadi_calls import chain_functions, tree_functions
 from symkin.runtime.ik import IK_OPTIONS, ik
+from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
 
 __all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
@@ -332,11 +333,16 @@ class Kinematics(FrameMethods):
         solutions in collision: on the C backend inside the C solver's search loop (the next
         search starts, within ``slimit``), elsewhere by solving again from new random starts, at
         most ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
+        With ``method="QP"`` on a chain's C kinematics each step also keeps the MMC's collision
+        rows (:func:`symkin.runtime.ik_qp_c.collision_qp_ik`).
         """
         if "collision" in kwargs or "collision_attempts" in kwargs:
             env = kwargs.pop("collision", None)
             attempts = kwargs.pop("collision_attempts", 20)
             if env is not None and env is not False:
+                qp = str(kwargs.get("method", "")).upper() == "QP"
+                if qp and frame is None and self.backend == "c" and not self.is_tree:
+                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)  # the QP keeps the MMC's rows
                 from symkin.runtime.collision import collision_ik
 
                 if frame is not None:

@@ -44,9 +44,10 @@ from symkin.errors import ConfigurationError
 __all__ = ["CMMC", "CRRMC", "mmc_library", "mmc_extension", "mmc_sources", "osqp_sources", "supports"]
 
 CSRC = Path(__file__).resolve().parent / "csrc"
-# the library's files from csrc: the MMC, RRMC and QRMC steps and the extension module
+# the library's files from csrc: the MMC, RRMC and QRMC steps, the QP IK step and the extension module
 _CSRC_FILES = (
-    "mmc.h", "mmc_impl.h", "mmc_py.c", "qrmc.h", "qrmc_impl.h", "symkin_pose.h", "symkin_pyarray.h"
+    "mmc.h", "mmc_impl.h", "mmc_py.c", "qrmc.h", "qrmc_impl.h", "mmc_ik.h", "mmc_ik.c", "symkin_pose.h",
+    "symkin_pyarray.h",
 )  # fmt: skip
 _P = ctypes.c_void_p
 _I32, _D = ctypes.c_int32, ctypes.c_double
@@ -271,6 +272,8 @@ _CTRL_FLAGS = (
     "has_dt",
     "fresh",
     "polished",
+    "no_jm",
+    "singular_qp",
     "pad_",
 )
 
