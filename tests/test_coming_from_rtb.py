@@ -107,7 +107,9 @@ def test_ik_names_defaults_and_residual(panda, kin):
     import inspect
 
     assert inspect.signature(panda.ik_LM).parameters["k"].default == 1.0
-    assert inspect.signature(symkin.ik).parameters["lam"].default == 0.1
+    from symkin.runtime.ik_problem import IKOptions
+
+    assert np.all(IKOptions.of(kin, method="LM").lam == 0.1)  # LM's lam when none is given
     T1, T2 = kin.fkine(kin.qr), kin.fkine(q0)
     np.testing.assert_allclose(rtb.angle_axis(T1, T2), symkin.pose_error(T1, T2), rtol=0, atol=1e-15)
 
