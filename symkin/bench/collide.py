@@ -275,7 +275,7 @@ def mmc_obstacle_steps(robot: Any, kin: Any, repeats: int = 3) -> dict[str, Any]
     options = {"collision": env, "d_i": 0.3, "d_s": 0.02}
     states, guide = [], MMC(kin, backend="python", **options)
     for _ in range(100):
-        nu, done = p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         states.append((q, nu))

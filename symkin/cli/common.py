@@ -254,7 +254,9 @@ def target(args: argparse.Namespace, robot: Any) -> np.ndarray:
     if args.target_q is not None:
         return robot.fkine(floats(args.target_q, "--target-q", robot.n))
     if args.matrix is not None:
-        return floats(args.matrix, "--matrix", 16).reshape(4, 4)
+        from symkin.core.pose import as_pose
+
+        return as_pose(floats(args.matrix, "--matrix", 16).reshape(4, 4), "--matrix")  # the one pose rule
     from symkin.model.transform import rpy_matrix
 
     pose = floats(args.pose, "--pose", 6)

@@ -20,6 +20,7 @@ import numpy as np
 
 from symkin.core.arrays import as_batch
 from symkin.core.names import identifier
+from symkin.core.pose import as_poses
 from symkin.errors import ParameterError
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Environment
@@ -252,7 +253,7 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
     batch = first.batch
     seed = kwargs.pop("seed", None)
     kwargs.pop("q0", None)
-    T = np.asarray(Tep, dtype=float).reshape(-1, 4, 4)
+    T = as_poses(Tep)[0]  # (N, 4, 4) by the one pose rule (kin.ik has checked it)
     q = np.array(first.q, dtype=float).reshape(len(T), -1)
     success = np.atleast_1d(np.array(first.success, dtype=bool))
     iters = np.atleast_1d(np.array(first.iterations, dtype=int))

@@ -94,8 +94,9 @@ class Kinematics(FrameMethods):
     the C backend, the extension module's functions themselves).
 
     Attributes: ``model`` (also ``robot`` and ``tree``), ``backend``, ``n``, ``name``,
-    ``joint_names``, ``qlim``, ``qd_max``, ``frames`` (a tree's), ``files`` (the generated sources),
-    ``path`` (the compiled library or module), ``module``.
+    ``joint_names``, ``qlim``, ``qd_max``, ``configs`` and each named configuration (``kin.qr``, as
+    on the model), ``frames`` (a tree's), ``files`` (the generated sources), ``path`` (the compiled
+    library or module), ``module``.
     """
 
     fkine: Callable[..., np.ndarray]
@@ -155,6 +156,25 @@ class Kinematics(FrameMethods):
     @property
     def qd_max(self) -> np.ndarray | None:
         return self.model.qd_max
+
+    @property
+    def configs(self) -> Any:
+        """The model's named configurations (``qz``, ``qr``...; each (n,)), as on the Robot; also
+        attributes: ``kin.qr``."""
+        return self.model.configs
+
+    def __getattr__(self, key: str) -> np.ndarray:
+        """A named configuration of the model as an attribute (``kin.qr``), as the Robot has it."""
+        model = self.__dict__.get("model")
+        if model is None or key.startswith("_"):
+            raise AttributeError(key)
+        try:
+            return model.configs[key]
+        except KeyError:
+            raise AttributeError(
+                f"Kinematics {model.name!r} has no attribute or configuration {key!r}; "
+                f"configurations: {sorted(model.configs)}"
+            ) from None
 
     @property
     def frames(self) -> tuple[str, ...]:

@@ -18,16 +18,6 @@ TABLE = Environment(
 )
 
 
-@pytest.fixture(scope="module")
-def panda():
-    return symkin.load("panda")
-
-
-@pytest.fixture(scope="module")
-def kin(panda):
-    return symkin.compile(panda, backend="c")
-
-
 def _colliding_targets(panda, kin, count, seed=0):
     """Configurations without self-collision whose arm (not the wrist and hand) hits the table
     scene, and their poses: other arm postures reach the same pose."""
@@ -104,7 +94,7 @@ def _run(kin, controller, q0, Tep, env, steps=120, dt=0.05):
     q = q0.copy()
     closest = np.inf
     for _ in range(steps):
-        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         qd, _ = controller.step(q, nu)
@@ -168,7 +158,7 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
     assert c.backend == "c" and p.backend == "python"
     q, near, methods, warm = q0.copy(), 0, [], 0
     for k in range(80):
-        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         (a, ia), (b, ib) = c.step(q, nu), p.step(q, nu)
