@@ -25,6 +25,7 @@ def add_parser(sub: Any) -> None:
         help="joint values (rad or m), or a named configuration such as qr (default qz)",
     )
     common.add_obstacle_options(s)
+    common.add_srdf_option(s)
     s.add_argument("--backend", choices=("c", "numpy"), default="c", help="the kernel that answers")
     s.add_argument("--top", type=int, default=5, metavar="K", help="print the K closest pairs")
     s.add_argument("--json", action="store_true", help="print JSON")
@@ -41,7 +42,7 @@ def _label(kind: str, i: int, j: int, shapes: Any) -> str:
 def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
 
-    robot = common.single_chain(args, geometry=True)
+    robot = common.with_srdf(args, common.single_chain(args, geometry=True))
     if args.top < 0:
         raise UserError(f"--top must be >= 0, got {args.top}")
     q = common.configuration(" ".join(args.q), robot, "Q") if args.q else np.zeros(robot.n)

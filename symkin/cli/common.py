@@ -28,6 +28,7 @@ __all__ = [
     "add_target_options",
     "add_scale_options",
     "split_frame",
+    "is_urdf",
     "single_chain",
     "chain_or_tree",
     "target",
@@ -37,6 +38,9 @@ __all__ = [
     "fmt",
     "add_obstacle_options",
     "environment_of",
+    "add_srdf_option",
+    "with_srdf",
+    "need_collision",
 ]
 
 ROBOT_HELP = (
@@ -163,7 +167,7 @@ def split_frame(spec: str) -> tuple[str, str | None]:
     return spec, None
 
 
-def _is_urdf(path: str) -> bool:
+def is_urdf(path: str) -> bool:
     return "(" not in path and Path(path.strip()).suffix.lower() in _URDF
 
 
@@ -187,7 +191,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
     tool, base_transform = getattr(args, "tool", None), getattr(args, "base", None)
     path, frame = split_frame(spec) if isinstance(spec, str) else (spec, None)
     end, base = _end(args, frame), getattr(args, "base_link", None)
-    if not isinstance(path, str) or not _is_urdf(path):
+    if not isinstance(path, str) or not is_urdf(path):
         if frame or end or base:
             raise UserError("--base-link, --end-link and ROBOT:FRAME apply to URDF files only")
         return resolve_robot(spec, tool=tool, base=base_transform)
@@ -222,7 +226,7 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
     path, frame = split_frame(args.robot)
     frames = getattr(args, "frames", None)
     if frames is not None:
-        if not _is_urdf(path):
+        if not is_urdf(path):
             raise UserError("--frames applies to URDF files only")
         if frame or getattr(args, "end_link", None):
             raise UserError("give either --frames (a tree) or one frame (ROBOT:FRAME, --end-link)")
@@ -231,7 +235,7 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
             raise UserError(f"--frames needs link names separated by commas, not {frames!r}")
         _no_transform(args, ", not a tree of --frames")
         return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
-    if _is_urdf(path) and _end(args, frame) is None:
+    if is_urdf(path) and _end(args, frame) is None:
         tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
         if len(tree.frames) > 1:
             _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
@@ -250,7 +254,9 @@ def target(args: argparse.Namespace, robot: Any) -> np.ndarray:
     if args.target_q is not None:
         return robot.fkine(floats(args.target_q, "--target-q", robot.n))
     if args.matrix is not None:
-        return floats(args.matrix, "--matrix", 16).reshape(4, 4)
+        from symkin.core.pose import as_pose
+
+        return as_pose(floats(args.matrix, "--matrix", 16).reshape(4, 4), "--matrix")  # the one pose rule
     from symkin.model.transform import rpy_matrix
 
     pose = floats(args.pose, "--pose", 6)
@@ -340,3 +346,70 @@ def environment_of(args: argparse.Namespace) -> Any:
                     raise UserError(f"--env {path}: each of {key} needs {size} numbers, got {row!r}")
                 shapes[what].append(make(v))
     return Environment(*(tuple(shapes[what]) for what in kinds))
+
+
+# -- SRDF (every command that checks collisions) ---------------------------------------------------
+def add_srdf_option(s: argparse.ArgumentParser, when: str = "") -> None:
+    """--srdf FILE: link pairs a MoveIt SRDF disables are not checked (``when``: what it needs)."""
+    s.add_argument(
+        "--srdf",
+        metavar="FILE",
+        help="skip the link pairs a MoveIt SRDF disables (<disable_collisions>); a pair of links stays "
+        "checked unless the SRDF disables every pair of the URDF links merged into them; "
+        "`symkin srdf ROBOT` writes one" + when,
+    )
+
+
+def need_collision(args: argparse.Namespace, env: Any) -> None:
+    """Obstacles and --srdf are options of --collision (ik, servo, reach): refused without it."""
+    if (len(env) or getattr(args, "srdf", None)) and not args.collision:
+        raise UserError(
+            "--sphere, --capsule, --box, --env and --srdf are options of --collision: add --collision"
+        )
+
+
+def srdf_carriers(args: argparse.Namespace, model: Any) -> dict[str, tuple[str, ...]]:
+    """Per link of ``model``'s geometry, the link names an SRDF of ROBOT uses for it: the URDF
+    links with collision elements attached to it (a URDF ROBOT), else its own name."""
+    links = model.geometry.links
+    path = args.robot if isinstance(args.robot, str) else None
+    if path is not None:
+        path = split_frame(path)[0]
+    if path is not None and is_urdf(path):
+        from symkin.geometry.urdf import urdf_carriers
+
+        carriers = urdf_carriers(Path(path).expanduser(), model)
+        return {x: carriers.get(x, (x,)) for x in links}
+    return {x: (x,) for x in links}
+
+
+def with_srdf(args: argparse.Namespace, model: Any) -> Any:
+    """``model`` with the link pairs of --srdf disabled (conservatively, see
+    :func:`symkin.geometry.srdf.srdf_disabled`); ``model`` itself without --srdf. A file none of
+    whose pairs names two of the model's links is an error (another robot's SRDF); pairs the SRDF
+    disables only in part are said on stderr."""
+    path = getattr(args, "srdf", None)
+    if path is None:
+        return model
+    from symkin.geometry.srdf import srdf_disabled
+
+    geometry = model.geometry
+    if geometry is None or not geometry.shapes:
+        raise UserError(f"--srdf: {model.name} has no collision geometry")
+    carriers = srdf_carriers(args, model)
+    pairs, partial, used = srdf_disabled(Path(path).expanduser(), carriers)
+    if not used:
+        names = sorted({x for c in carriers.values() for x in c})
+        shown = ", ".join(names[:6]) + (" ..." if len(names) > 6 else "")
+        raise UserError(
+            f"--srdf {path}: none of its disable_collisions pairs names two links of {model.name} with "
+            f"collision geometry ({shown}): an SRDF of another robot?"
+        )
+    if partial:
+        shown = ", ".join(f"({a}, {b})" for a, b in partial[:4]) + (" ..." if len(partial) > 4 else "")
+        print(
+            f"symkin: --srdf: {len(partial)} link pairs stay checked, the SRDF disabling only some of the "
+            f"links merged into them: {shown}",
+            file=sys.stderr,
+        )
+    return model.with_geometry(geometry.with_disabled(pairs))

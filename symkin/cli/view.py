@@ -44,6 +44,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--backend", choices=common.BACKENDS, default="c", help="kinematics backend")
     common.add_link_options(s)
     common.add_obstacle_options(s)
+    common.add_srdf_option(s)
     s.set_defaults(func=run)
 
 
@@ -55,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
     from symkin.view import view
 
-    robot = common.single_chain(args, geometry=True)
+    robot = common.with_srdf(args, common.single_chain(args, geometry=True))
     q = None if args.q is None else common.configuration(args.q, robot, "--q")
     env = common.environment_of(args)
     kin = compile_robot(robot, backend=args.backend)

@@ -351,17 +351,19 @@ class _CController:
 
     def servo(
         self, Tep: np.ndarray, q0: np.ndarray, gain: np.ndarray, threshold: float, dt: float, cap: Any,
-        axes: str, max_steps: int,
+        axes: str, max_steps: int, collide: tuple[int, int] | None = None,
     ) -> tuple:  # fmt: skip
         """The servo loop of :func:`symkin.runtime.loop.servo` in C with this controller (arguments
-        validated by it, but Tep; ``cap``: None, a number or (v_max, omega_max)). Returns (Q, QD, E, M,
-        infos, step_time, arrived, limit_violations), or None when Tep is not a valid (4, 4) pose."""
+        validated by it, but Tep; ``cap``: None, a number or (v_max, omega_max); ``collide``: None or
+        the addresses of a collision kernel's ``skcoll_in_collision_packed`` and of the packed
+        obstacles, which accept or halve each step). Returns (Q, QD, E, M, infos, step_time, arrived,
+        limit_violations, blocked), or None when Tep is not a valid (4, 4) pose."""
         caps = (
             [0.0, 0.0, 0.0] if cap is None else [1.0, float(cap), 0.0] if np.ndim(cap) == 0 else [2.0, *cap]
         )
         params = np.array([*gain, threshold, dt, *caps, _AXES[axes], float(max_steps)], dtype=float)
         return self._ext.servo(self._addr, self.kind, np.ascontiguousarray(Tep, dtype=float),
-                               np.ascontiguousarray(q0, dtype=float), params)  # fmt: skip
+                               np.ascontiguousarray(q0, dtype=float), params, collide)  # fmt: skip
 
 
 class CMMC(_CController):

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.pose import as_pose
 from symkin.errors import MissingExtraError, ParameterError
 from symkin.view.scene import Scene, ViewState, capsule_mesh, quaternion, quaternion_z_to, rotation
 
@@ -326,8 +327,9 @@ class Viewer:
 
     def set_target(self, T: Any, move_gizmo: bool = True) -> Any:
         """Solve ``kin.ik(T)`` (4, 4) from the current joint values; on success show the solution,
-        otherwise keep the last pose and say why in the panel. Returns the IKResult."""
-        T = np.asarray(T, dtype=float)
+        otherwise keep the last pose and say why in the panel. Returns the IKResult; PoseError for a
+        T that is not SE(3) (the one pose rule), before anything moves."""
+        T = as_pose(T)  # the one pose rule: PoseError before the gizmo moves
         with self._lock:
             if move_gizmo:
                 self._place_target(T)

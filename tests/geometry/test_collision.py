@@ -386,7 +386,8 @@ def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
     """The generated self checks try a sphere with several partners on the other link against that
     link's bounding sphere first; every active self pair must still be tested exactly once, in the
     scalar code, each sphere-first test must use the other link's bound. The four-lane code tests
-    every pair not proved apart within the joint limits (lanes outside them take the scalar code)."""
+    every pair not proved apart within the joint limits, then the proved pairs for the lanes beyond
+    them."""
     import re
     from collections import Counter
 
@@ -404,6 +405,7 @@ def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
     checks = (
         (tables["self_code"] + tables["self_code_proved"], "sphere_hit", expected),
         (tables["self_code4"], "hit2", expected4),
+        (tables["self_code4"] + tables["self_code4_proved"], "hit2", expected),
     )
     for code, call, expected in checks:
         found = Counter()

@@ -66,6 +66,11 @@ def test_the_target_gizmo_drives_ik_and_a_failure_keeps_the_pose(ur5):
         assert "IK failed" in viewer.message
         viewer.set_q(q_goal)
         assert viewer.message == ""
+        bad = T.copy()
+        bad[3] = [1.0, 0.0, 0.0, 1.0]  # not SE(3): the one pose rule, before anything moves
+        with pytest.raises(symkin.PoseError, match="bottom row"):
+            viewer.set_target(bad)
+        assert_close(viewer.q, q_goal, 0, "kept pose")
 
 
 def test_bad_ports_and_busy_ports_are_errors(ur5):
