@@ -73,12 +73,15 @@ KINDS = {
 }
 
 
-def run(cache: Path) -> subprocess.CompletedProcess:
-    env = {**os.environ, "SYMKIN_CACHE": str(cache)}
-    env.pop("PYTHONDONTWRITEBYTECODE", None)  # Python writes its own bytecode caches, as by default
-    return subprocess.run(
-        [sys.executable, "-c", SCRIPT], capture_output=True, text=True, env=env, cwd=ROOT, timeout=900
-    )
+def run(
+    cache: Path, preamble: str = "", argv: tuple[str, ...] = (), **env: str
+) -> subprocess.CompletedProcess:
+    """SCRIPT (after ``preamble``) in a new process with ``cache`` as SYMKIN_CACHE, run through
+    ``argv`` (such as ``unshare -m sh -c ...``) when given."""
+    environ = {**os.environ, "SYMKIN_CACHE": str(cache), **env}
+    environ.pop("PYTHONDONTWRITEBYTECODE", None)  # Python writes its own bytecode caches, as by default
+    command = [*argv, sys.executable, "-c", preamble + SCRIPT]
+    return subprocess.run(command, capture_output=True, text=True, env=environ, cwd=ROOT, timeout=900)
 
 
 @pytest.fixture(scope="module")
@@ -179,3 +182,100 @@ def _whole(path: Path, original: Path) -> bool:
         data.startswith(head)
         and data[len(head) : len(head) + 32] == hashlib.sha256(data[len(head) + 32 :]).digest()
     )
+
+
+# ---- issue 36, item 7: a full or unwritable cache costs speed, never an answer --------------------
+# Every write into the cache (files, not folders) fails as on a full disk: Python's open and os.open
+# (pathlib, tempfile.mkstemp) raise ENOSPC for a path under SYMKIN_CACHE; reading still works.
+FULL = """
+import builtins, errno, io, os
+_cache = os.path.realpath(os.environ["SYMKIN_CACHE"])
+def _full(path):
+    try:
+        p = os.path.realpath(os.fsdecode(path))
+    except TypeError:
+        return False
+    if p == _cache or p.startswith(_cache + os.sep):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), p)
+_io_open, _os_open = io.open, os.open
+def _open(file, mode="r", *args, **kwargs):
+    if not isinstance(file, int) and any(c in mode for c in "wax+"):
+        _full(file)
+    return _io_open(file, mode, *args, **kwargs)
+def _os_open_full(path, flags, *args, **kwargs):
+    if flags & (os.O_WRONLY | os.O_RDWR | os.O_CREAT):
+        _full(path)
+    return _os_open(path, flags, *args, **kwargs)
+builtins.open = io.open = _open
+os.open = _os_open_full
+"""
+
+
+def _same_answers(res: subprocess.CompletedProcess, expected: dict) -> None:
+    assert res.returncode == 0 and "Traceback" not in res.stderr, res.stderr
+    assert json.loads(res.stdout) == expected
+
+
+def test_a_full_cache_costs_speed_not_answers(warm, tmp_path):
+    """Every artefact (kinematics on three backends, closed-form IK, the C IK and MMC extensions,
+    OSQP sources, a tree, the collision kernel and its proof) with a cache that takes no file: C
+    ``symkin.compile`` and the collision kernel raised ``OSError: [Errno 28]``."""
+    _, expected = warm
+    cache = tmp_path / "full"
+    cache.mkdir()
+    _same_answers(run(cache, FULL), expected)
+    assert not [p for p in cache.rglob("*") if p.is_file()]  # nothing half-written left behind
+
+
+def test_an_unwritable_cache_costs_speed_not_answers(warm, tmp_path):
+    """SYMKIN_CACHE below a plain file: no folder can be made there (by root either)."""
+    _, expected = warm
+    (tmp_path / "file").write_text("not a folder")
+    _same_answers(run(tmp_path / "file" / "cache"), expected)
+
+
+def _can_mount_tmpfs() -> bool:
+    import shutil as sh
+
+    if sys.platform != "linux" or sh.which("unshare") is None:
+        return False
+    probe = subprocess.run(
+        ["unshare", "-rm", "sh", "-c", "mount -t tmpfs -o size=64k tmpfs /mnt"], capture_output=True
+    )
+    return probe.returncode == 0
+
+
+@pytest.mark.skipif(not _can_mount_tmpfs(), reason="needs unshare and a tmpfs in a user namespace")
+def test_a_really_full_cache_costs_speed_not_answers(warm, tmp_path):
+    """A real disk that fills up: a 400 KiB tmpfs (in a private mount namespace) as the cache, so
+    some entries fit and the rest fail part way (a source file, the compiler's output)."""
+    _, expected = warm
+    cache = tmp_path / "tiny"
+    cache.mkdir()
+    mount = f'mount -t tmpfs -o size=400k tmpfs {cache} && exec "$@"'
+    res = run(cache, argv=("unshare", "-rm", "sh", "-c", mount, "sh"))
+    _same_answers(res, expected)
+
+
+def test_the_compiler_failing_on_a_full_disk_builds_outside_the_cache(tmp_path, monkeypatch):
+    """The disk fills while the compiler writes the library into the cache: it says "No space left
+    on device" and the library is built in a temporary folder instead; a compile error of the
+    sources is still a CompileError."""
+    import ctypes
+    import shlex
+
+    from symkin.emit.c.build import compile_library, find_compiler
+    from symkin.errors import CompileError
+
+    real = shlex.join(find_compiler())
+    cc = tmp_path / "cc-full"
+    full = 'echo "ld: final link failed: No space left on device" >&2; exit 1'
+    cc.write_text(f'#!/bin/sh\ncase "$PWD" in "$SYMKIN_CACHE"/*) {full};; esac\nexec {real} "$@"\n')
+    cc.chmod(0o755)
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("CC", str(cc))
+    path = compile_library({"full.c": "int symkin_full(void) { return 36; }\n"}, "full_disk_probe")
+    assert tmp_path / "cache" not in path.parents
+    assert ctypes.CDLL(str(path)).symkin_full() == 36
+    with pytest.raises(CompileError, match="the C compiler failed"):
+        compile_library({"bad.c": "int symkin_bad(void) { return }\n"}, "full_disk_bad")
