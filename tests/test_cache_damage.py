@@ -279,3 +279,21 @@ def test_the_compiler_failing_on_a_full_disk_builds_outside_the_cache(tmp_path, 
     assert ctypes.CDLL(str(path)).symkin_full() == 36
     with pytest.raises(CompileError, match="the C compiler failed"):
         compile_library({"bad.c": "int symkin_bad(void) { return }\n"}, "full_disk_bad")
+
+
+def test_neither_the_cache_nor_a_temporary_folder_writable_is_one_symkin_error(tmp_path, monkeypatch):
+    """Not a bare OSError: a CompileError naming the cache and the temporary folder."""
+    import tempfile
+
+    from symkin.emit.c.build import compile_library
+    from symkin.errors import CompileError
+    from symkin.runtime.mmc_c import _generate_osqp
+
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path / "file" / "cache"))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "file" / "tmp"))
+    with pytest.raises(CompileError) as info:
+        compile_library({"nowhere.c": "int symkin_nowhere(void) { return 1; }\n"}, "nowhere_probe")
+    assert "symkin cache" in str(info.value) and str(tmp_path / "file" / "tmp") in str(info.value)
+    with pytest.raises(CompileError, match="OSQP's generated sources into the temporary folder"):
+        _generate_osqp(2, False, ())

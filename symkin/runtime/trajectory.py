@@ -182,6 +182,7 @@ def _times(t: Any, normalised: bool) -> tuple[np.ndarray, float, bool]:
         m = int(t)
         if m < 2:
             raise ParameterError(f"t as a number of samples must be at least 2, got {m}")
+        _room(m)
         if normalised:
             return np.linspace(0.0, 1.0, m), 1.0, True
         return np.arange(m, dtype=float), float(m - 1), False
@@ -318,8 +319,19 @@ def trapezoidal(q0: Any, qf: Any, t: Any, V: Any = None) -> Trajectory:
 
 # -- multi-segment ----------------------------------------------------------------------------
 def _steps(x: float, dt: float) -> int:
-    """ceil(x / dt) with slack for rounding (RTB's ``ceil(x / dt)``)."""
+    """ceil(x / dt) with slack for rounding (RTB's ``ceil(x / dt)``); ParameterError when that many
+    samples would not fit in memory."""
+    _room(x / dt)
     return max(0, math.ceil(x / dt - _EPS_STEPS))
+
+
+def _room(samples: float, n: int | None = None) -> None:
+    """ParameterError when ``samples`` samples of t, q, qd and qdd (of ``n`` axes; None: at least
+    one) would not fit in memory."""
+    from symkin.core.sizes import room
+
+    axes = f" x {n} axes" if n else ""
+    room(8.0 * samples * (1 + 3 * (n or 1)), f"a trajectory of {samples:.6g} samples{axes}")
 
 
 def mstraj(
@@ -417,6 +429,7 @@ def mstraj(
                     f"tsegment[{seg}] = {tseg:g} s is too short for blends of {ka * dt:g} s: it needs "
                     f"at least {(2 * ka2 + 1) * dt:g} s (the blends and one linear step of dt)"
                 )
+        _room(clock + kx + tseg / dt + ka2, n)  # the samples so far and this segment's
         segtime[seg] = tseg
         arrive[seg] = clock * dt + tseg + (ka2 * dt if seg > 0 else 0.0)
         v = dq / tseg

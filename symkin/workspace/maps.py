@@ -203,20 +203,21 @@ def reachability(
         ReachMap. The result does not depend on the scheduler, workers or chunk size.
     """
     require_scale(scheduler)
-    kin = kinematics_of(robot_or_kin, backend)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool):
         raise WorkspaceError(f"seed must be an integer, got {seed!r}")
     seed = int(seed)
+    rotations, described = _rotations(orientations, seed)  # a count checked before compiling
+    kin = kinematics_of(robot_or_kin, backend)
     centre, ball = reach_ball(kin.robot)
     if radius is not None:
         if not (isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0):
             raise WorkspaceError(f"radius must be a positive number of metres, got {radius!r}")
         ball = float(radius)
-    rotations, described = _rotations(orientations, seed)
     rows = _rows(axes)
     ik = ik_settings(kin, ik_options)
     env = _collision_env(kin, collision)
     grid = VoxelGrid.of(centre, ball, resolution, bounds, chunk)
+    _check_size(grid, len(rotations), kin.n, bool(solutions), output)
     settings = {
         "kind": "reachability",
         "resolution": grid.resolution,
@@ -284,6 +285,21 @@ def reachability(
             finally:
                 flush()
     return _load_map(group, None if output is None else str(output), stats)
+
+
+def _check_size(grid: VoxelGrid, K: int, n: int, solutions: bool, output: Any) -> None:
+    """WorkspaceError before any work when the map would not fit: its reach, manipulability and
+    voxel centres (read into memory), its solutions (``output`` None: in memory, else on the
+    store's disk), or a block's K IK problems per voxel (a block of ``grid.chunk`` voxels a side)."""
+    from symkin.core.sizes import room, stored
+
+    voxels = math.prod(grid.shape)
+    room(40.0 * voxels, f"a map of {voxels} voxels", WorkspaceError)
+    if solutions:
+        stored(output, 8.0 * voxels * K * n, f"the solutions of {voxels} voxels x {K} orientations",
+               WorkspaceError)  # fmt: skip
+    block = grid.chunk**3
+    room(8.0 * block * K * (2 * n + 16), f"blocks of {block} voxels x {K} orientations", WorkspaceError)
 
 
 def _collision_env(kin: Any, collision: Any) -> Any:
