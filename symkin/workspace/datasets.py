@@ -20,7 +20,7 @@ from symkin.core.sizes import count, room, stored
 from symkin.errors import WorkspaceError
 from symkin.runtime.ik import revolute_mask, sample_range
 from symkin.workspace.blocks import SampleSpec, sample_block
-from symkin.workspace.maps import kinematics_of
+from symkin.workspace.maps import kinematics_of, robot_of
 from symkin.workspace.run import client_for, require_scale, run_blocks
 from symkin.workspace.store import (
     open_store,
@@ -86,10 +86,11 @@ def samples(
     chunk = count(chunk, "chunk (samples per block)", error=WorkspaceError)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise WorkspaceError(f"seed must be an integer, got {seed!r}")
-    kin = kinematics_of(robot_or_kin, backend)
     # a block larger than the dataset is the dataset (Zarr fills a whole chunk in memory to write part)
     chunk, seed = _stored_chunk(output, overwrite) or min(chunk, n), int(seed)
-    _check_size(n, chunk, kin.n, output)
+    robot = robot_of(robot_or_kin)
+    _check_size(n, chunk, robot.n, output)  # before compiling
+    kin = kinematics_of(robot, backend)
     sample = sample_range(np.asarray(kin.qlim, dtype=float), revolute_mask(kin))
     blocks = -(-n // chunk)
     from symkin.core.version import __version__
