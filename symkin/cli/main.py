@@ -33,7 +33,10 @@ def build_parser() -> Parser:
     p = Parser(
         prog="symkin",
         description="symkin: a symbolic, code-generating kinematics compiler for robot manipulators.",
-        epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command.",
+        epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command. "
+        "Exit status: 0 success; 1 the answer no (collide: in collision; ik: not solved; servo: not arrived; "
+        "check: a failure; generate --check: out of date); 2 any error (one line; SYMKIN_TRACEBACK=1 adds "
+        "the traceback of an unexpected one); 130 interrupted.",
         formatter_class=Formatter,
     )
     p.add_argument("--version", action="version", version=f"symkin {__version__}")
