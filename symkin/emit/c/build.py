@@ -134,7 +134,16 @@ def check_cflags() -> None:
 
 @lru_cache(maxsize=8)
 def _probe(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
-    """'' when ``compiler`` builds a tiny shared library with ``flags``, else its first error line."""
+    """'' when ``compiler`` builds a tiny shared library with ``flags`` (or the probe cannot be
+    written, or the compiler runs out of space: a full disk says nothing of the flags), else its
+    first error line."""
+    try:
+        return _probe_in(compiler, flags)
+    except OSError:
+        return ""
+
+
+def _probe_in(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
     import subprocess
     import tempfile
 
@@ -150,7 +159,7 @@ def _probe(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
             )
         except (OSError, subprocess.TimeoutExpired) as exc:
             return str(exc)
-        if proc.returncode == 0:
+        if proc.returncode == 0 or any(reason in proc.stderr for reason in _UNWRITABLE):
             return ""
         lines = [ln for ln in (proc.stderr or proc.stdout).splitlines() if "error" in ln.lower()]
         return (lines or (proc.stderr or proc.stdout or f"exit {proc.returncode}").splitlines() or [""])[
