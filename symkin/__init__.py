@@ -35,6 +35,8 @@ from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
 from symkin.runtime.load import compile, load_compiled
 from symkin.runtime.loop import ServoResult, servo
+from symkin.runtime.null_space import joint_limit_cost, null_space_rrmc
+from symkin.runtime.qrmc import QRMC, qrmc
 from symkin.runtime.servo import p_servo
 from symkin.runtime.trajectory import (
     PathResult,
@@ -98,6 +100,7 @@ __all__ = [
     "ParameterError",
     "PathResult",
     "PoseError",
+    "QRMC",
     "Robot",
     "RobotError",
     "ServoResult",
@@ -119,15 +122,18 @@ __all__ = [
     "generate_collision",
     "geometry",
     "ik",
+    "joint_limit_cost",
     "jtraj",
     "list_robots",
     "load",
     "load_compiled",
     "load_dh_file",
     "mstraj",
+    "null_space_rrmc",
     "p_servo",
     "poe_of",
     "pose_error",
+    "qrmc",
     "quintic",
     "resolve_robot",
     "rrmc",

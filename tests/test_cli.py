@@ -142,7 +142,7 @@ def test_python_m_symkin_and_help():
     assert res.returncode == 2
 
 
-@pytest.mark.parametrize("controller", ["mmc", "rrmc"])
+@pytest.mark.parametrize("controller", ["mmc", "rrmc", "qrmc"])
 def test_servo_arrives_and_plots(capsys, tmp_path, controller):
     robot = load("panda")
     target = robot.qr + np.array([0.2, -0.1, 0.1, 0.2, 0.0, 0.1, 0.0])
@@ -153,6 +153,26 @@ def test_servo_arrives_and_plots(capsys, tmp_path, controller):
     assert code == 0 and data["arrived"], data
     assert png.stat().st_size > 1000
     np.testing.assert_allclose(robot.fkine(data["q_final"])[:3, 3], robot.fkine(target)[:3, 3], atol=0.05)
+    assert data["max_speed_over_limit"]["applied"] <= 1.0 + 1e-12
+
+
+def test_servo_says_why_it_did_not_arrive(capsys):
+    """A target out of the UR5's reach: exit 1, the joint speeds and the last step's status."""
+    argv = ["servo", "ur5", "--q0", "0 -1 0 -1 1 0.3", "--pose", "1.5 0 0.3 0 0 0", "--controller", "qrmc"]
+    code, out, _ = run(capsys, *argv, "--max-steps", "60")
+    assert code == 1 and "did not arrive after 60 steps" in out
+    assert "joint speeds up to" in out and "the last step was" in out
+
+
+def test_bench_qrmc_runs_and_plots(capsys, tmp_path):
+    png = tmp_path / "qrmc.png"
+    code, out, _ = run(capsys, "bench", "qrmc", "--plot", str(png))
+    assert code == 0 and png.stat().st_size > 1000
+    for task in ("lost direction", "finish at a singularity", "start and finish at singularities"):
+        assert task in out
+    code, out, _ = run(capsys, "bench", "qrmc", "--json")
+    rows = json.loads(out)["singular"]["tasks"]["lost direction"]
+    assert rows["qrmc"]["arrived"] and rows["qrmc"]["max_requested_over_limit"] <= 1.0
 
 
 def test_bench_mmc_runs_small(capsys, tmp_path):

@@ -1,5 +1,5 @@
 """The servo loop: position-based servoing (Haviland and Corke, Manipulator Differential Kinematics, Part 1,
-2023, eqs 37-43) driven by RRMC or MMC, integrated in time."""
+2023, eqs 37-43) driven by RRMC, QRMC or MMC, integrated in time."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from symkin.core.arrays import as_config, name_of, real_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_step
 from symkin.runtime.ik import check_pose, pose_error
+from symkin.runtime.qrmc import QRMC
 from symkin.runtime.servo import servo_gain, servo_velocity
 
 __all__ = ["servo", "ServoResult"]
@@ -37,7 +38,7 @@ class ServoResult:
         arrived: whether ``sum |e| < threshold`` was reached within ``max_steps``.
         limit_violations: number of configurations ``q[1:]`` with a joint outside ``qlim``.
         dt: the time step (s).
-        controller: ``"mmc"``, ``"rrmc"`` or the controller's name.
+        controller: ``"mmc"``, ``"rrmc"``, ``"qrmc"`` or the controller's name.
     """
 
     q: np.ndarray
@@ -112,14 +113,18 @@ def servo(
     threshold 0.1.
 
     ``controller`` is ``"mmc"`` (a new :class:`MMC` with ``lam``, ``qd_max``, ``joint_limits``,
-    ``axes`` and ``dt``), ``"rrmc"`` (:func:`rrmc` with ``qd_max``), an :class:`MMC` to reuse (its own
-    options apply), or any callable ``(q, nu) -> (qd, StepInfo)``; ``kin`` needs ``n``, ``qlim``,
+    ``axes`` and ``dt``), ``"rrmc"`` (:func:`rrmc` with ``qd_max``), ``"qrmc"`` (a new
+    :class:`~symkin.runtime.qrmc.QRMC` with ``qd_max`` and ``axes``: quadratic-rate control over a
+    horizon of 1 s, each step also started from the last step's answer), an :class:`MMC` or ``QRMC``
+    to reuse (its own options apply; a QRMC starts the run cold), or any callable ``(q, nu) -> (qd,
+    StepInfo)``; ``kin`` needs ``n``, ``qlim``,
     ``fkine``, ``manipulability(q, axes)`` and what the controller uses. ``qd_max=None`` uses
     ``kin.qd_max`` when the robot has it; pass ``np.inf`` for no speed limit.
 
     ``backend``: ``"auto"`` (default) runs the whole loop in C (``csrc/mmc_py.c``: kinematics, pose
     error, velocity command and the controller's C step, with the same arithmetic) when ``kin`` is
-    compiled C kinematics and the controller is ``"rrmc"`` or an MMC whose step runs in C; ``"python"``
+    compiled C kinematics and the controller is ``"rrmc"``, ``"qrmc"`` or an MMC or QRMC whose step
+    runs in C; ``"python"``
     runs this loop in Python around the same step; ``"c"`` requires the C loop. ``step_time`` is then
     the time of the C step alone.
 
@@ -150,11 +155,12 @@ def servo(
         raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
     _check_cap(nu_max)
     step, name, cstep = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
-    if isinstance(controller, MMC):
+    if isinstance(controller, (MMC, QRMC)):
         axes = controller.axes
     if backend == "c" and cstep is None:
         raise ConfigurationError(
-            "backend='c' needs compiled C kinematics and controller 'rrmc', 'mmc' or an MMC running in C"
+            "backend='c' needs compiled C kinematics and controller 'rrmc', 'qrmc', 'mmc' or an MMC or "
+            "QRMC running in C"
         )
     if cstep is not None and backend != "python":
         bar = _progress(progress, max_steps, name)
@@ -211,15 +217,23 @@ def _controller(
     if isinstance(controller, MMC):
         cstep = controller._c if controller.kin is kin else None
         return controller.step, "mmc", cstep
-    if isinstance(controller, str) and controller == "rrmc":
+    if isinstance(controller, str) and controller in ("rrmc", "qrmc"):
         if joint_limits:
             raise ParameterError(
-                "joint_limits=True needs controller='mmc' (RRMC has no joint-limit handling)"
+                f"joint_limits=True needs controller='mmc' ({controller.upper()} has no joint-limit handling)"
             )
-        return servo_rrmc_step(kin, qd_max, axes), "rrmc", rrmc_controller(kin, qd_max, axes=axes)
+        if controller == "qrmc":
+            controller = QRMC(kin, qd_max=qd_max, axes=axes)
+        else:
+            return servo_rrmc_step(kin, qd_max, axes), "rrmc", rrmc_controller(kin, qd_max, axes=axes)
+    if isinstance(controller, QRMC):
+        controller.reset()  # a run starts cold
+        return controller.step, "qrmc", controller._c if controller.kin is kin else None
     if callable(controller):
         return controller, getattr(controller, "__name__", type(controller).__name__), None
-    raise ParameterError(f"controller must be 'mmc', 'rrmc', an MMC or a callable, not {controller!r}")
+    raise ParameterError(
+        f"controller must be 'mmc', 'rrmc', 'qrmc', an MMC or QRMC, or a callable, not {controller!r}"
+    )
 
 
 def _check_cap(nu_max: Any) -> None:

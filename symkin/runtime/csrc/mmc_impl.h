@@ -745,18 +745,11 @@ static double det3_(const double *G)
            G[2] * (G[3] * G[7] - G[4] * G[6]);
 }
 
-/* RRMC (see mmc.h); symkin.runtime.control.rrmc is the reference */
-int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
+/* the manipulability of the rows c->axes of J (G = J J^T, L its Cholesky factor when regular) */
+static double rate_manipulability_(const symkin_mmc_ctrl *c, const double *J, const double *G, int regular,
+                                   const double *L)
 {
-    const double *q = in, *nu = in + N;
-    int bad = bad_input_(q, nu);
-    if (bad)
-        return bad;
-    double J[6 * N], G[36], L[36], y[6], m = 0.0, *qd = out;
-    c->polished = 0;
-    c->j0(q, J);
-    gram_(J, 0, 6, G);
-    int regular = regular_(G, c->singular_tol, L);
+    double m = 0.0;
     if (c->axes == 0) {
         if (regular) {
             m = chol_manipulability_(L);
@@ -770,6 +763,37 @@ int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
         double d = det3_(G3);
         m = d > 0.0 ? sqrt(d) : 0.0;
     }
+    return m;
+}
+
+/* qd scaled down as a whole to |qd_k| <= qd_max_k; returns the factor (1: unscaled) */
+static double scale_to_limits_(const symkin_mmc_ctrl *c, double *qd)
+{
+    double scale = 1.0;
+    for (int k = 0; k < N; ++k) {
+        double a = fabs(qd[k]);
+        if (a > c->qd_max[k] && c->qd_max[k] / a < scale)
+            scale = c->qd_max[k] / a;
+    }
+    if (scale < 1.0)
+        for (int k = 0; k < N; ++k)
+            qd[k] *= scale;
+    return scale;
+}
+
+/* RRMC (see mmc.h); symkin.runtime.control.rrmc is the reference */
+int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
+{
+    const double *q = in, *nu = in + N;
+    int bad = bad_input_(q, nu);
+    if (bad)
+        return bad;
+    double J[6 * N], G[36], L[36], y[6], *qd = out;
+    c->polished = 0;
+    c->j0(q, J);
+    gram_(J, 0, 6, G);
+    int regular = regular_(G, c->singular_tol, L);
+    double m = rate_manipulability_(c, J, G, regular, L);
     int status = MMC_SOLVED, method = N == 6 ? MMC_INVERSE : MMC_PINV;
     memcpy(y, nu, sizeof y);
     if (regular) {
@@ -782,22 +806,18 @@ int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
         else /* no damping at a singular J: no step */
             memset(y, 0, sizeof y);
     }
-    double scale = 1.0;
     for (int k = 0; k < N; ++k) {
         double s = 0.0;
         for (int i = 0; i < 6; ++i)
             s += J[i * N + k] * y[i];
         qd[k] = s;
-        double a = fabs(s);
-        if (a > c->qd_max[k] && c->qd_max[k] / a < scale)
-            scale = c->qd_max[k] / a;
     }
-    if (scale < 1.0)
-        for (int k = 0; k < N; ++k)
-            qd[k] *= scale;
+    double scale = scale_to_limits_(c, qd);
     write_info_(out, status, method, m, 0, MMC_NO_FALLBACK, residual_(J, qd, nu), 0.0, scale, 0);
     return 0;
 }
+
+#include "qrmc_impl.h" /* the quadratic-rate step, on the helpers above */
 #endif
 
 int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)

@@ -1,6 +1,6 @@
 /*
  * mmc_py.c: the CPython entry points of the MMC library (see mmc.h), compiled into it with
- * -DSYMKIN_MMC_MODULE=<module name>: one control step (MMC or RRMC) per call, and the whole
+ * -DSYMKIN_MMC_MODULE=<module name>: one control step (MMC, RRMC or QRMC) per call, and the whole
  * servo loop of symkin.runtime.loop.servo (Haviland and Corke 2023, eqs 37-43) in C. The library is also reached
  * through ctypes (symkin/runtime/mmc_c.py). The GIL stays held: the controllers of a library share
  * its embedded OSQP solvers.
@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "mmc.h"
+#include "qrmc.h"
 #include "symkin_pose.h"
 #include "symkin_pyarray.h"
 
@@ -23,7 +24,7 @@
 
 #define NQ MMC_N
 #define NOUT (MMC_N + MMC_NINFO)
-enum { KIND_MMC0 = 0, KIND_RRMC = 1, KIND_MMC6 = 6, KIND_MMC6D = 7 };
+enum { KIND_MMC0 = 0, KIND_RRMC = 1, KIND_QRMC = 2, KIND_MMC6 = 6, KIND_MMC6D = 7 };
 typedef int (*step_fn_)(symkin_mmc_ctrl *, const double *, double *);
 
 /* StepInfo and the texts of its codes, from setup() */
@@ -37,6 +38,7 @@ static step_fn_ step_of_(long kind)
     return kind == KIND_MMC0 ? symkin_mmc0_step
            : kind == KIND_MMC6 ? symkin_mmc6_step
            : kind == KIND_RRMC ? symkin_rrmc_step
+           : kind == KIND_QRMC ? symkin_qrmc_step
 #if MMC_K
            : kind == KIND_MMC6D ? symkin_mmc6d_step
 #endif
