@@ -60,11 +60,12 @@ def test_human_bytes():
 
 
 # Every user size of the Python API, at 10**20 (beyond any count) and at a count that fits an
-# integer but not this machine's memory.
+# integer but not this machine's memory (nor a C solver's int32 counter).
 def _api(big: int) -> dict:
     from symkin.check.kinematics import check
     from symkin.geometry.fit import fit_spheres, mesh_points
     from symkin.runtime.ik import ik_trace
+    from symkin.runtime.qrmc import QRMC
     from symkin.workspace.grid import so3_uniform
 
     robot = symkin.load("planar2")
@@ -92,6 +93,7 @@ def _api(big: int) -> dict:
         "ik_trace steps": lambda: ik_trace(kin(), T, [0.0, 0.0], big),
         "ik slimit": lambda: kin().ik(T, slimit=big),
         "ik ilimit": lambda: kin().ik(T, ilimit=big),
+        "QRMC iterations": lambda: QRMC(kin(), iterations=big),  # a C int32: 10**20 was truncated
         "check samples": lambda: check(robot, backends=("numpy",), samples=big),
         "so3_uniform": lambda: so3_uniform(big),
         "mesh_points samples": lambda: mesh_points(_box_mesh(), samples=big),
@@ -122,7 +124,8 @@ def _box_mesh():
 
 
 def _beyond_memory() -> int:
-    return memory_bytes() // 8 + 1  # as many float64 values as bytes of memory, and one more
+    """More float64 values than bytes of memory, and beyond the C solvers' int32 counters."""
+    return max(memory_bytes() // 8 + 1, 2**31)
 
 
 @pytest.mark.parametrize("size", ["1e20", "memory"])
