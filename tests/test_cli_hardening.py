@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -252,3 +253,23 @@ def test_a_size_beyond_the_machine_is_one_line(capsys, tmp_path, no_work, argv):
 def test_a_count_beyond_the_machine_is_one_line(capsys, argv):
     line = one_line_error(capsys, argv)
     assert any(word in line for word in ("memory", "integer")), line
+
+
+@pytest.mark.skipif(not Path("/dev/zero").exists(), reason="needs /dev/zero")
+@pytest.mark.parametrize("kind", ["--env", "URDF", "DH"])
+def test_an_endless_input_file_is_refused_before_it_fills_memory(capsys, tmp_path, no_work, kind):
+    """/dev/zero as an obstacle file, a URDF or a DH table: read up to a bound, then one line."""
+    if kind == "--env":
+        argv = ["collide", "ur5", "--env", "/dev/zero"]
+    else:
+        link = tmp_path / ("arm.urdf" if kind == "URDF" else "arm.dh")
+        link.symlink_to("/dev/zero")
+        argv = ["list-frames", str(link)] if kind == "URDF" else ["compile", str(link)]
+        if kind == "DH":
+            from symkin.errors import RobotError
+            from symkin.model.dh import dh_file_args
+
+            with pytest.raises(RobotError, match="larger than"):
+                dh_file_args(link)
+            return
+    assert "larger than" in one_line_error(capsys, argv)

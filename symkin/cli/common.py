@@ -366,10 +366,10 @@ def _shape(what: str, v: np.ndarray, where: str) -> Any:
 
 def _env_file(path: Path) -> dict:
     """The JSON object of an --env file (keys spheres, capsules, boxes)."""
+    from symkin.core.sizes import read_bounded
+
     try:
-        if path.stat().st_size > _ENV_BYTES:
-            raise UserError(f"--env {path}: larger than {_ENV_BYTES >> 20} MiB")
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(read_bounded(path, _ENV_BYTES, f"--env {path}", UserError).decode("utf-8"))
     except (OSError, ValueError) as exc:
         raise UserError(f"--env {path}: {exc}") from None
     except RecursionError:

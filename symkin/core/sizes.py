@@ -4,7 +4,8 @@ searches, points (leaf module).
 A size is checked before anything is allocated or any long work starts: :func:`count` takes an
 integer (a Python or NumPy integer, or a float with an integral value) within bounds, and
 :func:`room` refuses a request whose arrays would not fit in this machine's memory
-(:func:`stored`: nor on the disk of the store that keeps them). They raise
+(:func:`stored`: nor on the disk of the store that keeps them); :func:`read_bounded` reads an
+input file only up to a size. They raise
 a :class:`~symkin.errors.SymkinError` subclass naming the size (ParameterError unless the caller
 passes its own), never ``MemoryError``, ``OverflowError`` or NumPy's "Maximum allowed size
 exceeded".
@@ -20,7 +21,7 @@ from typing import Any
 
 from symkin.errors import ParameterError, SymkinError
 
-__all__ = ["MAX_COUNT", "count", "memory_bytes", "room", "stored", "human_bytes"]
+__all__ = ["MAX_COUNT", "count", "memory_bytes", "room", "stored", "read_bounded", "human_bytes"]
 
 #: The largest count any size may take: beyond 2**53 integers are not exact as doubles, and
 #: no machine holds that many samples anyway.
@@ -108,3 +109,14 @@ def stored(path: Any, nbytes: float, what: str, error: type[SymkinError] = Param
             f"{what} needs {human_bytes(nbytes)}, more than the whole disk holding {path} "
             f"({human_bytes(total)}): ask for fewer"
         )
+
+
+def read_bounded(path: Any, limit: int, what: str, error: type[Exception] = ParameterError) -> bytes:
+    """The bytes of the file at ``path``, reading at most ``limit`` + 1 of them: ``error`` naming
+    ``what`` for a larger file (or an endless one such as ``/dev/zero``) before it fills memory.
+    OSError as ``open`` raises it."""
+    with open(path, "rb") as f:
+        data = f.read(limit + 1)
+    if len(data) > limit:
+        raise error(f"{what} is larger than {human_bytes(limit)}: not an input symkin reads")
+    return data

@@ -140,3 +140,13 @@ def test_every_size_of_the_api_is_bounded_with_a_symkin_error(what, size):
         call()
     message = str(info.value)
     assert any(w in message for w in ("integer", "memory", "disk", "too many voxels")), message
+
+
+def test_read_bounded_reads_a_file_up_to_its_bound(tmp_path):
+    from symkin.core.sizes import read_bounded
+
+    path = tmp_path / "f"
+    path.write_bytes(b"x" * 100)
+    assert read_bounded(path, 100, "f") == b"x" * 100
+    with pytest.raises(ParameterError, match="f is larger than 99 B"):
+        read_bounded(path, 99, "f")
