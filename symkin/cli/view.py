@@ -5,6 +5,7 @@ gizmo driving IK. Serves until Ctrl-C (or ``--seconds``)."""
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from symkin.cli import common
@@ -35,7 +36,12 @@ def add_parser(sub: Any) -> None:
         metavar="'Q...'",
         help="first joint values, or a configuration name like qr (default qr, else qz)",
     )
-    s.add_argument("--host", default="127.0.0.1", help="address to serve on (0.0.0.0: every interface)")
+    s.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to serve on; every interface only as exactly 0.0.0.0 or :: (with a warning); an "
+        "empty host, *, 0, [::] and other wildcards are refused",
+    )
     s.add_argument("--port", type=_port, default=8080, help="port to serve on (0: any free port)")
     s.add_argument("--no-browser", action="store_true", help="do not open the page in a browser")
     s.add_argument(
@@ -53,14 +59,22 @@ def run(args: argparse.Namespace) -> int:
         import viser  # noqa: F401
     except ImportError:
         raise UserError("view needs viser: pip install 'symkin[view]'") from None
+    import warnings
+
     from symkin.runtime.load import compile as compile_robot
     from symkin.view import view
+    from symkin.view.address import serve_address
 
+    address = serve_address(args.host)  # an empty or wildcard host is refused before any work
     robot = common.with_srdf(args, common.single_chain(args, geometry=True))
     q = None if args.q is None else common.configuration(args.q, robot, "--q")
     env = common.environment_of(args)
     kin = compile_robot(robot, backend=args.backend)
-    viewer = view(kin, port=args.port, host=args.host, open_browser=not args.no_browser, q=q, env=env)
+    with warnings.catch_warnings():  # said below as one line
+        warnings.filterwarnings("ignore", message="serving on every interface")
+        viewer = view(kin, port=args.port, host=args.host, open_browser=not args.no_browser, q=q, env=env)
+    if address.public:
+        print(f"symkin: warning: {address.warning(viewer.port)}", file=sys.stderr, flush=True)
     how = f"for {args.seconds:g} s" if args.seconds else "until Ctrl-C"
     print(f"viewing {robot.name} at {viewer.url} ({how})", flush=True)
     try:

@@ -17,12 +17,14 @@ import io
 import socket
 import threading
 import time
+import warnings
 from typing import Any
 
 import numpy as np
 
 from symkin.core.pose import as_pose
 from symkin.errors import MissingExtraError, ParameterError
+from symkin.view.address import serve_address
 from symkin.view.scene import Scene, ViewState, capsule_mesh, quaternion, quaternion_z_to, rotation
 
 __all__ = ["Viewer", "view"]
@@ -67,8 +69,10 @@ def _check_address(host: str, port: int) -> None:
 class Viewer:
     """A running live view of compiled kinematics ``kin`` (see :func:`view`).
 
-    ``url``, ``host``, ``port``; ``q`` (n,) and ``state`` (:class:`~symkin.view.scene.ViewState`) as
-    drawn; ``message``, the status line of the panel. :meth:`set_q` moves the joints as the sliders
+    ``url`` (one a browser opens), ``host``, ``port``, ``address`` (an
+    :class:`~symkin.view.address.Address`, ``public`` when serving every interface); ``q`` (n,) and
+    ``state`` (:class:`~symkin.view.scene.ViewState`) as drawn; ``message``, the status line of the
+    panel. :meth:`set_q` moves the joints as the sliders
     do, :meth:`set_target` moves the target gizmo as a drag does, :meth:`wait` blocks, :meth:`stop`
     ends the server (also on leaving a ``with`` block). ``server`` is the viser server.
     """
@@ -89,6 +93,8 @@ class Viewer:
         robot = kin.robot
         q0 = robot.configs.get("qr", robot.configs["qz"]) if q is None else q
         state = self.scene.state(q0)  # checks q
+        address = serve_address(host)  # refuses an empty host and wildcards not asked for explicitly
+        host = address.host
         _check_address(host, port)
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner; we print the URL
             self.server = viser.ViserServer(host=host, port=int(port), verbose=False)
@@ -96,7 +102,7 @@ class Viewer:
         if int(port) and self.port != int(port):
             self.stop()
             raise OSError(f"cannot serve on {host}:{port}: in use (--port 0 picks a free port)")
-        self.url = f"http://{'localhost' if host in ('0.0.0.0', '::') else host}:{self.port}"
+        self.url, self.address = address.url(self.port), address
         self._lock = threading.RLock()
         self._syncing = False
         self._stopped = threading.Event()
@@ -404,10 +410,15 @@ def view(
     ``ellipsoid_scale``: m drawn per m/s (default: the first ellipsoid's largest semi-axis a quarter
     of the robot's size); ``open_browser``: open the page in the default browser.
 
+    ``host``: ``127.0.0.1`` serves this machine only; every interface only when asked for as
+    exactly ``0.0.0.0`` or ``::``, with a warning (:mod:`symkin.view.address`).
+
     Raises MissingExtraError without viser (``pip install 'symkin[view]'``), ParameterError for a
-    port outside 0..65535 or a tree, OSError when host:port cannot be served.
+    port outside 0..65535, a tree, or a host that is empty or means every interface in another
+    spelling (``*``, ``0``, ``[::]``...), OSError when host:port cannot be served.
     """
     _viser()
+    serve_address(host)  # before compiling: a host that is refused is refused at once
     from symkin.runtime.kinematics import Kinematics
 
     kin = robot
@@ -416,6 +427,8 @@ def view(
 
         kin = compile_robot(robot, backend=backend)
     viewer = Viewer(kin, host=host, port=port, q=q, env=env, ellipsoid_scale=ellipsoid_scale)
+    if viewer.address.public:
+        warnings.warn(viewer.address.warning(viewer.port), stacklevel=2)
     if open_browser:
         import webbrowser
 

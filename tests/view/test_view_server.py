@@ -84,6 +84,42 @@ def test_bad_ports_and_busy_ports_are_errors(ur5):
             view(ur5, port=busy, open_browser=False)
 
 
+def _ipv6() -> bool:
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+    except OSError:
+        return False
+    return True
+
+
+@pytest.mark.parametrize(
+    "host, public",
+    [
+        ("0.0.0.0", True),
+        pytest.param("::", True, marks=pytest.mark.skipif(not _ipv6(), reason="no IPv6")),
+        pytest.param("::1", False, marks=pytest.mark.skipif(not _ipv6(), reason="no IPv6")),
+        ("localhost", False),
+    ],
+)
+def test_the_printed_url_opens_the_page(ur5, host, public, recwarn):
+    """Issue 36, item 2: ``http://::1:PORT`` and ``http://:PORT`` were printed; every interface
+    (only as 0.0.0.0 or ::) comes with a warning."""
+    with view(ur5, host=host, port=0, open_browser=False) as viewer, urllib.request.urlopen(viewer.url) as r:
+        assert r.status == 200
+    said = [str(w.message) for w in recwarn if "every interface" in str(w.message)]
+    assert len(said) == (1 if public else 0), said
+
+
+@pytest.mark.parametrize("host", ["", "*", "0", "[::]"])
+def test_an_empty_or_wildcard_host_is_refused_before_compiling(host, monkeypatch):
+    import symkin.runtime.load
+
+    monkeypatch.setattr(symkin.runtime.load, "compile", lambda *a, **k: pytest.fail("compiled"))
+    with pytest.raises(symkin.ParameterError, match="0.0.0.0"):
+        view("planar3", host=host, port=0, open_browser=False)
+
+
 def test_show_names_the_parts_it_knows(ur5):
     with view(ur5, port=0, open_browser=False) as viewer:
         viewer.show(robot=False, velocity_ellipsoid=False)
@@ -110,6 +146,23 @@ def test_cli_errors_are_one_line(argv, message, capsys):
     assert main(["view", "planar3", "--no-browser", *argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("symkin: error:") and message in err[0]
+
+
+@pytest.mark.parametrize("host", ["", " ", "*", "0", "::0", "[::]"])
+def test_cli_refuses_an_empty_or_wildcard_host(host, capsys):
+    """``--host "$VAR"`` with VAR unset served every interface and printed ``http://:PORT``."""
+    assert main(["view", "planar3", "--no-browser", "--port", "0", "--seconds", "0.1", "--host", host]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("symkin: error:") and "0.0.0.0" in err[0], err
+
+
+def test_cli_serves_every_interface_when_asked_with_one_warning_line(capsys):
+    argv = ["view", "planar3", "--no-browser", "--port", "0", "--seconds", "0.2", "--host", "0.0.0.0"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("symkin: warning: serving on every interface"), err
+    assert "viewing planar3 at http://127.0.0.1:" in captured.out
 
 
 def test_cli_without_the_extra_says_how_to_install_it(monkeypatch, capsys):
