@@ -28,6 +28,7 @@ __all__ = [
     "add_target_options",
     "add_scale_options",
     "split_frame",
+    "is_urdf",
     "single_chain",
     "chain_or_tree",
     "target",
@@ -163,7 +164,7 @@ def split_frame(spec: str) -> tuple[str, str | None]:
     return spec, None
 
 
-def _is_urdf(path: str) -> bool:
+def is_urdf(path: str) -> bool:
     return "(" not in path and Path(path.strip()).suffix.lower() in _URDF
 
 
@@ -187,7 +188,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
     tool, base_transform = getattr(args, "tool", None), getattr(args, "base", None)
     path, frame = split_frame(spec) if isinstance(spec, str) else (spec, None)
     end, base = _end(args, frame), getattr(args, "base_link", None)
-    if not isinstance(path, str) or not _is_urdf(path):
+    if not isinstance(path, str) or not is_urdf(path):
         if frame or end or base:
             raise UserError("--base-link, --end-link and ROBOT:FRAME apply to URDF files only")
         return resolve_robot(spec, tool=tool, base=base_transform)
@@ -201,10 +202,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
             ) from None
         raise
     if geometry:
-        from symkin.geometry.urdf import geometry_from_urdf
-
-        shapes = geometry_from_urdf(Path(path).expanduser(), robot)
-        robot = robot.with_geometry(shapes) if shapes.shapes else robot
+        robot = _with_urdf_geometry(robot, path)
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 
@@ -214,15 +212,17 @@ def _no_transform(args: argparse.Namespace, hint: str) -> None:
         raise UserError(f"--tool/--base change one chain{hint}")
 
 
-def chain_or_tree(args: argparse.Namespace) -> Any:
-    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``):
-    a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``."""
+def chain_or_tree(args: argparse.Namespace, geometry: bool = False) -> Any:
+    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``,
+    ``view``): a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``.
+    ``geometry``: a URDF's ``<collision>`` elements become the model's collision geometry, as in
+    :func:`single_chain`."""
     from symkin.model.tree import Tree
 
     path, frame = split_frame(args.robot)
     frames = getattr(args, "frames", None)
     if frames is not None:
-        if not _is_urdf(path):
+        if not is_urdf(path):
             raise UserError("--frames applies to URDF files only")
         if frame or getattr(args, "end_link", None):
             raise UserError("give either --frames (a tree) or one frame (ROBOT:FRAME, --end-link)")
@@ -230,13 +230,23 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
         if not names:
             raise UserError(f"--frames needs link names separated by commas, not {frames!r}")
         _no_transform(args, ", not a tree of --frames")
-        return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
-    if _is_urdf(path) and _end(args, frame) is None:
+        tree = Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+        return _with_urdf_geometry(tree, path) if geometry else tree
+    if is_urdf(path) and _end(args, frame) is None:
         tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
         if len(tree.frames) > 1:
             _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
-            return tree
-    return single_chain(args)
+            return _with_urdf_geometry(tree, path) if geometry else tree
+    return single_chain(args, geometry=geometry)
+
+
+def _with_urdf_geometry(model: Any, path: str) -> Any:
+    """``model`` with the ``<collision>`` elements of the URDF ``path`` as its geometry (meshes
+    skipped), when there are any."""
+    from symkin.geometry.urdf import geometry_from_urdf
+
+    shapes = geometry_from_urdf(Path(path).expanduser(), model)
+    return model.with_geometry(shapes) if shapes.shapes else model
 
 
 # -- values ----------------------------------------------------------------------------------------
