@@ -170,10 +170,10 @@ class Viewer:
 
     def _show_q(self, q: np.ndarray, follow: bool, frame: str | None = None) -> ViewState:
         state = self.scene.state(q, self.state.frame if frame is None else frame)
-        self.state = state
         self._draw(state)
         if follow:
             self.page.place_target(state.T_frame)
+        self.state = state  # last: what is drawn, once it is
         return state
 
     def _set_sliders(self, q: np.ndarray) -> None:
