@@ -119,6 +119,18 @@ def _with_srdf(args: argparse.Namespace, model: Any, urdf: Path | None) -> Any:
     return model.with_geometry(geometry.with_disabled(pairs))
 
 
+def _grouped(notes: list[str]) -> list[str]:
+    """The URDF reader's notes, the collision meshes it skipped (one each) said in one line."""
+    meshes = [x for x in notes if " is a mesh (" in x]
+    if not meshes:
+        return notes
+    head = (
+        f"{len(meshes)} <collision> meshes are not in the collision model, so not checked "
+        "(symkin.geometry.geometry_from_urdf(..., mesh_spheres=K) fits spheres to them)"
+    )
+    return [head, *(x for x in notes if x not in meshes)]
+
+
 def _note(lines: list[str]) -> None:
     for line in lines[:_NOTES_PRINTED]:
         print(f"symkin: note: {line}", file=sys.stderr)
@@ -139,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always")
         model = common.chain_or_tree(args, geometry=True)
         model = _with_srdf(args, model, urdf)
-    notes = [str(w.message) for w in caught]
+    notes = _grouped([str(w.message) for w in caught])
     q = None if args.q is None else common.configuration(args.q, model, "--q")
     env = common.environment_of(args)
     kin = compile_robot(model, backend=args.backend)

@@ -348,26 +348,24 @@ def in_collision(model: Any, q: Any, env: Any = None) -> bool | np.ndarray:
 
 
 def witnesses(
-    model: Any, X: Any, pairs: Sequence[int], env: Any = None
+    model: Any, X: Any, pairs: Sequence[tuple[str, int, int]], env: Any = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The signed distances (K,) and witness points (K, 3), (K, 3) of the active pairs ``pairs``
-    (indices into :meth:`Layout.pair_labels` order, the order of :func:`distances`) at the shape
-    points X (P, 3) of one configuration: ``wa`` on the surface of the pair's shape i, ``wb`` on
-    the surface of its shape j or obstacle, ``wa - wb = d n`` (``n`` the unit normal from B to A of
-    :mod:`symkin.geometry.distance`; ``wa = pa - r_A n`` with ``pa`` the closest point of A's
-    core), so ``|wa - wb| = |d|``: the closest points of shapes apart, the deepest of shapes that
-    overlap."""
+    (labels as :meth:`Layout.pair_labels` gives them: ("self", i, j) or (obstacle kind, shape i,
+    obstacle k)) at the shape points X (P, 3) of one configuration: ``wa`` on the surface of the
+    pair's shape i, ``wb`` on the surface of its shape j or obstacle, ``wa - wb = d n`` (``n`` the
+    unit normal from B to A of :mod:`symkin.geometry.distance`; ``wa = pa - r_A n`` with ``pa`` the
+    closest point of A's core), so ``|wa - wb| = |d|``: the closest points of shapes apart, the
+    deepest of shapes that overlap."""
     layout = layout_of(model)
     env = as_environment(env)
-    labels = layout.pair_labels(env)
     arrays = Tables.of(layout).arrays
     radius = arrays[2]
     X1 = np.asarray(X, dtype=float).reshape(1, -1, 3)
     K = len(pairs)
     d, n, pa = np.empty(K), np.empty((K, 3)), np.empty((K, 3))
     kinds = {"sphere": "spheres", "capsule": "capsules", "box": "boxes"}
-    for m, k in enumerate(pairs):
-        kind, i, j = labels[k]
+    for m, (kind, i, j) in enumerate(pairs):
         if kind == "self":
             dd, nn, aa, _ = _pair_kinds(X1, arrays, np.array([i]), np.array([j]))
             d[m], n[m], pa[m] = dd[0, 0], nn[0, 0], aa[0, 0]
@@ -375,6 +373,6 @@ def witnesses(
             one = Environment(**{kinds[kind]: (getattr(env, kinds[kind])[j],)})
             dd, nn, aa = _obstacles(X1, arrays, one)[0]
             d[m], n[m], pa[m] = dd[0, i], nn[0, i], aa[0, i]
-    idx = np.array([labels[k][1] for k in pairs], dtype=int)
+    idx = np.array([i for _, i, _ in pairs], dtype=int)
     wa = pa - radius[idx, None] * n
     return d, wa, wa - d[:, None] * n

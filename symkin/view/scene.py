@@ -194,7 +194,8 @@ class Scene:
     def summary(self) -> str:
         """What is drawn, in words: joints, frames, collision shapes and pairs, obstacles, meshes."""
         self_pairs = sum(1 for label in self._pairs if label[0] == "self")
-        obstacles = f", {len(self.obstacles)} obstacles" if self.obstacles else ""
+        k = len(self.obstacles)
+        obstacles = f", {k} obstacle{'s' if k > 1 else ''}" if k else ""
         return (
             f"{self.n} joints, {len(self.frames)} frames, {len(self.shapes)} collision shapes "
             f"({self_pairs} self pairs checked{obstacles}), {len(self.meshes)} meshes"
@@ -267,8 +268,8 @@ class Scene:
         closest = None
         if len(d):
             k = int(np.argmin(d))
-            dk, a, b = witnesses(self.model, X, [k], self.env)
             label = self._pairs[k]
+            _, a, b = witnesses(self.model, X, [label], self.env)
             closest = Closest(label, float(d[k]), a[0], b[0], self.layout.describe(label))
         return X, colliding, hit, tuple(pairs_hit), closest
 

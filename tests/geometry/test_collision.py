@@ -158,7 +158,7 @@ def test_witness_points_of_spheres_lie_on_the_line_of_centres(panda):
         X = points(panda, q)
         d = distances(panda, q, env)
         pairs = list(range(0, len(labels), 37))
-        dw, a, b = witnesses(panda, X, pairs, env)
+        dw, a, b = witnesses(panda, X, [labels[k] for k in pairs], env)
         assert np.allclose(dw, d[pairs], atol=1e-14)
         for m, k in enumerate(pairs):
             kind, i, j = labels[k]
