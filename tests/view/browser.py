@@ -49,14 +49,17 @@ def chromium() -> str | None:
 
 
 class Browser:
-    """One headless Chromium with one page of ``size`` CSS pixels (device scale 1)."""
+    """One headless Chromium with one page of ``size`` CSS pixels (device scale 1); ``flags`` are added
+    to :data:`CHROMIUM_FLAGS`."""
 
-    def __init__(self, executable: str, size: tuple[int, int] = (1400, 900)) -> None:
+    def __init__(
+        self, executable: str, size: tuple[int, int] = (1400, 900), flags: tuple[str, ...] = ()
+    ) -> None:
         from websockets.sync.client import connect
 
         self.profile = tempfile.mkdtemp(prefix="symkin-chromium-")
         self.log = open(os.path.join(self.profile, "chromium.log"), "w")  # noqa: SIM115
-        args = [executable, *CHROMIUM_FLAGS, f"--user-data-dir={self.profile}", "about:blank"]
+        args = [executable, *CHROMIUM_FLAGS, *flags, f"--user-data-dir={self.profile}", "about:blank"]
         self.proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=self.log)
         port_file = Path(self.profile, "DevToolsActivePort")
         deadline = time.monotonic() + 60
