@@ -205,10 +205,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
             ) from None
         raise
     if geometry:
-        from symkin.geometry.urdf import geometry_from_urdf
-
-        shapes = geometry_from_urdf(Path(path).expanduser(), robot)
-        robot = robot.with_geometry(shapes) if shapes.shapes else robot
+        robot = _with_urdf_geometry(robot, path)
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 
@@ -218,9 +215,11 @@ def _no_transform(args: argparse.Namespace, hint: str) -> None:
         raise UserError(f"--tool/--base change one chain{hint}")
 
 
-def chain_or_tree(args: argparse.Namespace) -> Any:
-    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``):
-    a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``."""
+def chain_or_tree(args: argparse.Namespace, geometry: bool = False) -> Any:
+    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``,
+    ``view``): a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``.
+    ``geometry``: a URDF's ``<collision>`` elements become the model's collision geometry, as in
+    :func:`single_chain`."""
     from symkin.model.tree import Tree
 
     path, frame = split_frame(args.robot)
@@ -234,13 +233,23 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
         if not names:
             raise UserError(f"--frames needs link names separated by commas, not {frames!r}")
         _no_transform(args, ", not a tree of --frames")
-        return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+        tree = Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+        return _with_urdf_geometry(tree, path) if geometry else tree
     if is_urdf(path) and _end(args, frame) is None:
         tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
         if len(tree.frames) > 1:
             _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
-            return tree
-    return single_chain(args)
+            return _with_urdf_geometry(tree, path) if geometry else tree
+    return single_chain(args, geometry=geometry)
+
+
+def _with_urdf_geometry(model: Any, path: str) -> Any:
+    """``model`` with the ``<collision>`` elements of the URDF ``path`` as its geometry (meshes
+    skipped), when there are any."""
+    from symkin.geometry.urdf import geometry_from_urdf
+
+    shapes = geometry_from_urdf(Path(path).expanduser(), model)
+    return model.with_geometry(shapes) if shapes.shapes else model
 
 
 # -- values ----------------------------------------------------------------------------------------
