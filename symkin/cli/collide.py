@@ -32,14 +32,8 @@ def add_parser(sub: Any) -> None:
     s.set_defaults(func=run)
 
 
-def _label(kind: str, i: int, j: int, shapes: Any) -> str:
-    a = f"{type(shapes[i]).__name__.lower()} {i} ({shapes[i].link})"
-    if kind == "self":
-        return f"{a} - {type(shapes[j]).__name__.lower()} {j} ({shapes[j].link})"
-    return f"{a} - obstacle {kind} {j}"
-
-
 def run(args: argparse.Namespace) -> int:
+    from symkin.geometry.pairs import layout_of
     from symkin.runtime.load import compile as compile_robot
 
     robot = common.with_srdf(args, common.single_chain(args, geometry=True))
@@ -54,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
     d = kin.distances(q, env)
     labels = kin.collision_pairs(env)
     shapes = robot.geometry.shapes
+    describe = layout_of(robot).describe
     order = np.argsort(d, kind="stable")[: args.top]
     colliding = [k for k in np.argsort(d, kind="stable") if d[k] < 0]
     if args.json:
@@ -62,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
             "q": q.tolist(),
             "in_collision": bool(hit),
             "pairs": len(d),
-            "closest": [{"pair": _label(*labels[k], shapes), "distance": float(d[k])} for k in order],
-            "colliding": [_label(*labels[k], shapes) for k in colliding],
+            "closest": [{"pair": describe(labels[k]), "distance": float(d[k])} for k in order],
+            "colliding": [describe(labels[k]) for k in colliding],
         }
         print(json.dumps(out, indent=2))
         return 1 if hit else 0
@@ -76,5 +71,5 @@ def run(args: argparse.Namespace) -> int:
     if len(order):
         print("closest pairs (signed distance, m):")
         for k in order:
-            print(f"  {d[k]: .5f}  {_label(*labels[k], shapes)}")
+            print(f"  {d[k]: .5f}  {describe(labels[k])}")
     return 1 if hit else 0

@@ -205,10 +205,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
             ) from None
         raise
     if geometry:
-        from symkin.geometry.urdf import geometry_from_urdf
-
-        shapes = geometry_from_urdf(Path(path).expanduser(), robot)
-        robot = robot.with_geometry(shapes) if shapes.shapes else robot
+        robot = _with_urdf_geometry(robot, path)
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 
@@ -218,9 +215,11 @@ def _no_transform(args: argparse.Namespace, hint: str) -> None:
         raise UserError(f"--tool/--base change one chain{hint}")
 
 
-def chain_or_tree(args: argparse.Namespace) -> Any:
-    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``):
-    a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``."""
+def chain_or_tree(args: argparse.Namespace, geometry: bool = False) -> Any:
+    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``,
+    ``view``): a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``.
+    ``geometry``: a URDF's ``<collision>`` elements become the model's collision geometry, as in
+    :func:`single_chain`."""
     from symkin.model.tree import Tree
 
     path, frame = split_frame(args.robot)
@@ -234,13 +233,23 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
         if not names:
             raise UserError(f"--frames needs link names separated by commas, not {frames!r}")
         _no_transform(args, ", not a tree of --frames")
-        return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+        tree = Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+        return _with_urdf_geometry(tree, path) if geometry else tree
     if is_urdf(path) and _end(args, frame) is None:
         tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
         if len(tree.frames) > 1:
             _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
-            return tree
-    return single_chain(args)
+            return _with_urdf_geometry(tree, path) if geometry else tree
+    return single_chain(args, geometry=geometry)
+
+
+def _with_urdf_geometry(model: Any, path: str) -> Any:
+    """``model`` with the ``<collision>`` elements of the URDF ``path`` as its geometry (meshes
+    skipped), when there are any."""
+    from symkin.geometry.urdf import geometry_from_urdf
+
+    shapes = geometry_from_urdf(Path(path).expanduser(), model)
+    return model.with_geometry(shapes) if shapes.shapes else model
 
 
 # -- values ----------------------------------------------------------------------------------------
@@ -319,33 +328,79 @@ def add_obstacle_options(s: argparse.ArgumentParser) -> None:
 
 
 def environment_of(args: argparse.Namespace) -> Any:
-    """The obstacles of --sphere, --capsule, --box and --env."""
-    from symkin.model.geometry import Box, Capsule, Environment, Sphere
+    """The obstacles of --sphere, --capsule, --box and --env; a UserError naming the option (or the
+    file, its key and row) for anything that is not such a shape."""
+    from symkin.model.geometry import Environment
 
-    kinds = {  # option: (key in --env, numbers, the shape of them)
-        "sphere": ("spheres", 4, lambda v: Sphere(v[:3], v[3])),
-        "capsule": ("capsules", 7, lambda v: Capsule(v[:3], v[3:6], v[6])),
-        "box": ("boxes", 6, lambda v: Box(v[:3], v[3:])),
-    }
-    shapes = {
-        what: [make(floats(text, f"--{what}", size)) for text in getattr(args, what)]
-        for what, (_, size, make) in kinds.items()
-    }
+    shapes: dict[str, list[Any]] = {what: [] for what in _KINDS}
+    for what, (_, size) in _KINDS.items():
+        for text in getattr(args, what):
+            shapes[what].append(_shape(what, floats(text, f"--{what}", size), f"--{what} {text!r}"))
     if args.env:
-        path = Path(args.env).expanduser()
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError) as exc:
-            raise UserError(f"--env {path}: {exc}") from None
-        if not isinstance(data, dict) or set(data) - {"spheres", "capsules", "boxes"}:
-            raise UserError(f"--env {path}: a JSON object with keys spheres, capsules, boxes")
-        for what, (key, size, make) in kinds.items():
-            for row in data.get(key, []):
-                v = np.asarray(row, dtype=float) if isinstance(row, list) else np.zeros(0)
-                if v.shape != (size,):
-                    raise UserError(f"--env {path}: each of {key} needs {size} numbers, got {row!r}")
-                shapes[what].append(make(v))
-    return Environment(*(tuple(shapes[what]) for what in kinds))
+        data = _env_file(Path(args.env).expanduser())
+        for what, (key, size) in _KINDS.items():
+            rows = data.get(key, [])
+            if not isinstance(rows, list):
+                raise UserError(
+                    f"--env {args.env}: {key} must be a list of rows of {size} numbers, not {_json(rows)}"
+                )
+            for i, row in enumerate(rows):
+                where = f"--env {args.env}: {key}[{i}]"
+                if not (
+                    isinstance(row, list)
+                    and len(row) == size
+                    and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in row)
+                ):
+                    raise UserError(f"{where} must be {size} numbers, not {_json(row)}")
+                try:
+                    v = np.array([float(x) for x in row])
+                except OverflowError:  # an integer beyond any double
+                    raise UserError(f"{where}: the numbers must be finite") from None
+                shapes[what].append(_shape(what, v, where))
+    return Environment(*(tuple(shapes[what]) for what in _KINDS))
+
+
+_KINDS = {"sphere": ("spheres", 4), "capsule": ("capsules", 7), "box": ("boxes", 6)}  # option: key, numbers
+_ENV_BYTES = 64 * 2**20  # an obstacle file larger than this is refused before it is read
+
+
+def _shape(what: str, v: np.ndarray, where: str) -> Any:
+    """The obstacle ``what`` of the numbers ``v``; UserError naming ``where`` when they are not one."""
+    from symkin.errors import SymkinError
+    from symkin.model.geometry import Box, Capsule, Sphere
+
+    if not np.isfinite(v).all():
+        raise UserError(f"{where}: the numbers must be finite")
+    try:
+        if what == "sphere":
+            return Sphere(v[:3], v[3])
+        return Capsule(v[:3], v[3:6], v[6]) if what == "capsule" else Box(v[:3], v[3:])
+    except SymkinError as exc:
+        raise UserError(f"{where}: {exc}") from None
+
+
+def _env_file(path: Path) -> dict:
+    """The JSON object of an --env file (keys spheres, capsules, boxes)."""
+    from symkin.core.sizes import read_bounded
+
+    try:
+        data = json.loads(read_bounded(path, _ENV_BYTES, f"--env {path}", UserError).decode("utf-8"))
+    except (OSError, ValueError) as exc:
+        raise UserError(f"--env {path}: {exc}") from None
+    except RecursionError:
+        raise UserError(f"--env {path}: arrays nested too deeply to be obstacles") from None
+    if not isinstance(data, dict) or set(data) - {"spheres", "capsules", "boxes"}:
+        raise UserError(f"--env {path}: a JSON object with keys spheres, capsules, boxes")
+    return data
+
+
+def _json(value: Any) -> str:
+    """``value`` as JSON text, at most 60 characters."""
+    try:
+        text = json.dumps(value)
+    except (ValueError, RecursionError):
+        text = repr(type(value).__name__)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 # -- SRDF (every command that checks collisions) ---------------------------------------------------

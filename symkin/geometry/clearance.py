@@ -23,15 +23,12 @@ per-link obstacle lists.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
-import json
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from symkin.core.cache import cache_dir, write_atomic
+from symkin.core.cache import load_verified, store_verified
 from symkin.core.progress import bar
 from symkin.core.version import __version__
 from symkin.geometry.pairs import Layout
@@ -186,17 +183,16 @@ def proved_apart(layout: Layout) -> frozenset[tuple[int, int]]:
     """The self pairs of ``layout`` (two spheres) that no q within ``layout.tree.qlim`` brings
     closer than :data:`MARGIN`, proved by the branch and bound of this module. Pairs with a
     capsule are not tried. Memoised on the layout and kept in the compile cache
-    (``clearance/<key>.json``; a file that does not parse or names other pairs is recomputed)."""
+    (``clearance/<key>.json``, verified by the sha256 of its key and content: a file that does not
+    verify or names other pairs is recomputed, never trusted)."""
     cached = layout.__dict__.get("_proved_apart")
     if cached is not None:
         return cached
     key = _key(layout)
-    path = cache_dir() / "clearance" / f"{key}.json"
-    result = _read(path, key, layout)
+    result = _pairs(load_verified("clearance", key), layout)
     if result is None:
         result = _compute(layout)
-        with contextlib.suppress(OSError):
-            write_atomic(path, json.dumps({"key": key, "pairs": sorted(result)}))
+        store_verified("clearance", key, sorted(result))
     object.__setattr__(layout, "_proved_apart", result)
     return result
 
@@ -213,15 +209,13 @@ def _key(layout: Layout) -> str:
     return h.hexdigest()
 
 
-def _read(path: Path, key: str, layout: Layout) -> frozenset[tuple[int, int]] | None:
+def _pairs(stored: Any, layout: Layout) -> frozenset[tuple[int, int]] | None:
+    """The verified cache entry ``stored`` as pairs, or None when it is not pairs of ``layout``."""
     try:
-        data = json.loads(path.read_text())
-        pairs = frozenset((int(i), int(j)) for i, j in data["pairs"])
-    except (OSError, ValueError, KeyError, TypeError):
+        pairs = frozenset((int(i), int(j)) for i, j in stored)
+    except (TypeError, ValueError):
         return None
-    if data.get("key") != key or not pairs <= set(layout.self_pairs):
-        return None
-    return pairs
+    return pairs if pairs <= set(layout.self_pairs) else None
 
 
 def _compute(layout: Layout) -> frozenset[tuple[int, int]]:

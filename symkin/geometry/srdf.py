@@ -4,11 +4,12 @@ and written.
 Reading. :func:`read_srdf` gives them as pairs of link names for
 :meth:`symkin.geometry.Geometry.with_disabled`, translated to the model's link names with ``names``
 (e.g. :func:`symkin.geometry.urdf.urdf_link_names` for a chain read with
-:meth:`symkin.Robot.from_urdf`). :func:`srdf_disabled` is the conservative reading the command
-line uses: a pair of model links is disabled only when the SRDF disables every pair of the links
-with collision geometry that the model merged into them (fixed joints merge URDF links into one
-model link; an SRDF that disables the hand against link 5 but not the finger against link 5 leaves
-the pair checked). The file is parsed by the URDF reader's safe loader (no DOCTYPE, no xacro).
+:meth:`symkin.Robot.from_urdf`). Both it and :func:`srdf_disabled` (what the command line uses)
+read conservatively: a pair of model links is disabled only when the SRDF disables every pair of
+the links (with collision geometry, for :func:`srdf_disabled`) that the model merged into them
+(fixed joints merge URDF links into one model link; an SRDF that disables the hand against link 5
+but not the finger against link 5 leaves the pair checked). The file is parsed by the URDF
+reader's safe loader (no DOCTYPE, no xacro).
 
 Writing. :func:`disabled_pairs` lists a model's link pairs that need no check: ``"Adjacent"``
 (links on one rigid body or on bodies one joint apart, which symkin never checks against each
@@ -57,23 +58,21 @@ def read_srdf(
     """The ``disable_collisions`` pairs of an SRDF (file path or XML text), each sorted, sorted and
     without repeats.
 
-    ``names`` (a mapping or a function, optional) translates SRDF link names to the model's: a
-    pair with a link it does not know (a mapping without the key, a function returning None) is
-    dropped with a warning, and so is a pair whose two links become one.
+    ``names`` (a mapping or a function, optional) translates SRDF link names to the model's, and the
+    reading is then conservative, as :func:`srdf_disabled`'s: when several SRDF links fall on one
+    model link (URDF links merged by fixed joints), a pair of model links is disabled only when the
+    SRDF disables every pair of the SRDF links on them; pairs it disables only in part stay checked,
+    with a warning. A mapping names every link it translates (e.g.
+    :func:`symkin.geometry.urdf.urdf_link_names`); a function only sees the links the SRDF names, so
+    pass a mapping when links merge. A pair with a link ``names`` does not know (a mapping without
+    the key, a function returning None) is dropped with a warning, and so is a pair whose two links
+    become one.
     """
     entries, where = _entries(path_or_xml)
-    out: set[tuple[str, str]] = set()
-    dropped: list[tuple[str, str]] = []
-    for a, b in entries:
-        if names is not None:
-            get = names.get if isinstance(names, Mapping) else names
-            ma, mb = get(a), get(b)
-            if ma is None or mb is None or ma == mb:
-                dropped.append((a, b))
-                continue
-            a, b = ma, mb
-        if a != b:
-            out.add((a, b) if a <= b else (b, a))
+    if names is None:
+        return tuple(sorted({(a, b) if a <= b else (b, a) for a, b in entries if a != b}))
+    get = names.get if isinstance(names, Mapping) else names
+    dropped = [(a, b) for a, b in entries if get(a) is None or get(b) is None or get(a) == get(b)]
     if dropped:
         shown = ", ".join(f"({a}, {b})" for a, b in dropped[:5]) + (" ..." if len(dropped) > 5 else "")
         warnings.warn(
@@ -81,7 +80,36 @@ def read_srdf(
             f"that fall on one model link: dropped {shown}",
             stacklevel=2,
         )
-    return tuple(sorted(out))
+    known = names.keys() if isinstance(names, Mapping) else {x for p in entries for x in p}
+    carriers: dict[str, list[str]] = {}
+    for x in sorted(known):
+        m = get(x)
+        if m is not None:
+            carriers.setdefault(m, []).append(x)
+    disabled, partial = _conservative({frozenset(p) for p in entries if p[0] != p[1]}, carriers)
+    if partial:
+        shown = ", ".join(f"({a}, {b})" for a, b in partial[:5]) + (" ..." if len(partial) > 5 else "")
+        warnings.warn(
+            f"{where}: {len(partial)} model link pairs stay checked, the SRDF disabling only some of "
+            f"the links on them: {shown}",
+            stacklevel=2,
+        )
+    return disabled
+
+
+def _conservative(
+    off: Collection[frozenset[str]], carriers: Mapping[str, Collection[str]]
+) -> tuple[tuple[tuple[str, str], ...], tuple[tuple[str, str], ...]]:
+    """(model link pairs all of whose carrier pairs are in ``off``, pairs with only some of them)."""
+    disabled, partial = [], []
+    for x, y in itertools.combinations(sorted(carriers), 2):
+        wanted = [frozenset((a, b)) for a in carriers[x] for b in carriers[y] if a != b]
+        hits = sum(p in off for p in wanted)
+        if wanted and hits == len(wanted):
+            disabled.append((x, y))
+        elif hits:
+            partial.append((x, y))
+    return tuple(disabled), tuple(partial)
 
 
 def srdf_disabled(
@@ -96,15 +124,7 @@ def srdf_disabled(
     off = {frozenset(p) for p in entries if p[0] != p[1]}
     known = {x for links in carriers.values() for x in links}
     used = sum(1 for p in off if p <= known)
-    disabled, partial = [], []
-    for x, y in itertools.combinations(sorted(carriers), 2):
-        wanted = [frozenset((a, b)) for a in carriers[x] for b in carriers[y] if a != b]
-        hits = sum(p in off for p in wanted)
-        if wanted and hits == len(wanted):
-            disabled.append((x, y))
-        elif hits:
-            partial.append((x, y))
-    return tuple(disabled), tuple(partial), used
+    return (*_conservative(off, carriers), used)
 
 
 def disabled_pairs(model: Any) -> tuple[tuple[str, str, str], ...]:

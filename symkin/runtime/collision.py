@@ -171,7 +171,11 @@ def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05)
     b, _ = as_batch(q1, n, what="q1")
     if a.shape[0] != 1 or b.shape[0] != 1:
         raise ParameterError("motion_valid takes one configuration for q0 and one for q1")
-    steps = max(1, int(np.ceil(np.abs(b[0] - a[0]).max() / res)))
+    from symkin.core.sizes import room
+
+    span = float(np.abs(b[0] - a[0]).max())
+    room(8.0 * n * (span / res + 2), f"a motion checked at {span / res + 1:.6g} configurations")
+    steps = max(1, int(np.ceil(span / res)))
     s = np.linspace(0.0, 1.0, steps + 1)[:, None]
     Q = a[0] + s * (b[0] - a[0])
     return not bool(np.asarray(check(Q)).any())

@@ -299,14 +299,18 @@ def _options(kin: Any, *args: Any) -> IKOptions:
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
     """The iterates q_0 .. q_steps of one search from q0, not stopping at convergence:
     (k + 1, n), fewer rows if a step fails. For checking solvers against each other."""
+    from symkin.core.sizes import count, room
+
+    steps = count(steps, "steps", minimum=0)
     opt = IKOptions.of(kin, **options)
+    room(8.0 * (steps + 1) * opt.n, f"a trace of {steps} IK steps")
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
     q = as_config(q0, opt.n, name_of(kin), "q0").copy()  # the rule of q, as the C solver's trace
     step = _stepper(kin, opt)
     out = [q.copy()]
-    for _ in range(int(steps)):
+    for _ in range(steps):
         Te, J = _fkjac(kin, q)
         e = pose_error_of(Te, T[0])
         r2 = float(opt.we @ (e * e))

@@ -194,6 +194,7 @@ def _times(t: Any, mode: str) -> tuple[np.ndarray, np.ndarray, float, bool]:
         if m < 2:
             raise ParameterError(f"t as a number of samples must be at least 2, got {m}")
         m = _count(m, "t")
+        _room(m)
         if mode == "normalised":
             ts = np.linspace(0.0, 1.0, m)
             return ts, ts, 1.0, True
@@ -392,8 +393,17 @@ def _steps(x: float, dt: float, what: str) -> int:
     :data:`MAX_SAMPLES`."""
     with np.errstate(over="ignore"):
         r = float(x) / dt
-    _count(r, what)
+    _room(_count(r, what))
     return max(0, math.ceil(r - _EPS_STEPS))
+
+
+def _room(samples: float, n: int | None = None) -> None:
+    """ParameterError when ``samples`` samples of t, q, qd and qdd (of ``n`` axes; None: at least
+    one) would not fit in memory."""
+    from symkin.core.sizes import room
+
+    axes = f" x {n} axes" if n else ""
+    room(8.0 * samples * (1 + 3 * (n or 1)), f"a trajectory of {samples:.6g} samples{axes}")
 
 
 def mstraj(
@@ -511,6 +521,7 @@ def _mstraj_pieces(
                     f"tsegment[{seg}] = {tseg:g} s is too short for blends of {ka * dt:g} s: it needs "
                     f"at least {(2 * ka2 + 1) * dt:g} s (the blends and one linear step of dt)"
                 )
+        _room(clock + kx + tseg / dt + ka2, n)  # the samples so far and this segment's
         segtime[seg] = tseg
         arrive[seg] = clock * dt + tseg + (ka2 * dt if seg > 0 else 0.0)
         v = dq / tseg

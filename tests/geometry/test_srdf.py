@@ -122,10 +122,12 @@ def test_urdf_names_carriers_and_the_conservative_reading(tmp_path):
     partial_srdf = '<robot name="arm2"><disable_collisions link1="hand" link2="l1" reason="Never"/></robot>'
     disabled, partial, used = srdf_disabled(partial_srdf, carriers)
     assert disabled == () and partial == (("link1", "link3"),) and used == 1
-    # read_srdf's mapping (every pair it names) disables it
-    assert read_srdf(partial_srdf, {ln: m for m, links in carriers.items() for ln in links}) == (
-        ("link1", "link3"),
-    )
+    # read_srdf with a mapping reads as conservatively: the pair stays checked, with a warning
+    mapping = {ln: m for m, links in carriers.items() for ln in links}
+    with pytest.warns(UserWarning, match=r"1 model link pairs stay checked.*\(link1, link3\)"):
+        assert read_srdf(partial_srdf, mapping) == ()
+    full = partial_srdf.replace("</robot>", '<disable_collisions link1="flange" link2="l1"/></robot>')
+    assert read_srdf(full, mapping) == (("link1", "link3"),)
 
 
 def test_a_model_without_geometry_has_no_srdf():
