@@ -29,7 +29,9 @@ from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load, load_dh_file
+from symkin.model.spatial import joint_torques, velocity_transform, wrench_transform
 from symkin.model.tree import Tree
+from symkin.runtime.cartesian import PathResult, ctraj, servo_path
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
@@ -38,16 +40,7 @@ from symkin.runtime.loop import ServoResult, servo
 from symkin.runtime.null_space import joint_limit_cost, null_space_rrmc
 from symkin.runtime.qrmc import QRMC, qrmc
 from symkin.runtime.servo import p_servo
-from symkin.runtime.trajectory import (
-    PathResult,
-    Trajectory,
-    ctraj,
-    jtraj,
-    mstraj,
-    quintic,
-    servo_path,
-    trapezoidal,
-)
+from symkin.runtime.trajectory import Trajectory, jtraj, mstraj, quintic, trapezoidal
 
 _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
     "derive": ("symkin.derive.chain", "derivation"),
@@ -123,6 +116,7 @@ __all__ = [
     "geometry",
     "ik",
     "joint_limit_cost",
+    "joint_torques",
     "jtraj",
     "list_robots",
     "load",
@@ -142,5 +136,7 @@ __all__ = [
     "singularities",
     "symbolic",
     "trapezoidal",
+    "velocity_transform",
+    "wrench_transform",
     "write_generated",
 ]

@@ -108,6 +108,20 @@ def test_ik_solves_a_pose_given_on_the_command_line(capsys):
     assert code == 0 and "solved" in out
 
 
+@pytest.mark.parametrize("command", ["ik", "servo"])
+def test_a_matrix_that_is_not_se3_is_refused_naming_the_option(capsys, command):
+    """The one pose rule on --matrix (issue 36, item 6): one line naming the option, exit 2."""
+    T = load("ur5").fkine(load("ur5").qr)
+    for bad, why in (([1, 0, 0, 1], "bottom row"), ([0, 0, 0, 2], "bottom row")):
+        M = np.vstack([T[:3], bad])
+        code, _, err = run(capsys, command, "ur5", "--matrix", " ".join(map(str, M.ravel())))
+        assert code == 2 and f"--matrix has {why}" in err and len(err.strip().splitlines()) == 1
+    M = T.copy()
+    M[:3, :3] *= -1  # a reflection
+    code, _, err = run(capsys, command, "ur5", "--matrix", " ".join(map(str, M.ravel())))
+    assert code == 2 and "--matrix rotation is a reflection" in err
+
+
 def test_ik_unreachable_target_exits_1(capsys):
     code, out, _ = run(capsys, "ik", "planar2", "--pose", "5 0 0 0 0 0", "--json")
     assert code == 1 and json.loads(out)["success"] is False

@@ -32,6 +32,28 @@ def test_the_course_topics_have_tutorials():
     assert {"forward-kinematics", "ik-and-rrmc", "trajectories", "analytical-jacobian", "collision"} <= names
 
 
+PART2 = (
+    "part2-hessian",
+    "part2-analytic-forms",
+    "part2-null-space",
+    "part2-qp-control",
+    "part2-qp-ik",
+    "part2-qrmc",
+)
+
+
+def test_the_part2_topics_have_tutorials_in_the_navigation_and_the_guide():
+    """One page per topic of Haviland and Corke's Part 2 (its higher-order derivatives excepted),
+    listed under "Part 2" in the navigation and linked from the Part 2 guide."""
+    assert {p.stem for p in NOTEBOOKS} >= set(PART2)
+    nav = MKDOCS.read_text()
+    group = nav[nav.index("      - Part 2:") : nav.index("  - User guide:")]
+    guide = (DOCS / "guide" / "part2.md").read_text()
+    for name in PART2:
+        assert f"tutorials/{name}.ipynb" in group, name
+        assert f"../tutorials/{name}.ipynb" in guide, name
+
+
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_tutorial_notebook_runs(notebook, monkeypatch):
     """The code cells in order, in one namespace, as a kernel would run them (no outputs are
@@ -136,7 +158,7 @@ def test_equations_are_math_markup_with_the_bundled_katex(site):
         arithmatex[rel] = page.html.count('class="arithmatex"')
     assert arithmatex["guide/performance/index.html"] >= 2 and arithmatex["guide/analytic-ik/index.html"] >= 2
     assert arithmatex["guide/teaching/index.html"] >= 5
-    for name in ("ik-and-rrmc", "analytical-jacobian", "forward-kinematics"):
+    for name in ("ik-and-rrmc", "analytical-jacobian", "forward-kinematics", *PART2):
         cells = Page.of(site / f"tutorials/{name}/index.html").markdown_cells
         assert sum(c.count("$") for c in cells) >= 8, name
     # no formula left as code in the tutorials' prose
@@ -156,7 +178,8 @@ def test_equations_are_math_markup_with_the_bundled_katex(site):
 
 def test_equations_render_offline_in_a_browser(site):
     """Every page in headless Chromium with name resolution off (file:// only): the math is typeset
-    by KaTeX (no raw markup, no KaTeX error), its fonts load, and no request leaves the machine."""
+    by KaTeX (no raw markup, no KaTeX error; notebook LaTeX outputs too), its fonts load, and no
+    request leaves the machine."""
     from tests.view.browser import Browser, chromium
 
     if chromium() is None:
@@ -191,7 +214,7 @@ LOADED = (
 
 RENDERED = """(async () => {
   await document.fonts.ready;
-  const cells = [...document.querySelectorAll(".jp-MarkdownCell .jp-RenderedMarkdown")];
+  const cells = [...document.querySelectorAll(".jp-MarkdownCell .jp-RenderedMarkdown, .jp-RenderedLatex")];
   const prose = (cell) => {  // the text outside code and typeset math
     const copy = cell.cloneNode(true);
     copy.querySelectorAll("code, pre, .katex").forEach((e) => e.remove());

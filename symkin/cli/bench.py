@@ -9,7 +9,14 @@ from typing import Any
 import numpy as np
 
 from symkin.cli.checks import UserError, at_least_1, check_cflags_for, need_matplotlib, positive_float
-from symkin.cli.common import Deprecated, add_command, add_robot_argument, single_chain
+from symkin.cli.common import (
+    Deprecated,
+    add_command,
+    add_robot_argument,
+    add_srdf_option,
+    single_chain,
+    with_srdf,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -73,6 +80,17 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
     )
+    add_srdf_option(s, " (collide)")
+    s.add_argument(
+        "--build",
+        action="store_true",
+        help="collide: also the cold build of a 300-sphere model of ROBOT (its self pairs as tables)",
+    )
+    s.add_argument(
+        "--unrolled",
+        action="store_true",
+        help="collide --build: also that model as straight-line code (minutes)",
+    )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=run, robot_option=None)
 
@@ -86,6 +104,11 @@ def run(args: argparse.Namespace) -> int:
     check_cflags_for("c")
     if args.plot and args.what not in ("mmc", "qrmc", "compile", "urdf"):
         raise UserError(f"--plot is for `symkin bench mmc`, `qrmc`, `compile` and `urdf`, not `{args.what}`")
+    for option in ("srdf", "build", "unrolled"):
+        if getattr(args, option) and args.what != "collide":
+            raise UserError(f"--{option} is for `symkin bench collide`, not `{args.what}`")
+    if args.unrolled and not args.build:
+        raise UserError("--unrolled goes with --build")
     if args.what in ("tree", "urdf") and args.robot is not None:
         raise UserError(f"bench {args.what} measures its own robots; it takes no ROBOT")
     need_matplotlib(args.plot)
@@ -127,10 +150,18 @@ def run(args: argparse.Namespace) -> int:
     if args.what == "collide":
         from symkin.bench.collide import format_collide, run_collide
 
-        result = run_collide(
-            single_chain(args, "panda"), batch=args.batch or 20_000, seed=args.seed, progress=not args.json
-        )
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
+        robot = with_srdf(args, single_chain(args, "panda", geometry=True))
+        result = run_collide(robot, batch=args.batch or 20_000, seed=args.seed, progress=not args.json)
+        if not args.json:
+            print(format_collide(result), flush=True)
+        if args.build:
+            from symkin.bench.collide_build import format_build, run_build
+
+            result["build"] = run_build(robot, seed=args.seed, unrolled=args.unrolled)
+            if not args.json:
+                print("\n" + format_build(result["build"]))
+        if args.json:
+            print(json.dumps(result, indent=2, default=_jsonable))
         return 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin

@@ -38,6 +38,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--d-i", type=positive_float, default=0.3, help="--collision: influence distance (m)")
     s.add_argument("--d-s", type=positive_float, default=0.02, help="--collision: safety distance (m)")
     common.add_obstacle_options(s)
+    common.add_srdf_option(s, " (with --collision)")
     s.set_defaults(func=run)
 
 
@@ -47,8 +48,8 @@ def run(args: argparse.Namespace) -> int:
 
     robot = common.single_chain(args, geometry=args.collision)
     env = common.environment_of(args)
-    if len(env) and not args.collision:
-        raise UserError("--sphere, --capsule, --box and --env are obstacles of --collision: add --collision")
+    common.need_collision(args, env)
+    robot = common.with_srdf(args, robot)
     if args.collision and args.controller != "mmc":
         raise UserError("--collision needs the MMC controller (--controller mmc)")
     if args.collision and not args.d_i > args.d_s:
@@ -83,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
     steps = len(res.q) - 1
     summary = {
         "arrived": bool(res.arrived),
+        "reason": res.reason,
         "steps": steps,
         "final_error": float(np.abs(res.e[-1]).sum()) if len(res.e) else None,
         "mean_manipulability": float(np.mean(res.manipulability)),
@@ -94,7 +96,9 @@ def run(args: argparse.Namespace) -> int:
     if not res.arrived and res.info:
         last = res.info[-1]
         why = (
-            ": the controller could not produce the requested velocity there (a singularity, or a "
+            ": no part of the next step was free of collision, so the run stopped before it"
+            if res.blocked
+            else ": the controller could not produce the requested velocity there (a singularity, or a "
             "target out of reach)"
             if last.status in ("singular", "max_iter", "infeasible")
             else ""
@@ -120,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(summary, indent=2))
     else:
         print(
-            f"{args.controller}: {'arrived' if res.arrived else 'did not arrive'} after {steps} steps "
+            f"{args.controller}: {_outcome(res.reason)} after {steps} steps "
             f"(dt {args.dt} s); mean manipulability {summary['mean_manipulability']:.4f}"
         )
         print(f"q final = {common.fmt(res.q[-1])}")
@@ -141,6 +145,14 @@ def run(args: argparse.Namespace) -> int:
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0 if res.arrived else 1
+
+
+def _outcome(reason: str) -> str:
+    """How a servo run ended, in words."""
+    return {
+        "arrived": "arrived",
+        "collision": "stopped (no part of the next step was free of collision)",
+    }.get(reason, "did not arrive")
 
 
 def _speed_ratios(res: Any, kin: Any) -> tuple[np.ndarray, np.ndarray] | None:

@@ -201,7 +201,13 @@ def sample_q(
     N: int | None = None,
     seed: int | np.random.Generator | None = None,
 ) -> np.ndarray:
-    """Uniform random joint values within :func:`sample_bounds` of ``qlim``: (n,) or (N, n)."""
+    """Uniform random joint values within :func:`sample_bounds` of ``qlim``: (n,) or (N, n);
+    ParameterError for an N that is not a count >= 0 or whose array would not fit in memory."""
+    from symkin.core.sizes import count, room
+
+    if N is not None:
+        N = count(N, "N (the number of configurations)", minimum=0)
+        room(8.0 * N * len(qlim[0]), f"{N} random configurations")
     rng = np.random.default_rng(seed)
     lo, hi = sample_bounds(qlim, revolute)
     if N is None:

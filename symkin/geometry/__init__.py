@@ -3,7 +3,9 @@ from, and the NumPy reference of the queries the compiled kernel answers (:mod:`
 
 - :class:`Sphere`, :class:`Capsule` (robot and obstacles), :class:`Box` (obstacles),
   :class:`Geometry` (a robot's shapes and disabled link pairs), :class:`Environment`.
-- Sources: :func:`geometry_from_urdf` (``<collision>``), :func:`read_srdf` (disabled pairs),
+- Sources: :func:`geometry_from_urdf` (``<collision>``), :func:`read_srdf` and
+  :func:`srdf_disabled` (disabled pairs; :func:`disabled_pairs` and :func:`write_srdf` write an
+  SRDF of the pairs that need no check),
   :func:`fit_spheres` (spheres covering a mesh or points), :func:`builtin_geometry` (the built-in
   arms' sphere models, attached by :func:`symkin.load`).
 - :func:`layout_of`: the model's bodies and active pairs; :func:`proved_apart`: the self pairs no
@@ -17,7 +19,7 @@ from symkin.geometry.clearance import proved_apart, reach_sphere
 from symkin.geometry.fit import fit_spheres
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.geometry.reference import distance_jacobians, distances, in_collision, points
-from symkin.geometry.srdf import read_srdf
+from symkin.geometry.srdf import disabled_pairs, read_srdf, srdf_disabled, write_srdf
 from symkin.geometry.urdf import geometry_from_urdf
 from symkin.model.builtin_geometry import builtin_geometry
 from symkin.model.geometry import Box, Capsule, Environment, Geometry, Sphere
@@ -41,4 +43,7 @@ __all__ = [
     "proved_apart",
     "reach_sphere",
     "read_srdf",
+    "srdf_disabled",
+    "disabled_pairs",
+    "write_srdf",
 ]

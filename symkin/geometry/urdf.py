@@ -50,7 +50,14 @@ from symkin.model.urdf import (
     xml_numbers,
 )
 
-__all__ = ["geometry_from_urdf", "urdf_link_names", "urdf_link_frames", "box_spheres"]
+__all__ = [
+    "geometry_from_urdf",
+    "urdf_geometry",
+    "urdf_link_names",
+    "urdf_link_frames",
+    "urdf_carriers",
+    "box_spheres",
+]
 
 _Frame = tuple[str, np.ndarray]  # model link name, 4x4 transform model link frame -> URDF link frame
 
@@ -195,6 +202,20 @@ def urdf_link_names(path_or_xml: str | Path, model: Any) -> dict[str, str]:
     return {ln: f[0] for ln, f in urdf_link_frames(path_or_xml, model).items()}
 
 
+def urdf_carriers(path_or_xml: str | Path, model: Any) -> dict[str, tuple[str, ...]]:
+    """Per link of ``model``, the URDF links with ``<collision>`` elements attached to it (whose
+    geometry :func:`geometry_from_urdf` puts on it), in file order: what an SRDF names
+    (:func:`symkin.geometry.srdf.srdf_disabled`, :func:`~symkin.geometry.srdf.write_srdf`)."""
+    root, _ = load_xml(path_or_xml)
+    names = urdf_link_names(path_or_xml, model)
+    out: dict[str, list[str]] = {}
+    for lel in root.findall("link"):
+        name = lel.get("name") or ""
+        if lel.findall("collision") and name in names:
+            out.setdefault(names[name], []).append(name)
+    return {k: tuple(v) for k, v in out.items()}
+
+
 def box_spheres(half_extents: Any, max_spheres: int = 64) -> list[tuple[np.ndarray, float]]:
     """Spheres ``(centre, radius)`` covering the box ``|x_i| <= half_extents_i`` (box frame): a grid
     of at most ``max_spheres`` cells as near cubes as that allows, each sphere through its cell's
@@ -240,6 +261,14 @@ def geometry_from_urdf(
     :class:`symkin.Robot` from :meth:`~symkin.Robot.from_urdf` of the same URDF): shapes in the
     frames of the model's links, metres; no disabled pairs (see
     :func:`symkin.geometry.srdf.read_srdf`). Module docstring: which element becomes what."""
+    return urdf_geometry(path_or_xml, model, mesh_spheres, max_box_spheres)[0]
+
+
+def urdf_geometry(
+    path_or_xml: str | Path, model: Any, mesh_spheres: int = 0, max_box_spheres: int = 64
+) -> tuple[Geometry, tuple[str, ...]]:
+    """:func:`geometry_from_urdf` and the URDF links some of whose ``<collision>`` elements it
+    skipped (with a warning each), sorted."""
     root, where = load_xml(path_or_xml)
     graph = read_graph(path_or_xml)
     frames, why = _link_frames(graph, model)
@@ -307,7 +336,8 @@ def geometry_from_urdf(
             counts[tag] += 1
     made = ", ".join(f"{v} {k}" for k, v in counts.items() if v) or "no shapes"
     note = f"; skipped on {sorted(set(skipped))}" if skipped else ""
-    return Geometry(tuple(shapes), (), f"<collision> elements of {where} ({made}){note}")
+    geometry = Geometry(tuple(shapes), (), f"<collision> elements of {where} ({made}){note}")
+    return geometry, tuple(sorted(set(skipped)))
 
 
 def _mesh(

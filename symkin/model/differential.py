@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import AXES_ROWS, as_batch, axes_rows, real_array
-from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.errors import ConfigurationError, ParameterError
 from symkin.model.kinematics import cross
 from symkin.model.orientation import (  # noqa: F401 - NEAR_PI_L, angle_axis, REPRESENTATIONS re-exported
     NEAR_PI_L,
@@ -37,6 +37,7 @@ from symkin.model.orientation import (  # noqa: F401 - NEAR_PI_L, angle_axis, RE
     angle_axis,
     representation_of,
 )
+from symkin.model.spatial import velocity_transform, wrench_transform  # noqa: F401 - re-exported
 
 __all__ = [
     "FrameMethods",
@@ -233,10 +234,11 @@ class FrameMethods:
         Lynch and Park, Modern Robotics, 2017, sec 5.2). One wrench (6,) applies to every
         configuration of a batch, and one q to every wrench of a batch (N, 6).
 
-        ``frame="base"`` or ``frame="ee"`` on a model without a frame of that name (a chain, say)
-        means the end effector with the wrench in that frame: ``in_frame="base"|"ee"``.
+        ``frame="base"`` or ``frame="ee"`` on a model of one frame or without a frame of that name (a
+        chain, say) means the end effector with the wrench in that frame: ``in_frame="base"|"ee"``.
         """
-        if isinstance(frame, str) and frame in ("base", "ee") and frame not in getattr(self, "frames", ()):
+        frames = getattr(self, "frames", ())  # a compiled chain's one frame is its end effector, "ee"
+        if isinstance(frame, str) and frame in ("base", "ee") and (frame not in frames or len(frames) == 1):
             if in_frame not in ("base", frame):
                 raise ParameterError(f"frame={frame!r} and in_frame={in_frame!r}: two frames for the wrench")
             in_frame, frame = frame, None
@@ -443,62 +445,3 @@ def _det6_spd(G: list[list[float]]) -> float:
         return 0.0
     det *= a55
     return det
-
-
-# -- velocity and wrench transforms ---------------------------------------------------------------
-def _as_se3(T: Any) -> np.ndarray:
-    A = real_array(T, "T", PoseError)
-    if A.ndim not in (2, 3) or A.shape[-2:] != (4, 4):
-        raise PoseError(f"T must be a (4, 4) or (N, 4, 4) homogeneous transform, got shape {A.shape}")
-    if not np.isfinite(A).all():
-        raise PoseError("T holds NaN or infinite values")
-    R = A[..., :3, :3]
-    if (
-        np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max(initial=0.0) > 1e-6
-        or (np.linalg.det(R) <= 0.0).any()
-    ):
-        raise PoseError("T must be a homogeneous transform: its rotation part is not orthonormal")
-    return A
-
-
-def _skew(p: np.ndarray) -> np.ndarray:
-    S = np.zeros((*p.shape[:-1], 3, 3))
-    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -p[..., 2], p[..., 1], -p[..., 0]
-    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = p[..., 2], -p[..., 1], p[..., 0]
-    return S
-
-
-def velocity_transform(T: Any) -> np.ndarray:
-    """The (6, 6) matrix (or (N, 6, 6)) ``[[R, [t]x R], [0, R]]`` of ``T = aT_b = (R, t)``: it maps the
-    spatial velocity (v, omega) of a rigid body, expressed in frame {B} with v the velocity of the
-    body's point at the origin of {B}, to the same motion expressed in frame {A} with v that of the
-    body's point at the origin of {A}: ``(v_a, w_a) = (R v_b + t x (R w_b), R w_b)`` (m/s, rad/s).
-
-    This is the adjoint of T with symkin's row order (v, omega) (Corke, Robotics, Vision and Control,
-    3rd ed., 2023, chap 3 and 8; Lynch and Park, Modern Robotics, 2017, sec 3.3.2, rows
-    swapped). It composes, ``velocity_transform(T1 @ T2) = velocity_transform(T1) @
-    velocity_transform(T2)``, and ``velocity_transform(inv(T))`` is its inverse. Note that
-    ``jacob0`` and ``jacobe`` describe the velocity of one point (the frame's origin) and differ by
-    the rotation ``blkdiag(R, R)`` alone. PoseError for a T that is not SE(3).
-    """
-    A = _as_se3(T)
-    R, t = A[..., :3, :3], A[..., :3, 3]
-    X = np.zeros((*A.shape[:-2], 6, 6))
-    X[..., :3, :3] = R
-    X[..., 3:, 3:] = R
-    X[..., :3, 3:] = _skew(t) @ R
-    return X
-
-
-def wrench_transform(T: Any) -> np.ndarray:
-    """The (6, 6) matrix (or (N, 6, 6)) ``[[R, 0], [[t]x R, R]]`` of ``T = aT_b = (R, t)``, the inverse
-    transpose of :func:`velocity_transform`: it maps a wrench (f, m) expressed in {B}, m the moment
-    about the origin of {B}, to the same wrench expressed in {A} with the moment about the origin of
-    {A}: ``(f_a, m_a) = (R f_b, t x (R f_b) + R m_b)`` (N, N m). The power ``w . v`` of a wrench on
-    a motion is the same in both frames (Corke, Robotics, Vision and Control, 3rd ed., 2023, chap
-    3 and 8; Lynch and Park, Modern Robotics, 2017, sec 3.4, rows swapped). PoseError for a T
-    that is not SE(3).
-    """
-    X = velocity_transform(T)
-    X[..., 3:, :3], X[..., :3, 3:] = X[..., :3, 3:], 0.0  # [t]x R moved to the lower left block
-    return X

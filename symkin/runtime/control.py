@@ -291,10 +291,14 @@ class MMC:
     ``d_i`` (NEO's form, :func:`~symkin.runtime.mmc_qp.distance_dampers`), with ``d_dot = Jd qd``
     from the distance Jacobians (:meth:`symkin.Kinematics.distance_jacobians`), for the
     ``collision_rows`` (32) closest pairs within ``d_i``. Pairs of the robot's own shapes use
-    ``d_i_self`` (0.05 m) and ``d_s_self`` (0: the sphere models already pad the links): sphere
-    models hold pairs that stay a few centimetres apart at every configuration (the built-in
-    Panda's closest self pair is 1.2 cm apart at qr), which obstacle margins would push apart
-    forever and which would crowd the obstacles out of the rows. When any pair lies within its
+    ``d_i_self`` (0.05 m) and ``d_s_self`` (1 mm: the sphere models already pad the links, and a
+    pair driven to d = 0 by the damper would sit at exact contact, where rounding makes the
+    checker call every further step colliding): sphere models hold pairs that stay a few
+    centimetres apart at every configuration (the built-in Panda's closest self pair is 1.2 cm
+    apart at qr), which obstacle margins would push apart forever and which would crowd the
+    obstacles out of the rows. The dampers act on a linearisation, so a step may still end slightly
+    inside a margin or a pair: :func:`symkin.servo` checks every configuration it returns with the
+    collision checker and shortens or stops a step that collides. When any pair lies within its
     ``d_i`` and there is a slack, the step is first the active-set solve with the rows
     (:func:`~symkin.runtime.mmc_qp.active_set_rows_solve`, from the last step's settled set, then
     from the bounds the closed form crosses), else OSQP polished by the same solve. On C
@@ -333,7 +337,7 @@ class MMC:
         xi_d: float = 1.0,
         collision_rows: int = 32,
         d_i_self: float = 0.05,
-        d_s_self: float = 0.0,
+        d_s_self: float = 0.001,
     ) -> None:
         self._collision = self._env = None
         self._warm: tuple[np.ndarray, np.ndarray] | None = None  # the last obstacle step's active sets

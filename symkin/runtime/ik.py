@@ -43,6 +43,7 @@ from typing import Any, Literal
 import numpy as np
 
 from symkin.core.arrays import as_config, as_rows, name_of
+from symkin.core.pose import POSE_ATOL  # noqa: F401 - re-exported
 from symkin.errors import ParameterError, PoseError
 from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     DAMPINGS,
@@ -50,7 +51,6 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     MAX_ITERATIONS,
     METHODS,
     PINV_RCOND,
-    POSE_ATOL,
     QP_RHO_I,
     QP_RHO_S,
     TWO_PI,
@@ -65,6 +65,7 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     failure_reason,
     new_seed,
     pose_error,
+    pose_error_of,
     revolute_mask,
     sample_range,
     shift_into,
@@ -144,7 +145,7 @@ def _solve_one(kin: Any, opt: IKOptions, Tep: np.ndarray, q0: np.ndarray | None,
             q = rng.random_q(opt.sample)
         for i in range(opt.ilimit):
             T, J = _fkjac(kin, q)
-            e = pose_error(T, Tep)
+            e = pose_error_of(T, Tep)
             iterations += 1
             r2 = float(opt.we @ (e * e))
             res = math.sqrt(r2) if r2 >= 0 else math.nan
@@ -296,16 +297,20 @@ def _options(kin: Any, *args: Any) -> IKOptions:
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
     """The iterates q_0 .. q_steps of one search from q0, not stopping at convergence:
     (k + 1, n), fewer rows if a step fails. For checking solvers against each other."""
+    from symkin.core.sizes import count, room
+
+    steps = count(steps, "steps", minimum=0)
     opt = IKOptions.of(kin, **options)
+    room(8.0 * (steps + 1) * opt.n, f"a trace of {steps} IK steps")
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
     q = as_config(q0, opt.n, name_of(kin), "q0").copy()  # the rule of q, as the C solver's trace
     step = _stepper(kin, opt)
     out = [q.copy()]
-    for _ in range(int(steps)):
+    for _ in range(steps):
         Te, J = _fkjac(kin, q)
-        e = pose_error(Te, T[0])
+        e = pose_error_of(Te, T[0])
         r2 = float(opt.we @ (e * e))
         if not math.isfinite(r2):
             break

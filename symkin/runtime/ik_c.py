@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_config, as_rows, name_of, real_array
+from symkin.core.arrays import as_config, as_rows, name_of
+from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
 from symkin.runtime.memo import per_object
@@ -380,7 +381,7 @@ class CIKSolver:
             seed = self._seeds.getrandbits(64)
         else:
             seed = int(seed) & _M64
-        T = np.ascontiguousarray(real_array(Tep, "a target pose", PoseError))  # no complex, strings...
+        T = np.ascontiguousarray(pose_array(Tep))  # the pose rule's conversion: no complex, strings...
         if T.shape != (4, 4):
             return self._solve_batch(T, q0, seed)
         check_pose(T)  # the detailed PoseError
@@ -408,7 +409,7 @@ class CIKSolver:
 
     def _solve_batch(self, T: np.ndarray, q0: Any, seed: int) -> IKResult:
         if T.ndim != 3 or T.shape[1:] != (4, 4):
-            raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
+            check_pose(T)  # the rule's PoseError for the shape
         T = np.ascontiguousarray(T, dtype=float)
         N, n = len(T), self.n
         stride, Q0 = 0, None

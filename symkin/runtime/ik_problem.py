@@ -15,6 +15,7 @@ from typing import Any, Literal
 import numpy as np
 
 from symkin.core.arrays import as_batch, finite_number, name_of, per_joint, real_array, sample_bounds
+from symkin.core.pose import as_poses, pose_array
 from symkin.errors import ParameterError, PoseError
 from symkin.model.differential import NEAR_PI_L, angle_axis
 
@@ -28,8 +29,6 @@ QP_RHO_I = 0.9  # rad or m: the QP's joint-limit dampers act within this distanc
 QP_RHO_S = 0.01  # rad or m: ... and stop a joint this far from it
 DAMPINGS = ("wampler", "chan", "sugihara")
 PINV_RCOND = 1e-12  # singular values <= PINV_RCOND * largest are dropped (same in C)
-POSE_ATOL = 1e-6  # max |R^T R - I| of an accepted target
-_BOTTOM_ATOL = 1e-12
 TWO_PI = 6.283185307179586
 M64 = (1 << 64) - 1
 
@@ -321,40 +320,10 @@ def new_seed() -> int:
 
 # -- pose error (eqs 37-40) -------------------------------------------------------------------
 def check_pose(Tep: Any) -> tuple[np.ndarray, bool]:
-    """Validate SE(3) targets: (4, 4) or (N, 4, 4) -> ((N, 4, 4) float array, was_single).
-
-    Raises PoseError for a wrong shape, NaN/inf, a bottom row other than (0, 0, 0, 1), a
-    rotation with ``max |R^T R - I| > 1e-6`` or a reflection (det R < 0).
-    """
-    T = real_array(Tep, "a target pose", PoseError)
-    single = T.ndim == 2
-    if T.ndim not in (2, 3) or T.shape[-2:] != (4, 4):
-        raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
-    if single:
-        T = T[None]
-
-    def where(i: int) -> str:
-        return "the target" if single else f"target [{i}]"
-
-    bad = ~np.isfinite(T).all(axis=(1, 2))
-    if bad.any():
-        raise PoseError(f"{where(int(np.argmax(bad)))} contains NaN or inf")
-    bottom = np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > _BOTTOM_ATOL
-    if bottom.any():
-        i = int(np.argmax(bottom))
-        raise PoseError(f"{where(i)} has bottom row {T[i, 3].tolist()}, not [0, 0, 0, 1]")
-    R = T[:, :3, :3]
-    dev = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
-    if (dev > POSE_ATOL).any():
-        i = int(np.argmax(dev > POSE_ATOL))
-        raise PoseError(
-            f"{where(i)} rotation is not orthonormal: max |R^T R - I| = {dev[i]:.3g} > {POSE_ATOL:g}"
-        )
-    det = np.linalg.det(R)
-    if (det <= 0).any():
-        i = int(np.argmax(det <= 0))
-        raise PoseError(f"{where(i)} rotation is a reflection (det R = {det[i]:.3g})")
-    return T, single
+    """Validate SE(3) targets: (4, 4) or (N, 4, 4) -> ((N, 4, 4) float array, was_single), by the one
+    pose rule (:func:`symkin.core.pose.as_poses`): PoseError for a wrong shape, NaN/inf, a bottom row
+    other than (0, 0, 0, 1), a rotation with ``max |R^T R - I| > 1e-6`` or a reflection (det R <= 0)."""
+    return as_poses(Tep)
 
 
 def _angle_axis_one(R: np.ndarray) -> np.ndarray:
@@ -377,6 +346,21 @@ def _angle_axis_one(R: np.ndarray) -> np.ndarray:
 
 def pose_error(Te: Any, Tep: Any) -> np.ndarray:
     """e of eq 37 for poses Te, Tep (..., 4, 4) -> (..., 6): (t* - t, alpha(R* R^T)), base frame.
+
+    Both are checked by the one pose rule (:func:`symkin.core.pose.as_poses`; PoseError naming
+    ``Te`` or ``Tep``), then :func:`pose_error_of` computes e."""
+    A, B = pose_array(Te, "Te"), pose_array(Tep, "Tep")
+    for X, what in ((A, "Te"), (B, "Tep")):
+        as_poses(X.reshape(-1, 4, 4) if X.ndim > 3 and X.shape[-2:] == (4, 4) else X, what)
+    try:
+        np.broadcast_shapes(A.shape[:-2], B.shape[:-2])
+    except ValueError:
+        raise PoseError(f"Te {A.shape} and Tep {B.shape}: the stacks of poses do not broadcast") from None
+    return pose_error_of(A, B)
+
+
+def pose_error_of(Te: Any, Tep: Any) -> np.ndarray:
+    """:func:`pose_error` of poses known to be valid (no checks: the solvers' and servo loops' own).
 
     One pose pair is computed with scalar arithmetic in the order of the C code (``csrc/symkin_pose.h``),
     so both give the same numbers to the bit: the C and Python servo loops take the same steps."""

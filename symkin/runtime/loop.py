@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 import time
@@ -12,15 +13,20 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_config, name_of, real_array
+from symkin.core.arrays import MAX_JOINT_VALUE, as_config, name_of, real_array
+from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_step
-from symkin.runtime.ik import check_pose, pose_error
+from symkin.runtime.ik import check_pose, pose_error_of
 from symkin.runtime.qrmc import QRMC
 from symkin.runtime.servo import servo_gain, servo_velocity
 from symkin.runtime.task import task_kinematics
 
-__all__ = ["servo", "ServoResult"]
+__all__ = ["servo", "ServoResult", "SERVO_HALVINGS"]
+
+#: The most times a servo run with collision rows halves a step whose end the collision checker
+#: calls colliding before it stops (``csrc/mmc_py.c``: SERVO_HALVINGS).
+SERVO_HALVINGS = 10
 
 Controller = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, StepInfo]]
 
@@ -40,6 +46,10 @@ class ServoResult:
         limit_violations: number of configurations ``q[1:]`` with a joint outside ``qlim``.
         dt: the time step (s).
         controller: ``"mmc"``, ``"rrmc"``, ``"qrmc"`` or the controller's name.
+        blocked: the run stopped because no part of the next step was free of collision (an MMC with
+            collision rows: every configuration the loop returns passes the collision checker,
+            ``kin.in_collision(q, env)``; a step whose end it calls colliding is halved, up to
+            :data:`SERVO_HALVINGS` times, and ``info[k].scale`` says by how much).
     """
 
     q: np.ndarray
@@ -52,6 +62,7 @@ class ServoResult:
     limit_violations: int
     dt: float
     controller: str
+    blocked: bool = False
 
     @property
     def steps(self) -> int:
@@ -68,6 +79,11 @@ class ServoResult:
         return tuple(i.status for i in self.info)
 
     @property
+    def reason(self) -> str:
+        """Why the run ended: ``"arrived"``, ``"collision"`` (:attr:`blocked`) or ``"max_steps"``."""
+        return "arrived" if self.arrived else "collision" if self.blocked else "max_steps"
+
+    @property
     def left_limits(self) -> bool:
         """True when some configuration left the joint limits."""
         return self.limit_violations > 0
@@ -82,7 +98,7 @@ class ServoResult:
 
     def __repr__(self) -> str:
         return (
-            f"ServoResult(controller={self.controller!r}, steps={self.steps}, arrived={self.arrived}, "
+            f"ServoResult(controller={self.controller!r}, steps={self.steps}, reason={self.reason!r}, "
             f"mean_manipulability={self.mean_manipulability:.4g}, limit_violations={self.limit_violations})"
         )
 
@@ -132,6 +148,13 @@ def servo(
     ``frame`` picks the frame that servos: a tree's frame name (:class:`symkin.Tree` or its compiled
     kinematics), or link frame k of a chain; the joints off its path do not move (the loop then
     runs in Python, except for a C tree's frame without mimic joints).
+
+    With an :class:`MMC` with collision rows (``MMC(kin, collision=env)``) every configuration the run
+    returns is free by the collision checker, ``kin.in_collision(q, env)`` (the dampers act on a
+    linearisation, so a full step can end a few micrometres inside a pair): a step whose end
+    collides is halved, up to :data:`SERVO_HALVINGS` times (``info[k].scale`` records it), and when
+    no halving is free the run stops (``blocked``, ``reason == "collision"``). ``q0`` itself must
+    be free: ConfigurationError naming the pair otherwise.
     """
     kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
     if backend not in ("auto", "c", "python"):
@@ -142,7 +165,7 @@ def servo(
         raise ParameterError(f"dt must be a positive finite number, got {dt!r}")
     if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 0:
         raise ParameterError(f"max_steps must be an integer >= 0, got {max_steps!r}")
-    T = real_array(Tep, "a target pose", PoseError) if isinstance(Tep, np.ndarray) else None  # as check_pose
+    T = pose_array(Tep) if isinstance(Tep, np.ndarray) else None  # converted as check_pose does
     if T is None or T.shape != (4, 4):  # the C loop checks the pose itself
         T_all, single = check_pose(Tep)  # PoseError for NaN, a wrong shape or a non-SE(3) matrix
         if not single:
@@ -153,6 +176,9 @@ def servo(
         raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
     _check_cap(nu_max)
     step, name, cstep = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
+    guard = _collision_guard(getattr(step, "__self__", None), n)
+    if guard is not None:
+        _start_free(guard, q)
     if isinstance(controller, (MMC, QRMC)):
         axes = controller.axes
     if backend == "c" and cstep is None:
@@ -162,37 +188,47 @@ def servo(
         )
     if cstep is not None and backend != "python":
         bar = _progress(progress, max_steps, name)
-        out = cstep.servo(T, q, k, threshold, dt, nu_max, axes, max_steps)
+        collide = None if guard is None else _c_collide(*guard)
+        out = cstep.servo(T, q, k, threshold, dt, nu_max, axes, max_steps, collide)
         if out is None:  # not a valid pose
             check_pose(T)  # the detailed PoseError
             raise PoseError("invalid target pose")  # pragma: no cover - check_pose raised
-        Qa, QDa, Ea, Ma, infos_c, times_c, arrived, viol = out
+        Qa, QDa, Ea, Ma, infos_c, times_c, arrived, viol, blocked = out
         if bar is not None:
             bar.update(len(QDa))
             bar.close()
-        return ServoResult(Qa, QDa, Ea, Ma, infos_c, times_c, bool(arrived), int(viol), float(dt), name)
+        return ServoResult(
+            Qa, QDa, Ea, Ma, infos_c, times_c, bool(arrived), int(viol), float(dt), name, bool(blocked)
+        )
     check_pose(T)
     Tep = T
     k = np.asarray(k)
     qlo, qhi = np.asarray(kin.qlim, dtype=float)
 
     Q, QD, E, M, infos, times = [q.copy()], [], [], [], [], []
-    arrived = False
+    arrived = blocked = False
     bar = _progress(progress, max_steps, name)
     try:
         for _ in range(max_steps + 1):
-            e = pose_error(kin.fkine(q), Tep)
+            e = pose_error_of(kin.fkine(q), Tep)
             E.append(e)
             nu, arrived = servo_velocity(e, k, threshold, nu_max)
             if arrived or len(QD) == max_steps:
                 break
             t0 = time.perf_counter()
             qd, info = step(q, nu)
-            times.append(time.perf_counter() - t0)
+            elapsed = time.perf_counter() - t0
+            q_next = q + dt * qd
+            if guard is not None:
+                q_next, qd, info = _accepted(guard, q, q_next, qd, info, dt)
+                if q_next is None:  # no part of the step is free: not taken
+                    blocked = True
+                    break
+            times.append(elapsed)
             M.append(info.manipulability)
             QD.append(qd)
             infos.append(info)
-            q = q + dt * qd
+            q = q_next
             Q.append(q)
             if bar is not None:
                 bar.update(1)
@@ -203,7 +239,9 @@ def servo(
     Qa, QDa = np.array(Q), np.array(QD).reshape(len(QD), n)
     viol = int((((Qa[1:] < qlo) | (Qa[1:] > qhi)).any(axis=1)).sum())
     M = np.array(M, dtype=float)
-    return ServoResult(Qa, QDa, np.array(E), M, tuple(infos), np.array(times), arrived, viol, float(dt), name)
+    return ServoResult(
+        Qa, QDa, np.array(E), M, tuple(infos), np.array(times), arrived, viol, float(dt), name, blocked
+    )
 
 
 def _controller(
@@ -251,3 +289,70 @@ def _progress(progress: bool, total: int, name: str) -> Any:
     if not progress_shown(progress):
         return None
     return bar(total=total, desc=f"servo ({name})")
+
+
+# -- the step's acceptance with collision rows (issue 36, item 4) --------------------------------
+def _collision_guard(mmc: Any, n: int) -> tuple[Any, Any] | None:
+    """(collision checker, environment) of an MMC with collision rows whose checker takes the loop's
+    n joint values, else None."""
+    check = getattr(mmc, "_collision", None) if isinstance(mmc, MMC) else None
+    if check is None or int(check.n) != n:
+        return None
+    return check, mmc._env
+
+
+def _collides(guard: tuple[Any, Any], q: np.ndarray) -> bool:
+    """Whether q is not acceptable: colliding by the checker, or not a valid configuration (the C
+    kernel's -1: NaN, inf or beyond +-1e15)."""
+    check, env = guard
+    if not (np.abs(q) <= MAX_JOINT_VALUE).all():
+        return True
+    return bool(check.in_collision(q, env))
+
+
+def _start_free(guard: tuple[Any, Any], q: np.ndarray) -> None:
+    """ConfigurationError naming the deepest pair when the run's first configuration collides."""
+    if not _collides(guard, q):
+        return
+    check, env = guard
+    d = np.asarray(check.distances(q, env))
+    i = int(np.argmin(d))
+    kind, a, b = check.labels(env)[i]
+    pair = f"self pair of shapes {a} and {b}" if kind == "self" else f"shape {a} and {kind} obstacle {b}"
+    raise ConfigurationError(
+        f"q0 is in collision ({pair}, signed distance {d[i]:.3g} m): a servo run with collision "
+        "avoidance starts from a configuration that kin.in_collision(q0, env) calls free"
+    )
+
+
+def _accepted(
+    guard: tuple[Any, Any], q: np.ndarray, q_next: np.ndarray, qd: np.ndarray, info: StepInfo, dt: float
+) -> tuple[np.ndarray | None, np.ndarray, StepInfo]:
+    """The step q -> q_next = q + dt qd, halved until the checker calls its end free (at most
+    :data:`SERVO_HALVINGS` times; qd and ``info.scale`` halved with it, exactly: a power of two),
+    as the C loop does; (None, qd, info) when no halving is free."""
+    scale, h = 1.0, 0
+    while _collides(guard, q_next):
+        if h == SERVO_HALVINGS:
+            return None, qd, info
+        h += 1
+        scale *= 0.5
+        qd = qd * 0.5
+        q_next = q + dt * qd
+    if h:
+        info = dataclasses.replace(info, scale=info.scale * scale)
+    return q_next, qd, info
+
+
+def _c_collide(check: Any, env: Any) -> tuple[int, int] | None:
+    """The C loop's ``collide`` argument of a collision checker: the addresses of its kernel's
+    ``skcoll_in_collision_packed`` and of the packed obstacles (kept alive by ``env``)."""
+    import ctypes
+
+    from symkin.runtime.collision import env_args
+
+    kernel = getattr(check, "kernel", None)
+    if kernel is None:  # pragma: no cover - a C MMC with collision rows has the C kernel
+        raise ConfigurationError("the C servo loop with collision rows needs the C collision kernel")
+    fn = kernel.lib.skcoll_in_collision_packed
+    return int(ctypes.cast(fn, ctypes.c_void_p).value or 0), int(env_args(env).address)

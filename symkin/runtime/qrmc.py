@@ -140,6 +140,14 @@ def _levenberg_marquardt(
     return x, float(np.abs(g).max()), taken
 
 
+def _iterations(value: Any) -> int:
+    """Levenberg-Marquardt trials per start: an integer in 1 .. 2**31 - 1 (the C step's int32)."""
+    from symkin.core.sizes import count
+    from symkin.runtime.ik_problem import MAX_ITERATIONS
+
+    return count(value, "iterations", maximum=MAX_ITERATIONS)
+
+
 def quadratic_rate_solve(
     J: np.ndarray, H: np.ndarray, nu: np.ndarray, horizon: float = 1.0, qd0: Any = None, seed: Any = 0.1,
     iterations: int = 20, tol: float = 1e-10, damping: float = 1e-2, singular_tol: float = 1e-6,
@@ -147,7 +155,7 @@ def quadratic_rate_solve(
     """Solve ``J qd + (h/2) (H qd) qd = nu`` for qd (see the module docstring): from zero, then,
     unconverged, from ``qd0`` (when not zero) and ``qd0 + seed``; the converged answer of least norm,
     else the smallest residual. J (6, n) and H (n, 6, n) base frame at q, nu (6,) (v, omega), h (s)."""
-    o = _Options(float(horizon), int(iterations), float(tol), float(damping), float(singular_tol))
+    o = _Options(float(horizon), _iterations(iterations), float(tol), float(damping), float(singular_tol))
     n = J.shape[1]
     x0 = np.zeros(n) if qd0 is None else np.asarray(qd0, dtype=float)
     limit = o.tol * (1.0 + float(np.abs(nu).max()))
@@ -236,9 +244,7 @@ class QRMC:
         self.horizon = _number(horizon, "horizon")
         self.qd_max = _speed_limits(kin, self.n, qd_max)
         self.seed = _seed(seed, self.n)
-        if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
-            raise ParameterError(f"iterations must be an integer >= 1, got {iterations!r}")
-        self.iterations = int(iterations)
+        self.iterations = _iterations(iterations)
         self.tol = _number(tol, "tol")
         self.damping = _number(damping, "damping", strict=False)
         self.singular_tol = _number(singular_tol, "singular_tol", strict=False)

@@ -2021,16 +2021,19 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[51][1] = -0.049 * PJ[6][6] + T[7][7];
     X[51][2] = -0.049 * PJ[6][10] + T[7][11];
 }
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none), and whether it
+   holds for every q (no prismatic stroke in it): the batch tests a link only against the obstacle
+   spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.095 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 }, { 0.0, 0.0, 0.333 } };
 static const double reach_radius[N_LINKS] = { 0.14700877125510495, 0.265000000000266, 0.23276472678646806, 0.557295741247767, 0.6122604159440008, 1.093890936650848, 0.9465064460977213, 1.079995934586715, 1.1892832815074643 };
 
-/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
-   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
-   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
-static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
+/* the obstacle spheres each link can meet, link by link: idx[start[l]] to idx[start[l + 1]] - 1 for
+   link l (an obstacle outside a link's reach sphere cannot touch it; an obstacle on the edge is
+   kept); with outside, for configurations outside the joint limits: a link whose reach sphere
+   holds only within them takes every obstacle. idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1], int outside)
 {
+    (void)outside;
     int t = 0;
     for (int l = 0; l < N_LINKS; ++l) {
         start[l] = t;
@@ -2044,24 +2047,27 @@ static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
     start[N_LINKS] = t;
 }
 
-/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S, within the
+   joint limits and (idx_out, start_out) outside them */
 static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, const int *idx, const int *start, unsigned char *out)
+                          int nb, const int *idx, const int *start, const int *idx_out, const int *start_out,
+                          unsigned char *out)
 {
-    (void)idx; (void)start;
+    (void)idx; (void)start; (void)idx_out; (void)start_out;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
-    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
-       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
-    m4 far = {0, 0, 0, 0};
-    far |= ~((qv[0] >= -2.8973) & (qv[0] <= 2.8973));
-    far |= ~((qv[1] >= -1.7628) & (qv[1] <= 1.7628));
-    far |= ~((qv[2] >= -2.8973) & (qv[2] <= 2.8973));
-    far |= ~((qv[3] >= -3.0718) & (qv[3] <= -0.0698));
-    far |= ~((qv[4] >= -2.8973) & (qv[4] <= 2.8973));
-    far |= ~((qv[5] >= -0.0175) & (qv[5] <= 3.7525));
-    far |= ~((qv[6] >= -2.8973) & (qv[6] <= 2.8973));
+    /* lanes outside the joint limits (or NaN) also test the pairs proved apart within them, and
+       the obstacles beyond the reach spheres that hold only within them */
+    m4 outside = {0, 0, 0, 0}, far = {0, 0, 0, 0};
+    outside |= ~((qv[0] >= -2.8973) & (qv[0] <= 2.8973));
+    outside |= ~((qv[1] >= -1.7628) & (qv[1] <= 1.7628));
+    outside |= ~((qv[2] >= -2.8973) & (qv[2] <= 2.8973));
+    outside |= ~((qv[3] >= -3.0718) & (qv[3] <= -0.0698));
+    outside |= ~((qv[4] >= -2.8973) & (qv[4] <= 2.8973));
+    outside |= ~((qv[5] >= -0.0175) & (qv[5] <= 3.7525));
+    outside |= ~((qv[6] >= -2.8973) & (qv[6] <= 2.8973));
+    (void)outside;
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -2071,7 +2077,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        (void)near;
+        const m4 every = {-1, -1, -1, -1};
+        (void)near; (void)every;
+        if (skv_any_(outside)) {
+            idx = idx_out;
+            start = start_out;
+        }
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
@@ -2678,6 +2689,542 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             hit |= need & hit2(X[27], X[38], 0.010000000000000002);
             if (skv_all_(hit)) goto done;
         }
+        if (skv_any_(outside)) { /* the pairs proved apart within the limits, for the lanes outside */
+            need = outside & ~hit & hit2(X[43], X[45], 0.09288688510826397);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[45], 0.06138735983945731);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[8], 0.027224999999999992);
+                    hit |= near & hit2(X[0], X[9], 0.027224999999999992);
+                    hit |= near & hit2(X[0], X[10], 0.0256);
+                    hit |= near & hit2(X[0], X[11], 0.024025);
+                }
+                near = need & hit2(X[1], X[45], 0.051876770768007945);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[8], 0.021025000000000005);
+                    hit |= near & hit2(X[1], X[9], 0.021025000000000005);
+                    hit |= near & hit2(X[1], X[10], 0.019600000000000003);
+                    hit |= near & hit2(X[1], X[11], 0.018225);
+                }
+                near = need & hit2(X[2], X[45], 0.054179418035870286);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[8], 0.0225);
+                    hit |= near & hit2(X[2], X[9], 0.0225);
+                    hit |= near & hit2(X[2], X[10], 0.021025000000000005);
+                    hit |= near & hit2(X[2], X[11], 0.019600000000000003);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[43], X[46], 0.09163284216108111);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[46], 0.06036868639719121);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[12], 0.024025);
+                    hit |= near & hit2(X[0], X[13], 0.024025);
+                    hit |= near & hit2(X[0], X[14], 0.024025);
+                    hit |= near & hit2(X[0], X[15], 0.024025);
+                    hit |= near & hit2(X[0], X[16], 0.024025);
+                    hit |= near & hit2(X[0], X[17], 0.024025);
+                }
+                near = need & hit2(X[1], X[46], 0.05094067041045686);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[12], 0.018225);
+                    hit |= near & hit2(X[1], X[13], 0.018225);
+                    hit |= near & hit2(X[1], X[14], 0.018225);
+                    hit |= near & hit2(X[1], X[15], 0.018225);
+                    hit |= near & hit2(X[1], X[16], 0.018225);
+                    hit |= near & hit2(X[1], X[17], 0.018225);
+                }
+                near = need & hit2(X[2], X[46], 0.05322267440714044);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[12], 0.019600000000000003);
+                    hit |= near & hit2(X[2], X[13], 0.019600000000000003);
+                    hit |= near & hit2(X[2], X[14], 0.019600000000000003);
+                    hit |= near & hit2(X[2], X[15], 0.019600000000000003);
+                    hit |= near & hit2(X[2], X[16], 0.019600000000000003);
+                    hit |= near & hit2(X[2], X[17], 0.019600000000000003);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[43], X[47], 0.08527520569198171);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[47], 0.055229895601884);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[18], 0.0256);
+                    hit |= near & hit2(X[0], X[19], 0.0256);
+                    hit |= near & hit2(X[0], X[20], 0.024025);
+                    hit |= near & hit2(X[0], X[21], 0.024025);
+                }
+                near = need & hit2(X[1], X[47], 0.04622947896414851);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[18], 0.019600000000000003);
+                    hit |= near & hit2(X[1], X[19], 0.019600000000000003);
+                    hit |= near & hit2(X[1], X[20], 0.018225);
+                }
+                near = need & hit2(X[2], X[47], 0.048404583123582375);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[18], 0.021025000000000005);
+                    hit |= near & hit2(X[2], X[19], 0.021025000000000005);
+                    hit |= near & hit2(X[2], X[20], 0.019600000000000003);
+                    hit |= near & hit2(X[2], X[21], 0.019600000000000003);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[44], X[46], 0.10608075034412862);
+            if (skv_any_(need)) {
+                near = need & hit2(X[3], X[46], 0.05322267440714044);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[3], X[12], 0.019600000000000003);
+                    hit |= near & hit2(X[3], X[13], 0.019600000000000003);
+                    hit |= near & hit2(X[3], X[14], 0.019600000000000003);
+                    hit |= near & hit2(X[3], X[15], 0.019600000000000003);
+                    hit |= near & hit2(X[3], X[16], 0.019600000000000003);
+                    hit |= near & hit2(X[3], X[17], 0.019600000000000003);
+                }
+                near = need & hit2(X[4], X[46], 0.05322267440714044);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[4], X[12], 0.019600000000000003);
+                    hit |= near & hit2(X[4], X[13], 0.019600000000000003);
+                    hit |= near & hit2(X[4], X[14], 0.019600000000000003);
+                    hit |= near & hit2(X[4], X[15], 0.019600000000000003);
+                    hit |= near & hit2(X[4], X[16], 0.019600000000000003);
+                    hit |= near & hit2(X[4], X[17], 0.019600000000000003);
+                }
+                near = need & hit2(X[5], X[46], 0.05322267440714044);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[5], X[12], 0.019600000000000003);
+                    hit |= near & hit2(X[5], X[13], 0.019600000000000003);
+                    hit |= near & hit2(X[5], X[14], 0.019600000000000003);
+                    hit |= near & hit2(X[5], X[15], 0.019600000000000003);
+                    hit |= near & hit2(X[5], X[16], 0.019600000000000003);
+                    hit |= near & hit2(X[5], X[17], 0.019600000000000003);
+                }
+                near = need & hit2(X[6], X[46], 0.05322267440714044);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[6], X[12], 0.019600000000000003);
+                    hit |= near & hit2(X[6], X[13], 0.019600000000000003);
+                    hit |= near & hit2(X[6], X[14], 0.019600000000000003);
+                    hit |= near & hit2(X[6], X[15], 0.019600000000000003);
+                    hit |= near & hit2(X[6], X[16], 0.019600000000000003);
+                    hit |= near & hit2(X[6], X[17], 0.019600000000000003);
+                }
+                near = need & hit2(X[7], X[46], 0.05094067041045686);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[7], X[12], 0.018225);
+                    hit |= near & hit2(X[7], X[13], 0.018225);
+                    hit |= near & hit2(X[7], X[14], 0.018225);
+                    hit |= near & hit2(X[7], X[15], 0.018225);
+                    hit |= near & hit2(X[7], X[16], 0.018225);
+                    hit |= near & hit2(X[7], X[17], 0.018225);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[44], X[47], 0.09923156215282601);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[44], 0.05760000000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[3], 0.021025000000000005);
+                    hit |= near & hit2(X[18], X[4], 0.021025000000000005);
+                    hit |= near & hit2(X[18], X[5], 0.021025000000000005);
+                    hit |= near & hit2(X[18], X[6], 0.021025000000000005);
+                    hit |= near & hit2(X[18], X[7], 0.019600000000000003);
+                }
+                near = need & hit2(X[19], X[44], 0.05760000000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[19], X[3], 0.021025000000000005);
+                    hit |= near & hit2(X[19], X[4], 0.021025000000000005);
+                    hit |= near & hit2(X[19], X[5], 0.021025000000000005);
+                    hit |= near & hit2(X[19], X[6], 0.021025000000000005);
+                    hit |= near & hit2(X[19], X[7], 0.019600000000000003);
+                }
+                near = need & hit2(X[20], X[44], 0.05522500000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[3], 0.019600000000000003);
+                    hit |= near & hit2(X[20], X[4], 0.019600000000000003);
+                    hit |= near & hit2(X[20], X[5], 0.019600000000000003);
+                    hit |= near & hit2(X[20], X[6], 0.019600000000000003);
+                    hit |= near & hit2(X[20], X[7], 0.018225);
+                }
+                near = need & hit2(X[21], X[44], 0.05522500000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[21], X[3], 0.019600000000000003);
+                    hit |= near & hit2(X[21], X[4], 0.019600000000000003);
+                    hit |= near & hit2(X[21], X[5], 0.019600000000000003);
+                    hit |= near & hit2(X[21], X[6], 0.019600000000000003);
+                    hit |= near & hit2(X[21], X[7], 0.018225);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[45], X[47], 0.09167278705494286);
+            if (skv_any_(need)) {
+                near = need & hit2(X[8], X[47], 0.048404583123582375);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[8], X[18], 0.021025000000000005);
+                    hit |= near & hit2(X[8], X[19], 0.021025000000000005);
+                    hit |= near & hit2(X[8], X[20], 0.019600000000000003);
+                    hit |= near & hit2(X[8], X[21], 0.019600000000000003);
+                }
+                near = need & hit2(X[9], X[47], 0.048404583123582375);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[9], X[18], 0.021025000000000005);
+                    hit |= near & hit2(X[9], X[19], 0.021025000000000005);
+                    hit |= near & hit2(X[9], X[20], 0.019600000000000003);
+                    hit |= near & hit2(X[9], X[21], 0.019600000000000003);
+                }
+                near = need & hit2(X[10], X[47], 0.04622947896414851);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[10], X[18], 0.019600000000000003);
+                    hit |= near & hit2(X[10], X[19], 0.019600000000000003);
+                    hit |= near & hit2(X[10], X[20], 0.018225);
+                    hit |= near & hit2(X[10], X[21], 0.018225);
+                }
+                near = need & hit2(X[11], X[47], 0.04410437480471463);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[11], X[18], 0.018225);
+                    hit |= near & hit2(X[11], X[19], 0.018225);
+                    hit |= near & hit2(X[11], X[20], 0.016900000000000002);
+                    hit |= near & hit2(X[11], X[21], 0.016900000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[45], X[48], 0.13056317513449023);
+            if (skv_any_(need)) {
+                near = need & hit2(X[8], X[48], 0.07760154584147534);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[8], X[22], 0.015625);
+                    hit |= near & hit2(X[8], X[23], 0.015625);
+                    hit |= near & hit2(X[8], X[25], 0.018225);
+                    hit |= near & hit2(X[8], X[26], 0.019600000000000003);
+                    hit |= near & hit2(X[8], X[27], 0.018225);
+                }
+                near = need & hit2(X[9], X[48], 0.07760154584147534);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[9], X[22], 0.015625);
+                    hit |= near & hit2(X[9], X[23], 0.015625);
+                    hit |= near & hit2(X[9], X[25], 0.018225);
+                    hit |= near & hit2(X[9], X[26], 0.019600000000000003);
+                    hit |= near & hit2(X[9], X[27], 0.018225);
+                }
+                near = need & hit2(X[10], X[48], 0.07484084043993924);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[10], X[22], 0.014400000000000003);
+                    hit |= near & hit2(X[10], X[24], 0.014400000000000003);
+                    hit |= near & hit2(X[10], X[25], 0.016900000000000002);
+                    hit |= near & hit2(X[10], X[26], 0.018225);
+                    hit |= near & hit2(X[10], X[27], 0.016900000000000002);
+                }
+                near = need & hit2(X[11], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[11], X[23], 0.013225);
+                    hit |= near & hit2(X[11], X[24], 0.013225);
+                    hit |= near & hit2(X[11], X[25], 0.015625);
+                    hit |= near & hit2(X[11], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[11], X[27], 0.015625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[45], X[49], 0.0717633287616253);
+            if (skv_any_(need)) {
+                near = need & hit2(X[28], X[45], 0.0496241235001456);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[28], X[8], 0.019600000000000003);
+                    hit |= near & hit2(X[28], X[9], 0.019600000000000003);
+                    hit |= near & hit2(X[28], X[10], 0.018225);
+                    hit |= near & hit2(X[28], X[11], 0.016900000000000002);
+                }
+                hit |= need & hit2(X[10], X[29], 0.016900000000000002);
+                hit |= need & hit2(X[11], X[29], 0.015625);
+                hit |= need & hit2(X[11], X[30], 0.015625);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[46], X[48], 0.12907560820056235);
+            if (skv_any_(need)) {
+                near = need & hit2(X[12], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[12], X[22], 0.013225);
+                    hit |= near & hit2(X[12], X[23], 0.013225);
+                    hit |= near & hit2(X[12], X[24], 0.013225);
+                    hit |= near & hit2(X[12], X[25], 0.015625);
+                    hit |= near & hit2(X[12], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[12], X[27], 0.015625);
+                }
+                near = need & hit2(X[13], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[13], X[22], 0.013225);
+                    hit |= near & hit2(X[13], X[23], 0.013225);
+                    hit |= near & hit2(X[13], X[24], 0.013225);
+                    hit |= near & hit2(X[13], X[25], 0.015625);
+                    hit |= near & hit2(X[13], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[13], X[27], 0.015625);
+                }
+                near = need & hit2(X[14], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[14], X[22], 0.013225);
+                    hit |= near & hit2(X[14], X[23], 0.013225);
+                    hit |= near & hit2(X[14], X[24], 0.013225);
+                    hit |= near & hit2(X[14], X[25], 0.015625);
+                    hit |= near & hit2(X[14], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[14], X[27], 0.015625);
+                }
+                near = need & hit2(X[15], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[15], X[22], 0.013225);
+                    hit |= near & hit2(X[15], X[23], 0.013225);
+                    hit |= near & hit2(X[15], X[24], 0.013225);
+                    hit |= near & hit2(X[15], X[25], 0.015625);
+                    hit |= near & hit2(X[15], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[15], X[27], 0.015625);
+                }
+                near = need & hit2(X[16], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[16], X[22], 0.013225);
+                    hit |= near & hit2(X[16], X[23], 0.013225);
+                    hit |= near & hit2(X[16], X[24], 0.013225);
+                    hit |= near & hit2(X[16], X[25], 0.015625);
+                    hit |= near & hit2(X[16], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[16], X[27], 0.015625);
+                }
+                near = need & hit2(X[17], X[48], 0.07213013503840311);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[17], X[22], 0.013225);
+                    hit |= near & hit2(X[17], X[23], 0.013225);
+                    hit |= near & hit2(X[17], X[24], 0.013225);
+                    hit |= near & hit2(X[17], X[25], 0.015625);
+                    hit |= near & hit2(X[17], X[26], 0.016900000000000002);
+                    hit |= near & hit2(X[17], X[27], 0.015625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[46], X[49], 0.07066157830477109);
+            if (skv_any_(need)) {
+                near = need & hit2(X[28], X[46], 0.04870866641377328);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[28], X[12], 0.016900000000000002);
+                    hit |= near & hit2(X[28], X[13], 0.016900000000000002);
+                    hit |= near & hit2(X[28], X[14], 0.016900000000000002);
+                    hit |= near & hit2(X[28], X[15], 0.016900000000000002);
+                    hit |= near & hit2(X[28], X[16], 0.016900000000000002);
+                    hit |= near & hit2(X[28], X[17], 0.016900000000000002);
+                }
+                near = need & hit2(X[29], X[46], 0.046526662417089686);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[29], X[12], 0.015625);
+                    hit |= near & hit2(X[29], X[13], 0.015625);
+                    hit |= near & hit2(X[29], X[14], 0.015625);
+                    hit |= near & hit2(X[29], X[15], 0.015625);
+                    hit |= near & hit2(X[29], X[16], 0.015625);
+                    hit |= near & hit2(X[29], X[17], 0.015625);
+                }
+                near = need & hit2(X[30], X[46], 0.046526662417089686);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[30], X[12], 0.015625);
+                    hit |= near & hit2(X[30], X[13], 0.015625);
+                    hit |= near & hit2(X[30], X[14], 0.015625);
+                    hit |= near & hit2(X[30], X[15], 0.015625);
+                    hit |= near & hit2(X[30], X[16], 0.015625);
+                    hit |= near & hit2(X[30], X[17], 0.015625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[46], X[50], 0.06172718974982096);
+            if (skv_any_(need)) {
+                near = need & hit2(X[31], X[46], 0.044394658420406095);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[31], X[12], 0.0144);
+                    hit |= near & hit2(X[31], X[13], 0.0144);
+                    hit |= near & hit2(X[31], X[14], 0.0144);
+                    hit |= near & hit2(X[31], X[15], 0.0144);
+                    hit |= near & hit2(X[31], X[16], 0.0144);
+                    hit |= near & hit2(X[31], X[17], 0.0144);
+                }
+                near = need & hit2(X[32], X[46], 0.044394658420406095);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[32], X[12], 0.0144);
+                    hit |= near & hit2(X[32], X[13], 0.0144);
+                    hit |= near & hit2(X[32], X[14], 0.0144);
+                    hit |= near & hit2(X[32], X[15], 0.0144);
+                    hit |= near & hit2(X[32], X[16], 0.0144);
+                    hit |= near & hit2(X[32], X[17], 0.0144);
+                }
+                near = need & hit2(X[33], X[46], 0.03636664243367175);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[33], X[12], 0.010000000000000002);
+                    hit |= near & hit2(X[33], X[13], 0.010000000000000002);
+                    hit |= near & hit2(X[33], X[14], 0.010000000000000002);
+                    hit |= near & hit2(X[33], X[15], 0.010000000000000002);
+                    hit |= near & hit2(X[33], X[16], 0.010000000000000002);
+                    hit |= near & hit2(X[33], X[17], 0.010000000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[47], X[49], 0.06509257859239052);
+            if (skv_any_(need)) {
+                near = need & hit2(X[28], X[47], 0.04410437480471463);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[28], X[18], 0.018225);
+                    hit |= near & hit2(X[28], X[19], 0.018225);
+                    hit |= near & hit2(X[28], X[20], 0.016900000000000002);
+                    hit |= near & hit2(X[28], X[21], 0.016900000000000002);
+                }
+                near = need & hit2(X[29], X[47], 0.04202927064528075);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[29], X[18], 0.016900000000000002);
+                    hit |= near & hit2(X[29], X[19], 0.016900000000000002);
+                    hit |= near & hit2(X[29], X[20], 0.015625);
+                    hit |= near & hit2(X[29], X[21], 0.015625);
+                }
+                near = need & hit2(X[30], X[47], 0.04202927064528075);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[30], X[18], 0.016900000000000002);
+                    hit |= near & hit2(X[30], X[19], 0.016900000000000002);
+                    hit |= near & hit2(X[30], X[20], 0.015625);
+                    hit |= near & hit2(X[30], X[21], 0.015625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[47], X[50], 0.056529621742869025);
+            if (skv_any_(need)) {
+                near = need & hit2(X[31], X[47], 0.04000416648584688);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[31], X[18], 0.015625);
+                    hit |= near & hit2(X[31], X[19], 0.015625);
+                    hit |= near & hit2(X[31], X[20], 0.0144);
+                    hit |= near & hit2(X[31], X[21], 0.0144);
+                }
+                near = need & hit2(X[32], X[47], 0.04000416648584688);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[32], X[18], 0.015625);
+                    hit |= near & hit2(X[32], X[19], 0.015625);
+                    hit |= near & hit2(X[32], X[20], 0.0144);
+                    hit |= near & hit2(X[32], X[21], 0.0144);
+                }
+                near = need & hit2(X[33], X[47], 0.03240374984811138);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[33], X[18], 0.011025000000000002);
+                    hit |= near & hit2(X[33], X[19], 0.011025000000000002);
+                    hit |= near & hit2(X[33], X[20], 0.010000000000000002);
+                    hit |= near & hit2(X[33], X[21], 0.010000000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[47], X[51], 0.06355065956653608);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[51], 0.03135808627697378);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[34], 0.010816000000000003);
+                    hit |= near & hit2(X[18], X[35], 0.010816000000000003);
+                    hit |= near & hit2(X[18], X[36], 0.010816000000000003);
+                    hit |= near & hit2(X[18], X[37], 0.010816000000000003);
+                    hit |= near & hit2(X[18], X[38], 0.012100000000000003);
+                    hit |= near & hit2(X[18], X[39], 0.009025);
+                    hit |= near & hit2(X[18], X[40], 0.009025);
+                    hit |= near & hit2(X[18], X[41], 0.008100000000000001);
+                    hit |= near & hit2(X[18], X[42], 0.008100000000000001);
+                }
+                near = need & hit2(X[19], X[51], 0.03135808627697378);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[19], X[34], 0.010816000000000003);
+                    hit |= near & hit2(X[19], X[35], 0.010816000000000003);
+                    hit |= near & hit2(X[19], X[36], 0.010816000000000003);
+                    hit |= near & hit2(X[19], X[37], 0.010816000000000003);
+                    hit |= near & hit2(X[19], X[38], 0.012100000000000003);
+                    hit |= near & hit2(X[19], X[39], 0.009025);
+                    hit |= near & hit2(X[19], X[40], 0.009025);
+                    hit |= near & hit2(X[19], X[41], 0.008100000000000001);
+                    hit |= near & hit2(X[19], X[42], 0.008100000000000001);
+                }
+                near = need & hit2(X[20], X[51], 0.029612264821350036);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[34], 0.009801);
+                    hit |= near & hit2(X[20], X[35], 0.009801);
+                    hit |= near & hit2(X[20], X[36], 0.009801);
+                    hit |= near & hit2(X[20], X[37], 0.009801);
+                    hit |= near & hit2(X[20], X[38], 0.011025000000000002);
+                    hit |= near & hit2(X[20], X[39], 0.0081);
+                    hit |= near & hit2(X[20], X[40], 0.0081);
+                    hit |= near & hit2(X[20], X[41], 0.007225000000000001);
+                    hit |= near & hit2(X[20], X[42], 0.007225000000000001);
+                }
+                near = need & hit2(X[21], X[51], 0.029612264821350036);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[21], X[34], 0.009801);
+                    hit |= near & hit2(X[21], X[35], 0.009801);
+                    hit |= near & hit2(X[21], X[36], 0.009801);
+                    hit |= near & hit2(X[21], X[37], 0.009801);
+                    hit |= near & hit2(X[21], X[38], 0.011025000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[48], X[51], 0.0965050911425553);
+            if (skv_any_(need)) {
+                near = need & hit2(X[22], X[51], 0.024674800454478816);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[22], X[34], 0.007056000000000001);
+                    hit |= near & hit2(X[22], X[35], 0.007056000000000001);
+                    hit |= near & hit2(X[22], X[36], 0.007056000000000001);
+                    hit |= near & hit2(X[22], X[37], 0.007056000000000001);
+                    hit |= near & hit2(X[22], X[38], 0.0081);
+                    hit |= near & hit2(X[22], X[39], 0.0056250000000000015);
+                    hit |= near & hit2(X[22], X[40], 0.0056250000000000015);
+                    hit |= near & hit2(X[22], X[41], 0.004900000000000001);
+                    hit |= near & hit2(X[22], X[42], 0.004900000000000001);
+                }
+                near = need & hit2(X[23], X[51], 0.024674800454478816);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[23], X[35], 0.007056000000000001);
+                    hit |= near & hit2(X[23], X[36], 0.007056000000000001);
+                    hit |= near & hit2(X[23], X[38], 0.0081);
+                    hit |= near & hit2(X[23], X[39], 0.0056250000000000015);
+                    hit |= near & hit2(X[23], X[40], 0.0056250000000000015);
+                    hit |= near & hit2(X[23], X[41], 0.004900000000000001);
+                    hit |= near & hit2(X[23], X[42], 0.004900000000000001);
+                }
+                near = need & hit2(X[24], X[51], 0.024674800454478816);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[24], X[35], 0.007056000000000001);
+                    hit |= near & hit2(X[24], X[36], 0.007056000000000001);
+                    hit |= near & hit2(X[24], X[38], 0.0081);
+                    hit |= near & hit2(X[24], X[39], 0.0056250000000000015);
+                    hit |= near & hit2(X[24], X[40], 0.0056250000000000015);
+                    hit |= near & hit2(X[24], X[41], 0.004900000000000001);
+                    hit |= near & hit2(X[24], X[42], 0.004900000000000001);
+                }
+                near = need & hit2(X[25], X[51], 0.027916443365726296);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[25], X[35], 0.008836);
+                    hit |= near & hit2(X[25], X[36], 0.008836);
+                    hit |= near & hit2(X[25], X[38], 0.010000000000000002);
+                    hit |= near & hit2(X[25], X[39], 0.007224999999999999);
+                    hit |= near & hit2(X[25], X[40], 0.007224999999999999);
+                    hit |= near & hit2(X[25], X[41], 0.0064);
+                    hit |= near & hit2(X[25], X[42], 0.0064);
+                }
+                near = need & hit2(X[26], X[51], 0.029612264821350036);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[26], X[34], 0.009801);
+                    hit |= near & hit2(X[26], X[35], 0.009801);
+                    hit |= near & hit2(X[26], X[36], 0.009801);
+                    hit |= near & hit2(X[26], X[37], 0.009801);
+                    hit |= near & hit2(X[26], X[38], 0.011025000000000002);
+                    hit |= near & hit2(X[26], X[39], 0.0081);
+                    hit |= near & hit2(X[26], X[40], 0.0081);
+                    hit |= near & hit2(X[26], X[41], 0.007225000000000001);
+                    hit |= near & hit2(X[26], X[42], 0.007225000000000001);
+                }
+                near = need & hit2(X[27], X[51], 0.027916443365726296);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[27], X[34], 0.008836);
+                    hit |= near & hit2(X[27], X[35], 0.008836);
+                    hit |= near & hit2(X[27], X[36], 0.008836);
+                    hit |= near & hit2(X[27], X[37], 0.008836);
+                    hit |= near & hit2(X[27], X[39], 0.007224999999999999);
+                    hit |= near & hit2(X[27], X[40], 0.007224999999999999);
+                    hit |= near & hit2(X[27], X[41], 0.0064);
+                    hit |= near & hit2(X[27], X[42], 0.0064);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+        }
     done:
         for (int l = 0; l < 4; ++l) out[l] = hit[l] != 0;
         return;
@@ -2686,7 +3233,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, outside[l] != 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -2699,12 +3246,15 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    int small[16 * N_LINKS], start[N_LINKS + 1];
-    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    int small[2 * 16 * N_LINKS], start[N_LINKS + 1], start_out[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * 2 * (size_t)ns * N_LINKS);
     if (idx) { /* no memory for the lists: one configuration at a time below */
-        reachable(S, ns, idx, start);
+        int *idx_out = idx + (ns <= 16 ? 16 : ns) * N_LINKS;
+        reachable(S, ns, idx, start, 0);
+        idx_out = idx;
+        memcpy(start_out, start, sizeof start);
         for (; k + 4 <= N; k += 4)
-            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, idx_out, start_out, out + k);
         if (idx != small) free(idx);
     }
 #endif

@@ -1197,16 +1197,19 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[31][1] = -0.01 * T[4][5] + T[6][7];
     X[31][2] = -0.01 * T[4][9] + T[6][11];
 }
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none), and whether it
+   holds for every q (no prismatic stroke in it): the batch tests a link only against the obstacle
+   spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.038189999999999995 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
 static const double reach_radius[N_LINKS] = { 0.08550000000008652, 0.2813738836341765, 0.9057267153788726, 1.3322353441423185, 1.5335410000015346, 1.6492410000016504, 1.6907310000016922, 1.742741000001744 };
 
-/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
-   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
-   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
-static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
+/* the obstacle spheres each link can meet, link by link: idx[start[l]] to idx[start[l + 1]] - 1 for
+   link l (an obstacle outside a link's reach sphere cannot touch it; an obstacle on the edge is
+   kept); with outside, for configurations outside the joint limits: a link whose reach sphere
+   holds only within them takes every obstacle. idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1], int outside)
 {
+    (void)outside;
     int t = 0;
     for (int l = 0; l < N_LINKS; ++l) {
         start[l] = t;
@@ -1220,23 +1223,26 @@ static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
     start[N_LINKS] = t;
 }
 
-/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S, within the
+   joint limits and (idx_out, start_out) outside them */
 static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, const int *idx, const int *start, unsigned char *out)
+                          int nb, const int *idx, const int *start, const int *idx_out, const int *start_out,
+                          unsigned char *out)
 {
-    (void)idx; (void)start;
+    (void)idx; (void)start; (void)idx_out; (void)start_out;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
-    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
-       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
-    m4 far = {0, 0, 0, 0};
-    far |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
-    far |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
-    far |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
-    far |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
-    far |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
-    far |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
+    /* lanes outside the joint limits (or NaN) also test the pairs proved apart within them, and
+       the obstacles beyond the reach spheres that hold only within them */
+    m4 outside = {0, 0, 0, 0}, far = {0, 0, 0, 0};
+    outside |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
+    outside |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
+    outside |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
+    outside |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
+    outside |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
+    outside |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
+    (void)outside;
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1246,7 +1252,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        (void)near;
+        const m4 every = {-1, -1, -1, -1};
+        (void)near; (void)every;
+        if (skv_any_(outside)) {
+            idx = idx_out;
+            start = start_out;
+        }
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
@@ -1498,6 +1509,143 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             hit |= need & hit2(X[18], X[23], 0.01151329);
             if (skv_all_(hit)) goto done;
         }
+        if (skv_any_(outside)) { /* the pairs proved apart within the limits, for the lanes outside */
+            need = outside & ~hit & hit2(X[24], X[26], 0.2366822500000001);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[26], 0.2366822500000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[3], 0.03258025);
+                    hit |= near & hit2(X[0], X[4], 0.027639062500000002);
+                    hit |= near & hit2(X[0], X[5], 0.027639062500000002);
+                    hit |= near & hit2(X[0], X[6], 0.027639062500000002);
+                    hit |= near & hit2(X[0], X[7], 0.027639062500000002);
+                    hit |= near & hit2(X[0], X[8], 0.027639062500000002);
+                    hit |= near & hit2(X[0], X[9], 0.030888062500000008);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[24], X[27], 0.1803705147002501);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[0], X[10], 0.030888062500000008);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[27], 0.2341710415044507);
+            if (skv_any_(need)) {
+                near = need & hit2(X[1], X[27], 0.1885300742002501);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[10], 0.0343175625);
+                    hit |= near & hit2(X[1], X[11], 0.0256);
+                    hit |= near & hit2(X[1], X[12], 0.0256);
+                    hit |= near & hit2(X[1], X[13], 0.0256);
+                    hit |= near & hit2(X[1], X[14], 0.0256);
+                    hit |= near & hit2(X[1], X[15], 0.0256);
+                    hit |= near & hit2(X[1], X[16], 0.0256);
+                }
+                near = need & hit2(X[2], X[27], 0.1885300742002501);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[10], 0.0343175625);
+                    hit |= near & hit2(X[2], X[11], 0.0256);
+                    hit |= near & hit2(X[2], X[12], 0.0256);
+                    hit |= near & hit2(X[2], X[13], 0.0256);
+                    hit |= near & hit2(X[2], X[14], 0.0256);
+                    hit |= near & hit2(X[2], X[15], 0.0256);
+                    hit |= near & hit2(X[2], X[16], 0.0256);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[28], 0.2541004522182507);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[26], 0.21068100000000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[4], 0.019251562500000003);
+                    hit |= near & hit2(X[18], X[5], 0.019251562500000003);
+                    hit |= near & hit2(X[18], X[6], 0.019251562500000003);
+                    hit |= near & hit2(X[18], X[7], 0.019251562500000003);
+                    hit |= near & hit2(X[18], X[8], 0.019251562500000003);
+                    hit |= near & hit2(X[18], X[9], 0.0219780625);
+                }
+                near = need & hit2(X[19], X[26], 0.21068100000000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[19], X[5], 0.019251562500000003);
+                    hit |= near & hit2(X[19], X[6], 0.019251562500000003);
+                    hit |= near & hit2(X[19], X[7], 0.019251562500000003);
+                    hit |= near & hit2(X[19], X[8], 0.019251562500000003);
+                    hit |= near & hit2(X[19], X[9], 0.0219780625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[29], 0.24661404300625012);
+            if (skv_any_(need)) {
+                near = need & hit2(X[20], X[26], 0.21068100000000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[6], 0.019251562500000003);
+                    hit |= near & hit2(X[20], X[7], 0.019251562500000003);
+                    hit |= near & hit2(X[20], X[8], 0.019251562500000003);
+                    hit |= near & hit2(X[20], X[9], 0.0219780625);
+                }
+                near = need & hit2(X[21], X[26], 0.21068100000000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[21], X[7], 0.019251562500000003);
+                    hit |= near & hit2(X[21], X[8], 0.019251562500000003);
+                    hit |= near & hit2(X[21], X[9], 0.0219780625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[27], X[29], 0.18905364880900008);
+            if (skv_any_(need)) {
+                near = need & hit2(X[20], X[27], 0.15776823720025004);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[10], 0.0219780625);
+                    hit |= near & hit2(X[20], X[11], 0.015129);
+                    hit |= near & hit2(X[20], X[12], 0.015129);
+                    hit |= near & hit2(X[20], X[13], 0.015129);
+                    hit |= near & hit2(X[20], X[14], 0.015129);
+                    hit |= near & hit2(X[20], X[15], 0.015129);
+                    hit |= near & hit2(X[20], X[16], 0.015129);
+                }
+                near = need & hit2(X[21], X[27], 0.15776823720025004);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[21], X[10], 0.0219780625);
+                    hit |= near & hit2(X[21], X[11], 0.015129);
+                    hit |= near & hit2(X[21], X[12], 0.015129);
+                    hit |= near & hit2(X[21], X[13], 0.015129);
+                    hit |= near & hit2(X[21], X[14], 0.015129);
+                    hit |= near & hit2(X[21], X[15], 0.015129);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[27], X[30], 0.15776823720025004);
+            if (skv_any_(need)) {
+                near = need & hit2(X[22], X[27], 0.15776823720025004);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[22], X[10], 0.0219780625);
+                    hit |= near & hit2(X[22], X[11], 0.015129);
+                    hit |= near & hit2(X[22], X[12], 0.015129);
+                    hit |= near & hit2(X[22], X[13], 0.015129);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[27], X[31], 0.15093263850025007);
+            if (skv_any_(need)) {
+                near = need & hit2(X[23], X[27], 0.15093263850025007);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[23], X[10], 0.019474202500000003);
+                    hit |= near & hit2(X[23], X[11], 0.013064490000000003);
+                    hit |= near & hit2(X[23], X[12], 0.013064490000000003);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[28], X[30], 0.02594798256825064);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[18], X[22], 0.013456000000000001);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[28], X[31], 0.023220814883250642);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[19], X[23], 0.01151329);
+                if (skv_all_(hit)) goto done;
+            }
+        }
     done:
         for (int l = 0; l < 4; ++l) out[l] = hit[l] != 0;
         return;
@@ -1506,7 +1654,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, outside[l] != 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1519,12 +1667,15 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    int small[16 * N_LINKS], start[N_LINKS + 1];
-    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    int small[2 * 16 * N_LINKS], start[N_LINKS + 1], start_out[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * 2 * (size_t)ns * N_LINKS);
     if (idx) { /* no memory for the lists: one configuration at a time below */
-        reachable(S, ns, idx, start);
+        int *idx_out = idx + (ns <= 16 ? 16 : ns) * N_LINKS;
+        reachable(S, ns, idx, start, 0);
+        idx_out = idx;
+        memcpy(start_out, start, sizeof start);
         for (; k + 4 <= N; k += 4)
-            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, idx_out, start_out, out + k);
         if (idx != small) free(idx);
     }
 #endif

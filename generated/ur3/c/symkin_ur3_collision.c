@@ -1109,16 +1109,19 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[26][1] = -0.01 * T[4][5] + T[6][7];
     X[26][2] = -0.01 * T[4][9] + T[6][11];
 }
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none), and whether it
+   holds for every q (no prismatic stroke in it): the batch tests a link only against the obstacle
+   spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.04557 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
 static const double reach_radius[N_LINKS] = { 0.05400000000005501, 0.24122807615094333, 0.5045856760643677, 0.6420112334945919, 0.7611500000007622, 0.8465000000008476, 0.8833550000008844, 0.9324000000009336 };
 
-/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
-   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
-   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
-static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
+/* the obstacle spheres each link can meet, link by link: idx[start[l]] to idx[start[l + 1]] - 1 for
+   link l (an obstacle outside a link's reach sphere cannot touch it; an obstacle on the edge is
+   kept); with outside, for configurations outside the joint limits: a link whose reach sphere
+   holds only within them takes every obstacle. idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1], int outside)
 {
+    (void)outside;
     int t = 0;
     for (int l = 0; l < N_LINKS; ++l) {
         start[l] = t;
@@ -1132,23 +1135,26 @@ static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
     start[N_LINKS] = t;
 }
 
-/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S, within the
+   joint limits and (idx_out, start_out) outside them */
 static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, const int *idx, const int *start, unsigned char *out)
+                          int nb, const int *idx, const int *start, const int *idx_out, const int *start_out,
+                          unsigned char *out)
 {
-    (void)idx; (void)start;
+    (void)idx; (void)start; (void)idx_out; (void)start_out;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
-    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
-       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
-    m4 far = {0, 0, 0, 0};
-    far |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
-    far |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
-    far |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
-    far |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
-    far |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
-    far |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
+    /* lanes outside the joint limits (or NaN) also test the pairs proved apart within them, and
+       the obstacles beyond the reach spheres that hold only within them */
+    m4 outside = {0, 0, 0, 0}, far = {0, 0, 0, 0};
+    outside |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
+    outside |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
+    outside |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
+    outside |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
+    outside |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
+    outside |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
+    (void)outside;
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1158,7 +1164,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        (void)near;
+        const m4 every = {-1, -1, -1, -1};
+        (void)near; (void)every;
+        if (skv_any_(outside)) {
+            idx = idx_out;
+            start = start_out;
+        }
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
@@ -1404,6 +1415,77 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             hit |= need & hit2(X[14], X[17], 0.0064);
             if (skv_all_(hit)) goto done;
         }
+        if (skv_any_(outside)) { /* the pairs proved apart within the limits, for the lanes outside */
+            need = outside & ~hit & hit2(X[19], X[21], 0.05561343062500003);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[21], 0.055613430625000015);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[3], 0.012995999999999997);
+                    hit |= near & hit2(X[0], X[4], 0.011024999999999998);
+                    hit |= near & hit2(X[0], X[5], 0.011024999999999998);
+                    hit |= near & hit2(X[0], X[6], 0.011024999999999998);
+                    hit |= near & hit2(X[0], X[7], 0.012320999999999997);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[20], X[22], 0.056035766601562516);
+            if (skv_any_(need)) {
+                near = need & hit2(X[1], X[22], 0.0440008308140625);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[8], 0.013688999999999998);
+                    hit |= near & hit2(X[1], X[9], 0.010404000000000002);
+                    hit |= near & hit2(X[1], X[10], 0.010404000000000002);
+                }
+                near = need & hit2(X[2], X[22], 0.0440008308140625);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[8], 0.013688999999999998);
+                    hit |= near & hit2(X[2], X[9], 0.010404000000000002);
+                    hit |= near & hit2(X[2], X[10], 0.010404000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[21], X[23], 0.06386803020156254);
+            if (skv_any_(need)) {
+                near = need & hit2(X[13], X[21], 0.049206330625000023);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[13], X[5], 0.008281);
+                    hit |= near & hit2(X[13], X[6], 0.008281);
+                    hit |= near & hit2(X[13], X[7], 0.009409);
+                }
+                hit |= need & hit2(X[6], X[14], 0.008281);
+                hit |= need & hit2(X[7], X[14], 0.009409);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[22], X[24], 0.047307337506250005);
+            if (skv_any_(need)) {
+                near = need & hit2(X[15], X[22], 0.036010280814062504);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[15], X[8], 0.009409);
+                    hit |= near & hit2(X[15], X[9], 0.006724000000000001);
+                    hit |= near & hit2(X[15], X[10], 0.006724000000000001);
+                    hit |= near & hit2(X[15], X[11], 0.006724000000000001);
+                }
+                near = need & hit2(X[16], X[22], 0.036010280814062504);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[16], X[8], 0.009409);
+                    hit |= near & hit2(X[16], X[9], 0.006724000000000001);
+                    hit |= near & hit2(X[16], X[10], 0.006724000000000001);
+                    hit |= near & hit2(X[16], X[12], 0.006724000000000001);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[23], X[25], 0.012297978264062504);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[13], X[17], 0.0064);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[23], X[26], 0.011003223264062506);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[13], X[18], 0.005476000000000002);
+                hit |= need & hit2(X[14], X[18], 0.005476000000000002);
+                if (skv_all_(hit)) goto done;
+            }
+        }
     done:
         for (int l = 0; l < 4; ++l) out[l] = hit[l] != 0;
         return;
@@ -1412,7 +1494,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, outside[l] != 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1425,12 +1507,15 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    int small[16 * N_LINKS], start[N_LINKS + 1];
-    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    int small[2 * 16 * N_LINKS], start[N_LINKS + 1], start_out[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * 2 * (size_t)ns * N_LINKS);
     if (idx) { /* no memory for the lists: one configuration at a time below */
-        reachable(S, ns, idx, start);
+        int *idx_out = idx + (ns <= 16 ? 16 : ns) * N_LINKS;
+        reachable(S, ns, idx, start, 0);
+        idx_out = idx;
+        memcpy(start_out, start, sizeof start);
         for (; k + 4 <= N; k += 4)
-            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, idx_out, start_out, out + k);
         if (idx != small) free(idx);
     }
 #endif

@@ -1165,16 +1165,19 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[29][1] = -0.01 * T[4][5] + T[6][7];
     X[29][2] = -0.01 * T[4][9] + T[6][11];
 }
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none), and whether it
+   holds for every q (no prismatic stroke in it): the batch tests a link only against the obstacle
+   spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { 0.0, 0.0, 0.0267477 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
 static const double reach_radius[N_LINKS] = { 0.06750000000006852, 0.19981922300404037, 0.6288721489441376, 0.9274290940838854, 1.0625590000010638, 1.1572090000011583, 1.1942440000011953, 1.2424590000012437 };
 
-/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
-   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
-   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
-static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
+/* the obstacle spheres each link can meet, link by link: idx[start[l]] to idx[start[l + 1]] - 1 for
+   link l (an obstacle outside a link's reach sphere cannot touch it; an obstacle on the edge is
+   kept); with outside, for configurations outside the joint limits: a link whose reach sphere
+   holds only within them takes every obstacle. idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1], int outside)
 {
+    (void)outside;
     int t = 0;
     for (int l = 0; l < N_LINKS; ++l) {
         start[l] = t;
@@ -1188,23 +1191,26 @@ static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
     start[N_LINKS] = t;
 }
 
-/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S, within the
+   joint limits and (idx_out, start_out) outside them */
 static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, const int *idx, const int *start, unsigned char *out)
+                          int nb, const int *idx, const int *start, const int *idx_out, const int *start_out,
+                          unsigned char *out)
 {
-    (void)idx; (void)start;
+    (void)idx; (void)start; (void)idx_out; (void)start_out;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
-    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
-       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
-    m4 far = {0, 0, 0, 0};
-    far |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
-    far |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
-    far |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
-    far |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
-    far |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
-    far |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
+    /* lanes outside the joint limits (or NaN) also test the pairs proved apart within them, and
+       the obstacles beyond the reach spheres that hold only within them */
+    m4 outside = {0, 0, 0, 0}, far = {0, 0, 0, 0};
+    outside |= ~((qv[0] >= -6.283185307179586) & (qv[0] <= 6.283185307179586));
+    outside |= ~((qv[1] >= -6.283185307179586) & (qv[1] <= 6.283185307179586));
+    outside |= ~((qv[2] >= -6.283185307179586) & (qv[2] <= 6.283185307179586));
+    outside |= ~((qv[3] >= -6.283185307179586) & (qv[3] <= 6.283185307179586));
+    outside |= ~((qv[4] >= -6.283185307179586) & (qv[4] <= 6.283185307179586));
+    outside |= ~((qv[5] >= -6.283185307179586) & (qv[5] <= 6.283185307179586));
+    (void)outside;
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1214,7 +1220,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        (void)near;
+        const m4 every = {-1, -1, -1, -1};
+        (void)near; (void)every;
+        if (skv_any_(outside)) {
+            idx = idx_out;
+            start = start_out;
+        }
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
@@ -1470,6 +1481,117 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             hit |= need & hit2(X[16], X[21], 0.0075603025);
             if (skv_all_(hit)) goto done;
         }
+        if (skv_any_(outside)) { /* the pairs proved apart within the limits, for the lanes outside */
+            need = outside & ~hit & hit2(X[22], X[24], 0.12602500000000003);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[24], 0.12602500000000003);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[5], 0.0172265625);
+                    hit |= near & hit2(X[0], X[6], 0.0172265625);
+                    hit |= near & hit2(X[0], X[7], 0.0172265625);
+                    hit |= near & hit2(X[0], X[8], 0.019251562499999996);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[22], X[25], 0.09571521095156252);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[0], X[9], 0.019251562499999996);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[23], X[25], 0.12071802802500001);
+            if (skv_any_(need)) {
+                near = need & hit2(X[1], X[25], 0.10041214220156248);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[9], 0.021389062499999997);
+                    hit |= near & hit2(X[1], X[10], 0.015625);
+                    hit |= near & hit2(X[1], X[11], 0.015625);
+                    hit |= near & hit2(X[1], X[12], 0.015625);
+                    hit |= near & hit2(X[1], X[13], 0.015625);
+                }
+                near = need & hit2(X[2], X[25], 0.10041214220156248);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[9], 0.021389062499999997);
+                    hit |= near & hit2(X[2], X[10], 0.015625);
+                    hit |= near & hit2(X[2], X[11], 0.015625);
+                    hit |= near & hit2(X[2], X[12], 0.015625);
+                    hit |= near & hit2(X[2], X[13], 0.015625);
+                    hit |= near & hit2(X[2], X[14], 0.015625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[24], X[26], 0.13287209651406254);
+            if (skv_any_(need)) {
+                near = need & hit2(X[16], X[24], 0.11189025000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[16], X[5], 0.0122655625);
+                    hit |= near & hit2(X[16], X[6], 0.0122655625);
+                    hit |= near & hit2(X[16], X[7], 0.0122655625);
+                    hit |= near & hit2(X[16], X[8], 0.013983062499999999);
+                }
+                near = need & hit2(X[17], X[24], 0.11189025000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[17], X[5], 0.0122655625);
+                    hit |= near & hit2(X[17], X[6], 0.0122655625);
+                    hit |= near & hit2(X[17], X[7], 0.0122655625);
+                    hit |= near & hit2(X[17], X[8], 0.013983062499999999);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[24], X[27], 0.13341578075156252);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[24], 0.11189025000000001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[6], 0.0122655625);
+                    hit |= near & hit2(X[18], X[7], 0.0122655625);
+                    hit |= near & hit2(X[18], X[8], 0.013983062499999999);
+                }
+                hit |= need & hit2(X[7], X[19], 0.0122655625);
+                hit |= need & hit2(X[8], X[19], 0.013983062499999999);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[27], 0.10216972960000002);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[25], 0.08345093220156251);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[9], 0.013983062499999999);
+                    hit |= near & hit2(X[18], X[10], 0.009409);
+                    hit |= near & hit2(X[18], X[11], 0.009409);
+                    hit |= near & hit2(X[18], X[12], 0.009409);
+                    hit |= near & hit2(X[18], X[13], 0.009409);
+                    hit |= near & hit2(X[18], X[14], 0.009409);
+                }
+                near = need & hit2(X[19], X[25], 0.08345093220156251);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[19], X[9], 0.013983062499999999);
+                    hit |= near & hit2(X[19], X[10], 0.009409);
+                    hit |= near & hit2(X[19], X[11], 0.009409);
+                    hit |= near & hit2(X[19], X[12], 0.009409);
+                    hit |= near & hit2(X[19], X[13], 0.009409);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[28], 0.08345093220156251);
+            if (skv_any_(need)) {
+                near = need & hit2(X[20], X[25], 0.08345093220156251);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[9], 0.013983062499999999);
+                    hit |= near & hit2(X[20], X[10], 0.009409);
+                    hit |= near & hit2(X[20], X[11], 0.009409);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[29], 0.07942744432656251);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[9], X[21], 0.012365439999999998);
+                hit |= need & hit2(X[10], X[21], 0.0080910025);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[29], 0.013681103639062504);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[17], X[21], 0.0075603025);
+                if (skv_all_(hit)) goto done;
+            }
+        }
     done:
         for (int l = 0; l < 4; ++l) out[l] = hit[l] != 0;
         return;
@@ -1478,7 +1600,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, outside[l] != 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1491,12 +1613,15 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    int small[16 * N_LINKS], start[N_LINKS + 1];
-    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    int small[2 * 16 * N_LINKS], start[N_LINKS + 1], start_out[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * 2 * (size_t)ns * N_LINKS);
     if (idx) { /* no memory for the lists: one configuration at a time below */
-        reachable(S, ns, idx, start);
+        int *idx_out = idx + (ns <= 16 ? 16 : ns) * N_LINKS;
+        reachable(S, ns, idx, start, 0);
+        idx_out = idx;
+        memcpy(start_out, start, sizeof start);
         for (; k + 4 <= N; k += 4)
-            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, idx_out, start_out, out + k);
         if (idx != small) free(idx);
     }
 #endif
