@@ -174,6 +174,7 @@ def run_table1(
         "backend": backend,
         "rows": rows,
         "lanes": _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None,
+        "rtb_requested": bool(rtb),
         "rtb": _time_rtb(robot, n_problems, seed, tol) if rtb else None,
         "rtb_qp": _compare_qp(robot, solver, Tep, starts, labels, tol, rtb_qp_problems, seed)
         if rtb and backend == "c"
@@ -334,6 +335,8 @@ def format_table1(result: dict[str, Any]) -> str:
             + ("identical solutions" if lanes["same_solutions"] else "SOLUTIONS DIFFER")
         )
     rtb = result.get("rtb")
+    if rtb is None and result.get("rtb_requested"):
+        out.append("roboticstoolbox-python ik_LM: not timed (not installed: pip install 'symkin[compare]')")
     if rtb:
         if "error" in rtb:
             out.append(f"roboticstoolbox-python ik_LM: not timed ({rtb['error']})")
@@ -357,6 +360,6 @@ def format_table1(result: dict[str, Any]) -> str:
         qp = result["rtb_qp"]
         if qp is not None and "error" in qp:
             out.append(f"roboticstoolbox-python IK_QP: not compared ({qp['error']})")
-        elif qp is not None or result.get("rtb") is not None:
+        elif qp is not None or result.get("rtb_requested"):
             out.append(format_rtb_qp(qp))
     return "\n".join(out)
