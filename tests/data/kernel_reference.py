@@ -32,6 +32,7 @@ import numpy as np
 
 import symkin
 from symkin.model.geometry import Box, Capsule, Environment, Geometry, Sphere
+from symkin.runtime.kinematics import KIN_METHODS
 
 HERE = Path(__file__).resolve().parent
 KERNEL = HERE / "kernel_reference.npz"
@@ -179,18 +180,7 @@ def kinematics_outputs(model: Any, backend: str, Q: np.ndarray) -> dict[str, np.
         for name in ("fkine_all", "jacob0_all", "fkine_jacob0_all"):
             calls[name] = getattr(kin, name)
     else:
-        for name in (
-            "fkine",
-            "jacob0",
-            "jacobe",
-            "hessian0",
-            "hessiane",
-            "fkine_jacob0",
-            "jacob0_hessian0",
-            "link_poses",
-            "manipulability",
-            "jacobm",
-        ):
+        for name in (*KIN_METHODS, "manipulability", "jacobm"):
             calls[name] = getattr(kin, name)
         for k in range(model.n):
             for name in ("fkine", "jacob0", "jacobe"):
