@@ -9,7 +9,20 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from symkin.cli import bench, check, collide, dataset, derive, generate, ik, list_frames, plot, reach, servo
+from symkin.cli import (
+    bench,
+    check,
+    collide,
+    dataset,
+    derive,
+    generate,
+    geometry,
+    ik,
+    list_frames,
+    plot,
+    reach,
+    servo,
+)
 from symkin.cli import compile as compile_command
 from symkin.cli import list as list_command
 from symkin.cli import view as view_command
@@ -21,7 +34,7 @@ __all__ = ["build_parser", "main"]
 #: the commands in the order of ``symkin --help``
 COMMANDS = (
     list_command, compile_command, list_frames, generate, check, derive,
-    ik, servo, collide, plot, view_command, bench, reach, dataset,
+    ik, servo, collide, geometry, plot, view_command, bench, reach, dataset,
 )  # fmt: skip
 
 

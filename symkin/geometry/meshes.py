@@ -125,7 +125,8 @@ def check_extent(T: np.ndarray, what: str) -> None:
     extent = float(np.abs(T).max()) if T.size else 0.0
     if not math.isfinite(extent) or extent > MAX_SHAPE_SIZE:
         raise GeometryError(
-            f"{what} reaches {extent:g} m from its origin; collision shapes must stay within {MAX_SHAPE_SIZE:g} m"
+            f"{what} reaches {extent:g} m from its origin; collision shapes must stay within "
+            f"{MAX_SHAPE_SIZE:g} m"
         )
 
 
