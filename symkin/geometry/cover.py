@@ -185,22 +185,25 @@ def _holders(P: np.ndarray, C: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
     cell = np.floor(mid / size).astype(np.int64)
     order = np.lexsort(cell.T[::-1])
     keys, start = np.unique(cell[order], axis=0, return_index=True)
-    bucket = {tuple(k): order[i0:i1] for k, i0, i1 in zip(keys.tolist(), start, [*start[1:], len(order)])}
+    ends = [*start[1:], len(order)]
+    bucket = {tuple(k): order[i0:i1] for k, i0, i1 in zip(keys.tolist(), start, ends)}
     offsets = [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)]
-    out: list[np.ndarray] = []
-    for c, r in zip(C, R):
-        base = np.floor(c / size).astype(np.int64)
-        near = [
-            bucket[key]
-            for o in offsets
-            if (key := (base[0] + o[0], base[1] + o[1], base[2] + o[2])) in bucket
-        ]
-        idx = np.concatenate(near) if near else np.zeros(0, dtype=np.int64)
-        if len(idx):
-            idx = idx[np.sqrt(((mid[idx] - c) ** 2).sum(-1)) - reach[idx] <= r]
-        if len(idx):
-            idx = idx[np.sqrt(((P[idx] - c) ** 2).sum(-1)).max(1) <= r]
-        out.append(np.sort(idx))
+    out: list[np.ndarray] = [np.zeros(0, dtype=np.int64)] * len(C)
+    home = np.floor(C / size).astype(np.int64)
+    for key in {tuple(h) for h in home.tolist()}:  # candidates of one cell share their neighbours
+        mine = np.flatnonzero((home == key).all(1))
+        near = [bucket[n] for o in offsets if (n := (key[0] + o[0], key[1] + o[1], key[2] + o[2])) in bucket]
+        if not near:
+            continue
+        idx = np.concatenate(near)
+        for j0 in range(0, len(mine), 64):
+            js = mine[j0 : j0 + 64]
+            D = np.sqrt(((mid[idx, None, :] - C[None, js]) ** 2).sum(-1)) - reach[idx, None]  # (n, J)
+            for col, j in enumerate(js):
+                cand = idx[D[:, col] <= R[j]]
+                if len(cand):
+                    cand = cand[np.sqrt(((P[cand] - C[j]) ** 2).sum(-1)).max(1) <= R[j]]
+                out[j] = np.sort(cand)
     return out
 
 

