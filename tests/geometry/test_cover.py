@@ -52,14 +52,14 @@ def test_subdivide_keeps_the_surface_and_bounds_edges():
 
 
 SHAPES = {
-    "box": lambda: box_triangles([0.05, 0.1, 0.2]),
-    "plate": lambda: box_triangles([0.15, 0.12, 0.004]),
-    "long bar": lambda: box_triangles([0.3, 0.02, 0.02]),
+    "box": lambda: box_triangles([0.04, 0.06, 0.12]),
+    "plate": lambda: box_triangles([0.1, 0.08, 0.004]),
+    "long bar": lambda: box_triangles([0.2, 0.02, 0.02]),
 }
 
 
 @pytest.mark.parametrize("shape", sorted(SHAPES))
-@pytest.mark.parametrize("excess", [0.01, 0.03])
+@pytest.mark.parametrize("excess", [0.02, 0.04])
 def test_cover_holds_every_surface_point_within_the_excess(shape, excess):
     T = SHAPES[shape]()
     cover = cover_spheres([Surface(T)], excess)
@@ -79,15 +79,15 @@ def test_cover_holds_every_surface_point_within_the_excess(shape, excess):
 
 
 def test_tighter_excess_takes_more_spheres():
-    T = box_triangles([0.05, 0.05, 0.2])
-    loose, tight = cover_spheres([Surface(T)], 0.04), cover_spheres([Surface(T)], 0.01)
+    T = box_triangles([0.04, 0.04, 0.15])
+    loose, tight = cover_spheres([Surface(T)], 0.04), cover_spheres([Surface(T)], 0.015)
     assert len(loose) < len(tight)
 
 
 def test_a_swept_part_is_covered_along_its_whole_stroke():
     finger = box_triangles([0.01, 0.005, 0.02])
     stroke = np.array([0.0, 0.04, 0.0])
-    cover = cover_spheres([Surface(finger, stroke)], 0.01)
+    cover = cover_spheres([Surface(finger, stroke)], 0.015)
     rng = np.random.default_rng(3)
     P = sample_surface(finger, 20_000, seed=4) + rng.random((20_000, 1)) * stroke
     P = np.concatenate([P, finger.reshape(-1, 3), finger.reshape(-1, 3) + stroke])
@@ -95,7 +95,7 @@ def test_a_swept_part_is_covered_along_its_whole_stroke():
 
 
 def test_a_flat_part_without_inside_is_covered():
-    flat = box_triangles([0.1, 0.1, 0.0])  # zero thickness: no grid point inside, centroid spheres
+    flat = box_triangles([0.06, 0.06, 0.0])  # zero thickness: no grid point inside, centroid spheres
     cover = cover_spheres([Surface(flat)], 0.02)
     assert covered(sample_surface(flat, 10_000, seed=2), cover).max() <= 0
     assert cover.excess.max() <= 0.02 + 1e-9

@@ -18,13 +18,15 @@ from symkin.geometry.mesh_fit import coverage, fit_urdf
 trimesh = pytest.importorskip("trimesh")
 
 URDF = """<robot name="grip">
-  <link name="base_link"><collision><geometry><box size="0.2 0.2 0.05"/></geometry></collision></link>
+  <link name="base_link"><collision><geometry><box size="0.08 0.08 0.04"/></geometry></collision></link>
   <link name="arm"><collision><origin xyz="0 0 0.15" rpy="0.3 0 0"/>
-    <geometry><mesh filename="package://grip_pkg/meshes/arm.stl" scale="1 1 1.5"/></geometry></collision></link>
+    <geometry><mesh filename="package://grip_pkg/meshes/arm.stl" scale="1 1 1.5"/></geometry>
+  </collision></link>
   <link name="finger"><collision><geometry><box size="0.02 0.01 0.04"/></geometry></collision></link>
   <joint name="j1" type="revolute"><parent link="base_link"/><child link="arm"/><origin xyz="0 0 0.05"/>
     <axis xyz="0 0 1"/><limit lower="-2" upper="2"/></joint>
-  <joint name="slide" type="prismatic"><parent link="arm"/><child link="finger"/><origin xyz="0.03 0 0.3" rpy="0 0 0.5"/>
+  <joint name="slide" type="prismatic"><parent link="arm"/><child link="finger"/>
+    <origin xyz="0.03 0 0.3" rpy="0 0 0.5"/>
     <axis xyz="0 1 0"/><limit lower="-0.01" upper="0.03"/></joint>
 </robot>"""
 
@@ -34,7 +36,7 @@ def grip(tmp_path):
     pkg = tmp_path / "grip_pkg"
     (pkg / "meshes").mkdir(parents=True)
     (pkg / "urdf").mkdir()
-    trimesh.creation.capsule(height=0.15, radius=0.03).export(pkg / "meshes" / "arm.stl")
+    trimesh.creation.capsule(height=0.15, radius=0.03, count=[8, 8]).export(pkg / "meshes" / "arm.stl")
     path = pkg / "urdf" / "grip.urdf"
     path.write_text(URDF)
     return path
@@ -42,7 +44,7 @@ def grip(tmp_path):
 
 def test_chain_fit_covers_the_arm_and_the_finger_over_its_travel(grip):
     robot = symkin.Robot.from_urdf(grip, end_link="arm")
-    fit = fit_urdf(grip, robot, 0.01, progress=False)
+    fit = fit_urdf(grip, robot, 0.015, progress=False)
     assert {p.link for p in fit.parts} == {"base", "link1"}
     finger = [p for p in fit.parts if p.urdf_link == "finger"][0]
     assert finger.stroke is not None and np.linalg.norm(finger.stroke) == pytest.approx(0.04)
@@ -75,7 +77,8 @@ def test_package_paths_resolve_from_a_folder_above_or_from_packages(grip, tmp_pa
     moved.write_text(URDF)
     with pytest.warns(UserWarning, match="package://"):
         fit_urdf(moved, symkin.Tree.from_urdf(moved), 0.03, progress=False)
-    fit = fit_urdf(moved, symkin.Tree.from_urdf(moved), 0.03, {"grip_pkg": grip.parent.parent}, progress=False)
+    packages = {"grip_pkg": grip.parent.parent}
+    fit = fit_urdf(moved, symkin.Tree.from_urdf(moved), 0.03, packages, progress=False)
     assert any(p.urdf_link == "arm" for p in fit.parts)
 
 
@@ -97,7 +100,9 @@ def test_no_mesh_at_all_is_an_error(tmp_path):
 
 def test_cli_fit_reports_count_coverage_and_excess(grip, tmp_path, capsys):
     out = tmp_path / "spheres.json"
-    code = main(["geometry", "fit", str(grip), "--max-excess", "0.02", "--samples", "2000", "--json", "-o", str(out)])
+    args = ["geometry", "fit", str(grip), "--max-excess", "0.02", "--samples", "2000", "--json"]
+    args += ["-o", str(out)]
+    code = main(args)
     assert code == 0
     data = json.loads(capsys.readouterr().out)
     assert data == json.loads(out.read_text())
