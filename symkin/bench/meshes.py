@@ -145,6 +145,37 @@ class MeshOracle:
         return out
 
 
+def srdf_model(robot: Any, oracle: MeshOracle) -> Any:
+    """``robot`` with the link pairs its SRDF leaves unchecked unchecked too (a symkin link pair is
+    left out when every URDF link pair on it is): the pairs coal checks, for the price of the excess
+    alone. None without an SRDF."""
+    if oracle.srdf is None:
+        return None
+    from symkin.geometry.builtin_meshes import on_ee, source_frames
+    from symkin.geometry.meshes import link_placements
+    from symkin.geometry.srdf import read_srdf
+    from symkin.model.tree import Tree
+    from symkin.model.urdf import read_graph
+
+    path = oracle.srdf.parent.parent / "urdf"
+    urdf = next(p for p in path.iterdir() if p.name == Path(oracle.source.urdf).name)
+    tree = Tree.from_urdf(urdf, frames=list(oracle.source.links))
+    frames, _ = source_frames(robot.with_geometry(None), tree, oracle.source)
+    placed, _ = link_placements(read_graph(urdf), frames)
+    on = {ln: p.link for ln, p in on_ee(robot, placed, oracle.source).items()}
+    skip = set(read_srdf(oracle.srdf))
+    urdf_links = [ln for ln in on if ln in set(oracle.link)]
+    pairs = []
+    for a in set(on.values()):
+        for b in set(on.values()):
+            if a >= b:
+                continue
+            under = [(x, y) for x in urdf_links for y in urdf_links if on[x] == a and on[y] == b]
+            if under and all(tuple(sorted(p)) in skip for p in under):
+                pairs.append((a, b))
+    return robot.with_geometry(robot.geometry.with_disabled(pairs))
+
+
 def _near_contact(
     oracle: MeshOracle, robot: Any, free: np.ndarray, hit: np.ndarray, f: float, steps: int = 10
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -171,14 +202,18 @@ def run_meshes(
     robot = load(name)
     kin = compile_robot(robot, backend="c")
     oracle = MeshOracle(name)
+    same = srdf_model(robot, oracle)
+    kin_same = compile_robot(same, backend="c") if same is not None else kin
     rng = np.random.default_rng(seed)
     stroke = 0.04 if oracle.fingers else 0.0
     rows: dict[str, Any] = {}
     t0 = time.perf_counter()
     for kind in ("self", "obstacles"):
         per = n // (scenes if kind == "obstacles" else 1)
-        counts = dict.fromkeys(("both", "sym_only", "coal_only", "neither", "near_both", "near_coal_only",
-                                "near_free_sym", "near_free"), 0)  # fmt: skip
+        counts = dict.fromkeys(
+            ("both", "sym_only", "coal_only", "neither", "near_both", "near_coal_only", "near_free_sym",
+             "near_free", "srdf_sym_only", "srdf_coal_only"), 0,
+        )  # fmt: skip
         missed: list[dict[str, Any]] = []
         for _ in range(scenes if kind == "obstacles" else 1):
             env = random_scene(rng) if kind == "obstacles" else None
@@ -191,6 +226,9 @@ def run_meshes(
             counts["sym_only"] += int((ours & ~theirs).sum())
             counts["coal_only"] += int((~ours & theirs).sum())
             counts["neither"] += int((~ours & ~theirs).sum())
+            same_v = kin_same.in_collision(Q, env)
+            counts["srdf_sym_only"] += int((same_v & ~theirs).sum())
+            counts["srdf_coal_only"] += int((~same_v & theirs).sum())
             for k in np.flatnonzero(~ours & theirs)[:20]:
                 missed.append({"q": Q[k].tolist(), "fingers": float(F[k]), "pairs": oracle.pairs(Q[k], F[k])})
             free, hit = np.flatnonzero(~theirs), np.flatnonzero(theirs)
@@ -214,6 +252,7 @@ def run_meshes(
     rows["seconds"] = time.perf_counter() - t0
     rows["robot"], rows["spheres"], rows["self_pairs"] = name, len(robot.geometry), len(kin.collision_pairs())
     rows["srdf"] = str(oracle.srdf.name) if oracle.srdf else None
+    rows["srdf_disabled"] = [list(p) for p in same.geometry.disabled] if same is not None else None
     return rows
 
 
@@ -231,6 +270,12 @@ def format_meshes(r: dict[str, Any]) -> str:
             f"{c['coal_only']}; coal free {free}, symkin collision there {c['sym_only']} "
             f"({100 * c['sym_only'] / max(free, 1):.1f}%)"
         )
+        if r["srdf"]:
+            lines.append(
+                f"  {kind}: with the SRDF's pairs left out in symkin too: symkin free where coal collides "
+                f"{c['srdf_coal_only']}, symkin collision where coal free {c['srdf_sym_only']} "
+                f"({100 * c['srdf_sym_only'] / max(free, 1):.1f}%)"
+            )
         lines.append(
             f"  {kind}: {c['near_free']} near-contact pairs: symkin free where coal collides "
             f"{c['near_coal_only']}, symkin collision just outside contact {c['near_free_sym']} "
