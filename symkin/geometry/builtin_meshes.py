@@ -14,8 +14,8 @@ configurations within the limits: the rotations must agree to 1e-9, and the posi
 lines in the two models (rotations by one angle about two parallel axes ``e`` apart move a point
 to places at most ``2 e`` apart). That bound is returned per link, and the covering spheres of the
 link grow by it: 0 for the Panda and the UR arms (their URDFs and symkin's models agree to
-rounding); 0.87 mm for the iiwa's links past joint 2 (the URDF puts joint 2's axis 0.436 mm off
-KUKA's published kinematics and joint 4's back).
+rounding); 0.87 mm on the iiwa's link 2 and 1.74 mm on links 3 to 7 (the URDF puts the axes of
+joints 2 and 3 0.436 mm off KUKA's published kinematics, and joint 4's back).
 """
 
 from __future__ import annotations

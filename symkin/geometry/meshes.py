@@ -130,9 +130,11 @@ def check_extent(T: np.ndarray, what: str) -> None:
         )
 
 
-def _slide(graph: URDFGraph, link: str, known: Mapping[str, Placement]) -> tuple[Placement | None, str]:
-    """Walk up from ``link`` to a link in ``known`` through fixed joints and at most one prismatic
-    joint (not in ``known``'s model): its placement, or (None, why not)."""
+def _slide(
+    graph: URDFGraph, link: str, known: Mapping[str, Placement], slide: bool = True
+) -> tuple[Placement | None, str]:
+    """Walk up from ``link`` to a link in ``known`` through fixed joints and (with ``slide``) at
+    most one prismatic joint (not in ``known``'s model): its placement, or (None, why not)."""
     T = np.eye(4)  # the pose of ``link``'s frame in the frame of ``cur``
     stroke: np.ndarray | None = None  # the travel of the sliding joint, in the frame of ``cur``
     cur = link
@@ -141,7 +143,7 @@ def _slide(graph: URDFGraph, link: str, known: Mapping[str, Placement]) -> tuple
         if j is None:
             return None, f"it is not below the model's base (the root {cur!r} is reached)"
         O = rpy_matrix(*joint_origin(j.el, f"joint {j.name!r}"))
-        if j.kind == "prismatic" and stroke is None:
+        if j.kind == "prismatic" and stroke is None and slide:
             lo, hi, _ = joint_limits(j, graph.where)
             u = np.array([float(c) for c in joint_axis(j.el, f"joint {j.name!r}", graph.where, 1e-9)])
             u /= np.linalg.norm(u)
@@ -162,17 +164,17 @@ def _slide(graph: URDFGraph, link: str, known: Mapping[str, Placement]) -> tuple
 
 
 def link_placements(
-    graph: URDFGraph, frames: Mapping[str, tuple[str, np.ndarray]]
+    graph: URDFGraph, frames: Mapping[str, tuple[str, np.ndarray]], slide: bool = True
 ) -> tuple[dict[str, Placement], dict[str, str]]:
     """Every URDF link's :class:`Placement`, from ``frames`` (URDF link -> (model link, pose of the
     URDF link frame in the model link's frame)) for the links the model has, walking up fixed joints
-    and one sliding joint for the others; and, for links with no placement, why not."""
+    and (with ``slide``) one sliding joint for the others; and, for links with no placement, why not."""
     known = {ln: Placement(name, np.asarray(T, dtype=float)) for ln, (name, T) in frames.items()}
     out, why = dict(known), {}
     for ln in graph.links:
         if ln in out:
             continue
-        found, reason = _slide(graph, ln, known)
+        found, reason = _slide(graph, ln, known, slide)
         if found is None:
             why[ln] = reason
         else:

@@ -17,7 +17,6 @@ __all__ = [
     "subdivide",
     "pieces",
     "sample_surface",
-    "corner_gap",
 ]
 
 _CHUNK = 1 << 21  # point-triangle entries per NumPy block (a few tens of MB)
@@ -155,15 +154,3 @@ def sample_surface(triangles: np.ndarray, count: int, seed: int = 0) -> np.ndarr
     u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
     t = T[k]
     return t[:, 0] + u[:, None] * (t[:, 1] - t[:, 0]) + v[:, None] * (t[:, 2] - t[:, 0])
-
-
-def corner_gap(piece_corners: np.ndarray) -> float:
-    """The largest distance from a point of a piece to the piece's nearest corner, bounded above
-    by the longest edge over sqrt(3) for triangles (the circumradius of the worst, equilateral
-    one) and by the longest corner-to-corner distance for other pieces."""
-    X = np.asarray(piece_corners, dtype=float)
-    if X.size == 0:
-        return 0.0
-    m = X.shape[1]
-    D = np.linalg.norm(X[:, :, None, :] - X[:, None, :, :], axis=-1).max(axis=(1, 2))
-    return float(D.max() / np.sqrt(3.0)) if m == 3 else float(D.max())

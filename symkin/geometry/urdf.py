@@ -12,9 +12,16 @@ of ``model`` they move with:
 - ``<box size>``: a grid of spheres, each circumscribing its grid cell (conservative), cells
   as near cubes as ``max_box_spheres`` allows;
 - ``<mesh filename scale>``: ``mesh_spheres`` spheres fitted by :func:`symkin.geometry.fit.fit_spheres`
-  when ``mesh_spheres > 0``, trimesh is installed and the file resolves (relative to the URDF's
-  folder, ``file://`` paths as such; ``package://`` needs ROS and is not resolved); otherwise
-  skipped with a warning naming the link.
+  when ``mesh_spheres > 0``, trimesh is installed and the file resolves
+  (:func:`symkin.geometry.meshes.resolve_mesh`: relative to the URDF's folder, ``file://`` paths as
+  such, ``package://PKG/...`` from ``packages`` or a folder named PKG above the URDF) and reads;
+  otherwise skipped with a warning naming the link (and the file). The covering fit of a URDF's
+  meshes is :func:`symkin.geometry.mesh_fit.fit_urdf`.
+
+Sizes (radius, length, box sides) must be finite, >= 0 and at most
+:data:`symkin.geometry.meshes.MAX_SHAPE_SIZE` (1e4 m), a mesh scale finite and at most that in
+size (negative mirrors), else a GeometryError names the link; a box of any thickness, 0 or 1e-300 m
+included, becomes at most ``max_box_spheres`` spheres.
 
 ``model`` is a :class:`symkin.Tree` (its links are URDF link names) or a :class:`symkin.Robot`
 from :meth:`symkin.Robot.from_urdf` of the same file, whose links are ``base`` (the chain's
@@ -39,7 +46,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from symkin.errors import GeometryError, URDFError
-from symkin.geometry.meshes import MAX_SHAPE_SIZE, check_extent, read_mesh, resolve_mesh
+from symkin.geometry.meshes import MAX_SHAPE_SIZE, check_extent, link_placements, read_mesh, resolve_mesh
 from symkin.model.geometry import Capsule, Geometry, Sphere, as_index
 from symkin.model.transform import rpy_matrix
 from symkin.model.urdf import (
@@ -72,23 +79,6 @@ def _joint_motion(j: URDFJoint, where: str, q: float) -> np.ndarray:
     K = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
     T[:3, :3] = np.eye(3) + math.sin(q) * K + (1 - math.cos(q)) * (K @ K)
     return T
-
-
-def _fixed_up(graph: URDFGraph, link: str, known: dict[str, _Frame]) -> tuple[_Frame | None, str]:
-    """Walk up from ``link`` through fixed joints to the first link in ``known``: its frame with
-    the fixed transforms composed, or (None, why not)."""
-    T = np.eye(4)
-    cur = link
-    while cur not in known:
-        j = graph.parent_joint.get(cur)
-        if j is None:
-            return None, f"it is not below the model's base (the root {cur!r} is reached)"
-        if j.kind != "fixed":
-            return None, f"the {j.kind} joint {j.name!r} above it is not a joint of the model"
-        T = _joint_origin(j) @ T
-        cur = j.parent
-    name, A = known[cur]
-    return (name, A @ T), ""
 
 
 def _tree_frames(graph: URDFGraph, tree: Any) -> dict[str, _Frame]:
@@ -182,16 +172,8 @@ def _link_frames(graph: URDFGraph, model: Any) -> tuple[dict[str, _Frame], dict[
         known = _chain_frames(graph, model)
     else:
         raise GeometryError(f"model must be a symkin Robot or Tree, not {type(model).__name__}")
-    frames, why = dict(known), {}
-    for ln in graph.links:
-        if ln in frames:
-            continue
-        found, reason = _fixed_up(graph, ln, known)
-        if found is None:
-            why[ln] = reason
-        else:
-            frames[ln] = found
-    return frames, why
+    placed, why = link_placements(graph, known, slide=False)
+    return {ln: (p.link, p.T) for ln, p in placed.items()}, why
 
 
 def urdf_link_names(path_or_xml: str | Path, model: Any) -> dict[str, str]:
