@@ -29,23 +29,18 @@ from symkin.model.poe import poe_of
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
 from symkin.model.robots import list_robots, load, load_dh_file
+from symkin.model.spatial import joint_torques, velocity_transform, wrench_transform
 from symkin.model.tree import Tree
+from symkin.runtime.cartesian import PathResult, ctraj, servo_path
 from symkin.runtime.control import MMC, StepInfo, rrmc
 from symkin.runtime.ik import IKResult, ik, pose_error
 from symkin.runtime.kinematics import Kinematics
 from symkin.runtime.load import compile, load_compiled
 from symkin.runtime.loop import ServoResult, servo
+from symkin.runtime.null_space import joint_limit_cost, null_space_rrmc
+from symkin.runtime.qrmc import QRMC, qrmc
 from symkin.runtime.servo import p_servo
-from symkin.runtime.trajectory import (
-    PathResult,
-    Trajectory,
-    ctraj,
-    jtraj,
-    mstraj,
-    quintic,
-    servo_path,
-    trapezoidal,
-)
+from symkin.runtime.trajectory import Trajectory, jtraj, mstraj, quintic, trapezoidal
 
 _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
     "derive": ("symkin.derive.chain", "derivation"),
@@ -98,6 +93,7 @@ __all__ = [
     "ParameterError",
     "PathResult",
     "PoseError",
+    "QRMC",
     "Robot",
     "RobotError",
     "ServoResult",
@@ -119,15 +115,19 @@ __all__ = [
     "generate_collision",
     "geometry",
     "ik",
+    "joint_limit_cost",
+    "joint_torques",
     "jtraj",
     "list_robots",
     "load",
     "load_compiled",
     "load_dh_file",
     "mstraj",
+    "null_space_rrmc",
     "p_servo",
     "poe_of",
     "pose_error",
+    "qrmc",
     "quintic",
     "resolve_robot",
     "rrmc",
@@ -136,5 +136,7 @@ __all__ = [
     "singularities",
     "symbolic",
     "trapezoidal",
+    "velocity_transform",
+    "wrench_transform",
     "write_generated",
 ]

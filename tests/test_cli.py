@@ -108,6 +108,20 @@ def test_ik_solves_a_pose_given_on_the_command_line(capsys):
     assert code == 0 and "solved" in out
 
 
+@pytest.mark.parametrize("command", ["ik", "servo"])
+def test_a_matrix_that_is_not_se3_is_refused_naming_the_option(capsys, command):
+    """The one pose rule on --matrix (issue 36, item 6): one line naming the option, exit 2."""
+    T = load("ur5").fkine(load("ur5").qr)
+    for bad, why in (([1, 0, 0, 1], "bottom row"), ([0, 0, 0, 2], "bottom row")):
+        M = np.vstack([T[:3], bad])
+        code, _, err = run(capsys, command, "ur5", "--matrix", " ".join(map(str, M.ravel())))
+        assert code == 2 and f"--matrix has {why}" in err and len(err.strip().splitlines()) == 1
+    M = T.copy()
+    M[:3, :3] *= -1  # a reflection
+    code, _, err = run(capsys, command, "ur5", "--matrix", " ".join(map(str, M.ravel())))
+    assert code == 2 and "--matrix rotation is a reflection" in err
+
+
 def test_ik_unreachable_target_exits_1(capsys):
     code, out, _ = run(capsys, "ik", "planar2", "--pose", "5 0 0 0 0 0", "--json")
     assert code == 1 and json.loads(out)["success"] is False
@@ -142,7 +156,7 @@ def test_python_m_symkin_and_help():
     assert res.returncode == 2
 
 
-@pytest.mark.parametrize("controller", ["mmc", "rrmc"])
+@pytest.mark.parametrize("controller", ["mmc", "rrmc", "qrmc"])
 def test_servo_arrives_and_plots(capsys, tmp_path, controller):
     robot = load("panda")
     target = robot.qr + np.array([0.2, -0.1, 0.1, 0.2, 0.0, 0.1, 0.0])
@@ -153,6 +167,26 @@ def test_servo_arrives_and_plots(capsys, tmp_path, controller):
     assert code == 0 and data["arrived"], data
     assert png.stat().st_size > 1000
     np.testing.assert_allclose(robot.fkine(data["q_final"])[:3, 3], robot.fkine(target)[:3, 3], atol=0.05)
+    assert data["max_speed_over_limit"]["applied"] <= 1.0 + 1e-12
+
+
+def test_servo_says_why_it_did_not_arrive(capsys):
+    """A target out of the UR5's reach: exit 1, the joint speeds and the last step's status."""
+    argv = ["servo", "ur5", "--q0", "0 -1 0 -1 1 0.3", "--pose", "1.5 0 0.3 0 0 0", "--controller", "qrmc"]
+    code, out, _ = run(capsys, *argv, "--max-steps", "60")
+    assert code == 1 and "did not arrive after 60 steps" in out
+    assert "joint speeds up to" in out and "the last step was" in out
+
+
+def test_bench_qrmc_runs_and_plots(capsys, tmp_path):
+    png = tmp_path / "qrmc.png"
+    code, out, _ = run(capsys, "bench", "qrmc", "--plot", str(png))
+    assert code == 0 and png.stat().st_size > 1000
+    for task in ("lost direction", "finish at a singularity", "start and finish at singularities"):
+        assert task in out
+    code, out, _ = run(capsys, "bench", "qrmc", "--json")
+    rows = json.loads(out)["singular"]["tasks"]["lost direction"]
+    assert rows["qrmc"]["arrived"] and rows["qrmc"]["max_requested_over_limit"] <= 1.0
 
 
 def test_bench_mmc_runs_small(capsys, tmp_path):

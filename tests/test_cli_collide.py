@@ -65,13 +65,57 @@ def test_bench_collide_runs_and_agrees():
     r = run_collide("panda", batch=500, progress=False, ik_targets=10)
     assert [row["obstacles"] for row in r["rows"]] == [0, 10, 100]
     assert all(row["batch_ns"] > 0 and row["speedup_batch_vs_numpy"] > 1 for row in r["rows"])
-    assert r["ik"]["aware_solutions_in_collision"] == 0
+    assert [ik["scene"] for ik in r["ik"]] == ["table top", "10 random spheres", "cage"]
+    assert all(ik["aware_in_collision"] == ik["aware_one_in_collision"] == 0 for ik in r["ik"])
+    assert all(np.isfinite(ik["ratio"]) and np.isfinite(ik["ratio_one"]) for ik in r["ik"])
+    assert r["ik"][2]["obstacles"] == 14 and r["ik"][2]["plain_in_collision"] > 0  # the cage catches some
+    assert all(0.1 < row["outside"] < 0.3 and row["ratio"] > 0 for row in r["limits"])
     text = format_collide(r)
-    assert "collision-aware" in text and "C batch" in text
-    assert np.isfinite(r["ik"]["ratio"])
+    assert "avoiding" in text and "C batch" in text and "beyond" in text
     m = r["mmc"]
     assert m["c_backend"] == "c" and m["steps_with_obstacle_rows"] > 0 and m["c_us"] > 0
     assert "MMC past an obstacle" in text
+
+
+def test_srdf_command_and_the_srdf_option(tmp_path, capsys):
+    out = tmp_path / "panda.srdf"
+    assert main(["srdf", "panda", "-o", str(out)]) == 0
+    assert "adjacent" in capsys.readouterr().out and "<disable_collisions" in out.read_text()
+    assert main(["collide", "panda", "qr", "--json"]) == 0
+    full = json.loads(capsys.readouterr().out)
+    assert main(["collide", "panda", "qr", "--json", "--srdf", str(out)]) == 0
+    lean = json.loads(capsys.readouterr().out)
+    assert lean["pairs"] < full["pairs"] and lean["in_collision"] == full["in_collision"] is False
+    q = "0 -0.3 0 -2.2 0 2.0 0.78"
+    assert main(["ik", "panda", "--target-q", q, "--collision", "--srdf", str(out), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["success"] is True
+    other = tmp_path / "other.srdf"
+    other.write_text('<robot name="x"><disable_collisions link1="a" link2="b" reason="Never"/></robot>')
+    for argv, message in (
+        (["collide", "panda", "--srdf", str(other)], "another robot"),
+        (["collide", "puma560", "--srdf", str(out)], "no collision geometry"),
+        (["ik", "panda", "--target-q", q, "--srdf", str(out)], "--collision"),
+        (["servo", "panda", "--target-q", q, "--srdf", str(out)], "--collision"),
+        (["bench", "ik", "--srdf", str(out)], "bench collide"),
+        (["collide", "panda", "--srdf", str(tmp_path / "none.srdf")], "SRDF"),
+        (["ik", "panda", "--target-q", q, "--collision", "--all"], "numerical"),
+    ):
+        assert main(argv) == 2, argv
+        assert message in capsys.readouterr().err, argv
+
+
+def test_srdf_of_a_urdf_names_its_links(tmp_path, capsys):
+    from tests.geometry.test_srdf import ARM
+
+    urdf = tmp_path / "arm2.urdf"
+    urdf.write_text(ARM)
+    assert main(["srdf", str(urdf)]) == 0
+    captured = capsys.readouterr()
+    assert '<robot name="arm2">' in captured.out and 'link1="flange" link2="hand"' in captured.out
+    srdf = tmp_path / "arm2.srdf"
+    srdf.write_text(captured.out)
+    assert main(["collide", str(urdf), "0 0 0", "--srdf", str(srdf), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["pairs"] == 0  # every pair adjacent or proved apart
 
 
 def test_plot_draws_geometry_and_obstacles(tmp_path, capsys):

@@ -20,7 +20,7 @@ import pytest
 import symkin
 from symkin import Tree
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch, as_config
-from symkin.errors import ConfigurationError, PoseError, SymkinError
+from symkin.errors import ConfigurationError, PoseError, RobotError, SymkinError
 from symkin.runtime.control import MMC, rrmc
 from symkin.runtime.ik import check_pose
 from tests.model.tree_urdfs import QUADRUPED
@@ -327,3 +327,100 @@ def test_valid_joint_values_with_a_large_sum_of_squares(kins, backend):
     q = np.full(6, 5e14)  # valid: each within 1e15, squares add up to 1.5e30
     assert np.array_equal(kin.fkine(q), kin.fkine(q[None])[0])
     assert np.isfinite(kin.jacob0(q)).all()
+
+
+# -- the one pose rule at every function that takes a pose (issue 36, item 6) ---------------------
+def _se3_forms() -> dict[str, object]:
+    """spatialmath SE3 forms of a pose, where spatialmath is installed (the compare extra)."""
+    try:
+        from spatialmath import SE3
+    except ImportError:
+        return {}
+    return {
+        "SE3": lambda T: SE3(T, check=False),
+        "SE3 of two poses": lambda T: SE3([SE3(T, check=False), SE3(T, check=False)]),
+    }
+
+
+MORE_POSES = {
+    **POSES,
+    "bottom row 1 0 0 1": lambda T: np.vstack([T[:3], [1.0, 0.0, 0.0, 1.0]]),
+    "T[3, 3] = 2": lambda T: np.vstack([T[:3], [0.0, 0.0, 0.0, 2.0]]),
+    "bottom row off by 1e-9": lambda T: np.vstack([T[:3], [0.0, 1e-9, 0.0, 1.0]]),
+    "reflection": lambda T: T @ np.diag([1.0, 1.0, -1.0, 1.0]),
+    "rotation off by 1e-5": lambda T: np.vstack([np.hstack([T[:3, :3] * (1 + 1e-5), T[:3, 3:]]), T[3:]]),
+    "rotation off by 1e-8": lambda T: np.vstack([np.hstack([T[:3, :3] * (1 + 1e-8), T[:3, 3:]]), T[3:]]),
+    "translation 1e300": lambda T: np.vstack([np.hstack([T[:3, :3], [[1e300], [-1e300], [0.0]]]), T[3:]]),
+    **_se3_forms(),
+}
+
+
+def _pose_takers(ur5, kins):  # noqa: ANN001, ANN202
+    """(label, function of one pose, the rule it follows) for every public function that takes a pose:
+    the rule is as_poses with the function's name for the pose, its error class and whether it takes
+    a stack. IK and the servo loop are checked above with check_pose."""
+    from symkin.core.pose import as_poses
+    from symkin.errors import ParameterError
+
+    c = kins["c"]
+    T_ok = ur5.fkine(Q_UR5)
+    S = np.array([[0, 0, 1, 0, 0, 0], [0, 1, 0, -0.1, 0, 0]], dtype=float)
+
+    def rule(what, error=PoseError, batch=True):  # noqa: ANN001, ANN202
+        return lambda v: as_poses(v, what, error, batch)
+
+    def path_rule(v):  # noqa: ANN001, ANN202
+        P, single = as_poses(v, "poses")
+        if single or len(P) == 0:
+            raise ParameterError(f"poses must be a path of N >= 1 poses, shape (N, 4, 4), got {np.shape(v)}")
+        return P, single
+
+    return [
+        ("velocity_transform", symkin.velocity_transform, rule("T")),
+        ("wrench_transform", symkin.wrench_transform, rule("T")),
+        ("pose_error Te", lambda v: symkin.pose_error(v, T_ok), rule("Te")),
+        ("pose_error Tep", lambda v: symkin.pose_error(T_ok, v), rule("Tep")),
+        ("p_servo Te", lambda v: symkin.p_servo(v, T_ok, frame="base"), rule("Te", batch=False)),
+        ("p_servo Tep", lambda v: symkin.p_servo(T_ok, v, frame="ee"), rule("Tep", batch=False)),
+        ("ctraj T0", lambda v: symkin.ctraj(v, T_ok, 5), rule("T0", batch=False)),
+        ("ctraj T1", lambda v: symkin.ctraj(T_ok, v, 5), rule("T1", batch=False)),
+        ("servo_path", lambda v: symkin.servo_path(c, v, Q_UR5).q, path_rule),
+        ("with_tool", lambda v: ur5.with_tool(v).fkine(Q_UR5), rule("tool", RobotError, False)),
+        ("with_base", lambda v: ur5.with_base(v).fkine(Q_UR5), rule("base", RobotError, False)),
+        ("from_poe M", lambda v: symkin.Robot.from_poe(v, S).fkine([0.1, 0.2]), rule("M", RobotError, False)),
+        ("ik with collision", lambda v: c.ik(v, collision=True, seed=0, slimit=2).q, rule("target")),
+    ]
+
+
+@pytest.mark.parametrize("what", sorted(MORE_POSES))
+def test_every_function_taking_a_pose_follows_the_one_rule(what, ur5, kins):
+    """The same hostile pose gives the same error (class and message, naming the argument) or the
+    answer of its float64 conversion, at every function that takes a pose."""
+    T = MORE_POSES[what](ur5.fkine(Q_UR5))
+    for label, f, rule in _pose_takers(ur5, kins):
+        if label == "from_poe M" and what == "translation 1e300":
+            with pytest.raises(RobotError, match=r"within \+-1e\+150"):  # PoE's own bound, after the rule
+                f(T)
+            continue
+        if label == "ik with collision" and not ur5.geometry:
+            continue
+        check_same(f"{what}: {label}", f, T, rule)
+
+
+def test_the_pose_rule_refuses_what_the_issue_reported():
+    """velocity_transform/wrench_transform accepted a bottom row [1 0 0 1] and T[3, 3] = 2; p_servo
+    took any rotation; np.asarray of an SE3 of two poses is its first pose alone (kin.ik solved one)."""
+    T = np.eye(4)
+    for bottom in ([1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 2.0]):
+        T[3] = bottom
+        for f in (symkin.velocity_transform, symkin.wrench_transform):
+            with pytest.raises(PoseError, match=r"T has bottom row"):
+                f(T)
+    with pytest.raises(PoseError, match="Tep rotation is not orthonormal"):
+        symkin.p_servo(np.eye(4), np.diag([2.0, 1.0, 1.0, 1.0]), frame="base")
+    SE3 = pytest.importorskip("spatialmath").SE3
+    two = SE3([SE3.Tx(0.4) * SE3.Rz(0.3), SE3.Ty(0.2)])
+    assert symkin.velocity_transform(two).shape == (2, 6, 6)
+    kin = symkin.compile("panda", backend="c")
+    res = kin.ik(SE3([SE3(kin.fkine(kin.qr)), SE3(kin.fkine(kin.qz))]), seed=0)
+    assert res.batch and len(res) == 2 and np.asarray(res.success).all()

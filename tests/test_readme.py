@@ -42,6 +42,8 @@ def test_python_block_runs(page, index, block, capsys):
     for module in OPTIONAL:
         if f"import {module}" in block:
             pytest.importorskip(module)
+    if "symkin.view" in block:  # the view extra's examples
+        pytest.importorskip("viser")
     if "symkin.workspace" in block:  # the scale extra's examples
         pytest.importorskip("zarr")
         pytest.importorskip("distributed")

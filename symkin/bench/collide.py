@@ -1,8 +1,10 @@
 """``symkin bench collide``: collision checks per configuration, one call and batched, with the
 robot's sphere model against 0, 10 and 100 obstacle spheres, beside the generated NumPy module and (with
-the ``compare`` extra) Pinocchio + coal on the same spheres and capsules, all in the same run; then
-collision-aware IK against plain IK on a table-top scene, and the MMC step with obstacle rows
-(the velocity dampers of the closest pairs) in C against the Python reference step.
+the ``compare`` extra) Pinocchio + coal on the same spheres and capsules, all in the same run; the
+batch with about 19 % of its configurations outside the joint limits against one within them;
+collision-aware IK against plain IK in three scenes (a table top, 10 random spheres, VAMP's cage of
+14 spheres), a batch of targets and one target per call; and the MMC step with obstacle rows (the
+velocity dampers of the closest pairs) in C against the Python reference step.
 
 Times are CPU times of the calling thread (``time.thread_time``), best of several repeats.
 Obstacles: spheres of radius 0.05 m at uniform random places in a 1.6 m cube around the base
@@ -19,7 +21,15 @@ import numpy as np
 from symkin.bench.common import best_of, interleaved, optional
 from symkin.bench.kin import per_call_us
 
-__all__ = ["run_collide", "format_collide", "random_spheres", "table_scene", "pinocchio_collision"]
+__all__ = [
+    "run_collide",
+    "format_collide",
+    "random_spheres",
+    "table_scene",
+    "cage_scene",
+    "pinocchio_collision",
+    "beyond_limits",
+]
 
 
 def random_spheres(count: int, seed: int = 0, radius: float = 0.05) -> Any:
@@ -40,6 +50,32 @@ def table_scene() -> Any:
         capsules=(Capsule((0.4, -0.4, 0.0), (0.4, -0.4, 0.5), 0.05),),
         boxes=(Box((0.5, 0.0, -0.1), (0.5, 0.8, 0.05)),),
     )
+
+
+def cage_scene() -> Any:
+    """VAMP's cage around a Panda at the origin (Thomason, Kingston and Kavraki, Motions in
+    Microseconds via Vectorized Sampling-Based Planning, 2024, its benchmark scene): 14 spheres of
+    radius 0.2 m, seven at z = 0.25 m and seven at z = 0.8 m, on a ring of radius about 0.5 m."""
+    from symkin.model.geometry import Environment, Sphere
+
+    low = ((0.55, 0), (0.35, 0.35), (0, 0.55), (-0.55, 0), (-0.35, -0.35), (0, -0.55), (0.35, -0.35))
+    high = ((0.35, 0.35), (0, 0.55), (-0.35, 0.35), (-0.55, 0), (-0.35, -0.35), (0, -0.55), (0.35, -0.35))
+    rings = ((low, 0.25), (high, 0.8))
+    return Environment(spheres=tuple(Sphere((x, y, z), 0.2) for ring, z in rings for x, y in ring))
+
+
+def beyond_limits(robot: Any, count: int, seed: int = 0, outside: float = 0.19) -> np.ndarray:
+    """(count, n) configurations uniform in the joint limits widened about their middle so that a
+    fraction ``outside`` of them has a joint beyond its limits (joints with infinite limits keep
+    them)."""
+    lo, hi = (np.asarray(x, dtype=float) for x in robot.qlim)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    grow = (1.0 - outside) ** (-1.0 / max(int(finite.sum()), 1)) - 1.0  # per joint, of its range
+    Q = robot.random_q(count, seed=seed)
+    w = np.where(finite, hi - lo, 0.0)
+    u = np.random.default_rng(seed).random(Q.shape)
+    wide = lo - 0.5 * grow * w + (1.0 + grow) * w * u
+    return np.ascontiguousarray(np.where(finite, wide, Q))
 
 
 def pinocchio_collision(robot: Any, env: Any) -> Any:
@@ -146,32 +182,14 @@ def run_collide(
             print(f"  {count} obstacle spheres ...", flush=True)
         rows.append(_row(robot, kernel, numpy_kin, Q, random_spheres(count, seed)))
     if progress:
-        print("  IK on a table-top scene ...", flush=True)
-    scene = table_scene()
-    targets = []
-    rng = np.random.default_rng(seed)
-    while len(targets) < ik_targets:
-        q = robot.random_q(seed=rng)
-        if not kin.in_collision(q, scene):
-            targets.append(kin.fkine(q))
-    T = np.array(targets)
-    # alternating, best of three: the two share the machine's drift
-    best, last = interleaved(
-        {"plain": lambda: kin.ik(T, seed=seed), "aware": lambda: kin.ik(T, seed=seed, collision=scene)}
-    )
-    plain, aware = last["plain"], last["aware"]
-    plain_hits = kin.in_collision(plain.q, scene) & np.asarray(plain.success)
-    aware_hits = kin.in_collision(aware.q, scene) & np.asarray(aware.success)
-    ik = {
-        "targets": len(T),
-        "plain_us": best["plain"] / len(T) * 1e6,
-        "collision_aware_us": best["aware"] / len(T) * 1e6,
-        "ratio": best["aware"] / best["plain"],
-        "plain_success": float(np.mean(plain.success)),
-        "aware_success": float(np.mean(aware.success)),
-        "plain_solutions_in_collision": int(plain_hits.sum()),
-        "aware_solutions_in_collision": int(aware_hits.sum()),
-    }
+        print("  outside the joint limits ...", flush=True)
+    limits = [_limits_row(kernel, robot, Q, random_spheres(count, seed), seed) for count in (0, 10)]
+    ik = []
+    for name, scene in (("table top", table_scene()), ("10 random spheres", random_spheres(10, seed)),
+                        ("cage", cage_scene())):  # fmt: skip
+        if progress:
+            print(f"  IK, {name} ...", flush=True)
+        ik.append(ik_scene(kin, robot, name, scene, ik_targets, seed))
     if progress:
         print("  MMC with an obstacle ...", flush=True)
     mmc = mmc_obstacle_steps(robot, kin) if robot.n >= 6 else None
@@ -182,10 +200,62 @@ def run_collide(
         "self_pairs": len(layout.self_pairs),
         "batch": batch,
         "rows": rows,
+        "limits": limits,
         "ik": ik,
         "mmc": mmc,
         "pinocchio": rows[0].get("pinocchio_ns") is not None,
     }
+
+
+def _limits_row(kernel: Any, robot: Any, Q: np.ndarray, env: Any, seed: int) -> dict[str, Any]:
+    """The batch check of ``Q`` (within the joint limits) against the same count with about 19 %
+    of the configurations beyond them (:func:`beyond_limits`), alternating, best of 40 calls."""
+    W = beyond_limits(robot, len(Q), seed)
+    lo, hi = robot.qlim
+    best, _ = interleaved(
+        {"within": lambda: kernel.in_collision(Q, env), "beyond": lambda: kernel.in_collision(W, env)}, 40
+    )
+    return {
+        "obstacles": len(env),
+        "outside": float(np.mean(~((lo <= W) & (hi >= W)).all(axis=1))),
+        "within_ns": best["within"] / len(Q) * 1e9,
+        "beyond_ns": best["beyond"] / len(W) * 1e9,
+        "ratio": best["beyond"] / best["within"],
+    }
+
+
+def ik_scene(kin: Any, robot: Any, name: str, env: Any, count: int = 200, seed: int = 0) -> dict[str, Any]:
+    """Plain and collision-aware IK (``kin.ik(T, collision=env)``) on ``count`` targets, the poses
+    of random collision-free configurations (so a collision-free solution exists): a batch of
+    targets in one call and one target per call, alternating, best of three; success rates and
+    the solutions in collision."""
+    rng = np.random.default_rng(seed)
+    targets = []
+    while len(targets) < count:
+        q = robot.random_q(seed=rng)
+        if not kin.in_collision(q, env):
+            targets.append(kin.fkine(q))
+    T = np.array(targets)
+    kin.ik(T[0], seed=seed, collision=env)  # the kernel and the solver made before the clock runs
+    best, last = interleaved(
+        {
+            "plain": lambda: kin.ik(T, seed=seed),
+            "aware": lambda: kin.ik(T, seed=seed, collision=env),
+            "plain_one": lambda: [kin.ik(t, seed=seed) for t in T],
+            "aware_one": lambda: [kin.ik(t, seed=seed, collision=env) for t in T],
+        }
+    )
+    out: dict[str, Any] = {"scene": name, "obstacles": len(env), "targets": len(T)}
+    for key in ("plain", "aware", "plain_one", "aware_one"):
+        res = last[key]
+        q = np.array([r.q for r in res]) if isinstance(res, list) else np.asarray(res.q)
+        ok = np.array([r.success for r in res]) if isinstance(res, list) else np.asarray(res.success)
+        out[f"{key}_us"] = best[key] / len(T) * 1e6
+        out[f"{key}_success"] = float(ok.mean())
+        out[f"{key}_in_collision"] = int((ok & kin.in_collision(q, env)).sum())
+    out["ratio"] = best["aware"] / best["plain"]
+    out["ratio_one"] = best["aware_one"] / best["plain_one"]
+    return out
 
 
 def mmc_obstacle_steps(robot: Any, kin: Any, repeats: int = 3) -> dict[str, Any]:
@@ -205,7 +275,7 @@ def mmc_obstacle_steps(robot: Any, kin: Any, repeats: int = 3) -> dict[str, Any]
     options = {"collision": env, "d_i": 0.3, "d_s": 0.02}
     states, guide = [], MMC(kin, backend="python", **options)
     for _ in range(100):
-        nu, done = p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         states.append((q, nu))
@@ -236,6 +306,16 @@ def mmc_obstacle_steps(robot: Any, kin: Any, repeats: int = 3) -> dict[str, Any]
     }
 
 
+def _ik_line(ik: dict, how: str, label: str) -> str:
+    """One line of an IK scene: plain against collision-aware, ``how`` "" (batch) or "_one"."""
+
+    def part(key: str) -> str:
+        return f"{ik[key + '_us']:6.1f} ({ik[key + '_success']:.1%}, {ik[key + '_in_collision']})"
+
+    ratio = ik["ratio" + how]
+    return f"    {label:>12}: plain {part('plain' + how)}, avoiding {part('aware' + how)}: {ratio:.2f}x"
+
+
 def format_collide(r: dict) -> str:
     lines = [
         f"symkin bench collide: {r['robot']}, {r['shapes']} shapes, {r['self_pairs']} self pairs; "
@@ -255,15 +335,16 @@ def format_collide(r: dict) -> str:
         )
     if not r["pinocchio"]:
         lines.append("(install the compare extra, pip install 'symkin[compare]', for Pinocchio + coal)")
-    ik = r["ik"]
-    lines += [
-        "",
-        f"IK on a table-top scene, {ik['targets']} collision-free targets (us per target):",
-        f"  plain {ik['plain_us']:.1f} us ({ik['plain_success']:.1%} solved, "
-        f"{ik['plain_solutions_in_collision']} solutions in collision)",
-        f"  collision-aware {ik['collision_aware_us']:.1f} us ({ik['aware_success']:.1%} solved, "
-        f"{ik['aware_solutions_in_collision']} in collision): {ik['ratio']:.2f}x plain",
-    ]
+    lines += ["", "Outside the joint limits, ns per configuration in a batch (within them; some beyond):"]
+    for row in r["limits"]:
+        lines.append(
+            f"  {row['obstacles']:>3} obstacle spheres: {row['within_ns']:.0f} ns; {row['outside']:.0%} "
+            f"beyond {row['beyond_ns']:.0f} ns ({row['ratio']:.2f}x)"
+        )
+    lines += ["", "IK on the poses of collision-free configurations, us per target (solved, in collision):"]
+    for ik in r["ik"]:
+        lines.append(f"  {ik['scene']} ({ik['obstacles']} obstacles, {ik['targets']} targets):")
+        lines += [_ik_line(ik, "", "batch"), _ik_line(ik, "_one", "one per call")]
     m = r.get("mmc")
     if m:
         lines += [

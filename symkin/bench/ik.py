@@ -38,6 +38,10 @@ TABLE1_METHODS: dict[str, dict[str, Any]] = {
     "LM (Chan lambda=0.1)": {"method": "LM", "damping": "chan", "lam": 0.1},
     "LM (Sugihara w_n=1e-3)": {"method": "LM", "damping": "sugihara", "lam": 1e-3},
     "LM (Sugihara w_n=1e-4)": {"method": "LM", "damping": "sugihara", "lam": 1e-4},
+    # Manipulator Differential Kinematics, Part 2's QP (symkin.runtime.ik_qp): lambda_q = 0.01, lambda_delta
+    # = 1, joint-limit dampers; with the manipulability term of Part 2's UR5 experiment (1 / lambda_m)
+    "QP (lambda_q=0.01)": {"method": "QP"},
+    "QP + Jm (w_m=0.01)": {"method": "QP", "manipulability": 0.01},
 }
 
 # Table 1 of Part 1: (mean iterations, median iterations, infeasible count, infeasible %, mean
@@ -98,6 +102,7 @@ def run_table1(
     tol_on: str = "E",
     chunk: int = 1000,
     rtb: bool = True,
+    rtb_qp_problems: int = 1000,
 ) -> dict[str, Any]:
     """Reproduce Table 1 of Part 1 (module docstring) -> a dict with one entry per row.
 
@@ -107,7 +112,9 @@ def run_table1(
         settings: ``"a"`` (1 x 500) and/or ``"b"`` (100 x 30).
         backend: ``"c"`` (fast) or ``"numpy"`` (slow: use a few hundred problems).
         tol, tol_on: the convergence test; the paper's is ``E < 1e-6`` (``tol_on="E"``).
-        rtb: also time roboticstoolbox-python's C++ ``ik_LM`` (Chan 0.1, setting b) if installed.
+        rtb: also time roboticstoolbox-python's C++ ``ik_LM`` (Chan 0.1, setting b) if installed,
+            and compare its ``IK_QP`` with the QP row on the first ``rtb_qp_problems`` targets
+            (:mod:`symkin.bench.ik_qp`; needs quadprog).
 
     Returns:
         ``{"robot", "n_problems", "seed", "tol", "tol_on", "backend", "rows": [...], "rtb"}``; each
@@ -168,7 +175,25 @@ def run_table1(
         "rows": rows,
         "lanes": _time_lanes(solver, Tep, starts, seed, tol, tol_on) if backend == "c" else None,
         "rtb": _time_rtb(robot, n_problems, seed, tol) if rtb else None,
+        "rtb_qp": _compare_qp(robot, solver, Tep, starts, labels, tol, rtb_qp_problems, seed)
+        if rtb and backend == "c"
+        else None,
     }
+
+
+def _compare_qp(
+    robot: Any, kin: Any, Tep: np.ndarray, starts: np.ndarray, labels: list[str], tol: float, problems: int,
+    seed: int,
+) -> dict[str, Any] | None:  # fmt: skip
+    """RTB's IK_QP against the QP row (:func:`symkin.bench.ik_qp.compare_rtb_qp`), when that row runs."""
+    from symkin.bench.ik_qp import QP_ROW, compare_rtb_qp
+
+    if QP_ROW not in labels:
+        return None
+    try:
+        return compare_rtb_qp(robot, kin, Tep, starts, TABLE1_METHODS[QP_ROW], tol, problems, seed)
+    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
+        return {"error": f"{type(exc).__name__}: {exc}"}
 
 
 def _time_lanes(
@@ -210,7 +235,7 @@ def _row(
     solved = iterations[success]
     err = np.linalg.norm(pose_error(robot.fkine(q[success]), Tep[success]), axis=-1) if success.any() else []
     slimit, ilimit = SETTINGS[setting]
-    paper = PAPER_TABLE1.get((label, setting))
+    paper = PAPER_TABLE1.get((label, setting)) if robot.name == "ur5" else None  # the paper solved a UR5
     return {
         "method": label,
         "setting": setting,
@@ -326,4 +351,12 @@ def format_table1(result: dict[str, Any]) -> str:
                     f"symkin LM (Chan lambda=0.1), 100 x 30: {ours['us_per_solve']:.1f} us/solve: "
                     f"{rtb['us_per_solve'] / ours['us_per_solve']:.1f}x faster than roboticstoolbox-python"
                 )
+    if "rtb_qp" in result and any(r["method"].startswith("QP") for r in result["rows"]):
+        from symkin.bench.ik_qp import format_rtb_qp
+
+        qp = result["rtb_qp"]
+        if qp is not None and "error" in qp:
+            out.append(f"roboticstoolbox-python IK_QP: not compared ({qp['error']})")
+        elif qp is not None or result.get("rtb") is not None:
+            out.append(format_rtb_qp(qp))
     return "\n".join(out)

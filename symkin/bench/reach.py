@@ -68,11 +68,9 @@ def _worker_cpu(client: Any) -> float:
 
 
 def _cluster(workers: int) -> Any:
-    import distributed
+    from symkin.workspace.run import local_cluster
 
-    return distributed.LocalCluster(
-        n_workers=workers, threads_per_worker=1, dashboard_address=":0", silence_logs=50
-    )
+    return local_cluster(workers)
 
 
 def _same(a: Any, b: Any) -> bool:

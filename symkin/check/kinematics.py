@@ -150,9 +150,13 @@ def check(
     seed: int = 0,
 ) -> CheckReport:
     """Compare every function of every backend (names, or compiled Kinematics objects) of ``model``
-    (a Robot or a Tree) with the references (module docstring)."""
+    (a Robot or a Tree) with the references (module docstring). ParameterError for a ``samples``
+    that is not a count >= 1 or whose finite-difference Hessians would not fit in memory."""
+    from symkin.core.sizes import count, room
     from symkin.runtime.load import compile as compile_model
 
+    samples = count(samples, "samples")
+    room(8.0 * 24 * model.n**3 * samples, f"checking {samples} configurations (finite-difference Hessians)")
     kins = [b if isinstance(b, Kinematics) else compile_model(model, backend=b) for b in backends]
     tree = not isinstance(model, Robot)
     Q = sample_configurations(model, samples, seed)

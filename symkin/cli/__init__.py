@@ -9,8 +9,10 @@ Every command that takes a ROBOT accepts a built-in name (``panda``), an ETS str
 chain to one link (also ``--base-link/--end-link``), and ``--tool``/``--base`` to add a constant
 transform after the end effector / before the first link. ``compile``, ``check`` and ``derive``
 take a whole tree with ``--frames a,b,c`` (a branching URDF without a frame is a tree of its
-leaves). User mistakes print one line ``symkin: error: ...`` and exit with status 2, checked before
-any long work starts where they can be; a failed check or an unsolved problem exits 1. When the
+leaves). Exit status 0 and 1 are answers (1: in collision, not solved, not arrived, a failed
+check, files out of date); every error is one line ``symkin: error: ...`` and status 2 (user
+mistakes, checked before any long work starts where they can be; bad input files; running out
+of memory; an unexpected exception, whose traceback ``SYMKIN_TRACEBACK=1`` prints). When the
 reader of the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
 (128 + SIGPIPE), as a program killed by SIGPIPE would; an output that cannot be written (a full
 disk, ``> /dev/full``) is an error: ``symkin: error: cannot write the output: ...``, status 2.

@@ -1,4 +1,4 @@
-"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, calls, compile, urdf, reach, collide)."""
+"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, qrmc, calls, compile, urdf, reach, collide)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,14 @@ from typing import Any
 import numpy as np
 
 from symkin.cli.checks import UserError, at_least_1, check_cflags_for, need_matplotlib, positive_float
-from symkin.cli.common import Deprecated, add_command, add_robot_argument, single_chain
+from symkin.cli.common import (
+    Deprecated,
+    add_command,
+    add_robot_argument,
+    add_srdf_option,
+    single_chain,
+    with_srdf,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -19,13 +26,14 @@ def add_parser(sub: Any) -> None:
         sub,
         "bench",
         "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
-        "mmc (Table I), calls (one at a time), compile (cold, by chain length), urdf (every chain of "
+        "mmc (Table I), qrmc (QRMC vs RRMC at singularities), calls (one at a time), compile (cold, by "
+        "chain length), urdf (every chain of "
         "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK), meshes "
         "(the covering sphere model against Pinocchio + coal on the real meshes)",
     )
     s.add_argument(
         "what",
-        choices=("kin", "tree", "ik", "mmc", "calls", "compile", "urdf", "reach", "collide", "meshes"),
+        choices=("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide", "meshes"),
         help="which benchmark",
     )
     add_robot_argument(
@@ -45,14 +53,15 @@ def add_parser(sub: Any) -> None:
         "--problems",
         type=at_least_1,
         help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000); "
-        "urdf: at most N chains (default all); meshes: uniform configurations of each kind (default 100000)",
+        "qrmc: random tasks on the UR5 and the Panda besides the singular ones (default 0); urdf: at most "
+        "N chains (default all); meshes: uniform configurations of each kind (default 100000)",
     )
     s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
     s.add_argument(
         "--plot",
         metavar="PNG",
-        help="mmc: a Fig. 3 style plot of one task; compile: time and ops against joints; urdf: compile time "
-        "against joints",
+        help="mmc: a Fig. 3 style plot of one task; qrmc: manipulability, joint speeds and error of two "
+        "singular tasks; compile: time and ops against joints; urdf: compile time against joints",
     )
     s.add_argument("--analytic", action="store_true", help="ik: closed-form IK against EAIK and sampling")
     s.add_argument(
@@ -72,6 +81,17 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
     )
+    add_srdf_option(s, " (collide)")
+    s.add_argument(
+        "--build",
+        action="store_true",
+        help="collide: also the cold build of a 300-sphere model of ROBOT (its self pairs as tables)",
+    )
+    s.add_argument(
+        "--unrolled",
+        action="store_true",
+        help="collide --build: also that model as straight-line code (minutes)",
+    )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=run, robot_option=None)
 
@@ -83,8 +103,13 @@ def run(args: argparse.Namespace) -> int:
     if custom and args.robot is None:
         raise UserError("--tool/--base change a ROBOT: name one (symkin bench WHAT ROBOT --tool ...)")
     check_cflags_for("c")
-    if args.plot and args.what not in ("mmc", "compile", "urdf"):
-        raise UserError(f"--plot is for `symkin bench mmc`, `compile` and `urdf`, not `{args.what}`")
+    if args.plot and args.what not in ("mmc", "qrmc", "compile", "urdf"):
+        raise UserError(f"--plot is for `symkin bench mmc`, `qrmc`, `compile` and `urdf`, not `{args.what}`")
+    for option in ("srdf", "build", "unrolled"):
+        if getattr(args, option) and args.what != "collide":
+            raise UserError(f"--{option} is for `symkin bench collide`, not `{args.what}`")
+    if args.unrolled and not args.build:
+        raise UserError("--unrolled goes with --build")
     if args.what in ("tree", "urdf") and args.robot is not None:
         raise UserError(f"bench {args.what} measures its own robots; it takes no ROBOT")
     need_matplotlib(args.plot)
@@ -103,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
             if not args.json:
                 print(f"plot written to {args.plot}")
         return 0
+    if args.what == "qrmc":
+        return _qrmc(args)
     spec: Any = single_chain(args) if custom else args.robot
     if args.what == "calls":
         from symkin.bench.calls import format_calls, run_calls
@@ -124,10 +151,18 @@ def run(args: argparse.Namespace) -> int:
     if args.what == "collide":
         from symkin.bench.collide import format_collide, run_collide
 
-        result = run_collide(
-            single_chain(args, "panda"), batch=args.batch or 20_000, seed=args.seed, progress=not args.json
-        )
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
+        robot = with_srdf(args, single_chain(args, "panda", geometry=True))
+        result = run_collide(robot, batch=args.batch or 20_000, seed=args.seed, progress=not args.json)
+        if not args.json:
+            print(format_collide(result), flush=True)
+        if args.build:
+            from symkin.bench.collide_build import format_build, run_build
+
+            result["build"] = run_build(robot, seed=args.seed, unrolled=args.unrolled)
+            if not args.json:
+                print("\n" + format_build(result["build"]))
+        if args.json:
+            print(json.dumps(result, indent=2, default=_jsonable))
         return 0
     if args.what == "meshes":
         from symkin.bench.meshes import format_meshes, run_meshes
@@ -192,6 +227,29 @@ def run(args: argparse.Namespace) -> int:
         kin = compile_robot(single_chain(args, first), backend="c") if isinstance(first, str) else first
         q0, Tep = mmc.table1_tasks(kin, 1, np.random.default_rng(args.seed))
         mmc.plot_task(kin, q0[0], Tep[0], args.plot, title=f"{kin.name}: RRMC vs MMC (one Table I task)")
+        if not args.json:
+            print(f"plot written to {args.plot}")
+    return 0
+
+
+def _qrmc(args: argparse.Namespace) -> int:
+    """``symkin bench qrmc``: the UR5's singular tasks (and -n random tasks on the UR5 and the Panda)."""
+    from symkin.bench import qrmc
+    from symkin.runtime.load import compile as compile_robot
+
+    if args.robot is not None or _custom(args):
+        raise UserError("bench qrmc runs its own UR5 tasks (and the Panda's with -n); it takes no ROBOT")
+    ur5 = compile_robot("ur5", backend="c")
+    res = qrmc.run_singular(ur5, progress=not args.json, keep=bool(args.plot))
+    runs = res.pop("runs", None)
+    random = [
+        qrmc.run_random(compile_robot(name, backend="c"), args.problems, args.seed, progress=not args.json)
+        for name in (("ur5", "panda") if args.problems else ())
+    ]
+    out = {"singular": res, "random": random}
+    print(json.dumps(out, indent=2, default=_jsonable) if args.json else qrmc.format_singular(res, random))
+    if args.plot:
+        qrmc.plot_singular({k: runs[k] for k in qrmc.PLOTTED}, ur5.qd_max, args.plot)
         if not args.json:
             print(f"plot written to {args.plot}")
     return 0

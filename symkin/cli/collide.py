@@ -25,23 +25,18 @@ def add_parser(sub: Any) -> None:
         help="joint values (rad or m), or a named configuration such as qr (default qz)",
     )
     common.add_obstacle_options(s)
+    common.add_srdf_option(s)
     s.add_argument("--backend", choices=("c", "numpy"), default="c", help="the kernel that answers")
     s.add_argument("--top", type=int, default=5, metavar="K", help="print the K closest pairs")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=run)
 
 
-def _label(kind: str, i: int, j: int, shapes: Any) -> str:
-    a = f"{type(shapes[i]).__name__.lower()} {i} ({shapes[i].link})"
-    if kind == "self":
-        return f"{a} - {type(shapes[j]).__name__.lower()} {j} ({shapes[j].link})"
-    return f"{a} - obstacle {kind} {j}"
-
-
 def run(args: argparse.Namespace) -> int:
+    from symkin.geometry.pairs import layout_of
     from symkin.runtime.load import compile as compile_robot
 
-    robot = common.single_chain(args, geometry=True)
+    robot = common.with_srdf(args, common.single_chain(args, geometry=True))
     if args.top < 0:
         raise UserError(f"--top must be >= 0, got {args.top}")
     q = common.configuration(" ".join(args.q), robot, "Q") if args.q else np.zeros(robot.n)
@@ -53,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
     d = kin.distances(q, env)
     labels = kin.collision_pairs(env)
     shapes = robot.geometry.shapes
+    describe = layout_of(robot).describe
     order = np.argsort(d, kind="stable")[: args.top]
     colliding = [k for k in np.argsort(d, kind="stable") if d[k] < 0]
     if args.json:
@@ -61,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
             "q": q.tolist(),
             "in_collision": bool(hit),
             "pairs": len(d),
-            "closest": [{"pair": _label(*labels[k], shapes), "distance": float(d[k])} for k in order],
-            "colliding": [_label(*labels[k], shapes) for k in colliding],
+            "closest": [{"pair": describe(labels[k]), "distance": float(d[k])} for k in order],
+            "colliding": [describe(labels[k]) for k in colliding],
         }
         print(json.dumps(out, indent=2))
         return 1 if hit else 0
@@ -75,5 +71,5 @@ def run(args: argparse.Namespace) -> int:
     if len(order):
         print("closest pairs (signed distance, m):")
         for k in order:
-            print(f"  {d[k]: .5f}  {_label(*labels[k], shapes)}")
+            print(f"  {d[k]: .5f}  {describe(labels[k])}")
     return 1 if hit else 0

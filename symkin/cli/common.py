@@ -28,6 +28,7 @@ __all__ = [
     "add_target_options",
     "add_scale_options",
     "split_frame",
+    "is_urdf",
     "single_chain",
     "chain_or_tree",
     "target",
@@ -37,6 +38,9 @@ __all__ = [
     "fmt",
     "add_obstacle_options",
     "environment_of",
+    "add_srdf_option",
+    "with_srdf",
+    "need_collision",
 ]
 
 ROBOT_HELP = (
@@ -163,7 +167,7 @@ def split_frame(spec: str) -> tuple[str, str | None]:
     return spec, None
 
 
-def _is_urdf(path: str) -> bool:
+def is_urdf(path: str) -> bool:
     return "(" not in path and Path(path.strip()).suffix.lower() in _URDF
 
 
@@ -187,7 +191,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
     tool, base_transform = getattr(args, "tool", None), getattr(args, "base", None)
     path, frame = split_frame(spec) if isinstance(spec, str) else (spec, None)
     end, base = _end(args, frame), getattr(args, "base_link", None)
-    if not isinstance(path, str) or not _is_urdf(path):
+    if not isinstance(path, str) or not is_urdf(path):
         if frame or end or base:
             raise UserError("--base-link, --end-link and ROBOT:FRAME apply to URDF files only")
         return resolve_robot(spec, tool=tool, base=base_transform)
@@ -201,10 +205,7 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
             ) from None
         raise
     if geometry:
-        from symkin.geometry.urdf import geometry_from_urdf
-
-        shapes = geometry_from_urdf(Path(path).expanduser(), robot)
-        robot = robot.with_geometry(shapes) if shapes.shapes else robot
+        robot = _with_urdf_geometry(robot, path)
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 
@@ -214,15 +215,17 @@ def _no_transform(args: argparse.Namespace, hint: str) -> None:
         raise UserError(f"--tool/--base change one chain{hint}")
 
 
-def chain_or_tree(args: argparse.Namespace) -> Any:
-    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``):
-    a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``."""
+def chain_or_tree(args: argparse.Namespace, geometry: bool = False) -> Any:
+    """The Robot or :class:`symkin.Tree` a command works on (``compile``, ``check``, ``derive``,
+    ``view``): a Tree for ``--frames``, or for a branching URDF without ``ROBOT:FRAME``/``--end-link``.
+    ``geometry``: a URDF's ``<collision>`` elements become the model's collision geometry, as in
+    :func:`single_chain`."""
     from symkin.model.tree import Tree
 
     path, frame = split_frame(args.robot)
     frames = getattr(args, "frames", None)
     if frames is not None:
-        if not _is_urdf(path):
+        if not is_urdf(path):
             raise UserError("--frames applies to URDF files only")
         if frame or getattr(args, "end_link", None):
             raise UserError("give either --frames (a tree) or one frame (ROBOT:FRAME, --end-link)")
@@ -230,13 +233,23 @@ def chain_or_tree(args: argparse.Namespace) -> Any:
         if not names:
             raise UserError(f"--frames needs link names separated by commas, not {frames!r}")
         _no_transform(args, ", not a tree of --frames")
-        return Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
-    if _is_urdf(path) and _end(args, frame) is None:
+        tree = Tree.from_urdf(Path(path).expanduser(), frames=names, base_link=args.base_link)
+        return _with_urdf_geometry(tree, path) if geometry else tree
+    if is_urdf(path) and _end(args, frame) is None:
         tree = Tree.from_urdf(Path(path).expanduser(), base_link=getattr(args, "base_link", None))
         if len(tree.frames) > 1:
             _no_transform(args, f": name the frame as {path}:FRAME or with --end-link")
-            return tree
-    return single_chain(args)
+            return _with_urdf_geometry(tree, path) if geometry else tree
+    return single_chain(args, geometry=geometry)
+
+
+def _with_urdf_geometry(model: Any, path: str) -> Any:
+    """``model`` with the ``<collision>`` elements of the URDF ``path`` as its geometry (meshes
+    skipped), when there are any."""
+    from symkin.geometry.urdf import geometry_from_urdf
+
+    shapes = geometry_from_urdf(Path(path).expanduser(), model)
+    return model.with_geometry(shapes) if shapes.shapes else model
 
 
 # -- values ----------------------------------------------------------------------------------------
@@ -250,7 +263,9 @@ def target(args: argparse.Namespace, robot: Any) -> np.ndarray:
     if args.target_q is not None:
         return robot.fkine(floats(args.target_q, "--target-q", robot.n))
     if args.matrix is not None:
-        return floats(args.matrix, "--matrix", 16).reshape(4, 4)
+        from symkin.core.pose import as_pose
+
+        return as_pose(floats(args.matrix, "--matrix", 16).reshape(4, 4), "--matrix")  # the one pose rule
     from symkin.model.transform import rpy_matrix
 
     pose = floats(args.pose, "--pose", 6)
@@ -313,30 +328,143 @@ def add_obstacle_options(s: argparse.ArgumentParser) -> None:
 
 
 def environment_of(args: argparse.Namespace) -> Any:
-    """The obstacles of --sphere, --capsule, --box and --env."""
-    from symkin.model.geometry import Box, Capsule, Environment, Sphere
+    """The obstacles of --sphere, --capsule, --box and --env; a UserError naming the option (or the
+    file, its key and row) for anything that is not such a shape."""
+    from symkin.model.geometry import Environment
 
-    kinds = {  # option: (key in --env, numbers, the shape of them)
-        "sphere": ("spheres", 4, lambda v: Sphere(v[:3], v[3])),
-        "capsule": ("capsules", 7, lambda v: Capsule(v[:3], v[3:6], v[6])),
-        "box": ("boxes", 6, lambda v: Box(v[:3], v[3:])),
-    }
-    shapes = {
-        what: [make(floats(text, f"--{what}", size)) for text in getattr(args, what)]
-        for what, (_, size, make) in kinds.items()
-    }
+    shapes: dict[str, list[Any]] = {what: [] for what in _KINDS}
+    for what, (_, size) in _KINDS.items():
+        for text in getattr(args, what):
+            shapes[what].append(_shape(what, floats(text, f"--{what}", size), f"--{what} {text!r}"))
     if args.env:
-        path = Path(args.env).expanduser()
-        try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError) as exc:
-            raise UserError(f"--env {path}: {exc}") from None
-        if not isinstance(data, dict) or set(data) - {"spheres", "capsules", "boxes"}:
-            raise UserError(f"--env {path}: a JSON object with keys spheres, capsules, boxes")
-        for what, (key, size, make) in kinds.items():
-            for row in data.get(key, []):
-                v = np.asarray(row, dtype=float) if isinstance(row, list) else np.zeros(0)
-                if v.shape != (size,):
-                    raise UserError(f"--env {path}: each of {key} needs {size} numbers, got {row!r}")
-                shapes[what].append(make(v))
-    return Environment(*(tuple(shapes[what]) for what in kinds))
+        data = _env_file(Path(args.env).expanduser())
+        for what, (key, size) in _KINDS.items():
+            rows = data.get(key, [])
+            if not isinstance(rows, list):
+                raise UserError(
+                    f"--env {args.env}: {key} must be a list of rows of {size} numbers, not {_json(rows)}"
+                )
+            for i, row in enumerate(rows):
+                where = f"--env {args.env}: {key}[{i}]"
+                if not (
+                    isinstance(row, list)
+                    and len(row) == size
+                    and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in row)
+                ):
+                    raise UserError(f"{where} must be {size} numbers, not {_json(row)}")
+                try:
+                    v = np.array([float(x) for x in row])
+                except OverflowError:  # an integer beyond any double
+                    raise UserError(f"{where}: the numbers must be finite") from None
+                shapes[what].append(_shape(what, v, where))
+    return Environment(*(tuple(shapes[what]) for what in _KINDS))
+
+
+_KINDS = {"sphere": ("spheres", 4), "capsule": ("capsules", 7), "box": ("boxes", 6)}  # option: key, numbers
+_ENV_BYTES = 64 * 2**20  # an obstacle file larger than this is refused before it is read
+
+
+def _shape(what: str, v: np.ndarray, where: str) -> Any:
+    """The obstacle ``what`` of the numbers ``v``; UserError naming ``where`` when they are not one."""
+    from symkin.errors import SymkinError
+    from symkin.model.geometry import Box, Capsule, Sphere
+
+    if not np.isfinite(v).all():
+        raise UserError(f"{where}: the numbers must be finite")
+    try:
+        if what == "sphere":
+            return Sphere(v[:3], v[3])
+        return Capsule(v[:3], v[3:6], v[6]) if what == "capsule" else Box(v[:3], v[3:])
+    except SymkinError as exc:
+        raise UserError(f"{where}: {exc}") from None
+
+
+def _env_file(path: Path) -> dict:
+    """The JSON object of an --env file (keys spheres, capsules, boxes)."""
+    from symkin.core.sizes import read_bounded
+
+    try:
+        data = json.loads(read_bounded(path, _ENV_BYTES, f"--env {path}", UserError).decode("utf-8"))
+    except (OSError, ValueError) as exc:
+        raise UserError(f"--env {path}: {exc}") from None
+    except RecursionError:
+        raise UserError(f"--env {path}: arrays nested too deeply to be obstacles") from None
+    if not isinstance(data, dict) or set(data) - {"spheres", "capsules", "boxes"}:
+        raise UserError(f"--env {path}: a JSON object with keys spheres, capsules, boxes")
+    return data
+
+
+def _json(value: Any) -> str:
+    """``value`` as JSON text, at most 60 characters."""
+    try:
+        text = json.dumps(value)
+    except (ValueError, RecursionError):
+        text = repr(type(value).__name__)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+# -- SRDF (every command that checks collisions) ---------------------------------------------------
+def add_srdf_option(s: argparse.ArgumentParser, when: str = "") -> None:
+    """--srdf FILE: link pairs a MoveIt SRDF disables are not checked (``when``: what it needs)."""
+    s.add_argument(
+        "--srdf",
+        metavar="FILE",
+        help="skip the link pairs a MoveIt SRDF disables (<disable_collisions>); a pair of links stays "
+        "checked unless the SRDF disables every pair of the URDF links merged into them; "
+        "`symkin srdf ROBOT` writes one" + when,
+    )
+
+
+def need_collision(args: argparse.Namespace, env: Any) -> None:
+    """Obstacles and --srdf are options of --collision (ik, servo, reach): refused without it."""
+    if (len(env) or getattr(args, "srdf", None)) and not args.collision:
+        raise UserError(
+            "--sphere, --capsule, --box, --env and --srdf are options of --collision: add --collision"
+        )
+
+
+def srdf_carriers(args: argparse.Namespace, model: Any) -> dict[str, tuple[str, ...]]:
+    """Per link of ``model``'s geometry, the link names an SRDF of ROBOT uses for it: the URDF
+    links with collision elements attached to it (a URDF ROBOT), else its own name."""
+    links = model.geometry.links
+    path = args.robot if isinstance(args.robot, str) else None
+    if path is not None:
+        path = split_frame(path)[0]
+    if path is not None and is_urdf(path):
+        from symkin.geometry.urdf import urdf_carriers
+
+        carriers = urdf_carriers(Path(path).expanduser(), model)
+        return {x: carriers.get(x, (x,)) for x in links}
+    return {x: (x,) for x in links}
+
+
+def with_srdf(args: argparse.Namespace, model: Any) -> Any:
+    """``model`` with the link pairs of --srdf disabled (conservatively, see
+    :func:`symkin.geometry.srdf.srdf_disabled`); ``model`` itself without --srdf. A file none of
+    whose pairs names two of the model's links is an error (another robot's SRDF); pairs the SRDF
+    disables only in part are said on stderr."""
+    path = getattr(args, "srdf", None)
+    if path is None:
+        return model
+    from symkin.geometry.srdf import srdf_disabled
+
+    geometry = model.geometry
+    if geometry is None or not geometry.shapes:
+        raise UserError(f"--srdf: {model.name} has no collision geometry")
+    carriers = srdf_carriers(args, model)
+    pairs, partial, used = srdf_disabled(Path(path).expanduser(), carriers)
+    if not used:
+        names = sorted({x for c in carriers.values() for x in c})
+        shown = ", ".join(names[:6]) + (" ..." if len(names) > 6 else "")
+        raise UserError(
+            f"--srdf {path}: none of its disable_collisions pairs names two links of {model.name} with "
+            f"collision geometry ({shown}): an SRDF of another robot?"
+        )
+    if partial:
+        shown = ", ".join(f"({a}, {b})" for a, b in partial[:4]) + (" ..." if len(partial) > 4 else "")
+        print(
+            f"symkin: --srdf: {len(partial)} link pairs stay checked, the SRDF disabling only some of the "
+            f"links merged into them: {shown}",
+            file=sys.stderr,
+        )
+    return model.with_geometry(geometry.with_disabled(pairs))

@@ -1,5 +1,5 @@
-"""``symkin ik``: inverse kinematics for one target pose, numerical (NR, GN, LM) or in closed form
-(``--method analytic``, ``--all``)."""
+"""``symkin ik``: inverse kinematics for one target pose, numerical (NR, GN, LM, QP) or in closed
+form (``--method analytic``, ``--all``)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from symkin.cli import common
-from symkin.cli.checks import UserError, at_least_1, check_cflags_for, positive_float
+from symkin.cli.checks import UserError, at_least_1, check_cflags_for, non_negative_float, positive_float
 
 __all__ = ["add_parser", "run"]
 
@@ -20,7 +20,12 @@ def add_parser(sub: Any) -> None:
     s = common.add_command(sub, "ik", "solve inverse kinematics for one target pose")
     common.add_robot_argument(s)
     common.add_target_options(s, "first start of the search (default: random within the joint limits)")
-    s.add_argument("--method", choices=("NR", "GN", "LM", "analytic"), default="LM", help="solver")
+    s.add_argument(
+        "--method",
+        choices=("NR", "GN", "LM", "QP", "analytic"),
+        default="LM",
+        help="solver (QP: one QP per step, joint-limit dampers and a slack, Part 2)",
+    )
     s.add_argument(
         "--all", action="store_true", help="print every closed-form solution (arms with a closed form)"
     )
@@ -36,35 +41,81 @@ def add_parser(sub: Any) -> None:
         help="task weights: 'position' (position only), 'orientation', or six weights >= 0 for "
         "vx vy vz wx wy wz (default all 1)",
     )
-    s.add_argument("--lam", type=positive_float, help="damping lambda of LM (default 0.1)")
+    s.add_argument(
+        "--lam",
+        type=positive_float,
+        help="damping lambda of LM (default 0.1); QP: joint-velocity weight (0.01)",
+    )
+    s.add_argument("--slack-gain", type=positive_float, help="QP: the slack's gain lambda_delta (default 1)")
+    s.add_argument(
+        "--manipulability",
+        type=non_negative_float,
+        help="QP: weight of the manipulability term (default 0: none; Part 2's 1 / lambda_m)",
+    )
+    s.add_argument(
+        "--xi", type=positive_float, help="QP: gain of the joint-limit velocity dampers (default 1)"
+    )
+    s.add_argument(
+        "--rho-i", type=positive_float, help="QP: dampers' influence distance, rad or m (default 0.9)"
+    )
+    s.add_argument(
+        "--rho-s", type=non_negative_float, help="QP: dampers' stop distance, rad or m (default 0.01)"
+    )
     s.add_argument("--tol", type=positive_float, help="converged when |e| < TOL (default 1e-6: 1 um, 1 urad)")
     s.add_argument("--ilimit", type=at_least_1, help="iterations per search (default 30)")
     s.add_argument("--slimit", type=at_least_1, help="searches from random starts (default 100)")
     s.add_argument("--seed", type=int, default=0, help="seed of the random restarts")
+    s.add_argument(
+        "--collision",
+        action="store_true",
+        help="only a solution free of self-collisions and of the obstacles given (the robot's geometry; "
+        "a converged solution in collision starts the next search)",
+    )
+    common.add_obstacle_options(s)
+    common.add_srdf_option(s, " (with --collision)")
     s.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
 
-    robot = common.single_chain(args)
+    robot = common.single_chain(args, geometry=args.collision)
+    env = common.environment_of(args)
+    common.need_collision(args, env)
+    if args.collision and (args.all or args.method == "analytic"):
+        raise UserError("--collision applies to the numerical methods NR, GN and LM, not the closed form")
+    robot = common.with_srdf(args, robot)
     Tep = common.target(args, robot)
     numerical = {"--we": args.we, "--lam": args.lam, "--ilimit": args.ilimit, "--slimit": args.slimit}
+    qp = {f"--{k.replace('_', '-')}": getattr(args, k) for k in _QP_OPTIONS}
+    given_qp = [k for k, v in qp.items() if v is not None]
+    if given_qp and args.method != "QP":
+        raise UserError(f"{', '.join(given_qp)} set the QP method: add --method QP")
+    numerical.update(qp)
     check_cflags_for(args.backend)
     if args.all or args.method == "analytic":
         given = [k for k, v in numerical.items() if v is not None]
         if given:
             raise UserError(
-                f"{', '.join(given)} set the numerical methods NR, GN and LM, not the closed form"
+                f"{', '.join(given)} set the numerical methods NR, GN, LM and QP, not the closed form"
             )
         return _ik_analytic(args, compile_robot(robot, backend=args.backend), Tep)
     kin = compile_robot(robot, backend=args.backend)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
+    if args.collision:
+        kwargs["collision"] = env if len(env) else True
     if args.q0 is not None:
         kwargs["q0"] = common.floats(args.q0, "--q0", robot.n)
     if args.we is not None:
         kwargs["we"] = _weights(args.we)
-    for name in ("damping", "lam", "tol", "ilimit", "slimit"):  # the solver's defaults unless given
+    for name in (
+        "damping",
+        "lam",
+        "tol",
+        "ilimit",
+        "slimit",
+        *_QP_OPTIONS,
+    ):  # the solver's defaults unless given
         if getattr(args, name) is not None:
             kwargs[name] = getattr(args, name)
     t = time.perf_counter()
@@ -75,6 +126,9 @@ def run(args: argparse.Namespace) -> int:
     return _report(
         args, res, dt, f"in {res.iterations} iterations, {res.searches} searches, {dt * 1e3:.2f} ms"
     )
+
+
+_QP_OPTIONS = ("slack_gain", "manipulability", "xi", "rho_i", "rho_s")
 
 
 def _weights(text: str) -> np.ndarray:

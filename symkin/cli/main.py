@@ -5,7 +5,9 @@ exit status 2."""
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
+import traceback
 from collections.abc import Sequence
 from typing import Any
 
@@ -22,6 +24,7 @@ from symkin.cli import (
     plot,
     reach,
     servo,
+    srdf,
 )
 from symkin.cli import compile as compile_command
 from symkin.cli import list as list_command
@@ -34,7 +37,7 @@ __all__ = ["build_parser", "main"]
 #: the commands in the order of ``symkin --help``
 COMMANDS = (
     list_command, compile_command, list_frames, generate, check, derive,
-    ik, servo, collide, geometry, plot, view_command, bench, reach, dataset,
+    ik, servo, collide, geometry, srdf, plot, view_command, bench, reach, dataset,
 )  # fmt: skip
 
 
@@ -44,7 +47,10 @@ def build_parser() -> Parser:
     p = Parser(
         prog="symkin",
         description="symkin: a symbolic, code-generating kinematics compiler for robot manipulators.",
-        epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command.",
+        epilog="ROBOT is " + ROBOT_HELP + ". Run `symkin COMMAND --help` for the options of a command. "
+        "Exit status: 0 success; 1 the answer no (collide: in collision; ik: not solved; servo: not arrived; "
+        "check: a failure; generate --check: out of date); 2 any error (one line; SYMKIN_TRACEBACK=1 adds "
+        "the traceback of an unexpected one); 130 interrupted.",
         formatter_class=Formatter,
     )
     p.add_argument("--version", action="version", version=f"symkin {__version__}")
@@ -57,10 +63,14 @@ def build_parser() -> Parser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one symkin command; returns the exit status.
 
-    User mistakes print one line ``symkin: error: ...`` and exit with status 2. When the reader of
-    the output goes away (``symkin list | head -1``), symkin stops quietly with status 141
-    (128 + SIGPIPE), as a program killed by SIGPIPE would; an output that cannot be written (a full
-    disk, ``> /dev/full``) is an error: ``symkin: error: cannot write the output: ...``, status 2.
+    Exit status 0 or 1 is the command's answer (1: in collision, not solved, did not arrive, a check
+    failed, files out of date). Every error is one line ``symkin: error: ...`` and status 2: user
+    mistakes, bad files, and also an unexpected exception (a bug; ``SYMKIN_TRACEBACK=1`` prints its
+    traceback) or running out of memory, so an error never reads as an answer. Ctrl-C: status 130.
+    When the reader of the output goes away (``symkin list | head -1``), symkin stops quietly with
+    status 141 (128 + SIGPIPE), as a program killed by SIGPIPE would; an output that cannot be
+    written (a full disk, ``> /dev/full``) is an error: ``symkin: error: cannot write the output:
+    ...``, status 2.
     The output is flushed here, inside the guard, not by the interpreter at exit, so such an error
     is one line and status 2, not a success with nothing written or "Exception ignored".
     """
@@ -74,35 +84,56 @@ def main(argv: Sequence[str] | None = None) -> int:
         return code
     except BrokenPipeError:  # `symkin ... | head`: the reader left; stop quietly like other tools
         _silence_stdout()
-        return 141  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
+        return EXIT_PIPE  # 128 + SIGPIPE, what a shell reports for a command ended by a closed pipe
     except _OutputError as exc:
         _silence_stdout()
         _say(f"symkin: error: cannot write the output: {exc.cause.strerror or exc.cause}")
-        return 2
+        return EXIT_ERROR
     finally:
         if isinstance(sys.stdout, _Output):
             sys.stdout = stdout
 
 
+#: exit statuses: 0 and 1 are answers (1: in collision, not solved, not arrived, a check failed,
+#: files out of date); every error is 2, whatever raised it; then interrupted and closed pipe
+EXIT_OK, EXIT_NO, EXIT_ERROR, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 130, 141
+
+
 def _run(argv: Sequence[str] | None) -> int:
     from symkin.errors import SymkinError
 
-    parser = build_parser()
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help, --version, or a one-line usage error (exit 2)
-        return exc.code if isinstance(exc.code, int) else 2
-    try:
-        return int(args.func(args) or 0)
+        try:
+            args = build_parser().parse_args(argv)
+        except SystemExit as exc:  # --help, --version, or a one-line usage error (exit 2)
+            return exc.code if isinstance(exc.code, int) else EXIT_ERROR
+        code = args.func(args)
     except (BrokenPipeError, _OutputError):
         raise
     except (UserError, SymkinError, ValueError, OSError) as exc:
-        message = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        _say(f"symkin: error: {message}")
-        return 2
+        _say(f"symkin: error: {_first_line(exc)}")
+        return EXIT_ERROR
     except KeyboardInterrupt:
         _say("symkin: interrupted")
-        return 130
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        _say("symkin: error: out of memory (ask for less: a smaller size, batch or resolution)")
+        return EXIT_ERROR
+    except Exception as exc:  # noqa: BLE001 - a bug: one line and status 2, never an answer's status
+        _say(f"symkin: error: unexpected {type(exc).__name__}: {_first_line(exc)} (a bug in symkin: "
+             f"please report it; {_TRACEBACK}=1 prints the traceback)")  # fmt: skip
+        if os.environ.get(_TRACEBACK):
+            traceback.print_exc()
+        return EXIT_ERROR
+    return code if code in (EXIT_OK, EXIT_NO) else EXIT_ERROR if code else EXIT_OK
+
+
+_TRACEBACK = "SYMKIN_TRACEBACK"
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 class _OutputError(Exception):

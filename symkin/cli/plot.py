@@ -31,11 +31,12 @@ def add_parser(sub: Any) -> None:
         help="leave out the collision shapes (drawn when the robot has them)",
     )
     common.add_obstacle_options(s)
+    common.add_srdf_option(s)
     s.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = common.single_chain(args, geometry=True)
+    robot = common.with_srdf(args, common.single_chain(args, geometry=True))
     if args.q is None:
         q = robot.configs.get("qr", robot.configs["qz"])
     else:

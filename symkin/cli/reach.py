@@ -43,6 +43,7 @@ def add_parser(sub: Any) -> None:
         help="count only collision-free solutions (self-collisions, and the obstacles given)",
     )
     common.add_obstacle_options(s)
+    common.add_srdf_option(s, " (with --collision)")
     common.add_scale_options(s)
     s.set_defaults(func=run)
 
@@ -57,8 +58,8 @@ def run(args: argparse.Namespace) -> int:
     axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
     env = common.environment_of(args)
-    if len(env) and not args.collision:
-        raise UserError("--sphere, --capsule, --box and --env are obstacles of --collision: add --collision")
+    common.need_collision(args, env)
+    robot = common.with_srdf(args, robot)
     collision = (env if len(env) else True) if args.collision else None
     rmap = reachability(
         robot, args.resolution, args.orientations, output=args.output, seed=args.seed,

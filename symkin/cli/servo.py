@@ -1,4 +1,4 @@
-"""``symkin servo``: servo to a target pose with RRMC or MMC, optionally plotting manipulability
+"""``symkin servo``: servo to a target pose with RRMC, QRMC or MMC, optionally plotting manipulability
 and error against time."""
 
 from __future__ import annotations
@@ -16,14 +16,14 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(sub, "servo", "servo to a target pose with RRMC or MMC, optionally plotting")
+    s = common.add_command(sub, "servo", "servo to a target pose with RRMC, QRMC or MMC, optionally plotting")
     common.add_robot_argument(s)
     common.add_target_options(s, "start configuration (default: the ready pose qr, else qz)")
     s.add_argument(
         "--controller",
-        choices=("mmc", "rrmc"),
+        choices=("mmc", "rrmc", "qrmc"),
         default="mmc",
-        help="manipulability-maximising or plain resolved rate",
+        help="manipulability-maximising, plain resolved rate, or quadratic rate (through singularities)",
     )
     s.add_argument("--dt", type=positive_float, default=0.05, help="control period (s)")
     s.add_argument("--max-steps", type=int_at_least(0), default=500, help="give up after this many steps")
@@ -38,6 +38,7 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--d-i", type=positive_float, default=0.3, help="--collision: influence distance (m)")
     s.add_argument("--d-s", type=positive_float, default=0.02, help="--collision: safety distance (m)")
     common.add_obstacle_options(s)
+    common.add_srdf_option(s, " (with --collision)")
     s.set_defaults(func=run)
 
 
@@ -47,8 +48,8 @@ def run(args: argparse.Namespace) -> int:
 
     robot = common.single_chain(args, geometry=args.collision)
     env = common.environment_of(args)
-    if len(env) and not args.collision:
-        raise UserError("--sphere, --capsule, --box and --env are obstacles of --collision: add --collision")
+    common.need_collision(args, env)
+    robot = common.with_srdf(args, robot)
     if args.collision and args.controller != "mmc":
         raise UserError("--collision needs the MMC controller (--controller mmc)")
     if args.collision and not args.d_i > args.d_s:
@@ -83,11 +84,29 @@ def run(args: argparse.Namespace) -> int:
     steps = len(res.q) - 1
     summary = {
         "arrived": bool(res.arrived),
+        "reason": res.reason,
         "steps": steps,
         "final_error": float(np.abs(res.e[-1]).sum()) if len(res.e) else None,
         "mean_manipulability": float(np.mean(res.manipulability)),
         "q_final": res.q[-1].tolist(),
     }
+    speeds = _speeds(res, kin)
+    if speeds is not None:
+        summary["max_speed_over_limit"] = {"requested": speeds[0], "applied": speeds[1]}
+    if not res.arrived and res.info:
+        last = res.info[-1]
+        why = (
+            ": no part of the next step was free of collision, so the run stopped before it"
+            if res.blocked
+            else ": the controller could not produce the requested velocity there (a singularity, or a "
+            "target out of reach)"
+            if last.status in ("singular", "max_iter", "infeasible")
+            else ""
+        )
+        summary["stalled"] = (
+            f"sum|e| = {summary['final_error']:.3g}; the last step was {last.status!r} at manipulability "
+            f"{res.manipulability[-1]:.3g}{why}"
+        )
     clearance = None
     if args.collision:  # the closest approach along the path: obstacles, and all pairs
         D = np.asarray(kin.distances(np.asarray(res.q), env))
@@ -98,16 +117,24 @@ def run(args: argparse.Namespace) -> int:
         summary["closest_pair"] = float(D.min())
         summary["controller_backend"] = controller.backend
     if args.plot:
-        _plot_servo(res, args.dt, args.plot, f"{robot.name} {args.controller}", clearance)
+        title = f"{robot.name} {args.controller}"
+        _plot_servo(res, args.dt, args.plot, title, clearance, _speed_ratios(res, kin))
         summary["plot"] = args.plot
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
         print(
-            f"{args.controller}: {'arrived' if res.arrived else 'did not arrive'} after {steps} steps "
+            f"{args.controller}: {_outcome(res.reason)} after {steps} steps "
             f"(dt {args.dt} s); mean manipulability {summary['mean_manipulability']:.4f}"
         )
         print(f"q final = {common.fmt(res.q[-1])}")
+        if speeds is not None:
+            print(
+                f"joint speeds up to {speeds[1]:.3g} x the limits applied ({speeds[0]:.3g} x requested "
+                "before the speed scaling)"
+            )
+        if "stalled" in summary:
+            print(f"did not arrive: {summary['stalled']}")
         if args.collision:
             near = summary["closest_obstacle"]
             print(
@@ -120,16 +147,43 @@ def run(args: argparse.Namespace) -> int:
     return 0 if res.arrived else 1
 
 
-def _plot_servo(res: Any, dt: float, path: str, title: str, clearance: Any = None) -> None:
-    """Manipulability and error against time; with ``clearance`` ((steps,) distances, the safety
-    distance) a third panel with the closest approach; matplotlib was checked by need_matplotlib."""
+def _outcome(reason: str) -> str:
+    """How a servo run ended, in words."""
+    return {
+        "arrived": "arrived",
+        "collision": "stopped (no part of the next step was free of collision)",
+    }.get(reason, "did not arrive")
+
+
+def _speed_ratios(res: Any, kin: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """(requested, applied) max_i |qd_i| / qd_max_i per step, or None without speed limits."""
+    from symkin.bench.qrmc import speed_ratios
+
+    qd_max = getattr(kin, "qd_max", None)
+    if qd_max is None or not res.steps:
+        return None
+    return speed_ratios(res, np.broadcast_to(np.asarray(qd_max, dtype=float), (kin.n,)))
+
+
+def _speeds(res: Any, kin: Any) -> tuple[float, float] | None:
+    """(requested, applied) largest joint speed over its limit along the run, or None without limits."""
+    ratios = _speed_ratios(res, kin)
+    return None if ratios is None else (float(ratios[0].max()), float(ratios[1].max()))
+
+
+def _plot_servo(
+    res: Any, dt: float, path: str, title: str, clearance: Any = None, speeds: Any = None
+) -> None:
+    """Manipulability and error against time; with ``speeds`` ((requested, applied) max_i |qd_i| /
+    qd_max_i per step) a panel of the joint speeds; with ``clearance`` ((steps,) distances, the
+    safety distance) a panel with the closest approach; matplotlib was checked by need_matplotlib."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     t = np.arange(len(res.manipulability)) * dt
-    panels = 2 if clearance is None else 3
+    panels = 2 + (clearance is not None) + (speeds is not None)
     fig, axes = plt.subplots(panels, 1, figsize=(7, 2.5 * panels), sharex=True)
     a1, a2 = axes[0], axes[1]
     a1.plot(t, res.manipulability)
@@ -137,13 +191,20 @@ def _plot_servo(res: Any, dt: float, path: str, title: str, clearance: Any = Non
     a1.set_title(title)
     a2.plot(np.arange(len(res.e)) * dt, np.abs(np.asarray(res.e)).sum(axis=1))
     a2.set_ylabel("sum |e|")
+    if speeds is not None:
+        requested, applied = speeds
+        axes[2].semilogy(t[:-1], np.maximum(requested, 1e-6), "--", label="requested")
+        axes[2].semilogy(t[:-1], np.maximum(applied, 1e-6), label="applied")
+        axes[2].axhline(1.0, color="k", linewidth=0.8, linestyle=":", label="speed limit")
+        axes[2].set_ylabel("max |qd_i| / qd_max_i")
+        axes[2].legend(loc="best", fontsize="small")
     if clearance is not None:
         d, d_s = clearance
-        axes[2].plot(np.arange(len(d)) * dt, d, label="closest distance")
-        axes[2].axhline(d_s, color="tab:orange", linestyle="--", label="safety distance")
-        axes[2].axhline(0.0, color="tab:red", linewidth=0.8, label="contact")
-        axes[2].set_ylabel("clearance (m)")
-        axes[2].legend(loc="best", fontsize="small")
+        axes[-1].plot(np.arange(len(d)) * dt, d, label="closest distance")
+        axes[-1].axhline(d_s, color="tab:orange", linestyle="--", label="safety distance")
+        axes[-1].axhline(0.0, color="tab:red", linewidth=0.8, label="contact")
+        axes[-1].set_ylabel("clearance (m)")
+        axes[-1].legend(loc="best", fontsize="small")
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)

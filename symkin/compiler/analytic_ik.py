@@ -77,7 +77,8 @@ def build_analytic(robot: Robot, backend: str = "c", cache: bool = True) -> tupl
         from symkin.emit.numpy.backend import load_numpy
 
         module = load_numpy(files, cache_dir() / "analytic_ik")
-        return Artifact(files, module, Path(module.__file__) if module.__file__ else None), data["meta"]
+        file = getattr(module, "__file__", None)  # none when imported from memory (cache unwritable)
+        return Artifact(files, module, Path(file) if file else None), data["meta"]
     import sysconfig
 
     import numpy as np

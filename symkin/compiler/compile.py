@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -26,7 +25,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.core.cache import cache_dir, write_atomic
+from symkin.core.cache import cache_dir, verified
 from symkin.core.version import __version__
 from symkin.errors import CompileError, SymkinError
 from symkin.model.robot import Robot
@@ -307,27 +306,11 @@ def write_files(
     return out
 
 
-def _digest(files: dict[str, str]) -> str:
-    return hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
-
-
 def cached_entry(key: str, make: Callable[[], dict[str, Any]], use_cache: bool = True) -> dict[str, Any]:
-    """The entry ``key`` of the generated-code cache (a JSON object, verified by its sha256), else
-    ``make()``, stored atomically. One store for chains, trees and closed-form IK."""
-    path = cache_dir() / "gen" / f"{key}.json"
-    if use_cache and path.exists():
-        try:
-            data = json.loads(path.read_text())
-            body = {k: v for k, v in data.items() if k != "sha256"}
-            if data["sha256"] == _digest(body):
-                return body
-        except (OSError, ValueError, KeyError, TypeError, AttributeError):
-            pass  # corrupted entry: make it again below
-    body = make()
-    if use_cache:
-        with contextlib.suppress(OSError):  # an unwritable cache only costs speed
-            write_atomic(path, json.dumps({**body, "sha256": _digest(body)}))
-    return body
+    """The entry ``key`` of the generated-code cache (``<cache>/gen/<key>.json``, verified by the
+    sha256 of its key and content: :func:`symkin.core.cache.verified`), else ``make()``, stored
+    atomically. One store for chains, trees and closed-form IK."""
+    return verified("gen", key, make, use_cache)
 
 
 def cached_files(

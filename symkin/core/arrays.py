@@ -20,6 +20,8 @@ __all__ = [
     "as_rows",
     "name_of",
     "axes_rows",
+    "finite_number",
+    "per_joint",
     "real_array",
     "sample_bounds",
     "sample_q",
@@ -80,6 +82,30 @@ def real_array(
     except (TypeError, ValueError) as exc:
         raise error(f"{what} must be an array of {items}: {exc}") from None
     return out
+
+
+def finite_number(value: Any, name: str, minimum: float = 0.0, strict: bool = True) -> float:
+    """``value`` as a finite float > ``minimum`` (``>=`` when not ``strict``), else ParameterError."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+    if not (math.isfinite(x) and (x > minimum if strict else x >= minimum)):
+        raise ParameterError(
+            f"{name} must be finite and {'>' if strict else '>='} {minimum:g}, got {value!r}"
+        )
+    return x
+
+
+def per_joint(value: Any, n: int, name: str) -> np.ndarray:
+    """A scalar or (n,) parameter as finite (n,) floats >= 0, else ParameterError."""
+    try:
+        a = np.broadcast_to(real_array(value, name, ParameterError), (n,)).copy()
+    except ValueError:
+        raise ParameterError(f"{name} must be a number or {n} numbers, got {value!r}") from None
+    if not (np.isfinite(a).all() and (a >= 0).all()):
+        raise ParameterError(f"{name} must be finite and >= 0, got {a.tolist()}")
+    return a
 
 
 def _check_range(Q: np.ndarray, what: str, single: bool) -> None:
@@ -175,7 +201,13 @@ def sample_q(
     N: int | None = None,
     seed: int | np.random.Generator | None = None,
 ) -> np.ndarray:
-    """Uniform random joint values within :func:`sample_bounds` of ``qlim``: (n,) or (N, n)."""
+    """Uniform random joint values within :func:`sample_bounds` of ``qlim``: (n,) or (N, n);
+    ParameterError for an N that is not a count >= 0 or whose array would not fit in memory."""
+    from symkin.core.sizes import count, room
+
+    if N is not None:
+        N = count(N, "N (the number of configurations)", minimum=0)
+        room(8.0 * N * len(qlim[0]), f"{N} random configurations")
     rng = np.random.default_rng(seed)
     lo, hi = sample_bounds(qlim, revolute)
     if N is None:

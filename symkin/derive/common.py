@@ -261,6 +261,17 @@ class Printer:
         self.names[sym] = tex
         return sym
 
+    def _fraction_of_angle(self, f: sp.Expr) -> sp.Symbol | None:
+        """``sin(q_4 / 2)`` as ``\\sin(q_{4}/2)`` (the rationals below would print 0.5 q_4)."""
+        c, q = f.args[0].as_coeff_Mul()
+        if q not in self.index or not c.is_Rational or c.is_Integer:
+            return None
+        fn = "\\cos" if isinstance(f, sp.cos) else "\\sin"
+        num = "" if c.p == 1 else ("-" if c.p == -1 else f"{c.p} ")
+        sym = sp.Symbol(f"zzfrac{len(self.names)}")
+        self.names[sym] = f"{fn}({num}q_{{{self.index[q]}}}/{c.q})"
+        return sym
+
     def __call__(self, expr: Any) -> str:
         expr = sp.sympify(expr)
         ops = ops_of(expr)
@@ -268,7 +279,7 @@ class Printer:
             return f"\\text{{(an expression of {ops} operations, not shown)}}"
         subs = {}
         for f in expr.atoms(sp.cos, sp.sin):
-            a = self._abbreviation(f)
+            a = self._abbreviation(f) or self._fraction_of_angle(f)
             if a is not None:
                 subs[f] = a
         for pw in expr.atoms(sp.Pow):  # roots keep their exponent: sqrt(2), not 2^0.5

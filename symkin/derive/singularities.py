@@ -11,7 +11,9 @@ configuration): two axes that become parallel or collinear (a wrist singularity 
 among the last three joints), parallel axes that come to lie in one plane (an elbow: the arm
 stretched out or folded back), a point (where two axes meet, or the end effector) that comes to
 lie on an axis or in the plane of two axes (a shoulder singularity when the first axis is
-involved). Otherwise the text says that the joint twists become dependent.
+involved), or two such points that come to coincide. Otherwise the text says that the joint twists
+become dependent. Conversely, random lines through joint space must find no rank drop that no
+factor explains (:mod:`symkin.derive.singular_lines`): the list is complete, not only correct.
 """
 
 from __future__ import annotations
@@ -27,20 +29,28 @@ import numpy as np
 import sympy as sp
 
 from symkin.derive.common import FORMATS, Printer, latex_document
+from symkin.derive.singular_lines import FACTOR_TOL, LINES, MAX_LINES, SINGULAR_TOL, LineCheck, line_check
 from symkin.emit.templates import render
-from symkin.errors import check_choice
+from symkin.errors import ParameterError, check_choice
 from symkin.model.latex import display_name
 from symkin.model.robot import Robot
 from symkin.symbolic.singularities import MAX_TERMS, SingularFactor, SingularFactors, singular_factors
 
 __all__ = ["Singularity", "SingularityReport", "singularities", "SINGULAR_TOL"]
 
-#: The smallest singular value of J counts as 0 below this (at a solution of f = 0 it is ~1e-16).
-SINGULAR_TOL = 1e-9
 _GEOMETRY_TOL = 1e-7  # m or rad: an incidence of axes and points that holds at a solution
 _SOLUTIONS = 3
 _RANDOM = 20
+_UNEXPLAINED_SHOWN = 5  # configurations listed when rank drops along the lines are not explained
 _STATEMENTS = 2  # incidences of points with axes and planes shown per factor
+#: The roots of the factors of one joint, and as LaTeX.
+_ROOTS = {
+    "sin": (0.0, math.pi),
+    "cos": (math.pi / 2, -math.pi / 2),
+    "half-sin": (0.0,),
+    "half-cos": (math.pi,),
+}
+_ROOTS_TEX = {"sin": r"0 \text{ or } \pi", "cos": r"\pm\pi/2", "half-sin": "0", "half-cos": r"\pi"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +65,10 @@ class Singularity:
         sigma_at_solutions: the largest smallest-singular-value of J over those solutions.
         checked: whether every solution is singular (sigma below :data:`SINGULAR_TOL`); False when
             no real solution was found (then f = 0 has none, or none the sampling reached).
+        rank: the largest rank of J (its rows used) over the solutions (singular values at least
+            :data:`SINGULAR_TOL`); -1 without solutions.
+        also: the 0-based indices of the earlier factors that vanish at every solution too (f = 0
+            there is a root of higher order of the minors, as sin q_4 and cos(q_4 / 2) at q_4 = pi).
     """
 
     factor: SingularFactor
@@ -63,6 +77,8 @@ class Singularity:
     solutions: np.ndarray
     sigma_at_solutions: float
     checked: bool
+    rank: int = -1
+    also: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,6 +91,8 @@ class SingularityReport:
         sigma_at_random: the smallest singular value of J at each of the random configurations.
         determinant_check: the largest relative difference between the symbolic determinant and
             ``det`` of the numeric J at the random configurations (square J only, else NaN).
+        lines: the rank drops found along random lines through joint space, each of which must be
+            a zero of a listed factor (:class:`symkin.derive.singular_lines.LineCheck`).
         fmt, text: the format and the written report (Markdown with $$ math, or a LaTeX document);
         markdown: the Markdown whatever ``fmt`` (what Jupyter shows).
     """
@@ -84,23 +102,50 @@ class SingularityReport:
     singularities: tuple[Singularity, ...]
     sigma_at_random: np.ndarray
     determinant_check: float
+    lines: LineCheck
     fmt: str = "markdown"
     text: str = ""
     markdown: str = field(default="", repr=False)
 
     @property
     def ok(self) -> bool:
-        """Every factor's solutions are singular, no random configuration is, and the determinant (square
-        J) equals det of the numeric J."""
+        """Every factor's solutions are singular, no random configuration is, every rank drop along the
+        random lines is a zero of a factor, and the determinant (square J) equals det of the numeric J."""
         det_ok = math.isnan(self.determinant_check) or self.determinant_check < 1e-9
         return (
             det_ok
             and all(s.checked for s in self.singularities)
             and bool((self.sigma_at_random > SINGULAR_TOL).all())
+            and self.lines.ok
         )
 
     def _repr_markdown_(self) -> str:
         return self.markdown
+
+    def summary(self) -> str:
+        """A few plain-text lines: each condition (joints numbered from 1) and its check, the random
+        configurations, the lines, and ``ok`` or ``NOT ok``."""
+        A = self.analysis
+        rename = {q: sp.Symbol(f"q{j + 1}") for j, q in enumerate(A.q)}
+        minors = f"{A.minors} minor" + ("s" if A.minors != 1 else "")
+        out = [f"{A.name}: {len(self.singularities)} conditions ({A.method}, {minors})"]
+        for k, s in enumerate(self.singularities):
+            cond = f"{sp.sstr(s.factor.expr.xreplace(rename))} = 0"
+            if s.checked:
+                check = f"singular, rank {s.rank} of {A.full_rank}, sigma_min <= {s.sigma_at_solutions:.1e}"
+            elif len(s.solutions):
+                check = f"NOT singular at its solutions (sigma_min {s.sigma_at_solutions:.1e})"
+            else:
+                check = "no real solution found"
+            out.append(f"  {k + 1}  {cond}: {check}")
+        out.append(f"random configurations: sigma_min >= {self.sigma_at_random.min(initial=math.inf):.3g}")
+        L = self.lines
+        out.append(
+            f"lines: {L.lines} x {L.samples} samples, {len(L.drops)} rank drops, "
+            + (f"{len(L.unexplained)} explained by no condition" if len(L.unexplained) else "all explained")
+        )
+        out.append("ok" if self.ok else "NOT ok")
+        return "\n".join(out)
 
 
 def singularities(
@@ -109,15 +154,20 @@ def singularities(
     fmt: Literal["markdown", "latex"] = "markdown",
     seed: int = 0,
     max_terms: int = MAX_TERMS,
+    lines: int = LINES,
 ) -> SingularityReport:
     """The singular configurations of ``robot`` as factor conditions, checked numerically, and written
     up as Markdown or LaTeX (see the module docstring).
 
     ``axes``: the rows of J (``"auto"``, ``"all"``, ``"trans"``, ``"rot"``; see
     :func:`symkin.symbolic.singularities.singular_factors`); ``seed``: the random configurations
-    of the checks; ``max_terms``: a minor whose determinant has more terms is not factored.
+    of the checks; ``max_terms``: a minor whose determinant has more terms is not factored;
+    ``lines``: how many random lines through joint space are searched for rank drops that no factor
+    explains (:func:`symkin.derive.singular_lines.line_check`, 0 for none).
     """
     check_choice(fmt, FORMATS, "format")
+    if not isinstance(lines, (int, np.integer)) or isinstance(lines, bool) or not 0 <= lines <= MAX_LINES:
+        raise ParameterError(f"lines must be an integer from 0 to {MAX_LINES}, got {lines!r}")
     from symkin.model.resolve import resolve_robot
 
     robot = resolve_robot(robot)
@@ -138,19 +188,31 @@ def singularities(
         got = np.array([float(f(*q)) for q in Qr])
         det_check = float(np.max(np.abs(got - exact)) / max(np.max(np.abs(exact)), 1e-300))
     geometry = _Geometry(robot, A)
+    values = sp.lambdify(A.q, [f.expr for f in A.factors], "numpy")
     found = []
-    for factor in A.factors:
+    for k, factor in enumerate(A.factors):
         Q = _solve(robot, A.q, factor, rng)
-        s = sigma(Q) if len(Q) else np.zeros(0)
+        sv = np.linalg.svd(robot.jacob0(Q)[:, rows, :], compute_uv=False) if len(Q) else np.zeros((0, 1))
+        s = sv[:, -1]
         checked = bool(len(Q)) and bool((s < SINGULAR_TOL).all())
         kind, meaning = geometry.describe(factor, Q, Qr) if len(Q) else ("other", ())
-        found.append(Singularity(factor, kind, meaning, Q, float(s.max(initial=0.0)), checked))
-    report = SingularityReport(robot, A, tuple(found), sigma_random, det_check)
+        rank = int((sv >= SINGULAR_TOL).sum(axis=1).max(initial=-1))
+        also = tuple(i for i in range(k) if len(Q) and _vanish(values, Q, i, Qr))
+        found.append(Singularity(factor, kind, meaning, Q, float(s.max(initial=0.0)), checked, rank, also))
+    line = line_check(robot, rows, A.q, [f.expr for f in A.factors], lines=lines, seed=rng)
+    report = SingularityReport(robot, A, tuple(found), sigma_random, det_check, line)
     md = _markdown(report)
     return SingularityReport(
-        robot, A, tuple(found), sigma_random, det_check, fmt,
+        robot, A, tuple(found), sigma_random, det_check, line, fmt,
         latex_document(md) if fmt == "latex" else md, md,
     )  # fmt: skip
+
+
+def _vanish(values: Callable, Q: np.ndarray, i: int, Qr: np.ndarray) -> bool:
+    """Whether factor i is 0 at every configuration of Q (relative to its size at the random Qr)."""
+    at = np.array([float(values(*q)[i]) for q in Q])
+    scale = max(max(abs(float(values(*q)[i])) for q in Qr), 1e-300)
+    return bool((np.abs(at) <= FACTOR_TOL * scale).all())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -172,9 +234,9 @@ def _solve(
         j = factor.joints[attempt % len(factor.joints)]
         base = robot.random_q(seed=rng)
         a, b = (-math.pi, math.pi) if robot.revolute[j] else (-2.0, 2.0)  # m, whatever the limits
-        if factor.kind in ("sin", "cos"):  # exact roots
-            roots = (0.0, math.pi) if factor.kind == "sin" else (math.pi / 2, -math.pi / 2)
-            base[j] = roots[len(out) % 2]
+        if factor.kind in _ROOTS:  # exact roots
+            roots = _ROOTS[factor.kind]
+            base[j] = roots[len(out) % len(roots)]
             out.append(base)
             continue
         root = _root(
@@ -243,7 +305,7 @@ class _Geometry:
         tol, n, rev = _GEOMETRY_TOL, self.n, self.revolute
         said: list[str] = []
         kind = "other"
-        last = set(range(max(n - 3, 0), n))
+        last, first = set(range(max(n - 3, 0), n)), set(range(min(3, n)))
         sets = _parallel_sets(self, rev, Qr[:8], tol)  # axes parallel at every random q
         cls = {k: i for i, S in enumerate(sets) for k in S}
         seen: set[tuple[int, int]] = set()
@@ -253,9 +315,14 @@ class _Geometry:
             if new(lambda q, i=i, j=j: _parallel(*self.lines(q), i, j, tol)):
                 seen.add((cls[i], cls[j]))
                 both = "coincide" if all(_collinear(*self.lines(q), i, j, tol) for q in Q) else "are parallel"
-                said.append(f"the axes of joints {i + 1} and {j + 1} {both}")
+                between = all(i < k < j for k in factor.joints)
+                elbow = both == "coincide" and between and not ({i, j} <= last or {i, j} <= first)
+                stretched = " (the arm is stretched out or folded back)" if elbow else ""
+                said.append(f"the axes of joints {i + 1} and {j + 1} {both}{stretched}")
                 if {i, j} <= last and n >= 5:
                     kind = "wrist"
+                elif elbow and kind == "other":
+                    kind = "elbow"
         for S in sets:
             if len(S) >= 3 and new(lambda q, S=S: _coplanar_parallel(*self.lines(q), S, tol)):
                 names = ", ".join(str(k + 1) for k in S[:-1]) + f" and {S[-1] + 1}"
@@ -264,9 +331,12 @@ class _Geometry:
                     "folded back)"
                 )
                 kind = "elbow" if kind == "other" else kind
+        points = self._points(rev, Qr[:8], tol)
+        for (na, a), (nb, b) in itertools.combinations(points, 2):
+            if new(lambda q, a=a, b=b: _same_point(a(q), b(q), tol)):
+                said.append(f"{na} and {nb} coincide")
         if said:
             return kind, tuple(said)
-        points = self._points(rev, Qr[:8], tol)
         planes = self._planes(rev, Qr[:8], tol)
         on_axis: list[tuple[str, str]] = []  # (kind, statement)
         in_plane: list[tuple[str, str]] = []
@@ -277,7 +347,7 @@ class _Geometry:
                         ("shoulder" if a == 0 else "other", f"{pname} lies on the axis of joint {a + 1}")
                     )
             for (a, b), plane in planes:
-                if new(lambda q, point=point, plane=plane: _on_plane(point(q), *plane(q), tol)):
+                if new(lambda q, point=point, plane=plane: _on_plane(point(q), plane(q), tol)):
                     stretched = cls[a] == cls[b]  # two parallel axes: the arm stretched out or folded back
                     in_plane.append((
                         "elbow" if stretched else ("shoulder" if a == 0 else "other"),
@@ -335,12 +405,16 @@ def _close(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
     return bool(np.linalg.norm(a - b) < tol)
 
 
+def _same_point(a: np.ndarray | None, b: np.ndarray | None, tol: float) -> bool:
+    return a is not None and b is not None and _close(a, b, tol)
+
+
 def _parallel(W: np.ndarray, P: np.ndarray, i: int, j: int, tol: float) -> bool:
     return bool(np.linalg.norm(np.cross(W[i], W[j])) < tol)
 
 
-def _on_line(x: np.ndarray, W: np.ndarray, P: np.ndarray, a: int, tol: float) -> bool:
-    return bool(np.linalg.norm(np.cross(W[a], x - P[a])) < tol)
+def _on_line(x: np.ndarray | None, W: np.ndarray, P: np.ndarray, a: int, tol: float) -> bool:
+    return x is not None and bool(np.linalg.norm(np.cross(W[a], x - P[a])) < tol)
 
 
 def _collinear(W: np.ndarray, P: np.ndarray, i: int, j: int, tol: float) -> bool:
@@ -371,7 +445,12 @@ def _plane(W: np.ndarray, P: np.ndarray, a: int, b: int, tol: float) -> tuple[np
     return c / np.linalg.norm(c), P[a]
 
 
-def _on_plane(x: np.ndarray, normal: np.ndarray, point: np.ndarray, tol: float) -> bool:
+def _on_plane(x: np.ndarray | None, plane: tuple[np.ndarray, np.ndarray] | None, tol: float) -> bool:
+    """Whether x lies on the plane (unit normal, point); False when either is undefined there (two axes
+    that meet at random configurations can be parallel at a solution, two coplanar ones collinear)."""
+    if x is None or plane is None:
+        return False
+    normal, point = plane
     return bool(abs((x - point) @ normal) < tol)
 
 
@@ -416,15 +495,21 @@ def _markdown(R: SingularityReport) -> str:
     items = []
     for k, s in enumerate(R.singularities):
         f = s.factor
-        roots = {"sin": r"0 \text{ or } \pi", "cos": r"\pm\pi/2"}.get(f.kind)
+        roots = _ROOTS_TEX.get(f.kind)
         cond = P(f.expr.xreplace(rename)) + " = 0"
         if roots:
             cond += rf" \;(q_{{{f.joints[0] + 1}}} = {roots})"
         power = f" (power {f.multiplicity})" if f.multiplicity > 1 else ""
         meaning = "; ".join(s.meaning) if s.meaning else "the joint twists become linearly dependent"
+        if s.also:
+            which = " and ".join(str(i + 1) for i in s.also)
+            meaning += f" (where condition {which} holds too: a root of higher order)"
         if s.checked:
             sig = _sci(s.sigma_at_solutions)
-            check = f"singular: $\\sigma_{{min}} \\le {sig}$ at {len(s.solutions)} solutions"
+            check = (
+                f"singular (rank {s.rank} of {A.full_rank}): $\\sigma_{{min}} \\le {sig}$ at "
+                f"{len(s.solutions)} solutions"
+            )
             lo, hi = robot.qlim
             if not ((s.solutions >= lo - 1e-12) & (s.solutions <= hi + 1e-12)).all(axis=1).any():
                 check += " (outside the joint limits)"
@@ -464,8 +549,17 @@ def _markdown(R: SingularityReport) -> str:
         "sigma_random": _sci(float(R.sigma_at_random.min(initial=math.inf))),
         "tol": _sci(SINGULAR_TOL),
         "det_check": "" if math.isnan(R.determinant_check) else _sci(R.determinant_check),
+        "lines": R.lines.lines,
+        "samples": R.lines.samples,
+        "drops": len(R.lines.drops),
+        "unexplained": [_configuration(q) for q in R.lines.unexplained[:_UNEXPLAINED_SHOWN]],
+        "unexplained_count": len(R.lines.unexplained),
     }
     return render("derive/singularities.md.j2", **ctx)
+
+
+def _configuration(q: np.ndarray) -> str:
+    return "(" + ", ".join(f"{x:.4g}" for x in q) + ")"
 
 
 def _sci(x: float) -> str:

@@ -32,8 +32,11 @@ import numpy as np
 
 from symkin.core.names import comment_safe, identifier
 from symkin.core.version import __version__
+from symkin.emit import collision_self
+from symkin.emit.collision_self import c_number as _num
+from symkin.emit.collision_self import plan_self, self_code
 from symkin.emit.templates import render
-from symkin.geometry.clearance import proved_apart, reach_sphere
+from symkin.geometry.clearance import proved_apart, reach_everywhere, reach_sphere
 from symkin.geometry.reference import Tables
 from symkin.model.geometry import Capsule
 
@@ -47,12 +50,6 @@ __all__ = [
 
 # the distance primitives, shared with the C runtime (the MMC step with obstacle constraints)
 COLLIDE_HEADER = Path(__file__).resolve().parent.parent / "runtime" / "csrc" / "symkin_collide.h"
-
-
-def _num(x: float) -> str:
-    """A C (and Python) double literal that reads back exactly."""
-    r = repr(float(x))
-    return r if ("e" in r or "." in r or "n" in r) else r + ".0"
 
 
 def _py_num(x: float) -> str:
@@ -255,29 +252,6 @@ def _fk_lines(tree: Any, lang: Dialect) -> tuple[list[str], dict[str, list[Value
     return poses.lines, poses.vals
 
 
-SPHERE_FIRST = 3  # a sphere with this many partners on the other link is first tried on its bound
-
-
-def _sphere_first(
-    pairs: list[tuple[int, int]], link_of: dict[int, int], a: int, bounds: list, is_cap: list[bool]
-) -> tuple[list[tuple[int, tuple[int, str], list[int]]], list[tuple[int, int]]]:
-    """The self pairs of link ``a`` and one other link, planned: (firsts, rest). ``firsts``: the
-    spheres, on the side with fewer spheres, that have at least SPHERE_FIRST partners, each with
-    the other link's bound and its partners; such a sphere is tested against that bounding sphere
-    first (missing it, it misses every shape inside). ``rest``: the pairs to test one by one, in
-    their order. Links with capsules keep every pair in ``rest``."""
-    if any(is_cap[i] or is_cap[j] for i, j in pairs):
-        return [], list(pairs)
-    split = [(i, j) if link_of[i] == a else (j, i) for i, j in pairs]  # (on link a, on the other)
-    side = 0 if len({p[0] for p in split}) <= len({p[1] for p in split}) else 1
-    partners: dict[int, list[int]] = {}
-    for p in split:
-        partners.setdefault(p[side], []).append(p[1 - side])
-    firsts = [(o, bounds[link_of[js[0]]], js) for o, js in partners.items() if len(js) >= SPHERE_FIRST]
-    done = {o for o, _, _ in firsts}
-    return firsts, [(i, j) for i, j in pairs if i not in done and j not in done]
-
-
 def _point_lines(
     points: list[tuple[int, list[str]]], lang: Dialect, vals: dict[str, list[Value]]
 ) -> list[str]:
@@ -296,61 +270,6 @@ def _point_lines(
                 text = _const(value, lang)
             lines.append(_stmt(f"X[{i}][{r}] = {text}", lang))
     return lines
-
-
-# The self checks' C lines, scalar (return 1 on a hit) and four-lane (spheres only: a lane already
-# hit needs nothing more, a test runs only for the lanes whose bounds meet): a pair of links' bounds,
-# a sphere against the other link's bound, then a shape pair inside that test and one on its own.
-_SELF_LINES = {
-    False: {
-        "link": "if (skc_spheres_overlap(X[{pa}], {ra}, X[{pb}], {rb})) {{",
-        "first": "    if (sphere_hit({a}, {b}, {rr})) {{",
-        "inner": "        if (sphere_hit({a}, {b}, {rr})) return 1;",
-        "pair": "    if (sphere_hit({a}, {b}, {rr})) return 1;",
-        "end": "}}",
-    },
-    True: {
-        "link": "need = ~hit & hit2(X[{pa}], X[{pb}], {rr});\nif (skv_any_(need)) {{",
-        "first": "    near = need & hit2({a}, {b}, {rr});\n    if (skv_any_(near)) {{",
-        "inner": "        hit |= near & hit2({a}, {b}, {rr});",
-        "pair": "    hit |= need & hit2({a}, {b}, {rr});",
-        "end": "    if (skv_all_(hit)) return hit;\n}}",
-    },
-}
-
-
-def _self_code(groups: dict, plan: tuple, lanes: bool = False) -> list[str]:
-    """The self checks (C lines, :data:`_SELF_LINES`) of ``groups`` ((link a, link b) -> shape
-    pairs; ``plan``: bounds, link of each shape, first points, radii, which are capsules): per pair
-    of links, their bounding spheres, then each shape pair (two spheres: squared distance against
-    the constant squared radius sum); a sphere with SPHERE_FIRST or more partners on the other link
-    meets that link's bound first."""
-    bounds, link_of, first, radius, is_cap = plan
-    form = _SELF_LINES[lanes]
-    code = []
-
-    def add(kind: str, **values: Any) -> None:
-        code.extend(form[kind].format(**values).split("\n"))
-
-    for (a, b), pairs in sorted(groups.items()):
-        (pa, ra), (pb, rb) = bounds[a], bounds[b]
-        add("link", pa=pa, ra=ra, pb=pb, rb=rb, rr=_num((float(ra) + float(rb)) * (float(ra) + float(rb))))
-        firsts, rest = _sphere_first(pairs, link_of, a, bounds, is_cap)
-        for outer, bound, inner in firsts:
-            xo, rr_o = f"X[{first[outer]}]", (radius[outer] + float(bound[1])) ** 2
-            add("first", a=xo, b=f"X[{bound[0]}]", rr=_num(rr_o))
-            for j in inner:
-                rr = (radius[outer] + radius[j]) * (radius[outer] + radius[j])
-                add("inner", a=xo, b=f"X[{first[j]}]", rr=_num(rr))
-            code.append("    }")
-        for i, j in rest:
-            if is_cap[i] or is_cap[j]:  # scalar code only (the lanes take spheres only)
-                code.append(f"    if (overlaps(X, {i}, {j}, 0, NULL)) return 1;")
-            else:
-                rr = (radius[i] + radius[j]) * (radius[i] + radius[j])
-                add("pair", a=f"X[{first[i]}]", b=f"X[{first[j]}]", rr=_num(rr))
-        add("end")
-    return code
 
 
 def _limits(qlim: np.ndarray) -> list[tuple[int, str | None, str | None]]:
@@ -392,11 +311,12 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         points.append((layout.segment[group[0]], [_num(x) for x in c]))
         # where the bound can be at all within the joint limits: the batch drops the obstacles
         # beyond it for the link (radius -1: no such bound)
-        sphere = reach_sphere(layout, layout.segment[group[0]], c, r)
+        seg = layout.segment[group[0]]
+        sphere = reach_sphere(layout, seg, c, r)
         reach.append(
-            ([_num(x) for x in sphere[0]], _num(sphere[1]))  # rounded up by reach_sphere
+            ([_num(x) for x in sphere[0]], _num(sphere[1]), int(reach_everywhere(layout, seg)))
             if sphere is not None
-            else (["0.0", "0.0", "0.0"], "-1.0")
+            else (["0.0", "0.0", "0.0"], "-1.0", 1)
         )
     link_of = {i: links.index(s.link) for i, s in enumerate(layout.shapes)}
     # self pairs proved apart within the joint limits are checked only for q outside them
@@ -430,6 +350,9 @@ def collision_tables(layout: Any) -> dict[str, Any]:
     all_spheres = not any(is_cap)
     sphere_code4: list[str] = []
     plan = (bounds, link_of, first, radius, is_cap)
+    planned, planned_proved = plan_self(groups, plan), plan_self(groups_proved, plan)
+    looped = len(layout.self_pairs) > collision_self.UNROLL_PAIRS  # loops over tables past this size
+    unrolled = all_spheres and not looped
     if all_spheres:  # link by link, the obstacles within its reach (idx[start[l]..start[l + 1]])
         for l, ((pb, rb), group) in enumerate(zip(bounds, members)):
             sphere_code4.append(f"for (int t = start[{l}]; t < start[{l + 1}]; ++t) {{")
@@ -459,7 +382,13 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         "point_code4": point_code4,
         "fk4": fk4,
         "vector_pairs": all_spheres,
-        "self_code4": _self_code(groups, plan, lanes=True) if all_spheres else [],
+        "self_tables": looped,
+        "self_code4": self_code(planned, lanes=True) if unrolled else [],
+        "self_code4_proved": self_code(planned_proved, lanes=True, mask="outside & ") if unrolled else [],
+        "self_rows": collision_self.self_tables(planned) if looped else {},
+        "self_rows_proved": collision_self.self_tables(planned_proved) if looped else {},
+        "has_proved": bool(planned_proved),
+        "reach_limited": any(r[2] == 0 for r in reach),
         "limits": _limits(tree.qlim),
         "sphere_code4": sphere_code4,
         "shapes": shapes,
@@ -470,8 +399,8 @@ def collision_tables(layout: Any) -> dict[str, Any]:
         "reach": reach,
         "link_start": link_start,
         "link_shapes": link_shapes,
-        "self_code": _self_code(groups, plan),
-        "self_code_proved": _self_code(groups_proved, plan),
+        "self_code": [] if looped else self_code(planned),
+        "self_code_proved": [] if looped else self_code(planned_proved),
         "sphere_code": sphere_code,
         "anc_start": anc_start,
         "anc": anc or [0],

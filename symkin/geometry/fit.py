@@ -80,6 +80,10 @@ def mesh_points(mesh_or_points: Any, samples: int = 2000, seed: int = 0) -> np.n
     ``.vertices`` (a trimesh mesh) its vertices plus ``samples`` points sampled on its surface when
     trimesh is installed and it has faces; a file path loaded with trimesh (MissingExtraError
     without it)."""
+    from symkin.core.sizes import count, room
+
+    samples = count(samples, "samples", minimum=0, error=GeometryError)
+    room(24.0 * samples, f"{samples} surface samples", GeometryError)
     obj = _load(mesh_or_points)
     if hasattr(obj, "vertices"):
         pts = [np.asarray(obj.vertices, dtype=float).reshape(-1, 3)]
@@ -161,6 +165,9 @@ def fit_spheres(
     obj = _load(mesh_or_points)
     P = mesh_points(obj, samples=samples, seed=seed)
     k = min(k, len(np.unique(P, axis=0)))
+    from symkin.core.sizes import room
+
+    room(16.0 * len(P) * k, f"fitting {k} spheres to {len(P)} points (their distances)", GeometryError)
     labels = _kmeans(P, k, np.random.default_rng(seed)) if k > 1 else np.zeros(len(P), dtype=int)
     C = np.array([P[labels == j].mean(0) for j in range(k)])
     D = np.sqrt(((P[:, None, :] - C[None]) ** 2).sum(2))  # (N, k)

@@ -103,6 +103,15 @@ class Layout:
             out += [(kind, i, k) for k in range(len(items)) for i in range(len(self.shapes))]
         return out
 
+    def describe(self, label: tuple[str, int, int]) -> str:
+        """A pair of :meth:`pair_labels` in words: ``"sphere 3 (link4) - capsule 9 (link6)"`` or
+        ``"sphere 3 (link4) - obstacle box 0"``."""
+        kind, i, j = label
+        a = f"{type(self.shapes[i]).__name__.lower()} {i} ({self.shapes[i].link})"
+        if kind == "self":
+            return f"{a} - {type(self.shapes[j]).__name__.lower()} {j} ({self.shapes[j].link})"
+        return f"{a} - obstacle {kind} {j}"
+
 
 def _bodies(tree: Tree) -> tuple[dict[str, int], list[int], list[int]]:
     """link -> segment (-1 base); per segment its body; per segment its body's parent body."""

@@ -16,6 +16,7 @@ and calls it with its own straight-line link poses.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -35,6 +36,7 @@ __all__ = [
     "distances",
     "distance_jacobians",
     "in_collision",
+    "witnesses",
     "Tables",
 ]
 
@@ -343,3 +345,34 @@ def in_collision(model: Any, q: Any, env: Any = None) -> bool | np.ndarray:
     D, _, single = evaluate(model, q, env)
     hit = (D < 0).any(axis=1)
     return bool(hit[0]) if single else hit
+
+
+def witnesses(
+    model: Any, X: Any, pairs: Sequence[tuple[str, int, int]], env: Any = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The signed distances (K,) and witness points (K, 3), (K, 3) of the active pairs ``pairs``
+    (labels as :meth:`Layout.pair_labels` gives them: ("self", i, j) or (obstacle kind, shape i,
+    obstacle k)) at the shape points X (P, 3) of one configuration: ``wa`` on the surface of the
+    pair's shape i, ``wb`` on the surface of its shape j or obstacle, ``wa - wb = d n`` (``n`` the
+    unit normal from B to A of :mod:`symkin.geometry.distance`; ``wa = pa - r_A n`` with ``pa`` the
+    closest point of A's core), so ``|wa - wb| = |d|``: the closest points of shapes apart, the
+    deepest of shapes that overlap."""
+    layout = layout_of(model)
+    env = as_environment(env)
+    arrays = Tables.of(layout).arrays
+    radius = arrays[2]
+    X1 = np.asarray(X, dtype=float).reshape(1, -1, 3)
+    K = len(pairs)
+    d, n, pa = np.empty(K), np.empty((K, 3)), np.empty((K, 3))
+    kinds = {"sphere": "spheres", "capsule": "capsules", "box": "boxes"}
+    for m, (kind, i, j) in enumerate(pairs):
+        if kind == "self":
+            dd, nn, aa, _ = _pair_kinds(X1, arrays, np.array([i]), np.array([j]))
+            d[m], n[m], pa[m] = dd[0, 0], nn[0, 0], aa[0, 0]
+        else:
+            one = Environment(**{kinds[kind]: (getattr(env, kinds[kind])[j],)})
+            dd, nn, aa = _obstacles(X1, arrays, one)[0]
+            d[m], n[m], pa[m] = dd[0, i], nn[0, i], aa[0, i]
+    idx = np.array([i for _, i, _ in pairs], dtype=int)
+    wa = pa - radius[idx, None] * n
+    return d, wa, wa - d[:, None] * n

@@ -59,7 +59,15 @@ from symkin.model.urdf import (
     xml_numbers,
 )
 
-__all__ = ["geometry_from_urdf", "urdf_link_names", "urdf_link_frames", "box_spheres", "MAX_SHAPE_SPHERES"]
+__all__ = [
+    "geometry_from_urdf",
+    "urdf_geometry",
+    "urdf_link_names",
+    "urdf_link_frames",
+    "urdf_carriers",
+    "box_spheres",
+    "MAX_SHAPE_SPHERES",
+]
 
 _Frame = tuple[str, np.ndarray]  # model link name, 4x4 transform model link frame -> URDF link frame
 
@@ -182,6 +190,20 @@ def urdf_link_names(path_or_xml: str | Path, model: Any) -> dict[str, str]:
     return {ln: f[0] for ln, f in urdf_link_frames(path_or_xml, model).items()}
 
 
+def urdf_carriers(path_or_xml: str | Path, model: Any) -> dict[str, tuple[str, ...]]:
+    """Per link of ``model``, the URDF links with ``<collision>`` elements attached to it (whose
+    geometry :func:`geometry_from_urdf` puts on it), in file order: what an SRDF names
+    (:func:`symkin.geometry.srdf.srdf_disabled`, :func:`~symkin.geometry.srdf.write_srdf`)."""
+    root, _ = load_xml(path_or_xml)
+    names = urdf_link_names(path_or_xml, model)
+    out: dict[str, list[str]] = {}
+    for lel in root.findall("link"):
+        name = lel.get("name") or ""
+        if lel.findall("collision") and name in names:
+            out.setdefault(names[name], []).append(name)
+    return {k: tuple(v) for k, v in out.items()}
+
+
 #: The most spheres one ``<box>`` may become (``max_box_spheres``) or one ``<mesh>`` be fitted
 #: with (``mesh_spheres``): the kernel's pair tests grow with the square of the sphere count.
 MAX_SHAPE_SPHERES = 4096
@@ -259,6 +281,18 @@ def geometry_from_urdf(
     Sizes must be finite, >= 0 and at most :data:`symkin.geometry.meshes.MAX_SHAPE_SIZE` m (a
     GeometryError names the link otherwise); ``max_box_spheres`` and ``mesh_spheres`` (when > 0)
     are at most :data:`MAX_SHAPE_SPHERES`."""
+    return urdf_geometry(path_or_xml, model, mesh_spheres, max_box_spheres, packages)[0]
+
+
+def urdf_geometry(
+    path_or_xml: str | Path,
+    model: Any,
+    mesh_spheres: int = 0,
+    max_box_spheres: int = 64,
+    packages: Mapping[str, str | Path] | None = None,
+) -> tuple[Geometry, tuple[str, ...]]:
+    """:func:`geometry_from_urdf` and the URDF links some of whose ``<collision>`` elements it
+    skipped (with a warning each), sorted."""
     if mesh_spheres:
         mesh_spheres = _sphere_budget(mesh_spheres, "mesh_spheres")
     max_box_spheres = _sphere_budget(max_box_spheres, "max_box_spheres")
@@ -329,7 +363,8 @@ def geometry_from_urdf(
             counts[tag] += 1
     made = ", ".join(f"{v} {k}" for k, v in counts.items() if v) or "no shapes"
     note = f"; skipped on {sorted(set(skipped))}" if skipped else ""
-    return Geometry(tuple(shapes), (), f"<collision> elements of {where} ({made}){note}")
+    geometry = Geometry(tuple(shapes), (), f"<collision> elements of {where} ({made}){note}")
+    return geometry, tuple(sorted(set(skipped)))
 
 
 def _mesh(

@@ -1,7 +1,8 @@
 """What every frame's kinematics derive from its pose T, Jacobian J0 and Hessian H0 (numpy only).
 
 The numeric helpers (manipulability, its Jacobian, condition number, space Jacobian, dJ/dt,
-the end-effector-frame Hessian, the Hessian of a serial path from its Jacobian's columns) and
+the end-effector-frame Hessian, the Hessian of a serial path from its Jacobian's columns; the
+orientation representations and analytic forms are in :mod:`symkin.model.orientation`) and
 :class:`FrameMethods`, the methods every kinematics object has once it gives ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0`` and ``jacob0_hessian0`` of a frame: the numeric references
 (:class:`symkin.Robot`, :class:`symkin.Tree`) and the compiled :class:`symkin.Kinematics` share them.
@@ -26,8 +27,17 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import AXES_ROWS, as_batch, axes_rows, real_array
-from symkin.errors import ConfigurationError, ParameterError, PoseError
+from symkin.errors import ConfigurationError, ParameterError
 from symkin.model.kinematics import cross
+from symkin.model.orientation import (  # noqa: F401 - NEAR_PI_L, angle_axis, REPRESENTATIONS re-exported
+    NEAR_PI_L,
+    REPRESENTATIONS,
+    analytical_hessian_of,
+    analytical_of,
+    angle_axis,
+    representation_of,
+)
+from symkin.model.spatial import velocity_transform, wrench_transform  # noqa: F401 - re-exported
 
 __all__ = [
     "FrameMethods",
@@ -47,6 +57,7 @@ __all__ = [
     "angle_axis",
     "REPRESENTATIONS",
     "analytical_of",
+    "analytical_hessian_of",
     "velocity_transform",
     "wrench_transform",
 ]
@@ -185,11 +196,31 @@ class FrameMethods:
         exponential coordinates). ConfigurationError where A is singular (rpy pitch = +-90 deg, ZYZ
         theta = 0 or 180 deg); ParameterError for an unknown representation.
         """
-        rep = _representation(representation)
+        rep = representation_of(representation)
         Q, single = self._batch(q)
         T, J = _at(self.fkine_jacob0, Q, frame)  # type: ignore[attr-defined]
         Ja = analytical_of(T, J, rep)
         return Ja[0] if single else Ja
+
+    def hessian0_analytical(self, q: Any, representation: str = "rpy/xyz", frame: Any = None) -> np.ndarray:
+        """Analytical Hessian of ``frame``: (n, 6, n) or (N, n, 6, n), ``Ha[i] = dJ_a/dq_i``, the
+        derivative of :meth:`jacob0_analytical` (rows (v, d gamma/dt), same ``representation``),
+        laid out like :meth:`hessian0`.
+
+        The translational rows are those of ``hessian0``; the rate rows are
+        ``A^-1 H0_w[i] + (dA^-1/dq_i) J0_w`` (Haviland and Corke, Manipulator Differential
+        Kinematics, Part 2: Acceleration and Advanced Applications, 2023, section "Analytic Forms";
+        :func:`symkin.model.orientation.analytical_hessian_of`). ``sum_i Ha[i] qd_i`` is the rate
+        of change of ``J_a`` along qd. ConfigurationError where A is singular (rpy pitch = +-90 deg,
+        ZYZ theta = 0 or 180 deg), as :meth:`jacob0_analytical`; ParameterError for an unknown
+        representation.
+        """
+        rep = representation_of(representation)
+        Q, single = self._batch(q)
+        T = _at(self.fkine, Q, frame)  # type: ignore[attr-defined]
+        J, H = _at(self.jacob0_hessian0, Q, frame)  # type: ignore[attr-defined]
+        Ha = analytical_hessian_of(T, J, H, rep)
+        return Ha[0] if single else Ha
 
     def joint_torques(self, q: Any, wrench: Any, frame: Any = None, in_frame: str = "base") -> np.ndarray:
         """Joint forces/torques that balance ``wrench`` applied at ``frame``: ``tau = J^T w``, (n,) or (N, n).
@@ -413,202 +444,3 @@ def _det6_spd(G: list[list[float]]) -> float:
         return 0.0
     det *= a55
     return det
-
-
-# -- the Euler vector of a rotation (the orientation part of the pose error) ------------------------
-#: |l| (eq 39) below which a rotation with trace < 0 counts as a half turn for :func:`angle_axis`
-NEAR_PI_L = 1e-6
-
-
-def angle_axis(R: Any) -> np.ndarray:
-    """alpha(R) (eqs 38-40): the Euler vector of rotation matrices R (..., 3, 3) -> (..., 3).
-
-    A diagonal R gives 0 for (1, 1, 1) and pi/2 (r11 + 1, r22 + 1, r33 + 1) otherwise (eq 40);
-    other matrices use eq 38, except near pi (trace < 0 and |l| < 1e-6), where l of eq 39 is
-    rounding noise and the axis comes from the symmetric part of R (its sign from l).
-    """
-    R = np.asarray(R, dtype=float)
-    l = np.stack((R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]), -1)
-    tr = np.trace(R, axis1=-2, axis2=-1)
-    nl = np.sqrt((l * l).sum(-1))
-    diag = (R[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]] == 0).all(-1)
-    theta = np.arctan2(nl, tr - 1.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        general = np.where((nl == 0)[..., None], 0.0, (theta / nl)[..., None] * l)
-        ct = (tr - 1.0) / 2.0
-        M = ((R + np.swapaxes(R, -1, -2)) / 2.0 - ct[..., None, None] * np.eye(3)) / (1.0 - ct)[
-            ..., None, None
-        ]
-        d = np.diagonal(M, axis1=-2, axis2=-1)
-        k = np.argmax(d, axis=-1)  # first maximum, like the C code
-        ak = np.sqrt(np.maximum(np.take_along_axis(d, k[..., None], -1), 0.0))
-        col = np.take_along_axis(M, k[..., None, None], -1)[..., 0]
-        ax = col / ak
-        ax = np.where(np.arange(3) == k[..., None], ak, ax)
-        ax = np.where(((ax * l).sum(-1) < 0)[..., None], -ax, ax)
-        near_pi = theta[..., None] * ax
-    eq40 = np.where((tr > 0)[..., None], 0.0, math.pi / 2 * (np.diagonal(R, axis1=-2, axis2=-1) + 1.0))
-    use_general = (tr >= 0) | (nl >= NEAR_PI_L)
-    return np.where(diag[..., None], eq40, np.where(use_general[..., None], general, near_pi))
-
-
-# -- analytical Jacobian, velocity and wrench transforms -------------------------------------------
-#: The orientation representations of :meth:`FrameMethods.jacob0_analytical` (roboticstoolbox-python's
-#: names), gamma = (gamma_1, gamma_2, gamma_3) in rad:
-#:
-#: - ``"rpy/xyz"``: roll, pitch, yaw with ``R = Rx(yaw) Ry(pitch) Rz(roll)`` (spatialmath ``tr2rpy``
-#:   order "xyz"); pitch in [-90, 90] deg, singular at pitch = +-90 deg.
-#: - ``"rpy/zyx"``: roll, pitch, yaw with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (order "zyx");
-#:   pitch in [-90, 90] deg, singular at pitch = +-90 deg.
-#: - ``"eul"``: ZYZ Euler angles phi, theta, psi with ``R = Rz(phi) Ry(theta) Rz(psi)`` (``tr2eul``);
-#:   theta in [0, 180] deg, singular at theta = 0 and 180 deg.
-#: - ``"exp"``: exponential coordinates, the rotation vector r = theta n of ``R = exp([r]x)``
-#:   (``trlog``), theta in [0, 180] deg. Its rate matrix is singular only at theta = 360 k deg,
-#:   k != 0, which the principal rotation vector never reaches (it jumps from r to -r at 180 deg).
-REPRESENTATIONS: tuple[str, ...] = ("rpy/xyz", "rpy/zyx", "eul", "exp")
-
-#: Where A(gamma) counts as singular: |cos pitch| (rpy) or |sin theta| (eul) below this.
-_SINGULAR_TOL = 1e-6
-
-
-def _representation(representation: Any) -> str:
-    if not isinstance(representation, str) or representation not in REPRESENTATIONS:
-        raise ParameterError(
-            f"representation must be one of {', '.join(repr(r) for r in REPRESENTATIONS)}, "
-            f"not {representation!r}"
-        )
-    return representation
-
-
-def _gamma_of(R: np.ndarray, representation: str) -> np.ndarray:
-    """Orientation (N, 3) in ``representation`` (see :data:`REPRESENTATIONS`) of rotations R (N, 3, 3)."""
-    if representation == "rpy/xyz":  # R = Rx(y) Ry(p) Rz(r): R[0] = (cp cr, -cp sr, sp)
-        roll = np.arctan2(-R[:, 0, 1], R[:, 0, 0])
-        pitch = np.arctan2(R[:, 0, 2], np.hypot(R[:, 0, 0], R[:, 0, 1]))
-        yaw = np.arctan2(-R[:, 1, 2], R[:, 2, 2])
-        return np.stack((roll, pitch, yaw), axis=-1)
-    if representation == "rpy/zyx":  # R = Rz(y) Ry(p) Rx(r): R[2] = (-sp, cp sr, cp cr)
-        roll = np.arctan2(R[:, 2, 1], R[:, 2, 2])
-        pitch = np.arctan2(-R[:, 2, 0], np.hypot(R[:, 0, 0], R[:, 1, 0]))
-        yaw = np.arctan2(R[:, 1, 0], R[:, 0, 0])
-        return np.stack((roll, pitch, yaw), axis=-1)
-    if representation == "eul":  # R = Rz(phi) Ry(theta) Rz(psi): R[:, 2] = (cphi sth, sphi sth, cth)
-        phi = np.arctan2(R[:, 1, 2], R[:, 0, 2])
-        theta = np.arctan2(np.hypot(R[:, 0, 2], R[:, 1, 2]), R[:, 2, 2])
-        psi = np.arctan2(R[:, 2, 1], -R[:, 2, 0])
-        return np.stack((phi, theta, psi), axis=-1)
-    return angle_axis(R)  # the principal rotation vector, theta in [0, pi]
-
-
-def _omega_to_rates(gamma: np.ndarray, representation: str) -> np.ndarray:
-    """A(gamma)^-1 (N, 3, 3), mapping base-frame angular velocity omega to d gamma/dt, in closed form
-    (the inverse of ``omega = A(gamma) d gamma/dt``; Corke, Robotics, Vision and Control, 3rd ed.,
-    2023, chap 8; spatialmath's ``rotvelxform(inverse=True)``). ConfigurationError where A is
-    singular."""
-    g1, g2, g3 = gamma[:, 0], gamma[:, 1], gamma[:, 2]
-    z, o = np.zeros_like(g1), np.ones_like(g1)
-    if representation == "exp":
-        # A^-1 = J_l(r)^-1, the inverse left Jacobian of SO(3): omega (base frame) = J_l(r) dr/dt, theta <= pi
-        th = np.linalg.norm(gamma, axis=-1)
-        bad = (np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL) & (th > 1.0)
-        _raise_singular(bad, representation, "rotation angle", th)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            big = (1.0 - (th / 2.0) / np.tan(th / 2.0)) / th**2
-        coef = np.where(th < 1e-2, 1.0 / 12.0 + th**2 / 720.0 + th**4 / 30240.0, big)
-        K = np.zeros((len(th), 3, 3))
-        K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -g3, g2, -g1
-        K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = g3, -g2, g1
-        return np.eye(3) - K / 2.0 + coef[:, None, None] * (K @ K)
-    if representation == "eul":  # omega = (0, 0, 1) dphi + (-sphi, cphi, 0) dtheta + R[:, 2] dpsi
-        s2 = np.sin(g2)
-        _raise_singular(np.abs(s2) < _SINGULAR_TOL, representation, "theta", g2)
-        c1, s1, c2 = np.cos(g1), np.sin(g1), np.cos(g2)
-        rows = ((-c1 * c2 / s2, -s1 * c2 / s2, o), (-s1, c1, z), (c1 / s2, s1 / s2, z))
-    else:
-        c2 = np.cos(g2)
-        _raise_singular(np.abs(c2) < _SINGULAR_TOL, representation, "pitch", g2)
-        t2 = np.tan(g2)
-        c3, s3 = np.cos(g3), np.sin(g3)
-        if representation == "rpy/xyz":  # omega = R[:, 2] droll + Rx(yaw) y dpitch + x dyaw
-            rows = ((z, -s3 / c2, c3 / c2), (z, c3, s3), (o, s3 * t2, -c3 * t2))
-        else:  # rpy/zyx: omega = R[:, 0] droll + Rz(yaw) y dpitch + z dyaw
-            rows = ((c3 / c2, s3 / c2, z), (-s3, c3, z), (c3 * t2, s3 * t2, o))
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
-
-
-def _raise_singular(bad: np.ndarray, representation: str, angle: str, values: np.ndarray) -> None:
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        where = f" (configuration {i} of the batch)" if len(bad) > 1 else ""
-        deg = round(math.degrees(float(values[i])), 4) + 0.0  # + 0.0: no -0
-        raise ConfigurationError(
-            f"the analytical Jacobian is singular for {representation} at {angle} = {deg:.6g} deg"
-            f"{where}; use another representation"
-        )
-
-
-def analytical_of(T: np.ndarray, J: np.ndarray, representation: str = "rpy/xyz") -> np.ndarray:
-    """Analytical Jacobian (N, 6, n), ``blkdiag(I, A(gamma)^-1) J``, from the base-frame pose T (N, 4, 4)
-    and Jacobian J (N, 6, n) (rows (v, omega)) of a frame; gamma is the orientation of T in
-    ``representation`` (:data:`REPRESENTATIONS`). ConfigurationError where A is singular."""
-    rep = _representation(representation)
-    Ainv = _omega_to_rates(_gamma_of(T[:, :3, :3], rep), rep)
-    return np.concatenate((J[:, :3], Ainv @ J[:, 3:]), axis=1)
-
-
-def _as_se3(T: Any) -> np.ndarray:
-    A = real_array(T, "T", PoseError)
-    if A.ndim not in (2, 3) or A.shape[-2:] != (4, 4):
-        raise PoseError(f"T must be a (4, 4) or (N, 4, 4) homogeneous transform, got shape {A.shape}")
-    if not np.isfinite(A).all():
-        raise PoseError("T holds NaN or infinite values")
-    R = A[..., :3, :3]
-    if (
-        np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max(initial=0.0) > 1e-6
-        or (np.linalg.det(R) <= 0.0).any()
-    ):
-        raise PoseError("T must be a homogeneous transform: its rotation part is not orthonormal")
-    return A
-
-
-def _skew(p: np.ndarray) -> np.ndarray:
-    S = np.zeros((*p.shape[:-1], 3, 3))
-    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -p[..., 2], p[..., 1], -p[..., 0]
-    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = p[..., 2], -p[..., 1], p[..., 0]
-    return S
-
-
-def velocity_transform(T: Any) -> np.ndarray:
-    """The (6, 6) matrix (or (N, 6, 6)) ``[[R, [t]x R], [0, R]]`` of ``T = aT_b = (R, t)``: it maps the
-    spatial velocity (v, omega) of a rigid body, expressed in frame {B} with v the velocity of the
-    body's point at the origin of {B}, to the same motion expressed in frame {A} with v that of the
-    body's point at the origin of {A}: ``(v_a, w_a) = (R v_b + t x (R w_b), R w_b)`` (m/s, rad/s).
-
-    This is the adjoint of T with symkin's row order (v, omega) (Corke, Robotics, Vision and Control,
-    3rd ed., 2023, chap 3 and 8; Lynch and Park, Modern Robotics, 2017, sec 3.3.2, rows
-    swapped). It composes, ``velocity_transform(T1 @ T2) = velocity_transform(T1) @
-    velocity_transform(T2)``, and ``velocity_transform(inv(T))`` is its inverse. Note that
-    ``jacob0`` and ``jacobe`` describe the velocity of one point (the frame's origin) and differ by
-    the rotation ``blkdiag(R, R)`` alone. PoseError for a T that is not SE(3).
-    """
-    A = _as_se3(T)
-    R, t = A[..., :3, :3], A[..., :3, 3]
-    X = np.zeros((*A.shape[:-2], 6, 6))
-    X[..., :3, :3] = R
-    X[..., 3:, 3:] = R
-    X[..., :3, 3:] = _skew(t) @ R
-    return X
-
-
-def wrench_transform(T: Any) -> np.ndarray:
-    """The (6, 6) matrix (or (N, 6, 6)) ``[[R, 0], [[t]x R, R]]`` of ``T = aT_b = (R, t)``, the inverse
-    transpose of :func:`velocity_transform`: it maps a wrench (f, m) expressed in {B}, m the moment
-    about the origin of {B}, to the same wrench expressed in {A} with the moment about the origin of
-    {A}: ``(f_a, m_a) = (R f_b, t x (R f_b) + R m_b)`` (N, N m). The power ``w . v`` of a wrench on
-    a motion is the same in both frames (Corke, Robotics, Vision and Control, 3rd ed., 2023, chap
-    3 and 8; Lynch and Park, Modern Robotics, 2017, sec 3.4, rows swapped). PoseError for a T
-    that is not SE(3).
-    """
-    X = velocity_transform(T)
-    X[..., 3:, :3], X[..., :3, 3:] = X[..., :3, 3:], 0.0  # [t]x R moved to the lower left block
-    return X

@@ -241,6 +241,15 @@ class Environment:
             raise GeometryError("points contain NaN or inf")
         return cls(spheres=tuple(Sphere(p, r) for p in P))
 
+    def __hash__(self) -> int:
+        """The hash of the obstacles, computed once (an environment is a key of the C IK solvers
+        that avoid it, looked up on every ``kin.ik(T, collision=env)``)."""
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = hash((self.spheres, self.capsules, self.boxes))
+            object.__setattr__(self, "_hash", h)
+        return h
+
     def __getstate__(self) -> dict[str, Any]:
         """Pickle the obstacles only: the packed arrays a kernel cached (with their memory
         addresses) stay behind."""

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import as_config
+from symkin.core.pose import as_pose
 from symkin.errors import RobotError
 from symkin.model.dh import robot_args
 from symkin.model.ets import ET, Const
@@ -175,17 +176,11 @@ def poe_args(
     """
     if frame not in _FRAMES:
         raise RobotError(f"frame must be one of {list(_FRAMES)}, not {frame!r}")
-    Mx = _matrix(M, (4, 4), "M", tol)
+    checked = as_pose(M, "M", RobotError)  # the one pose rule first, then PoE's exact numbers
+    Mx = _matrix(M if isinstance(M, (np.ndarray, list, tuple)) else checked, (4, 4), "M", tol)
     Mf = np.array([[float(x) for x in row] for row in Mx])
-    if Mx[3] != [0, 0, 0, 1]:
-        raise RobotError(
-            f"M must be a homogeneous transform with last row [0, 0, 0, 1], got {Mf[3].tolist()}"
-        )
+    as_pose(Mf, "M", RobotError)  # and on the snapped entries
     R = Mf[:3, :3]
-    if np.abs(R @ R.T - np.eye(3)).max() > _CHECK or np.linalg.det(R) < 0:
-        raise RobotError(
-            f"the rotation part of M is not a rotation matrix (orthonormal, det +1): {R.tolist()}"
-        )
     arr = np.asarray(screws, dtype=object)
     if arr.ndim == 1 and arr.shape == (6,):
         arr = arr[None, :]

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.pose import as_pose
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
 
@@ -42,7 +43,6 @@ __all__ = [
 
 SNAP_TOL = 1e-9  # rad: angles this close to k pi / m (m <= 12) become exact
 LENGTH_TOL = 2e-15  # lengths this close (relative to max(1, |x|)) to a shorter decimal become it
-_ORTHO_TOL = 1e-6  # max |R^T R - I| and |det R - 1| of an accepted rotation
 _ROT = (Axis.Rx, Axis.Ry, Axis.Rz)
 _TRANS = (Axis.tx, Axis.ty, Axis.tz)
 
@@ -108,22 +108,11 @@ def zyx_ets(R: np.ndarray, tol: float = SNAP_TOL) -> list[ET]:
 def se3_ets(T: Any, what: str = "transform", snap_tol: float = SNAP_TOL) -> list[ET]:
     """A 4x4 homogeneous matrix ``[R t; 0 1]`` as ``tx ty tz`` then rotations (module docstring).
 
-    Raises RobotError when ``T`` is not 4x4, not finite, its last row is not (0, 0, 0, 1) or R is
-    not a rotation (orthonormal with det +1 to 1e-6).
+    Raises RobotError when ``T`` breaks the one pose rule (:func:`symkin.core.pose.as_pose`: 4x4,
+    finite, bottom row (0, 0, 0, 1), R orthonormal to 1e-6 with det R > 0).
     """
-    try:
-        M = np.asarray(T, dtype=float)
-    except (TypeError, ValueError):
-        raise RobotError(f"{what} must be a 4x4 matrix, not {type_name(T)}") from None
-    if M.shape != (4, 4):
-        raise RobotError(f"{what} must be a 4x4 homogeneous matrix, got shape {M.shape}")
-    if not np.isfinite(M).all():
-        raise RobotError(f"{what} contains NaN or inf")
-    if np.abs(M[3] - [0, 0, 0, 1]).max() > 1e-12:
-        raise RobotError(f"{what}: the last row of a homogeneous matrix must be 0 0 0 1, got {M[3].tolist()}")
+    M = as_pose(T, what, RobotError)  # the one pose rule
     R = M[:3, :3]
-    if np.abs(R.T @ R - np.eye(3)).max() > _ORTHO_TOL or abs(np.linalg.det(R) - 1) > _ORTHO_TOL:
-        raise RobotError(f"{what}: the upper-left 3x3 block is not a rotation matrix (orthonormal, det +1)")
     return rpy_ets([length_const(float(v)) for v in M[:3, 3]]) + _rotation_ets(R, snap_tol)
 
 
@@ -216,8 +205,8 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
     elif _is_rtb(value):
         chain, _ = rtb_ets(value, snap_tol)
         out = chain
-    elif isinstance(getattr(value, "A", None), np.ndarray) and np.shape(value.A) == (4, 4):
-        out = se3_ets(value.A, what, snap_tol)
+    elif isinstance(getattr(value, "A", None), (np.ndarray, list)):  # spatialmath SE3: the pose rule
+        out = se3_ets(value, what, snap_tol)
     else:
         raise RobotError(
             f"{what} must be constant ETS text, 'x y z roll pitch yaw', a symkin ETS or ET, a 4x4 matrix, a "

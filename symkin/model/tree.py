@@ -441,6 +441,15 @@ class Tree(FrameMethods):
         T, J = L[:, self.frame_segments[f]], self._jacobian(L, P, f)
         return (T[0], J[0]) if single else (T, J)
 
+    def segment_poses(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Base-frame poses of every segment, in :attr:`segments` order (Part 1 eqs 1-5, walked
+        depth first): its link's frame, after the joint and the constants that follow it, and its
+        joint frame, just before the joint (the link's frame for a fixed segment). Two (S, 4, 4)
+        arrays, or (N, S, 4, 4) for a batch."""
+        Q, single = self._batch(q)
+        L, P = self._walk(Q)
+        return (L[0], P[0]) if single else (L, P)
+
     def fkine_all(self, q: Any) -> np.ndarray:
         """Poses of every frame, in :attr:`frames` order: (F, 4, 4) or (N, F, 4, 4)."""
         Q, single = self._batch(q)

@@ -53,6 +53,7 @@ from typing import Any
 from xml.etree import ElementTree
 from xml.parsers import expat
 
+from symkin.core.sizes import read_bounded
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 from symkin.model.slots import Segment, Slot
@@ -195,6 +196,7 @@ def xml_numbers(
 #: resolves an angle to worse than 0.1 rad, and sums and squares of lengths along a chain head
 #: for overflow (inf in the kinematics instead of an error here).
 MAX_URDF_VALUE = 1e15
+URDF_FILE_BYTES = 64 * 2**20  # a URDF (or SRDF) file larger than this is refused before it is read
 
 
 def joint_origin(jel: ElementTree.Element, what: str) -> tuple[list[Fraction], list[Fraction]]:
@@ -346,8 +348,9 @@ def load_xml(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     ):
         path: Path | None = Path(path_or_xml)
         shown = repr(str(path)) if len(str(path)) <= 200 else repr(str(path)[:197] + "...")
-        try:
-            text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is allowed
+        try:  # a byte-order mark is allowed; newlines as read_text reads them
+            data = read_bounded(path, URDF_FILE_BYTES, "the file", OSError)  # named below
+            text = data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
         except UnicodeDecodeError as exc:
             raise URDFError(
                 f"URDF file {shown} is not UTF-8 text: {exc.reason} at byte {exc.start}"

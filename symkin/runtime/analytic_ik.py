@@ -29,7 +29,7 @@ from symkin.compiler.analytic_ik import analytic_key, build_analytic
 from symkin.core.arrays import as_rows, real_array
 from symkin.errors import ConfigurationError
 from symkin.model.resolve import resolve_robot
-from symkin.runtime.ik import IKResult, check_pose, pose_error
+from symkin.runtime.ik import IKResult, check_pose, pose_error_of
 from symkin.runtime.ik_problem import shift_into, stacked
 from symkin.runtime.memo import memoised
 
@@ -95,7 +95,7 @@ def nearest_pick(
     success, residual, reason); with no rows ``q0`` (zeros without it), failed, and reason None
     (the caller says why)."""
     q = rows[0] if len(rows) else np.zeros(rows.shape[1]) if q0 is None else np.array(q0)
-    r = float(np.linalg.norm(pose_error(np.asarray(fk(q)), target)))
+    r = float(np.linalg.norm(pose_error_of(np.asarray(fk(q)), target)))
     if not len(rows):
         return q, False, r, None
     success = r < tol

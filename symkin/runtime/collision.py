@@ -20,6 +20,7 @@ import numpy as np
 
 from symkin.core.arrays import as_batch
 from symkin.core.names import identifier
+from symkin.core.pose import as_poses
 from symkin.errors import ParameterError
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Environment
@@ -30,6 +31,7 @@ __all__ = [
     "CollisionKernel",
     "collision_kernel",
     "collision_ik",
+    "collision_solver",
     "collision_of",
     "collision_module",
     "motion_valid",
@@ -169,7 +171,11 @@ def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05)
     b, _ = as_batch(q1, n, what="q1")
     if a.shape[0] != 1 or b.shape[0] != 1:
         raise ParameterError("motion_valid takes one configuration for q0 and one for q1")
-    steps = max(1, int(np.ceil(np.abs(b[0] - a[0]).max() / res)))
+    from symkin.core.sizes import room
+
+    span = float(np.abs(b[0] - a[0]).max())
+    room(8.0 * n * (span / res + 2), f"a motion checked at {span / res + 1:.6g} configurations")
+    steps = max(1, int(np.ceil(span / res)))
     s = np.linspace(0.0, 1.0, steps + 1)[:, None]
     Q = a[0] + s * (b[0] - a[0])
     return not bool(np.asarray(check(Q)).any())
@@ -241,22 +247,17 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
     its last solution; iterations and searches count every round."""
     from symkin.runtime.ik_problem import IKResult
 
-    try:
-        attempts = int(attempts)
-    except (TypeError, ValueError):
-        raise ParameterError(f"collision_attempts must be a positive integer, got {attempts!r}") from None
-    if attempts < 1:
-        raise ParameterError(f"collision_attempts must be a positive integer, got {attempts}")
-    env = Environment() if env is True else as_environment(env)
-    check = kin.collision()
-    solver = _c_solver_avoiding(kin, check, env, kwargs)
+    attempts = _attempts(attempts)
+    solver = collision_solver(kin, env, kwargs)
     if solver is not None:
         return solver.solve(Tep, q0=kwargs.get("q0"), seed=kwargs.get("seed"))
+    env = Environment() if env is True else as_environment(env)
+    check = kin.collision()
     first = kin.ik(Tep, **kwargs)
     batch = first.batch
     seed = kwargs.pop("seed", None)
     kwargs.pop("q0", None)
-    T = np.asarray(Tep, dtype=float).reshape(-1, 4, 4)
+    T = as_poses(Tep)[0]  # (N, 4, 4) by the one pose rule (kin.ik has checked it)
     q = np.array(first.q, dtype=float).reshape(len(T), -1)
     success = np.atleast_1d(np.array(first.success, dtype=bool))
     iters = np.atleast_1d(np.array(first.iterations, dtype=int))
@@ -288,19 +289,37 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
 _AVOIDING: OrderedDict[tuple, tuple] = OrderedDict()  # (kin id, options, env id) -> (kin, env, solver)
 
 
-def _c_solver_avoiding(kin: Any, check: Collision, env: Environment, kwargs: dict[str, Any]) -> Any:
+def _attempts(attempts: Any) -> int:
+    """``collision_attempts`` checked: a positive integer (ParameterError otherwise)."""
+    try:
+        value = int(attempts)
+    except (TypeError, ValueError):
+        raise ParameterError(f"collision_attempts must be a positive integer, got {attempts!r}") from None
+    if value < 1:
+        raise ParameterError(f"collision_attempts must be a positive integer, got {value}")
+    return value
+
+
+def collision_solver(kin: Any, env: Any, kwargs: dict[str, Any], attempts: Any = 20) -> Any:
     """The C IK solver of ``kin.ik(**kwargs)`` that rejects converged solutions colliding with
-    ``env`` (the kernel's ``skcoll_in_collision_packed`` in its search loop), memoised for the
-    last 16 kinematics, options and environments; None when the C path does not apply (another
-    backend, a frame off the end effector, no C kernel, options the C solver does not take)."""
+    ``env`` (an Environment or obstacles; ``True``: self-collision only), the kernel's
+    ``skcoll_in_collision_packed`` in its search loop, memoised for the last 16 kinematics,
+    options and environments; None when the C path does not apply (another backend, a tree or a
+    frame off the end effector, options the C solver does not take). ``attempts``: the
+    ``collision_attempts`` of the other paths, checked here too."""
     from symkin.runtime.ik import IK_OPTIONS
     from symkin.runtime.ik_c import CIKSolver, options_key
     from symkin.runtime.ik_problem import IKOptions
 
-    if check.kernel is None or getattr(kin, "backend", None) != "c" or getattr(kin, "is_tree", True):
+    _attempts(attempts)
+    if getattr(kin, "backend", None) != "c" or getattr(kin, "is_tree", True):
         return None
     if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or getattr(kin, "n", 99) > 12:
         return None  # frame=, backend=...: the general path
+    env = Environment() if env is True else as_environment(env)
+    check = kin.collision()
+    if check.kernel is None:
+        return None
     options = IKOptions.of(kin, **{k: v for k, v in kwargs.items() if k in IK_OPTIONS})
     fn = check.kernel.lib.skcoll_in_collision_packed
 

@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import finite_number as _number
+from symkin.core.arrays import per_joint as _per_joint
 from symkin.core.arrays import real_array
 from symkin.errors import CompileError, ConfigurationError, ParameterError
 from symkin.runtime.memo import bounded, per_object
@@ -35,12 +37,14 @@ from symkin.runtime.mmc_qp import (
     active_set_rows_solve,
     active_set_solve,
     distance_dampers,
+    fallback_step,
     joint_velocity_bounds,
     manipulability_jacobian,
     mmc_closed_form,
     mmc_qp,
 )
 from symkin.runtime.step import OSQP_SETTINGS, StepInfo, step_nu, step_q
+from symkin.runtime.step import OSQP_STATUS as _OSQP_STATUS
 
 __all__ = [
     "MMC",
@@ -53,41 +57,6 @@ __all__ = [
     "joint_velocity_bounds",
     "manipulability_jacobian",
 ]
-
-_OSQP_STATUS = {
-    "OSQP_SOLVED": "solved",
-    "OSQP_SOLVED_INACCURATE": "inaccurate",
-    "OSQP_PRIMAL_INFEASIBLE": "infeasible",
-    "OSQP_PRIMAL_INFEASIBLE_INACCURATE": "infeasible",
-    "OSQP_DUAL_INFEASIBLE": "error",
-    "OSQP_DUAL_INFEASIBLE_INACCURATE": "error",
-    "OSQP_MAX_ITER_REACHED": "max_iter",
-    "OSQP_TIME_LIMIT_REACHED": "max_iter",
-}
-
-
-def _number(value: Any, name: str, minimum: float = 0.0, strict: bool = True) -> float:
-    """``value`` as a finite float > ``minimum`` (``>=`` when not ``strict``), else ParameterError."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and (x > minimum if strict else x >= minimum)):
-        raise ParameterError(
-            f"{name} must be finite and {'>' if strict else '>='} {minimum:g}, got {value!r}"
-        )
-    return x
-
-
-def _per_joint(value: Any, n: int, name: str) -> np.ndarray:
-    """A scalar or (n,) parameter as finite (n,) floats >= 0, else ParameterError."""
-    try:
-        a = np.broadcast_to(real_array(value, name, ParameterError), (n,)).copy()
-    except ValueError:
-        raise ParameterError(f"{name} must be a number or {n} numbers, got {value!r}") from None
-    if not (np.isfinite(a).all() and (a >= 0).all()):
-        raise ParameterError(f"{name} must be finite and >= 0, got {a.tolist()}")
-    return a
 
 
 def _speed_limits(kin: Any, n: int, qd_max: Any) -> np.ndarray:
@@ -321,10 +290,14 @@ class MMC:
     ``d_i`` (NEO's form, :func:`~symkin.runtime.mmc_qp.distance_dampers`), with ``d_dot = Jd qd``
     from the distance Jacobians (:meth:`symkin.Kinematics.distance_jacobians`), for the
     ``collision_rows`` (32) closest pairs within ``d_i``. Pairs of the robot's own shapes use
-    ``d_i_self`` (0.05 m) and ``d_s_self`` (0: the sphere models already pad the links): sphere
-    models hold pairs that stay a few centimetres apart at every configuration (the built-in
-    Panda's closest self pair is 1.2 cm apart at qr), which obstacle margins would push apart
-    forever and which would crowd the obstacles out of the rows. When any pair lies within its
+    ``d_i_self`` (0.05 m) and ``d_s_self`` (1 mm: the sphere models already pad the links, and a
+    pair driven to d = 0 by the damper would sit at exact contact, where rounding makes the
+    checker call every further step colliding): sphere models hold pairs that stay a few
+    centimetres apart at every configuration (the built-in Panda's closest self pair is 1.2 cm
+    apart at qr), which obstacle margins would push apart forever and which would crowd the
+    obstacles out of the rows. The dampers act on a linearisation, so a step may still end slightly
+    inside a margin or a pair: :func:`symkin.servo` checks every configuration it returns with the
+    collision checker and shortens or stops a step that collides. When any pair lies within its
     ``d_i`` and there is a slack, the step is first the active-set solve with the rows
     (:func:`~symkin.runtime.mmc_qp.active_set_rows_solve`, from the last step's settled set, then
     from the bounds the closed form crosses), else OSQP polished by the same solve. On C
@@ -363,7 +336,7 @@ class MMC:
         xi_d: float = 1.0,
         collision_rows: int = 32,
         d_i_self: float = 0.05,
-        d_s_self: float = 0.0,
+        d_s_self: float = 0.001,
     ) -> None:
         self._collision = self._env = None
         self._warm: tuple[np.ndarray, np.ndarray] | None = None  # the last obstacle step's active sets
@@ -745,20 +718,8 @@ class MMC:
 
     def _fallback(self, qp: MMCQP, status: str, method: str, iters: int) -> tuple[np.ndarray, StepInfo]:
         """The RRMC step scaled into [lower, upper] (or zero), never NaN."""
-        J, nu = qp.J, qp.l[:6]
-        lower, upper = qp.lower, qp.upper
-        qd, _, _, _ = _rrmc_step(J, nu, 1e-2, self.singular_tol, self._rows)
-        fallback = "rrmc"
-        if not np.isfinite(qd).all():
-            qd, fallback = np.zeros(self.n), "zero"
-        scale = 1.0
-        if (lower <= 0).all() and (upper >= 0).all():
-            with np.errstate(divide="ignore", invalid="ignore"):
-                r = np.where(qd > upper, upper / qd, np.where(qd < lower, lower / qd, 1.0))
-            scale = float(np.clip(r, 0.0, 1.0).min())
-            qd = qd * scale
-        qd = np.clip(qd, lower, upper)
-        res = float(np.abs(J @ qd - nu).max())
+        qd, fallback, scale = fallback_step(qp, self.singular_tol)
+        res = float(np.abs(qp.J @ qd - qp.l[:6]).max())
         return qd, StepInfo(status, method, qp.manipulability, iters, fallback, res, scale=scale)
 
 

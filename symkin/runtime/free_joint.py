@@ -27,7 +27,8 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import MAX_JOINT_VALUE, as_rows, real_array
-from symkin.errors import ConfigurationError, NoAnalyticIKError, PoseError, SymkinError
+from symkin.core.pose import pose_array
+from symkin.errors import ConfigurationError, NoAnalyticIKError, SymkinError
 from symkin.model.ets import ET, ETS
 from symkin.model.kinematics import const_matrix
 from symkin.model.robot import Robot
@@ -269,7 +270,7 @@ class FreeJointIK:
 def _poses(T: Any) -> tuple[np.ndarray, bool]:
     """T as (N, 4, 4) floats (converted by the one rule, real_array) and whether it was one pose;
     the full check (check_pose) only when the shape is wrong, the values are checked by the solver."""
-    Tb = real_array(T, "a target pose", PoseError)
+    Tb = pose_array(T)
     if Tb.shape == (4, 4):
         return Tb[None], True
     if Tb.ndim == 3 and Tb.shape[1:] == (4, 4):

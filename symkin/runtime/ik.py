@@ -7,7 +7,10 @@ The error e (eq 37) is the base-frame translation error and the angle-axis vecto
 - ``NR`` (eq 45): q += J^-1 e (``pinv``: pinv(We^1/2 J) We^1/2 e, the same for a square J);
 - ``GN`` (eqs 46-47): q += (J^T We J)^-1 J^T We e (``pinv``: pinv of J^T We J);
 - ``LM`` (eqs 48-51): q += (J^T We J + Wn)^-1 J^T We e with Wn = lam (``wampler``),
-  lam E_k (``chan``, eq 50) or E_k + lam (``sugihara``, eq 51; lam is w_n).
+  lam E_k (``chan``, eq 50) or E_k + lam (``sugihara``, eq 51; lam is w_n);
+- ``QP``: q += qd, qd the solution of a quadratic program with the joint limits as velocity
+  dampers and a slack on the error (Haviland and Corke, Manipulator Differential Kinematics,
+  Part 2, 2023): :mod:`symkin.runtime.ik_qp`.
 
 Global search: a search runs at most ``ilimit`` iterations (one iteration evaluates the pose and,
 unless it converged, takes a step); ``slimit`` searches start from q0, then ``starts[s]``, then
@@ -40,6 +43,7 @@ from typing import Any, Literal
 import numpy as np
 
 from symkin.core.arrays import as_config, as_rows, name_of
+from symkin.core.pose import POSE_ATOL  # noqa: F401 - re-exported
 from symkin.errors import ParameterError, PoseError
 from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     DAMPINGS,
@@ -47,7 +51,8 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     MAX_ITERATIONS,
     METHODS,
     PINV_RCOND,
-    POSE_ATOL,
+    QP_RHO_I,
+    QP_RHO_S,
     TWO_PI,
     Damping,
     IKOptions,
@@ -60,6 +65,7 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     failure_reason,
     new_seed,
     pose_error,
+    pose_error_of,
     revolute_mask,
     sample_range,
     shift_into,
@@ -112,8 +118,19 @@ def _fkjac(kin: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(kin.fkine(q), dtype=float), np.asarray(kin.jacob0(q), dtype=float)
 
 
+def _stepper(kin: Any, opt: IKOptions) -> Any:
+    """``step(q, J, e, r2) -> dq`` of ``opt.method``: eqs 45-51, or the QP's
+    (:func:`symkin.runtime.ik_qp.qp_step`); raises LinAlgError when there is no step."""
+    if opt.method == "QP":
+        from symkin.runtime.ik_qp import qp_step
+
+        return lambda q, J, e, r2: qp_step(kin, opt, q, J, e)
+    return lambda q, J, e, r2: _step(opt, J, e, r2)
+
+
 def _solve_one(kin: Any, opt: IKOptions, Tep: np.ndarray, q0: np.ndarray | None, rng: SplitMix64) -> tuple:
     """One target: (q, success, iterations, searches, residual, reason)."""
+    step = _stepper(kin, opt)
     lo, hi = opt.qlim
     best, best_q = math.inf, None
     iterations = limit_rejects = singular = 0
@@ -127,7 +144,7 @@ def _solve_one(kin: Any, opt: IKOptions, Tep: np.ndarray, q0: np.ndarray | None,
             q = rng.random_q(opt.sample)
         for i in range(opt.ilimit):
             T, J = _fkjac(kin, q)
-            e = pose_error(T, Tep)
+            e = pose_error_of(T, Tep)
             iterations += 1
             r2 = float(opt.we @ (e * e))
             res = math.sqrt(r2) if r2 >= 0 else math.nan
@@ -146,7 +163,7 @@ def _solve_one(kin: Any, opt: IKOptions, Tep: np.ndarray, q0: np.ndarray | None,
                 break
             try:
                 with np.errstate(all="ignore"):
-                    q = q + _step(opt, J, e, r2)
+                    q = q + step(q, J, e, r2)
             except np.linalg.LinAlgError:
                 singular += 1
                 break
@@ -160,7 +177,7 @@ def ik(
     Tep: Any,
     method: Method = "LM",
     damping: Damping = "chan",
-    lam: float | Sequence[float] = 0.1,
+    lam: float | Sequence[float] | None = None,
     pinv: bool = False,
     ilimit: int = 30,
     slimit: int = 100,
@@ -173,6 +190,11 @@ def ik(
     starts: Any = None,
     backend: Literal["numpy", "c"] = "numpy",
     frame: Any = None,
+    slack_gain: float = 1.0,
+    manipulability: float = 0.0,
+    xi: float = 1.0,
+    rho_i: float | Sequence[float] = QP_RHO_I,
+    rho_s: float | Sequence[float] = QP_RHO_S,
 ) -> IKResult:
     """Numerical IK: joint values q with ``kin.fkine(q)`` = ``Tep`` (eqs 37-51).
 
@@ -181,9 +203,11 @@ def ik(
             (a :class:`symkin.Robot` or a compiled backend); ``revolute`` or ``ets`` tells which
             joints wrap by 2 pi.
         Tep: target pose(s) 0T_e*, (4, 4) or (N, 4, 4); invalid SE(3) raises PoseError.
-        method: the step, ``"NR"``, ``"GN"`` or ``"LM"`` (module docstring).
+        method: the step, ``"NR"``, ``"GN"``, ``"LM"`` (module docstring) or ``"QP"`` (a quadratic
+            program with joint-limit dampers and a slack: :mod:`symkin.runtime.ik_qp`).
         damping: LM's damping, ``"wampler"``, ``"chan"`` or ``"sugihara"`` (module docstring).
-        lam: the damping constant (module docstring), a scalar or (n,).
+        lam: the damping constant (module docstring), a scalar or (n,), default 0.1; for QP the
+            joint-velocity weight lambda_q, one number, default 0.01.
         pinv: NR and GN steps through the pseudo-inverse (module docstring).
         ilimit: iterations per search.
         slimit: searches.
@@ -197,6 +221,11 @@ def ik(
         frame: the frame whose pose is the task: a tree's frame name (:class:`symkin.Tree` or
             its compiled kinematics) or link frame k of a chain; the joints off its path are free
             (they keep their start values).
+        slack_gain: method="QP": the slack's gain lambda_delta (:mod:`symkin.runtime.ik_qp`).
+        manipulability: method="QP": the manipulability term's weight (0: none).
+        xi: method="QP": the joint-limit velocity dampers' gain.
+        rho_i: method="QP": their influence distance (rad or m), a scalar or (n,).
+        rho_s: method="QP": their stop distance (rad or m), a scalar or (n,).
 
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.
@@ -205,7 +234,8 @@ def ik(
         from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)
-    args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts)
+    args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts, slack_gain,
+            manipulability, xi, rho_i, rho_s)  # fmt: skip
     if backend == "c":
         return _c_solver(kin, args).solve(Tep, q0, seed)
     opt = _options(kin, *args)
@@ -269,21 +299,26 @@ def _options(kin: Any, *args: Any) -> IKOptions:
 def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndarray:
     """The iterates q_0 .. q_steps of one search from q0, not stopping at convergence:
     (k + 1, n), fewer rows if a step fails. For checking solvers against each other."""
+    from symkin.core.sizes import count, room
+
+    steps = count(steps, "steps", minimum=0)
     opt = IKOptions.of(kin, **options)
+    room(8.0 * (steps + 1) * opt.n, f"a trace of {steps} IK steps")
     T, single = check_pose(Tep)
     if not single:
         raise PoseError("ik_trace takes one target pose (4, 4)")
     q = as_config(q0, opt.n, name_of(kin), "q0").copy()  # the rule of q, as the C solver's trace
+    step = _stepper(kin, opt)
     out = [q.copy()]
-    for _ in range(int(steps)):
+    for _ in range(steps):
         Te, J = _fkjac(kin, q)
-        e = pose_error(Te, T[0])
+        e = pose_error_of(Te, T[0])
         r2 = float(opt.we @ (e * e))
         if not math.isfinite(r2):
             break
         try:
             with np.errstate(all="ignore"):
-                q = q + _step(opt, J, e, r2)
+                q = q + step(q, J, e, r2)
         except np.linalg.LinAlgError:
             break
         out.append(q.copy())
@@ -291,7 +326,7 @@ def ik_trace(kin: Any, Tep: Any, q0: Any, steps: int, **options: Any) -> np.ndar
 
 
 IK_OPTIONS = ("method", "damping", "lam", "pinv", "ilimit", "slimit", "tol", "tol_on", "joint_limits", "we",
-              "starts")  # fmt: skip
+              "starts", "slack_gain", "manipulability", "xi", "rho_i", "rho_s")  # fmt: skip
 """The options of :func:`ik` that make a solver (``q0`` and ``seed`` vary per call)."""
 
 

@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_config, as_rows, name_of, real_array
+from symkin.core.arrays import as_config, as_rows, name_of
+from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
 from symkin.runtime.memo import per_object
@@ -42,13 +43,14 @@ __all__ = [
     "solver_for",
     "options_key",
     "ets_table",
+    "register_qp_step",
 ]
 
 CSRC = Path(__file__).resolve().parent / "csrc"
 _P = ctypes.c_void_p
 _I32, _I64, _U64, _D = ctypes.c_int32, ctypes.c_int64, ctypes.c_uint64, ctypes.c_double
 FKJAC = ctypes.CFUNCTYPE(None, _P, _P, _P)  # symkin_fkjac_fn
-_METHOD = {"NR": 0, "GN": 1, "LM": 2}
+_METHOD = {"NR": 0, "GN": 1, "LM": 2, "QP": 3}
 _DAMPING = {"wampler": 0, "chan": 1, "sugihara": 2}
 _AXES = ("tx", "ty", "tz", "Rx", "Ry", "Rz")
 
@@ -60,7 +62,7 @@ class _Config(ctypes.Structure):
         ("tol", _D),
         ("we", _D * 6),
         *((f, _P) for f in ("lam", "qlo", "qhi", "slo", "shi", "revolute", "starts", "fkjac", "ets")),
-        *((f, _P) for f in ("fkjac_batch", "collides", "collision_env")),
+        *((f, _P) for f in ("fkjac_batch", "collides", "collision_env", "step", "step_ctx")),
     ]
 
 
@@ -157,6 +159,13 @@ def ik_library() -> ctypes.CDLL:
 
 
 @lru_cache(maxsize=1)
+def ik_library_gil() -> ctypes.CDLL:
+    """:func:`ik_library` through :class:`ctypes.PyDLL`: its calls hold the GIL (the QP step's
+    embedded OSQP solvers are shared, see :mod:`symkin.runtime.ik_qp_c`)."""
+    return bind(ctypes.PyDLL(str(_ik_build()[0])))
+
+
+@lru_cache(maxsize=1)
 def ik_extension() -> Any:
     """The extension module of :func:`ik_library`'s library: ``solve`` of one target (see
     ``csrc/symkin_ik_py.c``)."""
@@ -226,6 +235,19 @@ def _result_maker() -> Any:
 _result = _result_maker()
 
 
+_QP_STEP: Any = None  # QPStep of symkin.runtime.ik_qp_c, which registers it (it sits above this module)
+
+
+def register_qp_step(make: Any) -> None:
+    """Register the maker of method "QP"'s step: ``make(kin, options, environment, **collision)``
+    returns an object with ``function`` and ``context`` (a ``symkin_ik_step_fn`` and its argument)
+    that keeps them alive. :mod:`symkin.runtime.ik_qp_c` registers its :class:`QPStep` when it is
+    imported: the step is the MMC library's (:mod:`symkin.runtime.mmc_c`), whose collision rows
+    depend on modules that depend on this one."""
+    global _QP_STEP
+    _QP_STEP = make
+
+
 class CIKSolver:
     """The C solver for one kinematics and one set of options (see :func:`symkin.runtime.ik.ik`).
 
@@ -240,6 +262,11 @@ class CIKSolver:
             obstacles it checks against; a converged solution that collides is rejected and the next
             search starts, as for joint limits (the reason counts them).
         lib: a library exporting the ``symkin_ik_*`` functions (default: :func:`ik_library`).
+        environment: method ``"QP"``: obstacles whose collision rows the QP step keeps (with
+            ``collision`` the MMC's row options: :class:`~symkin.runtime.ik_qp_c.QPStep`).
+
+    Method ``"QP"`` needs compiled C kinematics (its step is the MMC's, :mod:`symkin.runtime.ik_qp_c`)
+    and solves with the GIL held (the embedded OSQP solvers of its step are shared).
     """
 
     def __init__(
@@ -250,11 +277,20 @@ class CIKSolver:
         fkjac: Any = None,
         lib: ctypes.CDLL | None = None,
         collides: Any = None,
+        environment: Any = None,
+        collision: dict[str, Any] | None = None,
         **kwargs: Any,
     ) -> None:
         opt = options if options is not None else IKOptions.of(kin, **kwargs)
         if options is not None and kwargs:
             raise TypeError("pass either options or keyword options, not both")
+        self._qp = None
+        own = lib is None  # the default library, with the extension's one-target entry point
+        if opt.method == "QP":  # the QP step: an MMC controller's, with the GIL held
+            if _QP_STEP is None:  # pragma: no cover - registered when symkin.runtime.kinematics loads
+                raise ConfigurationError("method='QP' in C needs symkin.runtime.ik_qp_c (import symkin)")
+            self._qp = _QP_STEP(kin, opt, environment, **(collision or {}))
+            lib = lib if lib is not None else ik_library_gil()
         self.lib = bind(lib) if lib is not None else ik_library()
         nmax = self.lib.symkin_ik_nmax()
         if opt.n > nmax or opt.n < 1:
@@ -296,14 +332,14 @@ class CIKSolver:
             fn, env = collides
             cfg.collides, cfg.collision_env = ctypes.cast(fn, _P).value, env.address
         cfg.ets = ctypes.addressof(self._ets) if self._ets is not None else None
+        if self._qp is not None:
+            cfg.step, cfg.step_ctx = self._qp.function, self._qp.context
         self._cfg = cfg
         self._cfg_addr = ctypes.addressof(cfg)
         # one target: the extension's solve when the library is the default one (it has it), else
         # symkin_ik_solve through ctypes; either way with buffers per call (thread-safe)
         # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
-        self.fast = (
-            functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if lib is None else None
-        )
+        self.fast = functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if own else None
         self._seeds = random.Random(os.urandom(16))
 
     def bind(self, fallback: Any, by_options: dict[tuple, Any] | None = None) -> Any:
@@ -326,7 +362,8 @@ class CIKSolver:
     def solve(self, Tep: Any, q0: Any = None, seed: int | None = None) -> IKResult:
         """Solve one target (4, 4) or a batch (N, 4, 4); same arguments and result as :func:`ik`.
 
-        Thread-safe: one target is solved without the GIL, with buffers of its own.
+        Thread-safe: one target is solved without the GIL (with it for method "QP"), with buffers of
+        its own.
         """
         if self.fast is not None:
             res = self.fast(Tep, q0, seed)
@@ -344,7 +381,7 @@ class CIKSolver:
             seed = self._seeds.getrandbits(64)
         else:
             seed = int(seed) & _M64
-        T = np.ascontiguousarray(real_array(Tep, "a target pose", PoseError))  # no complex, strings...
+        T = np.ascontiguousarray(pose_array(Tep))  # the pose rule's conversion: no complex, strings...
         if T.shape != (4, 4):
             return self._solve_batch(T, q0, seed)
         check_pose(T)  # the detailed PoseError
@@ -372,7 +409,7 @@ class CIKSolver:
 
     def _solve_batch(self, T: np.ndarray, q0: Any, seed: int) -> IKResult:
         if T.ndim != 3 or T.shape[1:] != (4, 4):
-            raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
+            check_pose(T)  # the rule's PoseError for the shape
         T = np.ascontiguousarray(T, dtype=float)
         N, n = len(T), self.n
         stride, Q0 = 0, None
@@ -438,9 +475,10 @@ _SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def options_key(opt: IKOptions) -> tuple:
-    arrays = (opt.lam, opt.we, opt.qlim, opt.starts)
+    arrays = (opt.lam, opt.we, opt.qlim, opt.starts, opt.rho_i, opt.rho_s)
     return (opt.method, opt.damping, opt.pinv, opt.ilimit, opt.slimit, opt.tol, opt.tol_on, opt.joint_limits,
-            *(a.tobytes() for a in arrays), opt.starts.shape)  # fmt: skip
+            *(a.tobytes() for a in arrays), opt.starts.shape, opt.slack_gain, opt.manipulability,
+            opt.xi)  # fmt: skip
 
 
 def solver_for(kin: Any, opt: IKOptions) -> CIKSolver:

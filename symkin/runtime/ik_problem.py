@@ -14,17 +14,21 @@ from typing import Any, Literal
 
 import numpy as np
 
-from symkin.core.arrays import as_batch, name_of, real_array, sample_bounds
+from symkin.core.arrays import as_batch, finite_number, name_of, per_joint, real_array, sample_bounds
+from symkin.core.pose import as_poses, pose_array
 from symkin.errors import ParameterError, PoseError
 from symkin.model.differential import NEAR_PI_L, angle_axis
 
-Method = Literal["NR", "GN", "LM"]
+Method = Literal["NR", "GN", "LM", "QP"]
 Damping = Literal["wampler", "chan", "sugihara"]
-METHODS = ("NR", "GN", "LM")
+METHODS = ("NR", "GN", "LM", "QP")
+#: lam when it is not given: LM's damping, the QP's joint-velocity weight (symkin.runtime.ik_qp)
+DEFAULT_LAM = {"QP": 0.01}
+LM_LAM = 0.1
+QP_RHO_I = 0.9  # rad or m: the QP's joint-limit dampers act within this distance of a limit
+QP_RHO_S = 0.01  # rad or m: ... and stop a joint this far from it
 DAMPINGS = ("wampler", "chan", "sugihara")
 PINV_RCOND = 1e-12  # singular values <= PINV_RCOND * largest are dropped (same in C)
-POSE_ATOL = 1e-6  # max |R^T R - I| of an accepted target
-_BOTTOM_ATOL = 1e-12
 TWO_PI = 6.283185307179586
 M64 = (1 << 64) - 1
 
@@ -129,6 +133,13 @@ class IKOptions:
     sample: np.ndarray  # (2, n) finite range of random restarts
     revolute: np.ndarray  # (n,) bool
     starts: np.ndarray  # (S, n)
+    # method="QP" (symkin.runtime.ik_qp): the slack's gain, the manipulability term's weight and
+    # the joint-limit velocity dampers' gain, influence and stop distances
+    slack_gain: float = 1.0
+    manipulability: float = 0.0
+    xi: float = 1.0
+    rho_i: np.ndarray | None = None  # (n,)
+    rho_s: np.ndarray | None = None  # (n,)
 
     @classmethod
     def of(
@@ -136,7 +147,7 @@ class IKOptions:
         kin: Any,
         method: str = "LM",
         damping: str = "chan",
-        lam: float | Sequence[float] = 0.1,
+        lam: float | Sequence[float] | None = None,
         pinv: bool = False,
         ilimit: int = 30,
         slimit: int = 100,
@@ -145,6 +156,11 @@ class IKOptions:
         joint_limits: bool = True,
         we: Sequence[float] | None = None,
         starts: Any = None,
+        slack_gain: float = 1.0,
+        manipulability: float = 0.0,
+        xi: float = 1.0,
+        rho_i: float | Sequence[float] = QP_RHO_I,
+        rho_s: float | Sequence[float] = QP_RHO_S,
     ) -> IKOptions:
         n = int(kin.n)
         if n < 1:
@@ -152,6 +168,8 @@ class IKOptions:
         method = str(method).upper()
         if method not in METHODS:
             raise ParameterError(f"method must be one of {METHODS}, not {method!r}")
+        if lam is None:
+            lam = DEFAULT_LAM.get(method, LM_LAM)
         damping = str(damping).lower()
         if damping not in DAMPINGS:
             raise ParameterError(f"damping must be one of {DAMPINGS}, not {damping!r}")
@@ -188,13 +206,38 @@ class IKOptions:
         rev = revolute_mask(kin)
         # start configurations: the joint-value rule of q (as_batch), (n,) or (S, n)
         S = np.zeros((0, n)) if starts is None else as_batch(starts, n, name_of(kin), "starts")[0]
+        qp = _qp_options(n, method, lam_a, we_a, joint_limits, slack_gain, manipulability, xi, rho_i, rho_s)
         return cls(
             n, method, damping, _ro(lam_a), bool(pinv), int(ilimit), int(slimit), float(tol), tol_on,
-            bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S),
+            bool(joint_limits), _ro(we_a), _ro(qlim), _ro(sample_range(qlim, rev)), _ro(rev), _ro(S), *qp,
         )  # fmt: skip
 
 
 MAX_ITERATIONS = 2**31 - 1  # ilimit * slimit: the C solver counts iterations in int32
+
+
+def _qp_options(
+    n: int, method: str, lam: np.ndarray, we: np.ndarray, joint_limits: Any, slack_gain: Any,
+    manipulability: Any, xi: Any, rho_i: Any, rho_s: Any,
+) -> tuple[float, float, float, np.ndarray, np.ndarray]:  # fmt: skip
+    """The QP options, validated: (slack_gain, manipulability, xi, rho_i (n,), rho_s (n,))."""
+    slack_gain = finite_number(slack_gain, "slack_gain")  # the MMC's checks of the same quantities
+    manipulability = finite_number(manipulability, "manipulability", strict=False)
+    xi = finite_number(xi, "xi")
+    rho = [_ro(per_joint(rho_i, n, "rho_i")), _ro(per_joint(rho_s, n, "rho_s"))]
+    if method == "QP":
+        if not (lam == lam[0]).all() or not lam[0] > 0:
+            raise ParameterError(
+                f"method='QP' takes lam as one number > 0 (its joint-velocity weight), got {lam}"
+            )
+        if not (we > 0).all():
+            raise ParameterError(
+                f"method='QP' needs every weight of we > 0, got {we.tolist()}: its QP asks for the whole "
+                "pose error (we weighs the residual only); for position-only IK use LM"
+            )
+        if joint_limits and not (rho[0] > rho[1]).all():
+            raise ParameterError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s}) for every joint")
+    return slack_gain, manipulability, xi, rho[0], rho[1]
 
 
 def _count(value: Any, name: str) -> int:
@@ -277,40 +320,10 @@ def new_seed() -> int:
 
 # -- pose error (eqs 37-40) -------------------------------------------------------------------
 def check_pose(Tep: Any) -> tuple[np.ndarray, bool]:
-    """Validate SE(3) targets: (4, 4) or (N, 4, 4) -> ((N, 4, 4) float array, was_single).
-
-    Raises PoseError for a wrong shape, NaN/inf, a bottom row other than (0, 0, 0, 1), a
-    rotation with ``max |R^T R - I| > 1e-6`` or a reflection (det R < 0).
-    """
-    T = real_array(Tep, "a target pose", PoseError)
-    single = T.ndim == 2
-    if T.ndim not in (2, 3) or T.shape[-2:] != (4, 4):
-        raise PoseError(f"a target pose must have shape (4, 4) or (N, 4, 4), got {T.shape}")
-    if single:
-        T = T[None]
-
-    def where(i: int) -> str:
-        return "the target" if single else f"target [{i}]"
-
-    bad = ~np.isfinite(T).all(axis=(1, 2))
-    if bad.any():
-        raise PoseError(f"{where(int(np.argmax(bad)))} contains NaN or inf")
-    bottom = np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > _BOTTOM_ATOL
-    if bottom.any():
-        i = int(np.argmax(bottom))
-        raise PoseError(f"{where(i)} has bottom row {T[i, 3].tolist()}, not [0, 0, 0, 1]")
-    R = T[:, :3, :3]
-    dev = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
-    if (dev > POSE_ATOL).any():
-        i = int(np.argmax(dev > POSE_ATOL))
-        raise PoseError(
-            f"{where(i)} rotation is not orthonormal: max |R^T R - I| = {dev[i]:.3g} > {POSE_ATOL:g}"
-        )
-    det = np.linalg.det(R)
-    if (det <= 0).any():
-        i = int(np.argmax(det <= 0))
-        raise PoseError(f"{where(i)} rotation is a reflection (det R = {det[i]:.3g})")
-    return T, single
+    """Validate SE(3) targets: (4, 4) or (N, 4, 4) -> ((N, 4, 4) float array, was_single), by the one
+    pose rule (:func:`symkin.core.pose.as_poses`): PoseError for a wrong shape, NaN/inf, a bottom row
+    other than (0, 0, 0, 1), a rotation with ``max |R^T R - I| > 1e-6`` or a reflection (det R <= 0)."""
+    return as_poses(Tep)
 
 
 def _angle_axis_one(R: np.ndarray) -> np.ndarray:
@@ -333,6 +346,21 @@ def _angle_axis_one(R: np.ndarray) -> np.ndarray:
 
 def pose_error(Te: Any, Tep: Any) -> np.ndarray:
     """e of eq 37 for poses Te, Tep (..., 4, 4) -> (..., 6): (t* - t, alpha(R* R^T)), base frame.
+
+    Both are checked by the one pose rule (:func:`symkin.core.pose.as_poses`; PoseError naming
+    ``Te`` or ``Tep``), then :func:`pose_error_of` computes e."""
+    A, B = pose_array(Te, "Te"), pose_array(Tep, "Tep")
+    for X, what in ((A, "Te"), (B, "Tep")):
+        as_poses(X.reshape(-1, 4, 4) if X.ndim > 3 and X.shape[-2:] == (4, 4) else X, what)
+    try:
+        np.broadcast_shapes(A.shape[:-2], B.shape[:-2])
+    except ValueError:
+        raise PoseError(f"Te {A.shape} and Tep {B.shape}: the stacks of poses do not broadcast") from None
+    return pose_error_of(A, B)
+
+
+def pose_error_of(Te: Any, Tep: Any) -> np.ndarray:
+    """:func:`pose_error` of poses known to be valid (no checks: the solvers' and servo loops' own).
 
     One pose pair is computed with scalar arithmetic in the order of the C code (``csrc/symkin_pose.h``),
     so both give the same numbers to the bit: the C and Python servo loops take the same steps."""

@@ -12,6 +12,7 @@ methods are the extension module's functions themselves, so a call costs one C f
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from functools import cached_property
 from pathlib import Path
@@ -28,6 +29,7 @@ from symkin.model.robot import Robot
 from symkin.model.slots import hessian_of_columns
 from symkin.runtime.casadi_calls import chain_functions, tree_functions
 from symkin.runtime.ik import IK_OPTIONS, ik
+from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
 
 __all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
@@ -92,8 +94,9 @@ class Kinematics(FrameMethods):
     the C backend, the extension module's functions themselves).
 
     Attributes: ``model`` (also ``robot`` and ``tree``), ``backend``, ``n``, ``name``,
-    ``joint_names``, ``qlim``, ``qd_max``, ``frames`` (a tree's), ``files`` (the generated sources),
-    ``path`` (the compiled library or module), ``module``.
+    ``joint_names``, ``qlim``, ``qd_max``, ``configs`` and each named configuration (``kin.qr``, as
+    on the model), ``frames`` (a tree's), ``files`` (the generated sources), ``path`` (the compiled
+    library or module), ``module``.
     """
 
     fkine: Callable[..., np.ndarray]
@@ -153,6 +156,25 @@ class Kinematics(FrameMethods):
     @property
     def qd_max(self) -> np.ndarray | None:
         return self.model.qd_max
+
+    @property
+    def configs(self) -> Any:
+        """The model's named configurations (``qz``, ``qr``...; each (n,)), as on the Robot; also
+        attributes: ``kin.qr``."""
+        return self.model.configs
+
+    def __getattr__(self, key: str) -> np.ndarray:
+        """A named configuration of the model as an attribute (``kin.qr``), as the Robot has it."""
+        model = self.__dict__.get("model")
+        if model is None or key.startswith("_"):
+            raise AttributeError(key)
+        try:
+            return model.configs[key]
+        except KeyError:
+            raise AttributeError(
+                f"Kinematics {model.name!r} has no attribute or configuration {key!r}; "
+                f"configurations: {sorted(model.configs)}"
+            ) from None
 
     @property
     def frames(self) -> tuple[str, ...]:
@@ -310,18 +332,13 @@ class Kinematics(FrameMethods):
 
         ``collision=env`` (an Environment or obstacles; ``True``: self-collision only) rejects
         solutions in collision: on the C backend inside the C solver's search loop (the next
-        search starts, within ``slimit``), elsewhere by solving again from new random starts, at
-        most ``collision_attempts`` (20) times; see :func:`symkin.runtime.collision.collision_ik`.
+        search starts, within ``slimit``; its solver is made once and found by its options, an
+        equal environment included, so one target is one C call like the plain solve), elsewhere
+        by solving again from new random starts, at most ``collision_attempts`` (20) times; see
+        :func:`symkin.runtime.collision.collision_ik`. With ``method="QP"`` on a chain's C
+        kinematics each step also keeps the MMC's collision rows
+        (:func:`symkin.runtime.ik_qp_c.collision_qp_ik`).
         """
-        if "collision" in kwargs or "collision_attempts" in kwargs:
-            env = kwargs.pop("collision", None)
-            attempts = kwargs.pop("collision_attempts", 20)
-            if env is not None and env is not False:
-                from symkin.runtime.collision import collision_ik
-
-                if frame is not None:
-                    kwargs["frame"] = frame
-                return collision_ik(self, Tep, env, attempts, **kwargs)
         q0, seed = kwargs.get("q0"), kwargs.get("seed")
         options = {k: v for k, v in kwargs.items() if k not in ("q0", "seed")}  # what a C solver is made of
         if frame is None and self._ik_by_options:  # options seen before: straight to their C solver
@@ -331,6 +348,27 @@ class Kinematics(FrameMethods):
                 pass
             else:
                 return solver.solve(Tep, q0, seed)
+        if "collision" in kwargs or "collision_attempts" in kwargs:
+            env = kwargs.pop("collision", None)
+            attempts = kwargs.pop("collision_attempts", 20)
+            if env is not None and env is not False:
+                qp = str(kwargs.get("method", "")).upper() == "QP"
+                if qp and frame is None and self.backend == "c" and not self.is_tree:
+                    return collision_qp_ik(self, Tep, env, attempts, **kwargs)  # the QP keeps the MMC's rows
+                from symkin.runtime.collision import collision_ik, collision_solver
+
+                if frame is not None:
+                    kwargs["frame"] = frame
+                solver = collision_solver(self, env, kwargs, attempts)
+                if solver is None:
+                    return collision_ik(self, Tep, env, attempts, **kwargs)
+                with contextlib.suppress(TypeError):  # later calls of these options: one C call
+                    self._c_ik_solver({})
+                    self._remember_ik(
+                        tuple(options.items()), solver, solver.bind(MethodType(Kinematics.ik, self))
+                    )
+                return solver.solve(Tep, q0, seed)
+            options = {k: v for k, v in kwargs.items() if k not in ("q0", "seed")}
         if frame is not None or self.is_tree:
             return self.select(frame).ik(Tep, **kwargs)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS

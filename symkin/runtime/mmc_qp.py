@@ -29,6 +29,7 @@ __all__ = [
     "joint_velocity_bounds",
     "manipulability_jacobian",
     "distance_dampers",
+    "fallback_step",
     "active_set_solve",
     "active_of",
     "active_of_osqp",
@@ -89,8 +90,10 @@ def joint_velocity_bounds(
     Distances are in joint units (rad or m). The damper is a continuous-time constraint: a joint
     faster than ``rho_i / dt`` can jump over the influence zone in one step of an integration with
     time step ``dt``. Given ``dt``, every joint also gets ``|step| <= distance - rho_s``, i.e.
-    ``-(q_i - q_min - rho_s) / dt <= qd_i <= (q_max - q_i - rho_s) / dt``. Bounds are kept
-    consistent (lower <= upper).
+    ``-(q_i - q_min - rho_s) / dt <= qd_i <= (q_max - q_i - rho_s) / dt``, and the dampers only
+    tighten that interval (a joint within ``rho_s`` of a limit is pushed back at most to ``rho_s``
+    from the other one, however large ``xi / (rho_i - rho_s)``). Bounds are kept consistent
+    (lower <= upper); the speed limits come before the step bound when the two conflict.
     """
     lower, upper = -qd_max.copy(), qd_max.copy()
     if joint_limits:
@@ -101,9 +104,10 @@ def joint_velocity_bounds(
         d_lo = q - qlim[0]
         upper = np.where(d_hi < rho_i, np.minimum(upper, xi * (d_hi - rho_s) / width), upper)
         lower = np.where(d_lo < rho_i, np.maximum(lower, -xi * (d_lo - rho_s) / width), lower)
-        if dt is not None:
-            upper = np.minimum(upper, (d_hi - rho_s) / dt)
-            lower = np.maximum(lower, -(d_lo - rho_s) / dt)
+        if dt is not None:  # the dampers only tighten the step bound: a push-back from within
+            lo_dt, hi_dt = -(d_lo - rho_s) / dt, (d_hi - rho_s) / dt  # rho_s stops at the far side
+            upper = np.clip(upper, lo_dt, hi_dt)
+            lower = np.clip(lower, lo_dt, hi_dt)
         upper = np.maximum(upper, -qd_max)
         lower = np.minimum(lower, qd_max)
         bad = lower > upper
@@ -197,6 +201,41 @@ def distance_dampers(d: np.ndarray, d_i: float, d_s: float, xi: float) -> np.nda
     distance within the influence distance ``d_i`` (the approach slows to 0 at the safety distance
     ``d_s``; below it the shapes must part), ``-inf`` (no constraint) for the others."""
     return np.where(d < d_i, -xi * (d - d_s) / (d_i - d_s), -np.inf)
+
+
+def fallback_step(
+    qp: MMCQP, singular_tol: float = 1e-6, damping: float = 1e-2
+) -> tuple[np.ndarray, str, float]:
+    """(qd (n,), fallback, scale): the step of a QP no solver answered (a singular J, an infeasible
+    or failed QP), as ``csrc/mmc_impl.h`` takes it: the resolved-rate step (Haviland and Corke,
+    Manipulator Differential Kinematics, Part 1, 2023, eqs 35-36) ``J^T (J J^T)^-1 nu`` for
+    ``qp.J`` and the equality's ``nu`` when J's smallest singular value is at least
+    ``singular_tol``, else ``J^T (J J^T + damping^2 I)^-1 nu``; scaled down as a whole into the
+    bounds when they contain 0, then clipped into them. ``fallback`` is ``"rrmc"``, or ``"zero"``
+    when that step is not finite."""
+    J, nu = qp.J, qp.l[:6]
+    lower, upper = qp.lower, qp.upper
+    G = J @ J.T
+    try:
+        if J.shape[1] < 6:
+            raise np.linalg.LinAlgError("fewer than 6 joints: J J^T is singular")
+        np.linalg.cholesky(G - singular_tol**2 * np.eye(6))
+        qd = J.T @ np.linalg.solve(G, nu)
+    except np.linalg.LinAlgError:
+        try:
+            qd = J.T @ np.linalg.solve(G + damping * damping * np.eye(6), nu)
+        except np.linalg.LinAlgError:
+            qd = np.full(J.shape[1], np.nan)
+    fallback = "rrmc"
+    if not np.isfinite(qd).all():
+        qd, fallback = np.zeros(qp.n), "zero"
+    scale = 1.0
+    if (lower <= 0).all() and (upper >= 0).all():
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(qd > upper, upper / qd, np.where(qd < lower, lower / qd, 1.0))
+        scale = float(np.clip(r, 0.0, 1.0).min())
+        qd = qd * scale
+    return np.clip(qd, lower, upper), fallback, scale
 
 
 def mmc_closed_form(

@@ -1,8 +1,9 @@
 """Position-based servoing (Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eqs
 37-43): the end-effector velocity command from a pose error.
 
-numpy only. All quantities are in the robot's base frame; spatial velocities and errors have rows
-(v, omega) like the base-frame Jacobian ``jacob0``. The pose error of eq 37 is
+numpy only. Poses are in the robot's base frame; spatial velocities and errors have rows (v, omega),
+in the base frame like ``jacob0`` (what the servo loops use), or, from ``p_servo(..., frame="ee")``,
+in the end-effector frame like ``jacobe``. The pose error of eq 37 is
 :func:`symkin.runtime.ik.pose_error`.
 """
 
@@ -16,15 +17,17 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import real_array
-from symkin.errors import ParameterError, PoseError
-from symkin.runtime.ik import pose_error
+from symkin.core.pose import as_pose
+from symkin.errors import ParameterError
+from symkin.runtime.ik import pose_error_of
 
-__all__ = ["p_servo", "servo_velocity", "servo_gain", "pose_error_checked"]
+__all__ = ["p_servo", "servo_velocity", "servo_gain", "pose_error_checked", "SERVO_FRAMES"]
 
 
 def pose_error_checked(Te: Any, Tep: Any) -> np.ndarray:
-    """Pose error of eq 37 (:func:`symkin.runtime.ik.pose_error`) of one validated pose pair, (6,)."""
-    return pose_error(_pose(Te, "Te"), _pose(Tep, "Tep"))
+    """Pose error of eq 37 (:func:`symkin.runtime.ik.pose_error`) of one pose pair validated by the
+    one pose rule (:func:`symkin.core.pose.as_pose`), (6,)."""
+    return pose_error_of(as_pose(Te, "Te"), as_pose(Tep, "Tep"))
 
 
 def servo_gain(gain: float | Sequence[float] | np.ndarray) -> np.ndarray:
@@ -43,19 +46,45 @@ def servo_gain(gain: float | Sequence[float] | np.ndarray) -> np.ndarray:
     return k
 
 
+SERVO_FRAMES = ("base", "ee")
+
+
 def p_servo(
     Te: np.ndarray,
     Tep: np.ndarray,
     gain: float | Sequence[float] | np.ndarray = 1.0,
     threshold: float = 0.1,
     nu_max: float | Sequence[float] | None = None,
+    *,
+    frame: str | None = None,
 ) -> tuple[np.ndarray, bool]:
-    """Position-based servoing step from the current pose ``Te`` to ``Tep`` (both (4, 4), base frame).
+    """Position-based servoing step from the current pose ``Te`` to ``Tep`` (both (4, 4), base frame):
+    the velocity ``nu`` (6,) that drives the end effector toward ``Tep``, and whether it is there.
 
-    ``servo_velocity(pose_error_checked(Te, Tep), gain, threshold, nu_max)``: returns the end-effector
-    velocity ``nu`` (6,) and whether the target is reached.
+    ``frame`` (required, keyword) says in which frame ``nu`` (rows (v, omega)) is expressed:
+
+    - ``"base"``: the base frame, for ``qd = pinv(jacob0(q)) @ nu``: ``servo_velocity(e, gain,
+      threshold, nu_max)`` of the pose error e of eq 37 (what :func:`symkin.servo` commands);
+    - ``"ee"``: the end-effector frame of ``Te``, for ``qd = pinv(jacobe(q)) @ nu``: the same with
+      e rotated into that frame, ``(R^T e_v, R^T e_omega)`` (R the rotation of ``Te``), so the
+      gains, the arrival test ``sum |e| < threshold`` and the caps apply to its axes.
+
+    There is no default: roboticstoolbox-python's ``p_servo`` returns an end-effector-frame velocity
+    (its default ``method="rpy"``; ``method="angle-axis"`` gives symkin's ``"base"``), so a ported
+    ``jacobe`` loop given the base-frame velocity would move the arm the wrong way without an error.
+    PoseError when ``Te`` or ``Tep`` is not SE(3) (the one pose rule).
     """
-    return servo_velocity(pose_error_checked(Te, Tep), gain, threshold, nu_max)
+    if frame not in SERVO_FRAMES:
+        raise ParameterError(
+            f"p_servo needs frame='base' (nu in the base frame, for jacob0) or frame='ee' (in the "
+            f"end-effector frame, for jacobe; roboticstoolbox-python's p_servo default), not {frame!r}"
+        )
+    A = as_pose(Te, "Te")
+    e = pose_error_of(A, as_pose(Tep, "Tep"))
+    if frame == "ee":
+        R = A[:3, :3]
+        e = np.concatenate((R.T @ e[:3], R.T @ e[3:]))
+    return servo_velocity(e, gain, threshold, nu_max)
 
 
 def servo_velocity(
@@ -100,12 +129,3 @@ def _cap(nu: np.ndarray, rows: slice, limit: float) -> None:
     norm = math.sqrt(s)
     if norm > limit:
         nu[rows] *= limit / norm
-
-
-def _pose(T: Any, what: str) -> np.ndarray:
-    T = real_array(T, what, PoseError)
-    if T.shape != (4, 4):
-        raise PoseError(f"{what} must be a 4x4 homogeneous transform, got shape {T.shape}")
-    if not np.isfinite(T).all():
-        raise PoseError(f"{what} contains NaN or inf")
-    return T

@@ -11,7 +11,7 @@ import numpy as np
 from symkin.core.arrays import as_config, name_of, real_array
 from symkin.errors import ParameterError
 
-__all__ = ["OSQP_SETTINGS", "StepInfo", "step_q", "step_nu"]
+__all__ = ["OSQP_SETTINGS", "OSQP_STATUS", "StepInfo", "step_q", "step_nu"]
 
 
 #: OSQP settings of :class:`MMC`: tight tolerances, and polishing. ``polishing`` is done by symkin,
@@ -27,6 +27,19 @@ OSQP_SETTINGS: dict[str, Any] = {
     "max_iter": 4000,
     "verbose": False,
     "warm_starting": True,
+}
+
+
+#: StepInfo's status of each of OSQP's solver statuses (osqp.SolverStatus names)
+OSQP_STATUS = {
+    "OSQP_SOLVED": "solved",
+    "OSQP_SOLVED_INACCURATE": "inaccurate",
+    "OSQP_PRIMAL_INFEASIBLE": "infeasible",
+    "OSQP_PRIMAL_INFEASIBLE_INACCURATE": "infeasible",
+    "OSQP_DUAL_INFEASIBLE": "error",
+    "OSQP_DUAL_INFEASIBLE_INACCURATE": "error",
+    "OSQP_MAX_ITER_REACHED": "max_iter",
+    "OSQP_TIME_LIMIT_REACHED": "max_iter",
 }
 
 

@@ -1,23 +1,30 @@
 """Trajectories with the semantics of roboticstoolbox-python (RTB, Corke, Robotics, Vision & Control in
-Python, 3e, 2023, chap 3): scalar and joint-space quintics, trapezoidal (LSPB) profiles, multi-segment
-via-point paths, Cartesian paths between two poses, and resolved-rate tracking of a Cartesian path.
+Python, 3e, 2023, chap 3): scalar and joint-space quintics, trapezoidal (LSPB) profiles and multi-segment
+via-point paths (Cartesian paths: :mod:`symkin.runtime.cartesian`).
 
 numpy only (matplotlib for :meth:`Trajectory.plot`). Axis values are whatever the caller interpolates
 (joint values in rad or m, Cartesian coordinates); times are in seconds, or in steps where RTB uses steps
-(``quintic`` and ``trapezoidal`` with an integer ``t``). Poses are (4, 4) homogeneous transforms in the
-robot's base frame; spatial velocities and pose errors have rows (v, omega) in the base frame, as
-``jacob0`` and :func:`symkin.runtime.ik.pose_error` (eq 37 of Haviland and Corke, Manipulator
-Differential Kinematics, Part 1, 2023).
+(``quintic`` and ``trapezoidal`` with an integer ``t``).
 
-Where this module deliberately differs from RTB 1.1 (RTB's behaviour is a bug or an accident there):
+Every function returns finite samples or raises ParameterError: inputs are finite, at most
+:data:`MAX_SAMPLES` samples are made, positions near the range of a double are scaled by a power of two
+while the polynomials are evaluated (exactly), and a trajectory whose velocities or accelerations
+exceed a double (a distance of 1 in 1e-170 s) is refused, never returned as inf or NaN.
+
+Where this module deliberately differs from RTB 1.5 (RTB's behaviour is a bug or an accident there):
 
 - ``jtraj(q0, qf, m)`` returns ``t = linspace(0, 1, m)``, the times its velocities refer to (RTB
   returns ``linspace(0, m, m)`` with velocities per unit of normalised time).
 - ``mstraj`` includes the start ``q0`` as row 0 at ``t = 0`` (RTB leaves it out and starts its time
-  vector at 0 one step later); ``mstraj(...).q[1:]`` are RTB's rows, and it returns ``qd`` and ``qdd``.
-  It also computes step counts with integers (RTB's ``ceil(tacc / dt)`` rounds 1.1 / 0.1 up to 12) and
-  gives every segment at least one linear sample (RTB jumps back to a stale point otherwise).
+  vector at 0 one step later); ``mstraj(...).q[1:]`` are RTB's rows, and its ``qd`` and ``qdd`` are
+  those of the polynomial and linear pieces. It also computes step counts with integers (RTB's
+  ``ceil(tacc / dt)`` rounds 1.1 / 0.1 up to 12) and gives every segment at least one linear sample
+  (RTB jumps back to a stale point otherwise).
 - ``trapezoidal`` with ``|V| = |qf - q0| / tf`` exactly is refused (RTB divides by a zero blend time).
+- Inputs RTB turns into NaN or inf with at most a RuntimeWarning raise ParameterError here.
+
+As in RTB 1.5, ``quintic`` and ``trapezoidal`` given a vector of times run the motion from ``t[0]`` to
+``t[-1]``, and ``jtraj`` from time 0 to ``t[-1]`` (its times must be >= 0).
 """
 
 from __future__ import annotations
@@ -31,23 +38,16 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import as_config, name_of, real_array
-from symkin.errors import MissingExtraError, ParameterError, PoseError
-from symkin.runtime.ik_problem import check_pose, pose_error
-from symkin.runtime.servo import servo_gain
+from symkin.core.arrays import real_array
+from symkin.errors import MissingExtraError, ParameterError
 
-__all__ = [
-    "Trajectory",
-    "PathResult",
-    "quintic",
-    "jtraj",
-    "trapezoidal",
-    "mstraj",
-    "ctraj",
-    "servo_path",
-]
+__all__ = ["Trajectory", "quintic", "jtraj", "trapezoidal", "mstraj", "unit_trapezoidal", "MAX_SAMPLES"]
 
 _EPS_STEPS = 1e-9  # slack when counting time steps: 0.3 / 0.1 is 2.9999999999999996 steps, not 3
+#: The most samples a trajectory function makes (ParameterError beyond: 10**7 samples of 7 axes
+#: take 1.7 GB for q, qd and qdd).
+MAX_SAMPLES = 10_000_000
+_BIG = 2.0**960  # axes with a position beyond it are evaluated in units of a power of two (_axis_scale)
 
 
 # -- the result -------------------------------------------------------------------------------
@@ -143,6 +143,7 @@ class Trajectory:
 
 
 # -- input checks -----------------------------------------------------------------------------
+# -- input checks -----------------------------------------------------------------------------
 def _finite(x: Any, what: str) -> np.ndarray:
     a = real_array(x, what, ParameterError)
     if not np.isfinite(a).all():
@@ -174,17 +175,31 @@ def _boundary(v: Any, n: int, what: str) -> np.ndarray:
     return a
 
 
-def _times(t: Any, normalised: bool) -> tuple[np.ndarray, float, bool]:
-    """(sample times, final time tf, istime) of ``t``: an integer m (m samples: step numbers 0..m-1, or
-    ``linspace(0, 1, m)`` when ``normalised``) or a strictly increasing vector of times >= 0 (the motion
-    runs from time 0 to ``t[-1]``)."""
+def _count(m: float, what: str) -> int:
+    """``m`` samples as an int, or ParameterError when it exceeds :data:`MAX_SAMPLES` (or is not finite)."""
+    if not m <= MAX_SAMPLES:
+        raise ParameterError(f"{what}: {m:.4g} samples, more than the {MAX_SAMPLES} a trajectory may have")
+    return int(m)
+
+
+def _times(t: Any, mode: str) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """(sample times, times since the motion starts, duration T, istime) of ``t``.
+
+    ``t``: an integer m (m samples: step numbers 0..m-1, or ``linspace(0, 1, m)`` when ``mode`` is
+    ``"normalised"``), or a strictly increasing vector of finite times: the motion runs from ``t[0]``
+    to ``t[-1]`` (``mode="start"``, RTB's quintic and trapezoidal) or from time 0 to ``t[-1]``
+    (``"zero"``: RTB's jtraj; the times must be >= 0)."""
     if isinstance(t, numbers.Integral) and not isinstance(t, (bool, np.bool_)):
         m = int(t)
         if m < 2:
             raise ParameterError(f"t as a number of samples must be at least 2, got {m}")
-        if normalised:
-            return np.linspace(0.0, 1.0, m), 1.0, True
-        return np.arange(m, dtype=float), float(m - 1), False
+        m = _count(m, "t")
+        _room(m)
+        if mode == "normalised":
+            ts = np.linspace(0.0, 1.0, m)
+            return ts, ts, 1.0, True
+        ts = np.arange(m, dtype=float)
+        return ts, ts, float(m - 1), False
     a = real_array(t, "t", ParameterError)
     if a.ndim != 1 or a.size < 2:
         raise ParameterError(
@@ -192,13 +207,19 @@ def _times(t: Any, normalised: bool) -> tuple[np.ndarray, float, bool]:
         )
     if not np.isfinite(a).all():
         raise ParameterError("t must be finite (no NaN or inf)")
-    if a[0] < 0:
-        raise ParameterError(f"t must start at time >= 0 (the motion starts at 0), got t[0] = {a[0]}")
+    if mode != "start" and a[0] < 0:
+        raise ParameterError(f"t must start at time >= 0 (the motion starts at time 0), got t[0] = {a[0]}")
     dt = np.diff(a)
     if not (dt > 0).all():
         i = int(np.argmax(~(dt > 0)))
         raise ParameterError(f"t must be strictly increasing, but t[{i + 1}] = {a[i + 1]} <= t[{i}] = {a[i]}")
-    return a, float(a[-1]), True
+    if mode != "start":
+        return a, a, float(a[-1]), True
+    with np.errstate(over="ignore"):
+        T, tau = float(a[-1] - a[0]), a - a[0]
+    if not math.isfinite(T):
+        raise ParameterError(f"t spans {a[0]:g} .. {a[-1]:g}: the duration exceeds the range of a double")
+    return a, tau, T, True
 
 
 def _positive(x: Any, what: str, allow_zero: bool = False) -> float:
@@ -213,22 +234,47 @@ def _shaped(q: np.ndarray, scalar: bool) -> np.ndarray:
     return q[:, 0].copy() if scalar else q
 
 
+def _axis_scale(*sizes: np.ndarray) -> np.ndarray:
+    """Per axis, a power of two S: 1, or, where some ``|size|`` (positions, velocity x duration)
+    exceeds 2**960, one with every ``|size| / S < 2``. Positions divided by S keep the polynomials'
+    sums and products (a few hundred times the largest size) within a double; dividing and
+    multiplying by a power of two is exact."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        m = np.max(np.abs(np.stack(sizes)), axis=0)
+    big = np.isfinite(m) & (m > _BIG)
+    return np.where(big, np.ldexp(1.0, np.frexp(np.where(big, m, 1.0))[1] - 1), 1.0)
+
+
+def _checked(name: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, hint: str) -> None:
+    """ParameterError unless the times and samples are finite (a value beyond a double's range)."""
+    for a, what in ((t, "times"), (q, "positions"), (qd, "velocities"), (qdd, "accelerations")):
+        if not np.isfinite(a).all():
+            raise ParameterError(f"{name}: its {what} exceed the range of a double (|x| > 1.8e308); {hint}")
+
+
 # -- quintic polynomials ----------------------------------------------------------------------
 def _quintic(
     q0: np.ndarray, qf: np.ndarray, qd0: np.ndarray, qd1: np.ndarray, T: float, t: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """q, qd, qdd (len(t), n) of the quintic from (q0, qd0, 0) at time 0 to (qf, qd1, 0) at time T,
-    at times t: RTB's ``jtraj`` polynomial in normalised time s = t / T."""
-    d = qf - q0
-    A = 6 * d - 3 * (qd1 + qd0) * T
-    B = -15 * d + (8 * qd0 + 7 * qd1) * T
-    C = 10 * d - (6 * qd0 + 4 * qd1) * T
-    E = qd0 * T
-    s = (t / T)[:, None]
-    q = ((((A * s + B) * s + C) * s) * s + E) * s + q0
-    qd = ((((5 * A * s + 4 * B) * s + 3 * C) * s) * s + E) / T
-    qdd = (((20 * A * s + 12 * B) * s + 6 * C) * s) / T**2
+    at times t: RTB's ``jtraj`` polynomial in normalised time s = t / T, each axis in units of its
+    :func:`_axis_scale`. Values beyond a double come out inf or NaN (see :func:`_checked`)."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+        S = _axis_scale(q0, qf, qd0 * T, qd1 * T)
+        a, v0, v1 = q0 / S, qd0 / S * T, qd1 / S * T
+        d = qf / S - a
+        A = 6 * d - 3 * (v1 + v0)
+        B = -15 * d + (8 * v0 + 7 * v1)
+        C = 10 * d - (6 * v0 + 4 * v1)
+        s = (t / T)[:, None]
+        q = (((((A * s + B) * s + C) * s) * s + v0) * s + a) * S
+        q = np.where(s == 0, q0, q)  # q0 itself at the start (q0 / S may have lost bits to underflow)
+        qd = (((((5 * A * s + 4 * B) * s + 3 * C) * s) * s + v0) / T) * S
+        qdd = ((((20 * A * s + 12 * B) * s + 6 * C) * s) / T / T) * S
     return q, qd, qdd
+
+
+_SHORT = "give a longer duration or nearer endpoints"
 
 
 def quintic(q0: Any, qf: Any, t: Any, qd0: Any = None, qdf: Any = None) -> Trajectory:
@@ -236,12 +282,14 @@ def quintic(q0: Any, qf: Any, t: Any, qd0: Any = None, qdf: Any = None) -> Traje
     boundary velocities ``qd0``, ``qdf`` (default 0) and zero boundary accelerations (RTB's ``quintic``).
 
     ``t``: an int m, m samples at steps 0..m-1 (``istime`` False: qd per step, qdd per step squared,
-    as RTB), or a strictly increasing vector of times >= 0, the motion running from time 0 to ``t[-1]``.
-    ``q`` is (N,) for scalar endpoints, else (N, n).
+    as RTB), or a strictly increasing vector of times, the motion running from ``t[0]`` to ``t[-1]``
+    (as RTB 1.5). ``q`` is (N,) for scalar endpoints, else (N, n). ParameterError for values beyond
+    a double (see the module docstring).
     """
     a, b, scalar = _endpoints(q0, qf, vector=False)
-    t, T, istime = _times(t, normalised=False)
-    q, qd, qdd = _quintic(a, b, _boundary(qd0, a.size, "qd0"), _boundary(qdf, a.size, "qdf"), T, t)
+    t, tau, T, istime = _times(t, "start")
+    q, qd, qdd = _quintic(a, b, _boundary(qd0, a.size, "qd0"), _boundary(qdf, a.size, "qdf"), T, tau)
+    _checked("quintic", t, q, qd, qdd, _SHORT)
     return Trajectory("quintic", t, _shaped(q, scalar), _shaped(qd, scalar), _shaped(qdd, scalar), istime)
 
 
@@ -250,66 +298,89 @@ def jtraj(q0: Any, qf: Any, t: Any, qd0: Any = None, qd1: Any = None) -> Traject
     accelerations, boundary velocities ``qd0``, ``qd1`` (default 0), all axes starting and stopping together.
 
     ``t``: an int m, m samples over normalised time 0..1 (``t = linspace(0, 1, m)``), or a strictly
-    increasing vector of times >= 0, the polynomial scaled to run from time 0 to ``t[-1]``. ``q``,
-    ``qd``, ``qdd`` are (N, n), per second.
+    increasing vector of times >= 0, the polynomial scaled to run from time 0 to ``t[-1]`` (as RTB).
+    ``q``, ``qd``, ``qdd`` are (N, n), per second. ParameterError for values beyond a double.
     """
     a, b, _ = _endpoints(q0, qf, vector=True)
-    t, T, _ = _times(t, normalised=True)
-    q, qd, qdd = _quintic(a, b, _boundary(qd0, a.size, "qd0"), _boundary(qd1, a.size, "qd1"), T, t)
+    t, tau, T, _ = _times(t, "normalised")
+    q, qd, qdd = _quintic(a, b, _boundary(qd0, a.size, "qd0"), _boundary(qd1, a.size, "qd1"), T, tau)
+    _checked("jtraj", t, q, qd, qdd, _SHORT)
     return Trajectory("jtraj", t, q, qd, qdd, True)
 
 
 # -- trapezoidal (LSPB) -----------------------------------------------------------------------
+def _lspb(
+    a: np.ndarray, b: np.ndarray, T: float, t: np.ndarray, V: np.ndarray | None, scalar: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """q, qd, qdd (len(t), n), tblend and V (n,) of the trapezoidal profiles from ``a`` to ``b`` over
+    [0, T] at times t, with linear speeds |V| (n,) (None: 1.5 |b - a| / T). In normalised time
+    s = t / T and distance f (q = a (1 - f) + b f, exact at both ends and never beyond them) the
+    profile has speed
+    vn = |V| T / |b - a| in (1, 2], blends of duration beta = 1 - 1 / vn and acceleration vn / beta."""
+    n = a.size
+    moving = a != b
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+        S = _axis_scale(a, b, np.zeros(n) if V is None else V * T)
+        d = b / S - a / S
+        dist = np.where(moving, np.abs(d), 1.0)
+        if V is None:
+            vn = np.full(n, 1.5)
+        else:
+            w = V / S * T  # the distance at speed |V| over T
+            for j in np.flatnonzero(moving):
+                where = "" if scalar else f" (axis {j})"
+                lo = abs(b[j] - a[j]) / T
+                if not w[j] > dist[j]:
+                    raise ParameterError(
+                        f"V = {V[j]:.6g} is too small{where}: |V| must exceed |qf - q0| / tf = {lo:.6g} "
+                        "to arrive in time"
+                    )
+                if w[j] > 2 * dist[j] * (1 + 1e-12):
+                    raise ParameterError(
+                        f"V = {V[j]:.6g} is too large{where}: |V| must be at most 2 |qf - q0| / tf = "
+                        f"{2 * lo:.6g} (there is no linear segment beyond it)"
+                    )
+            vn = np.where(moving, np.minimum(w / dist, 2.0), 1.5)
+        beta = 1 - 1 / vn
+        k = vn / beta
+        s = (t / T)[:, None]
+        r = 1 - s
+        cases = [s <= beta, s <= 1 - beta, s <= 1]
+        f = np.select(cases, [k / 2 * s * s, vn * s + (1 - vn) / 2, 1 - k / 2 * r * r], 1.0)
+        fd = np.select(cases, [k * s, vn + 0 * s, k * r], 0.0)
+        fdd = np.select(cases, [k + 0 * s, 0 * s, -k + 0 * s], 0.0)
+        q = np.where(moving, a * (1 - f) + b * f, a)  # within [a, b]: no overflow; q0 where it stays
+        qd = np.where(moving, (d * fd / T) * S, 0.0)
+        qdd = np.where(moving, (d * fdd / T / T) * S, 0.0)
+        tb = np.where(moving, beta * T, np.inf)
+        v = np.where(moving, (d * vn / T) * S, 0.0)
+    return q, qd, qdd, tb, v
+
+
+def unit_trapezoidal(s: np.ndarray) -> np.ndarray:
+    """The path parameter (N,) of ``trapezoidal(0, 1, ...)`` at normalised times ``s`` (N,) in [0, 1]:
+    rest to rest with a constant-speed middle third (RTB's ``ctraj`` profile)."""
+    return _lspb(np.zeros(1), np.ones(1), 1.0, np.asarray(s, dtype=float), None)[0][:, 0]
+
+
 def trapezoidal(q0: Any, qf: Any, t: Any, V: Any = None) -> Trajectory:
     """Linear segment with parabolic blends from ``q0`` to ``qf`` (RTB's ``trapezoidal``, ``lspb``):
     constant acceleration from rest for ``tblend``, constant speed ``V``, constant deceleration to rest
-    at ``tf``, symmetric. Numbers, or vectors (n,) with one profile per axis over the same times.
+    at the end, symmetric. Numbers, or vectors (n,) with one profile per axis over the same times.
 
-    ``t`` as :func:`quintic`: an int m (steps 0..m-1, ``tf = m - 1``) or times from 0 to ``tf = t[-1]``.
+    ``t`` as :func:`quintic`: an int m (steps 0..m-1, duration ``tf = m - 1``) or times, the motion
+    running from ``t[0]`` to ``t[-1]`` (``tf = t[-1] - t[0]``, as RTB 1.5).
     ``V``: the speed of the linear segment, a number or (n,) (its sign is taken from ``qf - q0``);
     default RTB's ``1.5 (qf - q0) / tf``, which makes ``tblend = tf / 3``. An axis that moves needs
     ``|qf - q0| / tf < |V| <= 2 |qf - q0| / tf`` (slower cannot arrive in time; faster than the upper
-    bound has no linear segment): ParameterError otherwise. ``info`` holds ``tblend`` and ``V``.
+    bound has no linear segment): ParameterError otherwise, and for values beyond a double. ``info``
+    holds ``tblend`` and ``V``.
     """
     a, b, scalar = _endpoints(q0, qf, vector=False)
-    t, T, istime = _times(t, normalised=False)
-    d = b - a
-    if V is None:
-        v = 1.5 * d / T
-    else:
-        Va = _boundary(V, a.size, "V")
-        v = np.abs(Va) * np.sign(d)
-        for j in range(a.size):
-            where = "" if scalar else f" (axis {j})"
-            lo, hi = abs(d[j]) / T, 2 * abs(d[j]) / T
-            if d[j] != 0 and not abs(v[j]) > lo:
-                raise ParameterError(
-                    f"V = {abs(Va[j]):.6g} is too small{where}: |V| must exceed |qf - q0| / tf = {lo:.6g} "
-                    "to arrive in time"
-                )
-            if abs(v[j]) > hi * (1 + 1e-12):
-                raise ParameterError(
-                    f"V = {abs(Va[j]):.6g} is too large{where}: |V| must be at most 2 |qf - q0| / tf = "
-                    f"{hi:.6g} (there is no linear segment beyond it)"
-                )
-    moving = v != 0
-    vs = np.where(moving, v, 1.0)
-    tb = np.where(moving, (a - b + v * T) / vs, np.inf)
-    acc = np.where(moving, v / np.where(moving, tb, 1.0), 0.0)
-    tk = t[:, None]
-    blend1, linear, blend2 = tk <= tb, tk <= T - tb, tk <= T
-    q = np.select(
-        [blend1, linear, blend2],
-        [
-            a + acc / 2 * tk**2,
-            (b + a - v * T) / 2 + v * tk,
-            b - acc / 2 * T**2 + acc * T * tk - acc / 2 * tk**2,
-        ],
-        b,
-    )
-    qd = np.select([blend1, linear, blend2], [acc * tk, v + 0 * tk, acc * T - acc * tk], 0.0)
-    qdd = np.select([blend1, linear, blend2], [acc + 0 * tk, 0 * tk, -acc + 0 * tk], 0.0)
-    q = np.where(moving, q, a)  # an axis that does not move stays at q0
+    t, tau, T, istime = _times(t, "start")
+    speed = None if V is None else np.abs(_boundary(V, a.size, "V"))
+    q, qd, qdd, tb, v = _lspb(a, b, T, tau, speed, scalar)
+    _checked("trapezoidal", t, q, qd, qdd, _SHORT)
     info = {"tblend": float(tb[0]) if scalar else tb, "V": float(v[0]) if scalar else v}
     return Trajectory(
         "trapezoidal", t, _shaped(q, scalar), _shaped(qd, scalar), _shaped(qdd, scalar), istime, info
@@ -317,9 +388,22 @@ def trapezoidal(q0: Any, qf: Any, t: Any, V: Any = None) -> Trajectory:
 
 
 # -- multi-segment ----------------------------------------------------------------------------
-def _steps(x: float, dt: float) -> int:
-    """ceil(x / dt) with slack for rounding (RTB's ``ceil(x / dt)``)."""
-    return max(0, math.ceil(x / dt - _EPS_STEPS))
+def _steps(x: float, dt: float, what: str) -> int:
+    """ceil(x / dt) with slack for rounding (RTB's ``ceil(x / dt)``); ParameterError beyond
+    :data:`MAX_SAMPLES`."""
+    with np.errstate(over="ignore"):
+        r = float(x) / dt
+    _room(_count(r, what))
+    return max(0, math.ceil(r - _EPS_STEPS))
+
+
+def _room(samples: float, n: int | None = None) -> None:
+    """ParameterError when ``samples`` samples of t, q, qd and qdd (of ``n`` axes; None: at least
+    one) would not fit in memory."""
+    from symkin.core.sizes import room
+
+    axes = f" x {n} axes" if n else ""
+    room(8.0 * samples * (1 + 3 * (n or 1)), f"a trajectory of {samples:.6g} samples{axes}")
 
 
 def mstraj(
@@ -349,7 +433,9 @@ def mstraj(
 
     Returns ``t = dt * arange(N)``, ``q[0] = q0`` and ``q``, ``qd``, ``qdd`` (N, n) from the linear and
     polynomial pieces; ``info`` holds ``via``, ``segtime``, ``arrive`` and ``slowest``. With ``tacc`` an
-    even multiple of dt the duration ``t[-1]`` is ``sum(segtime)``.
+    even multiple of dt the duration ``t[-1]`` is ``sum(segtime)``. ParameterError beyond
+    :data:`MAX_SAMPLES` samples (a tiny ``dt`` or ``qdmax``, a huge ``tacc``) and for values beyond a
+    double (via points too far apart).
     """
     dt = _positive(dt, "dt")
     W = _finite(viapoints, "viapoints")
@@ -391,6 +477,18 @@ def mstraj(
         raise ParameterError(f"tacc must be >= 0, got {acc_t.tolist()}")
     v_start, v_end = _boundary(qd0, n, "qd0"), _boundary(qdf, n, "qdf")
 
+    durations, speeds = (seg_t, None) if tsegment is not None else (None, speed)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is caught by _checked at the end
+        return _mstraj_pieces(start, W, dt, acc_t, v_start, v_end, durations, speeds)
+
+
+def _mstraj_pieces(
+    start: np.ndarray, W: np.ndarray, dt: float, acc_t: np.ndarray, v_start: np.ndarray, v_end: np.ndarray,
+    seg_t: np.ndarray | None, speed: np.ndarray | None,
+) -> Trajectory:  # fmt: skip
+    """:func:`mstraj` of checked inputs: the blends and linear parts of each segment (``seg_t``
+    the durations, or None for ``speed``, the axes' qdmax)."""
+    ns, n = W.shape
     pieces = [(start[None], v_start[None], np.zeros((1, n)))]  # (q, qd, qdd) of each piece
     q_prev, v_prev, last = start, v_start, start
     clock = 0
@@ -398,25 +496,32 @@ def mstraj(
     ka2 = 0
     for seg in range(ns):
         q_next = W[seg]
-        ka = _steps(float(acc_t[seg]), dt)  # blend duration, steps
+        ka = _steps(acc_t[seg], dt, f"tacc / dt of segment {seg}")  # blend duration, steps
         ka2 = (ka + 1) // 2  # half of it, rounded up
         kx = ka2 if seg == 0 else ka  # this blend's duration
         dq = q_next - q_prev
-        if tsegment is None:
-            tt = kx + np.array([_steps(float(x), dt) for x in np.abs(dq) / speed])
+        if seg_t is None:
+            need = np.abs(dq) / speed  # each axis' time at qdmax (inf: beyond a double)
+            tt = kx + np.array([_steps(x, dt, f"segment {seg} at qdmax, in steps of dt") for x in need])
             slowest[seg] = int(np.argmax(tt))
             kseg = int(tt.max())
             if kseg <= 2 * ka:  # RTB: best with some linear motion
                 kseg = 2 * ka
             kseg = max(kseg, 2 * ka2 + 1)  # at least one linear sample
             tseg = kseg * dt
+            if not math.isfinite(tseg):
+                raise ParameterError(
+                    f"mstraj: segment {seg} lasts {kseg} steps of dt = {dt:g} s, beyond a double"
+                )
         else:
             tseg = float(seg_t[seg])
+            _count(tseg / dt, f"tsegment[{seg}] / dt")
             if round(tseg / dt) - ka2 < ka2 + 1:
                 raise ParameterError(
                     f"tsegment[{seg}] = {tseg:g} s is too short for blends of {ka * dt:g} s: it needs "
                     f"at least {(2 * ka2 + 1) * dt:g} s (the blends and one linear step of dt)"
                 )
+        _room(clock + kx + tseg / dt + ka2, n)  # the samples so far and this segment's
         segtime[seg] = tseg
         arrive[seg] = clock * dt + tseg + (ka2 * dt if seg > 0 else 0.0)
         v = dq / tseg
@@ -429,215 +534,13 @@ def mstraj(
         pieces.append(((1 - s) * q_prev + s * q_next, np.broadcast_to(v, (len(k), n)), np.zeros((len(k), n))))
         last = pieces[-1][0][-1]
         clock += len(k)
+        _count(clock, "mstraj")
         q_prev, v_prev = q_next, v
     if ka2 > 0:  # the final blend to rest (or qdf) at the last via point
         tau = np.arange(1, ka2 + 1) * dt
         pieces.append(_quintic(last, q_prev, v_prev, v_end, ka2 * dt, tau))
     q_all, qd_all, qdd_all = (np.concatenate(p) for p in zip(*pieces))
+    t = dt * np.arange(len(q_all))
+    _checked("mstraj", t, q_all, qd_all, qdd_all, "give via points nearer each other, or a smaller dt")
     info = {"via": W.copy(), "segtime": segtime, "arrive": arrive, "slowest": slowest}
-    return Trajectory("mstraj", dt * np.arange(len(q_all)), q_all, qd_all, qdd_all, True, info)
-
-
-# -- Cartesian --------------------------------------------------------------------------------
-def _se3(T: Any, what: str) -> np.ndarray:
-    """A validated (4, 4) pose (a numpy array, or anything with a ``.A`` array such as spatialmath's SE3)."""
-    if not isinstance(T, np.ndarray) and hasattr(T, "A"):
-        T = T.A
-    try:
-        T_all, single = check_pose(T)
-    except PoseError as exc:
-        msg = str(exc)
-        raise PoseError(
-            msg.replace("the target", what) if "the target" in msg else f"{what}: {msg}"
-        ) from None
-    if not single:
-        raise PoseError(f"{what} must be one pose (4, 4), got shape {np.shape(T)}")
-    return T_all[0]
-
-
-def _quaternion(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method, w >= 0 where it can)."""
-    tr = np.trace(R)
-    cands = np.array([tr, R[0, 0], R[1, 1], R[2, 2]])
-    i = int(np.argmax(cands))
-    if i == 0:
-        r = math.sqrt(1.0 + tr) * 2
-        q = [r / 4, (R[2, 1] - R[1, 2]) / r, (R[0, 2] - R[2, 0]) / r, (R[1, 0] - R[0, 1]) / r]
-    elif i == 1:
-        r = math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0)) * 2
-        q = [(R[2, 1] - R[1, 2]) / r, r / 4, (R[0, 1] + R[1, 0]) / r, (R[0, 2] + R[2, 0]) / r]
-    elif i == 2:
-        r = math.sqrt(max(1.0 + R[1, 1] - R[0, 0] - R[2, 2], 0.0)) * 2
-        q = [(R[0, 2] - R[2, 0]) / r, (R[0, 1] + R[1, 0]) / r, r / 4, (R[1, 2] + R[2, 1]) / r]
-    else:
-        r = math.sqrt(max(1.0 + R[2, 2] - R[0, 0] - R[1, 1], 0.0)) * 2
-        q = [(R[1, 0] - R[0, 1]) / r, (R[0, 2] + R[2, 0]) / r, (R[1, 2] + R[2, 1]) / r, r / 4]
-    q = np.array(q)
-    q /= np.linalg.norm(q)
-    return -q if q[0] < 0 else q
-
-
-def _rotations(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) (w, x, y, z)."""
-    w, x, y, z = q.T
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
-
-
-def _slerp(q0: np.ndarray, q1: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Spherical linear interpolation (N, 4) of unit quaternions along the shorter arc."""
-    dot = float(q0 @ q1)
-    if dot < 0:  # q and -q are the same rotation: take the short way
-        q1, dot = -q1, -dot
-    theta = math.acos(min(dot, 1.0))
-    if theta < 1e-9:
-        q = (1 - s)[:, None] * q0 + s[:, None] * q1
-    else:
-        q = (np.sin((1 - s) * theta)[:, None] * q0 + np.sin(s * theta)[:, None] * q1) / math.sin(theta)
-    return q / np.linalg.norm(q, axis=1, keepdims=True)
-
-
-def ctraj(T0: Any, T1: Any, t: Any = None, s: Any = None) -> np.ndarray:
-    """Cartesian path from pose ``T0`` to ``T1`` (both (4, 4) in the same frame): (N, 4, 4) poses.
-
-    The path parameter ``s`` in [0, 1] moves the origin along the straight line ``(1 - s) p0 + s p1``
-    and the rotation along the geodesic from R0 to R1 (SLERP of unit quaternions, the shorter way), as
-    RTB's ``ctraj`` (``T0.interp(T1, s)``). ``t``: an int N, ``s`` from ``trapezoidal(0, 1, N)`` (rest
-    to rest with a constant-speed middle third), or a vector of times, ``s`` from
-    ``trapezoidal(0, 1, t / t[-1])``. Or give ``s`` (N,) itself. ``s = 0`` and ``s = 1`` give ``T0``
-    and ``T1`` exactly. PoseError for a T0 or T1 that is not SE(3).
-    """
-    A, B = _se3(T0, "T0"), _se3(T1, "T1")
-    if (t is None) == (s is None):
-        raise ParameterError("give exactly one of t (samples or times) and s (path parameters in [0, 1])")
-    if t is not None:
-        if isinstance(t, numbers.Integral) and not isinstance(t, (bool, np.bool_)):
-            sv = trapezoidal(0.0, 1.0, int(t)).q
-        else:
-            times, T, _ = _times(t, normalised=False)
-            sv = trapezoidal(0.0, 1.0, times / T).q
-    else:
-        sv = real_array(s, "s", ParameterError)
-        if sv.ndim != 1 or sv.size < 1:
-            raise ParameterError(f"s must be a vector of path parameters, got shape {sv.shape}")
-        if not (np.isfinite(sv).all() and (sv >= 0).all() and (sv <= 1).all()):
-            raise ParameterError("s must hold path parameters in [0, 1] (no NaN)")
-    out = np.zeros((len(sv), 4, 4))
-    out[:, 3, 3] = 1.0
-    out[:, :3, 3] = (1 - sv)[:, None] * A[:3, 3] + sv[:, None] * B[:3, 3]
-    out[:, :3, :3] = _rotations(_slerp(_quaternion(A[:3, :3]), _quaternion(B[:3, :3]), sv))
-    out[sv == 0, :3, :3] = A[:3, :3]
-    out[sv == 1, :3, :3] = B[:3, :3]
-    return out
-
-
-# -- tracking a Cartesian path ----------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class PathResult:
-    """Resolved-rate tracking of a path of N poses (:func:`servo_path`).
-
-    Attributes:
-        q: (N, n) configurations, ``q[0] = q0``, ``q[i + 1] = q[i] + dt qd[i]``.
-        qd: (N - 1, n) joint velocities.
-        e: (N, 6) base-frame pose error (eq 37) of ``fkine(q[i])`` to ``poses[i]``: rows (position m,
-            Euler vector rad).
-        position_error: (N,) ``|e[:, :3]|``, metres.
-        angle_error: (N,) ``|e[:, 3:]|``, the rotation angle between actual and wanted pose, radians.
-        dt: the time step (s; 1.0 for one unit per step when not given).
-    """
-
-    q: np.ndarray
-    qd: np.ndarray
-    e: np.ndarray
-    position_error: np.ndarray
-    angle_error: np.ndarray
-    dt: float
-
-    @property
-    def t(self) -> np.ndarray:
-        """(N,) time of each configuration."""
-        return np.arange(len(self.q)) * self.dt
-
-    @property
-    def max_position_error(self) -> float:
-        """Largest position error over the path (m)."""
-        return float(self.position_error.max())
-
-    @property
-    def max_angle_error(self) -> float:
-        """Largest orientation error over the path (rad)."""
-        return float(self.angle_error.max())
-
-    def __repr__(self) -> str:
-        return (
-            f"PathResult({len(self.q)} poses, max_position_error={self.max_position_error:.3g} m, "
-            f"max_angle_error={self.max_angle_error:.3g} rad)"
-        )
-
-
-def servo_path(
-    kin: Any,
-    poses: Any,
-    q0: Any,
-    gain: float | Any = 1.0,
-    dt: float | None = None,
-    frame: Any = None,
-    feedforward: bool = True,
-    damping: float = 0.0,
-) -> PathResult:
-    """Track the Cartesian path ``poses`` (N, 4, 4) (base frame, e.g. from :func:`ctraj`) with
-    resolved-rate motion control from configuration ``q0`` (n,).
-
-    At step i: the pose error ``e_i`` (eq 37, :func:`symkin.runtime.ik.pose_error`) of
-    ``kin.fkine(q_i, frame=frame)`` to ``poses[i]``; the commanded base-frame spatial velocity
-    ``nu = nu_ff + k e_i`` with the feed-forward ``nu_ff = pose_error(poses[i], poses[i + 1]) / dt``
-    (the velocity that carries pose i to pose i + 1 in dt) and the feedback gain ``k`` (eq 42: a
-    number, ``(k_t, k_r)`` or six values, 1/s); ``qd_i`` the least-squares (minimum-norm) solution of
-    ``J0(q_i) qd = nu`` with ``J0 = kin.jacob0(q_i, frame=frame)`` (or the damped least-squares
-    ``J^T (J J^T + damping^2 I)^-1 nu``); ``q_{i+1} = q_i + dt qd_i``.
-
-    ``dt`` (s) is the time between consecutive poses; None means one time unit per pose, so that
-    ``gain = 1`` corrects the whole error of a step in the next one. ``feedforward=False`` drops
-    ``nu_ff`` (a pure position-based servo chasing each pose, one step behind). ``kin`` is any object
-    with ``n``, ``fkine`` and ``jacob0`` (a :class:`symkin.Robot`, compiled kinematics, a tree with
-    ``frame``); ``frame`` is passed to both when given. There are no joint limits or speed limits.
-    """
-    n = int(kin.n)
-    q = as_config(q0, n, name_of(kin), "q0").copy()
-    if not isinstance(poses, np.ndarray) and hasattr(poses, "A"):  # spatialmath SE3 with N values
-        poses = np.asarray(poses.A)
-    try:
-        P, single = check_pose(poses)
-    except PoseError as exc:
-        raise PoseError(f"poses: {exc}") from None
-    if single or len(P) == 0:
-        raise ParameterError(f"poses must be a path of N >= 1 poses, shape (N, 4, 4), got {np.shape(poses)}")
-    dt = 1.0 if dt is None else _positive(dt, "dt")
-    k = servo_gain(gain)
-    lam = _positive(damping, "damping", allow_zero=True)
-    kw = {} if frame is None else {"frame": frame}
-    N = len(P)
-    Q, QD, E = np.zeros((N, n)), np.zeros((N - 1, n)), np.zeros((N, 6))
-    for i in range(N):
-        Q[i] = q
-        E[i] = pose_error(np.asarray(kin.fkine(q, **kw), dtype=float), P[i])
-        if i == N - 1:
-            break
-        nu = k * E[i]
-        if feedforward:
-            nu = nu + pose_error(P[i], P[i + 1]) / dt
-        J = np.asarray(kin.jacob0(q, **kw), dtype=float)
-        if lam > 0:
-            qd = J.T @ np.linalg.solve(J @ J.T + lam**2 * np.eye(6), nu)
-        else:
-            qd = np.linalg.lstsq(J, nu, rcond=None)[0]
-        QD[i] = qd
-        q = q + dt * qd
-    pos, ang = np.linalg.norm(E[:, :3], axis=1), np.linalg.norm(E[:, 3:], axis=1)
-    return PathResult(Q, QD, E, pos, ang, dt)
+    return Trajectory("mstraj", t, q_all, qd_all, qdd_all, True, info)

@@ -15,11 +15,15 @@ centre (Corke, Robotics, Vision and Control, 3rd ed., 2023, sec 8.1.4 on singula
 et al., Robotics: Modelling, Planning and Control, 2009, sec 3.3, for the decoupling at the wrist
 centre). With ``axes="trans"`` only rotations are used (the translational rows depend on the point).
 
-Factoring: each entry is a polynomial in ``s_j = sin q_j``, ``c_j = cos q_j``; the determinant is
-computed exactly over those polynomials and reduced with ``s_j^2 = 1 - c_j^2``. In that ring a
-factor ``sin q_j`` is found by the test ``N(s_j = 0, c_j = +-1) = 0`` (and divided out), a factor
-``cos q_j`` by polynomial division; what remains is factored over the rationals and each factor
-written back in sines and cosines of joint angles and their sums.
+Factoring: each entry is a polynomial in ``s_j = sin q_j``, ``c_j = cos q_j`` (and the lengths of
+prismatic joints); each maximal minor is computed exactly over those polynomials, reduced with
+``s_j^2 = 1 - c_j^2``, and split into its prime divisors by the tangent half-angle substitution
+``t_j = tan(q_j / 2)``, where factorisation is unique (:mod:`symkin.symbolic.half_angle`). The
+factors common to all minors are the primes of every minor, each with its least multiplicity (a
+greatest common divisor modulo ``sin^2 + cos^2 = 1``, not the intersection of the minors' factor
+sets: one minor may carry ``sin q_3``, another ``(cos q_3 - 1)(cos q_3 + 1)``), written back in
+sines and cosines of joint angles and their sums (of half angles when a root is at ``q_j = 0`` or
+``q_j = pi`` only).
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from sympy.polys.matrices import DomainMatrix
 from symkin.errors import SymkinError, check_choice
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import count_ops, tree_size
+from symkin.symbolic.half_angle import HalfAngle, Piece
 from symkin.symbolic.kinematics import _walk, const_to_sympy, joint_symbols
 from symkin.symbolic.program import _jacobian_column
 
@@ -54,16 +59,21 @@ class SingularFactor:
     """One factor f(q) of the minors: J loses rank where f(q) = 0.
 
     Attributes:
-        expr: f in the joint symbols q0 .. q{n-1} (sines and cosines, sums of angles merged).
+        expr: f in the joint symbols q0 .. q{n-1} (sines and cosines, sums of angles merged; of half
+            angles, ``sin(q_j / 2)``, when f has a root at q_j = 0 or pi alone).
         multiplicity: its power in the determinant (the least power over the minors).
         joints: the joint indices f depends on.
-        kind: ``"sin"`` (f = sin q_j), ``"cos"`` (f = cos q_j) or ``"general"``.
+        kind: ``"sin"`` (f = sin q_j: q_j = 0 or pi), ``"cos"`` (f = cos q_j: q_j = +-pi/2),
+            ``"half-sin"`` (f = sin(q_j / 2): q_j = 0), ``"half-cos"`` (f = cos(q_j / 2): q_j = pi) or
+            ``"general"``.
+        sc: f as a polynomial in s_j, c_j (sympy's sparse polynomial), None for a half-angle f.
     """
 
     expr: sp.Expr
     multiplicity: int
     joints: tuple[int, ...]
     kind: str
+    sc: object = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,6 +109,11 @@ class SingularFactors:
     unfactored: int
     axis_exprs: tuple[tuple[bool, tuple[sp.Expr, ...], tuple[sp.Expr, ...]], ...]
     seconds: float
+
+    @property
+    def full_rank(self) -> int:
+        """The rank of J (its rows used) away from the singular configurations: min(m, n)."""
+        return min(len(self.rows), len(self.q))
 
 
 def singular_factors(robot: Robot | str, axes: str = "auto", max_terms: int = MAX_TERMS) -> SingularFactors:
@@ -137,29 +152,22 @@ def singular_factors(robot: Robot | str, axes: str = "auto", max_terms: int = MA
         subsets = [(tuple(range(m)), cols) for cols in itertools.combinations(range(n), m)]
     else:
         subsets = [(rs, tuple(range(n))) for rs in itertools.combinations(range(m), n)]
-    common: dict | None = None
-    constant = sp.Integer(1)
-    minors = unfactored = 0
-    for rs, cs in subsets:
-        M = D.extract(list(rs), list(cs))
-        det = _reduce(M.det(), n, dom)
-        if not det:
-            continue
-        minors += 1
-        if len(det.terms()) > max_terms:
-            unfactored += 1
-            continue
-        coeff, found = _factor(det, n, dom)
-        constant = coeff
-        common = found if common is None else {k: min(v, found[k]) for k, v in common.items() if k in found}
+    H = HalfAngle.of(n, dom)
+    dets = [d for d in (H.reduce(D.extract(list(rs), list(cs)).det()) for rs, cs in subsets) if d]
+    minors = len(dets)
+    usable = sorted((d for d in dets if len(d.terms()) <= max_terms), key=lambda d: len(d.terms()))
+    unfactored = minors - len(usable)
+    common, sources = H.common(usable) if usable else ({}, {})  # the shortest minor is factored
+    lengths = tuple(prismatic)
     factors = tuple(
         sorted(
-            (_factor_of(p, mult, n, s, c, qs, dom) for p, mult in (common or {}).items()),
+            (_factor_of(H, piece, power, s, c, qs, lengths) for piece, power in H.group(common, sources)),
             key=lambda f: (f.kind == "general", f.joints, sp.default_sort_key(f.expr)),
         )
     )
     determinant = None
-    if m == n and minors == 1 and not unfactored:
+    if m == n and minors == 1 and not unfactored and all(f.sc is not None for f in factors):
+        constant = H.scale(dets[0], {f.sc: f.multiplicity for f in factors})
         determinant = dom.domain.to_sympy(constant) * sp.Mul(*[f.expr**f.multiplicity for f in factors])
     method = "det(J)" if m == n else ("det(J J^T)" if m < n else "det(J^T J)")
     return SingularFactors(
@@ -223,197 +231,27 @@ def _shortest_jacobian(
     return best[1], best[2], best[3]
 
 
-def _reduce(p, n: int, dom):  # noqa: ANN001, ANN202
-    """p with every s_j^2 replaced by 1 - c_j^2 (degree <= 1 in each s_j)."""
-    gens = dom.ring.gens
-    out = dom.zero
-    for monom, coeff in p.terms():
-        term = dom.ring.ground_new(coeff)
-        for i, e in enumerate(monom):
-            if not e:
-                continue
-            if i < n:
-                term *= gens[i] ** (e % 2) * (1 - gens[i + n] ** 2) ** (e // 2)
-            else:
-                term *= gens[i] ** e
-        out += term
-    return out
-
-
-def _at(p, i: int, value: int):  # noqa: ANN001, ANN202
-    """p with generator i set to 0, 1 or -1."""
-    ring = p.ring
-    out = {}
-    for monom, coeff in p.terms():
-        e = monom[i]
-        if value == 0 and e:
-            continue
-        coeff = coeff * value**e if e else coeff
-        key = monom[:i] + (0,) + monom[i + 1 :]
-        out[key] = out.get(key, ring.domain.zero) + coeff
-    return ring.from_dict({k: v for k, v in out.items() if v})
-
-
-def _factor(det, n: int, dom) -> tuple[object, dict]:  # noqa: ANN001
-    """(constant, {factor: multiplicity}) of a determinant: its rational factors, each reduced
-    (s_j^2 = 1 - c_j^2), then sin q_j and cos q_j factors taken out modulo s_j^2 + c_j^2 = 1, then
-    the rest factored again (each factor primitive with a positive leading coefficient)."""
-    gens = dom.ring.gens
-    found: dict = {}
-    coeff, raw = det.factor_list()
-    for g, gmult in raw:
-        p = _reduce(g, n, dom)
-        for j in range(n):
-            s, c = gens[j], gens[j + n]
-            while p and not _at(_at(p, j, 0), j + n, 1) and not _at(_at(p, j, 0), j + n, -1):
-                b0 = _at(p, j, 0)  # p = b0 + s b1 with b0 = (1 - c^2) r, so p = s (b1 + s r)
-                b1 = (p - b0).exquo(s)
-                p = b1 + s * b0.exquo(1 - c**2)
-                found[s] = found.get(s, 0) + gmult
-            while p and not _at(p, j + n, 0):
-                p = p.exquo(c)
-                found[c] = found.get(c, 0) + gmult
-        k, rest = p.factor_list()
-        coeff *= k**gmult
-        for f, mult in rest:
-            k, split = _split(f, n, dom)
-            coeff *= k ** (mult * gmult)
-            for h, hmult in split:
-                if h.LC < 0:
-                    h, coeff = -h, coeff * (-1) ** (hmult * mult * gmult)
-                found[h] = found.get(h, 0) + hmult * mult * gmult
-    return coeff, found
-
-
-def _split(p, n: int, dom) -> tuple[object, list[tuple[object, int]]]:  # noqa: ANN001
-    """The factors of a reduced polynomial p in s_j, c_j modulo s_j^2 + c_j^2 = 1, found by the
-    tangent half-angle substitution ``c = (1 - t^2) / (1 + t^2)``, ``s = 2 t / (1 + t^2)`` (no
-    relation among the t_j: a unique factorisation), and written back in s_j, c_j:
-    ``t^a / (1 + t^2)^(e/2)`` is ``sin^a(q/2) cos^(e-a)(q/2)``, a product of ``(1 - c)/2``,
-    ``(1 + c)/2`` and ``s/2``. Factors of odd degree in some t_j are grouped (with the roots at
-    q_j = pi, t_j = oo) so each group has even degree in every t_j, as ``sin(q_i + q_j)`` splits
-    into ``(t_i + t_j) (1 - t_i t_j)``. Returns (constant, [(factor, multiplicity), ...]) with p =
-    constant * prod(factor^multiplicity) modulo the circle relations; (1, [(p, 1)]) when p does not
-    split."""
-    from sympy.polys.rings import ring as poly_ring
-
-    gens = dom.ring.gens
-    revolute = [j for j in range(n) if any(m[j] or m[j + n] for m in p.monoms())]
-    if not revolute:
-        return dom.domain.one, [(p, 1)]
-    names = [f"t{j}" for j in revolute] + [str(g) for g in gens[2 * n :]]
-    tring, *tg = poly_ring(",".join(names), dom.domain)
-    tv = dict(zip(revolute, tg))
-    degree = {j: max(m[j] + m[j + n] for m in p.monoms()) for j in revolute}
-    P = tring.zero
-    for monom, coeff in p.terms():
-        term = tring.ground_new(coeff)
-        for j in revolute:
-            b, a = monom[j], monom[j + n]
-            t = tv[j]
-            term *= (2 * t) ** b * (1 - t**2) ** a * (1 + t**2) ** (degree[j] - a - b)
-        for i, e in enumerate(monom[2 * n :]):
-            term *= tg[len(revolute) + i] ** e
-        P += term
-    _, tf = P.factor_list()
-    pieces: list[tuple[object, dict[int, int]]] = []  # (t-polynomial, extra degree at infinity)
-    for f, mult in tf:
-        if any(f == 1 + t**2 for t in tv.values()):
-            continue  # (1 + t_j^2): no real root, written back as 1
-        pieces += [(f, {})] * mult
-    for j in revolute:  # roots at t_j = oo (q_j = pi): the degree P lost
-        pieces += [(tring.one, {j: 1})] * (2 * degree[j] - P.degree(tv[j]))
-    if len(pieces) <= 1:
-        return dom.domain.one, [(p, 1)]
-    groups = _even_groups(pieces, tv)
-    out: dict = {}
-    for g, extra in groups:
-        h = _from_half_angle(g, extra, tv, n, dom)
-        if h.is_ground:
-            continue
-        h = h.primitive()[1]
-        out[h] = out.get(h, 0) + 1
-    if sum(out.values()) <= 1:
-        return dom.domain.one, [(p, 1)]
-    return _ratio(p, out, n, dom), list(out.items())
-
-
-def _ratio(p, factors: dict, n: int, dom):  # noqa: ANN001, ANN202
-    """The constant p / prod(h^m), evaluated exactly at rational points of the circles
-    (c, s) = ((1 - t^2) / (1 + t^2), 2 t / (1 + t^2))."""
-    K = dom.domain
-    extra = len(dom.ring.gens) - 2 * n
-    for k in range(1, 50):
-        ts = [K.convert(sp.Rational(k + j, 3 * k + 2 * j + 7)) for j in range(n)]
-        values = [2 * t / (1 + t * t) for t in ts] + [(1 - t * t) / (1 + t * t) for t in ts]
-        values += [K.convert(sp.Rational(2 * k + j + 1, 5)) for j in range(extra)]
-        den = K.one
-        for h, m in factors.items():
-            den *= h(*values) ** m
-        if den:
-            return p(*values) / den
-    raise SymkinError("no point found to scale the factors of the determinant")  # not reached
-
-
-def _odd(piece, tv) -> frozenset:  # noqa: ANN001
-    f, extra = piece
-    return frozenset(j for j, t in tv.items() if (f.degree(t) + extra.get(j, 0)) % 2)
-
-
-def _even_groups(pieces: list, tv: dict) -> list:
-    """Group pieces so each group has even degree in every t_j: even pieces alone, odd ones paired
-    with a piece of the same odd set, the rest together."""
-    groups, odd = [], []
-    for piece in pieces:
-        (odd if _odd(piece, tv) else groups).append(piece)
-    while odd:
-        first = odd.pop(0)
-        key = _odd(first, tv)
-        mate = next((k for k, other in enumerate(odd) if _odd(other, tv) == key), None)
-        if mate is None:
-            rest, odd = [first, *odd], []
-        else:
-            rest = [first, odd.pop(mate)]
-        f, extra = rest[0][0], dict(rest[0][1])
-        for g, e in rest[1:]:
-            f = f * g
-            for j, k in e.items():
-                extra[j] = extra.get(j, 0) + k
-        groups.append((f, extra))
-    return groups
-
-
-def _from_half_angle(g, extra: dict, tv: dict, n: int, dom):  # noqa: ANN001, ANN202
-    """``g(t) / prod (1 + t_j^2)^(e_j / 2)`` as a polynomial in s_j, c_j (e_j = deg_t_j g + extra[j],
-    even): ``t^a`` gives ``sin^a(q/2) cos^(e-a)(q/2)`` with ``sin^2 = (1 - c)/2``, ``cos^2 = (1 + c)/2``
-    and ``sin cos = s/2``."""
-    gens = dom.ring.gens
-    revolute = list(tv)
-    e = {j: g.degree(tv[j]) + extra.get(j, 0) for j in revolute}
-    half = dom.domain.convert(sp.Rational(1, 2))
-    out = dom.zero
-    for monom, coeff in g.terms():
-        term = dom.ring.ground_new(coeff)
-        for k, j in enumerate(revolute):
-            a, b = monom[k], e[j] - monom[k]
-            s, c = gens[j], gens[j + n]
-            if a % 2:
-                term *= s * half
-                a, b = a - 1, b - 1
-            term *= ((1 - c) * half) ** (a // 2) * ((1 + c) * half) ** (b // 2)
-        for i, x in enumerate(monom[len(revolute) :]):
-            term *= gens[2 * n + i] ** x
-        out += term
-    return _reduce(out, n, dom)
-
-
-def _factor_of(p, mult: int, n: int, s, c, qs, dom) -> SingularFactor:  # noqa: ANN001
-    expr = dom.to_sympy(p)
+def _factor_of(H: HalfAngle, piece: Piece, power: int, s, c, qs, lengths) -> SingularFactor:  # noqa: ANN001
+    """A group of primes as a factor in the joint symbols: sines and cosines of the joint angles (and
+    their sums, merged by ``trigsimp`` when that is shorter) when it has even degree in every t_j,
+    else sines and cosines of half angles."""
+    n = H.n
+    if H.odd(piece):
+        expr = H.to_expr(piece, qs, lengths)
+        joints = tuple(j for j in range(n) if expr.has(qs[j]))
+        half = {sp.sin(qs[j] / 2): "half-sin" for j in joints}
+        half |= {sp.cos(qs[j] / 2): "half-cos" for j in joints}
+        return SingularFactor(expr, power, joints, half.get(expr, "general"), None)
+    p = H.to_sc(piece)
+    p = p.primitive()[1]
+    if p.LC < 0:
+        p = -p
+    expr = H.dom.to_sympy(p)
     joints = tuple(j for j in range(n) if expr.has(s[j]) or expr.has(c[j]) or expr.has(qs[j]))
     if expr in s:
-        return SingularFactor(sp.sin(qs[s.index(expr)]), mult, joints, "sin")
+        return SingularFactor(sp.sin(qs[s.index(expr)]), power, joints, "sin", p)
     if expr in c:
-        return SingularFactor(sp.cos(qs[c.index(expr)]), mult, joints, "cos")
+        return SingularFactor(sp.cos(qs[c.index(expr)]), power, joints, "cos", p)
     trig = expr.xreplace(
         {**{s[j]: sp.sin(qs[j]) for j in range(n)}, **{c[j]: sp.cos(qs[j]) for j in range(n)}}
     )
@@ -421,8 +259,7 @@ def _factor_of(p, mult: int, n: int, s, c, qs, dom) -> SingularFactor:  # noqa: 
         short = sp.trigsimp(trig)
         if count_ops(short).total < count_ops(trig).total:
             trig = short
-    g = sp.gcd_terms(trig)
-    return SingularFactor(g, mult, joints, "general")
+    return SingularFactor(sp.gcd_terms(trig), power, joints, "general", p)
 
 
 def _axis_exprs(robot: Robot, qs: Sequence[sp.Symbol]) -> tuple:

@@ -1,13 +1,15 @@
-"""The live browser view of a serial chain (viser, the ``view`` extra): :func:`view` serves it and
-returns a running :class:`Viewer`.
+"""The live browser view of a robot, a serial chain or a tree (viser, the ``view`` extra): :func:`view`
+serves it and returns a running :class:`Viewer`.
 
-The page shows the robot (links, joints, link frames), the linear-velocity manipulability ellipsoid
-at the end effector, the collision shapes (red where they collide) and obstacles; its panel has a
-slider per joint (within the joint limits), the named configurations, what to show, the
-manipulability, the live base-frame Jacobian, and a target-pose gizmo whose moves are solved by
-``kin.ik`` from the current configuration (a failed solve keeps the last pose and says why).
-viser serves its own client from this process (no network needed). Callbacks compute with the
-compiled kinematics only (:mod:`symkin.view.scene`).
+The page (:mod:`symkin.view.page`) shows the robot (links, joints, link frames, its URDF meshes),
+the followed frame's axes and linear-velocity manipulability ellipsoid, the collision shapes (red
+where they collide), the obstacles and the closest pair with its distance; its panel has a frame
+selector (a tree's frames, a chain's end effector and link frames), a slider per joint (within the
+joint limits), the named configurations, the manipulability and the live base-frame Jacobian of the
+followed frame, the closest and the overlapping pairs, what to show, and a target-pose gizmo on the
+followed frame whose moves are solved by ``kin.ik`` from the current configuration (a failed solve
+keeps the last pose and says why). viser serves its own client from this process (no network
+needed). What is drawn is computed by :mod:`symkin.view.scene` (NumPy only).
 """
 
 from __future__ import annotations
@@ -17,24 +19,20 @@ import io
 import socket
 import threading
 import time
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from symkin.core.pose import as_pose
 from symkin.errors import MissingExtraError, ParameterError
-from symkin.view.scene import Scene, ViewState, capsule_mesh, quaternion, quaternion_z_to, rotation
+from symkin.view.address import serve_address
+from symkin.view.page import SHOW, Page
+from symkin.view.scene import MeshPart, Scene, ViewState, figure_size, rotation
 
 __all__ = ["Viewer", "view"]
-
-_ORANGE, _GREY, _BLUE, _RED, _PURPLE = (
-    (255, 127, 14),
-    (70, 70, 70),
-    (31, 119, 180),
-    (214, 39, 40),
-    (148, 103, 189),
-)
-_ROWS = ("vx", "vy", "vz", "wx", "wy", "wz")
-_SHOW = ("robot", "link frames", "velocity ellipsoid", "collision shapes", "target gizmo")
 
 
 def _viser() -> Any:
@@ -64,12 +62,17 @@ def _check_address(host: str, port: int) -> None:
 
 
 class Viewer:
-    """A running live view of compiled kinematics ``kin`` (see :func:`view`).
+    """A running live view of compiled kinematics ``kin``, a chain or a tree (see :func:`view`).
 
-    ``url``, ``host``, ``port``; ``q`` (n,) and ``state`` (:class:`~symkin.view.scene.ViewState`) as
-    drawn; ``message``, the status line of the panel. :meth:`set_q` moves the joints as the sliders
-    do, :meth:`set_target` moves the target gizmo as a drag does, :meth:`wait` blocks, :meth:`stop`
-    ends the server (also on leaving a ``with`` block). ``server`` is the viser server.
+    ``url`` (one a browser opens), ``host``, ``port``, ``address`` (an
+    :class:`~symkin.view.address.Address`, ``public`` when serving every interface); ``q`` (n,),
+    ``frame`` (the followed frame) and ``state`` (:class:`~symkin.view.scene.ViewState`) as drawn;
+    ``message``, the status line of the panel;
+    ``notes``, what could not be drawn (meshes) and why. :meth:`set_q` moves the joints as the
+    sliders do, :meth:`set_frame` follows another frame as the frame selector does,
+    :meth:`set_target` moves the target gizmo as a drag does, :meth:`show` toggles parts,
+    :meth:`wait` blocks, :meth:`stop` ends the server (also on leaving a ``with`` block).
+    ``server`` is the viser server.
     """
 
     def __init__(
@@ -81,13 +84,20 @@ class Viewer:
         q: Any = None,
         env: Any = None,
         ellipsoid_scale: float | None = None,
+        frame: str | None = None,
+        meshes: Sequence[MeshPart] = (),
+        notes: Sequence[str] = (),
     ) -> None:
         viser = _viser()
         self.kin = kin
-        self.scene = Scene(kin, env)
-        robot = kin.robot
-        q0 = robot.configs.get("qr", robot.configs["qz"]) if q is None else q
-        state = self.scene.state(q0)  # checks q
+        self.scene = Scene(kin, env, meshes)
+        self.notes = tuple(notes)
+        model = kin.model
+        lo, hi = model.qlim
+        q0 = np.clip(model.configs.get("qr", model.configs["qz"]), lo, hi) if q is None else q
+        state = self.scene.state(q0, frame)  # checks q and frame
+        address = serve_address(host)  # refuses an empty host and wildcards not asked for explicitly
+        host = address.host
         _check_address(host, port)
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner; we print the URL
             self.server = viser.ViserServer(host=host, port=int(port), verbose=False)
@@ -95,14 +105,13 @@ class Viewer:
         if int(port) and self.port != int(port):
             self.stop()
             raise OSError(f"cannot serve on {host}:{port}: in use (--port 0 picks a free port)")
-        self.url = f"http://{'localhost' if host in ('0.0.0.0', '::') else host}:{self.port}"
+        self.url, self.address = address.url(self.port), address
         self._lock = threading.RLock()
         self._syncing = False
         self._stopped = threading.Event()
         self.message = ""
         self.state: ViewState = state
-        chain = state.chain
-        self.span = max(float(np.ptp(chain, axis=0).max()), 0.1)
+        self.span = figure_size(state)
         r_max = float(state.radii.max())
         self.ellipsoid_scale = (
             ellipsoid_scale
@@ -110,175 +119,39 @@ class Viewer:
             else 0.25 * self.span / (r_max if r_max > 1e-9 else 1.0)
         )
         try:
-            self._build(robot, state)
+            self.page = Page(self.server, self.scene, state, self.span, self.ellipsoid_scale, self.notes)
+            self._connect()
+            self._draw(state)
         except Exception:
             self.stop()
             raise
 
-    # -- the scene and the panel -------------------------------------------------------------------
-    def _build(self, robot: Any, state: ViewState) -> None:
-        s, gui, span = self.server.scene, self.server.gui, self.span
-        gui.configure_theme(control_width="large", show_share_button=False)
-        centre = 0.5 * (state.chain.min(axis=0) + state.chain.max(axis=0))
-        self.server.initial_camera.look_at = centre
-        self.server.initial_camera.position = centre + 0.9 * span * np.array([1.0, -1.2, 0.6])
-        s.add_grid("/grid", width=2 * span, height=2 * span, cell_size=span / 10, section_size=span / 2)
-        self._base = s.add_frame("/base", axes_length=0.15 * span, axes_radius=0.008 * span)
-        self._links = [
-            s.add_frame(f"/links/{k}", axes_length=0.08 * span, axes_radius=0.005 * span)
-            for k in range(self.scene.n)
-        ]
-        self._ee = s.add_frame("/ee", axes_length=0.15 * span, axes_radius=0.008 * span)
-        self._chain = s.add_line_segments(
-            "/chain", self._segments(state), colors=_GREY, thickness=0.012 * span
-        )
-        self._joints = [
-            s.add_icosphere(f"/joints/{k}", radius=0.025 * span, color=_ORANGE, subdivisions=2)
-            for k in range(self.scene.n)
-        ]
-        self._ellipsoid = s.add_icosphere(
-            "/ellipsoid", radius=1.0, color=_PURPLE, opacity=0.4, subdivisions=3, cast_shadow=False
-        )
-        self._shapes = []
-        for k, shape in enumerate(self.scene.shapes):
-            if shape.kind == "sphere":
-                h = s.add_icosphere(
-                    f"/shapes/{k}", radius=shape.radius, color=_BLUE, opacity=0.3, subdivisions=2
-                )
-            else:
-                V, F = capsule_mesh(shape.radius, shape.length)
-                h = s.add_mesh_simple(f"/shapes/{k}", V, F, color=_BLUE, opacity=0.3)
-            self._shapes.append(h)
-        self._obstacles(self.scene.env)
-        self._target = s.add_transform_controls("/target", scale=0.3 * span, line_width=2.5)
-        self._place_target(state.T_ee)
-        self._target.on_update(self._on_target)
-
-        self._status = gui.add_markdown("")
-        with gui.add_folder("Joints"):
-            self._sliders = []
-            lo, hi = robot.qlim
-            for j, name in enumerate(robot.joint_names):
-                revolute = robot.ets.joints[j].is_revolute
-                slider = gui.add_slider(
-                    f"{name} ({'rad' if revolute else 'm'})", min=float(lo[j]), max=float(hi[j]),
-                    step=1e-3 if revolute else 5e-4, initial_value=float(np.clip(state.q[j], lo[j], hi[j])),
-                )  # fmt: skip
-                slider.on_update(lambda event, j=j: self._on_slider(j, event.target.value))
-                self._sliders.append(slider)
-            names = sorted(robot.configs)
-            if names:
-                self._config = gui.add_dropdown("configuration", names, initial_value=names[0])
-                gui.add_button("go to configuration").on_click(
-                    lambda _: self.set_q(robot.configs[self._config.value])
-                )
-        with gui.add_folder("Manipulability and J0"):
-            self._numbers = gui.add_markdown("")
-            self._jacobian = gui.add_markdown("")
-        with gui.add_folder("Show", expand_by_default=False):
-            self._show = {key: gui.add_checkbox(key, initial_value=True) for key in _SHOW}
-            for box in self._show.values():
-                box.on_update(lambda _: self._visibility())
-            if not self.scene.shapes:
-                self._show["collision shapes"].visible = False
-        self._draw(state)
-
-    def _obstacles(self, env: Any) -> None:
-        if env is None:
-            return
-        s = self.server.scene
-        for k, o in enumerate(env.spheres):
-            s.add_icosphere(
-                f"/obstacles/sphere{k}", radius=o.radius, color=(150, 150, 150), position=o.center
-            )
-        for k, o in enumerate(env.capsules):
-            a, b = np.array(o.a), np.array(o.b)
-            V, F = capsule_mesh(o.radius, float(np.linalg.norm(b - a)))
-            s.add_mesh_simple(
-                f"/obstacles/capsule{k}",
-                V,
-                F,
-                color=(150, 150, 150),
-                position=(a + b) / 2,
-                wxyz=quaternion_z_to(b - a),
-            )
-        for k, o in enumerate(env.boxes):
-            s.add_box(
-                f"/obstacles/box{k}", color=(150, 150, 150), dimensions=2 * np.array(o.half_extents),
-                position=o.center, wxyz=quaternion(o.R),
-            )  # fmt: skip
-
-    @staticmethod
-    def _segments(state: ViewState) -> np.ndarray:
-        c = state.chain
-        return np.stack((c[:-1], c[1:]), axis=1).astype(np.float32)  # (M, 2, 3)
-
-    def _place_target(self, T: np.ndarray) -> None:
-        self._target.position = T[:3, 3]
-        self._target.wxyz = quaternion(T[:3, :3])
+    # -- the callbacks of the page ------------------------------------------------------------------
+    def _connect(self) -> None:
+        page, model = self.page, self.kin.model
+        page.target.on_update(self._on_target)
+        for j, slider in enumerate(page.sliders):
+            slider.on_update(lambda event, j=j: self._on_slider(j, event.target.value))
+        if page.frame_menu is not None:
+            page.frame_menu.on_update(lambda event: self._on_frame(event.target.value))
+        if page.config_menu is not None:
+            page.config_button.on_click(lambda _: self.set_q(model.configs[page.config_menu.value]))
+        for box in page.show_boxes.values():
+            box.on_update(lambda _: page.visibility())
 
     def _draw(self, state: ViewState) -> None:
-        """Push ``state`` to the browsers (one batch of messages)."""
-        with self.server.atomic():
-            for k, h in enumerate(self._links):
-                h.position, h.wxyz = state.T_links[k, :3, 3], quaternion(state.T_links[k, :3, :3])
-            self._ee.position, self._ee.wxyz = state.T_ee[:3, 3], quaternion(state.T_ee[:3, :3])
-            self._chain.points = self._segments(state)
-            for k, h in enumerate(self._joints):
-                h.position = state.joints[k]
-            radii = np.maximum(state.radii * self.ellipsoid_scale, 1e-4 * self.span)
-            self._ellipsoid.position = state.T_ee[:3, 3]
-            self._ellipsoid.wxyz = quaternion(state.axes)
-            self._ellipsoid.scale = tuple(float(r) for r in radii)
-            for k, h in enumerate(self._shapes):
-                h.position, h.wxyz = self.scene.shape_pose(state, k)
-                h.color = _RED if state.colliding[k] else _BLUE
-            self._numbers.content = self._numbers_text(state)
-            self._jacobian.content = self._jacobian_text(state)
-            self._status.content = self._status_text(state)
-
-    def _numbers_text(self, state: ViewState) -> str:
-        p = state.T_ee[:3, 3]
-        return (
-            f"**manipulability** m = {state.m:.4g}, translational m_v = {state.m_trans:.4g}  \n"
-            f"ellipsoid semi-axes {', '.join(f'{r:.3g}' for r in state.radii[::-1])} m/s "
-            f"(drawn at {self.ellipsoid_scale:.3g} m per m/s)  \n"
-            f"end effector at ({p[0]:.4f}, {p[1]:.4f}, {p[2]:.4f}) m"
-        )
-
-    @staticmethod
-    def _jacobian_text(state: ViewState) -> str:
-        rows = [f"{r}  " + " ".join(f"{x:5.2f}" for x in row) for r, row in zip(_ROWS, state.J)]
-        return "**J0** (base frame)\n```\n" + "\n".join(rows) + "\n```"
-
-    def _status_text(self, state: ViewState) -> str:
-        lines = [self.message] if self.message else []
-        if self.scene.shapes:
-            hits = int(state.colliding.sum())
-            lines.append(f"**{hits} shapes in collision (red)**" if hits else "collision-free")
-        return "  \n".join(lines)
-
-    def _visibility(self) -> None:
-        show = {k: bool(v.value) for k, v in self._show.items()}
-        self._chain.visible = self._ee.visible = self._base.visible = show["robot"]
-        for h in self._joints:
-            h.visible = show["robot"]
-        for h in self._links:
-            h.visible = show["link frames"]
-        self._ellipsoid.visible = show["velocity ellipsoid"]
-        for h in self._shapes:
-            h.visible = show["collision shapes"]
-        self._target.visible = show["target gizmo"]
+        self.page.draw(state, self.message)
 
     def show(self, **parts: bool) -> None:
         """Show or hide parts of the drawing as the panel's "Show" boxes do: ``robot``,
-        ``link_frames``, ``velocity_ellipsoid``, ``collision_shapes``, ``target_gizmo``."""
-        keys = {k.replace(" ", "_"): k for k in _SHOW}
+        ``link_frames``, ``meshes``, ``velocity_ellipsoid``, ``collision_shapes``,
+        ``closest_pair``, ``target_gizmo``."""
+        keys = {k.replace(" ", "_"): k for k in SHOW}
         unknown = sorted(set(parts) - set(keys))
         if unknown:
             raise ParameterError(f"show() takes {', '.join(keys)}; not {', '.join(unknown)}")
         for key, on in parts.items():
-            self._show[keys[key]].value = bool(on)
+            self.page.show_boxes[keys[key]].value = bool(on)
 
     # -- what the user does -------------------------------------------------------------------------
     def _on_slider(self, j: int, value: float) -> None:
@@ -290,60 +163,90 @@ class Viewer:
             self.message = ""
             self._show_q(q, follow=True)
 
+    def _on_frame(self, frame: str) -> None:
+        with self._lock:
+            if self._syncing or frame == self.state.frame:
+                return
+            self.set_frame(frame)
+
     def _on_target(self, event: Any) -> None:
         T = np.eye(4)
         T[:3, :3] = rotation(event.target.wxyz)
         T[:3, 3] = event.target.position
         self.set_target(T, move_gizmo=False)
 
-    def _show_q(self, q: np.ndarray, follow: bool) -> ViewState:
-        state = self.scene.state(q)
-        self.state = state
+    def _show_q(self, q: np.ndarray, follow: bool, frame: str | None = None) -> ViewState:
+        state = self.scene.state(q, self.state.frame if frame is None else frame)
         self._draw(state)
         if follow:
-            self._place_target(state.T_ee)
+            self.page.place_target(state.T_frame)
+        self.state = state  # last: what is drawn, once it is
         return state
+
+    def _set_sliders(self, q: np.ndarray) -> None:
+        self._syncing = True
+        try:
+            for slider, v in zip(self.page.sliders, q):
+                slider.value = float(v)
+        finally:
+            self._syncing = False
 
     @property
     def q(self) -> np.ndarray:
         """The joint values drawn, (n,)."""
         return self.state.q.copy()
 
+    @property
+    def frame(self) -> str:
+        """The followed frame: the gizmo, the ellipsoid, the manipulability and J0 are its."""
+        return self.state.frame
+
     def set_q(self, q: Any) -> ViewState:
         """Move to joint values ``q`` (n,) as the sliders would (clipped to the joint limits); the
-        target gizmo follows the end effector. Returns the new state."""
-        lo, hi = self.kin.robot.qlim
+        target gizmo follows the followed frame. Returns the new state."""
+        lo, hi = self.kin.model.qlim
         q = np.clip(np.asarray(q, dtype=float).reshape(-1), lo, hi)
         with self._lock:
-            self._syncing = True
-            try:
-                for slider, v in zip(self._sliders, q):
-                    slider.value = float(v)
-            finally:
-                self._syncing = False
+            self._set_sliders(q)
             self.message = ""
             return self._show_q(q, follow=True)
 
-    def set_target(self, T: Any, move_gizmo: bool = True) -> Any:
-        """Solve ``kin.ik(T)`` (4, 4) from the current joint values; on success show the solution,
-        otherwise keep the last pose and say why in the panel. Returns the IKResult."""
-        T = np.asarray(T, dtype=float)
+    def set_frame(self, frame: str) -> ViewState:
+        """Follow ``frame`` (a name of ``scene.frames``, as the frame selector offers): the target
+        gizmo moves to it, the ellipsoid, manipulability and J0 become its. Returns the new state."""
         with self._lock:
-            if move_gizmo:
-                self._place_target(T)
-            res = self.kin.ik(T, q0=self.state.q)
-            if res.success:
+            frame = self.scene.frame_of(frame)
+            menu = self.page.frame_menu
+            if menu is not None and menu.value != frame:
                 self._syncing = True
                 try:
-                    for slider, v in zip(self._sliders, res.q):
-                        slider.value = float(v)
+                    menu.value = frame
                 finally:
                     self._syncing = False
+            self.message = ""
+            return self._show_q(self.state.q, follow=True, frame=frame)
+
+    def set_target(self, T: Any, move_gizmo: bool = True) -> Any:
+        """Solve ``kin.ik(T, frame=...)`` (4, 4) for the followed frame from the current joint
+        values (a tree's joints off its path are free); on success show the solution, otherwise keep
+        the last pose and say why in the panel. Returns the IKResult; PoseError for a T that is not
+        SE(3) (the one pose rule), before anything moves."""
+        T = as_pose(T)  # the one pose rule: PoseError before the gizmo moves
+        with self._lock:
+            if move_gizmo:
+                self.page.place_target(T)
+            frame = self.scene.frames[self.state.frame]
+            if frame is None:
+                res = self.kin.ik(T, q0=self.state.q)
+            else:
+                res = self.kin.ik(T, frame=frame, q0=self.state.q)
+            if res.success:
+                self._set_sliders(np.asarray(res.q, dtype=float))
                 self.message = f"IK solved: {res.iterations} iterations, residual {res.residual:.1e}"
                 self._show_q(np.asarray(res.q, dtype=float), follow=False)
             else:
                 self.message = f"**IK failed** ({res.reason}): kept the last pose"
-                self._status.content = self._status_text(self.state)
+                self.page.status(self.state, self.message)
         return res
 
     # -- running ------------------------------------------------------------------------------------
@@ -393,19 +296,36 @@ def view(
     env: Any = None,
     backend: str = "c",
     ellipsoid_scale: float | None = None,
+    frame: str | None = None,
+    urdf: str | Path | None = None,
+    meshes: str = "visual",
+    notes: Sequence[str] = (),
 ) -> Viewer:
-    """Serve a live view of ``robot`` (compiled kinematics of a chain, a :class:`~symkin.Robot`, or
-    anything :func:`symkin.compile` takes: a built-in name, ETS text, a DH or URDF file) at
-    ``http://host:port`` and return the running :class:`Viewer` (``port=0``: a free port; see
-    ``viewer.url``). ``q``: the first configuration (default ``qr``, else ``qz``); ``env``: obstacles
-    (an :class:`~symkin.Environment`); ``backend``: for a robot not compiled yet;
-    ``ellipsoid_scale``: m drawn per m/s (default: the first ellipsoid's largest semi-axis a quarter
-    of the robot's size); ``open_browser``: open the page in the default browser.
+    """Serve a live view of ``robot`` (compiled kinematics of a chain or a tree, a
+    :class:`~symkin.Robot` or :class:`~symkin.Tree`, or anything :func:`symkin.compile` takes: a
+    built-in name, ETS text, a DH or URDF file) at ``http://host:port`` and return the running
+    :class:`Viewer` (``port=0``: a free port; see ``viewer.url``). ``q``: the first configuration
+    (default ``qr``, else ``qz``, clipped to the joint limits); ``frame``: the frame to follow first
+    (default: the first of ``viewer.scene.frames``); ``env``: obstacles (an
+    :class:`~symkin.Environment`); ``backend``: for a robot not compiled yet; ``ellipsoid_scale``: m
+    drawn per m/s (default: the first ellipsoid's largest semi-axis a quarter of the robot's size);
+    ``open_browser``: open the page in the default browser.
+
+    ``urdf``: the URDF file the robot was read from, whose ``meshes`` ("visual", "collision" or
+    "none") are drawn on its links (:func:`symkin.view.meshes.urdf_meshes`; needs trimesh for mesh
+    files). What cannot be drawn is left out with a note (``viewer.notes``, also in the panel), never
+    an error: the collision shapes are drawn in its place. ``notes``: more lines for the panel's Notes.
+
+    ``host``: ``127.0.0.1`` serves this machine only; every interface only when asked for as
+    exactly ``0.0.0.0`` or ``::``, with a warning (:mod:`symkin.view.address`).
 
     Raises MissingExtraError without viser (``pip install 'symkin[view]'``), ParameterError for a
-    port outside 0..65535 or a tree, OSError when host:port cannot be served.
+    port outside 0..65535 or a host that is empty or means every interface in another spelling
+    (``*``, ``0``, ``[::]``...), FrameError for an unknown ``frame``, OSError when host:port cannot be
+    served.
     """
     _viser()
+    serve_address(host)  # before compiling: a host that is refused is refused at once
     from symkin.runtime.kinematics import Kinematics
 
     kin = robot
@@ -413,7 +333,19 @@ def view(
         from symkin.runtime.load import compile as compile_robot
 
         kin = compile_robot(robot, backend=backend)
-    viewer = Viewer(kin, host=host, port=port, q=q, env=env, ellipsoid_scale=ellipsoid_scale)
+    parts: list[MeshPart] = []
+    notes = list(notes)
+    if urdf is not None:
+        from symkin.view.meshes import urdf_meshes
+
+        parts, more = urdf_meshes(urdf, kin.model, meshes)
+        notes += more
+    viewer = Viewer(
+        kin, host=host, port=port, q=q, env=env, ellipsoid_scale=ellipsoid_scale, frame=frame,
+        meshes=parts, notes=notes,
+    )  # fmt: skip
+    if viewer.address.public:
+        warnings.warn(viewer.address.warning(viewer.port), stacklevel=2)
     if open_browser:
         import webbrowser
 

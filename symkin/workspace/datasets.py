@@ -16,10 +16,11 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.sizes import count, room, stored
 from symkin.errors import WorkspaceError
 from symkin.runtime.ik import revolute_mask, sample_range
 from symkin.workspace.blocks import SampleSpec, sample_block
-from symkin.workspace.maps import kinematics_of
+from symkin.workspace.maps import kinematics_of, robot_of
 from symkin.workspace.run import client_for, require_scale, run_blocks
 from symkin.workspace.store import (
     open_store,
@@ -81,14 +82,15 @@ def samples(
     :func:`symkin.workspace.reachability`. The samples do not depend on workers or chunk size.
     """
     require_scale(scheduler)
-    kin = kinematics_of(robot_or_kin, backend)
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or int(n) < 1:
-        raise WorkspaceError(f"n must be a positive number of samples, got {n!r}")
-    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or int(chunk) < 1:
-        raise WorkspaceError(f"chunk must be a positive number of samples, got {chunk!r}")
+    n = count(n, "n (the number of samples)", error=WorkspaceError)
+    chunk = count(chunk, "chunk (samples per block)", error=WorkspaceError)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise WorkspaceError(f"seed must be an integer, got {seed!r}")
-    n, chunk, seed = int(n), _stored_chunk(output, overwrite) or int(chunk), int(seed)
+    # a block larger than the dataset is the dataset (Zarr fills a whole chunk in memory to write part)
+    chunk, seed = _stored_chunk(output, overwrite) or min(chunk, n), int(seed)
+    robot = robot_of(robot_or_kin)
+    _check_size(n, chunk, robot.n, output)  # before compiling
+    kin = kinematics_of(robot, backend)
     sample = sample_range(np.asarray(kin.qlim, dtype=float), revolute_mask(kin))
     blocks = -(-n // chunk)
     from symkin.core.version import __version__
@@ -126,6 +128,16 @@ def samples(
             stats.update(run_blocks(sample_block, (kin, spec), todo, write, client, total=blocks,
                                     progress=progress, on_block=on_block, desc="samples"))  # fmt: skip
     return _load(group, None if output is None else str(output), stats)
+
+
+def _check_size(n: int, chunk: int, d: int, output: Any) -> None:
+    """WorkspaceError before any work when the dataset would not fit: its q and pose in memory
+    (``output`` None) or on the store's disk, a block of ``chunk`` samples (three copies: computed,
+    sent, written) or the marks of its blocks in memory."""
+    sample = 8.0 * (d + 16)
+    blocks = -(-n // chunk)
+    stored(output, n * sample, f"a dataset of {n} samples", WorkspaceError)
+    room(3 * chunk * sample + 64.0 * blocks, f"blocks of {chunk} samples", WorkspaceError)
 
 
 def _stored_chunk(output: Any, overwrite: bool) -> int | None:

@@ -71,9 +71,11 @@ def so3_uniform(count: int, seed: int = 0) -> np.ndarray:
     3k .. 3k+2 for rotation k), the unit quaternion (w, x, y, z) =
     (sqrt(u1) cos 2 pi u3, sqrt(1-u1) sin 2 pi u2, sqrt(1-u1) cos 2 pi u2, sqrt(u1) sin 2 pi u3).
     """
-    count = int(count)
-    if count < 1:
-        raise WorkspaceError(f"orientations must be >= 1, got {count}")
+    from symkin.core.sizes import count as checked
+    from symkin.core.sizes import room
+
+    count = checked(count, "orientations", error=WorkspaceError)
+    room(8.0 * 12 * count, f"{count} orientations", WorkspaceError)
     u = counter_uniform(seed, TAG_ORIENTATION, np.arange(3 * count)).reshape(count, 3)
     a, b = np.sqrt(1.0 - u[:, 0]), np.sqrt(u[:, 0])
     x, y = a * np.sin(2 * np.pi * u[:, 1]), a * np.cos(2 * np.pi * u[:, 1])
@@ -190,8 +192,10 @@ class VoxelGrid:
         shape = tuple(h - lo_ for lo_, h in zip(lo, hi))
         if chunk is None:  # the largest block edge in 16..4 that still gives >= 64 blocks
             chunk = next((c for c in range(16, 3, -1) if math.prod(-(-s // c) for s in shape) >= 64), 4)
-        if int(chunk) < 1:
-            raise WorkspaceError(f"chunk must be >= 1 voxels, got {chunk}")
+        from symkin.core.sizes import count
+
+        # a block edge beyond the grid is the grid (Zarr fills a whole chunk in memory to write part)
+        chunk = min(count(chunk, "chunk (voxels per block edge)", error=WorkspaceError), max(shape))
         return cls(tuple(float(c) for c in centre), float(radius), resolution, half, tuple(lo), shape,
                    int(chunk))  # type: ignore[arg-type]  # fmt: skip
 

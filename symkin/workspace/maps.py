@@ -93,6 +93,21 @@ def kinematics_of(robot_or_kin: Any, backend: str = "c") -> Any:
     return compile_robot(robot_or_kin, backend=backend)
 
 
+def robot_of(robot_or_kin: Any) -> Any:
+    """The Robot of a Kinematics, a Robot or a robot spec (name, ETS text, file), without compiling:
+    sizes are checked on it before any work."""
+    from symkin.model.robot import Robot
+    from symkin.runtime.kinematics import Kinematics
+
+    if isinstance(robot_or_kin, Kinematics):
+        return robot_or_kin.robot
+    if isinstance(robot_or_kin, str):
+        from symkin.model.resolve import resolve_robot
+
+        return resolve_robot(robot_or_kin)
+    return robot_or_kin if isinstance(robot_or_kin, Robot) else kinematics_of(robot_or_kin).robot
+
+
 def _rows(axes: str | Sequence[int]) -> tuple[int, ...]:
     if isinstance(axes, str):
         if axes not in _AXES:
@@ -203,20 +218,22 @@ def reachability(
         ReachMap. The result does not depend on the scheduler, workers or chunk size.
     """
     require_scale(scheduler)
-    kin = kinematics_of(robot_or_kin, backend)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool):
         raise WorkspaceError(f"seed must be an integer, got {seed!r}")
     seed = int(seed)
-    centre, ball = reach_ball(kin.robot)
+    rotations, described = _rotations(orientations, seed)  # sizes are checked before compiling
+    robot = robot_of(robot_or_kin)
+    centre, ball = reach_ball(robot)
     if radius is not None:
         if not (isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0):
             raise WorkspaceError(f"radius must be a positive number of metres, got {radius!r}")
         ball = float(radius)
-    rotations, described = _rotations(orientations, seed)
     rows = _rows(axes)
+    grid = VoxelGrid.of(centre, ball, resolution, bounds, chunk)
+    _check_size(grid, len(rotations), robot.n, bool(solutions), output, ik_options)
+    kin = kinematics_of(robot, backend)
     ik = ik_settings(kin, ik_options)
     env = _collision_env(kin, collision)
-    grid = VoxelGrid.of(centre, ball, resolution, bounds, chunk)
     settings = {
         "kind": "reachability",
         "resolution": grid.resolution,
@@ -284,6 +301,29 @@ def reachability(
             finally:
                 flush()
     return _load_map(group, None if output is None else str(output), stats)
+
+
+def _check_size(
+    grid: VoxelGrid, K: int, n: int, solutions: bool, output: Any, ik_options: Mapping[str, Any] | None
+) -> None:
+    """WorkspaceError before any work when the map would not fit: its reach, manipulability and
+    voxel centres (read into memory), its solutions (``output`` None: in memory, else on the
+    store's disk), or a block's K IK problems per voxel (a block of ``grid.chunk`` voxels a side);
+    ParameterError for IK search or iteration counts beyond the C solver's."""
+    from symkin.core.sizes import count, room, stored
+    from symkin.runtime.ik_problem import MAX_ITERATIONS
+
+    for key in ("slimit", "ilimit"):
+        if key in dict(ik_options or {}):
+            count(dict(ik_options or {})[key], key, maximum=MAX_ITERATIONS)
+
+    voxels = math.prod(grid.shape)
+    room(40.0 * voxels, f"a map of {voxels} voxels", WorkspaceError)
+    if solutions:
+        stored(output, 8.0 * voxels * K * n, f"the solutions of {voxels} voxels x {K} orientations",
+               WorkspaceError)  # fmt: skip
+    block = grid.chunk**3
+    room(8.0 * block * K * (2 * n + 16), f"blocks of {block} voxels x {K} orientations", WorkspaceError)
 
 
 def _collision_env(kin: Any, collision: Any) -> Any:

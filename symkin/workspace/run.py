@@ -3,7 +3,8 @@
 ``scheduler`` selects where the tasks run:
 
 - ``None``: a ``distributed.LocalCluster`` started for the run, one single-threaded worker
-  process per core (``workers=`` to choose), closed afterwards;
+  process per core (``workers=`` to choose), closed afterwards; it listens on this machine only
+  (127.0.0.1: its scheduler, workers and dashboard, :func:`local_cluster`);
 - ``"tcp://host:8786"`` (any scheduler address): an existing cluster, of one or many machines;
 - a ``distributed.Client``: that client's cluster, left open;
 - ``"synchronous"``: no Dask at all, the blocks run one after another in this process.
@@ -30,7 +31,7 @@ from typing import Any
 from symkin.errors import MissingExtraError, WorkspaceError
 from symkin.workspace.store import SCALE_HINT
 
-__all__ = ["client_for", "require_scale", "run_blocks"]
+__all__ = ["client_for", "local_cluster", "require_scale", "run_blocks"]
 
 
 def _distributed() -> Any:
@@ -66,13 +67,7 @@ def client_for(scheduler: Any = None, workers: int | None = None) -> Iterator[An
         count = int(workers) if workers is not None else (os.cpu_count() or 1)
         if count < 1:
             raise WorkspaceError(f"workers must be >= 1, got {workers}")
-        cluster = distributed.LocalCluster(
-            n_workers=count,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",
-            silence_logs=logging.ERROR,
-        )
+        cluster = local_cluster(count)
         try:
             with distributed.Client(cluster) as client:
                 yield client
@@ -92,6 +87,19 @@ def client_for(scheduler: Any = None, workers: int | None = None) -> Iterator[An
         yield client
     finally:
         client.close()
+
+
+def local_cluster(workers: int) -> Any:
+    """A ``distributed.LocalCluster`` of ``workers`` single-threaded worker processes that listens
+    on 127.0.0.1 only: Dask's default dashboard address ``":0"`` serves on every interface."""
+    return _distributed().LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address="127.0.0.1:0",
+        silence_logs=logging.ERROR,
+    )
 
 
 def run_blocks(

@@ -10,6 +10,13 @@ symkin writes the attribute ``symkin_store`` first into every store it creates: 
 user's files, a file, a store another program wrote) is refused and left untouched. A chunk that
 cannot be read (a damaged disk, a truncated file) is named in a WorkspaceError, and a run that
 resumes computes the blocks of such chunks again (:func:`damaged_blocks`).
+
+What is read back is verified: every chunk carries a CRC-32C (Zarr's ``crc32c`` codec), so a
+flipped byte makes its chunk unreadable (and recomputed on resume) instead of a wrong number; and
+the attribute ``symkin_sha256`` holds a sha256 of the other attributes and of every array's
+metadata (shape, chunks, dtype, fill value, codecs: a chunk never written reads as its fill
+value), so a store whose metadata were edited or damaged is a WorkspaceError, never a wrong map
+(stores written before it have no such attribute and are read as they are).
 """
 
 from __future__ import annotations
@@ -39,6 +46,7 @@ __all__ = [
 
 SCALE_HINT = 'pip install "symkin[scale]"'
 MARK = "symkin_store"  # written first into every store symkin creates (value: the layout version)
+SEAL = "symkin_sha256"  # the sha256 of the other attributes and of the arrays' metadata
 _KINDS = ("reachability", "dataset")
 
 
@@ -61,7 +69,44 @@ def open_stored(path: Any, kind: str) -> Any:
         raise WorkspaceError(f"cannot open the {what} {path}: {exc}") from None
     if dict(group.attrs).get("kind") != kind:
         raise WorkspaceError(f"{path} does not hold a symkin {'reachability map' if what == 'map' else kind}")
+    _verify(group, path)
     return group
+
+
+def _fingerprint(group: Any, attrs: dict[str, Any] | None = None) -> str:
+    """sha256 of the group's attributes (or ``attrs``), but the seal, and of its arrays' shapes,
+    chunks, dtypes and fill values."""
+    import hashlib
+
+    attrs = {k: v for k, v in (group.attrs if attrs is None else attrs).items() if k != SEAL}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        members = sorted(group.arrays(), key=lambda item: item[0])
+    arrays = {
+        name: [list(a.shape), list(a.chunks), str(a.dtype), _plain(a.fill_value)] for name, a in members
+    }
+    text = json.dumps([attrs, arrays], sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _plain(value: Any) -> Any:
+    """A NumPy scalar as the Python number it holds (its repr differs between NumPy versions)."""
+    return value.item() if hasattr(value, "item") else value
+
+
+def _seal(group: Any) -> None:
+    """Write the seal over the attributes and arrays as they now are."""
+    group.attrs[SEAL] = _fingerprint(group)
+
+
+def _verify(group: Any, path: Any) -> None:
+    """WorkspaceError when the store's seal does not match its attributes and arrays."""
+    seal = dict(group.attrs).get(SEAL)
+    if seal is not None and seal != _fingerprint(group):
+        raise WorkspaceError(
+            f"{path}: its attributes or array metadata (zarr.json) do not match their sha256: edited or "
+            "damaged; compute it again with overwrite"
+        )
 
 
 def robot_attrs(robot: Any) -> dict[str, Any]:
@@ -115,7 +160,8 @@ def open_store(
         _check_replaceable(path, group)  # overwrite, or remake a creation that was interrupted
         group = None
     if group is not None:
-        old = {k: v for k, v in group.attrs.items() if k != MARK}
+        _verify(group, path)
+        old = {k: v for k, v in group.attrs.items() if k not in (MARK, SEAL)}
         new = json.loads(json.dumps(attrs))
         if grow is not None:
             have, want = old.get("settings", {}).get(grow), new["settings"][grow]
@@ -133,14 +179,22 @@ def open_store(
             for name, (shape, _chunks, _dtype, _fill) in arrays.items():
                 group[name].resize(shape)
             group.attrs["settings"] = {**group.attrs["settings"], grow: want}
+            if SEAL in group.attrs:
+                _seal(group)
         return group
     store = str(path) if path is not None else zarr.storage.MemoryStore()
     group = zarr.open_group(store, mode="w", attributes={MARK: 1})  # the mark first: a store of ours
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
     for name, (shape, chunks, dtype, fill) in arrays.items():
-        group.create_array(name, shape=shape, chunks=chunks, dtype=dtype, fill_value=fill)
+        group.create_array(  # Zarr's default compressor, then a checksum of each chunk
+            name, shape=shape, chunks=chunks, dtype=dtype, fill_value=fill,
+            compressors=(ZstdCodec(level=0), Crc32cCodec()),
+        )  # fmt: skip
     if init is not None:
         init(group)
-    group.attrs.update(attrs)  # last: a store with attributes is complete
+    seal = _fingerprint(group, {**dict(group.attrs), **attrs})
+    group.attrs.update({**attrs, SEAL: seal})  # last, in one write: a store with attributes is complete
     return group
 
 

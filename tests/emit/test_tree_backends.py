@@ -48,6 +48,23 @@ def test_every_frame_and_entry_point_matches_the_reference(tree, backend):
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
+def test_a_frame_fixed_to_the_base_has_no_joint_on_its_path(backend):
+    """Its pose is constant and its J0 and H0 are zero (the NumPy module once failed to import:
+    its empty path was written ``(,)``)."""
+    text = QUADRUPED.replace('<link name="body"/>', '<link name="body"/><link name="imu"/>').replace(
+        "</robot>", fixed("imu_mount", "body", "imu", xyz="0 0 0.1") + "</robot>"
+    )
+    tree = Tree.from_urdf(text)
+    assert "imu" in tree.frames and tree.path_slots("imu") == []
+    kin = symkin.compile(tree, backend)
+    for q in tree.random_q(3, seed=2):
+        assert_close(kin.fkine(q, "imu"), tree.fkine(q, "imu"), 1e-13, "fkine imu")
+        J, H = kin.jacob0_hessian0(q, "imu")
+        assert not np.asarray(J).any() and not np.asarray(H).any()
+        assert_close(kin.jacob0_hessian0(q, "l_foot")[1], tree.hessian0(q, "l_foot"), 1e-12, "H0 l_foot")
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_errors_are_the_reference_errors(backend):
     tree = Tree.from_urdf(QUADRUPED)
     kin = symkin.compile(tree, backend)

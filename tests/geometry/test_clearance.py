@@ -124,22 +124,56 @@ def test_the_proof_is_kept_in_the_cache_and_a_damaged_file_is_recomputed(tmp_pat
     monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
     first = proved_apart(layout_of(_two_link(2.9)))
     (path,) = (tmp_path / "clearance").glob("*.json")
-    assert json.loads(path.read_text())["pairs"] == [[0, 1]]
+    assert json.loads(path.read_text())["body"] == [[0, 1]]
     monkeypatch.setattr(clearance, "_compute", lambda layout: pytest.fail("recomputed"))
     assert proved_apart(layout_of(_two_link(2.9))) == first  # read back, not recomputed
     monkeypatch.undo()
     monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
+    pristine = path.read_text()
+    stored = json.loads(pristine)
     for damaged in (
         "{not json",
-        json.dumps({"key": "other", "pairs": []}),
-        json.dumps({"key": path.stem, "pairs": [[0, 7]]}),
+        pristine[: len(pristine) // 2],
+        json.dumps({"key": path.stem, "pairs": [[0, 1]]}),  # the format before the checksum
+        json.dumps({**stored, "body": []}),
+        json.dumps({**stored, "sha256": stored["sha256"][::-1]}),
         '{"pairs": 3}',
+        "[" * 100_000,  # nested too deeply for the JSON reader
     ):
         path.write_text(damaged)
         assert proved_apart(layout_of(_two_link(2.9))) == first
-        assert json.loads(path.read_text())["pairs"] == [[0, 1]]
+        assert path.read_text() == pristine
     # other limits are another proof: with contact possible, nothing is proved
     assert proved_apart(layout_of(_two_link(3.1))) == frozenset()
+
+
+def _two_link_and_elbow() -> symkin.Robot:
+    """:func:`_two_link` (2.9) and a third sphere on link 2, 0.95 m back towards its joint: it
+    overlaps the base sphere at q = 0 (0.05 m apart, radii 0.1), so of the two self pairs only
+    (0, 1) is proved apart."""
+    robot = _two_link(2.9)
+    shapes = (*robot.geometry.shapes, Sphere((-0.95, 0, 0), 0.1, "link2"))
+    return robot.with_geometry(Geometry(shapes))
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy"])
+def test_a_flipped_digit_in_a_cached_proof_is_not_trusted(tmp_path, monkeypatch, backend):
+    """Issue 36, item 1: one digit of the stored proof flipped ([[0, 1]] -> [[0, 2]]: still JSON,
+    still the file's key, still pairs of the layout) made the kernels skip the colliding pair and
+    call q = 0 free. The entry's checksum fails, so the proof is recomputed."""
+    from symkin.runtime.collision import Collision
+
+    monkeypatch.setenv("SYMKIN_CACHE", str(tmp_path))
+    robot = _two_link_and_elbow()
+    assert in_collision(robot, np.zeros(2))  # the numeric reference
+    assert proved_apart(layout_of(robot)) == {(0, 1)}
+    (path,) = (tmp_path / "clearance").glob("*.json")
+    text = path.read_text()
+    assert text.count("[[0, 1]]") == 1
+    path.write_text(text.replace("[[0, 1]]", "[[0, 2]]"))
+    assert proved_apart(layout_of(_two_link_and_elbow())) == {(0, 1)}
+    assert Collision(_two_link_and_elbow(), backend).in_collision(np.zeros(2))
+    assert path.read_text() == text  # and the cache holds the proof again
 
 
 @pytest.mark.parametrize("name", ["gripper", "quadruped"])

@@ -22,6 +22,7 @@ from symkin.geometry import (
     layout_of,
     points,
 )
+from symkin.geometry.reference import witnesses
 
 ENV = Environment(
     spheres=(Sphere((0.45, 0.1, 0.5), 0.1), Sphere((-0.3, 0.3, 0.3), 0.15)),
@@ -144,6 +145,28 @@ def test_reference_sphere_distances_from_the_chain_link_frames(panda):
                 m += 1
         X = points(panda, q)
         assert np.allclose(X, np.array(C), atol=1e-12)
+
+
+def test_witness_points_of_spheres_lie_on_the_line_of_centres(panda):
+    """For two spheres (and a sphere and an obstacle sphere) the witness points are where the line
+    of centres leaves each sphere: ``c_i - r_i u`` and ``c_j + r_j u``, ``u`` from j to i."""
+    env = Environment(spheres=ENV.spheres)
+    layout = layout_of(panda)
+    labels = layout.pair_labels(env)
+    shapes = panda.geometry.shapes
+    for q in panda.random_q(5, seed=9):
+        X = points(panda, q)
+        d = distances(panda, q, env)
+        pairs = list(range(0, len(labels), 37))
+        dw, a, b = witnesses(panda, X, [labels[k] for k in pairs], env)
+        assert np.allclose(dw, d[pairs], atol=1e-14)
+        for m, k in enumerate(pairs):
+            kind, i, j = labels[k]
+            ci, ri = X[layout.point_index[i]], shapes[i].radius
+            cj, rj = (X[layout.point_index[j]], shapes[j].radius) if kind == "self" else (
+                np.array(env.spheres[j].center), env.spheres[j].radius)  # fmt: skip
+            u = (ci - cj) / np.linalg.norm(ci - cj)
+            assert np.allclose(a[m], ci - ri * u, atol=1e-12) and np.allclose(b[m], cj + rj * u, atol=1e-12)
 
 
 @pytest.mark.parametrize("name", ["panda", "ur5", "lbr_iiwa7"])
@@ -386,7 +409,8 @@ def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
     """The generated self checks try a sphere with several partners on the other link against that
     link's bounding sphere first; every active self pair must still be tested exactly once, in the
     scalar code, each sphere-first test must use the other link's bound. The four-lane code tests
-    every pair not proved apart within the joint limits (lanes outside them take the scalar code)."""
+    every pair not proved apart within the joint limits, then the proved pairs for the lanes beyond
+    them."""
     import re
     from collections import Counter
 
@@ -404,6 +428,7 @@ def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
     checks = (
         (tables["self_code"] + tables["self_code_proved"], "sphere_hit", expected),
         (tables["self_code4"], "hit2", expected4),
+        (tables["self_code4"] + tables["self_code4_proved"], "hit2", expected),
     )
     for code, call, expected in checks:
         found = Counter()

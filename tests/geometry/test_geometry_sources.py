@@ -4,6 +4,7 @@ disabled pairs, and sphere fitting."""
 from __future__ import annotations
 
 import math
+import re
 import sys
 import types
 import warnings
@@ -299,9 +300,13 @@ def test_read_srdf(tmp_path, arm_file) -> None:
     )  # fmt: skip
     robot = symkin.Robot.from_urdf(arm_file, end_link="tool")
     names = urdf_link_names(arm_file, robot)
-    with pytest.warns(UserWarning, match=r"1 disable_collisions pairs .*\(gripper, l1\)"):
+    with pytest.warns(UserWarning) as caught:
         pairs = read_srdf(SRDF, names)
-    assert pairs == (("base", "link1"), ("ee", "link3"), ("link2", "link3"))  # camera is on l2
+    said = " ".join(str(w.message) for w in caught)
+    assert re.search(r"1 disable_collisions pairs .*\(gripper, l1\)", said)
+    # camera rides on link2 with l2: (camera, l3) alone leaves (link2, link3) checked, and says so
+    assert re.search(r"stay checked.*\(link2, link3\)", said)
+    assert pairs == (("base", "link1"), ("ee", "link3"))
     with pytest.warns(UserWarning, match="fall on one model link"):  # both on link2
         assert (
             read_srdf('<robot name="x"><disable_collisions link1="l2" link2="camera"/></robot>', names) == ()

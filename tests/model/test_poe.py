@@ -164,8 +164,8 @@ def test_body_jacobian_adjoint_relation_with_flipped_and_prismatic_joints() -> N
         (np.eye(4), [[0, 0, 1, 0, 0]], {}, ["shape (n, 6)", "(1, 5)"]),
         (np.eye(4), [[0, 0, float("nan"), 0, 0, 0]], {}, ["screws[0, 2]", "finite"]),
         (np.eye(3), [[0, 0, 1, 0, 0, 0]], {}, ["M must be a 4x4"]),
-        (2 * np.eye(4), [[0, 0, 1, 0, 0, 0]], {}, ["last row"]),
-        (np.diag([1, 1, -1, 1]), [[0, 0, 1, 0, 0, 0]], {}, ["not a rotation matrix"]),
+        (2 * np.eye(4), [[0, 0, 1, 0, 0, 0]], {}, ["bottom row"]),
+        (np.diag([1, 1, -1, 1]), [[0, 0, 1, 0, 0, 0]], {}, ["M rotation is a reflection"]),
         (np.eye(4), [[0, 0, 1, 0, 0, 0]], {"frame": "world"}, ["'world'", "'space'", "'body'"]),
     ],
 )

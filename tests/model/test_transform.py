@@ -82,7 +82,7 @@ def test_float_noise_snaps_but_real_values_stay() -> None:
     "bad, match",
     [
         (np.eye(3), "4x4"),
-        (np.diag([1.0, 1.0, 1.0, 2.0]), "last row"),
+        (np.diag([1.0, 1.0, 1.0, 2.0]), "bottom row"),
         (np.diag([1.0, 2.0, 1.0, 1.0]), "rotation"),
         (np.diag([1.0, 1.0, -1.0, 1.0]), "rotation"),  # a reflection
         (np.full((4, 4), np.nan), "NaN"),

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from symkin import FrameError, Robot, RobotError, Tree, URDFError
+from symkin.model.plot import chain_points
 from tests.conftest import assert_close
 from tests.model.tree_urdfs import ARM_CAMERA, GRIPPER, GRIPPER_FREE, QUADRUPED, fixed, joint, urdf
 
@@ -111,6 +112,25 @@ def test_all_frames_at_once_match_each_frame_and_batch_shapes():
     T2, J2 = tree.fkine_jacob0_all(Q)
     assert np.array_equal(T2, T) and np.array_equal(J2, J)
     assert tree.fkine(Q[0], "l_foot").shape == (4, 4) and tree.jacob0(Q[0], "l_foot").shape == (6, 8)
+
+
+def test_segment_poses_are_each_links_pose_and_its_joint_frame():
+    tree = Tree.from_urdf(QUADRUPED, frames=["l_foot", "tail1", "tail_tip", "r_foot"])
+    Q = tree.random_q(3, seed=8)
+    L, P = tree.segment_poses(Q)
+    assert L.shape == P.shape == (3, len(tree.segments), 4, 4)
+    assert_close(L[:, list(tree.frame_segments)], tree.fkine_all(Q), 1e-12, "links")
+    for k, seg in enumerate(tree.segments):
+        if seg.slot is None:
+            assert np.array_equal(P[:, k], L[:, k]), f"fixed segment {seg.name}: no joint"
+    for frame in tree.frames:  # joint frames: the poses just before each joint of the frame's chain
+        chain, slots = tree.chain(frame), tree.path_slots(frame)
+        for i, q in enumerate(Q):
+            joints = chain_points(chain, q[[tree.slots[k].joint for k in slots]])[1]
+            P_chain = np.array([T for T, _ in joints])
+            assert_close(P[i, [tree.slots[k].segment for k in slots]], P_chain, 1e-12, f"joints to {frame}")
+    one = tree.segment_poses(Q[1])
+    assert np.array_equal(one[0], L[1]) and np.array_equal(one[1], P[1])
 
 
 def test_mimic_joints_follow_their_joint_exactly():

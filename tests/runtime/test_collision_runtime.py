@@ -18,16 +18,6 @@ TABLE = Environment(
 )
 
 
-@pytest.fixture(scope="module")
-def panda():
-    return symkin.load("panda")
-
-
-@pytest.fixture(scope="module")
-def kin(panda):
-    return symkin.compile(panda, backend="c")
-
-
 def _colliding_targets(panda, kin, count, seed=0):
     """Configurations without self-collision whose arm (not the wrist and hand) hits the table
     scene, and their poses: other arm postures reach the same pose."""
@@ -104,7 +94,7 @@ def _run(kin, controller, q0, Tep, env, steps=120, dt=0.05):
     q = q0.copy()
     closest = np.inf
     for _ in range(steps):
-        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         qd, _ = controller.step(q, nu)
@@ -168,7 +158,7 @@ def test_c_mmc_with_obstacles_solves_the_python_qp(panda, kin):
     assert c.backend == "c" and p.backend == "python"
     q, near, methods, warm = q0.copy(), 0, [], 0
     for k in range(80):
-        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01)
+        nu, done = symkin.p_servo(kin.fkine(q), Tep, gain=1.0, threshold=0.01, frame="base")
         if done:
             break
         (a, ia), (b, ib) = c.step(q, nu), p.step(q, nu)
@@ -229,11 +219,11 @@ def test_c_solver_rejects_colliding_solutions_inside_its_search_loop(panda, kin)
     collision kernel about every converged solution: a colliding one is rejected and the next
     search starts. Inside a shell of obstacles every solution collides: the reason counts the
     rejected ones, and the NumPy backend (rounds of Python restarts) fails the same target too."""
-    from symkin.runtime.collision import _c_solver_avoiding
+    from symkin.runtime.collision import collision_solver
 
-    assert _c_solver_avoiding(kin, kin.collision(), TABLE, {"seed": 1}) is not None
+    assert collision_solver(kin, TABLE, {"seed": 1}) is not None
     numpy_kin = symkin.compile(panda, backend="numpy")
-    assert _c_solver_avoiding(numpy_kin, numpy_kin.collision(), TABLE, {}) is None
+    assert collision_solver(numpy_kin, TABLE, {}) is None
     Tep = kin.fkine(panda.qr)
     hand = Tep[:3, 3]
     cage = Environment(spheres=(Sphere(hand + [0.0, 0.0, -0.25], 0.12),))  # around the forearm's way
@@ -246,3 +236,21 @@ def test_c_solver_rejects_colliding_solutions_inside_its_search_loop(panda, kin)
     assert np.abs(kin.fkine(free.q) - Tep).max() < 1e-5
     slow = numpy_kin.ik(Tep, seed=4, slimit=4, collision=Environment(spheres=(Sphere((0, 0, 0.5), 2.0),)))
     assert not slow.success and slow.reason == "in collision"
+
+
+def test_one_target_avoiding_collisions_is_one_c_call_after_the_first(panda, kin, monkeypatch):
+    """kin.ik(T, collision=env) makes its C solver once; later calls with the same options, and an
+    equal environment, go from kin.ik's C entry point straight to that solver (no Python path:
+    collision_solver is not called again) and give what the solver gives."""
+    import symkin.runtime.collision as collision
+
+    T = kin.fkine(panda.qr)
+    env = Environment(spheres=(Sphere((0.5, 0.3, 0.3), 0.1), Sphere((0.2, -0.4, 0.6), 0.1)))
+    first = kin.ik(T, seed=3, collision=env)
+    expected = collision.collision_solver(kin, env, {}).solve(T, seed=3)
+    monkeypatch.setattr(collision, "collision_solver", lambda *a, **k: pytest.fail("the Python path"))
+    again = kin.ik(T, seed=3, collision=Environment(spheres=env.spheres))
+    assert first.success and np.array_equal(first.q, again.q) and np.array_equal(again.q, expected.q)
+    assert not kin.in_collision(again.q, env)
+    batch = kin.ik(np.stack([T, T]), seed=3, collision=env)  # a batch with those options: its solver too
+    assert batch.success.all() and not kin.in_collision(batch.q, env).any()

@@ -116,20 +116,22 @@ def test_pose_error_is_translation_and_base_frame_rotation():
 
 def test_p_servo_gain_forms_arrival_and_caps():
     Te, Tep = np.eye(4), _pose(_rot([0, 0, 1], 0.2), (0.3, 0.0, 0.0))
-    nu, arrived = p_servo(Te, Tep, gain=(2.0, 0.5))
+    nu, arrived = p_servo(Te, Tep, gain=(2.0, 0.5), frame="base")
     assert not arrived
     assert_close(nu, [0.6, 0, 0, 0, 0, 0.1], 1e-12, "k e")
-    nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=0.1)  # eq 43: |k e| capped, direction kept
+    nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=0.1, frame="base")  # eq 43: |k e| capped, direction kept
     assert_close(np.linalg.norm(nu), 0.1, 1e-12, "|nu|")
     assert_close(nu / np.linalg.norm(nu), np.array([0.3, 0, 0, 0, 0, 0.2]) / math.hypot(0.3, 0.2), 1e-12)
-    nu, _ = p_servo(Te, Tep, gain=1.0, nu_max=(0.1, 1.0))  # translation and rotation capped separately
+    nu, _ = p_servo(
+        Te, Tep, gain=1.0, nu_max=(0.1, 1.0), frame="base"
+    )  # translation and rotation capped separately
     assert_close(nu, [0.1, 0, 0, 0, 0, 0.2], 1e-12, "separate caps")
-    nu, arrived = p_servo(Te, Tep, threshold=0.6)
+    nu, arrived = p_servo(Te, Tep, threshold=0.6, frame="base")
     assert arrived and not nu.any()
     with pytest.raises(ValueError):
         servo_velocity(np.ones(6), gain=(1.0, 2.0, 3.0))
     with pytest.raises(PoseError):
-        p_servo(np.eye(3), Tep)
+        p_servo(np.eye(3), Tep, frame="base")
 
 
 # -- the manipulability Jacobian and the QP -------------------------------------------------------
@@ -481,7 +483,7 @@ def test_c_path_agrees_with_the_python_path_on_servo_runs(cpanda, kwargs):
     for q0, Tep in zip(q0s, Teps):
         q = q0.copy()
         for _ in range(60):
-            nu, arrived = p_servo(cpanda.fkine(q), Tep)
+            nu, arrived = p_servo(cpanda.fkine(q), Tep, frame="base")
             if arrived:
                 break
             a, ia = c.step(q, nu)
@@ -542,7 +544,7 @@ def test_c_controllers_sharing_a_solver_do_not_interfere(cpanda):
     alone = servo(cpanda, q0s[0], Teps[0], MMC(cpanda, **kwargs), max_steps=40)
     a, b = MMC(cpanda, **kwargs), MMC(cpanda, lam=0.05, **kwargs)
     for k in range(alone.steps):
-        nu, _ = p_servo(cpanda.fkine(alone.q[k]), Teps[0])
+        nu, _ = p_servo(cpanda.fkine(alone.q[k]), Teps[0], frame="base")
         qd, info = a.step(alone.q[k], nu)
         b.step(alone.q[k] + 0.01, -nu)  # another controller on the same solver in between
         assert info.iterations == alone.info[k].iterations and info.status == alone.info[k].status

@@ -97,3 +97,30 @@ def test_a_result_does_not_change_at_the_next_call(kin) -> None:  # noqa: ANN001
     kin.fkine(q2), kin.jacob0(q2)
     assert_close(T1, r.fkine(q1), 1e-12, "T kept")
     assert_close(J1, r.jacob0(q1), 1e-12, "J kept")
+
+
+def test_named_configurations_as_on_the_robot(kin) -> None:  # noqa: ANN001
+    """Issue 36 item 14: kin.qr, kin.qz and kin.configs on every backend, as the Robot has them (a
+    ported ``robot.qr`` works on compiled kinematics); an unknown name lists the configurations."""
+    import pickle
+
+    r = kin.robot
+    assert sorted(kin.configs) == sorted(r.configs) == ["qr", "qz"]
+    for name in ("qr", "qz"):
+        np.testing.assert_array_equal(getattr(kin, name), r.configs[name])
+    assert_close(kin.fkine(kin.qr), r.fkine(r.qr), 1e-14, "fkine at qr")
+    with pytest.raises(
+        AttributeError, match=r"no attribute or configuration 'qready'; configurations: \['qr', 'qz'\]"
+    ):
+        kin.qready  # noqa: B018
+    assert not hasattr(kin, "_private") and getattr(kin, "source", None) is None
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(kin)).qr, r.qr)
+
+
+def test_a_compiled_tree_has_its_configurations() -> None:
+    from tests.model.tree_urdfs import QUADRUPED
+
+    tree = symkin.Tree.from_urdf(QUADRUPED)
+    kin = symkin.compile(tree, backend="numpy")
+    assert sorted(kin.configs) == ["qz"]
+    np.testing.assert_array_equal(kin.qz, np.zeros(tree.n))

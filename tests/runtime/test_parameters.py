@@ -19,13 +19,8 @@ NU = np.array([0.05, -0.02, 0.03, 0.1, 0.0, -0.1])
 
 
 @pytest.fixture(scope="module")
-def panda():
-    return symkin.load("panda")
-
-
-@pytest.fixture(scope="module")
-def cpanda(panda):
-    return symkin.compile(panda, backend="c")
+def cpanda(kin):  # the Panda's C kinematics (tests/runtime/conftest.py)
+    return kin
 
 
 @pytest.mark.parametrize(

@@ -1,55 +1,29 @@
-"""Trajectories (quintic, jtraj, trapezoidal, mstraj, ctraj) and resolved-rate tracking of a Cartesian path.
+"""Trajectories (quintic, jtraj, trapezoidal, mstraj): values, the RTB semantics and extreme inputs.
 
 Independent checks always run (boundary conditions, derivatives against finite differences, the
-piecewise structure, geodesic rotations); the comparisons with roboticstoolbox-python run only where it
+piecewise structure, finite samples or ParameterError over extreme inputs); the comparisons with
+roboticstoolbox-python run only where it
 is installed.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
+import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-import symkin
-from symkin.errors import ConfigurationError, ParameterError, PoseError
-from symkin.runtime.ik import angle_axis
-from symkin.runtime.trajectory import (
-    PathResult,
-    Trajectory,
-    ctraj,
-    jtraj,
-    mstraj,
-    quintic,
-    servo_path,
-    trapezoidal,
-)
-
-
-def rot(axis, angle: float) -> np.ndarray:
-    """Rotation matrix about a unit axis (Rodrigues)."""
-    k = np.asarray(axis, dtype=float)
-    k = k / np.linalg.norm(k)
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
-
-
-def pose(R: np.ndarray, p) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, p
-    return T
+from symkin.errors import ParameterError
+from symkin.runtime.cartesian import ctraj
+from symkin.runtime.trajectory import MAX_SAMPLES, Trajectory, jtraj, mstraj, quintic, trapezoidal
 
 
 def central(y: np.ndarray, h: float) -> np.ndarray:
     """Central differences of samples y (N, ...) spaced h apart, at samples 1..N-2."""
     return (y[2:] - y[:-2]) / (2 * h)
-
-
-def geodesic_angle(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
-    """Rotation angle(s) of Rb Ra^T."""
-    return np.linalg.norm(angle_axis(Rb @ np.swapaxes(Ra, -1, -2)), axis=-1)
 
 
 # -- quintic and jtraj --------------------------------------------------------------------------
@@ -265,75 +239,6 @@ def test_mstraj_bad_input():
         mstraj(VIA, 0.1, [0.1, 0.2], qdmax=1.0)
 
 
-# -- ctraj --------------------------------------------------------------------------------------
-T0 = pose(rot([1, 2, 3], 0.4), [0.3, -0.2, 0.5])
-T1 = pose(rot([-1, 0.5, 2], 1.1) @ rot([1, 2, 3], 0.4), [0.1, 0.4, 0.2])
-
-
-def test_ctraj_endpoints_linear_positions_and_geodesic_rotations():
-    s = np.linspace(0, 1, 21)
-    P = ctraj(T0, T1, s=s)
-    assert P.shape == (21, 4, 4)
-    np.testing.assert_array_equal(P[0], T0)
-    np.testing.assert_array_equal(P[-1], T1)
-    np.testing.assert_array_equal(P[:, 3], np.tile([0, 0, 0, 1.0], (21, 1)))
-    np.testing.assert_allclose(P[:, :3, 3], (1 - s)[:, None] * T0[:3, 3] + s[:, None] * T1[:3, 3], atol=1e-15)
-    R = P[:, :3, :3]
-    np.testing.assert_allclose(R @ np.swapaxes(R, 1, 2), np.tile(np.eye(3), (21, 1, 1)), atol=1e-14)
-    np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-14)
-    # geodesic: equal angles between consecutive rotations, about one fixed axis, adding up to the total
-    total = geodesic_angle(T0[:3, :3], T1[:3, :3])
-    steps = geodesic_angle(R[:-1], R[1:])
-    np.testing.assert_allclose(steps, total / 20, rtol=1e-9)
-    np.testing.assert_allclose(geodesic_angle(T0[:3, :3], R), s * total, atol=1e-12)
-    axes = angle_axis(R[1:] @ np.swapaxes(R[:-1], 1, 2))
-    axis = np.array([-1, 0.5, 2]) / np.linalg.norm([-1, 0.5, 2])
-    np.testing.assert_allclose(
-        axes / np.linalg.norm(axes, axis=1, keepdims=True), np.tile(axis, (20, 1)), atol=1e-9
-    )
-
-
-def test_ctraj_takes_the_shorter_rotation():
-    A = pose(np.eye(3), [0, 0, 0])
-    B = pose(rot([0, 0, 1], 3.5), [0, 0, 0])  # 3.5 rad one way is 2 pi - 3.5 = 2.78 rad the other
-    R = ctraj(A, B, s=np.linspace(0, 1, 11))[:, :3, :3]
-    np.testing.assert_allclose(geodesic_angle(R[:-1], R[1:]).sum(), 2 * math.pi - 3.5, rtol=1e-9)
-    np.testing.assert_allclose(geodesic_angle(R[:-1], R[1:]), (2 * math.pi - 3.5) / 10, rtol=1e-9)
-
-
-def test_ctraj_int_and_time_vector_use_the_trapezoidal_profile():
-    P = ctraj(T0, T1, 30)
-    s = trapezoidal(0.0, 1.0, 30).q
-    np.testing.assert_allclose(P[:, :3, 3], (1 - s)[:, None] * T0[:3, 3] + s[:, None] * T1[:3, 3], atol=1e-15)
-    np.testing.assert_allclose(ctraj(T0, T1, np.linspace(0, 3, 30)), P, atol=1e-14)
-    np.testing.assert_array_equal(P[[0, -1]], [T0, T1])
-
-
-def test_ctraj_bad_input():
-    bad = T1.copy()
-    bad[:3, :3] *= 1.01
-    with pytest.raises(PoseError, match="T1 rotation is not orthonormal"):
-        ctraj(T0, bad, 10)
-    bad = T0.copy()
-    bad[3] = [0, 0, 1, 1]
-    with pytest.raises(PoseError, match="T0 has bottom row"):
-        ctraj(bad, T1, 10)
-    bad = T0.copy()
-    bad[0, 3] = np.nan
-    with pytest.raises(PoseError, match="T0 contains NaN"):
-        ctraj(bad, T1, 10)
-    with pytest.raises(PoseError, match="T1"):
-        ctraj(T0, np.eye(3), 10)
-    with pytest.raises(PoseError, match="T0 rotation is a reflection"):
-        ctraj(np.diag([1.0, 1.0, -1.0, 1.0]), T1, 10)
-    with pytest.raises(ParameterError, match=r"in \[0, 1\]"):
-        ctraj(T0, T1, s=[0.0, 1.5])
-    with pytest.raises(ParameterError, match="exactly one"):
-        ctraj(T0, T1)
-    with pytest.raises(ParameterError, match="increasing"):
-        ctraj(T0, T1, [0.0, 1.0, 1.0])
-
-
 # -- input checks shared by the generators --------------------------------------------------------
 @pytest.mark.parametrize("fn", [quintic, jtraj, trapezoidal])
 def test_bad_times_and_endpoints(fn):
@@ -343,8 +248,9 @@ def test_bad_times_and_endpoints(fn):
         fn([0.0, 1.0], [1.0, 2.0], [0.0, 1.0, 0.5])
     with pytest.raises(ParameterError, match="finite"):
         fn([0.0, 1.0], [1.0, 2.0], [0.0, np.nan, 1.0])
-    with pytest.raises(ParameterError, match="time >= 0"):
-        fn([0.0, 1.0], [1.0, 2.0], [-1.0, 0.0, 1.0])
+    if fn is jtraj:  # jtraj's motion starts at time 0; quintic's and trapezoidal's at t[0] (as RTB 1.5)
+        with pytest.raises(ParameterError, match="time >= 0"):
+            fn([0.0, 1.0], [1.0, 2.0], [-1.0, 0.0, 1.0])
     with pytest.raises(ParameterError, match="at least 2"):
         fn([0.0, 1.0], [1.0, 2.0], 1)
     with pytest.raises(ParameterError, match="at least 2 times"):
@@ -364,6 +270,153 @@ def test_bad_boundary_velocities():
         quintic(0, 1, 10, qdf=np.nan)
     with pytest.raises(ParameterError, match="V must be a number or 2"):
         trapezoidal([0, 1], [1, 2], 10, V=[1, 2, 3])
+
+
+# -- t[0] > 0: the motion runs from t[0] (RTB 1.5) ------------------------------------------------
+@pytest.mark.parametrize("fn", [quintic, trapezoidal])
+def test_a_time_vector_starting_later_starts_the_motion_at_its_first_time(fn):
+    """quintic and trapezoidal run from t[0] to t[-1], as RTB 1.5 (roboticstoolbox.tools.trajectory:
+    ``tf = tv[-1] - tv[0]``, evaluated at ``tv - tv[0]``): the same samples as over t - t[0]."""
+    tau = np.linspace(0, 2, 21)
+    for start in (1.5, -3.0, 1e6):
+        late, early = fn([0.2, -1.0], [1.0, 2.0], start + tau), fn([0.2, -1.0], [1.0, 2.0], tau)
+        np.testing.assert_array_equal(late.t, start + tau)
+        for a, b in ((late.q, early.q), (late.qd, early.qd), (late.qdd, early.qdd)):
+            np.testing.assert_allclose(a, b, atol=1e-9 * max(1.0, start))  # t - t[0] rounds near 1e6
+        np.testing.assert_array_equal(late.q[0], [0.2, -1.0])
+        np.testing.assert_allclose(late.q[-1], [1.0, 2.0], atol=1e-14)
+
+
+def test_jtraj_keeps_its_motion_from_time_zero():
+    """RTB's jtraj scales by max(t) (normalised time t / t[-1]): a vector starting later samples the
+    same polynomial from time 0, so its first sample is already on the way."""
+    tr = jtraj([0.0], [1.0], np.array([2.0, 2.5, 3.0]))
+    s = np.array([2.0, 2.5, 3.0]) / 3.0
+    np.testing.assert_allclose(tr.q[:, 0], 10 * s**3 - 15 * s**4 + 6 * s**5, atol=1e-15)
+
+
+# -- extreme inputs: finite samples or ParameterError, never NaN or inf (issue 36, item 5) ----------
+def _outcome(fn, *args, **kwargs):
+    """fn's Trajectory, or the ParameterError it raised; any warning (overflow, invalid) fails."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            return fn(*args, **kwargs)
+        except ParameterError as exc:
+            return exc
+
+
+def _finite_trajectory(tr) -> None:
+    if isinstance(tr, ParameterError):
+        return
+    for a in (tr.t, tr.q, tr.qd, tr.qdd):
+        assert np.isfinite(a).all(), tr
+
+
+def test_the_reported_inputs_give_finite_samples_or_raise():
+    """trapezoidal(0, 1, [0, 1e-155]): acceleration 4.5e310 from t = 0; a quintic over 1e-170 s:
+    accelerations up to 5.8e340 inside; endpoints +-1e308 over one second: velocity 3.75e308. At
+    a quintic's two ends alone (the reported t = [0, 1e-170]) the samples are finite and exact: q0,
+    qf, and the boundary velocities and accelerations, 0."""
+    inner = [0.0, 0.25e-170, 1e-170]
+    for make in (
+        lambda: trapezoidal(0, 1, [0, 1e-155]),
+        lambda: quintic(0, 1, inner),
+        lambda: jtraj([0.0], [1.0], inner),
+        lambda: jtraj([-1e308], [1e308], 50),
+        lambda: quintic(-1e308, 1e308, [0.0, 0.25, 1.0]),
+        lambda: trapezoidal(-1e308, 1e308, [0.0, 1.0]),
+    ):
+        with pytest.raises(ParameterError, match="exceed the range of a double"):
+            make()
+    for tr in (quintic(0, 1, [0, 1e-170]), jtraj([0.0], [1.0], [0, 1e-170])):
+        np.testing.assert_array_equal(np.ravel(tr.q), [0.0, 1.0])
+        assert not np.ravel(tr.qd).any() and not np.ravel(tr.qdd).any()
+
+
+def test_extreme_but_representable_trajectories_come_out_finite_and_exact():
+    """Positions near the range of a double are evaluated in units of a power of two: the samples
+    are those of the same trajectory scaled down by 2**1000, times 2**1000, to the bit."""
+    big = 2.0**1000
+    t = np.linspace(0, 10, 41)
+    for fn in (jtraj, quintic, trapezoidal):
+        small = fn([-1.5, 0.25, 1.0], [1.5, -0.5, 1.0], t)
+        huge = fn([-1.5 * big, 0.25 * big, big], [1.5 * big, -0.5 * big, big], t)
+        for a, b in ((huge.q, small.q), (huge.qd, small.qd), (huge.qdd, small.qdd)):
+            assert np.isfinite(a).all()
+            np.testing.assert_array_equal(a, b * big)
+    tr = jtraj([-1e308], [1e308], np.linspace(0, 10, 11))  # 2e308 apart: |qf - q0| is beyond a double
+    assert np.isfinite(tr.q).all() and tr.q[0, 0] == -1e308 and tr.q[-1, 0] == 1e308
+    assert abs(tr.q[5, 0]) < 1e293  # the middle, 0 up to rounding of 1e308
+    assert tr.qd.max() == pytest.approx(15 / 8 * 2 * (1e308 / 10), rel=1e-12)  # 15/8 |qf - q0| / T
+    still = quintic(3.0, 3.0, [0.0, 1e-300, 2e-300])  # no motion: zero over any duration
+    assert (still.q == 3.0).all() and (still.qd == 0).all() and (still.qdd == 0).all()
+
+
+def test_sizes_beyond_max_samples_are_refused():
+    for make in (
+        lambda: quintic(0, 1, 10**12),
+        lambda: trapezoidal(0, 1, MAX_SAMPLES + 1),
+        lambda: jtraj([0.0], [1.0], 10**20),
+        lambda: mstraj(VIA, 0.1, 1e300, qdmax=1.0),
+        lambda: mstraj(VIA, 5e-324, 0.5, qdmax=1.0),
+        lambda: mstraj(VIA, 0.1, 0.5, qdmax=1e-300),
+        lambda: mstraj(VIA, 1e-9, 0.5, tsegment=[1.0, 1.0, 1.0]),
+    ):
+        with pytest.raises(ParameterError, match="samples"):
+            make()
+
+
+def test_mstraj_far_via_points_and_huge_times():
+    far = np.array([[-1e308, 0.0], [1e308, 1.0]])
+    for kwargs in ({"qdmax": 1e300}, {"tsegment": [1.0]}):
+        _finite_trajectory(_outcome(mstraj, far, 0.1, 0.2, **kwargs))
+    with pytest.raises(ParameterError, match="double"):
+        mstraj(far, 0.1, 0.2, tsegment=[1.0])  # 2e308 in one second
+    _finite_trajectory(_outcome(mstraj, VIA, 1e300, 0.0, qdmax=1.0))  # times up to 3e300
+
+
+_FLOATS = st.floats(allow_nan=False, allow_infinity=False)
+_TIMES = st.lists(_FLOATS, min_size=2, max_size=6, unique=True).map(sorted)
+_MAGNITUDES = st.sampled_from(
+    [0.0, 5e-324, 1e-300, 1e-170, 1e-9, 1.0, 1e9, 1e154, 1e300, 1.7976931348623157e308]
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(q0=_FLOATS, qf=_FLOATS, v0=_FLOATS, v1=_FLOATS, t=_TIMES, m=st.integers(2, 40))
+def test_quintic_jtraj_and_trapezoidal_are_finite_or_refused(q0, qf, v0, v1, t, m):
+    for tr in (
+        _outcome(quintic, q0, qf, t, qd0=v0, qdf=v1),
+        _outcome(quintic, q0, qf, m),
+        _outcome(jtraj, [q0], [qf], [abs(x) for x in t] if t[0] < 0 else t, qd0=[v0], qd1=[v1]),
+        _outcome(jtraj, [q0, qf], [qf, q0], m),
+        _outcome(trapezoidal, q0, qf, t),
+        _outcome(trapezoidal, q0, qf, m),
+        _outcome(trapezoidal, q0, qf, t, V=v0),
+    ):
+        _finite_trajectory(tr)
+        if not isinstance(tr, ParameterError):
+            assert (np.ravel(tr.q[0]) == np.ravel(q0)).all() or tr.name == "jtraj"
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    scale=_MAGNITUDES, dt=_MAGNITUDES, tacc=_MAGNITUDES, speed=_MAGNITUDES, sign=st.sampled_from([1.0, -1.0])
+)
+def test_mstraj_is_finite_or_refused(scale, dt, tacc, speed, sign):
+    via = sign * scale * np.array([[0.0, 0.0], [1.0, -1.0], [-1.0, 0.5]])
+    if dt > 0:
+        _finite_trajectory(_outcome(mstraj, via, dt, tacc, qdmax=speed) if speed > 0 else ParameterError())
+        _finite_trajectory(_outcome(mstraj, via, dt, tacc, tsegment=[max(speed, 1e-300)] * 2))
+
+
+def test_ctraj_with_far_poses_and_extreme_times():
+    A, B = np.eye(4), np.eye(4)
+    A[:3, 3], B[:3, 3] = -1e308, 1e308
+    for t in (20, [0.0, 1e-300, 1e300], [0.0, 5e-324]):
+        P = ctraj(A, B, t)
+        assert np.isfinite(P).all() and (P[0] == A).all() and (P[-1] == B).all()
 
 
 # -- the Trajectory object ----------------------------------------------------------------------
@@ -387,87 +440,6 @@ def test_plot_returns_a_figure_with_q_qd_qdd():
     assert [len(ax.get_lines()) for ax in axes] == [2, 2, 2]
     assert axes[-1].get_xlabel() == "t (s)"
     assert quintic(0, 1, 10).plot().get_axes()[-1].get_xlabel() == "k (step)"
-
-
-# -- tracking a Cartesian path ------------------------------------------------------------------
-@pytest.fixture(scope="module")
-def panda():
-    return symkin.load("panda")
-
-
-@pytest.fixture(scope="module")
-def line(panda):
-    """A 10 cm straight line in x from the Panda's ready pose, 50 poses (trapezoidal profile)."""
-    q0 = np.asarray(panda.configs["qr"], dtype=float)
-    Ta = panda.fkine(q0)
-    Tb = Ta.copy()
-    Tb[:3, 3] += [0.1, 0.0, 0.0]
-    return q0, ctraj(Ta, Tb, 50)
-
-
-def test_servo_path_tracks_a_straight_line(panda, line):
-    q0, P = line
-    res = servo_path(panda, P, q0)
-    assert isinstance(res, PathResult)
-    assert res.q.shape == (50, 7) and res.qd.shape == (49, 7) and res.e.shape == (50, 6)
-    np.testing.assert_array_equal(res.q[0], q0)
-    # measured: 1.4e-5 m (the linearisation error of one step of up to 3 mm), orientation 4e-16 rad
-    assert res.max_position_error < 3e-5
-    assert res.max_angle_error < 1e-9
-    assert res.position_error[-1] < 1e-7
-    np.testing.assert_allclose(panda.fkine(res.q[-1])[:3, 3], P[-1, :3, 3], atol=1e-7)
-    # the pieces matter: without feedback the linearisation error accumulates (3.9e-4 m), without
-    # the feed-forward the servo lags one step behind (3.1e-3 m), with neither the arm stays put
-    assert servo_path(panda, P, q0, gain=0.0).max_position_error > 1e-4
-    assert servo_path(panda, P, q0, feedforward=False).max_position_error > 1e-3
-    assert servo_path(panda, P, q0, gain=0.0, feedforward=False).max_position_error == pytest.approx(0.1)
-    # time steps: dt = 20 ms with gain 1/dt is the same loop as one unit per step with gain 1
-    timed = servo_path(panda, P, q0, gain=50.0, dt=0.02)
-    np.testing.assert_allclose(timed.q, res.q, atol=1e-12)
-    np.testing.assert_allclose(timed.qd, res.qd / 0.02, rtol=1e-9, atol=1e-9)
-    np.testing.assert_allclose(timed.t[-1], 49 * 0.02)
-
-
-def test_servo_path_rotation_frame_damping_and_compiled(panda, line):
-    q0, _ = line
-    Ta = panda.fkine(q0)
-    Tb = pose(Ta[:3, :3] @ rot([1, 0, 0], 0.3), Ta[:3, 3] + [0.0, 0.05, -0.05])
-    res = servo_path(panda, ctraj(Ta, Tb, 50), q0)
-    assert res.max_position_error < 3e-5 and res.max_angle_error < 1e-4  # measured 1.2e-5 m, 5.3e-5 rad
-    assert servo_path(panda, ctraj(Ta, Tb, 50), q0, feedforward=False).max_angle_error > 5e-3
-    damped = servo_path(panda, ctraj(Ta, Tb, 50), q0, damping=0.01)
-    assert damped.max_position_error < 1e-4 and damped.max_angle_error < 1e-4
-    # link frame 5 of the chain: fkine and jacob0 of that frame
-    F0 = panda.fkine(q0, frame=5)
-    F1 = pose(F0[:3, :3], F0[:3, 3] + [0.0, 0.0, 0.05])
-    res5 = servo_path(panda, ctraj(F0, F1, 20), q0, frame=5)
-    assert res5.max_position_error < 3e-5
-    np.testing.assert_allclose(panda.fkine(res5.q[-1], frame=5), F1, atol=1e-6)
-    np.testing.assert_array_equal(res5.q[:, 6], q0[6])  # the joint after frame 5 does not move
-    # compiled kinematics (NumPy backend) take the same steps
-    kin = symkin.compile(panda, backend="numpy")
-    P = ctraj(Ta, Tb, 50)
-    np.testing.assert_allclose(servo_path(kin, P, q0).q, res.q, atol=1e-10)
-
-
-def test_servo_path_bad_input(panda, line):
-    q0, P = line
-    with pytest.raises(ConfigurationError):
-        servo_path(panda, P, q0[:6])
-    with pytest.raises(ConfigurationError):
-        servo_path(panda, P, np.r_[q0[:6], np.nan])
-    with pytest.raises(ParameterError, match="dt must be"):
-        servo_path(panda, P, q0, dt=0.0)
-    with pytest.raises(ParameterError, match="dt must be"):
-        servo_path(panda, P, q0, dt=-0.1)
-    with pytest.raises(ParameterError, match="gain"):
-        servo_path(panda, P, q0, gain=-1.0)
-    with pytest.raises(ParameterError, match="path of N >= 1 poses"):
-        servo_path(panda, P[0], q0)
-    bad = P.copy()
-    bad[3, :3, :3] *= 2
-    with pytest.raises(PoseError, match=r"poses: target \[3\]"):
-        servo_path(panda, bad, q0)
 
 
 # -- roboticstoolbox-python, where it is installed ---------------------------------------------
@@ -501,11 +473,3 @@ def test_rtb_mstraj(rtb):
         ours, theirs = mstraj(VIA, 0.125, 0.5, **kwargs), rtb.mstraj(VIA, 0.125, 0.5, **kwargs)
         np.testing.assert_allclose(ours.q[1:], theirs.q, atol=1e-12)  # RTB leaves out the start q0
         np.testing.assert_allclose(ours.info["arrive"], theirs.arrive, atol=1e-12)
-
-
-def test_rtb_ctraj(rtb):
-    SE3 = pytest.importorskip("spatialmath").SE3
-    A, B = SE3(T0, check=False), SE3(T1, check=False)
-    np.testing.assert_allclose(ctraj(T0, T1, 20), np.array(rtb.ctraj(A, B, 20).A), atol=1e-12)
-    s = np.linspace(0, 1, 15)
-    np.testing.assert_allclose(ctraj(T0, T1, s=s), np.array(rtb.ctraj(A, B, s=s).A), atol=1e-12)

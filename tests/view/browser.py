@@ -1,5 +1,6 @@
 """Headless Chromium driven over the Chrome DevTools protocol (the ``websockets`` client that viser
-brings; no webdriver): open a page, run JavaScript, click, take PNG screenshots.
+brings; no webdriver): open a page, run JavaScript, click, take PNG screenshots, list the URLs the
+page requested.
 
 Started with the flags a closed network needs (no background networking, updates or sync), a
 fresh profile and software WebGL (SwiftShader), as ``apt-get install chromium`` provides it.
@@ -12,9 +13,11 @@ import io
 import itertools
 import json
 import os
+import queue
 import shutil
 import subprocess
 import tempfile
+import threading
 import time
 import urllib.request
 from pathlib import Path
@@ -46,14 +49,17 @@ def chromium() -> str | None:
 
 
 class Browser:
-    """One headless Chromium with one page of ``size`` CSS pixels (device scale 1)."""
+    """One headless Chromium with one page of ``size`` CSS pixels (device scale 1); ``flags`` are added
+    to :data:`CHROMIUM_FLAGS`."""
 
-    def __init__(self, executable: str, size: tuple[int, int] = (1400, 900)) -> None:
+    def __init__(
+        self, executable: str, size: tuple[int, int] = (1400, 900), flags: tuple[str, ...] = ()
+    ) -> None:
         from websockets.sync.client import connect
 
         self.profile = tempfile.mkdtemp(prefix="symkin-chromium-")
         self.log = open(os.path.join(self.profile, "chromium.log"), "w")  # noqa: SIM115
-        args = [executable, *CHROMIUM_FLAGS, f"--user-data-dir={self.profile}", "about:blank"]
+        args = [executable, *CHROMIUM_FLAGS, *flags, f"--user-data-dir={self.profile}", "about:blank"]
         self.proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=self.log)
         port_file = Path(self.profile, "DevToolsActivePort")
         deadline = time.monotonic() + 60
@@ -67,21 +73,65 @@ class Browser:
             page = next(p for p in json.load(r) if p["type"] == "page")
         self.ws = connect(page["webSocketDebuggerUrl"], max_size=None, open_timeout=30)
         self._ids = itertools.count(1)
+        self._waiting: dict[int, queue.Queue] = {}
+        self.events: list[dict] = []  # Network events of the page and its workers (see record_network)
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
         self.send(
             "Emulation.setDeviceMetricsOverride",
             width=size[0], height=size[1], deviceScaleFactor=1, mobile=False,
         )  # fmt: skip
 
+    def _read(self) -> None:
+        """The DevTools messages, as they come: answers to their command's caller; a worker the
+        page starts gets its Network events enabled before it runs; Network events are kept."""
+        from websockets.exceptions import ConnectionClosed
+
+        try:
+            while True:
+                msg = json.loads(self.ws.recv())
+                if "id" in msg:
+                    box = self._waiting.pop(msg["id"], None)
+                    if box is not None:
+                        box.put(msg)
+                elif msg.get("method") == "Target.attachedToTarget":
+                    session = msg["params"]["sessionId"]
+                    for method in ("Network.enable", "Runtime.runIfWaitingForDebugger"):
+                        self.ws.send(
+                            json.dumps({"id": next(self._ids), "sessionId": session, "method": method})
+                        )
+                elif msg.get("method", "").startswith("Network."):
+                    self.events.append(msg)
+        except (ConnectionClosed, OSError):
+            return
+
     def send(self, method: str, **params: Any) -> dict:
-        """One DevTools command; its result (events in between are dropped)."""
+        """One DevTools command; its result."""
         i = next(self._ids)
+        box: queue.Queue = queue.Queue()
+        self._waiting[i] = box
         self.ws.send(json.dumps({"id": i, "method": method, "params": params}))
-        while True:
-            msg = json.loads(self.ws.recv(timeout=120))
-            if msg.get("id") == i:
-                if "error" in msg:
-                    raise RuntimeError(f"{method}: {msg['error']}")
-                return msg["result"]
+        msg = box.get(timeout=120)
+        if "error" in msg:
+            raise RuntimeError(f"{method}: {msg['error']}")
+        return msg["result"]
+
+    def record_network(self) -> None:
+        """From now on, keep the Network events of the page and of every worker it starts."""
+        self.send("Network.enable")
+        self.send("Target.setAutoAttach", autoAttach=True, waitForDebuggerOnStart=True, flatten=True)
+
+    def requested(self) -> list[str]:
+        """Every URL the page and its workers asked for since :meth:`record_network` (documents,
+        scripts, fonts, images, web sockets)."""
+        urls = []
+        for e in list(self.events):
+            p = e.get("params", {})
+            if e["method"] == "Network.requestWillBeSent":
+                urls.append(p["request"]["url"])
+            elif e["method"] == "Network.webSocketCreated":
+                urls.append(p["url"])
+        return urls
 
     def open(self, url: str) -> None:
         self.send("Page.navigate", url=url)

@@ -18,6 +18,7 @@ import symkin  # noqa: E402
 from symkin.errors import WorkspaceError  # noqa: E402
 from symkin.model.differential import manipulability_of  # noqa: E402
 from symkin.workspace import open_dataset, open_map, reachability, samples  # noqa: E402
+from symkin.workspace.run import local_cluster  # noqa: E402
 
 L1, L2, L3 = 0.6, 0.25, 0.15
 PLANAR = f"Rz(q) tx({L1}) Rz(q) tx({L2}) Rz(q) tx({L3})"
@@ -46,12 +47,7 @@ def kin(robot):
 
 @pytest.fixture(scope="module")
 def client():
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, dashboard_address=":0", silence_logs=50
-        ) as cluster,
-        distributed.Client(cluster) as c,
-    ):
+    with local_cluster(2) as cluster, distributed.Client(cluster) as c:
         yield c
 
 
@@ -98,12 +94,7 @@ def test_planar_map_on_two_workers_matches_the_closed_form_workspace(cluster_map
 
 
 def test_same_map_bit_for_bit_with_one_worker_and_other_chunks(cluster_map, kin):
-    with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=1, dashboard_address=":0", silence_logs=50
-        ) as cluster,
-        distributed.Client(cluster) as c,
-    ):
+    with local_cluster(1) as cluster, distributed.Client(cluster) as c:
         one = reachability(kin, chunk=3, scheduler=c, progress=False, **SETTINGS)
     here = reachability(kin, chunk=8, scheduler="synchronous", progress=False, **SETTINGS)
     for other in (one, here):
@@ -259,3 +250,20 @@ def test_collision_free_map_counts_only_collision_free_solutions(robot, client):
     assert np.array_equal(on_workers.reach, free.reach)  # the obstacles travel to the workers intact
     with pytest.raises(symkin.GeometryError, match="no collision geometry"):
         reachability(robot, collision=True, **common)
+
+
+def test_the_local_cluster_listens_on_this_machine_only(client):
+    """Issue 36, item 2: Dask's default dashboard address ":0" served the dashboard on every
+    interface; the cluster of ``reach`` and ``dataset`` listens on 127.0.0.1 only (scheduler,
+    dashboard and workers)."""
+    import ipaddress
+    from urllib.parse import urlparse
+
+    cluster = client.cluster
+    sockets = getattr(cluster.scheduler.http_server, "_sockets", None)
+    assert sockets, "no dashboard sockets to check"
+    for sock in sockets.values():
+        assert ipaddress.ip_address(sock.getsockname()[0]).is_loopback, sock.getsockname()
+    addresses = [cluster.scheduler_address, *client.scheduler_info()["workers"]]
+    assert all(urlparse(a).hostname == "127.0.0.1" for a in addresses), addresses
+    assert urlparse(cluster.dashboard_link).hostname == "127.0.0.1"

@@ -194,3 +194,71 @@ def test_a_damaged_dataset_chunk_is_recomputed_on_resume(kin, whole_data, tmp_pa
     resumed = samples(kin, 100, output=path, **DATA)
     assert resumed.stats["computed"] == 4 and resumed.complete
     assert np.array_equal(resumed.q[...], whole_data.q[...])
+
+
+# ---- issue 36, item 1: what is read back from a store is verified -------------------------------
+def flip(path: Path, at: int | None = None) -> None:
+    """One bit of one byte changed (the middle one unless ``at``): the file keeps its size."""
+    data = bytearray(path.read_bytes())
+    k = len(data) // 2 if at is None else at
+    data[k] ^= 0x01
+    path.write_bytes(bytes(data))
+
+
+def test_a_flipped_byte_in_a_chunk_is_never_a_wrong_number(kin, whole_data, tmp_path):
+    """Random joint values do not compress: a chunk holds them raw, and one flipped bit was a
+    different q read back as if computed. Each chunk's CRC-32C makes it a damaged chunk: named on
+    open, computed again on resume."""
+    path = tmp_path / "data.zarr"
+    samples(kin, 100, output=path, **DATA)
+    chunk = written_chunks(path, "q")[1]
+    flip(chunk, at=len(chunk.read_bytes()) - 40)  # inside the values, before the checksum
+    with pytest.raises(WorkspaceError, match="chunk q/c/1/0 cannot be read"):
+        _read_all(path)
+    resumed = samples(kin, 100, output=path, **DATA)
+    assert resumed.stats["damaged"] == resumed.stats["computed"] == 1
+    assert np.array_equal(resumed.q[...], whole_data.q[...])
+
+
+def _read_all(path: Path) -> None:
+    """Read every array of the dataset at ``path`` as symkin does (WorkspaceError naming a chunk)."""
+    from symkin.workspace.store import open_stored, read_array
+
+    group = open_stored(path, "dataset")
+    for name in ("q", "pose", "done"):
+        read_array(group[name], str(path))
+
+
+@pytest.mark.parametrize(
+    "where, old, new",
+    [
+        ("zarr.json", '"seed": 2', '"seed": 3'),  # the attributes: another dataset's settings
+        ("q/zarr.json", "[\n    100,", "[\n    101,"),  # the shape: a row that was never computed
+        ("done/zarr.json", '"fill_value": 0', '"fill_value": 1'),  # unwritten marks read as written
+    ],
+)
+def test_a_flipped_digit_in_the_metadata_is_refused(kin, tmp_path, where, old, new):
+    path = tmp_path / "data.zarr"
+    samples(kin, 100, output=path, **DATA)
+    meta = path / where
+    text = meta.read_text()
+    assert text.count(old) == 1, text
+    meta.write_text(text.replace(old, new))
+    with pytest.raises(WorkspaceError, match="do not match their sha256"):
+        open_dataset(path)
+    with pytest.raises(WorkspaceError, match="do not match their sha256"):
+        samples(kin, 100, output=path, **DATA)  # a resume is refused too: overwrite computes it again
+    assert samples(kin, 100, output=path, overwrite=True, **DATA).complete
+
+
+def test_a_flipped_fill_value_of_a_map_is_refused(kin, whole_map, tmp_path):
+    """Voxels of blocks that reach nothing are never written: they read as the fill value, 0. One
+    digit made them all reachable."""
+    path = tmp_path / "map.zarr"
+    reachability(kin, output=path, **MAP)
+    meta = path / "reach" / "zarr.json"
+    text = meta.read_text()
+    assert text.count('"fill_value": 0.0') == 1
+    meta.write_text(text.replace('"fill_value": 0.0', '"fill_value": 1.0'))
+    with pytest.raises(WorkspaceError, match="do not match their sha256"):
+        open_map(path)

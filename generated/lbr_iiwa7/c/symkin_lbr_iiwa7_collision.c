@@ -1327,16 +1327,19 @@ static void points4(v4 T[N_SEG][12], v4 PJ[N_SEG][12], v4 X[N_POINTS][3])
     X[31][1] = -0.025 * PJ[6][6] + T[7][7];
     X[31][2] = -0.025 * PJ[6][10] + T[7][11];
 }
-/* per link, a sphere its bound stays in within the joint limits (radius -1: none): the batch tests a
-   link only against the obstacle spheres that meet it */
+/* per link, a sphere its bound stays in within the joint limits (radius -1: none), and whether it
+   holds for every q (no prismatic stroke in it): the batch tests a link only against the obstacle
+   spheres that meet it */
 static const double reach_centre[N_LINKS][3] = { { -0.045, 0.0, 0.0675 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 0.0 } };
 static const double reach_radius[N_LINKS] = { 0.13562071897737332, 0.40000000000040103, 0.6043990104432134, 0.7962500000007975, 1.0043990104436136, 1.1012500000011027, 1.2690832691332303, 1.2800000000012812, 1.3410000000013422 };
 
-/* the obstacle spheres each link can meet within the joint limits, link by link: idx[start[l]] to
-   idx[start[l + 1] - 1] for link l (an obstacle outside a link's reach sphere cannot touch it; an
-   obstacle on the edge is kept); idx holds up to N_LINKS ns entries */
-static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
+/* the obstacle spheres each link can meet, link by link: idx[start[l]] to idx[start[l + 1]] - 1 for
+   link l (an obstacle outside a link's reach sphere cannot touch it; an obstacle on the edge is
+   kept); with outside, for configurations outside the joint limits: a link whose reach sphere
+   holds only within them takes every obstacle. idx holds up to N_LINKS ns entries */
+static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1], int outside)
 {
+    (void)outside;
     int t = 0;
     for (int l = 0; l < N_LINKS; ++l) {
         start[l] = t;
@@ -1350,24 +1353,27 @@ static void reachable(const double *S, int ns, int *idx, int start[N_LINKS + 1])
     start[N_LINKS] = t;
 }
 
-/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S */
+/* verdicts of four configurations (rows of Q); idx and start: reachable's lists of S, within the
+   joint limits and (idx_out, start_out) outside them */
 static void in_collision4(const double *Q, const double *S, int ns, const double *C, int nc, const double *B,
-                          int nb, const int *idx, const int *start, unsigned char *out)
+                          int nb, const int *idx, const int *start, const int *idx_out, const int *start_out,
+                          unsigned char *out)
 {
-    (void)idx; (void)start;
+    (void)idx; (void)start; (void)idx_out; (void)start_out;
     v4 qv[N_Q > 0 ? N_Q : 1], T[N_SEG][12], PJ[N_SEG][12], X[N_POINTS][3];
     for (int j = 0; j < N_Q; ++j)
         qv[j] = (v4){Q[j], Q[N_Q + j], Q[2 * N_Q + j], Q[3 * N_Q + j]};
-    /* lanes outside the joint limits (or NaN) need the pairs proved apart within them and may
-       leave the links' reach spheres: the scalar code, as for the lanes sin and cos leave to it */
-    m4 far = {0, 0, 0, 0};
-    far |= ~((qv[0] >= -2.9670597283903604) & (qv[0] <= 2.9670597283903604));
-    far |= ~((qv[1] >= -2.0943951023931953) & (qv[1] <= 2.0943951023931953));
-    far |= ~((qv[2] >= -2.9670597283903604) & (qv[2] <= 2.9670597283903604));
-    far |= ~((qv[3] >= -2.0943951023931953) & (qv[3] <= 2.0943951023931953));
-    far |= ~((qv[4] >= -2.9670597283903604) & (qv[4] <= 2.9670597283903604));
-    far |= ~((qv[5] >= -2.0943951023931953) & (qv[5] <= 2.0943951023931953));
-    far |= ~((qv[6] >= -3.0543261909900767) & (qv[6] <= 3.0543261909900767));
+    /* lanes outside the joint limits (or NaN) also test the pairs proved apart within them, and
+       the obstacles beyond the reach spheres that hold only within them */
+    m4 outside = {0, 0, 0, 0}, far = {0, 0, 0, 0};
+    outside |= ~((qv[0] >= -2.9670597283903604) & (qv[0] <= 2.9670597283903604));
+    outside |= ~((qv[1] >= -2.0943951023931953) & (qv[1] <= 2.0943951023931953));
+    outside |= ~((qv[2] >= -2.9670597283903604) & (qv[2] <= 2.9670597283903604));
+    outside |= ~((qv[3] >= -2.0943951023931953) & (qv[3] <= 2.0943951023931953));
+    outside |= ~((qv[4] >= -2.9670597283903604) & (qv[4] <= 2.9670597283903604));
+    outside |= ~((qv[5] >= -2.0943951023931953) & (qv[5] <= 2.0943951023931953));
+    outside |= ~((qv[6] >= -3.0543261909900767) & (qv[6] <= 3.0543261909900767));
+    (void)outside;
     fk4(qv, T, PJ, &far);
     if (skv_any_(far)) { /* the scalar code: the same verdicts in the other lanes */
         for (int l = 0; l < 4; ++l)
@@ -1377,7 +1383,12 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
     points4(T, PJ, X);
     if (nc == 0 && nb == 0) {
         m4 hit = {0, 0, 0, 0}, need, near;
-        (void)near;
+        const m4 every = {-1, -1, -1, -1};
+        (void)near; (void)every;
+        if (skv_any_(outside)) {
+            idx = idx_out;
+            start = start_out;
+        }
         for (int t = start[0]; t < start[1]; ++t) {
             const double *ob = S + 4 * idx[t];
             const double ro = ob[3];
@@ -1613,6 +1624,283 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
             hit |= need & hit2(X[17], X[22], 0.0147015625);
             if (skv_all_(hit)) goto done;
         }
+        if (skv_any_(outside)) { /* the pairs proved apart within the limits, for the lanes outside */
+            need = outside & ~hit & hit2(X[23], X[25], 0.09552440348613621);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[25], 0.06940564180134988);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[5], 0.029756249999999995);
+                    hit |= near & hit2(X[0], X[6], 0.027224999999999992);
+                    hit |= near & hit2(X[0], X[7], 0.027224999999999992);
+                    hit |= near & hit2(X[0], X[8], 0.027224999999999992);
+                }
+                near = need & hit2(X[1], X[25], 0.05626360527723143);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[5], 0.021389062499999997);
+                    hit |= near & hit2(X[1], X[6], 0.019251562499999996);
+                    hit |= near & hit2(X[1], X[7], 0.019251562499999996);
+                    hit |= near & hit2(X[1], X[8], 0.019251562499999996);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[23], X[26], 0.08165061591381793);
+            if (skv_any_(need)) {
+                near = need & hit2(X[0], X[26], 0.05766001562500002);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[0], X[9], 0.027224999999999992);
+                    hit |= near & hit2(X[0], X[10], 0.027224999999999992);
+                    hit |= near & hit2(X[0], X[11], 0.027224999999999992);
+                }
+                near = need & hit2(X[1], X[26], 0.045742515625000015);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[1], X[9], 0.019251562499999996);
+                    hit |= near & hit2(X[1], X[10], 0.019251562499999996);
+                    hit |= near & hit2(X[1], X[11], 0.019251562499999996);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[23], X[27], 0.09552440348613621);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[0], X[12], 0.029756249999999995);
+                hit |= need & hit2(X[0], X[13], 0.027224999999999992);
+                hit |= need & hit2(X[1], X[12], 0.021389062499999997);
+                hit |= need & hit2(X[1], X[13], 0.019251562499999996);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[24], X[26], 0.09082689062500003);
+            if (skv_any_(need)) {
+                near = need & hit2(X[2], X[26], 0.050681265625000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[9], 0.0225);
+                    hit |= near & hit2(X[2], X[10], 0.0225);
+                    hit |= near & hit2(X[2], X[11], 0.0225);
+                }
+                near = need & hit2(X[3], X[26], 0.050681265625000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[3], X[9], 0.0225);
+                    hit |= near & hit2(X[3], X[10], 0.0225);
+                    hit |= near & hit2(X[3], X[11], 0.0225);
+                }
+                near = need & hit2(X[4], X[26], 0.050681265625000006);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[4], X[9], 0.0225);
+                    hit |= near & hit2(X[4], X[10], 0.0225);
+                    hit |= near & hit2(X[4], X[11], 0.0225);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[24], X[27], 0.10542976869095964);
+            if (skv_any_(need)) {
+                near = need & hit2(X[2], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[2], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[2], X[13], 0.0225);
+                    hit |= near & hit2(X[2], X[14], 0.0225);
+                    hit |= near & hit2(X[2], X[15], 0.0225);
+                }
+                near = need & hit2(X[3], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[3], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[3], X[13], 0.0225);
+                    hit |= near & hit2(X[3], X[14], 0.0225);
+                    hit |= near & hit2(X[3], X[15], 0.0225);
+                }
+                near = need & hit2(X[4], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[4], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[4], X[13], 0.0225);
+                    hit |= near & hit2(X[4], X[14], 0.0225);
+                    hit |= near & hit2(X[4], X[15], 0.0225);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[27], 0.12033892344606066);
+            if (skv_any_(need)) {
+                near = need & hit2(X[5], X[27], 0.06551014922303032);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[5], X[12], 0.027225000000000003);
+                    hit |= near & hit2(X[5], X[13], 0.024806250000000002);
+                    hit |= near & hit2(X[5], X[14], 0.024806250000000002);
+                    hit |= near & hit2(X[5], X[15], 0.024806250000000002);
+                }
+                near = need & hit2(X[6], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[6], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[6], X[13], 0.0225);
+                    hit |= near & hit2(X[6], X[14], 0.0225);
+                    hit |= near & hit2(X[6], X[15], 0.0225);
+                }
+                near = need & hit2(X[7], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[7], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[7], X[13], 0.0225);
+                    hit |= near & hit2(X[7], X[14], 0.0225);
+                    hit |= near & hit2(X[7], X[15], 0.0225);
+                }
+                near = need & hit2(X[8], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[8], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[8], X[13], 0.0225);
+                    hit |= near & hit2(X[8], X[14], 0.0225);
+                    hit |= near & hit2(X[8], X[15], 0.0225);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[28], 0.07518536866360795);
+            if (skv_any_(need)) {
+                near = need & hit2(X[16], X[25], 0.05987784785555099);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[16], X[5], 0.0236390625);
+                    hit |= near & hit2(X[16], X[6], 0.021389062499999997);
+                    hit |= near & hit2(X[16], X[7], 0.021389062499999997);
+                    hit |= near & hit2(X[16], X[8], 0.021389062499999997);
+                }
+                near = need & hit2(X[17], X[25], 0.05987784785555099);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[17], X[5], 0.0236390625);
+                    hit |= near & hit2(X[17], X[6], 0.021389062499999997);
+                    hit |= near & hit2(X[17], X[7], 0.021389062499999997);
+                    hit |= near & hit2(X[17], X[8], 0.021389062499999997);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[25], X[29], 0.07589536810129682);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[25], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[5], 0.024806250000000002);
+                    hit |= near & hit2(X[18], X[6], 0.0225);
+                    hit |= near & hit2(X[18], X[7], 0.0225);
+                    hit |= near & hit2(X[18], X[8], 0.0225);
+                }
+                near = need & hit2(X[19], X[25], 0.058056664066391206);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[19], X[5], 0.022500000000000006);
+                    hit |= near & hit2(X[19], X[6], 0.020306250000000005);
+                    hit |= near & hit2(X[19], X[7], 0.020306250000000005);
+                    hit |= near & hit2(X[19], X[8], 0.020306250000000005);
+                }
+                near = need & hit2(X[20], X[25], 0.05626360527723143);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[5], 0.021389062499999997);
+                    hit |= near & hit2(X[20], X[6], 0.019251562499999996);
+                    hit |= near & hit2(X[20], X[7], 0.019251562499999996);
+                    hit |= near & hit2(X[20], X[8], 0.019251562499999996);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[28], 0.06293826562500003);
+            if (skv_any_(need)) {
+                near = need & hit2(X[16], X[26], 0.04900689062500002);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[16], X[9], 0.021389062499999997);
+                    hit |= near & hit2(X[16], X[10], 0.021389062499999997);
+                    hit |= near & hit2(X[16], X[11], 0.021389062499999997);
+                }
+                near = need & hit2(X[17], X[26], 0.04900689062500002);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[17], X[9], 0.021389062499999997);
+                    hit |= near & hit2(X[17], X[10], 0.021389062499999997);
+                    hit |= near & hit2(X[17], X[11], 0.021389062499999997);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[29], 0.0635880115883325);
+            if (skv_any_(need)) {
+                near = need & hit2(X[9], X[29], 0.03134374036979398);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[9], X[18], 0.0225);
+                    hit |= near & hit2(X[9], X[19], 0.020306250000000005);
+                    hit |= near & hit2(X[9], X[20], 0.019251562499999996);
+                }
+                near = need & hit2(X[10], X[29], 0.03134374036979398);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[10], X[18], 0.0225);
+                    hit |= near & hit2(X[10], X[19], 0.020306250000000005);
+                    hit |= near & hit2(X[10], X[20], 0.019251562499999996);
+                }
+                near = need & hit2(X[11], X[29], 0.03134374036979398);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[11], X[18], 0.0225);
+                    hit |= near & hit2(X[11], X[19], 0.020306250000000005);
+                    hit |= near & hit2(X[11], X[20], 0.019251562499999996);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[30], 0.042076265625000026);
+            if (skv_any_(need)) {
+                near = need & hit2(X[21], X[26], 0.04207626562500001);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[21], X[9], 0.016900000000000002);
+                    hit |= near & hit2(X[21], X[10], 0.016900000000000002);
+                    hit |= near & hit2(X[21], X[11], 0.016900000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[26], X[31], 0.04005001562500002);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[9], X[22], 0.015625);
+                hit |= need & hit2(X[10], X[22], 0.015625);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[27], X[29], 0.07589536810129682);
+            if (skv_any_(need)) {
+                near = need & hit2(X[18], X[27], 0.061727156644710755);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[18], X[12], 0.024806250000000002);
+                    hit |= near & hit2(X[18], X[13], 0.0225);
+                    hit |= near & hit2(X[18], X[14], 0.0225);
+                    hit |= near & hit2(X[18], X[15], 0.0225);
+                }
+                near = need & hit2(X[19], X[27], 0.058056664066391206);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[19], X[12], 0.022500000000000006);
+                    hit |= near & hit2(X[19], X[13], 0.020306250000000005);
+                    hit |= near & hit2(X[19], X[14], 0.020306250000000005);
+                    hit |= near & hit2(X[19], X[15], 0.020306250000000005);
+                }
+                near = need & hit2(X[20], X[27], 0.05626360527723143);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[20], X[12], 0.021389062499999997);
+                    hit |= near & hit2(X[20], X[13], 0.019251562499999996);
+                    hit |= near & hit2(X[20], X[14], 0.019251562499999996);
+                    hit |= near & hit2(X[20], X[15], 0.019251562499999996);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[27], X[30], 0.05218917643585862);
+            if (skv_any_(need)) {
+                near = need & hit2(X[21], X[27], 0.0521891764358586);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[21], X[12], 0.018906250000000003);
+                    hit |= near & hit2(X[21], X[13], 0.016900000000000002);
+                    hit |= near & hit2(X[21], X[14], 0.016900000000000002);
+                    hit |= near & hit2(X[21], X[15], 0.016900000000000002);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[27], X[31], 0.04992968138364558);
+            if (skv_any_(need)) {
+                near = need & hit2(X[22], X[27], 0.04992968138364558);
+                if (skv_any_(near)) {
+                    hit |= near & hit2(X[22], X[12], 0.017556250000000002);
+                    hit |= near & hit2(X[22], X[13], 0.015625);
+                    hit |= near & hit2(X[22], X[14], 0.015625);
+                    hit |= near & hit2(X[22], X[15], 0.015625);
+                }
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[28], X[30], 0.024258062500000017);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[16], X[21], 0.0159390625);
+                if (skv_all_(hit)) goto done;
+            }
+            need = outside & ~hit & hit2(X[28], X[31], 0.022725562500000015);
+            if (skv_any_(need)) {
+                hit |= need & hit2(X[16], X[22], 0.0147015625);
+                if (skv_all_(hit)) goto done;
+            }
+        }
     done:
         for (int l = 0; l < 4; ++l) out[l] = hit[l] != 0;
         return;
@@ -1621,7 +1909,7 @@ static void in_collision4(const double *Q, const double *S, int ns, const double
         double Xl[N_POINTS][3];
         for (int i = 0; i < N_POINTS; ++i)
             for (int r = 0; r < 3; ++r) Xl[i][r] = X[i][r][l];
-        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, 0);
+        out[l] = (unsigned char)collides(Xl, S, ns, C, nc, B, nb, outside[l] != 0);
     }
 }
 #define SKCOLL_LANES 4
@@ -1634,12 +1922,15 @@ void skcoll_in_collision_batch(const double *Q, long N, const double *S, int ns,
 {
     long k = 0;
 #if SKCOLL_LANES == 4
-    int small[16 * N_LINKS], start[N_LINKS + 1];
-    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * (size_t)ns * N_LINKS);
+    int small[2 * 16 * N_LINKS], start[N_LINKS + 1], start_out[N_LINKS + 1];
+    int *idx = ns <= 16 ? small : (int *)malloc(sizeof(int) * 2 * (size_t)ns * N_LINKS);
     if (idx) { /* no memory for the lists: one configuration at a time below */
-        reachable(S, ns, idx, start);
+        int *idx_out = idx + (ns <= 16 ? 16 : ns) * N_LINKS;
+        reachable(S, ns, idx, start, 0);
+        idx_out = idx;
+        memcpy(start_out, start, sizeof start);
         for (; k + 4 <= N; k += 4)
-            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, out + k);
+            in_collision4(Q + k * N_Q, S, ns, C, nc, B, nb, idx, start, idx_out, start_out, out + k);
         if (idx != small) free(idx);
     }
 #endif

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import errno
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -133,7 +134,16 @@ def check_cflags() -> None:
 
 @lru_cache(maxsize=8)
 def _probe(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
-    """'' when ``compiler`` builds a tiny shared library with ``flags``, else its first error line."""
+    """'' when ``compiler`` builds a tiny shared library with ``flags`` (or the probe cannot be
+    written, or the compiler runs out of space: a full disk says nothing of the flags), else its
+    first error line."""
+    try:
+        return _probe_in(compiler, flags)
+    except OSError:
+        return ""
+
+
+def _probe_in(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
     import subprocess
     import tempfile
 
@@ -149,7 +159,7 @@ def _probe(compiler: tuple[str, ...], flags: tuple[str, ...]) -> str:
             )
         except (OSError, subprocess.TimeoutExpired) as exc:
             return str(exc)
-        if proc.returncode == 0:
+        if proc.returncode == 0 or any(reason in proc.stderr for reason in _UNWRITABLE):
             return ""
         lines = [ln for ln in (proc.stderr or proc.stdout).splitlines() if "error" in ln.lower()]
         return (lines or (proc.stderr or proc.stdout or f"exit {proc.returncode}").splitlines() or [""])[
@@ -197,9 +207,12 @@ def _sha256_file(path: Path) -> str:
         return hashlib.sha256(f.read()).hexdigest()
 
 
-def _valid(entry: Path, lib: str) -> bool:
-    """True when the entry's library matches the checksum written after it."""
+def _valid(entry: Path, lib: str, build_key: str) -> bool:
+    """True when the entry was built from ``build_key`` (its sources and flags) and its library
+    matches the checksum written after it."""
     try:
+        if (entry / (lib + ".build")).read_text().strip() != build_key:
+            return False
         expected = (entry / (lib + ".sha256")).read_text().strip()
         return bool(expected) and _sha256_file(entry / lib) == expected
     except OSError:
@@ -212,11 +225,7 @@ def _without_compiler(root: Path, name: str, lib: str, build_key: str) -> Path |
     found = []
     try:
         for entry in root.glob(f"{name}-*"):
-            try:
-                same = (entry / (lib + ".build")).read_text().strip() == build_key
-            except OSError:
-                continue
-            if same and _valid(entry, lib):
+            if _valid(entry, lib, build_key):
                 found.append((entry.stat().st_mtime_ns, entry))
     except OSError:
         return None
@@ -239,6 +248,7 @@ def _build(
     except subprocess.TimeoutExpired:
         raise CompileError(f"compiling {', '.join(cfiles)} took more than 600 s") from None
     if proc.returncode != 0 or not (tmp / lib).is_file():
+        _raise_if_unwritable(proc.stderr + proc.stdout, tmp)
         lines = (proc.stderr or proc.stdout or "").strip().splitlines()
         shown = "\n".join(lines[:25]) + (f"\n... ({len(lines) - 25} more lines)" if len(lines) > 25 else "")
         raise CompileError(
@@ -250,33 +260,46 @@ def _build(
     checksum.write_text(_sha256_file(tmp / lib) + "\n")
 
 
+# what the compiler prints when a disk filled up under it (the strerror texts of Python's C library)
+_UNWRITABLE = tuple(os.strerror(e) for e in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG))
+
+
+def _raise_if_unwritable(output: str, folder: Path) -> None:
+    """OSError when the compiler's ``output`` says a disk is full (its output in ``folder``, or its
+    temporary files): the disk's fault, not the sources'."""
+    for reason in _UNWRITABLE:
+        if reason in output:
+            raise OSError(f"the C compiler could not write into {folder}: {reason}")
+
+
 def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequence[str] = ()) -> Path:
     """Compile ``sources`` (file name -> text, ``.c`` and ``.h``) into a cached shared library.
 
     Returns the path of ``lib<name>.so`` inside its cache entry. A cached, intact entry is
     returned without compiling (about 0.1 ms); without a C compiler, an entry built from the same
-    sources and flags by any compiler is used. When the cache cannot be written, the library is
-    built in a temporary folder (removed at exit): it only costs speed. Raises CompileError when
-    no compiler is found (and nothing is cached) or compilation fails (with the first lines of the
-    compiler's output).
+    sources and flags by any compiler is used. When the cache cannot be written (full, over quota,
+    read-only, not a folder), the library is built in a temporary folder (removed at exit): it
+    only costs speed. Raises CompileError when no compiler is found (and nothing is cached),
+    compilation fails (with the first lines of the compiler's output), or neither the cache nor a
+    temporary folder can be written (naming both).
     """
     import shutil
     import tempfile
 
     _check_inputs(sources, name)
     flags = _flags(extra_cflags)
+    build_key = _build_key(sources, flags)
     root = cache_dir()
     lib = f"lib{name}.so"
     try:
         compiler = find_compiler()
     except CompileError:
-        cached = _without_compiler(root, name, lib, _build_key(sources, flags))
+        cached = _without_compiler(root, name, lib, build_key)
         if cached is None:
             raise
         return cached
-    key = _key(sources, flags, compiler)
-    entry = root / f"{name}-{key[:24]}"
-    if _valid(entry, lib):
+    entry = root / f"{name}-{_key(sources, flags, compiler)[:24]}"
+    if _valid(entry, lib, build_key):
         return entry / lib
     try:
         root.mkdir(parents=True, exist_ok=True)
@@ -284,18 +307,23 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     except OSError:
         return _build_uncached(sources, name, lib, flags, compiler)
     try:
-        _build(tmp, sources, lib, flags, compiler)
+        try:
+            _build(tmp, sources, lib, flags, compiler)
+        except OSError:  # the cache filled up (or became unwritable) while building
+            return _build_uncached(sources, name, lib, flags, compiler)
         for _ in range(5):
             try:
                 os.rename(tmp, entry)  # atomic; fails when another process placed the entry first
                 return entry / lib
             except OSError:
-                if _valid(entry, lib):
+                if _valid(entry, lib, build_key):
                     return entry / lib
-                _discard(entry, root)  # corrupt or half-removed entry: move it aside, then retry
+                if not _discard(entry, root):  # corrupt entry that cannot be moved aside: keep ours
+                    _keep_until_exit(tmp)
+                    return tmp / lib
         raise CompileError(f"could not place the cache entry {entry} (another process keeps replacing it)")
     finally:
-        if tmp.exists():
+        if tmp.exists() and tmp not in _UNCACHED:
             shutil.rmtree(tmp, ignore_errors=True)
 
 
@@ -306,20 +334,32 @@ def _build_uncached(
     sources: Mapping[str, str], name: str, lib: str, flags: Sequence[str], compiler: Sequence[str]
 ) -> Path:
     """Build in a private temporary folder (the cache is not writable); removed at exit."""
-    import atexit
+    import shutil
     import tempfile
 
+    tmp = None
     try:
         tmp = Path(tempfile.mkdtemp(prefix=f"symkin-{name}-"))
+        _build(tmp, sources, lib, flags, compiler)
     except OSError as exc:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise CompileError(
-            f"cannot write to the symkin cache {cache_dir()} nor a temporary folder ({exc})"
+            f"cannot write to the symkin cache {cache_dir()} (SYMKIN_CACHE) nor the temporary folder "
+            f"{tempfile.gettempdir()} (TMPDIR): {exc.strerror or exc}; free some space or point "
+            "SYMKIN_CACHE at a writable folder"
         ) from None
+    _keep_until_exit(tmp)
+    return tmp / lib
+
+
+def _keep_until_exit(folder: Path) -> None:
+    """Remove ``folder`` (a build outside the cache) when the interpreter exits."""
+    import atexit
+
     if not _UNCACHED:
         atexit.register(_remove_uncached)
-    _UNCACHED.append(tmp)
-    _build(tmp, sources, lib, flags, compiler)
-    return tmp / lib
+    _UNCACHED.append(folder)
 
 
 def _remove_uncached() -> None:
@@ -329,15 +369,20 @@ def _remove_uncached() -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
-def _discard(entry: Path, root: Path) -> None:
-    """Move a bad entry out of the way atomically (a no-op when someone else already did)."""
+def _discard(entry: Path, root: Path) -> bool:
+    """Move a bad entry out of the way atomically (a no-op when someone else already did); False
+    when the cache cannot take the folder to move it into (full, read-only)."""
     import shutil
     import tempfile
 
-    trash = Path(tempfile.mkdtemp(prefix=".trash-", dir=root))
+    try:
+        trash = Path(tempfile.mkdtemp(prefix=".trash-", dir=root))
+    except OSError:
+        return False
     with contextlib.suppress(OSError):
         os.rename(entry, trash / "entry")
     shutil.rmtree(trash, ignore_errors=True)
+    return True
 
 
 _LOADED: dict[tuple[str, int, int], ctypes.CDLL] = {}

@@ -61,6 +61,9 @@ typedef struct {
     int32_t has_dt;       /* bound each step's joint motion by the distance to the limit */
     int32_t fresh;        /* 1 until this controller's first OSQP solve: cold start */
     int32_t polished;     /* out: the last step's OSQP answer was replaced by the active-set one */
+    int32_t no_jm;        /* no manipulability term (Jm = 0): only J is evaluated (the QP IK step) */
+    int32_t singular_qp;  /* with the slack, a singular J still gets the QP (Jm = 0) instead of the
+                             fallback (the QP IK step) */
     int32_t pad_;
     double lam, slack_weight, xi, dt, singular_tol, damping, rho0;
     double qlo[MMC_N], qhi[MMC_N], qd_max[MMC_N], rho_i[MMC_N], rho_s[MMC_N];

@@ -189,9 +189,10 @@ static void bounds_(const symkin_mmc_ctrl *c, const double *q, double *lo, doubl
                 u = fmin_(u, c->xi * (d_hi - c->rho_s[i]) / width);
             if (d_lo < c->rho_i[i])
                 l = fmax_(l, -c->xi * (d_lo - c->rho_s[i]) / width);
-            if (c->has_dt) {
-                u = fmin_(u, (d_hi - c->rho_s[i]) / c->dt);
-                l = fmax_(l, -(d_lo - c->rho_s[i]) / c->dt);
+            if (c->has_dt) { /* the dampers only tighten the step bound (a push-back too) */
+                const double lo_dt = -(d_lo - c->rho_s[i]) / c->dt, hi_dt = (d_hi - c->rho_s[i]) / c->dt;
+                u = fmin_(fmax_(u, lo_dt), hi_dt);
+                l = fmin_(fmax_(l, lo_dt), hi_dt);
             }
             u = fmax_(u, -a);
             l = fmin_(l, a);
@@ -745,18 +746,11 @@ static double det3_(const double *G)
            G[2] * (G[3] * G[7] - G[4] * G[6]);
 }
 
-/* RRMC (see mmc.h); symkin.runtime.control.rrmc is the reference */
-int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
+/* the manipulability of the rows c->axes of J (G = J J^T, L its Cholesky factor when regular) */
+static double rate_manipulability_(const symkin_mmc_ctrl *c, const double *J, const double *G, int regular,
+                                   const double *L)
 {
-    const double *q = in, *nu = in + N;
-    int bad = bad_input_(q, nu);
-    if (bad)
-        return bad;
-    double J[6 * N], G[36], L[36], y[6], m = 0.0, *qd = out;
-    c->polished = 0;
-    c->j0(q, J);
-    gram_(J, 0, 6, G);
-    int regular = regular_(G, c->singular_tol, L);
+    double m = 0.0;
     if (c->axes == 0) {
         if (regular) {
             m = chol_manipulability_(L);
@@ -770,6 +764,37 @@ int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
         double d = det3_(G3);
         m = d > 0.0 ? sqrt(d) : 0.0;
     }
+    return m;
+}
+
+/* qd scaled down as a whole to |qd_k| <= qd_max_k; returns the factor (1: unscaled) */
+static double scale_to_limits_(const symkin_mmc_ctrl *c, double *qd)
+{
+    double scale = 1.0;
+    for (int k = 0; k < N; ++k) {
+        double a = fabs(qd[k]);
+        if (a > c->qd_max[k] && c->qd_max[k] / a < scale)
+            scale = c->qd_max[k] / a;
+    }
+    if (scale < 1.0)
+        for (int k = 0; k < N; ++k)
+            qd[k] *= scale;
+    return scale;
+}
+
+/* RRMC (see mmc.h); symkin.runtime.control.rrmc is the reference */
+int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
+{
+    const double *q = in, *nu = in + N;
+    int bad = bad_input_(q, nu);
+    if (bad)
+        return bad;
+    double J[6 * N], G[36], L[36], y[6], *qd = out;
+    c->polished = 0;
+    c->j0(q, J);
+    gram_(J, 0, 6, G);
+    int regular = regular_(G, c->singular_tol, L);
+    double m = rate_manipulability_(c, J, G, regular, L);
     int status = MMC_SOLVED, method = N == 6 ? MMC_INVERSE : MMC_PINV;
     memcpy(y, nu, sizeof y);
     if (regular) {
@@ -782,22 +807,18 @@ int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
         else /* no damping at a singular J: no step */
             memset(y, 0, sizeof y);
     }
-    double scale = 1.0;
     for (int k = 0; k < N; ++k) {
         double s = 0.0;
         for (int i = 0; i < 6; ++i)
             s += J[i * N + k] * y[i];
         qd[k] = s;
-        double a = fabs(s);
-        if (a > c->qd_max[k] && c->qd_max[k] / a < scale)
-            scale = c->qd_max[k] / a;
     }
-    if (scale < 1.0)
-        for (int k = 0; k < N; ++k)
-            qd[k] *= scale;
+    double scale = scale_to_limits_(c, qd);
     write_info_(out, status, method, m, 0, MMC_NO_FALLBACK, residual_(J, qd, nu), 0.0, scale, 0);
     return 0;
 }
+
+#include "qrmc_impl.h" /* the quadratic-rate step, on the helpers above */
 #endif
 
 int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
@@ -809,38 +830,45 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     double J[6 * N], H[N * 6 * N], G[36], L[36], B[6 * N], Jm[N], lo[N], hi[N];
     double *qd = out;
     c->polished = 0;
-    c->jh(q, J, H);
+    if (c->no_jm) /* no manipulability term: J alone */
+        c->j0(q, J);
+    else
+        c->jh(q, J, H);
     gram_(J, 0, 6, G);
     /* not when J is singular: its smallest singular value below singular_tol */
     int have_b = regular_(G, c->singular_tol, L);
+    /* the QP is solved: J regular, or (the QP IK step) with the slack at any J, Jm = 0 when singular */
+    const int solvable = have_b || (NS && c->singular_qp);
     double m = 0.0;
+    memset(Jm, 0, sizeof Jm);
     if (have_b)
         solve_rows_(L, 6, J, 0, B);
     if (c->axes == 0) {
         if (have_b) {
             m = chol_manipulability_(L);
-            jacobm_(H, B, 0, 6, m, Jm);
-        } else { /* singular: only m is reported (the QP is not solved) */
+            if (!c->no_jm)
+                jacobm_(H, B, 0, 6, m, Jm);
+        } else { /* singular: only m is reported (the QP is not solved, or solved without Jm) */
             double d = det_(G, 6);
             m = d > 0.0 ? sqrt(d) : 0.0;
-            memset(Jm, 0, sizeof Jm);
         }
     } else {
         int r0 = c->axes == 1 ? 0 : 3;
         double G3[9], L3[9], B3[3 * N];
         gram_(J, r0, 3, G3);
         double d = det_(G3, 3);
-        memset(Jm, 0, sizeof Jm);
         if (d > 0.0 && chol_(G3, 3, 0.0, L3)) {
             m = sqrt(d);
-            solve_rows_(L3, 3, J, r0, B3);
-            jacobm_(H, B3, r0, 3, m, Jm);
-            for (int k = 0; k < N; ++k)
-                if (!isfinite(Jm[k])) {
-                    memset(Jm, 0, sizeof Jm);
-                    m = 0.0;
-                    break;
-                }
+            if (!c->no_jm) {
+                solve_rows_(L3, 3, J, r0, B3);
+                jacobm_(H, B3, r0, 3, m, Jm);
+                for (int k = 0; k < N; ++k)
+                    if (!isfinite(Jm[k])) {
+                        memset(Jm, 0, sizeof Jm);
+                        m = 0.0;
+                        break;
+                    }
+            }
         }
     }
     bounds_(c, q, lo, hi);
@@ -853,7 +881,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     const double *Jd = 0, *dl = 0;
     const int near = 0;
 #endif
-    if (c->closed_form && have_b && (!near || c->active_set)) {
+    if (c->closed_form && solvable && (!near || c->active_set)) {
         /* z + J^+ (nu - J z), z = Jm / lam; with the slack z + J^T (J J^T + lam / w I)^-1 (nu - J z) */
         double z[N], t[6], sum = 0.0;
         int inside = 1;
@@ -937,7 +965,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     }
     int kind;
     double scale;
-    if (!have_b) {
+    if (!solvable) {
         fallback_(c, J, G, B, 0, nu, lo, hi, qd, &kind, &scale);
         write_info_(out, MMC_SINGULAR, MMC_CLOSED_FORM, m, 0, kind, residual_(J, qd, nu), 0.0, scale, 0);
         return 0;
@@ -995,7 +1023,7 @@ int MMC_FN(step)(symkin_mmc_ctrl *c, const double *in, double *out)
     /* infeasible, error or an unusable iterate: the RRMC step, and the next solve starts from it */
     if (status == MMC_SOLVED)
         status = MMC_ERROR;
-    fallback_(c, J, G, B, 1, nu, lo, hi, qd, &kind, &scale);
+    fallback_(c, J, G, B, have_b, nu, lo, hi, qd, &kind, &scale);
     write_info_(out, status, MMC_OSQP, m, iters, kind, residual_(J, qd, nu), 0.0, scale, 0);
     if (!c->fresh && owner_ == c) {
         double xw[NX], yw[NC];

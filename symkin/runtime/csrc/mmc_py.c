@@ -1,6 +1,6 @@
 /*
  * mmc_py.c: the CPython entry points of the MMC library (see mmc.h), compiled into it with
- * -DSYMKIN_MMC_MODULE=<module name>: one control step (MMC or RRMC) per call, and the whole
+ * -DSYMKIN_MMC_MODULE=<module name>: one control step (MMC, RRMC or QRMC) per call, and the whole
  * servo loop of symkin.runtime.loop.servo (Haviland and Corke 2023, eqs 37-43) in C. The library is also reached
  * through ctypes (symkin/runtime/mmc_c.py). The GIL stays held: the controllers of a library share
  * its embedded OSQP solvers.
@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "mmc.h"
+#include "qrmc.h"
 #include "symkin_pose.h"
 #include "symkin_pyarray.h"
 
@@ -23,7 +24,7 @@
 
 #define NQ MMC_N
 #define NOUT (MMC_N + MMC_NINFO)
-enum { KIND_MMC0 = 0, KIND_RRMC = 1, KIND_MMC6 = 6, KIND_MMC6D = 7 };
+enum { KIND_MMC0 = 0, KIND_RRMC = 1, KIND_QRMC = 2, KIND_MMC6 = 6, KIND_MMC6D = 7 };
 typedef int (*step_fn_)(symkin_mmc_ctrl *, const double *, double *);
 
 /* StepInfo and the texts of its codes, from setup() */
@@ -37,6 +38,7 @@ static step_fn_ step_of_(long kind)
     return kind == KIND_MMC0 ? symkin_mmc0_step
            : kind == KIND_MMC6 ? symkin_mmc6_step
            : kind == KIND_RRMC ? symkin_rrmc_step
+           : kind == KIND_QRMC ? symkin_qrmc_step
 #if MMC_K
            : kind == KIND_MMC6D ? symkin_mmc6d_step
 #endif
@@ -213,20 +215,53 @@ static int buf_grow_(servo_buf_ *b, Py_ssize_t cap)
     return 0;
 }
 
+/* PyArg "O&" converter: a Python int to the address it holds */
+static int PyLong_AsVoidPtr_conv_(PyObject *o, void *out)
+{
+    void *p = PyLong_AsVoidPtr(o);
+    if (!p && PyErr_Occurred())
+        return 0;
+    *(void **)out = p;
+    return 1;
+}
+
+/* Whether q collides (1), is free (0) or is not a valid configuration (-1) against the packed
+ * obstacles env: a generated collision kernel's skcoll_in_collision_packed. */
+typedef int (*collides_fn_)(const double *q, const long long *env);
+
+#define SERVO_HALVINGS 10 /* symkin.runtime.loop.SERVO_HALVINGS */
+
 /*
- * servo(ctrl_address, kind, Tep, q0, params) -> (Q, QD, E, M, infos, step_time, arrived,
- * limit_violations), or None when Tep is not a valid (4, 4) target pose (the caller raises the
- * detailed error): the loop of symkin.runtime.loop.servo with the controller's C step. params (13,):
- * gain (6), threshold, dt, nu cap mode (0 none, 1 one cap on |nu|, 2 caps on |v| and |omega|),
- * cap 1, cap 2, axes of the last manipulability, max_steps. Each step: e of eq 37 at fkine(q); stop
- * when sum |e| < threshold or after max_steps steps; nu = gain e (capped), qd from the controller,
- * q += dt qd. limit_violations counts the configurations after q0 outside [qlo, qhi] of the ctrl.
+ * servo(ctrl_address, kind, Tep, q0, params[, collide]) -> (Q, QD, E, M, infos, step_time, arrived,
+ * limit_violations, blocked), or None when Tep is not a valid (4, 4) target pose (the caller raises
+ * the detailed error): the loop of symkin.runtime.loop.servo with the controller's C step. params
+ * (13,): gain (6), threshold, dt, nu cap mode (0 none, 1 one cap on |nu|, 2 caps on |v| and
+ * |omega|), cap 1, cap 2, axes of the last manipulability, max_steps. Each step: e of eq 37 at
+ * fkine(q); stop when sum |e| < threshold or after max_steps steps; nu = gain e (capped), qd from
+ * the controller, q += dt qd. collide (None, or (address of skcoll_in_collision_packed, address of
+ * the packed obstacles)): a step whose next q the kernel does not call free is halved (qd and its
+ * info's scale), up to SERVO_HALVINGS times; when no halving is free the step is not taken, the loop
+ * stops and blocked is True. limit_violations counts the configurations after q0 outside
+ * [qlo, qhi] of the ctrl.
  */
 static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 5) {
-        PyErr_SetString(PyExc_TypeError, "servo(ctrl, kind, Tep, q0, params)");
+    if (nargs != 5 && nargs != 6) {
+        PyErr_SetString(PyExc_TypeError, "servo(ctrl, kind, Tep, q0, params[, collide])");
         return NULL;
+    }
+    collides_fn_ collides = NULL;
+    const long long *cenv = NULL;
+    if (nargs == 6 && args[5] != Py_None) {
+        void *fp = NULL, *ep = NULL;
+        if (!PyArg_ParseTuple(args[5], "O&O&", PyLong_AsVoidPtr_conv_, &fp, PyLong_AsVoidPtr_conv_, &ep))
+            return NULL;
+        collides = (collides_fn_)fp;
+        cenv = (const long long *)ep;
+        if (!collides || !cenv) {
+            PyErr_SetString(PyExc_ValueError, "servo: collide must be (function address, obstacles address)");
+            return NULL;
+        }
     }
     symkin_mmc_ctrl *c = (symkin_mmc_ctrl *)PyLong_AsVoidPtr(args[0]);
     step_fn_ fn = step_of_(PyLong_AsLong(args[1]));
@@ -260,7 +295,7 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
     servo_buf_ b = {0};
     PyObject *r = NULL;
     Py_ssize_t steps = 0;
-    int arrived = 0;
+    int arrived = 0, blocked = 0;
     if (buf_grow_(&b, 64) < 0)
         goto done;
     memcpy(b.Q, PyArray_DATA(q0), sizeof(double) * NQ);
@@ -297,12 +332,27 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
             goto done;
         }
         zero_unless_finite_(in + NQ, out);
-        memcpy(b.QD + steps * NQ, out, sizeof(double) * NQ);
-        memcpy(b.info + steps * MMC_NINFO, out + NQ, sizeof(double) * MMC_NINFO);
-        b.M[steps] = out[NQ + 2];
         double *qn = b.Q + (steps + 1) * NQ;
         for (int k = 0; k < NQ; ++k)
             qn[k] = q[k] + dt * out[k];
+        if (collides) { /* the step's acceptance: halve it until the kernel calls q free */
+            int h = 0, hit = collides(qn, cenv);
+            for (; hit != 0 && h < SERVO_HALVINGS; ++h) {
+                for (int k = 0; k < NQ; ++k) {
+                    out[k] *= 0.5;
+                    qn[k] = q[k] + dt * out[k];
+                }
+                out[NQ + 7] *= 0.5; /* the info's scale */
+                hit = collides(qn, cenv);
+            }
+            if (hit != 0) { /* no part of the step is free: not taken */
+                blocked = 1;
+                break;
+            }
+        }
+        memcpy(b.QD + steps * NQ, out, sizeof(double) * NQ);
+        memcpy(b.info + steps * MMC_NINFO, out + NQ, sizeof(double) * MMC_NINFO);
+        b.M[steps] = out[NQ + 2];
         ++steps;
         if (steps % 4096 == 0 && PyErr_CheckSignals() < 0)
             goto done;
@@ -329,9 +379,10 @@ static PyObject *py_servo(PyObject *self, PyObject *const *args, Py_ssize_t narg
             }
             PyTuple_SET_ITEM(infos, k, info);
         }
-        r = Py_BuildValue("(NNNNNNOl)", new_array_(2, steps + 1, NQ, b.Q), new_array_(2, steps, NQ, b.QD),
+        r = Py_BuildValue("(NNNNNNOlO)", new_array_(2, steps + 1, NQ, b.Q), new_array_(2, steps, NQ, b.QD),
                           new_array_(2, steps + 1, 6, b.E), new_array_(1, steps + 1, 0, b.M), infos,
-                          new_array_(1, steps, 0, b.times), arrived ? Py_True : Py_False, violations);
+                          new_array_(1, steps, 0, b.times), arrived ? Py_True : Py_False, violations,
+                          blocked ? Py_True : Py_False);
     }
 done: /* the result, or NULL after an error */
     buf_free_(&b);
@@ -345,7 +396,8 @@ static PyMethodDef methods_[] = {
     {"setup", (PyCFunction)py_setup, METH_VARARGS, "setup(StepInfo, statuses, methods, fallbacks)"},
     {"step", (PyCFunction)(void (*)(void))py_step, METH_FASTCALL, "step(ctrl, kind, q, nu) -> (qd, info) or None"},
     {"servo", (PyCFunction)(void (*)(void))py_servo, METH_FASTCALL,
-     "servo(ctrl, kind, Tep, q0, params) -> (Q, QD, E, M, infos, step_time, arrived, violations) or None"},
+     "servo(ctrl, kind, Tep, q0, params[, collide]) -> (Q, QD, E, M, infos, step_time, arrived, violations, "
+     "blocked) or None"},
     {NULL, NULL, 0, NULL},
 };
 

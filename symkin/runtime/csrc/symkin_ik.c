@@ -445,9 +445,11 @@ SYMKIN_INLINE int nr_gn_step(int n, const symkin_ik_config *c, const double *we,
     return lu_solve(n, A, dq);
 }
 
-/* The step of eqs 45-51, with n = 6 and n = 7 as constants (their loops unrolled) besides any n. */
-static int ik_step(const symkin_ik_config *c, const double *we, const double *J, const double *e, double r2,
-                   double *dq) {
+/* The step of eqs 45-51, with n = 6 and n = 7 as constants (their loops unrolled) besides any n, or the
+ * caller's (SYMKIN_IK_QP). */
+static int ik_step(const symkin_ik_config *c, const double *we, const double *q, const double *J, const double *e,
+                   double r2, double *dq) {
+    if (c->method == SYMKIN_IK_QP) return c->step(c->step_ctx, q, J, e, dq);
     if (c->method == SYMKIN_IK_LM) {
         if (c->n == 6) return lm_step(6, c, we, J, e, r2, dq);
         if (c->n == 7) return lm_step(7, c, we, J, e, r2, dq);
@@ -640,7 +642,7 @@ static void solve_one(const symkin_ik_config *c, const double *Tep, const double
     while (state != SEARCH_DONE) {
         kin_eval(c, t.q, T, J);
         state = judge(c, &t, T, e, &r2);
-        if (state == SEARCH_STEP) state = take_step(c, &t, dq, ik_step(c, we, J, e, r2, dq) != 0);
+        if (state == SEARCH_STEP) state = take_step(c, &t, dq, ik_step(c, we, t.q, J, e, r2, dq) != 0);
     }
 }
 
@@ -800,7 +802,7 @@ static void solve_batch_lanes(const symkin_ik_config *c, int64_t N, const double
             lm_step_lanes(7, c, we, J, e, r2, need, dq, failed);
         else
             for (int l = 0; l < SYMKIN_LANES; l++)
-                if (need[l]) failed[l] = ik_step(c, we, J[l], e[l], r2[l], dq[l]) != 0;
+                if (need[l]) failed[l] = ik_step(c, we, t[l].q, J[l], e[l], r2[l], dq[l]) != 0;
         for (int l = 0; l < SYMKIN_LANES; l++)
             if (need[l]) state[l] = take_step(c, &t[l], dq[l], failed[l]);
     }
@@ -852,7 +854,7 @@ int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const do
         kin_eval(cfg, q, T, J);
         symkin_pose_error(T, Tep, e);
         double r2 = weighted_r2(cfg, e);
-        if (!isfinite(r2) || ik_step(cfg, we, J, e, r2, dq) != 0) return k + 1;
+        if (!isfinite(r2) || ik_step(cfg, we, q, J, e, r2, dq) != 0) return k + 1;
         for (int j = 0; j < n; j++) q[j] += dq[j];
         memcpy(qs + (int64_t)(k + 1) * n, q, sizeof(double) * (size_t)n);
     }

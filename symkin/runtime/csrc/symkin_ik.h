@@ -33,6 +33,11 @@ typedef void (*symkin_fkjac_batch_fn)(const double *q, double *T, double *J, ptr
  * obstacles env: a generated collision kernel's skcoll_in_collision_packed. */
 typedef int (*symkin_collides_fn)(const double *q, const long long *env);
 
+/* A step of the caller's (SYMKIN_IK_QP): dq (n) from q (n), J (6, n) and the pose error e (6) at q;
+ * returns 0, or nonzero when it has no step (the search is abandoned, as at a singular solve).
+ * The QP step of the MMC library (mmc_ik.c) is one. */
+typedef int (*symkin_ik_step_fn)(void *ctx, const double *q, const double *J, const double *e, double *dq);
+
 /* One elementary transform of a table-driven ETS.
  * axis: 0..2 = tx, ty, tz; 3..5 = Rx, Ry, Rz.
  * joint >= 0: the joint variable q[joint] times sign (+1, or -1 for a flipped joint);
@@ -55,7 +60,7 @@ typedef struct {
 /* T and J0 of a table-driven ETS (same layout as symkin_fkjac_fn). */
 void symkin_ets_fkjac(const symkin_ets *ets, const double *q, double *T, double *J);
 
-enum { SYMKIN_IK_NR = 0, SYMKIN_IK_GN = 1, SYMKIN_IK_LM = 2 };
+enum { SYMKIN_IK_NR = 0, SYMKIN_IK_GN = 1, SYMKIN_IK_LM = 2, SYMKIN_IK_QP = 3 /* cfg->step */ };
 enum { SYMKIN_DAMP_WAMPLER = 0, SYMKIN_DAMP_CHAN = 1, SYMKIN_DAMP_SUGIHARA = 2 };
 
 /* Pose-check codes (symkin_ik_check_pose, symkin_ik_stats.status). */
@@ -70,7 +75,7 @@ enum {
 
 typedef struct {
     int32_t n;
-    int32_t method;       /* SYMKIN_IK_NR / GN / LM */
+    int32_t method;       /* SYMKIN_IK_NR / GN / LM / QP */
     int32_t damping;      /* SYMKIN_DAMP_*, LM only */
     int32_t pinv;         /* NR, GN: pseudo-inverse instead of a plain solve */
     int32_t ilimit;       /* iterations (pose evaluations) per search, >= 1 */
@@ -94,6 +99,8 @@ typedef struct {
                                           solves evaluates its lanes' poses in one call */
     symkin_collides_fn collides;       /* NULL, or converged q that collide are rejected (the next */
     const long long *collision_env;    /* search starts, as for joint limits), against this env */
+    symkin_ik_step_fn step;            /* SYMKIN_IK_QP: the step, called with step_ctx */
+    void *step_ctx;
 } symkin_ik_config;
 
 typedef struct {

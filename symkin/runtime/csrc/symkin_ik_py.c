@@ -2,8 +2,9 @@
  *
  * Compiled into the same library as symkin_ik.c (see symkin/runtime/ik_c.py, which also reaches
  * the library through ctypes for batches) with -DSYMKIN_IK_MODULE=<module name>. The call takes
- * the ndarray directly, releases the GIL while it solves and keeps every buffer on the stack or in
- * new arrays, so threads can solve with one solver at the same time. It builds the IKResult itself
+ * the ndarray directly, releases the GIL while it solves (not for the QP method, whose step uses the
+ * MMC library's shared solvers) and keeps every buffer on the stack or in new arrays, so threads
+ * can solve with one solver at the same time. It builds the IKResult itself
  * (the frozen dataclass's __init__ would cost more than the Python side of the rest).
  */
 #define PY_SSIZE_T_CLEAN
@@ -98,9 +99,13 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
     int32_t status;
     const double *Tp = (const double *)PyArray_DATA(T), *q0p = q0 ? (const double *)PyArray_DATA(q0) : NULL;
     double *qp = (double *)PyArray_DATA(q);
-    Py_BEGIN_ALLOW_THREADS
-    status = symkin_ik_solve(cfg, Tp, q0p, seed, qp, &st);
-    Py_END_ALLOW_THREADS
+    if (cfg->method == SYMKIN_IK_QP) { /* the QP step's embedded OSQP solvers are shared: keep the GIL */
+        status = symkin_ik_solve(cfg, Tp, q0p, seed, qp, &st);
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        status = symkin_ik_solve(cfg, Tp, q0p, seed, qp, &st);
+        Py_END_ALLOW_THREADS
+    }
     Py_DECREF(T);
     Py_XDECREF(q0);
     if (status != SYMKIN_POSE_OK) { /* invalid target or q0: the caller raises the detailed error */
