@@ -20,6 +20,9 @@ from symkin.cli.common import (
 
 __all__ = ["add_parser", "run"]
 
+#: the benchmarks ``symkin bench`` runs
+BENCHMARKS = ("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide", "meshes")
+
 
 def add_parser(sub: Any) -> None:
     s = add_command(
@@ -33,7 +36,7 @@ def add_parser(sub: Any) -> None:
     )
     s.add_argument(
         "what",
-        choices=("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide", "meshes"),
+        choices=BENCHMARKS,
         help="which benchmark",
     )
     add_robot_argument(
