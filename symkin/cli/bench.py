@@ -20,6 +20,9 @@ from symkin.cli.common import (
 
 __all__ = ["add_parser", "run"]
 
+#: the benchmarks ``symkin bench`` runs
+BENCHMARKS = ("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide", "meshes")
+
 
 def add_parser(sub: Any) -> None:
     s = add_command(
@@ -28,17 +31,18 @@ def add_parser(sub: Any) -> None:
         "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
         "mmc (Table I), qrmc (QRMC vs RRMC at singularities), calls (one at a time), compile (cold, by "
         "chain length), urdf (every chain of "
-        "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK)",
+        "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK), meshes "
+        "(the covering sphere model against Pinocchio + coal on the real meshes)",
     )
     s.add_argument(
         "what",
-        choices=("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide"),
+        choices=BENCHMARKS,
         help="which benchmark",
     )
     add_robot_argument(
         s,
-        "default: panda for kin, compile and collide, ur5 for ik and reach, the paper's three for mmc, "
-        "ur5 and panda for calls",
+        "default: panda for kin, compile, collide and meshes, ur5 for ik and reach, the paper's three for "
+        "mmc, ur5 and panda for calls",
     )
     s.add_argument(
         "--robot", dest="robot_option", action=Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
@@ -53,7 +57,7 @@ def add_parser(sub: Any) -> None:
         type=at_least_1,
         help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000); "
         "qrmc: random tasks on the UR5 and the Panda besides the singular ones (default 0); urdf: at most "
-        "N chains (default all)",
+        "N chains (default all); meshes: uniform configurations of each kind (default 100000)",
     )
     s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
     s.add_argument(
@@ -163,6 +167,20 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             print(json.dumps(result, indent=2, default=_jsonable))
         return 0
+    if args.what == "meshes":
+        from symkin.bench.meshes import format_meshes, run_meshes
+
+        if custom:
+            raise UserError(
+                "bench meshes compares a built-in robot's stored model; --tool/--base do not apply"
+            )
+        result = run_meshes(args.robot or "panda", n=args.problems or 100_000, seed=args.seed)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_meshes(result))
+        missed = sum(
+            result[k]["counts"]["coal_only"] + result[k]["counts"]["near_coal_only"]
+            for k in ("self", "obstacles")
+        )
+        return 1 if missed else 0
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 

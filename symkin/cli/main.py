@@ -18,6 +18,7 @@ from symkin.cli import (
     dataset,
     derive,
     generate,
+    geometry,
     ik,
     list_frames,
     plot,
@@ -36,7 +37,7 @@ __all__ = ["build_parser", "main"]
 #: the commands in the order of ``symkin --help``
 COMMANDS = (
     list_command, compile_command, list_frames, generate, check, derive,
-    ik, servo, collide, srdf, plot, view_command, bench, reach, dataset,
+    ik, servo, collide, geometry, srdf, plot, view_command, bench, reach, dataset,
 )  # fmt: skip
 
 

@@ -36,9 +36,15 @@ def _load(mesh_or_points: Any) -> Any:
         return mesh_or_points
     trimesh = _trimesh(f"reading the mesh file {str(mesh_or_points)!r}")
     try:
-        return trimesh.load(str(mesh_or_points), force="mesh")
+        mesh = trimesh.load(str(mesh_or_points), force="mesh")
+        empty = len(np.asarray(mesh.vertices).reshape(-1, 3)) == 0
     except Exception as exc:  # trimesh raises many kinds for unreadable files
         raise GeometryError(f"cannot read mesh file {str(mesh_or_points)!r}: {exc}") from None
+    if empty:
+        raise GeometryError(
+            f"mesh file {str(mesh_or_points)!r} has no vertices (empty, or not a mesh trimesh reads)"
+        )
+    return mesh
 
 
 def _triangles(obj: Any) -> np.ndarray | None:

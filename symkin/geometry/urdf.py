@@ -12,9 +12,16 @@ of ``model`` they move with:
 - ``<box size>``: a grid of spheres, each circumscribing its grid cell (conservative), cells
   as near cubes as ``max_box_spheres`` allows;
 - ``<mesh filename scale>``: ``mesh_spheres`` spheres fitted by :func:`symkin.geometry.fit.fit_spheres`
-  when ``mesh_spheres > 0``, trimesh is installed and the file resolves (relative to the URDF's
-  folder, ``file://`` paths as such; ``package://`` needs ROS and is not resolved); otherwise
-  skipped with a warning naming the link.
+  when ``mesh_spheres > 0``, trimesh is installed and the file resolves
+  (:func:`symkin.geometry.meshes.resolve_mesh`: relative to the URDF's folder, ``file://`` paths as
+  such, ``package://PKG/...`` from ``packages`` or a folder named PKG above the URDF) and reads;
+  otherwise skipped with a warning naming the link (and the file). The covering fit of a URDF's
+  meshes is :func:`symkin.geometry.mesh_fit.fit_urdf`.
+
+Sizes (radius, length, box sides) must be finite, >= 0 and at most
+:data:`symkin.geometry.meshes.MAX_SHAPE_SIZE` (1e4 m), a mesh scale finite and at most that in
+size (negative mirrors), else a GeometryError names the link; a box of any thickness, 0 or 1e-300 m
+included, becomes at most ``max_box_spheres`` spheres.
 
 ``model`` is a :class:`symkin.Tree` (its links are URDF link names) or a :class:`symkin.Robot`
 from :meth:`symkin.Robot.from_urdf` of the same file, whose links are ``base`` (the chain's
@@ -31,14 +38,16 @@ from __future__ import annotations
 import math
 import re
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree
 
 import numpy as np
 
-from symkin.errors import GeometryError, MissingExtraError
-from symkin.model.geometry import Capsule, Geometry, Sphere
+from symkin.errors import GeometryError, URDFError
+from symkin.geometry.meshes import MAX_SHAPE_SIZE, check_extent, link_placements, read_mesh, resolve_mesh
+from symkin.model.geometry import Capsule, Geometry, Sphere, as_index
 from symkin.model.transform import rpy_matrix
 from symkin.model.urdf import (
     URDFGraph,
@@ -57,6 +66,7 @@ __all__ = [
     "urdf_link_frames",
     "urdf_carriers",
     "box_spheres",
+    "MAX_SHAPE_SPHERES",
 ]
 
 _Frame = tuple[str, np.ndarray]  # model link name, 4x4 transform model link frame -> URDF link frame
@@ -77,23 +87,6 @@ def _joint_motion(j: URDFJoint, where: str, q: float) -> np.ndarray:
     K = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
     T[:3, :3] = np.eye(3) + math.sin(q) * K + (1 - math.cos(q)) * (K @ K)
     return T
-
-
-def _fixed_up(graph: URDFGraph, link: str, known: dict[str, _Frame]) -> tuple[_Frame | None, str]:
-    """Walk up from ``link`` through fixed joints to the first link in ``known``: its frame with
-    the fixed transforms composed, or (None, why not)."""
-    T = np.eye(4)
-    cur = link
-    while cur not in known:
-        j = graph.parent_joint.get(cur)
-        if j is None:
-            return None, f"it is not below the model's base (the root {cur!r} is reached)"
-        if j.kind != "fixed":
-            return None, f"the {j.kind} joint {j.name!r} above it is not a joint of the model"
-        T = _joint_origin(j) @ T
-        cur = j.parent
-    name, A = known[cur]
-    return (name, A @ T), ""
 
 
 def _tree_frames(graph: URDFGraph, tree: Any) -> dict[str, _Frame]:
@@ -184,16 +177,8 @@ def _link_frames(graph: URDFGraph, model: Any) -> tuple[dict[str, _Frame], dict[
     except TypeError:
         raise GeometryError(f"model must be a symkin Robot or Tree, not {type(model).__name__}") from None
     known = _chain_frames(graph, robot) if robot is not None else _tree_frames(graph, tree)
-    frames, why = dict(known), {}
-    for ln in graph.links:
-        if ln in frames:
-            continue
-        found, reason = _fixed_up(graph, ln, known)
-        if found is None:
-            why[ln] = reason
-        else:
-            frames[ln] = found
-    return frames, why
+    placed, why = link_placements(graph, known, slide=False)
+    return {ln: (p.link, p.T) for ln, p in placed.items()}, why
 
 
 def urdf_link_names(path_or_xml: str | Path, model: Any) -> dict[str, str]:
@@ -216,19 +201,38 @@ def urdf_carriers(path_or_xml: str | Path, model: Any) -> dict[str, tuple[str, .
     return {k: tuple(v) for k, v in out.items()}
 
 
+#: The most spheres one ``<box>`` may become (``max_box_spheres``) or one ``<mesh>`` be fitted
+#: with (``mesh_spheres``): the kernel's pair tests grow with the square of the sphere count.
+MAX_SHAPE_SPHERES = 4096
+
+
+def _sphere_budget(value: Any, what: str) -> int:
+    k = as_index(value, f"{what} must be a whole number, not {value!r}")
+    if not 1 <= k <= MAX_SHAPE_SPHERES:
+        raise GeometryError(f"{what} must be between 1 and {MAX_SHAPE_SPHERES}, got {k}")
+    return k
+
+
 def box_spheres(half_extents: Any, max_spheres: int = 64) -> list[tuple[np.ndarray, float]]:
     """Spheres ``(centre, radius)`` covering the box ``|x_i| <= half_extents_i`` (box frame): a grid
-    of at most ``max_spheres`` cells as near cubes as that allows, each sphere through its cell's
-    corners."""
+    of at most ``max_spheres`` cells, each sphere through its cell's corners. The cells start as
+    cubes of the box's smallest side (but no smaller than the longest side over ``max_spheres``, so
+    a side of 0 or 1e-300 m is one layer of cells) and grow by 10 % until the grid has at most
+    ``max_spheres`` cells: a cube is one sphere, a thin plate a layer of them, never none."""
     h = np.asarray(half_extents, dtype=float)
+    if h.shape != (3,) or not np.isfinite(h).all() or (h < 0).any():
+        raise GeometryError(f"box half extents must be 3 finite numbers >= 0, got {half_extents!r}")
+    k = _sphere_budget(max_spheres, "max_box_spheres")
     size = 2 * h
-    if max_spheres < 1:
-        raise GeometryError(f"max_box_spheres must be >= 1, got {max_spheres}")
-    positive = size[size > 0]
-    cell = float(positive.min()) if positive.size else 1.0
-    while True:
+    big = float(size.max())
+    if not np.isfinite(big) or big > 2 * MAX_SHAPE_SIZE:
+        raise GeometryError(f"box size {size.tolist()} is larger than {MAX_SHAPE_SIZE:g} m")
+    if big == 0:
+        return [(np.zeros(3), 0.0)]
+    cell = max(float(size.min()), big / k)
+    while True:  # at most log(k) / log(1.1) rounds: every count starts at <= k
         counts = np.maximum(1, np.ceil(size / cell - 1e-9)).astype(int)
-        if counts.prod() <= max_spheres:
+        if counts.prod() <= k:
             break
         cell *= 1.1
     step = size / counts
@@ -238,37 +242,57 @@ def box_spheres(half_extents: Any, max_spheres: int = 64) -> list[tuple[np.ndarr
     return [(c, radius) for c in grid]
 
 
-def _mesh_file(filename: str, folder: Path) -> Path | None:
-    if filename.startswith("package://"):
-        return None
-    if filename.startswith("file://"):
-        filename = filename[len("file://") :]
-    p = Path(filename)
-    return p if p.is_absolute() else folder / p
-
-
 def _floats(
     el: ElementTree.Element, attr: str, count: int, what: str, default: str | None = None
 ) -> list[float]:
     return [float(v) for v in xml_numbers(el.get(attr), count, what, default)]
 
 
+def _sized(shape: ElementTree.Element, attr: str, count: int, what: str, signed: bool = False) -> list[float]:
+    """``count`` sizes of a shape attribute: finite, at most :data:`MAX_SHAPE_SIZE` in size and
+    >= 0 (unless ``signed``: a mesh scale may mirror), else a GeometryError naming ``what`` (the
+    link and collision element)."""
+    try:
+        values = [float(v) for v in xml_numbers(shape.get(attr), count, what)]
+    except URDFError as exc:
+        raise GeometryError(str(exc)) from None
+    if max(abs(v) for v in values) > MAX_SHAPE_SIZE or (not signed and min(values) < 0):
+        sign = "" if signed else ">= 0 and "
+        raise GeometryError(f"{what} is {values}; collision sizes must be {sign}at most {MAX_SHAPE_SIZE:g} m")
+    return values
+
+
 def geometry_from_urdf(
-    path_or_xml: str | Path, model: Any, mesh_spheres: int = 0, max_box_spheres: int = 64
+    path_or_xml: str | Path,
+    model: Any,
+    mesh_spheres: int = 0,
+    max_box_spheres: int = 64,
+    packages: Mapping[str, str | Path] | None = None,
 ) -> Geometry:
     """The ``<collision>`` elements of a URDF (file path or XML text) as a
     :class:`~symkin.geometry.Geometry` on the links of ``model`` (a :class:`symkin.Tree` or a
     :class:`symkin.Robot` from :meth:`~symkin.Robot.from_urdf` of the same URDF): shapes in the
     frames of the model's links, metres; no disabled pairs (see
-    :func:`symkin.geometry.srdf.read_srdf`). Module docstring: which element becomes what."""
-    return urdf_geometry(path_or_xml, model, mesh_spheres, max_box_spheres)[0]
+    :func:`symkin.geometry.srdf.read_srdf`). Module docstring: which element becomes what.
+    ``packages`` maps ``package://`` names to folders (see :func:`symkin.geometry.meshes.resolve_mesh`).
+    Sizes must be finite, >= 0 and at most :data:`symkin.geometry.meshes.MAX_SHAPE_SIZE` m (a
+    GeometryError names the link otherwise); ``max_box_spheres`` and ``mesh_spheres`` (when > 0)
+    are at most :data:`MAX_SHAPE_SPHERES`."""
+    return urdf_geometry(path_or_xml, model, mesh_spheres, max_box_spheres, packages)[0]
 
 
 def urdf_geometry(
-    path_or_xml: str | Path, model: Any, mesh_spheres: int = 0, max_box_spheres: int = 64
+    path_or_xml: str | Path,
+    model: Any,
+    mesh_spheres: int = 0,
+    max_box_spheres: int = 64,
+    packages: Mapping[str, str | Path] | None = None,
 ) -> tuple[Geometry, tuple[str, ...]]:
     """:func:`geometry_from_urdf` and the URDF links some of whose ``<collision>`` elements it
     skipped (with a warning each), sorted."""
+    if mesh_spheres:
+        mesh_spheres = _sphere_budget(mesh_spheres, "mesh_spheres")
+    max_box_spheres = _sphere_budget(max_box_spheres, "max_box_spheres")
     root, where = load_xml(path_or_xml)
     graph = read_graph(path_or_xml)
     frames, why = _link_frames(graph, model)
@@ -308,31 +332,31 @@ def urdf_geometry(
             def at(p: Any, T: np.ndarray = T) -> np.ndarray:
                 return T[:3, :3] @ np.asarray(p, dtype=float) + T[:3, 3]
 
-            if tag == "sphere":
-                (r,) = _floats(shape, "radius", 1, f"{what} sphere radius")
-                shapes.append(Sphere(at((0, 0, 0)), r, target))
-            elif tag in ("cylinder", "capsule"):
-                (r,) = _floats(shape, "radius", 1, f"{what} {tag} radius")
-                (length,) = _floats(shape, "length", 1, f"{what} {tag} length")
-                if length < 0:
-                    raise GeometryError(f"{where}: {what} has a negative {tag} length {length}")
-                shapes.append(Capsule(at((0, 0, -length / 2)), at((0, 0, length / 2)), r, target))
-            elif tag == "box":
-                size = _floats(shape, "size", 3, f"{what} box size")
-                if min(size) < 0 or not all(math.isfinite(s) for s in size):
-                    raise GeometryError(f"{where}: {what} has box size {size}; sizes must be finite and >= 0")
-                for c, r in box_spheres(np.array(size) / 2, max_box_spheres):
-                    shapes.append(Sphere(at(c), r, target))
-            elif tag == "mesh":
-                fitted = _mesh(shape, folder, mesh_spheres, where, what)
-                if fitted is None:
+            try:
+                if tag == "sphere":
+                    (r,) = _sized(shape, "radius", 1, f"{where}: {what} sphere radius")
+                    shapes.append(Sphere(at((0, 0, 0)), r, target))
+                elif tag in ("cylinder", "capsule"):
+                    (r,) = _sized(shape, "radius", 1, f"{where}: {what} {tag} radius")
+                    (length,) = _sized(shape, "length", 1, f"{where}: {what} {tag} length")
+                    shapes.append(Capsule(at((0, 0, -length / 2)), at((0, 0, length / 2)), r, target))
+                elif tag == "box":
+                    size = _sized(shape, "size", 3, f"{where}: {what} box size")
+                    for c, r in box_spheres(np.array(size) / 2, max_box_spheres):
+                        shapes.append(Sphere(at(c), r, target))
+                elif tag == "mesh":
+                    fitted = _mesh(shape, folder, mesh_spheres, where, what, packages)
+                    if fitted is None:
+                        skipped.append(lname)
+                        continue
+                    shapes.extend(Sphere(at(c), r, target) for c, r in fitted)
+                else:
+                    warnings.warn(f"{where}: {what} has an unknown shape <{tag}>: skipped", stacklevel=2)
                     skipped.append(lname)
                     continue
-                shapes.extend(Sphere(at(c), r, target) for c, r in fitted)
-            else:
-                warnings.warn(f"{where}: {what} has an unknown shape <{tag}>: skipped", stacklevel=2)
-                skipped.append(lname)
-                continue
+            except GeometryError as exc:
+                text = str(exc)
+                raise GeometryError(text if lname in text else f"{where}: {what}: {text}") from None
             counts[tag] += 1
     made = ", ".join(f"{v} {k}" for k, v in counts.items() if v) or "no shapes"
     note = f"; skipped on {sorted(set(skipped))}" if skipped else ""
@@ -341,9 +365,15 @@ def urdf_geometry(
 
 
 def _mesh(
-    shape: ElementTree.Element, folder: Path, mesh_spheres: int, where: str, what: str
+    shape: ElementTree.Element,
+    folder: Path,
+    mesh_spheres: int,
+    where: str,
+    what: str,
+    packages: Mapping[str, str | Path] | None,
 ) -> list[tuple[np.ndarray, float]] | None:
-    """Spheres fitted to a ``<mesh>`` (in the collision element's frame), or None with a warning."""
+    """Spheres fitted to a ``<mesh>`` (in the collision element's frame), or None with a warning
+    naming the link and the file (not fitted, not resolved, missing, unreadable, empty)."""
     filename = shape.get("filename") or ""
     if mesh_spheres <= 0:
         warnings.warn(
@@ -352,11 +382,11 @@ def _mesh(
             stacklevel=3,
         )
         return None
-    path = _mesh_file(filename, folder)
+    path = resolve_mesh(filename, folder, packages)
     if path is None:
         warnings.warn(
             f"{where}: {what} is a mesh at {filename!r}; package:// paths are not resolved (no ROS "
-            "package path): skipped",
+            "package path; give packages={name: folder}): skipped",
             stacklevel=3,
         )
         return None
@@ -374,13 +404,18 @@ def _mesh(
         return None
     from symkin.geometry.fit import fit_spheres
 
-    scale = _floats(shape, "scale", 3, f"{what} mesh scale", "1 1 1")
+    scale = (
+        _sized(shape, "scale", 3, f"{where}: {what} mesh scale", signed=True)
+        if shape.get("scale")
+        else [1.0] * 3
+    )
     try:
-        mesh = trimesh.load(str(path), force="mesh")
-        mesh.apply_transform(np.diag([*scale, 1.0]))
-    except (MissingExtraError, GeometryError):
-        raise
-    except Exception as exc:  # trimesh raises many kinds for unreadable files
-        warnings.warn(f"{where}: {what}: cannot read mesh {str(path)!r} ({exc}): skipped", stacklevel=3)
+        tri = read_mesh(path, scale, f"{where}: {what}")
+    except GeometryError as exc:
+        warnings.warn(f"{exc}: skipped", stacklevel=3)
         return None
+    check_extent(tri, f"{where}: {what}: mesh file {str(path)!r} scaled by {scale}")
+    mesh = trimesh.Trimesh(
+        vertices=tri.reshape(-1, 3), faces=np.arange(3 * len(tri)).reshape(-1, 3), process=False
+    )
     return fit_spheres(mesh, mesh_spheres)

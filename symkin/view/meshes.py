@@ -37,17 +37,10 @@ _INSTALL = 'pip install "symkin[geometry]"'
 
 def resolve_mesh_file(filename: str, folder: Path) -> Path | None:
     """The file a URDF ``<mesh filename>`` names (module docstring), or None for a ``package://``
-    path no folder above ``folder`` resolves."""
-    if filename.startswith("package://"):
-        package, _, rest = filename[len("package://") :].partition("/")
-        for up in (folder.resolve(), *folder.resolve().parents):
-            if up.name == package:
-                return up / rest
-        return None
-    if filename.startswith("file://"):
-        filename = filename[len("file://") :]
-    path = Path(filename)
-    return path if path.is_absolute() else folder / path
+    path no folder above ``folder`` resolves (:func:`symkin.geometry.meshes.resolve_mesh`)."""
+    from symkin.geometry.meshes import resolve_mesh
+
+    return resolve_mesh(filename, folder)
 
 
 def box_mesh(size: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:

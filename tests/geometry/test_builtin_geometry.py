@@ -1,5 +1,7 @@
-"""The hand-written sphere models of the built-in arms: on known links, free at the named
-configurations, in collision when folded (own NumPy check: sphere centres through link_poses)."""
+"""The built-in arms' sphere models (covering models from the stored fits, the iiwa 7's
+hand-written one): on known links, free at the named configurations, in collision when folded
+(own NumPy check: sphere centres through link_poses). Their coverage of the real meshes is
+checked in test_covering_models.py."""
 
 from __future__ import annotations
 
@@ -9,14 +11,14 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.model.builtin_geometry import BUILTIN_GEOMETRY, builtin_geometry
+from symkin.model.builtin_geometry import BUILTIN_GEOMETRY, COVERING, builtin_geometry
 from symkin.model.geometry import Geometry, Sphere
 
 NAMES = ["panda", "ur3", "ur5", "ur10", "lbr_iiwa7", "lbr_iiwa14"]
 
 #: clearly folded configurations (within the joint limits) and a link pair they must bring together
 FOLDED = {  # pairs sorted as Geometry sorts them
-    "panda": ([0, 0, 0, -3.0, 0, 0.5, 0], ("ee", "link2")),  # the hand folded into the shoulder
+    "panda": ([0, 0, 0, -3.0, 0, 0.5, 0], ("link2", "link7")),  # the hand folded into the shoulder
     "ur3": ([0, -1.57, 3.0, 0, 0, 0], ("link2", "link5")),  # the forearm folded onto the upper arm
     "ur5": ([0, -1.57, 3.0, 0, 0, 0], ("link2", "link5")),
     "ur10": ([0, -1.57, 3.0, 0, 0, 0], ("link2", "link5")),
@@ -77,13 +79,19 @@ def test_names() -> None:
 @pytest.mark.parametrize("name", NAMES)
 def test_model_on_known_links(name: str) -> None:
     robot, g = symkin.load(name), builtin_geometry(name)
-    assert isinstance(g, Geometry) and g.source.startswith("approximate sphere model written for symkin")
-    assert all(isinstance(s, Sphere) and 0.01 < s.radius < 0.15 for s in g.shapes)
-    assert set(g.links) == set(robot.link_names)  # every link, base and ee included, has spheres
+    assert isinstance(g, Geometry)
+    if name in COVERING:
+        assert g.source.startswith("spheres covering the collision meshes of ")
+    else:
+        assert g.source.startswith("approximate sphere model written for symkin")
+    assert all(isinstance(s, Sphere) and 0.001 < s.radius < 0.25 for s in g.shapes)
+    assert set(g.links) <= set(robot.link_names)
+    bodies = {"ee" if link == f"link{robot.n}" else link for link in g.links}
+    assert bodies >= {"base", "ee", *(f"link{k}" for k in range(1, robot.n))}  # every body has spheres
     for a, b in g.disabled:
         assert a in robot.link_names and b in robot.link_names
     assert robot.with_geometry(g).geometry == g  # the Robot's own check accepts it
-    lo, hi = {"panda": (40, 60)}.get(name, (15, 40))
+    lo, hi = (15, 40) if name not in COVERING else (60, 250)
     assert lo <= len(g) <= hi
     assert builtin_geometry(name) == g  # the same model every time
 
@@ -111,7 +119,8 @@ def test_free_at_named_configurations(name: str) -> None:
     robot, g = symkin.load(name), builtin_geometry(name)
     assert robot.configs  # qz at least
     for cname, q in robot.configs.items():
-        assert colliding(robot, g, q) == {}, (name, cname)
+        if robot.within_limits(q):  # the Panda's qz is not (q4 = 0)
+            assert colliding(robot, g, q) == {}, (name, cname)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -142,10 +151,14 @@ def test_mostly_free_in_random_configurations(name: str) -> None:
         assert free > len(Q) // 2
 
 
-def test_panda_disabled_pair_is_always_in_contact() -> None:
-    """The disabled pair touches at the named configurations: it would mask nothing."""
-    robot, g = symkin.load("panda"), builtin_geometry("panda")
-    assert g.disabled == (("link5", "link7"),)
+@pytest.mark.parametrize("name", NAMES)
+def test_disabled_pairs_touch_at_the_named_configurations(name: str) -> None:
+    """Each disabled pair's spheres overlap at a named configuration (so the model would be in
+    collision there without it)."""
+    robot, g = symkin.load(name), builtin_geometry(name)
     open_g = Geometry(g.shapes, (), g.source)
-    for q in robot.configs.values():
-        assert ("link5", "link7") in colliding(robot, open_g, q)
+    touching = set()
+    for q in [robot.qz, *robot.configs.values()]:
+        if robot.within_limits(q):
+            touching |= set(colliding(robot, open_g, q))
+    assert set(g.disabled) <= touching

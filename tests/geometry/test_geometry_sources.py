@@ -217,12 +217,14 @@ def test_tree_base_below_root_skips_links_above(arm_file) -> None:
 
 def test_mesh_elements(tmp_path, monkeypatch) -> None:
     (tmp_path / "meshes").mkdir()
-    pts = np.random.default_rng(4).random((40, 3)) * [0.1, 0.05, 0.2]
-    np.savetxt(tmp_path / "meshes" / "part.xyz", pts)
+    trimesh = pytest.importorskip("trimesh")
+    hull = trimesh.convex.convex_hull(np.random.default_rng(4).random((40, 3)) * [0.1, 0.05, 0.2])
+    hull.export(tmp_path / "meshes" / "part.stl")
+    pts = np.asarray(hull.vertices)
     text = ARM.replace(
         '<link name="camera">',
         '<link name="camera"><collision><origin xyz="0 0 0.1"/><geometry>'
-        '<mesh filename="meshes/part.xyz" scale="2 2 2"/></geometry></collision>'
+        '<mesh filename="meshes/part.stl" scale="2 2 2"/></geometry></collision>'
         '<collision><geometry><mesh filename="package://arm3/meshes/cam.stl"/></geometry></collision>',
     )
     path = tmp_path / "mesh_arm.urdf"
@@ -238,16 +240,7 @@ def test_mesh_elements(tmp_path, monkeypatch) -> None:
     messages = " | ".join(str(w.message) for w in record)
     assert "needs trimesh" in messages and "package:// paths are not resolved" in messages
 
-    class FakeMesh:  # what geometry_from_urdf uses of a trimesh mesh
-        def __init__(self, vertices):
-            self.vertices = vertices
-
-        def apply_transform(self, M):
-            self.vertices = self.vertices @ M[:3, :3].T + M[:3, 3]
-
-    fake = types.ModuleType("trimesh")
-    fake.load = lambda f, force=None: FakeMesh(np.loadtxt(f))
-    monkeypatch.setitem(sys.modules, "trimesh", fake)
+    monkeypatch.setitem(sys.modules, "trimesh", trimesh)
     with pytest.warns(UserWarning, match="package://"):
         g = geometry_from_urdf(path, robot, mesh_spheres=3)
     fitted = [s for s in g.shapes if s.link == "link2"][-4:-1]  # then the camera's own sphere

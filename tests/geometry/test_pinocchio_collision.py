@@ -22,7 +22,16 @@ def _with_capsules(robot):
         Capsule((0, 0.02, 0), (0, 0.12, 0.05), 0.05, "link3"),
         Capsule((0, -0.1, 0), (0, 0.0, 0.1), 0.05, "link5"),
     )
-    return robot.with_geometry(Geometry((*robot.geometry.shapes, *extra), robot.geometry.disabled))
+    g = Geometry((*robot.geometry.shapes, *extra), robot.geometry.disabled)
+    # the link pairs the added capsules bring into contact at the ready pose stay unchecked (as the
+    # touching pairs of the built-in models): without that a compact wrist collides everywhere
+    touching = {
+        (shapes[i].link, shapes[j].link)
+        for shapes in [g.shapes]
+        for k, (i, j) in enumerate(symkin.geometry.layout_of(robot.with_geometry(g)).self_pairs)
+        if symkin.geometry.distances(robot.with_geometry(g), robot.qr)[k] < 0
+    }
+    return robot.with_geometry(g.with_disabled(touching))
 
 
 @pytest.mark.parametrize("name", ["panda", "ur5"])
@@ -49,7 +58,9 @@ def test_near_contact_verdicts_match_pinocchio():
     rng = np.random.default_rng(3)
     shapes = robot.geometry.shapes
     checked = 0
-    for q in robot.random_q(1000, seed=9):
+    for q in robot.random_q(10_000, seed=9):
+        if checked > 100:
+            break
         if kin.in_collision(q):
             continue
         X = kin.collision_points(q)
