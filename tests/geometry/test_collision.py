@@ -405,13 +405,9 @@ def test_four_lane_batch_gives_the_scalar_verdicts(panda, capsules):
         assert np.array_equal(outs[0][:200], [kin.in_collision(q, env) for q in Q[:200]])
 
 
-def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
-    """The generated self checks try a sphere with several partners on the other link against that
-    link's bounding sphere first; every active self pair must still be tested exactly once, in the
-    scalar code, each sphere-first test must use the other link's bound. The four-lane code tests
-    every pair not proved apart within the joint limits, then the proved pairs for the lanes beyond
-    them."""
-    import re
+def _self_pair_checks(panda):
+    """The Panda's collision tables, its self pairs by point indices (all, and those not proved
+    apart within the joint limits) and the points that are links' bounding spheres."""
     from collections import Counter
 
     from symkin.emit.collision import collision_tables
@@ -419,12 +415,28 @@ def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
 
     layout = layout_of(panda)
     tables = collision_tables(layout)
-    bound_points = {p for p, _ in tables["bounds"]}
     point = layout.point_index
     proved = proved_apart(layout)
     assert 0 < len(proved) < len(layout.self_pairs)
     expected = Counter(frozenset((point[i], point[j])) for i, j in layout.self_pairs)
     expected4 = Counter(frozenset((point[i], point[j])) for i, j in layout.self_pairs if (i, j) not in proved)
+    return tables, expected, expected4, {p for p, _ in tables["bounds"]}
+
+
+def test_every_self_pair_is_tested_once_in_the_unrolled_checks(panda, monkeypatch):
+    """Below UNROLL_PAIRS pairs the self checks are straight-line code that tries a sphere with
+    several partners on the other link against that link's bounding sphere first; every active
+    self pair must still be tested exactly once in the scalar code, each sphere-first test must use
+    the other link's bound. The four-lane code tests every pair not proved apart within the joint
+    limits, then the proved pairs for the lanes beyond them."""
+    import re
+    from collections import Counter
+
+    from symkin.emit import collision_self
+
+    monkeypatch.setattr(collision_self, "UNROLL_PAIRS", 10**9)  # the Panda's 3 240 pairs unrolled
+    tables, expected, expected4, bound_points = _self_pair_checks(panda)
+    assert not tables["self_tables"]
     checks = (
         (tables["self_code"] + tables["self_code_proved"], "sphere_hit", expected),
         (tables["self_code4"], "hit2", expected4),
@@ -444,3 +456,34 @@ def test_every_self_pair_is_tested_once_in_the_generated_checks(panda):
             found[frozenset((a, b))] += 1
         assert found == expected
         assert firsts > 0  # the Panda model has spheres with three or more partners
+
+
+def test_every_self_pair_is_a_table_row_once(panda):
+    """Past UNROLL_PAIRS pairs (the Panda's covering model has 3 240) the self checks are C table
+    rows that loops walk: every active self pair is one row, either a pair row or a sphere-first
+    row's inner entry (whose outer test is against the other link's bounding sphere); the proved
+    pairs' rows are the rest."""
+    import re
+    from collections import Counter
+
+    tables, expected, expected4, bound_points = _self_pair_checks(panda)
+    assert tables["self_tables"]
+
+    def pairs_of(rows):
+        found, firsts = Counter(), 0
+        nums = {k: [[float(x) for x in re.findall(r"-?[\d.e+-]+", r)] for r in v] for k, v in rows.items()}
+        for xo, xb, i0, i1, _ in nums["firsts"]:
+            assert int(xb) in bound_points and int(xo) not in bound_points
+            firsts += 1
+            for x, _ in nums["inner"][int(i0) : int(i1)]:
+                found[frozenset((int(xo), int(x)))] += 1
+        for a, b, cap, _ in nums["pairs"]:
+            assert cap == 0  # the Panda's model is spheres only
+            found[frozenset((int(a), int(b)))] += 1
+        return found, firsts
+
+    unproved, firsts = pairs_of(tables["self_rows"])
+    proved, _ = pairs_of(tables["self_rows_proved"])
+    assert unproved == expected4
+    assert unproved + proved == expected
+    assert firsts > 0
