@@ -51,19 +51,28 @@ def test_batch_equals_one_at_a_time_bit_for_bit(name):
 def test_the_lanes_are_where_they_pay():
     """Functions with code of their own (fkine, link_poses, jacob0, jacobe, fkine_jacob0; the
     Panda's jacob0_hessian0, whose Hessian is written out) get four-lane bodies; hessian0, which
-    calls jacob0_hessian0, keeps a scalar batch. The scalar bodies call the inline sin/cos (sk_sin),
-    not libm's sin directly."""
+    calls jacob0_hessian0, keeps a scalar batch. The scalar bodies take the sin and cos of their
+    angles four at a time (sk_sincos_n_, the lanes' kernels), not one call per angle nor libm's sin
+    directly; with libm they call sk_sin and sk_cos (libm's) per angle."""
     text = symkin.generate(load("panda"), "c")["symkin_panda.c"]
     for f in ("fkine", "link_poses", "jacob0", "jacobe", "fkine_jacob0", "jacob0_hessian0"):
         assert f"static void {f}_x4_(" in text, f
         assert re.search(rf"for \(; i \+ 4 <= N; i \+= 4\)\n\s+{f}_x4_\(", text), f
     assert "static void hessian0_x4_(" not in text
-    body = text[text.index("static void fkine_(const double") :]
-    body = body[: body.index("\n}\n")]
-    assert "sk_sin(q0)" in body and "sk_cos(q0)" in body
-    assert not re.search(r"(?<![\w])(sin|cos)\(", body)
+
+    def fkine_body(text: str) -> str:
+        body = text[text.index("static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)\n{") :]
+        return body[: body.index("\n}\n")]
+
+    body = fkine_body(text)
+    angles = "{ q0, q1, q2, q3, q4, q5, q6 + 0.7853981633974483, 0.0 }"
+    assert f"const double angle_[8] = {angles};\n        sk_sincos_n_(angle_, 7, sin_, cos_);" in body
+    assert "const double t0 = cos_[0];" in body and "const double t1 = sin_[0];" in body
+    assert not re.search(r"(?<![\w])(sk_sin|sk_cos|sin|cos)\(", body)
+    libm = fkine_body(symkin.generate(load("panda"), "c", libm=True)["symkin_panda.c"])
+    assert "sk_sin(q0)" in libm and "sk_cos(q0)" in libm and "sk_sincos_n_" not in libm
     single = symkin.generate(load("panda"), "c", precision="float")["symkin_panda.c"]
-    assert "_x4_" not in single  # single precision: one configuration per step
+    assert "_x4_" not in single and "sk_sincos_n_(" not in single  # single precision: sinf, cosf
 
 
 def test_vector_sin_cos_are_the_scalar_ones_on_the_hard_angles():

@@ -13,6 +13,8 @@ import hashlib
 import math
 import re
 import sysconfig
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -68,10 +70,9 @@ _TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[A-Za-z_]\w*")
 _LANE_CALLS = ("sk_sin", "sk_cos")
 
 
-def lane_calls(expr: str) -> str:
-    """``expr`` with each ``sk_sin(x)``/``sk_cos(x)`` as ``skv_sin_(x, &far_)``/``skv_cos_(x,
-    &far_)``: the branch-free four-lane kernels, which mark in ``far_`` the lanes the scalar code
-    must compute (``c/_sincos.c.j2``)."""
+def map_calls(expr: str, fn: Callable[[str, str], str]) -> str:
+    """``expr`` with each call ``sk_sin(x)``/``sk_cos(x)`` replaced by ``fn(name, x)``, innermost
+    calls first (``x`` as they left it)."""
     out, i = [], 0
     while True:
         j = min((k for k in (expr.find(c + "(", i) for c in _LANE_CALLS) if k >= 0), default=-1)
@@ -84,9 +85,40 @@ def lane_calls(expr: str) -> str:
             if depth == 0:
                 break
             k += 1
-        arg = lane_calls(expr[j + len(name) + 1 : k])
-        out += [expr[i:j], "skv", name[2:], "_(", arg, ", &far_)"]
+        out += [expr[i:j], fn(name, map_calls(expr[j + len(name) + 1 : k], fn))]
         i = k + 1
+
+
+def lane_calls(expr: str) -> str:
+    """``expr`` with each ``sk_sin(x)``/``sk_cos(x)`` as ``skv_sin_(x, &far_)``/``skv_cos_(x,
+    &far_)``: the branch-free four-lane kernels, which mark in ``far_`` the lanes the scalar code
+    must compute (``c/_sincos.c.j2``)."""
+    return map_calls(expr, lambda name, arg: f"skv{name[2:]}_({arg}, &far_)")
+
+
+def hoist_angles(f: Any) -> tuple[Any, tuple[str, ...]]:
+    """The printed function ``f`` with each ``sk_sin(x)``/``sk_cos(x)`` whose argument reads only
+    inputs and numbers as ``sin_[i]``/``cos_[i]``, and its distinct angles x (i-th first used
+    i-th): the template computes their sin and cos before the body, four at a time
+    (``sk_sincos_n_`` in ``c/_sincos.c.j2``; the same bits as ``sk_sin``/``sk_cos``)."""
+    if f.delegate:
+        return f, ()
+    inputs = {name for name, _ in f.inputs}
+    angles: dict[str, int] = {}
+
+    def hoist(name: str, arg: str) -> str:
+        if not _identifiers(arg) <= inputs:
+            return f"{name}({arg})"
+        return f"{name[3:]}_[{angles.setdefault(arg, len(angles))}]"
+
+    lines = tuple((name, map_calls(e, hoist)) for name, e in f.lines)
+    outs = tuple(replace(o, values=tuple((i, map_calls(e, hoist)) for i, e in o.values)) for o in f.outs)
+    return (replace(f, lines=lines, outs=outs), tuple(angles)) if angles else (f, ())
+
+
+def _identifiers(expr: str) -> set[str]:
+    """The names a printed C expression reads (numbers left out)."""
+    return {t for t in _TOKEN.findall(expr) if not t[0].isdigit() and t[0] != "."}
 
 
 def _blocks(size: int, values: list[tuple[int, str, bool]]) -> list[dict[str, Any]]:
@@ -131,7 +163,7 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
         names = {name for name, _ in f.inputs} | {name for name, _ in f.lines}
 
         def lane(expr: str, names: set[str] = names) -> tuple[str, bool] | None:
-            idents = {t for t in _TOKEN.findall(expr) if not t[0].isdigit() and t[0] != "."}
+            idents = _identifiers(expr)
             if idents - names - set(_LANE_CALLS):
                 return None
             return lane_calls(expr), not idents
@@ -195,6 +227,13 @@ def render_c(
 
     printer, variant = c_variant(f"symkin_{kernel.code_name}", prefix, precision, libm)
     printed = [lower(f, printer) for f in kernel.functions]
+    lanes = {} if precision == "float" else four_lane_bodies(printed)
+    if precision != "float" and not libm:  # the scalar bodies take their angles' sin and cos first
+        hoisted = [hoist_angles(f) for f in printed]
+        printed = [f for f, _ in hoisted]
+        angles = {f.name: a for f, a in hoisted if a}
+    else:
+        angles = {}
     prefix = variant["prefix"]
     real = variant["real"]
     by_name = {f.name: f for f in printed}
@@ -207,7 +246,8 @@ def render_c(
         "links": kernel.links and link_text(kernel.links),
         "aliases": kernel.aliases,
         "hessian_frames": sorted({h.frame for f in printed for h in f.hessians}),
-        "lanes": {} if precision == "float" else four_lane_bodies(printed),
+        "lanes": lanes,
+        "angles": angles,
         "joints": joint_table(kernel),
         "qd_max": all(math.isfinite(j.qd) for j in kernel.joints),
         "licence": LICENCE,
