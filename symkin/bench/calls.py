@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from symkin.bench.common import best_of, fresh_python, interleaved, optional
-from symkin.bench.kin import per_call_us, pinocchio_model, rtb_ets
+from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ets
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
 
@@ -57,20 +57,6 @@ GOALS: dict[str, tuple[str, float]] = {
     "import_s": ("<=", 0.3),
     "first_jacob0_s": ("<=", 0.5),
 }
-
-
-def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float, rounds: int = 4) -> dict:
-    """Microseconds per call of each path, measured in turn for ``rounds`` rounds (about ``budget``
-    seconds per path in all) and the best round kept: a burst of load on a shared machine then hits
-    every path of a comparison, not just one. Keys (row, column) -> {row: {column: us}}."""
-    best: dict[tuple[str, str], float] = {}
-    for _ in range(rounds):
-        for key, f in paths.items():
-            best[key] = min(best.get(key, math.inf), per_call_us(f, budget=budget / rounds, clock=CLOCK))
-    out: dict[str, dict[str, float]] = {}
-    for (row, col), us in best.items():
-        out.setdefault(row, {})[col] = us
-    return out
 
 
 # -- IK ----------------------------------------------------------------------------------------
@@ -213,7 +199,7 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[
         paths[("pinocchio", "jacob0")] = jac
         paths[("pinocchio", "manipulability")] = manip
         paths[("pinocchio (all frames)", "fkine")] = fk_all
-    return _interleaved(paths, budget)
+    return interleaved_us(paths, budget, clock=CLOCK)
 
 
 def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
@@ -231,7 +217,7 @@ def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, 
     }
     paths = {(k, "backend"): a for k, (a, _) in pairs.items()}
     paths.update({(k, "raw"): b for k, (_, b) in pairs.items()})
-    return _interleaved(paths, budget)
+    return interleaved_us(paths, budget, clock=CLOCK)
 
 
 # -- start-up ------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ import pytest
 
 import symkin
 from symkin.check.kinematics import LARGE_TURNS, check
+from symkin.emit.c import lanes
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
 INLINE_MAX = 1.6e6  # beyond, the generated code calls libm
@@ -50,6 +51,7 @@ def _ulp_errors(x: np.ndarray, got: np.ndarray, f) -> np.ndarray:  # noqa: ANN00
 
 def test_inline_sin_cos_are_within_one_ulp():
     kin = symkin.compile(symkin.Robot.from_ets("Rz(q)", name="rz_ulp"), backend="c")
+    assert lanes.ready(kin.module, timeout=600)  # the batch below: four lanes
     x = _angles()
     T = kin.fkine(x[:, None])  # generated code: T[0, 0] = sk_cos(q0), T[1, 0] = sk_sin(q0)
     for name, got, f in (("sin", T[:, 1, 0], mpmath.sin), ("cos", T[:, 0, 0], mpmath.cos)):

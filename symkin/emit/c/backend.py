@@ -153,7 +153,8 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
     the body's range check), and ``outs`` as (name, size, ((index, expression, constant), ...),
     blocks) with ``blocks`` the stores four entries at a time (:func:`_blocks`; empty for outputs
     of fewer than four entries); ``trig``: whether the body calls sin/cos (then a lane out of the
-    kernels' range sends the four configurations through the scalar code). Functions that call
+    kernels' range sends the four configurations through the scalar code: the body returns 1
+    before storing anything). Functions that call
     others or run loops (delegates, Hessians, scratch arrays) are left out: their batch stays
     scalar."""
     bodies = {}
@@ -215,7 +216,10 @@ def c_variant(
 def render_c(
     kernel: Kernel, prefix: str | None = None, precision: str = "double", libm: bool = False
 ) -> dict[str, str]:
-    """The generated ``<prefix>.h``, ``<prefix>.c`` and (double precision) the extension module.
+    """The generated ``<prefix>.h``, ``<prefix>.c`` (one configuration at a time, and the batch
+    entry points), ``<prefix>_lanes.c`` (double precision: the batch entry points' four-lane code,
+    a translation unit of its own so that a first call does not wait for it to compile) and
+    (double precision) the extension module ``<prefix>_pymodule.c``.
 
     ``prefix`` (default ``symkin_<code_name>``) starts every exported symbol and the file names, so
     the code of several robots links into one program. ``precision="float"``: single-precision
@@ -228,12 +232,10 @@ def render_c(
     printer, variant = c_variant(f"symkin_{kernel.code_name}", prefix, precision, libm)
     printed = [lower(f, printer) for f in kernel.functions]
     lanes = {} if precision == "float" else four_lane_bodies(printed)
-    if precision != "float" and not libm:  # the scalar bodies take their angles' sin and cos first
-        hoisted = [hoist_angles(f) for f in printed]
-        printed = [f for f, _ in hoisted]
-        angles = {f.name: a for f, a in hoisted if a}
-    else:
-        angles = {}
+    # the scalar bodies take their angles' sin and cos first, four at a time (libm: one by one)
+    hoisted = [(f, ()) if precision == "float" or libm else hoist_angles(f) for f in printed]
+    printed = [f for f, _ in hoisted]
+    angles = {f.name: a for f, a in hoisted if a}
     prefix = variant["prefix"]
     real = variant["real"]
     by_name = {f.name: f for f in printed}
@@ -277,6 +279,8 @@ def render_c(
         f"{prefix}.h": render("c/kernel.h.j2", **context),
         f"{prefix}.c": render("c/kernel.c.j2", **context),
     }
+    if lanes:
+        files[f"{prefix}_lanes.c"] = render("c/kernel_lanes.c.j2", **context)
     if precision == "float":
         return files
     ext = render("c/module.c.j2", module=module_name(files), **context)
@@ -355,7 +359,8 @@ def check_prefix(prefix: str) -> str:
 def module_name(files: dict[str, str]) -> str:
     """The extension module's import name: unique per kinematics source, so versions can coexist."""
     prefix = next(name[:-2] for name in files if name.endswith(".h"))
-    digest = hashlib.sha256((files[f"{prefix}.h"] + files[f"{prefix}.c"]).encode()).hexdigest()[:12]
+    kernel = files[f"{prefix}.h"] + files[f"{prefix}.c"] + files.get(f"{prefix}_lanes.c", "")
+    digest = hashlib.sha256(kernel.encode()).hexdigest()[:12]
     return f"_{prefix}_{digest}"
 
 
@@ -367,16 +372,23 @@ def extension_cflags() -> tuple[str, ...]:
 
 
 def compile_c(files: dict[str, str]) -> tuple[str, Path]:
-    """Compile the generated files (cached): the extension module's name and library path."""
+    """Compile the extension module of the generated files (cached; all but the four-lane code,
+    :mod:`symkin.emit.c.lanes`): its name and library path."""
     from symkin.emit.c.build import compile_library
+    from symkin.emit.c.lanes import main_sources
 
     name = module_name(files)
-    return name, compile_library(files, name, extra_cflags=extension_cflags())
+    return name, compile_library(main_sources(files), name, extra_cflags=extension_cflags())
 
 
 def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:
-    """Compile the generated files (cached) and import the extension module."""
+    """Compile the generated files' extension module (cached), import it and attach its four-lane
+    batch code (bound now when cached, else built after the first batch call:
+    :func:`symkin.emit.c.lanes.attach`)."""
     from symkin.emit.c.build import load_extension
+    from symkin.emit.c.lanes import attach
 
     name, path = compile_c(files)
-    return load_extension(name, path), path
+    module = load_extension(name, path)
+    attach(module, path, files)
+    return module, path
