@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import optional, rows_per_s
+from symkin.bench.common import optional, rows_per_s, with_lanes
 
 __all__ = ["run_kin", "format_kin", "per_call_us", "interleaved_us", "pinocchio_model", "rtb_ets"]
 
@@ -198,7 +198,7 @@ def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, prog
 
     robot = resolve_robot(robot_spec)
     q = robot.random_q(seed=seed)
-    kins = {b: symkin.compile(robot, backend=b) for b in ("c", "numpy", "casadi")}
+    kins = {b: with_lanes(symkin.compile(robot, backend=b)) for b in ("c", "numpy", "casadi")}
     paths: dict[str, dict[str, Callable[[], Any]]] = {
         "c (extension)": {f: (lambda f=f: getattr(kins["c"], f)(q)) for f in FUNCS},
         "c (ctypes, cached)": _ctypes_calls(kins["c"], q),

@@ -210,3 +210,30 @@ def test_a_far_lane_sends_its_four_configurations_through_the_scalar_code():
     T = kin.fkine(Q)
     for i in range(8):
         assert np.array_equal(T[i], kin.fkine(Q[i])), i
+
+
+def test_the_lanes_library_is_built_at_the_first_batch_and_changes_no_result():
+    """A robot new to the cache: compiling it and calling it one configuration at a time (or three)
+    builds no four-lane code; the first batch of four or more starts it in the background, and
+    batches before and after it is bound, and single calls, give the same bits."""
+    import uuid
+
+    ets = "Rz(q) tx(0.3) Ry(q) tz(0.2) Rx(q) tx(0.1)"
+    robot = symkin.Robot.from_ets(ets, name=f"lazy_{uuid.uuid4().hex[:8]}")  # new to the cache
+    kin = symkin.compile(robot, backend="c")
+    st = lanes.state(kin.module)
+    assert st is not None and not st.bound and st.thread is None
+    Q = _configurations(robot, 13)
+    singles = {m: [_outputs(getattr(kin, m)(q)) for q in Q] for m in KIN_METHODS}
+    kin.fkine(Q[:3])
+    assert st.thread is None and not st.bound  # fewer than four: no lanes wanted
+    before = {m: _outputs(getattr(kin, m)(Q)) for m in KIN_METHODS}
+    assert st.thread is not None
+    assert lanes.ready(kin.module, timeout=600) and st.bound, st.error
+    for m in KIN_METHODS:
+        after = _outputs(getattr(kin, m)(Q))
+        for a, b in zip(after, before[m]):
+            assert a.tobytes() == b.tobytes(), m
+        for i, single in enumerate(singles[m]):
+            for a, s in zip(after, single):
+                assert a[i].tobytes() == np.ascontiguousarray(s).tobytes(), (m, i)
