@@ -3,8 +3,10 @@
 Every figure is measured in the same run as the figure it is compared with, and printed as a
 ratio next to the goal it answers (symkin's targets for one call at a time):
 
-- IK: one ``kin.ik(T)`` per target against the batched per-solve time on the same targets, and
-  against roboticstoolbox-python's C++ ``ik_LM`` (when installed);
+- IK: one ``kin.ik(T)`` per target against the per-solve time of the scalar batch (the same
+  targets one at a time in one C call) and of the four-lane batch ``kin.ik(T_all)``, where one
+  call's time goes (arguments, GIL, solver: kinematics and steps, result), and against
+  roboticstoolbox-python's C++ ``ik_LM`` (when installed);
 - NR and GN with the pseudo-inverse against LM, per iteration;
 - an RRMC and an MMC step from Python on the C backend, and ``servo`` steps per second with the
   loop in C and in Python;
@@ -31,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, fresh_python, interleaved, optional
-from symkin.bench.kin import per_call_us, pinocchio_model, rtb_ets
+from symkin.bench.common import best_of, fresh_python, interleaved, optional, with_lanes
+from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ets
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
 
@@ -40,7 +42,7 @@ CLOCK = time.thread_time  # see the module docstring
 
 #: symkin's targets for one call at a time (a ratio or an absolute figure), by check
 GOALS: dict[str, tuple[str, float]] = {
-    "ik_single_over_batch": ("<=", 1.5),
+    "ik_single_over_scalar_batch": ("<=", 1.5),
     "ik_rtb_over_single": (">=", 10.0),
     "pinv_nr_over_lm_per_iteration": ("<=", 2.0),
     "pinv_gn_over_lm_per_iteration": ("<=", 2.0),
@@ -59,41 +61,70 @@ GOALS: dict[str, tuple[str, float]] = {
 }
 
 
-def _interleaved(paths: dict[tuple[str, str], Callable[[], Any]], budget: float, rounds: int = 4) -> dict:
-    """Microseconds per call of each path, measured in turn for ``rounds`` rounds (about ``budget``
-    seconds per path in all) and the best round kept: a burst of load on a shared machine then hits
-    every path of a comparison, not just one. Keys (row, column) -> {row: {column: us}}."""
-    best: dict[tuple[str, str], float] = {}
-    for _ in range(rounds):
-        for key, f in paths.items():
-            best[key] = min(best.get(key, math.inf), per_call_us(f, budget=budget / rounds, clock=CLOCK))
-    out: dict[str, dict[str, float]] = {}
-    for (row, col), us in best.items():
-        out.setdefault(row, {})[col] = us
-    return out
-
-
 # -- IK ----------------------------------------------------------------------------------------
 def ik_calls(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int, rtb: bool) -> dict[str, Any]:
     """One target per ``kin.ik(T)`` call against the batch ``kin.ik(T_all)`` (default options: LM
-    Chan lambda 0.1, 100 x 30, |e| < 1e-6) and RTB's C++ ``ik_LM`` with the same options (its
-    tolerance is on E = |e|^2 / 2: 5e-13)."""
+    Chan lambda 0.1, 100 x 30, |e| < 1e-6; four targets side by side in vector lanes), the scalar
+    batch (the same targets one at a time in one C call: the solver a single call runs, without
+    Python) and RTB's C++ ``ik_LM`` with the same options (its tolerance is on E = |e|^2 / 2: 5e-13);
+    ``parts_ns``: where one call's time goes (:func:`ik_call_parts`)."""
+    from symkin.runtime.ik import default_c_solver
+
     Tep = np.asarray(robot.fkine(robot.random_q(n_targets, seed=seed)))
     targets = list(Tep)
     kin.ik(Tep[:4])
     kin.ik(targets[0])
+    solver = default_c_solver(kin)
     out: dict[str, Any] = {"targets": n_targets}
     best, last = interleaved(
-        {"batch": lambda: kin.ik(Tep), "single": lambda: [kin.ik(T) for T in targets]}, rounds
+        {
+            "batch": lambda: kin.ik(Tep),
+            "single": lambda: [kin.ik(T) for T in targets],
+            "scalar": lambda: solver.solve_each(Tep, seed),
+        },
+        rounds,
     )
     res, results = last["batch"], last["single"]
     out["batch_us"] = 1e6 * best["batch"] / n_targets
     out["single_us"] = 1e6 * best["single"] / n_targets
+    out["scalar_batch_us"] = 1e6 * best["scalar"] / n_targets
     out["batch_success"] = float(np.mean(res.success))
     out["single_success"] = float(np.mean([r.success for r in results]))
+    out["scalar_batch_success"] = float(np.mean(last["scalar"][1]))
     out["mean_iterations"] = float(np.mean([r.iterations for r in results]))
+    out["parts_ns"] = ik_call_parts(solver, targets, robot.random_q(n_targets, seed=seed + 2), rounds)
     out["rtb"] = _rtb_ik(robot, targets) if rtb else None
     return out
+
+
+def ik_call_parts(
+    solver: Any, targets: list[np.ndarray], Q: np.ndarray, rounds: int
+) -> dict[str, float] | None:
+    """Nanoseconds of one ``solve(T)`` call by part, the least over ``rounds`` passes over the
+    targets, from the extension's timing build (:meth:`CIKSolver.profiled`; its clock reads add a
+    few tens of ns): taking the arguments, releasing and retaking the GIL, the solver, the result
+    object; and per iteration of the solver, one pose and Jacobian evaluation (the time of
+    evaluating at ``Q``, one at a time in C) and the rest (error, convergence test, LM step)."""
+    profiled = solver.profiled()
+    if profiled is None:
+        return None
+    solve, parts = profiled
+    names = ("arguments", "gil", "solver", "result")
+    best = dict.fromkeys(names, math.inf)
+    iterations = 0
+    for _ in range(rounds):
+        parts()
+        iterations = sum(int(solve(T).iterations) for T in targets)
+        calls, *ns = parts()
+        for name, t in zip(names, ns):
+            best[name] = min(best[name], t / calls)
+    kin_ns = 1e9 * best_of(lambda: solver.kin_each(Q), rounds, CLOCK) / len(Q)
+    per_call = iterations / len(targets)
+    return best | {
+        "iterations_per_call": per_call,
+        "kinematics_per_iteration": kin_ns,
+        "rest_per_iteration": best["solver"] / per_call - kin_ns,
+    }
 
 
 def _rtb_ik(robot: Any, targets: list[np.ndarray]) -> dict[str, Any] | None:
@@ -213,7 +244,7 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[
         paths[("pinocchio", "jacob0")] = jac
         paths[("pinocchio", "manipulability")] = manip
         paths[("pinocchio (all frames)", "fkine")] = fk_all
-    return _interleaved(paths, budget)
+    return interleaved_us(paths, budget, clock=CLOCK)
 
 
 def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, Any]:
@@ -231,7 +262,7 @@ def casadi_vs_raw(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[str, 
     }
     paths = {(k, "backend"): a for k, (a, _) in pairs.items()}
     paths.update({(k, "raw"): b for k, (_, b) in pairs.items()})
-    return _interleaved(paths, budget)
+    return interleaved_us(paths, budget, clock=CLOCK)
 
 
 # -- start-up ------------------------------------------------------------------------------------
@@ -289,7 +320,7 @@ def run_calls(
 
     robot = resolve_robot(robot_spec)
     crobot = resolve_robot(control_robot)
-    kin = symkin.compile(robot, backend="c")
+    kin = with_lanes(symkin.compile(robot, backend="c"))
     q = robot.random_q(seed=seed)
     sections: list[tuple[str, Callable[[], Any]]] = [
         ("ik", lambda: ik_calls(robot, kin, n_targets, seed, rounds, rtb=True)),
@@ -315,7 +346,7 @@ def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
     ik, pinv, ctl, npy, cas, st = (r[k] for k in ("ik", "pinv", "control", "numpy", "casadi", "startup"))
     lm = pinv["LM"]["single_us_per_iteration"]
     fig: dict[str, float | None] = {
-        "ik_single_over_batch": ik["single_us"] / ik["batch_us"],
+        "ik_single_over_scalar_batch": ik["single_us"] / ik["scalar_batch_us"],
         "ik_rtb_over_single": (ik["rtb"]["us"] / ik["single_us"])
         if ik.get("rtb") and "us" in ik["rtb"]
         else None,
@@ -343,14 +374,25 @@ def _checks(r: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def format_calls(r: dict[str, Any]) -> str:
     """Plain text of :func:`run_calls`'s result."""
     ik, pinv, ctl = r["ik"], r["pinv"], r["control"]
+    scalar = ik["scalar_batch_us"]
     lines = [
         f"symkin bench calls: {r['robot']} (IK, backends, start-up), {r['control_robot']} (control)",
         "",
         f"IK, {ik['targets']} targets, LM Chan lambda 0.1, 100 x 30, |e| < 1e-6 (us per solve):",
         f"  batched kin.ik(T_all)      {ik['batch_us']:8.2f}   success {ik['batch_success']:.3f}",
+        f"  scalar batch (one C call)  {scalar:8.2f}   success {ik['scalar_batch_success']:.3f}   "
+        f"({scalar / ik['batch_us']:.2f}x batched)",
         f"  one kin.ik(T) per target   {ik['single_us']:8.2f}   success {ik['single_success']:.3f}   "
-        f"({ik['single_us'] / ik['batch_us']:.2f}x batched; mean iterations {ik['mean_iterations']:.1f})",
+        f"({ik['single_us'] / scalar:.2f}x scalar batch, {ik['single_us'] / ik['batch_us']:.2f}x batched; "
+        f"mean iterations {ik['mean_iterations']:.1f})",
     ]
+    parts = ik.get("parts_ns")
+    if parts:
+        lines.append(
+            "  one call (ns): arguments {arguments:.0f}, GIL {gil:.0f}, solver {solver:.0f} "
+            "(per iteration: kinematics {kinematics_per_iteration:.0f}, rest {rest_per_iteration:.0f}), "
+            "result {result:.0f}".format(**parts)
+        )
     rtb = ik.get("rtb")
     if rtb and "us" in rtb:
         lines.append(

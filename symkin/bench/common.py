@@ -12,7 +12,7 @@ from collections.abc import Callable, Hashable
 from types import ModuleType
 from typing import Any
 
-__all__ = ["best_of", "interleaved", "rows_per_s", "optional", "fresh_python"]
+__all__ = ["best_of", "interleaved", "rows_per_s", "optional", "fresh_python", "with_lanes"]
 
 
 def interleaved(
@@ -64,3 +64,15 @@ def fresh_python(code: str, env: dict[str, str], timeout: float | None = None, w
     if proc.returncode != 0:
         raise RuntimeError(f"{what or repr(code)} failed:\n{proc.stderr.strip()[-2000:]}")
     return proc.stdout.strip().splitlines()[-1]
+
+
+def with_lanes(kin: Any, timeout: float = 600) -> Any:
+    """``kin`` once its four-lane batch code is bound (C backend; built in the background after the
+    first batch call, :mod:`symkin.emit.c.lanes`), so batch timings on a cold cache measure it
+    rather than the one-configuration steps before it; other backends as they are."""
+    module = getattr(kin, "module", None)
+    if getattr(kin, "backend", None) == "c" and module is not None:
+        from symkin.emit.c.lanes import ready
+
+        ready(module, timeout)
+    return kin

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import interleaved, optional
+from symkin.bench.common import interleaved, optional, with_lanes
 
 __all__ = ["run_table1", "format_table1", "table1_problems", "TABLE1_METHODS", "PAPER_TABLE1", "SETTINGS"]
 
@@ -143,7 +143,7 @@ def run_table1(
     if backend == "c":
         from symkin.runtime.load import compile as compile_robot
 
-        solver = compile_robot(robot, backend="c")
+        solver = with_lanes(compile_robot(robot, backend="c"))
     else:
         solver = robot
     rows = []

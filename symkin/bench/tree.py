@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, fresh_python, optional, rows_per_s
+from symkin.bench.common import best_of, fresh_python, optional, rows_per_s, with_lanes
 from symkin.bench.kin import per_call_us
 
 __all__ = ["erd_robots_dir", "TREE_CASES", "run_tree_kin", "format_tree_kin", "cold_compile_seconds"]
@@ -134,6 +134,7 @@ def run_tree_kin(
         t0 = time.perf_counter()
         kin = compile_model(tree, "c")
         warm = time.perf_counter() - t0
+        with_lanes(kin)
         q = tree.random_q(seed=seed)
         T, J = kin.fkine_jacob0_all(q)
         Tr, Jr = tree.fkine_jacob0_all(q)

@@ -1,4 +1,5 @@
-"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, qrmc, calls, compile, urdf, reach, collide)."""
+"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, qrmc, calls, sincos, compile, urdf, reach,
+collide, meshes)."""
 
 from __future__ import annotations
 
@@ -21,7 +22,10 @@ from symkin.cli.common import (
 __all__ = ["add_parser", "run"]
 
 #: the benchmarks ``symkin bench`` runs
-BENCHMARKS = ("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide", "meshes")
+BENCHMARKS = (
+    *("kin", "tree", "ik", "mmc", "qrmc", "calls", "sincos"),
+    *("compile", "urdf", "reach", "collide", "meshes"),
+)
 
 
 def add_parser(sub: Any) -> None:
@@ -29,7 +33,8 @@ def add_parser(sub: Any) -> None:
         sub,
         "bench",
         "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
-        "mmc (Table I), qrmc (QRMC vs RRMC at singularities), calls (one at a time), compile (cold, by "
+        "mmc (Table I), qrmc (QRMC vs RRMC at singularities), calls (one at a time), sincos (the C "
+        "sin/cos against glibc's), compile (cold, by "
         "chain length), urdf (every chain of "
         "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK), meshes "
         "(the covering sphere model against Pinocchio + coal on the real meshes)",
@@ -41,8 +46,8 @@ def add_parser(sub: Any) -> None:
     )
     add_robot_argument(
         s,
-        "default: panda for kin, compile, collide and meshes, ur5 for ik and reach, the paper's three for "
-        "mmc, ur5 and panda for calls",
+        "default: panda for kin, sincos, compile, collide and meshes, ur5 for ik and reach, the paper's "
+        "three for mmc, ur5 and panda for calls",
     )
     s.add_argument(
         "--robot", dest="robot_option", action=Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
@@ -139,6 +144,12 @@ def run(args: argparse.Namespace) -> int:
 
         result = run_calls(spec or "ur5", spec or "panda", seed=args.seed, progress=not args.json)
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        return 0
+    if args.what == "sincos":
+        from symkin.bench.sincos import format_sincos, run_sincos
+
+        result = run_sincos(spec or "panda", seed=args.seed, progress=not args.json)
+        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_sincos(result))
         return 0
     if args.what == "reach":
         from symkin.bench.reach import format_reach, run_reach

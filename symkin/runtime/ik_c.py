@@ -108,6 +108,8 @@ def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
         "symkin_ik_pose_error": (None, [_P, _P, _P]),
         "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
         "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+        "symkin_ik_solve_each": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+        "symkin_ik_kin_each": (None, [_P, _I64, _P, _P, _P]),
         "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
         "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
         "symkin_ets_fkjac": (None, [_P, _P, _P, _P]),
@@ -127,9 +129,10 @@ def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
 IK_CFLAGS: tuple[str, ...] = ("-fno-tree-slp-vectorize",)
 
 
-@lru_cache(maxsize=1)
-def _ik_build() -> tuple[Path, str]:
-    """(path of the compiled solver library, name of the extension module inside it)."""
+@lru_cache(maxsize=2)
+def _ik_build(profile: bool = False) -> tuple[Path, str]:
+    """(path of the compiled solver library, name of the extension module inside it); ``profile``:
+    the build whose extension times the parts of each call (``profile()``, for symkin bench calls)."""
     import hashlib
     import sysconfig
 
@@ -140,14 +143,15 @@ def _ik_build() -> tuple[Path, str]:
         **{name: (CSRC / name).read_text() for name in ("symkin_ik_py.c", "symkin_pyarray.h")},
     }
     digest = hashlib.sha256("\0".join(sources[k] for k in sorted(sources)).encode()).hexdigest()[:12]
-    module = f"_symkin_ik_{digest}"
+    module = f"_symkin_ik_{digest}" + ("_profile" if profile else "")
     flags = (
         *IK_CFLAGS,
+        *(("-DSYMKIN_IK_PROFILE",) if profile else ()),
         f"-DSYMKIN_IK_MODULE={module}",
         f"-I{sysconfig.get_paths()['include']}",
         f"-I{np.get_include()}",
     )
-    return compile_library(sources, "symkin_ik", flags), module
+    return compile_library(sources, "symkin_ik_profile" if profile else "symkin_ik", flags), module
 
 
 @lru_cache(maxsize=1)
@@ -165,13 +169,14 @@ def ik_library_gil() -> ctypes.CDLL:
     return bind(ctypes.PyDLL(str(_ik_build()[0])))
 
 
-@lru_cache(maxsize=1)
-def ik_extension() -> Any:
+@lru_cache(maxsize=2)
+def ik_extension(profile: bool = False) -> Any:
     """The extension module of :func:`ik_library`'s library: ``solve`` of one target (see
-    ``csrc/symkin_ik_py.c``)."""
+    ``csrc/symkin_ik_py.c``); ``profile``: that of the timing build (its ``profile()`` returns the
+    nanoseconds of each part of the calls so far)."""
     from symkin.emit.c.build import load_extension
 
-    path, name = _ik_build()
+    path, name = _ik_build(profile)
     module = load_extension(name, path)
 
     def seed() -> None:  # fresh seeds (seed=None) differ between processes, forked ones included
@@ -462,6 +467,36 @@ class CIKSolver:
         e = np.zeros(6)
         self.lib.symkin_ik_pose_error(_addr(a), _addr(b), _addr(e))
         return e
+
+    # -- benchmarks (symkin bench calls) ---------------------------------------------------
+    def solve_each(self, Tep: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """The scalar batch: targets ``Tep`` (N, 4, 4) solved one at a time in one C call, as
+        ``solve(Tep[i], seed=seed + i)`` (no lanes, no Python per target); (q (N, n), success (N,))."""
+        T = np.ascontiguousarray(Tep, dtype=float)
+        q, st = np.empty((len(T), self.n)), np.zeros(len(T), dtype=STATS_DTYPE)
+        bad = self.lib.symkin_ik_solve_each(self._cfg_addr, len(T), _addr(T), None, 0, int(seed) & _M64,
+                                            _addr(q), _addr(st))  # fmt: skip
+        if bad >= 0:
+            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        return q, st["success"].astype(bool)
+
+    def kin_each(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The solver's kinematics at each row of ``Q`` (N, n), one at a time in one C call (for
+        timing one evaluation); T (4, 4) and J0 (6, n) of the last row."""
+        Q = np.ascontiguousarray(Q, dtype=float).reshape(-1, self.n)
+        T, J = np.zeros((4, 4)), np.zeros((6, self.n))
+        self.lib.symkin_ik_kin_each(self._cfg_addr, len(Q), _addr(Q), _addr(T), _addr(J))
+        return T, J
+
+    def profiled(self) -> tuple[Any, Any] | None:
+        """``(solve, parts)``: ``solve(Tep, q0=None, seed=None)`` as :attr:`fast`, from the build of
+        the extension that times each part of a call, and ``parts()``: the calls since the last
+        ``parts()`` and their nanoseconds in arguments, GIL release and retake, the solver and the
+        result, summed (``(calls, args, gil, solver, result)``). None with another library."""
+        if self.fast is None:
+            return None
+        ext = ik_extension(True)
+        return functools.partial(ext.solve, self._cfg_addr, self._reason), ext.profile
 
     def random_q(self, seed: int, count: int, stream: int = 0) -> np.ndarray:
         """The first ``count`` random restarts of the stream (seed, stream), (count, n)."""

@@ -13,12 +13,19 @@ import numpy as np
 import pytest
 
 import symkin
+from symkin.emit.c import lanes
 from symkin.emit.c.build import compile_library, load_library
 from symkin.model.robots import load
 from symkin.runtime.kinematics import KIN_METHODS
 from tests.emit.test_sincos import _angles
 
 ROBOTS = ("panda", "ur5", "stanford", "gantry", "planar2")
+
+
+def _with_lanes(kin):
+    """``kin`` once its four-lane batch code is built and bound (symkin.emit.c.lanes)."""
+    assert lanes.ready(kin.module, timeout=600), lanes.state(kin.module)
+    return kin
 
 
 def _configurations(robot, n: int = 203) -> np.ndarray:
@@ -38,7 +45,7 @@ def _outputs(out) -> tuple[np.ndarray, ...]:
 def test_batch_equals_one_at_a_time_bit_for_bit(name):
     """Rows 0-199 go through the four-lane code, 200-202 through the scalar tail; single calls
     through the scalar code: every entry identical, for every generated function."""
-    kin = symkin.compile(name, backend="c")
+    kin = _with_lanes(symkin.compile(name, backend="c"))
     Q = _configurations(kin.robot)
     for method in KIN_METHODS:
         f = getattr(kin, method)
@@ -50,26 +57,38 @@ def test_batch_equals_one_at_a_time_bit_for_bit(name):
 
 def test_the_lanes_are_where_they_pay():
     """Functions with code of their own (fkine, link_poses, jacob0, jacobe, fkine_jacob0; the
-    Panda's jacob0_hessian0, whose Hessian is written out) get four-lane bodies; hessian0, which
-    calls jacob0_hessian0, keeps a scalar batch. The scalar bodies call the inline sin/cos (sk_sin),
-    not libm's sin directly."""
-    text = symkin.generate(load("panda"), "c")["symkin_panda.c"]
+    Panda's jacob0_hessian0, whose Hessian is written out) get four-lane bodies, in a file of their
+    own; hessian0, which calls jacob0_hessian0, keeps a scalar batch. The scalar bodies take the
+    sin and cos of their angles four at a time (sk_sincos_n_, the lanes' kernels), not one call
+    per angle nor libm's sin directly; with libm they call sk_sin and sk_cos (libm's) per angle."""
+    files = symkin.generate(load("panda"), "c")
+    text, four = files["symkin_panda.c"], files["symkin_panda_lanes.c"]
     for f in ("fkine", "link_poses", "jacob0", "jacobe", "fkine_jacob0", "jacob0_hessian0"):
-        assert f"static void {f}_x4_(" in text, f
-        assert re.search(rf"for \(; i \+ 4 <= N; i \+= 4\)\n\s+{f}_x4_\(", text), f
-    assert "static void hessian0_x4_(" not in text
-    body = text[text.index("static void fkine_(const double") :]
-    body = body[: body.index("\n}\n")]
-    assert "sk_sin(q0)" in body and "sk_cos(q0)" in body
-    assert not re.search(r"(?<![\w])(sin|cos)\(", body)
+        assert f"static void {f}_x4_(" in four and f"{f}_x4_(" not in text, f
+        assert re.search(rf"for \(; i \+ 4 <= N; i \+= 4\)\n\s+{f}_x4_\(", four), f
+        assert f"        i = l->{f}(" in text, f  # the batch entry point: through the lanes' table
+    assert "static void hessian0_x4_(" not in four and "l->hessian0(" not in text
+
+    def fkine_body(text: str) -> str:
+        head = "static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)\n{"
+        body = text[text.index(head) :]
+        return body[: body.index("\n}\n")]
+
+    body = fkine_body(text)
+    angles = "{ q0, q1, q2, q3, q4, q5, q6 + 0.7853981633974483, 0.0 }"
+    assert f"const double angle_[8] = {angles};\n        sk_sincos_n_(angle_, 7, sin_, cos_);" in body
+    assert "const double t0 = cos_[0];" in body and "const double t1 = sin_[0];" in body
+    assert not re.search(r"(?<![\w])(sk_sin|sk_cos|sin|cos)\(", body)
+    libm = fkine_body(symkin.generate(load("panda"), "c", libm=True)["symkin_panda.c"])
+    assert "sk_sin(q0)" in libm and "sk_cos(q0)" in libm and "sk_sincos_n_" not in libm
     single = symkin.generate(load("panda"), "c", precision="float")["symkin_panda.c"]
-    assert "_x4_" not in single  # single precision: one configuration per step
+    assert "_x4_" not in single and "sk_sincos_n_(" not in single  # single precision: sinf, cosf
 
 
 def test_vector_sin_cos_are_the_scalar_ones_on_the_hard_angles():
     """Rz(q): T[0, 0] = cos q, T[1, 0] = sin q. The doubles nearest k pi/2 (the reduction's third
     stage), huge, tiny and signed-zero angles, four per step against one at a time."""
-    kin = symkin.compile(symkin.Robot.from_ets("Rz(q)", name="rz_lanes"), backend="c")
+    kin = _with_lanes(symkin.compile(symkin.Robot.from_ets("Rz(q)", name="rz_lanes"), backend="c"))
     x = _angles()
     x = x[: len(x) // 4 * 4]
     batch = kin.fkine(x[:, None])
@@ -106,7 +125,7 @@ def test_tree_batch_equals_one_at_a_time_bit_for_bit(which):
     from tests.model.tree_urdfs import GRIPPER, QUADRUPED
 
     tree = symkin.Tree.from_urdf({"quadruped": QUADRUPED, "gripper": GRIPPER}[which])
-    kin = symkin.compile(tree, backend="c")
+    kin = _with_lanes(symkin.compile(tree, backend="c"))
     text = symkin.generate(tree, "c")
     assert any("fkine_jacob0_all_x4_(" in t for t in text.values())
     Q = tree.random_q(43, seed=8)
@@ -127,7 +146,7 @@ def test_tree_frame_batch_equals_one_at_a_time_bit_for_bit(which):
     from tests.model.tree_urdfs import GRIPPER, QUADRUPED
 
     tree = symkin.Tree.from_urdf({"quadruped": QUADRUPED, "gripper": GRIPPER}[which])
-    kin = symkin.compile(tree, backend="c")
+    kin = _with_lanes(symkin.compile(tree, backend="c"))
     text = "".join(symkin.generate(tree, "c").values())
     for base in ("fkine", "jacob0", "jacobe", "fkine_jacob0"):
         assert re.search(rf"(^|[^_]){base}_0_x4_\(", text, re.M), base
@@ -155,7 +174,7 @@ def test_tree_batch_writes_the_zero_entries_too():
     from tests.model.tree_urdfs import QUADRUPED
 
     tree = symkin.Tree.from_urdf(QUADRUPED)
-    kin = symkin.compile(tree, backend="c")
+    kin = _with_lanes(symkin.compile(tree, backend="c"))
     files = symkin.generate(tree, "c", prefix="lanes_tree")
     sources = {k: v for k, v in files.items() if not k.endswith("_pymodule.c")}
     lib = load_library(compile_library(sources, "lanes_tree"))
@@ -184,10 +203,37 @@ def test_a_far_lane_sends_its_four_configurations_through_the_scalar_code():
     """The four-lane bodies are straight-line code; a lane beyond the inline range makes the body
     compute its four configurations with the scalar code, so the blocks with one huge angle still
     give, in every lane, what one call gives."""
-    kin = symkin.compile("ur5", backend="c")
+    kin = _with_lanes(symkin.compile("ur5", backend="c"))
     Q = kin.robot.random_q(8, seed=2)
     Q[6, 2] = 3e9
     Q[1, 4] = -2e6
     T = kin.fkine(Q)
     for i in range(8):
         assert np.array_equal(T[i], kin.fkine(Q[i])), i
+
+
+def test_the_lanes_library_is_built_at_the_first_batch_and_changes_no_result():
+    """A robot new to the cache: compiling it and calling it one configuration at a time (or three)
+    builds no four-lane code; the first batch of four or more starts it in the background, and
+    batches before and after it is bound, and single calls, give the same bits."""
+    import uuid
+
+    ets = "Rz(q) tx(0.3) Ry(q) tz(0.2) Rx(q) tx(0.1)"
+    robot = symkin.Robot.from_ets(ets, name=f"lazy_{uuid.uuid4().hex[:8]}")  # new to the cache
+    kin = symkin.compile(robot, backend="c")
+    st = lanes.state(kin.module)
+    assert st is not None and not st.bound and st.thread is None
+    Q = _configurations(robot, 13)
+    singles = {m: [_outputs(getattr(kin, m)(q)) for q in Q] for m in KIN_METHODS}
+    kin.fkine(Q[:3])
+    assert st.thread is None and not st.bound  # fewer than four: no lanes wanted
+    before = {m: _outputs(getattr(kin, m)(Q)) for m in KIN_METHODS}
+    assert st.thread is not None
+    assert lanes.ready(kin.module, timeout=600) and st.bound, st.error
+    for m in KIN_METHODS:
+        after = _outputs(getattr(kin, m)(Q))
+        for a, b in zip(after, before[m]):
+            assert a.tobytes() == b.tobytes(), m
+        for i, single in enumerate(singles[m]):
+            for a, s in zip(after, single):
+                assert a[i].tobytes() == np.ascontiguousarray(s).tobytes(), (m, i)

@@ -12,6 +12,7 @@ import pytest
 
 import symkin
 from symkin.check.kinematics import LARGE_TURNS, check
+from symkin.emit.c import lanes
 from symkin.runtime.kinematics import KIN_METHODS, Kinematics
 
 INLINE_MAX = 1.6e6  # beyond, the generated code calls libm
@@ -50,6 +51,7 @@ def _ulp_errors(x: np.ndarray, got: np.ndarray, f) -> np.ndarray:  # noqa: ANN00
 
 def test_inline_sin_cos_are_within_one_ulp():
     kin = symkin.compile(symkin.Robot.from_ets("Rz(q)", name="rz_ulp"), backend="c")
+    assert lanes.ready(kin.module, timeout=600)  # the batch below: four lanes
     x = _angles()
     T = kin.fkine(x[:, None])  # generated code: T[0, 0] = sk_cos(q0), T[1, 0] = sk_sin(q0)
     for name, got, f in (("sin", T[:, 1, 0], mpmath.sin), ("cos", T[:, 0, 0], mpmath.cos)):
@@ -97,3 +99,29 @@ def test_check_passes_at_large_angles_on_a_builtin_robot(backend):
     robot = symkin.load("puma560")
     report = check(robot, backends=[backend], samples=4)
     assert all(r.ok for r in report.rows if r.function.endswith("(large q)")), report.format()
+
+
+def test_scalar_sin_cos_are_within_one_ulp_and_the_lanes_bits():
+    """The straight-line sk_sin and sk_cos themselves (the harness of symkin bench sincos), on the
+    hard angles above (next to k pi/2, huge: libm, tiny, signed zeros): within 1 ulp of mpmath, and
+    the same bits as sk_sincos_n_ (seven angles per call, as a configuration) and the four lanes."""
+    from symkin.bench.sincos import harness
+
+    lib = harness(7)
+    x = _angles()
+    x = np.ascontiguousarray(x[: len(x) // 28 * 28])
+    out = {}
+    for name in ("skb_scalar", "skb_config", "skb_lanes", "skb_libm"):
+        if hasattr(lib, name):
+            s, c = np.empty(len(x)), np.empty(len(x))
+            getattr(lib, name)(x.ctypes.data, len(x), s.ctypes.data, c.ctypes.data)
+            out[name] = (s, c)
+    assert {"skb_scalar", "skb_config", "skb_lanes"} <= set(out)
+    s, c = out["skb_scalar"]
+    for name, got, f in (("sin", s, mpmath.sin), ("cos", c, mpmath.cos)):
+        err = _ulp_errors(x, got, f)
+        assert err.max() < 1.0, f"{name}: {err.max():.3g} ulp at x = {x[int(np.argmax(err))]!r}"
+    for other in ("skb_config", "skb_lanes"):
+        for a, b in zip(out[other], (s, c)):
+            assert np.array_equal(a.view(np.uint64), b.view(np.uint64)), other
+    assert not np.array_equal(s.view(np.uint64), out["skb_libm"][0].view(np.uint64))  # not glibc's

@@ -46,15 +46,22 @@ const char *const symkin_gripper_tree_frame_names[2] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -62,14 +69,34 @@ const char *const symkin_gripper_tree_frame_names[2] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -77,14 +104,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -108,36 +139,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -218,7 +260,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -232,7 +274,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -307,6 +349,74 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 }
 #else
 #define SYMKIN_LANES 1
+#endif
+
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_gripper_tree_lanes.c: its table symkin_gripper_tree_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_gripper_tree_bind_lanes (symkin's runtime builds symkin_gripper_tree_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine_all)(const double *q, double *T, const int zeros, ptrdiff_t N, void (*scalar)(const double *q, double *T, const int zeros));
+    ptrdiff_t (*jacob0_all)(const double *q, double *J, const int zeros, ptrdiff_t N, void (*scalar)(const double *q, double *J, const int zeros));
+    ptrdiff_t (*fkine_jacob0_all)(const double *q, double *T, double *J, const int zeros, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J, const int zeros));
+    ptrdiff_t (*fkine_0)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*jacob0_0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe_0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*fkine_jacob0_0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*fkine_1)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*jacob0_1)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe_1)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*fkine_jacob0_1)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_gripper_tree_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_gripper_tree_bind_lanes(const void *table);
+void symkin_gripper_tree_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_gripper_tree_lanes;
+}
 #endif
 
 /*
@@ -407,12 +517,17 @@ static inline void fkine_all_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RE
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = t0*t5;
@@ -461,50 +576,13 @@ void symkin_gripper_tree_fkine_all(const double *q, double *T)
     fkine_all_(q, T, 1);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_all_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_all_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, const int zeros)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_all_(q + l * 2, T + l * 32, zeros);
-        return;
-    }
-    skv_store4_(T + 0, 32, t6, -t1, t8, t10);
-    skv_store4_(T + 4, 32, t7, t0, t9, t11);
-    skv_store4_(T + 8, 32, -t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 12, 32, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(T + 16, 32, t6, -t1, -t8, -t10);
-    skv_store4_(T + 20, 32, t7, t0, -t9, -t11);
-    skv_store4_(T + 24, 32, t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 28, 32, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_gripper_tree_fkine_all_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_all_x4_(q + i * 2, T + i * 32, 1);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_all(q, T, 1, N, fkine_all_);
 #endif
     for (; i < N; ++i)
         fkine_all_(q + i * 2, T + i * 32, 1);
@@ -514,8 +592,9 @@ void symkin_gripper_tree_fkine_all_batch_zeroed(const double *q, double *T, ptrd
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_all_x4_(q + i * 2, T + i * 32, 0);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_all(q, T, 0, N, fkine_all_);
 #endif
     for (; i < N; ++i)
         fkine_all_(q + i * 2, T + i * 32, 0);
@@ -526,12 +605,17 @@ static inline void jacob0_all_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t8 = t0*t5;
     const double t9 = t1*t5;
     const double t10 = t2 + (0.04)*t8;
@@ -576,52 +660,13 @@ void symkin_gripper_tree_jacob0_all(const double *q, double *J)
     jacob0_all_(q, J, 1);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_all_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_all_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, const int zeros)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    const sk_v4 t14 = t10 - t2;
-    const sk_v4 t15 = t11 - t3;
-    const sk_v4 t16 = t12 - 0.15;
-    const sk_v4 t17 = t0*t16;
-    const sk_v4 t18 = t1*t16;
-    const sk_v4 t19 = -t0*t14 - t1*t15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_all_(q + l * 2, J + l * 24, zeros);
-        return;
-    }
-    skv_store4_(J + 0, 24, -t11, t17, t10, t18);
-    skv_store4_(J + 4, 24, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 8, 24, SKV_SPLAT(0.0), t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 24, t11, -t17, -t10, -t18);
-    skv_store4_(J + 16, 24, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), t1);
-    skv_store4_(J + 20, 24, SKV_SPLAT(0.0), -t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_jacob0_all_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_all_x4_(q + i * 2, J + i * 24, 1);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_all(q, J, 1, N, jacob0_all_);
 #endif
     for (; i < N; ++i)
         jacob0_all_(q + i * 2, J + i * 24, 1);
@@ -631,8 +676,9 @@ void symkin_gripper_tree_jacob0_all_batch_zeroed(const double *q, double *J, ptr
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_all_x4_(q + i * 2, J + i * 24, 0);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_all(q, J, 0, N, jacob0_all_);
 #endif
     for (; i < N; ++i)
         jacob0_all_(q + i * 2, J + i * 24, 0);
@@ -643,12 +689,17 @@ static inline void fkine_jacob0_all_(const double *SYMKIN_RESTRICT q, double *SY
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = t0*t5;
@@ -727,62 +778,13 @@ void symkin_gripper_tree_fkine_jacob0_all(const double *q, double *T, double *J)
     fkine_jacob0_all_(q, T, J, 1);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_all_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_all_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J, const int zeros)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    const sk_v4 t14 = t10 - t2;
-    const sk_v4 t15 = t11 - t3;
-    const sk_v4 t16 = t12 - 0.15;
-    const sk_v4 t17 = t0*t16;
-    const sk_v4 t18 = t1*t16;
-    const sk_v4 t19 = -t0*t14 - t1*t15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_all_(q + l * 2, T + l * 32, J + l * 24, zeros);
-        return;
-    }
-    skv_store4_(T + 0, 32, t6, -t1, t8, t10);
-    skv_store4_(T + 4, 32, t7, t0, t9, t11);
-    skv_store4_(T + 8, 32, -t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 12, 32, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(T + 16, 32, t6, -t1, -t8, -t10);
-    skv_store4_(T + 20, 32, t7, t0, -t9, -t11);
-    skv_store4_(T + 24, 32, t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 28, 32, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 24, -t11, t17, t10, t18);
-    skv_store4_(J + 4, 24, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 8, 24, SKV_SPLAT(0.0), t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 24, t11, -t17, -t10, -t18);
-    skv_store4_(J + 16, 24, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), t1);
-    skv_store4_(J + 20, 24, SKV_SPLAT(0.0), -t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_fkine_jacob0_all_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_all_x4_(q + i * 2, T + i * 32, J + i * 24, 1);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0_all(q, T, J, 1, N, fkine_jacob0_all_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_all_(q + i * 2, T + i * 32, J + i * 24, 1);
@@ -792,8 +794,9 @@ void symkin_gripper_tree_fkine_jacob0_all_batch_zeroed(const double *q, double *
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_all_x4_(q + i * 2, T + i * 32, J + i * 24, 0);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0_all(q, T, J, 0, N, fkine_jacob0_all_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_all_(q + i * 2, T + i * 32, J + i * 24, 0);
@@ -804,12 +807,17 @@ static void fkine_0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = t0*t5;
@@ -840,46 +848,13 @@ void symkin_gripper_tree_fkine_0(const double *q, double *T)
     fkine_0_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_0_(q + l * 2, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, t6, -t1, t8, t10);
-    skv_store4_(T + 4, 16, t7, t0, t9, t11);
-    skv_store4_(T + 8, 16, -t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_gripper_tree_fkine_0_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_0_x4_(q + i * 2, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_0(q, T, N, fkine_0_);
 #endif
     for (; i < N; ++i)
         fkine_0_(q + i * 2, T + i * 16);
@@ -890,12 +865,17 @@ static void jacob0_0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t8 = t0*t5;
     const double t9 = t1*t5;
     const double t10 = t2 + (0.04)*t8;
@@ -926,49 +906,13 @@ void symkin_gripper_tree_jacob0_0(const double *q, double *J)
     jacob0_0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    const sk_v4 t14 = t10 - t2;
-    const sk_v4 t15 = t11 - t3;
-    const sk_v4 t16 = t12 - 0.15;
-    const sk_v4 t17 = t0*t16;
-    const sk_v4 t18 = t1*t16;
-    const sk_v4 t19 = -t0*t14 - t1*t15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_0_(q + l * 2, J + l * 12);
-        return;
-    }
-    skv_store4_(J + 0, 12, -t11, t17, t10, t18);
-    skv_store4_(J + 4, 12, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 8, 12, SKV_SPLAT(0.0), t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_jacob0_0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_0_x4_(q + i * 2, J + i * 12);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_0(q, J, N, jacob0_0_);
 #endif
     for (; i < N; ++i)
         jacob0_0_(q + i * 2, J + i * 12);
@@ -978,8 +922,13 @@ void symkin_gripper_tree_jacob0_0_batch(const double *q, double *J, ptrdiff_t N)
 static void jacobe_0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
 {
     const double q1 = q[1];
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    double sin_[1], cos_[1]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q1, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 1, sin_, cos_);
+    }
+    const double t4 = cos_[0];
+    const double t5 = sin_[0];
     const double t20 = (0.05)*t5;
     const double t21 = -0.05*t4 - 0.04;
     const double t24 = -0.02*t4;
@@ -1004,38 +953,13 @@ void symkin_gripper_tree_jacobe_0(const double *q, double *J)
     jacobe_0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t20 = (0.05)*t5;
-    const sk_v4 t21 = -0.05*t4 - 0.04;
-    const sk_v4 t24 = -0.02*t4;
-    const sk_v4 t25 = -t20*t4 - t21*t5;
-    const sk_v4 t26 = -0.02*t5;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_0_(q + l * 2, J + l * 12);
-        return;
-    }
-    skv_store4_(J + 0, 12, t24, SKV_SPLAT(0.04), t25, SKV_SPLAT(0.0));
-    skv_store4_(J + 4, 12, t26, SKV_SPLAT(0.0), -t5, SKV_SPLAT(0.0));
-    skv_store4_(J + 8, 12, SKV_SPLAT(0.0), SKV_SPLAT(1.0), t4, SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_jacobe_0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_0_x4_(q + i * 2, J + i * 12);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe_0(q, J, N, jacobe_0_);
 #endif
     for (; i < N; ++i)
         jacobe_0_(q + i * 2, J + i * 12);
@@ -1066,8 +990,13 @@ static const int hessiane_0_path_[2] = { 0, 1 };
 static void hessiane_0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
 {
     const double q1 = q[1];
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    double sin_[1], cos_[1]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q1, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 1, sin_, cos_);
+    }
+    const double t4 = cos_[0];
+    const double t5 = sin_[0];
     const double t20 = (0.05)*t5;
     const double t21 = -0.05*t4 - 0.04;
     const double t24 = -0.02*t4;
@@ -1106,12 +1035,17 @@ static void fkine_jacob0_0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_REST
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = t0*t5;
@@ -1160,55 +1094,13 @@ void symkin_gripper_tree_fkine_jacob0_0(const double *q, double *T, double *J)
     fkine_jacob0_0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    const sk_v4 t14 = t10 - t2;
-    const sk_v4 t15 = t11 - t3;
-    const sk_v4 t16 = t12 - 0.15;
-    const sk_v4 t17 = t0*t16;
-    const sk_v4 t18 = t1*t16;
-    const sk_v4 t19 = -t0*t14 - t1*t15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_0_(q + l * 2, T + l * 16, J + l * 12);
-        return;
-    }
-    skv_store4_(T + 0, 16, t6, -t1, t8, t10);
-    skv_store4_(T + 4, 16, t7, t0, t9, t11);
-    skv_store4_(T + 8, 16, -t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 12, -t11, t17, t10, t18);
-    skv_store4_(J + 4, 12, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 8, 12, SKV_SPLAT(0.0), t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_fkine_jacob0_0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_0_x4_(q + i * 2, T + i * 16, J + i * 12);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0_0(q, T, J, N, fkine_jacob0_0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_0_(q + i * 2, T + i * 16, J + i * 12);
@@ -1221,12 +1113,17 @@ static void jacob0_hessian0_0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t8 = t0*t5;
     const double t9 = t1*t5;
     const double t10 = t2 + (0.04)*t8;
@@ -1270,12 +1167,17 @@ static void fkine_1_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = t0*t5;
@@ -1306,46 +1208,13 @@ void symkin_gripper_tree_fkine_1(const double *q, double *T)
     fkine_1_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_1_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_1_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_1_(q + l * 2, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, t6, -t1, -t8, -t10);
-    skv_store4_(T + 4, 16, t7, t0, -t9, -t11);
-    skv_store4_(T + 8, 16, t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_gripper_tree_fkine_1_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_1_x4_(q + i * 2, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_1(q, T, N, fkine_1_);
 #endif
     for (; i < N; ++i)
         fkine_1_(q + i * 2, T + i * 16);
@@ -1356,12 +1225,17 @@ static void jacob0_1_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t8 = t0*t5;
     const double t9 = t1*t5;
     const double t10 = t2 + (0.04)*t8;
@@ -1392,49 +1266,13 @@ void symkin_gripper_tree_jacob0_1(const double *q, double *J)
     jacob0_1_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_1_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_1_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    const sk_v4 t14 = t10 - t2;
-    const sk_v4 t15 = t11 - t3;
-    const sk_v4 t16 = t12 - 0.15;
-    const sk_v4 t17 = t0*t16;
-    const sk_v4 t18 = t1*t16;
-    const sk_v4 t19 = -t0*t14 - t1*t15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_1_(q + l * 2, J + l * 12);
-        return;
-    }
-    skv_store4_(J + 0, 12, t11, -t17, -t10, -t18);
-    skv_store4_(J + 4, 12, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), t1);
-    skv_store4_(J + 8, 12, SKV_SPLAT(0.0), -t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_jacob0_1_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_1_x4_(q + i * 2, J + i * 12);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_1(q, J, N, jacob0_1_);
 #endif
     for (; i < N; ++i)
         jacob0_1_(q + i * 2, J + i * 12);
@@ -1444,8 +1282,13 @@ void symkin_gripper_tree_jacob0_1_batch(const double *q, double *J, ptrdiff_t N)
 static void jacobe_1_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
 {
     const double q1 = q[1];
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    double sin_[1], cos_[1]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q1, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 1, sin_, cos_);
+    }
+    const double t4 = cos_[0];
+    const double t5 = sin_[0];
     const double t20 = (0.05)*t5;
     const double t21 = -0.05*t4 - 0.04;
     const double t24 = -0.02*t4;
@@ -1470,38 +1313,13 @@ void symkin_gripper_tree_jacobe_1(const double *q, double *J)
     jacobe_1_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_1_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_1_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t20 = (0.05)*t5;
-    const sk_v4 t21 = -0.05*t4 - 0.04;
-    const sk_v4 t24 = -0.02*t4;
-    const sk_v4 t25 = -t20*t4 - t21*t5;
-    const sk_v4 t26 = -0.02*t5;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_1_(q + l * 2, J + l * 12);
-        return;
-    }
-    skv_store4_(J + 0, 12, -t24, SKV_SPLAT(-0.04), -t25, SKV_SPLAT(0.0));
-    skv_store4_(J + 4, 12, t26, SKV_SPLAT(0.0), t5, SKV_SPLAT(0.0));
-    skv_store4_(J + 8, 12, SKV_SPLAT(0.0), SKV_SPLAT(-1.0), t4, SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_jacobe_1_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_1_x4_(q + i * 2, J + i * 12);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe_1(q, J, N, jacobe_1_);
 #endif
     for (; i < N; ++i)
         jacobe_1_(q + i * 2, J + i * 12);
@@ -1533,8 +1351,13 @@ static const double hessiane_1_mult_[2] = { 1.0, -1.0 };
 static void hessiane_1_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
 {
     const double q1 = q[1];
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    double sin_[1], cos_[1]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q1, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 1, sin_, cos_);
+    }
+    const double t4 = cos_[0];
+    const double t5 = sin_[0];
     const double t20 = (0.05)*t5;
     const double t21 = -0.05*t4 - 0.04;
     const double t24 = -0.02*t4;
@@ -1573,12 +1396,17 @@ static void fkine_jacob0_1_(const double *SYMKIN_RESTRICT q, double *SYMKIN_REST
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = t0*t5;
@@ -1627,55 +1455,13 @@ void symkin_gripper_tree_fkine_jacob0_1(const double *q, double *T, double *J)
     fkine_jacob0_1_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_1_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_1_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[2], q[4], q[6]};
-    const sk_v4 q1 = {q[1], q[3], q[5], q[7]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = -0.02*t1;
-    const sk_v4 t3 = (0.02)*t0;
-    const sk_v4 t4 = skv_cos_(q1, &far_);
-    const sk_v4 t5 = skv_sin_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = t0*t5;
-    const sk_v4 t9 = t1*t5;
-    const sk_v4 t10 = t2 + (0.04)*t8;
-    const sk_v4 t11 = t3 + (0.04)*t9;
-    const sk_v4 t12 = (0.04)*t4 + 0.15;
-    const sk_v4 t14 = t10 - t2;
-    const sk_v4 t15 = t11 - t3;
-    const sk_v4 t16 = t12 - 0.15;
-    const sk_v4 t17 = t0*t16;
-    const sk_v4 t18 = t1*t16;
-    const sk_v4 t19 = -t0*t14 - t1*t15;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_1_(q + l * 2, T + l * 16, J + l * 12);
-        return;
-    }
-    skv_store4_(T + 0, 16, t6, -t1, -t8, -t10);
-    skv_store4_(T + 4, 16, t7, t0, -t9, -t11);
-    skv_store4_(T + 8, 16, t5, SKV_SPLAT(0.0), t4, t12);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 12, t11, -t17, -t10, -t18);
-    skv_store4_(J + 4, 12, SKV_SPLAT(0.0), t19, SKV_SPLAT(0.0), t1);
-    skv_store4_(J + 8, 12, SKV_SPLAT(0.0), -t0, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_gripper_tree_fkine_jacob0_1_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_1_x4_(q + i * 2, T + i * 16, J + i * 12);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0_1(q, T, J, N, fkine_jacob0_1_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_1_(q + i * 2, T + i * 16, J + i * 12);
@@ -1689,12 +1475,17 @@ static void jacob0_hessian0_1_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
 {
     const double q0 = q[0];
     const double q1 = q[1];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[2], cos_[2]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 2, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = -0.02*t1;
     const double t3 = (0.02)*t0;
-    const double t4 = sk_cos(q1);
-    const double t5 = sk_sin(q1);
+    const double t4 = cos_[1];
+    const double t5 = sin_[1];
     const double t8 = t0*t5;
     const double t9 = t1*t5;
     const double t10 = t2 + (0.04)*t8;

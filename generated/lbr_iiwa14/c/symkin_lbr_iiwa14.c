@@ -47,15 +47,22 @@ const char *const symkin_lbr_iiwa14_joint_names[SYMKIN_LBR_IIWA14_N] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -63,14 +70,34 @@ const char *const symkin_lbr_iiwa14_joint_names[SYMKIN_LBR_IIWA14_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -78,14 +105,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -109,36 +140,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -219,7 +261,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -233,7 +275,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -310,6 +352,70 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #define SYMKIN_LANES 1
 #endif
 
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_lbr_iiwa14_lanes.c: its table symkin_lbr_iiwa14_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_lbr_iiwa14_bind_lanes (symkin's runtime builds symkin_lbr_iiwa14_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*link_poses)(const double *q, double *links, ptrdiff_t N, void (*scalar)(const double *q, double *links));
+    ptrdiff_t (*jacob0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*hessiane)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*fkine_jacob0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*jacob0_hessian0)(const double *q, double *J, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *J, double *H));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_lbr_iiwa14_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_lbr_iiwa14_bind_lanes(const void *table);
+void symkin_lbr_iiwa14_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_lbr_iiwa14_lanes;
+}
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -337,16 +443,21 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos_[2];
+    const double t9 = sin_[2];
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -356,16 +467,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t16 = -0.42*t6;
     const double t17 = -0.42*t7;
     const double t18 = (0.42)*t2 + 0.36;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos_[3];
+    const double t20 = sin_[3];
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos_[4];
+    const double t28 = sin_[4];
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -375,16 +486,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos_[5];
+    const double t39 = sin_[5];
     const double t40 = -t24*t39 + t29*t38;
     const double t41 = -t25*t39 + t30*t38;
     const double t42 = -t26*t39 + t31*t38;
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t46 = cos_[6];
+    const double t47 = sin_[6];
     const double t48 = t32*t47 + t40*t46;
     const double t49 = t33*t47 + t41*t46;
     const double t50 = t34*t47 + t42*t46;
@@ -417,95 +528,13 @@ void symkin_lbr_iiwa14_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t10 = -t1*t9 + t4*t8;
-    const sk_v4 t11 = t0*t9 + t5*t8;
-    const sk_v4 t12 = -t3*t8;
-    const sk_v4 t13 = -t1*t8 - t4*t9;
-    const sk_v4 t14 = t0*t8 - t5*t9;
-    const sk_v4 t15 = t3*t9;
-    const sk_v4 t16 = -0.42*t6;
-    const sk_v4 t17 = -0.42*t7;
-    const sk_v4 t18 = (0.42)*t2 + 0.36;
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t21 = t10*t19 - t20*t6;
-    const sk_v4 t22 = t11*t19 - t20*t7;
-    const sk_v4 t23 = t12*t19 + t2*t20;
-    const sk_v4 t24 = -t10*t20 - t19*t6;
-    const sk_v4 t25 = -t11*t20 - t19*t7;
-    const sk_v4 t26 = -t12*t20 + t19*t2;
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t29 = t13*t28 + t21*t27;
-    const sk_v4 t30 = t14*t28 + t22*t27;
-    const sk_v4 t31 = t15*t28 + t23*t27;
-    const sk_v4 t32 = t13*t27 - t21*t28;
-    const sk_v4 t33 = t14*t27 - t22*t28;
-    const sk_v4 t34 = t15*t27 - t23*t28;
-    const sk_v4 t35 = t16 + (0.4)*t24;
-    const sk_v4 t36 = t17 + (0.4)*t25;
-    const sk_v4 t37 = t18 + (0.4)*t26;
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t40 = -t24*t39 + t29*t38;
-    const sk_v4 t41 = -t25*t39 + t30*t38;
-    const sk_v4 t42 = -t26*t39 + t31*t38;
-    const sk_v4 t43 = -t24*t38 - t29*t39;
-    const sk_v4 t44 = -t25*t38 - t30*t39;
-    const sk_v4 t45 = -t26*t38 - t31*t39;
-    const sk_v4 t46 = skv_cos_(q6, &far_);
-    const sk_v4 t47 = skv_sin_(q6, &far_);
-    const sk_v4 t48 = t32*t47 + t40*t46;
-    const sk_v4 t49 = t33*t47 + t41*t46;
-    const sk_v4 t50 = t34*t47 + t42*t46;
-    const sk_v4 t51 = t32*t46 - t40*t47;
-    const sk_v4 t52 = t33*t46 - t41*t47;
-    const sk_v4 t53 = t34*t46 - t42*t47;
-    const sk_v4 t54 = t35 - 0.126*t43;
-    const sk_v4 t55 = t36 - 0.126*t44;
-    const sk_v4 t56 = t37 - 0.126*t45;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_(q + l * 7, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, t48, t51, -t43, t54);
-    skv_store4_(T + 4, 16, t49, t52, -t44, t55);
-    skv_store4_(T + 8, 16, t50, t53, -t45, t56);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_lbr_iiwa14_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_x4_(q + i * 7, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine(q, T, N, fkine_);
 #endif
     for (; i < N; ++i)
         fkine_(q + i * 7, T + i * 16);
@@ -521,16 +550,21 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos_[2];
+    const double t9 = sin_[2];
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -540,16 +574,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t16 = -0.42*t6;
     const double t17 = -0.42*t7;
     const double t18 = (0.42)*t2 + 0.36;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos_[3];
+    const double t20 = sin_[3];
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos_[4];
+    const double t28 = sin_[4];
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -559,16 +593,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos_[5];
+    const double t39 = sin_[5];
     const double t40 = -t24*t39 + t29*t38;
     const double t41 = -t25*t39 + t30*t38;
     const double t42 = -t26*t39 + t31*t38;
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t46 = cos_[6];
+    const double t47 = sin_[6];
     const double t48 = t32*t47 + t40*t46;
     const double t49 = t33*t47 + t41*t46;
     const double t50 = t34*t47 + t42*t46;
@@ -694,116 +728,13 @@ void symkin_lbr_iiwa14_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
-#if SYMKIN_LANES == 4
-/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t10 = -t1*t9 + t4*t8;
-    const sk_v4 t11 = t0*t9 + t5*t8;
-    const sk_v4 t12 = -t3*t8;
-    const sk_v4 t13 = -t1*t8 - t4*t9;
-    const sk_v4 t14 = t0*t8 - t5*t9;
-    const sk_v4 t15 = t3*t9;
-    const sk_v4 t16 = -0.42*t6;
-    const sk_v4 t17 = -0.42*t7;
-    const sk_v4 t18 = (0.42)*t2 + 0.36;
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t21 = t10*t19 - t20*t6;
-    const sk_v4 t22 = t11*t19 - t20*t7;
-    const sk_v4 t23 = t12*t19 + t2*t20;
-    const sk_v4 t24 = -t10*t20 - t19*t6;
-    const sk_v4 t25 = -t11*t20 - t19*t7;
-    const sk_v4 t26 = -t12*t20 + t19*t2;
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t29 = t13*t28 + t21*t27;
-    const sk_v4 t30 = t14*t28 + t22*t27;
-    const sk_v4 t31 = t15*t28 + t23*t27;
-    const sk_v4 t32 = t13*t27 - t21*t28;
-    const sk_v4 t33 = t14*t27 - t22*t28;
-    const sk_v4 t34 = t15*t27 - t23*t28;
-    const sk_v4 t35 = t16 + (0.4)*t24;
-    const sk_v4 t36 = t17 + (0.4)*t25;
-    const sk_v4 t37 = t18 + (0.4)*t26;
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t40 = -t24*t39 + t29*t38;
-    const sk_v4 t41 = -t25*t39 + t30*t38;
-    const sk_v4 t42 = -t26*t39 + t31*t38;
-    const sk_v4 t43 = -t24*t38 - t29*t39;
-    const sk_v4 t44 = -t25*t38 - t30*t39;
-    const sk_v4 t45 = -t26*t38 - t31*t39;
-    const sk_v4 t46 = skv_cos_(q6, &far_);
-    const sk_v4 t47 = skv_sin_(q6, &far_);
-    const sk_v4 t48 = t32*t47 + t40*t46;
-    const sk_v4 t49 = t33*t47 + t41*t46;
-    const sk_v4 t50 = t34*t47 + t42*t46;
-    const sk_v4 t51 = t32*t46 - t40*t47;
-    const sk_v4 t52 = t33*t46 - t41*t47;
-    const sk_v4 t53 = t34*t46 - t42*t47;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            link_poses_(q + l * 7, links + l * 112);
-        return;
-    }
-    skv_store4_(links + 0, 112, t0, -t1, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 4, 112, t1, t0, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 8, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 12, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 16, 112, t4, t6, -t1, SKV_SPLAT(0.0));
-    skv_store4_(links + 20, 112, t5, t7, t0, SKV_SPLAT(0.0));
-    skv_store4_(links + 24, 112, -t3, -t2, SKV_SPLAT(0.0), SKV_SPLAT(0.36));
-    skv_store4_(links + 28, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 32, 112, t10, t13, -t6, SKV_SPLAT(0.0));
-    skv_store4_(links + 36, 112, t11, t14, -t7, SKV_SPLAT(0.0));
-    skv_store4_(links + 40, 112, t12, t15, t2, SKV_SPLAT(0.36));
-    skv_store4_(links + 44, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 48, 112, t21, t24, -t13, t16);
-    skv_store4_(links + 52, 112, t22, t25, -t14, t17);
-    skv_store4_(links + 56, 112, t23, t26, -t15, t18);
-    skv_store4_(links + 60, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 64, 112, t29, t32, t24, t16);
-    skv_store4_(links + 68, 112, t30, t33, t25, t17);
-    skv_store4_(links + 72, 112, t31, t34, t26, t18);
-    skv_store4_(links + 76, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 80, 112, t40, t43, t32, t35);
-    skv_store4_(links + 84, 112, t41, t44, t33, t36);
-    skv_store4_(links + 88, 112, t42, t45, t34, t37);
-    skv_store4_(links + 92, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 96, 112, t48, t51, -t43, t35);
-    skv_store4_(links + 100, 112, t49, t52, -t44, t36);
-    skv_store4_(links + 104, 112, t50, t53, -t45, t37);
-    skv_store4_(links + 108, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_lbr_iiwa14_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        link_poses_x4_(q + i * 7, links + i * 112);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->link_poses(q, links, N, link_poses_);
 #endif
     for (; i < N; ++i)
         link_poses_(q + i * 7, links + i * 112);
@@ -818,16 +749,21 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos_[2];
+    const double t9 = sin_[2];
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -837,16 +773,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t16 = -0.42*t6;
     const double t17 = -0.42*t7;
     const double t18 = (0.42)*t2 + 0.36;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos_[3];
+    const double t20 = sin_[3];
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos_[4];
+    const double t28 = sin_[4];
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -856,8 +792,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos_[5];
+    const double t39 = sin_[5];
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
@@ -938,115 +874,13 @@ void symkin_lbr_iiwa14_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t10 = -t1*t9 + t4*t8;
-    const sk_v4 t11 = t0*t9 + t5*t8;
-    const sk_v4 t12 = -t3*t8;
-    const sk_v4 t13 = -t1*t8 - t4*t9;
-    const sk_v4 t14 = t0*t8 - t5*t9;
-    const sk_v4 t15 = t3*t9;
-    const sk_v4 t16 = -0.42*t6;
-    const sk_v4 t17 = -0.42*t7;
-    const sk_v4 t18 = (0.42)*t2 + 0.36;
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t21 = t10*t19 - t20*t6;
-    const sk_v4 t22 = t11*t19 - t20*t7;
-    const sk_v4 t23 = t12*t19 + t2*t20;
-    const sk_v4 t24 = -t10*t20 - t19*t6;
-    const sk_v4 t25 = -t11*t20 - t19*t7;
-    const sk_v4 t26 = -t12*t20 + t19*t2;
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t29 = t13*t28 + t21*t27;
-    const sk_v4 t30 = t14*t28 + t22*t27;
-    const sk_v4 t31 = t15*t28 + t23*t27;
-    const sk_v4 t32 = t13*t27 - t21*t28;
-    const sk_v4 t33 = t14*t27 - t22*t28;
-    const sk_v4 t34 = t15*t27 - t23*t28;
-    const sk_v4 t35 = t16 + (0.4)*t24;
-    const sk_v4 t36 = t17 + (0.4)*t25;
-    const sk_v4 t37 = t18 + (0.4)*t26;
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t43 = -t24*t38 - t29*t39;
-    const sk_v4 t44 = -t25*t38 - t30*t39;
-    const sk_v4 t45 = -t26*t38 - t31*t39;
-    const sk_v4 t54 = t35 - 0.126*t43;
-    const sk_v4 t55 = t36 - 0.126*t44;
-    const sk_v4 t56 = t37 - 0.126*t45;
-    const sk_v4 t57 = t56 - 0.36;
-    const sk_v4 t58 = t0*t57;
-    const sk_v4 t59 = t1*t57;
-    const sk_v4 t60 = -t0*t54 - t1*t55;
-    const sk_v4 t61 = -t2*t55 - t57*t7;
-    const sk_v4 t62 = t2*t54 + t57*t6;
-    const sk_v4 t63 = t54*t7 - t55*t6;
-    const sk_v4 t64 = -t16 + t54;
-    const sk_v4 t65 = -t17 + t55;
-    const sk_v4 t66 = -t18 + t56;
-    const sk_v4 t67 = -t14*t66 + t15*t65;
-    const sk_v4 t68 = t13*t66 - t15*t64;
-    const sk_v4 t69 = -t13*t65 + t14*t64;
-    const sk_v4 t70 = t25*t66 - t26*t65;
-    const sk_v4 t71 = -t24*t66 + t26*t64;
-    const sk_v4 t72 = t24*t65 - t25*t64;
-    const sk_v4 t73 = -t35 + t54;
-    const sk_v4 t74 = -t36 + t55;
-    const sk_v4 t75 = -t37 + t56;
-    const sk_v4 t76 = t33*t75 - t34*t74;
-    const sk_v4 t77 = -t32*t75 + t34*t73;
-    const sk_v4 t78 = t32*t74 - t33*t73;
-    const sk_v4 t79 = -t44*t75 + t45*t74;
-    const sk_v4 t80 = t43*t75 - t45*t73;
-    const sk_v4 t81 = -t43*t74 + t44*t73;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_(q + l * 7, J + l * 42);
-        return;
-    }
-    skv_store4_(J + 0, 42, -t55, t58, t61, t67);
-    skv_store4_(J + 4, 42, t70, t76, t79, t54);
-    skv_store4_(J + 8, 42, t59, t62, t68, t71);
-    skv_store4_(J + 12, 42, t77, t80, SKV_SPLAT(0.0), t60);
-    skv_store4_(J + 16, 42, t63, t69, t72, t78);
-    skv_store4_(J + 20, 42, t81, SKV_SPLAT(0.0), -t1, -t6);
-    skv_store4_(J + 24, 42, -t13, t24, t32, -t43);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, -t7, -t14);
-    skv_store4_(J + 32, 42, t25, t33, -t44, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), t2, -t15, t26);
-    skv_store4_(J + 38, 42, -t15, t26, t34, -t45);
-}
-#endif
-
-
 void symkin_lbr_iiwa14_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_x4_(q + i * 7, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0(q, J, N, jacob0_);
 #endif
     for (; i < N; ++i)
         jacob0_(q + i * 7, J + i * 42);
@@ -1061,18 +895,23 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q1, q2, q3, q4, q5, q6, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t2 = cos_[0];
+    const double t3 = sin_[0];
+    const double t8 = cos_[1];
+    const double t9 = sin_[1];
+    const double t19 = cos_[2];
+    const double t20 = sin_[2];
+    const double t27 = cos_[3];
+    const double t28 = sin_[3];
+    const double t38 = cos_[4];
+    const double t39 = sin_[4];
+    const double t46 = cos_[5];
+    const double t47 = sin_[5];
     const double t82 = t38*t46;
     const double t83 = -t38*t47;
     const double t84 = t39*t46;
@@ -1173,107 +1012,13 @@ void symkin_lbr_iiwa14_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t46 = skv_cos_(q6, &far_);
-    const sk_v4 t47 = skv_sin_(q6, &far_);
-    const sk_v4 t82 = t38*t46;
-    const sk_v4 t83 = -t38*t47;
-    const sk_v4 t84 = t39*t46;
-    const sk_v4 t85 = -t39*t47;
-    const sk_v4 t86 = (0.4)*t84;
-    const sk_v4 t87 = (0.4)*t85;
-    const sk_v4 t88 = -0.4*t38 - 0.126;
-    const sk_v4 t89 = t27*t82 - t28*t47;
-    const sk_v4 t90 = t27*t83 - t28*t46;
-    const sk_v4 t91 = t27*t39;
-    const sk_v4 t92 = t27*t47 + t28*t82;
-    const sk_v4 t93 = t27*t46 + t28*t83;
-    const sk_v4 t94 = t28*t39;
-    const sk_v4 t95 = t19*t89 + t20*t84;
-    const sk_v4 t96 = t19*t90 + t20*t85;
-    const sk_v4 t97 = t19*t91 - t20*t38;
-    const sk_v4 t98 = -t19*t84 + t20*t89;
-    const sk_v4 t99 = -t19*t85 + t20*t90;
-    const sk_v4 t100 = t19*t38 + t20*t91;
-    const sk_v4 t101 = t86 - 0.42*t98;
-    const sk_v4 t102 = t87 - 0.42*t99;
-    const sk_v4 t103 = -0.42*t100 + t88;
-    const sk_v4 t104 = t8*t95 - t9*t92;
-    const sk_v4 t105 = t8*t96 - t9*t93;
-    const sk_v4 t106 = t8*t97 - t9*t94;
-    const sk_v4 t107 = t8*t92 + t9*t95;
-    const sk_v4 t108 = t8*t93 + t9*t96;
-    const sk_v4 t109 = t8*t94 + t9*t97;
-    const sk_v4 t113 = t104*t3 - t2*t98;
-    const sk_v4 t114 = t105*t3 - t2*t99;
-    const sk_v4 t115 = -t100*t2 + t106*t3;
-    const sk_v4 t116 = t101 + (0.36)*t113;
-    const sk_v4 t117 = t102 + (0.36)*t114;
-    const sk_v4 t118 = t103 + (0.36)*t115;
-    const sk_v4 t119 = (0.126)*t46;
-    const sk_v4 t120 = -0.126*t47;
-    const sk_v4 t121 = t38*t87 + t85*t88;
-    const sk_v4 t122 = -t38*t86 - t84*t88;
-    const sk_v4 t123 = t84*t87 - t85*t86;
-    const sk_v4 t124 = -t87*t94 + t88*t93;
-    const sk_v4 t125 = t86*t94 - t88*t92;
-    const sk_v4 t126 = -t86*t93 + t87*t92;
-    const sk_v4 t127 = t100*t102 - t103*t99;
-    const sk_v4 t128 = -t100*t101 + t103*t98;
-    const sk_v4 t129 = t101*t99 - t102*t98;
-    const sk_v4 t130 = t102*t109 - t103*t108;
-    const sk_v4 t131 = -t101*t109 + t103*t107;
-    const sk_v4 t132 = t101*t108 - t102*t107;
-    const sk_v4 t133 = t114*t118 - t115*t117;
-    const sk_v4 t134 = -t113*t118 + t115*t116;
-    const sk_v4 t135 = t113*t117 - t114*t116;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_(q + l * 7, J + l * 42);
-        return;
-    }
-    skv_store4_(J + 0, 42, t133, t130, t127, t124);
-    skv_store4_(J + 4, 42, t121, t119, SKV_SPLAT(0.0), t134);
-    skv_store4_(J + 8, 42, t131, t128, t125, t122);
-    skv_store4_(J + 12, 42, t120, SKV_SPLAT(0.0), t135, t132);
-    skv_store4_(J + 16, 42, t129, t126, t123, SKV_SPLAT(0.0));
-    skv_store4_(J + 20, 42, SKV_SPLAT(0.0), -t113, t107, t98);
-    skv_store4_(J + 24, 42, -t92, -t84, t47, SKV_SPLAT(0.0));
-    skv_store4_(J + 28, 42, -t114, t108, t99, -t93);
-    skv_store4_(J + 32, 42, -t85, t46, SKV_SPLAT(0.0), -t115);
-    skv_store4_(J + 36, 42, t109, t100, -t94, t38);
-    skv_store4_(J + 38, 42, -t94, t38, SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_lbr_iiwa14_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_x4_(q + i * 7, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe(q, J, N, jacobe_);
 #endif
     for (; i < N; ++i)
         jacobe_(q + i * 7, J + i * 42);
@@ -1307,18 +1052,23 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q1, q2, q3, q4, q5, q6, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t2 = cos_[0];
+    const double t3 = sin_[0];
+    const double t8 = cos_[1];
+    const double t9 = sin_[1];
+    const double t19 = cos_[2];
+    const double t20 = sin_[2];
+    const double t27 = cos_[3];
+    const double t28 = sin_[3];
+    const double t38 = cos_[4];
+    const double t39 = sin_[4];
+    const double t46 = cos_[5];
+    const double t47 = sin_[5];
     const double t82 = t38*t46;
     const double t83 = -t38*t47;
     const double t84 = t39*t46;
@@ -1849,348 +1599,13 @@ void symkin_lbr_iiwa14_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t46 = skv_cos_(q6, &far_);
-    const sk_v4 t47 = skv_sin_(q6, &far_);
-    const sk_v4 t82 = t38*t46;
-    const sk_v4 t83 = -t38*t47;
-    const sk_v4 t84 = t39*t46;
-    const sk_v4 t85 = -t39*t47;
-    const sk_v4 t86 = (0.4)*t84;
-    const sk_v4 t87 = (0.4)*t85;
-    const sk_v4 t88 = -0.4*t38 - 0.126;
-    const sk_v4 t89 = t27*t82 - t28*t47;
-    const sk_v4 t90 = t27*t83 - t28*t46;
-    const sk_v4 t91 = t27*t39;
-    const sk_v4 t92 = t27*t47 + t28*t82;
-    const sk_v4 t93 = t27*t46 + t28*t83;
-    const sk_v4 t94 = t28*t39;
-    const sk_v4 t95 = t19*t89 + t20*t84;
-    const sk_v4 t96 = t19*t90 + t20*t85;
-    const sk_v4 t97 = t19*t91 - t20*t38;
-    const sk_v4 t98 = -t19*t84 + t20*t89;
-    const sk_v4 t99 = -t19*t85 + t20*t90;
-    const sk_v4 t100 = t19*t38 + t20*t91;
-    const sk_v4 t101 = t86 - 0.42*t98;
-    const sk_v4 t102 = t87 - 0.42*t99;
-    const sk_v4 t103 = -0.42*t100 + t88;
-    const sk_v4 t104 = t8*t95 - t9*t92;
-    const sk_v4 t105 = t8*t96 - t9*t93;
-    const sk_v4 t106 = t8*t97 - t9*t94;
-    const sk_v4 t107 = t8*t92 + t9*t95;
-    const sk_v4 t108 = t8*t93 + t9*t96;
-    const sk_v4 t109 = t8*t94 + t9*t97;
-    const sk_v4 t113 = t104*t3 - t2*t98;
-    const sk_v4 t114 = t105*t3 - t2*t99;
-    const sk_v4 t115 = -t100*t2 + t106*t3;
-    const sk_v4 t116 = t101 + (0.36)*t113;
-    const sk_v4 t117 = t102 + (0.36)*t114;
-    const sk_v4 t118 = t103 + (0.36)*t115;
-    const sk_v4 t119 = (0.126)*t46;
-    const sk_v4 t120 = -0.126*t47;
-    const sk_v4 t121 = t38*t87 + t85*t88;
-    const sk_v4 t122 = -t38*t86 - t84*t88;
-    const sk_v4 t123 = t84*t87 - t85*t86;
-    const sk_v4 t124 = -t87*t94 + t88*t93;
-    const sk_v4 t125 = t86*t94 - t88*t92;
-    const sk_v4 t126 = -t86*t93 + t87*t92;
-    const sk_v4 t127 = t100*t102 - t103*t99;
-    const sk_v4 t128 = -t100*t101 + t103*t98;
-    const sk_v4 t129 = t101*t99 - t102*t98;
-    const sk_v4 t130 = t102*t109 - t103*t108;
-    const sk_v4 t131 = -t101*t109 + t103*t107;
-    const sk_v4 t132 = t101*t108 - t102*t107;
-    const sk_v4 t133 = t114*t118 - t115*t117;
-    const sk_v4 t134 = -t113*t118 + t115*t116;
-    const sk_v4 t135 = t113*t117 - t114*t116;
-    const sk_v4 t167 = -t114*t132 + t115*t131;
-    const sk_v4 t168 = t113*t132 - t115*t130;
-    const sk_v4 t169 = -t113*t131 + t114*t130;
-    const sk_v4 t170 = t108*t135 - t109*t134;
-    const sk_v4 t171 = -t107*t135 + t109*t133;
-    const sk_v4 t172 = t107*t134 - t108*t133;
-    const sk_v4 t173 = t167 - t170;
-    const sk_v4 t174 = t168 - t171;
-    const sk_v4 t175 = t169 - t172;
-    const sk_v4 t176 = t108*t115 - t109*t114;
-    const sk_v4 t177 = -t107*t115 + t109*t113;
-    const sk_v4 t178 = t107*t114 - t108*t113;
-    const sk_v4 t206 = -t114*t129 + t115*t128;
-    const sk_v4 t207 = t113*t129 - t115*t127;
-    const sk_v4 t208 = -t113*t128 + t114*t127;
-    const sk_v4 t209 = -t100*t134 + t135*t99;
-    const sk_v4 t210 = t100*t133 - t135*t98;
-    const sk_v4 t211 = -t133*t99 + t134*t98;
-    const sk_v4 t212 = t206 - t209;
-    const sk_v4 t213 = t207 - t210;
-    const sk_v4 t214 = t208 - t211;
-    const sk_v4 t215 = -t100*t114 + t115*t99;
-    const sk_v4 t216 = t100*t113 - t115*t98;
-    const sk_v4 t217 = -t113*t99 + t114*t98;
-    const sk_v4 t218 = t108*t129 - t109*t128;
-    const sk_v4 t219 = -t107*t129 + t109*t127;
-    const sk_v4 t220 = t107*t128 - t108*t127;
-    const sk_v4 t221 = -t100*t131 + t132*t99;
-    const sk_v4 t222 = t100*t130 - t132*t98;
-    const sk_v4 t223 = -t130*t99 + t131*t98;
-    const sk_v4 t224 = t218 - t221;
-    const sk_v4 t225 = t219 - t222;
-    const sk_v4 t226 = t220 - t223;
-    const sk_v4 t227 = t100*t108 - t109*t99;
-    const sk_v4 t228 = -t100*t107 + t109*t98;
-    const sk_v4 t229 = t107*t99 - t108*t98;
-    const sk_v4 t251 = -t114*t126 + t115*t125;
-    const sk_v4 t252 = t113*t126 - t115*t124;
-    const sk_v4 t253 = -t113*t125 + t114*t124;
-    const sk_v4 t254 = t134*t94 - t135*t93;
-    const sk_v4 t255 = -t133*t94 + t135*t92;
-    const sk_v4 t256 = t133*t93 - t134*t92;
-    const sk_v4 t257 = t251 - t254;
-    const sk_v4 t258 = t252 - t255;
-    const sk_v4 t259 = t253 - t256;
-    const sk_v4 t260 = t114*t94 - t115*t93;
-    const sk_v4 t261 = -t113*t94 + t115*t92;
-    const sk_v4 t262 = t113*t93 - t114*t92;
-    const sk_v4 t263 = t108*t126 - t109*t125;
-    const sk_v4 t264 = -t107*t126 + t109*t124;
-    const sk_v4 t265 = t107*t125 - t108*t124;
-    const sk_v4 t266 = t131*t94 - t132*t93;
-    const sk_v4 t267 = -t130*t94 + t132*t92;
-    const sk_v4 t268 = t130*t93 - t131*t92;
-    const sk_v4 t269 = t263 - t266;
-    const sk_v4 t270 = t264 - t267;
-    const sk_v4 t271 = t265 - t268;
-    const sk_v4 t272 = -t108*t94 + t109*t93;
-    const sk_v4 t273 = t107*t94 - t109*t92;
-    const sk_v4 t274 = -t107*t93 + t108*t92;
-    const sk_v4 t275 = -t100*t125 + t126*t99;
-    const sk_v4 t276 = t100*t124 - t126*t98;
-    const sk_v4 t277 = -t124*t99 + t125*t98;
-    const sk_v4 t278 = t128*t94 - t129*t93;
-    const sk_v4 t279 = -t127*t94 + t129*t92;
-    const sk_v4 t280 = t127*t93 - t128*t92;
-    const sk_v4 t281 = t275 - t278;
-    const sk_v4 t282 = t276 - t279;
-    const sk_v4 t283 = t277 - t280;
-    const sk_v4 t284 = t100*t93 - t94*t99;
-    const sk_v4 t285 = -t100*t92 + t94*t98;
-    const sk_v4 t286 = t92*t99 - t93*t98;
-    const sk_v4 t302 = -t114*t123 + t115*t122;
-    const sk_v4 t303 = t113*t123 - t115*t121;
-    const sk_v4 t304 = -t113*t122 + t114*t121;
-    const sk_v4 t305 = -t134*t38 - t135*t85;
-    const sk_v4 t306 = t133*t38 + t135*t84;
-    const sk_v4 t307 = t133*t85 - t134*t84;
-    const sk_v4 t308 = t302 - t305;
-    const sk_v4 t309 = t303 - t306;
-    const sk_v4 t310 = t304 - t307;
-    const sk_v4 t311 = -t114*t38 - t115*t85;
-    const sk_v4 t312 = t113*t38 + t115*t84;
-    const sk_v4 t313 = t113*t85 - t114*t84;
-    const sk_v4 t314 = t108*t123 - t109*t122;
-    const sk_v4 t315 = -t107*t123 + t109*t121;
-    const sk_v4 t316 = t107*t122 - t108*t121;
-    const sk_v4 t317 = -t131*t38 - t132*t85;
-    const sk_v4 t318 = t130*t38 + t132*t84;
-    const sk_v4 t319 = t130*t85 - t131*t84;
-    const sk_v4 t320 = t314 - t317;
-    const sk_v4 t321 = t315 - t318;
-    const sk_v4 t322 = t316 - t319;
-    const sk_v4 t323 = t108*t38 + t109*t85;
-    const sk_v4 t324 = -t107*t38 - t109*t84;
-    const sk_v4 t325 = -t107*t85 + t108*t84;
-    const sk_v4 t326 = -t100*t122 + t123*t99;
-    const sk_v4 t327 = t100*t121 - t123*t98;
-    const sk_v4 t328 = -t121*t99 + t122*t98;
-    const sk_v4 t329 = -t128*t38 - t129*t85;
-    const sk_v4 t330 = t127*t38 + t129*t84;
-    const sk_v4 t331 = t127*t85 - t128*t84;
-    const sk_v4 t332 = t326 - t329;
-    const sk_v4 t333 = t327 - t330;
-    const sk_v4 t334 = t328 - t331;
-    const sk_v4 t335 = t100*t85 + t38*t99;
-    const sk_v4 t336 = -t100*t84 - t38*t98;
-    const sk_v4 t337 = t84*t99 - t85*t98;
-    const sk_v4 t338 = t122*t94 - t123*t93;
-    const sk_v4 t339 = -t121*t94 + t123*t92;
-    const sk_v4 t340 = t121*t93 - t122*t92;
-    const sk_v4 t341 = -t125*t38 - t126*t85;
-    const sk_v4 t342 = t124*t38 + t126*t84;
-    const sk_v4 t343 = t124*t85 - t125*t84;
-    const sk_v4 t344 = t338 - t341;
-    const sk_v4 t345 = t339 - t342;
-    const sk_v4 t346 = t340 - t343;
-    const sk_v4 t347 = -t38*t93 - t85*t94;
-    const sk_v4 t348 = t38*t92 + t84*t94;
-    const sk_v4 t349 = -t84*t93 + t85*t92;
-    const sk_v4 t359 = t115*t120;
-    const sk_v4 t360 = -t115*t119;
-    const sk_v4 t361 = -t113*t120 + t114*t119;
-    const sk_v4 t362 = t135*t46;
-    const sk_v4 t363 = -t135*t47;
-    const sk_v4 t364 = -t133*t46 + t134*t47;
-    const sk_v4 t365 = t359 - t362;
-    const sk_v4 t366 = t360 - t363;
-    const sk_v4 t367 = t361 - t364;
-    const sk_v4 t368 = t115*t46;
-    const sk_v4 t369 = -t115*t47;
-    const sk_v4 t370 = -t113*t46 + t114*t47;
-    const sk_v4 t371 = -t109*t120;
-    const sk_v4 t372 = t109*t119;
-    const sk_v4 t373 = t107*t120 - t108*t119;
-    const sk_v4 t374 = t132*t46;
-    const sk_v4 t375 = -t132*t47;
-    const sk_v4 t376 = -t130*t46 + t131*t47;
-    const sk_v4 t377 = t371 - t374;
-    const sk_v4 t378 = t372 - t375;
-    const sk_v4 t379 = t373 - t376;
-    const sk_v4 t380 = -t109*t46;
-    const sk_v4 t381 = t109*t47;
-    const sk_v4 t382 = t107*t46 - t108*t47;
-    const sk_v4 t383 = -t100*t120;
-    const sk_v4 t384 = t100*t119;
-    const sk_v4 t385 = -t119*t99 + t120*t98;
-    const sk_v4 t386 = t129*t46;
-    const sk_v4 t387 = -t129*t47;
-    const sk_v4 t388 = -t127*t46 + t128*t47;
-    const sk_v4 t389 = t383 - t386;
-    const sk_v4 t390 = t384 - t387;
-    const sk_v4 t391 = t385 - t388;
-    const sk_v4 t392 = -t100*t46;
-    const sk_v4 t393 = t100*t47;
-    const sk_v4 t394 = t46*t98 - t47*t99;
-    const sk_v4 t395 = t120*t94;
-    const sk_v4 t396 = -t119*t94;
-    const sk_v4 t397 = t119*t93 - t120*t92;
-    const sk_v4 t398 = t126*t46;
-    const sk_v4 t399 = -t126*t47;
-    const sk_v4 t400 = -t124*t46 + t125*t47;
-    const sk_v4 t401 = t395 - t398;
-    const sk_v4 t402 = t396 - t399;
-    const sk_v4 t403 = t397 - t400;
-    const sk_v4 t404 = t46*t94;
-    const sk_v4 t405 = -t47*t94;
-    const sk_v4 t406 = -t46*t92 + t47*t93;
-    const sk_v4 t407 = -t120*t38;
-    const sk_v4 t408 = t119*t38;
-    const sk_v4 t409 = t119*t85 - t120*t84;
-    const sk_v4 t410 = t123*t46;
-    const sk_v4 t411 = -t123*t47;
-    const sk_v4 t412 = -t121*t46 + t122*t47;
-    const sk_v4 t413 = t407 - t410;
-    const sk_v4 t414 = t408 - t411;
-    const sk_v4 t415 = t409 - t412;
-    const sk_v4 t416 = -t46*t84 + t47*t85;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessiane_(q + l * 7, H + l * 294);
-        return;
-    }
-    skv_store4_(H + 0, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 8, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 24, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 28, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t173, SKV_SPLAT(0.0));
-    skv_store4_(H + 44, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 294, SKV_SPLAT(0.0), t174, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 294, t175, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 60, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t176);
-    skv_store4_(H + 64, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t177, SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 294, SKV_SPLAT(0.0), t178, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 80, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 294, t212, t224, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t213);
-    skv_store4_(H + 92, 294, t225, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t214, t226);
-    skv_store4_(H + 100, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 294, SKV_SPLAT(0.0), t215, t227, SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 294, t216, t228, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 116, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t217);
-    skv_store4_(H + 120, 294, t229, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t257, t269);
-    skv_store4_(H + 128, 294, t281, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 132, 294, SKV_SPLAT(0.0), t258, t270, t282);
-    skv_store4_(H + 136, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 294, t259, t271, t283, SKV_SPLAT(0.0));
-    skv_store4_(H + 144, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t260);
-    skv_store4_(H + 148, 294, t272, t284, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 152, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t261, t273);
-    skv_store4_(H + 156, 294, t285, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 160, 294, SKV_SPLAT(0.0), t262, t274, t286);
-    skv_store4_(H + 164, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 168, 294, t308, t320, t332, t344);
-    skv_store4_(H + 172, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t309);
-    skv_store4_(H + 176, 294, t321, t333, t345, SKV_SPLAT(0.0));
-    skv_store4_(H + 180, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t310, t322);
-    skv_store4_(H + 184, 294, t334, t346, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 188, 294, SKV_SPLAT(0.0), t311, t323, t335);
-    skv_store4_(H + 192, 294, t347, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 294, t312, t324, t336, t348);
-    skv_store4_(H + 200, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t313);
-    skv_store4_(H + 204, 294, t325, t337, t349, SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t365, t377);
-    skv_store4_(H + 212, 294, t389, t401, t413, SKV_SPLAT(0.0));
-    skv_store4_(H + 216, 294, SKV_SPLAT(0.0), t366, t378, t390);
-    skv_store4_(H + 220, 294, t402, t414, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 224, 294, t367, t379, t391, t403);
-    skv_store4_(H + 228, 294, t415, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t368);
-    skv_store4_(H + 232, 294, t380, t392, t404, -t82);
-    skv_store4_(H + 236, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t369, t381);
-    skv_store4_(H + 240, 294, t393, t405, -t83, SKV_SPLAT(0.0));
-    skv_store4_(H + 244, 294, SKV_SPLAT(0.0), t370, t382, t394);
-    skv_store4_(H + 248, 294, t406, t416, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 252, 294, t134, t131, t128, t125);
-    skv_store4_(H + 256, 294, t122, t120, SKV_SPLAT(0.0), -t133);
-    skv_store4_(H + 260, 294, -t130, -t127, -t124, -t121);
-    skv_store4_(H + 264, 294, -t119, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 268, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 272, 294, SKV_SPLAT(0.0), -t114, t108, t99);
-    skv_store4_(H + 276, 294, -t93, -t85, t46, SKV_SPLAT(0.0));
-    skv_store4_(H + 280, 294, t113, -t107, -t98, t92);
-    skv_store4_(H + 284, 294, t84, -t47, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 288, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 290, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_lbr_iiwa14_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessiane_x4_(q + i * 7, H + i * 294);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessiane(q, H, N, hessiane_);
 #endif
     for (; i < N; ++i)
         hessiane_(q + i * 7, H + i * 294);
@@ -2206,16 +1621,21 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos_[2];
+    const double t9 = sin_[2];
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -2225,16 +1645,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t16 = -0.42*t6;
     const double t17 = -0.42*t7;
     const double t18 = (0.42)*t2 + 0.36;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos_[3];
+    const double t20 = sin_[3];
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos_[4];
+    const double t28 = sin_[4];
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -2244,16 +1664,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos_[5];
+    const double t39 = sin_[5];
     const double t40 = -t24*t39 + t29*t38;
     const double t41 = -t25*t39 + t30*t38;
     const double t42 = -t26*t39 + t31*t38;
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
-    const double t46 = sk_cos(q6);
-    const double t47 = sk_sin(q6);
+    const double t46 = cos_[6];
+    const double t47 = sin_[6];
     const double t48 = t32*t47 + t40*t46;
     const double t49 = t33*t47 + t41*t46;
     const double t50 = t34*t47 + t42*t46;
@@ -2353,131 +1773,13 @@ void symkin_lbr_iiwa14_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t10 = -t1*t9 + t4*t8;
-    const sk_v4 t11 = t0*t9 + t5*t8;
-    const sk_v4 t12 = -t3*t8;
-    const sk_v4 t13 = -t1*t8 - t4*t9;
-    const sk_v4 t14 = t0*t8 - t5*t9;
-    const sk_v4 t15 = t3*t9;
-    const sk_v4 t16 = -0.42*t6;
-    const sk_v4 t17 = -0.42*t7;
-    const sk_v4 t18 = (0.42)*t2 + 0.36;
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t21 = t10*t19 - t20*t6;
-    const sk_v4 t22 = t11*t19 - t20*t7;
-    const sk_v4 t23 = t12*t19 + t2*t20;
-    const sk_v4 t24 = -t10*t20 - t19*t6;
-    const sk_v4 t25 = -t11*t20 - t19*t7;
-    const sk_v4 t26 = -t12*t20 + t19*t2;
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t29 = t13*t28 + t21*t27;
-    const sk_v4 t30 = t14*t28 + t22*t27;
-    const sk_v4 t31 = t15*t28 + t23*t27;
-    const sk_v4 t32 = t13*t27 - t21*t28;
-    const sk_v4 t33 = t14*t27 - t22*t28;
-    const sk_v4 t34 = t15*t27 - t23*t28;
-    const sk_v4 t35 = t16 + (0.4)*t24;
-    const sk_v4 t36 = t17 + (0.4)*t25;
-    const sk_v4 t37 = t18 + (0.4)*t26;
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t40 = -t24*t39 + t29*t38;
-    const sk_v4 t41 = -t25*t39 + t30*t38;
-    const sk_v4 t42 = -t26*t39 + t31*t38;
-    const sk_v4 t43 = -t24*t38 - t29*t39;
-    const sk_v4 t44 = -t25*t38 - t30*t39;
-    const sk_v4 t45 = -t26*t38 - t31*t39;
-    const sk_v4 t46 = skv_cos_(q6, &far_);
-    const sk_v4 t47 = skv_sin_(q6, &far_);
-    const sk_v4 t48 = t32*t47 + t40*t46;
-    const sk_v4 t49 = t33*t47 + t41*t46;
-    const sk_v4 t50 = t34*t47 + t42*t46;
-    const sk_v4 t51 = t32*t46 - t40*t47;
-    const sk_v4 t52 = t33*t46 - t41*t47;
-    const sk_v4 t53 = t34*t46 - t42*t47;
-    const sk_v4 t54 = t35 - 0.126*t43;
-    const sk_v4 t55 = t36 - 0.126*t44;
-    const sk_v4 t56 = t37 - 0.126*t45;
-    const sk_v4 t57 = t56 - 0.36;
-    const sk_v4 t58 = t0*t57;
-    const sk_v4 t59 = t1*t57;
-    const sk_v4 t60 = -t0*t54 - t1*t55;
-    const sk_v4 t61 = -t2*t55 - t57*t7;
-    const sk_v4 t62 = t2*t54 + t57*t6;
-    const sk_v4 t63 = t54*t7 - t55*t6;
-    const sk_v4 t64 = -t16 + t54;
-    const sk_v4 t65 = -t17 + t55;
-    const sk_v4 t66 = -t18 + t56;
-    const sk_v4 t67 = -t14*t66 + t15*t65;
-    const sk_v4 t68 = t13*t66 - t15*t64;
-    const sk_v4 t69 = -t13*t65 + t14*t64;
-    const sk_v4 t70 = t25*t66 - t26*t65;
-    const sk_v4 t71 = -t24*t66 + t26*t64;
-    const sk_v4 t72 = t24*t65 - t25*t64;
-    const sk_v4 t73 = -t35 + t54;
-    const sk_v4 t74 = -t36 + t55;
-    const sk_v4 t75 = -t37 + t56;
-    const sk_v4 t76 = t33*t75 - t34*t74;
-    const sk_v4 t77 = -t32*t75 + t34*t73;
-    const sk_v4 t78 = t32*t74 - t33*t73;
-    const sk_v4 t79 = -t44*t75 + t45*t74;
-    const sk_v4 t80 = t43*t75 - t45*t73;
-    const sk_v4 t81 = -t43*t74 + t44*t73;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_(q + l * 7, T + l * 16, J + l * 42);
-        return;
-    }
-    skv_store4_(T + 0, 16, t48, t51, -t43, t54);
-    skv_store4_(T + 4, 16, t49, t52, -t44, t55);
-    skv_store4_(T + 8, 16, t50, t53, -t45, t56);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 42, -t55, t58, t61, t67);
-    skv_store4_(J + 4, 42, t70, t76, t79, t54);
-    skv_store4_(J + 8, 42, t59, t62, t68, t71);
-    skv_store4_(J + 12, 42, t77, t80, SKV_SPLAT(0.0), t60);
-    skv_store4_(J + 16, 42, t63, t69, t72, t78);
-    skv_store4_(J + 20, 42, t81, SKV_SPLAT(0.0), -t1, -t6);
-    skv_store4_(J + 24, 42, -t13, t24, t32, -t43);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, -t7, -t14);
-    skv_store4_(J + 32, 42, t25, t33, -t44, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), t2, -t15, t26);
-    skv_store4_(J + 38, 42, -t15, t26, t34, -t45);
-}
-#endif
-
-
 void symkin_lbr_iiwa14_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_x4_(q + i * 7, T + i * 16, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0(q, T, J, N, fkine_jacob0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_(q + i * 7, T + i * 16, J + i * 42);
@@ -2492,16 +1794,21 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
     const double t7 = -t1*t3;
-    const double t8 = sk_cos(q2);
-    const double t9 = sk_sin(q2);
+    const double t8 = cos_[2];
+    const double t9 = sin_[2];
     const double t10 = -t1*t9 + t4*t8;
     const double t11 = t0*t9 + t5*t8;
     const double t12 = -t3*t8;
@@ -2511,16 +1818,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t16 = -0.42*t6;
     const double t17 = -0.42*t7;
     const double t18 = (0.42)*t2 + 0.36;
-    const double t19 = sk_cos(q3);
-    const double t20 = sk_sin(q3);
+    const double t19 = cos_[3];
+    const double t20 = sin_[3];
     const double t21 = t10*t19 - t20*t6;
     const double t22 = t11*t19 - t20*t7;
     const double t23 = t12*t19 + t2*t20;
     const double t24 = -t10*t20 - t19*t6;
     const double t25 = -t11*t20 - t19*t7;
     const double t26 = -t12*t20 + t19*t2;
-    const double t27 = sk_cos(q4);
-    const double t28 = sk_sin(q4);
+    const double t27 = cos_[4];
+    const double t28 = sin_[4];
     const double t29 = t13*t28 + t21*t27;
     const double t30 = t14*t28 + t22*t27;
     const double t31 = t15*t28 + t23*t27;
@@ -2530,8 +1837,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t35 = t16 + (0.4)*t24;
     const double t36 = t17 + (0.4)*t25;
     const double t37 = t18 + (0.4)*t26;
-    const double t38 = sk_cos(q5);
-    const double t39 = sk_sin(q5);
+    const double t38 = cos_[5];
+    const double t39 = sin_[5];
     const double t43 = -t24*t38 - t29*t39;
     const double t44 = -t25*t38 - t30*t39;
     const double t45 = -t26*t38 - t31*t39;
@@ -3012,295 +2319,13 @@ void symkin_lbr_iiwa14_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = skv_cos_(q2, &far_);
-    const sk_v4 t9 = skv_sin_(q2, &far_);
-    const sk_v4 t10 = -t1*t9 + t4*t8;
-    const sk_v4 t11 = t0*t9 + t5*t8;
-    const sk_v4 t12 = -t3*t8;
-    const sk_v4 t13 = -t1*t8 - t4*t9;
-    const sk_v4 t14 = t0*t8 - t5*t9;
-    const sk_v4 t15 = t3*t9;
-    const sk_v4 t16 = -0.42*t6;
-    const sk_v4 t17 = -0.42*t7;
-    const sk_v4 t18 = (0.42)*t2 + 0.36;
-    const sk_v4 t19 = skv_cos_(q3, &far_);
-    const sk_v4 t20 = skv_sin_(q3, &far_);
-    const sk_v4 t21 = t10*t19 - t20*t6;
-    const sk_v4 t22 = t11*t19 - t20*t7;
-    const sk_v4 t23 = t12*t19 + t2*t20;
-    const sk_v4 t24 = -t10*t20 - t19*t6;
-    const sk_v4 t25 = -t11*t20 - t19*t7;
-    const sk_v4 t26 = -t12*t20 + t19*t2;
-    const sk_v4 t27 = skv_cos_(q4, &far_);
-    const sk_v4 t28 = skv_sin_(q4, &far_);
-    const sk_v4 t29 = t13*t28 + t21*t27;
-    const sk_v4 t30 = t14*t28 + t22*t27;
-    const sk_v4 t31 = t15*t28 + t23*t27;
-    const sk_v4 t32 = t13*t27 - t21*t28;
-    const sk_v4 t33 = t14*t27 - t22*t28;
-    const sk_v4 t34 = t15*t27 - t23*t28;
-    const sk_v4 t35 = t16 + (0.4)*t24;
-    const sk_v4 t36 = t17 + (0.4)*t25;
-    const sk_v4 t37 = t18 + (0.4)*t26;
-    const sk_v4 t38 = skv_cos_(q5, &far_);
-    const sk_v4 t39 = skv_sin_(q5, &far_);
-    const sk_v4 t43 = -t24*t38 - t29*t39;
-    const sk_v4 t44 = -t25*t38 - t30*t39;
-    const sk_v4 t45 = -t26*t38 - t31*t39;
-    const sk_v4 t54 = t35 - 0.126*t43;
-    const sk_v4 t55 = t36 - 0.126*t44;
-    const sk_v4 t56 = t37 - 0.126*t45;
-    const sk_v4 t57 = t56 - 0.36;
-    const sk_v4 t58 = t0*t57;
-    const sk_v4 t59 = t1*t57;
-    const sk_v4 t60 = -t0*t54 - t1*t55;
-    const sk_v4 t61 = -t2*t55 - t57*t7;
-    const sk_v4 t62 = t2*t54 + t57*t6;
-    const sk_v4 t63 = t54*t7 - t55*t6;
-    const sk_v4 t64 = -t16 + t54;
-    const sk_v4 t65 = -t17 + t55;
-    const sk_v4 t66 = -t18 + t56;
-    const sk_v4 t67 = -t14*t66 + t15*t65;
-    const sk_v4 t68 = t13*t66 - t15*t64;
-    const sk_v4 t69 = -t13*t65 + t14*t64;
-    const sk_v4 t70 = t25*t66 - t26*t65;
-    const sk_v4 t71 = -t24*t66 + t26*t64;
-    const sk_v4 t72 = t24*t65 - t25*t64;
-    const sk_v4 t73 = -t35 + t54;
-    const sk_v4 t74 = -t36 + t55;
-    const sk_v4 t75 = -t37 + t56;
-    const sk_v4 t76 = t33*t75 - t34*t74;
-    const sk_v4 t77 = -t32*t75 + t34*t73;
-    const sk_v4 t78 = t32*t74 - t33*t73;
-    const sk_v4 t79 = -t44*t75 + t45*t74;
-    const sk_v4 t80 = t43*t75 - t45*t73;
-    const sk_v4 t81 = -t43*t74 + t44*t73;
-    const sk_v4 t136 = t0*t60;
-    const sk_v4 t137 = t1*t60;
-    const sk_v4 t138 = -t0*t58 - t1*t59;
-    const sk_v4 t139 = t0*t63;
-    const sk_v4 t140 = t1*t63;
-    const sk_v4 t141 = -t0*t61 - t1*t62;
-    const sk_v4 t142 = t0*t6 + t1*t7;
-    const sk_v4 t143 = t0*t69;
-    const sk_v4 t144 = t1*t69;
-    const sk_v4 t145 = -t0*t67 - t1*t68;
-    const sk_v4 t146 = -t0*t15;
-    const sk_v4 t147 = -t1*t15;
-    const sk_v4 t148 = t0*t13 + t1*t14;
-    const sk_v4 t149 = t0*t72;
-    const sk_v4 t150 = t1*t72;
-    const sk_v4 t151 = -t0*t70 - t1*t71;
-    const sk_v4 t152 = t0*t26;
-    const sk_v4 t153 = t1*t26;
-    const sk_v4 t154 = -t0*t24 - t1*t25;
-    const sk_v4 t155 = t0*t78;
-    const sk_v4 t156 = t1*t78;
-    const sk_v4 t157 = -t0*t76 - t1*t77;
-    const sk_v4 t158 = t0*t34;
-    const sk_v4 t159 = t1*t34;
-    const sk_v4 t160 = -t0*t32 - t1*t33;
-    const sk_v4 t161 = t0*t81;
-    const sk_v4 t162 = t1*t81;
-    const sk_v4 t163 = -t0*t79 - t1*t80;
-    const sk_v4 t164 = -t0*t45;
-    const sk_v4 t165 = -t1*t45;
-    const sk_v4 t166 = t0*t43 + t1*t44;
-    const sk_v4 t179 = -t2*t62 - t63*t7;
-    const sk_v4 t180 = t2*t61 + t6*t63;
-    const sk_v4 t181 = -t6*t62 + t61*t7;
-    const sk_v4 t182 = -t2*t68 - t69*t7;
-    const sk_v4 t183 = t2*t67 + t6*t69;
-    const sk_v4 t184 = -t6*t68 + t67*t7;
-    const sk_v4 t185 = t14*t2 + t15*t7;
-    const sk_v4 t186 = -t13*t2 - t15*t6;
-    const sk_v4 t187 = -t13*t7 + t14*t6;
-    const sk_v4 t188 = -t2*t71 - t7*t72;
-    const sk_v4 t189 = t2*t70 + t6*t72;
-    const sk_v4 t190 = -t6*t71 + t7*t70;
-    const sk_v4 t191 = -t2*t25 - t26*t7;
-    const sk_v4 t192 = t2*t24 + t26*t6;
-    const sk_v4 t193 = t24*t7 - t25*t6;
-    const sk_v4 t194 = -t2*t77 - t7*t78;
-    const sk_v4 t195 = t2*t76 + t6*t78;
-    const sk_v4 t196 = -t6*t77 + t7*t76;
-    const sk_v4 t197 = -t2*t33 - t34*t7;
-    const sk_v4 t198 = t2*t32 + t34*t6;
-    const sk_v4 t199 = t32*t7 - t33*t6;
-    const sk_v4 t200 = -t2*t80 - t7*t81;
-    const sk_v4 t201 = t2*t79 + t6*t81;
-    const sk_v4 t202 = -t6*t80 + t7*t79;
-    const sk_v4 t203 = t2*t44 + t45*t7;
-    const sk_v4 t204 = -t2*t43 - t45*t6;
-    const sk_v4 t205 = -t43*t7 + t44*t6;
-    const sk_v4 t230 = -t14*t69 + t15*t68;
-    const sk_v4 t231 = t13*t69 - t15*t67;
-    const sk_v4 t232 = -t13*t68 + t14*t67;
-    const sk_v4 t233 = -t14*t72 + t15*t71;
-    const sk_v4 t234 = t13*t72 - t15*t70;
-    const sk_v4 t235 = -t13*t71 + t14*t70;
-    const sk_v4 t236 = -t14*t26 + t15*t25;
-    const sk_v4 t237 = t13*t26 - t15*t24;
-    const sk_v4 t238 = -t13*t25 + t14*t24;
-    const sk_v4 t239 = -t14*t78 + t15*t77;
-    const sk_v4 t240 = t13*t78 - t15*t76;
-    const sk_v4 t241 = -t13*t77 + t14*t76;
-    const sk_v4 t242 = -t14*t34 + t15*t33;
-    const sk_v4 t243 = t13*t34 - t15*t32;
-    const sk_v4 t244 = -t13*t33 + t14*t32;
-    const sk_v4 t245 = -t14*t81 + t15*t80;
-    const sk_v4 t246 = t13*t81 - t15*t79;
-    const sk_v4 t247 = -t13*t80 + t14*t79;
-    const sk_v4 t248 = t14*t45 - t15*t44;
-    const sk_v4 t249 = -t13*t45 + t15*t43;
-    const sk_v4 t250 = t13*t44 - t14*t43;
-    const sk_v4 t287 = t25*t72 - t26*t71;
-    const sk_v4 t288 = -t24*t72 + t26*t70;
-    const sk_v4 t289 = t24*t71 - t25*t70;
-    const sk_v4 t290 = t25*t78 - t26*t77;
-    const sk_v4 t291 = -t24*t78 + t26*t76;
-    const sk_v4 t292 = t24*t77 - t25*t76;
-    const sk_v4 t293 = t25*t34 - t26*t33;
-    const sk_v4 t294 = -t24*t34 + t26*t32;
-    const sk_v4 t295 = t24*t33 - t25*t32;
-    const sk_v4 t296 = t25*t81 - t26*t80;
-    const sk_v4 t297 = -t24*t81 + t26*t79;
-    const sk_v4 t298 = t24*t80 - t25*t79;
-    const sk_v4 t299 = -t25*t45 + t26*t44;
-    const sk_v4 t300 = t24*t45 - t26*t43;
-    const sk_v4 t301 = -t24*t44 + t25*t43;
-    const sk_v4 t350 = t33*t78 - t34*t77;
-    const sk_v4 t351 = -t32*t78 + t34*t76;
-    const sk_v4 t352 = t32*t77 - t33*t76;
-    const sk_v4 t353 = t33*t81 - t34*t80;
-    const sk_v4 t354 = -t32*t81 + t34*t79;
-    const sk_v4 t355 = t32*t80 - t33*t79;
-    const sk_v4 t356 = -t33*t45 + t34*t44;
-    const sk_v4 t357 = t32*t45 - t34*t43;
-    const sk_v4 t358 = -t32*t44 + t33*t43;
-    const sk_v4 t417 = -t44*t81 + t45*t80;
-    const sk_v4 t418 = t43*t81 - t45*t79;
-    const sk_v4 t419 = -t43*t80 + t44*t79;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_hessian0_(q + l * 7, J + l * 42, H + l * 294);
-        return;
-    }
-    skv_store4_(J + 0, 42, -t55, t58, t61, t67);
-    skv_store4_(J + 4, 42, t70, t76, t79, t54);
-    skv_store4_(J + 8, 42, t59, t62, t68, t71);
-    skv_store4_(J + 12, 42, t77, t80, SKV_SPLAT(0.0), t60);
-    skv_store4_(J + 16, 42, t63, t69, t72, t78);
-    skv_store4_(J + 20, 42, t81, SKV_SPLAT(0.0), -t1, -t6);
-    skv_store4_(J + 24, 42, -t13, t24, t32, -t43);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, -t7, -t14);
-    skv_store4_(J + 32, 42, t25, t33, -t44, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), t2, -t15, t26);
-    skv_store4_(J + 38, 42, -t15, t26, t34, -t45);
-    skv_store4_(H + 0, 294, -t54, -t59, -t62, -t68);
-    skv_store4_(H + 4, 294, -t71, -t77, -t80, -t55);
-    skv_store4_(H + 8, 294, t58, t61, t67, t70);
-    skv_store4_(H + 12, 294, t76, t79, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t0, t7);
-    skv_store4_(H + 24, 294, t14, -t25, -t33, t44);
-    skv_store4_(H + 28, 294, SKV_SPLAT(0.0), -t1, -t6, -t13);
-    skv_store4_(H + 32, 294, t24, t32, -t43, SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t59, t136);
-    skv_store4_(H + 44, 294, t139, t143, t149, t155);
-    skv_store4_(H + 48, 294, t161, t58, t137, t140);
-    skv_store4_(H + 52, 294, t144, t150, t156, t162);
-    skv_store4_(H + 56, 294, SKV_SPLAT(0.0), t138, t141, t145);
-    skv_store4_(H + 60, 294, t151, t157, t163, SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 294, SKV_SPLAT(0.0), t4, t146, t152);
-    skv_store4_(H + 68, 294, t158, t164, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 294, t5, t147, t153, t159);
-    skv_store4_(H + 76, 294, t165, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t142);
-    skv_store4_(H + 80, 294, t148, t154, t160, t166);
-    skv_store4_(H + 84, 294, -t62, t139, t179, t182);
-    skv_store4_(H + 88, 294, t188, t194, t200, t61);
-    skv_store4_(H + 92, 294, t140, t180, t183, t189);
-    skv_store4_(H + 96, 294, t195, t201, SKV_SPLAT(0.0), t141);
-    skv_store4_(H + 100, 294, t181, t184, t190, t196);
-    skv_store4_(H + 104, 294, t202, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 294, t185, t191, t197, t203);
-    skv_store4_(H + 112, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t186);
-    skv_store4_(H + 116, 294, t192, t198, t204, SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t187, t193);
-    skv_store4_(H + 124, 294, t199, t205, -t68, t143);
-    skv_store4_(H + 128, 294, t182, t230, t233, t239);
-    skv_store4_(H + 132, 294, t245, t67, t144, t183);
-    skv_store4_(H + 136, 294, t231, t234, t240, t246);
-    skv_store4_(H + 140, 294, SKV_SPLAT(0.0), t145, t184, t232);
-    skv_store4_(H + 144, 294, t235, t241, t247, SKV_SPLAT(0.0));
-    skv_store4_(H + 148, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t236);
-    skv_store4_(H + 152, 294, t242, t248, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t237, t243);
-    skv_store4_(H + 160, 294, t249, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 294, SKV_SPLAT(0.0), t238, t244, t250);
-    skv_store4_(H + 168, 294, -t71, t149, t188, t233);
-    skv_store4_(H + 172, 294, t287, t290, t296, t70);
-    skv_store4_(H + 176, 294, t150, t189, t234, t288);
-    skv_store4_(H + 180, 294, t291, t297, SKV_SPLAT(0.0), t151);
-    skv_store4_(H + 184, 294, t190, t235, t289, t292);
-    skv_store4_(H + 188, 294, t298, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t293, t299);
-    skv_store4_(H + 196, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 294, SKV_SPLAT(0.0), t294, t300, SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 294, t295, t301, -t77, t155);
-    skv_store4_(H + 212, 294, t194, t239, t290, t350);
-    skv_store4_(H + 216, 294, t353, t76, t156, t195);
-    skv_store4_(H + 220, 294, t240, t291, t351, t354);
-    skv_store4_(H + 224, 294, SKV_SPLAT(0.0), t157, t196, t241);
-    skv_store4_(H + 228, 294, t292, t352, t355, SKV_SPLAT(0.0));
-    skv_store4_(H + 232, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 236, 294, SKV_SPLAT(0.0), t356, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 240, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 244, 294, t357, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 248, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t358);
-    skv_store4_(H + 252, 294, -t80, t161, t200, t245);
-    skv_store4_(H + 256, 294, t296, t353, t417, t79);
-    skv_store4_(H + 260, 294, t162, t201, t246, t297);
-    skv_store4_(H + 264, 294, t354, t418, SKV_SPLAT(0.0), t163);
-    skv_store4_(H + 268, 294, t202, t247, t298, t355);
-    skv_store4_(H + 272, 294, t419, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 276, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 280, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 284, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 288, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 290, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_lbr_iiwa14_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_hessian0_x4_(q + i * 7, J + i * 42, H + i * 294);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_hessian0(q, J, H, N, jacob0_hessian0_);
 #endif
     for (; i < N; ++i)
         jacob0_hessian0_(q + i * 7, J + i * 42, H + i * 294);

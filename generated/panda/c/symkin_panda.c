@@ -47,15 +47,22 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -63,14 +70,34 @@ const char *const symkin_panda_joint_names[SYMKIN_PANDA_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -78,14 +105,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -109,36 +140,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -219,7 +261,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -233,7 +275,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -310,6 +352,70 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #define SYMKIN_LANES 1
 #endif
 
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_panda_lanes.c: its table symkin_panda_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_panda_bind_lanes (symkin's runtime builds symkin_panda_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*link_poses)(const double *q, double *links, ptrdiff_t N, void (*scalar)(const double *q, double *links));
+    ptrdiff_t (*jacob0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*hessiane)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*fkine_jacob0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*jacob0_hessian0)(const double *q, double *J, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *J, double *H));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_panda_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_panda_bind_lanes(const void *table);
+void symkin_panda_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_panda_lanes;
+}
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -337,10 +443,15 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6 + 0.7853981633974483, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -348,8 +459,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos_[2];
+    const double t12 = sin_[2];
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -359,8 +470,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos_[3];
+    const double t23 = -sin_[3];
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -373,16 +484,16 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos_[4];
+    const double t37 = sin_[4];
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos_[5];
+    const double t45 = -sin_[5];
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -398,8 +509,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t66 = -0.1034*t49 + t55;
     const double t67 = -0.1034*t50 + t56;
     const double t68 = -0.1034*t51 + t57;
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    const double t69 = sin_[6];
+    const double t70 = -cos_[6];
     const double t71 = -t41*t70 + t46*t69;
     const double t72 = -t42*t70 + t47*t69;
     const double t73 = -t43*t70 + t48*t69;
@@ -429,107 +540,13 @@ void symkin_panda_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = t0*t3;
-    const sk_v4 t7 = t1*t3;
-    const sk_v4 t8 = (0.316)*t6;
-    const sk_v4 t9 = (0.316)*t7;
-    const sk_v4 t10 = (0.316)*t2 + 0.333;
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t13 = -t1*t12 + t11*t4;
-    const sk_v4 t14 = t0*t12 + t11*t5;
-    const sk_v4 t15 = -t11*t3;
-    const sk_v4 t16 = -t1*t11 - t12*t4;
-    const sk_v4 t17 = t0*t11 - t12*t5;
-    const sk_v4 t18 = t12*t3;
-    const sk_v4 t19 = (0.0825)*t13 + t8;
-    const sk_v4 t20 = (0.0825)*t14 + t9;
-    const sk_v4 t21 = t10 + (0.0825)*t15;
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t24 = t13*t22 - t23*t6;
-    const sk_v4 t25 = t14*t22 - t23*t7;
-    const sk_v4 t26 = t15*t22 - t2*t23;
-    const sk_v4 t27 = t13*t23 + t22*t6;
-    const sk_v4 t28 = t14*t23 + t22*t7;
-    const sk_v4 t29 = t15*t23 + t2*t22;
-    const sk_v4 t30 = t19 - 0.0825*t24;
-    const sk_v4 t31 = t20 - 0.0825*t25;
-    const sk_v4 t32 = t21 - 0.0825*t26;
-    const sk_v4 t33 = (0.384)*t27 + t30;
-    const sk_v4 t34 = (0.384)*t28 + t31;
-    const sk_v4 t35 = (0.384)*t29 + t32;
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = t16*t37 + t24*t36;
-    const sk_v4 t39 = t17*t37 + t25*t36;
-    const sk_v4 t40 = t18*t37 + t26*t36;
-    const sk_v4 t41 = t16*t36 - t24*t37;
-    const sk_v4 t42 = t17*t36 - t25*t37;
-    const sk_v4 t43 = t18*t36 - t26*t37;
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t46 = -t27*t45 + t38*t44;
-    const sk_v4 t47 = -t28*t45 + t39*t44;
-    const sk_v4 t48 = -t29*t45 + t40*t44;
-    const sk_v4 t49 = t27*t44 + t38*t45;
-    const sk_v4 t50 = t28*t44 + t39*t45;
-    const sk_v4 t51 = t29*t44 + t40*t45;
-    const sk_v4 t52 = t33 + (0.088)*t46;
-    const sk_v4 t53 = t34 + (0.088)*t47;
-    const sk_v4 t54 = t35 + (0.088)*t48;
-    const sk_v4 t55 = -0.107*t49 + t52;
-    const sk_v4 t56 = -0.107*t50 + t53;
-    const sk_v4 t57 = -0.107*t51 + t54;
-    const sk_v4 t66 = -0.1034*t49 + t55;
-    const sk_v4 t67 = -0.1034*t50 + t56;
-    const sk_v4 t68 = -0.1034*t51 + t57;
-    const sk_v4 t69 = skv_sin_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t70 = -skv_cos_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t71 = -t41*t70 + t46*t69;
-    const sk_v4 t72 = -t42*t70 + t47*t69;
-    const sk_v4 t73 = -t43*t70 + t48*t69;
-    const sk_v4 t74 = -t41*t69 - t46*t70;
-    const sk_v4 t75 = -t42*t69 - t47*t70;
-    const sk_v4 t76 = -t43*t69 - t48*t70;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_(q + l * 7, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, t71, t74, -t49, t66);
-    skv_store4_(T + 4, 16, t72, t75, -t50, t67);
-    skv_store4_(T + 8, 16, t73, t76, -t51, t68);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_panda_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_x4_(q + i * 7, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine(q, T, N, fkine_);
 #endif
     for (; i < N; ++i)
         fkine_(q + i * 7, T + i * 16);
@@ -545,10 +562,15 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -556,8 +578,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos_[2];
+    const double t12 = sin_[2];
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -567,8 +589,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos_[3];
+    const double t23 = -sin_[3];
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -581,16 +603,16 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos_[4];
+    const double t37 = sin_[4];
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos_[5];
+    const double t45 = -sin_[5];
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -603,8 +625,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t55 = -0.107*t49 + t52;
     const double t56 = -0.107*t50 + t53;
     const double t57 = -0.107*t51 + t54;
-    const double t58 = sk_cos(q6);
-    const double t59 = sk_sin(q6);
+    const double t58 = cos_[6];
+    const double t59 = sin_[6];
     const double t60 = -t41*t59 + t46*t58;
     const double t61 = -t42*t59 + t47*t58;
     const double t62 = -t43*t59 + t48*t58;
@@ -730,128 +752,13 @@ void symkin_panda_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
-#if SYMKIN_LANES == 4
-/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = t0*t3;
-    const sk_v4 t7 = t1*t3;
-    const sk_v4 t8 = (0.316)*t6;
-    const sk_v4 t9 = (0.316)*t7;
-    const sk_v4 t10 = (0.316)*t2 + 0.333;
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t13 = -t1*t12 + t11*t4;
-    const sk_v4 t14 = t0*t12 + t11*t5;
-    const sk_v4 t15 = -t11*t3;
-    const sk_v4 t16 = -t1*t11 - t12*t4;
-    const sk_v4 t17 = t0*t11 - t12*t5;
-    const sk_v4 t18 = t12*t3;
-    const sk_v4 t19 = (0.0825)*t13 + t8;
-    const sk_v4 t20 = (0.0825)*t14 + t9;
-    const sk_v4 t21 = t10 + (0.0825)*t15;
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t24 = t13*t22 - t23*t6;
-    const sk_v4 t25 = t14*t22 - t23*t7;
-    const sk_v4 t26 = t15*t22 - t2*t23;
-    const sk_v4 t27 = t13*t23 + t22*t6;
-    const sk_v4 t28 = t14*t23 + t22*t7;
-    const sk_v4 t29 = t15*t23 + t2*t22;
-    const sk_v4 t30 = t19 - 0.0825*t24;
-    const sk_v4 t31 = t20 - 0.0825*t25;
-    const sk_v4 t32 = t21 - 0.0825*t26;
-    const sk_v4 t33 = (0.384)*t27 + t30;
-    const sk_v4 t34 = (0.384)*t28 + t31;
-    const sk_v4 t35 = (0.384)*t29 + t32;
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = t16*t37 + t24*t36;
-    const sk_v4 t39 = t17*t37 + t25*t36;
-    const sk_v4 t40 = t18*t37 + t26*t36;
-    const sk_v4 t41 = t16*t36 - t24*t37;
-    const sk_v4 t42 = t17*t36 - t25*t37;
-    const sk_v4 t43 = t18*t36 - t26*t37;
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t46 = -t27*t45 + t38*t44;
-    const sk_v4 t47 = -t28*t45 + t39*t44;
-    const sk_v4 t48 = -t29*t45 + t40*t44;
-    const sk_v4 t49 = t27*t44 + t38*t45;
-    const sk_v4 t50 = t28*t44 + t39*t45;
-    const sk_v4 t51 = t29*t44 + t40*t45;
-    const sk_v4 t52 = t33 + (0.088)*t46;
-    const sk_v4 t53 = t34 + (0.088)*t47;
-    const sk_v4 t54 = t35 + (0.088)*t48;
-    const sk_v4 t55 = -0.107*t49 + t52;
-    const sk_v4 t56 = -0.107*t50 + t53;
-    const sk_v4 t57 = -0.107*t51 + t54;
-    const sk_v4 t58 = skv_cos_(q6, &far_);
-    const sk_v4 t59 = skv_sin_(q6, &far_);
-    const sk_v4 t60 = -t41*t59 + t46*t58;
-    const sk_v4 t61 = -t42*t59 + t47*t58;
-    const sk_v4 t62 = -t43*t59 + t48*t58;
-    const sk_v4 t63 = -t41*t58 - t46*t59;
-    const sk_v4 t64 = -t42*t58 - t47*t59;
-    const sk_v4 t65 = -t43*t58 - t48*t59;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            link_poses_(q + l * 7, links + l * 112);
-        return;
-    }
-    skv_store4_(links + 0, 112, t0, -t1, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 4, 112, t1, t0, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 8, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0), SKV_SPLAT(0.333));
-    skv_store4_(links + 12, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 16, 112, t4, -t1, t6, SKV_SPLAT(0.0));
-    skv_store4_(links + 20, 112, t5, t0, t7, SKV_SPLAT(0.0));
-    skv_store4_(links + 24, 112, -t3, SKV_SPLAT(0.0), t2, SKV_SPLAT(0.333));
-    skv_store4_(links + 28, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 32, 112, t13, t16, t6, t8);
-    skv_store4_(links + 36, 112, t14, t17, t7, t9);
-    skv_store4_(links + 40, 112, t15, t18, t2, t10);
-    skv_store4_(links + 44, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 48, 112, t24, t16, t27, t19);
-    skv_store4_(links + 52, 112, t25, t17, t28, t20);
-    skv_store4_(links + 56, 112, t26, t18, t29, t21);
-    skv_store4_(links + 60, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 64, 112, t38, t41, t27, t33);
-    skv_store4_(links + 68, 112, t39, t42, t28, t34);
-    skv_store4_(links + 72, 112, t40, t43, t29, t35);
-    skv_store4_(links + 76, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 80, 112, t46, t41, t49, t33);
-    skv_store4_(links + 84, 112, t47, t42, t50, t34);
-    skv_store4_(links + 88, 112, t48, t43, t51, t35);
-    skv_store4_(links + 92, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 96, 112, t60, t63, -t49, t55);
-    skv_store4_(links + 100, 112, t61, t64, -t50, t56);
-    skv_store4_(links + 104, 112, t62, t65, -t51, t57);
-    skv_store4_(links + 108, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_panda_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        link_poses_x4_(q + i * 7, links + i * 112);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->link_poses(q, links, N, link_poses_);
 #endif
     for (; i < N; ++i)
         link_poses_(q + i * 7, links + i * 112);
@@ -866,10 +773,15 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -877,8 +789,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos_[2];
+    const double t12 = sin_[2];
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -888,8 +800,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos_[3];
+    const double t23 = -sin_[3];
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -902,16 +814,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos_[4];
+    const double t37 = sin_[4];
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos_[5];
+    const double t45 = -sin_[5];
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -1007,136 +919,13 @@ void symkin_panda_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = t0*t3;
-    const sk_v4 t7 = t1*t3;
-    const sk_v4 t8 = (0.316)*t6;
-    const sk_v4 t9 = (0.316)*t7;
-    const sk_v4 t10 = (0.316)*t2 + 0.333;
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t13 = -t1*t12 + t11*t4;
-    const sk_v4 t14 = t0*t12 + t11*t5;
-    const sk_v4 t15 = -t11*t3;
-    const sk_v4 t16 = -t1*t11 - t12*t4;
-    const sk_v4 t17 = t0*t11 - t12*t5;
-    const sk_v4 t18 = t12*t3;
-    const sk_v4 t19 = (0.0825)*t13 + t8;
-    const sk_v4 t20 = (0.0825)*t14 + t9;
-    const sk_v4 t21 = t10 + (0.0825)*t15;
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t24 = t13*t22 - t23*t6;
-    const sk_v4 t25 = t14*t22 - t23*t7;
-    const sk_v4 t26 = t15*t22 - t2*t23;
-    const sk_v4 t27 = t13*t23 + t22*t6;
-    const sk_v4 t28 = t14*t23 + t22*t7;
-    const sk_v4 t29 = t15*t23 + t2*t22;
-    const sk_v4 t30 = t19 - 0.0825*t24;
-    const sk_v4 t31 = t20 - 0.0825*t25;
-    const sk_v4 t32 = t21 - 0.0825*t26;
-    const sk_v4 t33 = (0.384)*t27 + t30;
-    const sk_v4 t34 = (0.384)*t28 + t31;
-    const sk_v4 t35 = (0.384)*t29 + t32;
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = t16*t37 + t24*t36;
-    const sk_v4 t39 = t17*t37 + t25*t36;
-    const sk_v4 t40 = t18*t37 + t26*t36;
-    const sk_v4 t41 = t16*t36 - t24*t37;
-    const sk_v4 t42 = t17*t36 - t25*t37;
-    const sk_v4 t43 = t18*t36 - t26*t37;
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t46 = -t27*t45 + t38*t44;
-    const sk_v4 t47 = -t28*t45 + t39*t44;
-    const sk_v4 t48 = -t29*t45 + t40*t44;
-    const sk_v4 t49 = t27*t44 + t38*t45;
-    const sk_v4 t50 = t28*t44 + t39*t45;
-    const sk_v4 t51 = t29*t44 + t40*t45;
-    const sk_v4 t52 = t33 + (0.088)*t46;
-    const sk_v4 t53 = t34 + (0.088)*t47;
-    const sk_v4 t54 = t35 + (0.088)*t48;
-    const sk_v4 t55 = -0.107*t49 + t52;
-    const sk_v4 t56 = -0.107*t50 + t53;
-    const sk_v4 t57 = -0.107*t51 + t54;
-    const sk_v4 t66 = -0.1034*t49 + t55;
-    const sk_v4 t67 = -0.1034*t50 + t56;
-    const sk_v4 t68 = -0.1034*t51 + t57;
-    const sk_v4 t77 = t68 - 0.333;
-    const sk_v4 t78 = t0*t77;
-    const sk_v4 t79 = t1*t77;
-    const sk_v4 t80 = -t0*t66 - t1*t67;
-    const sk_v4 t81 = t66 - t8;
-    const sk_v4 t82 = t67 - t9;
-    const sk_v4 t83 = -t10 + t68;
-    const sk_v4 t84 = -t2*t82 + t7*t83;
-    const sk_v4 t85 = t2*t81 - t6*t83;
-    const sk_v4 t86 = t6*t82 - t7*t81;
-    const sk_v4 t87 = -t19 + t66;
-    const sk_v4 t88 = -t20 + t67;
-    const sk_v4 t89 = -t21 + t68;
-    const sk_v4 t90 = -t17*t89 + t18*t88;
-    const sk_v4 t91 = t16*t89 - t18*t87;
-    const sk_v4 t92 = -t16*t88 + t17*t87;
-    const sk_v4 t93 = -t33 + t66;
-    const sk_v4 t94 = -t34 + t67;
-    const sk_v4 t95 = -t35 + t68;
-    const sk_v4 t96 = t28*t95 - t29*t94;
-    const sk_v4 t97 = -t27*t95 + t29*t93;
-    const sk_v4 t98 = t27*t94 - t28*t93;
-    const sk_v4 t99 = -t42*t95 + t43*t94;
-    const sk_v4 t100 = t41*t95 - t43*t93;
-    const sk_v4 t101 = -t41*t94 + t42*t93;
-    const sk_v4 t102 = -t55 + t66;
-    const sk_v4 t103 = -t56 + t67;
-    const sk_v4 t104 = -t57 + t68;
-    const sk_v4 t105 = t103*t51 - t104*t50;
-    const sk_v4 t106 = -t102*t51 + t104*t49;
-    const sk_v4 t107 = t102*t50 - t103*t49;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_(q + l * 7, J + l * 42);
-        return;
-    }
-    skv_store4_(J + 0, 42, -t67, t78, t84, t90);
-    skv_store4_(J + 4, 42, t96, t99, t105, t66);
-    skv_store4_(J + 8, 42, t79, t85, t91, t97);
-    skv_store4_(J + 12, 42, t100, t106, SKV_SPLAT(0.0), t80);
-    skv_store4_(J + 16, 42, t86, t92, t98, t101);
-    skv_store4_(J + 20, 42, t107, SKV_SPLAT(0.0), -t1, t6);
-    skv_store4_(J + 24, 42, -t16, t27, -t41, -t49);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, t7, -t17);
-    skv_store4_(J + 32, 42, t28, -t42, -t50, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), t2, -t18, t29);
-    skv_store4_(J + 38, 42, -t18, t29, -t43, -t51);
-}
-#endif
-
-
 void symkin_panda_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_x4_(q + i * 7, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0(q, J, N, jacob0_);
 #endif
     for (; i < N; ++i)
         jacob0_(q + i * 7, J + i * 42);
@@ -1151,18 +940,23 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q1, q2, q3, q4, q5, q6 + 0.7853981633974483, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t2 = cos_[0];
+    const double t3 = sin_[0];
+    const double t11 = cos_[1];
+    const double t12 = sin_[1];
+    const double t22 = cos_[2];
+    const double t23 = -sin_[2];
+    const double t36 = cos_[3];
+    const double t37 = sin_[3];
+    const double t44 = cos_[4];
+    const double t45 = -sin_[4];
+    const double t69 = sin_[5];
+    const double t70 = -cos_[5];
     const double t108 = -0.088*t69;
     const double t109 = (0.088)*t70;
     const double t110 = -t45*t69;
@@ -1269,113 +1063,13 @@ void symkin_panda_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t69 = skv_sin_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t70 = -skv_cos_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t108 = -0.088*t69;
-    const sk_v4 t109 = (0.088)*t70;
-    const sk_v4 t110 = -t45*t69;
-    const sk_v4 t111 = t45*t70;
-    const sk_v4 t112 = t44*t69;
-    const sk_v4 t113 = -t44*t70;
-    const sk_v4 t114 = t108 - 0.384*t110;
-    const sk_v4 t115 = t109 - 0.384*t111;
-    const sk_v4 t116 = (0.384)*t44 - 0.2104;
-    const sk_v4 t117 = t112*t36 + t37*t70;
-    const sk_v4 t118 = t113*t36 + t37*t69;
-    const sk_v4 t119 = -t36*t45;
-    const sk_v4 t120 = t114 + (0.0825)*t117;
-    const sk_v4 t121 = t115 + (0.0825)*t118;
-    const sk_v4 t122 = t116 + (0.0825)*t119;
-    const sk_v4 t123 = t112*t37 - t36*t70;
-    const sk_v4 t124 = t113*t37 - t36*t69;
-    const sk_v4 t125 = -t37*t45;
-    const sk_v4 t126 = t110*t23 + t117*t22;
-    const sk_v4 t127 = t111*t23 + t118*t22;
-    const sk_v4 t128 = t119*t22 - t23*t44;
-    const sk_v4 t129 = t120 - 0.0825*t126;
-    const sk_v4 t130 = t121 - 0.0825*t127;
-    const sk_v4 t131 = t122 - 0.0825*t128;
-    const sk_v4 t132 = t110*t22 - t117*t23;
-    const sk_v4 t133 = t111*t22 - t118*t23;
-    const sk_v4 t134 = -t119*t23 - t22*t44;
-    const sk_v4 t135 = t129 - 0.316*t132;
-    const sk_v4 t136 = t130 - 0.316*t133;
-    const sk_v4 t137 = t131 - 0.316*t134;
-    const sk_v4 t138 = t11*t123 + t12*t126;
-    const sk_v4 t139 = t11*t124 + t12*t127;
-    const sk_v4 t140 = t11*t125 + t12*t128;
-    const sk_v4 t141 = t11*t126 - t12*t123;
-    const sk_v4 t142 = t11*t127 - t12*t124;
-    const sk_v4 t143 = t11*t128 - t12*t125;
-    const sk_v4 t144 = t132*t2 - t141*t3;
-    const sk_v4 t145 = t133*t2 - t142*t3;
-    const sk_v4 t146 = t134*t2 - t143*t3;
-    const sk_v4 t153 = (0.2104)*t69;
-    const sk_v4 t154 = -0.2104*t70;
-    const sk_v4 t155 = t108*t69 - t109*t70;
-    const sk_v4 t156 = -t109*t44 + (0.2104)*t111;
-    const sk_v4 t157 = t108*t44 - 0.2104*t110;
-    const sk_v4 t158 = t108*t111 - t109*t110;
-    const sk_v4 t159 = -t121*t125 + t122*t124;
-    const sk_v4 t160 = t120*t125 - t122*t123;
-    const sk_v4 t161 = -t120*t124 + t121*t123;
-    const sk_v4 t162 = t130*t134 - t131*t133;
-    const sk_v4 t163 = -t129*t134 + t131*t132;
-    const sk_v4 t164 = t129*t133 - t130*t132;
-    const sk_v4 t165 = t136*t140 - t137*t139;
-    const sk_v4 t166 = -t135*t140 + t137*t138;
-    const sk_v4 t167 = t135*t139 - t136*t138;
-    const sk_v4 t168 = t136*t146 - t137*t145;
-    const sk_v4 t169 = -t135*t146 + t137*t144;
-    const sk_v4 t170 = t135*t145 - t136*t144;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_(q + l * 7, J + l * 42);
-        return;
-    }
-    skv_store4_(J + 0, 42, t168, t165, t162, t159);
-    skv_store4_(J + 4, 42, t156, t153, SKV_SPLAT(0.0), t169);
-    skv_store4_(J + 8, 42, t166, t163, t160, t157);
-    skv_store4_(J + 12, 42, t154, SKV_SPLAT(0.0), t170, t167);
-    skv_store4_(J + 16, 42, t164, t161, t158, t155);
-    skv_store4_(J + 20, 42, SKV_SPLAT(0.0), t144, t138, t132);
-    skv_store4_(J + 24, 42, -t123, t110, t70, SKV_SPLAT(0.0));
-    skv_store4_(J + 28, 42, t145, t139, t133, -t124);
-    skv_store4_(J + 32, 42, t111, t69, SKV_SPLAT(0.0), t146);
-    skv_store4_(J + 36, 42, t140, t134, -t125, -t44);
-    skv_store4_(J + 38, 42, -t125, -t44, SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_panda_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_x4_(q + i * 7, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe(q, J, N, jacobe_);
 #endif
     for (; i < N; ++i)
         jacobe_(q + i * 7, J + i * 42);
@@ -1409,18 +1103,23 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q1, q2, q3, q4, q5, q6 + 0.7853981633974483, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t2 = cos_[0];
+    const double t3 = sin_[0];
+    const double t11 = cos_[1];
+    const double t12 = sin_[1];
+    const double t22 = cos_[2];
+    const double t23 = -sin_[2];
+    const double t36 = cos_[3];
+    const double t37 = sin_[3];
+    const double t44 = cos_[4];
+    const double t45 = -sin_[4];
+    const double t69 = sin_[5];
+    const double t70 = -cos_[5];
     const double t108 = -0.088*t69;
     const double t109 = (0.088)*t70;
     const double t110 = -t45*t69;
@@ -1957,354 +1656,13 @@ void symkin_panda_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t69 = skv_sin_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t70 = -skv_cos_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t108 = -0.088*t69;
-    const sk_v4 t109 = (0.088)*t70;
-    const sk_v4 t110 = -t45*t69;
-    const sk_v4 t111 = t45*t70;
-    const sk_v4 t112 = t44*t69;
-    const sk_v4 t113 = -t44*t70;
-    const sk_v4 t114 = t108 - 0.384*t110;
-    const sk_v4 t115 = t109 - 0.384*t111;
-    const sk_v4 t116 = (0.384)*t44 - 0.2104;
-    const sk_v4 t117 = t112*t36 + t37*t70;
-    const sk_v4 t118 = t113*t36 + t37*t69;
-    const sk_v4 t119 = -t36*t45;
-    const sk_v4 t120 = t114 + (0.0825)*t117;
-    const sk_v4 t121 = t115 + (0.0825)*t118;
-    const sk_v4 t122 = t116 + (0.0825)*t119;
-    const sk_v4 t123 = t112*t37 - t36*t70;
-    const sk_v4 t124 = t113*t37 - t36*t69;
-    const sk_v4 t125 = -t37*t45;
-    const sk_v4 t126 = t110*t23 + t117*t22;
-    const sk_v4 t127 = t111*t23 + t118*t22;
-    const sk_v4 t128 = t119*t22 - t23*t44;
-    const sk_v4 t129 = t120 - 0.0825*t126;
-    const sk_v4 t130 = t121 - 0.0825*t127;
-    const sk_v4 t131 = t122 - 0.0825*t128;
-    const sk_v4 t132 = t110*t22 - t117*t23;
-    const sk_v4 t133 = t111*t22 - t118*t23;
-    const sk_v4 t134 = -t119*t23 - t22*t44;
-    const sk_v4 t135 = t129 - 0.316*t132;
-    const sk_v4 t136 = t130 - 0.316*t133;
-    const sk_v4 t137 = t131 - 0.316*t134;
-    const sk_v4 t138 = t11*t123 + t12*t126;
-    const sk_v4 t139 = t11*t124 + t12*t127;
-    const sk_v4 t140 = t11*t125 + t12*t128;
-    const sk_v4 t141 = t11*t126 - t12*t123;
-    const sk_v4 t142 = t11*t127 - t12*t124;
-    const sk_v4 t143 = t11*t128 - t12*t125;
-    const sk_v4 t144 = t132*t2 - t141*t3;
-    const sk_v4 t145 = t133*t2 - t142*t3;
-    const sk_v4 t146 = t134*t2 - t143*t3;
-    const sk_v4 t153 = (0.2104)*t69;
-    const sk_v4 t154 = -0.2104*t70;
-    const sk_v4 t155 = t108*t69 - t109*t70;
-    const sk_v4 t156 = -t109*t44 + (0.2104)*t111;
-    const sk_v4 t157 = t108*t44 - 0.2104*t110;
-    const sk_v4 t158 = t108*t111 - t109*t110;
-    const sk_v4 t159 = -t121*t125 + t122*t124;
-    const sk_v4 t160 = t120*t125 - t122*t123;
-    const sk_v4 t161 = -t120*t124 + t121*t123;
-    const sk_v4 t162 = t130*t134 - t131*t133;
-    const sk_v4 t163 = -t129*t134 + t131*t132;
-    const sk_v4 t164 = t129*t133 - t130*t132;
-    const sk_v4 t165 = t136*t140 - t137*t139;
-    const sk_v4 t166 = -t135*t140 + t137*t138;
-    const sk_v4 t167 = t135*t139 - t136*t138;
-    const sk_v4 t168 = t136*t146 - t137*t145;
-    const sk_v4 t169 = -t135*t146 + t137*t144;
-    const sk_v4 t170 = t135*t145 - t136*t144;
-    const sk_v4 t202 = t145*t167 - t146*t166;
-    const sk_v4 t203 = -t144*t167 + t146*t165;
-    const sk_v4 t204 = t144*t166 - t145*t165;
-    const sk_v4 t205 = t139*t170 - t140*t169;
-    const sk_v4 t206 = -t138*t170 + t140*t168;
-    const sk_v4 t207 = t138*t169 - t139*t168;
-    const sk_v4 t208 = t202 - t205;
-    const sk_v4 t209 = t203 - t206;
-    const sk_v4 t210 = t204 - t207;
-    const sk_v4 t211 = -t139*t146 + t140*t145;
-    const sk_v4 t212 = t138*t146 - t140*t144;
-    const sk_v4 t213 = -t138*t145 + t139*t144;
-    const sk_v4 t241 = t145*t164 - t146*t163;
-    const sk_v4 t242 = -t144*t164 + t146*t162;
-    const sk_v4 t243 = t144*t163 - t145*t162;
-    const sk_v4 t244 = t133*t170 - t134*t169;
-    const sk_v4 t245 = -t132*t170 + t134*t168;
-    const sk_v4 t246 = t132*t169 - t133*t168;
-    const sk_v4 t247 = t241 - t244;
-    const sk_v4 t248 = t242 - t245;
-    const sk_v4 t249 = t243 - t246;
-    const sk_v4 t250 = -t133*t146 + t134*t145;
-    const sk_v4 t251 = t132*t146 - t134*t144;
-    const sk_v4 t252 = -t132*t145 + t133*t144;
-    const sk_v4 t253 = t139*t164 - t140*t163;
-    const sk_v4 t254 = -t138*t164 + t140*t162;
-    const sk_v4 t255 = t138*t163 - t139*t162;
-    const sk_v4 t256 = t133*t167 - t134*t166;
-    const sk_v4 t257 = -t132*t167 + t134*t165;
-    const sk_v4 t258 = t132*t166 - t133*t165;
-    const sk_v4 t259 = t253 - t256;
-    const sk_v4 t260 = t254 - t257;
-    const sk_v4 t261 = t255 - t258;
-    const sk_v4 t262 = -t133*t140 + t134*t139;
-    const sk_v4 t263 = t132*t140 - t134*t138;
-    const sk_v4 t264 = -t132*t139 + t133*t138;
-    const sk_v4 t286 = t145*t161 - t146*t160;
-    const sk_v4 t287 = -t144*t161 + t146*t159;
-    const sk_v4 t288 = t144*t160 - t145*t159;
-    const sk_v4 t289 = -t124*t170 + t125*t169;
-    const sk_v4 t290 = t123*t170 - t125*t168;
-    const sk_v4 t291 = -t123*t169 + t124*t168;
-    const sk_v4 t292 = t286 - t289;
-    const sk_v4 t293 = t287 - t290;
-    const sk_v4 t294 = t288 - t291;
-    const sk_v4 t295 = t124*t146 - t125*t145;
-    const sk_v4 t296 = -t123*t146 + t125*t144;
-    const sk_v4 t297 = t123*t145 - t124*t144;
-    const sk_v4 t298 = t139*t161 - t140*t160;
-    const sk_v4 t299 = -t138*t161 + t140*t159;
-    const sk_v4 t300 = t138*t160 - t139*t159;
-    const sk_v4 t301 = -t124*t167 + t125*t166;
-    const sk_v4 t302 = t123*t167 - t125*t165;
-    const sk_v4 t303 = -t123*t166 + t124*t165;
-    const sk_v4 t304 = t298 - t301;
-    const sk_v4 t305 = t299 - t302;
-    const sk_v4 t306 = t300 - t303;
-    const sk_v4 t307 = t124*t140 - t125*t139;
-    const sk_v4 t308 = -t123*t140 + t125*t138;
-    const sk_v4 t309 = t123*t139 - t124*t138;
-    const sk_v4 t310 = t133*t161 - t134*t160;
-    const sk_v4 t311 = -t132*t161 + t134*t159;
-    const sk_v4 t312 = t132*t160 - t133*t159;
-    const sk_v4 t313 = -t124*t164 + t125*t163;
-    const sk_v4 t314 = t123*t164 - t125*t162;
-    const sk_v4 t315 = -t123*t163 + t124*t162;
-    const sk_v4 t316 = t310 - t313;
-    const sk_v4 t317 = t311 - t314;
-    const sk_v4 t318 = t312 - t315;
-    const sk_v4 t319 = t124*t134 - t125*t133;
-    const sk_v4 t320 = -t123*t134 + t125*t132;
-    const sk_v4 t321 = t123*t133 - t124*t132;
-    const sk_v4 t337 = t145*t158 - t146*t157;
-    const sk_v4 t338 = -t144*t158 + t146*t156;
-    const sk_v4 t339 = t144*t157 - t145*t156;
-    const sk_v4 t340 = t111*t170 + t169*t44;
-    const sk_v4 t341 = -t110*t170 - t168*t44;
-    const sk_v4 t342 = t110*t169 - t111*t168;
-    const sk_v4 t343 = t337 - t340;
-    const sk_v4 t344 = t338 - t341;
-    const sk_v4 t345 = t339 - t342;
-    const sk_v4 t346 = -t111*t146 - t145*t44;
-    const sk_v4 t347 = t110*t146 + t144*t44;
-    const sk_v4 t348 = -t110*t145 + t111*t144;
-    const sk_v4 t349 = t139*t158 - t140*t157;
-    const sk_v4 t350 = -t138*t158 + t140*t156;
-    const sk_v4 t351 = t138*t157 - t139*t156;
-    const sk_v4 t352 = t111*t167 + t166*t44;
-    const sk_v4 t353 = -t110*t167 - t165*t44;
-    const sk_v4 t354 = t110*t166 - t111*t165;
-    const sk_v4 t355 = t349 - t352;
-    const sk_v4 t356 = t350 - t353;
-    const sk_v4 t357 = t351 - t354;
-    const sk_v4 t358 = -t111*t140 - t139*t44;
-    const sk_v4 t359 = t110*t140 + t138*t44;
-    const sk_v4 t360 = -t110*t139 + t111*t138;
-    const sk_v4 t361 = t133*t158 - t134*t157;
-    const sk_v4 t362 = -t132*t158 + t134*t156;
-    const sk_v4 t363 = t132*t157 - t133*t156;
-    const sk_v4 t364 = t111*t164 + t163*t44;
-    const sk_v4 t365 = -t110*t164 - t162*t44;
-    const sk_v4 t366 = t110*t163 - t111*t162;
-    const sk_v4 t367 = t361 - t364;
-    const sk_v4 t368 = t362 - t365;
-    const sk_v4 t369 = t363 - t366;
-    const sk_v4 t370 = -t111*t134 - t133*t44;
-    const sk_v4 t371 = t110*t134 + t132*t44;
-    const sk_v4 t372 = -t110*t133 + t111*t132;
-    const sk_v4 t373 = -t124*t158 + t125*t157;
-    const sk_v4 t374 = t123*t158 - t125*t156;
-    const sk_v4 t375 = -t123*t157 + t124*t156;
-    const sk_v4 t376 = t111*t161 + t160*t44;
-    const sk_v4 t377 = -t110*t161 - t159*t44;
-    const sk_v4 t378 = t110*t160 - t111*t159;
-    const sk_v4 t379 = t373 - t376;
-    const sk_v4 t380 = t374 - t377;
-    const sk_v4 t381 = t375 - t378;
-    const sk_v4 t382 = t111*t125 + t124*t44;
-    const sk_v4 t383 = -t110*t125 - t123*t44;
-    const sk_v4 t384 = t110*t124 - t111*t123;
-    const sk_v4 t394 = t145*t155 - t146*t154;
-    const sk_v4 t395 = -t144*t155 + t146*t153;
-    const sk_v4 t396 = t144*t154 - t145*t153;
-    const sk_v4 t397 = t170*t69;
-    const sk_v4 t398 = -t170*t70;
-    const sk_v4 t399 = -t168*t69 + t169*t70;
-    const sk_v4 t400 = t394 - t397;
-    const sk_v4 t401 = t395 - t398;
-    const sk_v4 t402 = t396 - t399;
-    const sk_v4 t403 = -t146*t69;
-    const sk_v4 t404 = t146*t70;
-    const sk_v4 t405 = t144*t69 - t145*t70;
-    const sk_v4 t406 = t139*t155 - t140*t154;
-    const sk_v4 t407 = -t138*t155 + t140*t153;
-    const sk_v4 t408 = t138*t154 - t139*t153;
-    const sk_v4 t409 = t167*t69;
-    const sk_v4 t410 = -t167*t70;
-    const sk_v4 t411 = -t165*t69 + t166*t70;
-    const sk_v4 t412 = t406 - t409;
-    const sk_v4 t413 = t407 - t410;
-    const sk_v4 t414 = t408 - t411;
-    const sk_v4 t415 = -t140*t69;
-    const sk_v4 t416 = t140*t70;
-    const sk_v4 t417 = t138*t69 - t139*t70;
-    const sk_v4 t418 = t133*t155 - t134*t154;
-    const sk_v4 t419 = -t132*t155 + t134*t153;
-    const sk_v4 t420 = t132*t154 - t133*t153;
-    const sk_v4 t421 = t164*t69;
-    const sk_v4 t422 = -t164*t70;
-    const sk_v4 t423 = -t162*t69 + t163*t70;
-    const sk_v4 t424 = t418 - t421;
-    const sk_v4 t425 = t419 - t422;
-    const sk_v4 t426 = t420 - t423;
-    const sk_v4 t427 = -t134*t69;
-    const sk_v4 t428 = t134*t70;
-    const sk_v4 t429 = t132*t69 - t133*t70;
-    const sk_v4 t430 = -t124*t155 + t125*t154;
-    const sk_v4 t431 = t123*t155 - t125*t153;
-    const sk_v4 t432 = -t123*t154 + t124*t153;
-    const sk_v4 t433 = t161*t69;
-    const sk_v4 t434 = -t161*t70;
-    const sk_v4 t435 = -t159*t69 + t160*t70;
-    const sk_v4 t436 = t430 - t433;
-    const sk_v4 t437 = t431 - t434;
-    const sk_v4 t438 = t432 - t435;
-    const sk_v4 t439 = t125*t69;
-    const sk_v4 t440 = -t125*t70;
-    const sk_v4 t441 = -t123*t69 + t124*t70;
-    const sk_v4 t442 = t111*t155 + t154*t44;
-    const sk_v4 t443 = -t110*t155 - t153*t44;
-    const sk_v4 t444 = t110*t154 - t111*t153;
-    const sk_v4 t445 = t158*t69;
-    const sk_v4 t446 = -t158*t70;
-    const sk_v4 t447 = -t156*t69 + t157*t70;
-    const sk_v4 t448 = t442 - t445;
-    const sk_v4 t449 = t443 - t446;
-    const sk_v4 t450 = t444 - t447;
-    const sk_v4 t451 = t110*t69 - t111*t70;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessiane_(q + l * 7, H + l * 294);
-        return;
-    }
-    skv_store4_(H + 0, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 8, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 24, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 28, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t208, SKV_SPLAT(0.0));
-    skv_store4_(H + 44, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 294, SKV_SPLAT(0.0), t209, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 294, t210, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 60, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t211);
-    skv_store4_(H + 64, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t212, SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 294, SKV_SPLAT(0.0), t213, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 80, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 294, t247, t259, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t248);
-    skv_store4_(H + 92, 294, t260, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t249, t261);
-    skv_store4_(H + 100, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 294, SKV_SPLAT(0.0), t250, t262, SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 294, t251, t263, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 116, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t252);
-    skv_store4_(H + 120, 294, t264, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t292, t304);
-    skv_store4_(H + 128, 294, t316, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 132, 294, SKV_SPLAT(0.0), t293, t305, t317);
-    skv_store4_(H + 136, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 294, t294, t306, t318, SKV_SPLAT(0.0));
-    skv_store4_(H + 144, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t295);
-    skv_store4_(H + 148, 294, t307, t319, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 152, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t296, t308);
-    skv_store4_(H + 156, 294, t320, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 160, 294, SKV_SPLAT(0.0), t297, t309, t321);
-    skv_store4_(H + 164, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 168, 294, t343, t355, t367, t379);
-    skv_store4_(H + 172, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t344);
-    skv_store4_(H + 176, 294, t356, t368, t380, SKV_SPLAT(0.0));
-    skv_store4_(H + 180, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t345, t357);
-    skv_store4_(H + 184, 294, t369, t381, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 188, 294, SKV_SPLAT(0.0), t346, t358, t370);
-    skv_store4_(H + 192, 294, t382, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 294, t347, t359, t371, t383);
-    skv_store4_(H + 200, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t348);
-    skv_store4_(H + 204, 294, t360, t372, t384, SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t400, t412);
-    skv_store4_(H + 212, 294, t424, t436, t448, SKV_SPLAT(0.0));
-    skv_store4_(H + 216, 294, SKV_SPLAT(0.0), t401, t413, t425);
-    skv_store4_(H + 220, 294, t437, t449, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 224, 294, t402, t414, t426, t438);
-    skv_store4_(H + 228, 294, t450, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t403);
-    skv_store4_(H + 232, 294, t415, t427, t439, t112);
-    skv_store4_(H + 236, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t404, t416);
-    skv_store4_(H + 240, 294, t428, t440, t113, SKV_SPLAT(0.0));
-    skv_store4_(H + 244, 294, SKV_SPLAT(0.0), t405, t417, t429);
-    skv_store4_(H + 248, 294, t441, t451, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 252, 294, t169, t166, t163, t160);
-    skv_store4_(H + 256, 294, t157, t154, SKV_SPLAT(0.0), -t168);
-    skv_store4_(H + 260, 294, -t165, -t162, -t159, -t156);
-    skv_store4_(H + 264, 294, -t153, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 268, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 272, 294, SKV_SPLAT(0.0), t145, t139, t133);
-    skv_store4_(H + 276, 294, -t124, t111, t69, SKV_SPLAT(0.0));
-    skv_store4_(H + 280, 294, -t144, -t138, -t132, t123);
-    skv_store4_(H + 284, 294, -t110, -t70, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 288, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 290, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_panda_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessiane_x4_(q + i * 7, H + i * 294);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessiane(q, H, N, hessiane_);
 #endif
     for (; i < N; ++i)
         hessiane_(q + i * 7, H + i * 294);
@@ -2320,10 +1678,15 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6 + 0.7853981633974483, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -2331,8 +1694,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos_[2];
+    const double t12 = sin_[2];
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -2342,8 +1705,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos_[3];
+    const double t23 = -sin_[3];
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -2356,16 +1719,16 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos_[4];
+    const double t37 = sin_[4];
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos_[5];
+    const double t45 = -sin_[5];
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -2381,8 +1744,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t66 = -0.1034*t49 + t55;
     const double t67 = -0.1034*t50 + t56;
     const double t68 = -0.1034*t51 + t57;
-    const double t69 = sk_sin(q6 + 0.7853981633974483);
-    const double t70 = -sk_cos(q6 + 0.7853981633974483);
+    const double t69 = sin_[6];
+    const double t70 = -cos_[6];
     const double t71 = -t41*t70 + t46*t69;
     const double t72 = -t42*t70 + t47*t69;
     const double t73 = -t43*t70 + t48*t69;
@@ -2485,149 +1848,13 @@ void symkin_panda_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = t0*t3;
-    const sk_v4 t7 = t1*t3;
-    const sk_v4 t8 = (0.316)*t6;
-    const sk_v4 t9 = (0.316)*t7;
-    const sk_v4 t10 = (0.316)*t2 + 0.333;
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t13 = -t1*t12 + t11*t4;
-    const sk_v4 t14 = t0*t12 + t11*t5;
-    const sk_v4 t15 = -t11*t3;
-    const sk_v4 t16 = -t1*t11 - t12*t4;
-    const sk_v4 t17 = t0*t11 - t12*t5;
-    const sk_v4 t18 = t12*t3;
-    const sk_v4 t19 = (0.0825)*t13 + t8;
-    const sk_v4 t20 = (0.0825)*t14 + t9;
-    const sk_v4 t21 = t10 + (0.0825)*t15;
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t24 = t13*t22 - t23*t6;
-    const sk_v4 t25 = t14*t22 - t23*t7;
-    const sk_v4 t26 = t15*t22 - t2*t23;
-    const sk_v4 t27 = t13*t23 + t22*t6;
-    const sk_v4 t28 = t14*t23 + t22*t7;
-    const sk_v4 t29 = t15*t23 + t2*t22;
-    const sk_v4 t30 = t19 - 0.0825*t24;
-    const sk_v4 t31 = t20 - 0.0825*t25;
-    const sk_v4 t32 = t21 - 0.0825*t26;
-    const sk_v4 t33 = (0.384)*t27 + t30;
-    const sk_v4 t34 = (0.384)*t28 + t31;
-    const sk_v4 t35 = (0.384)*t29 + t32;
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = t16*t37 + t24*t36;
-    const sk_v4 t39 = t17*t37 + t25*t36;
-    const sk_v4 t40 = t18*t37 + t26*t36;
-    const sk_v4 t41 = t16*t36 - t24*t37;
-    const sk_v4 t42 = t17*t36 - t25*t37;
-    const sk_v4 t43 = t18*t36 - t26*t37;
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t46 = -t27*t45 + t38*t44;
-    const sk_v4 t47 = -t28*t45 + t39*t44;
-    const sk_v4 t48 = -t29*t45 + t40*t44;
-    const sk_v4 t49 = t27*t44 + t38*t45;
-    const sk_v4 t50 = t28*t44 + t39*t45;
-    const sk_v4 t51 = t29*t44 + t40*t45;
-    const sk_v4 t52 = t33 + (0.088)*t46;
-    const sk_v4 t53 = t34 + (0.088)*t47;
-    const sk_v4 t54 = t35 + (0.088)*t48;
-    const sk_v4 t55 = -0.107*t49 + t52;
-    const sk_v4 t56 = -0.107*t50 + t53;
-    const sk_v4 t57 = -0.107*t51 + t54;
-    const sk_v4 t66 = -0.1034*t49 + t55;
-    const sk_v4 t67 = -0.1034*t50 + t56;
-    const sk_v4 t68 = -0.1034*t51 + t57;
-    const sk_v4 t69 = skv_sin_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t70 = -skv_cos_(q6 + 0.7853981633974483, &far_);
-    const sk_v4 t71 = -t41*t70 + t46*t69;
-    const sk_v4 t72 = -t42*t70 + t47*t69;
-    const sk_v4 t73 = -t43*t70 + t48*t69;
-    const sk_v4 t74 = -t41*t69 - t46*t70;
-    const sk_v4 t75 = -t42*t69 - t47*t70;
-    const sk_v4 t76 = -t43*t69 - t48*t70;
-    const sk_v4 t77 = t68 - 0.333;
-    const sk_v4 t78 = t0*t77;
-    const sk_v4 t79 = t1*t77;
-    const sk_v4 t80 = -t0*t66 - t1*t67;
-    const sk_v4 t81 = t66 - t8;
-    const sk_v4 t82 = t67 - t9;
-    const sk_v4 t83 = -t10 + t68;
-    const sk_v4 t84 = -t2*t82 + t7*t83;
-    const sk_v4 t85 = t2*t81 - t6*t83;
-    const sk_v4 t86 = t6*t82 - t7*t81;
-    const sk_v4 t87 = -t19 + t66;
-    const sk_v4 t88 = -t20 + t67;
-    const sk_v4 t89 = -t21 + t68;
-    const sk_v4 t90 = -t17*t89 + t18*t88;
-    const sk_v4 t91 = t16*t89 - t18*t87;
-    const sk_v4 t92 = -t16*t88 + t17*t87;
-    const sk_v4 t93 = -t33 + t66;
-    const sk_v4 t94 = -t34 + t67;
-    const sk_v4 t95 = -t35 + t68;
-    const sk_v4 t96 = t28*t95 - t29*t94;
-    const sk_v4 t97 = -t27*t95 + t29*t93;
-    const sk_v4 t98 = t27*t94 - t28*t93;
-    const sk_v4 t99 = -t42*t95 + t43*t94;
-    const sk_v4 t100 = t41*t95 - t43*t93;
-    const sk_v4 t101 = -t41*t94 + t42*t93;
-    const sk_v4 t102 = -t55 + t66;
-    const sk_v4 t103 = -t56 + t67;
-    const sk_v4 t104 = -t57 + t68;
-    const sk_v4 t105 = t103*t51 - t104*t50;
-    const sk_v4 t106 = -t102*t51 + t104*t49;
-    const sk_v4 t107 = t102*t50 - t103*t49;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_(q + l * 7, T + l * 16, J + l * 42);
-        return;
-    }
-    skv_store4_(T + 0, 16, t71, t74, -t49, t66);
-    skv_store4_(T + 4, 16, t72, t75, -t50, t67);
-    skv_store4_(T + 8, 16, t73, t76, -t51, t68);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 42, -t67, t78, t84, t90);
-    skv_store4_(J + 4, 42, t96, t99, t105, t66);
-    skv_store4_(J + 8, 42, t79, t85, t91, t97);
-    skv_store4_(J + 12, 42, t100, t106, SKV_SPLAT(0.0), t80);
-    skv_store4_(J + 16, 42, t86, t92, t98, t101);
-    skv_store4_(J + 20, 42, t107, SKV_SPLAT(0.0), -t1, t6);
-    skv_store4_(J + 24, 42, -t16, t27, -t41, -t49);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, t7, -t17);
-    skv_store4_(J + 32, 42, t28, -t42, -t50, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), t2, -t18, t29);
-    skv_store4_(J + 38, 42, -t18, t29, -t43, -t51);
-}
-#endif
-
-
 void symkin_panda_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_x4_(q + i * 7, T + i * 16, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0(q, T, J, N, fkine_jacob0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_(q + i * 7, T + i * 16, J + i * 42);
@@ -2642,10 +1869,15 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = t0*t3;
@@ -2653,8 +1885,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t8 = (0.316)*t6;
     const double t9 = (0.316)*t7;
     const double t10 = (0.316)*t2 + 0.333;
-    const double t11 = sk_cos(q2);
-    const double t12 = sk_sin(q2);
+    const double t11 = cos_[2];
+    const double t12 = sin_[2];
     const double t13 = -t1*t12 + t11*t4;
     const double t14 = t0*t12 + t11*t5;
     const double t15 = -t11*t3;
@@ -2664,8 +1896,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t19 = (0.0825)*t13 + t8;
     const double t20 = (0.0825)*t14 + t9;
     const double t21 = t10 + (0.0825)*t15;
-    const double t22 = sk_cos(q3);
-    const double t23 = -sk_sin(q3);
+    const double t22 = cos_[3];
+    const double t23 = -sin_[3];
     const double t24 = t13*t22 - t23*t6;
     const double t25 = t14*t22 - t23*t7;
     const double t26 = t15*t22 - t2*t23;
@@ -2678,16 +1910,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t33 = (0.384)*t27 + t30;
     const double t34 = (0.384)*t28 + t31;
     const double t35 = (0.384)*t29 + t32;
-    const double t36 = sk_cos(q4);
-    const double t37 = sk_sin(q4);
+    const double t36 = cos_[4];
+    const double t37 = sin_[4];
     const double t38 = t16*t37 + t24*t36;
     const double t39 = t17*t37 + t25*t36;
     const double t40 = t18*t37 + t26*t36;
     const double t41 = t16*t36 - t24*t37;
     const double t42 = t17*t36 - t25*t37;
     const double t43 = t18*t36 - t26*t37;
-    const double t44 = sk_cos(q5);
-    const double t45 = -sk_sin(q5);
+    const double t44 = cos_[5];
+    const double t45 = -sin_[5];
     const double t46 = -t27*t45 + t38*t44;
     const double t47 = -t28*t45 + t39*t44;
     const double t48 = -t29*t45 + t40*t44;
@@ -3183,316 +2415,13 @@ void symkin_panda_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = t0*t3;
-    const sk_v4 t7 = t1*t3;
-    const sk_v4 t8 = (0.316)*t6;
-    const sk_v4 t9 = (0.316)*t7;
-    const sk_v4 t10 = (0.316)*t2 + 0.333;
-    const sk_v4 t11 = skv_cos_(q2, &far_);
-    const sk_v4 t12 = skv_sin_(q2, &far_);
-    const sk_v4 t13 = -t1*t12 + t11*t4;
-    const sk_v4 t14 = t0*t12 + t11*t5;
-    const sk_v4 t15 = -t11*t3;
-    const sk_v4 t16 = -t1*t11 - t12*t4;
-    const sk_v4 t17 = t0*t11 - t12*t5;
-    const sk_v4 t18 = t12*t3;
-    const sk_v4 t19 = (0.0825)*t13 + t8;
-    const sk_v4 t20 = (0.0825)*t14 + t9;
-    const sk_v4 t21 = t10 + (0.0825)*t15;
-    const sk_v4 t22 = skv_cos_(q3, &far_);
-    const sk_v4 t23 = -skv_sin_(q3, &far_);
-    const sk_v4 t24 = t13*t22 - t23*t6;
-    const sk_v4 t25 = t14*t22 - t23*t7;
-    const sk_v4 t26 = t15*t22 - t2*t23;
-    const sk_v4 t27 = t13*t23 + t22*t6;
-    const sk_v4 t28 = t14*t23 + t22*t7;
-    const sk_v4 t29 = t15*t23 + t2*t22;
-    const sk_v4 t30 = t19 - 0.0825*t24;
-    const sk_v4 t31 = t20 - 0.0825*t25;
-    const sk_v4 t32 = t21 - 0.0825*t26;
-    const sk_v4 t33 = (0.384)*t27 + t30;
-    const sk_v4 t34 = (0.384)*t28 + t31;
-    const sk_v4 t35 = (0.384)*t29 + t32;
-    const sk_v4 t36 = skv_cos_(q4, &far_);
-    const sk_v4 t37 = skv_sin_(q4, &far_);
-    const sk_v4 t38 = t16*t37 + t24*t36;
-    const sk_v4 t39 = t17*t37 + t25*t36;
-    const sk_v4 t40 = t18*t37 + t26*t36;
-    const sk_v4 t41 = t16*t36 - t24*t37;
-    const sk_v4 t42 = t17*t36 - t25*t37;
-    const sk_v4 t43 = t18*t36 - t26*t37;
-    const sk_v4 t44 = skv_cos_(q5, &far_);
-    const sk_v4 t45 = -skv_sin_(q5, &far_);
-    const sk_v4 t46 = -t27*t45 + t38*t44;
-    const sk_v4 t47 = -t28*t45 + t39*t44;
-    const sk_v4 t48 = -t29*t45 + t40*t44;
-    const sk_v4 t49 = t27*t44 + t38*t45;
-    const sk_v4 t50 = t28*t44 + t39*t45;
-    const sk_v4 t51 = t29*t44 + t40*t45;
-    const sk_v4 t52 = t33 + (0.088)*t46;
-    const sk_v4 t53 = t34 + (0.088)*t47;
-    const sk_v4 t54 = t35 + (0.088)*t48;
-    const sk_v4 t55 = -0.107*t49 + t52;
-    const sk_v4 t56 = -0.107*t50 + t53;
-    const sk_v4 t57 = -0.107*t51 + t54;
-    const sk_v4 t66 = -0.1034*t49 + t55;
-    const sk_v4 t67 = -0.1034*t50 + t56;
-    const sk_v4 t68 = -0.1034*t51 + t57;
-    const sk_v4 t77 = t68 - 0.333;
-    const sk_v4 t78 = t0*t77;
-    const sk_v4 t79 = t1*t77;
-    const sk_v4 t80 = -t0*t66 - t1*t67;
-    const sk_v4 t81 = t66 - t8;
-    const sk_v4 t82 = t67 - t9;
-    const sk_v4 t83 = -t10 + t68;
-    const sk_v4 t84 = -t2*t82 + t7*t83;
-    const sk_v4 t85 = t2*t81 - t6*t83;
-    const sk_v4 t86 = t6*t82 - t7*t81;
-    const sk_v4 t87 = -t19 + t66;
-    const sk_v4 t88 = -t20 + t67;
-    const sk_v4 t89 = -t21 + t68;
-    const sk_v4 t90 = -t17*t89 + t18*t88;
-    const sk_v4 t91 = t16*t89 - t18*t87;
-    const sk_v4 t92 = -t16*t88 + t17*t87;
-    const sk_v4 t93 = -t33 + t66;
-    const sk_v4 t94 = -t34 + t67;
-    const sk_v4 t95 = -t35 + t68;
-    const sk_v4 t96 = t28*t95 - t29*t94;
-    const sk_v4 t97 = -t27*t95 + t29*t93;
-    const sk_v4 t98 = t27*t94 - t28*t93;
-    const sk_v4 t99 = -t42*t95 + t43*t94;
-    const sk_v4 t100 = t41*t95 - t43*t93;
-    const sk_v4 t101 = -t41*t94 + t42*t93;
-    const sk_v4 t102 = -t55 + t66;
-    const sk_v4 t103 = -t56 + t67;
-    const sk_v4 t104 = -t57 + t68;
-    const sk_v4 t105 = t103*t51 - t104*t50;
-    const sk_v4 t106 = -t102*t51 + t104*t49;
-    const sk_v4 t107 = t102*t50 - t103*t49;
-    const sk_v4 t171 = t0*t80;
-    const sk_v4 t172 = t1*t80;
-    const sk_v4 t173 = -t0*t78 - t1*t79;
-    const sk_v4 t174 = t0*t86;
-    const sk_v4 t175 = t1*t86;
-    const sk_v4 t176 = -t0*t84 - t1*t85;
-    const sk_v4 t177 = -t0*t6 - t1*t7;
-    const sk_v4 t178 = t0*t92;
-    const sk_v4 t179 = t1*t92;
-    const sk_v4 t180 = -t0*t90 - t1*t91;
-    const sk_v4 t181 = -t0*t18;
-    const sk_v4 t182 = -t1*t18;
-    const sk_v4 t183 = t0*t16 + t1*t17;
-    const sk_v4 t184 = t0*t98;
-    const sk_v4 t185 = t1*t98;
-    const sk_v4 t186 = -t0*t96 - t1*t97;
-    const sk_v4 t187 = t0*t29;
-    const sk_v4 t188 = t1*t29;
-    const sk_v4 t189 = -t0*t27 - t1*t28;
-    const sk_v4 t190 = t0*t101;
-    const sk_v4 t191 = t1*t101;
-    const sk_v4 t192 = -t0*t99 - t1*t100;
-    const sk_v4 t193 = -t0*t43;
-    const sk_v4 t194 = -t1*t43;
-    const sk_v4 t195 = t0*t41 + t1*t42;
-    const sk_v4 t196 = t0*t107;
-    const sk_v4 t197 = t1*t107;
-    const sk_v4 t198 = -t0*t105 - t1*t106;
-    const sk_v4 t199 = -t0*t51;
-    const sk_v4 t200 = -t1*t51;
-    const sk_v4 t201 = t0*t49 + t1*t50;
-    const sk_v4 t214 = -t2*t85 + t7*t86;
-    const sk_v4 t215 = t2*t84 - t6*t86;
-    const sk_v4 t216 = t6*t85 - t7*t84;
-    const sk_v4 t217 = -t2*t91 + t7*t92;
-    const sk_v4 t218 = t2*t90 - t6*t92;
-    const sk_v4 t219 = t6*t91 - t7*t90;
-    const sk_v4 t220 = t17*t2 - t18*t7;
-    const sk_v4 t221 = -t16*t2 + t18*t6;
-    const sk_v4 t222 = t16*t7 - t17*t6;
-    const sk_v4 t223 = -t2*t97 + t7*t98;
-    const sk_v4 t224 = t2*t96 - t6*t98;
-    const sk_v4 t225 = t6*t97 - t7*t96;
-    const sk_v4 t226 = -t2*t28 + t29*t7;
-    const sk_v4 t227 = t2*t27 - t29*t6;
-    const sk_v4 t228 = -t27*t7 + t28*t6;
-    const sk_v4 t229 = -t100*t2 + t101*t7;
-    const sk_v4 t230 = -t101*t6 + t2*t99;
-    const sk_v4 t231 = t100*t6 - t7*t99;
-    const sk_v4 t232 = t2*t42 - t43*t7;
-    const sk_v4 t233 = -t2*t41 + t43*t6;
-    const sk_v4 t234 = t41*t7 - t42*t6;
-    const sk_v4 t235 = -t106*t2 + t107*t7;
-    const sk_v4 t236 = t105*t2 - t107*t6;
-    const sk_v4 t237 = -t105*t7 + t106*t6;
-    const sk_v4 t238 = t2*t50 - t51*t7;
-    const sk_v4 t239 = -t2*t49 + t51*t6;
-    const sk_v4 t240 = t49*t7 - t50*t6;
-    const sk_v4 t265 = -t17*t92 + t18*t91;
-    const sk_v4 t266 = t16*t92 - t18*t90;
-    const sk_v4 t267 = -t16*t91 + t17*t90;
-    const sk_v4 t268 = -t17*t98 + t18*t97;
-    const sk_v4 t269 = t16*t98 - t18*t96;
-    const sk_v4 t270 = -t16*t97 + t17*t96;
-    const sk_v4 t271 = -t17*t29 + t18*t28;
-    const sk_v4 t272 = t16*t29 - t18*t27;
-    const sk_v4 t273 = -t16*t28 + t17*t27;
-    const sk_v4 t274 = t100*t18 - t101*t17;
-    const sk_v4 t275 = t101*t16 - t18*t99;
-    const sk_v4 t276 = -t100*t16 + t17*t99;
-    const sk_v4 t277 = t17*t43 - t18*t42;
-    const sk_v4 t278 = -t16*t43 + t18*t41;
-    const sk_v4 t279 = t16*t42 - t17*t41;
-    const sk_v4 t280 = t106*t18 - t107*t17;
-    const sk_v4 t281 = -t105*t18 + t107*t16;
-    const sk_v4 t282 = t105*t17 - t106*t16;
-    const sk_v4 t283 = t17*t51 - t18*t50;
-    const sk_v4 t284 = -t16*t51 + t18*t49;
-    const sk_v4 t285 = t16*t50 - t17*t49;
-    const sk_v4 t322 = t28*t98 - t29*t97;
-    const sk_v4 t323 = -t27*t98 + t29*t96;
-    const sk_v4 t324 = t27*t97 - t28*t96;
-    const sk_v4 t325 = -t100*t29 + t101*t28;
-    const sk_v4 t326 = -t101*t27 + t29*t99;
-    const sk_v4 t327 = t100*t27 - t28*t99;
-    const sk_v4 t328 = -t28*t43 + t29*t42;
-    const sk_v4 t329 = t27*t43 - t29*t41;
-    const sk_v4 t330 = -t27*t42 + t28*t41;
-    const sk_v4 t331 = -t106*t29 + t107*t28;
-    const sk_v4 t332 = t105*t29 - t107*t27;
-    const sk_v4 t333 = -t105*t28 + t106*t27;
-    const sk_v4 t334 = -t28*t51 + t29*t50;
-    const sk_v4 t335 = t27*t51 - t29*t49;
-    const sk_v4 t336 = -t27*t50 + t28*t49;
-    const sk_v4 t385 = t100*t43 - t101*t42;
-    const sk_v4 t386 = t101*t41 - t43*t99;
-    const sk_v4 t387 = -t100*t41 + t42*t99;
-    const sk_v4 t388 = t106*t43 - t107*t42;
-    const sk_v4 t389 = -t105*t43 + t107*t41;
-    const sk_v4 t390 = t105*t42 - t106*t41;
-    const sk_v4 t391 = t42*t51 - t43*t50;
-    const sk_v4 t392 = -t41*t51 + t43*t49;
-    const sk_v4 t393 = t41*t50 - t42*t49;
-    const sk_v4 t452 = t106*t51 - t107*t50;
-    const sk_v4 t453 = -t105*t51 + t107*t49;
-    const sk_v4 t454 = t105*t50 - t106*t49;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_hessian0_(q + l * 7, J + l * 42, H + l * 294);
-        return;
-    }
-    skv_store4_(J + 0, 42, -t67, t78, t84, t90);
-    skv_store4_(J + 4, 42, t96, t99, t105, t66);
-    skv_store4_(J + 8, 42, t79, t85, t91, t97);
-    skv_store4_(J + 12, 42, t100, t106, SKV_SPLAT(0.0), t80);
-    skv_store4_(J + 16, 42, t86, t92, t98, t101);
-    skv_store4_(J + 20, 42, t107, SKV_SPLAT(0.0), -t1, t6);
-    skv_store4_(J + 24, 42, -t16, t27, -t41, -t49);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, t7, -t17);
-    skv_store4_(J + 32, 42, t28, -t42, -t50, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), t2, -t18, t29);
-    skv_store4_(J + 38, 42, -t18, t29, -t43, -t51);
-    skv_store4_(H + 0, 294, -t66, -t79, -t85, -t91);
-    skv_store4_(H + 4, 294, -t97, -t100, -t106, -t67);
-    skv_store4_(H + 8, 294, t78, t84, t90, t96);
-    skv_store4_(H + 12, 294, t99, t105, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t0, -t7);
-    skv_store4_(H + 24, 294, t17, -t28, t42, t50);
-    skv_store4_(H + 28, 294, SKV_SPLAT(0.0), -t1, t6, -t16);
-    skv_store4_(H + 32, 294, t27, -t41, -t49, SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t79, t171);
-    skv_store4_(H + 44, 294, t174, t178, t184, t190);
-    skv_store4_(H + 48, 294, t196, t78, t172, t175);
-    skv_store4_(H + 52, 294, t179, t185, t191, t197);
-    skv_store4_(H + 56, 294, SKV_SPLAT(0.0), t173, t176, t180);
-    skv_store4_(H + 60, 294, t186, t192, t198, SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 294, SKV_SPLAT(0.0), t4, t181, t187);
-    skv_store4_(H + 68, 294, t193, t199, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 294, t5, t182, t188, t194);
-    skv_store4_(H + 76, 294, t200, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t177);
-    skv_store4_(H + 80, 294, t183, t189, t195, t201);
-    skv_store4_(H + 84, 294, -t85, t174, t214, t217);
-    skv_store4_(H + 88, 294, t223, t229, t235, t84);
-    skv_store4_(H + 92, 294, t175, t215, t218, t224);
-    skv_store4_(H + 96, 294, t230, t236, SKV_SPLAT(0.0), t176);
-    skv_store4_(H + 100, 294, t216, t219, t225, t231);
-    skv_store4_(H + 104, 294, t237, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 294, t220, t226, t232, t238);
-    skv_store4_(H + 112, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t221);
-    skv_store4_(H + 116, 294, t227, t233, t239, SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t222, t228);
-    skv_store4_(H + 124, 294, t234, t240, -t91, t178);
-    skv_store4_(H + 128, 294, t217, t265, t268, t274);
-    skv_store4_(H + 132, 294, t280, t90, t179, t218);
-    skv_store4_(H + 136, 294, t266, t269, t275, t281);
-    skv_store4_(H + 140, 294, SKV_SPLAT(0.0), t180, t219, t267);
-    skv_store4_(H + 144, 294, t270, t276, t282, SKV_SPLAT(0.0));
-    skv_store4_(H + 148, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t271);
-    skv_store4_(H + 152, 294, t277, t283, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t272, t278);
-    skv_store4_(H + 160, 294, t284, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 294, SKV_SPLAT(0.0), t273, t279, t285);
-    skv_store4_(H + 168, 294, -t97, t184, t223, t268);
-    skv_store4_(H + 172, 294, t322, t325, t331, t96);
-    skv_store4_(H + 176, 294, t185, t224, t269, t323);
-    skv_store4_(H + 180, 294, t326, t332, SKV_SPLAT(0.0), t186);
-    skv_store4_(H + 184, 294, t225, t270, t324, t327);
-    skv_store4_(H + 188, 294, t333, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t328, t334);
-    skv_store4_(H + 196, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 294, SKV_SPLAT(0.0), t329, t335, SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 294, t330, t336, -t100, t190);
-    skv_store4_(H + 212, 294, t229, t274, t325, t385);
-    skv_store4_(H + 216, 294, t388, t99, t191, t230);
-    skv_store4_(H + 220, 294, t275, t326, t386, t389);
-    skv_store4_(H + 224, 294, SKV_SPLAT(0.0), t192, t231, t276);
-    skv_store4_(H + 228, 294, t327, t387, t390, SKV_SPLAT(0.0));
-    skv_store4_(H + 232, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 236, 294, SKV_SPLAT(0.0), t391, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 240, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 244, 294, t392, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 248, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t393);
-    skv_store4_(H + 252, 294, -t106, t196, t235, t280);
-    skv_store4_(H + 256, 294, t331, t388, t452, t105);
-    skv_store4_(H + 260, 294, t197, t236, t281, t332);
-    skv_store4_(H + 264, 294, t389, t453, SKV_SPLAT(0.0), t198);
-    skv_store4_(H + 268, 294, t237, t282, t333, t390);
-    skv_store4_(H + 272, 294, t454, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 276, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 280, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 284, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 288, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 290, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_panda_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_hessian0_x4_(q + i * 7, J + i * 42, H + i * 294);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_hessian0(q, J, H, N, jacob0_hessian0_);
 #endif
     for (; i < N; ++i)
         jacob0_hessian0_(q + i * 7, J + i * 42, H + i * 294);

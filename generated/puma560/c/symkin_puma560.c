@@ -46,15 +46,22 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -62,14 +69,34 @@ const char *const symkin_puma560_joint_names[SYMKIN_PUMA560_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -77,14 +104,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -108,36 +139,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -218,7 +260,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -232,7 +274,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -309,6 +351,71 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #define SYMKIN_LANES 1
 #endif
 
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_puma560_lanes.c: its table symkin_puma560_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_puma560_bind_lanes (symkin's runtime builds symkin_puma560_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*link_poses)(const double *q, double *links, ptrdiff_t N, void (*scalar)(const double *q, double *links));
+    ptrdiff_t (*jacob0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*hessian0)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*hessiane)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*fkine_jacob0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*jacob0_hessian0)(const double *q, double *J, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *J, double *H));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_puma560_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_puma560_bind_lanes(const void *table);
+void symkin_puma560_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_puma560_lanes;
+}
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -325,25 +432,30 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q3);
+    double sin_[5], cos_[5]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q3, q4, q5, q1, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 5, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = sin_[1];
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q0);
-    const double x4 = sk_cos(q3);
+    const double x3 = cos_[0];
+    const double x4 = cos_[1];
     const double x5 = q1 + q2;
     const double x6 = sk_cos(x5);
     const double x7 = -x2 + x3*x4*x6;
-    const double x8 = sk_cos(q4);
-    const double x9 = sk_sin(q4);
+    const double x8 = cos_[2];
+    const double x9 = sin_[2];
     const double x10 = sk_sin(x5);
     const double x11 = x10*x3;
     const double x12 = -x11*x9 + x7*x8;
-    const double x13 = sk_cos(q5);
+    const double x13 = cos_[3];
     const double x14 = x0*x4;
     const double x15 = x1*x3;
     const double x16 = -x14 - x15*x6;
-    const double x17 = sk_sin(q5);
-    const double x18 = sk_cos(q1);
+    const double x17 = sin_[3];
+    const double x18 = cos_[4];
     const double x19 = x14*x6 + x15;
     const double x20 = x0*x10;
     const double x21 = x19*x8 - x20*x9;
@@ -362,7 +474,7 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     T[8] = x13*x24 - x17*x25;
     T[9] = -x13*x25 - x17*x24;
     T[10] = -x23*x9 + x6*x8;
-    T[11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sk_sin(q1);
+    T[11] = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*sin_[4];
     T[12] = 0.0;
     T[13] = 0.0;
     T[14] = 0.0;
@@ -374,64 +486,13 @@ void symkin_puma560_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = skv_sin_(q3, &far_);
-    const sk_v4 x2 = x0*x1;
-    const sk_v4 x3 = skv_cos_(q0, &far_);
-    const sk_v4 x4 = skv_cos_(q3, &far_);
-    const sk_v4 x5 = q1 + q2;
-    const sk_v4 x6 = skv_cos_(x5, &far_);
-    const sk_v4 x7 = -x2 + x3*x4*x6;
-    const sk_v4 x8 = skv_cos_(q4, &far_);
-    const sk_v4 x9 = skv_sin_(q4, &far_);
-    const sk_v4 x10 = skv_sin_(x5, &far_);
-    const sk_v4 x11 = x10*x3;
-    const sk_v4 x12 = -x11*x9 + x7*x8;
-    const sk_v4 x13 = skv_cos_(q5, &far_);
-    const sk_v4 x14 = x0*x4;
-    const sk_v4 x15 = x1*x3;
-    const sk_v4 x16 = -x14 - x15*x6;
-    const sk_v4 x17 = skv_sin_(q5, &far_);
-    const sk_v4 x18 = skv_cos_(q1, &far_);
-    const sk_v4 x19 = x14*x6 + x15;
-    const sk_v4 x20 = x0*x10;
-    const sk_v4 x21 = x19*x8 - x20*x9;
-    const sk_v4 x22 = -x2*x6 + x3*x4;
-    const sk_v4 x23 = x10*x4;
-    const sk_v4 x24 = x23*x8 + x6*x9;
-    const sk_v4 x25 = x1*x10;
-    const sk_v4 T_11_ = (0.0203)*x10 + (0.4318)*x6 + (0.4318)*skv_sin_(q1, &far_);
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_(q + l * 6, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, x12*x13 + x16*x17, -x12*x17 + x13*x16, -x11*x8 - x7*x9, (0.15005)*x0 - 0.4318*x11 + (0.4318)*x18*x3 + (0.0203)*x3*x6);
-    skv_store4_(T + 4, 16, x13*x21 + x17*x22, x13*x22 - x17*x21, -x19*x9 - x20*x8, (0.4318)*x0*x18 + (0.0203)*x0*x6 - 0.4318*x20 - 0.15005*x3);
-    skv_store4_(T + 8, 16, x13*x24 - x17*x25, -x13*x25 - x17*x24, -x23*x9 + x6*x8, T_11_);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_puma560_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_x4_(q + i * 6, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine(q, T, N, fkine_);
 #endif
     for (; i < N; ++i)
         fkine_(q + i * 6, T + i * 16);
@@ -446,11 +507,16 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_sin(q0);
-    const double x2 = sk_cos(q1);
+    double sin_[5], cos_[5]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q3, q4, q5, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 5, sin_, cos_);
+    }
+    const double x0 = cos_[0];
+    const double x1 = sin_[0];
+    const double x2 = cos_[1];
     const double x3 = x0*x2;
-    const double x4 = sk_sin(q1);
+    const double x4 = sin_[1];
     const double x5 = x1*x2;
     const double x6 = -x0;
     const double x7 = q1 + q2;
@@ -465,8 +531,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x16 = -x15;
     const double x17 = (0.4318)*x5;
     const double x18 = (0.4318)*x4;
-    const double x19 = sk_sin(q3);
-    const double x20 = sk_cos(q3);
+    const double x19 = sin_[2];
+    const double x20 = cos_[2];
     const double x21 = x0*x20*x8 - x1*x19;
     const double x22 = x1*x20 + x19*x9;
     const double x23 = -x22;
@@ -478,8 +544,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x29 = x10*x20;
     const double x30 = x10*x19;
     const double x31 = (0.0203)*x10 + x18;
-    const double x32 = sk_cos(q4);
-    const double x33 = sk_sin(q4);
+    const double x32 = cos_[3];
+    const double x33 = sin_[3];
     const double x34 = -x11*x33 + x21*x32;
     const double x35 = -x11*x32 - x21*x33;
     const double x36 = -0.4318*x11 + x24;
@@ -489,8 +555,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x40 = x29*x32 + x33*x8;
     const double x41 = -x29*x33 + x32*x8;
     const double x42 = x31 + (0.4318)*x8;
-    const double x43 = sk_cos(q5);
-    const double x44 = sk_sin(q5);
+    const double x43 = cos_[4];
+    const double x44 = sin_[4];
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -594,102 +660,13 @@ void symkin_puma560_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
-#if SYMKIN_LANES == 4
-/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q0, &far_);
-    const sk_v4 x1 = skv_sin_(q0, &far_);
-    const sk_v4 x2 = skv_cos_(q1, &far_);
-    const sk_v4 x3 = x0*x2;
-    const sk_v4 x4 = skv_sin_(q1, &far_);
-    const sk_v4 x5 = x1*x2;
-    const sk_v4 x6 = -x0;
-    const sk_v4 x7 = q1 + q2;
-    const sk_v4 x8 = skv_cos_(x7, &far_);
-    const sk_v4 x9 = x0*x8;
-    const sk_v4 x10 = skv_sin_(x7, &far_);
-    const sk_v4 x11 = x0*x10;
-    const sk_v4 x12 = -x11;
-    const sk_v4 x13 = (0.4318)*x3;
-    const sk_v4 x14 = x1*x8;
-    const sk_v4 x15 = x1*x10;
-    const sk_v4 x16 = -x15;
-    const sk_v4 x17 = (0.4318)*x5;
-    const sk_v4 x18 = (0.4318)*x4;
-    const sk_v4 x19 = skv_sin_(q3, &far_);
-    const sk_v4 x20 = skv_cos_(q3, &far_);
-    const sk_v4 x21 = x0*x20*x8 - x1*x19;
-    const sk_v4 x22 = x1*x20 + x19*x9;
-    const sk_v4 x23 = -x22;
-    const sk_v4 x24 = (0.15005)*x1 + x13 + (0.0203)*x9;
-    const sk_v4 x25 = x0*x19 + x14*x20;
-    const sk_v4 x26 = -x0*x20 + x14*x19;
-    const sk_v4 x27 = -x26;
-    const sk_v4 x28 = (0.15005)*x0;
-    const sk_v4 x29 = x10*x20;
-    const sk_v4 x30 = x10*x19;
-    const sk_v4 x31 = (0.0203)*x10 + x18;
-    const sk_v4 x32 = skv_cos_(q4, &far_);
-    const sk_v4 x33 = skv_sin_(q4, &far_);
-    const sk_v4 x34 = -x11*x33 + x21*x32;
-    const sk_v4 x35 = -x11*x32 - x21*x33;
-    const sk_v4 x36 = -0.4318*x11 + x24;
-    const sk_v4 x37 = -x15*x33 + x25*x32;
-    const sk_v4 x38 = -x15*x32 - x25*x33;
-    const sk_v4 x39 = (0.4318)*x1*x2 + (0.0203)*x1*x8 - 0.4318*x15 - x28;
-    const sk_v4 x40 = x29*x32 + x33*x8;
-    const sk_v4 x41 = -x29*x33 + x32*x8;
-    const sk_v4 x42 = x31 + (0.4318)*x8;
-    const sk_v4 x43 = skv_cos_(q5, &far_);
-    const sk_v4 x44 = skv_sin_(q5, &far_);
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            link_poses_(q + l * 6, links + l * 96);
-        return;
-    }
-    skv_store4_(links + 0, 96, x0, -x1, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 4, 96, x1, x0, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 8, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 12, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 16, 96, x3, -x0*x4, x1, SKV_SPLAT(0.0));
-    skv_store4_(links + 20, 96, x5, -x1*x4, x6, SKV_SPLAT(0.0));
-    skv_store4_(links + 24, 96, x4, x2, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 28, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 32, 96, x9, x12, x1, x13);
-    skv_store4_(links + 36, 96, x14, x16, x6, x17);
-    skv_store4_(links + 40, 96, x10, x8, SKV_SPLAT(0.0), x18);
-    skv_store4_(links + 44, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 48, 96, x21, x23, x12, x24);
-    skv_store4_(links + 52, 96, x25, x27, x16, (0.0203)*x14 + x17 - x28);
-    skv_store4_(links + 56, 96, x29, -x30, x8, x31);
-    skv_store4_(links + 60, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 64, 96, x34, x35, x22, x36);
-    skv_store4_(links + 68, 96, x37, x38, x26, x39);
-    skv_store4_(links + 72, 96, x40, x41, x30, x42);
-    skv_store4_(links + 76, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 80, 96, x23*x44 + x34*x43, x23*x43 - x34*x44, x35, x36);
-    skv_store4_(links + 84, 96, x27*x44 + x37*x43, x27*x43 - x37*x44, x38, x39);
-    skv_store4_(links + 88, 96, -x30*x44 + x40*x43, -x30*x43 - x40*x44, x41, x42);
-    skv_store4_(links + 92, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_puma560_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        link_poses_x4_(q + i * 6, links + i * 96);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->link_poses(q, links, N, link_poses_);
 #endif
     for (; i < N; ++i)
         link_poses_(q + i * 6, links + i * 96);
@@ -703,9 +680,14 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.4318)*sk_cos(q1);
-    const double x2 = sk_cos(q0);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q3, q4 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = (0.4318)*cos_[1];
+    const double x2 = cos_[0];
     const double x3 = q1 + q2;
     const double x4 = sk_cos(x3);
     const double x5 = (0.0203)*x4;
@@ -714,17 +696,17 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7;
     const double x9 = -x0*x1 + x8;
     const double x10 = (0.4318)*x4 + (0.0203)*x6;
-    const double x11 = x10 + (0.4318)*sk_sin(q1);
+    const double x11 = x10 + (0.4318)*sin_[1];
     const double x12 = x2*x6;
     const double x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5;
     const double x14 = x1*x2 + x13;
-    const double x15 = sk_cos(q3);
+    const double x15 = cos_[2];
     const double x16 = x0*x15;
-    const double x17 = sk_sin(q3);
+    const double x17 = sin_[2];
     const double x18 = x17*x2;
     const double x19 = x0*x17;
-    const double x20 = sk_sin(q4);
-    const double x21 = sk_cos(q4);
+    const double x20 = sin_[3];
+    const double x21 = cos_[3];
     const double x22 = -x2;
     J[0] = x9;
     J[1] = -x11*x2;
@@ -769,64 +751,13 @@ void symkin_puma560_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = (0.4318)*skv_cos_(q1, &far_);
-    const sk_v4 x2 = skv_cos_(q0, &far_);
-    const sk_v4 x3 = q1 + q2;
-    const sk_v4 x4 = skv_cos_(x3, &far_);
-    const sk_v4 x5 = (0.0203)*x4;
-    const sk_v4 x6 = skv_sin_(x3, &far_);
-    const sk_v4 x7 = x0*x6;
-    const sk_v4 x8 = -x0*x5 + (0.15005)*x2 + (0.4318)*x7;
-    const sk_v4 x9 = -x0*x1 + x8;
-    const sk_v4 x10 = (0.4318)*x4 + (0.0203)*x6;
-    const sk_v4 x11 = x10 + (0.4318)*skv_sin_(q1, &far_);
-    const sk_v4 x12 = x2*x6;
-    const sk_v4 x13 = (0.15005)*x0 - 0.4318*x12 + x2*x5;
-    const sk_v4 x14 = x1*x2 + x13;
-    const sk_v4 x15 = skv_cos_(q3, &far_);
-    const sk_v4 x16 = x0*x15;
-    const sk_v4 x17 = skv_sin_(q3, &far_);
-    const sk_v4 x18 = x17*x2;
-    const sk_v4 x19 = x0*x17;
-    const sk_v4 x20 = skv_sin_(q4, &far_);
-    const sk_v4 x21 = skv_cos_(q4, &far_);
-    const sk_v4 x22 = -x2;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_(q + l * 6, J + l * 36);
-        return;
-    }
-    skv_store4_(J + 0, 36, x9, -x11*x2, -x10*x2, SKV_SPLAT(0.0));
-    skv_store4_(J + 4, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x14, -x0*x11);
-    skv_store4_(J + 8, 36, -x0*x10, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), -x0*x9 + x14*x2, -x0*x8 + x13*x2, SKV_SPLAT(0.0));
-    skv_store4_(J + 16, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x0);
-    skv_store4_(J + 20, 36, x0, -x12, x16 + x18*x4, -x12*x21 - x20*(x15*x2*x4 - x19));
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), x22, x22, -x7);
-    skv_store4_(J + 28, 36, -x15*x2 + x19*x4, -x20*(x16*x4 + x18) - x21*x7, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), x4, x17*x6, -x15*x20*x6 + x21*x4);
-}
-#endif
-
-
 void symkin_puma560_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_x4_(q + i * 6, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0(q, J, N, jacob0_);
 #endif
     for (; i < N; ++i)
         jacob0_(q + i * 6, J + i * 36);
@@ -840,26 +771,31 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q5);
-    const double x1 = sk_sin(q3);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q5, q3, q4, q2 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = cos_[0];
+    const double x1 = sin_[1];
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q4);
-    const double x4 = sk_cos(q3);
-    const double x5 = sk_sin(q5);
+    const double x3 = cos_[2];
+    const double x4 = cos_[1];
+    const double x5 = sin_[0];
     const double x6 = x4*x5;
     const double x7 = x3*x6;
     const double x8 = -x2 - x7;
     const double x9 = q1 + q2;
     const double x10 = sk_sin(x9);
     const double x11 = sk_cos(x9);
-    const double x12 = sk_sin(q4);
+    const double x12 = sin_[2];
     const double x13 = x12*x5;
     const double x14 = x10*x8 - x11*x13;
     const double x15 = x12*x4;
     const double x16 = (0.0203)*x15;
-    const double x17 = sk_sin(q2);
+    const double x17 = sin_[3];
     const double x18 = (0.4318)*x3;
-    const double x19 = sk_cos(q2);
+    const double x19 = cos_[3];
     const double x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3;
     const double x21 = -x10*x15 + x11*x3;
     const double x22 = x0*x4;
@@ -921,79 +857,13 @@ void symkin_puma560_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q5, &far_);
-    const sk_v4 x1 = skv_sin_(q3, &far_);
-    const sk_v4 x2 = x0*x1;
-    const sk_v4 x3 = skv_cos_(q4, &far_);
-    const sk_v4 x4 = skv_cos_(q3, &far_);
-    const sk_v4 x5 = skv_sin_(q5, &far_);
-    const sk_v4 x6 = x4*x5;
-    const sk_v4 x7 = x3*x6;
-    const sk_v4 x8 = -x2 - x7;
-    const sk_v4 x9 = q1 + q2;
-    const sk_v4 x10 = skv_sin_(x9, &far_);
-    const sk_v4 x11 = skv_cos_(x9, &far_);
-    const sk_v4 x12 = skv_sin_(q4, &far_);
-    const sk_v4 x13 = x12*x5;
-    const sk_v4 x14 = x10*x8 - x11*x13;
-    const sk_v4 x15 = x12*x4;
-    const sk_v4 x16 = (0.0203)*x15;
-    const sk_v4 x17 = skv_sin_(q2, &far_);
-    const sk_v4 x18 = (0.4318)*x3;
-    const sk_v4 x19 = skv_cos_(q2, &far_);
-    const sk_v4 x20 = (0.15005)*x1*x12 - 0.4318*x15*x19 - x16 - x17*x18 + (0.4318)*x3;
-    const sk_v4 x21 = -x10*x15 + x11*x3;
-    const sk_v4 x22 = x0*x4;
-    const sk_v4 x23 = -0.15005*x1*x3*x5 + (0.4318)*x13 + (0.0203)*x2 + (0.15005)*x22 + (0.0203)*x7;
-    const sk_v4 x24 = (0.4318)*x12*x17*x5 + (0.4318)*x19*x8 - x23;
-    const sk_v4 x25 = x1*x5;
-    const sk_v4 x26 = -x22 + x25*x3;
-    const sk_v4 x27 = x1*x12;
-    const sk_v4 x28 = -x16 + x18 + (0.15005)*x27;
-    const sk_v4 x29 = -x23;
-    const sk_v4 x30 = x0*x3*x4 - x25;
-    const sk_v4 x31 = x0*x12;
-    const sk_v4 x32 = x10*x30 + x11*x31;
-    const sk_v4 x33 = x2*x3;
-    const sk_v4 x34 = -0.4318*x0*x12 - 0.0203*x0*x3*x4 + (0.0203)*x25 + (0.15005)*x33 + (0.15005)*x6;
-    const sk_v4 x35 = -0.4318*x17*x31 + (0.4318)*x19*x30 - x34;
-    const sk_v4 x36 = -x33 - x6;
-    const sk_v4 x37 = -x34;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_(q + l * 6, J + l * 36);
-        return;
-    }
-    skv_store4_(J + 0, 36, x14*x20 - x21*x24, x20*x26 - x24*x27, x26*x28 - x27*x29, SKV_SPLAT(0.0));
-    skv_store4_(J + 4, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x20*x32 + x21*x35, x1*x12*x35 - x20*x36);
-    skv_store4_(J + 8, 36, x1*x12*x37 - x28*x36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 36, -x14*x35 + x24*x32, x24*x36 - x26*x35, -x26*x37 + x29*x36, SKV_SPLAT(0.0));
-    skv_store4_(J + 16, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x32, x36);
-    skv_store4_(J + 20, 36, x36, x31, -x5, SKV_SPLAT(0.0));
-    skv_store4_(J + 24, 36, x14, x26, x26, -x13);
-    skv_store4_(J + 28, 36, -x0, SKV_SPLAT(0.0), x21, x27);
-    skv_store4_(J + 32, 36, x27, x3, SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_puma560_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_x4_(q + i * 6, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe(q, J, N, jacobe_);
 #endif
     for (; i < N; ++i)
         jacobe_(q + i * 6, J + i * 36);
@@ -1007,9 +877,14 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_cos(q0);
-    const double x1 = (0.4318)*sk_cos(q1);
-    const double x2 = sk_sin(q0);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q3, q4 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = cos_[0];
+    const double x1 = (0.4318)*cos_[1];
+    const double x2 = sin_[0];
     const double x3 = q1 + q2;
     const double x4 = sk_sin(x3);
     const double x5 = x0*x4;
@@ -1018,7 +893,7 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7;
     const double x9 = x0*x1 + x8;
     const double x10 = (0.0203)*x4 + (0.4318)*x6;
-    const double x11 = x10 + (0.4318)*sk_sin(q1);
+    const double x11 = x10 + (0.4318)*sin_[1];
     const double x12 = x11*x2;
     const double x13 = x10*x2;
     const double x14 = x2*x6;
@@ -1027,14 +902,14 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x17 = -x1*x2 + x16;
     const double x18 = -x0*x11;
     const double x19 = -x0*x10;
-    const double x20 = sk_cos(q3);
-    const double x21 = sk_sin(q3);
+    const double x20 = cos_[2];
+    const double x21 = sin_[2];
     const double x22 = x2*x21;
     const double x23 = -x0*x20 + x22*x6;
     const double x24 = x0*x21;
     const double x25 = x2*x20;
-    const double x26 = sk_sin(q4);
-    const double x27 = sk_cos(q4);
+    const double x26 = sin_[3];
+    const double x27 = cos_[3];
     const double x28 = x15*x27 + x26*(x24 + x25*x6);
     const double x29 = x24*x6 + x25;
     const double x30 = -x26*(x0*x20*x6 - x22) - x27*x5;
@@ -1281,137 +1156,13 @@ void symkin_puma560_hessian0(const double *q, double *H)
     hessian0_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q0, &far_);
-    const sk_v4 x1 = (0.4318)*skv_cos_(q1, &far_);
-    const sk_v4 x2 = skv_sin_(q0, &far_);
-    const sk_v4 x3 = q1 + q2;
-    const sk_v4 x4 = skv_sin_(x3, &far_);
-    const sk_v4 x5 = x0*x4;
-    const sk_v4 x6 = skv_cos_(x3, &far_);
-    const sk_v4 x7 = x0*x6;
-    const sk_v4 x8 = (0.15005)*x2 - 0.4318*x5 + (0.0203)*x7;
-    const sk_v4 x9 = x0*x1 + x8;
-    const sk_v4 x10 = (0.0203)*x4 + (0.4318)*x6;
-    const sk_v4 x11 = x10 + (0.4318)*skv_sin_(q1, &far_);
-    const sk_v4 x12 = x11*x2;
-    const sk_v4 x13 = x10*x2;
-    const sk_v4 x14 = x2*x6;
-    const sk_v4 x15 = x2*x4;
-    const sk_v4 x16 = (0.15005)*x0 - 0.0203*x14 + (0.4318)*x15;
-    const sk_v4 x17 = -x1*x2 + x16;
-    const sk_v4 x18 = -x0*x11;
-    const sk_v4 x19 = -x0*x10;
-    const sk_v4 x20 = skv_cos_(q3, &far_);
-    const sk_v4 x21 = skv_sin_(q3, &far_);
-    const sk_v4 x22 = x2*x21;
-    const sk_v4 x23 = -x0*x20 + x22*x6;
-    const sk_v4 x24 = x0*x21;
-    const sk_v4 x25 = x2*x20;
-    const sk_v4 x26 = skv_sin_(q4, &far_);
-    const sk_v4 x27 = skv_cos_(q4, &far_);
-    const sk_v4 x28 = x15*x27 + x26*(x24 + x25*x6);
-    const sk_v4 x29 = x24*x6 + x25;
-    const sk_v4 x30 = -x26*(x0*x20*x6 - x22) - x27*x5;
-    const sk_v4 x31 = x0*x9 - x17*x2;
-    const sk_v4 x32 = x0*x8 - x16*x2;
-    const sk_v4 x33 = -x0*x32;
-    const sk_v4 x34 = -x2*x32;
-    const sk_v4 x35 = (x0*x0);
-    const sk_v4 x36 = (x2*x2);
-    const sk_v4 x37 = -x10*x35 - x10*x36;
-    const sk_v4 x38 = -x7;
-    const sk_v4 x39 = -x24*x4;
-    const sk_v4 x40 = -x20*x26*x4 + x27*x6;
-    const sk_v4 x41 = -x0*x40;
-    const sk_v4 x42 = -x14;
-    const sk_v4 x43 = -x15*x21;
-    const sk_v4 x44 = -x2*x40;
-    const sk_v4 x45 = -x35*x4 - x36*x4;
-    const sk_v4 x46 = x0*x29 + x2*x23;
-    const sk_v4 x47 = -x28;
-    const sk_v4 x48 = x0*x30 + x2*x47;
-    const sk_v4 x49 = (x4*x4);
-    const sk_v4 x50 = x21*x4;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessian0_(q + l * 6, H + l * 216);
-        return;
-    }
-    skv_store4_(H + 0, 216, -x9, x12, x13, SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x17, x18);
-    skv_store4_(H + 8, 216, x19, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x0);
-    skv_store4_(H + 20, 216, x0, x15, -x23, x28);
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), x2, x2, -x5);
-    skv_store4_(H + 28, 216, x29, x30, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, x12, -x0*x31, x33, SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x18, -x2*x31);
-    skv_store4_(H + 44, 216, x34, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 216, SKV_SPLAT(0.0), -x11*x35 - x11*x36, x37, SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), x38, x39, x41);
-    skv_store4_(H + 60, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x42);
-    skv_store4_(H + 64, 216, x43, x44, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), x45, x46, x48);
-    skv_store4_(H + 72, 216, x13, x33, x33, SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x19, x34);
-    skv_store4_(H + 80, 216, x34, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 216, SKV_SPLAT(0.0), x37, x37, SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), x38, x39, x41);
-    skv_store4_(H + 96, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x42);
-    skv_store4_(H + 100, 216, x43, x44, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), x45, x46, x48);
-    skv_store4_(H + 108, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 116, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x22*x49 - x23*x6, -x15*x40 - x47*x6);
-    skv_store4_(H + 132, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, x24*x49 + x29*x6, x30*x6 + x40*x5, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x15*x29 - x23*x5, x15*x30 - x47*x5);
-    skv_store4_(H + 144, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 148, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 152, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 160, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x23*x40 - x47*x50);
-    skv_store4_(H + 168, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), -x29*x40 + x30*x50, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 176, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x23*x30 + x29*x47);
-    skv_store4_(H + 180, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 184, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 188, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_puma560_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessian0_x4_(q + i * 6, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessian0(q, H, N, hessian0_);
 #endif
     for (; i < N; ++i)
         hessian0_(q + i * 6, H + i * 216);
@@ -1425,18 +1176,23 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q3);
-    const double x1 = sk_cos(q5);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q3, q5, q4, q2 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = cos_[0];
+    const double x1 = cos_[1];
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q4);
-    const double x4 = sk_sin(q3);
-    const double x5 = sk_sin(q5);
+    const double x3 = cos_[2];
+    const double x4 = sin_[0];
+    const double x5 = sin_[1];
     const double x6 = x4*x5;
     const double x7 = -x2 + x3*x6;
     const double x8 = x0*x1*x3 - x6;
-    const double x9 = sk_cos(q2);
-    const double x10 = sk_sin(q2);
-    const double x11 = sk_sin(q4);
+    const double x9 = cos_[3];
+    const double x10 = sin_[3];
+    const double x11 = sin_[2];
     const double x12 = x1*x11;
     const double x13 = x0*x5;
     const double x14 = x1*x4;
@@ -1714,152 +1470,13 @@ void symkin_puma560_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q3, &far_);
-    const sk_v4 x1 = skv_cos_(q5, &far_);
-    const sk_v4 x2 = x0*x1;
-    const sk_v4 x3 = skv_cos_(q4, &far_);
-    const sk_v4 x4 = skv_sin_(q3, &far_);
-    const sk_v4 x5 = skv_sin_(q5, &far_);
-    const sk_v4 x6 = x4*x5;
-    const sk_v4 x7 = -x2 + x3*x6;
-    const sk_v4 x8 = x0*x1*x3 - x6;
-    const sk_v4 x9 = skv_cos_(q2, &far_);
-    const sk_v4 x10 = skv_sin_(q2, &far_);
-    const sk_v4 x11 = skv_sin_(q4, &far_);
-    const sk_v4 x12 = x1*x11;
-    const sk_v4 x13 = x0*x5;
-    const sk_v4 x14 = x1*x4;
-    const sk_v4 x15 = x14*x3;
-    const sk_v4 x16 = -0.0203*x0*x1*x3 - 0.4318*x1*x11 + (0.15005)*x13 + (0.15005)*x15 + (0.0203)*x6;
-    const sk_v4 x17 = -0.4318*x10*x12 - x16 + (0.4318)*x8*x9;
-    const sk_v4 x18 = x13 + x15;
-    const sk_v4 x19 = -x18;
-    const sk_v4 x20 = x13*x3;
-    const sk_v4 x21 = -x14 - x20;
-    const sk_v4 x22 = x11*x5;
-    const sk_v4 x23 = (0.0203)*x14 + (0.15005)*x2 + (0.0203)*x20 + (0.4318)*x22 - 0.15005*x3*x4*x5;
-    const sk_v4 x24 = (0.4318)*x10*x11*x5 + (0.4318)*x21*x9 - x23;
-    const sk_v4 x25 = -x17*x7 + x19*x24;
-    const sk_v4 x26 = q1 + q2;
-    const sk_v4 x27 = skv_sin_(x26, &far_);
-    const sk_v4 x28 = skv_cos_(x26, &far_);
-    const sk_v4 x29 = x21*x27 - x22*x28;
-    const sk_v4 x30 = x0*x11;
-    const sk_v4 x31 = -x27*x30 + x28*x3;
-    const sk_v4 x32 = (0.0203)*x30;
-    const sk_v4 x33 = (0.4318)*x3;
-    const sk_v4 x34 = -x10*x33 + (0.15005)*x11*x4 + (0.4318)*x3 - 0.4318*x30*x9 - x32;
-    const sk_v4 x35 = x11*x17*x4 - x19*x34;
-    const sk_v4 x36 = x12*x28 + x27*x8;
-    const sk_v4 x37 = -x17*x29 + x24*x36;
-    const sk_v4 x38 = x17*x31 - x34*x36;
-    const sk_v4 x39 = x11*x4;
-    const sk_v4 x40 = -x37*x7 + x38*x39;
-    const sk_v4 x41 = -x24*x39 + x34*x7;
-    const sk_v4 x42 = -x24*x31 + x29*x34;
-    const sk_v4 x43 = x19*x37 - x39*x42;
-    const sk_v4 x44 = x19*x38 - x42*x7;
-    const sk_v4 x45 = x29*x39 - x31*x7;
-    const sk_v4 x46 = x19*x31 - x36*x39;
-    const sk_v4 x47 = -x19*x29 + x36*x7;
-    const sk_v4 x48 = -x16;
-    const sk_v4 x49 = -x23;
-    const sk_v4 x50 = x19*x49 - x48*x7;
-    const sk_v4 x51 = -x32 + x33 + (0.15005)*x39;
-    const sk_v4 x52 = x11*x4*x48 - x19*x51;
-    const sk_v4 x53 = -x39*x49 + x51*x7;
-    const sk_v4 x54 = x37*x5;
-    const sk_v4 x55 = x25*x5;
-    const sk_v4 x56 = x5*x50;
-    const sk_v4 x57 = x1*x37;
-    const sk_v4 x58 = x31*x5;
-    const sk_v4 x59 = (x11*x11);
-    const sk_v4 x60 = x3*x7 + x59*x6;
-    const sk_v4 x61 = x1*x4*x59 - x19*x3;
-    const sk_v4 x62 = -x12*x7 - x19*x22;
-    const sk_v4 x63 = x11*x14;
-    const sk_v4 x64 = -x11*x6;
-    const sk_v4 x65 = -x1*x19 + x5*x7;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessiane_(q + l * 6, H + l * 216);
-        return;
-    }
-    skv_store4_(H + 0, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 8, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 28, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, x25*x29 - x31*x35 + x40, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x25*x36 + x31*x41 + x43, SKV_SPLAT(0.0));
-    skv_store4_(H + 44, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 216, -x29*x41 + x35*x36 - x44, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x45, SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 60, 216, x46, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x47, SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 216, x29*x50 - x31*x52 + x40, -x25*x7 + x35*x39 - x39*x52 + x50*x7, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x31*x53 - x36*x50 + x43, x19*x25 - x19*x50 - x39*x41 + x39*x53);
-    skv_store4_(H + 80, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 216, -x29*x53 + x36*x52 - x44, -x19*x35 + x19*x52 + x41*x7 - x53*x7, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x45, SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 216, x46, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 100, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x47, SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 216, x11*x54 + x3*x38, x11*x55 + x3*x35, x11*x56 + x3*x52, SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x11*x57 - x3*x42, x1*x11*x25 - x3*x41);
-    skv_store4_(H + 116, 216, x1*x11*x50 - x3*x53, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 216, -x12*x38 - x22*x42, -x12*x35 - x22*x41, -x12*x52 - x22*x53, SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x11*x58 + x29*x3, x60);
-    skv_store4_(H + 128, 216, x60, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 132, 216, x1*x11*x31 - x3*x36, x61, x61, SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x12*x29 - x22*x36, x62);
-    skv_store4_(H + 140, 216, x62, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 144, 216, x57, x1*x25, x1*x50, SKV_SPLAT(0.0));
-    skv_store4_(H + 148, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x54, -x55);
-    skv_store4_(H + 152, 216, -x56, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 216, -x1*x42 + x38*x5, -x1*x41 + x35*x5, -x1*x53 + x5*x52, SKV_SPLAT(0.0));
-    skv_store4_(H + 160, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x1*x31, x63);
-    skv_store4_(H + 164, 216, x63, x1*x3, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 168, 216, -x58, x64, x64, -x3*x5);
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x1*x36 + x29*x5, x65);
-    skv_store4_(H + 176, 216, x65, -(x1*x1)*x11 - x11*(x5*x5), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 180, 216, x38, x35, x52, SKV_SPLAT(0.0));
-    skv_store4_(H + 184, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x42, -x41);
-    skv_store4_(H + 188, 216, -x53, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x29, x7);
-    skv_store4_(H + 200, 216, x7, -x22, -x1, SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, -x36, x18, x18, -x12);
-    skv_store4_(H + 208, 216, x5, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_puma560_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessiane_x4_(q + i * 6, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessiane(q, H, N, hessiane_);
 #endif
     for (; i < N; ++i)
         hessiane_(q + i * 6, H + i * 216);
@@ -1874,27 +1491,32 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q3);
+    double sin_[5], cos_[5]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q3, q4, q5, q1, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 5, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = sin_[1];
     const double x2 = x0*x1;
-    const double x3 = sk_cos(q0);
-    const double x4 = sk_cos(q3);
+    const double x3 = cos_[0];
+    const double x4 = cos_[1];
     const double x5 = q1 + q2;
     const double x6 = sk_cos(x5);
     const double x7 = -x2 + x3*x4*x6;
-    const double x8 = sk_cos(q4);
-    const double x9 = sk_sin(q4);
+    const double x8 = cos_[2];
+    const double x9 = sin_[2];
     const double x10 = sk_sin(x5);
     const double x11 = x10*x3;
     const double x12 = -x11*x9 + x7*x8;
-    const double x13 = sk_cos(q5);
+    const double x13 = cos_[3];
     const double x14 = x0*x4;
     const double x15 = x1*x3;
     const double x16 = x14 + x15*x6;
     const double x17 = -x16;
-    const double x18 = sk_sin(q5);
+    const double x18 = sin_[3];
     const double x19 = -x11*x8 - x7*x9;
-    const double x20 = sk_cos(q1);
+    const double x20 = cos_[4];
     const double x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6;
     const double x22 = (0.4318)*x20*x3 + x21;
     const double x23 = x14*x6 + x15;
@@ -1911,7 +1533,7 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double x34 = x1*x10;
     const double x35 = -x32*x9 + x6*x8;
     const double x36 = (0.0203)*x10 + (0.4318)*x6;
-    const double x37 = x36 + (0.4318)*sk_sin(q1);
+    const double x37 = x36 + (0.4318)*sin_[4];
     const double x38 = -x3;
     T[0] = x12*x13 + x17*x18;
     T[1] = -x12*x18 + x13*x17;
@@ -1972,85 +1594,13 @@ void symkin_puma560_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = skv_sin_(q3, &far_);
-    const sk_v4 x2 = x0*x1;
-    const sk_v4 x3 = skv_cos_(q0, &far_);
-    const sk_v4 x4 = skv_cos_(q3, &far_);
-    const sk_v4 x5 = q1 + q2;
-    const sk_v4 x6 = skv_cos_(x5, &far_);
-    const sk_v4 x7 = -x2 + x3*x4*x6;
-    const sk_v4 x8 = skv_cos_(q4, &far_);
-    const sk_v4 x9 = skv_sin_(q4, &far_);
-    const sk_v4 x10 = skv_sin_(x5, &far_);
-    const sk_v4 x11 = x10*x3;
-    const sk_v4 x12 = -x11*x9 + x7*x8;
-    const sk_v4 x13 = skv_cos_(q5, &far_);
-    const sk_v4 x14 = x0*x4;
-    const sk_v4 x15 = x1*x3;
-    const sk_v4 x16 = x14 + x15*x6;
-    const sk_v4 x17 = -x16;
-    const sk_v4 x18 = skv_sin_(q5, &far_);
-    const sk_v4 x19 = -x11*x8 - x7*x9;
-    const sk_v4 x20 = skv_cos_(q1, &far_);
-    const sk_v4 x21 = (0.15005)*x0 - 0.4318*x11 + (0.0203)*x3*x6;
-    const sk_v4 x22 = (0.4318)*x20*x3 + x21;
-    const sk_v4 x23 = x14*x6 + x15;
-    const sk_v4 x24 = x0*x10;
-    const sk_v4 x25 = x23*x8 - x24*x9;
-    const sk_v4 x26 = x2*x6 - x3*x4;
-    const sk_v4 x27 = -x26;
-    const sk_v4 x28 = -x23*x9 - x24*x8;
-    const sk_v4 x29 = -0.0203*x0*x6 + (0.4318)*x24 + (0.15005)*x3;
-    const sk_v4 x30 = -0.4318*x0*x20 + x29;
-    const sk_v4 x31 = -x30;
-    const sk_v4 x32 = x10*x4;
-    const sk_v4 x33 = x32*x8 + x6*x9;
-    const sk_v4 x34 = x1*x10;
-    const sk_v4 x35 = -x32*x9 + x6*x8;
-    const sk_v4 x36 = (0.0203)*x10 + (0.4318)*x6;
-    const sk_v4 x37 = x36 + (0.4318)*skv_sin_(q1, &far_);
-    const sk_v4 x38 = -x3;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_(q + l * 6, T + l * 16, J + l * 36);
-        return;
-    }
-    skv_store4_(T + 0, 16, x12*x13 + x17*x18, -x12*x18 + x13*x17, x19, x22);
-    skv_store4_(T + 4, 16, x13*x25 + x18*x27, x13*x27 - x18*x25, x28, x31);
-    skv_store4_(T + 8, 16, x13*x33 - x18*x34, -x13*x34 - x18*x33, x35, x37);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 36, x30, -x3*x37, -x3*x36, SKV_SPLAT(0.0));
-    skv_store4_(J + 4, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x22, -x0*x37);
-    skv_store4_(J + 8, 36, -x0*x36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), x0*x31 + x22*x3, -x0*x29 + x21*x3, SKV_SPLAT(0.0));
-    skv_store4_(J + 16, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x0);
-    skv_store4_(J + 20, 36, x0, -x11, x16, x19);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), x38, x38, -x24);
-    skv_store4_(J + 28, 36, x26, x28, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), x6, x34, x35);
-}
-#endif
-
-
 void symkin_puma560_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_x4_(q + i * 6, T + i * 16, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0(q, T, J, N, fkine_jacob0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_(q + i * 6, T + i * 16, J + i * 36);
@@ -2064,9 +1614,14 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.4318)*sk_cos(q1);
-    const double x2 = sk_cos(q0);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q3, q4 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = (0.4318)*cos_[1];
+    const double x2 = cos_[0];
     const double x3 = q1 + q2;
     const double x4 = sk_cos(x3);
     const double x5 = x0*x4;
@@ -2075,7 +1630,7 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7;
     const double x9 = -x0*x1 + x8;
     const double x10 = (0.4318)*x4 + (0.0203)*x6;
-    const double x11 = x10 + (0.4318)*sk_sin(q1);
+    const double x11 = x10 + (0.4318)*sin_[1];
     const double x12 = -x11*x2;
     const double x13 = -x10*x2;
     const double x14 = x2*x6;
@@ -2087,14 +1642,14 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double x20 = -x0*x9 + x17*x2;
     const double x21 = -x0*x8 + x16*x2;
     const double x22 = -x14;
-    const double x23 = sk_cos(q3);
+    const double x23 = cos_[2];
     const double x24 = x0*x23;
-    const double x25 = sk_sin(q3);
+    const double x25 = sin_[2];
     const double x26 = x2*x25;
     const double x27 = x24 + x26*x4;
     const double x28 = x0*x25;
-    const double x29 = sk_sin(q4);
-    const double x30 = sk_cos(q4);
+    const double x29 = sin_[3];
+    const double x30 = cos_[3];
     const double x31 = -x14*x30 - x29*(x2*x23*x4 - x28);
     const double x32 = -x2;
     const double x33 = -x2*x23 + x28*x4;
@@ -2376,148 +1931,13 @@ void symkin_puma560_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = (0.4318)*skv_cos_(q1, &far_);
-    const sk_v4 x2 = skv_cos_(q0, &far_);
-    const sk_v4 x3 = q1 + q2;
-    const sk_v4 x4 = skv_cos_(x3, &far_);
-    const sk_v4 x5 = x0*x4;
-    const sk_v4 x6 = skv_sin_(x3, &far_);
-    const sk_v4 x7 = x0*x6;
-    const sk_v4 x8 = (0.15005)*x2 - 0.0203*x5 + (0.4318)*x7;
-    const sk_v4 x9 = -x0*x1 + x8;
-    const sk_v4 x10 = (0.4318)*x4 + (0.0203)*x6;
-    const sk_v4 x11 = x10 + (0.4318)*skv_sin_(q1, &far_);
-    const sk_v4 x12 = -x11*x2;
-    const sk_v4 x13 = -x10*x2;
-    const sk_v4 x14 = x2*x6;
-    const sk_v4 x15 = x2*x4;
-    const sk_v4 x16 = (0.15005)*x0 - 0.4318*x14 + (0.0203)*x15;
-    const sk_v4 x17 = x1*x2 + x16;
-    const sk_v4 x18 = x0*x11;
-    const sk_v4 x19 = x0*x10;
-    const sk_v4 x20 = -x0*x9 + x17*x2;
-    const sk_v4 x21 = -x0*x8 + x16*x2;
-    const sk_v4 x22 = -x14;
-    const sk_v4 x23 = skv_cos_(q3, &far_);
-    const sk_v4 x24 = x0*x23;
-    const sk_v4 x25 = skv_sin_(q3, &far_);
-    const sk_v4 x26 = x2*x25;
-    const sk_v4 x27 = x24 + x26*x4;
-    const sk_v4 x28 = x0*x25;
-    const sk_v4 x29 = skv_sin_(q4, &far_);
-    const sk_v4 x30 = skv_cos_(q4, &far_);
-    const sk_v4 x31 = -x14*x30 - x29*(x2*x23*x4 - x28);
-    const sk_v4 x32 = -x2;
-    const sk_v4 x33 = -x2*x23 + x28*x4;
-    const sk_v4 x34 = x29*(x24*x4 + x26) + x30*x7;
-    const sk_v4 x35 = -x34;
-    const sk_v4 x36 = x25*x6;
-    const sk_v4 x37 = -x23*x29*x6 + x30*x4;
-    const sk_v4 x38 = -x2*x21;
-    const sk_v4 x39 = -x0*x21;
-    const sk_v4 x40 = (x2*x2);
-    const sk_v4 x41 = (x0*x0);
-    const sk_v4 x42 = -x10*x40 - x10*x41;
-    const sk_v4 x43 = -x15;
-    const sk_v4 x44 = -x14*x25;
-    const sk_v4 x45 = -x2*x37;
-    const sk_v4 x46 = -x5;
-    const sk_v4 x47 = -x28*x6;
-    const sk_v4 x48 = -x0*x37;
-    const sk_v4 x49 = -x40*x6 - x41*x6;
-    const sk_v4 x50 = x0*x33 + x2*x27;
-    const sk_v4 x51 = x0*x35 + x2*x31;
-    const sk_v4 x52 = (x6*x6);
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_hessian0_(q + l * 6, J + l * 36, H + l * 216);
-        return;
-    }
-    skv_store4_(J + 0, 36, x9, x12, x13, SKV_SPLAT(0.0));
-    skv_store4_(J + 4, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x17, -x18);
-    skv_store4_(J + 8, 36, -x19, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), x20, x21, SKV_SPLAT(0.0));
-    skv_store4_(J + 16, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x0);
-    skv_store4_(J + 20, 36, x0, x22, x27, x31);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), x32, x32, -x7);
-    skv_store4_(J + 28, 36, x33, x35, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), x4, x36, x37);
-    skv_store4_(H + 0, 216, -x17, x18, x19, SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x9, x12);
-    skv_store4_(H + 8, 216, x13, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x2);
-    skv_store4_(H + 20, 216, x2, x7, -x33, x34);
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), x0, x0, x22);
-    skv_store4_(H + 28, 216, x27, x31, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, x18, -x2*x20, x38, SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x12, -x0*x20);
-    skv_store4_(H + 44, 216, x39, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 216, SKV_SPLAT(0.0), -x11*x40 - x11*x41, x42, SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), x43, x44, x45);
-    skv_store4_(H + 60, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x46);
-    skv_store4_(H + 64, 216, x47, x48, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), x49, x50, x51);
-    skv_store4_(H + 72, 216, x19, x38, x38, SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x13, x39);
-    skv_store4_(H + 80, 216, x39, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 216, SKV_SPLAT(0.0), x42, x42, SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), x43, x44, x45);
-    skv_store4_(H + 96, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x46);
-    skv_store4_(H + 100, 216, x47, x48, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), x49, x50, x51);
-    skv_store4_(H + 108, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 116, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x28*x52 - x33*x4, -x35*x4 - x37*x7);
-    skv_store4_(H + 132, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, x26*x52 + x27*x4, x14*x37 + x31*x4, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x14*x33 + x27*x7, -x14*x35 + x31*x7);
-    skv_store4_(H + 144, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 148, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 152, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 160, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x33*x37 - x35*x36);
-    skv_store4_(H + 168, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), -x27*x37 + x31*x36, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 176, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x27*x35 - x31*x33);
-    skv_store4_(H + 180, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 184, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 188, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_puma560_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_hessian0_x4_(q + i * 6, J + i * 36, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_hessian0(q, J, H, N, jacob0_hessian0_);
 #endif
     for (; i < N; ++i)
         jacob0_hessian0_(q + i * 6, J + i * 36, H + i * 216);

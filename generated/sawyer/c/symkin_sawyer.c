@@ -47,15 +47,22 @@ const char *const symkin_sawyer_joint_names[SYMKIN_SAWYER_N] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -63,14 +70,34 @@ const char *const symkin_sawyer_joint_names[SYMKIN_SAWYER_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -78,14 +105,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -109,36 +140,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -219,7 +261,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -233,7 +275,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -310,6 +352,70 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #define SYMKIN_LANES 1
 #endif
 
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_sawyer_lanes.c: its table symkin_sawyer_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_sawyer_bind_lanes (symkin's runtime builds symkin_sawyer_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*link_poses)(const double *q, double *links, ptrdiff_t N, void (*scalar)(const double *q, double *links));
+    ptrdiff_t (*jacob0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*hessiane)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*fkine_jacob0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*jacob0_hessian0)(const double *q, double *J, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *J, double *H));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_sawyer_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_sawyer_bind_lanes(const void *table);
+void symkin_sawyer_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_sawyer_lanes;
+}
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[7] = { 0, 1, 2, 3, 4, 5, 6 };
@@ -337,20 +443,25 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
+    const double t4 = sin_[1];
+    const double t5 = -cos_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos_[2];
+    const double t13 = sin_[2];
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -360,8 +471,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = -cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -371,8 +482,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos_[4];
+    const double t35 = sin_[4];
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -382,8 +493,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
+    const double t45 = -cos_[5];
+    const double t46 = -sin_[5];
     const double t47 = -t28*t46 + t36*t45;
     const double t48 = -t29*t46 + t37*t45;
     const double t49 = -t30*t46 + t38*t45;
@@ -393,8 +504,8 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t53 = (0.1363)*t39 + t42;
     const double t54 = (0.1363)*t40 + t43;
     const double t55 = (0.1363)*t41 + t44;
-    const double t56 = -sk_sin(q6);
-    const double t57 = sk_cos(q6);
+    const double t56 = -sin_[6];
+    const double t57 = cos_[6];
     const double t58 = -t39*t57 + t47*t56;
     const double t59 = -t40*t57 + t48*t56;
     const double t60 = -t41*t57 + t49*t56;
@@ -427,105 +538,13 @@ void symkin_sawyer_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = (0.081)*t0;
-    const sk_v4 t3 = (0.081)*t1;
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = -t0*t5;
-    const sk_v4 t9 = -t1*t5;
-    const sk_v4 t10 = -0.1925*t1 + t2;
-    const sk_v4 t11 = (0.1925)*t0 + t3;
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t14 = t1*t13 + t12*t6;
-    const sk_v4 t15 = -t0*t13 + t12*t7;
-    const sk_v4 t16 = -t12*t5;
-    const sk_v4 t17 = t1*t12 - t13*t6;
-    const sk_v4 t18 = -t0*t12 - t13*t7;
-    const sk_v4 t19 = t13*t5;
-    const sk_v4 t20 = t10 + (0.4)*t8;
-    const sk_v4 t21 = t11 + (0.4)*t9;
-    const sk_v4 t22 = 0.317 - 0.4*t4;
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t25 = t14*t23 - t24*t8;
-    const sk_v4 t26 = t15*t23 - t24*t9;
-    const sk_v4 t27 = t16*t23 + t24*t4;
-    const sk_v4 t28 = -t14*t24 - t23*t8;
-    const sk_v4 t29 = -t15*t24 - t23*t9;
-    const sk_v4 t30 = -t16*t24 + t23*t4;
-    const sk_v4 t31 = (0.1685)*t17 + t20;
-    const sk_v4 t32 = (0.1685)*t18 + t21;
-    const sk_v4 t33 = (0.1685)*t19 + t22;
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t36 = -t17*t35 + t25*t34;
-    const sk_v4 t37 = -t18*t35 + t26*t34;
-    const sk_v4 t38 = -t19*t35 + t27*t34;
-    const sk_v4 t39 = -t17*t34 - t25*t35;
-    const sk_v4 t40 = -t18*t34 - t26*t35;
-    const sk_v4 t41 = -t19*t34 - t27*t35;
-    const sk_v4 t42 = (0.4)*t28 + t31;
-    const sk_v4 t43 = (0.4)*t29 + t32;
-    const sk_v4 t44 = (0.4)*t30 + t33;
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t47 = -t28*t46 + t36*t45;
-    const sk_v4 t48 = -t29*t46 + t37*t45;
-    const sk_v4 t49 = -t30*t46 + t38*t45;
-    const sk_v4 t50 = -t28*t45 - t36*t46;
-    const sk_v4 t51 = -t29*t45 - t37*t46;
-    const sk_v4 t52 = -t30*t45 - t38*t46;
-    const sk_v4 t53 = (0.1363)*t39 + t42;
-    const sk_v4 t54 = (0.1363)*t40 + t43;
-    const sk_v4 t55 = (0.1363)*t41 + t44;
-    const sk_v4 t56 = -skv_sin_(q6, &far_);
-    const sk_v4 t57 = skv_cos_(q6, &far_);
-    const sk_v4 t58 = -t39*t57 + t47*t56;
-    const sk_v4 t59 = -t40*t57 + t48*t56;
-    const sk_v4 t60 = -t41*t57 + t49*t56;
-    const sk_v4 t61 = -t39*t56 - t47*t57;
-    const sk_v4 t62 = -t40*t56 - t48*t57;
-    const sk_v4 t63 = -t41*t56 - t49*t57;
-    const sk_v4 t64 = (0.13375)*t50 + t53;
-    const sk_v4 t65 = (0.13375)*t51 + t54;
-    const sk_v4 t66 = (0.13375)*t52 + t55;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_(q + l * 7, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, t58, t61, t50, t64);
-    skv_store4_(T + 4, 16, t59, t62, t51, t65);
-    skv_store4_(T + 8, 16, t60, t63, t52, t66);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_sawyer_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_x4_(q + i * 7, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine(q, T, N, fkine_);
 #endif
     for (; i < N; ++i)
         fkine_(q + i * 7, T + i * 16);
@@ -541,20 +560,25 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
+    const double t4 = sin_[1];
+    const double t5 = -cos_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos_[2];
+    const double t13 = sin_[2];
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -564,8 +588,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = -cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -575,8 +599,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos_[4];
+    const double t35 = sin_[4];
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -586,8 +610,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
+    const double t45 = -cos_[5];
+    const double t46 = -sin_[5];
     const double t47 = -t28*t46 + t36*t45;
     const double t48 = -t29*t46 + t37*t45;
     const double t49 = -t30*t46 + t38*t45;
@@ -597,8 +621,8 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t53 = (0.1363)*t39 + t42;
     const double t54 = (0.1363)*t40 + t43;
     const double t55 = (0.1363)*t41 + t44;
-    const double t56 = -sk_sin(q6);
-    const double t57 = sk_cos(q6);
+    const double t56 = -sin_[6];
+    const double t57 = cos_[6];
     const double t58 = -t39*t57 + t47*t56;
     const double t59 = -t40*t57 + t48*t56;
     const double t60 = -t41*t57 + t49*t56;
@@ -724,126 +748,13 @@ void symkin_sawyer_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
-#if SYMKIN_LANES == 4
-/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = (0.081)*t0;
-    const sk_v4 t3 = (0.081)*t1;
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = -t0*t5;
-    const sk_v4 t9 = -t1*t5;
-    const sk_v4 t10 = -0.1925*t1 + t2;
-    const sk_v4 t11 = (0.1925)*t0 + t3;
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t14 = t1*t13 + t12*t6;
-    const sk_v4 t15 = -t0*t13 + t12*t7;
-    const sk_v4 t16 = -t12*t5;
-    const sk_v4 t17 = t1*t12 - t13*t6;
-    const sk_v4 t18 = -t0*t12 - t13*t7;
-    const sk_v4 t19 = t13*t5;
-    const sk_v4 t20 = t10 + (0.4)*t8;
-    const sk_v4 t21 = t11 + (0.4)*t9;
-    const sk_v4 t22 = 0.317 - 0.4*t4;
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t25 = t14*t23 - t24*t8;
-    const sk_v4 t26 = t15*t23 - t24*t9;
-    const sk_v4 t27 = t16*t23 + t24*t4;
-    const sk_v4 t28 = -t14*t24 - t23*t8;
-    const sk_v4 t29 = -t15*t24 - t23*t9;
-    const sk_v4 t30 = -t16*t24 + t23*t4;
-    const sk_v4 t31 = (0.1685)*t17 + t20;
-    const sk_v4 t32 = (0.1685)*t18 + t21;
-    const sk_v4 t33 = (0.1685)*t19 + t22;
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t36 = -t17*t35 + t25*t34;
-    const sk_v4 t37 = -t18*t35 + t26*t34;
-    const sk_v4 t38 = -t19*t35 + t27*t34;
-    const sk_v4 t39 = -t17*t34 - t25*t35;
-    const sk_v4 t40 = -t18*t34 - t26*t35;
-    const sk_v4 t41 = -t19*t34 - t27*t35;
-    const sk_v4 t42 = (0.4)*t28 + t31;
-    const sk_v4 t43 = (0.4)*t29 + t32;
-    const sk_v4 t44 = (0.4)*t30 + t33;
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t47 = -t28*t46 + t36*t45;
-    const sk_v4 t48 = -t29*t46 + t37*t45;
-    const sk_v4 t49 = -t30*t46 + t38*t45;
-    const sk_v4 t50 = -t28*t45 - t36*t46;
-    const sk_v4 t51 = -t29*t45 - t37*t46;
-    const sk_v4 t52 = -t30*t45 - t38*t46;
-    const sk_v4 t53 = (0.1363)*t39 + t42;
-    const sk_v4 t54 = (0.1363)*t40 + t43;
-    const sk_v4 t55 = (0.1363)*t41 + t44;
-    const sk_v4 t56 = -skv_sin_(q6, &far_);
-    const sk_v4 t57 = skv_cos_(q6, &far_);
-    const sk_v4 t58 = -t39*t57 + t47*t56;
-    const sk_v4 t59 = -t40*t57 + t48*t56;
-    const sk_v4 t60 = -t41*t57 + t49*t56;
-    const sk_v4 t61 = -t39*t56 - t47*t57;
-    const sk_v4 t62 = -t40*t56 - t48*t57;
-    const sk_v4 t63 = -t41*t56 - t49*t57;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            link_poses_(q + l * 7, links + l * 112);
-        return;
-    }
-    skv_store4_(links + 0, 112, t0, -t1, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 4, 112, t1, t0, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 8, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 12, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 16, 112, t6, t8, -t1, t2);
-    skv_store4_(links + 20, 112, t7, t9, t0, t3);
-    skv_store4_(links + 24, 112, -t5, -t4, SKV_SPLAT(0.0), SKV_SPLAT(0.317));
-    skv_store4_(links + 28, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 32, 112, t14, t17, t8, t10);
-    skv_store4_(links + 36, 112, t15, t18, t9, t11);
-    skv_store4_(links + 40, 112, t16, t19, -t4, SKV_SPLAT(0.317));
-    skv_store4_(links + 44, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 48, 112, t25, t28, t17, t20);
-    skv_store4_(links + 52, 112, t26, t29, t18, t21);
-    skv_store4_(links + 56, 112, t27, t30, t19, t22);
-    skv_store4_(links + 60, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 64, 112, t36, t39, t28, t31);
-    skv_store4_(links + 68, 112, t37, t40, t29, t32);
-    skv_store4_(links + 72, 112, t38, t41, t30, t33);
-    skv_store4_(links + 76, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 80, 112, t47, t50, t39, t42);
-    skv_store4_(links + 84, 112, t48, t51, t40, t43);
-    skv_store4_(links + 88, 112, t49, t52, t41, t44);
-    skv_store4_(links + 92, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 96, 112, t58, t61, t50, t53);
-    skv_store4_(links + 100, 112, t59, t62, t51, t54);
-    skv_store4_(links + 104, 112, t60, t63, t52, t55);
-    skv_store4_(links + 108, 112, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_sawyer_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        link_poses_x4_(q + i * 7, links + i * 112);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->link_poses(q, links, N, link_poses_);
 #endif
     for (; i < N; ++i)
         link_poses_(q + i * 7, links + i * 112);
@@ -858,20 +769,25 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
+    const double t4 = sin_[1];
+    const double t5 = -cos_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos_[2];
+    const double t13 = sin_[2];
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -881,8 +797,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = -cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -892,8 +808,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos_[4];
+    const double t35 = sin_[4];
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -903,8 +819,8 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
+    const double t45 = -cos_[5];
+    const double t46 = -sin_[5];
     const double t50 = -t28*t45 - t36*t46;
     const double t51 = -t29*t45 - t37*t46;
     const double t52 = -t30*t45 - t38*t46;
@@ -998,135 +914,13 @@ void symkin_sawyer_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = (0.081)*t0;
-    const sk_v4 t3 = (0.081)*t1;
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = -t0*t5;
-    const sk_v4 t9 = -t1*t5;
-    const sk_v4 t10 = -0.1925*t1 + t2;
-    const sk_v4 t11 = (0.1925)*t0 + t3;
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t14 = t1*t13 + t12*t6;
-    const sk_v4 t15 = -t0*t13 + t12*t7;
-    const sk_v4 t16 = -t12*t5;
-    const sk_v4 t17 = t1*t12 - t13*t6;
-    const sk_v4 t18 = -t0*t12 - t13*t7;
-    const sk_v4 t19 = t13*t5;
-    const sk_v4 t20 = t10 + (0.4)*t8;
-    const sk_v4 t21 = t11 + (0.4)*t9;
-    const sk_v4 t22 = 0.317 - 0.4*t4;
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t25 = t14*t23 - t24*t8;
-    const sk_v4 t26 = t15*t23 - t24*t9;
-    const sk_v4 t27 = t16*t23 + t24*t4;
-    const sk_v4 t28 = -t14*t24 - t23*t8;
-    const sk_v4 t29 = -t15*t24 - t23*t9;
-    const sk_v4 t30 = -t16*t24 + t23*t4;
-    const sk_v4 t31 = (0.1685)*t17 + t20;
-    const sk_v4 t32 = (0.1685)*t18 + t21;
-    const sk_v4 t33 = (0.1685)*t19 + t22;
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t36 = -t17*t35 + t25*t34;
-    const sk_v4 t37 = -t18*t35 + t26*t34;
-    const sk_v4 t38 = -t19*t35 + t27*t34;
-    const sk_v4 t39 = -t17*t34 - t25*t35;
-    const sk_v4 t40 = -t18*t34 - t26*t35;
-    const sk_v4 t41 = -t19*t34 - t27*t35;
-    const sk_v4 t42 = (0.4)*t28 + t31;
-    const sk_v4 t43 = (0.4)*t29 + t32;
-    const sk_v4 t44 = (0.4)*t30 + t33;
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t50 = -t28*t45 - t36*t46;
-    const sk_v4 t51 = -t29*t45 - t37*t46;
-    const sk_v4 t52 = -t30*t45 - t38*t46;
-    const sk_v4 t53 = (0.1363)*t39 + t42;
-    const sk_v4 t54 = (0.1363)*t40 + t43;
-    const sk_v4 t55 = (0.1363)*t41 + t44;
-    const sk_v4 t64 = (0.13375)*t50 + t53;
-    const sk_v4 t65 = (0.13375)*t51 + t54;
-    const sk_v4 t66 = (0.13375)*t52 + t55;
-    const sk_v4 t67 = -t2 + t64;
-    const sk_v4 t68 = -t3 + t65;
-    const sk_v4 t69 = t66 - 0.317;
-    const sk_v4 t70 = t0*t69;
-    const sk_v4 t71 = t1*t69;
-    const sk_v4 t72 = -t0*t67 - t1*t68;
-    const sk_v4 t73 = -t10 + t64;
-    const sk_v4 t74 = -t11 + t65;
-    const sk_v4 t75 = t4*t74 + t69*t9;
-    const sk_v4 t76 = -t4*t73 - t69*t8;
-    const sk_v4 t77 = -t73*t9 + t74*t8;
-    const sk_v4 t78 = -t20 + t64;
-    const sk_v4 t79 = -t21 + t65;
-    const sk_v4 t80 = -t22 + t66;
-    const sk_v4 t81 = -t18*t80 + t19*t79;
-    const sk_v4 t82 = t17*t80 - t19*t78;
-    const sk_v4 t83 = -t17*t79 + t18*t78;
-    const sk_v4 t84 = -t31 + t64;
-    const sk_v4 t85 = -t32 + t65;
-    const sk_v4 t86 = -t33 + t66;
-    const sk_v4 t87 = t29*t86 - t30*t85;
-    const sk_v4 t88 = -t28*t86 + t30*t84;
-    const sk_v4 t89 = t28*t85 - t29*t84;
-    const sk_v4 t90 = -t42 + t64;
-    const sk_v4 t91 = -t43 + t65;
-    const sk_v4 t92 = -t44 + t66;
-    const sk_v4 t93 = t40*t92 - t41*t91;
-    const sk_v4 t94 = -t39*t92 + t41*t90;
-    const sk_v4 t95 = t39*t91 - t40*t90;
-    const sk_v4 t96 = -t53 + t64;
-    const sk_v4 t97 = -t54 + t65;
-    const sk_v4 t98 = -t55 + t66;
-    const sk_v4 t99 = t51*t98 - t52*t97;
-    const sk_v4 t100 = -t50*t98 + t52*t96;
-    const sk_v4 t101 = t50*t97 - t51*t96;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_(q + l * 7, J + l * 42);
-        return;
-    }
-    skv_store4_(J + 0, 42, -t65, t70, t75, t81);
-    skv_store4_(J + 4, 42, t87, t93, t99, t64);
-    skv_store4_(J + 8, 42, t71, t76, t82, t88);
-    skv_store4_(J + 12, 42, t94, t100, SKV_SPLAT(0.0), t72);
-    skv_store4_(J + 16, 42, t77, t83, t89, t95);
-    skv_store4_(J + 20, 42, t101, SKV_SPLAT(0.0), -t1, t8);
-    skv_store4_(J + 24, 42, -t17, t28, t39, t50);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, t9, -t18);
-    skv_store4_(J + 32, 42, t29, t40, t51, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), -t4, -t19, t30);
-    skv_store4_(J + 38, 42, -t19, t30, t41, t52);
-}
-#endif
-
-
 void symkin_sawyer_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_x4_(q + i * 7, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0(q, J, N, jacob0_);
 #endif
     for (; i < N; ++i)
         jacob0_(q + i * 7, J + i * 42);
@@ -1141,18 +935,23 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
-    const double t56 = -sk_sin(q6);
-    const double t57 = sk_cos(q6);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q1, q2, q3, q4, q5, q6, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t4 = sin_[0];
+    const double t5 = -cos_[0];
+    const double t12 = cos_[1];
+    const double t13 = sin_[1];
+    const double t23 = -cos_[2];
+    const double t24 = sin_[2];
+    const double t34 = cos_[3];
+    const double t35 = sin_[3];
+    const double t45 = -cos_[4];
+    const double t46 = -sin_[4];
+    const double t56 = -sin_[5];
+    const double t57 = cos_[5];
     const double t102 = (0.1363)*t57;
     const double t103 = (0.1363)*t56;
     const double t104 = t45*t56;
@@ -1268,122 +1067,13 @@ void symkin_sawyer_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t56 = -skv_sin_(q6, &far_);
-    const sk_v4 t57 = skv_cos_(q6, &far_);
-    const sk_v4 t102 = (0.1363)*t57;
-    const sk_v4 t103 = (0.1363)*t56;
-    const sk_v4 t104 = t45*t56;
-    const sk_v4 t105 = -t45*t57;
-    const sk_v4 t106 = t46*t56;
-    const sk_v4 t107 = -t46*t57;
-    const sk_v4 t108 = t102 + (0.4)*t106;
-    const sk_v4 t109 = t103 + (0.4)*t107;
-    const sk_v4 t110 = (0.4)*t45 - 0.13375;
-    const sk_v4 t111 = t104*t34 + t35*t57;
-    const sk_v4 t112 = t105*t34 + t35*t56;
-    const sk_v4 t113 = -t34*t46;
-    const sk_v4 t114 = t104*t35 - t34*t57;
-    const sk_v4 t115 = t105*t35 - t34*t56;
-    const sk_v4 t116 = -t35*t46;
-    const sk_v4 t117 = t108 + (0.1685)*t114;
-    const sk_v4 t118 = t109 + (0.1685)*t115;
-    const sk_v4 t119 = t110 + (0.1685)*t116;
-    const sk_v4 t120 = t106*t24 + t111*t23;
-    const sk_v4 t121 = t107*t24 + t112*t23;
-    const sk_v4 t122 = t113*t23 + t24*t45;
-    const sk_v4 t123 = -t106*t23 + t111*t24;
-    const sk_v4 t124 = -t107*t23 + t112*t24;
-    const sk_v4 t125 = t113*t24 - t23*t45;
-    const sk_v4 t126 = t117 + (0.4)*t123;
-    const sk_v4 t127 = t118 + (0.4)*t124;
-    const sk_v4 t128 = t119 + (0.4)*t125;
-    const sk_v4 t129 = t114*t13 + t12*t120;
-    const sk_v4 t130 = t115*t13 + t12*t121;
-    const sk_v4 t131 = t116*t13 + t12*t122;
-    const sk_v4 t132 = -t114*t12 + t120*t13;
-    const sk_v4 t133 = -t115*t12 + t121*t13;
-    const sk_v4 t134 = -t116*t12 + t122*t13;
-    const sk_v4 t135 = t126 + (0.1925)*t132;
-    const sk_v4 t136 = t127 + (0.1925)*t133;
-    const sk_v4 t137 = t128 + (0.1925)*t134;
-    const sk_v4 t138 = t123*t5 + t129*t4;
-    const sk_v4 t139 = t124*t5 + t130*t4;
-    const sk_v4 t140 = t125*t5 + t131*t4;
-    const sk_v4 t141 = -t123*t4 + t129*t5;
-    const sk_v4 t142 = -t124*t4 + t130*t5;
-    const sk_v4 t143 = -t125*t4 + t131*t5;
-    const sk_v4 t144 = t135 - 0.081*t138;
-    const sk_v4 t145 = t136 - 0.081*t139;
-    const sk_v4 t146 = t137 - 0.081*t140;
-    const sk_v4 t147 = (0.317)*t141 + t144;
-    const sk_v4 t148 = (0.317)*t142 + t145;
-    const sk_v4 t149 = (0.317)*t143 + t146;
-    const sk_v4 t150 = -0.13375*t56;
-    const sk_v4 t151 = (0.13375)*t57;
-    const sk_v4 t152 = -t102*t56 + t103*t57;
-    const sk_v4 t153 = t107*t110 - t109*t45;
-    const sk_v4 t154 = -t106*t110 + t108*t45;
-    const sk_v4 t155 = t106*t109 - t107*t108;
-    const sk_v4 t156 = -t115*t119 + t116*t118;
-    const sk_v4 t157 = t114*t119 - t116*t117;
-    const sk_v4 t158 = -t114*t118 + t115*t117;
-    const sk_v4 t159 = t124*t128 - t125*t127;
-    const sk_v4 t160 = -t123*t128 + t125*t126;
-    const sk_v4 t161 = t123*t127 - t124*t126;
-    const sk_v4 t162 = t133*t137 - t134*t136;
-    const sk_v4 t163 = -t132*t137 + t134*t135;
-    const sk_v4 t164 = t132*t136 - t133*t135;
-    const sk_v4 t165 = t142*t149 - t143*t148;
-    const sk_v4 t166 = -t141*t149 + t143*t147;
-    const sk_v4 t167 = t141*t148 - t142*t147;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_(q + l * 7, J + l * 42);
-        return;
-    }
-    skv_store4_(J + 0, 42, t165, t162, t159, t156);
-    skv_store4_(J + 4, 42, t153, t150, SKV_SPLAT(0.0), t166);
-    skv_store4_(J + 8, 42, t163, t160, t157, t154);
-    skv_store4_(J + 12, 42, t151, SKV_SPLAT(0.0), t167, t164);
-    skv_store4_(J + 16, 42, t161, t158, t155, t152);
-    skv_store4_(J + 20, 42, SKV_SPLAT(0.0), -t141, -t132, -t123);
-    skv_store4_(J + 24, 42, t114, -t106, -t57, SKV_SPLAT(0.0));
-    skv_store4_(J + 28, 42, -t142, -t133, -t124, t115);
-    skv_store4_(J + 32, 42, -t107, -t56, SKV_SPLAT(0.0), -t143);
-    skv_store4_(J + 36, 42, -t134, -t125, t116, -t45);
-    skv_store4_(J + 38, 42, t116, -t45, SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_sawyer_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_x4_(q + i * 7, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe(q, J, N, jacobe_);
 #endif
     for (; i < N; ++i)
         jacobe_(q + i * 7, J + i * 42);
@@ -1417,18 +1107,23 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
-    const double t56 = -sk_sin(q6);
-    const double t57 = sk_cos(q6);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q1, q2, q3, q4, q5, q6, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t4 = sin_[0];
+    const double t5 = -cos_[0];
+    const double t12 = cos_[1];
+    const double t13 = sin_[1];
+    const double t23 = -cos_[2];
+    const double t24 = sin_[2];
+    const double t34 = cos_[3];
+    const double t35 = sin_[3];
+    const double t45 = -cos_[4];
+    const double t46 = -sin_[4];
+    const double t56 = -sin_[5];
+    const double t57 = cos_[5];
     const double t102 = (0.1363)*t57;
     const double t103 = (0.1363)*t56;
     const double t104 = t45*t56;
@@ -1974,363 +1669,13 @@ void symkin_sawyer_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t56 = -skv_sin_(q6, &far_);
-    const sk_v4 t57 = skv_cos_(q6, &far_);
-    const sk_v4 t102 = (0.1363)*t57;
-    const sk_v4 t103 = (0.1363)*t56;
-    const sk_v4 t104 = t45*t56;
-    const sk_v4 t105 = -t45*t57;
-    const sk_v4 t106 = t46*t56;
-    const sk_v4 t107 = -t46*t57;
-    const sk_v4 t108 = t102 + (0.4)*t106;
-    const sk_v4 t109 = t103 + (0.4)*t107;
-    const sk_v4 t110 = (0.4)*t45 - 0.13375;
-    const sk_v4 t111 = t104*t34 + t35*t57;
-    const sk_v4 t112 = t105*t34 + t35*t56;
-    const sk_v4 t113 = -t34*t46;
-    const sk_v4 t114 = t104*t35 - t34*t57;
-    const sk_v4 t115 = t105*t35 - t34*t56;
-    const sk_v4 t116 = -t35*t46;
-    const sk_v4 t117 = t108 + (0.1685)*t114;
-    const sk_v4 t118 = t109 + (0.1685)*t115;
-    const sk_v4 t119 = t110 + (0.1685)*t116;
-    const sk_v4 t120 = t106*t24 + t111*t23;
-    const sk_v4 t121 = t107*t24 + t112*t23;
-    const sk_v4 t122 = t113*t23 + t24*t45;
-    const sk_v4 t123 = -t106*t23 + t111*t24;
-    const sk_v4 t124 = -t107*t23 + t112*t24;
-    const sk_v4 t125 = t113*t24 - t23*t45;
-    const sk_v4 t126 = t117 + (0.4)*t123;
-    const sk_v4 t127 = t118 + (0.4)*t124;
-    const sk_v4 t128 = t119 + (0.4)*t125;
-    const sk_v4 t129 = t114*t13 + t12*t120;
-    const sk_v4 t130 = t115*t13 + t12*t121;
-    const sk_v4 t131 = t116*t13 + t12*t122;
-    const sk_v4 t132 = -t114*t12 + t120*t13;
-    const sk_v4 t133 = -t115*t12 + t121*t13;
-    const sk_v4 t134 = -t116*t12 + t122*t13;
-    const sk_v4 t135 = t126 + (0.1925)*t132;
-    const sk_v4 t136 = t127 + (0.1925)*t133;
-    const sk_v4 t137 = t128 + (0.1925)*t134;
-    const sk_v4 t138 = t123*t5 + t129*t4;
-    const sk_v4 t139 = t124*t5 + t130*t4;
-    const sk_v4 t140 = t125*t5 + t131*t4;
-    const sk_v4 t141 = -t123*t4 + t129*t5;
-    const sk_v4 t142 = -t124*t4 + t130*t5;
-    const sk_v4 t143 = -t125*t4 + t131*t5;
-    const sk_v4 t144 = t135 - 0.081*t138;
-    const sk_v4 t145 = t136 - 0.081*t139;
-    const sk_v4 t146 = t137 - 0.081*t140;
-    const sk_v4 t147 = (0.317)*t141 + t144;
-    const sk_v4 t148 = (0.317)*t142 + t145;
-    const sk_v4 t149 = (0.317)*t143 + t146;
-    const sk_v4 t150 = -0.13375*t56;
-    const sk_v4 t151 = (0.13375)*t57;
-    const sk_v4 t152 = -t102*t56 + t103*t57;
-    const sk_v4 t153 = t107*t110 - t109*t45;
-    const sk_v4 t154 = -t106*t110 + t108*t45;
-    const sk_v4 t155 = t106*t109 - t107*t108;
-    const sk_v4 t156 = -t115*t119 + t116*t118;
-    const sk_v4 t157 = t114*t119 - t116*t117;
-    const sk_v4 t158 = -t114*t118 + t115*t117;
-    const sk_v4 t159 = t124*t128 - t125*t127;
-    const sk_v4 t160 = -t123*t128 + t125*t126;
-    const sk_v4 t161 = t123*t127 - t124*t126;
-    const sk_v4 t162 = t133*t137 - t134*t136;
-    const sk_v4 t163 = -t132*t137 + t134*t135;
-    const sk_v4 t164 = t132*t136 - t133*t135;
-    const sk_v4 t165 = t142*t149 - t143*t148;
-    const sk_v4 t166 = -t141*t149 + t143*t147;
-    const sk_v4 t167 = t141*t148 - t142*t147;
-    const sk_v4 t199 = -t142*t164 + t143*t163;
-    const sk_v4 t200 = t141*t164 - t143*t162;
-    const sk_v4 t201 = -t141*t163 + t142*t162;
-    const sk_v4 t202 = -t133*t167 + t134*t166;
-    const sk_v4 t203 = t132*t167 - t134*t165;
-    const sk_v4 t204 = -t132*t166 + t133*t165;
-    const sk_v4 t205 = t199 - t202;
-    const sk_v4 t206 = t200 - t203;
-    const sk_v4 t207 = t201 - t204;
-    const sk_v4 t208 = -t133*t143 + t134*t142;
-    const sk_v4 t209 = t132*t143 - t134*t141;
-    const sk_v4 t210 = -t132*t142 + t133*t141;
-    const sk_v4 t238 = -t142*t161 + t143*t160;
-    const sk_v4 t239 = t141*t161 - t143*t159;
-    const sk_v4 t240 = -t141*t160 + t142*t159;
-    const sk_v4 t241 = -t124*t167 + t125*t166;
-    const sk_v4 t242 = t123*t167 - t125*t165;
-    const sk_v4 t243 = -t123*t166 + t124*t165;
-    const sk_v4 t244 = t238 - t241;
-    const sk_v4 t245 = t239 - t242;
-    const sk_v4 t246 = t240 - t243;
-    const sk_v4 t247 = -t124*t143 + t125*t142;
-    const sk_v4 t248 = t123*t143 - t125*t141;
-    const sk_v4 t249 = -t123*t142 + t124*t141;
-    const sk_v4 t250 = -t133*t161 + t134*t160;
-    const sk_v4 t251 = t132*t161 - t134*t159;
-    const sk_v4 t252 = -t132*t160 + t133*t159;
-    const sk_v4 t253 = -t124*t164 + t125*t163;
-    const sk_v4 t254 = t123*t164 - t125*t162;
-    const sk_v4 t255 = -t123*t163 + t124*t162;
-    const sk_v4 t256 = t250 - t253;
-    const sk_v4 t257 = t251 - t254;
-    const sk_v4 t258 = t252 - t255;
-    const sk_v4 t259 = -t124*t134 + t125*t133;
-    const sk_v4 t260 = t123*t134 - t125*t132;
-    const sk_v4 t261 = -t123*t133 + t124*t132;
-    const sk_v4 t283 = -t142*t158 + t143*t157;
-    const sk_v4 t284 = t141*t158 - t143*t156;
-    const sk_v4 t285 = -t141*t157 + t142*t156;
-    const sk_v4 t286 = t115*t167 - t116*t166;
-    const sk_v4 t287 = -t114*t167 + t116*t165;
-    const sk_v4 t288 = t114*t166 - t115*t165;
-    const sk_v4 t289 = t283 - t286;
-    const sk_v4 t290 = t284 - t287;
-    const sk_v4 t291 = t285 - t288;
-    const sk_v4 t292 = t115*t143 - t116*t142;
-    const sk_v4 t293 = -t114*t143 + t116*t141;
-    const sk_v4 t294 = t114*t142 - t115*t141;
-    const sk_v4 t295 = -t133*t158 + t134*t157;
-    const sk_v4 t296 = t132*t158 - t134*t156;
-    const sk_v4 t297 = -t132*t157 + t133*t156;
-    const sk_v4 t298 = t115*t164 - t116*t163;
-    const sk_v4 t299 = -t114*t164 + t116*t162;
-    const sk_v4 t300 = t114*t163 - t115*t162;
-    const sk_v4 t301 = t295 - t298;
-    const sk_v4 t302 = t296 - t299;
-    const sk_v4 t303 = t297 - t300;
-    const sk_v4 t304 = t115*t134 - t116*t133;
-    const sk_v4 t305 = -t114*t134 + t116*t132;
-    const sk_v4 t306 = t114*t133 - t115*t132;
-    const sk_v4 t307 = -t124*t158 + t125*t157;
-    const sk_v4 t308 = t123*t158 - t125*t156;
-    const sk_v4 t309 = -t123*t157 + t124*t156;
-    const sk_v4 t310 = t115*t161 - t116*t160;
-    const sk_v4 t311 = -t114*t161 + t116*t159;
-    const sk_v4 t312 = t114*t160 - t115*t159;
-    const sk_v4 t313 = t307 - t310;
-    const sk_v4 t314 = t308 - t311;
-    const sk_v4 t315 = t309 - t312;
-    const sk_v4 t316 = t115*t125 - t116*t124;
-    const sk_v4 t317 = -t114*t125 + t116*t123;
-    const sk_v4 t318 = t114*t124 - t115*t123;
-    const sk_v4 t334 = -t142*t155 + t143*t154;
-    const sk_v4 t335 = t141*t155 - t143*t153;
-    const sk_v4 t336 = -t141*t154 + t142*t153;
-    const sk_v4 t337 = -t107*t167 + t166*t45;
-    const sk_v4 t338 = t106*t167 - t165*t45;
-    const sk_v4 t339 = -t106*t166 + t107*t165;
-    const sk_v4 t340 = t334 - t337;
-    const sk_v4 t341 = t335 - t338;
-    const sk_v4 t342 = t336 - t339;
-    const sk_v4 t343 = -t107*t143 + t142*t45;
-    const sk_v4 t344 = t106*t143 - t141*t45;
-    const sk_v4 t345 = -t106*t142 + t107*t141;
-    const sk_v4 t346 = -t133*t155 + t134*t154;
-    const sk_v4 t347 = t132*t155 - t134*t153;
-    const sk_v4 t348 = -t132*t154 + t133*t153;
-    const sk_v4 t349 = -t107*t164 + t163*t45;
-    const sk_v4 t350 = t106*t164 - t162*t45;
-    const sk_v4 t351 = -t106*t163 + t107*t162;
-    const sk_v4 t352 = t346 - t349;
-    const sk_v4 t353 = t347 - t350;
-    const sk_v4 t354 = t348 - t351;
-    const sk_v4 t355 = -t107*t134 + t133*t45;
-    const sk_v4 t356 = t106*t134 - t132*t45;
-    const sk_v4 t357 = -t106*t133 + t107*t132;
-    const sk_v4 t358 = -t124*t155 + t125*t154;
-    const sk_v4 t359 = t123*t155 - t125*t153;
-    const sk_v4 t360 = -t123*t154 + t124*t153;
-    const sk_v4 t361 = -t107*t161 + t160*t45;
-    const sk_v4 t362 = t106*t161 - t159*t45;
-    const sk_v4 t363 = -t106*t160 + t107*t159;
-    const sk_v4 t364 = t358 - t361;
-    const sk_v4 t365 = t359 - t362;
-    const sk_v4 t366 = t360 - t363;
-    const sk_v4 t367 = -t107*t125 + t124*t45;
-    const sk_v4 t368 = t106*t125 - t123*t45;
-    const sk_v4 t369 = -t106*t124 + t107*t123;
-    const sk_v4 t370 = t115*t155 - t116*t154;
-    const sk_v4 t371 = -t114*t155 + t116*t153;
-    const sk_v4 t372 = t114*t154 - t115*t153;
-    const sk_v4 t373 = -t107*t158 + t157*t45;
-    const sk_v4 t374 = t106*t158 - t156*t45;
-    const sk_v4 t375 = -t106*t157 + t107*t156;
-    const sk_v4 t376 = t370 - t373;
-    const sk_v4 t377 = t371 - t374;
-    const sk_v4 t378 = t372 - t375;
-    const sk_v4 t379 = t107*t116 - t115*t45;
-    const sk_v4 t380 = -t106*t116 + t114*t45;
-    const sk_v4 t381 = t106*t115 - t107*t114;
-    const sk_v4 t391 = -t142*t152 + t143*t151;
-    const sk_v4 t392 = t141*t152 - t143*t150;
-    const sk_v4 t393 = -t141*t151 + t142*t150;
-    const sk_v4 t394 = -t167*t56;
-    const sk_v4 t395 = t167*t57;
-    const sk_v4 t396 = t165*t56 - t166*t57;
-    const sk_v4 t397 = t391 - t394;
-    const sk_v4 t398 = t392 - t395;
-    const sk_v4 t399 = t393 - t396;
-    const sk_v4 t400 = -t143*t56;
-    const sk_v4 t401 = t143*t57;
-    const sk_v4 t402 = t141*t56 - t142*t57;
-    const sk_v4 t403 = -t133*t152 + t134*t151;
-    const sk_v4 t404 = t132*t152 - t134*t150;
-    const sk_v4 t405 = -t132*t151 + t133*t150;
-    const sk_v4 t406 = -t164*t56;
-    const sk_v4 t407 = t164*t57;
-    const sk_v4 t408 = t162*t56 - t163*t57;
-    const sk_v4 t409 = t403 - t406;
-    const sk_v4 t410 = t404 - t407;
-    const sk_v4 t411 = t405 - t408;
-    const sk_v4 t412 = -t134*t56;
-    const sk_v4 t413 = t134*t57;
-    const sk_v4 t414 = t132*t56 - t133*t57;
-    const sk_v4 t415 = -t124*t152 + t125*t151;
-    const sk_v4 t416 = t123*t152 - t125*t150;
-    const sk_v4 t417 = -t123*t151 + t124*t150;
-    const sk_v4 t418 = -t161*t56;
-    const sk_v4 t419 = t161*t57;
-    const sk_v4 t420 = t159*t56 - t160*t57;
-    const sk_v4 t421 = t415 - t418;
-    const sk_v4 t422 = t416 - t419;
-    const sk_v4 t423 = t417 - t420;
-    const sk_v4 t424 = -t125*t56;
-    const sk_v4 t425 = t125*t57;
-    const sk_v4 t426 = t123*t56 - t124*t57;
-    const sk_v4 t427 = t115*t152 - t116*t151;
-    const sk_v4 t428 = -t114*t152 + t116*t150;
-    const sk_v4 t429 = t114*t151 - t115*t150;
-    const sk_v4 t430 = -t158*t56;
-    const sk_v4 t431 = t158*t57;
-    const sk_v4 t432 = t156*t56 - t157*t57;
-    const sk_v4 t433 = t427 - t430;
-    const sk_v4 t434 = t428 - t431;
-    const sk_v4 t435 = t429 - t432;
-    const sk_v4 t436 = t116*t56;
-    const sk_v4 t437 = -t116*t57;
-    const sk_v4 t438 = -t114*t56 + t115*t57;
-    const sk_v4 t439 = -t107*t152 + t151*t45;
-    const sk_v4 t440 = t106*t152 - t150*t45;
-    const sk_v4 t441 = -t106*t151 + t107*t150;
-    const sk_v4 t442 = -t155*t56;
-    const sk_v4 t443 = t155*t57;
-    const sk_v4 t444 = t153*t56 - t154*t57;
-    const sk_v4 t445 = t439 - t442;
-    const sk_v4 t446 = t440 - t443;
-    const sk_v4 t447 = t441 - t444;
-    const sk_v4 t448 = t106*t56 - t107*t57;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessiane_(q + l * 7, H + l * 294);
-        return;
-    }
-    skv_store4_(H + 0, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 8, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 24, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 28, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t205, SKV_SPLAT(0.0));
-    skv_store4_(H + 44, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 294, SKV_SPLAT(0.0), t206, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 294, t207, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 60, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t208);
-    skv_store4_(H + 64, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t209, SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 294, SKV_SPLAT(0.0), t210, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 80, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 294, t244, t256, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t245);
-    skv_store4_(H + 92, 294, t257, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t246, t258);
-    skv_store4_(H + 100, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 294, SKV_SPLAT(0.0), t247, t259, SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 294, t248, t260, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 116, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t249);
-    skv_store4_(H + 120, 294, t261, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t289, t301);
-    skv_store4_(H + 128, 294, t313, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 132, 294, SKV_SPLAT(0.0), t290, t302, t314);
-    skv_store4_(H + 136, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 294, t291, t303, t315, SKV_SPLAT(0.0));
-    skv_store4_(H + 144, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t292);
-    skv_store4_(H + 148, 294, t304, t316, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 152, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t293, t305);
-    skv_store4_(H + 156, 294, t317, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 160, 294, SKV_SPLAT(0.0), t294, t306, t318);
-    skv_store4_(H + 164, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 168, 294, t340, t352, t364, t376);
-    skv_store4_(H + 172, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t341);
-    skv_store4_(H + 176, 294, t353, t365, t377, SKV_SPLAT(0.0));
-    skv_store4_(H + 180, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t342, t354);
-    skv_store4_(H + 184, 294, t366, t378, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 188, 294, SKV_SPLAT(0.0), t343, t355, t367);
-    skv_store4_(H + 192, 294, t379, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 294, t344, t356, t368, t380);
-    skv_store4_(H + 200, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t345);
-    skv_store4_(H + 204, 294, t357, t369, t381, SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t397, t409);
-    skv_store4_(H + 212, 294, t421, t433, t445, SKV_SPLAT(0.0));
-    skv_store4_(H + 216, 294, SKV_SPLAT(0.0), t398, t410, t422);
-    skv_store4_(H + 220, 294, t434, t446, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 224, 294, t399, t411, t423, t435);
-    skv_store4_(H + 228, 294, t447, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t400);
-    skv_store4_(H + 232, 294, t412, t424, t436, -t104);
-    skv_store4_(H + 236, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t401, t413);
-    skv_store4_(H + 240, 294, t425, t437, -t105, SKV_SPLAT(0.0));
-    skv_store4_(H + 244, 294, SKV_SPLAT(0.0), t402, t414, t426);
-    skv_store4_(H + 248, 294, t438, t448, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 252, 294, t166, t163, t160, t157);
-    skv_store4_(H + 256, 294, t154, t151, SKV_SPLAT(0.0), -t165);
-    skv_store4_(H + 260, 294, -t162, -t159, -t156, -t153);
-    skv_store4_(H + 264, 294, -t150, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 268, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 272, 294, SKV_SPLAT(0.0), -t142, -t133, -t124);
-    skv_store4_(H + 276, 294, t115, -t107, -t56, SKV_SPLAT(0.0));
-    skv_store4_(H + 280, 294, t141, t132, t123, -t114);
-    skv_store4_(H + 284, 294, t106, t57, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 288, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 290, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_sawyer_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessiane_x4_(q + i * 7, H + i * 294);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessiane(q, H, N, hessiane_);
 #endif
     for (; i < N; ++i)
         hessiane_(q + i * 7, H + i * 294);
@@ -2346,20 +1691,25 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q4 = q[4];
     const double q5 = q[5];
     const double q6 = q[6];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[7], cos_[7]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, q6, 0.0 };
+        sk_sincos_n_(angle_, 7, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
+    const double t4 = sin_[1];
+    const double t5 = -cos_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos_[2];
+    const double t13 = sin_[2];
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -2369,8 +1719,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = -cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -2380,8 +1730,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos_[4];
+    const double t35 = sin_[4];
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -2391,8 +1741,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
+    const double t45 = -cos_[5];
+    const double t46 = -sin_[5];
     const double t47 = -t28*t46 + t36*t45;
     const double t48 = -t29*t46 + t37*t45;
     const double t49 = -t30*t46 + t38*t45;
@@ -2402,8 +1752,8 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t53 = (0.1363)*t39 + t42;
     const double t54 = (0.1363)*t40 + t43;
     const double t55 = (0.1363)*t41 + t44;
-    const double t56 = -sk_sin(q6);
-    const double t57 = sk_cos(q6);
+    const double t56 = -sin_[6];
+    const double t57 = cos_[6];
     const double t58 = -t39*t57 + t47*t56;
     const double t59 = -t40*t57 + t48*t56;
     const double t60 = -t41*t57 + t49*t56;
@@ -2513,151 +1863,13 @@ void symkin_sawyer_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    const sk_v4 q6 = {q[6], q[13], q[20], q[27]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = (0.081)*t0;
-    const sk_v4 t3 = (0.081)*t1;
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = -t0*t5;
-    const sk_v4 t9 = -t1*t5;
-    const sk_v4 t10 = -0.1925*t1 + t2;
-    const sk_v4 t11 = (0.1925)*t0 + t3;
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t14 = t1*t13 + t12*t6;
-    const sk_v4 t15 = -t0*t13 + t12*t7;
-    const sk_v4 t16 = -t12*t5;
-    const sk_v4 t17 = t1*t12 - t13*t6;
-    const sk_v4 t18 = -t0*t12 - t13*t7;
-    const sk_v4 t19 = t13*t5;
-    const sk_v4 t20 = t10 + (0.4)*t8;
-    const sk_v4 t21 = t11 + (0.4)*t9;
-    const sk_v4 t22 = 0.317 - 0.4*t4;
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t25 = t14*t23 - t24*t8;
-    const sk_v4 t26 = t15*t23 - t24*t9;
-    const sk_v4 t27 = t16*t23 + t24*t4;
-    const sk_v4 t28 = -t14*t24 - t23*t8;
-    const sk_v4 t29 = -t15*t24 - t23*t9;
-    const sk_v4 t30 = -t16*t24 + t23*t4;
-    const sk_v4 t31 = (0.1685)*t17 + t20;
-    const sk_v4 t32 = (0.1685)*t18 + t21;
-    const sk_v4 t33 = (0.1685)*t19 + t22;
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t36 = -t17*t35 + t25*t34;
-    const sk_v4 t37 = -t18*t35 + t26*t34;
-    const sk_v4 t38 = -t19*t35 + t27*t34;
-    const sk_v4 t39 = -t17*t34 - t25*t35;
-    const sk_v4 t40 = -t18*t34 - t26*t35;
-    const sk_v4 t41 = -t19*t34 - t27*t35;
-    const sk_v4 t42 = (0.4)*t28 + t31;
-    const sk_v4 t43 = (0.4)*t29 + t32;
-    const sk_v4 t44 = (0.4)*t30 + t33;
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t47 = -t28*t46 + t36*t45;
-    const sk_v4 t48 = -t29*t46 + t37*t45;
-    const sk_v4 t49 = -t30*t46 + t38*t45;
-    const sk_v4 t50 = -t28*t45 - t36*t46;
-    const sk_v4 t51 = -t29*t45 - t37*t46;
-    const sk_v4 t52 = -t30*t45 - t38*t46;
-    const sk_v4 t53 = (0.1363)*t39 + t42;
-    const sk_v4 t54 = (0.1363)*t40 + t43;
-    const sk_v4 t55 = (0.1363)*t41 + t44;
-    const sk_v4 t56 = -skv_sin_(q6, &far_);
-    const sk_v4 t57 = skv_cos_(q6, &far_);
-    const sk_v4 t58 = -t39*t57 + t47*t56;
-    const sk_v4 t59 = -t40*t57 + t48*t56;
-    const sk_v4 t60 = -t41*t57 + t49*t56;
-    const sk_v4 t61 = -t39*t56 - t47*t57;
-    const sk_v4 t62 = -t40*t56 - t48*t57;
-    const sk_v4 t63 = -t41*t56 - t49*t57;
-    const sk_v4 t64 = (0.13375)*t50 + t53;
-    const sk_v4 t65 = (0.13375)*t51 + t54;
-    const sk_v4 t66 = (0.13375)*t52 + t55;
-    const sk_v4 t67 = -t2 + t64;
-    const sk_v4 t68 = -t3 + t65;
-    const sk_v4 t69 = t66 - 0.317;
-    const sk_v4 t70 = t0*t69;
-    const sk_v4 t71 = t1*t69;
-    const sk_v4 t72 = -t0*t67 - t1*t68;
-    const sk_v4 t73 = -t10 + t64;
-    const sk_v4 t74 = -t11 + t65;
-    const sk_v4 t75 = t4*t74 + t69*t9;
-    const sk_v4 t76 = -t4*t73 - t69*t8;
-    const sk_v4 t77 = -t73*t9 + t74*t8;
-    const sk_v4 t78 = -t20 + t64;
-    const sk_v4 t79 = -t21 + t65;
-    const sk_v4 t80 = -t22 + t66;
-    const sk_v4 t81 = -t18*t80 + t19*t79;
-    const sk_v4 t82 = t17*t80 - t19*t78;
-    const sk_v4 t83 = -t17*t79 + t18*t78;
-    const sk_v4 t84 = -t31 + t64;
-    const sk_v4 t85 = -t32 + t65;
-    const sk_v4 t86 = -t33 + t66;
-    const sk_v4 t87 = t29*t86 - t30*t85;
-    const sk_v4 t88 = -t28*t86 + t30*t84;
-    const sk_v4 t89 = t28*t85 - t29*t84;
-    const sk_v4 t90 = -t42 + t64;
-    const sk_v4 t91 = -t43 + t65;
-    const sk_v4 t92 = -t44 + t66;
-    const sk_v4 t93 = t40*t92 - t41*t91;
-    const sk_v4 t94 = -t39*t92 + t41*t90;
-    const sk_v4 t95 = t39*t91 - t40*t90;
-    const sk_v4 t96 = -t53 + t64;
-    const sk_v4 t97 = -t54 + t65;
-    const sk_v4 t98 = -t55 + t66;
-    const sk_v4 t99 = t51*t98 - t52*t97;
-    const sk_v4 t100 = -t50*t98 + t52*t96;
-    const sk_v4 t101 = t50*t97 - t51*t96;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_(q + l * 7, T + l * 16, J + l * 42);
-        return;
-    }
-    skv_store4_(T + 0, 16, t58, t61, t50, t64);
-    skv_store4_(T + 4, 16, t59, t62, t51, t65);
-    skv_store4_(T + 8, 16, t60, t63, t52, t66);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 42, -t65, t70, t75, t81);
-    skv_store4_(J + 4, 42, t87, t93, t99, t64);
-    skv_store4_(J + 8, 42, t71, t76, t82, t88);
-    skv_store4_(J + 12, 42, t94, t100, SKV_SPLAT(0.0), t72);
-    skv_store4_(J + 16, 42, t77, t83, t89, t95);
-    skv_store4_(J + 20, 42, t101, SKV_SPLAT(0.0), -t1, t8);
-    skv_store4_(J + 24, 42, -t17, t28, t39, t50);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, t9, -t18);
-    skv_store4_(J + 32, 42, t29, t40, t51, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), -t4, -t19, t30);
-    skv_store4_(J + 38, 42, -t19, t30, t41, t52);
-}
-#endif
-
-
 void symkin_sawyer_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_x4_(q + i * 7, T + i * 16, J + i * 42);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0(q, T, J, N, fkine_jacob0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_(q + i * 7, T + i * 16, J + i * 42);
@@ -2672,20 +1884,25 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
+    double sin_[6], cos_[6]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q2, q3, q4, q5, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 6, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
     const double t2 = (0.081)*t0;
     const double t3 = (0.081)*t1;
-    const double t4 = sk_sin(q1);
-    const double t5 = -sk_cos(q1);
+    const double t4 = sin_[1];
+    const double t5 = -cos_[1];
     const double t6 = t0*t4;
     const double t7 = t1*t4;
     const double t8 = -t0*t5;
     const double t9 = -t1*t5;
     const double t10 = -0.1925*t1 + t2;
     const double t11 = (0.1925)*t0 + t3;
-    const double t12 = sk_cos(q2);
-    const double t13 = sk_sin(q2);
+    const double t12 = cos_[2];
+    const double t13 = sin_[2];
     const double t14 = t1*t13 + t12*t6;
     const double t15 = -t0*t13 + t12*t7;
     const double t16 = -t12*t5;
@@ -2695,8 +1912,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t20 = t10 + (0.4)*t8;
     const double t21 = t11 + (0.4)*t9;
     const double t22 = 0.317 - 0.4*t4;
-    const double t23 = -sk_cos(q3);
-    const double t24 = sk_sin(q3);
+    const double t23 = -cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t14*t23 - t24*t8;
     const double t26 = t15*t23 - t24*t9;
     const double t27 = t16*t23 + t24*t4;
@@ -2706,8 +1923,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t31 = (0.1685)*t17 + t20;
     const double t32 = (0.1685)*t18 + t21;
     const double t33 = (0.1685)*t19 + t22;
-    const double t34 = sk_cos(q4);
-    const double t35 = sk_sin(q4);
+    const double t34 = cos_[4];
+    const double t35 = sin_[4];
     const double t36 = -t17*t35 + t25*t34;
     const double t37 = -t18*t35 + t26*t34;
     const double t38 = -t19*t35 + t27*t34;
@@ -2717,8 +1934,8 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t42 = (0.4)*t28 + t31;
     const double t43 = (0.4)*t29 + t32;
     const double t44 = (0.4)*t30 + t33;
-    const double t45 = -sk_cos(q5);
-    const double t46 = -sk_sin(q5);
+    const double t45 = -cos_[5];
+    const double t46 = -sin_[5];
     const double t50 = -t28*t45 - t36*t46;
     const double t51 = -t29*t45 - t37*t46;
     const double t52 = -t30*t45 - t38*t46;
@@ -3212,315 +2429,13 @@ void symkin_sawyer_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[7], q[14], q[21]};
-    const sk_v4 q1 = {q[1], q[8], q[15], q[22]};
-    const sk_v4 q2 = {q[2], q[9], q[16], q[23]};
-    const sk_v4 q3 = {q[3], q[10], q[17], q[24]};
-    const sk_v4 q4 = {q[4], q[11], q[18], q[25]};
-    const sk_v4 q5 = {q[5], q[12], q[19], q[26]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = (0.081)*t0;
-    const sk_v4 t3 = (0.081)*t1;
-    const sk_v4 t4 = skv_sin_(q1, &far_);
-    const sk_v4 t5 = -skv_cos_(q1, &far_);
-    const sk_v4 t6 = t0*t4;
-    const sk_v4 t7 = t1*t4;
-    const sk_v4 t8 = -t0*t5;
-    const sk_v4 t9 = -t1*t5;
-    const sk_v4 t10 = -0.1925*t1 + t2;
-    const sk_v4 t11 = (0.1925)*t0 + t3;
-    const sk_v4 t12 = skv_cos_(q2, &far_);
-    const sk_v4 t13 = skv_sin_(q2, &far_);
-    const sk_v4 t14 = t1*t13 + t12*t6;
-    const sk_v4 t15 = -t0*t13 + t12*t7;
-    const sk_v4 t16 = -t12*t5;
-    const sk_v4 t17 = t1*t12 - t13*t6;
-    const sk_v4 t18 = -t0*t12 - t13*t7;
-    const sk_v4 t19 = t13*t5;
-    const sk_v4 t20 = t10 + (0.4)*t8;
-    const sk_v4 t21 = t11 + (0.4)*t9;
-    const sk_v4 t22 = 0.317 - 0.4*t4;
-    const sk_v4 t23 = -skv_cos_(q3, &far_);
-    const sk_v4 t24 = skv_sin_(q3, &far_);
-    const sk_v4 t25 = t14*t23 - t24*t8;
-    const sk_v4 t26 = t15*t23 - t24*t9;
-    const sk_v4 t27 = t16*t23 + t24*t4;
-    const sk_v4 t28 = -t14*t24 - t23*t8;
-    const sk_v4 t29 = -t15*t24 - t23*t9;
-    const sk_v4 t30 = -t16*t24 + t23*t4;
-    const sk_v4 t31 = (0.1685)*t17 + t20;
-    const sk_v4 t32 = (0.1685)*t18 + t21;
-    const sk_v4 t33 = (0.1685)*t19 + t22;
-    const sk_v4 t34 = skv_cos_(q4, &far_);
-    const sk_v4 t35 = skv_sin_(q4, &far_);
-    const sk_v4 t36 = -t17*t35 + t25*t34;
-    const sk_v4 t37 = -t18*t35 + t26*t34;
-    const sk_v4 t38 = -t19*t35 + t27*t34;
-    const sk_v4 t39 = -t17*t34 - t25*t35;
-    const sk_v4 t40 = -t18*t34 - t26*t35;
-    const sk_v4 t41 = -t19*t34 - t27*t35;
-    const sk_v4 t42 = (0.4)*t28 + t31;
-    const sk_v4 t43 = (0.4)*t29 + t32;
-    const sk_v4 t44 = (0.4)*t30 + t33;
-    const sk_v4 t45 = -skv_cos_(q5, &far_);
-    const sk_v4 t46 = -skv_sin_(q5, &far_);
-    const sk_v4 t50 = -t28*t45 - t36*t46;
-    const sk_v4 t51 = -t29*t45 - t37*t46;
-    const sk_v4 t52 = -t30*t45 - t38*t46;
-    const sk_v4 t53 = (0.1363)*t39 + t42;
-    const sk_v4 t54 = (0.1363)*t40 + t43;
-    const sk_v4 t55 = (0.1363)*t41 + t44;
-    const sk_v4 t64 = (0.13375)*t50 + t53;
-    const sk_v4 t65 = (0.13375)*t51 + t54;
-    const sk_v4 t66 = (0.13375)*t52 + t55;
-    const sk_v4 t67 = -t2 + t64;
-    const sk_v4 t68 = -t3 + t65;
-    const sk_v4 t69 = t66 - 0.317;
-    const sk_v4 t70 = t0*t69;
-    const sk_v4 t71 = t1*t69;
-    const sk_v4 t72 = -t0*t67 - t1*t68;
-    const sk_v4 t73 = -t10 + t64;
-    const sk_v4 t74 = -t11 + t65;
-    const sk_v4 t75 = t4*t74 + t69*t9;
-    const sk_v4 t76 = -t4*t73 - t69*t8;
-    const sk_v4 t77 = -t73*t9 + t74*t8;
-    const sk_v4 t78 = -t20 + t64;
-    const sk_v4 t79 = -t21 + t65;
-    const sk_v4 t80 = -t22 + t66;
-    const sk_v4 t81 = -t18*t80 + t19*t79;
-    const sk_v4 t82 = t17*t80 - t19*t78;
-    const sk_v4 t83 = -t17*t79 + t18*t78;
-    const sk_v4 t84 = -t31 + t64;
-    const sk_v4 t85 = -t32 + t65;
-    const sk_v4 t86 = -t33 + t66;
-    const sk_v4 t87 = t29*t86 - t30*t85;
-    const sk_v4 t88 = -t28*t86 + t30*t84;
-    const sk_v4 t89 = t28*t85 - t29*t84;
-    const sk_v4 t90 = -t42 + t64;
-    const sk_v4 t91 = -t43 + t65;
-    const sk_v4 t92 = -t44 + t66;
-    const sk_v4 t93 = t40*t92 - t41*t91;
-    const sk_v4 t94 = -t39*t92 + t41*t90;
-    const sk_v4 t95 = t39*t91 - t40*t90;
-    const sk_v4 t96 = -t53 + t64;
-    const sk_v4 t97 = -t54 + t65;
-    const sk_v4 t98 = -t55 + t66;
-    const sk_v4 t99 = t51*t98 - t52*t97;
-    const sk_v4 t100 = -t50*t98 + t52*t96;
-    const sk_v4 t101 = t50*t97 - t51*t96;
-    const sk_v4 t168 = t0*t72;
-    const sk_v4 t169 = t1*t72;
-    const sk_v4 t170 = -t0*t70 - t1*t71;
-    const sk_v4 t171 = t0*t77;
-    const sk_v4 t172 = t1*t77;
-    const sk_v4 t173 = -t0*t75 - t1*t76;
-    const sk_v4 t174 = -t0*t8 - t1*t9;
-    const sk_v4 t175 = t0*t83;
-    const sk_v4 t176 = t1*t83;
-    const sk_v4 t177 = -t0*t81 - t1*t82;
-    const sk_v4 t178 = -t0*t19;
-    const sk_v4 t179 = -t1*t19;
-    const sk_v4 t180 = t0*t17 + t1*t18;
-    const sk_v4 t181 = t0*t89;
-    const sk_v4 t182 = t1*t89;
-    const sk_v4 t183 = -t0*t87 - t1*t88;
-    const sk_v4 t184 = t0*t30;
-    const sk_v4 t185 = t1*t30;
-    const sk_v4 t186 = -t0*t28 - t1*t29;
-    const sk_v4 t187 = t0*t95;
-    const sk_v4 t188 = t1*t95;
-    const sk_v4 t189 = -t0*t93 - t1*t94;
-    const sk_v4 t190 = t0*t41;
-    const sk_v4 t191 = t1*t41;
-    const sk_v4 t192 = -t0*t39 - t1*t40;
-    const sk_v4 t193 = t0*t101;
-    const sk_v4 t194 = t1*t101;
-    const sk_v4 t195 = -t0*t99 - t1*t100;
-    const sk_v4 t196 = t0*t52;
-    const sk_v4 t197 = t1*t52;
-    const sk_v4 t198 = -t0*t50 - t1*t51;
-    const sk_v4 t211 = t4*t76 + t77*t9;
-    const sk_v4 t212 = -t4*t75 - t77*t8;
-    const sk_v4 t213 = -t75*t9 + t76*t8;
-    const sk_v4 t214 = t4*t82 + t83*t9;
-    const sk_v4 t215 = -t4*t81 - t8*t83;
-    const sk_v4 t216 = t8*t82 - t81*t9;
-    const sk_v4 t217 = -t18*t4 - t19*t9;
-    const sk_v4 t218 = t17*t4 + t19*t8;
-    const sk_v4 t219 = t17*t9 - t18*t8;
-    const sk_v4 t220 = t4*t88 + t89*t9;
-    const sk_v4 t221 = -t4*t87 - t8*t89;
-    const sk_v4 t222 = t8*t88 - t87*t9;
-    const sk_v4 t223 = t29*t4 + t30*t9;
-    const sk_v4 t224 = -t28*t4 - t30*t8;
-    const sk_v4 t225 = -t28*t9 + t29*t8;
-    const sk_v4 t226 = t4*t94 + t9*t95;
-    const sk_v4 t227 = -t4*t93 - t8*t95;
-    const sk_v4 t228 = t8*t94 - t9*t93;
-    const sk_v4 t229 = t4*t40 + t41*t9;
-    const sk_v4 t230 = -t39*t4 - t41*t8;
-    const sk_v4 t231 = -t39*t9 + t40*t8;
-    const sk_v4 t232 = t100*t4 + t101*t9;
-    const sk_v4 t233 = -t101*t8 - t4*t99;
-    const sk_v4 t234 = t100*t8 - t9*t99;
-    const sk_v4 t235 = t4*t51 + t52*t9;
-    const sk_v4 t236 = -t4*t50 - t52*t8;
-    const sk_v4 t237 = -t50*t9 + t51*t8;
-    const sk_v4 t262 = -t18*t83 + t19*t82;
-    const sk_v4 t263 = t17*t83 - t19*t81;
-    const sk_v4 t264 = -t17*t82 + t18*t81;
-    const sk_v4 t265 = -t18*t89 + t19*t88;
-    const sk_v4 t266 = t17*t89 - t19*t87;
-    const sk_v4 t267 = -t17*t88 + t18*t87;
-    const sk_v4 t268 = -t18*t30 + t19*t29;
-    const sk_v4 t269 = t17*t30 - t19*t28;
-    const sk_v4 t270 = -t17*t29 + t18*t28;
-    const sk_v4 t271 = -t18*t95 + t19*t94;
-    const sk_v4 t272 = t17*t95 - t19*t93;
-    const sk_v4 t273 = -t17*t94 + t18*t93;
-    const sk_v4 t274 = -t18*t41 + t19*t40;
-    const sk_v4 t275 = t17*t41 - t19*t39;
-    const sk_v4 t276 = -t17*t40 + t18*t39;
-    const sk_v4 t277 = t100*t19 - t101*t18;
-    const sk_v4 t278 = t101*t17 - t19*t99;
-    const sk_v4 t279 = -t100*t17 + t18*t99;
-    const sk_v4 t280 = -t18*t52 + t19*t51;
-    const sk_v4 t281 = t17*t52 - t19*t50;
-    const sk_v4 t282 = -t17*t51 + t18*t50;
-    const sk_v4 t319 = t29*t89 - t30*t88;
-    const sk_v4 t320 = -t28*t89 + t30*t87;
-    const sk_v4 t321 = t28*t88 - t29*t87;
-    const sk_v4 t322 = t29*t95 - t30*t94;
-    const sk_v4 t323 = -t28*t95 + t30*t93;
-    const sk_v4 t324 = t28*t94 - t29*t93;
-    const sk_v4 t325 = t29*t41 - t30*t40;
-    const sk_v4 t326 = -t28*t41 + t30*t39;
-    const sk_v4 t327 = t28*t40 - t29*t39;
-    const sk_v4 t328 = -t100*t30 + t101*t29;
-    const sk_v4 t329 = -t101*t28 + t30*t99;
-    const sk_v4 t330 = t100*t28 - t29*t99;
-    const sk_v4 t331 = t29*t52 - t30*t51;
-    const sk_v4 t332 = -t28*t52 + t30*t50;
-    const sk_v4 t333 = t28*t51 - t29*t50;
-    const sk_v4 t382 = t40*t95 - t41*t94;
-    const sk_v4 t383 = -t39*t95 + t41*t93;
-    const sk_v4 t384 = t39*t94 - t40*t93;
-    const sk_v4 t385 = -t100*t41 + t101*t40;
-    const sk_v4 t386 = -t101*t39 + t41*t99;
-    const sk_v4 t387 = t100*t39 - t40*t99;
-    const sk_v4 t388 = t40*t52 - t41*t51;
-    const sk_v4 t389 = -t39*t52 + t41*t50;
-    const sk_v4 t390 = t39*t51 - t40*t50;
-    const sk_v4 t449 = -t100*t52 + t101*t51;
-    const sk_v4 t450 = -t101*t50 + t52*t99;
-    const sk_v4 t451 = t100*t50 - t51*t99;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_hessian0_(q + l * 7, J + l * 42, H + l * 294);
-        return;
-    }
-    skv_store4_(J + 0, 42, -t65, t70, t75, t81);
-    skv_store4_(J + 4, 42, t87, t93, t99, t64);
-    skv_store4_(J + 8, 42, t71, t76, t82, t88);
-    skv_store4_(J + 12, 42, t94, t100, SKV_SPLAT(0.0), t72);
-    skv_store4_(J + 16, 42, t77, t83, t89, t95);
-    skv_store4_(J + 20, 42, t101, SKV_SPLAT(0.0), -t1, t8);
-    skv_store4_(J + 24, 42, -t17, t28, t39, t50);
-    skv_store4_(J + 28, 42, SKV_SPLAT(0.0), t0, t9, -t18);
-    skv_store4_(J + 32, 42, t29, t40, t51, SKV_SPLAT(1.0));
-    skv_store4_(J + 36, 42, SKV_SPLAT(0.0), -t4, -t19, t30);
-    skv_store4_(J + 38, 42, -t19, t30, t41, t52);
-    skv_store4_(H + 0, 294, -t64, -t71, -t76, -t82);
-    skv_store4_(H + 4, 294, -t88, -t94, -t100, -t65);
-    skv_store4_(H + 8, 294, t70, t75, t81, t87);
-    skv_store4_(H + 12, 294, t93, t99, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t0, -t9);
-    skv_store4_(H + 24, 294, t18, -t29, -t40, -t51);
-    skv_store4_(H + 28, 294, SKV_SPLAT(0.0), -t1, t8, -t17);
-    skv_store4_(H + 32, 294, t28, t39, t50, SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t71, t168);
-    skv_store4_(H + 44, 294, t171, t175, t181, t187);
-    skv_store4_(H + 48, 294, t193, t70, t169, t172);
-    skv_store4_(H + 52, 294, t176, t182, t188, t194);
-    skv_store4_(H + 56, 294, SKV_SPLAT(0.0), t170, t173, t177);
-    skv_store4_(H + 60, 294, t183, t189, t195, SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 294, SKV_SPLAT(0.0), -t6, t178, t184);
-    skv_store4_(H + 68, 294, t190, t196, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 294, -t7, t179, t185, t191);
-    skv_store4_(H + 76, 294, t197, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t174);
-    skv_store4_(H + 80, 294, t180, t186, t192, t198);
-    skv_store4_(H + 84, 294, -t76, t171, t211, t214);
-    skv_store4_(H + 88, 294, t220, t226, t232, t75);
-    skv_store4_(H + 92, 294, t172, t212, t215, t221);
-    skv_store4_(H + 96, 294, t227, t233, SKV_SPLAT(0.0), t173);
-    skv_store4_(H + 100, 294, t213, t216, t222, t228);
-    skv_store4_(H + 104, 294, t234, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 294, t217, t223, t229, t235);
-    skv_store4_(H + 112, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t218);
-    skv_store4_(H + 116, 294, t224, t230, t236, SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t219, t225);
-    skv_store4_(H + 124, 294, t231, t237, -t82, t175);
-    skv_store4_(H + 128, 294, t214, t262, t265, t271);
-    skv_store4_(H + 132, 294, t277, t81, t176, t215);
-    skv_store4_(H + 136, 294, t263, t266, t272, t278);
-    skv_store4_(H + 140, 294, SKV_SPLAT(0.0), t177, t216, t264);
-    skv_store4_(H + 144, 294, t267, t273, t279, SKV_SPLAT(0.0));
-    skv_store4_(H + 148, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t268);
-    skv_store4_(H + 152, 294, t274, t280, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t269, t275);
-    skv_store4_(H + 160, 294, t281, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 294, SKV_SPLAT(0.0), t270, t276, t282);
-    skv_store4_(H + 168, 294, -t88, t181, t220, t265);
-    skv_store4_(H + 172, 294, t319, t322, t328, t87);
-    skv_store4_(H + 176, 294, t182, t221, t266, t320);
-    skv_store4_(H + 180, 294, t323, t329, SKV_SPLAT(0.0), t183);
-    skv_store4_(H + 184, 294, t222, t267, t321, t324);
-    skv_store4_(H + 188, 294, t330, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t325, t331);
-    skv_store4_(H + 196, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 294, SKV_SPLAT(0.0), t326, t332, SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 294, t327, t333, -t94, t187);
-    skv_store4_(H + 212, 294, t226, t271, t322, t382);
-    skv_store4_(H + 216, 294, t385, t93, t188, t227);
-    skv_store4_(H + 220, 294, t272, t323, t383, t386);
-    skv_store4_(H + 224, 294, SKV_SPLAT(0.0), t189, t228, t273);
-    skv_store4_(H + 228, 294, t324, t384, t387, SKV_SPLAT(0.0));
-    skv_store4_(H + 232, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 236, 294, SKV_SPLAT(0.0), t388, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 240, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 244, 294, t389, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 248, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t390);
-    skv_store4_(H + 252, 294, -t100, t193, t232, t277);
-    skv_store4_(H + 256, 294, t328, t385, t449, t99);
-    skv_store4_(H + 260, 294, t194, t233, t278, t329);
-    skv_store4_(H + 264, 294, t386, t450, SKV_SPLAT(0.0), t195);
-    skv_store4_(H + 268, 294, t234, t279, t330, t387);
-    skv_store4_(H + 272, 294, t451, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 276, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 280, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 284, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 288, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 290, 294, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_sawyer_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_hessian0_x4_(q + i * 7, J + i * 42, H + i * 294);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_hessian0(q, J, H, N, jacob0_hessian0_);
 #endif
     for (; i < N; ++i)
         jacob0_hessian0_(q + i * 7, J + i * 42, H + i * 294);

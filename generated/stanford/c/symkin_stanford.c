@@ -46,15 +46,22 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -62,14 +69,34 @@ const char *const symkin_stanford_joint_names[SYMKIN_STANFORD_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -77,14 +104,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -108,36 +139,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -218,7 +260,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -232,7 +274,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -309,6 +351,70 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #define SYMKIN_LANES 1
 #endif
 
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_stanford_lanes.c: its table symkin_stanford_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_stanford_bind_lanes (symkin's runtime builds symkin_stanford_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*link_poses)(const double *q, double *links, ptrdiff_t N, void (*scalar)(const double *q, double *links));
+    ptrdiff_t (*jacob0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*hessiane)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*fkine_jacob0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*jacob0_hessian0)(const double *q, double *J, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *J, double *H));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_stanford_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_stanford_bind_lanes(const void *table);
+void symkin_stanford_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_stanford_lanes;
+}
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -335,10 +441,15 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[5], cos_[5]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q3, q4, q5, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 5, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -350,24 +461,24 @@ static void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin_[2];
+    const double t16 = -cos_[2];
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t31 = cos_[4];
+    const double t32 = sin_[4];
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -400,79 +511,13 @@ void symkin_stanford_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = -0.154*t1;
-    const sk_v4 t9 = (0.154)*t0;
-    const sk_v4 t10 = -q2*t6 + t8;
-    const sk_v4 t11 = -q2*t7 + t9;
-    const sk_v4 t12 = q2*t2 + 0.412;
-    const sk_v4 t13 = (0.0203)*t1 + t10;
-    const sk_v4 t14 = -0.0203*t0 + t11;
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t17 = -t1*t16 + t15*t4;
-    const sk_v4 t18 = t0*t16 + t15*t5;
-    const sk_v4 t19 = -t15*t3;
-    const sk_v4 t20 = -t1*t15 - t16*t4;
-    const sk_v4 t21 = t0*t15 - t16*t5;
-    const sk_v4 t22 = t16*t3;
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t25 = t17*t23 + t24*t6;
-    const sk_v4 t26 = t18*t23 + t24*t7;
-    const sk_v4 t27 = t19*t23 - t2*t24;
-    const sk_v4 t28 = -t17*t24 + t23*t6;
-    const sk_v4 t29 = -t18*t24 + t23*t7;
-    const sk_v4 t30 = -t19*t24 - t2*t23;
-    const sk_v4 t31 = skv_cos_(q5, &far_);
-    const sk_v4 t32 = skv_sin_(q5, &far_);
-    const sk_v4 t33 = t20*t32 + t25*t31;
-    const sk_v4 t34 = t21*t32 + t26*t31;
-    const sk_v4 t35 = t22*t32 + t27*t31;
-    const sk_v4 t36 = t20*t31 - t25*t32;
-    const sk_v4 t37 = t21*t31 - t26*t32;
-    const sk_v4 t38 = t22*t31 - t27*t32;
-    const sk_v4 t39 = t13 - 0.263*t28;
-    const sk_v4 t40 = t14 - 0.263*t29;
-    const sk_v4 t41 = t12 - 0.263*t30;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_(q + l * 6, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, t33, t36, -t28, t39);
-    skv_store4_(T + 4, 16, t34, t37, -t29, t40);
-    skv_store4_(T + 8, 16, t35, t38, -t30, t41);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_stanford_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_x4_(q + i * 6, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine(q, T, N, fkine_);
 #endif
     for (; i < N; ++i)
         fkine_(q + i * 6, T + i * 16);
@@ -487,10 +532,15 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[5], cos_[5]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q3, q4, q5, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 5, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -502,24 +552,24 @@ static void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin_[2];
+    const double t16 = -cos_[2];
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t31 = cos_[4];
+    const double t32 = sin_[4];
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -629,96 +679,13 @@ void symkin_stanford_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
-#if SYMKIN_LANES == 4
-/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = -0.154*t1;
-    const sk_v4 t9 = (0.154)*t0;
-    const sk_v4 t10 = -q2*t6 + t8;
-    const sk_v4 t11 = -q2*t7 + t9;
-    const sk_v4 t12 = q2*t2 + 0.412;
-    const sk_v4 t13 = (0.0203)*t1 + t10;
-    const sk_v4 t14 = -0.0203*t0 + t11;
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t17 = -t1*t16 + t15*t4;
-    const sk_v4 t18 = t0*t16 + t15*t5;
-    const sk_v4 t19 = -t15*t3;
-    const sk_v4 t20 = -t1*t15 - t16*t4;
-    const sk_v4 t21 = t0*t15 - t16*t5;
-    const sk_v4 t22 = t16*t3;
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t25 = t17*t23 + t24*t6;
-    const sk_v4 t26 = t18*t23 + t24*t7;
-    const sk_v4 t27 = t19*t23 - t2*t24;
-    const sk_v4 t28 = -t17*t24 + t23*t6;
-    const sk_v4 t29 = -t18*t24 + t23*t7;
-    const sk_v4 t30 = -t19*t24 - t2*t23;
-    const sk_v4 t31 = skv_cos_(q5, &far_);
-    const sk_v4 t32 = skv_sin_(q5, &far_);
-    const sk_v4 t33 = t20*t32 + t25*t31;
-    const sk_v4 t34 = t21*t32 + t26*t31;
-    const sk_v4 t35 = t22*t32 + t27*t31;
-    const sk_v4 t36 = t20*t31 - t25*t32;
-    const sk_v4 t37 = t21*t31 - t26*t32;
-    const sk_v4 t38 = t22*t31 - t27*t32;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            link_poses_(q + l * 6, links + l * 96);
-        return;
-    }
-    skv_store4_(links + 0, 96, t0, -t1, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 4, 96, t1, t0, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 8, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 12, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 16, 96, t4, t6, -t1, SKV_SPLAT(0.0));
-    skv_store4_(links + 20, 96, t5, t7, t0, SKV_SPLAT(0.0));
-    skv_store4_(links + 24, 96, -t3, -t2, SKV_SPLAT(0.0), SKV_SPLAT(0.412));
-    skv_store4_(links + 28, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 32, 96, t1, t4, -t6, t10);
-    skv_store4_(links + 36, 96, -t0, t5, -t7, t11);
-    skv_store4_(links + 40, 96, SKV_SPLAT(0.0), -t3, t2, t12);
-    skv_store4_(links + 44, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 48, 96, t17, t20, -t6, t13);
-    skv_store4_(links + 52, 96, t18, t21, -t7, t14);
-    skv_store4_(links + 56, 96, t19, t22, t2, t12);
-    skv_store4_(links + 60, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 64, 96, t25, t28, t20, t13);
-    skv_store4_(links + 68, 96, t26, t29, t21, t14);
-    skv_store4_(links + 72, 96, t27, t30, t22, t12);
-    skv_store4_(links + 76, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 80, 96, t33, t36, -t28, t13);
-    skv_store4_(links + 84, 96, t34, t37, -t29, t14);
-    skv_store4_(links + 88, 96, t35, t38, -t30, t12);
-    skv_store4_(links + 92, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_stanford_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        link_poses_x4_(q + i * 6, links + i * 96);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->link_poses(q, links, N, link_poses_);
 #endif
     for (; i < N; ++i)
         link_poses_(q + i * 6, links + i * 96);
@@ -732,10 +699,15 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q3, q4 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -747,16 +719,16 @@ static void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin_[2];
+    const double t16 = -cos_[2];
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos_[3];
+    const double t24 = sin_[3];
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
@@ -822,88 +794,13 @@ void symkin_stanford_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = -0.154*t1;
-    const sk_v4 t9 = (0.154)*t0;
-    const sk_v4 t10 = -q2*t6 + t8;
-    const sk_v4 t11 = -q2*t7 + t9;
-    const sk_v4 t12 = q2*t2 + 0.412;
-    const sk_v4 t13 = (0.0203)*t1 + t10;
-    const sk_v4 t14 = -0.0203*t0 + t11;
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t17 = -t1*t16 + t15*t4;
-    const sk_v4 t18 = t0*t16 + t15*t5;
-    const sk_v4 t19 = -t15*t3;
-    const sk_v4 t20 = -t1*t15 - t16*t4;
-    const sk_v4 t21 = t0*t15 - t16*t5;
-    const sk_v4 t22 = t16*t3;
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t28 = -t17*t24 + t23*t6;
-    const sk_v4 t29 = -t18*t24 + t23*t7;
-    const sk_v4 t30 = -t19*t24 - t2*t23;
-    const sk_v4 t39 = t13 - 0.263*t28;
-    const sk_v4 t40 = t14 - 0.263*t29;
-    const sk_v4 t41 = t12 - 0.263*t30;
-    const sk_v4 t42 = t41 - 0.412;
-    const sk_v4 t43 = t0*t42;
-    const sk_v4 t44 = t1*t42;
-    const sk_v4 t45 = -t0*t39 - t1*t40;
-    const sk_v4 t46 = -t13 + t39;
-    const sk_v4 t47 = -t14 + t40;
-    const sk_v4 t48 = -t12 + t41;
-    const sk_v4 t49 = -t2*t47 - t48*t7;
-    const sk_v4 t50 = t2*t46 + t48*t6;
-    const sk_v4 t51 = t46*t7 - t47*t6;
-    const sk_v4 t52 = t21*t48 - t22*t47;
-    const sk_v4 t53 = -t20*t48 + t22*t46;
-    const sk_v4 t54 = t20*t47 - t21*t46;
-    const sk_v4 t55 = -t29*t48 + t30*t47;
-    const sk_v4 t56 = t28*t48 - t30*t46;
-    const sk_v4 t57 = -t28*t47 + t29*t46;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_(q + l * 6, J + l * 36);
-        return;
-    }
-    skv_store4_(J + 0, 36, -t40, t43, -t6, t49);
-    skv_store4_(J + 4, 36, t52, t55, t39, t44);
-    skv_store4_(J + 8, 36, -t7, t50, t53, t56);
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), t45, t2, t51);
-    skv_store4_(J + 16, 36, t54, t57, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 20, 36, SKV_SPLAT(0.0), -t6, t20, -t28);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), t0, SKV_SPLAT(0.0), -t7);
-    skv_store4_(J + 28, 36, t21, -t29, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), t2, t22, -t30);
-}
-#endif
-
-
 void symkin_stanford_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_x4_(q + i * 6, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0(q, J, N, jacob0_);
 #endif
     for (; i < N; ++i)
         jacob0_(q + i * 6, J + i * 36);
@@ -917,14 +814,19 @@ static void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q1, q3, q4, q5 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double t2 = cos_[0];
+    const double t3 = sin_[0];
+    const double t15 = sin_[1];
+    const double t16 = -cos_[1];
+    const double t23 = cos_[2];
+    const double t24 = sin_[2];
+    const double t31 = cos_[3];
+    const double t32 = sin_[3];
     const double t58 = t23*t31;
     const double t59 = -t23*t32;
     const double t60 = t24*t31;
@@ -1003,84 +905,13 @@ void symkin_stanford_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t31 = skv_cos_(q5, &far_);
-    const sk_v4 t32 = skv_sin_(q5, &far_);
-    const sk_v4 t58 = t23*t31;
-    const sk_v4 t59 = -t23*t32;
-    const sk_v4 t60 = t24*t31;
-    const sk_v4 t61 = -t24*t32;
-    const sk_v4 t62 = -t15*t32 - t16*t58;
-    const sk_v4 t63 = -t15*t31 - t16*t59;
-    const sk_v4 t64 = -t16*t24;
-    const sk_v4 t65 = -0.0203*t62;
-    const sk_v4 t66 = -0.0203*t63;
-    const sk_v4 t67 = -0.0203*t64 - 0.263;
-    const sk_v4 t68 = q2*t60 + t65;
-    const sk_v4 t69 = q2*t61 + t66;
-    const sk_v4 t70 = -q2*t23 + t67;
-    const sk_v4 t71 = t15*t58 - t16*t32;
-    const sk_v4 t72 = t15*t59 - t16*t31;
-    const sk_v4 t73 = t15*t24;
-    const sk_v4 t74 = (0.154)*t62 + t68;
-    const sk_v4 t75 = (0.154)*t63 + t69;
-    const sk_v4 t76 = (0.154)*t64 + t70;
-    const sk_v4 t80 = t2*t60 + t3*t71;
-    const sk_v4 t81 = t2*t61 + t3*t72;
-    const sk_v4 t82 = -t2*t23 + t3*t73;
-    const sk_v4 t83 = t74 + (0.412)*t80;
-    const sk_v4 t84 = t75 + (0.412)*t81;
-    const sk_v4 t85 = t76 + (0.412)*t82;
-    const sk_v4 t86 = (0.263)*t31;
-    const sk_v4 t87 = -0.263*t32;
-    const sk_v4 t88 = -0.263*t61;
-    const sk_v4 t89 = (0.263)*t60;
-    const sk_v4 t90 = t63*t76 - t64*t75;
-    const sk_v4 t91 = -t62*t76 + t64*t74;
-    const sk_v4 t92 = t62*t75 - t63*t74;
-    const sk_v4 t93 = t81*t85 - t82*t84;
-    const sk_v4 t94 = -t80*t85 + t82*t83;
-    const sk_v4 t95 = t80*t84 - t81*t83;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_(q + l * 6, J + l * 36);
-        return;
-    }
-    skv_store4_(J + 0, 36, t93, t90, -t60, t88);
-    skv_store4_(J + 4, 36, t86, SKV_SPLAT(0.0), t94, t91);
-    skv_store4_(J + 8, 36, -t61, t89, t87, SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 36, t95, t92, t23, SKV_SPLAT(0.0));
-    skv_store4_(J + 16, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t80, -t62);
-    skv_store4_(J + 20, 36, SKV_SPLAT(0.0), -t60, t32, SKV_SPLAT(0.0));
-    skv_store4_(J + 24, 36, -t81, -t63, SKV_SPLAT(0.0), -t61);
-    skv_store4_(J + 28, 36, t31, SKV_SPLAT(0.0), -t82, -t64);
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), t23, SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_stanford_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_x4_(q + i * 6, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe(q, J, N, jacobe_);
 #endif
     for (; i < N; ++i)
         jacobe_(q + i * 6, J + i * 36);
@@ -1113,14 +944,19 @@ static void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q1, q3, q4, q5 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double t2 = cos_[0];
+    const double t3 = sin_[0];
+    const double t15 = sin_[1];
+    const double t16 = -cos_[1];
+    const double t23 = cos_[2];
+    const double t24 = sin_[2];
+    const double t31 = cos_[3];
+    const double t32 = sin_[3];
     const double t58 = t23*t31;
     const double t59 = -t23*t32;
     const double t60 = t24*t31;
@@ -1445,195 +1281,13 @@ void symkin_stanford_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t31 = skv_cos_(q5, &far_);
-    const sk_v4 t32 = skv_sin_(q5, &far_);
-    const sk_v4 t58 = t23*t31;
-    const sk_v4 t59 = -t23*t32;
-    const sk_v4 t60 = t24*t31;
-    const sk_v4 t61 = -t24*t32;
-    const sk_v4 t62 = -t15*t32 - t16*t58;
-    const sk_v4 t63 = -t15*t31 - t16*t59;
-    const sk_v4 t64 = -t16*t24;
-    const sk_v4 t65 = -0.0203*t62;
-    const sk_v4 t66 = -0.0203*t63;
-    const sk_v4 t67 = -0.0203*t64 - 0.263;
-    const sk_v4 t68 = q2*t60 + t65;
-    const sk_v4 t69 = q2*t61 + t66;
-    const sk_v4 t70 = -q2*t23 + t67;
-    const sk_v4 t71 = t15*t58 - t16*t32;
-    const sk_v4 t72 = t15*t59 - t16*t31;
-    const sk_v4 t73 = t15*t24;
-    const sk_v4 t74 = (0.154)*t62 + t68;
-    const sk_v4 t75 = (0.154)*t63 + t69;
-    const sk_v4 t76 = (0.154)*t64 + t70;
-    const sk_v4 t80 = t2*t60 + t3*t71;
-    const sk_v4 t81 = t2*t61 + t3*t72;
-    const sk_v4 t82 = -t2*t23 + t3*t73;
-    const sk_v4 t83 = t74 + (0.412)*t80;
-    const sk_v4 t84 = t75 + (0.412)*t81;
-    const sk_v4 t85 = t76 + (0.412)*t82;
-    const sk_v4 t86 = (0.263)*t31;
-    const sk_v4 t87 = -0.263*t32;
-    const sk_v4 t88 = -0.263*t61;
-    const sk_v4 t89 = (0.263)*t60;
-    const sk_v4 t90 = t63*t76 - t64*t75;
-    const sk_v4 t91 = -t62*t76 + t64*t74;
-    const sk_v4 t92 = t62*t75 - t63*t74;
-    const sk_v4 t93 = t81*t85 - t82*t84;
-    const sk_v4 t94 = -t80*t85 + t82*t83;
-    const sk_v4 t95 = t80*t84 - t81*t83;
-    const sk_v4 t115 = -t81*t92 + t82*t91;
-    const sk_v4 t116 = t80*t92 - t82*t90;
-    const sk_v4 t117 = -t80*t91 + t81*t90;
-    const sk_v4 t118 = -t63*t95 + t64*t94;
-    const sk_v4 t119 = t62*t95 - t64*t93;
-    const sk_v4 t120 = -t62*t94 + t63*t93;
-    const sk_v4 t121 = t115 - t118;
-    const sk_v4 t122 = t116 - t119;
-    const sk_v4 t123 = t117 - t120;
-    const sk_v4 t124 = -t63*t82 + t64*t81;
-    const sk_v4 t125 = t62*t82 - t64*t80;
-    const sk_v4 t126 = -t62*t81 + t63*t80;
-    const sk_v4 t127 = -t23*t81 - t61*t82;
-    const sk_v4 t128 = t23*t80 + t60*t82;
-    const sk_v4 t129 = -t60*t81 + t61*t80;
-    const sk_v4 t130 = -t23*t63 - t61*t64;
-    const sk_v4 t131 = t23*t62 + t60*t64;
-    const sk_v4 t132 = -t60*t63 + t61*t62;
-    const sk_v4 t148 = t82*t89;
-    const sk_v4 t149 = -t82*t88;
-    const sk_v4 t150 = -t80*t89 + t81*t88;
-    const sk_v4 t151 = -t23*t94 - t61*t95;
-    const sk_v4 t152 = t23*t93 + t60*t95;
-    const sk_v4 t153 = -t60*t94 + t61*t93;
-    const sk_v4 t154 = t148 - t151;
-    const sk_v4 t155 = t149 - t152;
-    const sk_v4 t156 = t150 - t153;
-    const sk_v4 t157 = t64*t89;
-    const sk_v4 t158 = -t64*t88;
-    const sk_v4 t159 = -t62*t89 + t63*t88;
-    const sk_v4 t160 = -t23*t91 - t61*t92;
-    const sk_v4 t161 = t23*t90 + t60*t92;
-    const sk_v4 t162 = -t60*t91 + t61*t90;
-    const sk_v4 t163 = t157 - t160;
-    const sk_v4 t164 = t158 - t161;
-    const sk_v4 t165 = t159 - t162;
-    const sk_v4 t175 = t82*t87;
-    const sk_v4 t176 = -t82*t86;
-    const sk_v4 t177 = -t80*t87 + t81*t86;
-    const sk_v4 t178 = t31*t95;
-    const sk_v4 t179 = -t32*t95;
-    const sk_v4 t180 = -t31*t93 + t32*t94;
-    const sk_v4 t181 = t175 - t178;
-    const sk_v4 t182 = t176 - t179;
-    const sk_v4 t183 = t177 - t180;
-    const sk_v4 t184 = t31*t82;
-    const sk_v4 t185 = -t32*t82;
-    const sk_v4 t186 = -t31*t80 + t32*t81;
-    const sk_v4 t187 = t64*t87;
-    const sk_v4 t188 = -t64*t86;
-    const sk_v4 t189 = -t62*t87 + t63*t86;
-    const sk_v4 t190 = t31*t92;
-    const sk_v4 t191 = -t32*t92;
-    const sk_v4 t192 = -t31*t90 + t32*t91;
-    const sk_v4 t193 = t187 - t190;
-    const sk_v4 t194 = t188 - t191;
-    const sk_v4 t195 = t189 - t192;
-    const sk_v4 t196 = t31*t64;
-    const sk_v4 t197 = -t32*t64;
-    const sk_v4 t198 = -t31*t62 + t32*t63;
-    const sk_v4 t199 = t31*t60 - t32*t61;
-    const sk_v4 t200 = -t23*t87;
-    const sk_v4 t201 = t23*t86;
-    const sk_v4 t202 = -t60*t87 + t61*t86;
-    const sk_v4 t203 = -t31*t88 + t32*t89;
-    const sk_v4 t204 = t202 - t203;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessiane_(q + l * 6, H + l * 216);
-        return;
-    }
-    skv_store4_(H + 0, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 8, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 28, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, t121, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t122, SKV_SPLAT(0.0));
-    skv_store4_(H + 44, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 216, t123, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t124, SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 60, 216, t125, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t126, SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 216, t127, t130, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t128, t131);
-    skv_store4_(H + 80, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 216, t129, t132, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 100, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 216, t154, t163, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t155, t164);
-    skv_store4_(H + 116, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 216, t156, t165, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t127, t130);
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 132, 216, t128, t131, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t129, t132);
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 144, 216, t181, t193, -t58, t200);
-    skv_store4_(H + 148, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t182, t194);
-    skv_store4_(H + 152, 216, -t59, t201, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 216, t183, t195, -t199, t204);
-    skv_store4_(H + 160, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t184, t196);
-    skv_store4_(H + 164, 216, SKV_SPLAT(0.0), -t58, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 168, 216, t185, t197, SKV_SPLAT(0.0), -t59);
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t186, t198);
-    skv_store4_(H + 176, 216, SKV_SPLAT(0.0), -t199, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 180, 216, t94, t91, -t61, t89);
-    skv_store4_(H + 184, 216, t87, SKV_SPLAT(0.0), -t93, -t90);
-    skv_store4_(H + 188, 216, t60, -t88, -t86, SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t81, -t63);
-    skv_store4_(H + 200, 216, SKV_SPLAT(0.0), -t61, t31, SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, t80, t62, SKV_SPLAT(0.0), t60);
-    skv_store4_(H + 208, 216, -t32, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_stanford_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessiane_x4_(q + i * 6, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessiane(q, H, N, hessiane_);
 #endif
     for (; i < N; ++i)
         hessiane_(q + i * 6, H + i * 216);
@@ -1648,10 +1302,15 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[5], cos_[5]; /* of the angles: four at a time */
+    {
+        const double angle_[8] = { q0, q1, q3, q4, q5, 0.0, 0.0, 0.0 };
+        sk_sincos_n_(angle_, 5, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -1663,24 +1322,24 @@ static void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin_[2];
+    const double t16 = -cos_[2];
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos_[3];
+    const double t24 = sin_[3];
     const double t25 = t17*t23 + t24*t6;
     const double t26 = t18*t23 + t24*t7;
     const double t27 = t19*t23 - t2*t24;
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
-    const double t31 = sk_cos(q5);
-    const double t32 = sk_sin(q5);
+    const double t31 = cos_[4];
+    const double t32 = sin_[4];
     const double t33 = t20*t32 + t25*t31;
     const double t34 = t21*t32 + t26*t31;
     const double t35 = t22*t32 + t27*t31;
@@ -1765,104 +1424,13 @@ void symkin_stanford_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = -0.154*t1;
-    const sk_v4 t9 = (0.154)*t0;
-    const sk_v4 t10 = -q2*t6 + t8;
-    const sk_v4 t11 = -q2*t7 + t9;
-    const sk_v4 t12 = q2*t2 + 0.412;
-    const sk_v4 t13 = (0.0203)*t1 + t10;
-    const sk_v4 t14 = -0.0203*t0 + t11;
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t17 = -t1*t16 + t15*t4;
-    const sk_v4 t18 = t0*t16 + t15*t5;
-    const sk_v4 t19 = -t15*t3;
-    const sk_v4 t20 = -t1*t15 - t16*t4;
-    const sk_v4 t21 = t0*t15 - t16*t5;
-    const sk_v4 t22 = t16*t3;
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t25 = t17*t23 + t24*t6;
-    const sk_v4 t26 = t18*t23 + t24*t7;
-    const sk_v4 t27 = t19*t23 - t2*t24;
-    const sk_v4 t28 = -t17*t24 + t23*t6;
-    const sk_v4 t29 = -t18*t24 + t23*t7;
-    const sk_v4 t30 = -t19*t24 - t2*t23;
-    const sk_v4 t31 = skv_cos_(q5, &far_);
-    const sk_v4 t32 = skv_sin_(q5, &far_);
-    const sk_v4 t33 = t20*t32 + t25*t31;
-    const sk_v4 t34 = t21*t32 + t26*t31;
-    const sk_v4 t35 = t22*t32 + t27*t31;
-    const sk_v4 t36 = t20*t31 - t25*t32;
-    const sk_v4 t37 = t21*t31 - t26*t32;
-    const sk_v4 t38 = t22*t31 - t27*t32;
-    const sk_v4 t39 = t13 - 0.263*t28;
-    const sk_v4 t40 = t14 - 0.263*t29;
-    const sk_v4 t41 = t12 - 0.263*t30;
-    const sk_v4 t42 = t41 - 0.412;
-    const sk_v4 t43 = t0*t42;
-    const sk_v4 t44 = t1*t42;
-    const sk_v4 t45 = -t0*t39 - t1*t40;
-    const sk_v4 t46 = -t13 + t39;
-    const sk_v4 t47 = -t14 + t40;
-    const sk_v4 t48 = -t12 + t41;
-    const sk_v4 t49 = -t2*t47 - t48*t7;
-    const sk_v4 t50 = t2*t46 + t48*t6;
-    const sk_v4 t51 = t46*t7 - t47*t6;
-    const sk_v4 t52 = t21*t48 - t22*t47;
-    const sk_v4 t53 = -t20*t48 + t22*t46;
-    const sk_v4 t54 = t20*t47 - t21*t46;
-    const sk_v4 t55 = -t29*t48 + t30*t47;
-    const sk_v4 t56 = t28*t48 - t30*t46;
-    const sk_v4 t57 = -t28*t47 + t29*t46;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_(q + l * 6, T + l * 16, J + l * 36);
-        return;
-    }
-    skv_store4_(T + 0, 16, t33, t36, -t28, t39);
-    skv_store4_(T + 4, 16, t34, t37, -t29, t40);
-    skv_store4_(T + 8, 16, t35, t38, -t30, t41);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 36, -t40, t43, -t6, t49);
-    skv_store4_(J + 4, 36, t52, t55, t39, t44);
-    skv_store4_(J + 8, 36, -t7, t50, t53, t56);
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), t45, t2, t51);
-    skv_store4_(J + 16, 36, t54, t57, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 20, 36, SKV_SPLAT(0.0), -t6, t20, -t28);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), t0, SKV_SPLAT(0.0), -t7);
-    skv_store4_(J + 28, 36, t21, -t29, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), t2, t22, -t30);
-}
-#endif
-
-
 void symkin_stanford_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_x4_(q + i * 6, T + i * 16, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0(q, T, J, N, fkine_jacob0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_(q + i * 6, T + i * 16, J + i * 36);
@@ -1876,10 +1444,15 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double t0 = sk_cos(q0);
-    const double t1 = sk_sin(q0);
-    const double t2 = sk_cos(q1);
-    const double t3 = sk_sin(q1);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q3, q4 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double t0 = cos_[0];
+    const double t1 = sin_[0];
+    const double t2 = cos_[1];
+    const double t3 = sin_[1];
     const double t4 = t0*t2;
     const double t5 = t1*t2;
     const double t6 = -t0*t3;
@@ -1891,16 +1464,16 @@ static void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double t12 = q2*t2 + 0.412;
     const double t13 = (0.0203)*t1 + t10;
     const double t14 = -0.0203*t0 + t11;
-    const double t15 = sk_sin(q3);
-    const double t16 = -sk_cos(q3);
+    const double t15 = sin_[2];
+    const double t16 = -cos_[2];
     const double t17 = -t1*t16 + t15*t4;
     const double t18 = t0*t16 + t15*t5;
     const double t19 = -t15*t3;
     const double t20 = -t1*t15 - t16*t4;
     const double t21 = t0*t15 - t16*t5;
     const double t22 = t16*t3;
-    const double t23 = sk_cos(q4);
-    const double t24 = sk_sin(q4);
+    const double t23 = cos_[3];
+    const double t24 = sin_[3];
     const double t28 = -t17*t24 + t23*t6;
     const double t29 = -t18*t24 + t23*t7;
     const double t30 = -t19*t24 - t2*t23;
@@ -2228,188 +1801,13 @@ void symkin_stanford_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 t0 = skv_cos_(q0, &far_);
-    const sk_v4 t1 = skv_sin_(q0, &far_);
-    const sk_v4 t2 = skv_cos_(q1, &far_);
-    const sk_v4 t3 = skv_sin_(q1, &far_);
-    const sk_v4 t4 = t0*t2;
-    const sk_v4 t5 = t1*t2;
-    const sk_v4 t6 = -t0*t3;
-    const sk_v4 t7 = -t1*t3;
-    const sk_v4 t8 = -0.154*t1;
-    const sk_v4 t9 = (0.154)*t0;
-    const sk_v4 t10 = -q2*t6 + t8;
-    const sk_v4 t11 = -q2*t7 + t9;
-    const sk_v4 t12 = q2*t2 + 0.412;
-    const sk_v4 t13 = (0.0203)*t1 + t10;
-    const sk_v4 t14 = -0.0203*t0 + t11;
-    const sk_v4 t15 = skv_sin_(q3, &far_);
-    const sk_v4 t16 = -skv_cos_(q3, &far_);
-    const sk_v4 t17 = -t1*t16 + t15*t4;
-    const sk_v4 t18 = t0*t16 + t15*t5;
-    const sk_v4 t19 = -t15*t3;
-    const sk_v4 t20 = -t1*t15 - t16*t4;
-    const sk_v4 t21 = t0*t15 - t16*t5;
-    const sk_v4 t22 = t16*t3;
-    const sk_v4 t23 = skv_cos_(q4, &far_);
-    const sk_v4 t24 = skv_sin_(q4, &far_);
-    const sk_v4 t28 = -t17*t24 + t23*t6;
-    const sk_v4 t29 = -t18*t24 + t23*t7;
-    const sk_v4 t30 = -t19*t24 - t2*t23;
-    const sk_v4 t39 = t13 - 0.263*t28;
-    const sk_v4 t40 = t14 - 0.263*t29;
-    const sk_v4 t41 = t12 - 0.263*t30;
-    const sk_v4 t42 = t41 - 0.412;
-    const sk_v4 t43 = t0*t42;
-    const sk_v4 t44 = t1*t42;
-    const sk_v4 t45 = -t0*t39 - t1*t40;
-    const sk_v4 t46 = -t13 + t39;
-    const sk_v4 t47 = -t14 + t40;
-    const sk_v4 t48 = -t12 + t41;
-    const sk_v4 t49 = -t2*t47 - t48*t7;
-    const sk_v4 t50 = t2*t46 + t48*t6;
-    const sk_v4 t51 = t46*t7 - t47*t6;
-    const sk_v4 t52 = t21*t48 - t22*t47;
-    const sk_v4 t53 = -t20*t48 + t22*t46;
-    const sk_v4 t54 = t20*t47 - t21*t46;
-    const sk_v4 t55 = -t29*t48 + t30*t47;
-    const sk_v4 t56 = t28*t48 - t30*t46;
-    const sk_v4 t57 = -t28*t47 + t29*t46;
-    const sk_v4 t96 = t0*t45;
-    const sk_v4 t97 = t1*t45;
-    const sk_v4 t98 = -t0*t43 - t1*t44;
-    const sk_v4 t99 = t0*t6 + t1*t7;
-    const sk_v4 t100 = t0*t51;
-    const sk_v4 t101 = t1*t51;
-    const sk_v4 t102 = -t0*t49 - t1*t50;
-    const sk_v4 t103 = t0*t54;
-    const sk_v4 t104 = t1*t54;
-    const sk_v4 t105 = -t0*t52 - t1*t53;
-    const sk_v4 t106 = t0*t22;
-    const sk_v4 t107 = t1*t22;
-    const sk_v4 t108 = -t0*t20 - t1*t21;
-    const sk_v4 t109 = t0*t57;
-    const sk_v4 t110 = t1*t57;
-    const sk_v4 t111 = -t0*t55 - t1*t56;
-    const sk_v4 t112 = -t0*t30;
-    const sk_v4 t113 = -t1*t30;
-    const sk_v4 t114 = t0*t28 + t1*t29;
-    const sk_v4 t133 = -t2*t50 - t51*t7;
-    const sk_v4 t134 = t2*t49 + t51*t6;
-    const sk_v4 t135 = t49*t7 - t50*t6;
-    const sk_v4 t136 = -t2*t53 - t54*t7;
-    const sk_v4 t137 = t2*t52 + t54*t6;
-    const sk_v4 t138 = t52*t7 - t53*t6;
-    const sk_v4 t139 = -t2*t21 - t22*t7;
-    const sk_v4 t140 = t2*t20 + t22*t6;
-    const sk_v4 t141 = t20*t7 - t21*t6;
-    const sk_v4 t142 = -t2*t56 - t57*t7;
-    const sk_v4 t143 = t2*t55 + t57*t6;
-    const sk_v4 t144 = t55*t7 - t56*t6;
-    const sk_v4 t145 = t2*t29 + t30*t7;
-    const sk_v4 t146 = -t2*t28 - t30*t6;
-    const sk_v4 t147 = -t28*t7 + t29*t6;
-    const sk_v4 t166 = t21*t54 - t22*t53;
-    const sk_v4 t167 = -t20*t54 + t22*t52;
-    const sk_v4 t168 = t20*t53 - t21*t52;
-    const sk_v4 t169 = t21*t57 - t22*t56;
-    const sk_v4 t170 = -t20*t57 + t22*t55;
-    const sk_v4 t171 = t20*t56 - t21*t55;
-    const sk_v4 t172 = -t21*t30 + t22*t29;
-    const sk_v4 t173 = t20*t30 - t22*t28;
-    const sk_v4 t174 = -t20*t29 + t21*t28;
-    const sk_v4 t205 = -t29*t57 + t30*t56;
-    const sk_v4 t206 = t28*t57 - t30*t55;
-    const sk_v4 t207 = -t28*t56 + t29*t55;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_hessian0_(q + l * 6, J + l * 36, H + l * 216);
-        return;
-    }
-    skv_store4_(J + 0, 36, -t40, t43, -t6, t49);
-    skv_store4_(J + 4, 36, t52, t55, t39, t44);
-    skv_store4_(J + 8, 36, -t7, t50, t53, t56);
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), t45, t2, t51);
-    skv_store4_(J + 16, 36, t54, t57, SKV_SPLAT(0.0), -t1);
-    skv_store4_(J + 20, 36, SKV_SPLAT(0.0), -t6, t20, -t28);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), t0, SKV_SPLAT(0.0), -t7);
-    skv_store4_(J + 28, 36, t21, -t29, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), t2, t22, -t30);
-    skv_store4_(H + 0, 216, -t39, -t44, t7, -t50);
-    skv_store4_(H + 4, 216, -t53, -t56, -t40, t43);
-    skv_store4_(H + 8, 216, -t6, t49, t52, t55);
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t0);
-    skv_store4_(H + 20, 216, SKV_SPLAT(0.0), t7, -t21, t29);
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), -t1, SKV_SPLAT(0.0), -t6);
-    skv_store4_(H + 28, 216, t20, -t28, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, -t44, t96, t4, t100);
-    skv_store4_(H + 40, 216, t103, t109, t43, t97);
-    skv_store4_(H + 44, 216, t5, t101, t104, t110);
-    skv_store4_(H + 48, 216, SKV_SPLAT(0.0), t98, t99, t102);
-    skv_store4_(H + 52, 216, t105, t111, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), t4, t106, t112);
-    skv_store4_(H + 60, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t5);
-    skv_store4_(H + 64, 216, t107, t113, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), t99, t108, t114);
-    skv_store4_(H + 72, 216, t7, t4, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -t6, t5);
-    skv_store4_(H + 80, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 216, SKV_SPLAT(0.0), t99, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 100, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 216, -t50, t100, SKV_SPLAT(0.0), t133);
-    skv_store4_(H + 112, 216, t136, t142, t49, t101);
-    skv_store4_(H + 116, 216, SKV_SPLAT(0.0), t134, t137, t143);
-    skv_store4_(H + 120, 216, SKV_SPLAT(0.0), t102, SKV_SPLAT(0.0), t135);
-    skv_store4_(H + 124, 216, t138, t144, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t139, t145);
-    skv_store4_(H + 132, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, t140, t146, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), t141, t147);
-    skv_store4_(H + 144, 216, -t53, t103, SKV_SPLAT(0.0), t136);
-    skv_store4_(H + 148, 216, t166, t169, t52, t104);
-    skv_store4_(H + 152, 216, SKV_SPLAT(0.0), t137, t167, t170);
-    skv_store4_(H + 156, 216, SKV_SPLAT(0.0), t105, SKV_SPLAT(0.0), t138);
-    skv_store4_(H + 160, 216, t168, t171, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t172);
-    skv_store4_(H + 168, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), t173, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 176, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), t174);
-    skv_store4_(H + 180, 216, -t56, t109, SKV_SPLAT(0.0), t142);
-    skv_store4_(H + 184, 216, t169, t205, t55, t110);
-    skv_store4_(H + 188, 216, SKV_SPLAT(0.0), t143, t170, t206);
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), t111, SKV_SPLAT(0.0), t144);
-    skv_store4_(H + 196, 216, t171, t207, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_stanford_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_hessian0_x4_(q + i * 6, J + i * 36, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_hessian0(q, J, H, N, jacob0_hessian0_);
 #endif
     for (; i < N; ++i)
         jacob0_hessian0_(q + i * 6, J + i * 36, H + i * 216);

@@ -25,15 +25,22 @@
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -41,14 +48,34 @@
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -56,14 +83,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -87,36 +118,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -197,7 +239,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -211,7 +253,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -287,6 +329,35 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #else
 #define SYMKIN_LANES 1
 #endif
+
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
 
 #define N_Q 6
 #define N_SEG 7

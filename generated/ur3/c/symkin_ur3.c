@@ -46,15 +46,22 @@ const char *const symkin_ur3_joint_names[SYMKIN_UR3_N] = {
 /*
  * Inline sin and cos: no libm call per angle, which is what bounds batch throughput otherwise.
  * The reduction is fdlibm's (FreeBSD msun, e_rem_pio2.c, "medium" case): x = k pi/2 + r0 + r1,
- * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (good to 118
- * bits), refined by a third part when x is within 2^-49 |x| of a multiple of pi/2. The kernels
+ * r0 + r1 a double-double from a Cody-Waite reduction by pi/2 split in 33-bit parts (measured:
+ * r0 + r1 within 2^-121 |x| of x - k pi/2 for the doubles next to every k pi/2 in range), refined
+ * by a third part when the remainder is below 2^-58 |x| (then within 2^-63 of itself). The kernels
  * are fdlibm's polynomials on [-pi/4, pi/4] (k_sin.c, k_cos.c) plus the first-order term of the
  * tail r1. For |x| <= 1.6e6 (k < 2^20: every k * part is exact) the result is within 1 ulp of the
  * true value (measured max 0.80 ulp: symkin's guide, "Accuracy, inputs and errors"); larger and
- * non-finite arguments go to libm. Forced inline and branch-free (selects, no branch on the
- * quadrant), so an angle whose sin and cos are both used is reduced once. Define
- * SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C library's sin and cos
- * instead.
+ * non-finite arguments go to libm.
+ *
+ * The common path is straight-line code: the two-stage reduction, both kernels and a select by
+ * bit operations, with one branch (predicted not taken) to sk_far_ for the rare arguments that
+ * need the third stage or libm. Forced inline and with no branch before the arithmetic, sk_sin(x)
+ * and sk_cos(x) of one angle share all of it (the compiler merges the identical expressions), so
+ * the pair costs one reduction and two polynomials: about 0.8x glibc's sincos per angle (`symkin
+ * bench sincos`). The four-lane kernels below do the same operations lane by lane, so both give
+ * the same bits. Define SYMKIN_USE_LIBM (or generate with `symkin compile --libm`) to call the C
+ * library's sin and cos instead.
  *
  * The reduction constants and kernel polynomials are fdlibm's, which carries this notice:
  *   Copyright (C) 1993 by Sun Microsystems, Inc. All rights reserved.
@@ -62,14 +69,34 @@ const char *const symkin_ur3_joint_names[SYMKIN_UR3_N] = {
  *   Permission to use, copy, modify, and distribute this software is freely granted, provided
  *   that this notice is preserved.
  */
+#if defined(__GNUC__) || defined(__clang__)
+#define SK_COLD_ static __attribute__((noinline, cold))
+#define SK_RARE_(c) __builtin_expect(!!(c), 0)
+#else
+#define SK_COLD_ static
+#define SK_RARE_(c) (c)
+#endif
 
-/* x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2; returns k mod 4. Branch-free:
-   the second stage always runs (its rounding error is captured exactly), the third's result is
-   selected when the second cancelled by more than 49 bits (then the second's subtraction was exact). */
-SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
+SK_INLINE uint64_t sk_bits_(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+SK_INLINE double sk_double_(uint64_t u)
+{
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* The first two stages: x = k pi/2 + r0 + r1 with |r0| <= ~pi/4, |r1| <= ulp(r0) / 2, good to
+   2^-63 relative unless x is within 2^-58 |x| of a multiple of pi/2 (sk_far_p_). Returns k (mod 4). */
+SK_INLINE uint64_t sk_reduce_(double x, double *r0, double *r1)
 {
     /* k = x 2/pi rounded to the nearest integer: adding 1.5 * 2^52 leaves no fraction bits, and
-       the low bits of kb are k (mod 2^51; the four-lane code reads the quadrant there) */
+       the low bits of kb are k (mod 2^51) */
     const double kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
     const double k = kb - 6755399441055744.0;
     const double t = x - k * 1.57079632673412561417e+00; /* exact */
@@ -77,14 +104,18 @@ SK_INLINE long sk_reduce_(double x, double *r0, double *r1)
     const double r = t - w;
     w = k * 2.02226624879595063154e-21 - ((t - r) - w);
     const double y = r - w;
-    double w3 = k * 2.02226624871116645580e-21;
-    const double r3 = r - w3;
-    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
-    const double y3 = r3 - w3;
-    const int third = fabs(y) < fabs(x) * 1.7763568394002504646778106689453125e-15; /* 2^-49 */
-    *r0 = third ? y3 : y;
-    *r1 = third ? (r3 - y3) - w3 : (r - y) - w;
-    return (long)k & 3;
+    *r0 = y;
+    *r1 = (r - y) - w;
+    return sk_bits_(kb) & 3;
+}
+
+/* Whether x is beyond the inline range (or NaN) or so close to a multiple of pi/2 that the
+   reduction cancelled more than 58 bits (r0 the first part of its remainder): about 1.5% of the
+   doubles nearest multiples of pi/2, none of 0, +-pi/2, +-pi, +-3 pi/2, +-2 pi. */
+SK_INLINE int sk_far_p_(double x, double r0)
+{
+    const double ax = fabs(x);
+    return !(ax <= 1.6e6) | (fabs(r0) < ax * 3.4694469519536141888238489627838134765625e-18); /* 2^-58 */
 }
 
 /* sin(x + y) for |x| <= ~pi/4, |y| <= ulp(x) / 2 */
@@ -108,36 +139,47 @@ SK_INLINE double sk_kcos_(double x, double y)
 
 /* (k & 1 ? b : a), negated when k & 2, by bit operations: no branch on the quadrant of a random
    angle (a mispredicted branch costs more than both kernels) */
-SK_INLINE double sk_select_(long k, double a, double b)
+SK_INLINE double sk_select_(uint64_t k, double a, double b)
 {
-    uint64_t ua, ub, u;
-    memcpy(&ua, &a, sizeof ua);
-    memcpy(&ub, &b, sizeof ub);
-    const uint64_t m = (uint64_t)0 - (uint64_t)(k & 1);
-    u = ((ua & ~m) | (ub & m)) ^ ((uint64_t)(k & 2) << 62);
-    double r;
-    memcpy(&r, &u, sizeof r);
-    return r;
+    const uint64_t m = (uint64_t)0 - (k & 1);
+    return sk_double_(((sk_bits_(a) & ~m) | (sk_bits_(b) & m)) ^ ((k & 2) << 62));
+}
+
+/* sin (quarter 0) or cos (quarter 1) of the arguments sk_far_p_ marks: libm beyond the inline
+   range, else the reduction with its third stage (pi/2's third and fourth parts) */
+SK_COLD_ double sk_far_(double x, uint64_t quarter)
+{
+    if (!(fabs(x) <= 1.6e6))
+        return quarter ? cos(x) : sin(x);
+    const double k = (x * 6.36619772367581382433e-01 + 6755399441055744.0) - 6755399441055744.0;
+    const double t = x - k * 1.57079632673412561417e+00;
+    const double w = k * 6.07710050630396597660e-11;
+    const double r = t - w;
+    double w3 = k * 2.02226624871116645580e-21;
+    const double r3 = r - w3;
+    w3 = k * 8.47842766036889956997e-32 - ((r - r3) - w3);
+    const double y3 = r3 - w3, y3t = (r3 - y3) - w3;
+    return sk_select_((uint64_t)(long long)k + quarter, sk_ksin_(y3, y3t), sk_kcos_(y3, y3t));
 }
 
 SK_INLINE double sk_sin(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return sin(x);
-    if (fabs(x) < 1.490116119384765625e-08) /* 2^-26: sin x = x in double; sin(-0) = -0 */
-        return x;
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double s = sk_select_(k, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* s, c, -s, -c */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 0);
+    return fabs(x) < 1.490116119384765625e-08 ? x : s; /* 2^-26: sin x = x in double; sin(-0) = -0 */
 }
 
 SK_INLINE double sk_cos(double x)
 {
-    if (!(fabs(x) <= 1.6e6))
-        return cos(x);
     double r0, r1;
-    const long k = sk_reduce_(x, &r0, &r1);
-    return sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    const uint64_t k = sk_reduce_(x, &r0, &r1);
+    const double c = sk_select_(k + 1, sk_ksin_(r0, r1), sk_kcos_(r0, r1)); /* c, -s, -c, s */
+    if (SK_RARE_(sk_far_p_(x, r0)))
+        return sk_far_(x, 1);
+    return c;
 }
 
 #endif /* SYMKIN_USE_LIBM */
@@ -218,7 +260,7 @@ SK_INLINE sk_v4 skv_kcos_(sk_v4 x, sk_v4 y)
  * lane kernels these replaced, and 6% faster again with blends in place of bit selects
  * (first-generation EPYC, 2026-12-03).
  */
-/* sk_reduce_'s first two stages lane by lane: r0 + r1 and k (mod 4 in the low bits); returns |x| */
+/* sk_reduce_ lane by lane: r0 + r1 and k (mod 4 in the low bits), the lanes sk_far_p_ marks in *far; returns |x| */
 SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far)
 {
     const sk_v4 kb = x * 6.36619772367581382433e-01 + 6755399441055744.0;
@@ -232,7 +274,7 @@ SK_INLINE sk_v4 skv_reduced_(sk_v4 x, sk_v4 *r0, sk_v4 *r1, sk_m4 *k, sk_m4 *far
     *r0 = y;
     *r1 = (r - y) - w;
     *k = (sk_m4)kb;
-    *far |= (skv_abs_(y) < ax * 1.7763568394002504646778106689453125e-15) | ~(ax <= 1.6e6);
+    *far |= (skv_abs_(y) < ax * 3.4694469519536141888238489627838134765625e-18) | ~(ax <= 1.6e6);
     return ax;
 }
 
@@ -309,6 +351,71 @@ SK_INLINE void skv_store4_(double *out, const ptrdiff_t S, sk_v4 a, sk_v4 b, sk_
 #define SYMKIN_LANES 1
 #endif
 
+/*
+ * sin and cos of the m angles a[0..m-1] of one configuration into s[0..m-1] and c[0..m-1] (a
+ * holds m rounded up to a multiple of 4 entries): four angles per step through skv_sin_ and
+ * skv_cos_, whose lanes are bit for bit sk_sin and sk_cos (a step with a lane they cannot compute
+ * goes through sk_sin and sk_cos), one per step without lanes or with SYMKIN_USE_LIBM. The scalar
+ * functions take the sin and cos of their joint angles so.
+ */
+SK_INLINE void sk_sincos_n_(const double *a, const int m, double *s, double *c)
+{
+    int i = 0;
+#if SYMKIN_LANES == 4 && !defined(SYMKIN_USE_LIBM)
+    for (; i < m; i += 4) {
+        sk_v4 x;
+        memcpy(&x, a + i, sizeof x);
+        sk_m4 far = {0, 0, 0, 0};
+        const sk_v4 vs = skv_sin_(x, &far), vc = skv_cos_(x, &far);
+        if (SK_RARE_(skv_any_(far))) { /* beyond the inline range or next to a multiple of pi/2 */
+            for (int l = 0; l < 4 && i + l < m; ++l)
+                s[i + l] = sk_sin(a[i + l]), c[i + l] = sk_cos(a[i + l]);
+            continue;
+        }
+        for (int l = 0; l < 4 && i + l < m; ++l)
+            s[i + l] = vs[l], c[i + l] = vc[l];
+    }
+#endif
+    for (; i < m; ++i)
+        s[i] = sk_sin(a[i]), c[i] = sk_cos(a[i]);
+}
+
+#if SYMKIN_LANES == 4
+/*
+ * The four-lane batch loops of symkin_ur3_lanes.c: its table symkin_ur3_lanes when that file is
+ * compiled into the same program or library (a weak reference: NULL without it), else the table
+ * given to symkin_ur3_bind_lanes (symkin's runtime builds symkin_ur3_lanes.c as a library of its
+ * own after the first batch call and binds it; until then the batch entry points run one
+ * configuration per step, with the same results).
+ */
+typedef struct {
+    ptrdiff_t (*fkine)(const double *q, double *T, ptrdiff_t N, void (*scalar)(const double *q, double *T));
+    ptrdiff_t (*link_poses)(const double *q, double *links, ptrdiff_t N, void (*scalar)(const double *q, double *links));
+    ptrdiff_t (*jacob0)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*jacobe)(const double *q, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *J));
+    ptrdiff_t (*hessian0)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*hessiane)(const double *q, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *H));
+    ptrdiff_t (*fkine_jacob0)(const double *q, double *T, double *J, ptrdiff_t N, void (*scalar)(const double *q, double *T, double *J));
+    ptrdiff_t (*jacob0_hessian0)(const double *q, double *J, double *H, ptrdiff_t N, void (*scalar)(const double *q, double *J, double *H));
+    int end_; /* no member without lanes */
+} sk_lanes_t;
+
+extern const sk_lanes_t symkin_ur3_lanes __attribute__((weak));
+static const sk_lanes_t *bound_lanes_ = NULL;
+
+void symkin_ur3_bind_lanes(const void *table);
+void symkin_ur3_bind_lanes(const void *table)
+{
+    __atomic_store_n(&bound_lanes_, (const sk_lanes_t *)table, __ATOMIC_RELEASE);
+}
+
+static const sk_lanes_t *lanes_(void)
+{
+    const sk_lanes_t *l = __atomic_load_n(&bound_lanes_, __ATOMIC_ACQUIRE);
+    return l ? l : &symkin_ur3_lanes;
+}
+#endif
+
 /* Along the chain (base to end effector), the k-th joint's index, axis (0 x, 1 y, 2 z), sign
  * (-1 for a flipped joint) and kind (1 revolute, 0 prismatic). */
 static const int order_[6] = { 0, 1, 2, 3, 4, 5 };
@@ -325,24 +432,29 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q4);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q4, q5, q1 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = sin_[1];
     const double x2 = x0*x1;
     const double x3 = q1 + q2;
     const double x4 = q3 + x3;
     const double x5 = sk_cos(x4);
-    const double x6 = sk_cos(q0);
-    const double x7 = sk_cos(q4);
+    const double x6 = cos_[0];
+    const double x7 = cos_[1];
     const double x8 = x6*x7;
     const double x9 = x2 + x5*x8;
-    const double x10 = sk_cos(q5);
-    const double x11 = sk_sin(q5);
+    const double x10 = cos_[2];
+    const double x11 = sin_[2];
     const double x12 = sk_sin(x4);
     const double x13 = x12*x6;
     const double x14 = x0*x7;
     const double x15 = x1*x6;
     const double x16 = x15*x5;
-    const double x17 = (0.24365)*sk_cos(q1);
+    const double x17 = (0.24365)*cos_[3];
     const double x18 = (0.21325)*sk_cos(x3);
     const double x19 = x14*x5 - x15;
     const double x20 = x0*x12;
@@ -360,7 +472,7 @@ static inline void fkine_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRI
     T[8] = x10*x22 + x11*x5;
     T[9] = x10*x5 - x11*x22;
     T[10] = -x23;
-    T[11] = -0.0819*x23 - 0.08535*x5 - 0.24365*sk_sin(q1) - 0.21325*sk_sin(x3) + 0.1519;
+    T[11] = -0.0819*x23 - 0.08535*x5 - 0.24365*sin_[3] - 0.21325*sk_sin(x3) + 0.1519;
     T[12] = 0.0;
     T[13] = 0.0;
     T[14] = 0.0;
@@ -372,62 +484,13 @@ void symkin_ur3_fkine(const double *q, double *T)
     fkine_(q, T);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = skv_sin_(q4, &far_);
-    const sk_v4 x2 = x0*x1;
-    const sk_v4 x3 = q1 + q2;
-    const sk_v4 x4 = q3 + x3;
-    const sk_v4 x5 = skv_cos_(x4, &far_);
-    const sk_v4 x6 = skv_cos_(q0, &far_);
-    const sk_v4 x7 = skv_cos_(q4, &far_);
-    const sk_v4 x8 = x6*x7;
-    const sk_v4 x9 = x2 + x5*x8;
-    const sk_v4 x10 = skv_cos_(q5, &far_);
-    const sk_v4 x11 = skv_sin_(q5, &far_);
-    const sk_v4 x12 = skv_sin_(x4, &far_);
-    const sk_v4 x13 = x12*x6;
-    const sk_v4 x14 = x0*x7;
-    const sk_v4 x15 = x1*x6;
-    const sk_v4 x16 = x15*x5;
-    const sk_v4 x17 = (0.24365)*skv_cos_(q1, &far_);
-    const sk_v4 x18 = (0.21325)*skv_cos_(x3, &far_);
-    const sk_v4 x19 = x14*x5 - x15;
-    const sk_v4 x20 = x0*x12;
-    const sk_v4 x21 = x2*x5;
-    const sk_v4 x22 = x12*x7;
-    const sk_v4 x23 = x1*x12;
-    const sk_v4 T_11_ = -0.0819*x23 - 0.08535*x5 - 0.24365*skv_sin_(q1, &far_) - 0.21325*skv_sin_(x3, &far_) + 0.1519;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_(q + l * 6, T + l * 16);
-        return;
-    }
-    skv_store4_(T + 0, 16, x10*x9 - x11*x13, -x10*x13 - x11*x9, x14 - x16, (0.11235)*x0 + (0.08535)*x13 + (0.0819)*x14 - 0.0819*x16 - x17*x6 - x18*x6);
-    skv_store4_(T + 4, 16, x10*x19 - x11*x20, -x10*x20 - x11*x19, -x21 - x8, (0.08535)*x0*x12 - x0*x17 - x0*x18 - 0.0819*x21 - 0.11235*x6 - 0.0819*x8);
-    skv_store4_(T + 8, 16, x10*x22 + x11*x5, x10*x5 - x11*x22, -x23, T_11_);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_ur3_fkine_batch(const double *q, double *T, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_x4_(q + i * 6, T + i * 16);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine(q, T, N, fkine_);
 #endif
     for (; i < N; ++i)
         fkine_(q + i * 6, T + i * 16);
@@ -442,11 +505,16 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_sin(q0);
-    const double x2 = sk_cos(q1);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q4, q5 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = cos_[0];
+    const double x1 = sin_[0];
+    const double x2 = cos_[1];
     const double x3 = x0*x2;
-    const double x4 = sk_sin(q1);
+    const double x4 = sin_[1];
     const double x5 = x1*x2;
     const double x6 = -x0;
     const double x7 = q1 + q2;
@@ -470,8 +538,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x25 = (0.21325)*x13 + x14;
     const double x26 = (0.21325)*x10 + x15;
     const double x27 = -x26;
-    const double x28 = sk_sin(q4);
-    const double x29 = sk_cos(q4);
+    const double x28 = sin_[2];
+    const double x29 = cos_[2];
     const double x30 = x1*x28 + x18*x29;
     const double x31 = x1*x29 - x18*x28;
     const double x32 = -x0*x28 + x23*x29;
@@ -479,8 +547,8 @@ static inline void link_poses_(const double *SYMKIN_RESTRICT q, double *SYMKIN_R
     const double x34 = (0.11235)*x0 + x25;
     const double x35 = x19*x29;
     const double x36 = -x19*x28;
-    const double x37 = sk_cos(q5);
-    const double x38 = sk_sin(q5);
+    const double x37 = cos_[3];
+    const double x38 = sin_[3];
     links[0] = x0;
     links[1] = -x1;
     links[2] = 0.0;
@@ -584,96 +652,13 @@ void symkin_ur3_link_poses(const double *q, double *links)
     link_poses_(q, links);
 }
 
-#if SYMKIN_LANES == 4
-/* link_poses_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void link_poses_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT links)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q0, &far_);
-    const sk_v4 x1 = skv_sin_(q0, &far_);
-    const sk_v4 x2 = skv_cos_(q1, &far_);
-    const sk_v4 x3 = x0*x2;
-    const sk_v4 x4 = skv_sin_(q1, &far_);
-    const sk_v4 x5 = x1*x2;
-    const sk_v4 x6 = -x0;
-    const sk_v4 x7 = q1 + q2;
-    const sk_v4 x8 = skv_cos_(x7, &far_);
-    const sk_v4 x9 = x0*x8;
-    const sk_v4 x10 = skv_sin_(x7, &far_);
-    const sk_v4 x11 = (0.24365)*x3;
-    const sk_v4 x12 = -x11;
-    const sk_v4 x13 = x1*x8;
-    const sk_v4 x14 = (0.24365)*x5;
-    const sk_v4 x15 = (0.24365)*x4 - 0.1519;
-    const sk_v4 x16 = q3 + x7;
-    const sk_v4 x17 = skv_cos_(x16, &far_);
-    const sk_v4 x18 = x0*x17;
-    const sk_v4 x19 = skv_sin_(x16, &far_);
-    const sk_v4 x20 = x0*x19;
-    const sk_v4 x21 = (0.21325)*x9;
-    const sk_v4 x22 = x11 + x21;
-    const sk_v4 x23 = x1*x17;
-    const sk_v4 x24 = x1*x19;
-    const sk_v4 x25 = (0.21325)*x13 + x14;
-    const sk_v4 x26 = (0.21325)*x10 + x15;
-    const sk_v4 x27 = -x26;
-    const sk_v4 x28 = skv_sin_(q4, &far_);
-    const sk_v4 x29 = skv_cos_(q4, &far_);
-    const sk_v4 x30 = x1*x28 + x18*x29;
-    const sk_v4 x31 = x1*x29 - x18*x28;
-    const sk_v4 x32 = -x0*x28 + x23*x29;
-    const sk_v4 x33 = -x0*x29 - x23*x28;
-    const sk_v4 x34 = (0.11235)*x0 + x25;
-    const sk_v4 x35 = x19*x29;
-    const sk_v4 x36 = -x19*x28;
-    const sk_v4 x37 = skv_cos_(q5, &far_);
-    const sk_v4 x38 = skv_sin_(q5, &far_);
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            link_poses_(q + l * 6, links + l * 96);
-        return;
-    }
-    skv_store4_(links + 0, 96, x0, -x1, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 4, 96, x1, x0, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 8, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(links + 12, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 16, 96, x3, -x0*x4, x1, SKV_SPLAT(0.0));
-    skv_store4_(links + 20, 96, x5, -x1*x4, x6, SKV_SPLAT(0.0));
-    skv_store4_(links + 24, 96, x4, x2, SKV_SPLAT(0.0), SKV_SPLAT(0.1519));
-    skv_store4_(links + 28, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 32, 96, x9, -x0*x10, x1, x12);
-    skv_store4_(links + 36, 96, x13, -x1*x10, x6, -x14);
-    skv_store4_(links + 40, 96, x10, x8, SKV_SPLAT(0.0), -x15);
-    skv_store4_(links + 44, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 48, 96, x18, -x20, x1, -x22);
-    skv_store4_(links + 52, 96, x23, -x24, x6, -x25);
-    skv_store4_(links + 56, 96, x19, x17, SKV_SPLAT(0.0), x27);
-    skv_store4_(links + 60, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 64, 96, x30, x31, x20, (0.11235)*x1 - x22);
-    skv_store4_(links + 68, 96, x32, x33, x24, -x34);
-    skv_store4_(links + 72, 96, x35, x36, -x17, x27);
-    skv_store4_(links + 76, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(links + 80, 96, -x20*x38 + x30*x37, -x20*x37 - x30*x38, x31, (0.11235)*x1 + x12 + (0.08535)*x20 - x21);
-    skv_store4_(links + 84, 96, -x24*x38 + x32*x37, -x24*x37 - x32*x38, x33, (0.08535)*x1*x19 - x34);
-    skv_store4_(links + 88, 96, x17*x38 + x35*x37, x17*x37 - x35*x38, x36, -0.08535*x17 - x26);
-    skv_store4_(links + 92, 96, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_ur3_link_poses_batch(const double *q, double *links, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        link_poses_x4_(q + i * 6, links + i * 96);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->link_poses(q, links, N, link_poses_);
 #endif
     for (; i < N; ++i)
         link_poses_(q + i * 6, links + i * 96);
@@ -687,18 +672,23 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.24365)*sk_cos(q1);
+    double sin_[3], cos_[3]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q4, 0.0 };
+        sk_sincos_n_(angle_, 3, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = (0.24365)*cos_[1];
     const double x2 = q1 + q2;
     const double x3 = (0.21325)*sk_cos(x2);
-    const double x4 = sk_cos(q0);
+    const double x4 = cos_[0];
     const double x5 = q3 + x2;
     const double x6 = sk_sin(x5);
     const double x7 = x0*x6;
-    const double x8 = sk_cos(q4);
+    const double x8 = cos_[2];
     const double x9 = x4*x8;
     const double x10 = sk_cos(x5);
-    const double x11 = sk_sin(q4);
+    const double x11 = sin_[2];
     const double x12 = x10*x11;
     const double x13 = x0*x12;
     const double x14 = (0.0819)*x13 + (0.0819)*x9;
@@ -710,7 +700,7 @@ static inline void jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double x20 = (0.0819)*x19;
     const double x21 = (0.08535)*x10 + x20;
     const double x22 = x21 + (0.21325)*sk_sin(x2);
-    const double x23 = -x22 - 0.24365*sk_sin(q1);
+    const double x23 = -x22 - 0.24365*sin_[1];
     const double x24 = -x22;
     const double x25 = -x21;
     const double x26 = x25*x4;
@@ -771,82 +761,13 @@ void symkin_ur3_jacob0(const double *q, double *J)
     jacob0_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = (0.24365)*skv_cos_(q1, &far_);
-    const sk_v4 x2 = q1 + q2;
-    const sk_v4 x3 = (0.21325)*skv_cos_(x2, &far_);
-    const sk_v4 x4 = skv_cos_(q0, &far_);
-    const sk_v4 x5 = q3 + x2;
-    const sk_v4 x6 = skv_sin_(x5, &far_);
-    const sk_v4 x7 = x0*x6;
-    const sk_v4 x8 = skv_cos_(q4, &far_);
-    const sk_v4 x9 = x4*x8;
-    const sk_v4 x10 = skv_cos_(x5, &far_);
-    const sk_v4 x11 = skv_sin_(q4, &far_);
-    const sk_v4 x12 = x10*x11;
-    const sk_v4 x13 = x0*x12;
-    const sk_v4 x14 = (0.0819)*x13 + (0.0819)*x9;
-    const sk_v4 x15 = x14 - 0.08535*x7;
-    const sk_v4 x16 = x15 + (0.11235)*x4;
-    const sk_v4 x17 = x0*x3 + x16;
-    const sk_v4 x18 = x0*x1 + x17;
-    const sk_v4 x19 = x11*x6;
-    const sk_v4 x20 = (0.0819)*x19;
-    const sk_v4 x21 = (0.08535)*x10 + x20;
-    const sk_v4 x22 = x21 + (0.21325)*skv_sin_(x2, &far_);
-    const sk_v4 x23 = -x22 - 0.24365*skv_sin_(q1, &far_);
-    const sk_v4 x24 = -x22;
-    const sk_v4 x25 = -x21;
-    const sk_v4 x26 = x25*x4;
-    const sk_v4 x27 = -x15;
-    const sk_v4 x28 = x0*x25;
-    const sk_v4 x29 = -x14;
-    const sk_v4 x30 = -x13 - x9;
-    const sk_v4 x31 = x4*x6;
-    const sk_v4 x32 = x0*x8;
-    const sk_v4 x33 = x12*x4;
-    const sk_v4 x34 = (0.0819)*x32 - 0.0819*x33;
-    const sk_v4 x35 = (0.08535)*x31 + x34;
-    const sk_v4 x36 = (0.11235)*x0 + x35;
-    const sk_v4 x37 = -x3*x4 + x36;
-    const sk_v4 x38 = -x1*x4 + x37;
-    const sk_v4 x39 = x32 - x33;
-    const sk_v4 x40 = -x4;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_(q + l * 6, J + l * 36);
-        return;
-    }
-    skv_store4_(J + 0, 36, x18, -x23*x4, -x24*x4, -x26);
-    skv_store4_(J + 4, 36, x10*x27 + x28*x6, x11*x29*x6 - x20*x30, x38, -x0*x23);
-    skv_store4_(J + 8, 36, -x0*x24, -x28, -x10*x35 - x26*x6, (0.0819)*x11*x39*x6 - x19*x34);
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), -x0*x18 + x38*x4, -x0*x17 + x37*x4, -x0*x16 + x36*x4);
-    skv_store4_(J + 16, 36, x27*x4*x6 - x35*x7, x29*x39 - x30*x34, SKV_SPLAT(0.0), x0);
-    skv_store4_(J + 20, 36, x0, x0, x31, x39);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), x40, x40, x40);
-    skv_store4_(J + 28, 36, x7, x30, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x10, -x19);
-}
-#endif
-
-
 void symkin_ur3_jacob0_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_x4_(q + i * 6, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0(q, J, N, jacob0_);
 #endif
     for (; i < N; ++i)
         jacob0_(q + i * 6, J + i * 36);
@@ -860,20 +781,25 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q5);
+    double sin_[3], cos_[3]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q5, q4, q3, 0.0 };
+        sk_sincos_n_(angle_, 3, sin_, cos_);
+    }
+    const double x0 = cos_[0];
     const double x1 = q2 + q3;
     const double x2 = q1 + x1;
     const double x3 = sk_cos(x2);
-    const double x4 = sk_sin(q5);
-    const double x5 = sk_cos(q4);
+    const double x4 = sin_[0];
+    const double x5 = cos_[1];
     const double x6 = sk_sin(x2);
     const double x7 = x5*x6;
     const double x8 = x4*x7;
     const double x9 = x0*x3 - x8;
-    const double x10 = sk_sin(q4);
+    const double x10 = sin_[1];
     const double x11 = x10*x6;
     const double x12 = (0.24365)*sk_cos(x1);
-    const double x13 = (0.21325)*sk_cos(q3);
+    const double x13 = (0.21325)*cos_[2];
     const double x14 = (0.11235)*x5 + 0.0819;
     const double x15 = x10*x13 + x14;
     const double x16 = x10*x12 + x15;
@@ -883,7 +809,7 @@ static inline void jacobe_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTR
     const double x20 = (0.08535)*x0;
     const double x21 = x10*x4;
     const double x22 = (0.11235)*x21;
-    const double x23 = (0.21325)*sk_sin(q3);
+    const double x23 = (0.21325)*sin_[2];
     const double x24 = x0*x23 + x13*x19 - x20 - x22;
     const double x25 = x0*x18 + x12*x19 + x24;
     const double x26 = (0.1519)*x0*x3 + x25 - 0.1519*x8;
@@ -941,79 +867,13 @@ void symkin_ur3_jacobe(const double *q, double *J)
     jacobe_(q, J);
 }
 
-#if SYMKIN_LANES == 4
-/* jacobe_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacobe_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q5, &far_);
-    const sk_v4 x1 = q2 + q3;
-    const sk_v4 x2 = q1 + x1;
-    const sk_v4 x3 = skv_cos_(x2, &far_);
-    const sk_v4 x4 = skv_sin_(q5, &far_);
-    const sk_v4 x5 = skv_cos_(q4, &far_);
-    const sk_v4 x6 = skv_sin_(x2, &far_);
-    const sk_v4 x7 = x5*x6;
-    const sk_v4 x8 = x4*x7;
-    const sk_v4 x9 = x0*x3 - x8;
-    const sk_v4 x10 = skv_sin_(q4, &far_);
-    const sk_v4 x11 = x10*x6;
-    const sk_v4 x12 = (0.24365)*skv_cos_(x1, &far_);
-    const sk_v4 x13 = (0.21325)*skv_cos_(q3, &far_);
-    const sk_v4 x14 = (0.11235)*x5 + 0.0819;
-    const sk_v4 x15 = x10*x13 + x14;
-    const sk_v4 x16 = x10*x12 + x15;
-    const sk_v4 x17 = -0.1519*x11 + x16;
-    const sk_v4 x18 = (0.24365)*skv_sin_(x1, &far_);
-    const sk_v4 x19 = x4*x5;
-    const sk_v4 x20 = (0.08535)*x0;
-    const sk_v4 x21 = x10*x4;
-    const sk_v4 x22 = (0.11235)*x21;
-    const sk_v4 x23 = (0.21325)*skv_sin_(q3, &far_);
-    const sk_v4 x24 = x0*x23 + x13*x19 - x20 - x22;
-    const sk_v4 x25 = x0*x18 + x12*x19 + x24;
-    const sk_v4 x26 = (0.1519)*x0*x3 + x25 - 0.1519*x8;
-    const sk_v4 x27 = -x20 - x22;
-    const sk_v4 x28 = x3*x4;
-    const sk_v4 x29 = x0*x7;
-    const sk_v4 x30 = x28 + x29;
-    const sk_v4 x31 = x0*x5;
-    const sk_v4 x32 = x0*x10;
-    const sk_v4 x33 = (0.11235)*x32 - 0.08535*x4;
-    const sk_v4 x34 = -x13*x31 + x23*x4 + x33;
-    const sk_v4 x35 = -x12*x31 + x18*x4 + x34;
-    const sk_v4 x36 = (0.1519)*x28 + (0.1519)*x29 + x35;
-    const sk_v4 x37 = -x21;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacobe_(q + l * 6, J + l * 36);
-        return;
-    }
-    skv_store4_(J + 0, 36, x11*x26 + x17*x9, -x16*x21 - x25*x5, -x15*x21 - x24*x5, -x14*x21 - x27*x5);
-    skv_store4_(J + 4, 36, -0.0819*x0, SKV_SPLAT(0.0), -x11*x36 - x17*x30, -x16*x32 + x35*x5);
-    skv_store4_(J + 8, 36, -x15*x32 + x34*x5, -x14*x32 + x33*x5, (0.0819)*x4, SKV_SPLAT(0.0));
-    skv_store4_(J + 12, 36, x26*x30 - x36*x9, x21*x35 + x25*x32, x21*x34 + x24*x32, x21*x33 + x27*x32);
-    skv_store4_(J + 16, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x30, x32);
-    skv_store4_(J + 20, 36, x32, x32, -x4, SKV_SPLAT(0.0));
-    skv_store4_(J + 24, 36, x9, x37, x37, x37);
-    skv_store4_(J + 28, 36, -x0, SKV_SPLAT(0.0), -x11, x5);
-    skv_store4_(J + 32, 36, x5, x5, SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-}
-#endif
-
-
 void symkin_ur3_jacobe_batch(const double *q, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacobe_x4_(q + i * 6, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacobe(q, J, N, jacobe_);
 #endif
     for (; i < N; ++i)
         jacobe_(q + i * 6, J + i * 36);
@@ -1027,17 +887,22 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_cos(q0);
-    const double x1 = sk_cos(q1);
+    double sin_[3], cos_[3]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q4, 0.0 };
+        sk_sincos_n_(angle_, 3, sin_, cos_);
+    }
+    const double x0 = cos_[0];
+    const double x1 = cos_[1];
     const double x2 = q1 + q2;
     const double x3 = (0.21325)*sk_cos(x2);
-    const double x4 = sk_sin(q0);
+    const double x4 = sin_[0];
     const double x5 = q3 + x2;
     const double x6 = sk_sin(x5);
     const double x7 = x0*x6;
-    const double x8 = sk_cos(q4);
+    const double x8 = cos_[2];
     const double x9 = x4*x8;
-    const double x10 = sk_sin(q4);
+    const double x10 = sin_[2];
     const double x11 = sk_cos(x5);
     const double x12 = x0*x11;
     const double x13 = x10*x12;
@@ -1050,7 +915,7 @@ static inline void hessian0_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double x20 = (0.0819)*x19;
     const double x21 = (0.08535)*x11 + x20;
     const double x22 = x21 + (0.21325)*sk_sin(x2);
-    const double x23 = -x22 - 0.24365*sk_sin(q1);
+    const double x23 = -x22 - 0.24365*sin_[1];
     const double x24 = x23*x4;
     const double x25 = -x22;
     const double x26 = x25*x4;
@@ -1330,166 +1195,13 @@ void symkin_ur3_hessian0(const double *q, double *H)
     hessian0_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q0, &far_);
-    const sk_v4 x1 = skv_cos_(q1, &far_);
-    const sk_v4 x2 = q1 + q2;
-    const sk_v4 x3 = (0.21325)*skv_cos_(x2, &far_);
-    const sk_v4 x4 = skv_sin_(q0, &far_);
-    const sk_v4 x5 = q3 + x2;
-    const sk_v4 x6 = skv_sin_(x5, &far_);
-    const sk_v4 x7 = x0*x6;
-    const sk_v4 x8 = skv_cos_(q4, &far_);
-    const sk_v4 x9 = x4*x8;
-    const sk_v4 x10 = skv_sin_(q4, &far_);
-    const sk_v4 x11 = skv_cos_(x5, &far_);
-    const sk_v4 x12 = x0*x11;
-    const sk_v4 x13 = x10*x12;
-    const sk_v4 x14 = -0.0819*x13 + (0.0819)*x9;
-    const sk_v4 x15 = x14 + (0.08535)*x7;
-    const sk_v4 x16 = x15 + (0.11235)*x4;
-    const sk_v4 x17 = -x0*x3 + x16;
-    const sk_v4 x18 = -0.24365*x0*x1 + x17;
-    const sk_v4 x19 = x10*x6;
-    const sk_v4 x20 = (0.0819)*x19;
-    const sk_v4 x21 = (0.08535)*x11 + x20;
-    const sk_v4 x22 = x21 + (0.21325)*skv_sin_(x2, &far_);
-    const sk_v4 x23 = -x22 - 0.24365*skv_sin_(q1, &far_);
-    const sk_v4 x24 = x23*x4;
-    const sk_v4 x25 = -x22;
-    const sk_v4 x26 = x25*x4;
-    const sk_v4 x27 = -x21;
-    const sk_v4 x28 = x27*x4;
-    const sk_v4 x29 = x0*x27;
-    const sk_v4 x30 = x11*x15 + x29*x6;
-    const sk_v4 x31 = -x13 + x9;
-    const sk_v4 x32 = x14*x19 - x20*x31;
-    const sk_v4 x33 = x4*x6;
-    const sk_v4 x34 = x0*x8;
-    const sk_v4 x35 = x11*x4;
-    const sk_v4 x36 = x10*x35;
-    const sk_v4 x37 = (0.0819)*x34 + (0.0819)*x36;
-    const sk_v4 x38 = -0.08535*x33 + x37;
-    const sk_v4 x39 = (0.11235)*x0 + x38;
-    const sk_v4 x40 = x3*x4 + x39;
-    const sk_v4 x41 = (0.24365)*x1*x4 + x40;
-    const sk_v4 x42 = -x0*x23;
-    const sk_v4 x43 = -x0*x25;
-    const sk_v4 x44 = -x29;
-    const sk_v4 x45 = -x38;
-    const sk_v4 x46 = x11*x45 + x28*x6;
-    const sk_v4 x47 = -x37;
-    const sk_v4 x48 = x34 + x36;
-    const sk_v4 x49 = -x48;
-    const sk_v4 x50 = x10*x47*x6 - x20*x49;
-    const sk_v4 x51 = x0*x18 - x4*x41;
-    const sk_v4 x52 = x0*x17 - x4*x40;
-    const sk_v4 x53 = -x0*x52;
-    const sk_v4 x54 = x0*x16 - x39*x4;
-    const sk_v4 x55 = -x0*x54;
-    const sk_v4 x56 = x0*x45*x6 - x15*x33;
-    const sk_v4 x57 = -x0*x56;
-    const sk_v4 x58 = -x14*x49 + x31*x47;
-    const sk_v4 x59 = -x0*x58;
-    const sk_v4 x60 = -x4*x52;
-    const sk_v4 x61 = -x4*x54;
-    const sk_v4 x62 = -x4*x56;
-    const sk_v4 x63 = -x4*x58;
-    const sk_v4 x64 = (x0*x0);
-    const sk_v4 x65 = (x4*x4);
-    const sk_v4 x66 = -x25*x64 - x25*x65;
-    const sk_v4 x67 = -x27*x64 - x27*x65;
-    const sk_v4 x68 = -x30;
-    const sk_v4 x69 = x0*x46 + x4*x68;
-    const sk_v4 x70 = -x32;
-    const sk_v4 x71 = x0*x50 + x4*x70;
-    const sk_v4 x72 = x10*x7;
-    const sk_v4 x73 = x10*x33;
-    const sk_v4 x74 = x6*x64 + x6*x65;
-    const sk_v4 x75 = x0*x31 + x4*x49;
-    const sk_v4 x76 = x11*x70 + x33*x58;
-    const sk_v4 x77 = -x11*x50 - x58*x7;
-    const sk_v4 x78 = -x33*x50 + x7*x70;
-    const sk_v4 x79 = (x6*x6);
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessian0_(q + l * 6, H + l * 216);
-        return;
-    }
-    skv_store4_(H + 0, 216, -x18, x24, x26, x28);
-    skv_store4_(H + 4, 216, x30, x32, x41, x42);
-    skv_store4_(H + 8, 216, x43, x44, x46, x50);
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x0);
-    skv_store4_(H + 20, 216, x0, x0, -x33, x48);
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), x4, x4, x4);
-    skv_store4_(H + 28, 216, x7, x31, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, x24, -x0*x51, x53, x55);
-    skv_store4_(H + 40, 216, x57, x59, x42, -x4*x51);
-    skv_store4_(H + 44, 216, x60, x61, x62, x63);
-    skv_store4_(H + 48, 216, SKV_SPLAT(0.0), -x23*x64 - x23*x65, x66, x67);
-    skv_store4_(H + 52, 216, x69, x71, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x12, x72);
-    skv_store4_(H + 60, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 216, x35, x73, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x74, x75);
-    skv_store4_(H + 72, 216, x26, x53, x53, x55);
-    skv_store4_(H + 76, 216, x57, x59, x43, x60);
-    skv_store4_(H + 80, 216, x60, x61, x62, x63);
-    skv_store4_(H + 84, 216, SKV_SPLAT(0.0), x66, x66, x67);
-    skv_store4_(H + 88, 216, x69, x71, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x12, x72);
-    skv_store4_(H + 96, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 100, 216, x35, x73, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x74, x75);
-    skv_store4_(H + 108, 216, x28, x55, x55, x55);
-    skv_store4_(H + 112, 216, x57, x59, x44, x61);
-    skv_store4_(H + 116, 216, x61, x61, x62, x63);
-    skv_store4_(H + 120, 216, SKV_SPLAT(0.0), x67, x67, x67);
-    skv_store4_(H + 124, 216, x69, x71, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x12, x72);
-    skv_store4_(H + 132, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, x35, x73, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x74, x75);
-    skv_store4_(H + 144, 216, x30, x57, x57, x57);
-    skv_store4_(H + 148, 216, x11*x68 + x33*x56, x76, x46, x62);
-    skv_store4_(H + 152, 216, x62, x62, -x11*x46 - x56*x7, x77);
-    skv_store4_(H + 156, 216, SKV_SPLAT(0.0), x69, x69, x69);
-    skv_store4_(H + 160, 216, x0*x6*x68 - x33*x46, x78, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x10*x4*x79 + x11*x49);
-    skv_store4_(H + 168, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), x0*x10*x79 - x11*x31, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 176, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x0*x49*x6 - x31*x33);
-    skv_store4_(H + 180, 216, x32, x59, x59, x59);
-    skv_store4_(H + 184, 216, x76, x19*x70 + x49*x58, x50, x63);
-    skv_store4_(H + 188, 216, x63, x63, x77, -x19*x50 - x31*x58);
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), x71, x71, x71);
-    skv_store4_(H + 196, 216, x78, x31*x70 - x49*x50, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_ur3_hessian0_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessian0_x4_(q + i * 6, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessian0(q, H, N, hessian0_);
 #endif
     for (; i < N; ++i)
         hessian0_(q + i * 6, H + i * 216);
@@ -1503,24 +1215,29 @@ static inline void hessiane_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RES
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_cos(q5);
+    double sin_[3], cos_[3]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q5, q4, q3, 0.0 };
+        sk_sincos_n_(angle_, 3, sin_, cos_);
+    }
+    const double x0 = cos_[0];
     const double x1 = q2 + q3;
     const double x2 = q1 + x1;
     const double x3 = sk_cos(x2);
     const double x4 = sk_sin(x2);
-    const double x5 = sk_cos(q4);
-    const double x6 = sk_sin(q5);
+    const double x5 = cos_[1];
+    const double x6 = sin_[0];
     const double x7 = x5*x6;
     const double x8 = x4*x7;
     const double x9 = x0*x3 - x8;
     const double x10 = (0.24365)*sk_sin(x1);
     const double x11 = (0.24365)*sk_cos(x1);
     const double x12 = (0.08535)*x0;
-    const double x13 = sk_sin(q4);
+    const double x13 = sin_[1];
     const double x14 = x13*x6;
     const double x15 = (0.11235)*x14;
-    const double x16 = (0.21325)*sk_sin(q3);
-    const double x17 = (0.21325)*sk_cos(q3);
+    const double x16 = (0.21325)*sin_[2];
+    const double x17 = (0.21325)*cos_[2];
     const double x18 = x0*x16 - x12 - x15 + x17*x7;
     const double x19 = x0*x10 + x11*x7 + x18;
     const double x20 = x0*x13;
@@ -1810,170 +1527,13 @@ void symkin_ur3_hessiane(const double *q, double *H)
     hessiane_(q, H);
 }
 
-#if SYMKIN_LANES == 4
-/* hessiane_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void hessiane_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_cos_(q5, &far_);
-    const sk_v4 x1 = q2 + q3;
-    const sk_v4 x2 = q1 + x1;
-    const sk_v4 x3 = skv_cos_(x2, &far_);
-    const sk_v4 x4 = skv_sin_(x2, &far_);
-    const sk_v4 x5 = skv_cos_(q4, &far_);
-    const sk_v4 x6 = skv_sin_(q5, &far_);
-    const sk_v4 x7 = x5*x6;
-    const sk_v4 x8 = x4*x7;
-    const sk_v4 x9 = x0*x3 - x8;
-    const sk_v4 x10 = (0.24365)*skv_sin_(x1, &far_);
-    const sk_v4 x11 = (0.24365)*skv_cos_(x1, &far_);
-    const sk_v4 x12 = (0.08535)*x0;
-    const sk_v4 x13 = skv_sin_(q4, &far_);
-    const sk_v4 x14 = x13*x6;
-    const sk_v4 x15 = (0.11235)*x14;
-    const sk_v4 x16 = (0.21325)*skv_sin_(q3, &far_);
-    const sk_v4 x17 = (0.21325)*skv_cos_(q3, &far_);
-    const sk_v4 x18 = x0*x16 - x12 - x15 + x17*x7;
-    const sk_v4 x19 = x0*x10 + x11*x7 + x18;
-    const sk_v4 x20 = x0*x13;
-    const sk_v4 x21 = x0*x5;
-    const sk_v4 x22 = (0.11235)*x20 - 0.08535*x6;
-    const sk_v4 x23 = x16*x6 - x17*x21 + x22;
-    const sk_v4 x24 = x10*x6 - x11*x21 + x23;
-    const sk_v4 x25 = x14*x24 + x19*x20;
-    const sk_v4 x26 = (0.11235)*x5 + 0.0819;
-    const sk_v4 x27 = x13*x17 + x26;
-    const sk_v4 x28 = x11*x13 + x27;
-    const sk_v4 x29 = -x20*x28 + x24*x5;
-    const sk_v4 x30 = x13*x4;
-    const sk_v4 x31 = x3*x6;
-    const sk_v4 x32 = x21*x4;
-    const sk_v4 x33 = x31 + x32;
-    const sk_v4 x34 = x28 - 0.1519*x30;
-    const sk_v4 x35 = x24 + (0.1519)*x31 + (0.1519)*x32;
-    const sk_v4 x36 = -x30*x35 - x33*x34;
-    const sk_v4 x37 = (0.1519)*x0*x3 + x19 - 0.1519*x8;
-    const sk_v4 x38 = x33*x37 - x35*x9;
-    const sk_v4 x39 = x38*x6;
-    const sk_v4 x40 = x13*x39 + x36*x5;
-    const sk_v4 x41 = x14*x28 + x19*x5;
-    const sk_v4 x42 = -x41;
-    const sk_v4 x43 = x30*x37 + x34*x9;
-    const sk_v4 x44 = -x0*x13*x38 + x43*x5;
-    const sk_v4 x45 = x14*x43 + x20*x36;
-    const sk_v4 x46 = (x13*x13)*x4;
-    const sk_v4 x47 = -x46*x6 + x5*x9;
-    const sk_v4 x48 = -x0*x46 - x33*x5;
-    const sk_v4 x49 = -x14*x33 - x20*x9;
-    const sk_v4 x50 = x14*x23 + x18*x20;
-    const sk_v4 x51 = -x20*x27 + x23*x5;
-    const sk_v4 x52 = x5*x51;
-    const sk_v4 x53 = x50*x6;
-    const sk_v4 x54 = x13*x53;
-    const sk_v4 x55 = -x13*x25*x6 - x29*x5;
-    const sk_v4 x56 = x14*x27 + x18*x5;
-    const sk_v4 x57 = -x56;
-    const sk_v4 x58 = x5*x57;
-    const sk_v4 x59 = x0*x50;
-    const sk_v4 x60 = x13*x59;
-    const sk_v4 x61 = x0*x25;
-    const sk_v4 x62 = x13*x61 - x42*x5;
-    const sk_v4 x63 = x20*x51;
-    const sk_v4 x64 = x14*x57;
-    const sk_v4 x65 = -x14*x42 - x20*x29;
-    const sk_v4 x66 = -x12 - x15;
-    const sk_v4 x67 = x14*x22 + x20*x66;
-    const sk_v4 x68 = -x20*x26 + x22*x5;
-    const sk_v4 x69 = x6*x67;
-    const sk_v4 x70 = x13*x69 + x5*x68;
-    const sk_v4 x71 = x14*x26 + x5*x66;
-    const sk_v4 x72 = -x71;
-    const sk_v4 x73 = x0*x67;
-    const sk_v4 x74 = -x13*x73 + x5*x72;
-    const sk_v4 x75 = x14*x72 + x20*x68;
-    const sk_v4 x76 = (0.0819)*x6;
-    const sk_v4 x77 = -0.0819*x7;
-    const sk_v4 x78 = (0.0819)*x21;
-    const sk_v4 x79 = (0.0819)*x0;
-    const sk_v4 x80 = -x7;
-    const sk_v4 x81 = -(x0*x0)*x13 - x13*(x6*x6);
-    const sk_v4 x82 = -x14;
-    const sk_v4 x83 = -x20;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            hessiane_(q + l * 6, H + l * 216);
-        return;
-    }
-    skv_store4_(H + 0, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 4, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 8, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 20, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 28, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, x25*x9 + x29*x30 + x40, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 40, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x25*x33 - x30*x42 - x44, SKV_SPLAT(0.0));
-    skv_store4_(H + 44, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 48, 216, x29*x33 - x42*x9 - x45, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 52, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x47, SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 60, 216, x48, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x49, SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 72, 216, x30*x51 + x40 + x50*x9, -x52 - x54 - x55, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 76, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x30*x57 - x33*x50 - x44, x58 - x60 + x62);
-    skv_store4_(H + 80, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 84, 216, x33*x51 - x45 - x57*x9, x63 + x64 + x65, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 88, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x47, SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 96, 216, x48, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 100, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x49, SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 108, 216, x30*x68 + x40 + x67*x9, -x55 - x70, x52 + x54 - x70, SKV_SPLAT(0.0));
-    skv_store4_(H + 112, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x30*x72 - x33*x67 - x44, x62 + x74);
-    skv_store4_(H + 116, 216, -x58 + x60 + x74, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 120, 216, x33*x68 - x45 - x72*x9, x65 + x75, -x63 - x64 + x75, SKV_SPLAT(0.0));
-    skv_store4_(H + 124, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x47, SKV_SPLAT(0.0));
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 132, 216, x48, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x49, SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 144, 216, x0*x38 + x30*x76, x61 + x77, x59 + x77, x73 + x77);
-    skv_store4_(H + 148, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), (0.0819)*x0*x13*x4 - x39, -x25*x6 - x78);
-    skv_store4_(H + 152, 216, -x53 - x78, -x69 - x78, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 156, 216, -x0*x43 + x33*x76 + x36*x6 + x79*x9, -x0*x42 + x29*x6, -x0*x57 + x51*x6, -x0*x72 + x6*x68);
-    skv_store4_(H + 160, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x20*x4, x21);
-    skv_store4_(H + 164, 216, x21, x21, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 168, 216, x14*x4, x80, x80, x80);
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x0*x33 + x6*x9, x81);
-    skv_store4_(H + 176, 216, x81, x81, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 180, 216, x36, x29, x51, x68);
-    skv_store4_(H + 184, 216, x76, SKV_SPLAT(0.0), -x43, x41);
-    skv_store4_(H + 188, 216, x56, x71, x79, SKV_SPLAT(0.0));
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 196, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x9, x82);
-    skv_store4_(H + 200, 216, x82, x82, -x0, SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, -x33, x83, x83, x83);
-    skv_store4_(H + 208, 216, x6, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_ur3_hessiane_batch(const double *q, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        hessiane_x4_(q + i * 6, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->hessiane(q, H, N, hessiane_);
 #endif
     for (; i < N; ++i)
         hessiane_(q + i * 6, H + i * 216);
@@ -1988,25 +1548,30 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double q3 = q[3];
     const double q4 = q[4];
     const double q5 = q[5];
-    const double x0 = sk_sin(q0);
-    const double x1 = sk_sin(q4);
+    double sin_[4], cos_[4]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q4, q5, q1 };
+        sk_sincos_n_(angle_, 4, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = sin_[1];
     const double x2 = x0*x1;
     const double x3 = q1 + q2;
     const double x4 = q3 + x3;
     const double x5 = sk_cos(x4);
-    const double x6 = sk_cos(q0);
-    const double x7 = sk_cos(q4);
+    const double x6 = cos_[0];
+    const double x7 = cos_[1];
     const double x8 = x6*x7;
     const double x9 = x2 + x5*x8;
-    const double x10 = sk_cos(q5);
-    const double x11 = sk_sin(q5);
+    const double x10 = cos_[2];
+    const double x11 = sin_[2];
     const double x12 = sk_sin(x4);
     const double x13 = x12*x6;
     const double x14 = x0*x7;
     const double x15 = x1*x6;
     const double x16 = x15*x5;
     const double x17 = x14 - x16;
-    const double x18 = (0.24365)*sk_cos(q1);
+    const double x18 = (0.24365)*cos_[3];
     const double x19 = (0.21325)*sk_cos(x3);
     const double x20 = (0.0819)*x14 - 0.0819*x16;
     const double x21 = (0.08535)*x13 + x20;
@@ -2029,7 +1594,7 @@ static inline void fkine_jacob0_(const double *SYMKIN_RESTRICT q, double *SYMKIN
     const double x38 = (0.0819)*x36;
     const double x39 = x38 + (0.08535)*x5;
     const double x40 = x39 + (0.21325)*sk_sin(x3);
-    const double x41 = x40 + (0.24365)*sk_sin(q1);
+    const double x41 = x40 + (0.24365)*sin_[3];
     const double x42 = -x41;
     const double x43 = -x40;
     const double x44 = -x39;
@@ -2097,96 +1662,13 @@ void symkin_ur3_fkine_jacob0(const double *q, double *T, double *J)
     fkine_jacob0_(q, T, J);
 }
 
-#if SYMKIN_LANES == 4
-/* fkine_jacob0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void fkine_jacob0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT T, double *SYMKIN_RESTRICT J)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    const sk_v4 q5 = {q[5], q[11], q[17], q[23]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = skv_sin_(q4, &far_);
-    const sk_v4 x2 = x0*x1;
-    const sk_v4 x3 = q1 + q2;
-    const sk_v4 x4 = q3 + x3;
-    const sk_v4 x5 = skv_cos_(x4, &far_);
-    const sk_v4 x6 = skv_cos_(q0, &far_);
-    const sk_v4 x7 = skv_cos_(q4, &far_);
-    const sk_v4 x8 = x6*x7;
-    const sk_v4 x9 = x2 + x5*x8;
-    const sk_v4 x10 = skv_cos_(q5, &far_);
-    const sk_v4 x11 = skv_sin_(q5, &far_);
-    const sk_v4 x12 = skv_sin_(x4, &far_);
-    const sk_v4 x13 = x12*x6;
-    const sk_v4 x14 = x0*x7;
-    const sk_v4 x15 = x1*x6;
-    const sk_v4 x16 = x15*x5;
-    const sk_v4 x17 = x14 - x16;
-    const sk_v4 x18 = (0.24365)*skv_cos_(q1, &far_);
-    const sk_v4 x19 = (0.21325)*skv_cos_(x3, &far_);
-    const sk_v4 x20 = (0.0819)*x14 - 0.0819*x16;
-    const sk_v4 x21 = (0.08535)*x13 + x20;
-    const sk_v4 x22 = (0.11235)*x0 + x21;
-    const sk_v4 x23 = -x19*x6 + x22;
-    const sk_v4 x24 = -x18*x6 + x23;
-    const sk_v4 x25 = x14*x5 - x15;
-    const sk_v4 x26 = x0*x12;
-    const sk_v4 x27 = x2*x5;
-    const sk_v4 x28 = -x27 - x8;
-    const sk_v4 x29 = (0.0819)*x27 + (0.0819)*x8;
-    const sk_v4 x30 = -0.08535*x0*x12 + x29;
-    const sk_v4 x31 = x30 + (0.11235)*x6;
-    const sk_v4 x32 = x0*x19 + x31;
-    const sk_v4 x33 = x0*x18 + x32;
-    const sk_v4 x34 = -x33;
-    const sk_v4 x35 = x12*x7;
-    const sk_v4 x36 = x1*x12;
-    const sk_v4 x37 = -x36;
-    const sk_v4 x38 = (0.0819)*x36;
-    const sk_v4 x39 = x38 + (0.08535)*x5;
-    const sk_v4 x40 = x39 + (0.21325)*skv_sin_(x3, &far_);
-    const sk_v4 x41 = x40 + (0.24365)*skv_sin_(q1, &far_);
-    const sk_v4 x42 = -x41;
-    const sk_v4 x43 = -x40;
-    const sk_v4 x44 = -x39;
-    const sk_v4 x45 = x44*x6;
-    const sk_v4 x46 = -x30;
-    const sk_v4 x47 = x0*x44;
-    const sk_v4 x48 = -x29;
-    const sk_v4 x49 = -x6;
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            fkine_jacob0_(q + l * 6, T + l * 16, J + l * 36);
-        return;
-    }
-    skv_store4_(T + 0, 16, x10*x9 - x11*x13, -x10*x13 - x11*x9, x17, x24);
-    skv_store4_(T + 4, 16, x10*x25 - x11*x26, -x10*x26 - x11*x25, x28, x34);
-    skv_store4_(T + 8, 16, x10*x35 + x11*x5, x10*x5 - x11*x35, x37, 0.1519 - x41);
-    skv_store4_(T + 12, 16, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(1.0));
-    skv_store4_(J + 0, 36, x33, -x42*x6, -x43*x6, -x45);
-    skv_store4_(J + 4, 36, x12*x47 + x46*x5, x1*x12*x48 - x28*x38, x24, -x0*x42);
-    skv_store4_(J + 8, 36, -x0*x43, -x47, -x12*x45 - x21*x5, (0.0819)*x1*x12*x17 - x20*x36);
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), x0*x34 + x24*x6, -x0*x32 + x23*x6, -x0*x31 + x22*x6);
-    skv_store4_(J + 16, 36, x12*x46*x6 - x21*x26, x17*x48 - x20*x28, SKV_SPLAT(0.0), x0);
-    skv_store4_(J + 20, 36, x0, x0, x13, x17);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), x49, x49, x49);
-    skv_store4_(J + 28, 36, x26, x28, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x5, x37);
-}
-#endif
-
-
 void symkin_ur3_fkine_jacob0_batch(const double *q, double *T, double *J, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        fkine_jacob0_x4_(q + i * 6, T + i * 16, J + i * 36);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->fkine_jacob0(q, T, J, N, fkine_jacob0_);
 #endif
     for (; i < N; ++i)
         fkine_jacob0_(q + i * 6, T + i * 16, J + i * 36);
@@ -2200,17 +1682,22 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double q2 = q[2];
     const double q3 = q[3];
     const double q4 = q[4];
-    const double x0 = sk_sin(q0);
-    const double x1 = (0.24365)*sk_cos(q1);
+    double sin_[3], cos_[3]; /* of the angles: four at a time */
+    {
+        const double angle_[4] = { q0, q1, q4, 0.0 };
+        sk_sincos_n_(angle_, 3, sin_, cos_);
+    }
+    const double x0 = sin_[0];
+    const double x1 = (0.24365)*cos_[1];
     const double x2 = q1 + q2;
     const double x3 = (0.21325)*sk_cos(x2);
-    const double x4 = sk_cos(q0);
+    const double x4 = cos_[0];
     const double x5 = q3 + x2;
     const double x6 = sk_sin(x5);
     const double x7 = x0*x6;
-    const double x8 = sk_cos(q4);
+    const double x8 = cos_[2];
     const double x9 = x4*x8;
-    const double x10 = sk_sin(q4);
+    const double x10 = sin_[2];
     const double x11 = sk_cos(x5);
     const double x12 = x0*x11;
     const double x13 = x10*x12;
@@ -2223,7 +1710,7 @@ static inline void jacob0_hessian0_(const double *SYMKIN_RESTRICT q, double *SYM
     const double x20 = (0.0819)*x19;
     const double x21 = (0.08535)*x11 + x20;
     const double x22 = x21 + (0.21325)*sk_sin(x2);
-    const double x23 = -x22 - 0.24365*sk_sin(q1);
+    const double x23 = -x22 - 0.24365*sin_[1];
     const double x24 = -x23*x4;
     const double x25 = -x22;
     const double x26 = -x25*x4;
@@ -2540,176 +2027,13 @@ void symkin_ur3_jacob0_hessian0(const double *q, double *J, double *H)
     jacob0_hessian0_(q, J, H);
 }
 
-#if SYMKIN_LANES == 4
-/* jacob0_hessian0_ of four configurations (consecutive rows of q, of the outputs), lane by lane the
-   same operations; the outputs stored four entries at a time */
-static void jacob0_hessian0_x4_(const double *SYMKIN_RESTRICT q, double *SYMKIN_RESTRICT J, double *SYMKIN_RESTRICT H)
-{
-    const sk_v4 q0 = {q[0], q[6], q[12], q[18]};
-    const sk_v4 q1 = {q[1], q[7], q[13], q[19]};
-    const sk_v4 q2 = {q[2], q[8], q[14], q[20]};
-    const sk_v4 q3 = {q[3], q[9], q[15], q[21]};
-    const sk_v4 q4 = {q[4], q[10], q[16], q[22]};
-    sk_m4 far_ = {0, 0, 0, 0}; /* lanes the scalar code computes (skv_sin_, skv_cos_) */
-    const sk_v4 x0 = skv_sin_(q0, &far_);
-    const sk_v4 x1 = (0.24365)*skv_cos_(q1, &far_);
-    const sk_v4 x2 = q1 + q2;
-    const sk_v4 x3 = (0.21325)*skv_cos_(x2, &far_);
-    const sk_v4 x4 = skv_cos_(q0, &far_);
-    const sk_v4 x5 = q3 + x2;
-    const sk_v4 x6 = skv_sin_(x5, &far_);
-    const sk_v4 x7 = x0*x6;
-    const sk_v4 x8 = skv_cos_(q4, &far_);
-    const sk_v4 x9 = x4*x8;
-    const sk_v4 x10 = skv_sin_(q4, &far_);
-    const sk_v4 x11 = skv_cos_(x5, &far_);
-    const sk_v4 x12 = x0*x11;
-    const sk_v4 x13 = x10*x12;
-    const sk_v4 x14 = (0.0819)*x13 + (0.0819)*x9;
-    const sk_v4 x15 = x14 - 0.08535*x7;
-    const sk_v4 x16 = x15 + (0.11235)*x4;
-    const sk_v4 x17 = x0*x3 + x16;
-    const sk_v4 x18 = x0*x1 + x17;
-    const sk_v4 x19 = x10*x6;
-    const sk_v4 x20 = (0.0819)*x19;
-    const sk_v4 x21 = (0.08535)*x11 + x20;
-    const sk_v4 x22 = x21 + (0.21325)*skv_sin_(x2, &far_);
-    const sk_v4 x23 = -x22 - 0.24365*skv_sin_(q1, &far_);
-    const sk_v4 x24 = -x23*x4;
-    const sk_v4 x25 = -x22;
-    const sk_v4 x26 = -x25*x4;
-    const sk_v4 x27 = -x21;
-    const sk_v4 x28 = x27*x4;
-    const sk_v4 x29 = -x28;
-    const sk_v4 x30 = -x15;
-    const sk_v4 x31 = x0*x27;
-    const sk_v4 x32 = x11*x30 + x31*x6;
-    const sk_v4 x33 = -x14;
-    const sk_v4 x34 = x13 + x9;
-    const sk_v4 x35 = -x34;
-    const sk_v4 x36 = x10*x33*x6 - x20*x35;
-    const sk_v4 x37 = x4*x6;
-    const sk_v4 x38 = x0*x8;
-    const sk_v4 x39 = x11*x4;
-    const sk_v4 x40 = x10*x39;
-    const sk_v4 x41 = (0.0819)*x38 - 0.0819*x40;
-    const sk_v4 x42 = (0.08535)*x37 + x41;
-    const sk_v4 x43 = (0.11235)*x0 + x42;
-    const sk_v4 x44 = -x3*x4 + x43;
-    const sk_v4 x45 = -x1*x4 + x44;
-    const sk_v4 x46 = x0*x23;
-    const sk_v4 x47 = x0*x25;
-    const sk_v4 x48 = x11*x42 + x28*x6;
-    const sk_v4 x49 = -x48;
-    const sk_v4 x50 = x38 - x40;
-    const sk_v4 x51 = -0.0819*x10*x50*x6 + x19*x41;
-    const sk_v4 x52 = -x51;
-    const sk_v4 x53 = -x0*x18 + x4*x45;
-    const sk_v4 x54 = -x0*x17 + x4*x44;
-    const sk_v4 x55 = -x0*x16 + x4*x43;
-    const sk_v4 x56 = x30*x4*x6 - x42*x7;
-    const sk_v4 x57 = x33*x50 - x35*x41;
-    const sk_v4 x58 = -x4;
-    const sk_v4 x59 = -x4*x54;
-    const sk_v4 x60 = -x4*x55;
-    const sk_v4 x61 = -x4*x56;
-    const sk_v4 x62 = -x4*x57;
-    const sk_v4 x63 = -x0*x54;
-    const sk_v4 x64 = -x0*x55;
-    const sk_v4 x65 = -x0*x56;
-    const sk_v4 x66 = -x0*x57;
-    const sk_v4 x67 = (x4*x4);
-    const sk_v4 x68 = (x0*x0);
-    const sk_v4 x69 = -x25*x67 - x25*x68;
-    const sk_v4 x70 = -x27*x67 - x27*x68;
-    const sk_v4 x71 = x0*x49 + x32*x4;
-    const sk_v4 x72 = x0*x52 + x36*x4;
-    const sk_v4 x73 = x10*x37;
-    const sk_v4 x74 = x10*x7;
-    const sk_v4 x75 = x6*x67 + x6*x68;
-    const sk_v4 x76 = x0*x35 + x4*x50;
-    const sk_v4 x77 = x11*x52 + x57*x7;
-    const sk_v4 x78 = -x11*x36 - x37*x57;
-    const sk_v4 x79 = -x36*x7 + x37*x52;
-    const sk_v4 x80 = (x6*x6);
-    if (skv_any_(far_)) {
-        for (int l = 0; l < 4; ++l)
-            jacob0_hessian0_(q + l * 6, J + l * 36, H + l * 216);
-        return;
-    }
-    skv_store4_(J + 0, 36, x18, x24, x26, x29);
-    skv_store4_(J + 4, 36, x32, x36, x45, -x46);
-    skv_store4_(J + 8, 36, -x47, -x31, x49, x52);
-    skv_store4_(J + 12, 36, SKV_SPLAT(0.0), x53, x54, x55);
-    skv_store4_(J + 16, 36, x56, x57, SKV_SPLAT(0.0), x0);
-    skv_store4_(J + 20, 36, x0, x0, x37, x50);
-    skv_store4_(J + 24, 36, SKV_SPLAT(0.0), x58, x58, x58);
-    skv_store4_(J + 28, 36, x7, x35, SKV_SPLAT(1.0), SKV_SPLAT(0.0));
-    skv_store4_(J + 32, 36, SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x11, -x19);
-    skv_store4_(H + 0, 216, -x45, x46, x47, x31);
-    skv_store4_(H + 4, 216, x48, x51, x18, x24);
-    skv_store4_(H + 8, 216, x26, x29, x32, x36);
-    skv_store4_(H + 12, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 16, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x4);
-    skv_store4_(H + 20, 216, x4, x4, -x7, x34);
-    skv_store4_(H + 24, 216, SKV_SPLAT(0.0), x0, x0, x0);
-    skv_store4_(H + 28, 216, x37, x50, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 32, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 36, 216, x46, -x4*x53, x59, x60);
-    skv_store4_(H + 40, 216, x61, x62, x24, -x0*x53);
-    skv_store4_(H + 44, 216, x63, x64, x65, x66);
-    skv_store4_(H + 48, 216, SKV_SPLAT(0.0), -x23*x67 - x23*x68, x69, x70);
-    skv_store4_(H + 52, 216, x71, x72, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 56, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x39, x73);
-    skv_store4_(H + 60, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 64, 216, x12, x74, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 68, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x75, x76);
-    skv_store4_(H + 72, 216, x47, x59, x59, x60);
-    skv_store4_(H + 76, 216, x61, x62, x26, x63);
-    skv_store4_(H + 80, 216, x63, x64, x65, x66);
-    skv_store4_(H + 84, 216, SKV_SPLAT(0.0), x69, x69, x70);
-    skv_store4_(H + 88, 216, x71, x72, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 92, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x39, x73);
-    skv_store4_(H + 96, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 100, 216, x12, x74, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 104, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x75, x76);
-    skv_store4_(H + 108, 216, x31, x60, x60, x60);
-    skv_store4_(H + 112, 216, x61, x62, x29, x64);
-    skv_store4_(H + 116, 216, x64, x64, x65, x66);
-    skv_store4_(H + 120, 216, SKV_SPLAT(0.0), x70, x70, x70);
-    skv_store4_(H + 124, 216, x71, x72, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 128, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x39, x73);
-    skv_store4_(H + 132, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 136, 216, x12, x74, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 140, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), x75, x76);
-    skv_store4_(H + 144, 216, x48, x61, x61, x61);
-    skv_store4_(H + 148, 216, x11*x49 + x56*x7, x77, x32, x65);
-    skv_store4_(H + 152, 216, x65, x65, -x11*x32 - x37*x56, x78);
-    skv_store4_(H + 156, 216, SKV_SPLAT(0.0), x71, x71, x71);
-    skv_store4_(H + 160, 216, -x32*x7 + x4*x49*x6, x79, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 164, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), -x0*x10*x80 + x11*x35);
-    skv_store4_(H + 168, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 172, 216, SKV_SPLAT(0.0), x10*x4*x80 - x11*x50, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 176, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), x35*x4*x6 - x50*x7);
-    skv_store4_(H + 180, 216, x51, x62, x62, x62);
-    skv_store4_(H + 184, 216, x77, x19*x52 + x35*x57, x36, x66);
-    skv_store4_(H + 188, 216, x66, x66, x78, -x19*x36 - x50*x57);
-    skv_store4_(H + 192, 216, SKV_SPLAT(0.0), x72, x72, x72);
-    skv_store4_(H + 196, 216, x79, -x35*x36 + x50*x52, SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 200, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 204, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 208, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-    skv_store4_(H + 212, 216, SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0), SKV_SPLAT(0.0));
-}
-#endif
-
-
 void symkin_ur3_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N)
 {
     ptrdiff_t i = 0;
 #if SYMKIN_LANES == 4
-    for (; i + 4 <= N; i += 4)
-        jacob0_hessian0_x4_(q + i * 6, J + i * 36, H + i * 216);
+    const sk_lanes_t *l = lanes_();
+    if (l)
+        i = l->jacob0_hessian0(q, J, H, N, jacob0_hessian0_);
 #endif
     for (; i < N; ++i)
         jacob0_hessian0_(q + i * 6, J + i * 36, H + i * 216);

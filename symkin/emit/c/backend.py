@@ -13,6 +13,8 @@ import hashlib
 import math
 import re
 import sysconfig
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -68,10 +70,9 @@ _TOKEN = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[A-Za-z_]\w*")
 _LANE_CALLS = ("sk_sin", "sk_cos")
 
 
-def lane_calls(expr: str) -> str:
-    """``expr`` with each ``sk_sin(x)``/``sk_cos(x)`` as ``skv_sin_(x, &far_)``/``skv_cos_(x,
-    &far_)``: the branch-free four-lane kernels, which mark in ``far_`` the lanes the scalar code
-    must compute (``c/_sincos.c.j2``)."""
+def map_calls(expr: str, fn: Callable[[str, str], str]) -> str:
+    """``expr`` with each call ``sk_sin(x)``/``sk_cos(x)`` replaced by ``fn(name, x)``, innermost
+    calls first (``x`` as they left it)."""
     out, i = [], 0
     while True:
         j = min((k for k in (expr.find(c + "(", i) for c in _LANE_CALLS) if k >= 0), default=-1)
@@ -84,9 +85,40 @@ def lane_calls(expr: str) -> str:
             if depth == 0:
                 break
             k += 1
-        arg = lane_calls(expr[j + len(name) + 1 : k])
-        out += [expr[i:j], "skv", name[2:], "_(", arg, ", &far_)"]
+        out += [expr[i:j], fn(name, map_calls(expr[j + len(name) + 1 : k], fn))]
         i = k + 1
+
+
+def lane_calls(expr: str) -> str:
+    """``expr`` with each ``sk_sin(x)``/``sk_cos(x)`` as ``skv_sin_(x, &far_)``/``skv_cos_(x,
+    &far_)``: the branch-free four-lane kernels, which mark in ``far_`` the lanes the scalar code
+    must compute (``c/_sincos.c.j2``)."""
+    return map_calls(expr, lambda name, arg: f"skv{name[2:]}_({arg}, &far_)")
+
+
+def hoist_angles(f: Any) -> tuple[Any, tuple[str, ...]]:
+    """The printed function ``f`` with each ``sk_sin(x)``/``sk_cos(x)`` whose argument reads only
+    inputs and numbers as ``sin_[i]``/``cos_[i]``, and its distinct angles x (i-th first used
+    i-th): the template computes their sin and cos before the body, four at a time
+    (``sk_sincos_n_`` in ``c/_sincos.c.j2``; the same bits as ``sk_sin``/``sk_cos``)."""
+    if f.delegate:
+        return f, ()
+    inputs = {name for name, _ in f.inputs}
+    angles: dict[str, int] = {}
+
+    def hoist(name: str, arg: str) -> str:
+        if not _identifiers(arg) <= inputs:
+            return f"{name}({arg})"
+        return f"{name[3:]}_[{angles.setdefault(arg, len(angles))}]"
+
+    lines = tuple((name, map_calls(e, hoist)) for name, e in f.lines)
+    outs = tuple(replace(o, values=tuple((i, map_calls(e, hoist)) for i, e in o.values)) for o in f.outs)
+    return (replace(f, lines=lines, outs=outs), tuple(angles)) if angles else (f, ())
+
+
+def _identifiers(expr: str) -> set[str]:
+    """The names a printed C expression reads (numbers left out)."""
+    return {t for t in _TOKEN.findall(expr) if not t[0].isdigit() and t[0] != "."}
 
 
 def _blocks(size: int, values: list[tuple[int, str, bool]]) -> list[dict[str, Any]]:
@@ -121,7 +153,8 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
     the body's range check), and ``outs`` as (name, size, ((index, expression, constant), ...),
     blocks) with ``blocks`` the stores four entries at a time (:func:`_blocks`; empty for outputs
     of fewer than four entries); ``trig``: whether the body calls sin/cos (then a lane out of the
-    kernels' range sends the four configurations through the scalar code). Functions that call
+    kernels' range sends the four configurations through the scalar code: the body returns 1
+    before storing anything). Functions that call
     others or run loops (delegates, Hessians, scratch arrays) are left out: their batch stays
     scalar."""
     bodies = {}
@@ -131,7 +164,7 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
         names = {name for name, _ in f.inputs} | {name for name, _ in f.lines}
 
         def lane(expr: str, names: set[str] = names) -> tuple[str, bool] | None:
-            idents = {t for t in _TOKEN.findall(expr) if not t[0].isdigit() and t[0] != "."}
+            idents = _identifiers(expr)
             if idents - names - set(_LANE_CALLS):
                 return None
             return lane_calls(expr), not idents
@@ -183,7 +216,10 @@ def c_variant(
 def render_c(
     kernel: Kernel, prefix: str | None = None, precision: str = "double", libm: bool = False
 ) -> dict[str, str]:
-    """The generated ``<prefix>.h``, ``<prefix>.c`` and (double precision) the extension module.
+    """The generated ``<prefix>.h``, ``<prefix>.c`` (one configuration at a time, and the batch
+    entry points), ``<prefix>_lanes.c`` (double precision: the batch entry points' four-lane code,
+    a translation unit of its own so that a first call does not wait for it to compile) and
+    (double precision) the extension module ``<prefix>_pymodule.c``.
 
     ``prefix`` (default ``symkin_<code_name>``) starts every exported symbol and the file names, so
     the code of several robots links into one program. ``precision="float"``: single-precision
@@ -195,6 +231,11 @@ def render_c(
 
     printer, variant = c_variant(f"symkin_{kernel.code_name}", prefix, precision, libm)
     printed = [lower(f, printer) for f in kernel.functions]
+    lanes = {} if precision == "float" else four_lane_bodies(printed)
+    # the scalar bodies take their angles' sin and cos first, four at a time (libm: one by one)
+    hoisted = [(f, ()) if precision == "float" or libm else hoist_angles(f) for f in printed]
+    printed = [f for f, _ in hoisted]
+    angles = {f.name: a for f, a in hoisted if a}
     prefix = variant["prefix"]
     real = variant["real"]
     by_name = {f.name: f for f in printed}
@@ -207,7 +248,8 @@ def render_c(
         "links": kernel.links and link_text(kernel.links),
         "aliases": kernel.aliases,
         "hessian_frames": sorted({h.frame for f in printed for h in f.hessians}),
-        "lanes": {} if precision == "float" else four_lane_bodies(printed),
+        "lanes": lanes,
+        "angles": angles,
         "joints": joint_table(kernel),
         "qd_max": all(math.isfinite(j.qd) for j in kernel.joints),
         "licence": LICENCE,
@@ -237,6 +279,8 @@ def render_c(
         f"{prefix}.h": render("c/kernel.h.j2", **context),
         f"{prefix}.c": render("c/kernel.c.j2", **context),
     }
+    if lanes:
+        files[f"{prefix}_lanes.c"] = render("c/kernel_lanes.c.j2", **context)
     if precision == "float":
         return files
     ext = render("c/module.c.j2", module=module_name(files), **context)
@@ -315,7 +359,8 @@ def check_prefix(prefix: str) -> str:
 def module_name(files: dict[str, str]) -> str:
     """The extension module's import name: unique per kinematics source, so versions can coexist."""
     prefix = next(name[:-2] for name in files if name.endswith(".h"))
-    digest = hashlib.sha256((files[f"{prefix}.h"] + files[f"{prefix}.c"]).encode()).hexdigest()[:12]
+    kernel = files[f"{prefix}.h"] + files[f"{prefix}.c"] + files.get(f"{prefix}_lanes.c", "")
+    digest = hashlib.sha256(kernel.encode()).hexdigest()[:12]
     return f"_{prefix}_{digest}"
 
 
@@ -327,16 +372,23 @@ def extension_cflags() -> tuple[str, ...]:
 
 
 def compile_c(files: dict[str, str]) -> tuple[str, Path]:
-    """Compile the generated files (cached): the extension module's name and library path."""
+    """Compile the extension module of the generated files (cached; all but the four-lane code,
+    :mod:`symkin.emit.c.lanes`): its name and library path."""
     from symkin.emit.c.build import compile_library
+    from symkin.emit.c.lanes import main_sources
 
     name = module_name(files)
-    return name, compile_library(files, name, extra_cflags=extension_cflags())
+    return name, compile_library(main_sources(files), name, extra_cflags=extension_cflags())
 
 
 def build_c(files: dict[str, str]) -> tuple[ModuleType, Path]:
-    """Compile the generated files (cached) and import the extension module."""
+    """Compile the generated files' extension module (cached), import it and attach its four-lane
+    batch code (bound now when cached, else built after the first batch call:
+    :func:`symkin.emit.c.lanes.attach`)."""
     from symkin.emit.c.build import load_extension
+    from symkin.emit.c.lanes import attach
 
     name, path = compile_c(files)
-    return load_extension(name, path), path
+    module = load_extension(name, path)
+    attach(module, path, files)
+    return module, path

@@ -35,6 +35,7 @@ from symkin.errors import CompileError
 
 __all__ = [
     "compile_library",
+    "cached_library",
     "load_library",
     "load_extension",
     "find_compiler",
@@ -286,21 +287,14 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     import shutil
     import tempfile
 
-    _check_inputs(sources, name)
-    flags = _flags(extra_cflags)
+    found, entry, flags, compiler = _lookup(sources, name, extra_cflags)
+    if found is not None:
+        return found
+    if entry is None or compiler is None:  # no compiler and nothing cached
+        find_compiler()  # raises CompileError with the hint
+        raise CompileError("no C compiler found")
+    root, lib = entry.parent, f"lib{name}.so"
     build_key = _build_key(sources, flags)
-    root = cache_dir()
-    lib = f"lib{name}.so"
-    try:
-        compiler = find_compiler()
-    except CompileError:
-        cached = _without_compiler(root, name, lib, build_key)
-        if cached is None:
-            raise
-        return cached
-    entry = root / f"{name}-{_key(sources, flags, compiler)[:24]}"
-    if _valid(entry, lib, build_key):
-        return entry / lib
     try:
         root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".tmp-{name}-", dir=root))
@@ -325,6 +319,30 @@ def compile_library(sources: Mapping[str, str], name: str, extra_cflags: Sequenc
     finally:
         if tmp.exists() and tmp not in _UNCACHED:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def cached_library(sources: Mapping[str, str], name: str, extra_cflags: Sequence[str] = ()) -> Path | None:
+    """The library :func:`compile_library` would return without compiling (a cached, intact
+    entry; without a C compiler, one built by any compiler), or None when it would compile."""
+    return _lookup(sources, name, extra_cflags)[0]
+
+
+def _lookup(
+    sources: Mapping[str, str], name: str, extra_cflags: Sequence[str]
+) -> tuple[Path | None, Path | None, list[str], list[str] | None]:
+    """(the cached library or None, its entry folder, the flags, the compiler: None when there is
+    none, and then no entry either)."""
+    _check_inputs(sources, name)
+    flags = _flags(extra_cflags)
+    root = cache_dir()
+    lib = f"lib{name}.so"
+    build_key = _build_key(sources, flags)
+    try:
+        compiler = find_compiler()
+    except CompileError:
+        return _without_compiler(root, name, lib, build_key), None, flags, None
+    entry = root / f"{name}-{_key(sources, flags, compiler)[:24]}"
+    return (entry / lib if _valid(entry, lib, build_key) else None), entry, flags, compiler
 
 
 _UNCACHED: list[Path] = []

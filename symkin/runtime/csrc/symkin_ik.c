@@ -844,6 +844,20 @@ int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const doub
     return -1;
 }
 
+int64_t symkin_ik_solve_each(const symkin_ik_config *cfg, int64_t N, const double *Tep, const double *q0,
+                             int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st) {
+    for (int64_t i = 0; i < N; i++) {
+        int32_t status = symkin_ik_solve(cfg, Tep + 16 * i, q0 ? q0 + q0_stride * i : 0,
+                                         seed + (uint64_t)i, q + (int64_t)cfg->n * i, st + i);
+        if (status != SYMKIN_POSE_OK) return i;
+    }
+    return -1;
+}
+
+void symkin_ik_kin_each(const symkin_ik_config *cfg, int64_t N, const double *q, double *T, double *J) {
+    for (int64_t i = 0; i < N; i++) kin_eval(cfg, q + (int64_t)cfg->n * i, T, J);
+}
+
 int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const double *q0, int32_t steps, double *qs) {
     const int n = cfg->n;
     const double *we = step_weights(cfg);

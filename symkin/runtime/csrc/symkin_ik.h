@@ -138,6 +138,16 @@ int32_t symkin_ik_solve(const symkin_ik_config *cfg, const double *Tep, const do
 int64_t symkin_ik_solve_batch(const symkin_ik_config *cfg, int64_t N, const double *Tep, const double *q0,
                               int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st);
 
+/* For benchmarks (symkin bench calls): N targets one at a time, as N calls of symkin_ik_solve
+ * with the seeds seed, seed + 1, ... (no lanes); returns -1, or the index of the first invalid
+ * target (solved up to it). */
+int64_t symkin_ik_solve_each(const symkin_ik_config *cfg, int64_t N, const double *Tep, const double *q0,
+                             int64_t q0_stride, uint64_t seed, double *q, symkin_ik_stats *st);
+
+/* For benchmarks: the solver's kinematics at N configurations q (N x n), one at a time, into T
+ * (16) and J (6 n), overwritten each time. */
+void symkin_ik_kin_each(const symkin_ik_config *cfg, int64_t N, const double *q, double *T, double *J);
+
 /* The iterates of one search from q0 without stopping at convergence: qs gets q_0 .. q_steps
  * ((steps + 1) x n). Returns how many iterates were written (fewer if a step failed). */
 int32_t symkin_ik_trace(const symkin_ik_config *cfg, const double *Tep, const double *q0, int32_t steps,

@@ -27,6 +27,45 @@ static PyObject *slots_[SK_NFIELDS]; /* member descriptors of IKResult's slots, 
 static PyObject *success_ = NULL;    /* "success" */
 static uint64_t seed_state_ = 0;     /* fresh seeds (splitmix64), advanced with the GIL held */
 
+#ifdef SYMKIN_IK_PROFILE
+/* For symkin bench calls (a library built with -DSYMKIN_IK_PROFILE): the nanoseconds of each part
+ * of a call of solve_, summed over the calls until profile() returns and resets them. */
+#include <time.h>
+enum { SK_ARGS, SK_GIL, SK_SOLVER, SK_RESULT, SK_NPARTS };
+static double prof_ns_[SK_NPARTS];
+static long long prof_calls_;
+
+static double prof_now_(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return 1e9 * (double)t.tv_sec + (double)t.tv_nsec;
+}
+/* the time since *t into part, and *t = now */
+static void prof_add_(int part, double *t)
+{
+    const double now = prof_now_();
+    prof_ns_[part] += now - *t;
+    *t = now;
+}
+#define SK_PROF_(part, t) prof_add_(part, &(t))
+#define SK_PROF_START_(t) double t = prof_now_()
+
+/* profile() -> (calls, arguments ns, GIL release and retake ns, solver ns, result ns), reset */
+static PyObject *py_profile(PyObject *self, PyObject *unused)
+{
+    PyObject *r = Py_BuildValue("(Ldddd)", prof_calls_, prof_ns_[SK_ARGS], prof_ns_[SK_GIL], prof_ns_[SK_SOLVER],
+                                prof_ns_[SK_RESULT]);
+    prof_calls_ = 0;
+    for (int k = 0; k < SK_NPARTS; ++k)
+        prof_ns_[k] = 0.0;
+    return r;
+}
+#else
+#define SK_PROF_(part, t) ((void)0)
+#define SK_PROF_START_(t) ((void)0)
+#endif
+
 static uint64_t next_seed_(void)
 {
     uint64_t z = (seed_state_ += 0x9E3779B97F4A7C15ULL);
@@ -59,6 +98,7 @@ static PyObject *py_setup(PyObject *self, PyObject *args)
 static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject *Tep, PyObject *q0arg,
                         PyObject *seedarg)
 {
+    SK_PROF_START_(t);
     if (!result_type_) {
         PyErr_SetString(PyExc_RuntimeError, "setup() was not called");
         return NULL;
@@ -99,12 +139,17 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
     int32_t status;
     const double *Tp = (const double *)PyArray_DATA(T), *q0p = q0 ? (const double *)PyArray_DATA(q0) : NULL;
     double *qp = (double *)PyArray_DATA(q);
+    SK_PROF_(SK_ARGS, t);
     if (cfg->method == SYMKIN_IK_QP) { /* the QP step's embedded OSQP solvers are shared: keep the GIL */
         status = symkin_ik_solve(cfg, Tp, q0p, seed, qp, &st);
+        SK_PROF_(SK_SOLVER, t);
     } else {
         Py_BEGIN_ALLOW_THREADS
+        SK_PROF_(SK_GIL, t);
         status = symkin_ik_solve(cfg, Tp, q0p, seed, qp, &st);
+        SK_PROF_(SK_SOLVER, t);
         Py_END_ALLOW_THREADS
+        SK_PROF_(SK_GIL, t);
     }
     Py_DECREF(T);
     Py_XDECREF(q0);
@@ -123,7 +168,12 @@ static PyObject *solve_(const symkin_ik_config *cfg, PyObject *reason, PyObject 
     else
         values[5] = PyObject_CallFunction(reason, "diii", st.residual, (int)st.limit_rejects, (int)st.singular,
                                           (int)st.collision_rejects);
-    return new_record_(result_type_, slots_, values, SK_NFIELDS);
+    PyObject *r = new_record_(result_type_, slots_, values, SK_NFIELDS);
+#ifdef SYMKIN_IK_PROFILE
+    SK_PROF_(SK_RESULT, t);
+    ++prof_calls_;
+#endif
+    return r;
 }
 
 /* solve(config_address, reason, Tep, q0=None, seed=None) -> IKResult, or None when the arguments
@@ -309,6 +359,10 @@ static PyMethodDef methods_[] = {
     {"bind", (PyCFunction)py_bind, METH_VARARGS,
      "bind(config_address, reason, fallback, owner, by_options=None) -> ik(Tep, ...) solving one target in C, "
      "else fallback"},
+#ifdef SYMKIN_IK_PROFILE
+    {"profile", (PyCFunction)py_profile, METH_NOARGS,
+     "profile() -> (calls, arguments ns, GIL ns, solver ns, result ns) since the last call"},
+#endif
     {NULL, NULL, 0, NULL},
 };
 
