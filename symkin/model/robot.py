@@ -34,6 +34,7 @@ from symkin.model.differential import (  # noqa: F401 - re-exported
     rotate_rows,
     space_jacobian,
 )
+from symkin.model.derivatives import chain_derivative
 from symkin.model.ets import ETS
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.model.geometry import Geometry, check_geometry, move_links
@@ -429,6 +430,11 @@ class Robot(FrameMethods):
         Q, single = self._batch(q)
         H = self._num.hessian0(Q)
         return H[0] if single else H
+
+    def _derivative(self, Q: np.ndarray, order: int, frame: int | None) -> np.ndarray:
+        """Order ``order`` >= 3 of :meth:`derivative` from J0's columns (Part 2's product rule,
+        :func:`symkin.model.derivatives.chain_derivative`)."""
+        return chain_derivative(self.jacob0(Q, frame), self._chain.order, order)
 
     def ik(self, Tep: Any, frame: int | None = None, **kwargs: Any) -> Any:
         """Numerical IK on the numeric reference (slow; compile for speed): :func:`symkin.runtime.ik.ik`;

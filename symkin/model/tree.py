@@ -36,6 +36,7 @@ from symkin.model.frames import frame_position
 from symkin.model.geometry import Geometry, check_geometry, rename_links
 from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
 from symkin.model.robot import Robot
+from symkin.model.derivatives import path_derivative
 from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
 
 __all__ = ["Tree", "Segment", "Slot", "frame_position", "as_tree", "robot_of"]
@@ -515,6 +516,18 @@ class Tree(FrameMethods):
         J = self._jacobian(L, P, f)
         H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
         return (J[0], H[0]) if single else (J, H)
+
+    def _derivative(self, Q: np.ndarray, order: int, frame: Any) -> np.ndarray:
+        """Order ``order`` >= 3 of :meth:`derivative` from the slot columns of ``frame``'s path,
+        contracted onto the joints by the multipliers (the chain rule of a mimic slot, ``theta = m
+        q_j + c``; :func:`symkin.model.derivatives.path_derivative`)."""
+        f = self.frame_position(frame)
+        L, P = self._walk(Q)
+        slots, Jv, Jw = self._slot_columns(L, P, f)
+        A = np.zeros((len(slots), self.n))
+        for i, k in enumerate(slots):
+            A[i, self.slots[k].joint] = float(self.slots[k].multiplier)
+        return path_derivative(Jv, Jw, A, order)
 
 
 def as_tree(model: Any) -> Tree:
