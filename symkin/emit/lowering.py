@@ -86,7 +86,9 @@ def _size(shape: tuple[int, ...]) -> int:
     return size
 
 
-def _gathered(printer: CodePrinter, name: str, shape: tuple[int, ...], exprs: tuple[sp.Expr, ...]) -> PrintedOutput:
+def _gathered(
+    printer: CodePrinter, name: str, shape: tuple[int, ...], exprs: tuple[sp.Expr, ...]
+) -> PrintedOutput:
     """A gathered output: each distinct entry printed once, in order of first use."""
     first: dict[sp.Expr, int] = {}
     index = tuple(first.setdefault(e, len(first)) for e in exprs)

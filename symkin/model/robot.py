@@ -26,6 +26,7 @@ import numpy as np
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch, axes_rows, real_array, sample_q  # noqa: F401 - generated C imports axes_rows here
 from symkin.core.names import identifier
 from symkin.errors import ConfigurationError, FrameError, RobotError
+from symkin.model.derivatives import chain_derivative
 from symkin.model.differential import (  # noqa: F401 - re-exported
     FrameMethods,
     chain_hessian,
@@ -34,7 +35,6 @@ from symkin.model.differential import (  # noqa: F401 - re-exported
     rotate_rows,
     space_jacobian,
 )
-from symkin.model.derivatives import chain_derivative
 from symkin.model.ets import ETS
 from symkin.model.frames import ChainTables, frame_index, frame_jacobian
 from symkin.model.geometry import Geometry, check_geometry, move_links

@@ -30,13 +30,13 @@ import numpy as np
 
 from symkin.core.names import identifier
 from symkin.errors import RobotError, URDFError
+from symkin.model.derivatives import path_derivative
 from symkin.model.differential import FrameMethods, rotate_rows
 from symkin.model.ets import ET, ETS
 from symkin.model.frames import frame_position
 from symkin.model.geometry import Geometry, check_geometry, rename_links
 from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
 from symkin.model.robot import Robot
-from symkin.model.derivatives import path_derivative
 from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
 
 __all__ = ["Tree", "Segment", "Slot", "frame_position", "as_tree", "robot_of"]

@@ -82,9 +82,10 @@ def casadi_call(f: Any, n: int, name: str, shapes: dict[str, tuple[int, ...]]) -
 
 def casadi_methods(model: Any, fns: dict[str, Any]) -> dict[str, Any]:
     """The methods of ``model``'s kinematics from its casadi functions, each kind of
-    :data:`~symkin.emit.kernel.FRAMED` (and each ``derivative<k>`` there is) with ``frame=`` (a frame name, None for the only one; a
-    chain's link frame k: ``fkine``, ``jacob0`` and ``jacobe`` from the link poses, the others
-    through :class:`symkin.model.frames.LinkFrames`), ``link_poses`` and the ``*_all`` functions."""
+    :data:`~symkin.emit.kernel.FRAMED` (and each ``derivative<k>`` there is) with ``frame=`` (a
+    frame name, None for the only one; a chain's link frame k: ``fkine``, ``jacob0`` and
+    ``jacobe`` from the link poses, the others through :class:`symkin.model.frames.LinkFrames`),
+    ``link_poses`` and the ``*_all`` functions."""
     tree = as_tree(model)
     n, frames, name = tree.n, tree.frames, tree.name
     F, links = len(frames), n if "link_poses" in fns else 0

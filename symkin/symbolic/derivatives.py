@@ -42,6 +42,7 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import replace
 from fractions import Fraction
+
 import sympy as sp
 
 from symkin.symbolic.cse import Tensor
@@ -73,7 +74,9 @@ def extend_program(tp: TreeProgram) -> Program:
     return P
 
 
-def _nested(P: Program, cols: Sequence[Column], memo: dict[tuple[int, ...], Column], s: tuple[int, ...]) -> Column:
+def _nested(
+    P: Program, cols: Sequence[Column], memo: dict[tuple[int, ...], Column], s: tuple[int, ...]
+) -> Column:
     """(V(s), W(s)) of the sorted slot multiset ``s`` (module docstring), memoised by suffix."""
     got = memo.get(s)
     if got is not None:

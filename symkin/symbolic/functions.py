@@ -37,6 +37,7 @@ from symkin.core.names import function_name
 from symkin.model.derivatives import derivative_doc, derivative_kind
 from symkin.model.tree import Tree, as_tree
 from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, cse_outputs
+from symkin.symbolic.derivatives import derivative_entries, extend_program, frame_columns, with_lines
 from symkin.symbolic.kinematics import (
     ExpansionTooLargeError,
     SymbolicKinematics,
@@ -44,7 +45,6 @@ from symkin.symbolic.kinematics import (
     derive,
     joint_symbols,
 )
-from symkin.symbolic.derivatives import derivative_entries, extend_program, frame_columns, with_lines
 from symkin.symbolic.program import TreeProgram, derive_tree_program, program_code, safe_text
 
 __all__ = [
