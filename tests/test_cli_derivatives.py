@@ -3,6 +3,9 @@ with one line."""
 
 from __future__ import annotations
 
+import json
+import math
+
 import pytest
 
 from symkin.cli.main import main
@@ -51,4 +54,41 @@ def test_mistakes_exit_2_with_one_line(capsys, tmp_path, argv, message):
         path.write_text(GRIPPER)
         argv = tuple(str(path) if a == "GRIPPER" else a for a in argv)
     code, out, err = run(capsys, *argv)
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_bench_compile_reports_the_cost_of_the_derivatives(capsys):
+    """`symkin bench compile --derivatives K`: each robot cold without and with the orders 3..K, the
+    compiled derivative checked against the numeric reference and its code larger; the table."""
+    from symkin.bench.compile import format_derivatives
+
+    code, out, _ = run(capsys, "bench", "compile", "planar2", "--joints", "3", "--derivatives", "3", "--json")
+    assert code == 0
+    rows = json.loads(out)
+    assert [(r["robot"], r["derivatives"]) for r in rows] == [
+        ("planar2", 0),
+        ("planar2", 3),
+        ("chain3_0", 0),
+        ("chain3_0", 3),
+    ]
+    for plain, more in (rows[:2], rows[2:]):
+        assert "derivative_error" not in plain
+        assert more["derivative_error"] < 1e-12 and more["derivative_us"] > 0 and more["derivative_ops"] > 0
+        assert more["source_kb"] > plain["source_kb"] and more["numpy_kb"] > plain["numpy_kb"]
+    assert 0 < rows[3]["derivative_distinct"] <= 6 * math.comb(3 + 3 - 1, 3)  # one value per multiset and row
+    table = format_derivatives(rows)
+    assert "| derivatives up to |" in table
+    assert "| planar2 | 2 | 3 |" in table and "| chain3_0 | 3 | - |" in table
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (("bench", "kin", "--derivatives", "3"), "--derivatives is for `symkin bench compile`"),
+        (("bench", "compile", "--derivatives", "2"), "--derivatives"),
+        (("bench", "compile", "--derivatives", "9"), "--derivatives"),
+    ],
+)
+def test_bench_derivatives_mistakes_exit_2(capsys, argv, message):
+    code, _, err = run(capsys, *argv)
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
