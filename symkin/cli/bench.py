@@ -54,6 +54,14 @@ def add_parser(sub: Any) -> None:
     )
     s.add_argument("--joints", default="6,12,24,36", help="compile: joint counts of the random chains")
     s.add_argument(
+        "--derivatives",
+        type=int,
+        choices=(0, *range(3, 9)),
+        default=0,
+        metavar="K",
+        help="compile: also each robot with the derivatives of orders 3..K (K in 3..8), side by side",
+    )
+    s.add_argument(
         "--batch", type=at_least_1, default=None, help="kin: batch size (default 100000); collide: (20000)"
     )
     s.add_argument(
@@ -118,19 +126,28 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(f"--{option} is for `symkin bench collide`, not `{args.what}`")
     if args.unrolled and not args.build:
         raise UserError("--unrolled goes with --build")
+    if args.derivatives and args.what != "compile":
+        raise UserError(f"--derivatives is for `symkin bench compile`, not `{args.what}`")
     if args.what in ("tree", "urdf") and args.robot is not None:
         raise UserError(f"bench {args.what} measures its own robots; it takes no ROBOT")
     need_matplotlib(args.plot)
     if args.what == "compile":
-        from symkin.bench.compile import format_compile, plot_compile, run_compile
+        from symkin.bench.compile import format_compile, format_derivatives, plot_compile, run_compile
 
         if custom:
             raise UserError(
                 "bench compile measures ROBOT by name in a fresh process; --tool/--base do not apply"
             )
         joints = _joint_counts(args.joints)
-        rows = run_compile(joints, seed=args.seed, reference=args.robot or "panda", progress=not args.json)
-        print(json.dumps(rows, indent=2) if args.json else format_compile(rows))
+        rows = run_compile(
+            joints,
+            seed=args.seed,
+            reference=args.robot or "panda",
+            progress=not args.json,
+            derivatives=args.derivatives,
+        )
+        table = format_derivatives(rows) if args.derivatives >= 3 else format_compile(rows)
+        print(json.dumps(rows, indent=2) if args.json else table)
         if args.plot:
             plot_compile(rows, args.plot)
             if not args.json:

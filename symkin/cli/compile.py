@@ -53,6 +53,14 @@ def add_parser(sub: Any) -> None:
         help="how the code is derived: expanded (one expression per output, then CSE) or program "
         "(named link frames, linear in the chain); default: chosen by size",
     )
+    s.add_argument(
+        "--derivatives",
+        type=int,
+        default=0,
+        metavar="K",
+        help="also the partial derivatives of orders 3..K of every frame's pose (kin.derivative(q, k); "
+        "1 and 2 are jacob0 and hessian0, always there) (default 0: none)",
+    )
     add_link_options(s, frames=True)
     s.set_defaults(func=run)
 
@@ -86,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"single-precision code against double on 100 random q: max |fkine| error {err['fkine']:.1e}, "
               f"max |jacob0| error {err['jacob0']:.1e}")  # fmt: skip
     t1 = time.perf_counter()
-    kin = compile_model(model, backend=args.backend, strategy=args.strategy)
+    kin = compile_model(model, backend=args.backend, strategy=args.strategy, derivatives=args.derivatives)
     t_build = time.perf_counter() - t1
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
@@ -99,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
     if ops:
         print(f"operations: {ops}")
     (_tree_report if chain is None else _chain_report)(model, kin)
+    if args.derivatives >= 3:
+        _derivative_report(model, kin, args.derivatives)
     return 0
 
 
@@ -121,8 +131,34 @@ def _command(args: argparse.Namespace, model: Any) -> tuple[str, dict[str, Any]]
         command += given
     if args.strategy:
         command += f" --strategy {args.strategy}"
-    options = dict(strategy=args.strategy, prefix=args.prefix, precision=args.precision, libm=args.libm)
+    from symkin.compiler.compile import check_derivatives
+
+    try:
+        derivatives = check_derivatives(args.derivatives)
+    except SymkinError as exc:
+        raise UserError(f"--derivatives: {exc}") from None
+    if derivatives:
+        command += f" --derivatives {derivatives}"
+    options = dict(
+        strategy=args.strategy,
+        prefix=args.prefix,
+        precision=args.precision,
+        libm=args.libm,
+        derivatives=derivatives,
+    )
     return command, options
+
+
+def _derivative_report(model: Any, kin: Any, order: int) -> None:
+    """The derivative of the highest order at the first frame's random q against the reference."""
+    q = model.random_q(seed=0)
+    frame = None if len(kin.frames) == 1 else kin.frames[0]
+    D = kin.derivative(q, order, frame)
+    err = float(np.abs(D - model.derivative(q, order, frame)).max())
+    where = "" if frame is None else f" of frame {frame}"
+    print(f"derivative{order}{where}, shape {D.shape}: max |D - numeric reference| = {err:.2e} at a random q")
+    per_call = _us_per_call(lambda x: kin.derivative(x, order, frame), q, 200)
+    print(f"derivative{order}: {per_call:.2f} us per call")
 
 
 def _chain_report(robot: Any, kin: Any) -> None:

@@ -1,5 +1,6 @@
 """``symkin derive``: the derivation of FK, Jacobian and Hessian of a chain or tree, the
-closed-form IK of a chain or its singular configurations (Markdown or LaTeX)."""
+closed-form IK of a chain, its singular configurations or its derivatives of higher order
+(Markdown or LaTeX)."""
 
 from __future__ import annotations
 
@@ -36,6 +37,13 @@ def add_parser(sub: Any) -> None:
         "rows and as many translational rows as joints (a planar 2R arm), else all",
     )
     s.add_argument(
+        "--order",
+        type=int,
+        metavar="K",
+        help="write the partial derivatives of the pose up to order K instead (Part 2's higher-order "
+        "derivatives; 2 is the Hessian)",
+    )
+    s.add_argument(
         "--form",
         choices=("auto", "expanded", "program"),
         default="auto",
@@ -59,9 +67,13 @@ def run(args: argparse.Namespace) -> int:
     robot = chain_or_tree(args)
     sections = _sections(args.sections)
     output_file(args.output, "-o")
+    if args.order is not None and (args.ik or args.singularities or sections is not None):
+        raise UserError("--order writes its own derivation: leave out --ik, --singularities and --sections")
     if not robot.single_path:  # several frames, or a mimic joint on the path
-        if args.ik or args.singularities:
-            raise UserError("--ik and --singularities analyse one chain: name it as ROBOT.urdf:FRAME")
+        if args.ik or args.singularities or args.order is not None:
+            raise UserError(
+                "--ik, --singularities and --order analyse one chain: name it as ROBOT.urdf:FRAME"
+            )
         if sections is not None:
             raise UserError("--sections chooses parts of a chain's derivation, not of a tree's")
         from symkin.derive.tree import tree_derivation
@@ -73,6 +85,12 @@ def run(args: argparse.Namespace) -> int:
         from symkin.derive.singularities import singularities
 
         text = singularities(robot, axes=args.singular_axes, fmt=args.format).text
+    elif args.order is not None:
+        from symkin.derive.higher_order import higher_order_derivation
+
+        text = higher_order_derivation(
+            robot, args.order, fmt=args.format, symbolic_constants=args.symbolic_constants
+        )
     elif args.ik:
         if sections is not None:
             raise UserError("--sections chooses parts of the kinematics derivation, not of --ik")

@@ -47,6 +47,7 @@ __all__ = [
     "templates_digest",
     "check_backend",
     "check_strategy",
+    "check_derivatives",
     "generate",
     "generate_collision",
     "load_artifact",
@@ -68,6 +69,7 @@ COMPILER_SOURCES = (
     "emit",
     "compiler",
     "model/ets.py",
+    "model/derivatives.py",
     "model/robot.py",
     "model/tree.py",
     "model/slots.py",
@@ -103,6 +105,20 @@ def check_strategy(strategy: str | None, model: Any = None) -> None:
             f"{model.name} is not one serial chain: a tree compiles as one program (strategy 'program'), "
             "not 'expanded'"
         )
+
+
+def check_derivatives(derivatives: Any) -> int:
+    """``derivatives`` (the highest derivative order to compile, :func:`symkin.compile`) as an int
+    in 0..:data:`~symkin.model.derivatives.MAX_ORDER` (0, 1 and 2 add nothing: jacob0 and hessian0
+    are always there); SymkinError otherwise."""
+    from symkin.model.derivatives import MAX_ORDER
+
+    if isinstance(derivatives, bool) or not isinstance(derivatives, int) or not 0 <= derivatives <= MAX_ORDER:
+        raise SymkinError(
+            f"derivatives must be an integer 0..{MAX_ORDER} (the highest derivative order compiled), "
+            f"not {derivatives!r}"
+        )
+    return derivatives if derivatives >= 3 else 0
 
 
 def _check_model(model: Any, backend: str, strategy: str | None) -> None:
@@ -151,27 +167,50 @@ def sources_digest(root: Path) -> str:
     return h.hexdigest()
 
 
-def cache_key(model: Model, backend: str, strategy: str | None = None, what: str = "kinematics") -> str:
-    """The key of ``model``'s generated ``what`` (its kinematics, or "analytic-ik" for the closed-form
-    IK) on ``backend`` (see the module docstring)."""
+def cache_key(
+    model: Model, backend: str, strategy: str | None = None, what: str = "kinematics", derivatives: int = 0
+) -> str:
+    """The key of ``model``'s generated ``what`` (its kinematics, with the derivatives up to order
+    ``derivatives``, or "analytic-ik" for the closed-form IK) on ``backend`` (see the module
+    docstring)."""
     if what != "kinematics":  # e.g. "analytic-ik": depends on the ETS and name only
         parts = (__version__, what, backend, model.key)
     else:
         parts = (__version__, backend, model.code_name, as_tree(model).fingerprint, str(strategy))
+        parts += (f"derivatives {derivatives}",) if derivatives else ()
     text = "\n".join((*parts, templates_digest(), compiler_digest()))
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
-def derived_functions(model: Model, strategy: str | None = None) -> list:
+def derived_functions(model: Model, strategy: str | None = None, derivatives: int = 0) -> list:
     """The derived functions of ``model`` (:func:`symkin.symbolic.functions.kin_functions`; imports
-    sympy), memoised by its tree's structure and the strategy: shared by the backends."""
+    sympy), then its derivatives of orders 3..``derivatives``
+    (:func:`symkin.symbolic.functions.derivative_functions`), memoised by its tree's structure and
+    the strategy (the derivatives by the orders): shared by the backends."""
     tree = as_tree(model)
-    key = (tree.key, str(strategy))
+    functions = _memo((tree.key, str(strategy)), lambda: _kin_functions(tree, strategy))
+    if derivatives >= 3:
+        orders = tuple(range(3, derivatives + 1))
+        functions = functions + _memo((tree.key, orders), lambda: _derivative_functions(tree, orders))
+    return functions
+
+
+def _kin_functions(tree: Tree, strategy: str | None) -> list:
+    from symkin.symbolic.functions import kin_functions
+
+    return kin_functions(tree, strategy)
+
+
+def _derivative_functions(tree: Tree, orders: tuple[int, ...]) -> list:
+    from symkin.symbolic.functions import derivative_functions
+
+    return derivative_functions(tree, orders)
+
+
+def _memo(key: tuple, make: Callable[[], list]) -> list:
     functions = _FUNCTIONS.get(key)
     if functions is None:
-        from symkin.symbolic.functions import kin_functions
-
-        functions = kin_functions(tree, strategy)
+        functions = make()
         if len(_FUNCTIONS) >= _FUNCTIONS_MAX:
             _FUNCTIONS.clear()
         _FUNCTIONS[key] = functions
@@ -186,6 +225,7 @@ def generate(
     prefix: str | None = None,
     precision: str = "double",
     libm: bool = False,
+    derivatives: int = 0,
 ) -> dict[str, str]:
     """The generated source files of ``robot`` (a chain or a tree) for ``backend`` (file name ->
     text). Imports sympy.
@@ -198,8 +238,11 @@ def generate(
     (a tree: ``symkin_<tree>_tree``), so several robots link into one program;
     ``precision="float"`` for single-precision code (no Python module; for microcontrollers);
     ``libm`` to call the C library's sin and cos instead of the inline kernels.
+    ``derivatives``: also the partial derivatives of orders 3..``derivatives`` of every frame's
+    pose (``derivative3``..., :meth:`symkin.Kinematics.derivative`; 0, 1, 2: none).
     """
     _check_model(robot, backend, strategy)
+    derivatives = check_derivatives(derivatives)
     if (prefix is not None or precision != "double" or libm) and backend != "c":
         raise SymkinError(f"prefix, precision and libm apply to the C backend only, not {backend!r}")
     if prefix is not None:
@@ -210,8 +253,9 @@ def generate(
 
     tree = as_tree(robot)
     frames = f" --frames {','.join(tree.frames)}" if len(tree.frames) > 1 else ""
-    command = command or f"symkin compile {robot.identifier}{frames} --backend {backend}"
-    kernel = kernel_of(robot, tree, derived_functions(robot, strategy), command)
+    more = f" --derivatives {derivatives}" if derivatives else ""
+    command = command or f"symkin compile {robot.identifier}{frames} --backend {backend}{more}"
+    kernel = kernel_of(robot, tree, derived_functions(robot, strategy, derivatives), command)
     if backend == "c":
         from symkin.emit.c.backend import render_c
 
@@ -262,10 +306,11 @@ def write_generated(
     prefix: str | None = None,
     precision: str = "double",
     libm: bool = False,
+    derivatives: int = 0,
 ) -> list[Path]:
     """Generate and write the files of ``robot`` (a chain or a tree) for ``backend`` into
     ``folder`` (:func:`write_files`); returns the paths (options as :func:`generate`)."""
-    files = generate(robot, backend, command, strategy, prefix, precision, libm)
+    files = generate(robot, backend, command, strategy, prefix, precision, libm, derivatives)
     return write_files(robot, backend, files, folder, command, prefix, precision)
 
 
@@ -306,12 +351,16 @@ def cached_entry(key: str, make: Callable[[], dict[str, Any]], use_cache: bool =
 
 
 def cached_files(
-    model: Model, backend: str, key: str, use_cache: bool = True, strategy: str | None = None
+    model: Model,
+    backend: str,
+    key: str,
+    use_cache: bool = True,
+    strategy: str | None = None,
+    derivatives: int = 0,
 ) -> dict[str, str]:
     """Generated files from the cache (verified by checksum), else generate and store atomically."""
-    return cached_entry(key, lambda: {"files": generate(model, backend, strategy=strategy)}, use_cache)[
-        "files"
-    ]
+    make = lambda: {"files": generate(model, backend, strategy=strategy, derivatives=derivatives)}  # noqa: E731
+    return cached_entry(key, make, use_cache)["files"]
 
 
 def load_artifact(files: dict[str, str], backend: str) -> Artifact:
@@ -332,9 +381,16 @@ def load_artifact(files: dict[str, str], backend: str) -> Artifact:
 
 
 def build(
-    model: Model, backend: str = "c", cache: bool = True, strategy: str | None = None, key: str | None = None
+    model: Model,
+    backend: str = "c",
+    cache: bool = True,
+    strategy: str | None = None,
+    key: str | None = None,
+    derivatives: int = 0,
 ) -> Artifact:
-    """Generate (or take from the cache), build and load ``model``'s code on ``backend``."""
+    """Generate (or take from the cache), build and load ``model``'s code on ``backend`` (with the
+    derivatives of orders 3..``derivatives``)."""
     _check_model(model, backend, strategy)
-    key = key or cache_key(model, backend, strategy)
-    return load_artifact(cached_files(model, backend, key, cache, strategy), backend)
+    derivatives = check_derivatives(derivatives)
+    key = key or cache_key(model, backend, strategy, derivatives=derivatives)
+    return load_artifact(cached_files(model, backend, key, cache, strategy, derivatives), backend)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from symkin.core.names import function_name
+from symkin.model.derivatives import derivative_doc, derivative_kind
 
 __all__ = ["Joint", "Frame", "Kernel", "link_text", "FRAMED", "FRAMED_DOCS", "LINKED"]
 
@@ -109,6 +110,18 @@ class Kernel:
     def name_of(self, kind: str, frame: int | None) -> str:
         """The function name of ``kind`` for ``frame`` (:func:`~symkin.core.names.function_name`)."""
         return function_name(kind, frame, self.F)
+
+    @property
+    def framed(self) -> tuple[str, ...]:
+        """The per-frame kinds that also take a frame argument: :data:`FRAMED`, then the
+        ``derivative<k>`` kinds the kernel has, by order."""
+        orders = sorted({f.order for f in self.functions if f.order})
+        return FRAMED + tuple(derivative_kind(k) for k in orders)
+
+    def framed_doc(self, kind: str) -> str:
+        """The docstring of the method ``kind(q, frame=None)`` of a model of several frames."""
+        order = next((f.order for f in self.functions if f.kind == kind and f.order), 0)
+        return derivative_doc(order, self.n, "the frame") if order else FRAMED_DOCS[kind]
 
     def table(self, kind: str) -> list[str]:
         """The function names of ``kind`` for every frame, in frame order."""

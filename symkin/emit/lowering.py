@@ -18,10 +18,16 @@ MAX_PRINT_DEPTH = 200
 
 @dataclass(frozen=True)
 class PrintedOutput:
+    """An output: its entries printed (``values``), and for a gathered one (see
+    :class:`~symkin.symbolic.cse.CSEResult`) its ``distinct`` printed entries and the ``index``
+    of each entry among them (else both empty)."""
+
     name: str
     shape: tuple[int, ...]
     size: int
     values: tuple[tuple[int, str], ...]  # (flat index, printed expression); empty when a loop writes it
+    distinct: tuple[str, ...] = ()
+    index: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -63,6 +69,7 @@ class PrintedFunction:
     delegate: str = ""  # the function this one calls instead of having code of its own
     delegate_outs: tuple[str, ...] = ()  # that function's outputs, in order
     delegate_pick: tuple[int, ...] = ()  # positions of this function's outputs among them
+    order: int = 0  # a derivative<k> function's order k
 
 
 def _print(printer: CodePrinter, e: sp.Expr) -> str:
@@ -79,6 +86,17 @@ def _size(shape: tuple[int, ...]) -> int:
     return size
 
 
+def _gathered(
+    printer: CodePrinter, name: str, shape: tuple[int, ...], exprs: tuple[sp.Expr, ...]
+) -> PrintedOutput:
+    """A gathered output: each distinct entry printed once, in order of first use."""
+    first: dict[sp.Expr, int] = {}
+    index = tuple(first.setdefault(e, len(first)) for e in exprs)
+    distinct = tuple(_print(printer, e) for e in first)
+    values = tuple((i, distinct[k]) for i, k in enumerate(index))
+    return PrintedOutput(name, shape, len(exprs), values, distinct, index)
+
+
 def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
     """Print every intermediate and output of ``f``; inputs limited to the joints used. A function
     that calls ``f.delegate`` prints nothing: its outputs and the callee's others are local arrays."""
@@ -90,7 +108,9 @@ def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
     inputs = tuple((str(s), j) for j, s in enumerate(code.inputs) if s in used)
     lines = tuple((str(s), _print(printer, e)) for s, e in code.intermediates if own)
     every = [
-        PrintedOutput(
+        _gathered(printer, name, shape, exprs)
+        if own and name in code.gathered
+        else PrintedOutput(
             name, shape, _size(shape), tuple((i, _print(printer, e)) for i, e in enumerate(exprs) if own)
         )
         for name, (shape, exprs) in code.outputs.items()
@@ -119,4 +139,5 @@ def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
         delegate=f.delegate or "",
         delegate_outs=() if own else tuple(o.name for o in every),
         delegate_pick=() if own else tuple(i for i, o in enumerate(every) if o.name not in code.scratch),
+        order=f.order,
     )

@@ -28,6 +28,7 @@ import numpy as np
 
 from symkin.core.arrays import AXES_ROWS, as_batch, axes_rows, real_array
 from symkin.errors import ConfigurationError, ParameterError
+from symkin.model.derivatives import check_order
 from symkin.model.kinematics import cross
 from symkin.model.orientation import (  # noqa: F401 - NEAR_PI_L, angle_axis, REPRESENTATIONS re-exported
     NEAR_PI_L,
@@ -122,6 +123,27 @@ class FrameMethods:
         """Base-frame manipulator Hessian of ``frame`` (MMC paper eq 20): (n, 6, n) or (N, n, 6, n),
         ``H[i] = dJ0/dq_i``."""
         return _at(self.jacob0_hessian0, q, frame)[1]  # type: ignore[attr-defined]
+
+    def derivative(self, q: Any, order: int = 1, frame: Any = None) -> np.ndarray:
+        """Order-``order`` partial derivative of the pose of ``frame``: shape ``(n,) * (order - 1) +
+        (6, n)``, or (N, ...) for a batch, ``D[i_{k-1}, ..., i_1, :, i_0] = d^{k-1} J0[:, i_0] /
+        dq_{i_1} ... dq_{i_{k-1}}``, rows (v, omega) (Haviland and Corke, Manipulator Differential
+        Kinematics, Part 2, 2023, section "Higher-Order Derivatives"; roboticstoolbox-python's
+        ``partial_fkine0(q, order)`` layout). Order 1 is :meth:`jacob0` (6, n), order 2
+        :meth:`hessian0` (n, 6, n). ParameterError for an order that is not 1..8 or whose tensor
+        (6 n^order entries) is too large (:func:`symkin.model.derivatives.check_order`)."""
+        k = check_order(order, self.n, self.name)
+        if k == 1:
+            return _at(self.jacob0, q, frame)  # type: ignore[attr-defined]
+        if k == 2:
+            return self.hessian0(q, frame)
+        Q, single = self._batch(q)
+        D = self._derivative(Q, k, frame)
+        return D[0] if single else D
+
+    def _derivative(self, Q: np.ndarray, order: int, frame: Any) -> np.ndarray:
+        """The order-``order`` derivative (N, ...) at the checked configurations ``Q`` (N, n)."""
+        raise NotImplementedError
 
     def hessiane(self, q: Any, frame: Any = None) -> np.ndarray:
         """Hessian of ``frame`` in that frame, ``He[i] = dJe/dq_i = blkdiag(R^T)(H0[i] -

@@ -5,9 +5,9 @@ frame; the joints off that frame's path have zero Jacobian columns and stay wher
 (the damping of LM keeps its step defined). The same holds for link frame k of a chain
 (``frame=k``). A :class:`FrameView` has the chain interface (``n``, ``qlim``, ``qd_max``,
 ``revolute``, ``fkine``, ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``hessian0``,
-``jacob0_hessian0``, ``manipulability``, ``jacobm``, ``ik``) over any kinematics whose methods take
-``frame=``: the numeric references :class:`symkin.Robot` and :class:`symkin.Tree` or compiled
-:class:`symkin.Kinematics`.
+``jacob0_hessian0``, ``derivative``, ``manipulability``, ``jacobm``, ``ik``) over any kinematics
+whose methods take ``frame=``: the numeric references :class:`symkin.Robot` and
+:class:`symkin.Tree` or compiled :class:`symkin.Kinematics`.
 """
 
 from __future__ import annotations
@@ -84,6 +84,10 @@ class FrameView:
 
     def jacob0_hessian0(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
         return self.source.jacob0_hessian0(q, self.frame)
+
+    def derivative(self, q: Any, order: int = 1) -> np.ndarray:
+        """Order-``order`` derivative of the frame's pose, (n,) * (order - 1) + (6, n) or batched."""
+        return self.source.derivative(q, order, self.frame)
 
     def manipulability(self, q: Any, axes: str = "all") -> np.ndarray | float:
         """Yoshikawa manipulability of the chosen rows of the frame's J0 (eq 52)."""

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import FrameError
+from symkin.model.derivatives import chain_derivative
 from symkin.model.differential import FrameMethods, chain_hessian, rotate_rows
 from symkin.model.kinematics import cross
 
@@ -144,3 +145,6 @@ class LinkFrames(FrameMethods):
         J = self._jacob0(Q, frame)
         H = chain_hessian(J, self._order)
         return (J[0], H[0]) if single else (J, H)
+
+    def _derivative(self, Q: np.ndarray, order: int, frame: Any) -> np.ndarray:
+        return chain_derivative(self._jacob0(Q, frame), self._order, order)

@@ -26,6 +26,7 @@ import numpy as np
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch, axes_rows, real_array, sample_q  # noqa: F401 - generated C imports axes_rows here
 from symkin.core.names import identifier
 from symkin.errors import ConfigurationError, FrameError, RobotError
+from symkin.model.derivatives import chain_derivative
 from symkin.model.differential import (  # noqa: F401 - re-exported
     FrameMethods,
     chain_hessian,
@@ -429,6 +430,11 @@ class Robot(FrameMethods):
         Q, single = self._batch(q)
         H = self._num.hessian0(Q)
         return H[0] if single else H
+
+    def _derivative(self, Q: np.ndarray, order: int, frame: int | None) -> np.ndarray:
+        """Order ``order`` >= 3 of :meth:`derivative` from J0's columns (Part 2's product rule,
+        :func:`symkin.model.derivatives.chain_derivative`)."""
+        return chain_derivative(self.jacob0(Q, frame), self._chain.order, order)
 
     def ik(self, Tep: Any, frame: int | None = None, **kwargs: Any) -> Any:
         """Numerical IK on the numeric reference (slow; compile for speed): :func:`symkin.runtime.ik.ik`;

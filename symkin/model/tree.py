@@ -30,6 +30,7 @@ import numpy as np
 
 from symkin.core.names import identifier
 from symkin.errors import RobotError, URDFError
+from symkin.model.derivatives import path_derivative
 from symkin.model.differential import FrameMethods, rotate_rows
 from symkin.model.ets import ET, ETS
 from symkin.model.frames import frame_position
@@ -524,6 +525,18 @@ class Tree(FrameMethods):
         J = self._jacobian(L, P, f)
         H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
         return (J[0], H[0]) if single else (J, H)
+
+    def _derivative(self, Q: np.ndarray, order: int, frame: Any) -> np.ndarray:
+        """Order ``order`` >= 3 of :meth:`derivative` from the slot columns of ``frame``'s path,
+        contracted onto the joints by the multipliers (the chain rule of a mimic slot, ``theta = m
+        q_j + c``; :func:`symkin.model.derivatives.path_derivative`)."""
+        f = self.frame_position(frame)
+        L, P = self._walk(Q)
+        slots, Jv, Jw = self._slot_columns(L, P, f)
+        A = np.zeros((len(slots), self.n))
+        for i, k in enumerate(slots):
+            A[i, self.slots[k].joint] = float(self.slots[k].multiplier)
+        return path_derivative(Jv, Jw, A, order)
 
 
 def as_tree(model: Any) -> Tree:

@@ -14,6 +14,7 @@ import numpy as np
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch
 from symkin.core.names import function_name
 from symkin.emit.kernel import FRAMED, LINKED
+from symkin.model.derivatives import MAX_ORDER, derivative_kind, derivative_shape
 from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
 from symkin.model.tree import as_tree
 
@@ -81,15 +82,24 @@ def casadi_call(f: Any, n: int, name: str, shapes: dict[str, tuple[int, ...]]) -
 
 def casadi_methods(model: Any, fns: dict[str, Any]) -> dict[str, Any]:
     """The methods of ``model``'s kinematics from its casadi functions, each kind of
-    :data:`~symkin.emit.kernel.FRAMED` with ``frame=`` (a frame name, None for the only one; a
-    chain's link frame k: ``fkine``, ``jacob0`` and ``jacobe`` from the link poses, the others
-    through :class:`symkin.model.frames.LinkFrames`), ``link_poses`` and the ``*_all`` functions."""
+    :data:`~symkin.emit.kernel.FRAMED` (and each ``derivative<k>`` there is) with ``frame=`` (a
+    frame name, None for the only one; a chain's link frame k: ``fkine``, ``jacob0`` and
+    ``jacobe`` from the link poses, the others through :class:`symkin.model.frames.LinkFrames`),
+    ``link_poses`` and the ``*_all`` functions."""
     tree = as_tree(model)
     n, frames, name = tree.n, tree.frames, tree.name
     F, links = len(frames), n if "link_poses" in fns else 0
     shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
     every = {"T": (F, 4, 4), "J": (F, 6, n)}
-    calls = {key: casadi_call(f, n, name, every if key.endswith("_all") else shapes) for key, f in fns.items()
+    orders = {k for k in range(3, MAX_ORDER + 1) if function_name(derivative_kind(k), 0, F) in fns}
+
+    def shapes_of(key: str) -> dict[str, tuple[int, ...]]:
+        if key.endswith("_all"):
+            return every
+        order = next((k for k in orders if key.split("_")[0] == derivative_kind(k)), 0)
+        return {"D": derivative_shape(order, n)} if order else shapes
+
+    calls = {key: casadi_call(f, n, name, shapes_of(key)) for key, f in fns.items()
              if not key.startswith("manipulability")}  # fmt: skip
     methods = {key: f for key, f in calls.items() if key == "link_poses" or key.endswith("_all")}
 
@@ -103,6 +113,9 @@ def casadi_methods(model: Any, fns: dict[str, Any]) -> dict[str, Any]:
             if link < 0:
                 return calls[function_name(kind, k, F)](q)
             if kind not in LINKED:
+                order = next((k for k in orders if kind == derivative_kind(k)), 0)
+                if order:
+                    return link_frames.derivative(q, order, link)
                 return getattr(link_frames, kind)(q, link)
             L = calls["link_poses"](q)
             if kind == "fkine":
@@ -114,7 +127,7 @@ def casadi_methods(model: Any, fns: dict[str, Any]) -> dict[str, Any]:
         call.__name__, call.__doc__ = kind, (plain or calls[function_name(kind, 0, F)]).__doc__
         return call
 
-    methods.update({kind: framed(kind) for kind in FRAMED})
+    methods.update({kind: framed(kind) for kind in (*FRAMED, *(derivative_kind(k) for k in sorted(orders)))})
     tables = ChainTables.of(tree.chain().ets) if links else None
     link_frames = LinkFrames(n, name, methods["fkine"], methods["jacob0"], tables.order if tables else ())
     return methods

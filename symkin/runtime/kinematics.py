@@ -22,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from symkin.compiler.compile import Artifact, build, cache_key
+from symkin.compiler.compile import Artifact, build, cache_key, check_derivatives
 from symkin.core.names import function_name
 from symkin.errors import ConfigurationError, SymkinError
+from symkin.model.derivatives import MAX_ORDER, check_order, derivative_kind
 from symkin.model.differential import FrameMethods
 from symkin.model.frames import resolve_frame
 from symkin.model.tree import as_tree
@@ -62,18 +63,22 @@ sys.modules.setdefault(f"{__package__}.tree_kinematics", sys.modules[__name__])
 
 
 def load_kinematics(
-    model: Any, backend: str = "c", cache: bool = True, strategy: str | None = None
+    model: Any, backend: str = "c", cache: bool = True, strategy: str | None = None, derivatives: int = 0
 ) -> Kinematics:
-    """The compiled kinematics of ``model`` (a Robot or a Tree) on ``backend``, memoised per cache
-    key (see :mod:`symkin.compiler.compile`) and the model's own fingerprint: the object carries
-    the model (a robot's configurations and source, a tree's) a controller reads."""
-    key = cache_key(model, backend, strategy)
+    """The compiled kinematics of ``model`` (a Robot or a Tree) on ``backend`` (with the derivatives
+    of orders 3..``derivatives``), memoised per cache key (see :mod:`symkin.compiler.compile`) and
+    the model's own fingerprint: the object carries the model (a robot's configurations and source,
+    a tree's) a controller reads."""
+    derivatives = check_derivatives(derivatives)
+    key = cache_key(model, backend, strategy, derivatives=derivatives)
     geometry = None if model.geometry is None else model.geometry.fingerprint()  # not in the code's key
-    return memoised(
-        (key, model.fingerprint, geometry),
-        lambda: kinematics_of(model, build(model, backend, cache, strategy, key), backend),
-        cache,
-    )
+
+    def make() -> Kinematics:
+        kin = kinematics_of(model, build(model, backend, cache, strategy, key, derivatives), backend)
+        kin._options = (cache, strategy)
+        return kin
+
+    return memoised((key, model.fingerprint, geometry), make, cache)
 
 
 def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
@@ -83,7 +88,8 @@ def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
         kin = Kinematics(model, backend, casadi_methods(model, fns), art.files, art.path, art.module)
         kin.functions = fns  # type: ignore[attr-defined]
         return kin
-    functions = {name: getattr(art.module, name) for name in _MODULE_METHODS if hasattr(art.module, name)}
+    names = (*_MODULE_METHODS, *(derivative_kind(k) for k in range(3, MAX_ORDER + 1)))
+    functions = {name: getattr(art.module, name) for name in names if hasattr(art.module, name)}
     return Kinematics(model, backend, functions, art.files, art.path, art.module)
 
 
@@ -123,6 +129,7 @@ class Kinematics(FrameMethods):
         self._ik_by_options: dict[tuple, Any] = {}  # C IK solvers by keyword options (see ik)
         self._ik_bound: dict[tuple, Any] = {}  # their bound C entry points, looked up by kin.ik in C
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
+        self._options: tuple[bool, str | None] = (True, None)  # cache and strategy of the compile
 
     # -- what the model says -----------------------------------------------------------------
     @property
@@ -209,6 +216,35 @@ class Kinematics(FrameMethods):
             "manipulability, jacobm, cond, ik"
         )
         return robot_markdown(chain, head) + f"Methods: {methods}.\n"
+
+    # -- derivatives of any order ------------------------------------------------------------
+    def derivative(self, q: Any, order: int = 1, frame: Any = None) -> np.ndarray:
+        """Order-``order`` partial derivative of the pose of ``frame``: ``(n,) * (order - 1) + (6,
+        n)``, or (N, ...) for a batch, ``D[i_{k-1}, ..., i_1, :, i_0] = d^{k-1} J0[:, i_0] /
+        dq_{i_1} ... dq_{i_{k-1}}`` (roboticstoolbox-python's ``partial_fkine0`` layout; see
+        :meth:`symkin.Robot.derivative`). Order 1 is :meth:`jacob0`, order 2 :meth:`hessian0`.
+
+        Orders 3 and up are generated code (:mod:`symkin.symbolic.derivatives`): compiled with
+        ``symkin.compile(model, derivatives=k)``, or on the first call of an order the kinematics
+        lack (the model compiled again with the derivatives up to that order, from the compile
+        cache when it is there; a cold Panda order 4 takes seconds, see the performance guide).
+        A chain's link frame k takes them from its Jacobian (numeric, Part 2's recursion)."""
+        k = check_order(order, self.n, self.name)
+        if k < 3:
+            return super().derivative(q, k, frame)
+        fn = self.__dict__.get(derivative_kind(k))
+        if fn is None:
+            fn = self._compile_derivatives(k)
+        return fn(q) if frame is None else fn(q, frame)
+
+    def _compile_derivatives(self, order: int) -> Callable[..., np.ndarray]:
+        """The generated ``derivative<order>`` of this model on this backend: these kinematics
+        compiled again with the derivatives up to ``order``; every order it has is kept here."""
+        cache, strategy = self._options
+        other = load_kinematics(self.model, self.backend, cache, strategy, derivatives=order)
+        for k in range(3, order + 1):
+            self.__dict__[derivative_kind(k)] = other.__dict__[derivative_kind(k)]
+        return self.__dict__[derivative_kind(order)]
 
     # -- frames ------------------------------------------------------------------------------
     def fkine_all(self, q: Any) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from symkin.compiler.compile import Artifact, check_backend, check_strategy, load_artifact
+from symkin.compiler.compile import Artifact, check_backend, check_derivatives, check_strategy, load_artifact
 from symkin.compiler.manifest import import_module_file, read_manifest
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
@@ -16,7 +16,11 @@ __all__ = ["compile", "load_compiled"]
 
 
 def compile(  # noqa: A001
-    robot: Robot | Tree | str, backend: str = "c", cache: bool = True, strategy: str | None = None
+    robot: Robot | Tree | str,
+    backend: str = "c",
+    cache: bool = True,
+    strategy: str | None = None,
+    derivatives: int = 0,
 ) -> Kinematics:
     """Compile ``robot`` (a Robot, a built-in name or ETS text) into a :class:`Kinematics`, or a
     :class:`symkin.Tree` into one kernel for all its frames (the same class, with ``frame=name``).
@@ -26,14 +30,17 @@ def compile(  # noqa: A001
     for optimisation problems). Every backend has the numeric reference's methods and shapes.
     ``strategy`` chooses how the code is derived (see :func:`symkin.generate`; default by size).
     With ``cache`` the generated code comes from the compile cache and the object from a bounded
-    in-process memo when they are there.
+    in-process memo when they are there. ``derivatives=k`` also compiles the partial derivatives of
+    orders 3..k of every frame's pose (:meth:`Kinematics.derivative`; without it an order is
+    compiled on its first call).
     """
     check_backend(backend)
     if isinstance(robot, str):
         robot = resolve_robot(robot)
     as_tree(robot)  # TypeError for what is not a model
     check_strategy(strategy, robot)
-    return load_kinematics(robot, backend, cache, strategy)
+    derivatives = check_derivatives(derivatives)
+    return load_kinematics(robot, backend, cache, strategy, derivatives)
 
 
 def load_compiled(folder: str | Path, name: str | None = None, verify: bool = True) -> Kinematics:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-__all__ = ["OpCounts", "CSEResult", "count_ops", "cse_outputs", "floatify", "tree_size", "depth"]
+__all__ = ["OpCounts", "CSEResult", "Tensor", "count_ops", "cse_outputs", "floatify", "tree_size", "depth"]
 
 
 @dataclass(frozen=True)
@@ -161,7 +161,10 @@ class CSEResult:
     ``outputs[name]`` is ``(shape, exprs)`` with the expressions flattened in row-major order.
     Outputs named in ``scratch`` are local arrays, not results (a Jacobian a Hessian loop reads);
     ``hessians`` are Hessian outputs written by loops after the straight-line part
-    (:class:`symkin.symbolic.program.HessianLoop`). ``strategy`` says how the code was derived:
+    (:class:`symkin.symbolic.program.HessianLoop`). Outputs named in ``gathered`` are written by a
+    gather: their distinct entries once, then every entry picked from them by a table (a
+    derivative tensor of 6 n^k entries repeats a few thousand values; one store per entry costs
+    the C compiler 16x the time). ``strategy`` says how the code was derived:
     ``"expanded"`` (one expression per output, then CSE) or ``"program"`` (a straight-line
     program of named link frames, :mod:`symkin.symbolic.program`).
     """
@@ -173,15 +176,28 @@ class CSEResult:
     scratch: tuple[str, ...] = ()
     hessians: tuple[HessianLoop, ...] = ()
     strategy: str = "expanded"
+    gathered: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Tensor:
+    """An output of any rank: its ``shape`` and its ``entries`` in row-major order."""
+
+    shape: tuple[int, ...]
+    entries: tuple[sp.Expr, ...]
 
 
 def _flat(
-    outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...]], memo: dict[sp.Basic, sp.Expr]
+    outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...] | Tensor], memo: dict[sp.Basic, sp.Expr]
 ) -> dict[str, tuple[tuple[int, ...], tuple[sp.Expr, ...]]]:
-    """Each output (a matrix, or a tuple of equal-shape matrices for a 3-D array) as its shape and
-    its entries (:func:`floatify`, sharing ``memo``) in row-major order."""
+    """Each output (a matrix, a tuple of equal-shape matrices for a 3-D array, or a
+    :class:`Tensor`) as its shape and its entries (:func:`floatify`, sharing ``memo``) in
+    row-major order."""
     flat = {}
     for name, value in outputs.items():
+        if isinstance(value, Tensor):
+            flat[name] = (value.shape, tuple(floatify(x, memo) for x in value.entries))
+            continue
         mats = value if isinstance(value, tuple) else (value,)
         shape = (len(mats), *mats[0].shape) if isinstance(value, tuple) else mats[0].shape
         flat[name] = (tuple(shape), tuple(floatify(x, memo) for m in mats for x in m))

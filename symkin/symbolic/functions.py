@@ -27,14 +27,17 @@ form only up to :data:`EXPANDED_MAX_NODES` (:func:`expanded_if_small`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import sympy as sp
 
 from symkin.core.names import function_name
+from symkin.model.derivatives import derivative_doc, derivative_kind
 from symkin.model.tree import Tree, as_tree
 from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, cse_outputs
+from symkin.symbolic.derivatives import derivative_entries, extend_program, frame_columns, with_lines
 from symkin.symbolic.kinematics import (
     ExpansionTooLargeError,
     SymbolicKinematics,
@@ -53,6 +56,7 @@ __all__ = [
     "EXPANDED_MAX_NODES",
     "UNROLL_MAX_JOINTS",
     "kin_functions",
+    "derivative_functions",
     "derive_kinematics",
     "build_functions",
     "choose_strategy",
@@ -105,7 +109,7 @@ Derived = SymbolicKinematics | TreeProgram
 class KinFunction:
     """One emitted function: its ``kind``, the ``frame`` it is of (None: every frame, or the link
     frames), its ``name`` (:func:`~symkin.core.names.function_name`), docstring, and its code with
-    outputs in order.
+    outputs in order; ``order`` is the derivative order of a ``derivative<k>`` kind (else 0).
 
     With ``delegate`` set, the function calls that other function (whose code ``code`` is) and
     returns the outputs not listed in ``code.scratch``: one copy of the code, compiled once.
@@ -117,6 +121,7 @@ class KinFunction:
     doc: str
     code: CSEResult
     delegate: str | None = None
+    order: int = 0
 
     @property
     def outputs(self) -> list[tuple[str, tuple[int, ...], tuple[sp.Expr, ...]]]:
@@ -241,6 +246,28 @@ def _program(tp: TreeProgram) -> list[KinFunction]:
             "hessian0", f, frames, code, delegate=functions["jacob0_hessian0"].name
         )
         out += [functions[kind] for kind in spec if kind in functions]
+    return out
+
+
+def derivative_functions(model: Any, orders: Sequence[int]) -> list[KinFunction]:
+    """The ``derivative<k>`` function of every frame of ``model`` for each order k of ``orders``
+    (each 3 or more: order 1 is jacob0, order 2 hessian0), from one straight-line program of the
+    model's tree (:mod:`symkin.symbolic.derivatives`): every cross product shared by the orders
+    and frames that contain it, each function with the lines it needs."""
+    tree = as_tree(model)
+    tp = derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy, fold=True)
+    P = extend_program(tp)
+    frames, out = tp.frames, []
+    for k in orders:
+        if k < 3:
+            raise ValueError(f"derivative functions start at order 3 (1: jacob0, 2: hessian0), not {k}")
+        for f in range(len(frames)):
+            D = derivative_entries(P, frame_columns(tp, f), tp.paths[f], tree.n, k)
+            code = program_code(with_lines(tp, P), {"D": D}, gathered=("D",))
+            where = "the end effector" if len(frames) == 1 else f"frame {f} ({safe_text(frames[f])})"
+            kind = derivative_kind(k)
+            name = function_name(kind, f, len(frames))
+            out.append(KinFunction(kind, f, name, derivative_doc(k, tree.n, where), code, order=k))
     return out
 
 

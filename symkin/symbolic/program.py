@@ -358,6 +358,7 @@ def program_code(
     outputs: Mapping[str, sp.Matrix | tuple[sp.Matrix, ...]],
     scratch: tuple[str, ...] = (),
     hessians: tuple[HessianLoop, ...] = (),
+    gathered: tuple[str, ...] = (),
 ) -> CSEResult:
     """The lines of ``kp`` that ``outputs`` need, as straight-line code (see :class:`CSEResult`)."""
     memo: dict[sp.Basic, sp.Expr] = {}
@@ -365,7 +366,7 @@ def program_code(
     entries = [e for _, exprs in flat.values() for e in exprs]
     lines = tuple((kp.lines[i][0], floatify(kp.lines[i][1], memo)) for i in needed_lines(kp.lines, entries))
     counts = sum((h.counts for h in hessians), _total([e for _, e in lines] + entries))
-    return CSEResult(lines, flat, counts, kp.q, scratch, hessians, "program")
+    return CSEResult(lines, flat, counts, kp.q, scratch, hessians, "program", gathered)
 
 
 # -- the walk over a tree, of which a chain is the one-frame case --------------------------------

@@ -20,7 +20,7 @@ from types import ModuleType
 from typing import Any
 
 from symkin.core.names import c_string, comment_safe
-from symkin.emit.kernel import FRAMED, FRAMED_DOCS, LINKED, Kernel, link_text
+from symkin.emit.kernel import LINKED, Kernel, link_text
 from symkin.emit.templates import Header, render
 from symkin.errors import CompileError
 
@@ -154,12 +154,13 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
     blocks) with ``blocks`` the stores four entries at a time (:func:`_blocks`; empty for outputs
     of fewer than four entries); ``trig``: whether the body calls sin/cos (then a lane out of the
     kernels' range sends the four configurations through the scalar code: the body returns 1
-    before storing anything). Functions that call
-    others or run loops (delegates, Hessians, scratch arrays) are left out: their batch stays
+    before storing anything). Functions that call others or run loops (delegates, Hessians,
+    scratch arrays) are left out, and the derivatives of order 3 and more (tensors of 6 n^k
+    entries, whose stores bound their batch): their batch stays
     scalar."""
     bodies = {}
     for f in functions:
-        if f.delegate or f.hessians or f.scratch:
+        if f.delegate or f.hessians or f.scratch or f.kind.startswith("derivative"):
             continue
         names = {name for name, _ in f.inputs} | {name for name, _ in f.lines}
 
@@ -264,14 +265,15 @@ def render_c(
         "framed": [
             {
                 "kind": kind,
+                "order": by_name[kernel.name_of(kind, 0)].order,
                 "outs": by_name[kernel.name_of(kind, 0)].outs,
                 "names": [f"{prefix}_{name}" for name in kernel.table(kind)],
                 "types": ", ".join(
                     [f"const {real} *"] + [f"{real} *"] * len(by_name[kernel.name_of(kind, 0)].outs)
                 ),
-                "doc": by_name[kernel.name_of(kind, 0)].doc if kernel.F == 1 else FRAMED_DOCS[kind],
+                "doc": by_name[kernel.name_of(kind, 0)].doc if kernel.F == 1 else kernel.framed_doc(kind),
             }
-            for kind in FRAMED
+            for kind in kernel.framed
         ],
         "linked": LINKED,
     }

@@ -24,7 +24,15 @@ def casadi_function(f: Any) -> dict[str, Any]:
 
     def table(outs: tuple) -> list[dict[str, Any]]:
         return [
-            {"name": o.name, "vals": o.values, "rows": o.size // max(o.shape[-1], 1), "cols": o.shape[-1]}
+            {
+                "name": o.name,
+                "vals": o.values,
+                "rows": o.size // max(o.shape[-1], 1),
+                "cols": o.shape[-1],
+                "size": o.size,
+                "distinct": o.distinct,
+                "index": o.index,
+            }
             for o in outs
         ]
 

@@ -17,7 +17,7 @@ from types import CodeType, ModuleType
 from typing import Any
 
 from symkin.core.cache import write_atomic
-from symkin.emit.kernel import FRAMED, FRAMED_DOCS, LINKED
+from symkin.emit.kernel import LINKED
 from symkin.emit.templates import python_module
 
 __all__ = ["render_numpy", "load_numpy", "import_source"]
@@ -44,7 +44,7 @@ def render_numpy(kernel: Any) -> dict[str, str]:
             {
                 **vec.__dict__,
                 "scalar_lines": one.lines,
-                "scalar_fill": [_fill(o) for o in (*one.outs, *one.scratch) if o.values],
+                "scalar_fill": [_fill(o, f.name) for o in (*one.outs, *one.scratch) if o.values],
                 # every joint, also those the function does not use: the sum of their squares is
                 # the check (<= MAX_JOINT_VALUE**2: each within +-MAX_JOINT_VALUE, and NaN fails)
                 "unpack": ", ".join(joints) + ("," if len(joints) == 1 else ""),
@@ -64,10 +64,10 @@ def render_numpy(kernel: Any) -> dict[str, str]:
         kernel,
         printed,
         pack_sizes=sorted(sizes),
-        framed_kinds=FRAMED,
+        framed_kinds=kernel.framed,
         linked_kinds=LINKED,
-        tables={kind: kernel.table(kind) for kind in FRAMED},
-        framed_docs=FRAMED_DOCS,
+        tables={kind: kernel.table(kind) for kind in kernel.framed},
+        framed_docs={kind: kernel.framed_doc(kind) for kind in kernel.framed},
     )
 
 
@@ -76,14 +76,18 @@ def render_numpy(kernel: Any) -> dict[str, str]:
 PACK_MAX = 28
 
 
-def _fill(o: Any) -> dict[str, Any]:
-    """How the scalar code writes output ``o``: its name and shape, and chunks (number of values,
-    byte offset, printed values) of at most PACK_MAX values, of nearly equal sizes."""
-    values = [text for _, text in o.values]
+def _fill(o: Any, function: str) -> dict[str, Any]:
+    """How the scalar code of ``function`` writes output ``o``: its name and shape, the array the
+    values go to (``target``, of shape ``alloc``) and chunks (number of values, byte offset,
+    printed values) of at most PACK_MAX values, of nearly equal sizes; a gathered output's
+    distinct values go to ``<name>_of``, then its table ``at`` picks the entries."""
+    values = list(o.distinct) if o.index else [text for _, text in o.values]
     k = -(-len(values) // PACK_MAX)
     bounds = [len(values) * i // k for i in range(k + 1)]
     chunks = [(b - a, 8 * a, ", ".join(values[a:b])) for a, b in zip(bounds, bounds[1:])]
-    return {"name": o.name, "shape": o.shape, "chunks": chunks}
+    at = f"_AT_{function}_{o.name}" if o.index else ""
+    target, alloc = (f"{o.name}_of", (len(values),)) if at else (o.name, o.shape)
+    return {"name": o.name, "shape": o.shape, "chunks": chunks, "at": at, "target": target, "alloc": alloc}
 
 
 def _returned(values: list[str]) -> str:
