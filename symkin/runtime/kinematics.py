@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.compiler.compile import Artifact, build, cache_key
+from symkin.compiler.compile import OPTIONAL_BACKENDS, Artifact, build, cache_key
 from symkin.core.names import function_name
 from symkin.errors import ConfigurationError, SymkinError
 from symkin.model.differential import FrameMethods
@@ -76,7 +76,12 @@ def load_kinematics(
 
 
 def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
-    """The :class:`Kinematics` of ``model`` around its built code ``art``."""
+    """The :class:`Kinematics` of ``model`` around its built code ``art`` (JAX and PyTorch: a
+    :class:`symkin.runtime.diff.kinematics.DiffKinematics`)."""
+    if backend in OPTIONAL_BACKENDS:
+        from symkin.runtime.diff.kinematics import DiffKinematics
+
+        return DiffKinematics(model, backend, art.module, art.files, art.path)  # type: ignore[return-value]
     if backend == "casadi":
         fns = art.module.functions()
         kin = Kinematics(model, backend, casadi_methods(model, fns), art.files, art.path, art.module)
