@@ -69,7 +69,6 @@ class _Plan:
     tol_on: str
     joint_limits: bool
     frame: Any
-    seed: int
 
 
 def _step(ops: Ops, plan: _Plan, lam: Any, we: Any, J: Any, e: Any, r2: Any, done: Any) -> Any:
@@ -181,9 +180,10 @@ def _implicit(ops: Ops, fkjac: Any, q: Any, Tep: Any, we: Any) -> Any:
     return q + (dq - ops.detach(dq))
 
 
-def plan_of(kin: Any, options: dict[str, Any]) -> tuple[_Plan, Any]:
+def plan_of(kin: Any, options: dict[str, Any]) -> tuple[_Plan, Any, int]:
     """The validated options (:class:`symkin.runtime.ik_problem.IKOptions`: the NumPy and C
-    solvers' checks) as a :class:`_Plan` and the IKOptions themselves."""
+    solvers' checks) as a :class:`_Plan`, the IKOptions themselves and the seed of the random
+    starts (not in the plan: the JAX solver compiled for a plan serves every seed)."""
     from symkin.runtime.ik_problem import IKOptions
 
     frame = options.pop("frame", None)
@@ -196,8 +196,8 @@ def plan_of(kin: Any, options: dict[str, Any]) -> tuple[_Plan, Any]:
         raise ParameterError(f"{len(opt.starts)} starts given for slimit={slimit} searches per target")
     seed = int(np.random.SeedSequence().entropy % 2**63) if seed is None else int(seed)
     plan = _Plan(opt.method, opt.damping, opt.pinv, opt.ilimit, opt.slimit, opt.tol, opt.tol_on,
-                 opt.joint_limits, frame, seed)  # fmt: skip
-    return plan, opt
+                 opt.joint_limits, frame)  # fmt: skip
+    return plan, opt, seed
 
 
 def solve(kin: Any, Tep: Any, q0: Any = None, **options: Any) -> DiffIKResult:
@@ -206,7 +206,7 @@ def solve(kin: Any, Tep: Any, q0: Any = None, **options: Any) -> DiffIKResult:
     searches per target, default :data:`DEFAULT_SLIMIT`), ``seed`` for the random starts and
     ``frame``."""
     ops = kin.ops
-    plan, opt = plan_of(kin, dict(options))
+    plan, opt, seed = plan_of(kin, dict(options))
     if not ops.is_array(Tep) or not ops.floating(Tep) or Tep.ndim < 2 or tuple(Tep.shape[-2:]) != (4, 4):
         raise PoseError(
             f"{kin.name}: Tep must be a {kin.backend} array (..., 4, 4) of float32 or float64, "
@@ -218,7 +218,7 @@ def solve(kin: Any, Tep: Any, q0: Any = None, **options: Any) -> DiffIKResult:
     c = partial(ops.const, like=Tb[..., 0, 0])
     lo, hi = c(opt.qlim[0]), c(opt.qlim[1])
     sample_lo, sample_hi = c(opt.sample[0]), c(opt.sample[1])
-    Q = ops.uniform(plan.seed, (B, S, n), sample_lo, sample_hi)
+    Q = ops.uniform(seed, (B, S, n), sample_lo, sample_hi)
     first = 0
     if q0 is not None:
         q0 = ops.cast(kin.check_q(q0), Tb)
