@@ -1,4 +1,5 @@
-"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, qrmc, calls, compile, urdf, reach, collide)."""
+"""``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, qrmc, calls, compile, urdf, reach, collide,
+diff)."""
 
 from __future__ import annotations
 
@@ -21,16 +22,17 @@ def add_parser(sub: Any) -> None:
         "benchmarks: kin (per call, batched; with trees), tree (the tree rows alone), ik (Table 1), "
         "mmc (Table I), qrmc (QRMC vs RRMC at singularities), calls (one at a time), compile (cold, by "
         "chain length), urdf (every chain of "
-        "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK)",
+        "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK), diff (the "
+        "JAX and PyTorch backends against pytorch_kinematics)",
     )
     s.add_argument(
         "what",
-        choices=("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide"),
+        choices=("kin", "tree", "ik", "mmc", "qrmc", "calls", "compile", "urdf", "reach", "collide", "diff"),
         help="which benchmark",
     )
     add_robot_argument(
         s,
-        "default: panda for kin, compile and collide, ur5 for ik and reach, the paper's three for mmc, "
+        "default: panda for kin, compile, collide and diff, ur5 for ik and reach, the paper's three for mmc, "
         "ur5 and panda for calls",
     )
     s.add_argument(
@@ -46,7 +48,7 @@ def add_parser(sub: Any) -> None:
         type=at_least_1,
         help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000); "
         "qrmc: random tasks on the UR5 and the Panda besides the singular ones (default 0); urdf: at most "
-        "N chains (default all)",
+        "N chains (default all); diff: IK targets (default 1024)",
     )
     s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
     s.add_argument(
@@ -72,6 +74,14 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--no-cold", action="store_true", help="kin, tree: skip the cold compile of each tree")
     s.add_argument(
         "--backends", default="c,numpy,casadi", help="urdf: backends to compile each chain on (default all)"
+    )
+    s.add_argument(
+        "--batches",
+        default="1,1024,100000",
+        help="diff: batch sizes, comma separated (default 1,1024,100000)",
+    )
+    s.add_argument(
+        "--no-torch-compile", action="store_true", help="diff: skip torch.compile (slow to compile)"
     )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=run, robot_option=None)
@@ -132,6 +142,8 @@ def run(args: argparse.Namespace) -> int:
         )
         print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_collide(result))
         return 0
+    if args.what == "diff":
+        return _diff(args)
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -252,3 +264,21 @@ def _jsonable(x: Any) -> Any:
     if isinstance(x, (np.ndarray, np.generic)):
         return x.tolist()
     raise TypeError(f"not JSON serialisable: {type(x).__name__}")
+
+
+def _diff(args: argparse.Namespace) -> int:
+    """``symkin bench diff``: the JAX and PyTorch backends against pytorch_kinematics."""
+    from symkin.bench.diff import format_diff, run_diff
+
+    try:
+        batches = tuple(int(x) for x in args.batches.replace(",", " ").split())
+    except ValueError:
+        batches = ()
+    if not batches or min(batches) < 1:
+        raise UserError(f"--batches must be positive batch sizes like '1,1024,100000', not {args.batches!r}")
+    report = run_diff(
+        single_chain(args, "panda"), batches=batches, problems=args.problems or 1024, seed=args.seed,
+        compile_torch=not args.no_torch_compile, progress=not args.json,
+    )  # fmt: skip
+    print(json.dumps(report.as_dict(), indent=2, default=_jsonable) if args.json else format_diff(report))
+    return 0

@@ -108,7 +108,8 @@ def require(backend: str) -> None:
         from symkin.errors import MissingExtraError
 
         raise MissingExtraError(
-            f"the {backend} backend needs {module}: pip install 'symkin[{extra}]' (see the README for the CPU build)"
+            f"the {backend} backend needs {module}: pip install 'symkin[{extra}]' "
+            "(see the README for the CPU build)"
         )
 
 

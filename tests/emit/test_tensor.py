@@ -106,7 +106,9 @@ def test_autodiff_of_the_emitted_fk_equals_the_emitted_jacobian_and_hessian(name
         T, J = (L.numpy(a) for a in kin.function("fkine_jacob0")(x))
         assert_close(_twist_of_pose_derivative(dT, T), J, 1e-12, f"{name} d fkine / dq")
         dJ = L.numpy(L.jacfwd(kin.function("jacob0"))(x))  # (6, n, n): dJ[a, b] / dq_i
-        assert_close(np.moveaxis(dJ, -1, 0), L.numpy(kin.function("hessian0")(x)), 1e-12, f"{name} d jacob0 / dq")
+        assert_close(
+            np.moveaxis(dJ, -1, 0), L.numpy(kin.function("hessian0")(x)), 1e-12, f"{name} d jacob0 / dq"
+        )
 
 
 def test_jax_jit_vmap_and_grad():

@@ -96,15 +96,25 @@ class DiffCollision:
                 r = ops.const(self.radius[idx], X)
                 if kind == "spheres":
                     c, ro = P[..., :3], P[..., 3]
-                    d = dist.capsule_sphere(ops, A, B, r, c, ro) if cap else dist.sphere_sphere(ops, A, r, c, ro)
+                    d = (
+                        dist.capsule_sphere(ops, A, B, r, c, ro)
+                        if cap
+                        else dist.sphere_sphere(ops, A, r, c, ro)
+                    )
                 elif kind == "capsules":
                     a, b, ro = P[..., :3], P[..., 3:6], P[..., 6]
-                    d = dist.capsule_capsule(ops, A, B, r, a, b, ro) if cap else dist.capsule_sphere(
-                        ops, a, b, ro, A, r
+                    d = (
+                        dist.capsule_capsule(ops, A, B, r, a, b, ro)
+                        if cap
+                        else dist.capsule_sphere(ops, a, b, ro, A, r)
                     )
                 else:
                     c, h, R = P[..., :3], P[..., 3:6], P[..., 6:].reshape((len(O), 1, 3, 3))
-                    d = dist.capsule_box(ops, A, B, r, c, h, R) if cap else dist.sphere_box(ops, A, r, c, h, R)
+                    d = (
+                        dist.capsule_box(ops, A, B, r, c, h, R)
+                        if cap
+                        else dist.sphere_box(ops, A, r, c, h, R)
+                    )
                 parts.append(d)
             d = xp.concatenate(parts, -1)[..., self.shape_order]  # (..., O, S)
             out.append(d.reshape(tuple(d.shape[:-2]) + (-1,)))

@@ -160,7 +160,7 @@ def _core(ops: Ops, fkjac: Any, plan: _Plan, Tep: Any, Q0: Any, lam: Any, we: An
     xp = ops.xp
     Q, res, done, it = _search(ops, fkjac, plan, Tep, Q0, lam, we)
     Q = xp.where(done[..., None], _wrap(ops, Q, lo, hi, revolute), Q)
-    inside = ((Q >= lo) & (Q <= hi)).all(-1) if plan.joint_limits else done
+    inside = ((lo <= Q) & (hi >= Q)).all(-1) if plan.joint_limits else done
     success = done & inside
     S = Q.shape[1]
     index = ops.const(np.arange(S) - S, res)  # successes first, by search order

@@ -83,7 +83,10 @@ class DiffKinematics:
         return np.array(self.module.REVOLUTE, dtype=bool)
 
     def __repr__(self) -> str:
-        return f"DiffKinematics(robot={self.name!r}, n={self.n}, frames={list(self.frames)}, backend={self.backend!r})"
+        return (
+            f"DiffKinematics(robot={self.name!r}, n={self.n}, frames={list(self.frames)}, "
+            f"backend={self.backend!r})"
+        )
 
     def __reduce__(self) -> tuple[Any, tuple[Any, str]]:
         """Pickle as (model, backend): unpickling compiles again (from the compile cache)."""
@@ -153,7 +156,8 @@ class DiffKinematics:
 
     # -- collision geometry ------------------------------------------------------------------
     def collision(self) -> Any:
-        """The collision queries of the model's geometry (:class:`symkin.runtime.diff.collision.DiffCollision`)."""
+        """The collision queries of the model's geometry
+        (:class:`symkin.runtime.diff.collision.DiffCollision`)."""
         col = self.__dict__.get("_collision")
         if col is None:
             from symkin.runtime.diff.collision import DiffCollision

@@ -63,4 +63,3 @@ def pose_error(ops: Ops, T: Any, Tep: Any) -> Any:
     xp = ops.xp
     R = Tep[..., :3, :3] @ xp.swapaxes(T[..., :3, :3], -1, -2)
     return xp.concatenate((Tep[..., :3, 3] - T[..., :3, 3], angle_axis(ops, R)), -1)
-
