@@ -5,6 +5,8 @@ jacfwd/jacrev, torch.compile), dtypes and devices, and bad input."""
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -170,6 +172,17 @@ def test_torch_output_follows_the_input_device():
     for kind, shape in (("fkine", (5, 4, 4)), ("jacob0", (5, 6, 7)), ("hessian0", (5, 7, 6, 7))):
         out = getattr(kin, kind)(q)
         assert out.device.type == "meta" and out.dtype == torch.float32 and tuple(out.shape) == shape
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_pickles_as_robot_and_backend(backend):
+    L = lib(backend)
+    robot = load("planar3")
+    kin = _kin(robot, backend)
+    back = pickle.loads(pickle.dumps(kin))
+    assert type(back) is type(kin) and back.backend == backend and back.name == robot.name
+    q = robot.random_q(3, seed=0)
+    assert_close(L.numpy(back.function("fkine")(L.array(q))), robot.fkine(q), 1e-12, "unpickled fkine")
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

@@ -33,6 +33,8 @@ class DiffKinematics:
     Attributes: ``model`` (also ``robot`` and ``tree``), ``backend`` ("jax" or "torch"), ``n``,
     ``name``, ``joint_names``, ``qlim`` (NumPy, (2, n)), ``revolute``, ``frames``, ``kinds`` (the
     generated functions), ``files`` (the generated sources), ``path``, ``module``, ``ops``.
+    It pickles as (model, backend), unpickling compiles again (the reducer is registered by
+    :func:`symkin.runtime.kinematics.kinematics_of`, which makes these objects).
     """
 
     def __init__(
@@ -87,12 +89,6 @@ class DiffKinematics:
             f"DiffKinematics(robot={self.name!r}, n={self.n}, frames={list(self.frames)}, "
             f"backend={self.backend!r})"
         )
-
-    def __reduce__(self) -> tuple[Any, tuple[Any, str]]:
-        """Pickle as (model, backend): unpickling compiles again (from the compile cache)."""
-        from symkin.runtime.load import compile as compile_model
-
-        return (compile_model, (self.model, self.backend))
 
     def check_q(self, q: Any) -> Any:
         """q as the generated functions take it (ConfigurationError for a wrong shape or dtype)."""
