@@ -105,3 +105,15 @@ def test_bad_targets_and_options_raise_symkin_errors(backend):
         kin.ik(L.array(np.eye(4)), method="QP")
     with pytest.raises(ParameterError, match="starts"):
         kin.ik(L.array(np.eye(4)), slimit=1, starts=np.zeros((2, 6)))
+
+
+def test_a_singular_step_marks_its_search_dead_instead_of_raising():
+    """torch.linalg.solve raises on one singular matrix of a batch; the solve of the IK gives NaN
+    there (as JAX does) and solves the rest."""
+    L = lib("torch")
+    from symkin.runtime.diff.ops import ops_of
+
+    A = L.array(np.stack([np.eye(3), np.zeros((3, 3)), 2 * np.eye(3)]))
+    x = L.numpy(ops_of("torch").solve(A, L.array(np.ones((3, 3)))))
+    assert np.isnan(x[1]).all()
+    np.testing.assert_array_equal(x[[0, 2]], [[1.0, 1.0, 1.0], [0.5, 0.5, 0.5]])

@@ -160,7 +160,10 @@ class TorchOps(Ops):
         return self.xp.take_along_dim(x, index, dim=axis)
 
     def solve(self, A: Any, b: Any) -> Any:
-        return self.xp.linalg.solve(A, b[..., None])[..., 0]
+        """x of A x = b; NaN rows where A is singular (as JAX's solve gives, not an exception: the
+        IK marks those searches dead and the others go on)."""
+        x, info = self.xp.linalg.solve_ex(A, b[..., None])
+        return self.xp.where((info != 0)[..., None], float("nan"), x[..., 0])
 
     def pinv(self, A: Any) -> Any:
         return self.xp.linalg.pinv(A)
