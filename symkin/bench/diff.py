@@ -129,7 +129,8 @@ def _kin_paths(
             paths["pk"] = lambda: chain.jacobian(Q["torch"])
     if "torch" in kins:
         paths["torch"] = partial_call(getattr(kins["torch"], what), Q["torch"])
-        paths["torch.compile"] = partial_call(kins["torch.compile"][what], Q["torch"])
+        if "torch.compile" in kins:
+            paths["torch.compile"] = partial_call(kins["torch.compile"][what], Q["torch"])
     if "jax" in kins:
         fn = getattr(kins["jax"], what)
         paths["jax.jit"] = lambda: fn(Q["jax"]).block_until_ready()
@@ -228,12 +229,11 @@ def run_diff(
         if jax is not None:
             Q["jax"] = jax.numpy.asarray(Qn)
         chain = pk_chain(robot, tdt) if have_pk else None
-        if "torch" in kins:
+        if "torch" in kins and compile_torch:  # compiled per dtype and batch (dynamic=False)
             kins["torch.compile"] = {
-                what: (torch.compile(getattr(kins["torch"], what), dynamic=False) if compile_torch
-                       else getattr(kins["torch"], what))
+                what: torch.compile(getattr(kins["torch"], what), dynamic=False)
                 for what in ("fkine", "jacob0")
-            }  # fmt: skip
+            }
         for what in ("fkine", "jacob0"):
             best, first = _timed(
                 _kin_paths(what, kins, chain, Q), rounds if N < 100_000 else max(2, rounds // 2)

@@ -30,7 +30,7 @@ def test_a_small_run_measures_every_path_and_solves_its_targets():
     report = run_diff("planar3", batches=(1, 16), dtypes=("float64",), rounds=1, libraries=("torch",),
                       problems=16, compile_torch=False)  # fmt: skip
     paths = {r.path for r in report.rows}
-    assert {"torch", "torch.compile"} <= paths
+    assert "torch" in paths and "torch.compile" not in paths  # compile_torch=False: no such rows
     assert {(r.what, r.batch) for r in report.rows} == {(w, b) for w in ("fkine", "jacob0") for b in (1, 16)}
     assert all(r.seconds > 0 for r in report.rows)
     ours = [r for r in report.ik if r.path == "torch"]
