@@ -28,7 +28,7 @@ TEST_COMMAND = (
     "python -m pytest -q -n auto"
 )
 
-OPTIONAL = ("roboticstoolbox",)  # blocks showing the compare extra run where it is installed
+OPTIONAL = ("roboticstoolbox", "jax", "torch")  # blocks of optional extras run where installed
 
 
 def _name(page: Path) -> str:

@@ -1,5 +1,5 @@
 """``symkin bench WHAT``: the benchmarks (kin, tree, ik, mmc, qrmc, calls, sincos, compile, urdf, reach,
-collide, meshes)."""
+collide, meshes, diff)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ __all__ = ["add_parser", "run"]
 #: the benchmarks ``symkin bench`` runs
 BENCHMARKS = (
     *("kin", "tree", "ik", "mmc", "qrmc", "calls", "sincos"),
-    *("compile", "urdf", "reach", "collide", "meshes"),
+    *("compile", "urdf", "reach", "collide", "meshes", "diff"),
 )
 
 
@@ -37,7 +37,8 @@ def add_parser(sub: Any) -> None:
         "sin/cos against glibc's), compile (cold, by "
         "chain length), urdf (every chain of "
         "example-robot-data), reach (Dask maps), collide (collision checks, collision-aware IK), meshes "
-        "(the covering sphere model against Pinocchio + coal on the real meshes)",
+        "(the covering sphere model against Pinocchio + coal on the real meshes), diff (the JAX and "
+        "PyTorch backends against pytorch_kinematics)",
     )
     s.add_argument(
         "what",
@@ -46,8 +47,8 @@ def add_parser(sub: Any) -> None:
     )
     add_robot_argument(
         s,
-        "default: panda for kin, sincos, compile, collide and meshes, ur5 for ik and reach, the paper's "
-        "three for mmc, ur5 and panda for calls",
+        "default: panda for kin, sincos, compile, collide, meshes and diff, ur5 for ik and reach, the "
+        "paper's three for mmc, ur5 and panda for calls",
     )
     s.add_argument(
         "--robot", dest="robot_option", action=Deprecated, new="the ROBOT argument", help=argparse.SUPPRESS
@@ -70,7 +71,8 @@ def add_parser(sub: Any) -> None:
         type=at_least_1,
         help="ik: problems (default 10000; 1000 with --analytic); mmc: tasks per robot (default 1000); "
         "qrmc: random tasks on the UR5 and the Panda besides the singular ones (default 0); urdf: at most "
-        "N chains (default all); meshes: uniform configurations of each kind (default 100000)",
+        "N chains (default all); meshes: uniform configurations of each kind (default 100000); diff: IK "
+        "targets (default 1024)",
     )
     s.add_argument("--seed", type=int, default=0, help="seed of the random problems")
     s.add_argument(
@@ -107,6 +109,14 @@ def add_parser(sub: Any) -> None:
         "--unrolled",
         action="store_true",
         help="collide --build: also that model as straight-line code (minutes)",
+    )
+    s.add_argument(
+        "--batches",
+        default="1,1024,100000",
+        help="diff: batch sizes, comma separated (default 1,1024,100000)",
+    )
+    s.add_argument(
+        "--no-torch-compile", action="store_true", help="diff: skip torch.compile (slow to compile)"
     )
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=run, robot_option=None)
@@ -209,6 +219,8 @@ def run(args: argparse.Namespace) -> int:
             for k in ("self", "obstacles")
         )
         return 1 if missed else 0
+    if args.what == "diff":
+        return _diff(args)
     if args.what == "kin":
         from symkin.bench.kin import format_kin, run_kin
 
@@ -329,3 +341,21 @@ def _jsonable(x: Any) -> Any:
     if isinstance(x, (np.ndarray, np.generic)):
         return x.tolist()
     raise TypeError(f"not JSON serialisable: {type(x).__name__}")
+
+
+def _diff(args: argparse.Namespace) -> int:
+    """``symkin bench diff``: the JAX and PyTorch backends against pytorch_kinematics."""
+    from symkin.bench.diff import format_diff, run_diff
+
+    try:
+        batches = tuple(int(x) for x in args.batches.replace(",", " ").split())
+    except ValueError:
+        batches = ()
+    if not batches or min(batches) < 1:
+        raise UserError(f"--batches must be positive batch sizes like '1,1024,100000', not {args.batches!r}")
+    report = run_diff(
+        single_chain(args, "panda"), batches=batches, problems=args.problems or 1024, seed=args.seed,
+        compile_torch=not args.no_torch_compile, progress=not args.json,
+    )  # fmt: skip
+    print(json.dumps(report.as_dict(), indent=2, default=_jsonable) if args.json else format_diff(report))
+    return 0

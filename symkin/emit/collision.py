@@ -44,6 +44,7 @@ __all__ = [
     "render_collision",
     "render_collision_numpy",
     "render_collision_casadi",
+    "render_collision_tensor",
     "collision_module_name",
     "collision_tables",
 ]
@@ -469,15 +470,43 @@ def render_collision_casadi(layout: Any, command: str = "symkin generate") -> di
     return _render_python(layout, "casadi", command)
 
 
+def render_collision_tensor(layout: Any, backend: str, command: str = "symkin generate") -> dict[str, str]:
+    """The generated JAX or PyTorch collision module of ``layout`` (``backend`` "jax" or "torch"):
+    ``{"symkin_<robot>_collision_<backend>.py": ...}``, ``points(q)`` from the same straight-line
+    link poses on arrays of any batch shape (the JAX module materialises each link pose on the CPU,
+    as its kinematics module does), the geometry as literal Tables; the pair distances are
+    :mod:`symkin.runtime.diff.distance`."""
+    return _render_python(layout, backend, command)
+
+
+def _segment_kept(fk: list[str]) -> list[str]:
+    """The JAX link poses: each segment's pose ``T[k]`` passed through ``_keep_row`` once written."""
+    out: list[str] = []
+    last = None
+    for line in fk:
+        if line.startswith("# segment ") and last is not None:
+            out.append(f"T[{last}] = _keep_row(T[{last}])")
+        if line.startswith("# segment "):
+            last = int(line.split()[2].rstrip(":"))
+        out.append(line)
+    if last is not None:
+        out.append(f"T[{last}] = _keep_row(T[{last}])")
+    return out
+
+
+_LIBRARY = {"numpy": "NumPy", "casadi": "CasADi", "jax": "JAX", "torch": "PyTorch"}
+
+
 def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
     tree = layout.tree
     tables = Tables.of(layout)
     proved = proved_apart(layout)  # the generated in_collision skips them within the limits
     points = [(k, [_num(x) for x in p]) for s, k in zip(layout.shapes, layout.segment) for p in s.points]
-    module = collision_module_name(tree.name) + ("_casadi" if backend == "casadi" else "")
+    module = collision_module_name(tree.name) + ("" if backend == "numpy" else f"_{backend}")
     fk, vals = _fk_lines(tree, "py")
     text = render(
         f"{backend}/collision.py.j2",
+        library=_LIBRARY[backend],
         module=module,
         robot=comment_safe(tree.name, 80),
         name_literal=ascii(tree.name),
@@ -505,7 +534,7 @@ def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
             "proved": _py_tuple([f"({i}, {j})" for i, j in sorted(proved)]),
             "qlim": "None" if not proved else _py_rows(tree.qlim),
         },
-        fk=fk,
+        fk=_segment_kept(fk) if backend == "jax" else fk,
         point_code=_point_lines(points, "py", vals),
     )
     return {f"{module}.py": text}

@@ -19,6 +19,8 @@ __all__ = [
     "NumPyKinPrinter",
     "MathPrinter",
     "CasADiPrinter",
+    "JaxPrinter",
+    "TorchPrinter",
     "float_literal",
 ]
 
@@ -165,3 +167,17 @@ class CasADiPrinter(_PyLikePrinter):
     """CasADi SX expressions (``ca.cos``)."""
 
     module = "ca"
+
+
+class JaxPrinter(_PositiveFirst, _PyLikePrinter):
+    """``jax.numpy`` expressions (``jnp.cos``) on arrays of any batch shape; numbers stay Python
+    floats, which JAX treats as weakly typed (the array's float32 or float64 is kept)."""
+
+    module = "jnp"
+
+
+class TorchPrinter(_PositiveFirst, _PyLikePrinter):
+    """``torch`` expressions (``torch.cos``) on tensors of any batch shape; numbers stay Python
+    floats, so the tensor's dtype and device are kept."""
+
+    module = "torch"

@@ -184,7 +184,8 @@ def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05)
 def collision_module(layout: Layout, backend: str = "numpy") -> Any:
     """The generated collision module of ``layout`` for ``backend`` ("numpy":
     :func:`symkin.emit.collision.render_collision_numpy`; "casadi":
-    :func:`~symkin.emit.collision.render_collision_casadi`), imported once per layout (its bytecode
+    :func:`~symkin.emit.collision.render_collision_casadi`; "jax", "torch":
+    :func:`~symkin.emit.collision.render_collision_tensor`), imported once per layout (its bytecode
     cached by content)."""
     memo = layout.__dict__.get("_modules")
     if memo is None:
@@ -196,8 +197,12 @@ def collision_module(layout: Layout, backend: str = "numpy") -> Any:
         from symkin.emit import collision as emit
         from symkin.emit.numpy.backend import load_numpy
 
-        render = emit.render_collision_casadi if backend == "casadi" else emit.render_collision_numpy
-        module = memo[backend] = load_numpy(render(layout), cache_dir() / backend)
+        if backend in ("jax", "torch"):
+            files = emit.render_collision_tensor(layout, backend)
+        else:
+            render = emit.render_collision_casadi if backend == "casadi" else emit.render_collision_numpy
+            files = render(layout)
+        module = memo[backend] = load_numpy(files, cache_dir() / backend)
     return module
 
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.compiler.compile import Artifact, build, cache_key, check_derivatives
+from symkin.compiler.compile import OPTIONAL_BACKENDS, Artifact, build, cache_key, check_derivatives
 from symkin.core.names import function_name
 from symkin.errors import ConfigurationError, SymkinError
 from symkin.model.derivatives import MAX_ORDER, check_order, derivative_kind
@@ -58,6 +58,11 @@ def _rebuild(model: Any, backend: str) -> Kinematics:
     return load_kinematics(model, backend)
 
 
+def _reduce_diff(kin: Any) -> tuple[Any, tuple[Any, str]]:
+    """The pickle of a JAX or PyTorch :class:`~symkin.runtime.diff.kinematics.DiffKinematics`."""
+    return (_rebuild, (kin.model, kin.backend))
+
+
 # symkin 0.1.0 pickled compiled trees as symkin.runtime.tree_kinematics._rebuild: the same function
 sys.modules.setdefault(f"{__package__}.tree_kinematics", sys.modules[__name__])
 
@@ -82,7 +87,15 @@ def load_kinematics(
 
 
 def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
-    """The :class:`Kinematics` of ``model`` around its built code ``art``."""
+    """The :class:`Kinematics` of ``model`` around its built code ``art`` (JAX and PyTorch: a
+    :class:`symkin.runtime.diff.kinematics.DiffKinematics`)."""
+    if backend in OPTIONAL_BACKENDS:
+        import copyreg
+
+        from symkin.runtime.diff.kinematics import DiffKinematics
+
+        copyreg.pickle(DiffKinematics, _reduce_diff)  # pickled as (model, backend), as Kinematics
+        return DiffKinematics(model, backend, art.module, art.files, art.path)  # type: ignore[return-value]
     if backend == "casadi":
         fns = art.module.functions()
         kin = Kinematics(model, backend, casadi_methods(model, fns), art.files, art.path, art.module)

@@ -28,6 +28,9 @@ def compile(  # noqa: A001
     ``backend`` is ``"c"`` (a generated C library behind a CPython extension, the fast path),
     ``"numpy"`` (a generated Python module, batched) or ``"casadi"`` (``casadi.Function`` objects,
     for optimisation problems). Every backend has the numeric reference's methods and shapes.
+    ``"jax"`` and ``"torch"`` (extras ``jax``, ``torch``) give a
+    :class:`symkin.runtime.diff.kinematics.DiffKinematics` instead: the generated functions on
+    arrays of any batch shape, differentiable, with batched IK and collision distances.
     ``strategy`` chooses how the code is derived (see :func:`symkin.generate`; default by size).
     With ``cache`` the generated code comes from the compile cache and the object from a bounded
     in-process memo when they are there. ``derivatives=k`` also compiles the partial derivatives of

@@ -1,0 +1,138 @@
+"""Signed distances between collision primitives in JAX or PyTorch, differentiable.
+
+The closed forms of :mod:`symkin.geometry.distance` (same conventions, constants and degenerate
+cases): sphere-sphere, capsule-sphere, capsule-capsule (Ericson, Real-Time Collision Detection,
+2005, 5.1.9), sphere-box and capsule-box (the box's signed distance field, minimised along the
+segment by golden-section search). Each returns the signed distance ``d`` (...) only. Where a
+distance is a minimum over a closest-point parameter (a point on a segment), the parameter is
+found without gradients and the distance is evaluated there: by the envelope theorem that is the
+derivative of the minimum (``n . (pa' - pb')``, the reference's distance gradient), and it spares
+the autodiff the search. Lengths take their square root only where they exceed
+:data:`symkin.geometry.distance.DIST_EPS` (finite gradients for touching cores).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from symkin.geometry.distance import DIST_EPS, GOLDEN_ITERS, PAR_EPS, SEG_EPS
+from symkin.runtime.diff.ops import Ops
+
+__all__ = [
+    "sphere_sphere",
+    "capsule_sphere",
+    "capsule_capsule",
+    "sphere_box",
+    "capsule_box",
+]
+
+_INV_PHI = 0.6180339887498948482  # (sqrt(5) - 1) / 2
+
+
+def _dot(u: Any, v: Any) -> Any:
+    return (u * v).sum(-1)
+
+
+def _length(ops: Ops, v: Any) -> Any:
+    """|v| over the last axis, with a finite gradient where |v| <= DIST_EPS (there: 0)."""
+    xp = ops.xp
+    s = _dot(v, v)
+    ok = s > DIST_EPS * DIST_EPS
+    return xp.where(ok, xp.sqrt(xp.where(ok, s, 1.0)), 0.0)
+
+
+def _clamp01(ops: Ops, x: Any) -> Any:
+    return ops.clip(x, 0.0, 1.0)
+
+
+def _point_segment(ops: Ops, p: Any, a: Any, b: Any) -> Any:
+    """Parameter t in [0, 1] of the segment a-b's point closest to p (0 for a point segment)."""
+    xp = ops.xp
+    ab = b - a
+    l2 = _dot(ab, ab)
+    ok = l2 > SEG_EPS
+    return xp.where(ok, _clamp01(ops, _dot(p - a, ab) / xp.where(ok, l2, 1.0)), 0.0)
+
+
+def _segment_closest(ops: Ops, a1: Any, b1: Any, a2: Any, b2: Any) -> tuple[Any, Any]:
+    """Parameters (s, t) of the closest points of two segments (as the reference's)."""
+    xp = ops.xp
+    d1, d2, r = b1 - a1, b2 - a2, a1 - a2
+    a, e, f, c, b = _dot(d1, d1), _dot(d2, d2), _dot(d2, r), _dot(d1, r), _dot(d1, d2)
+    ok1, ok2 = a > SEG_EPS, e > SEG_EPS
+    a_s, e_s = xp.where(ok1, a, 1.0), xp.where(ok2, e, 1.0)
+    denom = a * e - b * b
+    skew = denom > PAR_EPS * a * e
+    s_gen = xp.where(skew, _clamp01(ops, (b * f - c * e) / xp.where(skew, denom, 1.0)), 0.0)
+    t_gen = (b * s_gen + f) / e_s
+    s_gen = xp.where(
+        t_gen < 0.0, _clamp01(ops, -c / a_s), xp.where(t_gen > 1.0, _clamp01(ops, (b - c) / a_s), s_gen)
+    )
+    t_gen = _clamp01(ops, t_gen)
+    s = xp.where(ok1, xp.where(ok2, s_gen, _clamp01(ops, -c / a_s)), 0.0)
+    t = xp.where(ok2, xp.where(ok1, t_gen, _clamp01(ops, f / e_s)), 0.0)
+    return s, t
+
+
+def _box_sdf(ops: Ops, p: Any, center: Any, h: Any, R: Any) -> Any:
+    """The box's exact signed distance field at p (box axes the columns of R)."""
+    xp = ops.xp
+    v = p - center
+    x = (R * v[..., :, None]).sum(-2)  # R^T v: box coordinates
+    qd = xp.abs(x) - h
+    m = xp.where(qd > 0.0, qd, 0.0)
+    qmax = xp.amax(qd, -1)
+    return _length(ops, m) + xp.where(qmax < 0.0, qmax, 0.0)
+
+
+def sphere_sphere(ops: Ops, c1: Any, r1: Any, c2: Any, r2: Any) -> Any:
+    """Sphere (c1, r1) against sphere (c2, r2)."""
+    return _length(ops, c1 - c2) - r1 - r2
+
+
+def capsule_sphere(ops: Ops, a1: Any, b1: Any, r1: Any, c2: Any, r2: Any) -> Any:
+    """Capsule (segment a1-b1, r1) against sphere (c2, r2)."""
+    t = ops.detach(_point_segment(ops, c2, a1, b1))
+    return _length(ops, a1 + t[..., None] * (b1 - a1) - c2) - r1 - r2
+
+
+def capsule_capsule(ops: Ops, a1: Any, b1: Any, r1: Any, a2: Any, b2: Any, r2: Any) -> Any:
+    """Capsule (a1-b1, r1) against capsule (a2-b2, r2)."""
+    s, t = _segment_closest(ops, *(ops.detach(x) for x in (a1, b1, a2, b2)))
+    pa = a1 + s[..., None] * (b1 - a1)
+    pb = a2 + t[..., None] * (b2 - a2)
+    return _length(ops, pa - pb) - r1 - r2
+
+
+def sphere_box(ops: Ops, c: Any, r: Any, center: Any, h: Any, R: Any) -> Any:
+    """Sphere (c, r) against box (center, half extents h, rotation R)."""
+    return _box_sdf(ops, c, center, h, R) - r
+
+
+def capsule_box(ops: Ops, a: Any, b: Any, r: Any, center: Any, h: Any, R: Any) -> Any:
+    """Capsule (a-b, r) against box (center, h, R): the box SDF minimised along the segment by
+    golden-section search (GOLDEN_ITERS steps, ties moving both ends in), then the endpoints, as
+    :func:`symkin.geometry.distance.capsule_box`."""
+    xp = ops.xp
+    A, B = ops.detach(a), ops.detach(b)
+
+    def f(t: Any) -> Any:
+        return _box_sdf(ops, A + t[..., None] * (B - A), center, h, R)
+
+    one = f(xp.zeros_like(A[..., 0])) * 0.0 + 1.0  # ones of the pair's batch shape
+    lo, hi = 0.0 * one, one
+    c, d = hi - _INV_PHI * (hi - lo), lo + _INV_PHI * (hi - lo)
+    fc, fd = f(c), f(d)
+    for _ in range(GOLDEN_ITERS):
+        left, right = fc < fd, fd < fc
+        lo = xp.where(left, lo, c)
+        hi = xp.where(right, hi, d)
+        c_new, d_new = hi - _INV_PHI * (hi - lo), lo + _INV_PHI * (hi - lo)
+        fc_new, fd_new = f(c_new), f(d_new)
+        c, d = xp.where(right, d, c_new), xp.where(left, c, d_new)
+        fc, fd = xp.where(right, fd, fc_new), xp.where(left, fc, fd_new)
+    t = 0.5 * (lo + hi)
+    ft, f0, f1 = f(t), f(0.0 * one), f(one)
+    t = xp.where(f0 < ft, 0.0, t)
+    t = xp.where(f1 < xp.where(f0 < ft, f0, ft), 1.0, t)
+    return _box_sdf(ops, a + ops.detach(t)[..., None] * (b - a), center, h, R) - r
