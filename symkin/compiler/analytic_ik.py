@@ -14,9 +14,9 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from symkin.compiler.compile import Artifact, cache_key, cached_entry, check_backend
+from symkin.compiler.compile import OPTIONAL_BACKENDS, Artifact, cache_key, cached_entry, check_backend
 from symkin.core.cache import cache_dir
-from symkin.errors import NoAnalyticIKError
+from symkin.errors import NoAnalyticIKError, SymkinError
 from symkin.model.robot import Robot
 
 __all__ = ["analytic_key", "build_analytic", "generate_analytic", "analytic_refusal", "NoAnalyticIKError"]
@@ -36,6 +36,11 @@ def generate_analytic(
     from symkin.symbolic.analytic_ik import derive_analytic
 
     check_backend(backend)
+    if backend in OPTIONAL_BACKENDS:
+        raise SymkinError(
+            f"the closed-form IK has no {backend} backend: choose c, numpy or casadi "
+            f"({backend}'s IK is the batched differentiable one, symkin.compile(robot, {backend!r}).ik)"
+        )
     try:
         plan = derive_analytic(robot)
     except NoAnalyticIKError as exc:

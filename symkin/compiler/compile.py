@@ -27,6 +27,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from symkin.compiler.manifest import BACKENDS
 from symkin.core.cache import cache_dir, verified
 from symkin.core.version import __version__
 from symkin.errors import CompileError, SymkinError
@@ -58,7 +59,6 @@ __all__ = [
     "write_files",
 ]
 
-BACKENDS = ("c", "numpy", "casadi", "jax", "torch")
 # the backends whose generated module imports an optional library: backend -> (import, pip extra)
 OPTIONAL_BACKENDS = {"jax": ("jax", "jax"), "torch": ("torch", "torch")}
 STRATEGIES = ("expanded", "program")

@@ -26,6 +26,10 @@ from symkin.model.data import model_of_data
 from symkin.model.robot import Robot
 from symkin.model.tree import Tree
 
+#: the backends a folder of generated code can be for (symkin.compiler.compile.BACKENDS: defined
+#: here, where a manifest's backend is checked, because compile imports this module)
+BACKENDS = ("c", "numpy", "casadi", "jax", "torch")
+
 __all__ = [
     "Manifest",
     "read_manifest",
@@ -146,7 +150,7 @@ def read_manifest(folder: str | Path, name: str | None = None, verify: bool = Tr
         backend, digests = data["backend"], data["files"]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CompileError(f"{where} is not a readable symkin manifest ({exc})") from None
-    if data.get("generator") != "symkin" or backend not in ("c", "numpy", "casadi"):
+    if data.get("generator") != "symkin" or backend not in BACKENDS:
         raise CompileError(f"{where} is not a symkin manifest (backend {backend!r})")
     files: dict[str, str] = {}
     for fname, digest in digests.items():

@@ -51,10 +51,11 @@ def load_compiled(folder: str | Path, name: str | None = None, verify: bool = Tr
     (``symkin compile -o DIR`` or :func:`symkin.write_generated`), as :func:`compile` gives it.
 
     C: the ``.c``/``.h`` files are compiled (cached by content, needs a C compiler) and their
-    extension module imported; NumPy and CasADi: the module in the folder is imported. ``name``
-    picks one robot when the folder holds several (the prefix, the robot or tree name, or the
-    manifest's stem). With ``verify`` a file whose sha256 differs from the manifest's (edited since
-    it was written) raises CompileError; ``verify=False`` loads edited files as they are.
+    extension module imported; NumPy, CasADi, JAX and PyTorch: the module in the folder is
+    imported. ``name`` picks one robot when the folder holds several (the prefix, the robot or tree
+    name, or the manifest's stem). With ``verify`` a file whose sha256 differs from the manifest's
+    (edited since it was written) raises CompileError; ``verify=False`` loads edited files as they
+    are.
     """
     m = read_manifest(folder, name, verify)
     if m.backend == "c":
@@ -64,6 +65,6 @@ def load_compiled(folder: str | Path, name: str | None = None, verify: bool = Tr
         if m.backend == "numpy":
             module = import_module_file(m.folder / pyname, m.files[pyname])
             art = Artifact(m.files, module, m.folder / pyname)
-        else:
-            art = load_artifact({pyname: m.files[pyname]}, "casadi")
+        else:  # CasADi, JAX, PyTorch
+            art = load_artifact({pyname: m.files[pyname]}, m.backend)
     return kinematics_of(m.robot, art, m.backend)

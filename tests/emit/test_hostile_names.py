@@ -1,8 +1,9 @@
 """Arbitrary names in generated code (issue 23, item 7): a robot, joint, link or frame name, or a
-command line, of any text is rendered into every template (chain and tree, C, NumPy and CasADi,
-and the closed-form IK) as inert comment text or an escaped string literal. The C is compiled and
-the Python imported from its bytes (so an encoding declaration in a comment would count) for each
-example, and the loaded code must compute the reference's kinematics under those names.
+command line, of any text is rendered into every template (chain and tree, C, NumPy, CasADi, JAX
+and PyTorch, and the closed-form IK) as inert comment text or an escaped string literal. The C is
+compiled and the Python imported from its bytes (so an encoding declaration in a comment would
+count) for each example, and the loaded code must compute the reference's kinematics under those
+names (JAX and PyTorch in float64, where installed).
 
 Each example compiles C, so the example counts are small; hostile pieces (comment ends,
 backslashes, trigraphs, quotes, newlines, control characters, non-ASCII) are drawn often.
@@ -10,9 +11,12 @@ backslashes, trigraphs, quotes, newlines, control characters, non-ASCII) are dra
 
 from __future__ import annotations
 
+import importlib.util
 import tempfile
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -21,8 +25,8 @@ from hypothesis import strategies as st
 
 import symkin
 from symkin import Robot, Tree
-from symkin.compiler.compile import generate
-from symkin.errors import RobotError
+from symkin.compiler.compile import OPTIONAL_BACKENDS, generate
+from symkin.errors import RobotError, SymkinError
 from tests.conftest import assert_close
 
 FEW = settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -45,6 +49,18 @@ NAME = st.one_of(
 ).filter(_text_ok)
 
 
+def _array_of(backend: str) -> Callable[[np.ndarray], Any] | None:
+    """q as ``backend``'s generated functions take it in float64 (JAX with 64-bit floats on), or
+    None when the backend's library (JAX, PyTorch) is not installed."""
+    if backend not in OPTIONAL_BACKENDS:
+        return np.asarray
+    if importlib.util.find_spec(backend) is None:
+        return None
+    from tests.diff_libs import lib
+
+    return lib(backend).array
+
+
 def _check_files(files: dict[str, str]) -> None:
     """Every generated file is ASCII, and the Python ones compile from their bytes, as an import
     reads them (PEP 263: a ``coding:`` comment on line 1 or 2 would change the encoding)."""
@@ -65,10 +81,13 @@ def test_chain_names_and_commands_in_every_backend(name, joints, command):
             folder = Path(tmp) / backend
             symkin.write_generated(robot, backend, folder, command=command)
             _check_files({p.name: p.read_text() for p in folder.iterdir() if p.suffix in (".c", ".h", ".py")})
+            x = _array_of(backend)
+            if x is None:  # JAX or PyTorch not installed: the files were checked
+                continue
             kin = symkin.load_compiled(folder)  # C compiled, Python imported from the folder
             assert kin.robot.name == name and kin.robot.joint_names == tuple(joints)
-            assert_close(kin.fkine(q), robot.fkine(q), 1e-12, backend)
-            assert_close(kin.jacob0(q, frame=0), robot.jacob0(q, frame=0), 1e-12, backend)
+            assert_close(np.asarray(kin.fkine(x(q))), robot.fkine(q), 1e-12, backend)
+            assert_close(np.asarray(kin.jacob0(x(q), frame=0)), robot.jacob0(q, frame=0), 1e-12, backend)
 
 
 TREE_URDF = """<robot name="t"><link name="base"/><link name="l1"/><link name="fa"/><link name="fb"/>
@@ -109,10 +128,14 @@ def test_tree_link_frame_and_joint_names_in_every_backend(name, joints, links):
     q = np.array([0.4, -0.6])
     for backend in symkin.BACKENDS:
         _check_files(generate(tree, backend))  # the command names the frames too
+        x = _array_of(backend)
+        if x is None:
+            continue
         kin = symkin.compile(tree, backend=backend)
         assert kin.frames == tree.frames
         for frame in tree.frames:  # by name: the C module decodes its frame names from C strings
-            assert_close(kin.fkine(q, frame), plain.fkine(q, "fa" if frame == links[2] else "fb"), 1e-12)
+            T = np.asarray(kin.fkine(x(q), frame))
+            assert_close(T, plain.fkine(q, "fa" if frame == links[2] else "fb"), 1e-12, backend)
 
 
 @settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -125,6 +148,10 @@ def test_analytic_ik_names_in_every_backend(name, command):
     robot = Robot.from_ets("Rz(q0) tx(0.7) Rz(q1) tx(0.4)", name=name)
     q = np.array([0.5, 0.9])
     for backend in symkin.BACKENDS:
+        if backend in OPTIONAL_BACKENDS:  # no closed form there: a clear error, not a KeyError
+            with pytest.raises(SymkinError, match=f"no {backend} backend"):
+                generate_analytic(robot, backend, command=command)
+            continue
         _check_files(generate_analytic(robot, backend, command=command)[0])
         res = compile_analytic(robot, backend).ik(robot.fkine(q), q0=q)
         assert res.success, (backend, res)
