@@ -12,7 +12,6 @@ import pytest
 import symkin
 from symkin import Tree
 from symkin.errors import CompileError
-from symkin.runtime.tree_kinematics import TreeKinematics
 from tests.conftest import assert_close
 from tests.model.tree_urdfs import GRIPPER, QUADRUPED
 
@@ -42,7 +41,7 @@ def test_a_tree_folder_loads_back_as_its_compiled_kinematics(tmp_path, tree, bac
     data = json.loads(manifest.read_text())
     assert data["kind"] == "tree" and data["backend"] == backend
     kin = symkin.load_compiled(tmp_path)
-    assert isinstance(kin, TreeKinematics) and kin.backend == backend
+    assert isinstance(kin, symkin.Kinematics) and kin.backend == backend
     _same_tree(kin.tree, tree)
     assert kin.files == symkin.compile(tree, backend).files
     Q = tree.random_q(4, seed=3)

@@ -59,11 +59,13 @@ def _peak_mb() -> tuple[float, float]:
 
 def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     """Cold compile of one robot in this process (the caller provides an empty cache)."""
+    from symkin.compiler.kernel import kernel_of
     from symkin.emit.c.backend import compile_c, render_c
     from symkin.emit.c.build import load_extension
     from symkin.emit.casadi.backend import render_casadi
     from symkin.emit.numpy.backend import render_numpy
     from symkin.model.resolve import resolve_robot
+    from symkin.model.tree import as_tree
     from symkin.symbolic.cse import OpCounts
     from symkin.symbolic.functions import build_functions, derive_kinematics, fk_j_h_counts
 
@@ -74,11 +76,12 @@ def _measure_here(spec: str, seed: int) -> dict[str, Any]:
     t1 = time.perf_counter()
     functions = build_functions(derived)
     t2 = time.perf_counter()
-    files = render_c(robot, functions, "symkin bench compile")
+    kernel = kernel_of(robot, as_tree(robot), functions, "symkin bench compile")
+    files = render_c(kernel)
     t3 = time.perf_counter()
     cpu3 = _cpu_s()
-    render_numpy(robot, functions, "symkin bench compile")
-    render_casadi(robot, functions, "symkin bench compile")
+    render_numpy(kernel)
+    render_casadi(kernel)
     t4 = time.perf_counter()
     cpu4 = _cpu_s()
     name, path = compile_c(files)

@@ -95,6 +95,7 @@ class Chain:
     failure: str = ""
     joints_key: str = ""  # the chain up to its last joint (without the constant tail to the leaf)
     synthetic: bool = False  # one of synthetic_urdfs(), not of the collection
+    mimic: bool = False  # a mimic joint on the path: the model is a one-frame Tree
 
 
 def _start(graph: Any, leaf: str, root: str) -> str:
@@ -154,7 +155,7 @@ def find_chains(root: Path) -> tuple[list[Chain], list[tuple[str, str]], int]:
             if key in chains:
                 chains[key].also.append(f"{rel}:{leaf}")
                 continue
-            chains[key] = Chain(rel, base, leaf, tree.n, key, model, joints_key=joints_key)
+            chains[key] = Chain(rel, base, leaf, tree.n, key, model, joints_key=joints_key, mimic=mimic)
     return list(chains.values()), bad, found
 
 
@@ -166,7 +167,7 @@ def _pin_errors(
     pin = optional("pinocchio")
     if pin is None:
         return None
-    mimic = chain.model.__class__.__name__ == "Tree"
+    mimic = chain.mimic
     key = (chain.urdf, mimic)
     if key not in cache:
         try:
@@ -238,7 +239,7 @@ def run_sweep(
                 _one(ch, backends, compile_model, where, pin_cache, seed)
     rows = [
         {"urdf": c.urdf, "base": c.base, "leaf": c.leaf, "n": c.n,
-         "mimic": c.model.__class__.__name__ == "Tree", "same_as": c.also, "compile_s": c.compile_s,
+         "mimic": c.mimic, "same_as": c.also, "compile_s": c.compile_s,
          "error": c.error, "pinocchio": c.pinocchio, "snap": c.snap, "failure": c.failure,
          "synthetic": c.synthetic}
         for c in chains + extra
@@ -262,9 +263,7 @@ def _one(
     model = ch.model
     rng = np.random.default_rng(seed)
     Q = np.vstack((model.random_q(10, seed=rng), np.zeros(model.n), np.full(model.n, 0.1)))
-    is_tree = model.__class__.__name__ == "Tree"
-    T_ref = model.fkine(Q, ch.leaf) if is_tree else model.fkine(Q)
-    J_ref = model.jacob0(Q, ch.leaf) if is_tree else model.jacob0(Q)
+    T_ref, J_ref = model.fkine(Q), model.jacob0(Q)  # a Robot, or a Tree of the one frame
     fails = []
     for b in backends:
         t0 = time.perf_counter()
@@ -274,8 +273,7 @@ def _one(
             fails.append(f"{b}: compile failed: {type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
             continue
         ch.compile_s[b] = time.perf_counter() - t0
-        T = kin.fkine(Q, frame=ch.leaf) if is_tree else kin.fkine(Q)
-        J = kin.jacob0(Q, frame=ch.leaf) if is_tree else kin.jacob0(Q)
+        T, J = kin.fkine(Q), kin.jacob0(Q)
         err = max(float(np.abs(T - T_ref).max()), float(np.abs(J - J_ref).max()))
         ch.error[b] = err
         if not err <= TOL:
@@ -296,11 +294,11 @@ def _as_written(root: Path, ch: Chain, Q: np.ndarray) -> tuple[np.ndarray, np.nd
     from symkin.model.tree import Tree
 
     path = root / ch.urdf
-    if ch.model.__class__.__name__ == "Tree":
-        tree = Tree.from_urdf(path, frames=[ch.leaf], base_link=ch.base, snap_tol=0.0)
-        return tree.fkine(Q, ch.leaf), tree.jacob0(Q, ch.leaf)
-    robot = Robot.from_urdf(path, base_link=ch.base, end_link=ch.leaf, snap_tol=0.0)
-    return robot.fkine(Q), robot.jacob0(Q)
+    if ch.mimic:
+        model = Tree.from_urdf(path, frames=[ch.leaf], base_link=ch.base, snap_tol=0.0)
+    else:
+        model = Robot.from_urdf(path, base_link=ch.base, end_link=ch.leaf, snap_tol=0.0)
+    return model.fkine(Q), model.jacob0(Q)
 
 
 def format_sweep(r: dict) -> str:

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from symkin.model.differential import rotate_rows
-from symkin.model.robot import Robot
+from symkin.model.tree import as_tree
 from symkin.runtime.kinematics import Kinematics
 
 __all__ = ["CheckRow", "CheckReport", "check", "REF_TOL", "FD_TOL", "FD_STEP", "LARGE_TURNS", "large_angles"]
@@ -158,29 +158,29 @@ def check(
     samples = count(samples, "samples")
     room(8.0 * 24 * model.n**3 * samples, f"checking {samples} configurations (finite-difference Hessians)")
     kins = [b if isinstance(b, Kinematics) else compile_model(model, backend=b) for b in backends]
-    tree = not isinstance(model, Robot)
+    tree = as_tree(model)
+    frames = tree.frames if len(tree.frames) > 1 else (None,)
     Q = sample_configurations(model, samples, seed)
     QL = large_angles(model, max(samples // 2, 1), seed + 1)
-    gain = max((abs(float(s.multiplier)) for s in model.slots), default=1.0) if tree else 1.0
+    gain = max((abs(float(s.multiplier)) for s in tree.slots), default=1.0)
     large_tol = REF_TOL + 8 * model.n * gain * float(np.abs(QL).max()) * 2.0**-53
-    rows = _tree_reference_rows(model, Q) if tree else []
+    rows = _tree_reference_rows(tree, Q)
     for kin in kins:
-        if tree:
-            rows += _all_rows(kin, model, Q)
-            if kin.backend == "c":
-                rows += _c_controller_rows(model, kin, Q)
-        else:
+        rows += _all_rows(kin, tree, Q)
+        if kin.backend == "c":
+            rows += _c_controller_rows(tree, kin, Q)
+        if getattr(kin, "link_poses", None) is not None:
             rows.append(
-                CheckRow(kin.backend, "link_poses", _rel(kin.link_poses(Q), model.link_poses(Q)), None)
+                CheckRow(kin.backend, "link_poses", _rel(kin.link_poses(Q), tree.chain().link_poses(Q)), None)
             )
-        for frame in model.frames if tree else (None,):
+        for frame in frames:
             rows += _frame_rows(kin, model, Q, QL, large_tol, frame, seed)
         if kin.backend == "c" and model.geometry is not None and model.geometry.shapes:
             rows += _collision_rows(kin, Q)
     title = (
-        f"{model.name} ({len(model.frames)} frames, each row the largest error over them)"
-        if tree
-        else model.name
+        model.name
+        if frames == (None,)
+        else f"{model.name} ({len(frames)} frames, each row the largest error over them)"
     )
     return CheckReport(title, len(Q), _merged(rows))
 
@@ -296,7 +296,7 @@ def _tree_reference_rows(tree: Any, Q: np.ndarray) -> list[CheckRow]:
             robot = tree.chain(f)
         except URDFError:
             continue  # a mimic joint on the path: no chain Robot
-        cols = [tree.slots[k].joint for k in tree.path_slots(f)]
+        cols = sorted(tree.slots[k].joint for k in tree.path_slots(f))  # the chain's q
         k = tree.frame_position(f)
         err = max(
             _rel(T_ref[:, k], robot.fkine(Q[:, cols])), _rel(J_ref[:, k][..., cols], robot.jacob0(Q[:, cols]))

@@ -58,10 +58,10 @@ def run(args: argparse.Namespace) -> int:
 def _singularities(robot: Any, args: argparse.Namespace) -> int:
     from symkin.derive.singular_lines import MAX_LINES
     from symkin.derive.singularities import singularities
-    from symkin.model.tree import Tree
 
-    if isinstance(robot, Tree):
+    if not robot.single_path:  # several frames, or a mimic joint on the path
         raise UserError("--singularities analyses one chain: name it as ROBOT.urdf:FRAME")
+    robot = robot.chain()
     if args.backend or args.json:
         raise UserError("--singularities checks the symbolic conditions: leave out --backend and --json")
     if args.lines > MAX_LINES:

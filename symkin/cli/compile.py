@@ -11,7 +11,8 @@ import numpy as np
 
 from symkin.cli.checks import UserError, check_cflags_for, output_dir
 from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree, fmt
-from symkin.model.tree import Tree
+from symkin.errors import SymkinError
+from symkin.model.tree import as_tree
 
 __all__ = ["add_parser", "run"]
 
@@ -63,7 +64,10 @@ def run(args: argparse.Namespace) -> int:
     model = chain_or_tree(args)
     out = output_dir(args.output) if args.output else None
     check_cflags_for(args.backend)
-    tree = isinstance(model, Tree)
+    try:
+        chain = model.chain()  # a Robot itself, or a tree's one serial chain
+    except SymkinError:  # several frames, or a mimic joint on the path
+        chain = None
     command, options = _command(args, model)
     t0 = time.perf_counter()
     files = generate(model, args.backend, command, **options)
@@ -82,26 +86,27 @@ def run(args: argparse.Namespace) -> int:
         print(f"single-precision code against double on 100 random q: max |fkine| error {err['fkine']:.1e}, "
               f"max |jacob0| error {err['jacob0']:.1e}")  # fmt: skip
     t1 = time.perf_counter()
-    kin = compile_model(model, backend=args.backend, **({} if tree else {"strategy": args.strategy}))
+    kin = compile_model(model, backend=args.backend, strategy=args.strategy)
     t_build = time.perf_counter() - t1
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
-    if tree:
-        frames = ", ".join(model.frames)
-        print(f"{model.name}: tree of {model.n} joints and {len(model.frames)} frames: {frames}")
+    if chain is None:
+        frames = ", ".join(kin.frames)
+        print(f"{model.name}: tree of {model.n} joints and {len(kin.frames)} frames: {frames}")
     else:
-        print(f"{model.name}: {model.n} joints ({model.ets.structure}), ETS {model.ets}")
+        print(f"{model.name}: {model.n} joints ({chain.ets.structure}), ETS {chain.ets}")
     print(f"backend {args.backend}: derived + generated in {t_gen:.2f} s, built/loaded in {t_build:.2f} s")
     if ops:
-        print(f"{'operations' if tree else 'operations after CSE'}: {ops}")
-    (_tree_report if tree else _chain_report)(model, kin)
+        print(f"operations: {ops}")
+    (_tree_report if chain is None else _chain_report)(model, kin)
     return 0
 
 
 def _command(args: argparse.Namespace, model: Any) -> tuple[str, dict[str, Any]]:
     """The command recorded in the generated files of a chain or tree, and the options of
     ``generate``; the C-only options are refused for another backend or without ``-o``."""
-    frames = f" --frames {','.join(model.frames)}" if isinstance(model, Tree) else ""
+    names = as_tree(model).frames
+    frames = f" --frames {','.join(names)}" if getattr(args, "frames", None) or len(names) > 1 else ""
     command = f"symkin compile {model.identifier}{frames} --backend {args.backend}"
     c_only = {  # flag: what it adds to the recorded command ("" when not given)
         "--prefix": f" --prefix {args.prefix}" if args.prefix else "",

@@ -55,12 +55,11 @@ def add_parser(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.derive.chain import derivation
-    from symkin.model.tree import Tree
 
     robot = chain_or_tree(args)
     sections = _sections(args.sections)
     output_file(args.output, "-o")
-    if isinstance(robot, Tree):
+    if not robot.single_path:  # several frames, or a mimic joint on the path
         if args.ik or args.singularities:
             raise UserError("--ik and --singularities analyse one chain: name it as ROBOT.urdf:FRAME")
         if sections is not None:
@@ -68,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         from symkin.derive.tree import tree_derivation
 
         text = tree_derivation(robot, fmt=args.format)
-    elif args.singularities:
+    elif (robot := robot.chain()) and args.singularities:
         if args.ik or sections is not None:
             raise UserError("--singularities writes its own report: leave out --ik and --sections")
         from symkin.derive.singularities import singularities

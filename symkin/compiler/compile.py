@@ -1,17 +1,19 @@
-"""The compiler: a model (a :class:`Robot` chain or a :class:`Tree`) -> its symbolic functions ->
-emitted sources -> a built and loaded :class:`Artifact` (the C extension module, or the NumPy or
-CasADi Python module). :func:`symkin.compile` (:mod:`symkin.runtime.load`) wraps an artifact in
-the runtime's kinematics object.
+"""The compiler: a model (a :class:`Robot` chain or a :class:`Tree`) -> its tree
+(:func:`symkin.model.tree.as_tree`: a chain is the one-frame tree of :meth:`Tree.from_robot`) -> its
+symbolic functions -> a :class:`~symkin.emit.kernel.Kernel` -> emitted sources -> a built and
+loaded :class:`Artifact` (the C extension module, or the NumPy or CasADi Python module).
+:func:`symkin.compile` (:mod:`symkin.runtime.load`) wraps an artifact in the runtime's kinematics
+object.
 
 Generated sources are cached per user (``$SYMKIN_CACHE`` or ``~/.cache/symkin``) under a key made
-of everything they depend on (:func:`cache_key`): every attribute of a robot
-(:attr:`Robot.fingerprint`: name, ETS, limits, speed limits, joint names, configurations, source;
-the C header lists the limits) or a tree's structure (:attr:`Tree.key`), the backend and strategy,
+of everything they depend on (:func:`cache_key`): the model's tree (:attr:`Tree.fingerprint`:
+structure, names, limits, speed limits; the C header lists the limits) and its name in generated
+code, the backend and strategy,
 the symkin version, the templates, the compiler's own Python code (symbolic, emit, compiler and the
 model classes it prints) and the sympy version. So a warm compile neither imports sympy nor
 re-derives anything, and a changed derivation never serves stale code. The derivation itself
-(which depends on the name and ETS only) is shared by the backends and by robots that differ only
-in their limits.
+(which depends on the tree's structure only) is shared by the backends and by models that differ
+only in their limits.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from symkin.core.cache import cache_dir, verified
 from symkin.core.version import __version__
 from symkin.errors import CompileError, SymkinError
 from symkin.model.robot import Robot
-from symkin.model.tree import Tree
+from symkin.model.tree import Tree, as_tree
 
 __all__ = [
     "Artifact",
@@ -48,7 +50,7 @@ __all__ = [
     "generate",
     "generate_collision",
     "load_artifact",
-    "tree_derivation_functions",
+    "derived_functions",
     "write_generated",
     "write_files",
 ]
@@ -57,11 +59,19 @@ BACKENDS = ("c", "numpy", "casadi")
 STRATEGIES = ("expanded", "program")
 Model = Robot | Tree
 
-_FUNCTIONS: dict[tuple[str, str, str | None], list] = {}  # derived functions, shared by the backends
+_FUNCTIONS: dict[tuple[str, str], list] = {}  # derived functions, shared by the backends
 _FUNCTIONS_MAX = 32
 
 # the compiler's own code: what it derives and prints depends on these files
-COMPILER_SOURCES = ("symbolic", "emit", "compiler", "model/ets.py", "model/robot.py", "model/tree.py")
+COMPILER_SOURCES = (
+    "symbolic",
+    "emit",
+    "compiler",
+    "model/ets.py",
+    "model/robot.py",
+    "model/tree.py",
+    "model/slots.py",
+)
 
 
 @dataclass(frozen=True)
@@ -82,27 +92,26 @@ def check_backend(backend: str) -> None:
 
 
 def check_strategy(strategy: str | None, model: Any = None) -> None:
-    """SymkinError unless ``strategy`` is None or one of :data:`STRATEGIES` (a tree: "program")."""
+    """SymkinError unless ``strategy`` is None or one of :data:`STRATEGIES` ("expanded" needs one
+    serial chain, :attr:`Tree.single_path`)."""
     if strategy is not None and strategy not in STRATEGIES:
         raise SymkinError(
             f"unknown strategy {strategy!r}: choose one of {', '.join(STRATEGIES)} (or None: by size)"
         )
-    if isinstance(model, Tree) and strategy not in (None, "program"):
-        raise SymkinError("a tree compiles as one program (strategy 'program'), not " + repr(strategy))
+    if strategy == "expanded" and model is not None and not getattr(model, "single_path", True):
+        raise SymkinError(
+            f"{model.name} is not one serial chain: a tree compiles as one program (strategy 'program'), "
+            "not 'expanded'"
+        )
 
 
 def _check_model(model: Any, backend: str, strategy: str | None) -> None:
     """The checks before a compile: ``backend``, ``strategy`` and ``model`` (a chain or tree with joints)."""
     check_backend(backend)
+    as_tree(model)  # TypeError for what is not a model
     check_strategy(strategy, model)
-    if not isinstance(model, (Robot, Tree)):
-        raise TypeError(
-            f"compile() needs a Robot, a Tree, a built-in robot name or ETS text, not {type(model).__name__}"
-        )
     if model.n == 0:
-        what = "tree" if isinstance(model, Tree) else "robot"
-        tail = " on the paths to its frames" if isinstance(model, Tree) else ""
-        raise SymkinError(f"{what} {model.name!r} has no joints{tail}: nothing to compile")
+        raise SymkinError(f"{model.name!r} has no joints (on the paths to its frames): nothing to compile")
 
 
 @lru_cache(maxsize=1)
@@ -147,35 +156,26 @@ def cache_key(model: Model, backend: str, strategy: str | None = None, what: str
     IK) on ``backend`` (see the module docstring)."""
     if what != "kinematics":  # e.g. "analytic-ik": depends on the ETS and name only
         parts = (__version__, what, backend, model.key)
-    elif isinstance(model, Tree):
-        parts = (__version__, "tree", backend, model.key)
     else:
-        parts = (__version__, backend, model.fingerprint, str(strategy))
+        parts = (__version__, backend, model.code_name, as_tree(model).fingerprint, str(strategy))
     text = "\n".join((*parts, templates_digest(), compiler_digest()))
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
-def _memo_functions(key: tuple[str, str, str | None], derive: Any) -> list:
+def derived_functions(model: Model, strategy: str | None = None) -> list:
+    """The derived functions of ``model`` (:func:`symkin.symbolic.functions.kin_functions`; imports
+    sympy), memoised by its tree's structure and the strategy: shared by the backends."""
+    tree = as_tree(model)
+    key = (tree.key, str(strategy))
     functions = _FUNCTIONS.get(key)
     if functions is None:
-        functions = derive()
+        from symkin.symbolic.functions import kin_functions
+
+        functions = kin_functions(tree, strategy)
         if len(_FUNCTIONS) >= _FUNCTIONS_MAX:
             _FUNCTIONS.clear()
         _FUNCTIONS[key] = functions
     return functions
-
-
-def tree_derivation_functions(tree: Tree) -> list:
-    """Derive the tree program of ``tree`` and build its emitted functions (imports sympy)."""
-
-    def derive() -> list:
-        from symkin.symbolic.functions import tree_functions
-        from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
-        from symkin.symbolic.program import derive_tree_program
-
-        return tree_functions(derive_tree_program(tree, joint_symbols(tree.n), const_to_sympy, fold=True))
-
-    return _memo_functions(("tree", tree.key, None), derive)
 
 
 def generate(
@@ -206,31 +206,23 @@ def generate(
         from symkin.emit.c.backend import check_prefix
 
         check_prefix(prefix)  # before the derivation, which can take long
-    if isinstance(robot, Tree):
-        from symkin.emit.tree import render_tree
+    from symkin.compiler.kernel import kernel_of
 
-        frames = ",".join(robot.frames)
-        command = command or f"symkin compile {robot.identifier} --frames {frames} --backend {backend}"
-        return render_tree(robot, tree_derivation_functions(robot), backend, command, prefix, precision, libm)
-
-    def derive() -> list:
-        from symkin.symbolic.functions import kin_functions
-
-        return kin_functions(robot, strategy=strategy)
-
-    command = command or f"symkin compile {robot.identifier} --backend {backend}"
-    functions = _memo_functions(("chain", robot.key, strategy), derive)
+    tree = as_tree(robot)
+    frames = f" --frames {','.join(tree.frames)}" if len(tree.frames) > 1 else ""
+    command = command or f"symkin compile {robot.identifier}{frames} --backend {backend}"
+    kernel = kernel_of(robot, tree, derived_functions(robot, strategy), command)
     if backend == "c":
         from symkin.emit.c.backend import render_c
 
-        return render_c(robot, functions, command, prefix, precision, libm)
+        return render_c(kernel, prefix, precision, libm)
     if backend == "numpy":
         from symkin.emit.numpy.backend import render_numpy
 
-        return render_numpy(robot, functions, command)
+        return render_numpy(kernel)
     from symkin.emit.casadi.backend import render_casadi
 
-    return render_casadi(robot, functions, command)
+    return render_casadi(kernel)
 
 
 def generate_collision(model: Model, backend: str, command: str | None = None) -> dict[str, str]:

@@ -17,17 +17,14 @@ from __future__ import annotations
 import hashlib
 import json
 import sys
-from dataclasses import asdict, dataclass
-from fractions import Fraction
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from symkin.errors import CompileError, SymkinError
-from symkin.model.ets import ET, ETS
+from symkin.model.data import model_of_data
 from symkin.model.robot import Robot
-from symkin.model.tree import Segment, Slot, Tree
+from symkin.model.tree import Tree
 
 __all__ = [
     "Manifest",
@@ -59,14 +56,14 @@ def write_manifest(
 ) -> Path:
     """Write the manifest of ``files`` (generated for the chain or tree ``robot`` on ``backend``,
     in ``precision``) into ``folder``."""
-    tree = isinstance(robot, Tree)
+    kind, model = robot.to_data()
     data = {
         "format": FORMAT,
         "generator": "symkin",
         "version": _version(),
-        "kind": "tree" if tree else "chain",
+        "kind": kind,
         "backend": backend,
-        "robot": _tree_data(robot) if tree else _chain_data(robot),  # type: ignore[arg-type]
+        "robot": model,
         "files": {name: _digest(text) for name, text in sorted(files.items())},
     }
     if precision != "double":
@@ -74,57 +71,6 @@ def write_manifest(
     path = Path(folder) / manifest_name(files)
     path.write_text(json.dumps(data, indent=2) + "\n")
     return path
-
-
-def _chain_data(robot: Robot) -> dict[str, Any]:
-    return {
-        "name": robot.name,
-        "ets": str(robot.ets),
-        "joint_names": list(robot.joint_names),
-        "qlim": robot.qlim.tolist(),
-        "qd_max": None if robot.qd_max is None else robot.qd_max.tolist(),
-        "configs": {k: v.tolist() for k, v in robot.configs.items() if k != "qz"},
-        "source": robot.source,
-    }
-
-
-def _segment_ets(ets: tuple[ET, ...]) -> tuple[str, list[int]]:
-    """A segment's ETS as text with its joints numbered q0, q1, ... in order (ETS text numbers the
-    joints of a chain from 0), and the joints' own indices."""
-    joints = [e.joint for e in ets if e.is_joint]
-    local = iter(range(len(joints)))
-    text = " ".join(str(ET(e.axis, joint=next(local), flip=e.flip) if e.is_joint else e) for e in ets)
-    return text, joints  # type: ignore[return-value]
-
-
-def _tree_data(tree: Tree) -> dict[str, Any]:
-    """Every field of ``tree`` (as :meth:`Tree.__getstate__` pickles it), as JSON."""
-    segments = []
-    for seg in tree.segments:
-        text, joints = _segment_ets(seg.ets)
-        segments.append(
-            {
-                "name": seg.name,
-                "parent": seg.parent,
-                "link": seg.link,
-                "slot": seg.slot,
-                "ets": text,
-                "joints": joints,
-            }
-        )
-    slots = [{**asdict(s), "multiplier": str(s.multiplier), "offset": str(s.offset)} for s in tree.slots]
-    return {
-        "name": tree.name,
-        "base_link": tree.base_link,
-        "frames": list(tree.frames),
-        "frame_segments": list(tree.frame_segments),
-        "joint_names": list(tree.joint_names),
-        "qlim": tree.qlim.tolist(),
-        "velocity": [None if np.isnan(v) else float(v) for v in tree.velocity],
-        "source": tree.source,
-        "segments": segments,
-        "slots": slots,
-    }
 
 
 def _version() -> str:
@@ -165,63 +111,12 @@ def _model(data: dict, where: str) -> Robot | Tree:
     kind = data.get("kind", "chain")
     if kind not in KINDS:
         raise CompileError(f"{where}: unknown kind of model {kind!r} (symkin reads {', '.join(KINDS)})")
-    return _tree(data, where) if kind == "tree" else _robot(data, where)
-
-
-def _tree(data: dict, where: str) -> Tree:
     try:
-        t = data["robot"]
-        segments = []
-        for seg in t["segments"]:
-            joints = iter(seg["joints"])
-            ets = ETS.parse(seg["ets"]).ets if seg["ets"] else ()
-            ets = tuple(ET(e.axis, joint=int(next(joints)), flip=e.flip) if e.is_joint else e for e in ets)
-            if next(joints, None) is not None:
-                raise ValueError(f"segment {seg['name']!r} lists more joints than its ETS has")
-            slot = None if seg["slot"] is None else int(seg["slot"])
-            segments.append(Segment(seg["name"], int(seg["parent"]), seg["link"], ets, slot))
-        slots = [
-            Slot(
-                s["name"],
-                int(s["segment"]),
-                int(s["joint"]),
-                Fraction(s["multiplier"]),
-                Fraction(s["offset"]),
-                bool(s["revolute"]),
-                s["mimics"],
-            )
-            for s in t["slots"]
-        ]
-        return Tree(
-            name=t["name"],
-            base_link=t["base_link"],
-            segments=tuple(segments),
-            slots=tuple(slots),
-            frames=tuple(t["frames"]),
-            frame_segments=tuple(int(k) for k in t["frame_segments"]),
-            joint_names=tuple(t["joint_names"]),
-            qlim=np.array(t["qlim"], dtype=float),
-            velocity=np.array([np.nan if v is None else v for v in t["velocity"]], dtype=float),
-            source=t.get("source", ""),
-        )
+        return model_of_data(kind, data["robot"])
     except (KeyError, TypeError, ValueError, StopIteration, SymkinError) as exc:
-        raise CompileError(f"{where}: the tree in the manifest is unreadable ({exc})") from None
-
-
-def _robot(data: dict, where: str) -> Robot:
-    try:
-        r = data["robot"]
-        return Robot(
-            ETS.parse(r["ets"]),
-            name=r["name"],
-            qlim=np.array(r["qlim"], dtype=float),
-            configs={k: np.array(v, dtype=float) for k, v in r.get("configs", {}).items()},
-            joint_names=tuple(r["joint_names"]),
-            qd_max=None if r.get("qd_max") is None else np.array(r["qd_max"], dtype=float),
-            source=r.get("source", ""),
-        )
-    except (KeyError, TypeError, ValueError) as exc:
-        raise CompileError(f"{where}: the robot in the manifest is unreadable ({exc})") from None
+        raise CompileError(
+            f"{where}: the {'tree' if kind == 'tree' else 'robot'} in the manifest is unreadable ({exc})"
+        ) from None
 
 
 @dataclass(frozen=True)
@@ -237,7 +132,7 @@ class Manifest:
     @property
     def kind(self) -> str:
         """``"tree"`` or ``"chain"``."""
-        return "tree" if isinstance(self.robot, Tree) else "chain"
+        return self.robot.to_data()[0]
 
 
 def read_manifest(folder: str | Path, name: str | None = None, verify: bool = True) -> Manifest:

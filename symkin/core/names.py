@@ -5,7 +5,7 @@ from __future__ import annotations
 import hashlib
 import re
 
-__all__ = ["IDENTIFIER_MAX", "identifier", "comment_safe", "c_string"]
+__all__ = ["IDENTIFIER_MAX", "identifier", "comment_safe", "c_string", "function_name"]
 
 IDENTIFIER_MAX = 40  # longest identifier(): C symbols, module and file names stay short
 
@@ -56,3 +56,11 @@ def c_string(text: str) -> str:
         safe = b < 128 and (ch.isalnum() or ch in " _-.,:;()[]=+")
         out.append(ch if safe else f"\\{b:03o}")
     return '"' + "".join(out) + '"'
+
+
+def function_name(kind: str, frame: int | None, frames: int) -> str:
+    """The name of a generated function of ``kind`` ("fkine", "jacob0_hessian0"...) for frame
+    ``frame`` of a model with ``frames`` frames: the kind itself for the only frame of a chain
+    (``<prefix>_fkine``) or a function of every frame (``frame=None``, ``fkine_all``), else
+    ``<kind>_<frame>`` (``<prefix>_fkine_3``)."""
+    return kind if frame is None or frames == 1 else f"{kind}_{frame}"

@@ -111,7 +111,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
         start = end
     frames = []
     for f, name in enumerate(tree.frames):
-        end = ends[f"frame {f}"]
+        end = ends[f"frame {f} J0"]
         rows = tp.lines[start:end]
         J = tp.J0[f]
         cols = [
@@ -127,7 +127,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
                 "zero": tree.n - len(cols),
             }
         )
-        start = end
+        start = ends[f"frame {f} Je"]
     worst = _checks(tree, tp)
     verdict = "ok" if worst < CHECK_TOL else "FAILED"
     shared = sum(1 for v in users.values() if len(v) > 1)

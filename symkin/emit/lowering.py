@@ -26,16 +26,32 @@ class PrintedOutput:
 
 @dataclass(frozen=True)
 class PrintedHessian:
-    """A Hessian output written by the loops of ``hessian_<frame>`` from the array ``jacobian``."""
+    """A Hessian output written by the loops of ``hessian_<frame>`` from the array ``jacobian``:
+    per slot on the path its joint, its column in ``jacobian`` (rows of ``width`` entries) and its
+    multiplier (``multipliers`` empty: each joint's one slot, multiplier 1)."""
 
     out: str
     jacobian: str
     frame: str  # "base" or "ee"
+    joints: tuple[int, ...] = ()
+    columns: tuple[int, ...] = ()
+    multipliers: tuple[float, ...] = ()
+    width: int = 0
+
+    @property
+    def args(self) -> str:
+        """The tables as the Python templates' ``_hessian_<frame>(C, columns, joints, [mult])`` take them."""
+        tables = [list(self.columns), list(self.joints)] + (
+            [list(self.multipliers)] if self.multipliers else []
+        )
+        return ", ".join(map(repr, tables))
 
 
 @dataclass(frozen=True)
 class PrintedFunction:
     name: str
+    kind: str
+    frame: int | None
     doc: str
     counts: str
     inputs: tuple[tuple[str, int], ...]  # (symbol name, joint index) actually used
@@ -64,61 +80,43 @@ def _size(shape: tuple[int, ...]) -> int:
 
 
 def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
-    """Print every intermediate and output of ``f``; inputs limited to the joints used."""
-    code = f.code
-    if f.delegate:
-        return _lower_delegate(f)
+    """Print every intermediate and output of ``f``; inputs limited to the joints used. A function
+    that calls ``f.delegate`` prints nothing: its outputs and the callee's others are local arrays."""
+    code, n = f.code, len(f.code.inputs)
+    own = not f.delegate
     used: set[sp.Symbol] = set()
-    for _, e in code.intermediates:
-        used |= e.free_symbols
-    for _, (_, exprs) in code.outputs.items():
-        for e in exprs:
-            used |= e.free_symbols
+    for e in [e for _, e in code.intermediates] + [e for _, exprs in code.outputs.values() for e in exprs]:
+        used |= e.free_symbols if own else set()
     inputs = tuple((str(s), j) for j, s in enumerate(code.inputs) if s in used)
-    lines = tuple((str(s), _print(printer, e)) for s, e in code.intermediates)
-    outs, scratch = [], []
-    for name, (shape, exprs) in code.outputs.items():
-        printed = PrintedOutput(
-            name, shape, _size(shape), tuple((i, _print(printer, e)) for i, e in enumerate(exprs))
+    lines = tuple((str(s), _print(printer, e)) for s, e in code.intermediates if own)
+    every = [
+        PrintedOutput(
+            name, shape, _size(shape), tuple((i, _print(printer, e)) for i, e in enumerate(exprs) if own)
         )
-        (scratch if name in code.scratch else outs).append(printed)
+        for name, (shape, exprs) in code.outputs.items()
+    ]
     hessians = []
     for h in code.hessians:
-        n = len(h.order)
-        outs.append(PrintedOutput(h.out, (n, 6, n), 6 * n * n, ()))
-        hessians.append(PrintedHessian(h.out, h.jacobian, h.frame))
+        every.append(PrintedOutput(h.out, (n, 6, n), 6 * n * n, ()))
+        if own:
+            width = code.outputs[h.jacobian][0][-1]
+            tables = (h.order, h.columns or h.order, h.multipliers or (), width)
+            hessians.append(PrintedHessian(h.out, h.jacobian, h.frame, *tables))
+    outs = tuple(o for o in every if o.name not in code.scratch)
+    scratch = tuple(o for o in every if o.name in code.scratch)
     return PrintedFunction(
         f.name,
+        f.kind,
+        f.frame,
         f.doc,
         str(code.counts),
         inputs,
         lines,
-        tuple(outs),
-        tuple(scratch),
+        outs,
+        scratch,
         tuple(hessians),
         code.strategy,
-    )
-
-
-def _lower_delegate(f: KinFunction) -> PrintedFunction:
-    """A function that calls ``f.delegate``: its outputs and the callee's others as local arrays."""
-    code = f.code
-    n = len(code.inputs)
-    shapes = [(name, shape) for name, (shape, _) in code.outputs.items()]
-    shapes += [(h.out, (n, 6, n)) for h in code.hessians]
-    every = [PrintedOutput(name, shape, _size(shape), ()) for name, shape in shapes]
-    outs = tuple(o for o in every if o.name not in code.scratch)
-    return PrintedFunction(
-        f.name,
-        f.doc,
-        str(code.counts),
-        (),
-        (),
-        outs,
-        tuple(o for o in every if o.name in code.scratch),
-        (),
-        code.strategy,
         delegate=f.delegate or "",
-        delegate_outs=tuple(o.name for o in every),
-        delegate_pick=tuple(i for i, o in enumerate(every) if o.name not in code.scratch),
+        delegate_outs=() if own else tuple(o.name for o in every),
+        delegate_pick=() if own else tuple(i for i, o in enumerate(every) if o.name not in code.scratch),
     )

@@ -8,18 +8,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from symkin.core.names import comment_safe, identifier
+from symkin.emit.kernel import link_text
 from symkin.errors import CompileError
 
 if TYPE_CHECKING:
     import jinja2
 
-__all__ = [
-    "render",
-    "render_python_module",
-    "template_dir",
-    "Header",
-    "chain_tables",
-]
+__all__ = ["render", "python_module", "template_dir", "Header", "strategy_text"]
 
 
 def template_dir() -> Path:
@@ -65,38 +60,30 @@ def render(name: str, **context: Any) -> str:
         raise CompileError(f"template {name} failed: {type(exc).__name__}: {exc}") from exc
 
 
-def render_python_module(
-    template: str,
-    robot: Any,
-    functions: list,
-    printed: list,
-    command: str,
-    suffix: str = "",
-    **context: Any,
+def python_module(
+    template: str, kernel: Any, printed: list, suffix: str = "", **context: Any
 ) -> dict[str, str]:
-    """Render a generated Python module ``symkin_<robot><suffix>.py`` (NumPy and CasADi backends)."""
-    module = f"symkin_{identifier(robot.name)}{suffix}"
+    """Render a generated Python module ``symkin_<code_name><suffix>.py`` (NumPy and CasADi
+    backends) of ``kernel``: ``printed`` are its functions as the template takes them."""
+    module = f"symkin_{kernel.code_name}{suffix}"
     text = render(
         template,
         module=module,
-        n=robot.n,
+        n=kernel.n,
+        F=kernel.F,
+        links=kernel.links and link_text(kernel.links),
         functions=printed,
-        header=Header.of(robot, functions, command, ascii(robot.name)),
-        name_literal=ascii(robot.name),
+        header=Header.of(kernel, ascii(kernel.name)),
+        name_literal=ascii(kernel.name),
+        frame_literals=[ascii(f.name) for f in kernel.frames],
+        hessian_frames=sorted({h.frame for f in printed for h in _get(f, "hessians")}),
         **context,
     )
     return {f"{module}.py": text}
 
 
-def chain_tables(robot: Any) -> dict[str, list[str]]:
-    """Per joint along the chain: joint index, axis index, sign literal, revolute flag (as text)."""
-    joints = [e for e in robot.ets if e.is_joint]
-    return {
-        "order": [str(e.joint) for e in joints],
-        "axis": [str(e.axis.index) for e in joints],
-        "sign": ["-1.0" if e.flip else "1.0" for e in joints],
-        "revolute": [str(int(e.is_revolute)) for e in joints],
-    }
+def _get(f: Any, key: str) -> Any:
+    return f[key] if isinstance(f, dict) else getattr(f, key)
 
 
 @dataclass(frozen=True)
@@ -105,7 +92,8 @@ class Header:
 
     robot: str  # comment-safe robot identifier
     name_literal: str  # the robot's name as an escaped string literal (backend-specific quoting)
-    ets: str
+    ets: str  # a serial chain's ETS, else ""
+    frames: str  # the frames' names
     version: str
     command: str
     counts: str
@@ -113,30 +101,36 @@ class Header:
     references: str
 
     @classmethod
-    def of(cls, robot: Any, functions: list, command: str, literal: str) -> Header:
-        """The header for ``functions`` (KinFunction list) of ``robot``; ``literal`` quotes its name."""
+    def of(cls, kernel: Any, literal: str) -> Header:
+        """The header of ``kernel``'s files; ``literal`` quotes its name."""
         from symkin.core.version import __version__
         from symkin.symbolic.cse import OpCounts
         from symkin.symbolic.functions import REFERENCES
 
+        functions = kernel.functions
         total = sum((f.code.counts for f in functions), OpCounts())
-        counts = f"{total} over {len(functions)} functions"
         return cls(
-            strategy=strategy_text(functions),
-            references=REFERENCES,
-            robot=identifier(robot.name),
+            robot=identifier(kernel.name),
             name_literal=literal,
-            ets=comment_safe(str(robot.ets), limit=4000),
+            ets=comment_safe(kernel.ets, limit=4000),
+            frames=comment_safe(", ".join(f.name for f in kernel.frames), limit=2000),
             version=__version__,
-            command=comment_safe(command),
-            counts=counts,
+            command=comment_safe(kernel.command),
+            counts=f"{total} over {len(functions)} functions",
+            strategy=strategy_text(functions, kernel.F),
+            references=REFERENCES,
         )
 
 
-def strategy_text(functions: list) -> str:
+def strategy_text(functions: list, frames: int = 1) -> str:
     """How the functions' code was derived, for the generated headers."""
     if functions[0].code.strategy == "expanded":
         return "expanded (one exact expression per output, then common-subexpression elimination)"
     loops = any(f.code.hessians for f in functions)
     hessians = "Hessians as loops over the Jacobian columns" if loops else "Hessians written out"
-    return f"straight-line program (named link frames and Jacobian columns; {hessians})"
+    tree = (
+        f", walked depth first over {frames} frames: the parts they share are computed once"
+        if frames > 1
+        else ""
+    )
+    return f"straight-line program (named link frames and Jacobian columns; {hessians}){tree}"

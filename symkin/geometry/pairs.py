@@ -16,29 +16,11 @@ import numpy as np
 
 from symkin.errors import GeometryError
 from symkin.model.geometry import Capsule, Environment, Geometry, Sphere
-from symkin.model.tree import Tree
+from symkin.model.tree import Tree, as_tree
 
 __all__ = ["Layout", "layout_of", "as_tree", "as_environment", "PAIR_KINDS"]
 
 PAIR_KINDS = ("self", "sphere", "capsule", "box")
-
-
-def as_tree(model: Any) -> Tree:
-    """``model`` (a Robot, a Tree, or compiled kinematics of either) as a Tree with its geometry."""
-    model = getattr(model, "model", model)
-    if isinstance(model, Tree):
-        return model
-    from symkin.model.robot import Robot
-
-    if isinstance(model, Robot):
-        return model.__dict__.get("_as_tree") or _memo_tree(model)
-    raise GeometryError(f"collision geometry needs a symkin Robot or Tree, not {type(model).__name__}")
-
-
-def _memo_tree(robot: Any) -> Tree:
-    tree = Tree.from_robot(robot)
-    object.__setattr__(robot, "_as_tree", tree)
-    return tree
 
 
 def as_environment(env: Any) -> Environment:

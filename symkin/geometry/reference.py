@@ -215,7 +215,8 @@ def _obstacles(X: np.ndarray, tab: tuple, env: Environment) -> list[tuple]:
                 )
                 res = dist.capsule_box(A, B, r, c, h, R) if is_cap else dist.sphere_box(A, r, c, h, R)
             d[:, :, idx], n[:, :, idx], pa[:, :, idx] = res[0], res[1], res[2]
-        out.append((d.reshape(N, -1), n.reshape(N, -1, 3), pa.reshape(N, -1, 3)))
+        M = len(O) * S  # spelled out: reshape cannot infer it for N = 0
+        out.append((d.reshape(N, M), n.reshape(N, M, 3), pa.reshape(N, M, 3)))
     return out
 
 

@@ -170,16 +170,13 @@ def urdf_link_frames(path_or_xml: str | Path, model: Any) -> dict[str, _Frame]:
 
 
 def _link_frames(graph: URDFGraph, model: Any) -> tuple[dict[str, _Frame], dict[str, str]]:
-    from symkin.model.robot import Robot
-    from symkin.model.tree import Tree
+    from symkin.model.tree import as_tree, robot_of
 
-    model = getattr(model, "model", model)
-    if isinstance(model, Tree):
-        known = _tree_frames(graph, model)
-    elif isinstance(model, Robot):
-        known = _chain_frames(graph, model)
-    else:
-        raise GeometryError(f"model must be a symkin Robot or Tree, not {type(model).__name__}")
+    try:
+        robot, tree = robot_of(model), as_tree(model)  # a chain's links are named by their place
+    except TypeError:
+        raise GeometryError(f"model must be a symkin Robot or Tree, not {type(model).__name__}") from None
+    known = _chain_frames(graph, robot) if robot is not None else _tree_frames(graph, tree)
     placed, why = link_placements(graph, known, slide=False)
     return {ln: (p.link, p.T) for ln, p in placed.items()}, why
 

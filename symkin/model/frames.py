@@ -1,6 +1,6 @@
-"""Link frames of a serial chain at run time (NumPy only): validating a ``frame`` argument, the
-Jacobian of a link frame from the link poses, and :class:`LinkFrames`, every method of a link frame
-from the generated ``fkine(q, frame=k)`` and ``jacob0(q, frame=k)``.
+"""Frames at run time (NumPy only): validating a ``frame`` argument (a model's named frames, a
+chain's link frames), the Jacobian of a link frame from the link poses, and :class:`LinkFrames`,
+every method of a link frame from the generated ``fkine(q, frame=k)`` and ``jacob0(q, frame=k)``.
 
 Link frame ``k`` is the frame right after the k-th joint along the chain, ``link_poses(q)[k]``
 (chain order; for every built-in and imported robot the k-th joint along the chain is joint k).
@@ -9,6 +9,7 @@ Link frame ``k`` is the frame right after the k-th joint along the chain, ``link
 from __future__ import annotations
 
 import operator
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -17,7 +18,40 @@ from symkin.errors import FrameError
 from symkin.model.differential import FrameMethods, chain_hessian, rotate_rows
 from symkin.model.kinematics import cross
 
-__all__ = ["frame_index", "ChainTables", "frame_jacobian", "LinkFrames"]
+__all__ = ["frame_index", "frame_position", "resolve_frame", "ChainTables", "frame_jacobian", "LinkFrames"]
+
+
+def frame_position(frame: Any, frames: Sequence[str], name: str = "tree", links: int = 0) -> int:
+    """The position of frame ``frame`` (a name; None when there is one frame) in ``frames``;
+    FrameError listing the valid ones (and the link frames 0..links-1 of a chain)."""
+    if isinstance(frame, str):
+        try:
+            return frames.index(frame)
+        except ValueError:
+            import difflib
+
+            close = difflib.get_close_matches(frame, frames, n=3)
+            hint = f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
+            tail = f" or a link frame index 0..{links - 1} (chain order, as link_poses)" if links else ""
+            raise FrameError(
+                f"{name} has no frame {frame!r}{hint}; its frames: {list(frames)}{tail}"
+            ) from None
+    if frame is None:
+        if len(frames) == 1:
+            return 0
+        raise FrameError(f"{name} has {len(frames)} frames: name one with frame=, one of {list(frames)}")
+    raise FrameError(
+        f"a frame of {name} is a link name, one of {list(frames)}, not {type(frame).__name__} {frame!r}"
+    )
+
+
+def resolve_frame(frame: Any, frames: Sequence[str], links: int, name: str) -> tuple[int, int]:
+    """``frame`` of a compiled model as ``(k, -1)`` for its named frame k (None: the only one) or
+    ``(-1, k)`` for link frame k of a chain (an integer, when the model has ``links`` link frames);
+    FrameError naming what is valid."""
+    if links and frame is not None and not isinstance(frame, str):
+        return -1, frame_index(frame, links, name)
+    return frame_position(frame, frames, name, links), -1
 
 
 def frame_index(frame: Any, n: int, name: str = "robot") -> int:

@@ -1,5 +1,9 @@
 """LaTeX for models, written by hand (no sympy): an ETS as ``{}^0T_e = t_z(0.333) R_z(q_1) ...``.
 
+The model's LaTeX text form (as ``str`` is its plain one), used by ``ETS._repr_latex_`` and
+``Robot._repr_latex_`` and by the derivations above the model; it reads the model's objects by
+their attributes and imports none of them (so the model imports it without a circle).
+
 Joints are shown 1-based like the seed (``q_1 .. q_n``): symkin's joint ``q{j}`` (0-based index
 ``j``) is displayed as ``q_{j+1}``. A flipped joint reads ``R_y(-q_4)``.
 """
@@ -10,12 +14,9 @@ import re
 from collections.abc import Mapping
 from fractions import Fraction
 from math import isqrt
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from symkin.core.rational import rational_text
-
-if TYPE_CHECKING:
-    from symkin.model.ets import ET, ETS, Const
 
 __all__ = ["ets_latex", "et_latex", "const_latex", "robot_latex", "text_latex", "joint_latex", "display_name"]
 
@@ -77,7 +78,7 @@ def _isqrt_exact(k: int) -> int | None:
     return r if r * r == k else None
 
 
-def const_latex(c: Const) -> str:
+def const_latex(c: Any) -> str:
     """An exact ETS constant ``a + b pi + atan2(y, x)`` as LaTeX, e.g. ``-\\frac{\\pi}{2}``."""
     parts: list[str] = []
     if c.atan2 is not None:
@@ -96,7 +97,7 @@ def const_latex(c: Const) -> str:
     return out
 
 
-def et_latex(e: ET, arg: str | None = None) -> str:
+def et_latex(e: Any, arg: str | None = None) -> str:
     """One elementary transform, e.g. ``R_z(q_{1})``; ``arg`` overrides the constant's text."""
     if e.joint is not None:
         inner = ("-" if e.flip else "") + joint_latex(e.joint)
@@ -105,7 +106,7 @@ def et_latex(e: ET, arg: str | None = None) -> str:
     return f"{AXIS_LATEX[e.axis.name]}({inner})"
 
 
-def ets_latex(ets: ETS, lhs: str | None = "{}^{0}T_{e}", names: Mapping[int, str] | None = None) -> str:
+def ets_latex(ets: Any, lhs: str | None = "{}^{0}T_{e}", names: Mapping[int, str] | None = None) -> str:
     """The ETS as a product of elementary transforms (eq 1), without ``$`` delimiters.
 
     Args:

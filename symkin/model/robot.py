@@ -25,7 +25,7 @@ import numpy as np
 
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch, axes_rows, real_array, sample_q  # noqa: F401 - generated C imports axes_rows here
 from symkin.core.names import identifier
-from symkin.errors import ConfigurationError, RobotError
+from symkin.errors import ConfigurationError, FrameError, RobotError
 from symkin.model.differential import (  # noqa: F401 - re-exported
     FrameMethods,
     chain_hessian,
@@ -307,6 +307,9 @@ class Robot(FrameMethods):
         """``name`` reduced to a safe C/Python identifier."""
         return identifier(self.name)
 
+    code_name = identifier  # the name in generated code (symbols ``symkin_<code_name>_*``)
+    single_path = True  # one serial chain (see Tree.single_path)
+
     @cached_property
     def _num(self) -> NumericKinematics:
         return NumericKinematics.of(self.ets)
@@ -433,6 +436,29 @@ class Robot(FrameMethods):
         from symkin.runtime.ik import ik
 
         return ik(self, Tep, frame=frame, **kwargs)
+
+    def to_data(self) -> tuple[str, dict[str, Any]]:
+        """``("chain", fields)``: the robot as JSON data (its ETS as text, which round-trips exactly),
+        for the manifests of :func:`symkin.write_generated`; :func:`symkin.model.tree.model_of_data`
+        reads it back."""
+        return "chain", {
+            "name": self.name,
+            "ets": str(self.ets),
+            "joint_names": list(self.joint_names),
+            "qlim": self.qlim.tolist(),
+            "qd_max": None if self.qd_max is None else self.qd_max.tolist(),
+            "configs": {k: v.tolist() for k, v in self.configs.items() if k != "qz"},
+            "source": self.source,
+        }
+
+    def chain(self, frame: Any = None) -> Robot:
+        """The serial chain to ``frame``: the robot itself (None or "ee", its end effector), as
+        :meth:`symkin.Tree.chain` gives a tree's."""
+        if frame is not None and frame != "ee":
+            raise FrameError(
+                f"the chain of robot {self.name!r} ends at its end effector (frame None or 'ee')"
+            )
+        return self
 
     def select(self, frame: int | None = None) -> Any:
         """The robot itself (``frame=None``: the end effector) or its link frame k as chain

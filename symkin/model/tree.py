@@ -29,37 +29,18 @@ from typing import Any
 import numpy as np
 
 from symkin.core.names import identifier
-from symkin.errors import FrameError, RobotError, URDFError
+from symkin.errors import RobotError, URDFError
 from symkin.model.differential import FrameMethods, rotate_rows
 from symkin.model.ets import ET, ETS
+from symkin.model.frames import frame_position
 from symkin.model.geometry import Geometry, check_geometry, rename_links
 from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
 from symkin.model.robot import Robot
 from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
 
-__all__ = ["Tree", "Segment", "Slot", "frame_position"]
+__all__ = ["Tree", "Segment", "Slot", "frame_position", "as_tree", "robot_of"]
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
-
-
-def frame_position(frame: Any, frames: Sequence[str], name: str = "tree") -> int:
-    """The position of frame ``frame`` (a name) in ``frames``; FrameError listing the valid ones."""
-    if isinstance(frame, str):
-        try:
-            return frames.index(frame)
-        except ValueError:
-            import difflib
-
-            close = difflib.get_close_matches(frame, frames, n=3)
-            hint = f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
-            raise FrameError(f"{name} has no frame {frame!r}{hint}; its frames: {list(frames)}") from None
-    if frame is None:
-        if len(frames) == 1:
-            return 0
-        raise FrameError(f"{name} has {len(frames)} frames: name one with frame=, one of {list(frames)}")
-    raise FrameError(
-        f"a frame of {name} is a link name, one of {list(frames)}, not {type(frame).__name__} {frame!r}"
-    )
 
 
 def joint_matrices(axis: int, prismatic: bool, x: np.ndarray) -> np.ndarray:
@@ -120,8 +101,6 @@ class Tree(FrameMethods):
         joint_names: the n independent joints, depth first (children in file order).
         qlim: joint limits (2, n); qd_max: joint speed limits (n,) when every joint gives one.
     """
-
-    _symkin_tree = True  # marks trees for symkin.ik, servo and MMC (a class attribute, not a field)
 
     name: str
     base_link: str
@@ -226,6 +205,44 @@ class Tree(FrameMethods):
             geometry=rename_links(robot.geometry, {"base": base_link, "ee": frame}),
         )
 
+    def to_data(self) -> tuple[str, dict[str, Any]]:
+        """``("tree", fields)``: every field of the tree (as :meth:`__getstate__` pickles it, but the
+        geometry) as JSON data: the segments' ETS as text with their joints numbered in order, the
+        slots' multipliers and offsets as exact fractions; :func:`model_of_data` reads it back."""
+        segments = []
+        for seg in self.segments:
+            local = iter(range(len(seg.ets)))
+            text = " ".join(
+                str(ET(e.axis, joint=next(local), flip=e.flip) if e.is_joint else e) for e in seg.ets
+            )
+            joints = [e.joint for e in seg.ets if e.is_joint]
+            segments.append(
+                {
+                    "name": seg.name,
+                    "parent": seg.parent,
+                    "link": seg.link,
+                    "slot": seg.slot,
+                    "ets": text,
+                    "joints": joints,
+                }
+            )
+        slots = [
+            {**dataclasses.asdict(s), "multiplier": str(s.multiplier), "offset": str(s.offset)}
+            for s in self.slots
+        ]
+        return "tree", {
+            "name": self.name,
+            "base_link": self.base_link,
+            "frames": list(self.frames),
+            "frame_segments": list(self.frame_segments),
+            "joint_names": list(self.joint_names),
+            "qlim": self.qlim.tolist(),
+            "velocity": [None if np.isnan(v) else float(v) for v in self.velocity],
+            "source": self.source,
+            "segments": segments,
+            "slots": slots,
+        }
+
     def __getstate__(self) -> dict[str, Any]:
         """Pickle the fields (and cached values) without the memoised frame views."""
         state = dict(self.__dict__)
@@ -264,6 +281,26 @@ class Tree(FrameMethods):
         for s in self.slots:
             lines.append(f"{s.name}|{s.segment}|{s.joint}|{s.multiplier}|{s.offset}|{s.revolute}")
         return hashlib.sha256("\n".join(lines).encode()).hexdigest()
+
+    @property
+    def fingerprint(self) -> str:
+        """:attr:`key` and the limits, speeds and source: two trees with equal fingerprints have
+        identical kinematics and generated code (the compile caches' part of a model)."""
+        h = hashlib.sha256(f"{self.key}\0{self.source}\0".encode())
+        h.update(np.ascontiguousarray(self.qlim, dtype="<f8").tobytes())
+        h.update(np.ascontiguousarray(self.velocity, dtype="<f8").tobytes())
+        return h.hexdigest()
+
+    @property
+    def code_name(self) -> str:
+        """The name in generated code: ``<identifier>_tree`` (symbols ``symkin_<code_name>_*``)."""
+        return f"{self.identifier}_tree"
+
+    @property
+    def single_path(self) -> bool:
+        """Whether the tree is one serial chain: one frame and no mimic joint on its path (what
+        the expanded derivation, closed-form IK and the live view need: :meth:`chain` gives it)."""
+        return len(self.frames) == 1 and not any(self.slots[k].is_mimic for k in self.path_slots(None))
 
     def __repr__(self) -> str:
         return f"Tree(name={self.name!r}, n={self.n}, frames={list(self.frames)})"
@@ -307,11 +344,16 @@ class Tree(FrameMethods):
                 rev[s.joint] = False
         return rev
 
-    def chain(self, frame: str) -> Robot:
-        """The serial chain from the base link to ``frame`` as a :class:`Robot` (joints in tree
-        order; the same ETS as ``Robot.from_urdf(..., end_link=frame)``). A chain through a mimic
-        joint cannot be a Robot (its joints are independent): URDFError naming the joint."""
-        slots = [self.slots[k] for k in self.path_slots(frame)]
+    def chain(self, frame: Any = None) -> Robot:
+        """The serial chain from the base link to ``frame`` (None: the only frame) as a
+        :class:`Robot` (the same ETS as ``Robot.from_urdf(..., end_link=frame)``). Its joints keep
+        their order in the tree (the joints of a chain's own tree, :meth:`from_robot`, their indices;
+        a URDF tree's, numbered depth first, the order along the path): the chain's q is
+        ``q[sorted(joints on the path)]`` of the tree's. A chain through a mimic joint
+        cannot be a Robot (its joints are independent): URDFError naming the joint."""
+        frame = self.frame_name(frame)
+        on = self.path_slots(frame)
+        slots = [self.slots[k] for k in on]
         for s in slots:
             if s.is_mimic:
                 raise URDFError(
@@ -319,22 +361,23 @@ class Tree(FrameMethods):
                     "a Robot has independent joints only: use the Tree (symkin.compile(tree), "
                     f"frame={frame!r})"
                 )
-        renumber = {k: i for i, k in enumerate(self.path_slots(frame))}  # slot -> joint of the chain
-        ets: list[ET] = []
-        for si in self.path(frame):
-            for e in self.segments[si].ets:
-                ets.append(ET(e.axis, joint=renumber[e.joint], flip=e.flip) if e.is_joint else e)
         if not slots:
             raise URDFError(
                 f"no revolute, continuous or prismatic joint between {self.base_link!r} and {frame!r}"
             )
-        cols = [s.joint for s in slots]
+        cols = sorted(s.joint for s in slots)  # the chain's joints, in the tree's order
+        joint = {k: cols.index(s.joint) for k, s in zip(on, slots)}  # slot -> joint of the chain
+        ets = [
+            ET(e.axis, joint=joint[e.joint], flip=e.flip) if e.is_joint else e
+            for si in self.path(frame)
+            for e in self.segments[si].ets
+        ]
         vel = self.velocity[cols]
         return Robot(
             ETS(tuple(ets)),
             name=self.name,
             qlim=self.qlim[:, cols],
-            joint_names=tuple(s.name for s in slots),
+            joint_names=tuple(self.joint_names[j] for j in cols),
             qd_max=None if np.isnan(vel).any() else vel,
             source=f"{self.source.split(', tree below')[0]}, chain {self.base_link} -> {frame}",
         )
@@ -481,3 +524,27 @@ class Tree(FrameMethods):
         J = self._jacobian(L, P, f)
         H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
         return (J[0], H[0]) if single else (J, H)
+
+
+def as_tree(model: Any) -> Tree:
+    """``model`` (a Robot, a Tree, or what holds one as ``model``: compiled kinematics) as a Tree:
+    a chain through :meth:`Tree.from_robot`, memoised on the Robot. Where symkin asks whether a
+    model is a tree; everything below a model works on the tree."""
+    model = getattr(model, "model", model)
+    if isinstance(model, Tree):
+        return model
+    if not isinstance(model, Robot):
+        raise TypeError(f"a symkin model is a Robot or a Tree, not {type(model).__name__}")
+    tree = model.__dict__.get("_tree")
+    if tree is None:
+        tree = Tree.from_robot(model)
+        object.__setattr__(model, "_tree", tree)
+    return tree
+
+
+def robot_of(model: Any) -> Robot | None:
+    """``model`` (or what holds one as ``model``: compiled kinematics) when it is a Robot, a chain
+    whose links are named by their place along it (``base``, ``link1``.., ``ee``), else None (a
+    Tree: its links by their own names)."""
+    model = getattr(model, "model", model)
+    return None if as_tree(model) is model else model

@@ -569,7 +569,8 @@ def urdf_args(
     name: str | None = None,
     snap_tol: float = 1e-9,
 ) -> dict[str, Any]:
-    """The serial chain of a URDF (file path or XML text) from ``base_link`` to ``end_link``.
+    """The serial chain of a URDF (file path or XML text) from ``base_link`` to ``end_link``: the
+    tree of that one frame (:func:`urdf_tree_args`), its joints' ETs in order.
 
     ``base_link`` defaults to the root link, ``end_link`` to the only leaf below ``base_link``
     (a branching tree needs ``end_link``). Joints: revolute, continuous, prismatic, fixed.
@@ -584,39 +585,26 @@ def urdf_args(
                 f"links {leaves}"
             )
         end_link = leaves[0]
-    else:
-        graph.check_link(end_link, "end_link")
-    chain: list[ET] = []
-    names, limits = [], []
-    for j in graph.path(base_link, end_link, "end_link"):
-        what = f"joint {j.name!r}"
-        if j.kind in ("floating", "planar"):
-            raise URDFError(
-                f"{where}: {what} between {base_link!r} and {end_link!r} is {j.kind}; symkin supports "
-                "revolute, continuous, prismatic and fixed joints (choose base_link/end_link to avoid it)"
-            )
-        mimic = j.el.find("mimic")
-        if mimic is not None and j.movable:  # a fixed joint does not move: its <mimic> says nothing
-            raise URDFError(
-                f"{where}: {what} mimics joint {mimic.get('joint')!r}; mimic joints are not supported "
-                "(each joint must be independent): choose another end_link or edit the URDF"
-            )
-        chain += joint_ets(graph, j, len(names), snap_tol)
-        if j.movable:
-            names.append(j.name)
-            limits.append(joint_limits(j, where))
-    if not names:
+    graph.check_link(end_link, "end_link")
+    one = [end_link] if end_link != base_link else []  # a path without joints: refused below
+    tree = urdf_tree_args(graph, one, base_link, snap_tol, name) if one else {"slots": ()}
+    mimic = next((s for s in tree["slots"] if s.is_mimic), None)
+    if mimic is not None:
+        raise URDFError(
+            f"{where}: joint {mimic.name!r} mimics joint {mimic.mimics!r}; mimic joints are not supported "
+            "(each joint must be independent): choose another end_link or edit the URDF"
+        )
+    if not tree["slots"]:
         raise URDFError(
             f"{where}: no revolute, continuous or prismatic joint between {base_link!r} and {end_link!r}"
         )
-    lower, upper, qd = _limit_lists(limits)
-    qd_max = None if any(math.isnan(v) for v in qd) else qd
+    qd = tree["velocity"]
     return dict(
-        ets=ETS(tuple(chain)),
-        name=name or graph.name,
-        qlim=[lower, upper],
-        joint_names=tuple(names),
-        qd_max=qd_max,
+        ets=ETS(tuple(e for seg in tree["segments"] for e in seg.ets)),
+        name=tree["name"],
+        qlim=tree["qlim"],
+        joint_names=tree["joint_names"],
+        qd_max=None if any(math.isnan(v) for v in qd) else qd,
         source=f"{where}, chain {base_link} -> {end_link}",
     )
 
@@ -666,14 +654,15 @@ def _mimic(graph: URDFGraph, j: URDFJoint) -> tuple[URDFJoint, Fraction, Fractio
 
 
 def urdf_tree_args(
-    path_or_xml: str | Path,
+    path_or_xml: str | Path | URDFGraph,
     frames: Sequence[str] | str | None = None,
     base_link: str | None = None,
     snap_tol: float = 1e-9,
     name: str | None = None,
 ) -> dict[str, Any]:
-    """The :class:`symkin.Tree` arguments of a URDF: see :meth:`symkin.Tree.from_urdf`."""
-    graph = read_graph(path_or_xml)
+    """The :class:`symkin.Tree` arguments of a URDF (or of its read graph): see
+    :meth:`symkin.Tree.from_urdf`."""
+    graph = path_or_xml if isinstance(path_or_xml, URDFGraph) else read_graph(path_or_xml)
     where, base_link = graph.where, graph.base(base_link)
     if isinstance(frames, str):
         frames = [f.strip() for f in frames.split(",") if f.strip()]

@@ -12,9 +12,12 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch
-from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
+from symkin.core.names import function_name
+from symkin.emit.kernel import FRAMED, LINKED
+from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
+from symkin.model.tree import as_tree
 
-__all__ = ["casadi_call", "chain_functions", "tree_functions"]
+__all__ = ["casadi_call", "casadi_methods"]
 
 
 def _mapped(f: Any, Q: np.ndarray, single: bool, shapes: dict[str, tuple[int, ...]]) -> list[np.ndarray]:
@@ -76,77 +79,42 @@ def casadi_call(f: Any, n: int, name: str, shapes: dict[str, tuple[int, ...]]) -
     return call
 
 
-def chain_functions(robot: Any, fns: dict[str, Any], methods: tuple[str, ...]) -> dict[str, Any]:
-    """The methods of a chain's kinematics from its casadi functions, each with ``frame=`` (link
-    frame k): ``fkine``, ``jacob0`` and ``jacobe`` from the link poses, the others from those
-    (:class:`symkin.model.frames.LinkFrames`)."""
-    n = robot.n
+def casadi_methods(model: Any, fns: dict[str, Any]) -> dict[str, Any]:
+    """The methods of ``model``'s kinematics from its casadi functions, each kind of
+    :data:`~symkin.emit.kernel.FRAMED` with ``frame=`` (a frame name, None for the only one; a
+    chain's link frame k: ``fkine``, ``jacob0`` and ``jacobe`` from the link poses, the others
+    through :class:`symkin.model.frames.LinkFrames`), ``link_poses`` and the ``*_all`` functions."""
+    tree = as_tree(model)
+    n, frames, name = tree.n, tree.frames, tree.name
+    F, links = len(frames), n if "link_poses" in fns else 0
     shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n), "links": (n, 4, 4)}
-    functions = {name: casadi_call(fns[name], n, robot.name, shapes) for name in methods}
-    link_poses = functions["link_poses"]
-    chain = ChainTables.of(robot.ets)
+    every = {"T": (F, 4, 4), "J": (F, 6, n)}
+    calls = {key: casadi_call(f, n, name, every if key.endswith("_all") else shapes) for key, f in fns.items()
+             if not key.startswith("manipulability")}  # fmt: skip
+    methods = {key: f for key, f in calls.items() if key == "link_poses" or key.endswith("_all")}
 
-    def framed(name: str) -> Any:
-        plain = functions[name]
+    def framed(kind: str) -> Any:
+        plain = calls.get(kind)
 
         def call(q: Any, frame: Any = None) -> Any:
-            if frame is None:
+            if frame is None and plain is not None:
                 return plain(q)
-            k = frame_index(frame, n, robot.name)
-            L = link_poses(q)
-            if name == "fkine":
-                return L[..., k, :, :]
+            k, link = resolve_frame(frame, frames, links, name)
+            if link < 0:
+                return calls[function_name(kind, k, F)](q)
+            if kind not in LINKED:
+                return getattr(link_frames, kind)(q, link)
+            L = calls["link_poses"](q)
+            if kind == "fkine":
+                return L[..., link, :, :]
             Lb = L[None] if L.ndim == 3 else L
-            J = frame_jacobian(Lb, k, chain, ee=name == "jacobe")
+            J = frame_jacobian(Lb, link, tables, ee=kind == "jacobe")
             return J[0] if L.ndim == 3 else J
 
-        call.__name__, call.__doc__ = plain.__name__, plain.__doc__
+        call.__name__, call.__doc__ = kind, (plain or calls[function_name(kind, 0, F)]).__doc__
         return call
 
-    for name in ("fkine", "jacob0", "jacobe"):
-        functions[name] = framed(name)
-    links = LinkFrames(n, robot.name, functions["fkine"], functions["jacob0"], chain.order)
-
-    def linked(name: str) -> Any:
-        plain, of_link = functions[name], getattr(links, name)
-
-        def call(q: Any, frame: Any = None) -> Any:
-            return plain(q) if frame is None else of_link(q, frame)
-
-        call.__name__, call.__doc__ = plain.__name__, plain.__doc__
-        return call
-
-    for name in ("fkine_jacob0", "jacob0_hessian0", "hessian0", "hessiane"):
-        functions[name] = linked(name)
-    return functions
-
-
-def tree_functions(tree: Any, fns: dict[str, Any], methods: tuple[str, ...]) -> dict[str, Any]:
-    """The methods of a tree's kinematics from its casadi functions (one per frame, ``<name>_<k>``,
-    and the ``*_all`` ones over every frame), and ``jacob0_hessian0(q, frame)``."""
-    n, F = tree.n, len(tree.frames)
-    shapes = {"T": (4, 4), "J": (6, n), "H": (n, 6, n)}
-    shapes_all = {"T": (F, 4, 4), "J": (F, 6, n)}
-
-    def call(f: Any, q: Any, shape: dict[str, tuple[int, ...]]) -> Any:
-        Q, single = as_batch(q, n, tree.name)
-        outs = _mapped(f, Q, single, shape)
-        return outs[0] if len(outs) == 1 else tuple(outs)
-
-    def framed(base: str) -> Any:
-        def method(q: Any, frame: Any = None) -> Any:
-            return call(fns[f"{base}_{tree.frame_position(frame)}"], q, shapes)
-
-        method.__name__ = base
-        return method
-
-    def every(name: str) -> Any:
-        def method(q: Any) -> Any:
-            return call(fns[name], q, shapes_all)
-
-        method.__name__ = name
-        return method
-
-    return {
-        name: every(name) if name.endswith("_all") else framed(name) for name in (*methods, "jacob0_hessian0")
-    }
+    methods.update({kind: framed(kind) for kind in FRAMED})
+    tables = ChainTables.of(tree.chain().ets) if links else None
+    link_frames = LinkFrames(n, name, methods["fkine"], methods["jacob0"], tables.order if tables else ())
+    return methods

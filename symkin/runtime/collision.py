@@ -312,7 +312,7 @@ def collision_solver(kin: Any, env: Any, kwargs: dict[str, Any], attempts: Any =
     from symkin.runtime.ik_problem import IKOptions
 
     _attempts(attempts)
-    if getattr(kin, "backend", None) != "c" or getattr(kin, "is_tree", True):
+    if getattr(kin, "backend", None) != "c" or len(getattr(kin, "frames", ())) != 1:  # one frame's kinematics
         return None
     if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or getattr(kin, "n", 99) > 12:
         return None  # frame=, backend=...: the general path

@@ -45,6 +45,7 @@ from symkin.runtime.mmc_qp import (
 )
 from symkin.runtime.step import OSQP_SETTINGS, StepInfo, step_nu, step_q
 from symkin.runtime.step import OSQP_STATUS as _OSQP_STATUS
+from symkin.runtime.task import task_kinematics
 
 __all__ = [
     "MMC",
@@ -361,10 +362,7 @@ class MMC:
         ):
             raise ParameterError(f"collision_rows must be a positive integer, got {collision_rows!r}")
         self.collision_rows = int(collision_rows)
-        if frame is not None or getattr(kin, "_symkin_tree", False):  # one frame of a tree
-            from symkin.runtime.task import task_kinematics
-
-            kin = task_kinematics(kin, frame)
+        kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
         if backend not in ("auto", "c", "python"):
             raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin = kin
@@ -417,13 +415,6 @@ class MMC:
                         raise
                     warnings.warn(f"MMC runs in Python: the C step is unavailable ({exc})", stacklevel=2)
             elif backend == "c":
-                if getattr(kin, "backend", None) == "c" and getattr(
-                    getattr(kin, "tree", None), "_symkin_tree", False
-                ):
-                    raise ConfigurationError(
-                        f"backend='c': the path to {kin.name} has a mimic joint, whose Hessian the C "
-                        "tree does not generate; this MMC runs in Python (backend='auto')"
-                    )
                 raise ConfigurationError("backend='c' needs C kinematics: symkin.compile(robot, backend='c')")
 
     @property

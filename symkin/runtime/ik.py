@@ -72,6 +72,7 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     stacked,
 )
 from symkin.runtime.memo import per_object
+from symkin.runtime.task import task_kinematics
 
 __all__ = [
     "IKResult",
@@ -230,10 +231,7 @@ def ik(
     Returns:
         IKResult; unreachable targets give ``success=False`` and a ``reason``.
     """
-    if frame is not None or getattr(kin, "_symkin_tree", False):
-        from symkin.runtime.task import task_kinematics
-
-        kin = task_kinematics(kin, frame)
+    kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
     args = (method, damping, lam, pinv, ilimit, slimit, tol, tol_on, joint_limits, we, starts, slack_gain,
             manipulability, xi, rho_i, rho_s)  # fmt: skip
     if backend == "c":

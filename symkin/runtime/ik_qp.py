@@ -218,8 +218,7 @@ def build_ik_qp(kin: Any, q: Any, Tep: Any, frame: Any = None, **options: Any) -
     from symkin.runtime.ik_problem import check_pose, pose_error
     from symkin.runtime.task import task_kinematics
 
-    if frame is not None or getattr(kin, "_symkin_tree", False):
-        kin = task_kinematics(kin, frame)
+    kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
     opt = IKOptions.of(kin, method="QP", **options)
     q = as_config(q, opt.n, name_of(kin), "q")
     T, single = check_pose(Tep)

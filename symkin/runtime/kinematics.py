@@ -1,18 +1,19 @@
 """Compiled kinematics: the object :func:`symkin.compile` returns, for a chain or a tree (no sympy here).
 
-One class for every model. Every method takes ``frame=`` (a chain: None for the end effector or
-link frame k, the frame right after the k-th joint along the chain; a tree: a frame name, or None
-when it has one frame) and has the numeric references' signatures and shapes: ``fkine``,
+One class for every model. Every method takes ``frame=`` (a frame name, or None when the model has
+one frame: a chain's end effector, "ee"; on a chain also k, link frame k, the frame right after the
+k-th joint along the chain) and has the numeric references' signatures and shapes: ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``hessian0``, ``hessiane``, ``jacob0_hessian0``,
-``manipulability``, ``jacobm``, ``cond``, ``jacobs``, ``jacobb``, ``jacob0_dot``, ``ik``; a chain
-adds ``link_poses``, ``ik_all`` and its closed form, a tree ``fkine_all``, ``jacob0_all`` and
-``fkine_jacob0_all`` (every frame, in ``tree.frames`` order). On the C backend the generated
-methods are the extension module's functions themselves, so a call costs one C function call.
+``manipulability``, ``jacobm``, ``cond``, ``jacobs``, ``jacobb``, ``jacob0_dot``, ``ik``,
+``fkine_all``, ``jacob0_all`` and ``fkine_jacob0_all`` (every frame, in ``frames`` order); a chain
+adds ``link_poses``, ``ik_all`` and its closed form. On the C backend the generated methods are
+the extension module's functions themselves, so a call costs one C function call.
 """
 
 from __future__ import annotations
 
 import contextlib
+import sys
 from collections.abc import Callable
 from functools import cached_property
 from pathlib import Path
@@ -22,17 +23,17 @@ from typing import Any
 import numpy as np
 
 from symkin.compiler.compile import Artifact, build, cache_key
-from symkin.core.arrays import as_batch
-from symkin.errors import ConfigurationError
+from symkin.core.names import function_name
+from symkin.errors import ConfigurationError, SymkinError
 from symkin.model.differential import FrameMethods
-from symkin.model.robot import Robot
-from symkin.model.slots import hessian_of_columns
-from symkin.runtime.casadi_calls import chain_functions, tree_functions
+from symkin.model.frames import resolve_frame
+from symkin.model.tree import as_tree
+from symkin.runtime.casadi_calls import casadi_methods
 from symkin.runtime.ik import IK_OPTIONS, ik
 from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
 
-__all__ = ["Kinematics", "KIN_METHODS", "TREE_METHODS", "load_kinematics", "kinematics_of"]
+__all__ = ["Kinematics", "KIN_METHODS", "load_kinematics", "kinematics_of"]
 
 C_IK_MAX_JOINTS = 12  # SYMKIN_IK_NMAX of the C solver; longer chains use the NumPy solver
 _FAST_KEYS = frozenset((*IK_OPTIONS, "q0", "seed", "backend"))  # what ik's memoised C solvers take
@@ -47,7 +48,8 @@ KIN_METHODS = (
     "fkine_jacob0",
     "jacob0_hessian0",
 )  # generated for a chain
-TREE_METHODS = ("fkine", "jacob0", "jacobe", "fkine_jacob0", "fkine_all", "jacob0_all", "fkine_jacob0_all")
+# what a generated module may have besides: every frame's at once, and manipulability (C)
+_MODULE_METHODS = (*KIN_METHODS, "fkine_all", "jacob0_all", "fkine_jacob0_all", "manipulability", "jacobm")
 
 
 def _rebuild(model: Any, backend: str) -> Kinematics:
@@ -55,36 +57,33 @@ def _rebuild(model: Any, backend: str) -> Kinematics:
     return load_kinematics(model, backend)
 
 
+# symkin 0.1.0 pickled compiled trees as symkin.runtime.tree_kinematics._rebuild: the same function
+sys.modules.setdefault(f"{__package__}.tree_kinematics", sys.modules[__name__])
+
+
 def load_kinematics(
     model: Any, backend: str = "c", cache: bool = True, strategy: str | None = None
 ) -> Kinematics:
     """The compiled kinematics of ``model`` (a Robot or a Tree) on ``backend``, memoised per cache
-    key (see :mod:`symkin.compiler.compile`). A tree's generated code depends on its structure only;
-    the object also carries the limits, speeds and source a controller reads, so trees that differ
-    there get their own object."""
+    key (see :mod:`symkin.compiler.compile`) and the model's own fingerprint: the object carries
+    the model (a robot's configurations and source, a tree's) a controller reads."""
     key = cache_key(model, backend, strategy)
     geometry = None if model.geometry is None else model.geometry.fingerprint()  # not in the code's key
-    memo: Any = (key, geometry)
-    if not isinstance(model, Robot):
-        memo = (key, model.qlim.tobytes(), np.asarray(model.velocity).tobytes(), model.source, geometry)
     return memoised(
-        memo, lambda: kinematics_of(model, build(model, backend, cache, strategy, key), backend), cache
+        (key, model.fingerprint, geometry),
+        lambda: kinematics_of(model, build(model, backend, cache, strategy, key), backend),
+        cache,
     )
 
 
 def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
     """The :class:`Kinematics` of ``model`` around its built code ``art``."""
-    chain = isinstance(model, Robot)
-    methods = KIN_METHODS if chain else TREE_METHODS
     if backend == "casadi":
         fns = art.module.functions()
-        functions = (chain_functions if chain else tree_functions)(model, fns, methods)
-        kin = Kinematics(model, backend, functions, art.files, art.path, art.module)
+        kin = Kinematics(model, backend, casadi_methods(model, fns), art.files, art.path, art.module)
         kin.functions = fns  # type: ignore[attr-defined]
         return kin
-    if chain and backend == "c":
-        methods = (*methods, "manipulability", "jacobm")
-    functions = {name: getattr(art.module, name) for name in methods}
+    functions = {name: getattr(art.module, name) for name in _MODULE_METHODS if hasattr(art.module, name)}
     return Kinematics(model, backend, functions, art.files, art.path, art.module)
 
 
@@ -95,8 +94,8 @@ class Kinematics(FrameMethods):
 
     Attributes: ``model`` (also ``robot`` and ``tree``), ``backend``, ``n``, ``name``,
     ``joint_names``, ``qlim``, ``qd_max``, ``configs`` and each named configuration (``kin.qr``, as
-    on the model), ``frames`` (a tree's), ``files`` (the generated sources), ``path`` (the compiled
-    library or module), ``module``.
+    on the model), ``frames`` (a chain: "ee"), ``files`` (the generated sources), ``path`` (the
+    compiled library or module), ``module``.
     """
 
     fkine: Callable[..., np.ndarray]
@@ -116,15 +115,13 @@ class Kinematics(FrameMethods):
         self.model = model
         self._n = int(model.n)  # kept: a Robot counts the joints of its ETS on every call
         self.backend, self.files, self.path, self.module = backend, files, path, module
-        self.is_tree = not isinstance(model, Robot)
-        if self.is_tree:
-            self._symkin_tree = True  # marks trees for symkin.ik, servo and MMC
+        self.frames: tuple[str, ...] = as_tree(model).frames
+        self._links = self._n if "link_poses" in functions else 0  # a chain's link frames
         for name, fn in functions.items():
             setattr(self, name, fn)
         self._ik_solver: Any = None  # the C IK solver with the default options, after a first call
         self._ik_by_options: dict[tuple, Any] = {}  # C IK solvers by keyword options (see ik)
         self._ik_bound: dict[tuple, Any] = {}  # their bound C entry points, looked up by kin.ik in C
-        self._paths: dict[str, tuple[list[Any], list[int], bool]] = {}  # a tree's frames (see _path)
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
 
     # -- what the model says -----------------------------------------------------------------
@@ -177,11 +174,6 @@ class Kinematics(FrameMethods):
             ) from None
 
     @property
-    def frames(self) -> tuple[str, ...]:
-        """A tree's frame names (``*_all`` results follow them); () for a chain (link frames by index)."""
-        return self.model.frames if self.is_tree else ()
-
-    @property
     def c_prefix(self) -> str:
         """The prefix of the exported C symbols (``symkin_<name>`` unless generated with another)."""
         headers = sorted(f for f in self.files if f.endswith(".h"))
@@ -194,10 +186,8 @@ class Kinematics(FrameMethods):
         return self.model.random_q(N, seed)
 
     def __repr__(self) -> str:
-        if self.is_tree:
-            frames = list(self.frames)
-            return f"Kinematics(tree={self.name!r}, n={self.n}, frames={frames}, backend={self.backend!r})"
-        return f"Kinematics(robot={self.name!r}, n={self.n}, backend={self.backend!r})"
+        frames = list(self.frames)
+        return f"Kinematics(robot={self.name!r}, n={self.n}, frames={frames}, backend={self.backend!r})"
 
     def __reduce__(self) -> tuple[Any, tuple[Any, str]]:
         """Pickle as (model, backend): unpickling compiles again, which loads the generated code
@@ -210,106 +200,92 @@ class Kinematics(FrameMethods):
 
         files = ", ".join(f"`{md_text(f)}`" for f in sorted(self.files))
         head = f"**{md_text(self.name)}** compiled for the **{self.backend}** backend ({files})"
-        if self.is_tree:
+        try:
+            chain = self.model.chain()
+        except SymkinError:  # several frames, or a mimic joint on the path
             return f"{head}: frames {', '.join(f'`{md_text(f)}`' for f in self.frames)}, {self.n} joints.\n"
         methods = (
             "fkine, link_poses, jacob0, jacobe, jacobs, jacobb, jacob0_dot, hessian0, hessiane, "
             "manipulability, jacobm, cond, ik"
         )
-        return robot_markdown(self.model, head) + f"Methods: {methods}.\n"
+        return robot_markdown(chain, head) + f"Methods: {methods}.\n"
 
     # -- frames ------------------------------------------------------------------------------
+    def fkine_all(self, q: Any) -> np.ndarray:
+        """Poses of every frame, (F, 4, 4) or (N, F, 4, 4) (a model of one frame: its pose)."""
+        return np.expand_dims(self.fkine(q), -3)
+
+    def jacob0_all(self, q: Any) -> np.ndarray:
+        """Base-frame Jacobians of every frame, (F, 6, n) or (N, F, 6, n)."""
+        return np.expand_dims(self.jacob0(q), -3)
+
+    def fkine_jacob0_all(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`fkine_all` and :meth:`jacob0_all` together."""
+        T, J = self.fkine_jacob0(q)
+        return np.expand_dims(T, -3), np.expand_dims(J, -3)
+
+    def _frame(self, frame: Any) -> tuple[int, int]:
+        """(frame index, -1) or (-1, link frame index) of a frame argument."""
+        return resolve_frame(frame, self.frames, self._links, self.name)
+
     def select(self, frame: Any = None) -> Any:
         """One frame as chain kinematics of all n joints, for :func:`symkin.ik`, :func:`symkin.servo`
-        and :class:`symkin.MMC`: the chain itself for ``frame=None``, else a
-        :class:`symkin.model.frame_view.FrameView`."""
-        if frame is None and not self.is_tree:
+        and :class:`symkin.MMC`: these kinematics themselves for the only frame (``frame=None``),
+        else a :class:`symkin.model.frame_view.FrameView`."""
+        if frame is None and len(self.frames) == 1:
             return self
         from symkin.model.frame_view import frame_view
 
         return frame_view(self.model, self, frame)
 
-    def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        """Base-frame Jacobian and Hessian of ``frame``: ((6, n), (n, 6, n)) or batched (a chain
-        binds its generated function). A tree's frame: the generated function (Haviland and Corke,
-        Maximising Manipulability During Resolved-Rate Motion Control, 2020, eq 20) when the
-        backend has one and no mimic joint is on the path; else from the compiled Jacobian's
-        columns (no mimic joint) or the numeric reference."""
-        tree = self.model
-        name = tree.frame_name(frame)
-        slots, joints, plain = self._path(name)
-        generated = getattr(self.module, "jacob0_hessian0", None)
-        if generated is not None and plain:
-            out = generated(q, name)
-            if out is not NotImplemented:
-                return out
-        if not plain:
-            return self.jacob0(q, name), tree.hessian0(q, name)
-        Q, single = as_batch(q, self.n, self.name)
-        J = np.asarray(self.jacob0(Q, name))
-        Jv, Jw = np.swapaxes(J[:, :3, joints], 1, 2), np.swapaxes(J[:, 3:, joints], 1, 2)
-        H = hessian_of_columns(Jv, Jw, slots, self.n)
-        return (J[0], H[0]) if single else (J, H)
-
-    def _path(self, name: str) -> tuple[list[Any], list[int], bool]:
-        """A tree frame's slots on its path (base first), their joints, and whether no mimic joint
-        is among them (J's columns are then the slots' own); worked out once per frame."""
-        path = self._paths.get(name)
-        if path is None:
-            slots = [self.model.slots[k] for k in self.model.path_slots(name)]
-            path = self._paths[name] = (slots, [s.joint for s in slots], not any(s.is_mimic for s in slots))
-        return path
-
-    def c_controller_functions(self, frame: str) -> dict[str, Any] | None:
-        """The C functions the C controllers (MMC, RRMC, the servo loop) call for a tree's
-        ``frame``, as ctypes functions (``jacob0_hessian0``, ``jacob0``, ``fkine``,
-        ``manipulability``), or None when the backend is not C, the model is a chain (whose
-        controllers find its functions by prefix) or a mimic joint is on the frame's path (its H
-        is then not generated; the controllers run in Python)."""
-        if self.backend != "c" or not self.is_tree:
+    def _c_functions(self, frame: Any, kinds: tuple[str, ...]) -> dict[str, Any] | None:
+        """The generated C functions ``kinds`` of ``frame`` (a named frame) as ctypes functions;
+        None for another backend or a chain's link frame."""
+        if self.backend != "c" or self.path is None:
+            return None
+        k, link = self._frame(frame)
+        if link >= 0:
             return None
         from symkin.emit.c.build import load_library
 
-        k = self.model.frame_position(frame)
-        lib, prefix = load_library(self.path), self.c_prefix
-        try:
-            return {
-                name: getattr(lib, f"{prefix}_{name}_{k}")
-                for name in ("jacob0_hessian0", "jacob0", "fkine", "manipulability")
-            }
-        except AttributeError:  # a mimic joint on the path
-            return None
+        self._lib = load_library(self.path)
+        F = len(self.frames)
+        return {kind: getattr(self._lib, f"{self.c_prefix}_{function_name(kind, k, F)}") for kind in kinds}
+
+    def c_controller_functions(self, frame: Any) -> dict[str, Any] | None:
+        """The C functions the C controllers (MMC, RRMC, the servo loop) call for ``frame``, as
+        ctypes functions (``jacob0_hessian0``, ``jacob0``, ``fkine``, ``manipulability``), or None
+        when the backend is not C or ``frame`` is a chain's link frame (the controllers then run
+        in Python)."""
+        return self._c_functions(frame, ("jacob0_hessian0", "jacob0", "fkine", "manipulability"))
 
     def c_fkjac_of(self, frame: Any) -> Any:
-        """The C entry point ``fkine_jacob0`` of a tree's ``frame`` as a ctypes function (C
-        backend), for the C IK solver; None for other backends and a chain's link frames."""
-        if self.backend != "c" or not self.is_tree:
-            return None
-        from symkin.emit.c.build import load_library
-
-        k = self.model.frame_position(frame)
-        self._lib = load_library(self.path)
-        return getattr(self._lib, f"{self.c_prefix}_fkine_jacob0_{k}")
+        """The C entry point ``fkine_jacob0`` of ``frame`` as a ctypes function (C backend), for the
+        C IK solver; None for other backends and a chain's link frames."""
+        fns = self._c_functions(frame, ("fkine_jacob0",))
+        return None if fns is None else fns["fkine_jacob0"]
 
     @cached_property
     def c_fkjac(self) -> Any:
-        """The C entry point ``fkine_jacob0(q, T, J)`` as a ctypes function (C backend only), for
-        the C IK solver."""
-        if self.backend != "c" or self.path is None or self.is_tree:
-            raise AttributeError("c_fkjac exists only for a chain on the C backend (a tree: c_fkjac_of)")
-        from symkin.emit.c.build import load_library
-
-        return getattr(load_library(self.path), f"{self.c_prefix}_fkine_jacob0")
+        """The C entry point ``fkine_jacob0(q, T, J)`` of the only frame as a ctypes function (C
+        backend), for the C IK solver."""
+        return self._c_entry("fkine_jacob0")
 
     @cached_property
     def c_fkjac_batch(self) -> Any:
-        """The C entry point ``fkine_jacob0_batch(q, T, J, N)`` as a ctypes function (C backend, a
-        chain), four configurations per step: a batch of LM solves evaluates its lanes with it."""
-        if self.backend != "c" or self.path is None or self.is_tree:
-            raise AttributeError("c_fkjac_batch exists only for a chain on the C backend")
+        """The C entry point ``fkine_jacob0_batch(q, T, J, N)`` of the only frame as a ctypes
+        function (C backend), four configurations per step: a batch of LM solves evaluates its
+        lanes with it."""
+        return self._c_entry("fkine_jacob0_batch")
+
+    def _c_entry(self, name: str) -> Any:
+        if self.backend != "c" or self.path is None or len(self.frames) != 1:
+            raise AttributeError(
+                f"{name} of the only frame exists on the C backend only (several frames: c_fkjac_of)"
+            )
         from symkin.emit.c.build import load_library
 
-        return getattr(load_library(self.path), f"{self.c_prefix}_fkine_jacob0_batch")
+        return getattr(load_library(self.path), f"{self.c_prefix}_{name}")
 
     def ik(self, Tep: Any, frame: Any = None, **kwargs: Any) -> Any:
         """Numerical inverse kinematics of ``frame`` (eqs 37-51); see :func:`symkin.runtime.ik.ik`
@@ -353,7 +329,7 @@ class Kinematics(FrameMethods):
             attempts = kwargs.pop("collision_attempts", 20)
             if env is not None and env is not False:
                 qp = str(kwargs.get("method", "")).upper() == "QP"
-                if qp and frame is None and self.backend == "c" and not self.is_tree:
+                if qp and frame is None and self.backend == "c" and len(self.frames) == 1:
                     return collision_qp_ik(self, Tep, env, attempts, **kwargs)  # the QP keeps the MMC's rows
                 from symkin.runtime.collision import collision_ik, collision_solver
 
@@ -369,8 +345,9 @@ class Kinematics(FrameMethods):
                     )
                 return solver.solve(Tep, q0, seed)
             options = {k: v for k, v in kwargs.items() if k not in ("q0", "seed")}
-        if frame is not None or self.is_tree:
-            return self.select(frame).ik(Tep, **kwargs)
+        view = self.select(frame)
+        if view is not self:
+            return view.ik(Tep, **kwargs)
         c_loop = self.backend == "c" and self.n <= C_IK_MAX_JOINTS
         fast = kwargs.keys() <= _FAST_KEYS and kwargs.get("method") != "analytic"
         if c_loop and fast and kwargs.get("backend", "c") == "c":
@@ -390,7 +367,7 @@ class Kinematics(FrameMethods):
                 from symkin.runtime.free_joint import free_joint_solver, parse_free_joint
 
                 j, values = parse_free_joint(free)
-                return free_joint_solver(self.robot, j, self.backend).ik(Tep, values, **options)
+                return free_joint_solver(self.model.chain(), j, self.backend).ik(Tep, values, **options)
             return self.analytic.ik(Tep, fkine=self.fkine, **options)
         kwargs.setdefault("backend", "c" if c_loop else "numpy")
         return ik(self, Tep, **kwargs)
@@ -499,14 +476,18 @@ class Kinematics(FrameMethods):
         NoAnalyticIKError naming what the arm lacks."""
         from symkin.runtime.analytic_ik import compile_analytic
 
-        return compile_analytic(self.robot, self.backend)
+        return compile_analytic(self.model.chain(), self.backend)
 
     @property
     def has_analytic_ik(self) -> bool:
         """Whether symkin derives a closed-form IK for this arm (cached; see :meth:`ik_all`)."""
         from symkin.compiler.analytic_ik import analytic_refusal
 
-        return analytic_refusal(self.robot, self.backend) is None
+        try:
+            chain = self.model.chain()
+        except SymkinError:  # several frames, or a mimic joint on the path: no one chain
+            return False
+        return analytic_refusal(chain, self.backend) is None
 
     def ik_all(
         self, T: Any, q0: Any = None, joint_limits: bool = True, weights: Any = None, free_joint: Any = None
@@ -530,7 +511,9 @@ class Kinematics(FrameMethods):
             j, values = parse_free_joint(free_joint)
             if values is None:
                 raise ConfigurationError("ik_all needs the values of the free joint: free_joint=(j, values)")
-            return free_joint_solver(self.robot, j, self.backend).ik_all(T, values, q0, joint_limits, weights)
+            return free_joint_solver(self.model.chain(), j, self.backend).ik_all(
+                T, values, q0, joint_limits, weights
+            )
         solver = self.analytic
         if self.backend == "c":
             self.__dict__["ik_all"] = solver.ik_all

@@ -9,7 +9,7 @@ from symkin.compiler.compile import Artifact, check_backend, check_strategy, loa
 from symkin.compiler.manifest import import_module_file, read_manifest
 from symkin.model.resolve import resolve_robot
 from symkin.model.robot import Robot
-from symkin.model.tree import Tree
+from symkin.model.tree import Tree, as_tree
 from symkin.runtime.kinematics import Kinematics, kinematics_of, load_kinematics
 
 __all__ = ["compile", "load_compiled"]
@@ -29,15 +29,10 @@ def compile(  # noqa: A001
     in-process memo when they are there.
     """
     check_backend(backend)
-    check_strategy(strategy, robot)
-    if isinstance(robot, Tree):
-        return load_kinematics(robot, backend, cache)
     if isinstance(robot, str):
         robot = resolve_robot(robot)
-    if not isinstance(robot, Robot):
-        raise TypeError(
-            f"compile() needs a Robot, a Tree, a built-in robot name or ETS text, not {type(robot).__name__}"
-        )
+    as_tree(robot)  # TypeError for what is not a model
+    check_strategy(strategy, robot)
     return load_kinematics(robot, backend, cache, strategy)
 
 

@@ -20,6 +20,7 @@ from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_st
 from symkin.runtime.ik import check_pose, pose_error_of
 from symkin.runtime.qrmc import QRMC
 from symkin.runtime.servo import servo_gain, servo_velocity
+from symkin.runtime.task import task_kinematics
 
 __all__ = ["servo", "ServoResult", "SERVO_HALVINGS"]
 
@@ -155,10 +156,7 @@ def servo(
     no halving is free the run stops (``blocked``, ``reason == "collision"``). ``q0`` itself must
     be free: ConfigurationError naming the pair otherwise.
     """
-    if frame is not None or getattr(kin, "_symkin_tree", False):
-        from symkin.runtime.task import task_kinematics
-
-        kin = task_kinematics(kin, frame)
+    kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
     if backend not in ("auto", "c", "python"):
         raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
     n = int(kin.n)

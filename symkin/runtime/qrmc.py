@@ -235,10 +235,9 @@ class QRMC:
         tol: float = 1e-10, damping: float = 1e-2, singular_tol: float = 1e-6, axes: str = "all",
         backend: str = "auto", frame: Any = None,
     ) -> None:  # fmt: skip
-        if frame is not None or getattr(kin, "_symkin_tree", False):
-            from symkin.runtime.task import task_kinematics
+        from symkin.runtime.task import task_kinematics
 
-            kin = task_kinematics(kin, frame)
+        kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
         if backend not in ("auto", "c", "python"):
             raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin, self.n = kin, int(kin.n)

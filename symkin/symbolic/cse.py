@@ -208,10 +208,12 @@ def cse_outputs(
 
 @dataclass(frozen=True)
 class HessianLoop:
-    """A Hessian (n, 6, n) written by loops from a Jacobian (6, n) of the same frame.
+    """A Hessian (n, 6, n) written by loops from the Jacobian columns of the slots on one frame's path.
 
-    With ``Jv_a, Jw_a`` the columns of joint a (``Jw = 0`` for a prismatic joint) and chain order
-    ``order`` (joint index of the k-th joint from the base):
+    With ``Jv_a, Jw_a`` the column of slot a (``Jw = 0`` for a prismatic slot), ``order`` the joint
+    of each slot along the path (base first), ``columns`` the column of each slot in the array
+    ``jacobian`` (default ``order``: the Jacobian (6, n) itself) and ``multipliers`` the slots'
+    ``m`` of ``theta = m q_joint + c`` (default 1; then each joint's column is its one slot's):
 
     - base frame (``frame="base"``, eq 20 of Haviland and Corke, Maximising Manipulability During
       Resolved-Rate Motion Control, 2020): for b at or before a,
@@ -220,13 +222,16 @@ class HessianLoop:
       ``dJe_a/dq_b = (Jw_a x Jv_b - Jw_b x Jv_a ; Jw_a x Jw_b)``, and 0 for b at or before a
       (a joint does not move the end-effector-frame axes of the joints after it).
 
-    ``out`` names the Hessian output and ``jacobian`` the (6, n) array it reads.
+    Each block adds ``m_a m_b`` times into ``H[joint_b][:, joint_a]`` (the chain rule). ``out``
+    names the Hessian output and ``jacobian`` the array of columns it reads.
     """
 
     out: str
     jacobian: str
     frame: str
     order: tuple[int, ...]
+    columns: tuple[int, ...] | None = None
+    multipliers: tuple[float, ...] | None = None
 
     @property
     def counts(self) -> OpCounts:

@@ -12,7 +12,11 @@ Built the way that keeps the expressions small (see ``shared/notes/measurements.
 - Hessian blocks come from Jacobian columns (eq 20 and Appendix I of Haviland and Corke, Maximising
   Manipulability During Resolved-Rate Motion Control, 2020): for b <= a (chain
   order), ``dJ_a/dq_b = (w_b x Jv_a; w_b x Jw_a)`` when b is revolute and 0 when b is prismatic;
-  for b > a, ``dJ_a/dq_b = (w_a x Jv_b; 0)`` when a is revolute and 0 when a is prismatic.
+  for b > a, ``dJ_a/dq_b = (w_a x Jv_b; 0)`` when a is revolute and 0 when a is prismatic; the
+  end-effector frame's likewise from the columns of Je (:class:`symkin.symbolic.cse.HessianLoop`).
+
+It is the walk of :func:`symkin.symbolic.program.derive_tree_program` over the chain as a one-frame
+tree, every value kept as one expression (an inline :class:`~symkin.symbolic.program.Program`).
 """
 
 from __future__ import annotations
@@ -26,8 +30,8 @@ from symkin.errors import SymkinError
 from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import tree_size
-from symkin.symbolic.fold import Fixed, fold_constants
-from symkin.symbolic.program import Frame, Program, _base_jacobian, _hessians, _matrix, _Walk, walk_joints
+from symkin.symbolic.fold import Fixed
+from symkin.symbolic.program import Frame, Program, _matrix, _Walk, derive_tree_program, walk_joints
 
 __all__ = ["SymbolicKinematics", "ExpansionTooLargeError", "derive", "const_to_sympy", "joint_symbols"]
 
@@ -50,10 +54,6 @@ def joint_symbols(n: int) -> tuple[sp.Symbol, ...]:
     return tuple(sp.Symbol(f"q{j}", real=True) for j in range(n))
 
 
-def _cross(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> list[sp.Expr]:
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
 def _walk(
     elements: Iterable[ET | Fixed],
     qs: Sequence[sp.Symbol],
@@ -71,47 +71,6 @@ def _walk(
         if links is not None:
             links.append(_matrix(*pose.pose()))
     return pose, frames
-
-
-def _ee_frame(
-    elements: Sequence[ET | Fixed], qs: Sequence[sp.Symbol], constant: Callable[[Const], sp.Expr]
-) -> tuple[sp.Matrix, list[sp.Matrix]]:
-    """End-effector-frame Jacobian and Hessian from the inverse chain walked from the end effector.
-
-    With u_a the joint axes and p'_a the joint origins in the end-effector frame (the inverse ETS
-    E_M^-1 ... E_1^-1), ``Je_a = (p'_a x u_a; u_a)`` (revolute) or ``(u_a; 0)`` (prismatic). For
-    b <= a (chain order) dJe_a/dq_b = 0; for b > a, with du = u_a x u_b and
-    dr = u_b x (p'_a - p'_b) when b is revolute (du = 0, dr = u_b when b is prismatic):
-    ``dJe_a/dq_b = (du x r_a + u_a x dr; du)`` for revolute a (r_a = -p'_a), ``(du; 0)`` for prismatic a.
-    """
-    n = len(qs)
-    _, frames = _walk(reversed(tuple(elements)), qs, constant, -1)
-    ordered = frames[::-1]  # chain order
-    zero3 = [sp.Integer(0)] * 3
-    Je = sp.zeros(6, n)
-    cols = []
-    for j, revolute, u, p in ordered:
-        r = [-x for x in p]
-        v = _cross(u, r) if revolute else u
-        w = u if revolute else zero3
-        cols.append((v, w, r))
-        Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(w)
-    He = [sp.zeros(6, n) for _ in range(n)]
-    for kb, (jb, rev_b, ub, pb) in enumerate(ordered):
-        for ka, (ja, rev_a, ua, pa) in enumerate(ordered[:kb]):
-            if rev_b:
-                du = _cross(ua, ub)
-                dr = _cross(ub, [x - y for x, y in zip(pa, pb)])
-            else:
-                du, dr = zero3, ub
-            if rev_a:
-                r_a = cols[ka][2]
-                dv = [x + y for x, y in zip(_cross(du, r_a), _cross(ua, dr))]
-                dw = du
-            else:
-                dv, dw = du, zero3
-            He[jb][:3, ja], He[jb][3:, ja] = sp.Matrix(dv), sp.Matrix(dw)
-    return Je, He
 
 
 @dataclass(frozen=True, eq=False)
@@ -162,29 +121,31 @@ def derive(
     written out as trees (:func:`symkin.symbolic.cse.tree_size`) exceed that many nodes, checked
     after each of them, so sizing the expanded form costs no more than building it up to that size.
     """
-    ets = robot.ets if isinstance(robot, Robot) else robot
-    name = robot.name if isinstance(robot, Robot) else "robot"
+    from symkin.model.tree import Tree
+
+    ets = robot if isinstance(robot, ETS) else robot.ets
+    name = "robot" if isinstance(robot, ETS) else robot.name
     n = ets.n
     qs = tuple(q) if q is not None else joint_symbols(n)
-    elements = fold_constants(ets) if fold else tuple(ets)
     sizes: dict[sp.Basic, int] = {}
     total = 0
 
     def budget(exprs: Iterable[sp.Expr]) -> None:
         nonlocal total
-        if max_nodes is not None:
-            total += tree_size(list(exprs), sizes)
-            if total > max_nodes:
-                raise ExpansionTooLargeError(f"{name}: over {max_nodes} nodes expanded")
+        total += tree_size(list(exprs), sizes)
+        if total > max_nodes:  # type: ignore[operator]
+            raise ExpansionTooLargeError(f"{name}: over {max_nodes} nodes expanded")
 
-    links: list[sp.Matrix] = []
-    pose, frames = _walk(elements, qs, constant, 1, links)
-    cols, pe = pose.pose()
-    T = _matrix(cols, pe)
-    budget(T)
-    J0 = _base_jacobian(pose.P, frames, pe, n)
-    budget(J0)
-    H0, _ = _hessians(pose.P, J0, None, [f[0] for f in frames])
-    budget(x for h in H0 for x in h)
-    Je, He = _ee_frame(elements, qs, constant)
-    return SymbolicKinematics(name, ets, qs, T, tuple(links), J0, Je, tuple(H0), tuple(He))
+    tree = Tree.from_robot(Robot(ets, name=name))
+    tp = derive_tree_program(
+        tree,
+        qs,
+        constant,
+        name,
+        fold=fold,
+        hessians=True,
+        inline=True,
+        budget=None if max_nodes is None else budget,
+    )
+    H0, He = tp.H0[0] or (), tp.He[0] or ()
+    return SymbolicKinematics(name, ets, qs, tp.T[0], tp.links[:n], tp.J0[0], tp.Je[0], H0, He)  # type: ignore[arg-type]

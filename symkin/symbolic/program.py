@@ -35,12 +35,13 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import sympy as sp
 
 from symkin.model.ets import ET, ETS, Const
-from symkin.symbolic.cse import CSEResult, HessianLoop, OpCounts, _flat, _total, floatify
+from symkin.symbolic.cse import CSEResult, HessianLoop, _flat, _total, floatify
 from symkin.symbolic.fold import MIX, Fixed, fold_constants
 
 __all__ = [
@@ -53,10 +54,7 @@ __all__ = [
     "walk_joints",
     "TreeProgram",
     "derive_tree_program",
-    "TREE_FUNCTIONS",
-    "PER_FRAME",
     "safe_text",
-    "total_ops",
 ]
 
 _HALF_PI = sp.pi / 2
@@ -236,18 +234,10 @@ def _jacobian_column(
     return _cross(P, w, P.vec([a - b for a, b in zip(pe, p)])), w
 
 
-def _base_jacobian(P: Program, frames: Iterable[Frame], pe: Sequence[sp.Expr], n: int) -> sp.Matrix:
-    """The base-frame Jacobian (6 x n) of the point ``pe`` from the joints' ``frames``."""
-    J0 = sp.zeros(6, n)
-    for j, revolute, w, p in frames:
-        v, o = _jacobian_column(P, revolute, w, p, pe)
-        J0[:3, j], J0[3:, j] = sp.Matrix(v), sp.Matrix(o)
-    return J0
-
-
 @dataclass(frozen=True, eq=False)
 class KinematicProgram:
-    """The kinematics of a chain as a straight-line program.
+    """The kinematics of a chain as a straight-line program (the one-frame case of
+    :func:`derive_tree_program`, as :func:`derive_program` gives it).
 
     ``lines`` assign the intermediates ``t0, t1, ...`` in order (each a small expression of the
     joint symbols and earlier intermediates). The outputs are matrices over those names: ``T``
@@ -286,51 +276,34 @@ def derive_program(
     hessians: bool = True,
     fold: bool = False,
 ) -> KinematicProgram:
-    """Derive the pose, link frames and both Jacobians of ``ets`` as one straight-line program;
-    with ``hessians`` also both Hessians, written out (O(n^2) lines; zeros and exact axes of the
-    Jacobian columns make many of their cross products vanish or shrink). ``fold``: long runs of
-    constants, and runs with two or more rotations by arbitrary angles, become one numeric
-    transform each first (:func:`symkin.symbolic.fold.fold_constants`; ``constant`` then does
-    not see them)."""
-    n = ets.n
-    P = Program()
-    links: list[tuple[list[list[sp.Expr]], list[sp.Expr]]] = []
-    marks: list[tuple[str, int]] = []
-    elements = fold_constants(ets) if fold else tuple(ets)
-    W = _Walk(P)
-    frames: list[Frame] = []
-    for frame in walk_joints(W, elements, qs, constant, 1):  # the link frames as they are passed
-        frames.append(frame)
-        links.append(W.pose())
-        marks.append((f"link {len(links) - 1}", len(P.lines)))
-    cols, pe = W.pose()
-    marks.append(("T", len(P.lines)))
-    J0 = _base_jacobian(P, frames, pe, n)
-    marks.append(("J0", len(P.lines)))
-    # end-effector frame: the inverse chain walked from the end effector (eq 16 without R^T products)
-    inv = list(walk_joints(_Walk(P), reversed(elements), qs, constant, -1))
-    Je = sp.zeros(6, n)
-    for j, revolute, u, p in inv:
-        v = _cross(P, p, u) if revolute else u  # (p' x u) = u x r with r = -p'
-        Je[:3, j], Je[3:, j] = sp.Matrix(v), sp.Matrix(u if revolute else _ZERO3)
-    marks.append(("Je", len(P.lines)))
-    order = tuple(f[0] for f in frames)
-    H0, He = _hessians(P, J0, Je, order) if hessians else (None, None)
-    marks.append(("H", len(P.lines)))
+    """Derive the pose, link frames and both Jacobians of the chain ``ets`` as one straight-line
+    program, by :func:`derive_tree_program` of the chain as a one-frame tree; with ``hessians``
+    also both Hessians, written out (O(n^2) lines; zeros and exact axes of the Jacobian columns
+    make many of their cross products vanish or shrink). ``fold``: long runs of constants, and
+    runs with two or more rotations by arbitrary angles, become one numeric transform each first
+    (:func:`symkin.symbolic.fold.fold_constants`; ``constant`` then does not see them)."""
+    from symkin.model.robot import Robot
+    from symkin.model.tree import Tree
+
+    tree = Tree.from_robot(Robot(ets, name=name))
+    tp = derive_tree_program(tree, qs, constant, name, fold=fold, hessians=hessians)
+    n = len(tree.slots)
+    marks = {"frame 0": "T", "frame 0 J0": "J0", "frame 0 Je": "Je", "H": "H"}
+    marks.update({f"segment {k}": f"link {k}" for k in range(n)})
     return KinematicProgram(
         name=name,
         ets=ets,
         q=tuple(qs),
-        lines=tuple(P.lines),
-        T=_matrix(cols, pe),
-        links=tuple(_matrix(c, p) for c, p in links),
-        J0=J0,
-        Je=Je,
-        order=order,
-        revolute=tuple(f[1] for f in frames),
-        H0=H0,
-        He=He,
-        marks=tuple(marks),
+        lines=tp.lines,
+        T=tp.T[0],
+        links=tuple(tp.links[:n]),  # type: ignore[arg-type]
+        J0=tp.J0[0],
+        Je=tp.Je[0],
+        order=tuple(j for j, _ in tp.paths[0]),
+        revolute=tuple(s.revolute for s in tree.slots),
+        H0=tp.H0[0],
+        He=tp.He[0],
+        marks=tuple((marks[k], end) for k, end in tp.marks if k in marks),
     )
 
 
@@ -395,45 +368,68 @@ def program_code(
     return CSEResult(lines, flat, counts, kp.q, scratch, hessians, "program")
 
 
-# -- trees ------------------------------------------------------------------------------------
-
-# The functions every tree kernel has; per frame k also fkine_k, jacob0_k, jacobe_k, fkine_jacob0_k.
-TREE_FUNCTIONS: dict[str, str] = {
-    "fkine_all": "Pose of every frame in the base frame, (F, 4, 4), frames in order.",
-    "jacob0_all": "Base-frame Jacobian of every frame, (F, 6, n), rows (v, omega); 0 off a frame's path.",
-    "fkine_jacob0_all": "Poses (F, 4, 4) and base-frame Jacobians (F, 6, n) of every frame together.",
-}
-PER_FRAME: dict[str, str] = {
-    "fkine": "Pose of frame {k} ({name}) in the base frame, 4x4.",
-    "jacob0": "Base-frame Jacobian of frame {k} ({name}), (6, n), rows (v, omega); 0 off its path.",
-    "jacobe": "Jacobian of frame {k} ({name}) in that frame, (6, n), rows (v, omega) (eq 16).",
-    "fkine_jacob0": "Pose (4, 4) and base-frame Jacobian (6, n) of frame {k} ({name}) together.",
-}
+# -- the walk over a tree, of which a chain is the one-frame case --------------------------------
 
 
 @dataclass(frozen=True, eq=False)
 class TreeProgram:
-    """A tree's kinematics as straight-line code: ``lines`` assign ``t0, t1, ...`` in order.
+    """A model's kinematics as straight-line code: ``lines`` assign ``t0, t1, ...`` in order.
 
-    Per frame (in ``frames`` order): ``T`` (4x4), ``J0`` and ``Je`` (6xn). ``links`` holds the
-    pose after each segment (depth first; used by the derivation; None for a fixed segment whose
-    constants were folded into the next one). ``marks`` ends each section of ``lines``:
-    ``("segment k", end)`` per segment, then ``("frame k", end)`` per frame.
+    Per frame (in ``frames`` order): ``paths`` (the joint and multiplier of each slot on its path,
+    base first), ``T`` (4x4), ``J0`` and ``Je`` (6xn, contracted onto the joints); ``C0`` and
+    ``Ce`` the slot columns of J0 and Je (6 x slots, before the multipliers) where the frame is not
+    plain (a joint met twice or a multiplier other than 1: its Hessians come from them), else
+    None; ``H0`` and ``He`` the Hessians written out (``hessians``, plain frames) or None.
+    ``links`` holds the pose after each segment (depth first; None for a fixed segment whose
+    constants were folded into the next one); ``link_frames`` the link frames of a serial chain
+    (one plain frame whose every segment ends in its joint): the pose right after each joint, along
+    the chain (eq 5), else (). ``marks`` ends each section of ``lines``:
+    ``("segment k", end)`` per segment, then per frame ``("frame f", end)`` (its pose),
+    ``("frame f J0", end)`` and ``("frame f Je", end)``, then ``("H", end)``.
     """
 
     name: str
     q: tuple[sp.Symbol, ...]
     lines: tuple[tuple[sp.Symbol, sp.Expr], ...]
     frames: tuple[str, ...]
+    paths: tuple[tuple[tuple[int, Fraction], ...], ...]
     T: tuple[sp.Matrix, ...]
     J0: tuple[sp.Matrix, ...]
     Je: tuple[sp.Matrix, ...]
+    C0: tuple[sp.Matrix | None, ...]
+    Ce: tuple[sp.Matrix | None, ...]
+    H0: tuple[tuple[sp.Matrix, ...] | None, ...]
+    He: tuple[tuple[sp.Matrix, ...] | None, ...]
     links: tuple[sp.Matrix | None, ...]
     marks: tuple[tuple[str, int], ...]
+    link_frames: tuple[sp.Matrix, ...] = ()
 
     @property
     def n(self) -> int:
         return len(self.q)
+
+    def plain(self, f: int) -> bool:
+        """Whether frame ``f``'s Jacobian columns are its slots' own (each joint met once, multipliers 1)."""
+        joints = [j for j, _ in self.paths[f]]
+        return len(set(joints)) == len(joints) and all(m == 1 for _, m in self.paths[f])
+
+
+def _contract(
+    P: Program, J: sp.Matrix, joint: int, m: Fraction, v: Sequence[sp.Expr], o: Sequence[sp.Expr]
+) -> None:
+    """Add ``m`` times the slot column (v ; o) to column ``joint`` of J (the chain rule of
+    ``theta = m q_joint + c``)."""
+    if m != 1:
+        r = sp.Rational(m)
+        v, o = P.vec([r * x for x in v]), P.vec([r * x for x in o])
+    if any(x != 0 for x in J[:, joint]):  # another slot of this joint came first
+        v = P.vec([a + b for a, b in zip(J[:3, joint], v)])
+        o = P.vec([a + b for a, b in zip(J[3:, joint], o)])
+    J[:3, joint], J[3:, joint] = sp.Matrix(v), sp.Matrix(o)
+
+
+def _slot_matrix(columns: Sequence[tuple[Sequence[sp.Expr], Sequence[sp.Expr]]]) -> sp.Matrix:
+    return sp.Matrix([[*v, *o] for v, o in columns]).T if columns else sp.zeros(6, 0)
 
 
 def derive_tree_program(
@@ -443,18 +439,33 @@ def derive_tree_program(
     name: str | None = None,
     frame_jacobians: bool = True,
     fold: bool = False,
+    hessians: bool = False,
+    inline: bool = False,
+    budget: Callable[[Iterable[sp.Expr]], None] | None = None,
 ) -> TreeProgram:
     """Derive the pose, base-frame and (``frame_jacobians``) frame-expressed Jacobian of every
-    frame of ``tree`` (a :class:`symkin.Tree`) as one program (module docstring).
+    frame of ``tree`` (a :class:`symkin.Tree`; a chain is the one-frame tree of
+    :meth:`symkin.Tree.from_robot`) as one program (module docstring); with ``hessians`` also both
+    Hessians of each plain frame, written out (:func:`_hessians`).
+
+    The frame-expressed Jacobian comes from the inverse of the frame's path walked from the frame
+    (eq 16 without the R^T products): with u_a the slot axes and p'_a the slot origins in the
+    frame, its slot columns are ``(p'_a x u_a ; u_a)`` (revolute) or ``(u_a ; 0)`` (prismatic).
 
     ``fold``: the constants of a fixed segment that is no frame and has one child are walked with
     the child's, and each long run of constants, or run with two or more rotations by arbitrary
     angles, becomes one numeric transform (:func:`symkin.symbolic.fold.fold_constants`;
-    ``constant`` then does not see them): a chain of many fixed links costs one transform."""
+    ``constant`` then does not see them): a chain of many fixed links costs one transform.
+
+    ``inline``: every value one expression (nothing named: the expanded derivation of
+    :mod:`symkin.symbolic.kinematics`); ``budget`` is called with each frame's T, J0 and H0 as they
+    are derived (it may raise to stop a derivation that grows too large)."""
     segments, slots = tree.segments, tree.slots  # type: ignore[attr-defined]
     n = len(qs)
-    P = Program()
+    P = Program(inline=inline)
+    check = budget or (lambda exprs: None)
     walks: list[_Walk] = []
+    walked: list[tuple[ET | Fixed, ...]] = []  # per segment: the elements its walk applied
     joint_axes: dict[int, tuple[list[sp.Expr], list[sp.Expr]]] = {}  # slot -> (signed axis, origin)
     thetas = [sp.Rational(s.multiplier) * qs[s.joint] + sp.Rational(s.offset) for s in slots]  # by slot
     links: list[sp.Matrix | None] = []
@@ -467,52 +478,73 @@ def derive_tree_program(
         if fold and seg.slot is None and k not in ends and children[k] == 1:
             carried.append(ets)
             walks.append(_Walk(P) if seg.parent < 0 else walks[seg.parent])  # forked by the child
+            walked.append(())
             links.append(None)
             marks.append((f"segment {k}", len(P.lines)))
             continue
         carried.append(())
         W = _Walk(P) if seg.parent < 0 else walks[seg.parent].fork()
-        for slot, _, w, p in walk_joints(W, fold_constants(ets) if fold else ets, thetas, constant, 1):
+        elements = fold_constants(ets) if fold else ets
+        for slot, _, w, p in walk_joints(W, elements, thetas, constant, 1):
             joint_axes[slot] = (w, p)
         walks.append(W)
+        walked.append(tuple(elements))
         links.append(_matrix(*W.pose()))  # dead code in the kernels unless a frame needs it
         marks.append((f"segment {k}", len(P.lines)))
-    Ts, J0s, Jes = [], [], []
+    paths, Ts, J0s, Jes, C0s, Ces, H0s, Hes = [], [], [], [], [], [], [], []
     for f, frame in enumerate(tree.frames):  # type: ignore[attr-defined]
+        on = [slots[k] for k in tree.path_slots(frame)]  # type: ignore[attr-defined]
+        paths.append(tuple((s.joint, s.multiplier) for s in on))
         cols, pe = walks[tree.frame_segments[f]].pose()  # type: ignore[attr-defined]
-        J0, Je = sp.zeros(6, n), sp.zeros(6, n)
-        for k in tree.path_slots(frame):  # type: ignore[attr-defined]
-            s = slots[k]
-            w, p = joint_axes[k]
-            v, o = _jacobian_column(P, s.revolute, w, p, pe)
-            m = sp.Rational(s.multiplier)
-            if m != 1:
-                v, o = P.vec([m * x for x in v]), P.vec([m * x for x in o])
-            if s.is_mimic and any(x != 0 for x in J0[:, s.joint]):  # the joint it follows is on the path
-                v = P.vec([a + b for a, b in zip(J0[:3, s.joint], v)])
-                o = P.vec([a + b for a, b in zip(J0[3:, s.joint], o)])
-            J0[:3, s.joint], J0[3:, s.joint] = sp.Matrix(v), sp.Matrix(o)
-        for j in range(n if frame_jacobians else 0):  # in the frame: R^T v and R^T omega
-            for r0 in (0, 3):
-                col = list(J0[r0 : r0 + 3, j])
-                if any(x != 0 for x in col):
-                    Je[r0 : r0 + 3, j] = sp.Matrix(
-                        P.vec([sum(c[r] * col[r] for r in range(3)) for c in cols])
-                    )
         Ts.append(_matrix(cols, pe))
+        check(Ts[-1])
+        marks.append((f"frame {f}", len(P.lines)))
+        J0, base = sp.zeros(6, n), []
+        for k in tree.path_slots(frame):  # type: ignore[attr-defined]
+            v, o = _jacobian_column(P, slots[k].revolute, *joint_axes[k], pe)
+            base.append((v, o))
+            _contract(P, J0, slots[k].joint, slots[k].multiplier, v, o)
+        check(J0)
+        marks.append((f"frame {f} J0", len(P.lines)))
+        Je, own = sp.zeros(6, n), []
+        if frame_jacobians:  # the path's inverse, walked from the frame
+            elements = reversed([e for seg in tree.path(frame) for e in walked[seg]])  # type: ignore[attr-defined]
+            inv = list(walk_joints(_Walk(P), elements, thetas, constant, -1))
+            # slot columns (u x r ; u), r = -p' the frame's origin from the slot's (or (u ; 0))
+            own = [(_cross(P, u, [-x for x in p]), u) if rev else (u, _ZERO3) for _, rev, u, p in inv]
+            own.reverse()
+            for s, (v, o) in zip(on, own):
+                _contract(P, Je, s.joint, s.multiplier, v, o)
+        marks.append((f"frame {f} Je", len(P.lines)))
         J0s.append(J0)
         Jes.append(Je)
-        marks.append((f"frame {f}", len(P.lines)))
+        plain = len({s.joint for s in on}) == len(on) and all(s.multiplier == 1 for s in on)
+        C0s.append(None if plain else _slot_matrix(base))
+        Ces.append(None if plain or not frame_jacobians else _slot_matrix(own))
+        H0, He = _hessians(P, J0, Je, [s.joint for s in on]) if hessians and plain else (None, None)
+        check(x for h in H0 or () for x in h)
+        H0s.append(H0)
+        Hes.append(He)
+    marks.append(("H", len(P.lines)))
+    chain = [segments[s.segment] for s in slots]
+    serial = len(paths) == 1 and len(paths[0]) == len(slots) and C0s[0] is None
+    serial = serial and all(seg.ets and seg.ets[-1].is_joint for seg in chain)
     return TreeProgram(
         name=name or tree.name,  # type: ignore[attr-defined]
         q=tuple(qs),
         lines=tuple(P.lines),
         frames=tuple(tree.frames),  # type: ignore[attr-defined]
+        paths=tuple(paths),
         T=tuple(Ts),
         J0=tuple(J0s),
         Je=tuple(Jes),
+        C0=tuple(C0s),
+        Ce=tuple(Ces),
+        H0=tuple(H0s),
+        He=tuple(Hes),
         links=tuple(links),
         marks=tuple(marks),
+        link_frames=tuple(links[s.segment] for s in slots) if serial else (),  # type: ignore[misc]
     )
 
 
@@ -520,7 +552,3 @@ def safe_text(text: str, limit: int = 80) -> str:
     """A name as text safe inside any generated comment, docstring or string literal."""
     out = "".join(c if c.isascii() and (c.isalnum() or c in "_-.:/+ ',()") else "?" for c in text)
     return out if len(out) <= limit else out[: limit - 3] + "..."
-
-
-def total_ops(functions: list) -> OpCounts:
-    return sum((f.code.counts for f in functions), OpCounts())

@@ -103,13 +103,14 @@ class ViewState(NamedTuple):
 
 
 def frame_choices(kin: Any) -> dict[str, Any]:
-    """The frames the view can follow, name -> the ``frame=`` argument of ``kin``: a tree's declared
-    frames (``kin.frames``); a chain's end effector ``ee`` (None) and link frame k as
-    ``link<k+1>`` (k), the link names of the chain read as a tree."""
-    frames = tuple(getattr(kin, "frames", ()) or ())
-    if frames:
-        return {name: name for name in frames}
-    return {"ee": None, **{f"link{k + 1}": k for k in range(int(kin.n))}}
+    """The frames the view can follow, name -> the ``frame=`` argument of ``kin``: its frames
+    (``kin.frames``; the only one as None: a chain's end effector ``ee``) and a chain's link frame k
+    as ``link<k+1>`` (k), the link names of the chain read as a tree."""
+    frames = tuple(kin.frames)
+    choices = {name: None if len(frames) == 1 else name for name in frames}
+    if getattr(kin, "link_poses", None) is not None:  # a chain's link frames
+        choices.update({f"link{k + 1}": k for k in range(int(kin.n))})
+    return choices
 
 
 class _Segment(NamedTuple):

@@ -96,7 +96,7 @@ def kinematics_of(robot_or_kin: Any, backend: str = "c") -> Any:
 def robot_of(robot_or_kin: Any) -> Any:
     """The Robot of a Kinematics, a Robot or a robot spec (name, ETS text, file), without compiling:
     sizes are checked on it before any work."""
-    from symkin.model.robot import Robot
+    from symkin.model.tree import robot_of as chain_of
     from symkin.runtime.kinematics import Kinematics
 
     if isinstance(robot_or_kin, Kinematics):
@@ -105,7 +105,11 @@ def robot_of(robot_or_kin: Any) -> Any:
         from symkin.model.resolve import resolve_robot
 
         return resolve_robot(robot_or_kin)
-    return robot_or_kin if isinstance(robot_or_kin, Robot) else kinematics_of(robot_or_kin).robot
+    try:
+        robot = chain_of(robot_or_kin)  # a Robot itself; None for a Tree
+    except TypeError:  # not a model (an ETS)
+        robot = None
+    return robot if robot is not None else kinematics_of(robot_or_kin).robot
 
 
 def _rows(axes: str | Sequence[int]) -> tuple[int, ...]:

@@ -94,15 +94,15 @@ def test_the_kernel_shares_what_frames_share():
         for i in range(3)
     ]
     xml = urdf([f"k{i}" for i in range(7)] + [f"{s}{i}" for s in "ab" for i in range(1, 4)], trunk + branches)
-    from symkin.compiler.compile import tree_derivation_functions
+    from symkin.compiler.compile import derived_functions
 
     tree = Tree.from_urdf(xml)
     assert tree.n == 12 and tree.frames == ("a3", "b3")
-    fns = {f.name: f.code.counts.total for f in tree_derivation_functions(tree)}
+    fns = {f.name: f.code.counts.total for f in derived_functions(tree)}
     both = fns["fkine_jacob0_0"] + fns["fkine_jacob0_1"]
     assert fns["fkine_jacob0_all"] < both
     one_chain = Tree.from_urdf(xml, frames=["a3"])
-    trunk_ops = {f.name: f.code.counts.total for f in tree_derivation_functions(one_chain)}["fkine_all"]
+    trunk_ops = {f.name: f.code.counts.total for f in derived_functions(one_chain)}["fkine"]
     assert fns["fkine_jacob0_all"] <= both - trunk_ops // 2
 
 

@@ -13,7 +13,6 @@ import pytest
 
 import symkin
 from symkin import Robot, Tree
-from symkin.runtime.tree_kinematics import TreeKinematics
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "pickles_0.1.0_7c10cf0.pkl"
 PICKLES = pickle.loads(DATA.read_bytes())  # a dict of the old pickles' bytes, by what they hold
@@ -40,7 +39,7 @@ def test_old_compiled_chain_pickles_load(backend):
 @pytest.mark.parametrize("backend", ["numpy", "c"])
 def test_old_compiled_tree_pickles_load(backend):
     kin = pickle.loads(PICKLES[f"tree_{backend}"])
-    assert isinstance(kin, TreeKinematics) and kin.backend == backend
+    assert isinstance(kin, symkin.Kinematics) and kin.backend == backend
     tree = kin.tree
     q = tree.random_q(5, seed=3)
     np.testing.assert_allclose(kin.fkine_all(q), tree.fkine_all(q), atol=1e-12)

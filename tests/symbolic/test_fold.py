@@ -17,7 +17,7 @@ from symkin.bench.urdf_sweep import synthetic_urdfs
 from symkin.model.ets import ET, Axis, Const
 from symkin.model.kinematics import const_matrix
 from symkin.model.robots import list_robots, load
-from symkin.symbolic import kinematics as symbolic_kinematics
+from symkin.symbolic import program
 from symkin.symbolic.fold import MAX_RUN, Fixed, fold_constants
 from symkin.symbolic.functions import EXPANDED_MAX_NODES, expanded_if_small
 from symkin.symbolic.kinematics import ExpansionTooLargeError, const_to_sympy, derive, joint_symbols
@@ -190,8 +190,7 @@ def test_choosing_the_expanded_form_stops_at_the_size_limit(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("derived past the size limit")
 
-    monkeypatch.setattr(symbolic_kinematics, "_cross", forbidden)  # J0 and H0
-    monkeypatch.setattr(symbolic_kinematics, "_ee_frame", forbidden)  # Je and He
+    monkeypatch.setattr(program, "_jacobian_column", forbidden)  # J0, and the Je, H0 and He after it
     with pytest.raises(ExpansionTooLargeError):
         derive(robot, max_nodes=100)
     monkeypatch.undo()

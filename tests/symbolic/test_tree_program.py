@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from symkin import Tree
-from symkin.compiler.compile import tree_derivation_functions
+from symkin.compiler.compile import derived_functions
 from symkin.symbolic.kinematics import const_to_sympy, joint_symbols
 from symkin.symbolic.program import derive_tree_program
 from tests.model.tree_urdfs import GRIPPER, joint, urdf
@@ -27,7 +27,7 @@ def legs(k: int) -> Tree:
 
 
 def ops(tree: Tree) -> dict[str, int]:
-    return {f.name: f.code.counts.total for f in tree_derivation_functions(tree)}
+    return {f.name: f.code.counts.total for f in derived_functions(tree)}
 
 
 def test_size_grows_linearly_with_legs():

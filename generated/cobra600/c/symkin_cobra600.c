@@ -1412,25 +1412,40 @@ static void frame_jacobian_(const double *SYMKIN_RESTRICT L, int k, int ee, doub
     }
 }
 
-void symkin_cobra600_fkine_frame(const double *q, int k, double *T)
+void symkin_cobra600_fkine_link(const double *q, int k, double *T)
 {
     double L[16 * 4];
     link_poses_(q, L);
     memcpy(T, L + 16 * k, sizeof(double) * 16);
 }
 
-void symkin_cobra600_jacob0_frame(const double *q, int k, double *J)
+void symkin_cobra600_jacob0_link(const double *q, int k, double *J)
 {
     double L[16 * 4];
     link_poses_(q, L);
     frame_jacobian_(L, k, 0, J);
 }
 
-void symkin_cobra600_jacobe_frame(const double *q, int k, double *J)
+void symkin_cobra600_jacobe_link(const double *q, int k, double *J)
 {
     double L[16 * 4];
     link_poses_(q, L);
     frame_jacobian_(L, k, 1, J);
+}
+
+void symkin_cobra600_fkine_frame(const double *q, int k, double *out)
+{
+    symkin_cobra600_fkine_link(q, k, out);
+}
+
+void symkin_cobra600_jacob0_frame(const double *q, int k, double *out)
+{
+    symkin_cobra600_jacob0_link(q, k, out);
+}
+
+void symkin_cobra600_jacobe_frame(const double *q, int k, double *out)
+{
+    symkin_cobra600_jacobe_link(q, k, out);
 }
 
 /* Cholesky of the r x r SPD matrix A (row-major, r <= 6) in place; returns 0 if not positive. */
@@ -1473,39 +1488,22 @@ static void gram_(const double *J, int r0, int r, double *A)
         }
 }
 
-double symkin_cobra600_manipulability(const double *q, int axes)
+/* Yoshikawa manipulability m of the rows of J chosen by axes (0 all, 1 translation, 2 rotation);
+ * with H, also dm/dq into Jm (Jm_i = m tr(H_i^T (J J^T)^-1 J)). */
+static double manipulability_of_(const double *J, const double *H, int axes, double *Jm)
 {
-    double J[6 * 4], A[36];
+    double A[36], B[6 * 4];
     int r, r0 = rows_(axes, &r);
-    if (4 < r) /* fewer joints than rows: J J^T is singular, m = 0 exactly */
-        return 0.0;
-    jacob0_(q, J);
-    gram_(J, r0, r, A);
-    if (!chol_(A, r))
-        return 0.0;
-    double m = 1.0;
-    for (int i = 0; i < r; ++i)
-        m *= A[i * r + i];
-    return m;
-}
-
-double symkin_cobra600_jacobm(const double *q, int axes, double *Jm)
-{
-    double J[6 * 4], H[4 * 6 * 4], A[36], B[6 * 4];
-    int r, r0 = rows_(axes, &r);
-    if (4 < r) {
-        memset(Jm, 0, sizeof(double) * 4);
-        return 0.0;
-    }
-    jacob0_hessian0_(q, J, H);
-    gram_(J, r0, r, A);
-    if (!chol_(A, r)) {
-        memset(Jm, 0, sizeof(double) * 4);
+    if (4 < r || (gram_(J, r0, r, A), !chol_(A, r))) { /* J J^T singular: m = 0 exactly */
+        if (Jm)
+            memset(Jm, 0, sizeof(double) * 4);
         return 0.0;
     }
     double m = 1.0;
     for (int i = 0; i < r; ++i)
         m *= A[i * r + i];
+    if (!Jm)
+        return m;
     /* B = (J J^T)^-1 Js, column by column with the Cholesky factor */
     for (int k = 0; k < 4; ++k) {
         double y[6];
@@ -1531,4 +1529,18 @@ double symkin_cobra600_jacobm(const double *q, int axes, double *Jm)
         Jm[i] = m * s;
     }
     return m;
+}
+
+double symkin_cobra600_manipulability(const double *q, int axes)
+{
+    double J[6 * 4];
+    jacob0_(q, J);
+    return manipulability_of_(J, NULL, axes, NULL);
+}
+
+double symkin_cobra600_jacobm(const double *q, int axes, double *Jm)
+{
+    double J[6 * 4], H[4 * 6 * 4];
+    jacob0_hessian0_(q, J, H);
+    return manipulability_of_(J, H, axes, Jm);
 }

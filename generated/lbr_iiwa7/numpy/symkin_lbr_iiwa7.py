@@ -11,8 +11,8 @@
 Every function takes q of shape (7,) or (N, 7): one configuration is evaluated with
 scalar ``math`` code, a batch with vectorised NumPy code (no Python loop over N). ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``jacob0_hessian0``, ``hessian0`` and ``hessiane`` take
-``frame=k`` for link frame k (the frame right after the k-th joint along the chain, as
-``link_poses``).
+``frame=``: a name of ``FRAMES`` (None: the only one), or k for link frame k (the frame right after the k-th
+joint along the chain, as ``link_poses``).
 """
 
 import math
@@ -22,10 +22,13 @@ from math import cos, sin, sqrt
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
 
 ROBOT_NAME = 'lbr_iiwa7'
 N_JOINTS = 7
+FRAMES = ('ee', )
+LINKS = 7  # link frames
+_FRAME = {name: k for k, name in enumerate(FRAMES)}
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _ndarray = np.ndarray
@@ -43,6 +46,12 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
     (1, 1, 1, 1, 1, 1, 1,),
 )
+
+
+def _frame(frame):
+    """(frame index, link frame index or -1) of a frame argument (symkin.model.frames.resolve_frame)."""
+    k = _FRAME.get(frame) if type(frame) is str else None
+    return (k, -1) if k is not None else resolve_frame(frame, FRAMES, LINKS, ROBOT_NAME)
 
 
 def _fkine_batch(Q):
@@ -132,7 +141,7 @@ def _fkine_batch(Q):
 
 
 def fkine(q, frame=None):
-    """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector pose in the base frame, 4x4 (Part 1 eq 1)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -196,11 +205,11 @@ def fkine(q, frame=None):
             T = _empty((4, 4))
             _PACK_16(T, 0, t48, t51, -t43, t54, t49, t52, -t44, t55, t50, t53, -t45, t56, 0.0, 0.0, 0.0, 1.0)
             return T
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = L[:, k]
+        out = L[:, link]
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
@@ -589,7 +598,7 @@ def _jacob0_batch(Q):
 
 
 def jacob0(q, frame=None):
-    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
+    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -668,11 +677,11 @@ def jacob0(q, frame=None):
             _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
             _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=False)
+        out = frame_jacobian(L, link, CHAIN, ee=False)
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
@@ -800,7 +809,7 @@ def _jacobe_batch(Q):
 
 
 def jacobe(q, frame=None):
-    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -871,11 +880,11 @@ def jacobe(q, frame=None):
             _PACK_21(J, 0, t133, t130, t127, t124, t121, t119, 0.0, t134, t131, t128, t125, t122, t120, 0.0, t135, t132, t129, t126, t123, 0.0, 0.0)
             _PACK_21(J, 168, -t113, t107, t98, -t92, -t84, t47, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, -t115, t109, t100, -t94, t38, 0.0, 1.0)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=True)
+        out = frame_jacobian(L, link, CHAIN, ee=True)
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
@@ -891,8 +900,8 @@ def _hessian0_batch(Q):
 
 
 def hessian0(q, frame=None):
-    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k."""
-    if frame is not None:
+    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
+    if frame is not None and _frame(frame)[1] >= 0:
         return _LINKS.hessian0(q, frame)
     out = jacob0_hessian0(q)
     return out[1]
@@ -1446,10 +1455,8 @@ def _hessiane_batch(Q):
 
 
 def hessiane(q, frame=None):
-    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.hessiane(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t2 = cos(q1)
@@ -1706,6 +1713,9 @@ def hessiane(q, frame=None):
             _PACK_27(H, 1920, t393, t405, -t83, 0.0, 0.0, t370, t382, t394, t406, t416, 0.0, 0.0, t134, t131, t128, t125, t122, t120, 0.0, -t133, -t130, -t127, -t124, -t121, -t119, 0.0, 0.0)
             _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t114, t108, t99, -t93, -t85, t46, 0.0, t113, -t107, -t98, t92, t84, -t47, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return H
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.hessiane(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
@@ -1870,10 +1880,8 @@ def _fkine_jacob0_batch(Q):
 
 
 def fkine_jacob0(q, frame=None):
-    """Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.fkine_jacob0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -1964,6 +1972,9 @@ def fkine_jacob0(q, frame=None):
             _PACK_21(J, 0, -t55, t58, t61, t67, t70, t76, t79, t54, t59, t62, t68, t71, t77, t80, 0.0, t60, t63, t69, t72, t78, t81)
             _PACK_21(J, 168, 0.0, -t1, -t6, -t13, t24, t32, -t43, 0.0, t0, -t7, -t14, t25, t33, -t44, 1.0, 0.0, t2, -t15, t26, t34, -t45)
             return (T, J)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.fkine_jacob0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
@@ -2500,10 +2511,8 @@ def _jacob0_hessian0_batch(Q):
 
 
 def jacob0_hessian0(q, frame=None):
-    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.jacob0_hessian0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -2699,6 +2708,9 @@ def jacob0_hessian0(q, frame=None):
             _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t357, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t358, -t80, t161, t200, t245, t296, t353, t417, t79, t162, t201, t246, t297, t354, t418, 0.0)
             _PACK_27(H, 2136, t163, t202, t247, t298, t355, t419, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return (J, H)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.jacob0_hessian0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)

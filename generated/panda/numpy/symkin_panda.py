@@ -11,8 +11,8 @@
 Every function takes q of shape (7,) or (N, 7): one configuration is evaluated with
 scalar ``math`` code, a batch with vectorised NumPy code (no Python loop over N). ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``jacob0_hessian0``, ``hessian0`` and ``hessiane`` take
-``frame=k`` for link frame k (the frame right after the k-th joint along the chain, as
-``link_poses``).
+``frame=``: a name of ``FRAMES`` (None: the only one), or k for link frame k (the frame right after the k-th
+joint along the chain, as ``link_poses``).
 """
 
 import math
@@ -22,10 +22,13 @@ from math import cos, sin, sqrt
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
 
 ROBOT_NAME = 'panda'
 N_JOINTS = 7
+FRAMES = ('ee', )
+LINKS = 7  # link frames
+_FRAME = {name: k for k, name in enumerate(FRAMES)}
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _ndarray = np.ndarray
@@ -43,6 +46,12 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, -1.0, 1.0, -1.0, 1.0,),
     (1, 1, 1, 1, 1, 1, 1,),
 )
+
+
+def _frame(frame):
+    """(frame index, link frame index or -1) of a frame argument (symkin.model.frames.resolve_frame)."""
+    k = _FRAME.get(frame) if type(frame) is str else None
+    return (k, -1) if k is not None else resolve_frame(frame, FRAMES, LINKS, ROBOT_NAME)
 
 
 def _fkine_batch(Q):
@@ -144,7 +153,7 @@ def _fkine_batch(Q):
 
 
 def fkine(q, frame=None):
-    """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector pose in the base frame, 4x4 (Part 1 eq 1)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -220,11 +229,11 @@ def fkine(q, frame=None):
             T = _empty((4, 4))
             _PACK_16(T, 0, t71, t74, -t49, t66, t72, t75, -t50, t67, t73, t76, -t51, t68, 0.0, 0.0, 0.0, 1.0)
             return T
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = L[:, k]
+        out = L[:, link]
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
@@ -658,7 +667,7 @@ def _jacob0_batch(Q):
 
 
 def jacob0(q, frame=None):
-    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
+    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -758,11 +767,11 @@ def jacob0(q, frame=None):
             _PACK_21(J, 0, -t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107)
             _PACK_21(J, 168, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=False)
+        out = frame_jacobian(L, link, CHAIN, ee=False)
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
@@ -896,7 +905,7 @@ def _jacobe_batch(Q):
 
 
 def jacobe(q, frame=None):
-    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -973,11 +982,11 @@ def jacobe(q, frame=None):
             _PACK_21(J, 0, t168, t165, t162, t159, t156, t153, 0.0, t169, t166, t163, t160, t157, t154, 0.0, t170, t167, t164, t161, t158, t155, 0.0)
             _PACK_21(J, 168, t144, t138, t132, -t123, t110, t70, 0.0, t145, t139, t133, -t124, t111, t69, 0.0, t146, t140, t134, -t125, -t44, 0.0, 1.0)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=True)
+        out = frame_jacobian(L, link, CHAIN, ee=True)
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
@@ -993,8 +1002,8 @@ def _hessian0_batch(Q):
 
 
 def hessian0(q, frame=None):
-    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k."""
-    if frame is not None:
+    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
+    if frame is not None and _frame(frame)[1] >= 0:
         return _LINKS.hessian0(q, frame)
     out = jacob0_hessian0(q)
     return out[1]
@@ -1554,10 +1563,8 @@ def _hessiane_batch(Q):
 
 
 def hessiane(q, frame=None):
-    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.hessiane(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t2 = cos(q1)
@@ -1820,6 +1827,9 @@ def hessiane(q, frame=None):
             _PACK_27(H, 1920, t428, t440, t113, 0.0, 0.0, t405, t417, t429, t441, t451, 0.0, 0.0, t169, t166, t163, t160, t157, t154, 0.0, -t168, -t165, -t162, -t159, -t156, -t153, 0.0, 0.0)
             _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t145, t139, t133, -t124, t111, t69, 0.0, -t144, -t138, -t132, t123, -t110, -t70, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return H
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.hessiane(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
@@ -2002,10 +2012,8 @@ def _fkine_jacob0_batch(Q):
 
 
 def fkine_jacob0(q, frame=None):
-    """Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.fkine_jacob0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -2114,6 +2122,9 @@ def fkine_jacob0(q, frame=None):
             _PACK_21(J, 0, -t67, t78, t84, t90, t96, t99, t105, t66, t79, t85, t91, t97, t100, t106, 0.0, t80, t86, t92, t98, t101, t107)
             _PACK_21(J, 168, 0.0, -t1, t6, -t16, t27, -t41, -t49, 0.0, t0, t7, -t17, t28, -t42, -t50, 1.0, 0.0, t2, -t18, t29, -t43, -t51)
             return (T, J)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.fkine_jacob0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
@@ -2671,10 +2682,8 @@ def _jacob0_hessian0_batch(Q):
 
 
 def jacob0_hessian0(q, frame=None):
-    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.jacob0_hessian0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -2891,6 +2900,9 @@ def jacob0_hessian0(q, frame=None):
             _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t392, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t393, -t106, t196, t235, t280, t331, t388, t452, t105, t197, t236, t281, t332, t389, t453, 0.0)
             _PACK_27(H, 2136, t198, t237, t282, t333, t390, t454, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return (J, H)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.jacob0_hessian0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)

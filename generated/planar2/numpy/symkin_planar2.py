@@ -11,8 +11,8 @@
 Every function takes q of shape (2,) or (N, 2): one configuration is evaluated with
 scalar ``math`` code, a batch with vectorised NumPy code (no Python loop over N). ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``jacob0_hessian0``, ``hessian0`` and ``hessiane`` take
-``frame=k`` for link frame k (the frame right after the k-th joint along the chain, as
-``link_poses``).
+``frame=``: a name of ``FRAMES`` (None: the only one), or k for link frame k (the frame right after the k-th
+joint along the chain, as ``link_poses``).
 """
 
 import math
@@ -22,10 +22,13 @@ from math import cos, sin, sqrt
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
 
 ROBOT_NAME = 'planar2'
 N_JOINTS = 2
+FRAMES = ('ee', )
+LINKS = 2  # link frames
+_FRAME = {name: k for k, name in enumerate(FRAMES)}
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _ndarray = np.ndarray
@@ -41,6 +44,12 @@ CHAIN = ChainTables(
     (1.0, 1.0,),
     (1, 1,),
 )
+
+
+def _frame(frame):
+    """(frame index, link frame index or -1) of a frame argument (symkin.model.frames.resolve_frame)."""
+    k = _FRAME.get(frame) if type(frame) is str else None
+    return (k, -1) if k is not None else resolve_frame(frame, FRAMES, LINKS, ROBOT_NAME)
 
 
 def _fkine_batch(Q):
@@ -71,7 +80,7 @@ def _fkine_batch(Q):
 
 
 def fkine(q, frame=None):
-    """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector pose in the base frame, 4x4 (Part 1 eq 1)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -81,11 +90,11 @@ def fkine(q, frame=None):
             T = _empty((4, 4))
             _PACK_16(T, 0, x1, -x2, 0.0, x1 + cos(q0), x2, x1, 0.0, x2 + sin(q0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
             return T
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = L[:, k]
+        out = L[:, link]
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
@@ -187,7 +196,7 @@ def _jacob0_batch(Q):
 
 
 def jacob0(q, frame=None):
-    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
+    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -197,11 +206,11 @@ def jacob0(q, frame=None):
             J = _empty((6, 2))
             _PACK_12(J, 0, -x1 - sin(q0), -x1, x2 + cos(q0), x2, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=False)
+        out = frame_jacobian(L, link, CHAIN, ee=False)
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
@@ -231,18 +240,18 @@ def _jacobe_batch(Q):
 
 
 def jacobe(q, frame=None):
-    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             J = _empty((6, 2))
             _PACK_12(J, 0, sin(q1), 0.0, cos(q1) + 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=True)
+        out = frame_jacobian(L, link, CHAIN, ee=True)
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
@@ -290,10 +299,8 @@ def _hessian0_batch(Q):
 
 
 def hessian0(q, frame=None):
-    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.hessian0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = q0 + q1
@@ -304,6 +311,9 @@ def hessian0(q, frame=None):
             H = _empty((2, 6, 2))
             _PACK_24(H, 0, -x1 - cos(q0), x2, -x3 - sin(q0), x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x2, x2, x4, x4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return H
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.hessian0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessian0_batch(Q)
@@ -345,15 +355,16 @@ def _hessiane_batch(Q):
 
 
 def hessiane(q, frame=None):
-    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.hessiane(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             H = _empty((2, 6, 2))
             _PACK_24(H, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, cos(q1), 0.0, -sin(q1), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return H
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.hessiane(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
@@ -407,10 +418,8 @@ def _fkine_jacob0_batch(Q):
 
 
 def fkine_jacob0(q, frame=None):
-    """Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.fkine_jacob0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = q0 + q1
@@ -424,6 +433,9 @@ def fkine_jacob0(q, frame=None):
             J = _empty((6, 2))
             _PACK_12(J, 0, -x5, x3, x4, x1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0)
             return (T, J)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.fkine_jacob0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
@@ -486,10 +498,8 @@ def _jacob0_hessian0_batch(Q):
 
 
 def jacob0_hessian0(q, frame=None):
-    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.jacob0_hessian0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1 = q.tolist()
         if q0 * q0 + q1 * q1 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             x0 = q0 + q1
@@ -504,6 +514,9 @@ def jacob0_hessian0(q, frame=None):
             H = _empty((2, 6, 2))
             _PACK_24(H, 0, -x5, x6, x2, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x6, x6, x3, x3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return (J, H)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.jacob0_hessian0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)

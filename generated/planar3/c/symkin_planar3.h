@@ -79,16 +79,19 @@ void symkin_planar3_jacob0_hessian0(const double *q, double *J, double *H);
 void symkin_planar3_jacob0_hessian0_batch(const double *q, double *J, double *H, ptrdiff_t N);
 /* Pose 4x4 of link frame k (0 <= k < 3): the frame right after the k-th joint along the chain
  * (link_poses[k]); k is not checked. */
-void symkin_planar3_fkine_frame(const double *q, int k, double *T);
+void symkin_planar3_fkine_link(const double *q, int k, double *T);
 /* Jacobian 6x3 of link frame k in the base frame / in frame k, rows (v, omega); columns of
  * joints after the frame are 0; k is not checked. */
-void symkin_planar3_jacob0_frame(const double *q, int k, double *J);
-void symkin_planar3_jacobe_frame(const double *q, int k, double *J);
+void symkin_planar3_jacob0_link(const double *q, int k, double *J);
+void symkin_planar3_jacobe_link(const double *q, int k, double *J);
+void symkin_planar3_fkine_frame(const double *q, int k, double *out); /* fkine_link */
+void symkin_planar3_jacob0_frame(const double *q, int k, double *out); /* jacob0_link */
+void symkin_planar3_jacobe_frame(const double *q, int k, double *out); /* jacobe_link */
 /* Manipulability sqrt(det(J J^T)) of the rows of J0 chosen by axes (SYMKIN_PLANAR3_AXES_*)
- * (Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eq 52); 0 at a singularity. */
-double symkin_planar3_manipulability(const double *q, int axes);
-/* Manipulability Jacobian dm/dq into Jm[SYMKIN_PLANAR3_N] (Haviland and Corke, Maximising
+ * (Haviland and Corke, Manipulator Differential Kinematics, Part 1, 2023, eq 52); 0 at a singularity.
+ * Manipulability Jacobian dm/dq into Jm[SYMKIN_PLANAR3_N] (Haviland and Corke, Maximising
  * Manipulability During Resolved-Rate Motion Control, 2020, eq 11); returns m. */
+double symkin_planar3_manipulability(const double *q, int axes);
 double symkin_planar3_jacobm(const double *q, int axes, double *Jm);
 
 #ifdef __cplusplus

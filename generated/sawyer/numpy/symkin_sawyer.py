@@ -11,8 +11,8 @@
 Every function takes q of shape (7,) or (N, 7): one configuration is evaluated with
 scalar ``math`` code, a batch with vectorised NumPy code (no Python loop over N). ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``jacob0_hessian0``, ``hessian0`` and ``hessiane`` take
-``frame=k`` for link frame k (the frame right after the k-th joint along the chain, as
-``link_poses``).
+``frame=``: a name of ``FRAMES`` (None: the only one), or k for link frame k (the frame right after the k-th
+joint along the chain, as ``link_poses``).
 """
 
 import math
@@ -22,10 +22,13 @@ from math import cos, sin, sqrt
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
 
 ROBOT_NAME = 'sawyer'
 N_JOINTS = 7
+FRAMES = ('ee', )
+LINKS = 7  # link frames
+_FRAME = {name: k for k, name in enumerate(FRAMES)}
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _ndarray = np.ndarray
@@ -43,6 +46,12 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, -1.0, 1.0, 1.0, 1.0,),
     (1, 1, 1, 1, 1, 1, 1,),
 )
+
+
+def _frame(frame):
+    """(frame index, link frame index or -1) of a frame argument (symkin.model.frames.resolve_frame)."""
+    k = _FRAME.get(frame) if type(frame) is str else None
+    return (k, -1) if k is not None else resolve_frame(frame, FRAMES, LINKS, ROBOT_NAME)
 
 
 def _fkine_batch(Q):
@@ -142,7 +151,7 @@ def _fkine_batch(Q):
 
 
 def fkine(q, frame=None):
-    """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector pose in the base frame, 4x4 (Part 1 eq 1)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -216,11 +225,11 @@ def fkine(q, frame=None):
             T = _empty((4, 4))
             _PACK_16(T, 0, t58, t61, t50, t64, t59, t62, t51, t65, t60, t63, t52, t66, 0.0, 0.0, 0.0, 1.0)
             return T
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = L[:, k]
+        out = L[:, link]
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
@@ -649,7 +658,7 @@ def _jacob0_batch(Q):
 
 
 def jacob0(q, frame=None):
-    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
+    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -748,11 +757,11 @@ def jacob0(q, frame=None):
             _PACK_21(J, 0, -t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101)
             _PACK_21(J, 168, 0.0, -t1, t8, -t17, t28, t39, t50, 0.0, t0, t9, -t18, t29, t40, t51, 1.0, 0.0, -t4, -t19, t30, t41, t52)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=False)
+        out = frame_jacobian(L, link, CHAIN, ee=False)
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
@@ -895,7 +904,7 @@ def _jacobe_batch(Q):
 
 
 def jacobe(q, frame=None):
-    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -981,11 +990,11 @@ def jacobe(q, frame=None):
             _PACK_21(J, 0, t165, t162, t159, t156, t153, t150, 0.0, t166, t163, t160, t157, t154, t151, 0.0, t167, t164, t161, t158, t155, t152, 0.0)
             _PACK_21(J, 168, -t141, -t132, -t123, t114, -t106, -t57, 0.0, -t142, -t133, -t124, t115, -t107, -t56, 0.0, -t143, -t134, -t125, t116, -t45, 0.0, 1.0)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=True)
+        out = frame_jacobian(L, link, CHAIN, ee=True)
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
@@ -1001,8 +1010,8 @@ def _hessian0_batch(Q):
 
 
 def hessian0(q, frame=None):
-    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k."""
-    if frame is not None:
+    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
+    if frame is not None and _frame(frame)[1] >= 0:
         return _LINKS.hessian0(q, frame)
     out = jacob0_hessian0(q)
     return out[1]
@@ -1571,10 +1580,8 @@ def _hessiane_batch(Q):
 
 
 def hessiane(q, frame=None):
-    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.hessiane(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t4 = sin(q1)
@@ -1846,6 +1853,9 @@ def hessiane(q, frame=None):
             _PACK_27(H, 1920, t425, t437, -t105, 0.0, 0.0, t402, t414, t426, t438, t448, 0.0, 0.0, t166, t163, t160, t157, t154, t151, 0.0, -t165, -t162, -t159, -t156, -t153, -t150, 0.0, 0.0)
             _PACK_27(H, 2136, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t142, -t133, -t124, t115, -t107, -t56, 0.0, t141, t132, t123, -t114, t106, t57, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return H
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.hessiane(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
@@ -2030,10 +2040,8 @@ def _fkine_jacob0_batch(Q):
 
 
 def fkine_jacob0(q, frame=None):
-    """Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.fkine_jacob0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -2144,6 +2152,9 @@ def fkine_jacob0(q, frame=None):
             _PACK_21(J, 0, -t65, t70, t75, t81, t87, t93, t99, t64, t71, t76, t82, t88, t94, t100, 0.0, t72, t77, t83, t89, t95, t101)
             _PACK_21(J, 168, 0.0, -t1, t8, -t17, t28, t39, t50, 0.0, t0, t9, -t18, t29, t40, t51, 1.0, 0.0, -t4, -t19, t30, t41, t52)
             return (T, J)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.fkine_jacob0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
@@ -2700,10 +2711,8 @@ def _jacob0_hessian0_batch(Q):
 
 
 def jacob0_hessian0(q, frame=None):
-    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.jacob0_hessian0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5, q6 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 + q6 * q6 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -2919,6 +2928,9 @@ def jacob0_hessian0(q, frame=None):
             _PACK_27(H, 1920, 0.0, 0.0, 0.0, 0.0, t389, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, t390, -t100, t193, t232, t277, t328, t385, t449, t99, t194, t233, t278, t329, t386, t450, 0.0)
             _PACK_27(H, 2136, t195, t234, t279, t330, t387, t451, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return (J, H)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.jacob0_hessian0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)

@@ -11,8 +11,8 @@
 Every function takes q of shape (6,) or (N, 6): one configuration is evaluated with
 scalar ``math`` code, a batch with vectorised NumPy code (no Python loop over N). ``fkine``,
 ``jacob0``, ``jacobe``, ``fkine_jacob0``, ``jacob0_hessian0``, ``hessian0`` and ``hessiane`` take
-``frame=k`` for link frame k (the frame right after the k-th joint along the chain, as
-``link_poses``).
+``frame=``: a name of ``FRAMES`` (None: the only one), or k for link frame k (the frame right after the k-th
+joint along the chain, as ``link_poses``).
 """
 
 import math
@@ -22,10 +22,13 @@ from math import cos, sin, sqrt
 import numpy as np
 
 from symkin.model.robot import as_batch
-from symkin.model.frames import ChainTables, LinkFrames, frame_index, frame_jacobian
+from symkin.model.frames import ChainTables, LinkFrames, frame_jacobian, resolve_frame
 
 ROBOT_NAME = 'stanford'
 N_JOINTS = 6
+FRAMES = ('ee', )
+LINKS = 6  # link frames
+_FRAME = {name: k for k, name in enumerate(FRAMES)}
 _F8 = np.dtype(float)
 _SHAPE = (N_JOINTS,)
 _ndarray = np.ndarray
@@ -42,6 +45,12 @@ CHAIN = ChainTables(
     (1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
     (1, 1, 0, 1, 1, 1,),
 )
+
+
+def _frame(frame):
+    """(frame index, link frame index or -1) of a frame argument (symkin.model.frames.resolve_frame)."""
+    k = _FRAME.get(frame) if type(frame) is str else None
+    return (k, -1) if k is not None else resolve_frame(frame, FRAMES, LINKS, ROBOT_NAME)
 
 
 def _fkine_batch(Q):
@@ -115,7 +124,7 @@ def _fkine_batch(Q):
 
 
 def fkine(q, frame=None):
-    """End-effector pose in the base frame, 4x4 (Part 1 eq 1). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector pose in the base frame, 4x4 (Part 1 eq 1)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -164,11 +173,11 @@ def fkine(q, frame=None):
             T = _empty((4, 4))
             _PACK_16(T, 0, t33, t36, -t28, t39, t34, t37, -t29, t40, t35, t38, -t30, t41, 0.0, 0.0, 0.0, 1.0)
             return T
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = L[:, k]
+        out = L[:, link]
         return out[0] if single else out
     if not single:
         return _fkine_batch(Q)
@@ -479,7 +488,7 @@ def _jacob0_batch(Q):
 
 
 def jacob0(q, frame=None):
-    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34). frame=k: link frame k (chain order, as link_poses)."""
+    """Base-frame Jacobian, (6, n), rows (v, omega) (Part 1 eqs 31-34)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -534,11 +543,11 @@ def jacob0(q, frame=None):
             _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
             _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=False)
+        out = frame_jacobian(L, link, CHAIN, ee=False)
         return out[0] if single else out
     if not single:
         return _jacob0_batch(Q)
@@ -639,7 +648,7 @@ def _jacobe_batch(Q):
 
 
 def jacobe(q, frame=None):
-    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16). frame=k: link frame k (chain order, as link_poses)."""
+    """End-effector-frame Jacobian, (6, n), rows (v, omega) (Part 1 eq 16)."""
     if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
@@ -690,11 +699,11 @@ def jacobe(q, frame=None):
             _PACK_18(J, 0, t93, t90, -t60, t88, t86, 0.0, t94, t91, -t61, t89, t87, 0.0, t95, t92, t23, 0.0, 0.0, 0.0)
             _PACK_18(J, 144, -t80, -t62, 0.0, -t60, t32, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, -t82, -t64, 0.0, t23, 0.0, 1.0)
             return J
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
-    if frame is not None:
-        k = frame_index(frame, N_JOINTS, ROBOT_NAME)
+    if link >= 0:
         L = _link_poses_batch(Q)
-        out = frame_jacobian(L, k, CHAIN, ee=True)
+        out = frame_jacobian(L, link, CHAIN, ee=True)
         return out[0] if single else out
     if not single:
         return _jacobe_batch(Q)
@@ -710,8 +719,8 @@ def _hessian0_batch(Q):
 
 
 def hessian0(q, frame=None):
-    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20). frame=k: link frame k."""
-    if frame is not None:
+    """Base-frame Hessian, (n, 6, n), H[i] = dJ0/dq_i (MMC eq 20)."""
+    if frame is not None and _frame(frame)[1] >= 0:
         return _LINKS.hessian0(q, frame)
     out = jacob0_hessian0(q)
     return out[1]
@@ -1054,10 +1063,8 @@ def _hessiane_batch(Q):
 
 
 def hessiane(q, frame=None):
-    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.hessiane(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """End-effector-frame Hessian, (n, 6, n), H[i] = dJe/dq_i."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t2 = cos(q1)
@@ -1179,6 +1186,9 @@ def hessiane(q, frame=None):
             _PACK_27(H, 1296, t184, t196, 0.0, -t58, 0.0, 0.0, t185, t197, 0.0, -t59, 0.0, 0.0, t186, t198, 0.0, -t199, 0.0, 0.0, t94, t91, -t61, t89, t87, 0.0, -t93, -t90, t60)
             _PACK_27(H, 1512, -t88, -t86, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -t81, -t63, 0.0, -t61, t31, 0.0, t80, t62, 0.0, t60, -t32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return H
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.hessiane(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _hessiane_batch(Q)
@@ -1312,10 +1322,8 @@ def _fkine_jacob0_batch(Q):
 
 
 def fkine_jacob0(q, frame=None):
-    """Pose (4, 4) and base-frame Jacobian (6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.fkine_jacob0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Pose (4, 4) and base-frame Jacobian (6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -1382,6 +1390,9 @@ def fkine_jacob0(q, frame=None):
             _PACK_18(J, 0, -t40, t43, -t6, t49, t52, t55, t39, t44, -t7, t50, t53, t56, 0.0, t45, t2, t51, t54, t57)
             _PACK_18(J, 144, 0.0, -t1, 0.0, -t6, t20, -t28, 0.0, t0, 0.0, -t7, t21, -t29, 1.0, 0.0, 0.0, t2, t22, -t30)
             return (T, J)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.fkine_jacob0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _fkine_jacob0_batch(Q)
@@ -1749,10 +1760,8 @@ def _jacob0_hessian0_batch(Q):
 
 
 def jacob0_hessian0(q, frame=None):
-    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together. frame=k: link frame k."""
-    if frame is not None:
-        return _LINKS.jacob0_hessian0(q, frame)
-    if type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
+    """Base-frame Jacobian (6, n) and Hessian (n, 6, n) together."""
+    if frame is None and type(q) is _ndarray and q.dtype is _F8 and q.shape == _SHAPE:
         q0, q1, q2, q3, q4, q5 = q.tolist()
         if q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4 + q5 * q5 <= 1e30:  # one valid configuration (|q| <= 1e15): scalar code
             t0 = cos(q0)
@@ -1861,6 +1870,9 @@ def jacob0_hessian0(q, frame=None):
             _PACK_27(H, 1296, 0.0, 0.0, 0.0, 0.0, 0.0, t172, 0.0, 0.0, 0.0, 0.0, 0.0, t173, 0.0, 0.0, 0.0, 0.0, 0.0, t174, -t56, t109, 0.0, t142, t169, t205, t55, t110, 0.0)
             _PACK_27(H, 1512, t143, t170, t206, 0.0, t111, 0.0, t144, t171, t207, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             return (J, H)
+    link = -1 if frame is None else _frame(frame)[1]  # raises the error for a bad frame
+    if link >= 0:
+        return _LINKS.jacob0_hessian0(q, frame)
     Q, single = as_batch(q, N_JOINTS, ROBOT_NAME)  # raises the error for a bad q
     if not single:
         return _jacob0_hessian0_batch(Q)

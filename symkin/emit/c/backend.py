@@ -17,16 +17,12 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from symkin.core.names import c_string, comment_safe, identifier
-from symkin.emit.templates import Header, chain_tables, render
+from symkin.core.names import c_string, comment_safe
+from symkin.emit.kernel import FRAMED, FRAMED_DOCS, LINKED, Kernel, link_text
+from symkin.emit.templates import Header, render
 from symkin.errors import CompileError
 
-__all__ = ["render_c", "build_c", "compile_c", "c_prefix", "c_variant", "float_error", "four_lane_bodies"]
-
-
-def c_prefix(robot: Any) -> str:
-    """The C symbol prefix of a robot: ``symkin_<identifier>``."""
-    return f"symkin_{identifier(robot.name)}"
+__all__ = ["render_c", "build_c", "compile_c", "c_variant", "float_error", "four_lane_bodies"]
 
 
 LICENCE = (
@@ -43,27 +39,23 @@ def _c_double(x: float) -> str:
     return float_literal(x)
 
 
-def joint_table(robot: Any) -> list[dict[str, str]]:
+def joint_table(kernel: Kernel) -> list[dict[str, str]]:
     """Per joint (by index): name, kind, limits and speed limit as comment text and C literals."""
-    kinds = {e.joint: e for e in robot.ets if e.is_joint}
     rows = []
-    for j in range(robot.n):
-        revolute = kinds[j].is_revolute
-        lo, hi = (float(v) for v in robot.qlim[:, j])
-        qd = float(robot.qd_max[j]) if robot.qd_max is not None else math.inf
+    for j, joint in enumerate(kernel.joints):
         rows.append(
             {
                 "index": str(j),
-                "name": comment_safe(_NAME_SHOWN.sub("?", robot.joint_names[j]), limit=80),
-                "name_c": c_string(robot.joint_names[j]),
-                "kind": "revolute" if revolute else "prismatic",
-                "unit": "rad" if revolute else "m",
-                "lo": f"{lo:.6g}",
-                "hi": f"{hi:.6g}",
-                "qd": f"{qd:.6g}",
-                "lo_c": _c_double(lo),
-                "hi_c": _c_double(hi),
-                "qd_c": _c_double(qd),
+                "name": comment_safe(_NAME_SHOWN.sub("?", joint.name), limit=80),
+                "name_c": c_string(joint.name),
+                "kind": "revolute" if joint.revolute else "prismatic",
+                "unit": "rad" if joint.revolute else "m",
+                "lo": f"{joint.lo:.6g}",
+                "hi": f"{joint.hi:.6g}",
+                "qd": f"{joint.qd:.6g}",
+                "lo_c": _c_double(joint.lo),
+                "hi_c": _c_double(joint.hi),
+                "qd_c": _c_double(joint.qd),
             }
         )
     return rows
@@ -189,16 +181,11 @@ def c_variant(
 
 
 def render_c(
-    robot: Any,
-    functions: list,
-    command: str,
-    prefix: str | None = None,
-    precision: str = "double",
-    libm: bool = False,
+    kernel: Kernel, prefix: str | None = None, precision: str = "double", libm: bool = False
 ) -> dict[str, str]:
     """The generated ``<prefix>.h``, ``<prefix>.c`` and (double precision) the extension module.
 
-    ``prefix`` (default ``symkin_<robot>``) starts every exported symbol and the file names, so
+    ``prefix`` (default ``symkin_<code_name>``) starts every exported symbol and the file names, so
     the code of several robots links into one program. ``precision="float"``: single-precision
     code (``float`` arrays, ``sinf``/``cosf``) for microcontrollers, without the Python module.
     ``libm``: call the C library's sin and cos instead of the inline kernels (the same as
@@ -206,63 +193,86 @@ def render_c(
     """
     from symkin.emit.lowering import lower
 
-    printer, variant = c_variant(c_prefix(robot), prefix, precision, libm)
-    printed = [lower(f, printer) for f in functions]
+    printer, variant = c_variant(f"symkin_{kernel.code_name}", prefix, precision, libm)
+    printed = [lower(f, printer) for f in kernel.functions]
     prefix = variant["prefix"]
-    header = Header.of(robot, functions, command, c_string(robot.name))
+    real = variant["real"]
+    by_name = {f.name: f for f in printed}
     context = {
         **variant,
-        "n": robot.n,
+        "n": kernel.n,
+        "F": kernel.F,
         "functions": printed,
-        "header": header,
-        "chain": chain_tables(robot),
+        "header": Header.of(kernel, c_string(kernel.name)),
+        "links": kernel.links and link_text(kernel.links),
+        "aliases": kernel.aliases,
         "hessian_frames": sorted({h.frame for f in printed for h in f.hessians}),
         "lanes": {} if precision == "float" else four_lane_bodies(printed),
-        "joints": joint_table(robot),
-        "qd_max": robot.qd_max is not None,
+        "joints": joint_table(kernel),
+        "qd_max": all(math.isfinite(j.qd) for j in kernel.joints),
         "licence": LICENCE,
-        "references": header.references,
+        "frame_literals": [c_string(f.name) for f in kernel.frames],
+        "frames": [
+            {
+                kind: kernel.name_of(kind, f.index)
+                for kind in ("manipulability", "jacobm", "jacob0", "jacob0_hessian0")
+            }
+            for f in kernel.frames
+        ],
+        "framed": [
+            {
+                "kind": kind,
+                "outs": by_name[kernel.name_of(kind, 0)].outs,
+                "names": [f"{prefix}_{name}" for name in kernel.table(kind)],
+                "types": ", ".join(
+                    [f"const {real} *"] + [f"{real} *"] * len(by_name[kernel.name_of(kind, 0)].outs)
+                ),
+                "doc": by_name[kernel.name_of(kind, 0)].doc if kernel.F == 1 else FRAMED_DOCS[kind],
+            }
+            for kind in FRAMED
+        ],
+        "linked": LINKED,
     }
-    h = render("c/kinematics.h.j2", **context)
-    c = render("c/kinematics.c.j2", **context)
-    files = {f"{prefix}.h": h, f"{prefix}.c": c}
+    files = {
+        f"{prefix}.h": render("c/kernel.h.j2", **context),
+        f"{prefix}.c": render("c/kernel.c.j2", **context),
+    }
     if precision == "float":
         return files
     ext = render("c/module.c.j2", module=module_name(files), **context)
     return {**files, f"{prefix}_pymodule.c": ext}
 
 
-def float_error(robot: Any, files: dict[str, str], samples: int = 100, seed: int = 0) -> dict[str, float]:
-    """Largest |float - double| of the single-precision code's fkine and jacob0 (compiled here, called
-    through ctypes) against the numeric reference, over random configurations within the limits.
-    For a tree (``robot`` a :class:`symkin.Tree`): of every frame, through ``fkine_all`` and
-    ``jacob0_all``."""
+def float_error(model: Any, files: dict[str, str], samples: int = 100, seed: int = 0) -> dict[str, float]:
+    """Largest |float - double| of the single-precision code's fkine and jacob0 of every frame
+    (compiled here, called through ctypes) against the numeric reference of ``model`` (a Robot or
+    a Tree), over random configurations within the limits."""
     import ctypes
 
     import numpy as np
 
+    from symkin.core.names import function_name
     from symkin.emit.c.build import compile_library, load_library
+    from symkin.model.tree import as_tree
 
+    tree = as_tree(model)
     header = next(name for name in files if name.endswith(".h"))
     prefix = header[:-2]
     lib = load_library(compile_library(files, f"{prefix}_float"))
-    Q = np.ascontiguousarray(robot.random_q(samples, seed=seed), dtype=np.float32)
-    if getattr(robot, "_symkin_tree", False):
-        F = len(robot.frames)
-        entries = (
-            ("fkine", "fkine_all", 16 * F, robot.fkine_all),
-            ("jacob0", "jacob0_all", 6 * robot.n * F, robot.jacob0_all),
-        )
-    else:
-        entries = (("fkine", "fkine", 16, robot.fkine), ("jacob0", "jacob0", 6 * robot.n, robot.jacob0))
-    out = {}
-    for key, name, size, ref in entries:
-        buf = np.empty(samples * size, dtype=np.float32)
-        fn = getattr(lib, f"{prefix}_{name}_batch")
-        fn.restype = None
-        fn(Q.ctypes.data_as(ctypes.c_void_p), buf.ctypes.data_as(ctypes.c_void_p), ctypes.c_ssize_t(samples))
-        want = ref(Q.astype(float))
-        out[key] = float(np.abs(buf.reshape(want.shape).astype(float) - want).max())
+    Q = np.ascontiguousarray(tree.random_q(samples, seed=seed), dtype=np.float32)
+    out = {"fkine": 0.0, "jacob0": 0.0}
+    for k, frame in enumerate(tree.frames):
+        for kind, size in (("fkine", 16), ("jacob0", 6 * tree.n)):
+            buf = np.empty(samples * size, dtype=np.float32)
+            fn = getattr(lib, f"{prefix}_{function_name(kind, k, len(tree.frames))}_batch")
+            fn.restype = None
+            fn(
+                Q.ctypes.data_as(ctypes.c_void_p),
+                buf.ctypes.data_as(ctypes.c_void_p),
+                ctypes.c_ssize_t(samples),
+            )
+            want = getattr(tree, kind)(Q.astype(float), frame)
+            out[kind] = max(out[kind], float(np.abs(buf.reshape(want.shape).astype(float) - want).max()))
     return out
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.emit.templates import chain_tables, render_python_module
+from symkin.emit.templates import python_module
 
 __all__ = ["render_casadi"]
 
@@ -40,16 +40,11 @@ def casadi_function(f: Any) -> dict[str, Any]:
     }
 
 
-def render_casadi(robot: Any, functions: list, command: str) -> dict[str, str]:
-    """The generated module ``symkin_<robot>_casadi.py``."""
-    printed = [casadi_function(f) for f in functions]
-    return render_python_module(
+def render_casadi(kernel: Any) -> dict[str, str]:
+    """The generated module ``symkin_<code_name>_casadi.py`` of ``kernel``."""
+    return python_module(
         "casadi/module.py.j2",
-        robot,
-        functions,
-        printed,
-        command,
+        kernel,
+        [casadi_function(f) for f in kernel.functions],
         "_casadi",
-        chain=chain_tables(robot),
-        hessian_frames=sorted({h.frame for f in printed for h in f["hessians"]}),
     )

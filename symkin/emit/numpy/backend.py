@@ -17,13 +17,14 @@ from types import CodeType, ModuleType
 from typing import Any
 
 from symkin.core.cache import write_atomic
-from symkin.emit.templates import chain_tables, render_python_module
+from symkin.emit.kernel import FRAMED, FRAMED_DOCS, LINKED
+from symkin.emit.templates import python_module
 
 __all__ = ["render_numpy", "load_numpy", "import_source"]
 
 
-def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
-    """The generated module ``symkin_<robot>.py``.
+def render_numpy(kernel: Any) -> dict[str, str]:
+    """The generated module ``symkin_<code_name>.py`` of ``kernel``.
 
     The scalar code of one configuration is written for CPython's speed, as measured with
     ``symkin bench calls``: inline in the public function (no second call), the joint values
@@ -36,7 +37,7 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
     from symkin.emit.printers import MathPrinter, NumPyKinPrinter
 
     printed = []
-    for f in functions:
+    for f in kernel.functions:
         vec, one = lower(f, NumPyKinPrinter()), lower(f, MathPrinter())
         joints = [str(s) for s in f.code.inputs]
         printed.append(
@@ -58,15 +59,15 @@ def render_numpy(robot: Any, functions: list, command: str) -> dict[str, str]:
             }
         )
     sizes = {size for f in printed for o in f["scalar_fill"] for size, _, _ in o["chunks"]}
-    return render_python_module(
+    return python_module(
         "numpy/module.py.j2",
-        robot,
-        functions,
+        kernel,
         printed,
-        command,
-        chain=chain_tables(robot),
-        hessian_frames=sorted({h.frame for f in printed for h in f["hessians"]}),
         pack_sizes=sorted(sizes),
+        framed_kinds=FRAMED,
+        linked_kinds=LINKED,
+        tables={kind: kernel.table(kind) for kind in FRAMED},
+        framed_docs=FRAMED_DOCS,
     )
 
 
