@@ -15,7 +15,7 @@ from symkin.cli import main
 def test_collide_free_and_in_collision(capsys):
     assert main(["collide", "panda", "qr"]) == 0
     out = capsys.readouterr().out
-    assert "collision-free" in out and "43 shapes" in out
+    assert "collision-free" in out and f"{len(symkin.load('panda').geometry.shapes)} shapes" in out
     hand = symkin.load("panda").fkine(symkin.load("panda").qr)[:3, 3]
     sphere = " ".join(map(str, [*hand, 0.05]))
     assert main(["collide", "panda", "qr", "--sphere", sphere]) == 1

@@ -256,11 +256,13 @@ class FrameMethods:
         Lynch and Park, Modern Robotics, 2017, sec 5.2). One wrench (6,) applies to every
         configuration of a batch, and one q to every wrench of a batch (N, 6).
 
-        ``frame="base"`` or ``frame="ee"`` on a model of one frame or without a frame of that name (a
-        chain, say) means the end effector with the wrench in that frame: ``in_frame="base"|"ee"``.
+        ``frame="base"`` or ``frame="ee"`` on a model without a frame of that name (a chain, compiled
+        or not) means the end effector with the wrench in that frame: ``in_frame="base"|"ee"``; a
+        tree's frame named "ee" is that frame, with the wrench in the base frame by default.
         """
-        frames = getattr(self, "frames", ())  # a compiled chain's one frame is its end effector, "ee"
-        if isinstance(frame, str) and frame in ("base", "ee") and (frame not in frames or len(frames) == 1):
+        # the frames of the model (a compiled chain's frames are ("ee",), its Robot has none)
+        frames = getattr(getattr(self, "model", self), "frames", ())
+        if isinstance(frame, str) and frame in ("base", "ee") and frame not in frames:
             if in_frame not in ("base", frame):
                 raise ParameterError(f"frame={frame!r} and in_frame={in_frame!r}: two frames for the wrench")
             in_frame, frame = frame, None

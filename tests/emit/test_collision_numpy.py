@@ -172,7 +172,9 @@ def test_in_collision_exact_near_contact_and_in_chunks(monkeypatch):
     module = collision_module(layout_of(panda))
     rng = np.random.default_rng(5)
     tested = 0
-    for q in panda.random_q(30, seed=6):
+    for q in panda.random_q(300, seed=6):  # the covering model: many configurations collide
+        if tested >= 20:
+            break
         if module.in_collision(q):
             continue
         i = int(rng.integers(len(panda.geometry.shapes)))

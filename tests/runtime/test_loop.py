@@ -94,10 +94,10 @@ def test_self_collision_only_and_a_table(panda, kin):
 
 
 def test_a_step_with_no_free_part_stops_the_run_the_same_in_c_and_python(panda, kin):
-    """Seeds 59 and 67: the QP is infeasible from the start (obstacles within their safety distance) and
+    """Seeds 59 and 88: the QP is infeasible from the start (obstacles within their safety distance) and
     the RRMC fallback, which knows no dampers, heads into an obstacle; the steps are halved until no
     part of one is free, and both loops stop there, after the same steps."""
-    for seed in (59, 67):
+    for seed in (59, 88):
         q0, Tep, env = enclosed_scene(panda, kin, seed)
         runs = [
             symkin.servo(kin, q0, Tep, symkin.MMC(kin, collision=env, backend=b), max_steps=120)

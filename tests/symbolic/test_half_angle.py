@@ -44,8 +44,14 @@ def _pieces(polys: list[sp.Expr]) -> list[tuple[object, int]]:
     return H.group(common, source)
 
 
-def _value(expr: sp.Expr, q: np.ndarray, d0: float) -> float:
-    return float(expr.subs({**dict(zip(Q, q)), D0: d0}))
+#: digits of the evaluations that compare two forms of a polynomial (both sides near a root cancel
+#: heavily in double precision)
+DIGITS = 40
+
+
+def _value(expr: sp.Expr, q: np.ndarray, d0: float) -> sp.Float:
+    values = {**{Q[j]: sp.Float(q[j], DIGITS) for j in range(N)}, D0: sp.Float(d0, DIGITS)}
+    return expr.evalf(DIGITS, subs=values)
 
 
 def _sympy_gcd(polys: list[sp.Expr]) -> sp.Expr:
@@ -67,9 +73,10 @@ def _sympy_gcd(polys: list[sp.Expr]) -> sp.Expr:
     return sp.gcd_list(out)
 
 
-def _at_half_angles(expr: sp.Expr, q: np.ndarray, d0: float) -> float:
-    values = {**{T[j]: np.sin(q[j] / 2) for j in range(N)}, **{U[j]: np.cos(q[j] / 2) for j in range(N)}}
-    return float(expr.subs({**values, D0: d0}))
+def _at_half_angles(expr: sp.Expr, q: np.ndarray, d0: float) -> sp.Float:
+    half = [sp.Float(q[j], DIGITS) / 2 for j in range(N)]
+    values = {**{T[j]: sp.sin(half[j]) for j in range(N)}, **{U[j]: sp.cos(half[j]) for j in range(N)}}
+    return expr.evalf(DIGITS, subs={**values, D0: sp.Float(d0, DIGITS)})
 
 
 def _to_q(expr: sp.Expr) -> sp.Expr:
@@ -121,7 +128,7 @@ def test_common_factors_are_the_gcd_of_the_half_angle_polynomials(
     ratios = []
     for _ in range(4):
         q, d0 = rng.uniform(-3, 3, N), float(rng.uniform(0.2, 2))
-        ratios.append(_value(ours, q, d0) / _at_half_angles(theirs, q, d0))
+        ratios.append(float(_value(ours, q, d0) / _at_half_angles(theirs, q, d0)))
     assert np.ptp(ratios) <= 1e-9 * abs(ratios[0]) and abs(ratios[0]) > 1e-12, (pieces, theirs)
 
 
@@ -145,4 +152,4 @@ def test_one_polynomial_is_its_constant_times_its_factors(items: list[tuple[int,
     for _ in range(3):
         q, d0 = rng.uniform(-3, 3, N), float(rng.uniform(0.2, 2))
         want, got = _value(_to_q(p), q, d0), _value(_to_q(product), q, d0)
-        assert abs(got - want) <= 1e-9 * max(1.0, abs(want))
+        assert abs(float(got - want)) <= 1e-9 * max(1.0, abs(float(want)))

@@ -55,10 +55,10 @@ def _blocks(C, cols):
 def _to_joints(Hv, Hw, joints, mult):
     """(N, b, a, 3) slot blocks -> H (N, n, 6, n), H[:, j_b, :, j_a] (+)= m_a m_b block(b, a)."""
     Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
-    j = list(joints)
+    j = np.asarray(joints, dtype=np.intp)  # integer even when empty (a frame fixed to the base)
     if mult is None:  # each joint once, multiplier 1: the blocks are the joints'
         H = np.zeros((Hs.shape[0], N_JOINTS, 6, N_JOINTS))
-        H[:, np.array(j)[:, None], :, np.array(j)[None, :]] = np.moveaxis(Hs, 0, 2)
+        H[:, j[:, None], :, j[None, :]] = np.moveaxis(Hs, 0, 2)
         return H
     A = np.zeros((len(j), N_JOINTS))
     np.add.at(A, (np.arange(len(j)), j), mult)
