@@ -11,6 +11,7 @@ import numpy as np
 
 from symkin.cli.checks import UserError, check_cflags_for, output_dir
 from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree, fmt
+from symkin.compiler.compile import OPTIONAL_BACKENDS
 from symkin.errors import SymkinError
 from symkin.model.tree import as_tree
 
@@ -20,7 +21,7 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub: Any) -> None:
     s = add_command(sub, "compile", "generate (and build) the kinematics code of a robot")
     add_robot_argument(s)
-    s.add_argument("--backend", choices=BACKENDS, default="c", help="code to generate")
+    s.add_argument("--backend", choices=(*BACKENDS, *OPTIONAL_BACKENDS), default="c", help="code to generate")
     s.add_argument(
         "-o",
         "--output",
@@ -106,7 +107,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"backend {args.backend}: derived + generated in {t_gen:.2f} s, built/loaded in {t_build:.2f} s")
     if ops:
         print(f"operations: {ops}")
-    (_tree_report if chain is None else _chain_report)(model, kin)
+    if args.backend in OPTIONAL_BACKENDS:
+        _tensor_report(model, kin, chain is None)
+    else:
+        (_tree_report if chain is None else _chain_report)(model, kin)
     if args.derivatives >= 3:
         _derivative_report(model, kin, args.derivatives)
     return 0
@@ -172,6 +176,29 @@ def _chain_report(robot: Any, kin: Any) -> None:
     err = float(np.abs(kin.jacob0(q) - robot.jacob0(q)).max())
     print(f"max |jacob0 - numeric reference| = {err:.2e}")
     print(f"jacob0: {_us_per_call(kin.jacob0, q):.2f} us per call from Python")
+
+
+def _tensor_report(model: Any, kin: Any, tree: bool) -> None:
+    """JAX/PyTorch kinematics (float64 arrays of the library) at the ready pose (a chain) or q = 0
+    (a tree): the pose and Jacobian, checked against the numeric reference."""
+    q = np.zeros(model.n) if tree else model.configs.get("qr", model.configs["qz"])
+    if kin.backend == "jax":
+        kin.ops.jax.config.update("jax_enable_x64", True)  # float64 in JAX is opt-in
+    x = kin.ops.xp.asarray(np.array(q, dtype=float), dtype=kin.ops.xp.float64)  # a writable copy
+    if tree:
+        T, J = (kin.ops.numpy(a) for a in kin.fkine_jacob0_all(x))
+        Tr, Jr = model.fkine_jacob0_all(q)
+        print(f"\nframe positions at q = 0 (m), {kin.backend} float64:")
+        for f, Tf in zip(kin.frames, T):
+            print(f"  {f:24} {np.array2string(Tf[:3, 3], precision=5, suppress_small=True)}")
+    else:
+        T, J = kin.ops.numpy(kin.fkine(x)), kin.ops.numpy(kin.jacob0(x))
+        Tr, Jr = model.fkine(q), model.jacob0(q)
+        print(f"\nat {'qr' if 'qr' in model.configs else 'qz'} = {fmt(q)}, {kin.backend} float64:")
+        print(f"fkine (4x4):\n{fmt(T)}")
+        print(f"jacob0 (6x{model.n}, rows v, omega):\n{fmt(J)}")
+    err = max(float(np.abs(T - Tr).max()), float(np.abs(J - Jr).max()))
+    print(f"max |fkine, jacob0 - numeric reference| = {err:.2e}")
 
 
 def _tree_report(tree: Any, kin: Any) -> None:
