@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from symkin.errors import FrameError, ParameterError
+from symkin.model.derivatives import check_order, derivative_kind
 from symkin.model.tree import as_tree
 from symkin.runtime.diff.ops import ops_of
 
@@ -103,6 +105,27 @@ class DiffKinematics:
         if "frame" in inspect.signature(fn).parameters:
             return partial(fn, frame=frame)
         return fn
+
+    def derivative(self, q: Any, order: int = 1, frame: Any = None) -> Any:
+        """Order-``order`` partial derivative of the pose of ``frame``: ``(..., ) + (n,) * (order -
+        1) + (6, n)`` (Haviland and Corke, Manipulator Differential Kinematics, Part 2, 2023;
+        roboticstoolbox-python's ``partial_fkine0`` layout, as :meth:`symkin.Robot.derivative`).
+        Order 1 is ``jacob0``, order 2 ``hessian0``; orders 3 and up are generated when the model
+        is compiled with ``symkin.compile(model, backend, derivatives=k)`` (ParameterError
+        otherwise: these modules are not compiled again on a call)."""
+        k = check_order(order, self.n, self.name)
+        kind = {1: "jacob0", 2: "hessian0"}.get(k, derivative_kind(k))
+        if kind not in self.kinds:
+            raise ParameterError(
+                f"{self.name}: these {self.backend} kinematics have no order-{k} derivative; compile "
+                f"them with symkin.compile(model, backend={self.backend!r}, derivatives={k})"
+            )
+        fn = getattr(self, kind)
+        if "frame" in inspect.signature(getattr(self.module, kind)).parameters:
+            return fn(q, frame=frame)
+        if frame is not None and frame not in self.frames:
+            raise FrameError(f"{self.name} has no frame {frame!r}; it has {list(self.frames)}")
+        return fn(q)
 
     def random_q(self, N: int | None = None, seed: Any = None, dtype: Any = None) -> Any:
         """Uniform random configurations within qlim, (n,) or (N, n), as an array of this backend
