@@ -596,7 +596,7 @@ def _compile_in_child(cache: str, barrier, queue) -> None:
 
 
 def test_concurrent_builds_of_the_same_library_all_succeed(tmp_path):
-    ctx = multiprocessing.get_context("fork")
+    ctx = multiprocessing.get_context("spawn")  # not fork: the worker may have started JAX threads
     barrier, queue = ctx.Barrier(4), ctx.Queue()
     procs = [ctx.Process(target=_compile_in_child, args=(str(tmp_path), barrier, queue)) for _ in range(4)]
     for p in procs:
