@@ -12,6 +12,7 @@ configurations, within :data:`F32_TOL`.
 from __future__ import annotations
 
 import importlib.util
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
@@ -19,7 +20,15 @@ import numpy as np
 
 from symkin.compiler.compile import OPTIONAL_BACKENDS
 
-__all__ = ["TENSOR_BACKENDS", "F32_TOL", "available", "missing_reason", "NumpyView"]
+__all__ = [
+    "TENSOR_BACKENDS",
+    "F32_TOL",
+    "available",
+    "missing_reason",
+    "NumpyView",
+    "PrecisionErrors",
+    "reference_errors",
+]
 
 #: the optional backends ``symkin check`` covers: backend -> (the library it imports, its pip extra)
 TENSOR_BACKENDS = OPTIONAL_BACKENDS
@@ -48,14 +57,15 @@ class NumpyView:
     :meth:`~symkin.runtime.diff.kinematics.DiffKinematics.function` gives them (JAX: eagerly, as
     the check's many batch shapes would each compile anew under ``jax.jit``; the jitted functions
     trace the same code, which tests/emit/test_tensor.py checks). Attributes other than functions
-    (``backend``, ``n``, ``frames``, ``model``) are the kinematics' own."""
+    (``backend``, ``n``, ``frames``, ``model``) are the kinematics' own. ``device``: where the
+    arrays go (a ``torch.device`` or name, a JAX device; None: the library's default)."""
 
-    def __init__(self, kin: Any) -> None:
+    def __init__(self, kin: Any, device: Any = None) -> None:
         if kin.backend == "jax":
             import jax
 
             jax.config.update("jax_enable_x64", True)  # the reference's precision (module docstring)
-        self.kin = kin
+        self.kin, self.device = kin, device
         self.backend: str = kin.backend
         self.model = kin.model
         self.n: int = kin.n
@@ -76,8 +86,9 @@ class NumpyView:
         """x as an array of the backend in ``dtype`` ("float64" or "float32")."""
         xp = self.kin.ops.xp
         if self.backend == "jax":
-            return xp.asarray(np.asarray(x), dtype=getattr(xp, dtype))
-        return xp.as_tensor(np.asarray(x), dtype=getattr(xp, dtype))
+            out = xp.asarray(np.asarray(x), dtype=getattr(xp, dtype))
+            return out if self.device is None else self.kin.ops.jax.device_put(out, self.device)
+        return xp.as_tensor(np.asarray(x), dtype=getattr(xp, dtype), device=self.device)
 
     def _call(self, fn: Any, Q: Any, *args: Any, dtype: str = "float64", **kw: Any) -> Any:
         Q = np.asarray(Q, dtype=float)
@@ -89,6 +100,40 @@ class NumpyView:
 
     def _host(self, x: Any) -> np.ndarray:
         return np.asarray(self.kin.ops.numpy(x), dtype=float)
+
+
+@dataclass(frozen=True)
+class PrecisionErrors:
+    """The largest errors of a backend against the numeric reference, relative to max(1, |ref|):
+    ``float64`` over FK, J0, Je and H0 of every frame, ``float32`` over FK, J0 and H0 evaluated in
+    float32 (against the float64 reference at the same float32-rounded configurations)."""
+
+    float64: float
+    float32: float
+
+
+def reference_errors(model: Any, backend: str, Q: np.ndarray, device: Any = None) -> PrecisionErrors:
+    """Compile ``model`` (a Robot or a Tree) on ``backend`` ("jax" or "torch") and compare it at the
+    configurations ``Q`` (N, n) with the numeric reference ``model.fkine/jacob0/jacobe/hessian0``,
+    on ``device`` (None: the library's default)."""
+    from symkin.check.kinematics import _rel
+    from symkin.model.robot import Robot
+    from symkin.runtime.load import compile as compile_model
+
+    view = NumpyView(compile_model(model, backend=backend), device)
+    frames: tuple[Any, ...] = (None,) if isinstance(model, Robot) else model.frames
+    Q = np.asarray(Q, dtype=float)
+    Q32 = Q.astype(np.float32).astype(float)
+    e64 = e32 = 0.0
+    for frame in frames:
+        kw = {} if frame is None else {"frame": frame}
+        for kind in ("fkine", "jacob0", "jacobe", "hessian0"):
+            e64 = max(e64, _rel(getattr(view, kind)(Q, **kw), getattr(model, kind)(Q, **kw)))
+        for kind in ("fkine", "jacob0", "hessian0"):
+            e32 = max(
+                e32, _rel(getattr(view, kind)(Q32, dtype="float32", **kw), getattr(model, kind)(Q32, **kw))
+            )
+    return PrecisionErrors(e64, e32)
 
 
 PAD = 32  # batches are padded to a multiple of this many rows: fewer distinct shapes to compile
