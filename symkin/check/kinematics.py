@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.check.measure import relative_error as _rel
 from symkin.check.tensor import F32_TOL, TENSOR_BACKENDS, NumpyView, available, missing_reason
 from symkin.model.differential import rotate_rows
 from symkin.model.tree import as_tree
@@ -95,13 +96,6 @@ class CheckReport:
         lines += self.skipped
         lines.append("all ok" if self.ok else "FAILED")
         return "\n".join(lines)
-
-
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if a.shape != b.shape or not np.isfinite(a).all():
-        return float("inf")
-    return float(np.abs(a - b).max(initial=0.0) / max(1.0, np.abs(b).max(initial=0.0)))
 
 
 def _vee_rate(Tp: np.ndarray, Tm: np.ndarray, T: np.ndarray, h: float) -> np.ndarray:

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.check.measure import relative_error as _rel
 from symkin.compiler.compile import OPTIONAL_BACKENDS
 
 __all__ = [
@@ -116,7 +117,6 @@ def reference_errors(model: Any, backend: str, Q: np.ndarray, device: Any = None
     """Compile ``model`` (a Robot or a Tree) on ``backend`` ("jax" or "torch") and compare it at the
     configurations ``Q`` (N, n) with the numeric reference ``model.fkine/jacob0/jacobe/hessian0``,
     on ``device`` (None: the library's default)."""
-    from symkin.check.kinematics import _rel
     from symkin.model.robot import Robot
     from symkin.runtime.load import compile as compile_model
 
