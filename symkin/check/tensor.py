@@ -117,11 +117,12 @@ def reference_errors(model: Any, backend: str, Q: np.ndarray, device: Any = None
     """Compile ``model`` (a Robot or a Tree) on ``backend`` ("jax" or "torch") and compare it at the
     configurations ``Q`` (N, n) with the numeric reference ``model.fkine/jacob0/jacobe/hessian0``,
     on ``device`` (None: the library's default)."""
-    from symkin.model.robot import Robot
+    from symkin.model.tree import as_tree
     from symkin.runtime.load import compile as compile_model
 
     view = NumpyView(compile_model(model, backend=backend), device)
-    frames: tuple[Any, ...] = (None,) if isinstance(model, Robot) else model.frames
+    tree = as_tree(model)
+    frames: tuple[Any, ...] = tree.frames if len(tree.frames) > 1 else (None,)
     Q = np.asarray(Q, dtype=float)
     Q32 = Q.astype(np.float32).astype(float)
     e64 = e32 = 0.0
