@@ -115,3 +115,18 @@ def test_manifests_without_a_kind_are_chains_and_unknown_kinds_or_broken_trees_a
     manifest.write_text(json.dumps(data))
     with pytest.raises(CompileError, match="the tree in the manifest is unreadable"):
         symkin.load_compiled(tmp_path / "tree")
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_a_one_frame_tree_through_a_plain_mimic_joint_compiles(backend):
+    # finger b follows finger a (off its path) with multiplier 1, as panda_finger_joint2 does in
+    # example-robot-data's panda: the path is serial but no chain Robot, so no link_poses
+    urdf = GRIPPER.replace(
+        '<mimic joint="finger_a" multiplier="-1" offset="0.01"/>', '<mimic joint="finger_a"/>'
+    )
+    tree = Tree.from_urdf(urdf, frames=["fb"])
+    assert any(s.is_mimic for s in tree.slots)
+    kin = symkin.compile(tree, backend=backend)
+    Q = tree.random_q(5, seed=0)
+    for kind in ("fkine", "jacob0", "hessian0"):
+        assert_close(getattr(kin, kind)(Q, "fb"), getattr(tree, kind)(Q, "fb"), 1e-12, kind)

@@ -21,6 +21,11 @@ limits and its pose, by symkin's numeric reference, is within 1 mm and 0.01 rad 
 
 The libraries run on one thread each (``torch.set_num_threads(1)``; XLA's CPU client as it comes:
 its elementwise loops run on one thread), so the figures compare code, not cores.
+
+``device="cuda"`` runs every path on the GPU instead (``scripts/gpu_check.py``): the arrays and
+pytorch_kinematics' chain on the first CUDA device, JAX on its first GPU device, and the clock
+the wall time of a call that waits for the device (``torch.cuda.synchronize``,
+``block_until_ready``).
 """
 
 from __future__ import annotations
@@ -86,6 +91,7 @@ class DiffReport:
     ik: tuple[IKRow, ...]
     agreement: float  # largest |T_pk - T_symkin| over the FK rows' configurations
     notes: tuple[str, ...] = field(default_factory=tuple)
+    device: str = "cpu"
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -94,33 +100,37 @@ class DiffReport:
             "ik": [r.__dict__ for r in self.ik],
             "agreement": self.agreement,
             "notes": list(self.notes),
+            "device": self.device,
         }
 
 
-def pk_chain(robot: Any, dtype: Any) -> Any:
-    """pytorch_kinematics' serial chain of ``robot`` (from :func:`chain_urdf`) in ``dtype``."""
+def pk_chain(robot: Any, dtype: Any, device: str = "cpu") -> Any:
+    """pytorch_kinematics' serial chain of ``robot`` (from :func:`chain_urdf`) in ``dtype`` on ``device``."""
     import pytorch_kinematics as pk
 
     from symkin.bench.urdf_text import chain_urdf
 
-    return pk.build_serial_chain_from_urdf(chain_urdf(robot).encode(), "ee").to(dtype=dtype)
+    return pk.build_serial_chain_from_urdf(chain_urdf(robot).encode(), "ee").to(dtype=dtype, device=device)
 
 
-def _timed(paths: dict[str, Callable[[], Any]], rounds: int) -> tuple[dict[str, float], dict[str, float]]:
-    """(least time, first call's time) per path (:func:`symkin.bench.common.interleaved`)."""
+def _timed(
+    paths: dict[str, Callable[[], Any]], rounds: int, clock: Callable[[], float] = _CLOCK
+) -> tuple[dict[str, float], dict[str, float]]:
+    """(least ``clock`` time, first call's wall time) per path (:func:`symkin.bench.common.interleaved`)."""
     first = {}
     for key, f in paths.items():
         t0 = _WALL()
         f()
         first[key] = _WALL() - t0
-    best, _ = interleaved(paths, rounds, _CLOCK)
+    best, _ = interleaved(paths, rounds, clock)
     return best, first
 
 
 def _kin_paths(
-    what: str, kins: dict[str, Any], chain: Any, Q: dict[str, Any]
+    what: str, kins: dict[str, Any], chain: Any, Q: dict[str, Any], sync: Callable[[], Any] = lambda: None
 ) -> dict[str, Callable[[], Any]]:
-    """The calls of ``what`` for one batch: pk, symkin eager PyTorch, torch.compile, jax.jit."""
+    """The calls of ``what`` for one batch: pk, symkin eager PyTorch, torch.compile, jax.jit (the
+    PyTorch ones followed by ``sync``, which waits for the device)."""
     paths: dict[str, Callable[[], Any]] = {}
     if chain is not None:
         if what == "fkine":
@@ -131,6 +141,7 @@ def _kin_paths(
         paths["torch"] = partial_call(getattr(kins["torch"], what), Q["torch"])
         if "torch.compile" in kins:
             paths["torch.compile"] = partial_call(kins["torch.compile"][what], Q["torch"])
+    paths = {key: _then(f, sync) for key, f in paths.items()}
     if "jax" in kins:
         fn = getattr(kins["jax"], what)
         paths["jax.jit"] = lambda: fn(Q["jax"]).block_until_ready()
@@ -139,6 +150,17 @@ def _kin_paths(
 
 def partial_call(fn: Callable[[Any], Any], q: Any) -> Callable[[], Any]:
     return lambda: fn(q)
+
+
+def _then(f: Callable[[], Any], sync: Callable[[], Any]) -> Callable[[], Any]:
+    """f, then ``sync()``; f's result."""
+
+    def call() -> Any:
+        out = f()
+        sync()
+        return out
+
+    return call
 
 
 def _ik_errors(robot: Any, q: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -154,8 +176,8 @@ def _ik_errors(robot: Any, q: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np
 
 
 def _ik_row(path: str, dtype: str, robot: Any, T: np.ndarray, solve: Callable[[], np.ndarray],
-            rounds: int) -> IKRow:  # fmt: skip
-    best, first = _timed({path: solve}, rounds)
+            rounds: int, clock: Callable[[], float] = _CLOCK) -> IKRow:  # fmt: skip
+    best, first = _timed({path: solve}, rounds, clock)
     q = solve()
     pos, rot, inside = _ik_errors(robot, q, T)
     solved = float(np.mean((pos <= POS_TOL) & (rot <= ROT_TOL) & inside))
@@ -167,7 +189,7 @@ def _ik_row(path: str, dtype: str, robot: Any, T: np.ndarray, solve: Callable[[]
 def _pk_ik(chain: Any, robot: Any, torch: Any, Tt: Any, seed: int) -> Callable[[], np.ndarray]:
     import pytorch_kinematics as pk
 
-    lim = torch.as_tensor(np.asarray(robot.qlim).T.copy(), dtype=Tt.dtype)
+    lim = torch.as_tensor(np.asarray(robot.qlim).T.copy(), dtype=Tt.dtype, device=Tt.device)
     ik = pk.PseudoInverseIK(
         chain, max_iterations=30, num_retries=10, joint_limits=lim, early_stopping_any_converged=True,
         early_stopping_no_improvement="all", debug=False, lr=0.2,
@@ -195,8 +217,10 @@ def run_diff(
     seed: int = 0,
     compile_torch: bool = True,
     progress: bool = False,
+    device: str = "cpu",
 ) -> DiffReport:
-    """The measurements of the module docstring, in one run (``robot`` a name or a Robot chain)."""
+    """The measurements of the module docstring, in one run (``robot`` a name or a Robot chain), on
+    ``device`` ("cpu", or "cuda": the GPU, see the module docstring)."""
     import symkin
     from symkin.core.progress import bar
     from symkin.model.resolve import resolve_robot
@@ -208,8 +232,11 @@ def run_diff(
     if torch is None:
         raise MissingExtraError("bench diff needs torch: pip install 'symkin[torch]'")
     torch.set_num_threads(1)
+    gpu = device != "cpu"
+    clock, sync = (_WALL, torch.cuda.synchronize) if gpu else (_CLOCK, lambda: None)
     if jax is not None:
         jax.config.update("jax_enable_x64", True)
+    jax_device = None if jax is None else jax.devices("gpu" if gpu else "cpu")[0]
     have_pk = optional("pytorch_kinematics") is not None
     if not have_pk:
         notes.append("pytorch_kinematics is not installed (pip install 'symkin[compare-diff]'): no peer rows")
@@ -225,10 +252,10 @@ def run_diff(
     for dtype, N in bar(steps, progress, desc="bench diff"):
         tdt = getattr(torch, dtype)
         Qn = robot.random_q(N, seed=rng).reshape(N, robot.n).astype(dtype)
-        Q = {"torch": torch.from_numpy(Qn)}
+        Q = {"torch": torch.from_numpy(Qn).to(device)}
         if jax is not None:
-            Q["jax"] = jax.numpy.asarray(Qn)
-        chain = pk_chain(robot, tdt) if have_pk else None
+            Q["jax"] = jax.device_put(Qn, jax_device)
+        chain = pk_chain(robot, tdt, device) if have_pk else None
         if "torch" in kins and compile_torch:  # compiled per dtype and batch (dynamic=False)
             kins["torch.compile"] = {
                 what: torch.compile(getattr(kins["torch"], what), dynamic=False)
@@ -236,39 +263,41 @@ def run_diff(
             }
         for what in ("fkine", "jacob0"):
             best, first = _timed(
-                _kin_paths(what, kins, chain, Q), rounds if N < 100_000 else max(2, rounds // 2)
+                _kin_paths(what, kins, chain, Q, sync), rounds if N < 100_000 else max(2, rounds // 2), clock
             )
             rows += [DiffRow(what, p, dtype, N, best[p], first[p]) for p in best]
         if chain is not None and dtype == "float64":
-            T_pk = chain.forward_kinematics(Q["torch"], end_only=True).get_matrix().numpy()
+            T_pk = chain.forward_kinematics(Q["torch"], end_only=True).get_matrix().cpu().numpy()
             agreement = max(agreement, float(np.abs(T_pk - robot.fkine(Qn)).max()))
     ik_rows = []
     T = robot.fkine(robot.random_q(problems, seed=rng).reshape(problems, robot.n))
     for dtype in dtypes:
         tdt = getattr(torch, dtype)
-        Tt = torch.as_tensor(T, dtype=tdt)
+        Tt = torch.as_tensor(T, dtype=tdt, device=device)
         if have_pk:
-            chain = pk_chain(robot, tdt)
-            ik_rows.append(_ik_row("pk", dtype, robot, T, _pk_ik(chain, robot, torch, Tt, seed), rounds))
+            chain = pk_chain(robot, tdt, device)
+            ik_rows.append(
+                _ik_row("pk", dtype, robot, T, _pk_ik(chain, robot, torch, Tt, seed), rounds, clock)
+            )
         tol = 1e-6 if dtype == "float64" else 1e-4
         if "torch" in kins:
             kin = kins["torch"]
             ik_rows.append(_ik_row(
                 "torch", dtype, robot, T,
                 lambda k=kin, t=Tt, tol=tol: k.ik(t, slimit=10, ilimit=30, seed=seed, tol=tol)
-                .q.detach().numpy().astype(float),
-                rounds,
+                .q.detach().cpu().numpy().astype(float),
+                rounds, clock,
             ))  # fmt: skip
         if jax is not None:
-            kin, Tj = kins["jax"], jax.numpy.asarray(T.astype(dtype))
+            kin, Tj = kins["jax"], jax.device_put(T.astype(dtype), jax_device)
             ik_rows.append(_ik_row(
                 "jax.jit", dtype, robot, T,
                 lambda k=kin, t=Tj, tol=tol: np.asarray(
                     k.ik(t, slimit=10, ilimit=30, seed=seed, tol=tol).q, dtype=float
                 ),
-                rounds,
+                rounds, clock,
             ))  # fmt: skip
-    return DiffReport(robot.name, tuple(rows), tuple(ik_rows), agreement, tuple(notes))
+    return DiffReport(robot.name, tuple(rows), tuple(ik_rows), agreement, tuple(notes), device)
 
 
 def _ms(s: float) -> str:
@@ -279,8 +308,13 @@ def format_diff(report: DiffReport) -> str:
     """The tables: per function, dtype and batch each path's time, its ratio to pytorch_kinematics
     (how many times faster) and its warm-up; then the IK."""
     out = [
-        f"symkin bench diff {report.robot}: CPU, one thread per library, least CPU time of a call "
-        "(process time); warm-up: the first call's wall time",
+        f"symkin bench diff {report.robot}: "
+        + (
+            "CPU, one thread per library, least CPU time of a call (process time)"
+            if report.device == "cpu"
+            else f"GPU ({report.device}), least wall time of a call that waits for the device"
+        )
+        + "; warm-up: the first call's wall time",
         f"same robot: pytorch_kinematics' FK from symkin's URDF differs from symkin's by at most "
         f"{report.agreement:.1e}",
         f"{'function':8} {'dtype':8} {'batch':>7} {'path':14} {'ms':>9} {'x pk':>7} {'warm-up s':>10}",

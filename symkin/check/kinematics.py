@@ -8,7 +8,9 @@ configurations, at the model's named configurations and near them (where singula
 are). Space and body Jacobians and the condition number are compared with the reference. A tree
 runs every row for each of its frames (a row reports the largest error over them), plus its
 ``*_all`` functions, each frame's reference against the serial :class:`symkin.Robot` to it, and
-on C the functions the C controllers call. A model with collision geometry adds, on C, the
+on C the functions the C controllers call. The JAX and PyTorch backends check FK, J and H (the
+rows above up to ``jacob0_hessian0`` and the large-q rows) in float64, and in float32 within
+:data:`symkin.check.tensor.F32_TOL`. A model with collision geometry adds, on C, the
 collision kernel's distances against the NumPy reference and their gradients against finite
 differences, and whether its verdicts agree with the distances.
 
@@ -27,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
+from symkin.check.measure import relative_error as _rel
+from symkin.check.tensor import F32_TOL, TENSOR_BACKENDS, NumpyView, available, missing_reason
 from symkin.model.differential import rotate_rows
 from symkin.model.tree import as_tree
-from symkin.runtime.kinematics import Kinematics
 
 __all__ = ["CheckRow", "CheckReport", "check", "REF_TOL", "FD_TOL", "FD_STEP", "LARGE_TURNS", "large_angles"]
 
@@ -58,6 +61,7 @@ class CheckReport:
     robot: str
     samples: int
     rows: tuple[CheckRow, ...]
+    skipped: tuple[str, ...] = ()  # one line per optional backend whose library is not installed
 
     @property
     def ok(self) -> bool:
@@ -69,6 +73,7 @@ class CheckReport:
             "samples": self.samples,
             "ok": self.ok,
             "rows": [{**r.__dict__, "ok": r.ok} for r in self.rows],
+            "skipped": list(self.skipped),
         }
 
     def _large_tol(self) -> float:
@@ -86,16 +91,11 @@ class CheckReport:
         lines.append(
             f"tolerances: {REF_TOL:g} vs reference, {FD_TOL:g} vs central differences (h = {FD_STEP:g});"
             f" (large q): up to {LARGE_TURNS} turns, {self._large_tol():.2g} vs reference"
+            + (f"; (float32): {F32_TOL:g}" if any(r.ref_tol == F32_TOL for r in self.rows) else "")
         )
+        lines += self.skipped
         lines.append("all ok" if self.ok else "FAILED")
         return "\n".join(lines)
-
-
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if a.shape != b.shape or not np.isfinite(a).all():
-        return float("inf")
-    return float(np.abs(a - b).max(initial=0.0) / max(1.0, np.abs(b).max(initial=0.0)))
 
 
 def _vee_rate(Tp: np.ndarray, Tm: np.ndarray, T: np.ndarray, h: float) -> np.ndarray:
@@ -145,19 +145,23 @@ def large_angles(robot: Any, n: int, seed: int = 0) -> np.ndarray:
 
 def check(
     model: Any,
-    backends: Sequence[str] | Iterable[Kinematics] = ("c", "numpy", "casadi"),
+    backends: Sequence[str] | Iterable[Any] = ("c", "numpy", "casadi"),
     samples: int = 20,
     seed: int = 0,
 ) -> CheckReport:
     """Compare every function of every backend (names, or compiled Kinematics objects) of ``model``
-    (a Robot or a Tree) with the references (module docstring). ParameterError for a ``samples``
+    (a Robot or a Tree) with the references (module docstring). "jax" and "torch" check FK, J and H
+    (float64 and float32; :mod:`symkin.check.tensor`) and are skipped, with a line in the report's
+    ``skipped``, where their library is not installed. ParameterError for a ``samples``
     that is not a count >= 1 or whose finite-difference Hessians would not fit in memory."""
     from symkin.core.sizes import count, room
     from symkin.runtime.load import compile as compile_model
 
     samples = count(samples, "samples")
     room(8.0 * 24 * model.n**3 * samples, f"checking {samples} configurations (finite-difference Hessians)")
-    kins = [b if isinstance(b, Kinematics) else compile_model(model, backend=b) for b in backends]
+    names = [b for b in backends if not isinstance(b, str) or available(b)]
+    skipped = tuple(missing_reason(b) for b in backends if isinstance(b, str) and not available(b))
+    kins = [_numpy_facing(b if not isinstance(b, str) else compile_model(model, backend=b)) for b in names]
     tree = as_tree(model)
     frames = tree.frames if len(tree.frames) > 1 else (None,)
     Q = sample_configurations(model, samples, seed)
@@ -182,7 +186,12 @@ def check(
         if frames == (None,)
         else f"{model.name} ({len(frames)} frames, each row the largest error over them)"
     )
-    return CheckReport(title, len(Q), _merged(rows))
+    return CheckReport(title, len(Q), _merged(rows), skipped)
+
+
+def _numpy_facing(kin: Any) -> Any:
+    """``kin``, or a JAX/PyTorch kinematics as a :class:`symkin.check.tensor.NumpyView`."""
+    return NumpyView(kin) if kin.backend in TENSOR_BACKENDS and not isinstance(kin, NumpyView) else kin
 
 
 def _collision_rows(kin: Any, Q: np.ndarray) -> list[CheckRow]:
@@ -250,6 +259,30 @@ def _frame_rows(
     rows.append(CheckRow(b, "fkine_jacob0", max(_rel(T2, T), _rel(J2, J0)), None))
     J3, H3 = at("jacob0_hessian0")(Q)
     rows.append(CheckRow(b, "jacob0_hessian0", max(_rel(J3, J0), _rel(H3, at("hessian0", ref)(Q))), None))
+    # large angles: FK, J and H against the reference, tolerance from the angle-sum rounding
+    for name in ("fkine", "jacob0", "hessian0"):
+        err = _rel(at(name)(QL), at(name, ref)(QL))
+        rows.append(CheckRow(b, f"{name} (large q)", err, None, large_tol))
+    if b in TENSOR_BACKENDS:  # FK, J, H and what the other backends add on top of them: below
+        return rows + _float32_rows(b, at, ref, Q)
+    return rows + _rate_rows(b, at, ref, Q, seed)
+
+
+def _float32_rows(b: str, at: Any, ref: Any, Q: np.ndarray) -> list[CheckRow]:
+    """FK, J and H evaluated in float32 against the float64 reference at the same float32-rounded
+    configurations (JAX and PyTorch, whose functions keep q's dtype), within :data:`F32_TOL`."""
+    Q32 = Q.astype(np.float32).astype(float)
+    errors = {
+        name: _rel(at(name)(Q32, dtype="float32"), at(name, ref)(Q32))
+        for name in ("fkine", "jacob0", "hessian0")
+    }
+    return [CheckRow(b, f"{name} (float32)", err, None, F32_TOL) for name, err in errors.items()]
+
+
+def _rate_rows(b: str, at: Any, ref: Any, Q: np.ndarray, seed: int) -> list[CheckRow]:
+    """J dot, the space and body Jacobians, the condition number, manipulability and its Jacobian
+    of one frame (``at(name)`` its method) against the reference and finite differences."""
+    h, rows = FD_STEP, []
     # dJ0/dt = sum_i H0[i] qd_i against d/dt J0(q + t qd) by central differences
     qd = np.random.default_rng(seed + 1).uniform(-1.0, 1.0, Q.shape)
     Jd = at("jacob0_dot")(Q, qd)
@@ -277,10 +310,6 @@ def _frame_rows(
             rows.append(
                 CheckRow(b, f"jacobm:{axes}", _rel(Jm, at("jacobm", ref)(Qg, axes=axes)), _rel(fd_m, Jm))
             )
-    # large angles: FK, J and H against the reference, tolerance from the angle-sum rounding
-    for name in ("fkine", "jacob0", "hessian0"):
-        err = _rel(at(name)(QL), at(name, ref)(QL))
-        rows.append(CheckRow(b, f"{name} (large q)", err, None, large_tol))
     return rows
 
 

@@ -9,6 +9,7 @@ from typing import Any
 
 from symkin.cli.checks import UserError, check_cflags_for, int_at_least
 from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree
+from symkin.compiler.compile import OPTIONAL_BACKENDS
 
 __all__ = ["add_parser", "run"]
 
@@ -19,8 +20,9 @@ def add_parser(sub: Any) -> None:
     s.add_argument(
         "--backend",
         action="append",
-        choices=BACKENDS,
-        help="only this backend (repeat for several; default all)",
+        choices=(*BACKENDS, *OPTIONAL_BACKENDS),
+        help="only this backend (repeat for several; default all: jax and torch where installed, "
+        "skipped with a note where not)",
     )
     s.add_argument("--samples", type=int_at_least(1), default=20, help="random configurations")
     s.add_argument("--seed", type=int, default=0, help="seed of the random configurations")
@@ -47,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     robot = chain_or_tree(args)
     if args.singularities:
         return _singularities(robot, args)
-    backends = args.backend or BACKENDS
+    backends = args.backend or (*BACKENDS, *OPTIONAL_BACKENDS)
     for b in args.backend or ("c",):
         check_cflags_for(b)
     report = check(robot, backends=backends, samples=args.samples, seed=args.seed)

@@ -530,6 +530,7 @@ def derive_tree_program(
     chain = [segments[s.segment] for s in slots]
     serial = len(paths) == 1 and len(paths[0]) == len(slots) and C0s[0] is None
     serial = serial and all(seg.ets and seg.ets[-1].is_joint for seg in chain)
+    serial = serial and not any(s.is_mimic for s in slots)  # no chain Robot (Tree.chain refuses it)
     return TreeProgram(
         name=name or tree.name,  # type: ignore[attr-defined]
         q=tuple(qs),
