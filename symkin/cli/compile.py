@@ -109,8 +109,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"operations: {ops}")
     if args.backend in OPTIONAL_BACKENDS:
         _tensor_report(model, kin, chain is None)
+    elif chain is None:
+        _tree_report(model, kin.fkine_jacob0_all)
     else:
-        (_tree_report if chain is None else _chain_report)(model, kin)
+        _chain_report(model, kin)
     if args.derivatives >= 3:
         _derivative_report(model, kin, args.derivatives)
     return 0
@@ -179,41 +181,45 @@ def _chain_report(robot: Any, kin: Any) -> None:
 
 
 def _tensor_report(model: Any, kin: Any, tree: bool) -> None:
-    """JAX/PyTorch kinematics (float64 arrays of the library) at the ready pose (a chain) or q = 0
-    (a tree): the pose and Jacobian, checked against the numeric reference."""
-    q = np.zeros(model.n) if tree else model.configs.get("qr", model.configs["qz"])
+    """JAX/PyTorch kinematics in float64 arrays of the library: a tree's frames as
+    :func:`_tree_report` shows them (untimed), a chain's pose and Jacobian at the ready pose, each
+    checked against the numeric reference."""
     if kin.backend == "jax":
         kin.ops.jax.config.update("jax_enable_x64", True)  # float64 in JAX is opt-in
-    x = kin.ops.xp.asarray(np.array(q, dtype=float), dtype=kin.ops.xp.float64)  # a writable copy
+    xp = kin.ops.xp
+
+    def on_numpy(fn: Any) -> Any:  # NumPy in (a writable copy), NumPy out
+        def call(q: np.ndarray) -> Any:
+            out = fn(xp.asarray(np.array(q, dtype=float), dtype=xp.float64))
+            return tuple(kin.ops.numpy(a) for a in out) if isinstance(out, tuple) else kin.ops.numpy(out)
+
+        return call
+
     if tree:
-        T, J = (kin.ops.numpy(a) for a in kin.fkine_jacob0_all(x))
-        Tr, Jr = model.fkine_jacob0_all(q)
-        print(f"\nframe positions at q = 0 (m), {kin.backend} float64:")
-        for f, Tf in zip(kin.frames, T):
-            print(f"  {f:24} {np.array2string(Tf[:3, 3], precision=5, suppress_small=True)}")
-    else:
-        T, J = kin.ops.numpy(kin.fkine(x)), kin.ops.numpy(kin.jacob0(x))
-        Tr, Jr = model.fkine(q), model.jacob0(q)
-        print(f"\nat {'qr' if 'qr' in model.configs else 'qz'} = {fmt(q)}, {kin.backend} float64:")
-        print(f"fkine (4x4):\n{fmt(T)}")
-        print(f"jacob0 (6x{model.n}, rows v, omega):\n{fmt(J)}")
-    err = max(float(np.abs(T - Tr).max()), float(np.abs(J - Jr).max()))
+        _tree_report(model, on_numpy(kin.fkine_jacob0_all), f", {kin.backend} float64", timed=False)
+        return
+    q = model.configs.get("qr", model.configs["qz"])
+    T, J = on_numpy(kin.fkine)(q), on_numpy(kin.jacob0)(q)
+    print(f"\nat {'qr' if 'qr' in model.configs else 'qz'} = {fmt(q)}, {kin.backend} float64:")
+    print(f"fkine (4x4):\n{fmt(T)}")
+    print(f"jacob0 (6x{model.n}, rows v, omega):\n{fmt(J)}")
+    err = max(float(np.abs(T - model.fkine(q)).max()), float(np.abs(J - model.jacob0(q)).max()))
     print(f"max |fkine, jacob0 - numeric reference| = {err:.2e}")
 
 
-def _tree_report(tree: Any, kin: Any) -> None:
-    """Every frame's position at q = 0, checked against the reference."""
+def _tree_report(tree: Any, fkjac: Any, note: str = "", timed: bool = True) -> None:
+    """Every frame's position at q = 0 by ``fkjac`` (a NumPy ``fkine_jacob0_all``; ``note`` ends the
+    heading), checked against the reference, and its time per call when ``timed``."""
     q = np.zeros(tree.n)
-    T, J = kin.fkine_jacob0_all(q)
+    T, J = fkjac(q)
     Tr, Jr = tree.fkine_jacob0_all(q)
-    print("\nframe positions at q = 0 (m):")
+    print(f"\nframe positions at q = 0 (m){note}:")
     for f, Tf in zip(tree.frames, T):
         print(f"  {f:24} {np.array2string(Tf[:3, 3], precision=5, suppress_small=True)}")
     err = max(float(np.abs(T - Tr).max()), float(np.abs(J - Jr).max()))
     print(f"max |fkine_all, jacob0_all - numeric reference| = {err:.2e}")
-    print(
-        f"fkine_jacob0_all (every frame): {_us_per_call(kin.fkine_jacob0_all, q):.2f} us per call from Python"
-    )
+    if timed:
+        print(f"fkine_jacob0_all (every frame): {_us_per_call(fkjac, q):.2f} us per call from Python")
 
 
 def _us_per_call(function: Any, q: np.ndarray, reps: int = 2000) -> float:
