@@ -123,7 +123,7 @@ def test_derive_a_tree_shows_the_shared_part_once(capsys, tmp_path):
     assert out.count("joint `waist`") == 1  # the torso, once, serving both tools
     assert "on the path to `l_tool`, `r_tool`" in out
     assert "### Frame `l_tool`" in out and "### Frame `r_tool`" in out
-    assert "(ok, tolerance 1e-12)" in out
+    assert "(tolerance 1e-12): ok" in out and "FAILED" not in out
 
 
 def test_resolve_accepts_a_urdf_frame(quad):

@@ -354,7 +354,7 @@ def test_long_chain_checks_catch_a_wrong_step(monkeypatch) -> None:
     import symkin.derive.program as dp
     from symkin.bench.compile import random_chain
 
-    real = dp.derive_program
+    real = dp.derive_tree_program
 
     def broken(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
         kp = real(*args, **kwargs)
@@ -362,7 +362,7 @@ def test_long_chain_checks_catch_a_wrong_step(monkeypatch) -> None:
         lines = (*kp.lines[:40], (s, -e), *kp.lines[41:])
         return type(kp)(**{**kp.__dict__, "lines": lines})
 
-    monkeypatch.setattr(dp, "derive_program", broken)
+    monkeypatch.setattr(dp, "derive_tree_program", broken)
     d = dp.program_derivation(random_chain(9, seed=4), False)
     assert "failed" in d.checks.values()
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from symkin import Tree
-from symkin.derive.tree import tree_derivation
+from symkin.derive.program import tree_derivation
 from tests.model.tree_urdfs import GRIPPER
 
 
@@ -14,6 +14,23 @@ def test_mimic_rules_frames_and_check_in_markdown_and_latex():
     assert r"$\theta_{6} = -q_{3} + 0.01$" in md
     assert md.count("### link") == len(tree.segments)
     assert "### Frame `fa_tip2`" in md and "### Frame `fb`" in md
-    assert "(ok, tolerance 1e-12)" in md
+    assert "(tolerance 1e-12): ok" in md and "FAILED" not in md
     tex = tree_derivation(tree, "latex")
     assert tex.startswith("\\documentclass") and "###" not in tex and "\\section{" in tex
+
+
+def test_checks_catch_a_wrong_step(monkeypatch):
+    """The 30-digit checks compare with the literal products along each path and with the numeric
+    Tree: a walk with one wrong sign fails both."""
+    import symkin.derive.program as dp
+
+    real = dp.derive_tree_program
+
+    def broken(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        tp = real(*args, **kwargs)
+        s, e = tp.lines[10]
+        return type(tp)(**{**tp.__dict__, "lines": (*tp.lines[:10], (s, -e), *tp.lines[11:])})
+
+    monkeypatch.setattr(dp, "derive_tree_program", broken)
+    md = tree_derivation(Tree.from_urdf(GRIPPER))
+    assert "J0: FAILED" in md and "(tolerance 1e-12): FAILED" in md

@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
             )
         if sections is not None:
             raise UserError("--sections chooses parts of a chain's derivation, not of a tree's")
-        from symkin.derive.tree import tree_derivation
+        from symkin.derive.program import tree_derivation
 
         text = tree_derivation(robot, fmt=args.format)
     elif (robot := robot.chain()) and args.singularities:

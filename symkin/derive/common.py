@@ -324,8 +324,8 @@ def inline_latex(text: str) -> str:
 
 
 def latex_document(markdown: str) -> str:
-    """The template's Markdown (``#`` title, ``##`` sections, paragraphs, ``$$`` blocks, pipe
-    tables) as a standalone LaTeX document (amsmath only)."""
+    """The template's Markdown (``#`` title, ``##`` sections, ``###`` subsections, paragraphs, ``$$``
+    blocks, pipe tables) as a standalone LaTeX document (amsmath only)."""
     body: list[str] = []
     title = ""
     table = False
@@ -336,8 +336,9 @@ def latex_document(markdown: str) -> str:
             table = False
         if line.startswith("# "):
             title = inline_latex(line[2:])
-        elif line.startswith("## "):
-            body += [rf"\section{{{inline_latex(line[3:])}}}", ""]
+        elif line.startswith(("## ", "### ")):
+            level = "section" if line.startswith("## ") else "subsection*"
+            body += [rf"\{level}{{{inline_latex(line.split(' ', 1)[1])}}}", ""]
         elif line == "$$":
             body += [r"\[", *iter(lines.__next__, "$$"), r"\]", ""]
         elif line.startswith("|") and not set(line) <= set("|-"):

@@ -1,68 +1,264 @@
-"""Derivations of long chains: the kinematics as named intermediates, link frame by link frame.
+"""Program derivations: a tree's kinematics, or a long chain's as the one-frame tree's, as named
+intermediates, link frame by link frame.
 
 Beyond about seven joints the multiplied-out link frames, pose and Jacobian have far more terms
 than a reader can use (a generic 12-joint chain: about 2 million nodes). The derivation then
 follows the O(n) algorithm of Haviland and Corke (Manipulator Differential Kinematics, Part 1,
-2023, eqs 31-34) the way :mod:`symkin.symbolic.program` computes it: each link frame from the
-previous one, every new quantity named (``zeta_k``), the Jacobian columns as cross products of
-named axes and origins, and the Hessian by its rule. The results are checked at random points,
-to 30 digits, against the literal products of the elementary transforms (eqs 1, 5, 26-28) and
-against central differences of the Jacobian.
+2023, eqs 31-34) the way the compiler computes it
+(:func:`symkin.symbolic.program.derive_tree_program`; a chain is the tree of
+:meth:`symkin.Tree.from_robot`): the tree walked depth first, each link frame from its parent's,
+every new quantity named (``zeta_k``), so a part several frames share (a torso, a hip) appears once;
+then each frame's pose and the nonzero columns of its Jacobian, cross products of named axes and
+origins (a mimic joint's column added by the chain rule); for one frame also the Hessian by its
+rule. The results are checked at 3 random points, to 30 digits, against the literal products of the
+elementary transforms along each path (eqs 1, 5, 26-28), the Hessian against central differences
+of the Jacobian, and the poses and Jacobians against the numeric reference :class:`symkin.Tree`.
 """
 
 from __future__ import annotations
 
-import random
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from fractions import Fraction
 from typing import Any
 
 import mpmath
+import numpy as np
 import sympy as sp
 
-from symkin.model.ets import ETS
-from symkin.model.latex import ets_latex
+from symkin.derive.common import (
+    SECTIONS,
+    Derivation,
+    Printer,
+    constants,
+    et_matrix,
+    generator,
+    latex_document,
+    mp_function,
+    products,
+    shared_context,
+)
+from symkin.model.ets import ET, Const, rational_text
+from symkin.model.latex import AXIS_LATEX, display_name, et_latex, ets_latex
 from symkin.model.robot import Robot
-from symkin.symbolic.program import KinematicProgram, derive_program
+from symkin.model.tree import Tree
+from symkin.symbolic.kinematics import const_to_sympy
+from symkin.symbolic.program import TreeProgram, derive_tree_program
 
-__all__ = ["program_derivation", "program_context", "LINES_PER_BLOCK"]
+__all__ = ["program_derivation", "program_context", "tree_derivation", "LINES_PER_BLOCK"]
 
 LINES_PER_BLOCK = 12  # assignments per displayed equation block
+CHECK_TOL = 1e-12  # against the double-precision reference symkin.Tree
 _XYZ = "xyz"
 
 
-def program_derivation(robot: Robot, symbolic_constants: bool) -> Any:
-    """The :class:`symkin.derive.chain.Derivation` of ``robot`` in program form (see the module)."""
-    from symkin.derive.common import Derivation, constants, et_matrix
+def _symbols(n: int) -> tuple[sp.Symbol, ...]:
+    return tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(n))
 
+
+def _program(
+    tree: Tree, q: tuple[sp.Symbol, ...], constant: Any, values: Mapping[sp.Symbol, sp.Expr], reference: Tree
+) -> tuple[TreeProgram, dict[str, str]]:
+    """The walk of ``tree`` (Hessians too for one frame) and its checks (:func:`_checks`)."""
+    tp = derive_tree_program(tree, q, constant, frame_jacobians=False, hessians=len(tree.frames) == 1)
+    return tp, _checks(tree, tp, constant, values, reference)
+
+
+def program_derivation(robot: Robot, symbolic_constants: bool) -> Derivation:
+    """The :class:`symkin.derive.chain.Derivation` of ``robot`` in program form: the derivation of
+    its one-frame tree (see the module)."""
     ets = robot.ets
     n = ets.n
-    q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(n))
+    q = _symbols(n)
     C = constants(ets, symbolic_constants)
-    kp = derive_program(C.ets, q, C.constant, robot.name, hessians=True)
+    tree = Tree.from_robot(replace(robot, ets=C.ets))
+    tp, checks = _program(tree, q, C.constant, C.values, Tree.from_robot(robot))
     eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
-    E = [et_matrix(e.axis, eta[k]) for k, e in enumerate(ets)]
-    checks = _checks(kp, ets, eta, q, dict(C.values))
     im = sp.ImmutableMatrix
-    position = {j: k for k, j in enumerate(kp.order)}
-    assert kp.H0 is not None
+    by_joint = {s.joint: tp.links[s.segment] for s in tree.slots}
+    assert tp.H0[0] is not None
     return Derivation(
         robot,
         q,
         dict(C.values),
-        tuple(map(im, E)),
-        im(kp.T),
-        tuple(im(kp.links[position[j]]) for j in range(n)),
+        tuple(im(et_matrix(e.axis, eta[k])) for k, e in enumerate(ets)),
+        im(tp.T[0]),
+        tuple(im(by_joint[j]) for j in range(n)),
         (),
         (),
-        im(kp.J0),
-        im(kp.J0),
-        tuple(map(im, kp.H0)),
+        im(tp.J0[0]),
+        im(tp.J0[0]),
+        tuple(map(im, tp.H0[0])),
         True,
         checks,
         form="program",
-        intermediates=kp.lines,
-        sections=kp.marks,
+        intermediates=tp.lines,
+        sections=tp.marks,
     )
+
+
+def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
+    """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
+    from symkin.derive.common import FORMATS
+    from symkin.emit.templates import render
+    from symkin.errors import SymkinError, check_choice
+
+    check_choice(fmt, FORMATS, "format")
+    if tree.n == 0:
+        raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
+    q = _symbols(tree.n)
+    tp, checks = _program(tree, q, const_to_sympy, {}, tree)
+    P = Printer(q, tp.lines)
+    ctx = _walk_context(tree, tp, checks, P, {})
+    kinds = {True: "revolute", False: "prismatic"}
+    joints = []
+    for j, name in enumerate(tree.joint_names):
+        driven = [s for s in tree.slots if s.joint == j]
+        moves = ", ".join(f"`{display_name(tree.segments[s.segment].link)}`" for s in driven)
+        mimics = ", ".join(f"$\\theta_{{{k + 1}}} = {_theta(s)}$" for k, s in enumerate(tree.slots)
+                           if s.joint == j and not _plain(s))  # fmt: skip
+        joints.append([f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(name)}`",
+                       kinds[all(s.revolute for s in driven)], f"{moves} ({mimics})" if mimics else moves])  # fmt: skip
+    from symkin.core.version import __version__
+
+    text = render(
+        "derive/program.md.j2",
+        **ctx,
+        robot=display_name(tree.name),
+        n=tree.n,
+        source=display_name(tree.source).rstrip(".") + ". " if tree.source else "",
+        joint_map="$q_k$ is `q(k-1)`",
+        version=__version__,
+        joints=joints,
+        joint_column="moves",
+        ets="",
+        factors=[],
+        constants=[],
+        legend=P.legend(),
+        sections=set(SECTIONS),
+    )
+    return latex_document(text) if fmt == "latex" else text
+
+
+def program_context(D: Derivation) -> tuple[dict[str, Any], str]:
+    """The template context of ``derive/program.md.j2`` for the chain derivation ``D`` and its
+    LaTeX summary for Jupyter."""
+    ets = D.robot.ets
+    C = constants(ets, bool(D.constants))
+    tree = Tree.from_robot(replace(D.robot, ets=C.ets))
+    links = (*(D.links[s.joint] for s in tree.slots), D.T)  # the last segment ends at the end effector
+    tp = TreeProgram(D.robot.name, D.q, D.intermediates, tree.frames, (), (D.T,), (D.J0,), (), (), (), (D.H0,), (),
+                     links, D.sections)  # fmt: skip
+    P = Printer(D.q, D.intermediates)
+    names = {e.const: C.names[k] for k, e in enumerate(C.ets) if k in C.names}
+    ctx = {**shared_context(D, P, C), **_walk_context(tree, tp, D.checks, P, names)}
+    ctx["legend"] = P.legend()
+    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(D.T[r, 3])}" for r in range(3)]
+    return ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
+
+
+# ---------------------------------------------------------------------------------------------
+# The written walk
+
+
+def _plain(s: Any) -> bool:
+    """Whether a slot is its joint's own (theta = q_j)."""
+    return s.multiplier == 1 and s.offset == 0
+
+
+def _theta(s: Any) -> str:
+    q = f"q_{{{s.joint + 1}}}"
+    m, c = s.multiplier, s.offset
+    text = q if m == 1 else f"-{q}" if m == -1 else f"{rational_text(m)}\\, {q}"
+    if c != 0:
+        text += f" {'+' if c > 0 else '-'} {rational_text(abs(c))}"
+    return text
+
+
+def _factor(tree: Tree, e: ET, names: Mapping[Const, str]) -> str:
+    """One factor; a joint as its angle (or displacement) q_j, or theta_k when a mimic moves it."""
+    if not e.is_joint:
+        return et_latex(e, names.get(e.const))  # type: ignore[arg-type]
+    s = tree.slots[e.joint]  # type: ignore[index]
+    angle = f"q_{{{s.joint + 1}}}" if _plain(s) else f"\\theta_{{{e.joint + 1}}}"  # type: ignore[operator]
+    return f"{AXIS_LATEX[e.axis.name]}({'-' if e.flip else ''}{angle})"
+
+
+def _walk_context(
+    tree: Tree, tp: TreeProgram, checks: Mapping[str, str], P: Printer, names: Mapping[Const, str]
+) -> dict[str, Any]:
+    """What the template writes of the walk: each link frame from its parent's (``steps``), each
+    frame's pose and Jacobian columns (``frames``), the Hessian's pattern (one frame), the checks."""
+    ends, lines, n, F = dict(tp.marks), tp.lines, len(tp.q), len(tree.frames)
+    users: dict[int, list[str]] = {}
+    for f in tree.frames:
+        for s in tree.path(f):
+            users.setdefault(s, []).append(display_name(f))
+
+    def pose(k: int) -> str:
+        return f"{{}}^{{0}}T_{{{k + 1}}}" if k >= 0 else ""
+
+    steps, start = [], 0
+    for k, seg in enumerate(tree.segments):
+        end = ends[f"segment {k}"]
+        parent = "base" if seg.parent < 0 else display_name(tree.segments[seg.parent].link)
+        joint = f"joint `{display_name(seg.name)}`" if seg.slot is not None else "fixed"
+        path = f"; on the path to {', '.join(f'`{u}`' for u in users.get(k, []))}" if F > 1 else ""
+        product = " ".join(
+            [pose(seg.parent)] * (seg.parent >= 0) + [_factor(tree, e, names) for e in seg.ets]
+        )
+        steps.append(
+            {
+                "title": f"link {k + 1}, `{display_name(seg.link)}` ({joint} from `{parent}`){path}",
+                "lines": [f"{pose(k)} = {product or 'I'}", *_blocks(P, lines[start:end])],
+                "matrix": f"{pose(k)} = {P.matrix(tp.links[k])}",
+            }
+        )
+        start = end
+    frames = []
+    for f, name in enumerate(tree.frames):
+        link = tree.frame_segments[f]
+        J = tp.J0[f]
+        cols = [f"J_{{{j + 1}}} = {P.matrix(sp.Matrix(J[:, j]).T)}^\\top" for j in range(n) if any(J[:, j])]
+        lhs = "{}^{0}T_{e}" if F == 1 else pose(link)
+        frames.append(
+            {
+                "name": display_name(name),
+                "link": link + 1,
+                "pose": [*_blocks(P, lines[start : ends[f"frame {f}"]]), f"{lhs} = {P.matrix(tp.T[f])}"],
+                "jacobian": [*_blocks(P, lines[ends[f"frame {f}"] : ends[f"frame {f} J0"]]), *cols],
+                "zero": n - len(cols),
+            }
+        )
+        start = ends[f"frame {f} Je"]
+    ctx: dict[str, Any] = {
+        "F": F,
+        "S": len(tree.segments),
+        "shared": sum(1 for v in users.values() if len(v) > 1),
+        "mimic": any(not _plain(s) for s in tree.slots),
+        "nodes": len(lines),
+        "steps": steps,
+        "frames": frames,
+        "checks": "; ".join(f"{k}: {'ok' if v != 'failed' else 'FAILED'}" for k, v in checks.items()),
+        "hessian": "",
+    }
+    H0 = tp.H0[0]
+    if F == 1 and H0 is not None:
+        dot = sp.Symbol("zzbullet")
+        P.names[dot] = r"\bullet"
+        pattern = sp.Matrix(n, n, lambda i, c: 0 if H0[i][:, c].is_zero_matrix else dot)
+        ctx["hessian"] = rf"\big(\partial J_j / \partial q_i \neq 0\big)_{{ij}} = {P.matrix(pattern)}"
+        ctx["hessian_lines"] = ends["H"] - ends["frame 0 Je"]
+    return ctx
+
+
+def _blocks(P: Printer, lines: Sequence[tuple[sp.Symbol, sp.Expr]]) -> list[str]:
+    """Assignments as aligned blocks of at most :data:`LINES_PER_BLOCK` lines."""
+    out = []
+    for i in range(0, len(lines), LINES_PER_BLOCK):
+        rows = [f"{P.names[s]} &= {P(e)}" for s, e in lines[i : i + LINES_PER_BLOCK]]
+        out.append(r"\begin{aligned} " + r" \\ ".join(rows) + r" \end{aligned}")
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -70,117 +266,94 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> Any:
 
 
 def _checks(
-    kp: KinematicProgram, ets: ETS, eta: list[sp.Expr], q: tuple[sp.Symbol, ...], values: dict
+    tree: Tree, tp: TreeProgram, constant: Any, values: Mapping[sp.Symbol, sp.Expr], reference: Tree
 ) -> dict[str, str]:
-    """Compare the program with the literal products of eqs 1, 5 and 26-28, and its Hessian with
-    central differences of its Jacobian along a random direction, at 3 random points to 30 digits."""
-    from symkin.derive.common import et_matrix, generator, mp_function, products
-
-    n = len(q)
-    consts = list(values)
-    assert kp.H0 is not None
-    outs = [*kp.T, *(x for L in kp.links for x in L), *kp.J0, *(x for H in kp.H0 for x in H)]
-    rng = random.Random(1)
-    worst = {"eq 1: T": 0.0, "eq 5: link frames": 0.0, "eqs 26-28 and 31-34: J0": 0.0, "eq 20: H0": 0.0}
+    """Compare the program at 3 random points, to 30 digits, with the literal products of the
+    elementary transforms along each path (eqs 1 and 5; each Jacobian column from the derivative of
+    its factor, eqs 26-28, times a mimic joint's multiplier), its Hessian with central differences
+    of its Jacobian along a random direction (eq 20), and, in double precision, the poses and
+    Jacobians with the numeric ``reference`` (``tree`` with the constants' values)."""
+    consts, q = list(values), list(tp.q)
+    n, F = len(q), len(tree.frames)
+    segs = [k for k, L in enumerate(tp.links) if L is not None]
+    H = [x for H0 in tp.H0 if H0 is not None for h in H0 for x in h]
+    outs = [x for M in (*tp.T, *(tp.links[k] for k in segs), *tp.J0) for x in M] + H
+    worst = {"eq 1: T": 0.0, "eq 5: link frames": 0.0, "eqs 26-28 and 31-34: J0": 0.0}
+    worst |= {"eq 20: H0": 0.0} if H else {}
+    worst["symkin.Tree"] = 0.0
+    rng = np.random.default_rng(1)
 
     def diff(key: str, a: Sequence[Any], b: Sequence[Any]) -> None:  # the largest |a - b| so far
         worst[key] = max(worst[key], float(max((abs(x - y) for x, y in zip(a, b)), default=0)))
 
+    def flat(M: Any) -> list[Any]:
+        return [M[r, c] for r in range(M.rows) for c in range(M.cols)]
+
     with mpmath.workdps(30):
-        f = mp_function(kp.lines, list(q) + consts, outs)
-        fj = mp_function(kp.lines, list(q) + consts, list(kp.J0))
+        f = mp_function(tp.lines, q + consts, outs)
         cvals = [mpmath.mpf(sp.N(values[c], 40)) for c in consts]
-        mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-        for _ in range(3):
-            qv = [mpmath.mpf(rng.randint(100, 2000)) / 1000 for _ in q]
-            sub = dict(zip(q, qv)) | dict(zip(consts, cvals))
-            values = [mpmath.mpf(sp.N(x.xreplace(sub), 40)) for x in eta]
-            E = [et_matrix(e.axis, v, mpmath) for e, v in zip(ets, values)]
-            prefix, suffix = products(E, mpmath.eye(4))
+        for qf in reference.random_q(3, seed=1):
+            qv = [mpmath.mpf(float(x)) for x in qf]
             got = f(*qv, *cvals)
-            T = prefix[-1]
-            k = 16
-            diff("eq 1: T", got[:16], [T[r, c] for r in range(4) for c in range(4)])
-            for j in kp.order:  # chain order
-                P = prefix[mu[j] + 1]
-                diff("eq 5: link frames", got[k : k + 16], [P[r, c] for r in range(4) for c in range(4)])
-                k += 16
-            J = got[k : k + 6 * n]
-            k += 6 * n
-            for j in range(n):
-                e = ets[mu[j]]
-                dT = prefix[mu[j]] * (e.sign * generator(e.axis, mpmath)) * E[mu[j]] * suffix[mu[j] + 1]
-                S = dT[:3, :3] * T[:3, :3].T
-                col = [dT[0, 3], dT[1, 3], dT[2, 3], S[2, 1], S[0, 2], S[1, 0]]
-                diff("eqs 26-28 and 31-34: J0", [J[r * n + j] for r in range(6)], col)
-            # eq 20 along a random direction v: sum_i v_i H_i = dJ(q + h v)/dh, by central differences
-            H = got[k:]
-            v = [mpmath.mpf(rng.randint(-1000, 1000)) / 1000 for _ in q]
-            h = mpmath.mpf(10) ** -12
-            Ju = fj(*[a + h * b for a, b in zip(qv, v)], *cvals)
-            Jd = fj(*[a - h * b for a, b in zip(qv, v)], *cvals)
-            fd = [(a - b) / (2 * h) for a, b in zip(Ju, Jd)]
-            Hv = [sum(v[i] * H[i * 6 * n + m] for i in range(n)) for m in range(6 * n)]
-            diff("eq 20: H0", Hv, fd)
+            k = 16 * F + 16 * len(segs)
+            E = {e: _literal(tree, e, qv, constant, values) for s in tree.segments for e in s.ets}
+            poses = []
+            for s in tree.segments:
+                poses.append(poses[s.parent] if s.parent >= 0 else mpmath.eye(4))
+                for e in s.ets:
+                    poses[-1] = poses[-1] * E[e]
+            diff("eq 5: link frames", got[16 * F : k], [x for i in segs for x in flat(poses[i])])
+            Tr, Jr = reference.fkine_jacob0_all(np.array([float(x) for x in qf]))
+            for fr, frame in enumerate(tree.frames):
+                path = [e for i in tree.path(frame) for e in tree.segments[i].ets]
+                prefix, suffix = products([E[e] for e in path], mpmath.eye(4))
+                T = prefix[-1]
+                diff("eq 1: T", got[16 * fr : 16 * fr + 16], flat(T))
+                J = mpmath.zeros(6, n)
+                for i, e in enumerate(path):
+                    if e.is_joint:
+                        s = tree.slots[e.joint]  # type: ignore[index]
+                        dT = prefix[i] * (e.sign * generator(e.axis, mpmath)) * E[e] * suffix[i + 1]
+                        S = dT[:3, :3] * T[:3, :3].T
+                        col = [dT[0, 3], dT[1, 3], dT[2, 3], S[2, 1], S[0, 2], S[1, 0]]
+                        for r in range(6):
+                            J[r, s.joint] += _mp(s.multiplier) * col[r]
+                Jg = got[k + 6 * n * fr : k + 6 * n * (fr + 1)]
+                diff("eqs 26-28 and 31-34: J0", Jg, flat(J))
+                ref = np.concatenate((Tr[fr].reshape(-1), Jr[fr].reshape(-1)))
+                diff(
+                    "symkin.Tree",
+                    got[16 * fr : 16 * fr + 16] + Jg,
+                    ref,
+                )
+            if H:  # eq 20 along a random direction v: sum_i v_i H_i = dJ(q + h v)/dh
+                fj = mp_function(tp.lines, q + consts, list(tp.J0[0]))
+                v = [mpmath.mpf(float(x)) for x in rng.uniform(-1, 1, n)]
+                h = mpmath.mpf(10) ** -12
+                Ju = fj(*[a + h * b for a, b in zip(qv, v)], *cvals)
+                Jd = fj(*[a - h * b for a, b in zip(qv, v)], *cvals)
+                Hs = got[k + 6 * n * F :]
+                Hv = [sum(v[i] * Hs[i * 6 * n + m] for i in range(n)) for m in range(6 * n)]
+                diff("eq 20: H0", Hv, [(a - b) / (2 * h) for a, b in zip(Ju, Jd)])
     # central differences with step 1e-12 at 30 digits are exact to about 1e-18
-    bound = {"eq 20: H0": 1e-15}
-    return {k: ("numeric" if v < bound.get(k, 1e-20) else "failed") for k, v in worst.items()}
-
-
-# ---------------------------------------------------------------------------------------------
-# The written derivation
-
-
-def program_context(D: Any) -> tuple[dict[str, Any], str]:
-    """The template context of ``derive/program.md.j2`` and the LaTeX summary for Jupyter."""
-    from symkin.derive.common import Printer, constants, shared_context
-
-    q, n, ets = D.q, len(D.q), D.robot.ets
-    C = constants(ets, bool(D.constants))
-    mu = {e.joint: k for k, e in enumerate(ets) if e.joint is not None}
-    P = Printer(q, D.intermediates)
-    lines = list(D.intermediates)
-    ends = dict(D.sections)
-    ctx: dict[str, Any] = {**shared_context(D, P, C), "nodes": len(lines)}
-    order = [e.joint for e in ets if e.joint is not None]
-    steps = []
-    start = 0
-    previous = 0
-    for k, j in enumerate(order):
-        end = ends[f"link {k}"]
-        factors = " ".join(f"E_{{{i + 1}}}" for i in range(previous, mu[j] + 1))
-        lhs = f"{{}}^{{0}}T_{{{j + 1}}}"
-        before = "" if k == 0 else f"{{}}^{{0}}T_{{{order[k - 1] + 1}}}\\, "
-        steps.append(
-            {
-                "product": f"{lhs} = {before}{factors}",
-                "lines": _blocks(P, lines[start:end]),
-                "matrix": f"{lhs} = {P.matrix(D.links[j])}",
-            }
-        )
-        start, previous = end, mu[j] + 1
-    ctx["links"] = steps
-    tail = " ".join(f"E_{{{i + 1}}}" for i in range(previous, len(ets)))
-    last = f"{{}}^{{0}}T_{{{order[-1] + 1}}}"
-    ctx["pose_product"] = f"{{}}^{{0}}T_{{e}} = {last}\\, {tail}" if tail else f"{{}}^{{0}}T_{{e}} = {last}"
-    ctx["pose_lines"] = _blocks(P, lines[start : ends["T"]])
-    ctx["pose"] = f"{{}}^{{0}}T_{{e}} = {P.matrix(D.T)}"
-    ctx["jacobian_lines"] = _blocks(P, lines[ends["T"] : ends["J0"]])
-    ctx["columns"] = [f"J_{{{j + 1}}} = {P.matrix(sp.Matrix(D.J0[:, j]).T)}^\\top" for j in range(n)]
-    pattern = sp.Matrix(n, n, lambda i, c: 0 if D.H0[i][:, c].is_zero_matrix else sp.Symbol("zzbullet"))
-    P.names[sp.Symbol("zzbullet")] = r"\bullet"
-    ctx["hessian"] = rf"\big(\partial J_j / \partial q_i \neq 0\big)_{{ij}} = {P.matrix(pattern)}"
-    ctx["hessian_lines"] = ends["H"] - ends["Je"]
-    ctx["legend"] = P.legend()
-    T = D.T
-    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3)]
-    return ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
-
-
-def _blocks(P: Any, lines: list[tuple[sp.Symbol, sp.Expr]]) -> list[str]:
-    """Assignments as aligned blocks of at most :data:`LINES_PER_BLOCK` lines."""
-    out = []
-    for i in range(0, len(lines), LINES_PER_BLOCK):
-        rows = [f"{P.names[s]} &= {P(e)}" for s, e in lines[i : i + LINES_PER_BLOCK]]
-        out.append(r"\begin{aligned} " + r" \\ ".join(rows) + r" \end{aligned}")
+    bound = {"eq 20: H0": 1e-15, "symkin.Tree": CHECK_TOL}
+    out = {k: ("numeric" if v < bound.get(k, 1e-20) else "failed") for k, v in worst.items()}
+    out[f"symkin.Tree: largest difference {worst['symkin.Tree']:.1e} (tolerance {CHECK_TOL:g})"] = out.pop(
+        "symkin.Tree"
+    )
     return out
+
+
+def _literal(tree: Tree, e: ET, q: Sequence[Any], constant: Any, values: Mapping[sp.Symbol, Any]) -> Any:
+    """The elementary transform ``e`` of a segment as an mpmath matrix (Fig. 2): a joint's at the
+    angle of its slot, ``sign (m q_j + c)``; a constant's value with ``values`` substituted."""
+    if e.is_joint:
+        s = tree.slots[e.joint]  # type: ignore[index]
+        eta = e.sign * (_mp(s.multiplier) * q[s.joint] + _mp(s.offset))
+    else:
+        eta = mpmath.mpf(sp.N(constant(e.const).xreplace(dict(values)), 40))
+    return et_matrix(e.axis, eta, mpmath)
+
+
+def _mp(x: Fraction) -> Any:
+    return mpmath.mpf(x.numerator) / x.denominator
