@@ -363,7 +363,7 @@ def test_long_chain_checks_catch_a_wrong_step(monkeypatch) -> None:
         return type(kp)(**{**kp.__dict__, "lines": lines})
 
     monkeypatch.setattr(dp, "derive_tree_program", broken)
-    d = dp.program_derivation(random_chain(9, seed=4), False)
+    d = dp.program_derivation(random_chain(9, seed=4), False)[0]
     assert "failed" in d.checks.values()
 
 

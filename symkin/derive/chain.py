@@ -375,10 +375,9 @@ def derive_steps(
 
         form = "expanded" if expanded_if_small(robot) is not None else "program"
     if form == "program":
-        from symkin.derive.program import program_context, program_derivation
+        from symkin.derive.program import program_derivation
 
-        D = program_derivation(robot, symbolic_constants)
-        ctx, summary = program_context(D)
+        D, ctx, summary = program_derivation(robot, symbolic_constants)
         for part in list(shown):
             shown |= set(_NEEDS_PROGRAM.get(part, ()))
         text = render("derive/program.md.j2", **ctx, sections=shown)

@@ -27,6 +27,7 @@ import numpy as np
 import sympy as sp
 
 from symkin.derive.common import (
+    FORMATS,
     SECTIONS,
     Derivation,
     Printer,
@@ -38,6 +39,7 @@ from symkin.derive.common import (
     products,
     shared_context,
 )
+from symkin.errors import SymkinError, check_choice
 from symkin.model.ets import ET, Const, rational_text
 from symkin.model.latex import AXIS_LATEX, display_name, et_latex, ets_latex
 from symkin.model.robot import Robot
@@ -45,116 +47,68 @@ from symkin.model.tree import Tree
 from symkin.symbolic.kinematics import const_to_sympy
 from symkin.symbolic.program import TreeProgram, derive_tree_program
 
-__all__ = ["program_derivation", "program_context", "tree_derivation", "LINES_PER_BLOCK"]
+__all__ = ["program_derivation", "tree_derivation", "LINES_PER_BLOCK"]
 
 LINES_PER_BLOCK = 12  # assignments per displayed equation block
 CHECK_TOL = 1e-12  # against the double-precision reference symkin.Tree
 _XYZ = "xyz"
 
 
-def _symbols(n: int) -> tuple[sp.Symbol, ...]:
-    return tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(n))
-
-
 def _program(
-    tree: Tree, q: tuple[sp.Symbol, ...], constant: Any, values: Mapping[sp.Symbol, sp.Expr], reference: Tree
-) -> tuple[TreeProgram, dict[str, str]]:
-    """The walk of ``tree`` (Hessians too for one frame) and its checks (:func:`_checks`)."""
+    tree: Tree, constant: Any, values: Mapping[sp.Symbol, sp.Expr], reference: Tree
+) -> tuple[TreeProgram, dict[str, str], Printer]:
+    """The walk of ``tree`` (Hessians too for one frame), its checks (:func:`_checks`) and its printer."""
+    q = tuple(sp.Symbol(f"q_{j + 1}", real=True) for j in range(tree.n))
     tp = derive_tree_program(tree, q, constant, frame_jacobians=False, hessians=len(tree.frames) == 1)
-    return tp, _checks(tree, tp, constant, values, reference)
+    return tp, _checks(tree, tp, constant, values, reference), Printer(q, tp.lines)
 
 
-def program_derivation(robot: Robot, symbolic_constants: bool) -> Derivation:
-    """The :class:`symkin.derive.chain.Derivation` of ``robot`` in program form: the derivation of
-    its one-frame tree (see the module)."""
-    ets = robot.ets
-    n = ets.n
-    q = _symbols(n)
-    C = constants(ets, symbolic_constants)
+def program_derivation(robot: Robot, symbolic_constants: bool) -> tuple[Derivation, dict[str, Any], str]:
+    """The :class:`symkin.derive.chain.Derivation` of ``robot`` in program form, the derivation of
+    its one-frame tree (see the module), with the context of ``derive/program.md.j2`` and the LaTeX
+    summary for Jupyter."""
+    ets, C = robot.ets, constants(robot.ets, symbolic_constants)
     tree = Tree.from_robot(replace(robot, ets=C.ets))
-    tp, checks = _program(tree, q, C.constant, C.values, Tree.from_robot(robot))
+    tp, checks, P = _program(tree, C.constant, C.values, Tree.from_robot(robot))
+    q, im = tp.q, sp.ImmutableMatrix
     eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
-    im = sp.ImmutableMatrix
-    by_joint = {s.joint: tp.links[s.segment] for s in tree.slots}
+    links = {s.joint: im(tp.links[s.segment]) for s in tree.slots}
     assert tp.H0[0] is not None
-    return Derivation(
-        robot,
-        q,
-        dict(C.values),
-        tuple(im(et_matrix(e.axis, eta[k])) for k, e in enumerate(ets)),
-        im(tp.T[0]),
-        tuple(im(by_joint[j]) for j in range(n)),
-        (),
-        (),
-        im(tp.J0[0]),
-        im(tp.J0[0]),
-        tuple(map(im, tp.H0[0])),
-        True,
-        checks,
-        form="program",
-        intermediates=tp.lines,
-        sections=tp.marks,
-    )
+    D = Derivation(robot, q, dict(C.values), tuple(im(et_matrix(e.axis, eta[k])) for k, e in enumerate(ets)),
+                   im(tp.T[0]), tuple(links[j] for j in range(len(q))), (), (), im(tp.J0[0]), im(tp.J0[0]),
+                   tuple(map(im, tp.H0[0])), True, checks, form="program", intermediates=tp.lines,
+                   sections=tp.marks)  # fmt: skip
+    names = {e.const: C.names[k] for k, e in enumerate(C.ets) if k in C.names}
+    ctx = {**shared_context(D, P, C), **_walk_context(tree, tp, checks, P, names)}
+    ctx["legend"] = P.legend()
+    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(D.T[r, 3])}" for r in range(3)]
+    return D, ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
 
 
 def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
-    from symkin.derive.common import FORMATS
+    from symkin.core.version import __version__
     from symkin.emit.templates import render
-    from symkin.errors import SymkinError, check_choice
 
     check_choice(fmt, FORMATS, "format")
     if tree.n == 0:
         raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
-    q = _symbols(tree.n)
-    tp, checks = _program(tree, q, const_to_sympy, {}, tree)
-    P = Printer(q, tp.lines)
+    tp, checks, P = _program(tree, const_to_sympy, {}, tree)
     ctx = _walk_context(tree, tp, checks, P, {})
-    kinds = {True: "revolute", False: "prismatic"}
     joints = []
     for j, name in enumerate(tree.joint_names):
         driven = [s for s in tree.slots if s.joint == j]
         moves = ", ".join(f"`{display_name(tree.segments[s.segment].link)}`" for s in driven)
         mimics = ", ".join(f"$\\theta_{{{k + 1}}} = {_theta(s)}$" for k, s in enumerate(tree.slots)
                            if s.joint == j and not _plain(s))  # fmt: skip
-        joints.append([f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(name)}`",
-                       kinds[all(s.revolute for s in driven)], f"{moves} ({mimics})" if mimics else moves])  # fmt: skip
-    from symkin.core.version import __version__
-
-    text = render(
-        "derive/program.md.j2",
-        **ctx,
-        robot=display_name(tree.name),
-        n=tree.n,
-        source=display_name(tree.source).rstrip(".") + ". " if tree.source else "",
-        joint_map="$q_k$ is `q(k-1)`",
-        version=__version__,
-        joints=joints,
-        joint_column="moves",
-        ets="",
-        factors=[],
-        constants=[],
-        legend=P.legend(),
-        sections=set(SECTIONS),
-    )
+        kind = "revolute" if all(s.revolute for s in driven) else "prismatic"
+        joints.append([f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(name)}`", kind,
+                       f"{moves} ({mimics})" if mimics else moves])  # fmt: skip
+    source = display_name(tree.source).rstrip(".") + ". " if tree.source else ""
+    text = render("derive/program.md.j2", **ctx, robot=display_name(tree.name), n=tree.n, source=source,
+                  joint_map="$q_k$ is `q(k-1)`", version=__version__, joints=joints, joint_column="moves",
+                  ets="", factors=[], constants=[], legend=P.legend(), sections=set(SECTIONS))  # fmt: skip
     return latex_document(text) if fmt == "latex" else text
-
-
-def program_context(D: Derivation) -> tuple[dict[str, Any], str]:
-    """The template context of ``derive/program.md.j2`` for the chain derivation ``D`` and its
-    LaTeX summary for Jupyter."""
-    ets = D.robot.ets
-    C = constants(ets, bool(D.constants))
-    tree = Tree.from_robot(replace(D.robot, ets=C.ets))
-    links = (*(D.links[s.joint] for s in tree.slots), D.T)  # the last segment ends at the end effector
-    tp = TreeProgram(D.robot.name, D.q, D.intermediates, tree.frames, (), (D.T,), (D.J0,), (), (), (), (D.H0,), (),
-                     links, D.sections)  # fmt: skip
-    P = Printer(D.q, D.intermediates)
-    names = {e.const: C.names[k] for k, e in enumerate(C.ets) if k in C.names}
-    ctx = {**shared_context(D, P, C), **_walk_context(tree, tp, D.checks, P, names)}
-    ctx["legend"] = P.legend()
-    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(D.T[r, 3])}" for r in range(3)]
-    return ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -270,71 +224,57 @@ def _checks(
 ) -> dict[str, str]:
     """Compare the program at 3 random points, to 30 digits, with the literal products of the
     elementary transforms along each path (eqs 1 and 5; each Jacobian column from the derivative of
-    its factor, eqs 26-28, times a mimic joint's multiplier), its Hessian with central differences
-    of its Jacobian along a random direction (eq 20), and, in double precision, the poses and
-    Jacobians with the numeric ``reference`` (``tree`` with the constants' values)."""
-    consts, q = list(values), list(tp.q)
-    n, F = len(q), len(tree.frames)
-    segs = [k for k, L in enumerate(tp.links) if L is not None]
-    H = [x for H0 in tp.H0 if H0 is not None for h in H0 for x in h]
-    outs = [x for M in (*tp.T, *(tp.links[k] for k in segs), *tp.J0) for x in M] + H
-    worst = {"eq 1: T": 0.0, "eq 5: link frames": 0.0, "eqs 26-28 and 31-34: J0": 0.0}
-    worst |= {"eq 20: H0": 0.0} if H else {}
-    worst["symkin.Tree"] = 0.0
-    rng = np.random.default_rng(1)
+    its factor, eqs 26-28, times a mimic joint's multiplier), its Hessian (one frame) with central
+    differences of its Jacobian along a random direction (eq 20), and, in double precision, its poses
+    and Jacobians with the numeric ``reference`` (``tree`` with the constants' values)."""
+    consts, q, n = list(values), list(tp.q), len(tp.q)
+    H0 = tp.H0[0] if len(tp.H0) == 1 else None
+    groups = [tp.T, tp.links, tp.J0, H0 or ()]
+    f = mp_function(tp.lines, q + consts, [x for g in groups for M in g for x in M])
+    keys = ["eq 1: T", "eq 5: link frames", "eqs 26-28 and 31-34: J0", "symkin.Tree"] + ["eq 20: H0"] * bool(
+        H0
+    )
+    worst = dict.fromkeys(keys, 0.0)
+    v = [mpmath.mpf(float(x)) for x in np.random.default_rng(1).uniform(-1, 1, n)]  # a direction for eq 20
 
-    def diff(key: str, a: Sequence[Any], b: Sequence[Any]) -> None:  # the largest |a - b| so far
-        worst[key] = max(worst[key], float(max((abs(x - y) for x, y in zip(a, b)), default=0)))
-
-    def flat(M: Any) -> list[Any]:
-        return [M[r, c] for r in range(M.rows) for c in range(M.cols)]
+    def diff(key: str, a: Sequence[Any], b: Any) -> None:  # the largest |a - b| so far (b: a list or matrix)
+        b = [x for row in b.tolist() for x in row] if isinstance(b, mpmath.matrix) else b
+        worst[key] = max(worst[key], float(max((abs(x - y) for x, y in zip(a, b, strict=True)), default=0)))
 
     with mpmath.workdps(30):
-        f = mp_function(tp.lines, q + consts, outs)
         cvals = [mpmath.mpf(sp.N(values[c], 40)) for c in consts]
         for qf in reference.random_q(3, seed=1):
             qv = [mpmath.mpf(float(x)) for x in qf]
-            got = f(*qv, *cvals)
-            k = 16 * F + 16 * len(segs)
+            flat = iter(f(*qv, *cvals))
+            T, links, J0, H = ([[next(flat) for _ in range(len(M))] for M in g] for g in groups)
             E = {e: _literal(tree, e, qv, constant, values) for s in tree.segments for e in s.ets}
-            poses = []
+            poses: list[Any] = []
             for s in tree.segments:
-                poses.append(poses[s.parent] if s.parent >= 0 else mpmath.eye(4))
-                for e in s.ets:
-                    poses[-1] = poses[-1] * E[e]
-            diff("eq 5: link frames", got[16 * F : k], [x for i in segs for x in flat(poses[i])])
-            Tr, Jr = reference.fkine_jacob0_all(np.array([float(x) for x in qf]))
+                start = poses[s.parent] if s.parent >= 0 else mpmath.eye(4)
+                poses.append(products([E[e] for e in s.ets], start)[0][-1])
+                diff("eq 5: link frames", links[len(poses) - 1], poses[-1])
+            Tr, Jr = reference.fkine_jacob0_all(np.array(qf, float))
             for fr, frame in enumerate(tree.frames):
-                path = [e for i in tree.path(frame) for e in tree.segments[i].ets]
+                path = [e for k in tree.path(frame) for e in tree.segments[k].ets]
                 prefix, suffix = products([E[e] for e in path], mpmath.eye(4))
-                T = prefix[-1]
-                diff("eq 1: T", got[16 * fr : 16 * fr + 16], flat(T))
+                diff("eq 1: T", T[fr], prefix[-1])
                 J = mpmath.zeros(6, n)
                 for i, e in enumerate(path):
-                    if e.is_joint:
+                    if e.is_joint:  # dT/dtheta (eq 26) and its column (eqs 27-28), times the multiplier
                         s = tree.slots[e.joint]  # type: ignore[index]
                         dT = prefix[i] * (e.sign * generator(e.axis, mpmath)) * E[e] * suffix[i + 1]
-                        S = dT[:3, :3] * T[:3, :3].T
+                        S = dT[:3, :3] * prefix[-1][:3, :3].T
                         col = [dT[0, 3], dT[1, 3], dT[2, 3], S[2, 1], S[0, 2], S[1, 0]]
                         for r in range(6):
                             J[r, s.joint] += _mp(s.multiplier) * col[r]
-                Jg = got[k + 6 * n * fr : k + 6 * n * (fr + 1)]
-                diff("eqs 26-28 and 31-34: J0", Jg, flat(J))
-                ref = np.concatenate((Tr[fr].reshape(-1), Jr[fr].reshape(-1)))
-                diff(
-                    "symkin.Tree",
-                    got[16 * fr : 16 * fr + 16] + Jg,
-                    ref,
-                )
-            if H:  # eq 20 along a random direction v: sum_i v_i H_i = dJ(q + h v)/dh
-                fj = mp_function(tp.lines, q + consts, list(tp.J0[0]))
-                v = [mpmath.mpf(float(x)) for x in rng.uniform(-1, 1, n)]
+                diff("eqs 26-28 and 31-34: J0", J0[fr], J)
+                diff("symkin.Tree", T[fr] + J0[fr], [*Tr[fr].flat, *Jr[fr].flat])
+            if H0:  # eq 20 along v: sum_i v_i H_i = dJ(q + h v)/dh, by central differences
                 h = mpmath.mpf(10) ** -12
-                Ju = fj(*[a + h * b for a, b in zip(qv, v)], *cvals)
-                Jd = fj(*[a - h * b for a, b in zip(qv, v)], *cvals)
-                Hs = got[k + 6 * n * F :]
-                Hv = [sum(v[i] * Hs[i * 6 * n + m] for i in range(n)) for m in range(6 * n)]
-                diff("eq 20: H0", Hv, [(a - b) / (2 * h) for a, b in zip(Ju, Jd)])
+                Ju, Jd = (f(*[a + sign * h * b for a, b in zip(qv, v)], *cvals) for sign in (1, -1))
+                k = 16 * len(tp.T) + 16 * len(tp.links)
+                fd = [(a - b) / (2 * h) for a, b in zip(Ju[k : k + 6 * n], Jd[k : k + 6 * n])]
+                diff("eq 20: H0", [sum(v[i] * H[i][m] for i in range(n)) for m in range(6 * n)], fd)
     # central differences with step 1e-12 at 30 digits are exact to about 1e-18
     bound = {"eq 20: H0": 1e-15, "symkin.Tree": CHECK_TOL}
     out = {k: ("numeric" if v < bound.get(k, 1e-20) else "failed") for k, v in worst.items()}
@@ -344,15 +284,13 @@ def _checks(
     return out
 
 
-def _literal(tree: Tree, e: ET, q: Sequence[Any], constant: Any, values: Mapping[sp.Symbol, Any]) -> Any:
+def _literal(tree: Tree, e: ET, q: Sequence[Any], constant: Any, values: Mapping[sp.Symbol, sp.Expr]) -> Any:
     """The elementary transform ``e`` of a segment as an mpmath matrix (Fig. 2): a joint's at the
     angle of its slot, ``sign (m q_j + c)``; a constant's value with ``values`` substituted."""
     if e.is_joint:
         s = tree.slots[e.joint]  # type: ignore[index]
-        eta = e.sign * (_mp(s.multiplier) * q[s.joint] + _mp(s.offset))
-    else:
-        eta = mpmath.mpf(sp.N(constant(e.const).xreplace(dict(values)), 40))
-    return et_matrix(e.axis, eta, mpmath)
+        return et_matrix(e.axis, e.sign * (_mp(s.multiplier) * q[s.joint] + _mp(s.offset)), mpmath)
+    return et_matrix(e.axis, mpmath.mpf(sp.N(constant(e.const).xreplace(dict(values)), 40)), mpmath)
 
 
 def _mp(x: Fraction) -> Any:
