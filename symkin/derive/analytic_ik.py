@@ -6,11 +6,11 @@ of :func:`symkin.symbolic.analytic_ik.derive_analytic` with its equation and exa
 
 from __future__ import annotations
 
-import re
 from typing import Literal
 
 import sympy as sp
 
+from symkin.derive.common import latex_document
 from symkin.emit.templates import render
 from symkin.model.latex import display_name
 from symkin.model.robot import Robot
@@ -135,24 +135,4 @@ def ik_derivation(robot: Robot, fmt: Literal["markdown", "latex"] = "markdown") 
         steps=steps,
         branches=branches,
     )
-    return md if fmt == "markdown" else _latex_document(md)
-
-
-def _latex_document(md: str) -> str:
-    """A minimal LaTeX document from the Markdown above (headings, display math, code)."""
-    body, opening = [], True
-    for line in md.splitlines():
-        if line.startswith("### "):
-            line = r"\subsection*{" + line[4:] + "}"
-        elif line.startswith("## "):
-            line = r"\section*{" + line[3:] + "}"
-        elif line.startswith("# "):
-            line = r"\section*{" + line[2:] + "}"
-        elif line == "$$":
-            line, opening = (r"\[" if opening else r"\]"), not opening
-        body.append(re.sub(r"`([^`]*)`", r"\\texttt{\1}", line))
-    return (
-        "\\documentclass{article}\n\\usepackage{amsmath}\n\\begin{document}\n"
-        + "\n".join(body)
-        + ("\n\\end{document}\n")
-    )
+    return md if fmt == "markdown" else latex_document(md)

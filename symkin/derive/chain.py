@@ -38,18 +38,21 @@ from symkin.derive.common import (  # noqa: F401
     Constants,
     Derivation,
     Printer,
+    aligned,
     constants,
     et_matrix,
     generator,
+    hessian_pattern,
     latex_document,
     ops_of,
     products,
     shared_context,
+    summary,
 )
 from symkin.emit.templates import render
 from symkin.errors import SymkinError, check_choice
 from symkin.model.ets import ET, ETS, Axis
-from symkin.model.latex import et_latex, ets_latex
+from symkin.model.latex import et_latex
 from symkin.model.robot import Robot
 from symkin.symbolic.kinematics import derive
 
@@ -255,7 +258,7 @@ def _pose_tex(P: Printer, M: sp.Matrix, lhs: str) -> str:
         r"0 & 0 & 0 & 1 \end{pmatrix}"
     ]
     lines += [rf"\mathbf{{{name}}} &= {_vec(P, M[:3, c])}" for c, name in enumerate("noat")]
-    return r"\begin{aligned} " + r" \\ ".join(lines) + r" \end{aligned}"
+    return aligned(lines)
 
 
 _FAST_RULE = {
@@ -287,9 +290,7 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     }
     ctx["links"] = [_pose_tex(P, D.links[j], f"{{}}^{{0}}T_{{{j + 1}}}") for j in range(n)]
     T = D.T
-    position = (
-        r"\begin{aligned} " + r" \\ ".join(f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3)) + r" \end{aligned}"
-    )
+    position = aligned(f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3))
     rotation = r" \\ ".join(f"r_{{{r + 1}{c + 1}}} &= {P(T[r, c])}" for r in range(3) for c in range(3))
     ctx["pose"] = [f"{{}}^{{0}}T_{{e}} = {P.matrix(T)}", position] if _shown(T) else [
         position, r"R = (r_{ij}), \quad \begin{aligned} " + rotation + r" \end{aligned}"
@@ -329,15 +330,10 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
             for i in range(n)
         ]
     else:
-        dot = sp.Symbol("zzbullet")
-        P.names[dot] = r"\bullet"
-        pattern = sp.Matrix(n, n, lambda i, c: 0 if D.H0[i][:, c].is_zero_matrix else dot)
-        ctx["hessian"] = [rf"\big(\partial J_j / \partial q_i \neq 0\big)_{{ij}} = {P.matrix(pattern)}"]
-    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3)]
-    if _shown(Jf):
-        summary.append(rf"{{}}^0J &= {P.matrix(Jf)}")
+        ctx["hessian"] = [hessian_pattern(P, D.H0)]
+    text = summary(D, P, C, *([rf"{{}}^0J &= {P.matrix(Jf)}"] if _shown(Jf) else []))
     ctx["legend"] = P.legend()
-    return ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
+    return ctx, text
 
 
 def derive_steps(

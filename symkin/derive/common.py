@@ -7,7 +7,7 @@ from __future__ import annotations
 import itertools
 import operator
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
@@ -23,6 +23,9 @@ from symkin.symbolic.kinematics import const_to_sympy
 
 __all__ = [
     "CHECK_TEXT",
+    "aligned",
+    "hessian_pattern",
+    "summary",
     "shared_context",
     "FORMATS",
     "SECTIONS",
@@ -398,3 +401,24 @@ def shared_context(D: Any, P: Printer, C: Constants) -> dict[str, Any]:
             f"E_{{{k + 1}}} = {et_latex(e, C.names.get(k))} = {P.matrix(D.E[k])}" for k, e in enumerate(ets)
         ],
     }
+
+
+def aligned(rows: Iterable[str]) -> str:
+    """Rows ``lhs &= rhs`` as one aligned block."""
+    return r"\begin{aligned} " + r" \\ ".join(rows) + r" \end{aligned}"
+
+
+def summary(D: Any, P: Printer, C: Constants, *rows: str) -> str:
+    """What Jupyter shows of a chain's derivation ``D``: its ETS and position (then ``rows``)."""
+    from symkin.model.latex import ets_latex
+
+    xyz = [f"{'xyz'[r]} &= {P(D.T[r, 3])}" for r in range(3)]
+    return f"$${aligned([ets_latex(D.robot.ets, '{}^{0}T_{e} &', C.names), *xyz, *rows])}$$"
+
+
+def hessian_pattern(P: Printer, H0: Sequence[Any]) -> str:
+    """The pattern of the Hessian blocks ``H0``: a bullet where dJ_j/dq_i is not zero."""
+    n, dot = len(H0), sp.Symbol("zzbullet")
+    P.names[dot] = r"\bullet"
+    pattern = sp.Matrix(n, n, lambda i, c: 0 if H0[i][:, c].is_zero_matrix else dot)
+    return rf"\big(\partial J_j / \partial q_i \neq 0\big)_{{ij}} = {P.matrix(pattern)}"

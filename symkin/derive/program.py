@@ -26,22 +26,10 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from symkin.derive.common import (
-    FORMATS,
-    SECTIONS,
-    Derivation,
-    Printer,
-    constants,
-    et_matrix,
-    generator,
-    latex_document,
-    mp_function,
-    products,
-    shared_context,
-)
+from symkin.derive.common import Derivation, Printer, aligned, et_matrix, generator, hessian_pattern, products
 from symkin.errors import SymkinError, check_choice
 from symkin.model.ets import ET, Const, rational_text
-from symkin.model.latex import AXIS_LATEX, display_name, et_latex, ets_latex
+from symkin.model.latex import AXIS_LATEX, display_name, et_latex
 from symkin.model.robot import Robot
 from symkin.model.tree import Tree
 from symkin.symbolic.kinematics import const_to_sympy
@@ -51,7 +39,6 @@ __all__ = ["program_derivation", "tree_derivation", "LINES_PER_BLOCK"]
 
 LINES_PER_BLOCK = 12  # assignments per displayed equation block
 CHECK_TOL = 1e-12  # against the double-precision reference symkin.Tree
-_XYZ = "xyz"
 
 
 def _program(
@@ -67,6 +54,8 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> tuple[Derivati
     """The :class:`symkin.derive.chain.Derivation` of ``robot`` in program form, the derivation of
     its one-frame tree (see the module), with the context of ``derive/program.md.j2`` and the LaTeX
     summary for Jupyter."""
+    from symkin.derive.common import constants, shared_context, summary
+
     ets, C = robot.ets, constants(robot.ets, symbolic_constants)
     tree = Tree.from_robot(replace(robot, ets=C.ets))
     tp, checks, P = _program(tree, C.constant, C.values, Tree.from_robot(robot))
@@ -81,13 +70,13 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> tuple[Derivati
     names = {e.const: C.names[k] for k, e in enumerate(C.ets) if k in C.names}
     ctx = {**shared_context(D, P, C), **_walk_context(tree, tp, checks, P, names)}
     ctx["legend"] = P.legend()
-    summary = [ets_latex(ets, r"{}^{0}T_{e} &", C.names)] + [f"{_XYZ[r]} &= {P(D.T[r, 3])}" for r in range(3)]
-    return D, ctx, r"$$\begin{aligned} " + r" \\ ".join(summary) + r" \end{aligned}$$"
+    return D, ctx, summary(D, P, C)
 
 
 def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
     from symkin.core.version import __version__
+    from symkin.derive.common import FORMATS, SECTIONS, latex_document
     from symkin.emit.templates import render
 
     check_choice(fmt, FORMATS, "format")
@@ -196,13 +185,8 @@ def _walk_context(
         "checks": "; ".join(f"{k}: {'ok' if v != 'failed' else 'FAILED'}" for k, v in checks.items()),
         "hessian": "",
     }
-    H0 = tp.H0[0]
-    if F == 1 and H0 is not None:
-        dot = sp.Symbol("zzbullet")
-        P.names[dot] = r"\bullet"
-        pattern = sp.Matrix(n, n, lambda i, c: 0 if H0[i][:, c].is_zero_matrix else dot)
-        ctx["hessian"] = rf"\big(\partial J_j / \partial q_i \neq 0\big)_{{ij}} = {P.matrix(pattern)}"
-        ctx["hessian_lines"] = ends["H"] - ends["frame 0 Je"]
+    if F == 1 and tp.H0[0] is not None:
+        ctx["hessian"], ctx["hessian_lines"] = hessian_pattern(P, tp.H0[0]), ends["H"] - ends["frame 0 Je"]
     return ctx
 
 
@@ -210,8 +194,7 @@ def _blocks(P: Printer, lines: Sequence[tuple[sp.Symbol, sp.Expr]]) -> list[str]
     """Assignments as aligned blocks of at most :data:`LINES_PER_BLOCK` lines."""
     out = []
     for i in range(0, len(lines), LINES_PER_BLOCK):
-        rows = [f"{P.names[s]} &= {P(e)}" for s, e in lines[i : i + LINES_PER_BLOCK]]
-        out.append(r"\begin{aligned} " + r" \\ ".join(rows) + r" \end{aligned}")
+        out.append(aligned(f"{P.names[s]} &= {P(e)}" for s, e in lines[i : i + LINES_PER_BLOCK]))
     return out
 
 
@@ -227,6 +210,8 @@ def _checks(
     its factor, eqs 26-28, times a mimic joint's multiplier), its Hessian (one frame) with central
     differences of its Jacobian along a random direction (eq 20), and, in double precision, its poses
     and Jacobians with the numeric ``reference`` (``tree`` with the constants' values)."""
+    from symkin.derive.common import mp_function
+
     consts, q, n = list(values), list(tp.q), len(tp.q)
     H0 = tp.H0[0] if len(tp.H0) == 1 else None
     groups = [tp.T, tp.links, tp.J0, H0 or ()]
