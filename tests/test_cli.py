@@ -70,7 +70,7 @@ def test_compile_accepts_an_ets_string_a_dh_file_and_a_urdf(capsys, tmp_path):
         (["ik", "ur5", "--target-q", "0 0 nan 0 0 0"], "finite"),
         (["compile", "ur5", "--tool", "tz(q)"], "joint"),
         (["compile", "ur5", "--base", "1 2 3 4"], "4 numbers"),
-        (["derive", "planar2", "--sections", "fk,jacobians"], "--sections"),
+        (["derive", "planar2", "--sections", "fk,jacobians"], "unknown section(s) ['jacobians']"),
         (["ik", "ur5", "--target-q", "0 0 0 0 0 0", "--we", "1 1 1"], "6 numbers"),
         (["ik", "ur5", "--target-q", "0 0 0 0 0 0", "--we", "0 0 0 0 0 0"], "not all 0"),
         (["ik", "ur5", "--target-q", "0 0 0 0 0 0", "--all", "--lam", "0.1"], "numerical methods"),

@@ -124,6 +124,9 @@ def test_derive_a_tree_shows_the_shared_part_once(capsys, tmp_path):
     assert "on the path to `l_tool`, `r_tool`" in out
     assert "### Frame `l_tool`" in out and "### Frame `r_tool`" in out
     assert "(tolerance 1e-12): ok" in out and "FAILED" not in out
+    code, out, _ = run(capsys, "derive", str(path), "--sections", "fk")  # with the link frames it needs
+    assert code == 0 and "## Forward kinematics (eq 1)" in out and "## Link frames (eq 5)" in out
+    assert "## The manipulator Jacobian" not in out and "## How the results were checked" not in out
 
 
 def test_resolve_accepts_a_urdf_frame(quad):

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.derive.chain import derivation
 
     robot = chain_or_tree(args)
-    sections = _sections(args.sections)
+    sections = args.sections
     output_file(args.output, "-o")
     if args.order is not None and (args.ik or args.singularities or sections is not None):
         raise UserError("--order writes its own derivation: leave out --ik, --singularities and --sections")
@@ -74,11 +74,9 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(
                 "--ik, --singularities and --order analyse one chain: name it as ROBOT.urdf:FRAME"
             )
-        if sections is not None:
-            raise UserError("--sections chooses parts of a chain's derivation, not of a tree's")
         from symkin.derive.program import tree_derivation
 
-        text = tree_derivation(robot, fmt=args.format)
+        text = tree_derivation(robot, fmt=args.format, sections=sections)
     elif (robot := robot.chain()) and args.singularities:
         if args.ik or sections is not None:
             raise UserError("--singularities writes its own report: leave out --ik and --sections")
@@ -112,17 +110,3 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(text)
     return 0
-
-
-def _sections(text: str | None) -> tuple[str, ...] | None:
-    if text is None:
-        return None
-    from symkin.derive.chain import SECTIONS
-
-    names = tuple(w for w in text.replace(",", " ").split())
-    bad = [w for w in names if w not in SECTIONS]
-    if bad or not names:
-        raise UserError(
-            f"--sections takes names from {', '.join(SECTIONS)} separated by commas, not {text!r}"
-        )
-    return names

@@ -47,6 +47,7 @@ from symkin.derive.common import (  # noqa: F401
     ops_of,
     products,
     shared_context,
+    shown_sections,
     summary,
 )
 from symkin.emit.templates import render
@@ -61,7 +62,6 @@ __all__ = ["Derivation", "derive_steps", "derivation", "SECTIONS"]
 Fmt = Literal["markdown", "latex"]
 Form = Literal["auto", "expanded", "program"]
 FORMS = ("auto", "expanded", "program")
-_NEEDS_PROGRAM = {"fk": ("links",), "jacobian": ("links", "fk"), "hessian": ("links", "fk", "jacobian")}
 SYMBOLIC_CHECK_MAX_OPS = 1500  # larger differences are checked at random points
 MATRIX_MAX_OPS = 160  # larger matrices are printed entry by entry
 FULL_MAX_N = 4  # dT/dq_j matrices and Hessian blocks are printed up to this many joints
@@ -342,7 +342,7 @@ def derive_steps(
     simplify: bool = True,
     fmt: Fmt = "markdown",
     form: Form = "auto",
-    sections: Sequence[str] | None = None,
+    sections: Sequence[str] | str | None = None,
 ) -> Derivation:
     """Derive ``robot``'s kinematics step by step: the results and the written derivation.
 
@@ -360,7 +360,7 @@ def derive_steps(
         sections: write only these parts of the text (names in :data:`SECTIONS`, e.g.
             ``("fk", "jacobian")``); default all. The results are computed in full either way.
     """
-    shown = _shown_sections(sections)
+    shown = shown_sections(sections)
     check_choice(fmt, FORMATS, "format")
     check_choice(form, FORMS, "form")
     from symkin.model.resolve import robot_with_joints
@@ -374,8 +374,7 @@ def derive_steps(
         from symkin.derive.program import program_derivation
 
         D, ctx, summary = program_derivation(robot, symbolic_constants)
-        for part in list(shown):
-            shown |= set(_NEEDS_PROGRAM.get(part, ()))
+        shown = shown_sections(sections, program=True)
         text = render("derive/program.md.j2", **ctx, sections=shown)
     else:
         D = _steps(robot, symbolic_constants, simplify)
@@ -391,24 +390,13 @@ def derive_steps(
     )
 
 
-def _shown_sections(sections: Sequence[str] | str | None) -> set[str]:
-    if sections is None:
-        return set(SECTIONS)
-    if isinstance(sections, str):
-        sections = [w for w in sections.replace(",", " ").split()]
-    bad = [k for k in sections if k not in SECTIONS]
-    if bad or not sections:
-        raise SymkinError(f"unknown section(s) {bad or list(sections)}: choose from {', '.join(SECTIONS)}")
-    return set(sections)
-
-
 def derivation(
     robot: Robot | ETS | str,
     fmt: Fmt = "markdown",
     symbolic_constants: bool = False,
     simplify: bool = True,
     form: Form = "auto",
-    sections: Sequence[str] | None = None,
+    sections: Sequence[str] | str | None = None,
 ) -> str:
     """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`)."""
     return derive_steps(

@@ -14,6 +14,7 @@ from typing import Any
 
 import sympy as sp
 
+from symkin.errors import SymkinError
 from symkin.model.ets import ET, ETS, Axis, Const, rational_text
 from symkin.model.latex import text_latex
 from symkin.model.robot import Robot
@@ -27,6 +28,7 @@ __all__ = [
     "hessian_pattern",
     "summary",
     "shared_context",
+    "shown_sections",
     "FORMATS",
     "SECTIONS",
     "Constants",
@@ -45,6 +47,19 @@ __all__ = [
 #: the joint table are always written. In the program form a part that uses named quantities also
 #: brings the parts that define them (``fk`` the link frames, ``jacobian`` the link frames and ``fk``).
 SECTIONS = ("ets", "transforms", "links", "fk", "derivatives", "jacobian", "hessian", "checks")
+_NEEDS_PROGRAM = {"fk": ("links",), "jacobian": ("links", "fk"), "hessian": ("links", "fk", "jacobian")}
+
+
+def shown_sections(sections: Sequence[str] | str | None, program: bool = False) -> set[str]:
+    """The parts to write: ``sections`` (names of :data:`SECTIONS`, or one string of them separated by
+    commas or spaces; None: all), in the ``program`` form with the parts they need."""
+    if sections is None:
+        return set(SECTIONS)
+    names = sections.replace(",", " ").split() if isinstance(sections, str) else list(sections)
+    bad = [k for k in names if k not in SECTIONS]
+    if bad or not names:
+        raise SymkinError(f"unknown section(s) {bad or names}: choose from {', '.join(SECTIONS)}")
+    return set(names).union(*(_NEEDS_PROGRAM.get(k, ()) for k in names if program))
 
 
 DISPLAY_MAX_OPS = 900  # larger expressions are not printed

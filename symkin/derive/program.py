@@ -73,12 +73,14 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> tuple[Derivati
     return D, ctx, summary(D, P, C)
 
 
-def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
-    """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``)."""
+def tree_derivation(tree: Tree, fmt: str = "markdown", sections: Sequence[str] | str | None = None) -> str:
+    """The derivation of ``tree`` as Markdown (or a LaTeX document with ``fmt="latex"``); ``sections``
+    as in :func:`symkin.derive.chain.derive_steps`."""
     from symkin.core.version import __version__
-    from symkin.derive.common import FORMATS, SECTIONS, latex_document
+    from symkin.derive.common import FORMATS, latex_document, shown_sections
     from symkin.emit.templates import render
 
+    shown = shown_sections(sections, program=True)
     check_choice(fmt, FORMATS, "format")
     if tree.n == 0:
         raise SymkinError(f"tree {tree.name!r} has no joints: nothing to derive")
@@ -96,7 +98,7 @@ def tree_derivation(tree: Tree, fmt: str = "markdown") -> str:
     source = display_name(tree.source).rstrip(".") + ". " if tree.source else ""
     text = render("derive/program.md.j2", **ctx, robot=display_name(tree.name), n=tree.n, source=source,
                   joint_map="$q_k$ is `q(k-1)`", version=__version__, joints=joints, joint_column="moves",
-                  ets="", factors=[], constants=[], legend=P.legend(), sections=set(SECTIONS))  # fmt: skip
+                  ets="", factors=[], constants=[], legend=P.legend(), sections=shown)  # fmt: skip
     return latex_document(text) if fmt == "latex" else text
 
 
