@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from symkin import Tree
 from symkin.derive.program import tree_derivation
-from tests.model.tree_urdfs import GRIPPER
+from tests.model.tree_urdfs import DUAL_ARM, GRIPPER
 
 
 def test_mimic_rules_frames_and_check_in_markdown_and_latex():
@@ -34,3 +34,13 @@ def test_checks_catch_a_wrong_step(monkeypatch):
     monkeypatch.setattr(dp, "derive_tree_program", broken)
     md = tree_derivation(Tree.from_urdf(GRIPPER))
     assert "J0: FAILED" in md and "(tolerance 1e-12): FAILED" in md
+
+
+def test_abbreviations_of_ten_joints_or_more_are_unambiguous():
+    """With 13 joints cos q_12 and cos(q_1 + q_2) must not both read c_{12}."""
+    import re
+
+    md = tree_derivation(Tree.from_urdf(DUAL_ARM))
+    legend = next(line for line in md.splitlines() if line.startswith("Notation:"))
+    names = re.findall(r"\$([cs]_\{[^}]*\}) = ", legend)
+    assert "c_{12}" in names and "c_{1,2}" in names and len(names) == len(set(names))

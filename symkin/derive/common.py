@@ -270,7 +270,7 @@ class Printer:
         idx.sort()
         kind = "c" if isinstance(f, sp.cos) else "s"
         sym = sp.Symbol(f"zz{kind}{'_'.join(map(str, idx))}")
-        sub = ("" if max(idx) < 10 else ",").join(map(str, idx))
+        sub = ("" if len(self.index) < 10 else ",").join(map(str, idx))  # c_{12} or c_{1,2}, never both
         tex = f"{kind}_{{{sub}}}"
         arg = " + ".join(f"q_{{{i}}}" for i in idx)
         fn = "\\cos" if kind == "c" else "\\sin"
