@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from symkin import Tree
+from symkin.derive.chain import derivation
 from symkin.derive.program import tree_derivation
 from tests.model.tree_urdfs import DUAL_ARM, GRIPPER
 
@@ -17,6 +18,7 @@ def test_mimic_rules_frames_and_check_in_markdown_and_latex():
     assert "(tolerance 1e-12): ok" in md and "FAILED" not in md
     tex = tree_derivation(tree, "latex")
     assert tex.startswith("\\documentclass") and "###" not in tex and "\\section{" in tex
+    assert derivation(tree) == md  # the chain's entry takes a tree too
 
 
 def test_checks_catch_a_wrong_step(monkeypatch):

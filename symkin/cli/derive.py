@@ -69,15 +69,11 @@ def run(args: argparse.Namespace) -> int:
     output_file(args.output, "-o")
     if args.order is not None and (args.ik or args.singularities or sections is not None):
         raise UserError("--order writes its own derivation: leave out --ik, --singularities and --sections")
-    if not robot.single_path:  # several frames, or a mimic joint on the path
-        if args.ik or args.singularities or args.order is not None:
-            raise UserError(
-                "--ik, --singularities and --order analyse one chain: name it as ROBOT.urdf:FRAME"
-            )
-        from symkin.derive.program import tree_derivation
-
-        text = tree_derivation(robot, fmt=args.format, sections=sections)
-    elif (robot := robot.chain()) and args.singularities:
+    if robot.single_path:
+        robot = robot.chain()
+    elif args.ik or args.singularities or args.order is not None:  # several frames, or a mimic on the path
+        raise UserError("--ik, --singularities and --order analyse one chain: name it as ROBOT.urdf:FRAME")
+    if args.singularities:
         if args.ik or sections is not None:
             raise UserError("--singularities writes its own report: leave out --ik and --sections")
         from symkin.derive.singularities import singularities
@@ -95,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
         from symkin.derive.analytic_ik import ik_derivation
 
         text = ik_derivation(robot, fmt=args.format)
-    else:
+    else:  # a chain, or a tree: the same walk
         text = derivation(
             robot,
             fmt=args.format,

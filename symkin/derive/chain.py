@@ -55,6 +55,7 @@ from symkin.errors import SymkinError, check_choice
 from symkin.model.ets import ET, ETS, Axis
 from symkin.model.latex import et_latex
 from symkin.model.robot import Robot
+from symkin.model.tree import Tree
 from symkin.symbolic.kinematics import derive
 
 __all__ = ["Derivation", "derive_steps", "derivation", "SECTIONS"]
@@ -391,14 +392,20 @@ def derive_steps(
 
 
 def derivation(
-    robot: Robot | ETS | str,
+    robot: Robot | ETS | Tree | str,
     fmt: Fmt = "markdown",
     symbolic_constants: bool = False,
     simplify: bool = True,
     form: Form = "auto",
     sections: Sequence[str] | str | None = None,
 ) -> str:
-    """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`)."""
+    """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`);
+    a tree with several frames or a mimic joint in the program form (:mod:`symkin.derive.program`)."""
+    if isinstance(robot, Tree) and not robot.single_path:
+        from symkin.derive.program import tree_derivation
+
+        return tree_derivation(robot, fmt, sections)
+    robot = robot.chain() if isinstance(robot, Tree) else robot
     return derive_steps(
         robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form, sections=sections
     ).text
