@@ -124,7 +124,8 @@ class Derivation:
             definitions in order and :meth:`expand` substitutes them back; ``dT`` and ``ee`` are
             empty).
         intermediates: (symbol, expression) of each named intermediate (program form).
-        sections: where each link frame's, the pose's and the Jacobians' intermediates end.
+        sections: where the intermediates of each link frame, the pose, the Jacobian and the Hessian
+            end (the marks of :class:`symkin.symbolic.program.TreeProgram`, the chain as a tree).
     """
 
     robot: Robot
