@@ -63,10 +63,24 @@ def program_derivation(robot: Robot, symbolic_constants: bool) -> tuple[Derivati
     eta = [e.sign * q[e.joint] if e.joint is not None else C.eta[k] for k, e in enumerate(ets)]
     links = {s.joint: im(tp.links[s.segment]) for s in tree.slots}
     assert tp.H0[0] is not None
-    D = Derivation(robot, q, dict(C.values), tuple(im(et_matrix(e.axis, eta[k])) for k, e in enumerate(ets)),
-                   im(tp.T[0]), tuple(links[j] for j in range(len(q))), (), (), im(tp.J0[0]), im(tp.J0[0]),
-                   tuple(map(im, tp.H0[0])), True, checks, form="program", intermediates=tp.lines,
-                   sections=tp.marks)  # fmt: skip
+    D = Derivation(
+        robot=robot,
+        q=q,
+        constants=dict(C.values),
+        E=tuple(im(et_matrix(e.axis, eta[k])) for k, e in enumerate(ets)),
+        T=im(tp.T[0]),
+        links=tuple(links[j] for j in range(len(q))),
+        ee=(),
+        dT=(),
+        J0=im(tp.J0[0]),
+        J0_fast=im(tp.J0[0]),
+        H0=tuple(map(im, tp.H0[0])),
+        simplified=True,
+        checks=checks,
+        form="program",
+        intermediates=tp.lines,
+        sections=tp.marks,
+    )
     names = {e.const: C.names[k] for k, e in enumerate(C.ets) if k in C.names}
     ctx = {**shared_context(D, P, C), **_walk_context(tree, tp, checks, P, names)}
     ctx["legend"] = P.legend()
@@ -96,9 +110,22 @@ def tree_derivation(tree: Tree, fmt: str = "markdown", sections: Sequence[str] |
         joints.append([f"$q_{{{j + 1}}}$", f"`q{j}`", f"`{display_name(name)}`", kind,
                        f"{moves} ({mimics})" if mimics else moves])  # fmt: skip
     source = display_name(tree.source).rstrip(".") + ". " if tree.source else ""
-    text = render("derive/program.md.j2", **ctx, robot=display_name(tree.name), n=tree.n, source=source,
-                  joint_map="$q_k$ is `q(k-1)`", version=__version__, joints=joints, joint_column="moves",
-                  ets="", factors=[], constants=[], legend=P.legend(), sections=shown)  # fmt: skip
+    text = render(
+        "derive/program.md.j2",
+        **ctx,
+        robot=display_name(tree.name),
+        n=tree.n,
+        source=source,
+        joint_map="$q_k$ is `q(k-1)`",
+        version=__version__,
+        joints=joints,
+        joint_column="moves",
+        ets="",
+        factors=[],
+        constants=[],
+        legend=P.legend(),
+        sections=shown,
+    )
     return latex_document(text) if fmt == "latex" else text
 
 
