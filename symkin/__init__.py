@@ -43,7 +43,6 @@ from symkin.runtime.servo import p_servo
 from symkin.runtime.trajectory import Trajectory, jtraj, mstraj, quintic, trapezoidal
 
 _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import symkin` stays light
-    "derive": ("symkin.derive.chain", "derivation"),
     "derive_steps": ("symkin.derive.chain", "derive_steps"),
     "Derivation": ("symkin.derive.chain", "Derivation"),
     "singularities": ("symkin.derive.singularities", "singularities"),
@@ -56,6 +55,10 @@ def __getattr__(name: str):  # noqa: ANN202
         import importlib
 
         return importlib.import_module("symkin.symbolic")
+    if name == "derive":  # the callable subpackage: symkin.derive(robot) -> the written derivation
+        import importlib
+
+        return importlib.import_module("symkin.derive")
     if name == "geometry":  # collision geometry sources and the NumPy reference
         import importlib
 
