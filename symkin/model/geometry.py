@@ -89,42 +89,45 @@ def link_name(link: Any) -> str:
     return f"link{k + 1}"
 
 
+class _Round:
+    """What a sphere and a capsule share: the points of their core (``_ENDS``: each field and its
+    name in errors, after ``_KIND``), a radius and a link, checked when they are made."""
+
+    _KIND = ""
+    _ENDS: tuple[tuple[str, str], ...] = ()
+    radius: float
+    link: str
+
+    def __post_init__(self) -> None:
+        for end, what in self._ENDS:
+            object.__setattr__(self, end, _vec3(getattr(self, end), f"{self._KIND} {what}"))
+        object.__setattr__(self, "radius", _radius(self.radius, f"{self._KIND} radius"))
+        object.__setattr__(self, "link", link_name(self.link))
+
+    @property
+    def points(self) -> tuple[Vec3, ...]:
+        return tuple(getattr(self, end) for end, _ in self._ENDS)
+
+
 @dataclass(frozen=True)
-class Sphere:
+class Sphere(_Round):
     """A sphere of ``radius`` centred at ``center`` in the frame of ``link``."""
 
+    _KIND, _ENDS = "sphere", (("center", "center"),)
     center: Vec3
     radius: float
     link: str = "base"
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "center", _vec3(self.center, "sphere center"))
-        object.__setattr__(self, "radius", _radius(self.radius, "sphere radius"))
-        object.__setattr__(self, "link", link_name(self.link))
-
-    @property
-    def points(self) -> tuple[Vec3, ...]:
-        return (self.center,)
-
 
 @dataclass(frozen=True)
-class Capsule:
+class Capsule(_Round):
     """The points within ``radius`` of the segment ``a``-``b`` (frame of ``link``)."""
 
+    _KIND, _ENDS = "capsule", (("a", "end a"), ("b", "end b"))
     a: Vec3
     b: Vec3
     radius: float
     link: str = "base"
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "a", _vec3(self.a, "capsule end a"))
-        object.__setattr__(self, "b", _vec3(self.b, "capsule end b"))
-        object.__setattr__(self, "radius", _radius(self.radius, "capsule radius"))
-        object.__setattr__(self, "link", link_name(self.link))
-
-    @property
-    def points(self) -> tuple[Vec3, ...]:
-        return (self.a, self.b)
 
 
 def _rotation(value: Any) -> tuple[float, ...]:

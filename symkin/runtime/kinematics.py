@@ -33,6 +33,7 @@ from symkin.runtime.casadi_calls import casadi_methods
 from symkin.runtime.ik import IK_OPTIONS, ik
 from symkin.runtime.ik_qp_c import collision_qp_ik  # registers the QP step of the C IK solver
 from symkin.runtime.memo import memoised
+from symkin.runtime.model_attrs import ModelAttributes
 
 __all__ = ["Kinematics", "KIN_METHODS", "load_kinematics", "kinematics_of"]
 
@@ -106,7 +107,7 @@ def kinematics_of(model: Any, art: Artifact, backend: str) -> Kinematics:
     return Kinematics(model, backend, functions, art.files, art.path, art.module)
 
 
-class Kinematics(FrameMethods):
+class Kinematics(ModelAttributes, FrameMethods):
     """Generated kinematics of ``model`` (a :class:`symkin.Robot` chain or a :class:`symkin.Tree`)
     on one backend ("c", "numpy" or "casadi"); the generated functions are bound as attributes (on
     the C backend, the extension module's functions themselves).
@@ -144,32 +145,7 @@ class Kinematics(FrameMethods):
         self._c_rrmc: dict[tuple, Any] = {}  # C RRMC controllers by options (symkin.runtime.control.rrmc)
         self._options: tuple[bool, str | None] = (True, None)  # cache and strategy of the compile
 
-    # -- what the model says -----------------------------------------------------------------
-    @property
-    def robot(self) -> Any:
-        return self.model
-
-    @property
-    def tree(self) -> Any:
-        return self.model
-
-    @property
-    def n(self) -> int:
-        """Number of joints."""
-        return self._n
-
-    @property
-    def name(self) -> str:
-        return self.model.name
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        return self.model.joint_names
-
-    @property
-    def qlim(self) -> np.ndarray:
-        return self.model.qlim
-
+    # -- what the model says (with ModelAttributes) -----------------------------------------
     @property
     def qd_max(self) -> np.ndarray | None:
         return self.model.qd_max

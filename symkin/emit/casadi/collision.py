@@ -6,9 +6,9 @@ The shape points come from the generated CasADi collision module
 (``templates/casadi/collision.py.j2``: straight-line link poses with the constants folded in), the
 pair distances are the closed forms of :mod:`symkin.geometry.distance` written with CasADi's
 ``if_else``/``fmin``/``fmax``: sphere-sphere, capsule-sphere, capsule-capsule (Ericson's closest
-points of two segments) and sphere-box (the box's signed distance field). A capsule against a box
-has no closed form (:mod:`symkin.geometry.distance` minimises along the segment): such an
-environment is refused with a GeometryError.
+points of two segments, :mod:`symkin.emit.segments`) and sphere-box (the box's signed distance
+field). A capsule against a box has no closed form (:mod:`symkin.geometry.distance` minimises along
+the segment): such an environment is refused with a GeometryError.
 """
 
 from __future__ import annotations
@@ -17,45 +17,19 @@ from typing import Any
 
 import numpy as np
 
+from symkin.emit.segments import SegmentOps, point_segment, segment_closest
 from symkin.errors import GeometryError
 
 __all__ = ["distances_function"]
-
-SEG_EPS, PAR_EPS = 1e-24, 1e-14  # as symkin.geometry.distance
 
 
 def _norm(ca: Any, v: Any) -> Any:
     return ca.sqrt(ca.sumsqr(v))
 
 
-def _clamp01(ca: Any, x: Any) -> Any:
-    return ca.fmin(ca.fmax(x, 0.0), 1.0)
-
-
-def _point_segment(ca: Any, p: Any, a: Any, b: Any) -> Any:
-    ab = b - a
-    l2 = ca.dot(ab, ab)
-    return ca.if_else(l2 > SEG_EPS, _clamp01(ca, ca.dot(p - a, ab) / ca.if_else(l2 > SEG_EPS, l2, 1.0)), 0.0)
-
-
-def _segment_closest(ca: Any, a1: Any, b1: Any, a2: Any, b2: Any) -> tuple[Any, Any]:
-    """Parameters (s, t) of the closest points of two segments (Ericson, Real-Time Collision
-    Detection, 2005, 5.1.9), as :func:`symkin.geometry.distance.segment_closest`."""
-    d1, d2, r = b1 - a1, b2 - a2, a1 - a2
-    a, e, f, c, b = ca.dot(d1, d1), ca.dot(d2, d2), ca.dot(d2, r), ca.dot(d1, r), ca.dot(d1, d2)
-    ok1, ok2 = a > SEG_EPS, e > SEG_EPS
-    a_s, e_s = ca.if_else(ok1, a, 1.0), ca.if_else(ok2, e, 1.0)
-    denom = a * e - b * b
-    skew = denom > PAR_EPS * a * e
-    s_gen = ca.if_else(skew, _clamp01(ca, (b * f - c * e) / ca.if_else(skew, denom, 1.0)), 0.0)
-    t_gen = (b * s_gen + f) / e_s
-    s_gen = ca.if_else(
-        t_gen < 0.0, _clamp01(ca, -c / a_s), ca.if_else(t_gen > 1.0, _clamp01(ca, (b - c) / a_s), s_gen)
-    )
-    t_gen = _clamp01(ca, t_gen)
-    s = ca.if_else(ok1, ca.if_else(ok2, s_gen, _clamp01(ca, -c / a_s)), 0.0)
-    t = ca.if_else(ok2, ca.if_else(ok1, t_gen, _clamp01(ca, f / e_s)), 0.0)
-    return s, t
+def _segment_ops(ca: Any) -> SegmentOps:
+    """CasADi's ``if_else``, ``dot`` and ``fmin``/``fmax`` for :mod:`symkin.emit.segments`."""
+    return SegmentOps(where=ca.if_else, dot=ca.dot, clamp01=lambda x: ca.fmin(ca.fmax(x, 0.0), 1.0))
 
 
 def _box_sdf(ca: Any, p: Any, center: np.ndarray, h: np.ndarray, R: np.ndarray) -> Any:
@@ -72,11 +46,11 @@ def _box_sdf(ca: Any, p: Any, center: np.ndarray, h: np.ndarray, R: np.ndarray) 
 def _pair(ca: Any, A: Any, ra: float, cap_a: bool, B: Any, rb: float, cap_b: bool) -> Any:
     """Signed distance of shape A (points A: 1 or 2) against shape B."""
     if cap_a and cap_b:
-        s, t = _segment_closest(ca, A[0], A[1], B[0], B[1])
+        s, t = segment_closest(_segment_ops(ca), A[0], A[1], B[0], B[1])
         return _norm(ca, A[0] + s * (A[1] - A[0]) - B[0] - t * (B[1] - B[0])) - ra - rb
     if cap_a or cap_b:
         (a, b, ro), (p, rp) = ((A[0], A[1], ra), (B[0], rb)) if cap_a else ((B[0], B[1], rb), (A[0], ra))
-        t = _point_segment(ca, p, a, b)
+        t = point_segment(_segment_ops(ca), p, a, b)
         return _norm(ca, a + t * (b - a) - p) - ro - rp
     return _norm(ca, A[0] - B[0]) - ra - rb
 

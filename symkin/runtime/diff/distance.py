@@ -2,7 +2,8 @@
 
 The closed forms of :mod:`symkin.geometry.distance` (same conventions, constants and degenerate
 cases): sphere-sphere, capsule-sphere, capsule-capsule (Ericson, Real-Time Collision Detection,
-2005, 5.1.9), sphere-box and capsule-box (the box's signed distance field, minimised along the
+2005, 5.1.9; the segments' closest points are :mod:`symkin.emit.segments`, shared with CasADi),
+sphere-box and capsule-box (the box's signed distance field, minimised along the
 segment by golden-section search). Each returns the signed distance ``d`` (...) only. Where a
 distance is a minimum over a closest-point parameter (a point on a segment), the parameter is
 found without gradients and the distance is evaluated there: by the envelope theorem that is the
@@ -15,7 +16,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.geometry.distance import DIST_EPS, GOLDEN_ITERS, PAR_EPS, SEG_EPS
+from symkin.emit.segments import SegmentOps, point_segment, segment_closest
+from symkin.geometry.distance import DIST_EPS, GOLDEN_ITERS
 from symkin.runtime.diff.ops import Ops
 
 __all__ = [
@@ -41,37 +43,9 @@ def _length(ops: Ops, v: Any) -> Any:
     return xp.where(ok, xp.sqrt(xp.where(ok, s, 1.0)), 0.0)
 
 
-def _clamp01(ops: Ops, x: Any) -> Any:
-    return ops.clip(x, 0.0, 1.0)
-
-
-def _point_segment(ops: Ops, p: Any, a: Any, b: Any) -> Any:
-    """Parameter t in [0, 1] of the segment a-b's point closest to p (0 for a point segment)."""
-    xp = ops.xp
-    ab = b - a
-    l2 = _dot(ab, ab)
-    ok = l2 > SEG_EPS
-    return xp.where(ok, _clamp01(ops, _dot(p - a, ab) / xp.where(ok, l2, 1.0)), 0.0)
-
-
-def _segment_closest(ops: Ops, a1: Any, b1: Any, a2: Any, b2: Any) -> tuple[Any, Any]:
-    """Parameters (s, t) of the closest points of two segments (as the reference's)."""
-    xp = ops.xp
-    d1, d2, r = b1 - a1, b2 - a2, a1 - a2
-    a, e, f, c, b = _dot(d1, d1), _dot(d2, d2), _dot(d2, r), _dot(d1, r), _dot(d1, d2)
-    ok1, ok2 = a > SEG_EPS, e > SEG_EPS
-    a_s, e_s = xp.where(ok1, a, 1.0), xp.where(ok2, e, 1.0)
-    denom = a * e - b * b
-    skew = denom > PAR_EPS * a * e
-    s_gen = xp.where(skew, _clamp01(ops, (b * f - c * e) / xp.where(skew, denom, 1.0)), 0.0)
-    t_gen = (b * s_gen + f) / e_s
-    s_gen = xp.where(
-        t_gen < 0.0, _clamp01(ops, -c / a_s), xp.where(t_gen > 1.0, _clamp01(ops, (b - c) / a_s), s_gen)
-    )
-    t_gen = _clamp01(ops, t_gen)
-    s = xp.where(ok1, xp.where(ok2, s_gen, _clamp01(ops, -c / a_s)), 0.0)
-    t = xp.where(ok2, xp.where(ok1, t_gen, _clamp01(ops, f / e_s)), 0.0)
-    return s, t
+def _segment_ops(ops: Ops) -> SegmentOps:
+    """The library's ``where``, a dot over the last axis and ``clip`` for :mod:`symkin.emit.segments`."""
+    return SegmentOps(where=ops.xp.where, dot=_dot, clamp01=lambda x: ops.clip(x, 0.0, 1.0))
 
 
 def _box_sdf(ops: Ops, p: Any, center: Any, h: Any, R: Any) -> Any:
@@ -92,13 +66,13 @@ def sphere_sphere(ops: Ops, c1: Any, r1: Any, c2: Any, r2: Any) -> Any:
 
 def capsule_sphere(ops: Ops, a1: Any, b1: Any, r1: Any, c2: Any, r2: Any) -> Any:
     """Capsule (segment a1-b1, r1) against sphere (c2, r2)."""
-    t = ops.detach(_point_segment(ops, c2, a1, b1))
+    t = ops.detach(point_segment(_segment_ops(ops), c2, a1, b1))
     return _length(ops, a1 + t[..., None] * (b1 - a1) - c2) - r1 - r2
 
 
 def capsule_capsule(ops: Ops, a1: Any, b1: Any, r1: Any, a2: Any, b2: Any, r2: Any) -> Any:
     """Capsule (a1-b1, r1) against capsule (a2-b2, r2)."""
-    s, t = _segment_closest(ops, *(ops.detach(x) for x in (a1, b1, a2, b2)))
+    s, t = segment_closest(_segment_ops(ops), *(ops.detach(x) for x in (a1, b1, a2, b2)))
     pa = a1 + s[..., None] * (b1 - a1)
     pb = a2 + t[..., None] * (b2 - a2)
     return _length(ops, pa - pb) - r1 - r2

@@ -25,11 +25,12 @@ from symkin.errors import FrameError, ParameterError
 from symkin.model.derivatives import check_order, derivative_kind
 from symkin.model.tree import as_tree
 from symkin.runtime.diff.ops import ops_of
+from symkin.runtime.model_attrs import ModelAttributes
 
 __all__ = ["DiffKinematics"]
 
 
-class DiffKinematics:
+class DiffKinematics(ModelAttributes):
     """Generated JAX or PyTorch kinematics of ``model`` (a chain or a tree); see the module docstring.
 
     Attributes: ``model`` (also ``robot`` and ``tree``), ``backend`` ("jax" or "torch"), ``n``,
@@ -57,30 +58,10 @@ class DiffKinematics:
         framed = "frame" in inspect.signature(fn).parameters
         return self.ops.jax.jit(fn, static_argnames=("frame",) if framed else ())  # type: ignore[attr-defined]
 
-    # -- what the model says -----------------------------------------------------------------
-    @property
-    def robot(self) -> Any:
-        return self.model
-
-    @property
-    def tree(self) -> Any:
-        return self.model
-
-    @property
-    def n(self) -> int:
-        return self._n
-
-    @property
-    def name(self) -> str:
-        return self.model.name
-
+    # -- what the model says (with ModelAttributes) -----------------------------------------
     @property
     def joint_names(self) -> tuple[str, ...]:
         return tuple(self.module.JOINT_NAMES)
-
-    @property
-    def qlim(self) -> np.ndarray:
-        return np.asarray(self.model.qlim, dtype=float)
 
     @property
     def revolute(self) -> np.ndarray:

@@ -2,10 +2,12 @@
 
 The pose error, the IK step and the collision distances are written once against :class:`Ops`
 (``ops.xp`` is ``jax.numpy`` or ``torch``; the names the two spell alike are called on it
-directly), and this module spells the rest: constants of an array's dtype and device, ``atan2``,
-clamping, the linear solves, gathering along an axis, stopping gradients, random numbers and the
-IK's iteration loop (``lax.while_loop`` under JAX, a Python loop that stops when every problem has
-converged under PyTorch). Neither library is imported until an :class:`Ops` is made.
+directly, and :class:`Ops` itself wraps those its callers take as methods: ``arctan2``, ``clip``,
+``linalg.pinv``, the float dtypes), and one subclass per library spells the rest: constants of an
+array's dtype and device, casts, the linear solve, gathering along an axis, stopping gradients,
+random numbers and the IK's iteration loop (``lax.while_loop`` under JAX, a Python loop that stops
+when every problem has converged under PyTorch). Neither library is imported until an
+:class:`Ops` is made.
 """
 
 from __future__ import annotations
@@ -34,10 +36,10 @@ class Ops:
         raise NotImplementedError
 
     def atan2(self, y: Any, x: Any) -> Any:
-        raise NotImplementedError
+        return self.xp.arctan2(y, x)  # torch.arctan2: torch.atan2's alias
 
     def clip(self, x: Any, lo: float, hi: float) -> Any:
-        raise NotImplementedError
+        return self.xp.clip(x, lo, hi)  # torch.clip: torch.clamp's alias
 
     def take(self, x: Any, index: Any, axis: int) -> Any:
         """Entries of x at ``index`` along ``axis`` (index broadcast as ``take_along_axis``)."""
@@ -48,7 +50,7 @@ class Ops:
         raise NotImplementedError
 
     def pinv(self, A: Any) -> Any:
-        raise NotImplementedError
+        return self.xp.linalg.pinv(A)
 
     def detach(self, x: Any) -> Any:
         """x without its gradient (the value passes, no derivative flows back)."""
@@ -69,7 +71,7 @@ class Ops:
 
     def floating(self, x: Any) -> bool:
         """Whether x is an array of float32 or float64."""
-        raise NotImplementedError
+        return getattr(x, "dtype", None) in (self.xp.float32, self.xp.float64)
 
 
 class JaxOps(Ops):
@@ -90,20 +92,11 @@ class JaxOps(Ops):
     def cast(self, x: Any, like: Any) -> Any:
         return x.astype(self.xp.int32 if like is None else like.dtype)
 
-    def atan2(self, y: Any, x: Any) -> Any:
-        return self.xp.arctan2(y, x)
-
-    def clip(self, x: Any, lo: float, hi: float) -> Any:
-        return self.xp.clip(x, lo, hi)
-
     def take(self, x: Any, index: Any, axis: int) -> Any:
         return self.xp.take_along_axis(x, index, axis=axis)
 
     def solve(self, A: Any, b: Any) -> Any:
         return self.xp.linalg.solve(A, b[..., None])[..., 0]
-
-    def pinv(self, A: Any) -> Any:
-        return self.xp.linalg.pinv(A)
 
     def detach(self, x: Any) -> Any:
         return self.jax.lax.stop_gradient(x)
@@ -126,9 +119,6 @@ class JaxOps(Ops):
         )
         return state
 
-    def floating(self, x: Any) -> bool:
-        return getattr(x, "dtype", None) in (self.xp.float32, self.xp.float64)
-
 
 class TorchOps(Ops):
     name = "torch"
@@ -150,12 +140,6 @@ class TorchOps(Ops):
     def cast(self, x: Any, like: Any) -> Any:
         return x.to(self.xp.int32) if like is None else x.to(dtype=like.dtype, device=like.device)
 
-    def atan2(self, y: Any, x: Any) -> Any:
-        return self.xp.atan2(y, x)
-
-    def clip(self, x: Any, lo: float, hi: float) -> Any:
-        return self.xp.clamp(x, lo, hi)
-
     def take(self, x: Any, index: Any, axis: int) -> Any:
         return self.xp.take_along_dim(x, index, dim=axis)
 
@@ -164,9 +148,6 @@ class TorchOps(Ops):
         IK marks those searches dead and the others go on)."""
         x, info = self.xp.linalg.solve_ex(A, b[..., None])
         return self.xp.where((info != 0)[..., None], float("nan"), x[..., 0])
-
-    def pinv(self, A: Any) -> Any:
-        return self.xp.linalg.pinv(A)
 
     def detach(self, x: Any) -> Any:
         return x.detach()
@@ -185,9 +166,6 @@ class TorchOps(Ops):
                 break
             state = body(state)
         return state
-
-    def floating(self, x: Any) -> bool:
-        return getattr(x, "dtype", None) in (self.xp.float32, self.xp.float64)
 
 
 _OPS: dict[str, Ops] = {}
