@@ -23,6 +23,7 @@ __all__ = [
     "Parser",
     "Deprecated",
     "add_command",
+    "add_robot_command",
     "add_robot_argument",
     "add_link_options",
     "add_target_options",
@@ -37,10 +38,11 @@ __all__ = [
     "configuration",
     "fmt",
     "add_obstacle_options",
+    "add_collision_options",
+    "collision_model",
     "environment_of",
     "add_srdf_option",
     "with_srdf",
-    "need_collision",
 ]
 
 ROBOT_HELP = (
@@ -96,6 +98,13 @@ class Deprecated(argparse.Action):
 def add_command(sub: Any, name: str, text: str) -> argparse.ArgumentParser:
     """The parser of ``symkin NAME`` (``text`` is its line in ``symkin --help`` and its description)."""
     return sub.add_parser(name, help=text, description=text, formatter_class=Formatter)
+
+
+def add_robot_command(sub: Any, name: str, text: str, default: str | None = None) -> argparse.ArgumentParser:
+    """The parser of ``symkin NAME ROBOT`` (:func:`add_command` with :func:`add_robot_argument`)."""
+    s = add_command(sub, name, text)
+    add_robot_argument(s, default)
+    return s
 
 
 def add_robot_argument(s: argparse.ArgumentParser, default: str | None = None) -> None:
@@ -327,6 +336,32 @@ def add_obstacle_options(s: argparse.ArgumentParser) -> None:
     )
 
 
+def add_collision_options(s: argparse.ArgumentParser, text: str | None = None) -> None:
+    """The obstacles and --srdf, and (``text``: what it does in this command) the --collision
+    they then go with."""
+    if text is not None:
+        s.add_argument("--collision", action="store_true", help=text)
+    add_obstacle_options(s)
+    add_srdf_option(s, "" if text is None else " (with --collision)")
+
+
+def collision_model(args: argparse.Namespace, tree: bool = False) -> tuple[Any, Any, Any]:
+    """(model, obstacles, collision) of a command with obstacles: the Robot of :func:`single_chain`
+    (or, ``tree``, the Robot or Tree of :func:`chain_or_tree`) with a URDF's collision geometry and
+    --srdf applied, the obstacles of :func:`environment_of`, and what the solvers take as
+    ``collision`` (None without --collision, else the obstacles, or True for self-collisions
+    alone). Obstacles and --srdf of a command with --collision are refused without it; a command
+    without that option (plot, collide, view) always has the geometry."""
+    on = getattr(args, "collision", True)
+    model = (chain_or_tree if tree else single_chain)(args, geometry=on)
+    env = environment_of(args)
+    if (len(env) or getattr(args, "srdf", None)) and not on:
+        raise UserError(
+            "--sphere, --capsule, --box, --env and --srdf are options of --collision: add --collision"
+        )
+    return with_srdf(args, model), env, (env if len(env) else True) if on else None
+
+
 def environment_of(args: argparse.Namespace) -> Any:
     """The obstacles of --sphere, --capsule, --box and --env; a UserError naming the option (or the
     file, its key and row) for anything that is not such a shape."""
@@ -413,14 +448,6 @@ def add_srdf_option(s: argparse.ArgumentParser, when: str = "") -> None:
         "checked unless the SRDF disables every pair of the URDF links merged into them; "
         "`symkin srdf ROBOT` writes one" + when,
     )
-
-
-def need_collision(args: argparse.Namespace, env: Any) -> None:
-    """Obstacles and --srdf are options of --collision (ik, servo, reach): refused without it."""
-    if (len(env) or getattr(args, "srdf", None)) and not args.collision:
-        raise UserError(
-            "--sphere, --capsule, --box, --env and --srdf are options of --collision: add --collision"
-        )
 
 
 def srdf_carriers(args: argparse.Namespace, model: Any) -> dict[str, tuple[str, ...]]:

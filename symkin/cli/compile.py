@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from symkin.cli.checks import UserError, check_cflags_for, output_dir
-from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree, fmt
+from symkin.cli.common import BACKENDS, add_link_options, add_robot_command, chain_or_tree, fmt
 from symkin.compiler.compile import OPTIONAL_BACKENDS
 from symkin.errors import SymkinError
 from symkin.model.differential import manipulability_one
@@ -20,8 +20,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "compile", "generate (and build) the kinematics code of a robot")
-    add_robot_argument(s)
+    s = add_robot_command(sub, "compile", "generate (and build) the kinematics code of a robot")
     s.add_argument("--backend", choices=(*BACKENDS, *OPTIONAL_BACKENDS), default="c", help="code to generate")
     s.add_argument(
         "-o",

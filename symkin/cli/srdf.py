@@ -17,12 +17,11 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(
+    s = common.add_robot_command(
         sub,
         "srdf",
         "write a MoveIt SRDF disabling adjacent link pairs and pairs proved apart over the joint limits",
     )
-    common.add_robot_argument(s)
     common.add_link_options(s, frames=True)
     s.add_argument("-o", "--output", metavar="FILE", help="file to write (default: print it)")
     s.add_argument(
