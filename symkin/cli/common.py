@@ -473,7 +473,8 @@ def with_srdf(args: argparse.Namespace, model: Any) -> Any:
     path = getattr(args, "srdf", None)
     if path is None:
         return model
-    from symkin.geometry.srdf import srdf_disabled
+    from symkin.core.names import listed
+    from symkin.geometry.srdf import pairs_text, srdf_disabled
 
     geometry = model.geometry
     if geometry is None or not geometry.shapes:
@@ -482,16 +483,14 @@ def with_srdf(args: argparse.Namespace, model: Any) -> Any:
     pairs, partial, used = srdf_disabled(Path(path).expanduser(), carriers)
     if not used:
         names = sorted({x for c in carriers.values() for x in c})
-        shown = ", ".join(names[:6]) + (" ..." if len(names) > 6 else "")
         raise UserError(
             f"--srdf {path}: none of its disable_collisions pairs names two links of {model.name} with "
-            f"collision geometry ({shown}): an SRDF of another robot?"
+            f"collision geometry ({listed(names, 6)}): an SRDF of another robot?"
         )
     if partial:
-        shown = ", ".join(f"({a}, {b})" for a, b in partial[:4]) + (" ..." if len(partial) > 4 else "")
         print(
             f"symkin: --srdf: {len(partial)} link pairs stay checked, the SRDF disabling only some of the "
-            f"links merged into them: {shown}",
+            f"links merged into them: {pairs_text(partial, 4)}",
             file=sys.stderr,
         )
     return model.with_geometry(geometry.with_disabled(pairs))
