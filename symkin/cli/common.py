@@ -318,22 +318,19 @@ def damaged(summary: dict) -> str:
 
 
 # -- obstacles (collide, plot, reach) --------------------------------------------------------------
+_KINDS = {  # option: JSON key, its numbers, what it is
+    "sphere": ("spheres", "x y z r", "an obstacle sphere"),
+    "capsule": ("capsules", "ax ay az bx by bz r", "an obstacle capsule"),
+    "box": ("boxes", "cx cy cz hx hy hz", "an axis-aligned obstacle box (centre, half side lengths)"),
+}
+
+
 def add_obstacle_options(s: argparse.ArgumentParser) -> None:
     """--sphere, --capsule, --box (repeatable) and --env FILE: obstacles in the base frame."""
-    s.add_argument("--sphere", action="append", default=[], metavar="'X Y Z R'", help="an obstacle sphere")
-    s.add_argument(
-        "--capsule", action="append", default=[], metavar="'AX AY AZ BX BY BZ R'", help="an obstacle capsule"
-    )
-    s.add_argument(
-        "--box", action="append", default=[], metavar="'CX CY CZ HX HY HZ'",
-        help="an axis-aligned obstacle box (centre, half side lengths)",
-    )  # fmt: skip
-    s.add_argument(
-        "--env",
-        metavar="FILE",
-        help='obstacles from JSON: {"spheres": [[x,y,z,r]...], "capsules": [[ax,ay,az,bx,by,bz,r]...], '
-        '"boxes": [[cx,cy,cz,hx,hy,hz]...]} (base frame, m)',
-    )
+    for what, (_, numbers, text) in _KINDS.items():
+        s.add_argument(f"--{what}", action="append", default=[], metavar=f"'{numbers.upper()}'", help=text)
+    rows = ", ".join(f'"{key}": [[{numbers.replace(" ", ",")}]...]' for key, numbers, _ in _KINDS.values())
+    s.add_argument("--env", metavar="FILE", help=f"obstacles from JSON: {{{rows}}} (base frame, m)")
 
 
 def add_collision_options(s: argparse.ArgumentParser, text: str | None = None) -> None:
@@ -368,13 +365,14 @@ def environment_of(args: argparse.Namespace) -> Any:
     from symkin.model.geometry import Environment
 
     shapes: dict[str, list[Any]] = {what: [] for what in _KINDS}
-    for what, (_, size) in _KINDS.items():
+    for what, (_, numbers, _) in _KINDS.items():
+        size = len(numbers.split())
         for text in getattr(args, what):
             shapes[what].append(_shape(what, floats(text, f"--{what}", size), f"--{what} {text!r}"))
     if args.env:
         data = _env_file(Path(args.env).expanduser())
-        for what, (key, size) in _KINDS.items():
-            rows = data.get(key, [])
+        for what, (key, numbers, _) in _KINDS.items():
+            rows, size = data.get(key, []), len(numbers.split())
             if not isinstance(rows, list):
                 raise UserError(
                     f"--env {args.env}: {key} must be a list of rows of {size} numbers, not {_json(rows)}"
@@ -395,7 +393,6 @@ def environment_of(args: argparse.Namespace) -> Any:
     return Environment(*(tuple(shapes[what]) for what in _KINDS))
 
 
-_KINDS = {"sphere": ("spheres", 4), "capsule": ("capsules", 7), "box": ("boxes", 6)}  # option: key, numbers
 _ENV_BYTES = 64 * 2**20  # an obstacle file larger than this is refused before it is read
 
 

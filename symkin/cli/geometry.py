@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from symkin.cli import common
-from symkin.cli.checks import UserError, output_file, positive_float
+from symkin.cli.checks import UserError, at_least_1, output_file, positive_float
 
 __all__ = ["add_parser", "run_fit", "run_builtins"]
 
@@ -43,7 +43,7 @@ def add_parser(sub: Any) -> None:
     )  # fmt: skip
     f.add_argument(
         "--samples",
-        type=int,
+        type=at_least_1,
         default=20_000,
         metavar="N",
         help="mesh points drawn per mesh for the coverage check",
@@ -116,8 +116,6 @@ def run_fit(args: argparse.Namespace) -> int:
     from symkin.geometry.builtin_meshes import MESH_SOURCES
     from symkin.geometry.mesh_fit import coverage, fit_builtin, fit_urdf
 
-    if args.samples < 1:
-        raise UserError(f"--samples must be >= 1, got {args.samples}")
     output_file(args.output, "--output")
     key = "_".join(args.robot.strip().lower().replace("-", " ").split())
     if key in MESH_SOURCES:
