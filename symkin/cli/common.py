@@ -31,6 +31,7 @@ __all__ = [
     "split_frame",
     "is_urdf",
     "single_chain",
+    "transformed",
     "chain_or_tree",
     "target",
     "scheduler",
@@ -218,9 +219,14 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 
+def transformed(args: argparse.Namespace) -> bool:
+    """Whether --tool or --base change the robot."""
+    return getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None
+
+
 def _no_transform(args: argparse.Namespace, hint: str) -> None:
     """--tool/--base change one chain: refused for a tree (``hint`` ends the message)."""
-    if getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None:
+    if transformed(args):
         raise UserError(f"--tool/--base change one chain{hint}")
 
 
