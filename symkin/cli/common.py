@@ -30,6 +30,7 @@ __all__ = [
     "add_scale_options",
     "split_frame",
     "is_urdf",
+    "urdf_of",
     "single_chain",
     "transformed",
     "chain_or_tree",
@@ -179,6 +180,12 @@ def split_frame(spec: str) -> tuple[str, str | None]:
 
 def is_urdf(path: str) -> bool:
     return "(" not in path and Path(path.strip()).suffix.lower() in _URDF
+
+
+def urdf_of(args: argparse.Namespace) -> Path | None:
+    """The URDF file ROBOT names (``path.urdf`` or ``path.urdf:FRAME``), or None."""
+    path = split_frame(args.robot)[0] if isinstance(args.robot, str) else None
+    return Path(path).expanduser() if path is not None and is_urdf(path) else None
 
 
 def _end(args: argparse.Namespace, frame: str | None) -> str | None:
@@ -457,13 +464,11 @@ def srdf_carriers(args: argparse.Namespace, model: Any) -> dict[str, tuple[str, 
     """Per link of ``model``'s geometry, the link names an SRDF of ROBOT uses for it: the URDF
     links with collision elements attached to it (a URDF ROBOT), else its own name."""
     links = model.geometry.links
-    path = args.robot if isinstance(args.robot, str) else None
+    path = urdf_of(args)
     if path is not None:
-        path = split_frame(path)[0]
-    if path is not None and is_urdf(path):
         from symkin.geometry.urdf import urdf_carriers
 
-        carriers = urdf_carriers(Path(path).expanduser(), model)
+        carriers = urdf_carriers(path, model)
         return {x: carriers.get(x, (x,)) for x in links}
     return {x: (x,) for x in links}
 

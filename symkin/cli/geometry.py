@@ -18,6 +18,7 @@ from typing import Any
 
 from symkin.cli import common
 from symkin.cli.checks import UserError, at_least_1, output_file, positive_float
+from symkin.core.names import robot_key
 
 __all__ = ["add_parser", "run_fit", "run_builtins"]
 
@@ -117,7 +118,7 @@ def run_fit(args: argparse.Namespace) -> int:
     from symkin.geometry.mesh_fit import coverage, fit_builtin, fit_urdf
 
     output_file(args.output, "--output")
-    key = "_".join(args.robot.strip().lower().replace("-", " ").split())
+    key = robot_key(args.robot)
     if key in MESH_SOURCES:
         fit = fit_builtin(key, args.max_excess)
     elif Path(args.robot).suffix.lower() in (".urdf", ".xml"):
@@ -153,7 +154,7 @@ def run_builtins(args: argparse.Namespace) -> int:
     from symkin.geometry import builtin_store
     from symkin.model.builtin_geometry import COVERING, stored_models
 
-    names = ["_".join(r.strip().lower().replace("-", " ").split()) for r in args.robots] or list(COVERING)
+    names = [robot_key(r) for r in args.robots] or list(COVERING)
     unknown = [n for n in names if n not in COVERING]
     if unknown:
         raise UserError(f"no covering model for {unknown}; built-ins with one: {', '.join(COVERING)}")

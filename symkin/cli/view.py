@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
-from pathlib import Path
 from typing import Any
 
 from symkin.cli import common
@@ -70,12 +69,6 @@ def add_parser(sub: Any) -> None:
     s.set_defaults(func=run)
 
 
-def _urdf(args: argparse.Namespace) -> Path | None:
-    """The URDF file ROBOT names, or None."""
-    path = common.split_frame(args.robot)[0]
-    return Path(path).expanduser() if common.is_urdf(path) else None
-
-
 def _grouped(notes: list[str]) -> list[str]:
     """The URDF reader's notes, the collision meshes it skipped (one each) said in one line."""
     meshes = [x for x in notes if " is a mesh (" in x]
@@ -105,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.view.address import serve_address
 
     address = serve_address(args.host)  # an empty or wildcard host is refused before any work
-    urdf = _urdf(args)
+    urdf = common.urdf_of(args)
     with warnings.catch_warnings(record=True) as caught:  # skipped collision meshes: notes
         warnings.simplefilter("always")
         model, env, _ = common.collision_model(args, tree=True)
