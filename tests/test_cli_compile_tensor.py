@@ -27,4 +27,4 @@ def test_compile_a_chain_and_a_tree_to_a_tensor_backend(backend, tmp_path, capsy
     urdf.write_text(QUADRUPED)
     assert main(["compile", str(urdf), "--backend", backend]) == 0
     out = capsys.readouterr().out
-    assert "frame positions at q = 0" in out and _error(out) < 1e-12
+    assert "frame positions (m)" in out and _error(out) < 1e-12

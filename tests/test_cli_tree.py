@@ -55,9 +55,34 @@ def test_compile_a_tree_with_frames(capsys, quad, tmp_path):
         capsys, "compile", quad, "--frames", "r_foot,l_foot", "--backend", "numpy", "-o", str(tmp_path / "g")
     )
     assert code == 0, out
-    assert "tree of 6 joints and 2 frames: r_foot, l_foot" in out
-    assert "max |fkine_all, jacob0_all - numeric reference| = 0.00e+00" in out or "e-1" in out
+    assert "6 joints and 2 frames: r_foot, l_foot" in out
+    assert "max |fkine, jacob0 - numeric reference| = 0.00e+00" in out or "e-1" in out
     assert (tmp_path / "g" / "symkin_quad_tree.py").exists()
+
+
+def test_compile_reports_a_chain_as_the_tree_of_its_one_frame(capsys, quad):
+    """One report: the chain ``quad.urdf:r_foot`` (a Robot) and the one-frame tree ``--frames
+    r_foot`` (a Tree) print the same pose, Jacobian, manipulability and check; a tree of several
+    frames prints each frame's position; both are checked against the numeric reference."""
+
+    def report(*argv: str) -> list[str]:
+        code, out, _ = run(capsys, "compile", *argv, "--backend", "numpy")
+        assert code == 0, out
+        lines = out.splitlines()
+        check = next(ln for ln in lines if ln.startswith("max |fkine, jacob0 - numeric reference| = "))
+        assert float(check.rsplit("= ", 1)[1]) < 1e-12
+        return lines
+
+    def body(lines: list[str]) -> list[str]:  # what follows the heading, timings and ops, untimed
+        return [ln for ln in lines[3:] if "us per call" not in ln and "numeric reference" not in ln]
+
+    chain, one = report(f"{quad}:r_foot"), report(quad, "--frames", "r_foot")
+    assert "manipulability: " in "\n".join(body(chain)) and body(chain) == body(one)
+    assert chain[0].startswith("quad: 3 joints and 1 frame: ee; ETS (RRR) ")  # a Robot's frame is ee
+    assert one[0] == chain[0].replace("frame: ee;", "frame: r_foot;")
+    tree = report(quad)
+    positions = tree[tree.index("frame positions (m):") + 1 :][:3]
+    assert [ln.split()[0] for ln in positions] == ["l_foot", "tail_tip", "r_foot"]
 
 
 def test_a_branching_urdf_without_a_frame_compiles_every_leaf(capsys, quad):

@@ -16,6 +16,7 @@ from symkin.cli.common import (
     add_robot_argument,
     add_srdf_option,
     single_chain,
+    transformed,
     with_srdf,
 )
 
@@ -125,7 +126,7 @@ def add_parser(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.robot is None:
         args.robot = args.robot_option
-    custom = _custom(args)
+    custom = transformed(args)
     if custom and args.robot is None:
         raise UserError("--tool/--base change a ROBOT: name one (symkin bench WHAT ROBOT --tool ...)")
     check_cflags_for("c")
@@ -148,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(
                 "bench compile measures ROBOT by name in a fresh process; --tool/--base do not apply"
             )
-        joints = _joint_counts(args.joints)
+        joints = _counts(args.joints, "--joints", "joint counts between 1 and 200 like '6,12,24,36'", 200)
         rows = run_compile(
             joints,
             seed=args.seed,
@@ -157,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
             derivatives=args.derivatives,
         )
         table = format_derivatives(rows) if args.derivatives >= 3 else format_compile(rows)
-        print(json.dumps(rows, indent=2) if args.json else table)
+        _show(args, rows, lambda _: table)
         if args.plot:
             plot_compile(rows, args.plot)
             if not args.json:
@@ -170,13 +171,13 @@ def run(args: argparse.Namespace) -> int:
         from symkin.bench.calls import format_calls, run_calls
 
         result = run_calls(spec or "ur5", spec or "panda", seed=args.seed, progress=not args.json)
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_calls(result))
+        _show(args, result, format_calls)
         return 0
     if args.what == "sincos":
         from symkin.bench.sincos import format_sincos, run_sincos
 
         result = run_sincos(spec or "panda", seed=args.seed, progress=not args.json)
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_sincos(result))
+        _show(args, result, format_sincos)
         return 0
     if args.what == "reach":
         from symkin.bench.reach import format_reach, run_reach
@@ -187,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
             single_chain(args, "ur5"), resolution=args.resolution, orientations=args.orientations,
             seed=args.seed, fault=args.fault, progress=not args.json, repeat=args.repeat,
         )  # fmt: skip
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_reach(result))
+        _show(args, result, format_reach)
         return 0
     if args.what == "collide":
         from symkin.bench.collide import format_collide, run_collide
@@ -213,7 +214,7 @@ def run(args: argparse.Namespace) -> int:
                 "bench meshes compares a built-in robot's stored model; --tool/--base do not apply"
             )
         result = run_meshes(args.robot or "panda", n=args.problems or 100_000, seed=args.seed)
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_meshes(result))
+        _show(args, result, format_meshes)
         missed = sum(
             result[k]["counts"]["coal_only"] + result[k]["counts"]["near_coal_only"]
             for k in ("self", "obstacles")
@@ -228,11 +229,11 @@ def run(args: argparse.Namespace) -> int:
         if not args.json:
             print(format_kin(result), flush=True)
         result["trees"] = _trees(args)
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
+        _show(args, result)
         return 0
     if args.what in ("tree", "urdf"):
         code, result = (0, _trees(args)) if args.what == "tree" else _urdf(args)
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else "")
+        _show(args, result)
         return code
     if args.what == "ik" and args.analytic:
         from symkin.bench.analytic_ik import format_analytic, run_analytic
@@ -241,7 +242,7 @@ def run(args: argparse.Namespace) -> int:
         result = run_analytic(
             robots, n=args.problems or 1000, starts=args.starts, seed=args.seed, progress=not args.json
         )
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_analytic(result))
+        _show(args, result, format_analytic)
         return 0
     if args.what == "ik":
         from symkin.bench.ik import format_table1, run_table1
@@ -252,7 +253,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             progress=not args.json,
         )
-        print(json.dumps(result, indent=2, default=_jsonable) if args.json else format_table1(result))
+        _show(args, result, format_table1)
         return 0
     from symkin.bench import mmc
     from symkin.runtime.load import compile as compile_robot
@@ -264,7 +265,7 @@ def run(args: argparse.Namespace) -> int:
     result = mmc.run_table1(
         robots=robots, n_tasks=args.problems or 1000, seed=args.seed, progress=not args.json
     )
-    print(json.dumps(result, indent=2, default=_jsonable) if args.json else mmc.format_table1(result))
+    _show(args, result, mmc.format_table1)
     if args.plot:
         first = robots[0]
         kin = compile_robot(single_chain(args, first), backend="c") if isinstance(first, str) else first
@@ -280,7 +281,7 @@ def _qrmc(args: argparse.Namespace) -> int:
     from symkin.bench import qrmc
     from symkin.runtime.load import compile as compile_robot
 
-    if args.robot is not None or _custom(args):
+    if args.robot is not None or transformed(args):
         raise UserError("bench qrmc runs its own UR5 tasks (and the Panda's with -n); it takes no ROBOT")
     ur5 = compile_robot("ur5", backend="c")
     res = qrmc.run_singular(ur5, progress=not args.json, keep=bool(args.plot))
@@ -290,7 +291,7 @@ def _qrmc(args: argparse.Namespace) -> int:
         for name in (("ur5", "panda") if args.problems else ())
     ]
     out = {"singular": res, "random": random}
-    print(json.dumps(out, indent=2, default=_jsonable) if args.json else qrmc.format_singular(res, random))
+    _show(args, out, lambda _: qrmc.format_singular(res, random))
     if args.plot:
         qrmc.plot_singular({k: runs[k] for k in qrmc.PLOTTED}, ur5.qd_max, args.plot)
         if not args.json:
@@ -298,18 +299,15 @@ def _qrmc(args: argparse.Namespace) -> int:
     return 0
 
 
-def _custom(args: argparse.Namespace) -> bool:
-    """Whether --tool or --base changed the robot (benchmarks then take the Robot, not its name)."""
-    return getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None
-
-
-def _joint_counts(text: str) -> tuple[int, ...]:
+def _counts(text: str, option: str, what: str, most: int | None = None) -> tuple[int, ...]:
+    """The whole numbers from 1 (to ``most``) of ``option``, separated by commas or spaces
+    (``what``: what they must be, with an example)."""
     try:
         counts = tuple(int(x) for x in text.replace(",", " ").split())
     except ValueError:
         counts = ()
-    if not counts or any(c < 1 or c > 200 for c in counts):
-        raise UserError(f"--joints must be joint counts between 1 and 200 like '6,12,24,36', not {text!r}")
+    if not counts or min(counts) < 1 or (most is not None and max(counts) > most):
+        raise UserError(f"{option} must be {what}, not {text!r}")
     return counts
 
 
@@ -337,6 +335,12 @@ def _urdf(args: argparse.Namespace) -> tuple[int, dict]:
     return (0 if sweep["ok"] else 1), sweep
 
 
+def _show(args: argparse.Namespace, result: Any, text: Any = None) -> None:
+    """``result`` as JSON with --json, else ``text(result)`` (nothing when there is no ``text``:
+    the tables were printed as they came)."""
+    print(json.dumps(result, indent=2, default=_jsonable) if args.json else text(result) if text else "")
+
+
 def _jsonable(x: Any) -> Any:
     if isinstance(x, (np.ndarray, np.generic)):
         return x.tolist()
@@ -347,15 +351,10 @@ def _diff(args: argparse.Namespace) -> int:
     """``symkin bench diff``: the JAX and PyTorch backends against pytorch_kinematics."""
     from symkin.bench.diff import format_diff, run_diff
 
-    try:
-        batches = tuple(int(x) for x in args.batches.replace(",", " ").split())
-    except ValueError:
-        batches = ()
-    if not batches or min(batches) < 1:
-        raise UserError(f"--batches must be positive batch sizes like '1,1024,100000', not {args.batches!r}")
+    batches = _counts(args.batches, "--batches", "positive batch sizes like '1,1024,100000'")
     report = run_diff(
         single_chain(args, "panda"), batches=batches, problems=args.problems or 1024, seed=args.seed,
         compile_torch=not args.no_torch_compile, progress=not args.json,
     )  # fmt: skip
-    print(json.dumps(report.as_dict(), indent=2, default=_jsonable) if args.json else format_diff(report))
+    _show(args, report.as_dict(), lambda _: format_diff(report))
     return 0

@@ -8,15 +8,16 @@ import json
 from typing import Any
 
 from symkin.cli.checks import UserError, check_cflags_for, int_at_least
-from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree
+from symkin.cli.common import BACKENDS, add_link_options, add_robot_command, chain_or_tree
 from symkin.compiler.compile import OPTIONAL_BACKENDS
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "check", "compare every backend with the numeric reference and finite differences")
-    add_robot_argument(s)
+    s = add_robot_command(
+        sub, "check", "compare every backend with the numeric reference and finite differences"
+    )
     s.add_argument(
         "--backend",
         action="append",

@@ -16,16 +16,14 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(sub, "collide", "check a configuration for self- and environment collisions")
-    common.add_robot_argument(s)
+    s = common.add_robot_command(sub, "collide", "check a configuration for self- and environment collisions")
     s.add_argument(
         "q",
         nargs="*",
         metavar="Q",
         help="joint values (rad or m), or a named configuration such as qr (default qz)",
     )
-    common.add_obstacle_options(s)
-    common.add_srdf_option(s)
+    common.add_collision_options(s)
     s.add_argument("--backend", choices=("c", "numpy"), default="c", help="the kernel that answers")
     s.add_argument("--top", type=int, default=5, metavar="K", help="print the K closest pairs")
     s.add_argument("--json", action="store_true", help="print JSON")
@@ -36,11 +34,10 @@ def run(args: argparse.Namespace) -> int:
     from symkin.geometry.pairs import layout_of
     from symkin.runtime.load import compile as compile_robot
 
-    robot = common.with_srdf(args, common.single_chain(args, geometry=True))
+    robot, env, _ = common.collision_model(args)
     if args.top < 0:
         raise UserError(f"--top must be >= 0, got {args.top}")
     q = common.configuration(" ".join(args.q), robot, "Q") if args.q else np.zeros(robot.n)
-    env = common.environment_of(args)
     check_cflags_for(args.backend)
     kin = compile_robot(robot, backend=args.backend)
     q = np.asarray(robot.check_q(q), dtype=float).reshape(robot.n)

@@ -23,13 +23,16 @@ __all__ = [
     "Parser",
     "Deprecated",
     "add_command",
+    "add_robot_command",
     "add_robot_argument",
     "add_link_options",
     "add_target_options",
     "add_scale_options",
     "split_frame",
     "is_urdf",
+    "urdf_of",
     "single_chain",
+    "transformed",
     "chain_or_tree",
     "target",
     "scheduler",
@@ -37,10 +40,11 @@ __all__ = [
     "configuration",
     "fmt",
     "add_obstacle_options",
+    "add_collision_options",
+    "collision_model",
     "environment_of",
     "add_srdf_option",
     "with_srdf",
-    "need_collision",
 ]
 
 ROBOT_HELP = (
@@ -96,6 +100,13 @@ class Deprecated(argparse.Action):
 def add_command(sub: Any, name: str, text: str) -> argparse.ArgumentParser:
     """The parser of ``symkin NAME`` (``text`` is its line in ``symkin --help`` and its description)."""
     return sub.add_parser(name, help=text, description=text, formatter_class=Formatter)
+
+
+def add_robot_command(sub: Any, name: str, text: str, default: str | None = None) -> argparse.ArgumentParser:
+    """The parser of ``symkin NAME ROBOT`` (:func:`add_command` with :func:`add_robot_argument`)."""
+    s = add_command(sub, name, text)
+    add_robot_argument(s, default)
+    return s
 
 
 def add_robot_argument(s: argparse.ArgumentParser, default: str | None = None) -> None:
@@ -171,6 +182,12 @@ def is_urdf(path: str) -> bool:
     return "(" not in path and Path(path.strip()).suffix.lower() in _URDF
 
 
+def urdf_of(args: argparse.Namespace) -> Path | None:
+    """The URDF file ROBOT names (``path.urdf`` or ``path.urdf:FRAME``), or None."""
+    path = split_frame(args.robot)[0] if isinstance(args.robot, str) else None
+    return Path(path).expanduser() if path is not None and is_urdf(path) else None
+
+
 def _end(args: argparse.Namespace, frame: str | None) -> str | None:
     end = getattr(args, "end_link", None)
     if frame and end and frame != end:
@@ -209,9 +226,14 @@ def single_chain(args: argparse.Namespace, default: str | None = None, geometry:
     return resolve_robot(robot, tool=tool, base=base_transform)
 
 
+def transformed(args: argparse.Namespace) -> bool:
+    """Whether --tool or --base change the robot."""
+    return getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None
+
+
 def _no_transform(args: argparse.Namespace, hint: str) -> None:
     """--tool/--base change one chain: refused for a tree (``hint`` ends the message)."""
-    if getattr(args, "tool", None) is not None or getattr(args, "base", None) is not None:
+    if transformed(args):
         raise UserError(f"--tool/--base change one chain{hint}")
 
 
@@ -309,22 +331,45 @@ def damaged(summary: dict) -> str:
 
 
 # -- obstacles (collide, plot, reach) --------------------------------------------------------------
+_KINDS = {  # option: JSON key, its numbers, what it is
+    "sphere": ("spheres", "x y z r", "an obstacle sphere"),
+    "capsule": ("capsules", "ax ay az bx by bz r", "an obstacle capsule"),
+    "box": ("boxes", "cx cy cz hx hy hz", "an axis-aligned obstacle box (centre, half side lengths)"),
+}
+
+
 def add_obstacle_options(s: argparse.ArgumentParser) -> None:
     """--sphere, --capsule, --box (repeatable) and --env FILE: obstacles in the base frame."""
-    s.add_argument("--sphere", action="append", default=[], metavar="'X Y Z R'", help="an obstacle sphere")
-    s.add_argument(
-        "--capsule", action="append", default=[], metavar="'AX AY AZ BX BY BZ R'", help="an obstacle capsule"
-    )
-    s.add_argument(
-        "--box", action="append", default=[], metavar="'CX CY CZ HX HY HZ'",
-        help="an axis-aligned obstacle box (centre, half side lengths)",
-    )  # fmt: skip
-    s.add_argument(
-        "--env",
-        metavar="FILE",
-        help='obstacles from JSON: {"spheres": [[x,y,z,r]...], "capsules": [[ax,ay,az,bx,by,bz,r]...], '
-        '"boxes": [[cx,cy,cz,hx,hy,hz]...]} (base frame, m)',
-    )
+    for what, (_, numbers, text) in _KINDS.items():
+        s.add_argument(f"--{what}", action="append", default=[], metavar=f"'{numbers.upper()}'", help=text)
+    rows = ", ".join(f'"{key}": [[{numbers.replace(" ", ",")}]...]' for key, numbers, _ in _KINDS.values())
+    s.add_argument("--env", metavar="FILE", help=f"obstacles from JSON: {{{rows}}} (base frame, m)")
+
+
+def add_collision_options(s: argparse.ArgumentParser, text: str | None = None) -> None:
+    """The obstacles and --srdf, and (``text``: what it does in this command) the --collision
+    they then go with."""
+    if text is not None:
+        s.add_argument("--collision", action="store_true", help=text)
+    add_obstacle_options(s)
+    add_srdf_option(s, "" if text is None else " (with --collision)")
+
+
+def collision_model(args: argparse.Namespace, tree: bool = False) -> tuple[Any, Any, Any]:
+    """(model, obstacles, collision) of a command with obstacles: the Robot of :func:`single_chain`
+    (or, ``tree``, the Robot or Tree of :func:`chain_or_tree`) with a URDF's collision geometry and
+    --srdf applied, the obstacles of :func:`environment_of`, and what the solvers take as
+    ``collision`` (None without --collision, else the obstacles, or True for self-collisions
+    alone). Obstacles and --srdf of a command with --collision are refused without it; a command
+    without that option (plot, collide, view) always has the geometry."""
+    on = getattr(args, "collision", True)
+    model = (chain_or_tree if tree else single_chain)(args, geometry=on)
+    env = environment_of(args)
+    if (len(env) or getattr(args, "srdf", None)) and not on:
+        raise UserError(
+            "--sphere, --capsule, --box, --env and --srdf are options of --collision: add --collision"
+        )
+    return with_srdf(args, model), env, (env if len(env) else True) if on else None
 
 
 def environment_of(args: argparse.Namespace) -> Any:
@@ -333,13 +378,14 @@ def environment_of(args: argparse.Namespace) -> Any:
     from symkin.model.geometry import Environment
 
     shapes: dict[str, list[Any]] = {what: [] for what in _KINDS}
-    for what, (_, size) in _KINDS.items():
+    for what, (_, numbers, _) in _KINDS.items():
+        size = len(numbers.split())
         for text in getattr(args, what):
             shapes[what].append(_shape(what, floats(text, f"--{what}", size), f"--{what} {text!r}"))
     if args.env:
         data = _env_file(Path(args.env).expanduser())
-        for what, (key, size) in _KINDS.items():
-            rows = data.get(key, [])
+        for what, (key, numbers, _) in _KINDS.items():
+            rows, size = data.get(key, []), len(numbers.split())
             if not isinstance(rows, list):
                 raise UserError(
                     f"--env {args.env}: {key} must be a list of rows of {size} numbers, not {_json(rows)}"
@@ -360,7 +406,6 @@ def environment_of(args: argparse.Namespace) -> Any:
     return Environment(*(tuple(shapes[what]) for what in _KINDS))
 
 
-_KINDS = {"sphere": ("spheres", 4), "capsule": ("capsules", 7), "box": ("boxes", 6)}  # option: key, numbers
 _ENV_BYTES = 64 * 2**20  # an obstacle file larger than this is refused before it is read
 
 
@@ -415,25 +460,15 @@ def add_srdf_option(s: argparse.ArgumentParser, when: str = "") -> None:
     )
 
 
-def need_collision(args: argparse.Namespace, env: Any) -> None:
-    """Obstacles and --srdf are options of --collision (ik, servo, reach): refused without it."""
-    if (len(env) or getattr(args, "srdf", None)) and not args.collision:
-        raise UserError(
-            "--sphere, --capsule, --box, --env and --srdf are options of --collision: add --collision"
-        )
-
-
 def srdf_carriers(args: argparse.Namespace, model: Any) -> dict[str, tuple[str, ...]]:
     """Per link of ``model``'s geometry, the link names an SRDF of ROBOT uses for it: the URDF
     links with collision elements attached to it (a URDF ROBOT), else its own name."""
     links = model.geometry.links
-    path = args.robot if isinstance(args.robot, str) else None
+    path = urdf_of(args)
     if path is not None:
-        path = split_frame(path)[0]
-    if path is not None and is_urdf(path):
         from symkin.geometry.urdf import urdf_carriers
 
-        carriers = urdf_carriers(Path(path).expanduser(), model)
+        carriers = urdf_carriers(path, model)
         return {x: carriers.get(x, (x,)) for x in links}
     return {x: (x,) for x in links}
 
@@ -446,7 +481,8 @@ def with_srdf(args: argparse.Namespace, model: Any) -> Any:
     path = getattr(args, "srdf", None)
     if path is None:
         return model
-    from symkin.geometry.srdf import srdf_disabled
+    from symkin.core.names import listed
+    from symkin.geometry.srdf import pairs_text, srdf_disabled
 
     geometry = model.geometry
     if geometry is None or not geometry.shapes:
@@ -455,16 +491,14 @@ def with_srdf(args: argparse.Namespace, model: Any) -> Any:
     pairs, partial, used = srdf_disabled(Path(path).expanduser(), carriers)
     if not used:
         names = sorted({x for c in carriers.values() for x in c})
-        shown = ", ".join(names[:6]) + (" ..." if len(names) > 6 else "")
         raise UserError(
             f"--srdf {path}: none of its disable_collisions pairs names two links of {model.name} with "
-            f"collision geometry ({shown}): an SRDF of another robot?"
+            f"collision geometry ({listed(names, 6)}): an SRDF of another robot?"
         )
     if partial:
-        shown = ", ".join(f"({a}, {b})" for a, b in partial[:4]) + (" ..." if len(partial) > 4 else "")
         print(
             f"symkin: --srdf: {len(partial)} link pairs stay checked, the SRDF disabling only some of the "
-            f"links merged into them: {shown}",
+            f"links merged into them: {pairs_text(partial, 4)}",
             file=sys.stderr,
         )
     return model.with_geometry(geometry.with_disabled(pairs))

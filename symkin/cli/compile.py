@@ -10,17 +10,17 @@ from typing import Any
 import numpy as np
 
 from symkin.cli.checks import UserError, check_cflags_for, output_dir
-from symkin.cli.common import BACKENDS, add_command, add_link_options, add_robot_argument, chain_or_tree, fmt
+from symkin.cli.common import BACKENDS, add_link_options, add_robot_command, chain_or_tree, fmt
 from symkin.compiler.compile import OPTIONAL_BACKENDS
 from symkin.errors import SymkinError
+from symkin.model.differential import manipulability_one
 from symkin.model.tree import as_tree
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = add_command(sub, "compile", "generate (and build) the kinematics code of a robot")
-    add_robot_argument(s)
+    s = add_robot_command(sub, "compile", "generate (and build) the kinematics code of a robot")
     s.add_argument("--backend", choices=(*BACKENDS, *OPTIONAL_BACKENDS), default="c", help="code to generate")
     s.add_argument(
         "-o",
@@ -73,10 +73,6 @@ def run(args: argparse.Namespace) -> int:
     model = chain_or_tree(args)
     out = output_dir(args.output) if args.output else None
     check_cflags_for(args.backend)
-    try:
-        chain = model.chain()  # a Robot itself, or a tree's one serial chain
-    except SymkinError:  # several frames, or a mimic joint on the path
-        chain = None
     command, options = _command(args, model)
     t0 = time.perf_counter()
     files = generate(model, args.backend, command, **options)
@@ -99,20 +95,14 @@ def run(args: argparse.Namespace) -> int:
     t_build = time.perf_counter() - t1
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
-    if chain is None:
-        frames = ", ".join(kin.frames)
-        print(f"{model.name}: tree of {model.n} joints and {len(kin.frames)} frames: {frames}")
-    else:
-        print(f"{model.name}: {model.n} joints ({chain.ets.structure}), ETS {chain.ets}")
+    print(_heading(model, kin.frames))
     print(f"backend {args.backend}: derived + generated in {t_gen:.2f} s, built/loaded in {t_build:.2f} s")
     if ops:
         print(f"operations: {ops}")
-    if args.backend in OPTIONAL_BACKENDS:
-        _tensor_report(model, kin, chain is None)
-    elif chain is None:
-        _tree_report(model, kin.fkine_jacob0_all)
+    if args.backend in OPTIONAL_BACKENDS:  # the library's float64 arrays; timed by `symkin bench diff`
+        _report(model, kin, _on_numpy(kin, kin.fkine_jacob0_all), f", {kin.backend} float64", timed=False)
     else:
-        _chain_report(model, kin)
+        _report(model, kin, kin.fkine_jacob0_all)
     if args.derivatives >= 3:
         _derivative_report(model, kin, args.derivatives)
     return 0
@@ -167,59 +157,55 @@ def _derivative_report(model: Any, kin: Any, order: int) -> None:
     print(f"derivative{order}: {per_call:.2f} us per call")
 
 
-def _chain_report(robot: Any, kin: Any) -> None:
-    """The pose, Jacobian and manipulability at the ready pose, checked against the reference."""
-    q = robot.configs.get("qr", robot.configs["qz"])
-    qname = "qr" if "qr" in robot.configs else "qz"
-    print(f"\nat {qname} = {fmt(q)}:")
-    print(f"fkine (4x4):\n{fmt(kin.fkine(q))}")
-    print(f"jacob0 (6x{robot.n}, rows v, omega):\n{fmt(kin.jacob0(q))}")
-    print(f"manipulability: {float(kin.manipulability(q)):.6g}")
-    err = float(np.abs(kin.jacob0(q) - robot.jacob0(q)).max())
-    print(f"max |jacob0 - numeric reference| = {err:.2e}")
-    print(f"jacob0: {_us_per_call(kin.jacob0, q):.2f} us per call from Python")
+def _heading(model: Any, frames: tuple[str, ...]) -> str:
+    """What was compiled: the joints and frames, and a serial chain's ETS."""
+    names = f"{len(frames)} frame{'s' * (len(frames) > 1)}: {', '.join(frames)}"
+    try:
+        chain = model.chain()  # a Robot itself, or a tree's one serial chain
+    except SymkinError:  # several frames, or a mimic joint on the path
+        return f"{model.name}: {model.n} joints and {names}"
+    return f"{model.name}: {model.n} joints and {names}; ETS ({chain.ets.structure}) {chain.ets}"
 
 
-def _tensor_report(model: Any, kin: Any, tree: bool) -> None:
-    """JAX/PyTorch kinematics in float64 arrays of the library: a tree's frames as
-    :func:`_tree_report` shows them (untimed), a chain's pose and Jacobian at the ready pose, each
-    checked against the numeric reference."""
+def _report(model: Any, kin: Any, fkjac: Any, note: str = "", timed: bool = True) -> None:
+    """Every frame's pose and Jacobian at the ready configuration (``qr``, else ``qz``) by ``fkjac``
+    (a NumPy ``fkine_jacob0_all`` of ``kin``: (F, 4, 4), (F, 6, n); ``note`` ends the heading),
+    checked against the numeric reference; when ``timed``, the time of the generated call of every
+    frame (``fkine_jacob0`` of one frame, ``fkine_jacob0_all`` of several). One frame (a serial
+    chain) is shown whole with its manipulability (Haviland and Corke, Manipulator Differential
+    Kinematics, Part 1, 2023, eq 52), several by their positions."""
+    qname = "qr" if "qr" in model.configs else "qz"
+    q = model.configs[qname]
+    T, J = fkjac(q)
+    one = len(kin.frames) == 1
+    print(f"\nat {qname} = {fmt(q)}{note}:")
+    if one:
+        print(f"fkine (4x4):\n{fmt(T[0])}")
+        print(f"jacob0 (6x{model.n}, rows v, omega):\n{fmt(J[0])}")
+        print(f"manipulability: {manipulability_one(J[0]):.6g}")
+    else:
+        print("frame positions (m):")
+        for f, Tf in zip(kin.frames, T):
+            print(f"  {f:24} {fmt(Tf[:3, 3])}")
+    Tr, Jr = as_tree(model).fkine_jacob0_all(q)
+    err = max(float(np.abs(T - Tr).max()), float(np.abs(J - Jr).max()))
+    print(f"max |fkine, jacob0 - numeric reference| = {err:.2e}")
+    if timed:
+        name = "fkine_jacob0" if one else "fkine_jacob0_all"
+        print(f"{name}: {_us_per_call(getattr(kin, name), q):.2f} us per call from Python")
+
+
+def _on_numpy(kin: Any, fn: Any) -> Any:
+    """``fn`` of JAX/PyTorch kinematics on float64 NumPy arrays: NumPy in (a writable copy), NumPy out."""
     if kin.backend == "jax":
         kin.ops.jax.config.update("jax_enable_x64", True)  # float64 in JAX is opt-in
     xp = kin.ops.xp
 
-    def on_numpy(fn: Any) -> Any:  # NumPy in (a writable copy), NumPy out
-        def call(q: np.ndarray) -> Any:
-            out = fn(xp.asarray(np.array(q, dtype=float), dtype=xp.float64))
-            return tuple(kin.ops.numpy(a) for a in out) if isinstance(out, tuple) else kin.ops.numpy(out)
+    def call(q: np.ndarray) -> Any:
+        out = fn(xp.asarray(np.array(q, dtype=float), dtype=xp.float64))
+        return tuple(kin.ops.numpy(a) for a in out) if isinstance(out, tuple) else kin.ops.numpy(out)
 
-        return call
-
-    if tree:
-        _tree_report(model, on_numpy(kin.fkine_jacob0_all), f", {kin.backend} float64", timed=False)
-        return
-    q = model.configs.get("qr", model.configs["qz"])
-    T, J = on_numpy(kin.fkine)(q), on_numpy(kin.jacob0)(q)
-    print(f"\nat {'qr' if 'qr' in model.configs else 'qz'} = {fmt(q)}, {kin.backend} float64:")
-    print(f"fkine (4x4):\n{fmt(T)}")
-    print(f"jacob0 (6x{model.n}, rows v, omega):\n{fmt(J)}")
-    err = max(float(np.abs(T - model.fkine(q)).max()), float(np.abs(J - model.jacob0(q)).max()))
-    print(f"max |fkine, jacob0 - numeric reference| = {err:.2e}")
-
-
-def _tree_report(tree: Any, fkjac: Any, note: str = "", timed: bool = True) -> None:
-    """Every frame's position at q = 0 by ``fkjac`` (a NumPy ``fkine_jacob0_all``; ``note`` ends the
-    heading), checked against the reference, and its time per call when ``timed``."""
-    q = np.zeros(tree.n)
-    T, J = fkjac(q)
-    Tr, Jr = tree.fkine_jacob0_all(q)
-    print(f"\nframe positions at q = 0 (m){note}:")
-    for f, Tf in zip(tree.frames, T):
-        print(f"  {f:24} {np.array2string(Tf[:3, 3], precision=5, suppress_small=True)}")
-    err = max(float(np.abs(T - Tr).max()), float(np.abs(J - Jr).max()))
-    print(f"max |fkine_all, jacob0_all - numeric reference| = {err:.2e}")
-    if timed:
-        print(f"fkine_jacob0_all (every frame): {_us_per_call(fkjac, q):.2f} us per call from Python")
+    return call
 
 
 def _us_per_call(function: Any, q: np.ndarray, reps: int = 2000) -> float:

@@ -13,8 +13,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(sub, "dataset", "a (q, pose) dataset for learning (Zarr, on Dask)")
-    common.add_robot_argument(s)
+    s = common.add_robot_command(sub, "dataset", "a (q, pose) dataset for learning (Zarr, on Dask)")
     s.add_argument("-n", type=at_least_1, required=True, help="number of samples (more than stored appends)")
     s.add_argument("-o", "--output", required=True, metavar="STORE", help="the Zarr store, e.g. data.zarr")
     s.add_argument("--chunk", type=at_least_1, default=65536, help="samples per block (default 65536)")

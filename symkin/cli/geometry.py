@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from symkin.cli import common
-from symkin.cli.checks import UserError, output_file, positive_float
+from symkin.cli.checks import UserError, at_least_1, output_file, positive_float
+from symkin.core.names import robot_key
 
 __all__ = ["add_parser", "run_fit", "run_builtins"]
 
@@ -43,7 +44,7 @@ def add_parser(sub: Any) -> None:
     )  # fmt: skip
     f.add_argument(
         "--samples",
-        type=int,
+        type=at_least_1,
         default=20_000,
         metavar="N",
         help="mesh points drawn per mesh for the coverage check",
@@ -116,10 +117,8 @@ def run_fit(args: argparse.Namespace) -> int:
     from symkin.geometry.builtin_meshes import MESH_SOURCES
     from symkin.geometry.mesh_fit import coverage, fit_builtin, fit_urdf
 
-    if args.samples < 1:
-        raise UserError(f"--samples must be >= 1, got {args.samples}")
     output_file(args.output, "--output")
-    key = "_".join(args.robot.strip().lower().replace("-", " ").split())
+    key = robot_key(args.robot)
     if key in MESH_SOURCES:
         fit = fit_builtin(key, args.max_excess)
     elif Path(args.robot).suffix.lower() in (".urdf", ".xml"):
@@ -155,7 +154,7 @@ def run_builtins(args: argparse.Namespace) -> int:
     from symkin.geometry import builtin_store
     from symkin.model.builtin_geometry import COVERING, stored_models
 
-    names = ["_".join(r.strip().lower().replace("-", " ").split()) for r in args.robots] or list(COVERING)
+    names = [robot_key(r) for r in args.robots] or list(COVERING)
     unknown = [n for n in names if n not in COVERING]
     if unknown:
         raise UserError(f"no covering model for {unknown}; built-ins with one: {', '.join(COVERING)}")

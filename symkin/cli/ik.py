@@ -17,8 +17,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(sub, "ik", "solve inverse kinematics for one target pose")
-    common.add_robot_argument(s)
+    s = common.add_robot_command(sub, "ik", "solve inverse kinematics for one target pose")
     common.add_target_options(s, "first start of the search (default: random within the joint limits)")
     s.add_argument(
         "--method",
@@ -65,26 +64,20 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--ilimit", type=at_least_1, help="iterations per search (default 30)")
     s.add_argument("--slimit", type=at_least_1, help="searches from random starts (default 100)")
     s.add_argument("--seed", type=int, default=0, help="seed of the random restarts")
-    s.add_argument(
-        "--collision",
-        action="store_true",
-        help="only a solution free of self-collisions and of the obstacles given (the robot's geometry; "
+    common.add_collision_options(
+        s,
+        "only a solution free of self-collisions and of the obstacles given (the robot's geometry; "
         "a converged solution in collision starts the next search)",
     )
-    common.add_obstacle_options(s)
-    common.add_srdf_option(s, " (with --collision)")
     s.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
 
-    robot = common.single_chain(args, geometry=args.collision)
-    env = common.environment_of(args)
-    common.need_collision(args, env)
     if args.collision and (args.all or args.method == "analytic"):
         raise UserError("--collision applies to the numerical methods NR, GN and LM, not the closed form")
-    robot = common.with_srdf(args, robot)
+    robot, _, collision = common.collision_model(args)
     Tep = common.target(args, robot)
     numerical = {"--we": args.we, "--lam": args.lam, "--ilimit": args.ilimit, "--slimit": args.slimit}
     qp = {f"--{k.replace('_', '-')}": getattr(args, k) for k in _QP_OPTIONS}
@@ -102,8 +95,8 @@ def run(args: argparse.Namespace) -> int:
         return _ik_analytic(args, compile_robot(robot, backend=args.backend), Tep)
     kin = compile_robot(robot, backend=args.backend)
     kwargs: dict[str, Any] = {"method": args.method, "seed": args.seed}
-    if args.collision:
-        kwargs["collision"] = env if len(env) else True
+    if collision is not None:
+        kwargs["collision"] = collision
     if args.q0 is not None:
         kwargs["q0"] = common.floats(args.q0, "--q0", robot.n)
     if args.we is not None:

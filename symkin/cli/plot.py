@@ -13,10 +13,9 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(
+    s = common.add_robot_command(
         sub, "plot", "draw a robot (links, frames, collision shapes, obstacles, velocity ellipsoid) as PNG"
     )
-    common.add_robot_argument(s)
     s.add_argument(
         "--q", metavar="'Q...'", help="joint values, or a configuration name like qr (default qr, else qz)"
     )
@@ -30,13 +29,12 @@ def add_parser(sub: Any) -> None:
         action="store_true",
         help="leave out the collision shapes (drawn when the robot has them)",
     )
-    common.add_obstacle_options(s)
-    common.add_srdf_option(s)
+    common.add_collision_options(s)
     s.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = common.with_srdf(args, common.single_chain(args, geometry=True))
+    robot, env, _ = common.collision_model(args)
     if args.q is None:
         q = robot.configs.get("qr", robot.configs["qz"])
     else:
@@ -45,7 +43,6 @@ def run(args: argparse.Namespace) -> int:
         import matplotlib  # noqa: F401
     except ImportError:
         raise UserError("plot needs matplotlib: pip install 'symkin[plot]'") from None
-    env = common.environment_of(args)
     highlight: list[int] = []
     note = ""
     if robot.geometry is not None and not args.no_geometry:

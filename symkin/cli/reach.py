@@ -16,10 +16,9 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(
+    s = common.add_robot_command(
         sub, "reach", "reachability and manipulability map of the workspace (Zarr, on Dask)"
     )
-    common.add_robot_argument(s)
     s.add_argument(
         "--resolution", type=positive_float, default=0.05, help="voxel edge in metres (default 0.05)"
     )
@@ -37,13 +36,9 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--plot", metavar="PNG", help="write a slice of the map (reachability, manipulability)")
     s.add_argument("--slice-axis", choices=("x", "y", "z"), default="z", help="plot: axis of the slice")
     s.add_argument("--slice-at", type=float, help="plot: coordinate of the slice (default: the centre)")
-    s.add_argument(
-        "--collision",
-        action="store_true",
-        help="count only collision-free solutions (self-collisions, and the obstacles given)",
+    common.add_collision_options(
+        s, "count only collision-free solutions (self-collisions, and the obstacles given)"
     )
-    common.add_obstacle_options(s)
-    common.add_srdf_option(s, " (with --collision)")
     common.add_scale_options(s)
     s.set_defaults(func=run)
 
@@ -53,14 +48,10 @@ def run(args: argparse.Namespace) -> int:
     from symkin.workspace.run import require_scale
 
     require_scale(common.scheduler(args))  # before compiling: say which extra is missing at once
-    robot = common.single_chain(args, geometry=args.collision)
+    robot, _, collision = common.collision_model(args)
     bounds = None if args.bounds is None else common.floats(args.bounds, "--bounds", 6).reshape(3, 2)
     axes: Any = args.axes if args.axes in ("all", "trans", "rot") else _rows(args.axes)
     ik_options = {"slimit": args.slimit, "ilimit": args.ilimit}
-    env = common.environment_of(args)
-    common.need_collision(args, env)
-    robot = common.with_srdf(args, robot)
-    collision = (env if len(env) else True) if args.collision else None
     rmap = reachability(
         robot, args.resolution, args.orientations, output=args.output, seed=args.seed,
         solutions=args.solutions, axes=axes, bounds=bounds, radius=args.radius, chunk=args.chunk,

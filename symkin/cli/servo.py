@@ -16,8 +16,9 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(sub, "servo", "servo to a target pose with RRMC, QRMC or MMC, optionally plotting")
-    common.add_robot_argument(s)
+    s = common.add_robot_command(
+        sub, "servo", "servo to a target pose with RRMC, QRMC or MMC, optionally plotting"
+    )
     common.add_target_options(s, "start configuration (default: the ready pose qr, else qz)")
     s.add_argument(
         "--controller",
@@ -29,16 +30,13 @@ def add_parser(sub: Any) -> None:
     s.add_argument("--max-steps", type=int_at_least(0), default=500, help="give up after this many steps")
     s.add_argument("--joint-limits", action="store_true", help="MMC: velocity dampers keep joints in limits")
     s.add_argument("--plot", metavar="PNG", help="write manipulability and error against time")
-    s.add_argument(
-        "--collision",
-        action="store_true",
-        help="MMC: avoid self-collisions and the obstacles given (the robot's geometry; NEO's velocity "
+    common.add_collision_options(
+        s,
+        "MMC: avoid self-collisions and the obstacles given (the robot's geometry; NEO's velocity "
         "dampers on the closest pairs)",
     )
     s.add_argument("--d-i", type=positive_float, default=0.3, help="--collision: influence distance (m)")
     s.add_argument("--d-s", type=positive_float, default=0.02, help="--collision: safety distance (m)")
-    common.add_obstacle_options(s)
-    common.add_srdf_option(s, " (with --collision)")
     s.set_defaults(func=run)
 
 
@@ -46,10 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.runtime.load import compile as compile_robot
     from symkin.runtime.loop import servo
 
-    robot = common.single_chain(args, geometry=args.collision)
-    env = common.environment_of(args)
-    common.need_collision(args, env)
-    robot = common.with_srdf(args, robot)
+    robot, env, collision = common.collision_model(args)
     if args.collision and args.controller != "mmc":
         raise UserError("--collision needs the MMC controller (--controller mmc)")
     if args.collision and not args.d_i > args.d_s:
@@ -67,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
             kin,
             joint_limits=args.joint_limits,
             dt=args.dt,
-            collision=env if len(env) else True,
+            collision=collision,
             d_i=args.d_i,
             d_s=args.d_s,
         )

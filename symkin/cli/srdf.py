@@ -17,12 +17,11 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(
+    s = common.add_robot_command(
         sub,
         "srdf",
         "write a MoveIt SRDF disabling adjacent link pairs and pairs proved apart over the joint limits",
     )
-    common.add_robot_argument(s)
     common.add_link_options(s, frames=True)
     s.add_argument("-o", "--output", metavar="FILE", help="file to write (default: print it)")
     s.add_argument(
@@ -40,19 +39,18 @@ def add_parser(sub: Any) -> None:
 def _model(args: argparse.Namespace) -> tuple[Any, str, dict[str, tuple[str, ...]] | None, str]:
     """(model with its geometry, the robot's name in the SRDF, the URDF links each model link
     carries (None: a built-in robot, named as symkin names it), a note on what was left out)."""
-    path = common.split_frame(args.robot)[0]
+    file = common.urdf_of(args)
     model = common.chain_or_tree(args)
-    if not common.is_urdf(path):
+    if file is None:
         if args.mesh_spheres:
             raise UserError("--mesh-spheres applies to a URDF ROBOT")
         return model, model.name, None, ""
     from symkin.geometry.urdf import urdf_carriers, urdf_geometry
     from symkin.model.urdf import read_graph
 
-    file = Path(path).expanduser()
     geometry, skipped = urdf_geometry(file, model, mesh_spheres=args.mesh_spheres)
     if not geometry.shapes:
-        raise UserError(f"{path} has no <collision> shapes symkin reads (sphere, cylinder, capsule, box)")
+        raise UserError(f"{file} has no <collision> shapes symkin reads (sphere, cylinder, capsule, box)")
     model = model.with_geometry(geometry)
     carriers = {k: tuple(x for x in v if x not in skipped) for k, v in urdf_carriers(file, model).items()}
     note = f"Left out (collision elements symkin did not read): {', '.join(skipped)}." if skipped else ""

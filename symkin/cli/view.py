@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
-from pathlib import Path
 from typing import Any
 
 from symkin.cli import common
@@ -30,13 +29,12 @@ def _port(text: str) -> int:
 
 
 def add_parser(sub: Any) -> None:
-    s = common.add_command(
+    s = common.add_robot_command(
         sub,
         "view",
         "live browser view of a chain or a tree: frame selector, joint sliders, meshes, velocity "
         "ellipsoid, manipulability, J, collision shapes and the closest pair, IK gizmo",
     )
-    common.add_robot_argument(s)
     s.add_argument(
         "--q",
         metavar="'Q...'",
@@ -67,15 +65,8 @@ def add_parser(sub: Any) -> None:
     )
     s.add_argument("--backend", choices=common.BACKENDS, default="c", help="kinematics backend")
     common.add_link_options(s, frames=True)
-    common.add_obstacle_options(s)
-    common.add_srdf_option(s)
+    common.add_collision_options(s)
     s.set_defaults(func=run)
-
-
-def _urdf(args: argparse.Namespace) -> Path | None:
-    """The URDF file ROBOT names, or None."""
-    path = common.split_frame(args.robot)[0]
-    return Path(path).expanduser() if common.is_urdf(path) else None
 
 
 def _grouped(notes: list[str]) -> list[str]:
@@ -107,14 +98,12 @@ def run(args: argparse.Namespace) -> int:
     from symkin.view.address import serve_address
 
     address = serve_address(args.host)  # an empty or wildcard host is refused before any work
-    urdf = _urdf(args)
+    urdf = common.urdf_of(args)
     with warnings.catch_warnings(record=True) as caught:  # skipped collision meshes: notes
         warnings.simplefilter("always")
-        model = common.chain_or_tree(args, geometry=True)
-        model = common.with_srdf(args, model)
+        model, env, _ = common.collision_model(args, tree=True)
     notes = _grouped([str(w.message) for w in caught])
     q = None if args.q is None else common.configuration(args.q, model, "--q")
-    env = common.environment_of(args)
     kin = compile_robot(model, backend=args.backend)
     with warnings.catch_warnings():  # said below as one line
         warnings.filterwarnings("ignore", message="serving on every interface")

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import hashlib
 import re
+from collections.abc import Sequence
 
-__all__ = ["IDENTIFIER_MAX", "identifier", "comment_safe", "c_string", "function_name"]
+__all__ = ["IDENTIFIER_MAX", "identifier", "comment_safe", "c_string", "function_name", "listed", "robot_key"]
 
 IDENTIFIER_MAX = 40  # longest identifier(): C symbols, module and file names stay short
 
@@ -64,3 +65,15 @@ def function_name(kind: str, frame: int | None, frames: int) -> str:
     (``<prefix>_fkine``) or a function of every frame (``frame=None``, ``fkine_all``), else
     ``<kind>_<frame>`` (``<prefix>_fkine_3``)."""
     return kind if frame is None or frames == 1 else f"{kind}_{frame}"
+
+
+def listed(texts: Sequence[str], most: int) -> str:
+    """The first ``most`` of ``texts`` joined by commas, ending `` ...`` when there are more (what
+    a message shows of a long list)."""
+    return ", ".join(texts[:most]) + (" ..." if len(texts) > most else "")
+
+
+def robot_key(name: str) -> str:
+    """A built-in robot's key from its name as people write it: case-insensitive, ``-`` and
+    spaces read as ``_`` (``"LBR-iiwa7"`` -> ``"lbr_iiwa7"``)."""
+    return "_".join(name.strip().lower().replace("-", " ").split())

@@ -25,15 +25,16 @@ from __future__ import annotations
 
 import itertools
 import warnings
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
 
+from symkin.core.names import listed
 from symkin.errors import GeometryError, URDFError
 from symkin.model.urdf import load_xml
 
-__all__ = ["read_srdf", "srdf_disabled", "disabled_pairs", "write_srdf"]
+__all__ = ["read_srdf", "srdf_disabled", "disabled_pairs", "write_srdf", "pairs_text"]
 
 
 def _entries(path_or_xml: str | Path) -> tuple[list[tuple[str, str]], str]:
@@ -73,13 +74,11 @@ def read_srdf(
         return tuple(sorted({(a, b) if a <= b else (b, a) for a, b in entries if a != b}))
     get = names.get if isinstance(names, Mapping) else names
     dropped = [(a, b) for a, b in entries if get(a) is None or get(b) is None or get(a) == get(b)]
-    if dropped:
-        shown = ", ".join(f"({a}, {b})" for a, b in dropped[:5]) + (" ..." if len(dropped) > 5 else "")
-        warnings.warn(
-            f"{where}: {len(dropped)} disable_collisions pairs name links the model does not have or "
-            f"that fall on one model link: dropped {shown}",
-            stacklevel=2,
-        )
+    _warn(
+        where,
+        dropped,
+        "disable_collisions pairs name links the model does not have or that fall on one model link: dropped",
+    )
     known = names.keys() if isinstance(names, Mapping) else {x for p in entries for x in p}
     carriers: dict[str, list[str]] = {}
     for x in sorted(known):
@@ -87,14 +86,19 @@ def read_srdf(
         if m is not None:
             carriers.setdefault(m, []).append(x)
     disabled, partial = _conservative({frozenset(p) for p in entries if p[0] != p[1]}, carriers)
-    if partial:
-        shown = ", ".join(f"({a}, {b})" for a, b in partial[:5]) + (" ..." if len(partial) > 5 else "")
-        warnings.warn(
-            f"{where}: {len(partial)} model link pairs stay checked, the SRDF disabling only some of "
-            f"the links on them: {shown}",
-            stacklevel=2,
-        )
+    _warn(where, partial, "model link pairs stay checked, the SRDF disabling only some of the links on them:")
     return disabled
+
+
+def pairs_text(pairs: Sequence[tuple[str, str]], most: int) -> str:
+    """``(a, b), (c, d) ...``: the first ``most`` link pairs, as messages show them."""
+    return listed([f"({a}, {b})" for a, b in pairs], most)
+
+
+def _warn(where: str, pairs: Sequence[tuple[str, str]], what: str) -> None:
+    """A warning (to the caller of :func:`read_srdf`) naming the first five ``pairs``, if any."""
+    if pairs:
+        warnings.warn(f"{where}: {len(pairs)} {what} {pairs_text(pairs, 5)}", stacklevel=3)
 
 
 def _conservative(

@@ -28,6 +28,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from symkin.core.names import robot_key
 from symkin.model.geometry import Geometry, Sphere
 
 __all__ = ["builtin_geometry", "BUILTIN_GEOMETRY", "COVERING", "DEFAULT_EXCESS", "stored_models", "STORE"]
@@ -133,6 +134,6 @@ def builtin_geometry(name: str) -> Geometry | None:
     robot's links (module docstring), metres."""
     if not isinstance(name, str):
         return None
-    key = "_".join(name.strip().lower().replace("-", " ").split())
+    key = robot_key(name)
     build = _MODELS.get(key)
     return build() if build is not None else None

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from symkin.core.names import robot_key
 from symkin.errors import UnknownRobotError
 from symkin.model.dh import DHLink
 from symkin.model.ets import ET, ETS
@@ -282,7 +283,7 @@ def load(name: str) -> Robot:
         raise UnknownRobotError(
             f"a robot name must be a string, not {type(name).__name__}; available: {', '.join(list_robots())}"
         )
-    key = "_".join(name.strip().lower().replace("-", " ").split())
+    key = robot_key(name)
     if key not in _BUILDERS:
         close = difflib.get_close_matches(key, list_robots(), n=3, cutoff=0.5)
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""

@@ -278,23 +278,23 @@ static PyObject *bound_ik_call_(PyObject *op, PyObject *const *args, size_t narg
     return PyObject_Vectorcall(b->fallback, args, nargsf, kwnames);
 }
 
+/* The references a bound solver owns, in one list: the garbage collector visits them, and clearing
+ * (a cycle broken, the object freed) drops them. */
+#define BOUND_IK_REFS_(F) F(reason) F(fallback) F(owner) F(by_options)
+#define BOUND_IK_VISIT_(member) Py_VISIT(b->member);
+#define BOUND_IK_CLEAR_(member) Py_CLEAR(b->member);
+
 static int bound_ik_traverse_(PyObject *op, visitproc visit, void *arg)
 {
     bound_ik_ *b = (bound_ik_ *)op;
-    Py_VISIT(b->reason);
-    Py_VISIT(b->fallback);
-    Py_VISIT(b->owner);
-    Py_VISIT(b->by_options);
+    BOUND_IK_REFS_(BOUND_IK_VISIT_)
     return 0;
 }
 
 static int bound_ik_clear_(PyObject *op)
 {
     bound_ik_ *b = (bound_ik_ *)op;
-    Py_CLEAR(b->reason);
-    Py_CLEAR(b->fallback);
-    Py_CLEAR(b->owner);
-    Py_CLEAR(b->by_options);
+    BOUND_IK_REFS_(BOUND_IK_CLEAR_)
     return 0;
 }
 
