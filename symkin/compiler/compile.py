@@ -208,24 +208,14 @@ def derived_functions(model: Model, strategy: str | None = None, derivatives: in
     sympy), then its derivatives of orders 3..``derivatives``
     (:func:`symkin.symbolic.functions.derivative_functions`), memoised by its tree's structure and
     the strategy (the derivatives by the orders): shared by the backends."""
+    from symkin.symbolic.functions import derivative_functions, kin_functions
+
     tree = as_tree(model)
-    functions = _memo((tree.key, str(strategy)), lambda: _kin_functions(tree, strategy))
+    functions = _memo((tree.key, str(strategy)), lambda: kin_functions(tree, strategy))
     if derivatives >= 3:
         orders = tuple(range(3, derivatives + 1))
-        functions = functions + _memo((tree.key, orders), lambda: _derivative_functions(tree, orders))
+        functions = functions + _memo((tree.key, orders), lambda: derivative_functions(tree, orders))
     return functions
-
-
-def _kin_functions(tree: Tree, strategy: str | None) -> list:
-    from symkin.symbolic.functions import kin_functions
-
-    return kin_functions(tree, strategy)
-
-
-def _derivative_functions(tree: Tree, orders: tuple[int, ...]) -> list:
-    from symkin.symbolic.functions import derivative_functions
-
-    return derivative_functions(tree, orders)
 
 
 def _memo(key: tuple, make: Callable[[], list]) -> list:
@@ -326,19 +316,13 @@ def generate_collision(model: Model, backend: str, command: str | None = None) -
 
 
 def write_generated(
-    robot: Model,
-    backend: str,
-    folder: str | Path,
-    command: str | None = None,
-    strategy: str | None = None,
-    prefix: str | None = None,
-    precision: str = "double",
-    libm: bool = False,
-    derivatives: int = 0,
+    robot: Model, backend: str, folder: str | Path, command: str | None = None, **options: Any
 ) -> list[Path]:
     """Generate and write the files of ``robot`` (a chain or a tree) for ``backend`` into
-    ``folder`` (:func:`write_files`); returns the paths (options as :func:`generate`)."""
-    files = generate(robot, backend, command, strategy, prefix, precision, libm, derivatives)
+    ``folder`` (:func:`write_files`); returns the paths (``options``: ``strategy``, ``prefix``,
+    ``precision``, ``libm`` and ``derivatives`` of :func:`generate`)."""
+    files = generate(robot, backend, command, **options)
+    prefix, precision = options.get("prefix"), options.get("precision", "double")
     return write_files(robot, backend, files, folder, command, prefix, precision)
 
 
