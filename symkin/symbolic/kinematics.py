@@ -31,7 +31,7 @@ from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import tree_size
 from symkin.symbolic.fold import Fixed
-from symkin.symbolic.program import Frame, Program, _matrix, _Walk, derive_tree_program, walk_joints
+from symkin.symbolic.program import Frame, Program, _Walk, derive_tree_program, walk_joints
 
 __all__ = ["SymbolicKinematics", "ExpansionTooLargeError", "derive", "const_to_sympy", "joint_symbols"]
 
@@ -59,18 +59,11 @@ def _walk(
     qs: Sequence[sp.Symbol],
     constant: Callable[[Const], sp.Expr],
     sign: int,
-    links: list[sp.Matrix] | None = None,
 ) -> tuple[_Walk, list[Frame]]:
     """Apply ``elements`` in order (``sign=-1``: their inverses) to a pose whose every entry is one
-    expression, recording each joint's axis and origin just before it, and (into ``links``) the pose
-    right after it."""
+    expression, recording each joint's axis and origin just before it."""
     pose = _Walk(Program(inline=True))
-    frames: list[Frame] = []
-    for frame in walk_joints(pose, elements, qs, constant, sign):
-        frames.append(frame)
-        if links is not None:
-            links.append(_matrix(*pose.pose()))
-    return pose, frames
+    return pose, list(walk_joints(pose, elements, qs, constant, sign))
 
 
 @dataclass(frozen=True, eq=False)

@@ -50,7 +50,6 @@ __all__ = [
     "derive_program",
     "HessianLoop",
     "program_code",
-    "move",
     "walk_joints",
     "TreeProgram",
     "derive_tree_program",
@@ -183,15 +182,6 @@ class _Walk:
 Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, signed axis, origin)
 
 
-def move(pose: Any, e: ET, value: sp.Expr) -> None:
-    """Rotate the running ``pose`` of a walk (with ``rotate`` and ``translate`` by an axis index)
-    about the axis of ``e``, or translate it along that axis, by ``value``."""
-    if e.axis.is_rotation:
-        pose.rotate(e.axis.index, value)
-    else:
-        pose.translate(e.axis.index, value)
-
-
 def walk_joints(
     pose: Any,
     elements: Iterable[ET | Fixed],
@@ -215,7 +205,7 @@ def walk_joints(
             value = sign * constant(e.const)
             if value == 0:
                 continue
-        move(pose, e, value)
+        (pose.rotate if e.axis.is_rotation else pose.translate)(e.axis.index, value)
         if frame is not None:
             yield frame
 
