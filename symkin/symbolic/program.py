@@ -48,6 +48,7 @@ __all__ = [
     "Program",
     "KinematicProgram",
     "derive_program",
+    "chain_program",
     "HessianLoop",
     "program_code",
     "walk_joints",
@@ -226,8 +227,9 @@ def _jacobian_column(
 
 @dataclass(frozen=True, eq=False)
 class KinematicProgram:
-    """The kinematics of a chain as a straight-line program (the one-frame case of
-    :func:`derive_tree_program`, as :func:`derive_program` gives it).
+    """The kinematics of a chain (the one-frame case of :func:`derive_tree_program`): as a
+    straight-line program (:func:`derive_program`), or every entry one expression
+    (:func:`symkin.symbolic.kinematics.derive`; ``lines`` then empty).
 
     ``lines`` assign the intermediates ``t0, t1, ...`` in order (each a small expression of the
     joint symbols and earlier intermediates). The outputs are matrices over those names: ``T``
@@ -277,13 +279,18 @@ def derive_program(
 
     tree = Tree.from_robot(Robot(ets, name=name))
     tp = derive_tree_program(tree, qs, constant, name, fold=fold, hessians=hessians)
+    return chain_program(tree, tp, ets)
+
+
+def chain_program(tree: Any, tp: TreeProgram, ets: ETS) -> KinematicProgram:
+    """The :class:`KinematicProgram` of ``tp``, derived from the one-frame tree of the chain ``ets``."""
     n = len(tree.slots)
     marks = {"frame 0": "T", "frame 0 J0": "J0", "frame 0 Je": "Je", "H": "H"}
     marks.update({f"segment {k}": f"link {k}" for k in range(n)})
     return KinematicProgram(
-        name=name,
+        name=tp.name,
         ets=ets,
-        q=tuple(qs),
+        q=tp.q,
         lines=tp.lines,
         T=tp.T[0],
         links=tuple(tp.links[:n]),  # type: ignore[arg-type]
