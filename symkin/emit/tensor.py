@@ -96,8 +96,6 @@ def tensor_function(f: Any, printer: Any, keep: bool) -> dict[str, Any]:
 
     p = lower(f, printer)
     code = f.code
-    if getattr(code, "loops", ()):  # pragma: no cover - a construct this backend does not know
-        raise CompileError(f"the tensor backends cannot print the loops of {f.name}")
 
     def table(outs: tuple) -> list[dict[str, Any]]:
         return [
