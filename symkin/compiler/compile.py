@@ -42,7 +42,6 @@ __all__ = [
     "build",
     "COMPILER_SOURCES",
     "cache_key",
-    "cached_entry",
     "cached_files",
     "compiler_digest",
     "sources_digest",
@@ -351,13 +350,6 @@ def write_files(
     return out
 
 
-def cached_entry(key: str, make: Callable[[], dict[str, Any]], use_cache: bool = True) -> dict[str, Any]:
-    """The entry ``key`` of the generated-code cache (``<cache>/gen/<key>.json``, verified by the
-    sha256 of its key and content: :func:`symkin.core.cache.verified`), else ``make()``, stored
-    atomically. One store for chains, trees and closed-form IK."""
-    return verified("gen", key, make, use_cache)
-
-
 def cached_files(
     model: Model,
     backend: str,
@@ -366,9 +358,10 @@ def cached_files(
     strategy: str | None = None,
     derivatives: int = 0,
 ) -> dict[str, str]:
-    """Generated files from the cache (verified by checksum), else generate and store atomically."""
+    """Generated files from the cache (``<cache>/gen/<key>.json``, verified by the sha256 of its key
+    and content: :func:`symkin.core.cache.verified`), else generated and stored atomically."""
     make = lambda: {"files": generate(model, backend, strategy=strategy, derivatives=derivatives)}  # noqa: E731
-    return cached_entry(key, make, use_cache)["files"]
+    return verified("gen", key, make, use_cache)["files"]
 
 
 def load_artifact(files: dict[str, str], backend: str) -> Artifact:
