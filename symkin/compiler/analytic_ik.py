@@ -14,8 +14,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from symkin.compiler.compile import OPTIONAL_BACKENDS, Artifact, cache_key, cached_entry, check_backend
-from symkin.core.cache import cache_dir
+from symkin.compiler.compile import OPTIONAL_BACKENDS, Artifact, cache_key, check_backend
+from symkin.core.cache import cache_dir, verified
 from symkin.errors import NoAnalyticIKError, SymkinError
 from symkin.model.robot import Robot
 
@@ -59,7 +59,7 @@ def _cached(robot: Robot, backend: str, use_cache: bool) -> dict:
         except NoAnalyticIKError as exc:
             return {"files": {}, "meta": {}, "refused": str(exc)}
 
-    return cached_entry(analytic_key(robot, backend), make, use_cache)
+    return verified("gen", analytic_key(robot, backend), make, use_cache)  # the store of compile.cached_files
 
 
 def analytic_refusal(robot: Robot, backend: str = "c", cache: bool = True) -> str | None:

@@ -28,15 +28,7 @@ def _joints(tree: Tree) -> tuple[Joint, ...]:
 
 def kernel_of(model: Any, tree: Tree, functions: list, command: str) -> Kernel:
     """The kernel of ``model`` (a Robot or a Tree; ``tree`` its tree) with the derived ``functions``."""
-    frames = tuple(
-        Frame(
-            name,
-            f,
-            tuple(tree.slots[k].joint for k in tree.path_slots(name)),
-            tuple(float(tree.slots[k].multiplier) for k in tree.path_slots(name)),
-        )
-        for f, name in enumerate(tree.frames)
-    )
+    frames = tuple(Frame(name, f) for f, name in enumerate(tree.frames))
     links = ChainTables.of(tree.chain().ets) if any(fn.kind == "link_poses" for fn in functions) else None
     aliases = (
         tuple((f"{kind}_frame", f"{kind}_link") for kind in LINKED) if links and len(frames) == 1 else ()

@@ -45,6 +45,7 @@ __all__ = [
     "render_collision_numpy",
     "render_collision_casadi",
     "render_collision_tensor",
+    "render_collision_python",
     "collision_module_name",
     "collision_tables",
 ]
@@ -459,7 +460,7 @@ def render_collision_numpy(layout: Any, command: str = "symkin generate") -> dic
     link poses and shape points as straight-line NumPy code vectorised over configurations, the
     geometry as literal :class:`symkin.geometry.reference.Tables`, the pair math from
     :func:`symkin.geometry.reference.evaluate_frames`."""
-    return _render_python(layout, "numpy", command)
+    return render_collision_python(layout, "numpy", command)
 
 
 def render_collision_casadi(layout: Any, command: str = "symkin generate") -> dict[str, str]:
@@ -467,7 +468,7 @@ def render_collision_casadi(layout: Any, command: str = "symkin generate") -> di
     ``{"symkin_<robot>_collision_casadi.py": ...}``, the same straight-line link poses and shape
     points on CasADi expressions; ``function(env)`` builds the distances' ``casadi.Function``
     (:func:`symkin.emit.casadi.collision.distances_function`)."""
-    return _render_python(layout, "casadi", command)
+    return render_collision_python(layout, "casadi", command)
 
 
 def render_collision_tensor(layout: Any, backend: str, command: str = "symkin generate") -> dict[str, str]:
@@ -476,7 +477,7 @@ def render_collision_tensor(layout: Any, backend: str, command: str = "symkin ge
     link poses on arrays of any batch shape (the JAX module materialises each link pose on the CPU,
     as its kinematics module does), the geometry as literal Tables; the pair distances are
     :mod:`symkin.runtime.diff.distance`."""
-    return _render_python(layout, backend, command)
+    return render_collision_python(layout, backend, command)
 
 
 def _segment_kept(fk: list[str]) -> list[str]:
@@ -497,7 +498,9 @@ def _segment_kept(fk: list[str]) -> list[str]:
 _LIBRARY = {"numpy": "NumPy", "casadi": "CasADi", "jax": "JAX", "torch": "PyTorch"}
 
 
-def _render_python(layout: Any, backend: str, command: str) -> dict[str, str]:
+def render_collision_python(layout: Any, backend: str, command: str = "symkin generate") -> dict[str, str]:
+    """The generated collision module of ``layout`` on the Python ``backend`` (numpy, casadi, jax,
+    torch; the ``render_collision_<backend>`` functions above)."""
     tree = layout.tree
     tables = Tables.of(layout)
     proved = proved_apart(layout)  # the generated in_collision skips them within the limits

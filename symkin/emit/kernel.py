@@ -1,4 +1,4 @@
-"""The one description every emitter takes: a kernel (frames with their paths, functions with a
+"""The one description every emitter takes: a kernel (named frames, functions with a
 kind and a frame, aliases), made by the compiler from a model (:mod:`symkin.compiler.kernel`).
 
 A chain is the kernel of one frame with link frames (``link_poses``, the ``*_link`` functions
@@ -47,18 +47,11 @@ class Joint:
 
 @dataclass(frozen=True)
 class Frame:
-    """A frame of the kernel: its ``name`` and ``index`` (in the kernel's order), and per slot on
-    its path (base first) the joint it follows and its multiplier (``theta = m q_joint + c``)."""
+    """A frame of the kernel: its ``name`` and ``index`` (in the kernel's order; the Hessian loops
+    carry the joints and multipliers of the slots on its path, :class:`symkin.symbolic.cse.HessianLoop`)."""
 
     name: str
     index: int
-    joints: tuple[int, ...]
-    multipliers: tuple[float, ...]
-
-    @property
-    def plain(self) -> bool:
-        """Each joint met once with multiplier 1: J's columns are the slots' own."""
-        return len(set(self.joints)) == len(self.joints) and all(m == 1 for m in self.multipliers)
 
 
 def link_text(links: Any) -> dict[str, list[str]]:

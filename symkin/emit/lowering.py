@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import sympy as sp
@@ -79,13 +80,6 @@ def _print(printer: CodePrinter, e: sp.Expr) -> str:
     return printer.doprint(e)
 
 
-def _size(shape: tuple[int, ...]) -> int:
-    size = 1
-    for d in shape:
-        size *= d
-    return size
-
-
 def _gathered(
     printer: CodePrinter, name: str, shape: tuple[int, ...], exprs: tuple[sp.Expr, ...]
 ) -> PrintedOutput:
@@ -111,7 +105,7 @@ def lower(f: KinFunction, printer: CodePrinter) -> PrintedFunction:
         _gathered(printer, name, shape, exprs)
         if own and name in code.gathered
         else PrintedOutput(
-            name, shape, _size(shape), tuple((i, _print(printer, e)) for i, e in enumerate(exprs) if own)
+            name, shape, math.prod(shape), tuple((i, _print(printer, e)) for i, e in enumerate(exprs) if own)
         )
         for name, (shape, exprs) in code.outputs.items()
     ]

@@ -120,8 +120,8 @@ class NumPyPrinter(_PyLikePrinter):
 
 
 class MathModulePrinter(NumPyPrinter):
-    """Scalar Python with the math module (``math.cos``): a tree's and the closed-form IK's code
-    for one configuration."""
+    """Scalar Python with the math module (``math.cos``): the closed-form IK's code for one
+    configuration."""
 
     module = "math"
 

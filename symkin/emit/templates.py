@@ -77,6 +77,7 @@ def python_module(
         name_literal=ascii(kernel.name),
         frame_literals=[ascii(f.name) for f in kernel.frames],
         hessian_frames=sorted({h.frame for f in printed for h in _get(f, "hessians")}),
+        framed_docs={kind: kernel.framed_doc(kind) for kind in kernel.framed},
         **context,
     )
     return {f"{module}.py": text}

@@ -23,7 +23,6 @@ from typing import Any
 
 import sympy as sp
 
-from symkin.emit.kernel import FRAMED_DOCS
 from symkin.emit.templates import python_module
 from symkin.errors import CompileError
 
@@ -97,8 +96,6 @@ def tensor_function(f: Any, printer: Any, keep: bool) -> dict[str, Any]:
 
     p = lower(f, printer)
     code = f.code
-    if getattr(code, "loops", ()):  # pragma: no cover - a construct this backend does not know
-        raise CompileError(f"the tensor backends cannot print the loops of {f.name}")
 
     def table(outs: tuple) -> list[dict[str, Any]]:
         return [
@@ -108,18 +105,11 @@ def tensor_function(f: Any, printer: Any, keep: bool) -> dict[str, Any]:
         ]
 
     return {
-        "name": p.name,
-        "kind": p.kind,
-        "frame": p.frame,
-        "doc": p.doc,
-        "inputs": p.inputs,
+        **p.__dict__,
         "groups": _groups(p.lines, _levels(list(code.intermediates)) if p.lines else [], keep),
         "outs": table(p.outs),
         "scratch": table(p.scratch),
         "out_names": [o.name for o in p.outs],
-        "hessians": p.hessians,
-        "delegate": p.delegate,
-        "delegate_pick": p.delegate_pick,
     }
 
 
@@ -143,6 +133,5 @@ def render_tensor(kernel: Any, backend: str) -> dict[str, str]:
         joint_names=[ascii(j.name) for j in kernel.joints],
         revolute=[j.revolute for j in kernel.joints],
         kinds=kinds,
-        kind_docs={kind: FRAMED_DOCS.get(kind, f"{kind} of the frame.") for kind in kinds},
         **_NOTES[backend],
     )

@@ -22,7 +22,6 @@ tree, every value kept as one expression (an inline :class:`~symkin.symbolic.pro
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
 
 import sympy as sp
 
@@ -31,7 +30,8 @@ from symkin.model.ets import ET, ETS, Const
 from symkin.model.robot import Robot
 from symkin.symbolic.cse import tree_size
 from symkin.symbolic.fold import Fixed
-from symkin.symbolic.program import Frame, Program, _matrix, _Walk, derive_tree_program, walk_joints
+from symkin.symbolic.program import Frame, Program, _Walk, chain_program, derive_tree_program, walk_joints
+from symkin.symbolic.program import KinematicProgram as SymbolicKinematics  # every entry one expression
 
 __all__ = ["SymbolicKinematics", "ExpansionTooLargeError", "derive", "const_to_sympy", "joint_symbols"]
 
@@ -59,45 +59,11 @@ def _walk(
     qs: Sequence[sp.Symbol],
     constant: Callable[[Const], sp.Expr],
     sign: int,
-    links: list[sp.Matrix] | None = None,
 ) -> tuple[_Walk, list[Frame]]:
     """Apply ``elements`` in order (``sign=-1``: their inverses) to a pose whose every entry is one
-    expression, recording each joint's axis and origin just before it, and (into ``links``) the pose
-    right after it."""
+    expression, recording each joint's axis and origin just before it."""
     pose = _Walk(Program(inline=True))
-    frames: list[Frame] = []
-    for frame in walk_joints(pose, elements, qs, constant, sign):
-        frames.append(frame)
-        if links is not None:
-            links.append(_matrix(*pose.pose()))
-    return pose, frames
-
-
-@dataclass(frozen=True, eq=False)
-class SymbolicKinematics:
-    """Exact kinematics of a robot. Joint-indexed outputs; ``links`` in chain order.
-
-    Attributes:
-        q: the joint symbols, by joint index.
-        T: end-effector pose in the base frame, 4x4 (eq 1).
-        links: pose of each link frame right after its joint (eq 5), chain order.
-        J0, Je: base- and end-effector-frame Jacobians, 6xn, rows (v, omega).
-        H0, He: Hessians, n matrices 6xn, ``H[i] = dJ/dq_i``.
-    """
-
-    name: str
-    ets: ETS
-    q: tuple[sp.Symbol, ...]
-    T: sp.Matrix
-    links: tuple[sp.Matrix, ...]
-    J0: sp.Matrix
-    Je: sp.Matrix
-    H0: tuple[sp.Matrix, ...]
-    He: tuple[sp.Matrix, ...]
-
-    @property
-    def n(self) -> int:
-        return len(self.q)
+    return pose, list(walk_joints(pose, elements, qs, constant, sign))
 
 
 class ExpansionTooLargeError(SymkinError):
@@ -147,5 +113,4 @@ def derive(
         inline=True,
         budget=None if max_nodes is None else budget,
     )
-    H0, He = tp.H0[0] or (), tp.He[0] or ()
-    return SymbolicKinematics(name, ets, qs, tp.T[0], tp.links[:n], tp.J0[0], tp.Je[0], H0, He)  # type: ignore[arg-type]
+    return chain_program(tree, tp, ets)

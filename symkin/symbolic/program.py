@@ -48,9 +48,9 @@ __all__ = [
     "Program",
     "KinematicProgram",
     "derive_program",
+    "chain_program",
     "HessianLoop",
     "program_code",
-    "move",
     "walk_joints",
     "TreeProgram",
     "derive_tree_program",
@@ -183,15 +183,6 @@ class _Walk:
 Frame = tuple[int, bool, list[sp.Expr], list[sp.Expr]]  # (joint, revolute, signed axis, origin)
 
 
-def move(pose: Any, e: ET, value: sp.Expr) -> None:
-    """Rotate the running ``pose`` of a walk (with ``rotate`` and ``translate`` by an axis index)
-    about the axis of ``e``, or translate it along that axis, by ``value``."""
-    if e.axis.is_rotation:
-        pose.rotate(e.axis.index, value)
-    else:
-        pose.translate(e.axis.index, value)
-
-
 def walk_joints(
     pose: Any,
     elements: Iterable[ET | Fixed],
@@ -215,7 +206,7 @@ def walk_joints(
             value = sign * constant(e.const)
             if value == 0:
                 continue
-        move(pose, e, value)
+        (pose.rotate if e.axis.is_rotation else pose.translate)(e.axis.index, value)
         if frame is not None:
             yield frame
 
@@ -236,8 +227,9 @@ def _jacobian_column(
 
 @dataclass(frozen=True, eq=False)
 class KinematicProgram:
-    """The kinematics of a chain as a straight-line program (the one-frame case of
-    :func:`derive_tree_program`, as :func:`derive_program` gives it).
+    """The kinematics of a chain (the one-frame case of :func:`derive_tree_program`): as a
+    straight-line program (:func:`derive_program`), or every entry one expression
+    (:func:`symkin.symbolic.kinematics.derive`; ``lines`` then empty).
 
     ``lines`` assign the intermediates ``t0, t1, ...`` in order (each a small expression of the
     joint symbols and earlier intermediates). The outputs are matrices over those names: ``T``
@@ -287,13 +279,18 @@ def derive_program(
 
     tree = Tree.from_robot(Robot(ets, name=name))
     tp = derive_tree_program(tree, qs, constant, name, fold=fold, hessians=hessians)
+    return chain_program(tree, tp, ets)
+
+
+def chain_program(tree: Any, tp: TreeProgram, ets: ETS) -> KinematicProgram:
+    """The :class:`KinematicProgram` of ``tp``, derived from the one-frame tree of the chain ``ets``."""
     n = len(tree.slots)
     marks = {"frame 0": "T", "frame 0 J0": "J0", "frame 0 Je": "Je", "H": "H"}
     marks.update({f"segment {k}": f"link {k}" for k in range(n)})
     return KinematicProgram(
-        name=name,
+        name=tp.name,
         ets=ets,
-        q=tuple(qs),
+        q=tp.q,
         lines=tp.lines,
         T=tp.T[0],
         links=tuple(tp.links[:n]),  # type: ignore[arg-type]

@@ -220,11 +220,6 @@ static int frame_arg_(PyObject *obj, int *link)
     return k;
 }
 
-typedef void (*fkine_fn_)(const double *, double *);
-typedef void (*fkine_batch_fn_)(const double *, double *, ptrdiff_t);
-static const fkine_fn_ fkine_fns_[NF] = { symkin_gripper_tree_fkine_0, symkin_gripper_tree_fkine_1 };
-static const fkine_batch_fn_ fkine_batch_fns_[NF] = { symkin_gripper_tree_fkine_0_batch, symkin_gripper_tree_fkine_1_batch };
-
 static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
     PyObject *frame_obj;
@@ -248,22 +243,17 @@ static PyObject *py_fkine(PyObject *self, PyObject *const *args, Py_ssize_t narg
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        fkine_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_T));
+        symkin_gripper_tree_fkine_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_T));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        fkine_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_T), (ptrdiff_t)N);
+        symkin_gripper_tree_fkine_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_T), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
     return out_T;
 }
-
-typedef void (*jacob0_fn_)(const double *, double *);
-typedef void (*jacob0_batch_fn_)(const double *, double *, ptrdiff_t);
-static const jacob0_fn_ jacob0_fns_[NF] = { symkin_gripper_tree_jacob0_0, symkin_gripper_tree_jacob0_1 };
-static const jacob0_batch_fn_ jacob0_batch_fns_[NF] = { symkin_gripper_tree_jacob0_0_batch, symkin_gripper_tree_jacob0_1_batch };
 
 static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
@@ -288,22 +278,17 @@ static PyObject *py_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nar
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        jacob0_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_J));
+        symkin_gripper_tree_jacob0_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_J));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        jacob0_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_J), (ptrdiff_t)N);
+        symkin_gripper_tree_jacob0_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_J), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
     return out_J;
 }
-
-typedef void (*jacobe_fn_)(const double *, double *);
-typedef void (*jacobe_batch_fn_)(const double *, double *, ptrdiff_t);
-static const jacobe_fn_ jacobe_fns_[NF] = { symkin_gripper_tree_jacobe_0, symkin_gripper_tree_jacobe_1 };
-static const jacobe_batch_fn_ jacobe_batch_fns_[NF] = { symkin_gripper_tree_jacobe_0_batch, symkin_gripper_tree_jacobe_1_batch };
 
 static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
@@ -328,22 +313,17 @@ static PyObject *py_jacobe(PyObject *self, PyObject *const *args, Py_ssize_t nar
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        jacobe_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_J));
+        symkin_gripper_tree_jacobe_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_J));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        jacobe_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_J), (ptrdiff_t)N);
+        symkin_gripper_tree_jacobe_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_J), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
     return out_J;
 }
-
-typedef void (*fkine_jacob0_fn_)(const double *, double *, double *);
-typedef void (*fkine_jacob0_batch_fn_)(const double *, double *, double *, ptrdiff_t);
-static const fkine_jacob0_fn_ fkine_jacob0_fns_[NF] = { symkin_gripper_tree_fkine_jacob0_0, symkin_gripper_tree_fkine_jacob0_1 };
-static const fkine_jacob0_batch_fn_ fkine_jacob0_batch_fns_[NF] = { symkin_gripper_tree_fkine_jacob0_0_batch, symkin_gripper_tree_fkine_jacob0_1_batch };
 
 static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
@@ -371,12 +351,12 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        fkine_jacob0_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_T), (double *)PyArray_DATA((PyArrayObject *)out_J));
+        symkin_gripper_tree_fkine_jacob0_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_T), (double *)PyArray_DATA((PyArrayObject *)out_J));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        fkine_jacob0_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_T), (double *)PyArray_DATA((PyArrayObject *)out_J), (ptrdiff_t)N);
+        symkin_gripper_tree_fkine_jacob0_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_T), (double *)PyArray_DATA((PyArrayObject *)out_J), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
@@ -385,11 +365,6 @@ static PyObject *py_fkine_jacob0(PyObject *self, PyObject *const *args, Py_ssize
     Py_DECREF(out_J); /* the tuple holds the reference */
     return result;
 }
-
-typedef void (*hessian0_fn_)(const double *, double *);
-typedef void (*hessian0_batch_fn_)(const double *, double *, ptrdiff_t);
-static const hessian0_fn_ hessian0_fns_[NF] = { symkin_gripper_tree_hessian0_0, symkin_gripper_tree_hessian0_1 };
-static const hessian0_batch_fn_ hessian0_batch_fns_[NF] = { symkin_gripper_tree_hessian0_0_batch, symkin_gripper_tree_hessian0_1_batch };
 
 static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
@@ -414,22 +389,17 @@ static PyObject *py_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t n
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        hessian0_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_H));
+        symkin_gripper_tree_hessian0_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_H));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        hessian0_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_H), (ptrdiff_t)N);
+        symkin_gripper_tree_hessian0_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_H), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
     return out_H;
 }
-
-typedef void (*hessiane_fn_)(const double *, double *);
-typedef void (*hessiane_batch_fn_)(const double *, double *, ptrdiff_t);
-static const hessiane_fn_ hessiane_fns_[NF] = { symkin_gripper_tree_hessiane_0, symkin_gripper_tree_hessiane_1 };
-static const hessiane_batch_fn_ hessiane_batch_fns_[NF] = { symkin_gripper_tree_hessiane_0_batch, symkin_gripper_tree_hessiane_1_batch };
 
 static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
@@ -454,22 +424,17 @@ static PyObject *py_hessiane(PyObject *self, PyObject *const *args, Py_ssize_t n
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        hessiane_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_H));
+        symkin_gripper_tree_hessiane_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_H));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        hessiane_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_H), (ptrdiff_t)N);
+        symkin_gripper_tree_hessiane_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_H), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);
     return out_H;
 }
-
-typedef void (*jacob0_hessian0_fn_)(const double *, double *, double *);
-typedef void (*jacob0_hessian0_batch_fn_)(const double *, double *, double *, ptrdiff_t);
-static const jacob0_hessian0_fn_ jacob0_hessian0_fns_[NF] = { symkin_gripper_tree_jacob0_hessian0_0, symkin_gripper_tree_jacob0_hessian0_1 };
-static const jacob0_hessian0_batch_fn_ jacob0_hessian0_batch_fns_[NF] = { symkin_gripper_tree_jacob0_hessian0_0_batch, symkin_gripper_tree_jacob0_hessian0_1_batch };
 
 static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
@@ -497,12 +462,12 @@ static PyObject *py_jacob0_hessian0(PyObject *self, PyObject *const *args, Py_ss
     }
     const double *q = (const double *)PyArray_DATA(qa);
     if (single) {
-        jacob0_hessian0_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_J), (double *)PyArray_DATA((PyArrayObject *)out_H));
+        symkin_gripper_tree_jacob0_hessian0_frame(q, k, (double *)PyArray_DATA((PyArrayObject *)out_J), (double *)PyArray_DATA((PyArrayObject *)out_H));
     } else {
         if (N >= 4)
             want_lanes_();
         Py_BEGIN_ALLOW_THREADS
-        jacob0_hessian0_batch_fns_[k](q, (double *)PyArray_DATA((PyArrayObject *)out_J), (double *)PyArray_DATA((PyArrayObject *)out_H), (ptrdiff_t)N);
+        symkin_gripper_tree_jacob0_hessian0_frame_batch(q, k, (double *)PyArray_DATA((PyArrayObject *)out_J), (double *)PyArray_DATA((PyArrayObject *)out_H), (ptrdiff_t)N);
         Py_END_ALLOW_THREADS
     }
     Py_DECREF(qa);

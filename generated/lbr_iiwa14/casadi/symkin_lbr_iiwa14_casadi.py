@@ -24,7 +24,7 @@ FRAMES = ('ee', )
 ORDER = (0, 1, 2, 3, 4, 5, 6,)
 AXIS = (2, 2, 2, 2, 2, 2, 2,)
 SIGN = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,)
-REVOLUTE = (1, 1, 1, 1, 1, 1, 1,)
+CHAIN_REVOLUTE = (1, 1, 1, 1, 1, 1, 1,)
 
 
 def frame_jacobian(links, k, ee=False):
@@ -39,7 +39,7 @@ def frame_jacobian(links, k, ee=False):
     for a in range(k + 1):
         La = links[4 * a : 4 * a + 3, :]
         w = SIGN[a] * La[:, AXIS[a]]
-        if REVOLUTE[a]:
+        if CHAIN_REVOLUTE[a]:
             v, o = ca.cross(w, Lk[:, 3] - La[:, 3]), w
         else:
             v, o = w, ca.DM.zeros(3, 1)

@@ -39,12 +39,10 @@ _PACK_18 = struct.Struct("18d").pack_into
 _PACK_24 = struct.Struct("24d").pack_into
 _PACK_27 = struct.Struct("27d").pack_into
 # Along the chain: joint index, axis index (0 x, 1 y, 2 z), sign, revolute.
-CHAIN = ChainTables(
-    (0, 1, 2, 3, 4, 5,),
-    (2, 2, 2, 2, 2, 2,),
-    (1.0, 1.0, 1.0, 1.0, 1.0, 1.0,),
-    (1, 1, 1, 1, 1, 1,),
-)
+ORDER = (0, 1, 2, 3, 4, 5,)
+AXIS = (2, 2, 2, 2, 2, 2,)
+SIGN = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0,)
+CHAIN_REVOLUTE = (1, 1, 1, 1, 1, 1,)
 
 
 def _frame(frame):
@@ -2136,4 +2134,5 @@ def jacob0_hessian0(q, frame=None):
 
 
 # Every method of link frame k from fkine(q, k) and jacob0(q, k) (symkin.model.frames.LinkFrames).
-_LINKS = LinkFrames(N_JOINTS, ROBOT_NAME, fkine, jacob0, CHAIN.order)
+CHAIN = ChainTables(ORDER, AXIS, SIGN, CHAIN_REVOLUTE)
+_LINKS = LinkFrames(N_JOINTS, ROBOT_NAME, fkine, jacob0, ORDER)

@@ -24,7 +24,7 @@ from symkin.emit.kernel import LINKED, Kernel, link_text
 from symkin.emit.templates import Header, render
 from symkin.errors import CompileError
 
-__all__ = ["render_c", "build_c", "compile_c", "c_variant", "float_error", "four_lane_bodies"]
+__all__ = ["render_c", "build_c", "compile_c", "float_error", "four_lane_bodies"]
 
 
 LICENCE = (
@@ -192,28 +192,6 @@ def four_lane_bodies(functions: list) -> dict[str, dict[str, Any]]:
     return bodies
 
 
-def c_variant(
-    default_prefix: str, prefix: str | None, precision: str, libm: bool
-) -> tuple[Any, dict[str, Any]]:
-    """The printer and the template context of one variant of generated C, shared by chains and
-    trees: ``prefix`` (checked; ``default_prefix`` when None), ``real`` (``precision``: "double"
-    or "float"), the ``tiny`` and ``sqrt`` of the Cholesky in ``c/_gram.c.j2`` and ``libm`` for
-    ``c/_sincos.c.j2``."""
-    from symkin.emit.printers import CPrinter, FloatCPrinter
-
-    if precision not in PRECISIONS:
-        raise CompileError(f"unknown precision {precision!r}: choose one of {', '.join(PRECISIONS)}")
-    single = precision == "float"
-    context = {
-        "prefix": default_prefix if prefix is None else check_prefix(prefix),
-        "real": precision,
-        "tiny": "1e-30f" if single else "1e-300",
-        "sqrt": "sqrtf" if single else "sqrt",
-        "libm": libm,
-    }
-    return (FloatCPrinter() if single else CPrinter()), context
-
-
 def render_c(
     kernel: Kernel, prefix: str | None = None, precision: str = "double", libm: bool = False
 ) -> dict[str, str]:
@@ -229,19 +207,25 @@ def render_c(
     defining ``SYMKIN_USE_LIBM`` when compiling).
     """
     from symkin.emit.lowering import lower
+    from symkin.emit.printers import CPrinter, FloatCPrinter
 
-    printer, variant = c_variant(f"symkin_{kernel.code_name}", prefix, precision, libm)
-    printed = [lower(f, printer) for f in kernel.functions]
-    lanes = {} if precision == "float" else four_lane_bodies(printed)
+    if precision not in PRECISIONS:
+        raise CompileError(f"unknown precision {precision!r}: choose one of {', '.join(PRECISIONS)}")
+    single = precision == "float"
+    prefix = f"symkin_{kernel.code_name}" if prefix is None else check_prefix(prefix)
+    printed = [lower(f, FloatCPrinter() if single else CPrinter()) for f in kernel.functions]
+    lanes = {} if single else four_lane_bodies(printed)
     # the scalar bodies take their angles' sin and cos first, four at a time (libm: one by one)
-    hoisted = [(f, ()) if precision == "float" or libm else hoist_angles(f) for f in printed]
+    hoisted = [(f, ()) if single or libm else hoist_angles(f) for f in printed]
     printed = [f for f, _ in hoisted]
     angles = {f.name: a for f, a in hoisted if a}
-    prefix = variant["prefix"]
-    real = variant["real"]
     by_name = {f.name: f for f in printed}
-    context = {
-        **variant,
+    context = {  # tiny and sqrt: the Cholesky of c/_gram.c.j2; libm: c/_sincos.c.j2
+        "prefix": prefix,
+        "real": precision,
+        "tiny": "1e-30f" if single else "1e-300",
+        "sqrt": "sqrtf" if single else "sqrt",
+        "libm": libm,
         "n": kernel.n,
         "F": kernel.F,
         "functions": printed,
@@ -269,7 +253,7 @@ def render_c(
                 "outs": by_name[kernel.name_of(kind, 0)].outs,
                 "names": [f"{prefix}_{name}" for name in kernel.table(kind)],
                 "types": ", ".join(
-                    [f"const {real} *"] + [f"{real} *"] * len(by_name[kernel.name_of(kind, 0)].outs)
+                    [f"const {precision} *"] + [f"{precision} *"] * len(by_name[kernel.name_of(kind, 0)].outs)
                 ),
                 "doc": by_name[kernel.name_of(kind, 0)].doc if kernel.F == 1 else kernel.framed_doc(kind),
             }
@@ -283,7 +267,7 @@ def render_c(
     }
     if lanes:
         files[f"{prefix}_lanes.c"] = render("c/kernel_lanes.c.j2", **context)
-    if precision == "float":
+    if single:
         return files
     ext = render("c/module.c.j2", module=module_name(files), **context)
     return {**files, f"{prefix}_pymodule.c": ext}

@@ -67,7 +67,6 @@ def render_numpy(kernel: Any) -> dict[str, str]:
         framed_kinds=kernel.framed,
         linked_kinds=LINKED,
         tables={kind: kernel.table(kind) for kind in kernel.framed},
-        framed_docs={kind: kernel.framed_doc(kind) for kind in kernel.framed},
     )
 
 
