@@ -55,7 +55,7 @@ from symkin.errors import SymkinError, check_choice
 from symkin.model.ets import ET, ETS, Axis
 from symkin.model.latex import et_latex
 from symkin.model.robot import Robot
-from symkin.model.tree import Tree
+from symkin.model.tree import Tree, as_tree, robot_of
 from symkin.symbolic.kinematics import derive
 
 __all__ = ["Derivation", "derive_steps", "derivation", "SECTIONS"]
@@ -401,11 +401,13 @@ def derivation(
 ) -> str:
     """The derivation of ``robot``'s kinematics as Markdown or a LaTeX document (see :func:`derive_steps`);
     a tree with several frames or a mimic joint in the program form (:mod:`symkin.derive.program`)."""
-    if isinstance(robot, Tree) and not robot.single_path:
-        from symkin.derive.program import tree_derivation
+    if not isinstance(robot, (str, ETS)):  # a model: ask it whether it is one serial chain
+        tree = as_tree(robot)
+        if not tree.single_path:
+            from symkin.derive.program import tree_derivation
 
-        return tree_derivation(robot, fmt, sections)
-    robot = robot.chain() if isinstance(robot, Tree) else robot
+            return tree_derivation(tree, fmt, sections)
+        robot = robot_of(robot) or tree.chain()
     return derive_steps(
         robot, symbolic_constants=symbolic_constants, simplify=simplify, fmt=fmt, form=form, sections=sections
     ).text
