@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, fresh_python, interleaved, optional, with_lanes
+from symkin.bench.common import best_of, cells, fresh_python, interleaved, optional, table, with_lanes
 from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ets
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
@@ -418,17 +418,16 @@ def format_calls(r: dict[str, Any]) -> str:
             f"  {name:5} loop in C {row['c']:10.0f}   loop in Python {row['python']:8.0f}   "
             f"({row['c'] / row['python']:.1f}x)"
         )
-    funcs = ("fkine", "jacob0", "manipulability")
-    lines += ["", "One configuration per call (us):", f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs)]
-    for label, row in r["numpy"].items():
-        lines.append(f"  {label:24}" + "".join(f"{row[f]:16.2f}" if f in row else " " * 16 for f in funcs))
-    if "pinocchio" in r["numpy"]:
-        p, npy, c = r["numpy"]["pinocchio"], r["numpy"]["numpy"], r["numpy"]["c"]
-        lines.append(f"  {'numpy / pinocchio':24}" + "".join(f"{npy[f] / p[f]:15.2f}x" for f in funcs))
-        lines.append(f"  {'pinocchio / c':24}" + "".join(f"{p[f] / c[f]:15.2f}x" for f in funcs))
-        pa = r["numpy"]["pinocchio (all frames)"]["fkine"]
-        lines.append(f"  {'numpy / pinocchio all fr.':24}{npy['fkine'] / pa:15.2f}x")
-    else:
+    funcs, one = ("fkine", "jacob0", "manipulability"), r["numpy"]
+    rows = [cells(label, row, funcs, "{:.2f}") for label, row in one.items()]
+    if "pinocchio" in one:
+        p, npy, c = one["pinocchio"], one["numpy"], one["c"]
+        rows.append(cells("numpy / pinocchio", {f: npy[f] / p[f] for f in funcs}, funcs, "{:.2f}x"))
+        rows.append(cells("pinocchio / c", {f: p[f] / c[f] for f in funcs}, funcs, "{:.2f}x"))
+        all_frames = {"fkine": npy["fkine"] / one["pinocchio (all frames)"]["fkine"]}
+        rows.append(cells("numpy / pinocchio all fr.", all_frames, funcs, "{:.2f}x"))
+    lines += ["", "One configuration per call (us):", *("  " + x for x in table(["path", *funcs], rows))]
+    if "pinocchio" not in one:
         lines.append("  (install the compare extra for Pinocchio)")
     lines.append("  CasADi backend vs its raw casadi.Function:")
     for f, row in r["casadi"].items():

@@ -1,5 +1,6 @@
 """What the benchmarks share: timing (the best of several rounds, paths measured in turn), peer
-libraries that may be missing, and a fresh Python interpreter for start-up and cold-compile figures."""
+libraries that may be missing, a fresh Python interpreter for start-up and cold-compile figures,
+and the tables of their reports."""
 
 from __future__ import annotations
 
@@ -8,11 +9,21 @@ import math
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterable, Sequence
 from types import ModuleType
 from typing import Any
 
-__all__ = ["best_of", "interleaved", "rows_per_s", "optional", "fresh_python", "with_lanes"]
+__all__ = [
+    "best_of",
+    "interleaved",
+    "rows_per_s",
+    "optional",
+    "fresh_python",
+    "with_lanes",
+    "table",
+    "cell",
+    "cells",
+]
 
 
 def interleaved(
@@ -76,3 +87,32 @@ def with_lanes(kin: Any, timeout: float = 600) -> Any:
 
         ready(module, timeout)
     return kin
+
+
+def table(head: Sequence[str], rows: Iterable[Sequence[Any] | None], align: str = "") -> list[str]:
+    """The lines of a plain-text table: ``head``, a rule, then ``rows`` (cells as strings, other
+    values by ``str``; a row None is an empty line), each column as wide as its widest cell, two
+    spaces apart, aligned by ``align`` (``l`` or ``r`` per column; default: the first left, the
+    others right)."""
+    body = [None if r is None else [str(c) for c in r] for r in rows]
+    align = align or "l" + "r" * (len(head) - 1)
+    lines = [list(head)] + [r for r in body if r is not None]
+    widths = [max(len(r[i]) for r in lines) for i in range(len(head))]
+
+    def line(r: Sequence[str]) -> str:
+        return "  ".join(c.ljust(w) if a == "l" else c.rjust(w) for c, w, a in zip(r, widths, align)).rstrip()
+
+    rule = "-" * max(len(line(r)) for r in lines)
+    return [line(head), rule] + ["" if r is None else line(r) for r in body]
+
+
+def cell(value: Any, fmt: str = "{}", missing: str = "-") -> str:
+    """``value`` by the format string ``fmt`` (``"{:.2f}x"``), or ``missing`` when it is None (a
+    figure not measured)."""
+    return missing if value is None else fmt.format(value)
+
+
+def cells(label: str, values: dict[Any, Any], keys: Iterable[Any], fmt: str = "{}") -> list[str]:
+    """A row of :func:`table`: ``label``, then ``values[k]`` by ``fmt`` for each of ``keys`` ("-"
+    where missing)."""
+    return [label, *(cell(values.get(k), fmt) for k in keys)]

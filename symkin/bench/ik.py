@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import interleaved, optional, with_lanes
+from symkin.bench.common import interleaved, optional, table, with_lanes
 
 __all__ = ["run_table1", "format_table1", "table1_problems", "TABLE1_METHODS", "PAPER_TABLE1", "SETTINGS"]
 
@@ -307,21 +307,14 @@ def format_table1(result: dict[str, Any]) -> str:
     )
     cols = ["Method", "S", "I", "Mean it", "Med it", "Infeas", "Infeas %", "Mean S", "Max S", "us/solve",
             "us/it", "max|e|", "| paper:", "Mean it", "Med it", "Infeas %", "Mean S", "Max S"]  # fmt: skip
-    lines = []
-    for r in result["rows"]:
+    rows: list[list[str] | None] = []
+    for i, r in enumerate(result["rows"]):
+        if i and r["setting"] != result["rows"][i - 1]["setting"]:
+            rows.append(None)
         p = r["paper"]
         paper = [_CELLS[k].format(p[k]) if p else "-" for k in _PAPER_KEYS if k != "infeasible"]
-        lines.append([r["method"], *(cell.format(r[k]) for k, cell in _CELLS.items()), "", *paper])
-    widths = [max(len(c), *(len(x[i]) for x in lines)) if lines else len(c) for i, c in enumerate(cols)]
-
-    def fmt(cells: list[str]) -> str:
-        return "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
-
-    out = [head, fmt(cols), "-" * len(fmt(cols))]
-    for i, x in enumerate(lines):
-        if i and result["rows"][i]["setting"] != result["rows"][i - 1]["setting"]:
-            out.append("")
-        out.append(fmt(x))
+        rows.append([r["method"], *(cell.format(r[k]) for k, cell in _CELLS.items()), "", *paper])
+    out = [head, *table(cols, rows)]
     out.append(
         "S, I: searches and iterations allowed; iteration statistics over solved problems; us/it: time "
         "over all iterations (failed searches included)."

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import optional, rows_per_s, with_lanes
+from symkin.bench.common import cells, optional, rows_per_s, table, with_lanes
 
 __all__ = ["run_kin", "format_kin", "per_call_us", "interleaved_us", "pinocchio_model", "rtb_ets"]
 
@@ -283,24 +283,22 @@ class _KernelCall:
 
 
 def format_kin(r: dict) -> str:
+    rows = [cells(path, row, FUNCS, "{:.3f}") for path, row in r["per_call_us"].items()]
+    rows += [
+        cells(f"c speed-up vs {peer}", row, FUNCS, "{:.1f}x") for peer, row in r["speedup_of_c_over"].items()
+    ]
     lines = [f"symkin bench kin: {r['robot']} ({r['n']} joints), one configuration per call from Python", ""]
-    lines.append(f"{'path':22} " + " ".join(f"{f + ' (us)':>14}" for f in FUNCS))
-    for path, row in r["per_call_us"].items():
-        lines.append(f"{path:22} " + " ".join(f"{row[f]:14.3f}" for f in FUNCS))
-    for peer, row in r["speedup_of_c_over"].items():
-        lines.append(f"{'c speed-up vs ' + peer:22} " + " ".join(f"{row[f]:13.1f}x" for f in FUNCS))
+    lines += table(["path", *(f"{f} (us)" for f in FUNCS)], rows)
     if not r["speedup_of_c_over"]:
         lines.append(
             "(install the compare extra, pip install 'symkin[compare]', to measure RTB and Pinocchio)"
         )
-    lines.append("")
-    lines.append(f"batched, {r['batch']} configurations, one core (million per second)")
-    fs = BATCH_FUNCS
-    lines.append(f"{'backend':22} " + " ".join(f"{f:>14}" for f in fs))
-    rows = r["batched_M_per_s"]
-    for b, row in rows.items():
-        lines.append(f"{b:22} " + " ".join(f"{row[f]:14.2f}" for f in fs))
-    four, one = rows.get("c kernels, 4 lanes"), rows.get("c kernels, scalar")
+    batched = r["batched_M_per_s"]
+    rows = [cells(b, row, BATCH_FUNCS, "{:.2f}") for b, row in batched.items()]
+    four, one = batched.get("c kernels, 4 lanes"), batched.get("c kernels, scalar")
     if four and one:
-        lines.append(f"{'4 lanes vs scalar':22} " + " ".join(f"{four[f] / one[f]:13.2f}x" for f in fs))
-    return "\n".join(lines)
+        rows.append(
+            cells("4 lanes vs scalar", {f: four[f] / one[f] for f in BATCH_FUNCS}, BATCH_FUNCS, "{:.2f}x")
+        )
+    lines += ["", f"batched, {r['batch']} configurations, one core (million per second)"]
+    return "\n".join(lines + table(["backend", *BATCH_FUNCS], rows))
