@@ -1,15 +1,16 @@
 """What the benchmarks share: timing (the best of several rounds, paths measured in turn), peer
 libraries that may be missing, a fresh Python interpreter for start-up and cold-compile figures,
-and the tables of their reports."""
+figures, and the tables of their reports."""
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import math
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Hashable, Iterable, Sequence
+from collections.abc import Callable, Hashable, Iterable, Iterator, Sequence
 from types import ModuleType
 from typing import Any
 
@@ -87,6 +88,29 @@ def with_lanes(kin: Any, timeout: float = 600) -> Any:
 
         ready(module, timeout)
     return kin
+
+
+@contextlib.contextmanager
+def figure(path: Any, what: str, dpi: float | None = None, **subplots: Any) -> Iterator[tuple[Any, Any]]:
+    """``(fig, axes)`` of ``matplotlib.pyplot.subplots(**subplots)`` (the Agg backend) for the
+    block, then laid out tight, written to ``path`` (``dpi``; None: the figure's) and closed. A
+    MissingExtraError naming ``what`` without matplotlib (the ``plot`` extra)."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover - optional dependency
+        from symkin.errors import MissingExtraError
+
+        raise MissingExtraError(f"{what} needs matplotlib: pip install 'symkin[plot]'") from None
+    fig, axes = plt.subplots(**subplots)
+    try:
+        yield fig, axes
+        fig.tight_layout()
+        fig.savefig(path, dpi=dpi or "figure")
+    finally:
+        plt.close(fig)
 
 
 def table(head: Sequence[str], rows: Iterable[Sequence[Any] | None], align: str = "") -> list[str]:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import fresh_python
+from symkin.bench.common import figure, fresh_python
 
 __all__ = [
     "random_chain",
@@ -244,33 +244,25 @@ def format_compile(rows: list[dict[str, Any]]) -> str:
 
 def plot_compile(rows: list[dict[str, Any]], path: str) -> None:
     """Compile time (stacked by phase) and operations per joint against the number of joints."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     chains = [r for r in rows if r["robot"].startswith("chain") and not r.get("derivatives")]
     n = [r["n"] for r in chains]
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
-    bottom = np.zeros(len(chains))
-    for key, label in (
-        ("derive_s", "derive"),
-        ("cse_s", "code"),
-        ("render_c_s", "C source"),
-        ("gcc_s", "gcc"),
-    ):
-        v = np.array([r[key] for r in chains])
-        a.bar([str(x) for x in n], v, bottom=bottom, label=label)
-        bottom += v
-    a.set_xlabel("joints")
-    a.set_ylabel("cold compile to C (s)")
-    a.legend()
-    b.plot(n, [r["ops_fk_j_h"] / r["n"] for r in chains], "o-", label="FK + J + H")
-    b.plot(n, [r["ops_fk_j"] / r["n"] for r in chains], "s-", label="FK + J")
-    b.set_xlabel("joints")
-    b.set_ylabel("operations per joint (after CSE)")
-    b.legend()
-    fig.suptitle("symkin bench compile: random serial chains")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    with figure(path, "plot_compile", 120, ncols=2, figsize=(10, 4)) as (fig, (a, b)):
+        bottom = np.zeros(len(chains))
+        for key, label in (
+            ("derive_s", "derive"),
+            ("cse_s", "code"),
+            ("render_c_s", "C source"),
+            ("gcc_s", "gcc"),
+        ):
+            v = np.array([r[key] for r in chains])
+            a.bar([str(x) for x in n], v, bottom=bottom, label=label)
+            bottom += v
+        a.set_xlabel("joints")
+        a.set_ylabel("cold compile to C (s)")
+        a.legend()
+        b.plot(n, [r["ops_fk_j_h"] / r["n"] for r in chains], "o-", label="FK + J + H")
+        b.plot(n, [r["ops_fk_j"] / r["n"] for r in chains], "s-", label="FK + J")
+        b.set_xlabel("joints")
+        b.set_ylabel("operations per joint (after CSE)")
+        b.legend()
+        fig.suptitle("symkin bench compile: random serial chains")

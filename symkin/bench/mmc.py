@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import optional
+from symkin.bench.common import figure, optional
 from symkin.core.progress import bar
 from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
@@ -425,26 +425,18 @@ def plot_task(
     ``servo_options`` go to :func:`symkin.runtime.loop.servo` (``lam``, ``dt``, ``qd_max``...).
     Needs matplotlib (``pip install symkin[plot]``). Returns the two :class:`ServoResult`.
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - optional dependency
-        raise ImportError("plot_task needs matplotlib: pip install 'symkin[plot]'") from exc
     kin = _robot(robot)
     results = {c: servo(kin, q0, Tep, c, **servo_options) for c in ("rrmc", "mmc")}
-    fig, ax = plt.subplots(figsize=(6.0, 3.2), dpi=150)
-    for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
-        ax.plot(results[key].t, results[key].manipulability, style, label=label, linewidth=1.6)
-    ax.set_xlabel("Time (s)")
-    ax.set_ylabel("Manipulability")
-    ax.set_title(title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing")
-    ax.grid(True, alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    with figure(path, "plot_task", figsize=(6.0, 3.2), dpi=150) as (_, ax):
+        for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
+            ax.plot(results[key].t, results[key].manipulability, style, label=label, linewidth=1.6)
+        ax.set_xlabel("Time (s)")
+        ax.set_ylabel("Manipulability")
+        ax.set_title(
+            title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing"
+        )
+        ax.grid(True, alpha=0.3)
+        ax.legend()
     return results
 
 

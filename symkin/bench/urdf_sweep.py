@@ -28,7 +28,7 @@ from unittest import mock
 
 import numpy as np
 
-from symkin.bench.common import optional
+from symkin.bench.common import figure, optional
 from symkin.bench.tree import erd_robots_dir, pinocchio_q
 
 __all__ = ["Chain", "find_chains", "run_sweep", "format_sweep", "plot_sweep", "synthetic_urdfs", "TOL"]
@@ -375,21 +375,13 @@ def format_sweep(r: dict) -> str:
 
 
 def plot_sweep(r: dict, path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for b in r.get("backends", []):
-        pts = [(row["n"], row["compile_s"][b]) for row in r["rows"] if b in row["compile_s"]]
-        if pts:
-            x, y = zip(*pts)
-            ax.scatter(x, y, s=12, label=b)
-    ax.set_xlabel("joints")
-    ax.set_ylabel("compile time (s)")
-    ax.set_title("every distinct chain of example-robot-data")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    with figure(path, "plot_sweep", 120, figsize=(7, 4)) as (_, ax):
+        for b in r.get("backends", []):
+            pts = [(row["n"], row["compile_s"][b]) for row in r["rows"] if b in row["compile_s"]]
+            if pts:
+                x, y = zip(*pts)
+                ax.scatter(x, y, s=12, label=b)
+        ax.set_xlabel("joints")
+        ax.set_ylabel("compile time (s)")
+        ax.set_title("every distinct chain of example-robot-data")
+        ax.legend()
