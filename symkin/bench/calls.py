@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, cells, fresh_python, interleaved, optional, table, with_lanes
-from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ets
+from symkin.bench.common import best_of, cells, fresh_python, interleaved, table, with_lanes
+from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ik_lm
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
 
@@ -128,24 +128,7 @@ def ik_call_parts(
 
 
 def _rtb_ik(robot: Any, targets: list[np.ndarray]) -> dict[str, Any] | None:
-    rtb = optional("roboticstoolbox")
-    if rtb is None:
-        return None
-    try:
-        ets = rtb_ets(rtb, robot)
-        solve = [
-            lambda T=T: ets.ik_LM(T, ilimit=30, slimit=100, tol=5e-13, k=0.1, method="chan") for T in targets
-        ]
-        solve[0]()
-        t0 = CLOCK()
-        sols = [s() for s in solve]
-        elapsed = CLOCK() - t0
-        return {
-            "us": 1e6 * elapsed / len(targets),
-            "success": float(np.mean([bool(s.success) for s in sols])),
-        }
-    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
-        return {"error": f"{type(exc).__name__}: {exc}"}
+    return rtb_ik_lm(robot, targets, 5e-13, lambda s, ok, _: {"us": 1e6 * s, "success": float(np.mean(ok))})
 
 
 def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int) -> dict[str, Any]:

@@ -67,6 +67,15 @@ def optional(name: str) -> ModuleType | None:
         return None
 
 
+def guarded(f: Callable[[], Any]) -> Any:
+    """``f()``, or ``{"error": "<exception type>: <message>"}`` when it raises: an optional
+    comparison with a peer library must not break the benchmark."""
+    try:
+        return f()
+    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
+        return {"error": f"{type(exc).__name__}: {exc}"}
+
+
 def fresh_python(code: str, env: dict[str, str], timeout: float | None = None, what: str = "") -> str:
     """The last line ``code`` prints, run by a fresh interpreter (``python -c``) with ``env``; a
     RuntimeError (``what`` failed, with the end of its stderr) when it fails."""

@@ -16,6 +16,7 @@ calling thread (``time.thread_time``), so that other processes of a shared machi
 from __future__ import annotations
 
 import ctypes
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -23,9 +24,17 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import cells, optional, rows_per_s, table, with_lanes
+from symkin.bench.common import cells, guarded, optional, rows_per_s, table, with_lanes
 
-__all__ = ["run_kin", "format_kin", "per_call_us", "interleaved_us", "pinocchio_model", "rtb_ets"]
+__all__ = [
+    "run_kin",
+    "format_kin",
+    "per_call_us",
+    "interleaved_us",
+    "pinocchio_model",
+    "rtb_ets",
+    "rtb_solve",
+]
 
 FUNCS = ("fkine", "jacob0", "hessian0")
 BATCH_FUNCS = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
@@ -189,6 +198,39 @@ def rtb_ets(rtb: Any, robot: Any) -> Any:
         make = getattr(rtb.ET, e.axis.value)
         out.append(make(jindex=e.joint, flip=e.flip) if e.is_joint else make(e.const.value))
     return rtb.ETS(out)
+
+
+def rtb_solve(
+    solve: Callable[[np.ndarray], Any], Tep: Any
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """A roboticstoolbox-python IK ``solve(T)`` called once per target of ``Tep`` (N, 4, 4) after a
+    warm-up call, by the CPU time of this thread: (seconds per solve, q (N, n), success (N,),
+    iterations (N,))."""
+    solve(Tep[0])
+    t0 = time.thread_time()
+    out = [solve(T) for T in Tep]
+    seconds = (time.thread_time() - t0) / len(out)
+    q = np.array([np.asarray(o.q, dtype=float) for o in out])
+    return seconds, q, np.array([bool(o.success) for o in out]), np.array([int(o.iterations) for o in out])
+
+
+def rtb_ik_lm(
+    robot: Any, Tep: Any, tol: float, report: Callable[[float, np.ndarray, np.ndarray], Any], q0: Any = None
+) -> Any:
+    """roboticstoolbox-python's C++ ``ik_LM`` (Chan, lambda 0.1, 100 x 30; ``tol`` on E = |e|^2 / 2)
+    on the same ETS, from ``q0`` (None: its random starts), on each target of ``Tep``
+    (:func:`rtb_solve`): ``report(seconds per solve, success (N,), iterations (N,))``; None without
+    roboticstoolbox-python, ``{"error": ...}`` when it fails (:func:`symkin.bench.common.guarded`)."""
+    rtb = optional("roboticstoolbox")
+    if rtb is None:
+        return None
+
+    def run() -> Any:
+        lm = functools.partial(rtb_ets(rtb, robot).ik_LM, q0=q0, ilimit=30, slimit=100, tol=tol, k=0.1)
+        seconds, _, success, iterations = rtb_solve(lm, Tep)
+        return report(seconds, success, iterations)
+
+    return guarded(run)
 
 
 def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, progress: bool = True) -> dict:
