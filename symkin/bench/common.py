@@ -7,12 +7,16 @@ from __future__ import annotations
 import contextlib
 import importlib
 import math
+import os
+import resource
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Hashable, Iterable, Iterator, Sequence
 from types import ModuleType
 from typing import Any
+from unittest import mock
 
 __all__ = [
     "best_of",
@@ -74,6 +78,23 @@ def guarded(f: Callable[[], Any]) -> Any:
         return f()
     except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
         return {"error": f"{type(exc).__name__}: {exc}"}
+
+
+@contextlib.contextmanager
+def fresh_cache() -> Iterator[str]:
+    """A new, empty compile cache (``SYMKIN_CACHE``, restored after) for the block: every compile
+    in it (and in a :func:`fresh_python` it starts) derives, generates and builds."""
+    with (
+        tempfile.TemporaryDirectory(prefix="symkin-bench-") as folder,
+        mock.patch.dict(os.environ, {"SYMKIN_CACHE": folder}),
+    ):
+        yield folder
+
+
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of its finished children (the compiler)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def fresh_python(code: str, env: dict[str, str], timeout: float | None = None, what: str = "") -> str:

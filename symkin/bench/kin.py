@@ -24,17 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import cells, guarded, optional, rows_per_s, table, with_lanes
+from symkin.bench.common import best_of, cells, guarded, optional, rows_per_s, table, with_lanes
 
-__all__ = [
-    "run_kin",
-    "format_kin",
-    "per_call_us",
-    "interleaved_us",
-    "pinocchio_model",
-    "rtb_ets",
-    "rtb_solve",
-]
+__all__ = ["run_kin", "format_kin", "per_call_us", "interleaved_us", "pinocchio_model", "rtb_ets"]
 
 FUNCS = ("fkine", "jacob0", "hessian0")
 BATCH_FUNCS = ("fkine", "jacob0", "fkine_jacob0", "hessian0")
@@ -51,19 +43,15 @@ def per_call_us(
     shared machine do not)."""
     f()
     n, t = 1, 0.0
-    while t < budget / repeats / 4:
+    while t < budget / repeats / 4:  # calls per timing: a quarter of the budget of one repeat
         n *= 4
-        t0 = clock()
-        for _ in range(n):
-            f()
-        t = clock() - t0
-    best = t / n
-    for _ in range(repeats - 1):
-        t0 = clock()
-        for _ in range(n):
-            f()
-        best = min(best, (clock() - t0) / n)
-    return best * 1e6
+        t = best_of(lambda n=n: _calls(f, n), 1, clock)
+    return min(t, best_of(lambda: _calls(f, n), repeats - 1, clock)) / n * 1e6
+
+
+def _calls(f: Callable[[], Any], n: int) -> None:
+    for _ in range(n):
+        f()
 
 
 def interleaved_us(

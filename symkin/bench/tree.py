@@ -11,7 +11,6 @@ cold compile time (a fresh process with an empty cache). Needs the ``compare`` e
 from __future__ import annotations
 
 import os
-import tempfile
 import time
 from importlib import metadata
 from pathlib import Path
@@ -19,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, fresh_python, optional, rows_per_s, with_lanes
+from symkin.bench.common import best_of, fresh_cache, fresh_python, optional, rows_per_s, with_lanes
 from symkin.bench.kin import per_call_us
 
 __all__ = ["erd_robots_dir", "TREE_CASES", "run_tree_kin", "format_tree_kin", "cold_compile_seconds"]
@@ -49,8 +48,8 @@ def cold_compile_seconds(urdf: Path, frames: tuple[str, ...]) -> float:
         f"tree = symkin.Tree.from_urdf({str(urdf)!r}, frames={list(frames)!r}); "
         "symkin.compile(tree, 'c'); print(time.perf_counter() - t)"
     )
-    with tempfile.TemporaryDirectory() as tmp:
-        return float(fresh_python(code, {**os.environ, "SYMKIN_CACHE": tmp}))
+    with fresh_cache():
+        return float(fresh_python(code, dict(os.environ)))
 
 
 def pinocchio_q(model: Any, names: Any, q: np.ndarray) -> np.ndarray:
