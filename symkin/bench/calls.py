@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from symkin.bench.common import best_of, cells, fresh_python, interleaved, table, with_lanes
-from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ik_lm
+from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_calls, rtb_ik_lm
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
 
@@ -201,32 +201,12 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[
         paths[(label, "fkine")] = lambda k=k: k.fkine(q)
         paths[(label, "jacob0")] = lambda k=k: k.jacob0(q)
         paths[(label, "manipulability")] = lambda k=k: k.manipulability(q)
-    pm = pinocchio_model(robot)
-    if pm is not None:
-        import pinocchio as pin
-
-        model, data, fid = pm
-        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-        def fk() -> Any:
-            pin.forwardKinematics(model, data, q)
-            return pin.updateFramePlacement(model, data, fid)
-
-        def jac() -> Any:
-            return pin.computeFrameJacobian(model, data, q, fid, lwa)
-
-        def manip() -> float:
-            J = pin.computeFrameJacobian(model, data, q, fid, lwa)
-            return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
-
-        def fk_all() -> Any:
-            pin.framesForwardKinematics(model, data, q)
-            return data.oMf[fid]
-
-        paths[("pinocchio", "fkine")] = fk
-        paths[("pinocchio", "jacob0")] = jac
-        paths[("pinocchio", "manipulability")] = manip
-        paths[("pinocchio (all frames)", "fkine")] = fk_all
+    pin = pinocchio_calls(robot, q)
+    if pin is not None:
+        paths[("pinocchio", "fkine")] = pin["fkine"]
+        paths[("pinocchio", "jacob0")] = pin["frame_jacobian"]
+        paths[("pinocchio", "manipulability")] = pin["manipulability"]
+        paths[("pinocchio (all frames)", "fkine")] = pin["fkine_all_frames"]
     return interleaved_us(paths, budget, clock=CLOCK)
 
 

@@ -145,29 +145,56 @@ def pinocchio_model(robot: Any) -> tuple[Any, Any, int] | None:
     return model, model.createData(), frame
 
 
+def pinocchio_calls(robot: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
+    """One configuration ``q`` per call through Pinocchio (:func:`pinocchio_model`; None without it),
+    the end-effector frame's: ``fkine`` (``forwardKinematics`` + ``updateFramePlacement``),
+    ``fkine_all_frames`` (``framesForwardKinematics``), ``jacob0`` (``computeJointJacobians`` +
+    ``getFrameJacobian``), ``frame_jacobian`` (``computeFrameJacobian``), ``manipulability``
+    (sqrt(det(J J^T)) of that Jacobian through numpy) and ``hessian0``; LOCAL_WORLD_ALIGNED."""
+    pm = pinocchio_model(robot)
+    if pm is None:
+        return None
+    import pinocchio as pin
+
+    model, data, fid = pm
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    pin.computeJointJacobians(model, data, q)
+
+    def fk() -> Any:  # the pose of one frame: joint placements, then that frame's
+        pin.forwardKinematics(model, data, q)
+        return pin.updateFramePlacement(model, data, fid)
+
+    def fk_all() -> Any:
+        pin.framesForwardKinematics(model, data, q)
+        return data.oMf[fid]
+
+    def jac() -> Any:
+        pin.computeJointJacobians(model, data, q)
+        return pin.getFrameJacobian(model, data, fid, lwa)
+
+    def manip() -> float:
+        J = pin.computeFrameJacobian(model, data, q, fid, lwa)
+        return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
+
+    def hess() -> Any:
+        pin.computeJointKinematicHessians(model, data, q)
+        return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
+
+    return {
+        "fkine": fk,
+        "fkine_all_frames": fk_all,
+        "jacob0": jac,
+        "frame_jacobian": lambda: pin.computeFrameJacobian(model, data, q, fid, lwa),
+        "manipulability": manip,
+        "hessian0": hess,
+    }
+
+
 def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], Any]]]:
     peers: dict[str, dict[str, Callable[[], Any]]] = {}
-    pm = pinocchio_model(robot)
-    if pm is not None:
-        import pinocchio as pin
-
-        model, data, fid = pm
-        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        pin.computeJointJacobians(model, data, q)
-
-        def fk() -> Any:  # the pose of one frame: joint placements, then that frame's
-            pin.forwardKinematics(model, data, q)
-            return pin.updateFramePlacement(model, data, fid)
-
-        def jac() -> Any:
-            pin.computeJointJacobians(model, data, q)
-            return pin.getFrameJacobian(model, data, fid, lwa)
-
-        def hess() -> Any:
-            pin.computeJointKinematicHessians(model, data, q)
-            return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
-
-        peers["pinocchio"] = {"fkine": fk, "jacob0": jac, "hessian0": hess}
+    pin = pinocchio_calls(robot, q)
+    if pin is not None:
+        peers["pinocchio"] = {f: pin[f] for f in FUNCS}
     rtb = optional("roboticstoolbox")
     if rtb is not None:
         ets = rtb_ets(rtb, robot)
