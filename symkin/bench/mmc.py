@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import figure, optional
+from symkin.bench.common import cell, figure, optional, table
 from symkin.core.progress import bar
 from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
@@ -382,30 +382,28 @@ def step_timing(
     return out
 
 
+_TIMED = ("c", "python", "rtb_qpsolvers", "rtb_kinematics")  # the step timing's paths, in its table's order
+
+
 def _max_diff(a: list[np.ndarray], b: list[np.ndarray]) -> float:
     return max((float(np.abs(x - y).max()) for x, y in zip(a, b)), default=float("nan"))
 
 
 def format_step_timing(timing: dict[str, Any]) -> str:
     """Plain-text table of a :func:`step_timing` result."""
+    rows = []
+    for name, r in timing["configs"].items():
+        med, p90 = r["median_us"], r["p90_us"]
+        us = [f"{med[k]:.1f} ({p90[k]:.0f})" if k in med else "-" for k in _TIMED]
+        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["c_methods"].items()))
+        ratios = [cell(r.get("speedup_vs_rtb"), "{:.1f}x"), f"{r['speedup_vs_python']:.1f}x"]
+        rows.append([name, r["steps"], *us, *ratios, methods])
+    head = ["config", "steps", "C", "Python", "RTB+qpsolvers", "(RTB J, Jm)", "C vs RTB", "C vs Py"]
     lines = [
         f"MMC step, {timing['robot']} ({timing['n_tasks']} Table I tasks replayed; median (p90) us per step "
         "from Python, same states for each)",
-        f"{'config':<12} {'steps':>6} {'C':>14} {'Python':>14} {'RTB+qpsolvers':>15} {'(RTB J, Jm)':>13} "
-        f"{'C vs RTB':>9} {'C vs Py':>8}  C path methods",
+        *table([*head, "C path methods"], rows, "lrrrrrrrl"),
     ]
-    for name, r in timing["configs"].items():
-        med, p90 = r["median_us"], r["p90_us"]
-
-        def cell(k: str, width: int, med: dict = med, p90: dict = p90) -> str:
-            return f"{med[k]:.1f} ({p90[k]:.0f})".rjust(width) if k in med else "-".rjust(width)
-
-        ratio = f"{r['speedup_vs_rtb']:.1f}x" if "speedup_vs_rtb" in r else "-"
-        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["c_methods"].items()))
-        lines.append(
-            f"{name:<12} {r['steps']:>6} {cell('c', 14)} {cell('python', 14)} {cell('rtb_qpsolvers', 15)} "
-            f"{cell('rtb_kinematics', 13)} {ratio:>9} {r['speedup_vs_python']:>7.1f}x  {methods}"
-        )
     diffs = [
         f"{name} {r['max_diff_python']:.1e}"
         + (f" / {r['max_diff_rtb']:.1e}" if "max_diff_rtb" in r else "")
