@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, interleaved, optional
+from symkin.bench.common import best_of, cell, interleaved, optional
 
 __all__ = ["run_analytic", "format_analytic", "sampled_solutions"]
 
@@ -165,13 +165,6 @@ def _solution_sets(
     return out
 
 
-def _getter(r: dict[str, Any]) -> Any:
-    def g(k: str, fmt: str) -> str:
-        return format(r[k], fmt) if k in r else "-"
-
-    return g
-
-
 def format_analytic(result: dict[str, Any]) -> str:
     """The result of :func:`run_analytic` as a table."""
     lines = [
@@ -182,14 +175,14 @@ def format_analytic(result: dict[str, Any]) -> str:
         f"{'x one':>6} {'x batch':>7}",
     ]
     for name, r in result["robots"].items():
-        g = _getter(r)
         lines.append(
             f"{name:10} {r['kind']:30} {r['derive_s']:6.2f}s {r['c_batch_us']:6.2f}us {r['c_one_us']:5.2f}us "
             f"{r['numpy_batch_us']:5.0f}us {r['mean_solutions']:5.2f} {r['max_fk_error']:8.1e} "
-            f"{g('agree', 'd'):>6} | {g('eaik_one_us', '6.2f'):>6}us {g('eaik_batch_us', '5.2f'):>5}us "
-            f"{g('eaik_mean_solutions', '5.2f'):>5} {g('eaik_max_fk_error', '8.1e'):>8} "
-            f"{g('eaik_agree', 'd'):>6} "
-            f"{g('speedup_one', '5.1f'):>5}x {g('speedup_batch', '6.1f'):>6}x"
+            f"{cell(r.get('agree'), '{:d}'):>6} | {cell(r.get('eaik_one_us'), '{:6.2f}'):>6}us "
+            f"{cell(r.get('eaik_batch_us'), '{:5.2f}'):>5}us "
+            f"{cell(r.get('eaik_mean_solutions'), '{:5.2f}'):>5} "
+            f"{cell(r.get('eaik_max_fk_error'), '{:8.1e}'):>8} {cell(r.get('eaik_agree'), '{:d}'):>6} "
+            f"{cell(r.get('speedup_one'), '{:5.1f}'):>5}x {cell(r.get('speedup_batch'), '{:6.1f}'):>6}x"
         )
     if not any("eaik_one_us" in r for r in result["robots"].values()):
         lines.append("EAIK not installed (pip install 'symkin[compare]'): no comparison")

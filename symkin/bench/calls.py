@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, fresh_python, interleaved, optional, with_lanes
-from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_model, rtb_ets
+from symkin.bench.common import best_of, cells, fresh_python, interleaved, table, with_lanes
+from symkin.bench.kin import interleaved_us, per_call_us, pinocchio_calls, rtb_ik_lm
 
 __all__ = ["run_calls", "format_calls", "GOALS"]
 
@@ -128,24 +128,7 @@ def ik_call_parts(
 
 
 def _rtb_ik(robot: Any, targets: list[np.ndarray]) -> dict[str, Any] | None:
-    rtb = optional("roboticstoolbox")
-    if rtb is None:
-        return None
-    try:
-        ets = rtb_ets(rtb, robot)
-        solve = [
-            lambda T=T: ets.ik_LM(T, ilimit=30, slimit=100, tol=5e-13, k=0.1, method="chan") for T in targets
-        ]
-        solve[0]()
-        t0 = CLOCK()
-        sols = [s() for s in solve]
-        elapsed = CLOCK() - t0
-        return {
-            "us": 1e6 * elapsed / len(targets),
-            "success": float(np.mean([bool(s.success) for s in sols])),
-        }
-    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
-        return {"error": f"{type(exc).__name__}: {exc}"}
+    return rtb_ik_lm(robot, targets, 5e-13, lambda s, ok, _: {"us": 1e6 * s, "success": float(np.mean(ok))})
 
 
 def pinv_per_iteration(robot: Any, kin: Any, n_targets: int, seed: int, rounds: int) -> dict[str, Any]:
@@ -218,32 +201,12 @@ def numpy_vs_pinocchio(robot: Any, q: np.ndarray, budget: float = 0.25) -> dict[
         paths[(label, "fkine")] = lambda k=k: k.fkine(q)
         paths[(label, "jacob0")] = lambda k=k: k.jacob0(q)
         paths[(label, "manipulability")] = lambda k=k: k.manipulability(q)
-    pm = pinocchio_model(robot)
-    if pm is not None:
-        import pinocchio as pin
-
-        model, data, fid = pm
-        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-        def fk() -> Any:
-            pin.forwardKinematics(model, data, q)
-            return pin.updateFramePlacement(model, data, fid)
-
-        def jac() -> Any:
-            return pin.computeFrameJacobian(model, data, q, fid, lwa)
-
-        def manip() -> float:
-            J = pin.computeFrameJacobian(model, data, q, fid, lwa)
-            return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
-
-        def fk_all() -> Any:
-            pin.framesForwardKinematics(model, data, q)
-            return data.oMf[fid]
-
-        paths[("pinocchio", "fkine")] = fk
-        paths[("pinocchio", "jacob0")] = jac
-        paths[("pinocchio", "manipulability")] = manip
-        paths[("pinocchio (all frames)", "fkine")] = fk_all
+    pin = pinocchio_calls(robot, q)
+    if pin is not None:
+        paths[("pinocchio", "fkine")] = pin["fkine"]
+        paths[("pinocchio", "jacob0")] = pin["frame_jacobian"]
+        paths[("pinocchio", "manipulability")] = pin["manipulability"]
+        paths[("pinocchio (all frames)", "fkine")] = pin["fkine_all_frames"]
     return interleaved_us(paths, budget, clock=CLOCK)
 
 
@@ -418,17 +381,16 @@ def format_calls(r: dict[str, Any]) -> str:
             f"  {name:5} loop in C {row['c']:10.0f}   loop in Python {row['python']:8.0f}   "
             f"({row['c'] / row['python']:.1f}x)"
         )
-    funcs = ("fkine", "jacob0", "manipulability")
-    lines += ["", "One configuration per call (us):", f"  {'path':24}" + "".join(f"{f:>16}" for f in funcs)]
-    for label, row in r["numpy"].items():
-        lines.append(f"  {label:24}" + "".join(f"{row[f]:16.2f}" if f in row else " " * 16 for f in funcs))
-    if "pinocchio" in r["numpy"]:
-        p, npy, c = r["numpy"]["pinocchio"], r["numpy"]["numpy"], r["numpy"]["c"]
-        lines.append(f"  {'numpy / pinocchio':24}" + "".join(f"{npy[f] / p[f]:15.2f}x" for f in funcs))
-        lines.append(f"  {'pinocchio / c':24}" + "".join(f"{p[f] / c[f]:15.2f}x" for f in funcs))
-        pa = r["numpy"]["pinocchio (all frames)"]["fkine"]
-        lines.append(f"  {'numpy / pinocchio all fr.':24}{npy['fkine'] / pa:15.2f}x")
-    else:
+    funcs, one = ("fkine", "jacob0", "manipulability"), r["numpy"]
+    rows = [cells(label, row, funcs, "{:.2f}") for label, row in one.items()]
+    if "pinocchio" in one:
+        p, npy, c = one["pinocchio"], one["numpy"], one["c"]
+        rows.append(cells("numpy / pinocchio", {f: npy[f] / p[f] for f in funcs}, funcs, "{:.2f}x"))
+        rows.append(cells("pinocchio / c", {f: p[f] / c[f] for f in funcs}, funcs, "{:.2f}x"))
+        all_frames = {"fkine": npy["fkine"] / one["pinocchio (all frames)"]["fkine"]}
+        rows.append(cells("numpy / pinocchio all fr.", all_frames, funcs, "{:.2f}x"))
+    lines += ["", "One configuration per call (us):", *("  " + x for x in table(["path", *funcs], rows))]
+    if "pinocchio" not in one:
         lines.append("  (install the compare extra for Pinocchio)")
     lines.append("  CasADi backend vs its raw casadi.Function:")
     for f, row in r["casadi"].items():

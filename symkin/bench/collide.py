@@ -29,6 +29,7 @@ __all__ = [
     "cage_scene",
     "pinocchio_collision",
     "beyond_limits",
+    "add_obstacles",
 ]
 
 
@@ -112,15 +113,9 @@ def pinocchio_collision(robot: Any, env: Any) -> Any:
             shape = coal.Sphere(s.radius)
             local = pin.SE3(np.eye(3), np.array(s.center))
         geom.addGeometryObject(pin.GeometryObject(f"s{k}", parent_joint, placement * local, shape))
-    n_robot = len(layout.shapes)
-    for o, s in enumerate(env.spheres):
-        geom.addGeometryObject(pin.GeometryObject(f"o{o}", 0, pin.SE3(np.eye(3), np.array(s.center)),
-                                                  coal.Sphere(s.radius)))  # fmt: skip
     for i, j in layout.self_pairs:
         geom.addCollisionPair(pin.CollisionPair(i, j))
-    for o in range(len(env.spheres)):
-        for i in range(n_robot):
-            geom.addCollisionPair(pin.CollisionPair(i, n_robot + o))
+    add_obstacles(pin, coal, geom, env)
     data, gdata = model.createData(), pin.GeometryData(geom)
 
     def check(q: np.ndarray) -> bool:
@@ -132,6 +127,22 @@ def pinocchio_collision(robot: Any, env: Any) -> Any:
 
     check.distances = distances  # type: ignore[attr-defined]
     return check
+
+
+def add_obstacles(pin: Any, coal: Any, geom: Any, env: Any, to_world: np.ndarray | None = None) -> int:
+    """Add ``env``'s spheres and boxes (symkin's base frame; ``to_world``: the 4x4 pose of that frame
+    in Pinocchio's world, default identity) to the Pinocchio GeometryModel ``geom`` on the universe
+    joint, each paired with every object already in it (the robot's); returns how many."""
+    B = np.eye(4) if to_world is None else to_world
+    n = len(geom.geometryObjects)
+    shapes = [(coal.Sphere(s.radius), np.eye(3), s.center) for s in env.spheres]
+    shapes += [(coal.Box(*(2 * np.array(b.half_extents))), b.R, b.center) for b in env.boxes]
+    for k, (shape, R, c) in enumerate(shapes):
+        pose = pin.SE3(B[:3, :3] @ R, B[:3, :3] @ np.array(c) + B[:3, 3])
+        geom.addGeometryObject(pin.GeometryObject(f"obstacle_{k}", 0, pose, shape))
+        for i in range(n):
+            geom.addCollisionPair(pin.CollisionPair(i, n + k))
+    return len(shapes)
 
 
 def _rotation_to(z: np.ndarray) -> np.ndarray:

@@ -11,18 +11,13 @@ first.
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
-import os
-import resource
-import tempfile
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import interleaved
+from symkin.bench.common import cpu_seconds, fresh_cache, interleaved
 
 __all__ = ["dense_spheres", "run_build", "format_build"]
 
@@ -45,31 +40,11 @@ def dense_spheres(robot: Any, total: int = 300, seed: int = 0) -> Any:
     return robot.with_geometry(Geometry(tuple(out), robot.geometry.disabled, source))
 
 
-@contextlib.contextmanager
-def _fresh_cache() -> Iterator[None]:
-    """A new, empty compile cache for the block (SYMKIN_CACHE restored after it)."""
-    old = os.environ.get("SYMKIN_CACHE")
-    with tempfile.TemporaryDirectory(prefix="symkin-build-") as folder:
-        os.environ["SYMKIN_CACHE"] = folder
-        try:
-            yield
-        finally:
-            if old is None:
-                os.environ.pop("SYMKIN_CACHE", None)
-            else:
-                os.environ["SYMKIN_CACHE"] = old
-
-
 def _timed(f: Any) -> tuple[Any, float, float]:
     """(f(), wall seconds, CPU seconds of this process and its finished children)."""
-
-    def cpu() -> float:
-        me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-        return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
-
-    w, c = time.perf_counter(), cpu()
+    w, c = time.perf_counter(), cpu_seconds()
     out = f()
-    return out, time.perf_counter() - w, cpu() - c
+    return out, time.perf_counter() - w, cpu_seconds() - c
 
 
 def _library(layout: Any, unroll: int | None) -> tuple[Any, dict[str, float]]:
@@ -116,7 +91,7 @@ def run_build(
         "spheres": len(layout.shapes),
         "pairs": len(layout.self_pairs),
     }
-    with _fresh_cache():
+    with fresh_cache():
         proved, wall, cpu = _timed(lambda: proved_apart(layout))
         out.update(proved=len(proved), proof_s=wall, proof_cpu_s=cpu)
         libs = {"tables": _library(layout, None)}

@@ -1,18 +1,34 @@
 """What the benchmarks share: timing (the best of several rounds, paths measured in turn), peer
-libraries that may be missing, and a fresh Python interpreter for start-up and cold-compile figures."""
+libraries that may be missing, a fresh Python interpreter for start-up and cold-compile figures,
+figures, and the tables of their reports."""
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import math
+import os
+import resource
 import subprocess
 import sys
+import tempfile
 import time
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterable, Iterator, Sequence
 from types import ModuleType
 from typing import Any
+from unittest import mock
 
-__all__ = ["best_of", "interleaved", "rows_per_s", "optional", "fresh_python", "with_lanes"]
+__all__ = [
+    "best_of",
+    "interleaved",
+    "rows_per_s",
+    "optional",
+    "fresh_python",
+    "with_lanes",
+    "table",
+    "cell",
+    "cells",
+]
 
 
 def interleaved(
@@ -55,6 +71,32 @@ def optional(name: str) -> ModuleType | None:
         return None
 
 
+def guarded(f: Callable[[], Any]) -> Any:
+    """``f()``, or ``{"error": "<exception type>: <message>"}`` when it raises: an optional
+    comparison with a peer library must not break the benchmark."""
+    try:
+        return f()
+    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
+        return {"error": f"{type(exc).__name__}: {exc}"}
+
+
+@contextlib.contextmanager
+def fresh_cache() -> Iterator[str]:
+    """A new, empty compile cache (``SYMKIN_CACHE``, restored after) for the block: every compile
+    in it (and in a :func:`fresh_python` it starts) derives, generates and builds."""
+    with (
+        tempfile.TemporaryDirectory(prefix="symkin-bench-") as folder,
+        mock.patch.dict(os.environ, {"SYMKIN_CACHE": folder}),
+    ):
+        yield folder
+
+
+def cpu_seconds() -> float:
+    """CPU seconds of this process and of its finished children (the compiler)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 def fresh_python(code: str, env: dict[str, str], timeout: float | None = None, what: str = "") -> str:
     """The last line ``code`` prints, run by a fresh interpreter (``python -c``) with ``env``; a
     RuntimeError (``what`` failed, with the end of its stderr) when it fails."""
@@ -76,3 +118,55 @@ def with_lanes(kin: Any, timeout: float = 600) -> Any:
 
         ready(module, timeout)
     return kin
+
+
+@contextlib.contextmanager
+def figure(path: Any, what: str, dpi: float | None = None, **subplots: Any) -> Iterator[tuple[Any, Any]]:
+    """``(fig, axes)`` of ``matplotlib.pyplot.subplots(**subplots)`` (the Agg backend) for the
+    block, then laid out tight, written to ``path`` (``dpi``; None: the figure's) and closed. A
+    MissingExtraError naming ``what`` without matplotlib (the ``plot`` extra)."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover - optional dependency
+        from symkin.errors import MissingExtraError
+
+        raise MissingExtraError(f"{what} needs matplotlib: pip install 'symkin[plot]'") from None
+    fig, axes = plt.subplots(**subplots)
+    try:
+        yield fig, axes
+        fig.tight_layout()
+        fig.savefig(path, dpi=dpi or "figure")
+    finally:
+        plt.close(fig)
+
+
+def table(head: Sequence[str], rows: Iterable[Sequence[Any] | None], align: str = "") -> list[str]:
+    """The lines of a plain-text table: ``head``, a rule, then ``rows`` (cells as strings, other
+    values by ``str``; a row None is an empty line), each column as wide as its widest cell, two
+    spaces apart, aligned by ``align`` (``l`` or ``r`` per column; default: the first left, the
+    others right)."""
+    body = [None if r is None else [str(c) for c in r] for r in rows]
+    align = align or "l" + "r" * (len(head) - 1)
+    lines = [list(head)] + [r for r in body if r is not None]
+    widths = [max(len(r[i]) for r in lines) for i in range(len(head))]
+
+    def line(r: Sequence[str]) -> str:
+        return "  ".join(c.ljust(w) if a == "l" else c.rjust(w) for c, w, a in zip(r, widths, align)).rstrip()
+
+    rule = "-" * max(len(line(r)) for r in lines)
+    return [line(head), rule] + ["" if r is None else line(r) for r in body]
+
+
+def cell(value: Any, fmt: str = "{}", missing: str = "-") -> str:
+    """``value`` by the format string ``fmt`` (``"{:.2f}x"``), or ``missing`` when it is None (a
+    figure not measured)."""
+    return missing if value is None else fmt.format(value)
+
+
+def cells(label: str, values: dict[Any, Any], keys: Iterable[Any], fmt: str = "{}") -> list[str]:
+    """A row of :func:`table`: ``label``, then ``values[k]`` by ``fmt`` for each of ``keys`` ("-"
+    where missing)."""
+    return [label, *(cell(values.get(k), fmt) for k in keys)]

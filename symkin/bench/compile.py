@@ -15,14 +15,13 @@ import json
 import os
 import resource
 import sys
-import tempfile
 import time
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import fresh_python
+from symkin.bench.common import cpu_seconds, figure, fresh_cache, fresh_python
 
 __all__ = [
     "random_chain",
@@ -52,12 +51,6 @@ def random_chain(n: int, seed: int = 0, name: str | None = None) -> Any:
     return Robot.from_ets(" ".join(parts), name=name or f"chain{n}_{seed}")
 
 
-def _cpu_s() -> float:
-    """CPU seconds of this process and its finished children (the compiler)."""
-    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
 def _peak_mb() -> tuple[float, float]:
     """Peak resident memory (MB) of this process and of the largest child it waited for."""
     scale = 1 / 1024 if sys.platform != "darwin" else 1 / 1024**2
@@ -85,7 +78,7 @@ def _measure_here(spec: str, seed: int, derivatives: int = 0) -> dict[str, Any]:
     )
 
     robot = random_chain(int(spec), seed) if spec.isdigit() else resolve_robot(spec)
-    cpu0 = _cpu_s()
+    cpu0 = cpu_seconds()
     t0 = time.perf_counter()
     derived = derive_kinematics(robot)
     t1 = time.perf_counter()
@@ -97,17 +90,17 @@ def _measure_here(spec: str, seed: int, derivatives: int = 0) -> dict[str, Any]:
     kernel = kernel_of(robot, as_tree(robot), functions, "symkin bench compile")
     files = render_c(kernel)
     t3 = time.perf_counter()
-    cpu3 = _cpu_s()
+    cpu3 = cpu_seconds()
     python = {**render_numpy(kernel), **render_casadi(kernel)}
     t4 = time.perf_counter()
-    cpu4 = _cpu_s()
+    cpu4 = cpu_seconds()
     name, path = compile_c(files)
     t5 = time.perf_counter()
     module = load_extension(name, path)
     q = robot.random_q(seed=1)
     err = float(np.abs(module.jacob0(q) - robot.jacob0(q)).max())
     t6 = time.perf_counter()
-    cpu6 = _cpu_s()
+    cpu6 = cpu_seconds()
     by_name = {f.name: f.code.counts for f in functions}
     own, child = _peak_mb()
     extra: dict[str, Any] = {}
@@ -162,9 +155,8 @@ def measure(spec: str, seed: int = 0, timeout: float = 1800, derivatives: int = 
         "import json, sys; from symkin.bench.compile import _measure_here; "
         f"print(json.dumps(_measure_here({spec!r}, {seed}, {derivatives})))"
     )
-    with tempfile.TemporaryDirectory(prefix="symkin-bench-") as cache:
-        env = {**os.environ, "SYMKIN_CACHE": cache}
-        return json.loads(fresh_python(code, env, timeout, what=f"measuring {spec}"))
+    with fresh_cache():
+        return json.loads(fresh_python(code, dict(os.environ), timeout, what=f"measuring {spec}"))
 
 
 def run_compile(
@@ -244,33 +236,25 @@ def format_compile(rows: list[dict[str, Any]]) -> str:
 
 def plot_compile(rows: list[dict[str, Any]], path: str) -> None:
     """Compile time (stacked by phase) and operations per joint against the number of joints."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     chains = [r for r in rows if r["robot"].startswith("chain") and not r.get("derivatives")]
     n = [r["n"] for r in chains]
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
-    bottom = np.zeros(len(chains))
-    for key, label in (
-        ("derive_s", "derive"),
-        ("cse_s", "code"),
-        ("render_c_s", "C source"),
-        ("gcc_s", "gcc"),
-    ):
-        v = np.array([r[key] for r in chains])
-        a.bar([str(x) for x in n], v, bottom=bottom, label=label)
-        bottom += v
-    a.set_xlabel("joints")
-    a.set_ylabel("cold compile to C (s)")
-    a.legend()
-    b.plot(n, [r["ops_fk_j_h"] / r["n"] for r in chains], "o-", label="FK + J + H")
-    b.plot(n, [r["ops_fk_j"] / r["n"] for r in chains], "s-", label="FK + J")
-    b.set_xlabel("joints")
-    b.set_ylabel("operations per joint (after CSE)")
-    b.legend()
-    fig.suptitle("symkin bench compile: random serial chains")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    with figure(path, "plot_compile", 120, ncols=2, figsize=(10, 4)) as (fig, (a, b)):
+        bottom = np.zeros(len(chains))
+        for key, label in (
+            ("derive_s", "derive"),
+            ("cse_s", "code"),
+            ("render_c_s", "C source"),
+            ("gcc_s", "gcc"),
+        ):
+            v = np.array([r[key] for r in chains])
+            a.bar([str(x) for x in n], v, bottom=bottom, label=label)
+            bottom += v
+        a.set_xlabel("joints")
+        a.set_ylabel("cold compile to C (s)")
+        a.legend()
+        b.plot(n, [r["ops_fk_j_h"] / r["n"] for r in chains], "o-", label="FK + J + H")
+        b.plot(n, [r["ops_fk_j"] / r["n"] for r in chains], "s-", label="FK + J")
+        b.set_xlabel("joints")
+        b.set_ylabel("operations per joint (after CSE)")
+        b.legend()
+        fig.suptitle("symkin bench compile: random serial chains")

@@ -30,6 +30,7 @@ the wall time of a call that waits for the device (``torch.cuda.synchronize``,
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -186,6 +187,12 @@ def _ik_row(path: str, dtype: str, robot: Any, T: np.ndarray, solve: Callable[[]
     )
 
 
+def _ik_q(kin: Any, T: Any, seed: int, tol: float) -> np.ndarray:
+    """q (N, n) of symkin's IK (PyTorch or JAX backend) on the targets T: 10 starts x 30 iterations."""
+    q = kin.ik(T, slimit=10, ilimit=30, seed=seed, tol=tol).q
+    return np.asarray(q.detach().cpu().numpy() if hasattr(q, "detach") else q, dtype=float)
+
+
 def _pk_ik(chain: Any, robot: Any, torch: Any, Tt: Any, seed: int) -> Callable[[], np.ndarray]:
     import pytorch_kinematics as pk
 
@@ -280,23 +287,11 @@ def run_diff(
                 _ik_row("pk", dtype, robot, T, _pk_ik(chain, robot, torch, Tt, seed), rounds, clock)
             )
         tol = 1e-6 if dtype == "float64" else 1e-4
-        if "torch" in kins:
-            kin = kins["torch"]
-            ik_rows.append(_ik_row(
-                "torch", dtype, robot, T,
-                lambda k=kin, t=Tt, tol=tol: k.ik(t, slimit=10, ilimit=30, seed=seed, tol=tol)
-                .q.detach().cpu().numpy().astype(float),
-                rounds, clock,
-            ))  # fmt: skip
-        if jax is not None:
-            kin, Tj = kins["jax"], jax.device_put(T.astype(dtype), jax_device)
-            ik_rows.append(_ik_row(
-                "jax.jit", dtype, robot, T,
-                lambda k=kin, t=Tj, tol=tol: np.asarray(
-                    k.ik(t, slimit=10, ilimit=30, seed=seed, tol=tol).q, dtype=float
-                ),
-                rounds, clock,
-            ))  # fmt: skip
+        for path, lib in (("torch", "torch"), ("jax.jit", "jax")):
+            if lib in kins:
+                Tx = Tt if lib == "torch" else jax.device_put(T.astype(dtype), jax_device)
+                solve = functools.partial(_ik_q, kins[lib], Tx, seed=seed, tol=tol)
+                ik_rows.append(_ik_row(path, dtype, robot, T, solve, rounds, clock))
     return DiffReport(robot.name, tuple(rows), tuple(ik_rows), agreement, tuple(notes), device)
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import interleaved, optional, with_lanes
+from symkin.bench.common import guarded, interleaved, table, with_lanes
 
 __all__ = ["run_table1", "format_table1", "table1_problems", "TABLE1_METHODS", "PAPER_TABLE1", "SETTINGS"]
 
@@ -191,10 +191,9 @@ def _compare_qp(
 
     if QP_ROW not in labels:
         return None
-    try:
-        return compare_rtb_qp(robot, kin, Tep, starts, TABLE1_METHODS[QP_ROW], tol, problems, seed)
-    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
-        return {"error": f"{type(exc).__name__}: {exc}"}
+    return guarded(
+        lambda: compare_rtb_qp(robot, kin, Tep, starts, TABLE1_METHODS[QP_ROW], tol, problems, seed)
+    )
 
 
 def _time_lanes(
@@ -257,28 +256,19 @@ def _row(
 
 def _time_rtb(robot: Any, n_problems: int, seed: int, tol: float) -> dict[str, Any] | None:
     """roboticstoolbox-python's C++ ``ik_LM`` (Chan, lambda 0.1, 100 x 30) on the same problems."""
-    rtb = optional("roboticstoolbox")  # optional; not a dependency
-    if rtb is None:
-        return None
-    try:
-        from symkin.bench.kin import rtb_ets
+    from symkin.bench.kin import rtb_ik_lm
 
-        ets = rtb_ets(rtb, robot)  # the same ETS (no model download)
-        q, _, starts = table1_problems(robot, n_problems, seed)
-        Tep = [ets.eval(x) for x in q]
-        t0 = time.thread_time()
-        out = [ets.ik_LM(T, q0=starts[0], ilimit=30, slimit=100, tol=tol, k=0.1, method="chan") for T in Tep]
-        elapsed = time.thread_time() - t0
-        success = np.array([bool(o.success) for o in out])
-        iterations = np.array([int(o.iterations) for o in out])
-        return {
-            "method": "RTB ik_LM (Chan lambda=0.1), 100 x 30",
-            "mean_iterations": float(iterations[success].mean()) if success.any() else float("nan"),
-            "infeasible": int((~success).sum()),
-            "us_per_solve": 1e6 * elapsed / len(Tep),
-        }
-    except Exception as exc:  # noqa: BLE001 - an optional comparison must not break the benchmark
-        return {"error": f"{type(exc).__name__}: {exc}"}
+    _, Tep, starts = table1_problems(robot, n_problems, seed)
+    return rtb_ik_lm(robot, Tep, tol, _rtb_row, starts[0])
+
+
+def _rtb_row(seconds: float, success: np.ndarray, iterations: np.ndarray) -> dict[str, Any]:
+    return {
+        "method": "RTB ik_LM (Chan lambda=0.1), 100 x 30",
+        "mean_iterations": float(iterations[success].mean()) if success.any() else float("nan"),
+        "infeasible": int((~success).sum()),
+        "us_per_solve": 1e6 * seconds,
+    }
 
 
 #: the cells of a row of format_table1 after the method, in order (the paper's without "infeasible")
@@ -307,21 +297,14 @@ def format_table1(result: dict[str, Any]) -> str:
     )
     cols = ["Method", "S", "I", "Mean it", "Med it", "Infeas", "Infeas %", "Mean S", "Max S", "us/solve",
             "us/it", "max|e|", "| paper:", "Mean it", "Med it", "Infeas %", "Mean S", "Max S"]  # fmt: skip
-    lines = []
-    for r in result["rows"]:
+    rows: list[list[str] | None] = []
+    for i, r in enumerate(result["rows"]):
+        if i and r["setting"] != result["rows"][i - 1]["setting"]:
+            rows.append(None)
         p = r["paper"]
         paper = [_CELLS[k].format(p[k]) if p else "-" for k in _PAPER_KEYS if k != "infeasible"]
-        lines.append([r["method"], *(cell.format(r[k]) for k, cell in _CELLS.items()), "", *paper])
-    widths = [max(len(c), *(len(x[i]) for x in lines)) if lines else len(c) for i, c in enumerate(cols)]
-
-    def fmt(cells: list[str]) -> str:
-        return "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(cells, widths)))
-
-    out = [head, fmt(cols), "-" * len(fmt(cols))]
-    for i, x in enumerate(lines):
-        if i and result["rows"][i]["setting"] != result["rows"][i - 1]["setting"]:
-            out.append("")
-        out.append(fmt(x))
+        rows.append([r["method"], *(cell.format(r[k]) for k, cell in _CELLS.items()), "", *paper])
+    out = [head, *table(cols, rows)]
     out.append(
         "S, I: searches and iterations allowed; iteration statistics over solved problems; us/it: time "
         "over all iterations (failed searches included)."

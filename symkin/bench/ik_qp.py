@@ -16,7 +16,6 @@ best of three interleaved rounds, RTB's one round (it takes seconds).
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 import numpy as np
@@ -56,7 +55,7 @@ def compare_rtb_qp(
     rtb = optional("roboticstoolbox")
     if rtb is None or optional("quadprog") is None:
         return None
-    from symkin.bench.kin import rtb_ets
+    from symkin.bench.kin import rtb_ets, rtb_solve
     from symkin.runtime.ik import ik
     from symkin.runtime.ik_problem import IKOptions
 
@@ -68,12 +67,7 @@ def compare_rtb_qp(
     ets = rtb_ets(rtb, robot)
     ets.qlim = np.asarray(robot.qlim, dtype=float)  # its dampers and limit check need the limits
     solver = rtb.IK_QP(ilimit=30, slimit=100, tol=tol, joint_limits=True, seed=seed, **params)
-    t0 = time.thread_time()
-    out = [solver.solve(ets, x, q0=starts) for x in T]
-    t_rtb = (time.thread_time() - t0) / len(T)
-    rtb_q = np.array([np.asarray(o.q, dtype=float) for o in out])
-    rtb_success = np.array([bool(o.success) for o in out])
-    rtb_iterations = np.array([int(o.iterations) for o in out])
+    t_rtb, rtb_q, rtb_success, rtb_iterations = rtb_solve(lambda x: solver.solve(ets, x, q0=starts), T)
     return {
         "problems": len(T),
         "rtb_parameters": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},

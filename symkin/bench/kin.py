@@ -16,6 +16,7 @@ calling thread (``time.thread_time``), so that other processes of a shared machi
 from __future__ import annotations
 
 import ctypes
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -23,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import optional, rows_per_s, with_lanes
+from symkin.bench.common import best_of, cells, guarded, optional, rows_per_s, table, with_lanes
 
 __all__ = ["run_kin", "format_kin", "per_call_us", "interleaved_us", "pinocchio_model", "rtb_ets"]
 
@@ -42,19 +43,15 @@ def per_call_us(
     shared machine do not)."""
     f()
     n, t = 1, 0.0
-    while t < budget / repeats / 4:
+    while t < budget / repeats / 4:  # calls per timing: a quarter of the budget of one repeat
         n *= 4
-        t0 = clock()
-        for _ in range(n):
-            f()
-        t = clock() - t0
-    best = t / n
-    for _ in range(repeats - 1):
-        t0 = clock()
-        for _ in range(n):
-            f()
-        best = min(best, (clock() - t0) / n)
-    return best * 1e6
+        t = best_of(lambda n=n: _calls(f, n), 1, clock)
+    return min(t, best_of(lambda: _calls(f, n), repeats - 1, clock)) / n * 1e6
+
+
+def _calls(f: Callable[[], Any], n: int) -> None:
+    for _ in range(n):
+        f()
 
 
 def interleaved_us(
@@ -148,29 +145,56 @@ def pinocchio_model(robot: Any) -> tuple[Any, Any, int] | None:
     return model, model.createData(), frame
 
 
+def pinocchio_calls(robot: Any, q: np.ndarray) -> dict[str, Callable[[], Any]] | None:
+    """One configuration ``q`` per call through Pinocchio (:func:`pinocchio_model`; None without it),
+    the end-effector frame's: ``fkine`` (``forwardKinematics`` + ``updateFramePlacement``),
+    ``fkine_all_frames`` (``framesForwardKinematics``), ``jacob0`` (``computeJointJacobians`` +
+    ``getFrameJacobian``), ``frame_jacobian`` (``computeFrameJacobian``), ``manipulability``
+    (sqrt(det(J J^T)) of that Jacobian through numpy) and ``hessian0``; LOCAL_WORLD_ALIGNED."""
+    pm = pinocchio_model(robot)
+    if pm is None:
+        return None
+    import pinocchio as pin
+
+    model, data, fid = pm
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    pin.computeJointJacobians(model, data, q)
+
+    def fk() -> Any:  # the pose of one frame: joint placements, then that frame's
+        pin.forwardKinematics(model, data, q)
+        return pin.updateFramePlacement(model, data, fid)
+
+    def fk_all() -> Any:
+        pin.framesForwardKinematics(model, data, q)
+        return data.oMf[fid]
+
+    def jac() -> Any:
+        pin.computeJointJacobians(model, data, q)
+        return pin.getFrameJacobian(model, data, fid, lwa)
+
+    def manip() -> float:
+        J = pin.computeFrameJacobian(model, data, q, fid, lwa)
+        return math.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
+
+    def hess() -> Any:
+        pin.computeJointKinematicHessians(model, data, q)
+        return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
+
+    return {
+        "fkine": fk,
+        "fkine_all_frames": fk_all,
+        "jacob0": jac,
+        "frame_jacobian": lambda: pin.computeFrameJacobian(model, data, q, fid, lwa),
+        "manipulability": manip,
+        "hessian0": hess,
+    }
+
+
 def _peer_calls(robot: Any, q: np.ndarray) -> dict[str, dict[str, Callable[[], Any]]]:
     peers: dict[str, dict[str, Callable[[], Any]]] = {}
-    pm = pinocchio_model(robot)
-    if pm is not None:
-        import pinocchio as pin
-
-        model, data, fid = pm
-        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        pin.computeJointJacobians(model, data, q)
-
-        def fk() -> Any:  # the pose of one frame: joint placements, then that frame's
-            pin.forwardKinematics(model, data, q)
-            return pin.updateFramePlacement(model, data, fid)
-
-        def jac() -> Any:
-            pin.computeJointJacobians(model, data, q)
-            return pin.getFrameJacobian(model, data, fid, lwa)
-
-        def hess() -> Any:
-            pin.computeJointKinematicHessians(model, data, q)
-            return pin.getJointKinematicHessian(model, data, model.frames[fid].parentJoint, lwa)
-
-        peers["pinocchio"] = {"fkine": fk, "jacob0": jac, "hessian0": hess}
+    pin = pinocchio_calls(robot, q)
+    if pin is not None:
+        peers["pinocchio"] = {f: pin[f] for f in FUNCS}
     rtb = optional("roboticstoolbox")
     if rtb is not None:
         ets = rtb_ets(rtb, robot)
@@ -189,6 +213,39 @@ def rtb_ets(rtb: Any, robot: Any) -> Any:
         make = getattr(rtb.ET, e.axis.value)
         out.append(make(jindex=e.joint, flip=e.flip) if e.is_joint else make(e.const.value))
     return rtb.ETS(out)
+
+
+def rtb_solve(
+    solve: Callable[[np.ndarray], Any], Tep: Any
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """A roboticstoolbox-python IK ``solve(T)`` called once per target of ``Tep`` (N, 4, 4) after a
+    warm-up call, by the CPU time of this thread: (seconds per solve, q (N, n), success (N,),
+    iterations (N,))."""
+    solve(Tep[0])
+    t0 = time.thread_time()
+    out = [solve(T) for T in Tep]
+    seconds = (time.thread_time() - t0) / len(out)
+    q = np.array([np.asarray(o.q, dtype=float) for o in out])
+    return seconds, q, np.array([bool(o.success) for o in out]), np.array([int(o.iterations) for o in out])
+
+
+def rtb_ik_lm(
+    robot: Any, Tep: Any, tol: float, report: Callable[[float, np.ndarray, np.ndarray], Any], q0: Any = None
+) -> Any:
+    """roboticstoolbox-python's C++ ``ik_LM`` (Chan, lambda 0.1, 100 x 30; ``tol`` on E = |e|^2 / 2)
+    on the same ETS, from ``q0`` (None: its random starts), on each target of ``Tep``
+    (:func:`rtb_solve`): ``report(seconds per solve, success (N,), iterations (N,))``; None without
+    roboticstoolbox-python, ``{"error": ...}`` when it fails (:func:`symkin.bench.common.guarded`)."""
+    rtb = optional("roboticstoolbox")
+    if rtb is None:
+        return None
+
+    def run() -> Any:
+        lm = functools.partial(rtb_ets(rtb, robot).ik_LM, q0=q0, ilimit=30, slimit=100, tol=tol, k=0.1)
+        seconds, _, success, iterations = rtb_solve(lm, Tep)
+        return report(seconds, success, iterations)
+
+    return guarded(run)
 
 
 def run_kin(robot_spec: Any = "panda", batch: int = 100_000, seed: int = 0, progress: bool = True) -> dict:
@@ -283,24 +340,22 @@ class _KernelCall:
 
 
 def format_kin(r: dict) -> str:
+    rows = [cells(path, row, FUNCS, "{:.3f}") for path, row in r["per_call_us"].items()]
+    rows += [
+        cells(f"c speed-up vs {peer}", row, FUNCS, "{:.1f}x") for peer, row in r["speedup_of_c_over"].items()
+    ]
     lines = [f"symkin bench kin: {r['robot']} ({r['n']} joints), one configuration per call from Python", ""]
-    lines.append(f"{'path':22} " + " ".join(f"{f + ' (us)':>14}" for f in FUNCS))
-    for path, row in r["per_call_us"].items():
-        lines.append(f"{path:22} " + " ".join(f"{row[f]:14.3f}" for f in FUNCS))
-    for peer, row in r["speedup_of_c_over"].items():
-        lines.append(f"{'c speed-up vs ' + peer:22} " + " ".join(f"{row[f]:13.1f}x" for f in FUNCS))
+    lines += table(["path", *(f"{f} (us)" for f in FUNCS)], rows)
     if not r["speedup_of_c_over"]:
         lines.append(
             "(install the compare extra, pip install 'symkin[compare]', to measure RTB and Pinocchio)"
         )
-    lines.append("")
-    lines.append(f"batched, {r['batch']} configurations, one core (million per second)")
-    fs = BATCH_FUNCS
-    lines.append(f"{'backend':22} " + " ".join(f"{f:>14}" for f in fs))
-    rows = r["batched_M_per_s"]
-    for b, row in rows.items():
-        lines.append(f"{b:22} " + " ".join(f"{row[f]:14.2f}" for f in fs))
-    four, one = rows.get("c kernels, 4 lanes"), rows.get("c kernels, scalar")
+    batched = r["batched_M_per_s"]
+    rows = [cells(b, row, BATCH_FUNCS, "{:.2f}") for b, row in batched.items()]
+    four, one = batched.get("c kernels, 4 lanes"), batched.get("c kernels, scalar")
     if four and one:
-        lines.append(f"{'4 lanes vs scalar':22} " + " ".join(f"{four[f] / one[f]:13.2f}x" for f in fs))
-    return "\n".join(lines)
+        rows.append(
+            cells("4 lanes vs scalar", {f: four[f] / one[f] for f in BATCH_FUNCS}, BATCH_FUNCS, "{:.2f}x")
+        )
+    lines += ["", f"batched, {r['batch']} configurations, one core (million per second)"]
+    return "\n".join(lines + table(["backend", *BATCH_FUNCS], rows))

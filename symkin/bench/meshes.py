@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.collide import add_obstacles
 from symkin.bench.common import optional
 
 __all__ = ["MeshOracle", "run_meshes", "format_meshes", "random_scene"]
@@ -103,21 +104,8 @@ class MeshOracle:
                 if tuple(sorted((link[i], link[j]))) in skip:
                     continue
                 geom.addCollisionPair(pin.CollisionPair(i, j))
-        Binv = np.linalg.inv(self.B)
-        obstacles = []
-        if env is not None:
-            for s in env.spheres:
-                p = Binv[:3, :3] @ np.array(s.center) + Binv[:3, 3]
-                obstacles.append((coal.Sphere(s.radius), pin.SE3(np.eye(3), p)))
-            for b in env.boxes:
-                R = Binv[:3, :3] @ b.R
-                p = Binv[:3, :3] @ np.array(b.center) + Binv[:3, 3]
-                obstacles.append((coal.Box(*(2 * np.array(b.half_extents))), pin.SE3(R, p)))
-        for k, (shape, pose) in enumerate(obstacles):
-            geom.addGeometryObject(pin.GeometryObject(f"obstacle_{k}", 0, pose, shape))
-            for i in range(n):
-                geom.addCollisionPair(pin.CollisionPair(i, n + k))
-        self.geom, self.link = geom, link + [f"obstacle {k}" for k in range(len(obstacles))]
+        count = 0 if env is None else add_obstacles(pin, coal, geom, env, np.linalg.inv(self.B))
+        self.geom, self.link = geom, link + [f"obstacle {k}" for k in range(count)]
         self.data, self.gdata = self.model.createData(), pin.GeometryData(geom)
 
     def q_of(self, q: np.ndarray, fingers: float) -> np.ndarray:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import optional
+from symkin.bench.common import cell, figure, optional, table
 from symkin.core.progress import bar
 from symkin.runtime.control import MMC, joint_velocity_bounds, rrmc
 from symkin.runtime.loop import ServoResult, servo
@@ -382,30 +382,28 @@ def step_timing(
     return out
 
 
+_TIMED = ("c", "python", "rtb_qpsolvers", "rtb_kinematics")  # the step timing's paths, in its table's order
+
+
 def _max_diff(a: list[np.ndarray], b: list[np.ndarray]) -> float:
     return max((float(np.abs(x - y).max()) for x, y in zip(a, b)), default=float("nan"))
 
 
 def format_step_timing(timing: dict[str, Any]) -> str:
     """Plain-text table of a :func:`step_timing` result."""
+    rows = []
+    for name, r in timing["configs"].items():
+        med, p90 = r["median_us"], r["p90_us"]
+        us = [f"{med[k]:.1f} ({p90[k]:.0f})" if k in med else "-" for k in _TIMED]
+        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["c_methods"].items()))
+        ratios = [cell(r.get("speedup_vs_rtb"), "{:.1f}x"), f"{r['speedup_vs_python']:.1f}x"]
+        rows.append([name, r["steps"], *us, *ratios, methods])
+    head = ["config", "steps", "C", "Python", "RTB+qpsolvers", "(RTB J, Jm)", "C vs RTB", "C vs Py"]
     lines = [
         f"MMC step, {timing['robot']} ({timing['n_tasks']} Table I tasks replayed; median (p90) us per step "
         "from Python, same states for each)",
-        f"{'config':<12} {'steps':>6} {'C':>14} {'Python':>14} {'RTB+qpsolvers':>15} {'(RTB J, Jm)':>13} "
-        f"{'C vs RTB':>9} {'C vs Py':>8}  C path methods",
+        *table([*head, "C path methods"], rows, "lrrrrrrrl"),
     ]
-    for name, r in timing["configs"].items():
-        med, p90 = r["median_us"], r["p90_us"]
-
-        def cell(k: str, width: int, med: dict = med, p90: dict = p90) -> str:
-            return f"{med[k]:.1f} ({p90[k]:.0f})".rjust(width) if k in med else "-".rjust(width)
-
-        ratio = f"{r['speedup_vs_rtb']:.1f}x" if "speedup_vs_rtb" in r else "-"
-        methods = ", ".join(f"{k} {v}" for k, v in sorted(r["c_methods"].items()))
-        lines.append(
-            f"{name:<12} {r['steps']:>6} {cell('c', 14)} {cell('python', 14)} {cell('rtb_qpsolvers', 15)} "
-            f"{cell('rtb_kinematics', 13)} {ratio:>9} {r['speedup_vs_python']:>7.1f}x  {methods}"
-        )
     diffs = [
         f"{name} {r['max_diff_python']:.1e}"
         + (f" / {r['max_diff_rtb']:.1e}" if "max_diff_rtb" in r else "")
@@ -425,26 +423,18 @@ def plot_task(
     ``servo_options`` go to :func:`symkin.runtime.loop.servo` (``lam``, ``dt``, ``qd_max``...).
     Needs matplotlib (``pip install symkin[plot]``). Returns the two :class:`ServoResult`.
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - optional dependency
-        raise ImportError("plot_task needs matplotlib: pip install 'symkin[plot]'") from exc
     kin = _robot(robot)
     results = {c: servo(kin, q0, Tep, c, **servo_options) for c in ("rrmc", "mmc")}
-    fig, ax = plt.subplots(figsize=(6.0, 3.2), dpi=150)
-    for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
-        ax.plot(results[key].t, results[key].manipulability, style, label=label, linewidth=1.6)
-    ax.set_xlabel("Time (s)")
-    ax.set_ylabel("Manipulability")
-    ax.set_title(title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing")
-    ax.grid(True, alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
+    with figure(path, "plot_task", figsize=(6.0, 3.2), dpi=150) as (_, ax):
+        for key, label, style in (("rrmc", "RRMC", "--"), ("mmc", "MMC", "-")):
+            ax.plot(results[key].t, results[key].manipulability, style, label=label, linewidth=1.6)
+        ax.set_xlabel("Time (s)")
+        ax.set_ylabel("Manipulability")
+        ax.set_title(
+            title or f"{getattr(kin, 'name', 'robot')}: manipulability during position-based servoing"
+        )
+        ax.grid(True, alpha=0.3)
+        ax.legend()
     return results
 
 

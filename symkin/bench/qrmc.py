@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import figure
 from symkin.core.progress import bar
 from symkin.runtime.loop import ServoResult, servo
 from symkin.runtime.qrmc import QRMC
@@ -225,36 +226,29 @@ def plot_singular(runs: dict[str, dict[str, ServoResult]], qd_max: Any, path: st
     """One column per task (``runs``: task -> controller label -> ServoResult): manipulability, the
     largest joint speed over its limit (requested: dashed; applied: solid) and the error sum |e|
     against time, one line per controller, as a PNG. Needs matplotlib (``pip install symkin[plot]``)."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - optional dependency
-        raise ImportError("plot_singular needs matplotlib: pip install 'symkin[plot]'") from exc
-    fig, grid = plt.subplots(3, len(runs), figsize=(5.5 * len(runs), 7.5), sharex="col", squeeze=False)
-    for col, (task, by_label) in enumerate(runs.items()):
-        axes = grid[:, col]
-        for (label, res), color in zip(by_label.items(), ("tab:red", "tab:blue", "tab:green"), strict=False):
-            requested, applied = speed_ratios(res, qd_max)
-            t, name = res.t, label.upper()
-            axes[0].plot(t, res.manipulability, color=color, label=name)
-            floor = np.maximum(requested, 1e-6)
-            axes[1].semilogy(t[:-1], floor, "--", color=color, label=f"{name} requested")
-            axes[1].semilogy(t[:-1], np.maximum(applied, 1e-6), color=color, label=f"{name} applied")
-            axes[2].semilogy(t, np.abs(res.e).sum(axis=1), color=color, label=name)
-        axes[1].axhline(1.0, color="k", linewidth=0.8, linestyle=":", label="joint speed limit")
-        axes[0].set_title(f"UR5: {task}")
-        axes[2].set_xlabel("time (s)")
-        for ax in axes:
-            ax.grid(True, alpha=0.3)
-            ax.legend(fontsize="small", loc="best")
-    grid[0, 0].set_ylabel("manipulability")
-    grid[1, 0].set_ylabel("max |qd_i| / qd_max_i")
-    grid[2, 0].set_ylabel("sum |e|")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    size = {"figsize": (5.5 * len(runs), 7.5), "sharex": "col", "squeeze": False}
+    with figure(path, "plot_singular", 110, nrows=3, ncols=len(runs), **size) as (_, grid):
+        for col, (task, by_label) in enumerate(runs.items()):
+            axes = grid[:, col]
+            for (label, res), color in zip(
+                by_label.items(), ("tab:red", "tab:blue", "tab:green"), strict=False
+            ):
+                requested, applied = speed_ratios(res, qd_max)
+                t, name = res.t, label.upper()
+                axes[0].plot(t, res.manipulability, color=color, label=name)
+                floor = np.maximum(requested, 1e-6)
+                axes[1].semilogy(t[:-1], floor, "--", color=color, label=f"{name} requested")
+                axes[1].semilogy(t[:-1], np.maximum(applied, 1e-6), color=color, label=f"{name} applied")
+                axes[2].semilogy(t, np.abs(res.e).sum(axis=1), color=color, label=name)
+            axes[1].axhline(1.0, color="k", linewidth=0.8, linestyle=":", label="joint speed limit")
+            axes[0].set_title(f"UR5: {task}")
+            axes[2].set_xlabel("time (s)")
+            for ax in axes:
+                ax.grid(True, alpha=0.3)
+                ax.legend(fontsize="small", loc="best")
+        grid[0, 0].set_ylabel("manipulability")
+        grid[1, 0].set_ylabel("max |qd_i| / qd_max_i")
+        grid[2, 0].set_ylabel("sum |e|")
 
 
 #: The tasks :func:`main` and ``symkin bench qrmc --plot`` draw.

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.bench.common import cells, table
 from symkin.bench.kin import interleaved_us
 
 __all__ = ["run_sincos", "format_sincos", "ulp_errors", "angle_sets", "harness", "GOAL"]
@@ -173,31 +174,28 @@ def run_sincos(robot_spec: Any = "panda", seed: int = 0, progress: bool = True) 
 
 def format_sincos(r: dict[str, Any]) -> str:
     """Plain text of :func:`run_sincos`'s result."""
-    c = r["c"]
-    m = c["m"]
+    c, py, ck = r["c"], r["python"], r["check"]
+    ns = c["ns_per_angle"]
+    rows = [
+        cells(k, row, PATHS, "{:.2f}") + [f"{row['sk_sin + sk_cos'] / row['glibc sincos']:.2f}x"]
+        for k, row in ns.items()
+    ]
     lines = [
         f"symkin bench sincos: sin and cos of one angle, ns per angle ({c['n']} angles per call, CPU time)",
         "",
-        f"{'angles':16}"
-        + "".join(f"{p.replace(' m ', f' {m} '):>22}" for p in PATHS)
-        + f"{'scalar / glibc':>16}",
     ]
-    for label, row in c["ns_per_angle"].items():
-        cells = "".join(f"{row[p]:22.2f}" if p in row else f"{'-':>22}" for p in PATHS)
-        lines.append(f"{label:16}{cells}{row['sk_sin + sk_cos'] / row['glibc sincos']:15.2f}x")
-    lines.append("")
-    lines.append("largest error against mpmath (ulp, first 2000 angles of each set): glibc / symkin")
-    for label, e in c["max_ulp"].items():
-        lines.append(f"  {label:16} {e['glibc']:.3f} / {e['symkin']:.3f}")
-    same = "yes" if c["same_bits"] else "NO"
-    lines.append(f"scalar, configuration and four-lane results the same bits: {same}")
-    py = r["python"]
+    lines += table(["angles", *(p.replace(" m ", f" {c['m']} ") for p in PATHS), "scalar / glibc"], rows)
+    lines += ["", "largest error against mpmath (ulp, first 2000 angles of each set): glibc / symkin"]
+    lines += [f"  {label:16} {e['glibc']:.3f} / {e['symkin']:.3f}" for label, e in c["max_ulp"].items()]
+    lines.append(
+        f"scalar, configuration and four-lane results the same bits: {'yes' if c['same_bits'] else 'NO'}"
+    )
     lines += ["", f"{r['robot']}: one call from Python (ns), inline sin/cos against libm=True (glibc)"]
-    lines.append(f"{'':10}" + "".join(f"{f:>12}" for f in FUNCS))
-    for label in ("inline", "libm"):
-        lines.append(f"{label:10}" + "".join(f"{py[label][f]:12.1f}" for f in FUNCS))
-    lines.append(f"{'ratio':10}" + "".join(f"{py['inline'][f] / py['libm'][f]:11.2f}x" for f in FUNCS))
-    ck = r["check"]
+    ratio = {f: py["inline"][f] / py["libm"][f] for f in FUNCS}
+    rows = [cells(k, py[k], FUNCS, "{:.1f}") for k in ("inline", "libm")] + [
+        cells("ratio", ratio, FUNCS, "{:.2f}x")
+    ]
+    lines += table(["", *FUNCS], rows)
     lines += [
         "",
         f"goal: scalar sk_sin + sk_cos within {GOAL:g}x glibc's sincos on [-pi, pi]: "

@@ -11,7 +11,6 @@ cold compile time (a fresh process with an empty cache). Needs the ``compare`` e
 from __future__ import annotations
 
 import os
-import tempfile
 import time
 from importlib import metadata
 from pathlib import Path
@@ -19,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, fresh_python, optional, rows_per_s, with_lanes
+from symkin.bench.common import best_of, cell, fresh_cache, fresh_python, optional, rows_per_s, with_lanes
 from symkin.bench.kin import per_call_us
 
 __all__ = ["erd_robots_dir", "TREE_CASES", "run_tree_kin", "format_tree_kin", "cold_compile_seconds"]
@@ -49,8 +48,8 @@ def cold_compile_seconds(urdf: Path, frames: tuple[str, ...]) -> float:
         f"tree = symkin.Tree.from_urdf({str(urdf)!r}, frames={list(frames)!r}); "
         "symkin.compile(tree, 'c'); print(time.perf_counter() - t)"
     )
-    with tempfile.TemporaryDirectory() as tmp:
-        return float(fresh_python(code, {**os.environ, "SYMKIN_CACHE": tmp}))
+    with fresh_cache():
+        return float(fresh_python(code, dict(os.environ)))
 
 
 def pinocchio_q(model: Any, names: Any, q: np.ndarray) -> np.ndarray:
@@ -185,14 +184,11 @@ def format_tree_kin(r: dict) -> str:
         ours = row["symkin_us"]["fkine_jacob0_all"]
         pin = row["pinocchio"]
         pin_us = pin["per_call_us"][pin["best"]] if pin else None
-        ratio = f"{pin_us / ours:5.1f}x" if pin_us else "-"
-        cold = f"{row['cold_compile_s']:.1f} s" if "cold_compile_s" in row else "-"
-        pin_rate = f"{pin['batch_per_s']:.3g}" if pin else "-"
-        pin_text = f"{pin_us:.2f}" if pin_us else "-"
         lines.append(
             f"{row['case']:10} {row['robot'][:8]:8} {row['n']:>3} {len(row['frames']):>2} {ours:>10.2f} "
-            f"{pin_text:>13} {ratio:>6}  {row['batch_fkine_jacob0_all_per_s']:>14.3g} {pin_rate:>12} "
-            f"{cold:>13}"
+            f"{cell(pin_us, '{:.2f}'):>13} {cell(pin_us and pin_us / ours, '{:5.1f}x'):>6}  "
+            f"{row['batch_fkine_jacob0_all_per_s']:>14.3g} {cell(pin and pin['batch_per_s'], '{:.3g}'):>12} "
+            f"{cell(row.get('cold_compile_s'), '{:.1f} s'):>13}"
         )
     for row in r["rows"]:
         pin = row["pinocchio"]

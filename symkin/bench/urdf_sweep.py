@@ -17,18 +17,16 @@ before it and between its joints, and with 2000 fixed links of quarter turns and
 
 from __future__ import annotations
 
-import os
 import tempfile
 import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from unittest import mock
 
 import numpy as np
 
-from symkin.bench.common import optional
+from symkin.bench.common import figure, fresh_cache, optional
 from symkin.bench.tree import erd_robots_dir, pinocchio_q
 
 __all__ = ["Chain", "find_chains", "run_sweep", "format_sweep", "plot_sweep", "synthetic_urdfs", "TOL"]
@@ -233,8 +231,7 @@ def run_sweep(
         for ch in extra:
             ch.synthetic = True
         todo = [(c, root) for c in chains] + [(c, own) for c in extra]
-        # a fresh cache: every compile derives, generates and builds
-        with mock.patch.dict(os.environ, {"SYMKIN_CACHE": str(Path(tmp) / "cache")}):
+        with fresh_cache():  # every compile derives, generates and builds
             for ch, where in bar(todo, progress, desc="chains"):
                 _one(ch, backends, compile_model, where, pin_cache, seed)
     rows = [
@@ -375,21 +372,13 @@ def format_sweep(r: dict) -> str:
 
 
 def plot_sweep(r: dict, path: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for b in r.get("backends", []):
-        pts = [(row["n"], row["compile_s"][b]) for row in r["rows"] if b in row["compile_s"]]
-        if pts:
-            x, y = zip(*pts)
-            ax.scatter(x, y, s=12, label=b)
-    ax.set_xlabel("joints")
-    ax.set_ylabel("compile time (s)")
-    ax.set_title("every distinct chain of example-robot-data")
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    with figure(path, "plot_sweep", 120, figsize=(7, 4)) as (_, ax):
+        for b in r.get("backends", []):
+            pts = [(row["n"], row["compile_s"][b]) for row in r["rows"] if b in row["compile_s"]]
+            if pts:
+                x, y = zip(*pts)
+                ax.scatter(x, y, s=12, label=b)
+        ax.set_xlabel("joints")
+        ax.set_ylabel("compile time (s)")
+        ax.set_title("every distinct chain of example-robot-data")
+        ax.legend()
