@@ -32,6 +32,7 @@ import numpy as np
 from symkin.core.arrays import as_config, as_rows, name_of
 from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, PoseError
+from symkin.runtime.cext import address, bind_functions, build_extension, csrc, layout
 from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
 from symkin.runtime.memo import per_object
 
@@ -46,7 +47,6 @@ __all__ = [
     "register_qp_step",
 ]
 
-CSRC = Path(__file__).resolve().parent / "csrc"
 _P = ctypes.c_void_p
 _I32, _I64, _U64, _D = ctypes.c_int32, ctypes.c_int64, ctypes.c_uint64, ctypes.c_double
 FKJAC = ctypes.CFUNCTYPE(None, _P, _P, _P)  # symkin_fkjac_fn
@@ -94,34 +94,28 @@ def ik_sources() -> dict[str, str]:
     Compile them together with generated kinematics to get one library exporting both (with
     :data:`IK_CFLAGS`).
     """
-    names = ("symkin_ik.h", "symkin_pose.h", "symkin_ik.c", "symkin_ets.c")
-    return {name: (CSRC / name).read_text() for name in names}
+    return csrc("symkin_ik.h", "symkin_pose.h", "symkin_ik.c", "symkin_ets.c")
 
 
 def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
     """Set the argument types of the ``symkin_ik_*`` functions of ``lib`` (and check the layout)."""
-    sig = {
-        "symkin_ik_nmax": (_I32, []),
-        "symkin_ik_stats_size": (_I32, []),
-        "symkin_ik_config_size": (_I32, []),
-        "symkin_ik_check_pose": (_I32, [_P, _P]),
-        "symkin_ik_pose_error": (None, [_P, _P, _P]),
-        "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
-        "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
-        "symkin_ik_solve_each": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
-        "symkin_ik_kin_each": (None, [_P, _I64, _P, _P, _P]),
-        "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
-        "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
-        "symkin_ets_fkjac": (None, [_P, _P, _P, _P]),
-    }
-    for name, (res, args) in sig.items():
-        fn = getattr(lib, name)
-        fn.restype, fn.argtypes = res, args
-    if lib.symkin_ik_stats_size() != ctypes.sizeof(_Stats) or lib.symkin_ik_config_size() != ctypes.sizeof(
-        _Config
-    ):
-        raise RuntimeError("symkin_ik struct layout differs between C and Python")
+    bind_functions(lib, _SIGNATURES)
+    layout(lib, "symkin_ik_layout", (ctypes.sizeof(_Stats), ctypes.sizeof(_Config)))
     return lib
+
+
+_SIGNATURES = {
+    "symkin_ik_nmax": (_I32, []),
+    "symkin_ik_check_pose": (_I32, [_P, _P]),
+    "symkin_ik_pose_error": (None, [_P, _P, _P]),
+    "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
+    "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+    "symkin_ik_solve_each": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+    "symkin_ik_kin_each": (None, [_P, _I64, _P, _P, _P]),
+    "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
+    "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
+    "symkin_ets_fkjac": (None, [_P, _P, _P, _P]),
+}
 
 
 # GCC 12 turns some a*b + c*d / a*b - c*d pairs into vfmaddsub when SLP-vectorising, even under
@@ -133,25 +127,10 @@ IK_CFLAGS: tuple[str, ...] = ("-fno-tree-slp-vectorize",)
 def _ik_build(profile: bool = False) -> tuple[Path, str]:
     """(path of the compiled solver library, name of the extension module inside it); ``profile``:
     the build whose extension times the parts of each call (``profile()``, for symkin bench calls)."""
-    import hashlib
-    import sysconfig
-
-    from symkin.emit.c.build import compile_library
-
-    sources = {
-        **ik_sources(),
-        **{name: (CSRC / name).read_text() for name in ("symkin_ik_py.c", "symkin_pyarray.h")},
-    }
-    digest = hashlib.sha256("\0".join(sources[k] for k in sorted(sources)).encode()).hexdigest()[:12]
-    module = f"_symkin_ik_{digest}" + ("_profile" if profile else "")
-    flags = (
-        *IK_CFLAGS,
-        *(("-DSYMKIN_IK_PROFILE",) if profile else ()),
-        f"-DSYMKIN_IK_MODULE={module}",
-        f"-I{sysconfig.get_paths()['include']}",
-        f"-I{np.get_include()}",
-    )
-    return compile_library(sources, "symkin_ik_profile" if profile else "symkin_ik", flags), module
+    sources = {**ik_sources(), **csrc("symkin_ik_py.c", "symkin_pyarray.h")}
+    flags = (*IK_CFLAGS, *(("-DSYMKIN_IK_PROFILE",) if profile else ()))
+    stem = "symkin_ik_profile" if profile else "symkin_ik"
+    return build_extension(sources, stem, "SYMKIN_IK_MODULE", f"_{stem}", flags)
 
 
 @lru_cache(maxsize=1)
@@ -176,8 +155,7 @@ def ik_extension(profile: bool = False) -> Any:
     nanoseconds of each part of the calls so far)."""
     from symkin.emit.c.build import load_extension
 
-    path, name = _ik_build(profile)
-    module = load_extension(name, path)
+    module = load_extension(*reversed(_ik_build(profile)))
 
     def seed() -> None:  # fresh seeds (seed=None) differ between processes, forked ones included
         module.setup(IKResult, int.from_bytes(os.urandom(8), "little"))
@@ -309,9 +287,7 @@ class CIKSolver:
             fkjac = getattr(kin, "c_fkjac", None)
             batch = getattr(kin, "c_fkjac_batch", None) if fkjac is not None else None
         self._fkjac_ref, self._batch_ref = fkjac, batch
-        self._fkjac_addr = (
-            0 if fkjac is None else (fkjac if isinstance(fkjac, int) else ctypes.cast(fkjac, _P).value)
-        )
+        self._fkjac_addr = address(fkjac)
         self._table = self._ets = None
         if not self._fkjac_addr:
             ets = ets_of(kin)
@@ -331,11 +307,11 @@ class CIKSolver:
         for name, arr in self._keep.items():
             setattr(cfg, name, _addr(arr) if arr.size else None)
         cfg.fkjac = self._fkjac_addr or None
-        cfg.fkjac_batch = ctypes.cast(batch, _P).value if batch is not None else None
+        cfg.fkjac_batch = address(batch) or None
         self._collides = collides  # kept alive: the function's library and the packed obstacles
         if collides is not None:
             fn, env = collides
-            cfg.collides, cfg.collision_env = ctypes.cast(fn, _P).value, env.address
+            cfg.collides, cfg.collision_env = address(fn), env.address
         cfg.ets = ctypes.addressof(self._ets) if self._ets is not None else None
         if self._qp is not None:
             cfg.step, cfg.step_ctx = self._qp.function, self._qp.context

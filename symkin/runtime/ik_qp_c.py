@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError
+from symkin.runtime.cext import address, layout
 from symkin.runtime.ik_c import register_qp_step
 from symkin.runtime.ik_problem import IKOptions
 
@@ -70,14 +71,10 @@ class QPStep:
         lo, hi = damped_limits(opt)
         c.qlo[:], c.qhi[:] = lo.tolist(), hi.tolist()
         lib = controller.lib
-        layout = (_I32 * 1)()
-        lib.symkin_mmc_ik_layout.restype, lib.symkin_mmc_ik_layout.argtypes = None, [_P]
-        lib.symkin_mmc_ik_layout(layout)
-        if layout[0] != ctypes.sizeof(_Ctx):
-            raise RuntimeError("symkin_mmc_ik_ctx layout differs between C and Python")
+        layout(lib, "symkin_mmc_ik_layout", (ctypes.sizeof(_Ctx),))
         self._ctx = _Ctx(ctypes.addressof(c), int(environment is not None), 0, opt.slack_gain / scale)
         self.context = ctypes.addressof(self._ctx)
-        self.function = int(ctypes.cast(lib.symkin_mmc_ik_step, _P).value or 0)
+        self.function = address(lib.symkin_mmc_ik_step)
         self.n = opt.n
 
     def step(self, q: Any, e: Any) -> np.ndarray | None:
