@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import warnings
 import weakref
 from typing import Any
 
@@ -25,7 +24,7 @@ import numpy as np
 from symkin.core.arrays import finite_number as _number
 from symkin.core.arrays import per_joint as _per_joint
 from symkin.core.arrays import real_array
-from symkin.errors import CompileError, ConfigurationError, ParameterError
+from symkin.errors import ParameterError
 from symkin.runtime.memo import bounded, per_object
 from symkin.runtime.mmc_qp import (
     _AXES,
@@ -43,7 +42,7 @@ from symkin.runtime.mmc_qp import (
     mmc_closed_form,
     mmc_qp,
 )
-from symkin.runtime.step import OSQP_SETTINGS, StepInfo, step_nu, step_q
+from symkin.runtime.step import OSQP_SETTINGS, CStep, StepInfo, step_nu, step_q
 from symkin.runtime.step import OSQP_STATUS as _OSQP_STATUS
 from symkin.runtime.task import task_kinematics
 
@@ -260,7 +259,7 @@ def _rrmc_step(
 
 
 # -- MMC: the controller ---------------------------------------------------------------------------
-class MMC:
+class MMC(CStep):
     """Manipulability Motion Controller (MMC paper eq 12), one OSQP problem per controller.
 
     ``step(q, nu)`` returns joint velocities (n,) achieving the base-frame spatial velocity ``nu`` (6,)
@@ -363,8 +362,6 @@ class MMC:
             raise ParameterError(f"collision_rows must be a positive integer, got {collision_rows!r}")
         self.collision_rows = int(collision_rows)
         kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
-        if backend not in ("auto", "c", "python"):
-            raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin = kin
         self.n = int(kin.n)
         if self.n < 1:
@@ -391,36 +388,18 @@ class MMC:
         self._solver: Any = None  # osqp.OSQP, set up on the first step that needs it (osqp imported then)
         self._raw: Any = None
         self._polish = bool(self.settings.get("polishing"))
-        self._c: Any = None
-        if backend != "python":
-            from symkin.runtime import mmc_c
+        from symkin.runtime import mmc_c
 
-            c_collision = self._collision is None or (
-                self.slack
-                and getattr(self._collision, "kernel", None) is not None
-                and self._collision.n == self.n  # the kernel takes this controller's joint values
-            )
-            if mmc_c.supports(kin) and not c_collision:
-                if backend == "c":
-                    raise ConfigurationError(
-                        "backend='c': the C MMC step with collision avoidance needs the slack "
-                        "(slack=True) and the C collision kernel of the controller's joints; this MMC "
-                        "runs in Python (backend='auto')"
-                    )
-            elif mmc_c.supports(kin):
-                try:
-                    self._c = mmc_c.CMMC(self)
-                except (CompileError, OSError, RuntimeError) as exc:
-                    if backend == "c":
-                        raise
-                    warnings.warn(f"MMC runs in Python: the C step is unavailable ({exc})", stacklevel=2)
-            elif backend == "c":
-                raise ConfigurationError("backend='c' needs C kinematics: symkin.compile(robot, backend='c')")
-
-    @property
-    def backend(self) -> str:
-        """``"c"`` when :meth:`step` runs in C (:mod:`symkin.runtime.mmc_c`), else ``"python"``."""
-        return "python" if self._c is None else "c"
+        c_ok = self._collision is None or (
+            self.slack
+            and getattr(self._collision, "kernel", None) is not None
+            and self._collision.n == self.n  # the kernel takes this controller's joint values
+        )
+        refusal = (
+            "backend='c': the C MMC step with collision avoidance needs the slack (slack=True) and the C "
+            "collision kernel of the controller's joints; this MMC runs in Python (backend='auto')"
+        )
+        self._c = self._c_step(kin, backend, lambda: mmc_c.CMMC(self), "MMC", None if c_ok else refusal)
 
     def __repr__(self) -> str:
         return (
