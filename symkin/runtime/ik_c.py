@@ -192,32 +192,6 @@ def _addr(a: np.ndarray) -> int:
 _M64 = 0xFFFFFFFFFFFFFFFF
 
 
-def _result_maker() -> Any:
-    """``IKResult(q, success, iterations, searches, residual, reason)``, faster for a single solve:
-    the frozen dataclass's __init__ costs more than the rest of the Python side of a solve."""
-    import dataclasses
-
-    names = [f.name for f in dataclasses.fields(IKResult)]
-    slots = [IKResult.__dict__.get(name) for name in names]
-    if names != ["q", "success", "iterations", "searches", "residual", "reason"] or not all(
-        type(s).__name__ == "member_descriptor" for s in slots
-    ):
-        return IKResult
-    setters = [s.__set__ for s in slots]  # type: ignore[union-attr]
-    new = object.__new__
-
-    def make(*values: Any) -> Any:  # q, success, iterations, searches, residual, reason
-        r = new(IKResult)
-        for set_value, value in zip(setters, values, strict=True):
-            set_value(r, value)
-        return r
-
-    return make
-
-
-_result = _result_maker()
-
-
 _QP_STEP: Any = None  # QPStep of symkin.runtime.ik_qp_c, which registers it (it sits above this module)
 
 
@@ -318,7 +292,7 @@ class CIKSolver:
         self._cfg = cfg
         self._cfg_addr = ctypes.addressof(cfg)
         # one target: the extension's solve when the library is the default one (it has it), else
-        # symkin_ik_solve through ctypes; either way with buffers per call (thread-safe)
+        # a batch of one through ctypes; either way with buffers per call (thread-safe)
         # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
         self.fast = functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if own else None
         self._seeds = random.Random(os.urandom(16))
@@ -371,18 +345,7 @@ class CIKSolver:
             res = self.fast(T, Q0, seed)
             if res is not None:
                 return res
-        q, st = np.empty(self.n), _Stats()
-        status = self.lib.symkin_ik_solve(
-            self._cfg_addr, _addr(T), None if Q0 is None else _addr(Q0), seed, _addr(q), ctypes.addressof(st)
-        )
-        if status:
-            raise PoseError(f"invalid target pose (code {status})")
-        reason = (
-            "success"
-            if st.success
-            else self._reason(st.residual, st.limit_rejects, st.singular, st.collision_rejects)
-        )
-        return _result(q, bool(st.success), st.iterations, st.searches, st.residual, reason)
+        return self._solve_batch(T[None], None if Q0 is None else Q0[None], seed)[0]  # another library
 
     def _check_q0(self, q0: Any) -> np.ndarray:
         """q0 of one target: the joint-value rule of q (as_config), as the NumPy solver's."""
