@@ -21,7 +21,6 @@ from __future__ import annotations
 import ctypes
 import functools
 import os
-import random
 import weakref
 from functools import lru_cache
 from pathlib import Path
@@ -33,7 +32,7 @@ from symkin.core.arrays import as_config, as_rows, name_of
 from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, PoseError
 from symkin.runtime.cext import address, bind_functions, build_extension, csrc, layout
-from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
+from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason, seed_of
 from symkin.runtime.memo import per_object
 
 __all__ = [
@@ -158,7 +157,7 @@ def ik_extension(profile: bool = False) -> Any:
     module = load_extension(*reversed(_ik_build(profile)))
 
     def seed() -> None:  # fresh seeds (seed=None) differ between processes, forked ones included
-        module.setup(IKResult, int.from_bytes(os.urandom(8), "little"))
+        module.setup(IKResult, seed_of())
 
     seed()
     if hasattr(os, "register_at_fork"):
@@ -187,9 +186,6 @@ def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
 
 def _addr(a: np.ndarray) -> int:
     return a.ctypes.data
-
-
-_M64 = 0xFFFFFFFFFFFFFFFF
 
 
 _QP_STEP: Any = None  # QPStep of symkin.runtime.ik_qp_c, which registers it (it sits above this module)
@@ -295,7 +291,6 @@ class CIKSolver:
         # a batch of one through ctypes; either way with buffers per call (thread-safe)
         # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
         self.fast = functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if own else None
-        self._seeds = random.Random(os.urandom(16))
 
     def bind(self, fallback: Any, by_options: dict[tuple, Any] | None = None) -> Any:
         """A callable ``ik(Tep, *args, **kwargs)`` for a kinematics object's ``ik``: one target
@@ -332,10 +327,7 @@ class CIKSolver:
 
     def _solve_checked(self, Tep: Any, q0: Any, seed: Any) -> IKResult:
         """:meth:`solve` with every argument validated first (detailed errors) and batches."""
-        if seed is None:
-            seed = self._seeds.getrandbits(64)
-        else:
-            seed = int(seed) & _M64
+        seed = seed_of(seed)
         T = np.ascontiguousarray(pose_array(Tep))  # the pose rule's conversion: no complex, strings...
         if T.shape != (4, 4):
             return self._solve_batch(T, q0, seed)
@@ -355,19 +347,10 @@ class CIKSolver:
         if T.ndim != 3 or T.shape[1:] != (4, 4):
             check_pose(T)  # the rule's PoseError for the shape
         T = np.ascontiguousarray(T, dtype=float)
-        N, n = len(T), self.n
-        stride, Q0 = 0, None
-        if q0 is not None:  # the rule of the NumPy solver: (n,) for all targets or (N, n)
-            Q0 = np.ascontiguousarray(as_rows(q0, n, N, False, self._name, "q0"))
-            stride = n
-        q = np.empty((N, n))
-        st = np.zeros(N, dtype=STATS_DTYPE)
-        bad = self.lib.symkin_ik_solve_batch(
-            self._cfg_addr, N, _addr(T), None if Q0 is None else _addr(Q0), stride, seed, _addr(q), _addr(st)
-        )
-        if bad >= 0:
-            check_pose(T)
-            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        Q0 = None  # the rule of the NumPy solver: (n,) for all targets or (N, n)
+        if q0 is not None:
+            Q0 = np.ascontiguousarray(as_rows(q0, self.n, len(T), False, self._name, "q0"))
+        q, st = self._call(self.lib.symkin_ik_solve_batch, T, Q0, seed)
         success = st["success"].astype(bool)
         columns = ("success", "residual", "limit_rejects", "singular", "collision_rejects")
         reason = tuple(
@@ -411,13 +394,32 @@ class CIKSolver:
     def solve_each(self, Tep: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """The scalar batch: targets ``Tep`` (N, 4, 4) solved one at a time in one C call, as
         ``solve(Tep[i], seed=seed + i)`` (no lanes, no Python per target); (q (N, n), success (N,))."""
-        T = np.ascontiguousarray(Tep, dtype=float)
-        q, st = np.empty((len(T), self.n)), np.zeros(len(T), dtype=STATS_DTYPE)
-        bad = self.lib.symkin_ik_solve_each(self._cfg_addr, len(T), _addr(T), None, 0, int(seed) & _M64,
-                                            _addr(q), _addr(st))  # fmt: skip
-        if bad >= 0:
-            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        q, st = self._call(
+            self.lib.symkin_ik_solve_each, np.ascontiguousarray(Tep, dtype=float), None, seed_of(seed)
+        )
         return q, st["success"].astype(bool)
+
+    def _call(
+        self, fn: Any, T: np.ndarray, Q0: np.ndarray | None, seed: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(q (N, n), stats (N,)) of ``fn`` (``symkin_ik_solve_batch`` or ``_each``) on the targets ``T``
+        (N, 4, 4) from ``Q0`` (N, n) or None; PoseError for the first target that is not a pose."""
+        q, st = np.empty((len(T), self.n)), np.zeros(len(T), dtype=STATS_DTYPE)
+        stride = 0 if Q0 is None else self.n
+        bad = fn(
+            self._cfg_addr,
+            len(T),
+            _addr(T),
+            None if Q0 is None else _addr(Q0),
+            stride,
+            seed,
+            _addr(q),
+            _addr(st),
+        )
+        if bad >= 0:
+            check_pose(T)  # the detailed PoseError
+            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        return q, st
 
     def kin_each(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The solver's kinematics at each row of ``Q`` (N, n), one at a time in one C call (for
@@ -440,7 +442,7 @@ class CIKSolver:
     def random_q(self, seed: int, count: int, stream: int = 0) -> np.ndarray:
         """The first ``count`` random restarts of the stream (seed, stream), (count, n)."""
         out = np.zeros((int(count), self.n))
-        self.lib.symkin_ik_random_q(self._cfg_addr, int(seed) & _M64, int(stream), int(count),
+        self.lib.symkin_ik_random_q(self._cfg_addr, seed_of(seed), int(stream), int(count),
                                     _addr(out))  # fmt: skip
         return out
 
