@@ -506,13 +506,9 @@ class MMC(CStep):
             else:
                 z = Jm / self.lam
                 qd = z + B.T @ (nu - J @ z)  # J^+ nu + (I - J^+ J) Jm / lam
-            inside = not self._bounded or ((qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all())
-            if inside and math.isfinite(qd.sum()):
-                return self._closed_form_info(J, qd, nu, m)
-            if self.active_set:
-                done = self._active_set(J, Jm, nu, lower, upper, m, qd)
-                if done is not None:
-                    return done
+            done = self._closed_form_step(J, Jm, nu, lower, upper, m, qd, self._bounded)
+            if done is not None:
+                return done
         elif self.closed_form and B is not None and self.active_set and self.slack:
             # obstacle rows: the active-set solve with the rows, first from the last step's active
             # bounds and pairs (a servo run's next step usually keeps them), then from the bounds
@@ -535,23 +531,30 @@ class MMC(CStep):
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
         return self._solve(qp, s_min, try_closed_form=False, pairs=pairs)
 
-    def _closed_form_info(
-        self, J: np.ndarray, qd: np.ndarray, nu: np.ndarray, m: float
-    ) -> tuple[np.ndarray, StepInfo]:
-        e = nu - J @ qd
-        slack = float(np.linalg.norm(e)) if self.slack else 0.0
-        return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(e).max()), slack=slack)
-
-    def _active_set(
-        self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
+    def _closed_form_step(
+        self,
+        J: np.ndarray,
+        Jm: np.ndarray,
+        nu: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        m: float,
         qd: np.ndarray,
-    ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
-        """The active-set solution started from the bounds the closed form ``qd`` crosses, or None."""
-        w = self.slack_weight if self.slack else None
-        found = active_set_solve(J, Jm, nu, lower, upper, self.lam, w, active_of(qd, lower, upper))
-        if found is None:
+        bounded: bool = True,
+    ) -> tuple[np.ndarray, StepInfo] | None:
+        """The closed form ``qd`` as the step's answer when it is finite and (``bounded``) within the
+        bounds; else the active-set solution started from the bounds it crosses, or None."""
+        if math.isfinite(qd.sum()) and (
+            not bounded or ((qd >= lo - 1e-12).all() and (qd <= hi + 1e-12).all())
+        ):
+            e = nu - J @ qd
+            slack = float(np.linalg.norm(e)) if self.slack else 0.0
+            return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(e).max()), slack=slack)
+        if not self.active_set:
             return None
-        return self._active_set_answer(J, nu, lower, upper, m, *found)
+        w = self.slack_weight if self.slack else None
+        found = active_set_solve(J, Jm, nu, lo, hi, self.lam, w, active_of(qd, lo, hi))
+        return None if found is None else self._active_set_answer(J, nu, lo, hi, m, *found)
 
     def _active_set_answer(
         self, J: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float, x: np.ndarray,
@@ -578,12 +581,9 @@ class MMC(CStep):
             return self._fallback(qp, "singular", "closed_form", 0)
         if try_closed_form and not near:  # the closed form and the active set know only the bounds
             qd = mmc_closed_form(J, qp.Jm, nu, self.lam, w)
-            if np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
-                return self._closed_form_info(J, qd, nu, m)
-            if self.active_set:
-                done = self._active_set(J, qp.Jm, nu, lower, upper, m, qd)
-                if done is not None:
-                    return done
+            done = self._closed_form_step(J, qp.Jm, nu, lower, upper, m, qd)
+            if done is not None:
+                return done
         x, status, iters = self._osqp(qp)
         usable = x is not None and status in ("solved", "inaccurate", "max_iter")
         if usable and self._polish and (qp.has_slack or not near):
