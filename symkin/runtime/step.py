@@ -123,5 +123,5 @@ class CStep:
         except (CompileError, OSError, RuntimeError) as exc:
             if backend == "c":
                 raise
-            warnings.warn(f"{what} runs in Python: the C step is unavailable ({exc})", stacklevel=4)
+            warnings.warn(f"{what} runs in Python: the C step is unavailable ({exc})", stacklevel=3)
             return None
