@@ -258,6 +258,12 @@ def _rrmc_step(
     return Jt.T @ y, "singular", "damped", m
 
 
+_C_COLLISION_REFUSAL = (
+    "backend='c': the C MMC step with collision avoidance needs the slack (slack=True) and the C "
+    "collision kernel of the controller's joints; this MMC runs in Python (backend='auto')"
+)
+
+
 # -- MMC: the controller ---------------------------------------------------------------------------
 class MMC(CStep):
     """Manipulability Motion Controller (MMC paper eq 12), one OSQP problem per controller.
@@ -395,11 +401,8 @@ class MMC(CStep):
             and getattr(self._collision, "kernel", None) is not None
             and self._collision.n == self.n  # the kernel takes this controller's joint values
         )
-        refusal = (
-            "backend='c': the C MMC step with collision avoidance needs the slack (slack=True) and the C "
-            "collision kernel of the controller's joints; this MMC runs in Python (backend='auto')"
-        )
-        self._c = self._c_step(kin, backend, lambda: mmc_c.CMMC(self), "MMC", None if c_ok else refusal)
+        refusal = None if c_ok else _C_COLLISION_REFUSAL
+        self._c = self._c_step(backend, mmc_c.supports(kin), lambda: mmc_c.CMMC(self), "MMC", refusal)
 
     def __repr__(self) -> str:
         return (

@@ -234,7 +234,7 @@ class QRMC(CStep):
         tol: float = 1e-10, damping: float = 1e-2, singular_tol: float = 1e-6, axes: str = "all",
         backend: str = "auto", frame: Any = None,
     ) -> None:  # fmt: skip
-        from symkin.runtime import qrmc_c
+        from symkin.runtime import mmc_c, qrmc_c
         from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
@@ -249,7 +249,7 @@ class QRMC(CStep):
         self.axes, self._rows = axes, _axes(axes)
         self._prev = np.zeros(self.n)
         self._jh = getattr(kin, "jacob0_hessian0", None)
-        self._c = self._c_step(kin, backend, lambda: qrmc_c.CQRMC(self), "QRMC")
+        self._c = self._c_step(backend, mmc_c.supports(kin), lambda: qrmc_c.CQRMC(self), "QRMC")
 
     def __repr__(self) -> str:
         return f"QRMC(n={self.n}, horizon={self.horizon}, axes={self.axes!r}, backend={self.backend!r})"

@@ -101,18 +101,16 @@ class CStep:
         return "python" if self._c is None else "c"
 
     @staticmethod
-    def _c_step(kin: Any, backend: str, make: Any, what: str, refusal: str | None = None) -> Any:
-        """``make()`` (the C step of ``kin``'s controller ``what``) for ``backend`` ``"auto"`` or
-        ``"c"`` when ``kin`` is compiled C kinematics (:func:`symkin.runtime.mmc_c.supports`) and
-        ``refusal`` (why this controller cannot run in C) is None; else None (the Python step), or
+    def _c_step(backend: str, supported: bool, make: Any, what: str, refusal: str | None = None) -> Any:
+        """``make()`` (the C step of the controller ``what``) for ``backend`` ``"auto"`` or ``"c"`` when
+        its kinematics are compiled C kinematics (``supported``: :func:`symkin.runtime.mmc_c.supports`)
+        and ``refusal`` (why this controller cannot run in C) is None; else None (the Python step), or
         ConfigurationError for ``"c"``. With ``"auto"`` a C step that fails to build warns."""
         if backend not in ("auto", "c", "python"):
             raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         if backend == "python":
             return None
-        from symkin.runtime import mmc_c
-
-        if not mmc_c.supports(kin):
+        if not supported:
             refusal = "backend='c' needs C kinematics: symkin.compile(robot, backend='c')"
         if refusal is not None:
             if backend == "c":
