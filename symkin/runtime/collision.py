@@ -305,33 +305,39 @@ def _attempts(attempts: Any) -> int:
     return value
 
 
-def collision_solver(kin: Any, env: Any, kwargs: dict[str, Any], attempts: Any = 20) -> Any:
+def collision_solver(
+    kin: Any, env: Any, kwargs: dict[str, Any], attempts: Any = 20, rows: dict[str, Any] | None = None
+) -> Any:
     """The C IK solver of ``kin.ik(**kwargs)`` that rejects converged solutions colliding with
     ``env`` (an Environment or obstacles; ``True``: self-collision only), the kernel's
     ``skcoll_in_collision_packed`` in its search loop, memoised for the last 16 kinematics,
     options and environments; None when the C path does not apply (another backend, a tree or a
     frame off the end effector, options the C solver does not take). ``attempts``: the
-    ``collision_attempts`` of the other paths, checked here too."""
-    from symkin.runtime.ik import IK_OPTIONS
+    ``collision_attempts`` of the other paths, checked here too. ``rows`` (method ``"QP"``): the
+    MMC's collision-row options; the QP step then also keeps the rows of ``env``
+    (:class:`~symkin.runtime.ik_qp_c.QPStep`)."""
+    from symkin.runtime.ik import IK_OPTIONS, _ik_defaults, _options
     from symkin.runtime.ik_c import CIKSolver, options_key
-    from symkin.runtime.ik_problem import IKOptions
 
     _attempts(attempts)
     if getattr(kin, "backend", None) != "c" or len(getattr(kin, "frames", ())) != 1:  # one frame's kinematics
         return None
-    if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or getattr(kin, "n", 99) > 12:
+    if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or (rows is None and getattr(kin, "n", 99) > 12):
         return None  # frame=, backend=...: the general path
     env = Environment() if env is True else as_environment(env)
     check = kin.collision()
     if check.kernel is None:
         return None
-    options = IKOptions.of(kin, **{k: v for k, v in kwargs.items() if k in IK_OPTIONS})
+    defaults = _ik_defaults()  # the options, validated once per values (ik's memo)
+    options = _options(kin, *(kwargs.get(k, defaults[k]) for k in IK_OPTIONS))
     fn = check.kernel.lib.skcoll_in_collision_packed
 
     def make() -> tuple:
-        return kin, env, CIKSolver(kin, options, collides=(fn, env_args(env)))
+        qp = {} if rows is None else {"environment": env, "collision": rows}
+        return kin, env, CIKSolver(kin, options, collides=(fn, env_args(env)), **qp)
 
-    key = (id(kin), options_key(options), id(env))
+    qp_key = None if rows is None else tuple(sorted((k, repr(v)) for k, v in rows.items()))
+    key = (id(kin), options_key(options), id(env), qp_key)
     hit = lru(_AVOIDING, key, make, _KEEP)
     if hit[0] is not kin or hit[1] is not env:  # another object under a reused id
         hit = _AVOIDING[key] = make()

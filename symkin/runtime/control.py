@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import warnings
 import weakref
 from typing import Any
 
@@ -25,7 +24,7 @@ import numpy as np
 from symkin.core.arrays import finite_number as _number
 from symkin.core.arrays import per_joint as _per_joint
 from symkin.core.arrays import real_array
-from symkin.errors import CompileError, ConfigurationError, ParameterError
+from symkin.errors import ParameterError
 from symkin.runtime.memo import bounded, per_object
 from symkin.runtime.mmc_qp import (
     _AXES,
@@ -43,7 +42,7 @@ from symkin.runtime.mmc_qp import (
     mmc_closed_form,
     mmc_qp,
 )
-from symkin.runtime.step import OSQP_SETTINGS, StepInfo, step_nu, step_q
+from symkin.runtime.step import OSQP_SETTINGS, CStep, StepInfo, step_nu, step_q
 from symkin.runtime.step import OSQP_STATUS as _OSQP_STATUS
 from symkin.runtime.task import task_kinematics
 
@@ -259,8 +258,14 @@ def _rrmc_step(
     return Jt.T @ y, "singular", "damped", m
 
 
+_C_COLLISION_REFUSAL = (
+    "backend='c': the C MMC step with collision avoidance needs the slack (slack=True) and the C "
+    "collision kernel of the controller's joints; this MMC runs in Python (backend='auto')"
+)
+
+
 # -- MMC: the controller ---------------------------------------------------------------------------
-class MMC:
+class MMC(CStep):
     """Manipulability Motion Controller (MMC paper eq 12), one OSQP problem per controller.
 
     ``step(q, nu)`` returns joint velocities (n,) achieving the base-frame spatial velocity ``nu`` (6,)
@@ -363,8 +368,6 @@ class MMC:
             raise ParameterError(f"collision_rows must be a positive integer, got {collision_rows!r}")
         self.collision_rows = int(collision_rows)
         kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
-        if backend not in ("auto", "c", "python"):
-            raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin = kin
         self.n = int(kin.n)
         if self.n < 1:
@@ -391,36 +394,15 @@ class MMC:
         self._solver: Any = None  # osqp.OSQP, set up on the first step that needs it (osqp imported then)
         self._raw: Any = None
         self._polish = bool(self.settings.get("polishing"))
-        self._c: Any = None
-        if backend != "python":
-            from symkin.runtime import mmc_c
+        from symkin.runtime import mmc_c
 
-            c_collision = self._collision is None or (
-                self.slack
-                and getattr(self._collision, "kernel", None) is not None
-                and self._collision.n == self.n  # the kernel takes this controller's joint values
-            )
-            if mmc_c.supports(kin) and not c_collision:
-                if backend == "c":
-                    raise ConfigurationError(
-                        "backend='c': the C MMC step with collision avoidance needs the slack "
-                        "(slack=True) and the C collision kernel of the controller's joints; this MMC "
-                        "runs in Python (backend='auto')"
-                    )
-            elif mmc_c.supports(kin):
-                try:
-                    self._c = mmc_c.CMMC(self)
-                except (CompileError, OSError, RuntimeError) as exc:
-                    if backend == "c":
-                        raise
-                    warnings.warn(f"MMC runs in Python: the C step is unavailable ({exc})", stacklevel=2)
-            elif backend == "c":
-                raise ConfigurationError("backend='c' needs C kinematics: symkin.compile(robot, backend='c')")
-
-    @property
-    def backend(self) -> str:
-        """``"c"`` when :meth:`step` runs in C (:mod:`symkin.runtime.mmc_c`), else ``"python"``."""
-        return "python" if self._c is None else "c"
+        c_ok = self._collision is None or (
+            self.slack
+            and getattr(self._collision, "kernel", None) is not None
+            and self._collision.n == self.n  # the kernel takes this controller's joint values
+        )
+        refusal = None if c_ok else _C_COLLISION_REFUSAL
+        self._c = self._c_step(backend, mmc_c.supports(kin), lambda: mmc_c.CMMC(self), "MMC", refusal)
 
     def __repr__(self) -> str:
         return (
@@ -527,13 +509,9 @@ class MMC:
             else:
                 z = Jm / self.lam
                 qd = z + B.T @ (nu - J @ z)  # J^+ nu + (I - J^+ J) Jm / lam
-            inside = not self._bounded or ((qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all())
-            if inside and math.isfinite(qd.sum()):
-                return self._closed_form_info(J, qd, nu, m)
-            if self.active_set:
-                done = self._active_set(J, Jm, nu, lower, upper, m, qd)
-                if done is not None:
-                    return done
+            done = self._closed_form_step(J, Jm, nu, lower, upper, m, qd, self._bounded)
+            if done is not None:
+                return done
         elif self.closed_form and B is not None and self.active_set and self.slack:
             # obstacle rows: the active-set solve with the rows, first from the last step's active
             # bounds and pairs (a servo run's next step usually keeps them), then from the bounds
@@ -556,23 +534,30 @@ class MMC:
         qp = mmc_qp(J, Jm, nu, lower, upper, self.lam, self.slack_weight if self.slack else None, m, Jd, dl)
         return self._solve(qp, s_min, try_closed_form=False, pairs=pairs)
 
-    def _closed_form_info(
-        self, J: np.ndarray, qd: np.ndarray, nu: np.ndarray, m: float
-    ) -> tuple[np.ndarray, StepInfo]:
-        e = nu - J @ qd
-        slack = float(np.linalg.norm(e)) if self.slack else 0.0
-        return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(e).max()), slack=slack)
-
-    def _active_set(
-        self, J: np.ndarray, Jm: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float,
+    def _closed_form_step(
+        self,
+        J: np.ndarray,
+        Jm: np.ndarray,
+        nu: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        m: float,
         qd: np.ndarray,
-    ) -> tuple[np.ndarray, StepInfo] | None:  # fmt: skip
-        """The active-set solution started from the bounds the closed form ``qd`` crosses, or None."""
-        w = self.slack_weight if self.slack else None
-        found = active_set_solve(J, Jm, nu, lower, upper, self.lam, w, active_of(qd, lower, upper))
-        if found is None:
+        bounded: bool = True,
+    ) -> tuple[np.ndarray, StepInfo] | None:
+        """The closed form ``qd`` as the step's answer when it is finite and (``bounded``) within the
+        bounds; else the active-set solution started from the bounds it crosses, or None."""
+        if math.isfinite(qd.sum()) and (
+            not bounded or ((qd >= lo - 1e-12).all() and (qd <= hi + 1e-12).all())
+        ):
+            e = nu - J @ qd
+            slack = float(np.linalg.norm(e)) if self.slack else 0.0
+            return qd, StepInfo("solved", "closed_form", m, residual=float(np.abs(e).max()), slack=slack)
+        if not self.active_set:
             return None
-        return self._active_set_answer(J, nu, lower, upper, m, *found)
+        w = self.slack_weight if self.slack else None
+        found = active_set_solve(J, Jm, nu, lo, hi, self.lam, w, active_of(qd, lo, hi))
+        return None if found is None else self._active_set_answer(J, nu, lo, hi, m, *found)
 
     def _active_set_answer(
         self, J: np.ndarray, nu: np.ndarray, lower: np.ndarray, upper: np.ndarray, m: float, x: np.ndarray,
@@ -599,12 +584,9 @@ class MMC:
             return self._fallback(qp, "singular", "closed_form", 0)
         if try_closed_form and not near:  # the closed form and the active set know only the bounds
             qd = mmc_closed_form(J, qp.Jm, nu, self.lam, w)
-            if np.isfinite(qd).all() and (qd >= lower - 1e-12).all() and (qd <= upper + 1e-12).all():
-                return self._closed_form_info(J, qd, nu, m)
-            if self.active_set:
-                done = self._active_set(J, qp.Jm, nu, lower, upper, m, qd)
-                if done is not None:
-                    return done
+            done = self._closed_form_step(J, qp.Jm, nu, lower, upper, m, qd)
+            if done is not None:
+                return done
         x, status, iters = self._osqp(qp)
         usable = x is not None and status in ("solved", "inaccurate", "max_iter")
         if usable and self._polish and (qp.has_slack or not near):

@@ -63,11 +63,11 @@ from symkin.runtime.ik_problem import (  # noqa: F401 - re-exported
     check_pose,
     ets_of,
     failure_reason,
-    new_seed,
     pose_error,
     pose_error_of,
     revolute_mask,
     sample_range,
+    seed_of,
     shift_into,
     stacked,
 )
@@ -241,7 +241,7 @@ def ik(
         raise ParameterError(f"backend must be 'numpy' or 'c', not {backend!r}")
     T, single = check_pose(Tep)
     Q0 = None if q0 is None else as_rows(q0, opt.n, len(T), single, name_of(kin), "q0")  # the rule of q
-    seed = new_seed() if seed is None else int(seed) & M64
+    seed = seed_of(seed)
     out = [
         _solve_one(kin, opt, T[i], None if Q0 is None else Q0[i], SplitMix64(seed, i)) for i in range(len(T))
     ]

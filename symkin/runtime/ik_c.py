@@ -21,7 +21,6 @@ from __future__ import annotations
 import ctypes
 import functools
 import os
-import random
 import weakref
 from functools import lru_cache
 from pathlib import Path
@@ -32,7 +31,8 @@ import numpy as np
 from symkin.core.arrays import as_config, as_rows, name_of
 from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, PoseError
-from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason
+from symkin.runtime.cext import address, bind_functions, build_extension, csrc, layout
+from symkin.runtime.ik_problem import IKOptions, IKResult, check_pose, ets_of, failure_reason, seed_of
 from symkin.runtime.memo import per_object
 
 __all__ = [
@@ -46,7 +46,6 @@ __all__ = [
     "register_qp_step",
 ]
 
-CSRC = Path(__file__).resolve().parent / "csrc"
 _P = ctypes.c_void_p
 _I32, _I64, _U64, _D = ctypes.c_int32, ctypes.c_int64, ctypes.c_uint64, ctypes.c_double
 FKJAC = ctypes.CFUNCTYPE(None, _P, _P, _P)  # symkin_fkjac_fn
@@ -94,34 +93,28 @@ def ik_sources() -> dict[str, str]:
     Compile them together with generated kinematics to get one library exporting both (with
     :data:`IK_CFLAGS`).
     """
-    names = ("symkin_ik.h", "symkin_pose.h", "symkin_ik.c", "symkin_ets.c")
-    return {name: (CSRC / name).read_text() for name in names}
+    return csrc("symkin_ik.h", "symkin_pose.h", "symkin_ik.c", "symkin_ets.c")
 
 
 def bind(lib: ctypes.CDLL) -> ctypes.CDLL:
     """Set the argument types of the ``symkin_ik_*`` functions of ``lib`` (and check the layout)."""
-    sig = {
-        "symkin_ik_nmax": (_I32, []),
-        "symkin_ik_stats_size": (_I32, []),
-        "symkin_ik_config_size": (_I32, []),
-        "symkin_ik_check_pose": (_I32, [_P, _P]),
-        "symkin_ik_pose_error": (None, [_P, _P, _P]),
-        "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
-        "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
-        "symkin_ik_solve_each": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
-        "symkin_ik_kin_each": (None, [_P, _I64, _P, _P, _P]),
-        "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
-        "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
-        "symkin_ets_fkjac": (None, [_P, _P, _P, _P]),
-    }
-    for name, (res, args) in sig.items():
-        fn = getattr(lib, name)
-        fn.restype, fn.argtypes = res, args
-    if lib.symkin_ik_stats_size() != ctypes.sizeof(_Stats) or lib.symkin_ik_config_size() != ctypes.sizeof(
-        _Config
-    ):
-        raise RuntimeError("symkin_ik struct layout differs between C and Python")
+    bind_functions(lib, _SIGNATURES)
+    layout(lib, "symkin_ik_layout", (ctypes.sizeof(_Stats), ctypes.sizeof(_Config)))
     return lib
+
+
+_SIGNATURES = {
+    "symkin_ik_nmax": (_I32, []),
+    "symkin_ik_check_pose": (_I32, [_P, _P]),
+    "symkin_ik_pose_error": (None, [_P, _P, _P]),
+    "symkin_ik_solve": (_I32, [_P, _P, _P, _U64, _P, _P]),
+    "symkin_ik_solve_batch": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+    "symkin_ik_solve_each": (_I64, [_P, _I64, _P, _P, _I64, _U64, _P, _P]),
+    "symkin_ik_kin_each": (None, [_P, _I64, _P, _P, _P]),
+    "symkin_ik_trace": (_I32, [_P, _P, _P, _I32, _P]),
+    "symkin_ik_random_q": (None, [_P, _U64, _I64, _I32, _P]),
+    "symkin_ets_fkjac": (None, [_P, _P, _P, _P]),
+}
 
 
 # GCC 12 turns some a*b + c*d / a*b - c*d pairs into vfmaddsub when SLP-vectorising, even under
@@ -133,25 +126,10 @@ IK_CFLAGS: tuple[str, ...] = ("-fno-tree-slp-vectorize",)
 def _ik_build(profile: bool = False) -> tuple[Path, str]:
     """(path of the compiled solver library, name of the extension module inside it); ``profile``:
     the build whose extension times the parts of each call (``profile()``, for symkin bench calls)."""
-    import hashlib
-    import sysconfig
-
-    from symkin.emit.c.build import compile_library
-
-    sources = {
-        **ik_sources(),
-        **{name: (CSRC / name).read_text() for name in ("symkin_ik_py.c", "symkin_pyarray.h")},
-    }
-    digest = hashlib.sha256("\0".join(sources[k] for k in sorted(sources)).encode()).hexdigest()[:12]
-    module = f"_symkin_ik_{digest}" + ("_profile" if profile else "")
-    flags = (
-        *IK_CFLAGS,
-        *(("-DSYMKIN_IK_PROFILE",) if profile else ()),
-        f"-DSYMKIN_IK_MODULE={module}",
-        f"-I{sysconfig.get_paths()['include']}",
-        f"-I{np.get_include()}",
-    )
-    return compile_library(sources, "symkin_ik_profile" if profile else "symkin_ik", flags), module
+    sources = {**ik_sources(), **csrc("symkin_ik_py.c", "symkin_pyarray.h")}
+    flags = (*IK_CFLAGS, *(("-DSYMKIN_IK_PROFILE",) if profile else ()))
+    stem = "symkin_ik_profile" if profile else "symkin_ik"
+    return build_extension(sources, stem, "SYMKIN_IK_MODULE", f"_{stem}", flags)
 
 
 @lru_cache(maxsize=1)
@@ -176,11 +154,10 @@ def ik_extension(profile: bool = False) -> Any:
     nanoseconds of each part of the calls so far)."""
     from symkin.emit.c.build import load_extension
 
-    path, name = _ik_build(profile)
-    module = load_extension(name, path)
+    module = load_extension(*reversed(_ik_build(profile)))
 
     def seed() -> None:  # fresh seeds (seed=None) differ between processes, forked ones included
-        module.setup(IKResult, int.from_bytes(os.urandom(8), "little"))
+        module.setup(IKResult, seed_of())
 
     seed()
     if hasattr(os, "register_at_fork"):
@@ -209,35 +186,6 @@ def ets_table(ets: Any) -> tuple[ctypes.Array, _ETS]:
 
 def _addr(a: np.ndarray) -> int:
     return a.ctypes.data
-
-
-_M64 = 0xFFFFFFFFFFFFFFFF
-
-
-def _result_maker() -> Any:
-    """``IKResult(q, success, iterations, searches, residual, reason)``, faster for a single solve:
-    the frozen dataclass's __init__ costs more than the rest of the Python side of a solve."""
-    import dataclasses
-
-    names = [f.name for f in dataclasses.fields(IKResult)]
-    slots = [IKResult.__dict__.get(name) for name in names]
-    if names != ["q", "success", "iterations", "searches", "residual", "reason"] or not all(
-        type(s).__name__ == "member_descriptor" for s in slots
-    ):
-        return IKResult
-    setters = [s.__set__ for s in slots]  # type: ignore[union-attr]
-    new = object.__new__
-
-    def make(*values: Any) -> Any:  # q, success, iterations, searches, residual, reason
-        r = new(IKResult)
-        for set_value, value in zip(setters, values, strict=True):
-            set_value(r, value)
-        return r
-
-    return make
-
-
-_result = _result_maker()
 
 
 _QP_STEP: Any = None  # QPStep of symkin.runtime.ik_qp_c, which registers it (it sits above this module)
@@ -309,9 +257,7 @@ class CIKSolver:
             fkjac = getattr(kin, "c_fkjac", None)
             batch = getattr(kin, "c_fkjac_batch", None) if fkjac is not None else None
         self._fkjac_ref, self._batch_ref = fkjac, batch
-        self._fkjac_addr = (
-            0 if fkjac is None else (fkjac if isinstance(fkjac, int) else ctypes.cast(fkjac, _P).value)
-        )
+        self._fkjac_addr = address(fkjac)
         self._table = self._ets = None
         if not self._fkjac_addr:
             ets = ets_of(kin)
@@ -331,21 +277,20 @@ class CIKSolver:
         for name, arr in self._keep.items():
             setattr(cfg, name, _addr(arr) if arr.size else None)
         cfg.fkjac = self._fkjac_addr or None
-        cfg.fkjac_batch = ctypes.cast(batch, _P).value if batch is not None else None
+        cfg.fkjac_batch = address(batch) or None
         self._collides = collides  # kept alive: the function's library and the packed obstacles
         if collides is not None:
             fn, env = collides
-            cfg.collides, cfg.collision_env = ctypes.cast(fn, _P).value, env.address
+            cfg.collides, cfg.collision_env = address(fn), env.address
         cfg.ets = ctypes.addressof(self._ets) if self._ets is not None else None
         if self._qp is not None:
             cfg.step, cfg.step_ctx = self._qp.function, self._qp.context
         self._cfg = cfg
         self._cfg_addr = ctypes.addressof(cfg)
         # one target: the extension's solve when the library is the default one (it has it), else
-        # symkin_ik_solve through ctypes; either way with buffers per call (thread-safe)
+        # a batch of one through ctypes; either way with buffers per call (thread-safe)
         # fast(Tep, q0=None, seed=None): an IKResult, or None when an argument needs checking
         self.fast = functools.partial(ik_extension().solve, self._cfg_addr, self._reason) if own else None
-        self._seeds = random.Random(os.urandom(16))
 
     def bind(self, fallback: Any, by_options: dict[tuple, Any] | None = None) -> Any:
         """A callable ``ik(Tep, *args, **kwargs)`` for a kinematics object's ``ik``: one target
@@ -382,10 +327,7 @@ class CIKSolver:
 
     def _solve_checked(self, Tep: Any, q0: Any, seed: Any) -> IKResult:
         """:meth:`solve` with every argument validated first (detailed errors) and batches."""
-        if seed is None:
-            seed = self._seeds.getrandbits(64)
-        else:
-            seed = int(seed) & _M64
+        seed = seed_of(seed)
         T = np.ascontiguousarray(pose_array(Tep))  # the pose rule's conversion: no complex, strings...
         if T.shape != (4, 4):
             return self._solve_batch(T, q0, seed)
@@ -395,18 +337,7 @@ class CIKSolver:
             res = self.fast(T, Q0, seed)
             if res is not None:
                 return res
-        q, st = np.empty(self.n), _Stats()
-        status = self.lib.symkin_ik_solve(
-            self._cfg_addr, _addr(T), None if Q0 is None else _addr(Q0), seed, _addr(q), ctypes.addressof(st)
-        )
-        if status:
-            raise PoseError(f"invalid target pose (code {status})")
-        reason = (
-            "success"
-            if st.success
-            else self._reason(st.residual, st.limit_rejects, st.singular, st.collision_rejects)
-        )
-        return _result(q, bool(st.success), st.iterations, st.searches, st.residual, reason)
+        return self._solve_batch(T[None], None if Q0 is None else Q0[None], seed)[0]  # another library
 
     def _check_q0(self, q0: Any) -> np.ndarray:
         """q0 of one target: the joint-value rule of q (as_config), as the NumPy solver's."""
@@ -416,19 +347,10 @@ class CIKSolver:
         if T.ndim != 3 or T.shape[1:] != (4, 4):
             check_pose(T)  # the rule's PoseError for the shape
         T = np.ascontiguousarray(T, dtype=float)
-        N, n = len(T), self.n
-        stride, Q0 = 0, None
-        if q0 is not None:  # the rule of the NumPy solver: (n,) for all targets or (N, n)
-            Q0 = np.ascontiguousarray(as_rows(q0, n, N, False, self._name, "q0"))
-            stride = n
-        q = np.empty((N, n))
-        st = np.zeros(N, dtype=STATS_DTYPE)
-        bad = self.lib.symkin_ik_solve_batch(
-            self._cfg_addr, N, _addr(T), None if Q0 is None else _addr(Q0), stride, seed, _addr(q), _addr(st)
-        )
-        if bad >= 0:
-            check_pose(T)
-            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        Q0 = None  # the rule of the NumPy solver: (n,) for all targets or (N, n)
+        if q0 is not None:
+            Q0 = np.ascontiguousarray(as_rows(q0, self.n, len(T), False, self._name, "q0"))
+        q, st = self._call(self.lib.symkin_ik_solve_batch, T, Q0, seed)
         success = st["success"].astype(bool)
         columns = ("success", "residual", "limit_rejects", "singular", "collision_rejects")
         reason = tuple(
@@ -472,13 +394,32 @@ class CIKSolver:
     def solve_each(self, Tep: np.ndarray, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """The scalar batch: targets ``Tep`` (N, 4, 4) solved one at a time in one C call, as
         ``solve(Tep[i], seed=seed + i)`` (no lanes, no Python per target); (q (N, n), success (N,))."""
-        T = np.ascontiguousarray(Tep, dtype=float)
-        q, st = np.empty((len(T), self.n)), np.zeros(len(T), dtype=STATS_DTYPE)
-        bad = self.lib.symkin_ik_solve_each(self._cfg_addr, len(T), _addr(T), None, 0, int(seed) & _M64,
-                                            _addr(q), _addr(st))  # fmt: skip
-        if bad >= 0:
-            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        q, st = self._call(
+            self.lib.symkin_ik_solve_each, np.ascontiguousarray(Tep, dtype=float), None, seed_of(seed)
+        )
         return q, st["success"].astype(bool)
+
+    def _call(
+        self, fn: Any, T: np.ndarray, Q0: np.ndarray | None, seed: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(q (N, n), stats (N,)) of ``fn`` (``symkin_ik_solve_batch`` or ``_each``) on the targets ``T``
+        (N, 4, 4) from ``Q0`` (N, n) or None; PoseError for the first target that is not a pose."""
+        q, st = np.empty((len(T), self.n)), np.zeros(len(T), dtype=STATS_DTYPE)
+        stride = 0 if Q0 is None else self.n
+        bad = fn(
+            self._cfg_addr,
+            len(T),
+            _addr(T),
+            None if Q0 is None else _addr(Q0),
+            stride,
+            seed,
+            _addr(q),
+            _addr(st),
+        )
+        if bad >= 0:
+            check_pose(T)  # the detailed PoseError
+            raise PoseError(f"target [{bad}] is not a valid pose (code {st['status'][bad]})")
+        return q, st
 
     def kin_each(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The solver's kinematics at each row of ``Q`` (N, n), one at a time in one C call (for
@@ -501,7 +442,7 @@ class CIKSolver:
     def random_q(self, seed: int, count: int, stream: int = 0) -> np.ndarray:
         """The first ``count`` random restarts of the stream (seed, stream), (count, n)."""
         out = np.zeros((int(count), self.n))
-        self.lib.symkin_ik_random_q(self._cfg_addr, int(seed) & _M64, int(stream), int(count),
+        self.lib.symkin_ik_random_q(self._cfg_addr, seed_of(seed), int(stream), int(count),
                                     _addr(out))  # fmt: skip
         return out
 

@@ -313,9 +313,9 @@ class SplitMix64:
         )
 
 
-def new_seed() -> int:
-    """A fresh random 64-bit seed (used when ``seed`` is None)."""
-    return int.from_bytes(os.urandom(8), "little")
+def seed_of(seed: Any = None) -> int:
+    """The 64-bit seed of a solve: ``seed`` modulo 2^64, or a fresh random one when None."""
+    return int.from_bytes(os.urandom(8), "little") if seed is None else int(seed) & M64
 
 
 # -- pose error (eqs 37-40) -------------------------------------------------------------------

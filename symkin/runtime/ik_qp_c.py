@@ -18,12 +18,12 @@ solver (its collision rows use modules that use the solver), so this module regi
 from __future__ import annotations
 
 import ctypes
-import weakref
 from typing import Any
 
 import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError
+from symkin.runtime.cext import address, layout
 from symkin.runtime.ik_c import register_qp_step
 from symkin.runtime.ik_problem import IKOptions
 
@@ -70,14 +70,10 @@ class QPStep:
         lo, hi = damped_limits(opt)
         c.qlo[:], c.qhi[:] = lo.tolist(), hi.tolist()
         lib = controller.lib
-        layout = (_I32 * 1)()
-        lib.symkin_mmc_ik_layout.restype, lib.symkin_mmc_ik_layout.argtypes = None, [_P]
-        lib.symkin_mmc_ik_layout(layout)
-        if layout[0] != ctypes.sizeof(_Ctx):
-            raise RuntimeError("symkin_mmc_ik_ctx layout differs between C and Python")
+        layout(lib, "symkin_mmc_ik_layout", (ctypes.sizeof(_Ctx),))
         self._ctx = _Ctx(ctypes.addressof(c), int(environment is not None), 0, opt.slack_gain / scale)
         self.context = ctypes.addressof(self._ctx)
-        self.function = int(ctypes.cast(lib.symkin_mmc_ik_step, _P).value or 0)
+        self.function = address(lib.symkin_mmc_ik_step)
         self.n = opt.n
 
     def step(self, q: Any, e: Any) -> np.ndarray | None:
@@ -91,44 +87,26 @@ class QPStep:
         return None if failed else dq
 
 
-_SOLVERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # kin -> {key: (env, solver)}
-
-
 def collision_qp_ik(kin: Any, Tep: Any, collision: Any, collision_attempts: Any = None, **kwargs: Any) -> Any:
     """``kin.ik(Tep, method="QP", collision=env, **kwargs)`` on compiled C kinematics of a chain:
     the QP step with the MMC's collision rows (the robot's closest pairs within ``d_i`` keep their
     distance dampers; options ``d_i``, ``d_s``, ``xi_d``, ``collision_rows``, ``d_i_self``,
     ``d_s_self`` of :class:`~symkin.runtime.control.MMC`), and a converged solution that collides
-    is rejected (the next search starts; the reason counts them). ``collision_attempts`` is not
+    is rejected (the next search starts; the reason counts them): the solver of
+    :func:`symkin.runtime.collision.collision_solver` with the rows. ``collision_attempts`` is not
     used: the search loop itself keeps looking, within ``slimit`` searches."""
-    from symkin.geometry.pairs import as_environment
-    from symkin.model.geometry import Environment
-    from symkin.runtime.collision import env_args
-    from symkin.runtime.ik import IK_OPTIONS, _ik_defaults, _options
-    from symkin.runtime.ik_c import CIKSolver, options_key
-    from symkin.runtime.memo import per_object
+    from symkin.runtime.collision import collision_solver
+    from symkin.runtime.ik import IK_OPTIONS
 
-    env = Environment() if collision is True else as_environment(collision)
     q0, seed = kwargs.pop("q0", None), kwargs.pop("seed", None)
     rows = {k: kwargs.pop(k) for k in ROW_OPTIONS if k in kwargs}
     unknown = sorted(set(kwargs) - set(IK_OPTIONS))
     if unknown:
         raise TypeError(f"ik(method='QP', collision=...) got unexpected options {unknown}")
-    defaults = _ik_defaults()
-    opt = _options(kin, *(kwargs.get(k, defaults[k]) for k in IK_OPTIONS))
-    kernel = kin.collision().kernel
-    if kernel is None:  # pragma: no cover - C kinematics have the C kernel
+    solver = collision_solver(kin, collision, kwargs, rows=rows)
+    if solver is None:  # pragma: no cover - C kinematics have the C kernel
         raise ConfigurationError("method='QP' with collision needs the C collision kernel")
-
-    def make() -> tuple:
-        fn = kernel.lib.skcoll_in_collision_packed
-        return env, CIKSolver(kin, opt, collides=(fn, env_args(env)), environment=env, collision=rows)
-
-    key = (options_key(opt), id(env), tuple(sorted((k, repr(v)) for k, v in rows.items())))
-    found = per_object(_SOLVERS, kin, key, make)
-    if found[0] is not env:  # pragma: no cover - another environment under a reused id
-        found = make()
-    return found[1].solve(Tep, q0, seed)
+    return solver.solve(Tep, q0, seed)
 
 
 #: the MMC's collision-row options that kin.ik(method="QP", collision=...) takes

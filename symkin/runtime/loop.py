@@ -347,12 +347,10 @@ def _accepted(
 def _c_collide(check: Any, env: Any) -> tuple[int, int] | None:
     """The C loop's ``collide`` argument of a collision checker: the addresses of its kernel's
     ``skcoll_in_collision_packed`` and of the packed obstacles (kept alive by ``env``)."""
-    import ctypes
-
+    from symkin.runtime.cext import address
     from symkin.runtime.collision import env_args
 
     kernel = getattr(check, "kernel", None)
     if kernel is None:  # pragma: no cover - a C MMC with collision rows has the C kernel
         raise ConfigurationError("the C servo loop with collision rows needs the C collision kernel")
-    fn = kernel.lib.skcoll_in_collision_packed
-    return int(ctypes.cast(fn, ctypes.c_void_p).value or 0), int(env_args(env).address)
+    return address(kernel.lib.skcoll_in_collision_packed), int(env_args(env).address)

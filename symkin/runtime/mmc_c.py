@@ -39,10 +39,10 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import CompileError, ConfigurationError
+from symkin.runtime.cext import address, bind_functions, build_extension, csrc, layout
 
 __all__ = ["CMMC", "CRRMC", "mmc_library", "mmc_extension", "mmc_sources", "osqp_sources", "supports"]
 
-CSRC = Path(__file__).resolve().parent / "csrc"
 # the library's files from csrc: the MMC, RRMC and QRMC steps, the QP IK step and the extension module
 _CSRC_FILES = (
     "mmc.h", "mmc_impl.h", "mmc_py.c", "qrmc.h", "qrmc_impl.h", "mmc_ik.h", "mmc_ik.c", "symkin_pose.h",
@@ -86,10 +86,6 @@ def kinematics_functions(kin: Any) -> dict[str, Any]:
         names = ("jacob0_hessian0", "jacob0", "fkine", "manipulability")
         fns = _KIN_FUNCTIONS[kin] = {name: getattr(lib, f"{prefix}_{name}") for name in names}
     return fns
-
-
-def _address(fn: Any) -> int:
-    return int(ctypes.cast(fn, _P).value or 0)
 
 
 def _settings_key(settings: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
@@ -212,7 +208,7 @@ def _sources(n: int, key: tuple[tuple[str, Any], ...], nd: int = 0) -> dict[str,
     return {
         **out,
         "mmc_config.h": f"#ifndef MMC_CONFIG_H\n#define MMC_CONFIG_H\n{config}#endif\n",
-        **{name: (CSRC / name).read_text() for name in _CSRC_FILES},
+        **csrc(*_CSRC_FILES),
         "mmc_s0.c": _wrapper(0),
         "mmc_s6.c": _wrapper(6),
         **({"mmc_s6d.c": _wrapper(6, nd)} if nd else {}),
@@ -223,27 +219,16 @@ def _sources(n: int, key: tuple[tuple[str, Any], ...], nd: int = 0) -> dict[str,
 def _library(n: int, key: tuple[tuple[str, Any], ...], nd: int = 0) -> tuple[ctypes.PyDLL, Any]:
     """(the library through ctypes, its extension module) for n joints, these settings and nd
     collision rows (0: no distance variant)."""
-    import sysconfig
-
-    from symkin.emit.c.build import compile_library, load_extension
+    from symkin.emit.c.build import load_extension
     from symkin.runtime.step import StepInfo
 
-    sources = _sources(n, key, nd)
-    digest = hashlib.sha256("\0".join(f"{k}\0{sources[k]}" for k in sorted(sources)).encode()).hexdigest()
-    module = f"_symkin_mmc{n}_{digest[:12]}"
-    flags = (
-        "-fvisibility=hidden",
-        f"-DSYMKIN_MMC_MODULE={module}",
-        f"-I{sysconfig.get_paths()['include']}",
-        f"-I{np.get_include()}",
+    stem = f"symkin_mmc{n}" + (f"d{nd}" if nd else "")
+    path, module = build_extension(
+        _sources(n, key, nd), stem, "SYMKIN_MMC_MODULE", f"_symkin_mmc{n}", ("-fvisibility=hidden",)
     )
-    path = compile_library(sources, f"symkin_mmc{n}" + (f"d{nd}" if nd else ""), extra_cflags=flags)
     lib = ctypes.PyDLL(str(path))  # the GIL stays held during calls: the embedded solvers are shared
     steps = ("symkin_mmc0_step", "symkin_mmc6_step", "symkin_rrmc_step", "symkin_mmc6d_step")
-    for name in steps[: 4 if nd else 3]:  # the last with collision rows only
-        fn = getattr(lib, name)
-        fn.restype, fn.argtypes = ctypes.c_int, [_P, _P, _P]
-    lib.symkin_mmc_layout.restype, lib.symkin_mmc_layout.argtypes = None, [_P]
+    bind_functions(lib, {name: (ctypes.c_int, [_P, _P, _P]) for name in steps[: 4 if nd else 3]})
     ext = load_extension(module, path)
     ext.setup(StepInfo, _STATUS, _METHOD, _FALLBACK)
     return lib, ext
@@ -312,14 +297,11 @@ class _CController:
         from symkin.runtime.step import step_nu, step_q
 
         self.lib, self._ext = _library(int(n), _settings_key(settings), int(nd))
-        layout = (_I32 * 3)()
-        self.lib.symkin_mmc_layout(layout)
         Ctrl = _ctrl_type(n, int(nd))
-        if tuple(layout) != (n, ctypes.sizeof(Ctrl), 9):
-            raise RuntimeError(f"symkin_mmc layout {tuple(layout)} differs from Python's")
+        layout(self.lib, "symkin_mmc_layout", (n, ctypes.sizeof(Ctrl), 9))
         self._fns = kinematics_functions(kin)
         c = Ctrl()
-        c.jh, c.j0, c.fk, c.manip = (_address(self._fns[k]) for k in ("jacob0_hessian0", "jacob0", "fkine",
+        c.jh, c.j0, c.fk, c.manip = (address(self._fns[k]) for k in ("jacob0_hessian0", "jacob0", "fkine",
                                                                        "manipulability"))  # fmt: skip
         if not (c.jh and c.j0 and c.fk and c.manip):
             raise ConfigurationError("the C kinematics lack jacob0_hessian0, jacob0, fkine or manipulability")
@@ -411,7 +393,7 @@ class CMMC(_CController):
         pairs = kernel.n_distances(env)
         self._buffers = (np.empty(max(pairs, 1)), packed, kernel)
         c = self._ctrl
-        c.dist, c.rows = _address(kernel.lib.skcoll_distances), _address(kernel.lib.skcoll_distance_rows)
+        c.dist, c.rows = address(kernel.lib.skcoll_distances), address(kernel.lib.skcoll_distance_rows)
         c.env_s, c.env_ns, c.env_c, c.env_nc, c.env_b, c.env_nb = packed.args
         c.dbuf = self._buffers[0].ctypes.data
         c.pairs = pairs

@@ -33,7 +33,6 @@ order, the rest of nu is met), scaled down as a whole to the joint speed limits,
 from __future__ import annotations
 
 import math
-import warnings
 import weakref
 from dataclasses import dataclass
 from typing import Any
@@ -41,12 +40,12 @@ from typing import Any
 import numpy as np
 
 from symkin.core.arrays import real_array
-from symkin.errors import CompileError, ConfigurationError, ParameterError
+from symkin.errors import ParameterError
 from symkin.model.differential import manipulability_one
 from symkin.runtime.control import _number, _speed_limits, scale_to_limits
 from symkin.runtime.memo import per_object
 from symkin.runtime.mmc_qp import _axes
-from symkin.runtime.step import StepInfo, step_nu, step_q
+from symkin.runtime.step import CStep, StepInfo, step_nu, step_q
 
 __all__ = [
     "QRMC",
@@ -219,7 +218,7 @@ def qrmc(
     return ctrl.step(q, nu, qd0=np.zeros(ctrl.n) if qd0 is None else qd0)
 
 
-class QRMC:
+class QRMC(CStep):
     """The quadratic-rate controller (see :mod:`symkin.runtime.qrmc`) with its options and last answer.
 
     ``step(q, nu)`` uses its last answer (none after :meth:`reset`) as ``qd0``, ``step(q, nu, qd0)``
@@ -235,11 +234,10 @@ class QRMC:
         tol: float = 1e-10, damping: float = 1e-2, singular_tol: float = 1e-6, axes: str = "all",
         backend: str = "auto", frame: Any = None,
     ) -> None:  # fmt: skip
+        from symkin.runtime import mmc_c, qrmc_c
         from symkin.runtime.task import task_kinematics
 
         kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
-        if backend not in ("auto", "c", "python"):
-            raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
         self.kin, self.n = kin, int(kin.n)
         self.horizon = _number(horizon, "horizon")
         self.qd_max = _speed_limits(kin, self.n, qd_max)
@@ -251,14 +249,7 @@ class QRMC:
         self.axes, self._rows = axes, _axes(axes)
         self._prev = np.zeros(self.n)
         self._jh = getattr(kin, "jacob0_hessian0", None)
-        self._c: Any = None
-        if backend != "python":
-            self._c = _c_controller(self, backend)
-
-    @property
-    def backend(self) -> str:
-        """``"c"`` when :meth:`step` runs in C (:mod:`symkin.runtime.qrmc_c`), else ``"python"``."""
-        return "python" if self._c is None else "c"
+        self._c = self._c_step(backend, mmc_c.supports(kin), lambda: qrmc_c.CQRMC(self), "QRMC")
 
     def __repr__(self) -> str:
         return f"QRMC(n={self.n}, horizon={self.horizon}, axes={self.axes!r}, backend={self.backend!r})"
@@ -315,22 +306,3 @@ def _start(qd0: Any, n: int) -> np.ndarray:
     if a.shape != (n,) or not np.isfinite(a).all():
         raise ParameterError(f"qd0 must be {n} finite numbers, got {qd0!r}")
     return a
-
-
-def _c_controller(ctrl: QRMC, backend: str) -> Any:
-    """The C step of ``ctrl`` (:class:`symkin.runtime.qrmc_c.CQRMC`), or None on the Python path."""
-    from symkin.runtime import mmc_c
-
-    if not mmc_c.supports(ctrl.kin):
-        if backend == "c":
-            raise ConfigurationError("backend='c' needs C kinematics: symkin.compile(robot, backend='c')")
-        return None
-    from symkin.runtime.qrmc_c import CQRMC
-
-    try:
-        return CQRMC(ctrl)
-    except (CompileError, OSError, RuntimeError) as exc:
-        if backend == "c":
-            raise
-        warnings.warn(f"QRMC runs in Python: the C step is unavailable ({exc})", stacklevel=3)
-        return None

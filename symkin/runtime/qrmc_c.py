@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.runtime.cext import layout
 from symkin.runtime.mmc_c import _D, _I32, _KIND_QRMC, _CController, _ctrl_type
 
 __all__ = ["CQRMC"]
@@ -53,12 +54,8 @@ class CQRMC(_CController):
 
         super().__init__(ctrl.kin, ctrl.n, OSQP_SETTINGS, ctrl.axes, ctrl.qd_max)
         n = self.n
-        layout = (_I32 * 2)()
-        self.lib.symkin_qrmc_layout.restype, self.lib.symkin_qrmc_layout.argtypes = None, [ctypes.c_void_p]
-        self.lib.symkin_qrmc_layout(layout)
         Q = _qrmc_type(n)()
-        if tuple(layout) != (n, ctypes.sizeof(Q)):
-            raise RuntimeError(f"symkin_qrmc layout {tuple(layout)} differs from Python's")
+        layout(self.lib, "symkin_qrmc_layout", (n, ctypes.sizeof(Q)))
         ctypes.memmove(ctypes.addressof(Q.base), ctypes.addressof(self._ctrl), ctypes.sizeof(self._ctrl))
         self._q = Q
         self._ctrl = Q.base  # shares Q's memory

@@ -3,15 +3,16 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from symkin.core.arrays import as_config, name_of, real_array
-from symkin.errors import ParameterError
+from symkin.errors import CompileError, ConfigurationError, ParameterError
 
-__all__ = ["OSQP_SETTINGS", "OSQP_STATUS", "StepInfo", "step_q", "step_nu"]
+__all__ = ["OSQP_SETTINGS", "OSQP_STATUS", "StepInfo", "step_q", "step_nu", "CStep"]
 
 
 #: OSQP settings of :class:`MMC`: tight tolerances, and polishing. ``polishing`` is done by symkin,
@@ -86,3 +87,39 @@ def step_nu(nu: Any) -> np.ndarray:
     if nu.shape != (6,) or not np.isfinite(nu).all():
         raise ParameterError(f"nu must be 6 finite numbers (v, omega), got {nu!r}")
     return nu
+
+
+class CStep:
+    """A controller whose step runs in C (``_c``, from :meth:`_c_step`) or, when ``_c`` is None, in
+    Python (MMC, QRMC)."""
+
+    _c: Any = None
+
+    @property
+    def backend(self) -> str:
+        """``"c"`` when the step runs in C, else ``"python"``."""
+        return "python" if self._c is None else "c"
+
+    @staticmethod
+    def _c_step(backend: str, supported: bool, make: Any, what: str, refusal: str | None = None) -> Any:
+        """``make()`` (the C step of the controller ``what``) for ``backend`` ``"auto"`` or ``"c"`` when
+        its kinematics are compiled C kinematics (``supported``: :func:`symkin.runtime.mmc_c.supports`)
+        and ``refusal`` (why this controller cannot run in C) is None; else None (the Python step), or
+        ConfigurationError for ``"c"``. With ``"auto"`` a C step that fails to build warns."""
+        if backend not in ("auto", "c", "python"):
+            raise ParameterError(f"backend must be 'auto', 'c' or 'python', not {backend!r}")
+        if backend == "python":
+            return None
+        if not supported:
+            refusal = "backend='c' needs C kinematics: symkin.compile(robot, backend='c')"
+        if refusal is not None:
+            if backend == "c":
+                raise ConfigurationError(refusal)
+            return None
+        try:
+            return make()
+        except (CompileError, OSError, RuntimeError) as exc:
+            if backend == "c":
+                raise
+            warnings.warn(f"{what} runs in Python: the C step is unavailable ({exc})", stacklevel=3)
+            return None

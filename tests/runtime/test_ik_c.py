@@ -47,6 +47,28 @@ def test_one_kin_ik_call_is_the_batch_solution(ur5):
     np.testing.assert_allclose(ur5.fkine(batch.q[batch.success]), Tep[batch.success], atol=1e-6)
 
 
+def test_a_solver_on_another_library_solves_one_target_as_the_default_one(ur5):
+    """Without the default library's extension, one target is a batch of one through ctypes: the
+    same q, counts and reason as the extension's call, the unreachable target included."""
+    from symkin.runtime.ik_c import CIKSolver, ik_library
+
+    Tep, q0 = _targets(ur5, 4), ur5.robot.random_q(4, seed=3)
+    default, other = CIKSolver(ur5, slimit=3), CIKSolver(ur5, slimit=3, lib=ik_library())
+    assert other.fast is None
+    for i in range(4):
+        a, b = default.solve(Tep[i], q0[i], seed=5), other.solve(Tep[i], q0[i], seed=5)
+        assert type(b.success) is bool and b.q.shape == (6,)
+        assert a.q.tobytes() == b.q.tobytes(), i
+        assert (a.success, a.iterations, a.searches, a.residual, a.reason) == (
+            b.success,
+            b.iterations,
+            b.searches,
+            b.residual,
+            b.reason,
+        )
+    assert not other.solve(Tep[3], seed=5).success
+
+
 def test_scalar_batch_solves_each_target_as_one_call_does(ur5):
     solver = default_c_solver(ur5)
     Tep = _targets(ur5)

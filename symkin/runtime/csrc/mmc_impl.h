@@ -177,6 +177,17 @@ static double residual_(const double *J, const double *qd, const double *nu)
     return res;
 }
 
+/* out = A^T y for A (6, N) row-major, y (6) */
+static void tmul_(const double *A, const double *y, double *out)
+{
+    for (int k = 0; k < N; ++k) {
+        double s = 0.0;
+        for (int i = 0; i < 6; ++i)
+            s += A[i * N + k] * y[i];
+        out[k] = s;
+    }
+}
+
 /* joint_velocity_bounds of control.py */
 static void bounds_(const symkin_mmc_ctrl *c, const double *q, double *lo, double *hi)
 {
@@ -238,12 +249,7 @@ static void fallback_(const symkin_mmc_ctrl *c, const double *J, const double *G
                       int *kind, double *scale)
 {
     if (have_b) {
-        for (int k = 0; k < N; ++k) {
-            double s = 0.0;
-            for (int i = 0; i < 6; ++i)
-                s += B[i * N + k] * nu[i];
-            qd[k] = s;
-        }
+        tmul_(B, nu, qd);
     } else { /* J^T (J J^T + d^2 I)^-1 nu, the damped least-squares step */
         double L[36], y[6];
         if (chol_(G, 6, c->damping * c->damping, L)) {
@@ -253,12 +259,7 @@ static void fallback_(const symkin_mmc_ctrl *c, const double *J, const double *G
             for (int i = 0; i < 6; ++i)
                 y[i] = NAN;
         }
-        for (int k = 0; k < N; ++k) {
-            double s = 0.0;
-            for (int i = 0; i < 6; ++i)
-                s += J[i * N + k] * y[i];
-            qd[k] = s;
-        }
+        tmul_(J, y, qd);
     }
     *kind = MMC_FALLBACK_RRMC;
     for (int k = 0; k < N; ++k)
@@ -807,12 +808,7 @@ int symkin_rrmc_step(symkin_mmc_ctrl *c, const double *in, double *out)
         else /* no damping at a singular J: no step */
             memset(y, 0, sizeof y);
     }
-    for (int k = 0; k < N; ++k) {
-        double s = 0.0;
-        for (int i = 0; i < 6; ++i)
-            s += J[i * N + k] * y[i];
-        qd[k] = s;
-    }
+    tmul_(J, y, qd);
     double scale = scale_to_limits_(c, qd);
     write_info_(out, status, method, m, 0, MMC_NO_FALLBACK, residual_(J, qd, nu), 0.0, scale, 0);
     return 0;

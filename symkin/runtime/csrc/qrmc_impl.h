@@ -68,12 +68,9 @@ static double qrmc_lm_(const symkin_qrmc_ctrl *c, const double *J, const double 
         *taken = *taken + 1;
         memcpy(y, g, sizeof y);
         chol_solve_(L, 6, y);
-        for (int k = 0; k < N; ++k) {
-            double s = 0.0;
-            for (int i = 0; i < 6; ++i)
-                s += Jt[i * N + k] * y[i];
-            xn[k] = x[k] - s;
-        }
+        tmul_(Jt, y, xn); /* the step J~^T y */
+        for (int k = 0; k < N; ++k)
+            xn[k] = x[k] - xn[k];
         double An[6 * N];
         qrmc_hx_(H, xn, An);
         double rn = qrmc_g_(J, An, nu, half_h, xn, gn, &cost_n);

@@ -53,8 +53,10 @@ typedef int64_t symkin_m4 __attribute__((vector_size(SYMKIN_LANES * sizeof(int64
 static const double TWO_PI = 6.283185307179586;
 
 int32_t symkin_ik_nmax(void) { return NM; }
-int32_t symkin_ik_stats_size(void) { return (int32_t)sizeof(symkin_ik_stats); }
-int32_t symkin_ik_config_size(void) { return (int32_t)sizeof(symkin_ik_config); }
+void symkin_ik_layout(int32_t *out) { /* what symkin.runtime.ik_c checks its mirrors against */
+    out[0] = (int32_t)sizeof(symkin_ik_stats);
+    out[1] = (int32_t)sizeof(symkin_ik_config);
+}
 
 /* ---- random restarts: splitmix64 ---------------------------------------------------------- */
 static uint64_t mix64(uint64_t z) {

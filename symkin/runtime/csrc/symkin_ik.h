@@ -116,8 +116,7 @@ typedef struct {
 } symkin_ik_stats;
 
 int32_t symkin_ik_nmax(void);
-int32_t symkin_ik_stats_size(void);
-int32_t symkin_ik_config_size(void);
+void symkin_ik_layout(int32_t *out); /* sizeof symkin_ik_stats, sizeof symkin_ik_config */
 
 /* SYMKIN_POSE_* for a row-major 4x4 target; *deviation gets max |R^T R - I| (or 0). */
 int32_t symkin_ik_check_pose(const double *T, double *deviation);
