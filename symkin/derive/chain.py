@@ -292,9 +292,9 @@ def _context(D: Derivation) -> tuple[dict[str, Any], str]:
     ctx["links"] = [_pose_tex(P, D.links[j], f"{{}}^{{0}}T_{{{j + 1}}}") for j in range(n)]
     T = D.T
     position = aligned(f"{_XYZ[r]} &= {P(T[r, 3])}" for r in range(3))
-    rotation = r" \\ ".join(f"r_{{{r + 1}{c + 1}}} &= {P(T[r, c])}" for r in range(3) for c in range(3))
+    rotation = aligned(f"r_{{{r + 1}{c + 1}}} &= {P(T[r, c])}" for r in range(3) for c in range(3))
     ctx["pose"] = [f"{{}}^{{0}}T_{{e}} = {P.matrix(T)}", position] if _shown(T) else [
-        position, r"R = (r_{ij}), \quad \begin{aligned} " + rotation + r" \end{aligned}"
+        position, rf"R = (r_{{ij}}), \quad {rotation}"
     ]  # fmt: skip
     ctx["derivatives"], ctx["columns27"], ctx["columns_fast"] = [], [], []
     for j in range(n):
