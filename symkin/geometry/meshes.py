@@ -31,6 +31,7 @@ from symkin.model.urdf import URDFGraph, joint_axis, joint_limits, joint_origin,
 __all__ = [
     "MeshPart",
     "Placement",
+    "load_mesh",
     "read_mesh",
     "resolve_mesh",
     "link_placements",
@@ -92,11 +93,9 @@ def resolve_mesh(
     return p if p.is_absolute() else folder / p
 
 
-def read_mesh(path: str | Path, scale: Any = (1.0, 1.0, 1.0), what: str = "") -> np.ndarray:
-    """The triangles (F, 3, 3) of the mesh file ``path`` (any format trimesh reads), each vertex
-    multiplied by ``scale`` per axis. GeometryError naming the file (and ``what``, e.g. the link)
-    when it cannot be read, has no triangles or holds NaN/inf; MissingExtraError without trimesh.
-    (:func:`check_extent` bounds the size.)"""
+def load_mesh(path: str | Path, what: str = "") -> Any:
+    """The mesh file ``path`` (any format trimesh reads) as a trimesh mesh; GeometryError naming
+    the file (and ``what``, e.g. the link) when it cannot be read, MissingExtraError without trimesh."""
     where = f"{what}: " if what else ""
     try:
         import trimesh
@@ -104,16 +103,24 @@ def read_mesh(path: str | Path, scale: Any = (1.0, 1.0, 1.0), what: str = "") ->
         raise MissingExtraError(
             f"{where}reading the mesh file {str(path)!r} needs trimesh: {_INSTALL}"
         ) from None
-    s = np.asarray(scale, dtype=float).reshape(-1)
-    if s.shape != (3,) or not np.isfinite(s).all():
-        raise GeometryError(f"{where}mesh scale must be 3 finite numbers, got {scale!r}")
     try:
-        mesh = trimesh.load(str(path), force="mesh")
-        T = np.asarray(mesh.triangles, dtype=float).reshape(-1, 3, 3)
+        return trimesh.load(str(path), force="mesh")
     except Exception as exc:  # trimesh raises many kinds for unreadable files
         raise GeometryError(
             f"{where}cannot read mesh file {str(path)!r}: {type(exc).__name__}: {exc}"
         ) from None
+
+
+def read_mesh(path: str | Path, scale: Any = (1.0, 1.0, 1.0), what: str = "") -> np.ndarray:
+    """The triangles (F, 3, 3) of the mesh file ``path`` (:func:`load_mesh`), each vertex
+    multiplied by ``scale`` per axis. GeometryError naming the file (and ``what``, e.g. the link)
+    when it cannot be read, has no triangles or holds NaN/inf; MissingExtraError without trimesh.
+    (:func:`check_extent` bounds the size.)"""
+    where = f"{what}: " if what else ""
+    s = np.asarray(scale, dtype=float).reshape(-1)
+    if s.shape != (3,) or not np.isfinite(s).all():
+        raise GeometryError(f"{where}mesh scale must be 3 finite numbers, got {scale!r}")
+    T = np.asarray(load_mesh(path, what).triangles, dtype=float).reshape(-1, 3, 3)
     if len(T) == 0:
         raise GeometryError(f"{where}mesh file {str(path)!r} has no triangles (empty or not a mesh)")
     if not np.isfinite(T).all():
