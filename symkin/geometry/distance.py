@@ -70,6 +70,7 @@ __all__ = [
     "segment_closest_with",
     "point_segment",
     "point_segment_with",
+    "golden_min_with",
     "box_sdf",
     "sphere_sphere",
     "capsule_sphere",
@@ -238,39 +239,43 @@ def _box_sdf(p: Array, center: Array, h: Array, R: Array) -> tuple[Array, Array]
     return d, n
 
 
-def _golden_min(f: Callable[[Array], Array], shape: tuple) -> Array:
-    """argmin over t in [0, 1] of the convex ``f`` (vectorised): golden-section search with
-    GOLDEN_ITERS steps, then the better of the bracket's midpoint and the endpoints 0 and 1.
+def golden_min_with(
+    ops: SegmentOps, f: Callable[[Any], Any], lo: Any, hi: Any, pair: Callable[[Any, Any], Any] | None = None
+) -> Any:
+    """argmin over t in [0, 1] of the convex ``f`` (vectorised) in the array library of ``ops``:
+    golden-section search with GOLDEN_ITERS steps from ``lo`` and ``hi`` (zeros and ones of the
+    batch shape), then the better of the bracket's midpoint and the endpoints 0 and 1. ``pair(c,
+    d)`` gives each step's ``(f(c), f(d))`` (default two calls; NumPy stacks them into one).
 
     On a tie f(c) == f(d) a minimiser lies in [c, d] (convexity): both ends move in and both inner
     points are evaluated afresh, so a flat stretch of minima (a segment parallel to a face) ends
     in its interior rather than at a kink on its edge, where the normal would be the wrong face's.
     """
-    lo = np.zeros(shape)
-    hi = np.ones(shape)
+    where = ops.where
+    pair = pair or (lambda c, d: (f(c), f(d)))
+    zero, one = lo, hi
     c = hi - _INV_PHI * (hi - lo)
     d = lo + _INV_PHI * (hi - lo)
-    fc = f(c)
-    fd = f(d)
+    fc, fd = f(c), f(d)
     for _ in range(GOLDEN_ITERS):
         # fc < fd: hi = d, d = c, c = new; fd < fc: lo = c, c = d, d = new; tie: lo = c, hi = d, both new
         left = fc < fd
         right = fd < fc
-        lo = np.where(left, lo, c)
-        hi = np.where(right, hi, d)
+        lo = where(left, lo, c)
+        hi = where(right, hi, d)
         c_new = hi - _INV_PHI * (hi - lo)
         d_new = lo + _INV_PHI * (hi - lo)
-        fc_new, fd_new = f(np.stack([c_new, d_new]))
-        c, d = np.where(right, d, c_new), np.where(left, c, d_new)
-        fc, fd = np.where(right, fd, fc_new), np.where(left, fc, fd_new)
+        fc_new, fd_new = pair(c_new, d_new)
+        c, d = where(right, d, c_new), where(left, c, d_new)
+        fc, fd = where(right, fd, fc_new), where(left, fc, fd_new)
     t = 0.5 * (lo + hi)
     ft = f(t)
-    f0 = f(np.zeros(shape))
+    f0 = f(zero)
     take0 = f0 < ft
-    t = np.where(take0, 0.0, t)
-    ft = np.where(take0, f0, ft)
-    f1 = f(np.ones(shape))
-    return np.where(f1 < ft, 1.0, t)
+    t = where(take0, 0.0, t)
+    ft = where(take0, f0, ft)
+    f1 = f(one)
+    return where(f1 < ft, 1.0, t)
 
 
 # --- public functions --------------------------------------------------------------------------
@@ -370,7 +375,9 @@ def capsule_box(
     def sdf_at(t: Array) -> Array:
         return _box_sdf(A + t[..., None] * ab, Ctr, H, M)[0]
 
-    t = _golden_min(sdf_at, shape)
+    t = golden_min_with(
+        _NUMPY, sdf_at, np.zeros(shape), np.ones(shape), lambda c, d: sdf_at(np.stack([c, d]))
+    )
     pa = A + t[..., None] * ab
     sdf, n = _box_sdf(pa, Ctr, H, M)
     n = np.broadcast_to(n, shape + (3,)).copy()
