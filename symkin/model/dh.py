@@ -43,6 +43,7 @@ import numpy as np
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
 from symkin.model.transform import angle_const as float_angle
+from symkin.model.transform import constant_ets
 
 __all__ = ["DHLink", "dh_args", "dh_file_args", "dh_table_args", "angle_const", "length_const", "robot_args"]
 
@@ -172,26 +173,6 @@ def _link_ets(link: DHLink, j: int, modified: bool) -> list[ET]:
     return [e for e in seq if e.is_joint or not e.const.is_zero]
 
 
-def _const_ets(ets: ETS | ET | str | Sequence[ET] | None, what: str) -> list[ET]:
-    """A constant transform given as ETS, ET, list of ETs or ETS text; no joints allowed."""
-    if ets is None:
-        return []
-    if isinstance(ets, str):
-        try:
-            ets = ETS.parse(ets)
-        except ETSParseError as exc:
-            raise RobotError(f"{what}: {exc}") from None
-    elif isinstance(ets, ET):
-        ets = [ets]
-    out = list(ets)
-    for e in out:
-        if not isinstance(e, ET):
-            raise RobotError(f"{what} must be an ETS, ETS text or list of ET, got {type(e).__name__}")
-        if e.is_joint:
-            raise RobotError(f"{what} must be constant, but contains the joint {e}")
-    return [e for e in out if not e.const.is_zero]
-
-
 def robot_args(
     chain: Sequence[ET],
     name: str,
@@ -219,8 +200,8 @@ def dh_args(
     modified: bool = False,
     name: str = "robot",
     qlim: Any = None,
-    base: ETS | ET | str | Sequence[ET] | None = None,
-    tool: ETS | ET | str | Sequence[ET] | None = None,
+    base: Any = None,
+    tool: Any = None,
     configs: Mapping[str, Any] | None = None,
     qd_max: Any = None,
     source: str = "",
@@ -232,7 +213,8 @@ def dh_args(
 
     ``links``: DHLink or dicts with the same keys (plus ``type``: ``'R'``/``'P'``). ``qlim``
     (2, n) overrides the per-link limits; links without limits get the Robot defaults.
-    ``base``/``tool``: constant ETS (or ETS text) before the first and after the last link.
+    ``base``/``tool``: constant transforms before the first and after the last link, in any form
+    :meth:`symkin.Robot.with_tool` takes (ETS text, ``"x y z roll pitch yaw"``, a 4x4 matrix...).
     Joint names default to the links' ``name`` when every link has one.
     """
     if isinstance(links, (str, bytes, Mapping, DHLink)) or not isinstance(links, Sequence):
@@ -240,10 +222,10 @@ def dh_args(
     if not links:
         raise RobotError("a DH robot needs at least one link")
     rows = [_link_of(row, j) for j, row in enumerate(links)]
-    chain = _const_ets(base, "base")
+    chain = constant_ets(base, "base")
     for j, link in enumerate(rows):
         chain += _link_ets(link, j, modified)
-    chain += _const_ets(tool, "tool")
+    chain += constant_ets(tool, "tool")
     n = len(rows)
     if qlim is None and any(r.qlim is not None for r in rows):
         lim = []

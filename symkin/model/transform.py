@@ -194,7 +194,7 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
         out = list(value)
     elif isinstance(value, ET):
         out = [value]
-    elif isinstance(value, (list, tuple)) and value and all(isinstance(e, ET) for e in value):
+    elif isinstance(value, (list, tuple)) and all(isinstance(e, ET) for e in value):  # [] too
         out = list(value)
     elif isinstance(value, np.ndarray) or (
         isinstance(value, (list, tuple))
