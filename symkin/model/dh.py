@@ -258,17 +258,9 @@ _META = ("name", "source", "base", "tool", "qd_max")
 
 def dh_file_args(path: str | Path) -> dict[str, Any]:
     """The Robot arguments of a DH table file (format in the module docstring)."""
-    from symkin.core.sizes import read_bounded
+    from symkin.core.sizes import read_text
 
-    path = Path(path)
-    try:
-        data = read_bounded(path, DH_FILE_BYTES, "the file", OSError)  # named below
-        text = data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")  # as read_text reads it
-    except OSError as exc:
-        raise RobotError(f"cannot read DH table {str(path)!r}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        where = f"DH table {str(path)!r}"
-        raise RobotError(f"{where} is not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+    text = read_text(path, DH_FILE_BYTES, f"DH table {str(path)!r}", RobotError)
     return dh_table_args(text, str(path))
 
 

@@ -53,7 +53,7 @@ from typing import Any
 from xml.etree import ElementTree
 from xml.parsers import expat
 
-from symkin.core.sizes import read_bounded
+from symkin.core.sizes import read_text
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 from symkin.model.slots import Segment, Slot
@@ -348,18 +348,8 @@ def load_xml(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     ):
         path: Path | None = Path(path_or_xml)
         shown = repr(str(path)) if len(str(path)) <= 200 else repr(str(path)[:197] + "...")
-        try:  # a byte-order mark is allowed; newlines as read_text reads them
-            data = read_bounded(path, URDF_FILE_BYTES, "the file", OSError)  # named below
-            text = data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
-        except UnicodeDecodeError as exc:
-            raise URDFError(
-                f"URDF file {shown} is not UTF-8 text: {exc.reason} at byte {exc.start}"
-            ) from None
-        except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
-            raise URDFError(
-                f"cannot read URDF file {shown}: {getattr(exc, 'strerror', None) or exc}"
-            ) from None
         where = f"URDF file {shown}"
+        text = read_text(path, URDF_FILE_BYTES, where, URDFError)  # a byte-order mark is allowed
         if path.name.lower().endswith(".xacro"):  # even one without macros: read the expanded file
             raise _xacro_error(where, "its name ends in .xacro", path)
     elif isinstance(path_or_xml, str):
