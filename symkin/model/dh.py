@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import math
 import numbers
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from fractions import Fraction
@@ -81,40 +80,19 @@ def angle_const(value: Any, what: str = "angle", tol: float = _SNAP_TOL) -> Cons
     A float within ``tol`` of ``k*pi/m`` with ``m <= 12`` becomes exactly that multiple of pi,
     else the exact decimal it prints as. Raises RobotError naming ``what`` for bad values.
     """
-    x = _real(value, what)
-    if isinstance(x, float):
-        return float_angle(x, tol)
-    return x if isinstance(x, Const) else Const(x)
+    exact = isinstance(value, (bool, numbers.Rational)) or not isinstance(value, numbers.Real)
+    if exact or not math.isfinite(value):  # text, Const, int, Fraction; or refused by Const.of
+        return length_const(value, what)
+    return float_angle(float(value), tol)
 
 
 def length_const(value: Any, what: str = "length") -> Const:
-    """An exact length: text/Const as given, ints and Fractions exact, floats as printed."""
-    x = _real(value, what)
-    if isinstance(x, float):
-        return Const(Fraction(repr(x)))
-    return x if isinstance(x, Const) else Const(x)
-
-
-def _real(value: Any, what: str) -> Const | Fraction | float:
-    """Normalise a user number: Const for text/Const, Fraction for exact numbers, float for floats."""
-    if isinstance(value, Const):
-        return value
-    if isinstance(value, str):
-        try:
-            return Const.of(value)
-        except ETSParseError as exc:
-            raise RobotError(f"{what}: {str(exc).splitlines()[0]}") from None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise RobotError(f"{what} must be a number or text like 'pi/2', not {type(value).__name__} {value!r}")
-    if isinstance(value, (numbers.Integral, Fraction)):
-        r = Fraction(int(value)) if isinstance(value, numbers.Integral) else value
-        if abs(r) > sys.float_info.max:
-            raise RobotError(f"{what} = {value} is beyond the range of a double")
-        return r
-    x = float(value)
-    if not math.isfinite(x):
-        raise RobotError(f"{what} is {x}: DH parameters must be finite")
-    return x
+    """An exact length: text/Const as given, ints and Fractions exact, floats as printed
+    (:meth:`Const.of`); RobotError naming ``what`` for anything else."""
+    try:
+        return Const.of(value)
+    except (ETSParseError, RobotError, TypeError) as exc:
+        raise RobotError(f"{what}: {str(exc).splitlines()[0]}") from None
 
 
 def _link_of(row: DHLink | Mapping[str, Any], j: int) -> DHLink:
@@ -245,8 +223,7 @@ def dh_args(
 
 
 def _limit(value: Any, j: int) -> float:
-    x = _real(value, f"DH link {j} qlim")
-    return x.value if isinstance(x, Const) else float(x)
+    return length_const(value, f"DH link {j} qlim").value
 
 
 # ---------------------------------------------------------------------------------------------
