@@ -311,10 +311,8 @@ def move_links(geometry: Geometry | None, moves: dict[str, np.ndarray]) -> Geome
         T = moves.get(s.link)
         if T is None:
             return s
-        pts = [tuple(T[:3, :3] @ np.array(p) + T[:3, 3]) for p in s.points]
-        if isinstance(s, Sphere):
-            return Sphere(pts[0], s.radius, s.link)
-        return Capsule(pts[0], pts[1], s.radius, s.link)
+        ends = {end: tuple(T[:3, :3] @ np.array(p) + T[:3, 3]) for (end, _), p in zip(s._ENDS, s.points)}
+        return dataclasses.replace(s, **ends)
 
     return Geometry(tuple(moved(s) for s in geometry.shapes), geometry.disabled, geometry.source)
 
