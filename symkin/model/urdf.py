@@ -179,16 +179,7 @@ def xml_numbers(
     cells = text.split()
     if len(cells) != count:
         raise URDFError(f"{what} must have {count} numbers, got {text!r}")
-    values = [_number(c, what) for c in cells]
-    for cell, v in zip(cells, values):
-        if bound is not None and abs(v) > bound:
-            shown = cell if len(cell) <= 40 else cell[:37] + "..."
-            limit = f"{bound:g}".replace("e+", "e")
-            raise URDFError(
-                f"{what} contains {shown!r}; URDF lengths, angles and mimic factors must be within "
-                f"+-{limit} (an angle beyond it has no meaningful double value)"
-            )
-    return values
+    return [_number(c, what, bound) for c in cells]
 
 
 #: The largest |value| of a URDF length or angle (origin xyz and rpy, mimic multiplier and offset),
@@ -237,8 +228,8 @@ _DECIMAL = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
 _MAX_NUMBER_CHARS = 1000
 
 
-def _number(cell: str, what: str) -> Fraction:
-    """One exact, finite number from URDF text (the decimal as written)."""
+def _number(cell: str, what: str, bound: float | None = None) -> Fraction:
+    """One exact, finite number from URDF text (the decimal as written), within +-``bound`` if given."""
     shown = cell if len(cell) <= 40 else cell[:37] + "..."
     if cell.lower().lstrip("+-") in ("nan", "inf", "infinity"):
         raise URDFError(f"{what} contains {shown!r}: numbers must be finite")
@@ -252,6 +243,12 @@ def _number(cell: str, what: str) -> Fraction:
     value = Fraction(cell)
     if abs(value) > sys.float_info.max:
         raise URDFError(f"{what} contains {shown!r}, beyond the range of a double (about 1.8e308)")
+    if bound is not None and abs(value) > bound:
+        limit = f"{bound:g}".replace("e+", "e")
+        raise URDFError(
+            f"{what} contains {shown!r}; URDF lengths, angles and mimic factors must be within "
+            f"+-{limit} (an angle beyond it has no meaningful double value)"
+        )
     return value
 
 
