@@ -214,16 +214,12 @@ def dh_args(
                 pair = tuple(r.qlim)
                 if len(pair) != 2:
                     raise RobotError(f"DH link {j}: qlim must be (lower, upper), got {r.qlim!r}")
-                lim.append((_limit(pair[0], j), _limit(pair[1], j)))
+                lim.append(tuple(length_const(v, f"DH link {j} qlim").value for v in pair))
         qlim = np.array(lim, dtype=float).T
     if joint_names is None and all(r.name for r in rows):
         joint_names = [str(r.name) for r in rows]
     source = source or ("modified" if modified else "standard") + f" DH table, {n} links"
     return robot_args(chain, name, qlim, configs, joint_names, qd_max, source)
-
-
-def _limit(value: Any, j: int) -> float:
-    return length_const(value, f"DH link {j} qlim").value
 
 
 # ---------------------------------------------------------------------------------------------
