@@ -66,7 +66,6 @@ __all__ = [
     "joint_limits",
     "urdf_args",
     "axis_ets",
-    "translation_ets",
     "atan2_const",
     "snap_angle",
     "snap_atan2",
@@ -106,11 +105,6 @@ def atan2_const(sy: Fraction, sx: Fraction) -> Const:
         return Const(atan2=(sy, sx))
     b = base if sx > 0 else 1 - base  # first or second quadrant
     return Const.pi_times(b if sy > 0 else -b)
-
-
-def translation_ets(p: Sequence[Const | Fraction]) -> list[ET]:
-    """``tx(px) ty(py) tz(pz)`` without the zero terms."""
-    return rpy_ets([v if isinstance(v, Const) else Const(Fraction(v)) for v in p])
 
 
 def axis_ets(u: Sequence[Fraction], joint: int, revolute: bool) -> list[ET]:
