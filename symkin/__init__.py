@@ -50,22 +50,18 @@ _LAZY = {  # sympy-based teaching derivations: loaded on first use so `import sy
 }
 
 
+#: Subpackages loaded on first use: the callable ``symkin.symbolic(robot)`` (sympy expressions)
+#: and ``symkin.derive(robot)`` (the written derivation), and ``symkin.geometry`` (collision
+#: geometry sources and the NumPy reference).
+_SUBPACKAGES = ("symbolic", "derive", "geometry")
+
+
 def __getattr__(name: str):  # noqa: ANN202
-    if name == "symbolic":  # the callable subpackage: symkin.symbolic(robot) -> sympy expressions
-        import importlib
+    import importlib
 
-        return importlib.import_module("symkin.symbolic")
-    if name == "derive":  # the callable subpackage: symkin.derive(robot) -> the written derivation
-        import importlib
-
-        return importlib.import_module("symkin.derive")
-    if name == "geometry":  # collision geometry sources and the NumPy reference
-        import importlib
-
-        return importlib.import_module("symkin.geometry")
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"symkin.{name}")
     if name in _LAZY:
-        import importlib
-
         module, attr = _LAZY[name]
         return getattr(importlib.import_module(module), attr)
     raise AttributeError(f"module 'symkin' has no attribute {name!r}")

@@ -205,13 +205,9 @@ def _collision_rows(kin: Any, Q: np.ndarray) -> list[CheckRow]:
     D, J = kin.distance_jacobians(Q, env)
     ref = float(np.abs(D - reference.distances(kin.model, Q, env)).max()) if D.size else 0.0
     verdicts = float(np.mean(kin.in_collision(Q, env) != (D < 0).any(axis=1)))
-    h, fd = FD_STEP, 0.0
-    for k, q in enumerate(Q):
-        for j, e in enumerate(np.eye(kin.n) * h):
-            col = (kin.distances(q + e, env) - kin.distances(q - e, env)) / (2 * h)
-            ok = D[k] > 1e-4
-            if ok.any():
-                fd = max(fd, float(np.abs(J[k][ok, j] - col[ok]).max()))
+    fd_J = np.swapaxes(_fd(lambda x: kin.distances(x, env), Q, FD_STEP), 1, 2)  # (N, M, n)
+    apart = D > 1e-4
+    fd = float(np.abs(J - fd_J)[apart].max()) if apart.any() else 0.0
     return [
         CheckRow(kin.backend, "collision distances", ref, fd, REF_TOL),
         CheckRow(kin.backend, "collision verdicts", verdicts, None, 0.0),
@@ -247,8 +243,7 @@ def _frame_rows(
     T = at("fkine")(Q)
     J0, Je = at("jacob0")(Q), at("jacobe")(Q)
     rows.append(CheckRow(b, "fkine", _rel(T, at("fkine", ref)(Q)), None))
-    # J0 from FK: columns are (dp/dq, vee(dR/dq R^T)); Je the same in the end-effector frame
-    fd_J0 = np.swapaxes(_vee_rate(*_shifted(at("fkine"), Q, h), T[:, None], h), 1, 2)
+    fd_J0 = _fd_jacobians(at("fkine"), Q, T, h)  # Je the same in the end-effector frame
     rows.append(CheckRow(b, "jacob0", _rel(J0, at("jacob0", ref)(Q)), _rel(fd_J0, J0)))
     fd_Je = rotate_rows(T, fd_J0)
     rows.append(CheckRow(b, "jacobe", _rel(Je, at("jacobe", ref)(Q)), _rel(fd_Je, Je)))
@@ -337,10 +332,10 @@ def _tree_reference_rows(tree: Any, Q: np.ndarray) -> list[CheckRow]:
     return rows
 
 
-def _fd_jacobians(fkine_all: Any, Q: np.ndarray, T: np.ndarray, h: float) -> np.ndarray:
-    """(N, F, 6, n) base-frame Jacobians of every frame from central differences of the poses."""
-    rate = _vee_rate(*_shifted(fkine_all, Q, h), T[:, None], h)  # (N, n, F, 6)
-    return np.transpose(rate, (0, 2, 3, 1))
+def _fd_jacobians(fkine: Any, Q: np.ndarray, T: np.ndarray, h: float) -> np.ndarray:
+    """Base-frame Jacobians (N, 6, n), or (N, F, 6, n) of every frame of ``fkine_all``, from central
+    differences of the poses T (N, 4, 4) or (N, F, 4, 4): columns (dp/dq, vee(dR/dq R^T))."""
+    return np.moveaxis(_vee_rate(*_shifted(fkine, Q, h), T[:, None], h), 1, -1)  # rate (N, n, [F,] 6)
 
 
 def _all_rows(kin: Any, tree: Any, Q: np.ndarray) -> list[CheckRow]:

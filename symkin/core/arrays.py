@@ -84,16 +84,16 @@ def real_array(
     return out
 
 
-def finite_number(value: Any, name: str, minimum: float = 0.0, strict: bool = True) -> float:
-    """``value`` as a finite float > ``minimum`` (``>=`` when not ``strict``), else ParameterError."""
+def finite_number(
+    value: Any, name: str, minimum: float = 0.0, strict: bool = True, error: type[Exception] = ParameterError
+) -> float:
+    """``value`` as a finite float > ``minimum`` (``>=`` when not ``strict``), else ``error``."""
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+        raise error(f"{name} must be a number, got {value!r}") from None
     if not (math.isfinite(x) and (x > minimum if strict else x >= minimum)):
-        raise ParameterError(
-            f"{name} must be finite and {'>' if strict else '>='} {minimum:g}, got {value!r}"
-        )
+        raise error(f"{name} must be finite and {'>' if strict else '>='} {minimum:g}, got {value!r}")
     return x
 
 

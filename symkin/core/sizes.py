@@ -5,7 +5,7 @@ A size is checked before anything is allocated or any long work starts: :func:`c
 integer (a Python or NumPy integer, or a float with an integral value) within bounds, and
 :func:`room` refuses a request whose arrays would not fit in this machine's memory
 (:func:`stored`: nor on the disk of the store that keeps them); :func:`read_bounded` reads an
-input file only up to a size. They raise
+input file only up to a size (:func:`read_text`: a UTF-8 text file). They raise
 a :class:`~symkin.errors.SymkinError` subclass naming the size (ParameterError unless the caller
 passes its own), never ``MemoryError``, ``OverflowError`` or NumPy's "Maximum allowed size
 exceeded".
@@ -21,7 +21,7 @@ from typing import Any
 
 from symkin.errors import ParameterError, SymkinError
 
-__all__ = ["MAX_COUNT", "count", "memory_bytes", "room", "stored", "read_bounded", "human_bytes"]
+__all__ = ["MAX_COUNT", "count", "memory_bytes", "room", "stored", "read_bounded", "read_text", "human_bytes"]
 
 #: The largest count any size may take: beyond 2**53 integers are not exact as doubles, and
 #: no machine holds that many samples anyway.
@@ -120,3 +120,16 @@ def read_bounded(path: Any, limit: int, what: str, error: type[Exception] = Para
     if len(data) > limit:
         raise error(f"{what} is larger than {human_bytes(limit)}: not an input symkin reads")
     return data
+
+
+def read_text(path: Any, limit: int, what: str, error: type[Exception]) -> str:
+    """The text of the UTF-8 file at ``path`` read by :func:`read_bounded` (a byte-order mark
+    dropped, newlines as ``Path.read_text`` reads them): ``error`` naming ``what`` (``"URDF file
+    'arm.urdf'"``) when it cannot be read, is larger than ``limit`` bytes or is not UTF-8."""
+    try:
+        data = read_bounded(path, limit, "the file", OSError)  # named below
+        return data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} is not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        raise error(f"cannot read {what}: {getattr(exc, 'strerror', None) or exc}") from None

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import math
 import numbers
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from fractions import Fraction
@@ -43,6 +42,7 @@ import numpy as np
 from symkin.errors import ETSParseError, RobotError
 from symkin.model.ets import ET, ETS, Axis, Const
 from symkin.model.transform import angle_const as float_angle
+from symkin.model.transform import constant_ets
 
 __all__ = ["DHLink", "dh_args", "dh_file_args", "dh_table_args", "angle_const", "length_const", "robot_args"]
 
@@ -80,40 +80,19 @@ def angle_const(value: Any, what: str = "angle", tol: float = _SNAP_TOL) -> Cons
     A float within ``tol`` of ``k*pi/m`` with ``m <= 12`` becomes exactly that multiple of pi,
     else the exact decimal it prints as. Raises RobotError naming ``what`` for bad values.
     """
-    x = _real(value, what)
-    if isinstance(x, float):
-        return float_angle(x, tol)
-    return x if isinstance(x, Const) else Const(x)
+    exact = isinstance(value, (bool, numbers.Rational)) or not isinstance(value, numbers.Real)
+    if exact or not math.isfinite(value):  # text, Const, int, Fraction; or refused by Const.of
+        return length_const(value, what)
+    return float_angle(float(value), tol)
 
 
 def length_const(value: Any, what: str = "length") -> Const:
-    """An exact length: text/Const as given, ints and Fractions exact, floats as printed."""
-    x = _real(value, what)
-    if isinstance(x, float):
-        return Const(Fraction(repr(x)))
-    return x if isinstance(x, Const) else Const(x)
-
-
-def _real(value: Any, what: str) -> Const | Fraction | float:
-    """Normalise a user number: Const for text/Const, Fraction for exact numbers, float for floats."""
-    if isinstance(value, Const):
-        return value
-    if isinstance(value, str):
-        try:
-            return Const.of(value)
-        except ETSParseError as exc:
-            raise RobotError(f"{what}: {str(exc).splitlines()[0]}") from None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise RobotError(f"{what} must be a number or text like 'pi/2', not {type(value).__name__} {value!r}")
-    if isinstance(value, (numbers.Integral, Fraction)):
-        r = Fraction(int(value)) if isinstance(value, numbers.Integral) else value
-        if abs(r) > sys.float_info.max:
-            raise RobotError(f"{what} = {value} is beyond the range of a double")
-        return r
-    x = float(value)
-    if not math.isfinite(x):
-        raise RobotError(f"{what} is {x}: DH parameters must be finite")
-    return x
+    """An exact length: text/Const as given, ints and Fractions exact, floats as printed
+    (:meth:`Const.of`); RobotError naming ``what`` for anything else."""
+    try:
+        return Const.of(value)
+    except (ETSParseError, RobotError, TypeError) as exc:
+        raise RobotError(f"{what}: {str(exc).splitlines()[0]}") from None
 
 
 def _link_of(row: DHLink | Mapping[str, Any], j: int) -> DHLink:
@@ -172,26 +151,6 @@ def _link_ets(link: DHLink, j: int, modified: bool) -> list[ET]:
     return [e for e in seq if e.is_joint or not e.const.is_zero]
 
 
-def _const_ets(ets: ETS | ET | str | Sequence[ET] | None, what: str) -> list[ET]:
-    """A constant transform given as ETS, ET, list of ETs or ETS text; no joints allowed."""
-    if ets is None:
-        return []
-    if isinstance(ets, str):
-        try:
-            ets = ETS.parse(ets)
-        except ETSParseError as exc:
-            raise RobotError(f"{what}: {exc}") from None
-    elif isinstance(ets, ET):
-        ets = [ets]
-    out = list(ets)
-    for e in out:
-        if not isinstance(e, ET):
-            raise RobotError(f"{what} must be an ETS, ETS text or list of ET, got {type(e).__name__}")
-        if e.is_joint:
-            raise RobotError(f"{what} must be constant, but contains the joint {e}")
-    return [e for e in out if not e.const.is_zero]
-
-
 def robot_args(
     chain: Sequence[ET],
     name: str,
@@ -219,8 +178,8 @@ def dh_args(
     modified: bool = False,
     name: str = "robot",
     qlim: Any = None,
-    base: ETS | ET | str | Sequence[ET] | None = None,
-    tool: ETS | ET | str | Sequence[ET] | None = None,
+    base: Any = None,
+    tool: Any = None,
     configs: Mapping[str, Any] | None = None,
     qd_max: Any = None,
     source: str = "",
@@ -232,7 +191,8 @@ def dh_args(
 
     ``links``: DHLink or dicts with the same keys (plus ``type``: ``'R'``/``'P'``). ``qlim``
     (2, n) overrides the per-link limits; links without limits get the Robot defaults.
-    ``base``/``tool``: constant ETS (or ETS text) before the first and after the last link.
+    ``base``/``tool``: constant transforms before the first and after the last link, in any form
+    :meth:`symkin.Robot.with_tool` takes (ETS text, ``"x y z roll pitch yaw"``, a 4x4 matrix...).
     Joint names default to the links' ``name`` when every link has one.
     """
     if isinstance(links, (str, bytes, Mapping, DHLink)) or not isinstance(links, Sequence):
@@ -240,10 +200,10 @@ def dh_args(
     if not links:
         raise RobotError("a DH robot needs at least one link")
     rows = [_link_of(row, j) for j, row in enumerate(links)]
-    chain = _const_ets(base, "base")
+    chain = constant_ets(base, "base")
     for j, link in enumerate(rows):
         chain += _link_ets(link, j, modified)
-    chain += _const_ets(tool, "tool")
+    chain += constant_ets(tool, "tool")
     n = len(rows)
     if qlim is None and any(r.qlim is not None for r in rows):
         lim = []
@@ -254,17 +214,12 @@ def dh_args(
                 pair = tuple(r.qlim)
                 if len(pair) != 2:
                     raise RobotError(f"DH link {j}: qlim must be (lower, upper), got {r.qlim!r}")
-                lim.append((_limit(pair[0], j), _limit(pair[1], j)))
+                lim.append(tuple(length_const(v, f"DH link {j} qlim").value for v in pair))
         qlim = np.array(lim, dtype=float).T
     if joint_names is None and all(r.name for r in rows):
         joint_names = [str(r.name) for r in rows]
     source = source or ("modified" if modified else "standard") + f" DH table, {n} links"
     return robot_args(chain, name, qlim, configs, joint_names, qd_max, source)
-
-
-def _limit(value: Any, j: int) -> float:
-    x = _real(value, f"DH link {j} qlim")
-    return x.value if isinstance(x, Const) else float(x)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -276,17 +231,9 @@ _META = ("name", "source", "base", "tool", "qd_max")
 
 def dh_file_args(path: str | Path) -> dict[str, Any]:
     """The Robot arguments of a DH table file (format in the module docstring)."""
-    from symkin.core.sizes import read_bounded
+    from symkin.core.sizes import read_text
 
-    path = Path(path)
-    try:
-        data = read_bounded(path, DH_FILE_BYTES, "the file", OSError)  # named below
-        text = data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")  # as read_text reads it
-    except OSError as exc:
-        raise RobotError(f"cannot read DH table {str(path)!r}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        where = f"DH table {str(path)!r}"
-        raise RobotError(f"{where} is not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+    text = read_text(path, DH_FILE_BYTES, f"DH table {str(path)!r}", RobotError)
     return dh_table_args(text, str(path))
 
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import math
 import operator
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -25,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import finite_number
 from symkin.errors import GeometryError
 
 __all__ = [
@@ -56,13 +56,7 @@ def _vec3(value: Any, what: str) -> Vec3:
 
 
 def _radius(value: Any, what: str = "radius") -> float:
-    try:
-        r = float(value)
-    except (TypeError, ValueError):
-        raise GeometryError(f"{what} must be a number, got {value!r}") from None
-    if not math.isfinite(r) or r < 0:
-        raise GeometryError(f"{what} must be finite and >= 0, got {value!r}")
-    return r
+    return finite_number(value, what, 0.0, False, GeometryError)
 
 
 def as_index(value: Any, message: str) -> int:
@@ -311,10 +305,8 @@ def move_links(geometry: Geometry | None, moves: dict[str, np.ndarray]) -> Geome
         T = moves.get(s.link)
         if T is None:
             return s
-        pts = [tuple(T[:3, :3] @ np.array(p) + T[:3, 3]) for p in s.points]
-        if isinstance(s, Sphere):
-            return Sphere(pts[0], s.radius, s.link)
-        return Capsule(pts[0], pts[1], s.radius, s.link)
+        ends = {end: tuple(T[:3, :3] @ np.array(p) + T[:3, 3]) for (end, _), p in zip(s._ENDS, s.points)}
+        return dataclasses.replace(s, **ends)
 
     return Geometry(tuple(moved(s) for s in geometry.shapes), geometry.disabled, geometry.source)
 

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ConfigurationError, ParameterError
+from symkin.model.spatial import skew
 
 __all__ = [
     "NEAR_PI_L",
@@ -159,14 +160,6 @@ def gamma_of(R: np.ndarray, representation: str) -> np.ndarray:
     return angle_axis(R)  # the principal rotation vector, theta in [0, pi]
 
 
-def _skew_rows(g: np.ndarray) -> np.ndarray:
-    """[g]x (N, 3, 3) of vectors g (N, 3)."""
-    K = np.zeros((len(g), 3, 3))
-    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -g[:, 2], g[:, 1], -g[:, 0]
-    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = g[:, 2], -g[:, 1], g[:, 0]
-    return K
-
-
 def _exp_coefficients(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(c, c'/theta) of the inverse left Jacobian ``I - K/2 + c(theta) K^2`` of SO(3): ``c = (1 -
     (theta/2) cot(theta/2)) / theta^2`` and ``c'(theta)/theta = (theta^2 / sin^2(theta/2) + 2 theta
@@ -194,7 +187,7 @@ def omega_to_rates(gamma: np.ndarray, representation: str, what: str = "Jacobian
         th = np.linalg.norm(gamma, axis=-1)
         bad = (np.abs(np.sin(th / 2.0)) < _SINGULAR_TOL) & (th > 1.0)
         _raise_singular(bad, representation, "rotation angle", th, what)
-        K = _skew_rows(gamma)
+        K = skew(gamma)
         return np.eye(3) - K / 2.0 + _exp_coefficients(th)[0][:, None, None] * (K @ K)
     if representation == "eul":  # omega = (0, 0, 1) dphi + (-sphi, cphi, 0) dtheta + R[:, 2] dpsi
         s2 = np.sin(g2)
@@ -227,8 +220,8 @@ def rates_derivatives(gamma: np.ndarray, representation: str) -> np.ndarray:
     if representation == "exp":  # d/dr_k (I - K/2 + c K^2) = -E_k/2 + c (E_k K + K E_k) + (c'/th) r_k K^2
         th = np.linalg.norm(gamma, axis=-1)
         c, d = _exp_coefficients(th)
-        K = _skew_rows(gamma)
-        E = _skew_rows(np.eye(3))  # E[k] = [e_k]x
+        K = skew(gamma)
+        E = skew(np.eye(3))  # E[k] = [e_k]x
         EK = np.einsum("kab,Nbc->Nkac", E, K)
         KE = np.einsum("Nab,kbc->Nkac", K, E)
         KK = K @ K

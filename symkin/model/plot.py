@@ -121,11 +121,10 @@ def plot_robot(
     else:
         fig = ax.figure
     ax.plot(*origins.T, color="0.25", linewidth=3, solid_capstyle="round", zorder=1)
-    for T, revolute in joints:
+    for (T, revolute), e in zip(joints, (e for e in robot.ets if e.is_joint)):
         ax.scatter(
             *T[:3, 3], s=60, marker="o" if revolute else "s", color="#ff7f0e", depthshade=False, zorder=3
         )
-    for (T, _), e in zip(joints, (e for e in robot.ets if e.is_joint)):
         axis = T[:3, e.axis.index] * e.sign
         seg = np.array([T[:3, 3] - 0.06 * span * axis, T[:3, 3] + 0.06 * span * axis])
         ax.plot(*seg.T, color="#ff7f0e", linewidth=2.5)
@@ -157,10 +156,8 @@ def plot_robot(
             ends = [T[:3, :3] @ np.array(p) + T[:3, 3] for p in shape.points]
             points.append(_shape(ax, ends, shape.radius, "#d62728" if i in marked else "#1f77b4"))
     if env is not None:
-        for s in env.spheres:
-            points.append(_shape(ax, [np.array(s.center)], s.radius, "0.45"))
-        for c in env.capsules:
-            points.append(_shape(ax, [np.array(c.a), np.array(c.b)], c.radius, "0.45"))
+        for s in (*env.spheres, *env.capsules):
+            points.append(_shape(ax, [np.array(p) for p in s.points], s.radius, "0.45"))
         for b in env.boxes:
             points.append(_box(ax, b))
     allp = np.concatenate(points)

@@ -30,8 +30,8 @@ from symkin.errors import RobotError
 from symkin.model.dh import robot_args
 from symkin.model.ets import ET, Const
 from symkin.model.kinematics import const_matrix, et_matrix
-from symkin.model.transform import zyx_ets
-from symkin.model.urdf import axis_ets, snap_atan2, translation_ets
+from symkin.model.transform import rpy_ets, zyx_ets
+from symkin.model.urdf import axis_ets, snap_atan2
 
 __all__ = ["poe_args", "poe_of"]
 
@@ -105,7 +105,7 @@ def simplify_constants(chain: list[ET], tol: float = 0.0) -> list[ET]:
                 while j < len(chain) and not chain[j].is_joint and not chain[j].axis.is_rotation:
                     total[chain[j].axis.index] = total[chain[j].axis.index] + chain[j].const
                     j += 1
-                merged = translation_ets([Const() if abs(t.value) <= tol else t for t in total])
+                merged = rpy_ets([Const() if abs(t.value) <= tol else t for t in total])
                 changed |= [str(x) for x in merged] != [str(x) for x in chain[i:j]]
                 out += merged
                 i = j
@@ -154,7 +154,7 @@ def _screw_ets(S: list[Fraction], j: int, tol: float) -> list[ET]:
     p = [(w[1] * v[2] - w[2] * v[1]) / w2, (w[2] * v[0] - w[0] * v[2]) / w2, (w[0] * v[1] - w[1] * v[0]) / w2]
     p = [Fraction(0) if abs(c) <= tol else _tidy(c) for c in p]
     rot = [snap_atan2(e, tol) for e in axis_ets(w, j, revolute=True)]
-    return translation_ets(p) + rot + translation_ets([-c for c in p])
+    return rpy_ets([Const(c) for c in p]) + rot + rpy_ets([Const(-c) for c in p])
 
 
 def poe_args(
@@ -187,7 +187,7 @@ def poe_args(
     if arr.ndim != 2 or arr.shape[1] != 6 or arr.shape[0] == 0:
         raise RobotError(f"screws must have shape (n, 6), rows (omega, v), got shape {arr.shape}")
     Sx = _matrix(arr, None, "screws", tol)
-    home = translation_ets([Mx[0][3], Mx[1][3], Mx[2][3]]) + zyx_ets(R, tol)
+    home = rpy_ets([Const(row[3]) for row in Mx[:3]]) + zyx_ets(R, tol)
     joints: list[ET] = []
     for j, S in enumerate(Sx):
         joints += _screw_ets(S, j, tol)

@@ -58,24 +58,24 @@ def _resolve(spec: str | Robot | ETS) -> Robot:
     text = spec.strip()
     if text in list_robots():
         return load(text)
+    if "(" in text:
+        return Robot.from_ets(text, name="ets_robot")
     head, sep, frame = text.rpartition(":")  # path.urdf:FRAME, the chain to link FRAME
-    if sep and frame and "(" not in text and "/" not in frame and Path(head).suffix.lower() in _URDF_SUFFIXES:
+    if sep and frame and "/" not in frame and Path(head).suffix.lower() in _URDF_SUFFIXES:
         return Robot.from_urdf(Path(head).expanduser(), end_link=frame)
     path = Path(text).expanduser()
-    if "(" not in text and path.is_dir():
+    if path.is_dir():
         raise RobotError(
             f"{text!r} is a folder; give a DH table file, a URDF file, a built-in name or ETS text"
         )
-    if "(" not in text and not path.exists() and ("/" in text or os.sep in text or path.suffix):
+    if not path.exists() and ("/" in text or os.sep in text or path.suffix):
         raise RobotError(
             f"no such file: {text!r} (a robot is a built-in name, quoted ETS text, a DH table or a URDF file)"
         )
-    if "(" not in text and path.suffix.lower() in _URDF_SUFFIXES:
+    if path.suffix.lower() in _URDF_SUFFIXES:
         return Robot.from_urdf(path)
-    if "(" not in text and path.is_file():
+    if path.is_file():
         from symkin.model.robots import load_dh_file
 
         return load_dh_file(path)
-    if "(" in text:
-        return Robot.from_ets(text, name="ets_robot")
     return load(text)  # raises UnknownRobotError with the list of built-in robots and close matches

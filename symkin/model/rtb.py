@@ -27,7 +27,7 @@ import numpy as np
 
 from symkin.errors import RobotError
 from symkin.model.ets import ETS
-from symkin.model.transform import RTB_KINDS, SNAP_TOL, rtb_ets, rtb_kind, se3_ets, type_name
+from symkin.model.transform import RTB_KINDS, SNAP_TOL, is_rtb, rtb_ets, rtb_kind, se3_ets, type_name
 
 __all__ = ["rtb_args", "rtb_ets"]
 
@@ -67,11 +67,7 @@ def rtb_args(
         return _from_robot(obj, name, start, end, snap_tol)
     if start is not None or end is not None:
         raise RobotError("start/end choose links of a roboticstoolbox robot; an ETS has no links")
-    try:
-        is_ets = hasattr(obj, "isjoint") or all(hasattr(et, "isjoint") for et in obj)
-    except TypeError:
-        is_ets = False
-    if not is_ets:
+    if not is_rtb(obj):
         raise RobotError(
             f"from_rtb needs a roboticstoolbox robot, ETS or ET, not {type_name(obj)}; for symkin's own "
             "ETS use Robot.from_ets"

@@ -16,7 +16,7 @@ import numpy as np
 
 from symkin.core.pose import as_poses
 
-__all__ = ["velocity_transform", "wrench_transform", "joint_torques"]
+__all__ = ["skew", "velocity_transform", "wrench_transform", "joint_torques"]
 
 
 def _as_se3(T: Any) -> np.ndarray:
@@ -25,7 +25,8 @@ def _as_se3(T: Any) -> np.ndarray:
     return A[0] if single else A
 
 
-def _skew(p: np.ndarray) -> np.ndarray:
+def skew(p: np.ndarray) -> np.ndarray:
+    """The cross-product matrices ``[p]x`` (..., 3, 3) of vectors ``p`` (..., 3)."""
     S = np.zeros((*p.shape[:-1], 3, 3))
     S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -p[..., 2], p[..., 1], -p[..., 0]
     S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = p[..., 2], -p[..., 1], p[..., 0]
@@ -50,7 +51,7 @@ def velocity_transform(T: Any) -> np.ndarray:
     X = np.zeros((*A.shape[:-2], 6, 6))
     X[..., :3, :3] = R
     X[..., 3:, 3:] = R
-    X[..., :3, 3:] = _skew(t) @ R
+    X[..., :3, 3:] = skew(t) @ R
     return X
 
 

@@ -168,7 +168,7 @@ def _text_ets(text: str, what: str, snap_tol: float) -> list[ET]:
     return rpy_ets(consts[:3], consts[3:])
 
 
-def _is_rtb(obj: Any) -> bool:
+def is_rtb(obj: Any) -> bool:
     """A roboticstoolbox ET or ETS (duck-typed: no import of roboticstoolbox)."""
     first = obj
     if not hasattr(obj, "isjoint"):
@@ -194,7 +194,7 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
         out = list(value)
     elif isinstance(value, ET):
         out = [value]
-    elif isinstance(value, (list, tuple)) and value and all(isinstance(e, ET) for e in value):
+    elif isinstance(value, (list, tuple)) and all(isinstance(e, ET) for e in value):  # [] too
         out = list(value)
     elif isinstance(value, np.ndarray) or (
         isinstance(value, (list, tuple))
@@ -202,7 +202,7 @@ def constant_ets(value: Any, what: str = "transform", snap_tol: float = SNAP_TOL
         and all(isinstance(r, (list, tuple)) for r in value)
     ):
         out = se3_ets(value, what, snap_tol)
-    elif _is_rtb(value):
+    elif is_rtb(value):
         chain, _ = rtb_ets(value, snap_tol)
         out = chain
     elif isinstance(getattr(value, "A", None), (np.ndarray, list)):  # spatialmath SE3: the pose rule

@@ -53,7 +53,7 @@ from typing import Any
 from xml.etree import ElementTree
 from xml.parsers import expat
 
-from symkin.core.sizes import read_bounded
+from symkin.core.sizes import read_text
 from symkin.errors import URDFError
 from symkin.model.ets import ET, ETS, Axis, Const, surd
 from symkin.model.slots import Segment, Slot
@@ -66,7 +66,6 @@ __all__ = [
     "joint_limits",
     "urdf_args",
     "axis_ets",
-    "translation_ets",
     "atan2_const",
     "snap_angle",
     "snap_atan2",
@@ -106,11 +105,6 @@ def atan2_const(sy: Fraction, sx: Fraction) -> Const:
         return Const(atan2=(sy, sx))
     b = base if sx > 0 else 1 - base  # first or second quadrant
     return Const.pi_times(b if sy > 0 else -b)
-
-
-def translation_ets(p: Sequence[Const | Fraction]) -> list[ET]:
-    """``tx(px) ty(py) tz(pz)`` without the zero terms."""
-    return rpy_ets([v if isinstance(v, Const) else Const(Fraction(v)) for v in p])
 
 
 def axis_ets(u: Sequence[Fraction], joint: int, revolute: bool) -> list[ET]:
@@ -179,16 +173,7 @@ def xml_numbers(
     cells = text.split()
     if len(cells) != count:
         raise URDFError(f"{what} must have {count} numbers, got {text!r}")
-    values = [_number(c, what) for c in cells]
-    for cell, v in zip(cells, values):
-        if bound is not None and abs(v) > bound:
-            shown = cell if len(cell) <= 40 else cell[:37] + "..."
-            limit = f"{bound:g}".replace("e+", "e")
-            raise URDFError(
-                f"{what} contains {shown!r}; URDF lengths, angles and mimic factors must be within "
-                f"+-{limit} (an angle beyond it has no meaningful double value)"
-            )
-    return values
+    return [_number(c, what, bound) for c in cells]
 
 
 #: The largest |value| of a URDF length or angle (origin xyz and rpy, mimic multiplier and offset),
@@ -238,8 +223,8 @@ _DECIMAL = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
 _MAX_NUMBER_CHARS = 1000
 
 
-def _number(cell: str, what: str) -> Fraction:
-    """One exact, finite number from URDF text (the decimal as written)."""
+def _number(cell: str, what: str, bound: float | None = None) -> Fraction:
+    """One exact, finite number from URDF text (the decimal as written), within +-``bound`` if given."""
     shown = cell if len(cell) <= 40 else cell[:37] + "..."
     if cell.lower().lstrip("+-") in ("nan", "inf", "infinity"):
         raise URDFError(f"{what} contains {shown!r}: numbers must be finite")
@@ -253,6 +238,12 @@ def _number(cell: str, what: str) -> Fraction:
     value = Fraction(cell)
     if abs(value) > sys.float_info.max:
         raise URDFError(f"{what} contains {shown!r}, beyond the range of a double (about 1.8e308)")
+    if bound is not None and abs(value) > bound:
+        limit = f"{bound:g}".replace("e+", "e")
+        raise URDFError(
+            f"{what} contains {shown!r}; URDF lengths, angles and mimic factors must be within "
+            f"+-{limit} (an angle beyond it has no meaningful double value)"
+        )
     return value
 
 
@@ -349,18 +340,8 @@ def load_xml(path_or_xml: str | Path) -> tuple[ElementTree.Element, str]:
     ):
         path: Path | None = Path(path_or_xml)
         shown = repr(str(path)) if len(str(path)) <= 200 else repr(str(path)[:197] + "...")
-        try:  # a byte-order mark is allowed; newlines as read_text reads them
-            data = read_bounded(path, URDF_FILE_BYTES, "the file", OSError)  # named below
-            text = data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
-        except UnicodeDecodeError as exc:
-            raise URDFError(
-                f"URDF file {shown} is not UTF-8 text: {exc.reason} at byte {exc.start}"
-            ) from None
-        except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
-            raise URDFError(
-                f"cannot read URDF file {shown}: {getattr(exc, 'strerror', None) or exc}"
-            ) from None
         where = f"URDF file {shown}"
+        text = read_text(path, URDF_FILE_BYTES, where, URDFError)  # a byte-order mark is allowed
         if path.name.lower().endswith(".xacro"):  # even one without macros: read the expanded file
             raise _xacro_error(where, "its name ends in .xacro", path)
     elif isinstance(path_or_xml, str):

@@ -151,3 +151,18 @@ def test_read_bounded_reads_a_file_up_to_its_bound(tmp_path):
     assert read_bounded(path, 100, "f") == b"x" * 100
     with pytest.raises(ParameterError, match="f is larger than 99 B"):
         read_bounded(path, 99, "f")
+
+
+def test_read_text_reads_utf8_text_as_read_text_does_and_names_the_file_otherwise(tmp_path):
+    from symkin.core.sizes import read_text
+
+    path = tmp_path / "f.txt"
+    path.write_bytes("\ufeffa\r\nb\rc°\n".encode())
+    assert read_text(path, 100, "file 'f.txt'", GeometryError) == "a\nb\nc°\n"  # BOM dropped
+    with pytest.raises(GeometryError, match=r"^cannot read file 'f.txt': the file is larger than 4 B"):
+        read_text(path, 4, "file 'f.txt'", GeometryError)
+    path.write_bytes(b"ok \xff")
+    with pytest.raises(GeometryError, match=r"^file 'f.txt' is not UTF-8 text: invalid start byte at byte 3"):
+        read_text(path, 100, "file 'f.txt'", GeometryError)
+    with pytest.raises(GeometryError, match=r"^cannot read file 'g': No such file"):
+        read_text(tmp_path / "g", 100, "file 'g'", GeometryError)
