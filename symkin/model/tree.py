@@ -180,10 +180,11 @@ class Tree(NumericFrames):
         }
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickle the fields (and cached values) without the memoised frame views."""
+        """Pickle the fields (and cached values) without the memoised frame views, collision layout
+        and numeric kernel (rebuilt on first use)."""
         state = dict(self.__dict__)
-        state.pop("_frame_views", None)
-        state.pop("_collision_layout", None)
+        for key in ("_frame_views", "_collision_layout", "_num"):
+            state.pop(key, None)
         return state
 
     # -- plain attributes ------------------------------------------------------------------
