@@ -33,10 +33,9 @@ from dataclasses import dataclass
 import sympy as sp
 
 from symkin.core.names import c_string, comment_safe, identifier
-from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
 from symkin.emit.printers import CPrinter, MathModulePrinter, NumPyPrinter
 from symkin.emit.templates import render
-from symkin.symbolic.analytic_ik import AnalyticIK, Step, given_symbols, pose_symbols
+from symkin.symbolic.analytic_ik import AnalyticIK, Step, cs_names, given_symbols, pose_symbols
 from symkin.symbolic.cse import floatify
 from symkin.symbolic.ik_geometry import is_zero, random_point, same_value, value_at
 
@@ -47,6 +46,32 @@ BACKEND_DIALECT = {"c": "c", "numpy": "numpy", "casadi": "python"}
 
 def ik_prefix(robot_name: str) -> str:
     return f"symkin_{identifier(robot_name)}_ik"
+
+
+@dataclass
+class Out:
+    lines: list[str]
+    depth: int
+
+    def emit(self, text: str) -> None:
+        self.lines.append("    " * self.depth + text)
+
+
+def cse_lines(exprs: list[sp.Expr], prefix: str) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    flat = [floatify(e) for e in exprs]
+    repl, reduced = sp.cse(flat, symbols=sp.numbered_symbols(prefix), order="none")
+    return list(repl), list(reduced)
+
+
+def used_later(plan: AnalyticIK) -> list[set[str]]:
+    """Names of the symbols each step's successors use."""
+    used: list[set[str]] = []
+    acc: set[str] = set()
+    for st in reversed(plan.steps):
+        used.append(set(acc))
+        for _, e in st.exprs:
+            acc |= {str(s) for s in e.free_symbols}
+    return used[::-1]
 
 
 # -- mirrored branches (the C body) ------------------------------------------------------------
