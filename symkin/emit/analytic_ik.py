@@ -1,5 +1,6 @@
 """Lower a derived closed form (:class:`symkin.symbolic.analytic_ik.AnalyticIK`) to C, NumPy or
-plain Python through the templates ``templates/{c,numpy,python}/analytic_ik*.j2``.
+plain Python through the templates ``templates/c/analytic_ik*.j2`` and ``templates/python/analytic_ik.py.j2``
+(both Python dialects).
 
 The body is a nest of blocks, one per step: the step's coefficients (CSE'd), then the angle, its
 cosine and sine (from the subproblem's own atan2/acos arguments, no extra trig calls), and, for a
@@ -478,4 +479,6 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         files[f"{prefix}_pymodule.c"] = render("c/analytic_ik_module.c.j2", module=module, **context)
         return files
     module = f"{prefix}"
-    return {f"{module}.py": render(f"{dialect}/analytic_ik.py.j2", module=module, **context)}
+    return {
+        f"{module}.py": render("python/analytic_ik.py.j2", module=module, numpy=dialect == "numpy", **context)
+    }
