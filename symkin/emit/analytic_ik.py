@@ -246,11 +246,15 @@ def _call(out: Out, lang: _Lang, st: Step, args: list[str], need_cs: bool = True
 
 def body(plan: AnalyticIK, dialect: str) -> str:
     """The statements of ``raw`` (NumPy, Python) or ``body_`` (C) between reading the pose and the
-    end: every step in order, a loop over the sign of each two-branch step, one leaf per slot."""
+    end: the pose the steps solve for when the arm's constant ends were moved to the target
+    (``plan.pose_map``), every step in order, a loop over the sign of each two-branch step, one leaf
+    per slot."""
     lang = _LANGS[dialect]
     c = lang.c
     flag_decl = lang.decl.replace("double", "int")
     out = Out([], 1)
+    for sym, e in plan.pose_map:
+        out.emit(lang.decl.format(sym, lang.printer().doprint(floatify(e))))
     later = used_later(plan)
     steps = plan.steps
     flag = "0"
@@ -421,20 +425,6 @@ def _emit_region(
     return flag
 
 
-def _fk_code(plan: AnalyticIK, lang: _Lang) -> tuple[list[str], list[str]]:
-    """Straight-line code for the 3x4 pose of q (for verifying flagged candidates)."""
-    pr = lang.printer()
-    temps, values = cse_lines(list(plan.fk), "f")
-    return [lang.decl.format(sym, pr.doprint(e)) for sym, e in temps], [pr.doprint(e) for e in values]
-
-
-def _pose_lines(plan: AnalyticIK, lang: _Lang) -> list[str]:
-    """The pose the steps solve for from the target as given, when the arm's constant ends were
-    moved to the target (``plan.pose_map``; no lines otherwise)."""
-    pr = lang.printer()
-    return ["    " + lang.decl.format(sym, pr.doprint(floatify(e))) for sym, e in plan.pose_map]
-
-
 def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str) -> dict[str, str]:
     """The generated files of the closed form for ``backend`` ("c", "numpy" or "casadi", the last
     rendered as plain Python)."""
@@ -447,7 +437,9 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
     pose = [(str(R[i, j]), i * 4 + j) for i in range(3) for j in range(3)] + [
         (str(p[i]), i * 4 + 3) for i in range(3)
     ]
-    fk_lines, fk_values = _fk_code(plan, _LANGS[dialect])
+    lang = _LANGS[dialect]
+    pr = lang.printer()
+    fk_temps, fk_values = cse_lines(list(plan.fk), "f")  # the 3x4 pose of q, to verify flagged candidates
     joints = [(f"q{j}", f"c{j}", f"s{j}", plan.revolute[j]) for j in range(plan.n)]
     context = {
         "prefix": prefix,
@@ -456,9 +448,9 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         "check": plan.check,
         "revolute": [int(r) for r in plan.revolute],
         "pose": pose,
-        "body": "\n".join([*_pose_lines(plan, _LANGS[dialect]), body(plan, dialect)]),
-        "fk_lines": fk_lines,
-        "fk_values": fk_values,
+        "body": body(plan, dialect),
+        "fk_lines": [lang.decl.format(sym, pr.doprint(e)) for sym, e in fk_temps],
+        "fk_values": [pr.doprint(e) for e in fk_values],
         "joints": joints,
         "robot": identifier(name),
         "name_literal": c_string(name) if dialect == "c" else ascii(name),
