@@ -33,7 +33,6 @@ from symkin.core.progress import bar
 from symkin.core.version import __version__
 from symkin.geometry.pairs import Layout
 from symkin.model.geometry import Capsule
-from symkin.model.tree import joint_matrices
 
 __all__ = ["proved_apart", "reach_sphere", "reach_everywhere"]
 
@@ -83,16 +82,9 @@ def _lipschitz(tree: Any, path: list[int], reach: list[float], extra: float, n: 
 def _relative_walk(tree: Any, path: list[int], Q: np.ndarray) -> np.ndarray:
     """(N, 4, 4) pose of the last link of ``path`` (deepest first) in the frame of the link the
     path hangs from, at joint values Q (N, n)."""
-    num = tree._num
     T = np.broadcast_to(np.eye(4), (Q.shape[0], 4, 4))
     for k in reversed(path):
-        seg = tree.segments[k]
-        T = T @ num.A[k]
-        if seg.slot is not None:
-            s = tree.slots[seg.slot]
-            theta = float(s.multiplier) * Q[:, s.joint] + float(s.offset)
-            T = T @ joint_matrices(num.axis[k], not s.revolute, num.sign[k] * theta)
-        T = T @ num.B[k]
+        T = T @ tree._num.transform(Q, k)
     return T
 
 

@@ -44,6 +44,7 @@ __all__ = [
     "FrameMethods",
     "frame_and_rows",
     "path_hessian",
+    "selection",
     "chain_hessian",
     "rotate_rows",
     "hessian_to_ee",
@@ -64,6 +65,15 @@ __all__ = [
 ]
 
 
+def selection(A: np.ndarray) -> np.ndarray | None:
+    """The joint each slot moves when weights ``A`` (s, n) only pick distinct joints with weight
+    1 (no mimic slot), else None."""
+    rows, cols = np.nonzero(A)
+    if len(rows) == A.shape[0] and (A[rows, cols] == 1.0).all() and len(set(cols)) == len(cols):
+        return cols
+    return None
+
+
 def path_hessian(Jv: np.ndarray, Jw: np.ndarray, A: np.ndarray) -> np.ndarray:
     """Hessian (N, n, 6, n) of a frame from the geometric columns Jv, Jw (N, s, 3) of the s joint
     slots on its path (base first; Jw = 0 for a prismatic slot): per pair of slots a, b, b at or
@@ -76,6 +86,11 @@ def path_hessian(Jv: np.ndarray, Jw: np.ndarray, A: np.ndarray) -> np.ndarray:
     Hv = np.where(lower, X, np.swapaxes(X, 1, 2))
     Hw = np.where(lower, Y, 0.0)
     Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
+    cols = selection(A)
+    if cols is not None:  # slot i is joint cols[i]
+        H = np.zeros((Hs.shape[0], A.shape[1], 6, A.shape[1]))
+        H[np.ix_(range(Hs.shape[0]), cols, range(6), cols)] = np.swapaxes(Hs, 2, 3)
+        return H
     return np.einsum("bk,Nbar,ai->Nkri", A, Hs, A)
 
 

@@ -29,7 +29,7 @@ from symkin.core.pose import as_pose
 from symkin.errors import RobotError
 from symkin.model.dh import robot_args
 from symkin.model.ets import ET, Const
-from symkin.model.kinematics import NumericKinematics
+from symkin.model.kinematics import const_matrix, et_matrix
 from symkin.model.transform import zyx_ets
 from symkin.model.urdf import axis_ets, snap_atan2, translation_ets
 
@@ -195,7 +195,9 @@ def poe_args(
     chain = simplify_constants(chain, tol)
     source = source or f"product of exponentials ({frame} form), {len(Sx)} screws"
     args = robot_args(chain, name, qlim, configs, joint_names, qd_max, source)
-    T0 = NumericKinematics.of(args["ets"]).fkine(np.zeros((1, len(Sx))))[0]
+    T0 = np.eye(4)
+    for e in args["ets"]:  # the pose at q = 0
+        T0 = T0 @ (et_matrix(e.axis, 0.0) if e.is_joint else const_matrix(e.axis, e.const))
     if np.abs(T0 - Mf).max() > _CHECK:  # guard against a decomposition bug: T(0) must be M
         raise RobotError(
             f"internal error: the ETS of M does not reproduce M (max error {np.abs(T0 - Mf).max():.3g})"

@@ -26,19 +26,13 @@ import numpy as np
 from symkin.core.arrays import MAX_JOINT_VALUE, as_batch, axes_rows, real_array, sample_q  # noqa: F401 - generated C imports axes_rows here
 from symkin.core.names import identifier
 from symkin.errors import ConfigurationError, FrameError, RobotError
-from symkin.model.derivatives import chain_derivative
-from symkin.model.differential import (  # noqa: F401 - re-exported
-    FrameMethods,
-    chain_hessian,
-    cond_of,
-    jacob_dot_of,
-    rotate_rows,
-    space_jacobian,
-)
+from symkin.model.differential import cond_of, jacob_dot_of, space_jacobian  # noqa: F401 - re-exported
 from symkin.model.ets import ETS
-from symkin.model.frames import ChainTables, frame_index, frame_jacobian
+from symkin.model.frames import frame_index
 from symkin.model.geometry import Geometry, check_geometry, move_links
-from symkin.model.kinematics import NumericKinematics, const_matrix
+from symkin.model.kinematics import const_matrix
+from symkin.model.numeric import NumericFrames, NumericKinematics
+from symkin.model.slots import chain_segments
 
 __all__ = [
     "Robot",
@@ -72,7 +66,7 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Robot(FrameMethods):
+class Robot(NumericFrames):
     """A serial manipulator described by an ETS.
 
     Attributes:
@@ -313,11 +307,12 @@ class Robot(FrameMethods):
 
     @cached_property
     def _num(self) -> NumericKinematics:
-        return NumericKinematics.of(self.ets)
+        """The numeric kernel (:mod:`symkin.model.numeric`) of the chain's segments."""
+        return NumericKinematics.of(*chain_segments(self.ets, self.joint_names), self.n)
 
-    @cached_property
-    def _chain(self) -> ChainTables:
-        return ChainTables.of(self.ets)
+    def _segment(self, frame: Any) -> int:
+        """Segment k is link frame k; segment n the end effector."""
+        return self.n if frame is None else self.frame_name(frame)
 
     def check_q(self, q: Any, limits: bool = False) -> np.ndarray:
         """``q`` as a float array after validation; with ``limits``, reject values outside qlim."""
@@ -354,87 +349,15 @@ class Robot(FrameMethods):
         """``frame`` as the index k of a link frame (FrameError naming the valid range)."""
         return frame_index(frame, self.n, self.name)
 
-    # -- numeric reference kinematics (Part 1 eqs 1, 14-16, 31-34) ------------------------
-    def fkine(self, q: Any, frame: int | None = None) -> np.ndarray:
-        """End-effector pose in the base frame 0T_e (eq 1): (4, 4) or (N, 4, 4).
-
-        ``frame=k``: the pose of link frame k instead (``link_poses(q)[k]``, the frame right after
-        the k-th joint along the chain).
-        """
-        Q, single = self._batch(q)
-        T = self._num.fkine(Q) if frame is None else self._num.link_poses(Q)[:, self.frame_name(frame)]
-        return T[0] if single else T
-
+    # -- numeric reference kinematics (Part 1 eqs 1, 14-16, 31-34; NumericFrames) -----------
     def link_poses(self, q: Any) -> np.ndarray:
         """Base-frame pose of each link frame (right after its joint, eq 5), (n, 4, 4) or (N, n, 4, 4).
 
-        Links are in chain order (the k-th joint met from the base).
+        Links are in chain order (the k-th joint met from the base); ``fkine(q, frame=k)`` is link k's.
         """
         Q, single = self._batch(q)
-        T = self._num.link_poses(Q)
+        T = self._num.poses(Q)[:, 1 : self.n + 1]
         return T[0] if single else T
-
-    def jacob0(self, q: Any, frame: int | None = None) -> np.ndarray:
-        """Base-frame manipulator Jacobian (eqs 31-34): (6, n) or (N, 6, n), rows (v, omega).
-
-        v is the velocity of the end-effector origin expressed in the base frame. For the space
-        Jacobian of Lynch and Park's Modern Robotics (rows (omega, v), v of the point at the base
-        origin) see :meth:`jacobs`. ``frame=k``: the Jacobian of link frame k (the frame right after
-        the k-th joint along the chain, as :meth:`link_poses`); columns of later joints are 0.
-        """
-        Q, single = self._batch(q)
-        if frame is None:
-            J = self._num.jacob0(Q)
-        else:
-            J = frame_jacobian(self._num.link_poses(Q), self.frame_name(frame), self._chain)
-        return J[0] if single else J
-
-    def jacobe(self, q: Any, frame: int | None = None) -> np.ndarray:
-        """End-effector-frame Jacobian (eq 16): ``blkdiag(R^T, R^T) J0``, rows (v, omega).
-
-        For the body Jacobian of Modern Robotics (rows (omega, v)) see :meth:`jacobb`. ``frame=k``:
-        the Jacobian of link frame k expressed in that frame.
-        """
-        Q, single = self._batch(q)
-        if frame is None:
-            Je = rotate_rows(*self._num.fkine_jacob0(Q))
-        else:
-            Je = frame_jacobian(self._num.link_poses(Q), self.frame_name(frame), self._chain, ee=True)
-        return Je[0] if single else Je
-
-    def fkine_jacob0(self, q: Any, frame: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Pose and base-frame Jacobian from one pass: ((4, 4), (6, n)) or batched."""
-        Q, single = self._batch(q)
-        if frame is not None:
-            k, L = self.frame_name(frame), self._num.link_poses(Q)
-            T, J = L[:, k], frame_jacobian(L, k, self._chain)
-        else:
-            T, J = self._num.fkine_jacob0(Q)
-        return (T[0], J[0]) if single else (T, J)
-
-    def jacob0_hessian0(self, q: Any, frame: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Base-frame Jacobian and Hessian from one pass: ((6, n), (n, 6, n)) or batched. ``frame=k``:
-        of link frame k, the Hessian from the Jacobian's columns (MMC paper eq 20)."""
-        Q, single = self._batch(q)
-        if frame is not None:
-            J = self.jacob0(Q, frame)
-            H = chain_hessian(J, self._chain.order)
-        else:
-            _, J, H = self._num.jacob0_hessian0(Q)
-        return (J[0], H[0]) if single else (J, H)
-
-    def hessian0(self, q: Any, frame: int | None = None) -> np.ndarray:
-        """Base-frame manipulator Hessian (MMC paper eq 20): (n, 6, n) or (N, n, 6, n), H[i] = dJ0/dq_i."""
-        if frame is not None:
-            return self.jacob0_hessian0(q, frame)[1]
-        Q, single = self._batch(q)
-        H = self._num.hessian0(Q)
-        return H[0] if single else H
-
-    def _derivative(self, Q: np.ndarray, order: int, frame: int | None) -> np.ndarray:
-        """Order ``order`` >= 3 of :meth:`derivative` from J0's columns (Part 2's product rule,
-        :func:`symkin.model.derivatives.chain_derivative`)."""
-        return chain_derivative(self.jacob0(Q, frame), self._chain.order, order)
 
     def ik(self, Tep: Any, frame: int | None = None, **kwargs: Any) -> Any:
         """Numerical IK on the numeric reference (slow; compile for speed): :func:`symkin.runtime.ik.ik`;

@@ -1,6 +1,6 @@
 """The parts of a kinematic tree: segments (the constant ETS and the joint slot from a link to
-its child) and joint slots (a slot's joint, with mimic multiplier and offset), and the Hessian of
-one frame from the geometric Jacobian columns of the slots on its path."""
+its child) and joint slots (a slot's joint, with mimic multiplier and offset), and a serial chain's
+segments and slots (:func:`chain_segments`)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-import numpy as np
-
-from symkin.model.differential import path_hessian
 from symkin.model.ets import ET
 
-__all__ = ["Segment", "Slot", "hessian_of_columns"]
+__all__ = ["Segment", "Slot", "chain_segments"]
 
 
 @dataclass(frozen=True)
@@ -47,10 +44,22 @@ class Slot:
         return self.mimics != self.name
 
 
-def hessian_of_columns(Jv: np.ndarray, Jw: np.ndarray, slots: Sequence[Slot], n: int) -> np.ndarray:
-    """Hessian (N, n, 6, n) from the geometric columns Jv, Jw (N, s, 3) of the slots on one path
-    (base first; Jw = 0 for a prismatic slot), contracted onto the joints they follow."""
-    A = np.zeros((len(slots), n))
-    for i, sl in enumerate(slots):
-        A[i, sl.joint] = float(sl.multiplier)
-    return path_hessian(Jv, Jw, A)
+def chain_segments(
+    ets: Sequence[ET], joint_names: Sequence[str], frame: str = "ee"
+) -> tuple[tuple[Segment, ...], tuple[Slot, ...]]:
+    """The segments and slots of a serial chain ``ets``: one segment per joint (the constant
+    transforms before it, then the joint; its link ``link<k>``, k along the chain from 1), then a
+    fixed one to ``frame`` with the constants after the last joint."""
+    segments: list[Segment] = []
+    slots: list[Slot] = []
+    consts: list[ET] = []
+    for e in ets:
+        if not e.is_joint:
+            consts.append(e)
+            continue
+        k, name = len(slots), joint_names[e.joint]  # type: ignore[index]
+        segments.append(Segment(name, k - 1, f"link{k + 1}", (*consts, ET(e.axis, joint=k, flip=e.flip)), k))
+        slots.append(Slot(name, k, e.joint, Fraction(1), Fraction(0), e.is_revolute, name))  # type: ignore[arg-type]
+        consts = []
+    segments.append(Segment(f"{frame}_fixed", len(segments) - 1, frame, tuple(consts)))
+    return tuple(segments), tuple(slots)

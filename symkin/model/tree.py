@@ -4,13 +4,8 @@ A :class:`Tree` is a set of :class:`Segment` s (one per URDF joint on a path to 
 an exact ETS fragment from its parent link to its child link, walked depth first. Movable
 segments are :class:`Slot` s; each is driven by one joint of ``q`` as ``theta = m q_j + c``
 (``m = 1, c = 0`` except for mimic joints). Numeric reference kinematics (numpy only) are methods
-of :class:`Tree`; every method takes ``q`` of shape (n,) or a batch (N, n).
-
-The Jacobian of frame f in the base frame, rows (v, omega), has for each slot a on the path to f
-the column ``(w_a x (p_f - p_a) ; w_a)`` (revolute) or ``(w_a ; 0)`` (prismatic), with ``w_a``
-the slot's signed axis and ``p_a`` its origin (Haviland and Corke, Manipulator Differential
-Kinematics, Part 1, IEEE RAM 2023, eqs 31-34, frame f in place of the end effector), added
-``m_a`` times into joint ``j_a``'s column (the chain rule); joints off the path have zero columns.
+of :class:`Tree`, on the kernel a chain uses too (:mod:`symkin.model.numeric`); every method takes
+``q`` of shape (n,) or a batch (N, n).
 """
 
 from __future__ import annotations
@@ -21,7 +16,6 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from fractions import Fraction
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -30,66 +24,20 @@ import numpy as np
 
 from symkin.core.names import identifier
 from symkin.errors import RobotError, URDFError
-from symkin.model.derivatives import path_derivative
-from symkin.model.differential import FrameMethods, rotate_rows
 from symkin.model.ets import ET, ETS
 from symkin.model.frames import frame_position
 from symkin.model.geometry import Geometry, check_geometry, rename_links
-from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
+from symkin.model.numeric import NumericFrames, NumericKinematics
 from symkin.model.robot import Robot
-from symkin.model.slots import Segment, Slot, hessian_of_columns  # noqa: F401 - Segment, Slot re-exported
+from symkin.model.slots import Segment, Slot, chain_segments
 
 __all__ = ["Tree", "Segment", "Slot", "frame_position", "as_tree", "robot_of"]
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
 
 
-def joint_matrices(axis: int, prismatic: bool, x: np.ndarray) -> np.ndarray:
-    """(N, 4, 4) elementary transforms about/along ``axis`` by ``x`` (N,)."""
-    M = np.zeros((len(x), 4, 4))
-    M[:, range(4), range(4)] = 1.0
-    if prismatic:
-        M[:, axis, 3] = x
-    else:
-        j, k = ROT_SLICES[axis]
-        c, s = np.cos(x), np.sin(x)
-        M[:, j, j] = M[:, k, k] = c
-        M[:, j, k], M[:, k, j] = -s, s
-    return M
-
-
 @dataclass(frozen=True, eq=False)
-class _Numeric:
-    """Per segment: constants before (A) and after (B) the joint, its axis index, sign, kind."""
-
-    A: np.ndarray  # (S, 4, 4)
-    B: np.ndarray  # (S, 4, 4)
-    axis: tuple[int, ...]
-    sign: tuple[float, ...]
-
-    @classmethod
-    def of(cls, segments: Sequence[Segment]) -> _Numeric:
-        A, B, axis, sign = [], [], [], []
-        for seg in segments:
-            before, after, joint = np.eye(4), np.eye(4), None
-            for e in seg.ets:
-                if e.is_joint:
-                    joint = e
-                    continue
-                M = const_matrix(e.axis, e.const)
-                if joint is None:
-                    before = before @ M
-                else:
-                    after = after @ M
-            A.append(before)
-            B.append(after)
-            axis.append(joint.axis.index if joint is not None else 0)
-            sign.append(float(joint.sign) if joint is not None else 1.0)
-        return cls(np.array(A).reshape(-1, 4, 4), np.array(B).reshape(-1, 4, 4), tuple(axis), tuple(sign))
-
-
-@dataclass(frozen=True, eq=False)
-class Tree(FrameMethods):
+class Tree(NumericFrames):
     """A kinematic tree with named frames (build with :meth:`from_urdf`).
 
     Attributes:
@@ -172,31 +120,18 @@ class Tree(FrameMethods):
         chain is a tree with one end frame. One segment per joint (the constant transforms before
         it, then the joint; its link ``link<k>``, k along the chain from 1), then a fixed one to
         ``frame``. Same joints, names, limits and kinematics; :meth:`chain` gives the ETS back."""
-        segments: list[Segment] = []
-        slots: list[Slot] = []
-        consts: list[ET] = []
-        for e in robot.ets:
-            if not e.is_joint:
-                consts.append(e)
-                continue
-            k, name = len(slots), robot.joint_names[e.joint]  # type: ignore[index]
-            segments.append(
-                Segment(name, k - 1, f"link{k + 1}", (*consts, ET(e.axis, joint=k, flip=e.flip)), k)
-            )
-            slots.append(Slot(name, k, e.joint, Fraction(1), Fraction(0), e.is_revolute, name))  # type: ignore[arg-type]
-            consts = []
-        links = {base_link, *(seg.link for seg in segments)}
+        segments, slots = chain_segments(robot.ets, robot.joint_names, frame)
+        links = {base_link, *(seg.link for seg in segments[:-1])}
         if not isinstance(frame, str) or frame in links:
             raise RobotError(
                 f"the end frame must be a name other than the links {sorted(links)}, not {frame!r}"
             )
-        segments.append(Segment(f"{frame}_fixed", len(segments) - 1, frame, tuple(consts)))
         qd = robot.qd_max
         return cls(
             name=robot.name,
             base_link=base_link,
-            segments=tuple(segments),
-            slots=tuple(slots),
+            segments=segments,
+            slots=slots,
             frames=(frame,),
             frame_segments=(len(segments) - 1,),
             joint_names=robot.joint_names,
@@ -407,83 +342,19 @@ class Tree(FrameMethods):
 
     within_limits = Robot.within_limits
 
-    # -- numeric reference kinematics ------------------------------------------------------
+    # -- numeric reference kinematics (symkin.model.numeric) --------------------------------
     @cached_property
-    def _num(self) -> _Numeric:
-        return _Numeric.of(self.segments)
+    def _num(self) -> NumericKinematics:
+        return NumericKinematics.of(self.segments, self.slots, self.n)
+
+    def _segment(self, frame: Any) -> int:
+        return self.frame_segments[self.frame_position(frame)]
 
     def _walk(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Link poses L (N, S, 4, 4) after each segment and joint frames P (N, S, 4, 4) just
         before each segment's joint, depth first."""
-        num, N = self._num, Q.shape[0]
-        S = len(self.segments)
-        L = np.empty((N, S, 4, 4))
-        P = np.empty((N, S, 4, 4))
-        for k, seg in enumerate(self.segments):
-            P[:, k] = num.A[k] if seg.parent < 0 else L[:, seg.parent] @ num.A[k]
-            if seg.slot is None:
-                L[:, k] = P[:, k]
-                continue
-            s = self.slots[seg.slot]
-            theta = float(s.multiplier) * Q[:, s.joint] + float(s.offset)
-            M = joint_matrices(num.axis[k], not s.revolute, num.sign[k] * theta)
-            L[:, k] = P[:, k] @ M @ num.B[k]
-        return L, P
-
-    def _slot_columns(self, L: np.ndarray, P: np.ndarray, f: int) -> tuple[list[int], np.ndarray, np.ndarray]:
-        """Slots on the path to frame position f and their geometric columns Jv, Jw (N, s, 3)
-        (Jw = 0 for a prismatic slot)."""
-        slots = self.path_slots(self.frames[f])
-        pf = L[:, self.frame_segments[f], :3, 3]
-        N = L.shape[0]
-        Jv, Jw = np.zeros((N, len(slots), 3)), np.zeros((N, len(slots), 3))
-        for i, k in enumerate(slots):
-            s = self.slots[k]
-            seg = s.segment
-            w = P[:, seg, :3, self._num.axis[seg]] * self._num.sign[seg]
-            if s.revolute:
-                Jv[:, i] = cross(w, pf - P[:, seg, :3, 3])
-                Jw[:, i] = w
-            else:
-                Jv[:, i] = w
-        return slots, Jv, Jw
-
-    def _jacobian(self, L: np.ndarray, P: np.ndarray, f: int) -> np.ndarray:
-        slots, Jv, Jw = self._slot_columns(L, P, f)
-        J = np.zeros((L.shape[0], 6, self.n))
-        for i, k in enumerate(slots):
-            s = self.slots[k]
-            m = float(s.multiplier)
-            J[:, :3, s.joint] += m * Jv[:, i]
-            J[:, 3:, s.joint] += m * Jw[:, i]
-        return J
-
-    def fkine(self, q: Any, frame: Any = None) -> np.ndarray:
-        """Pose of ``frame`` in the base-link frame: (4, 4) or (N, 4, 4). ``frame`` may be
-        omitted when the tree has one frame."""
-        f = self.frame_position(frame)
-        Q, single = self._batch(q)
-        T = self._walk(Q)[0][:, self.frame_segments[f]]
-        return T[0] if single else T
-
-    def jacob0(self, q: Any, frame: Any = None) -> np.ndarray:
-        """Base-frame Jacobian of ``frame`` (module docstring): (6, n) or (N, 6, n), rows (v, omega);
-        zero columns for the joints off its path."""
-        return self.fkine_jacob0(q, frame)[1]
-
-    def jacobe(self, q: Any, frame: Any = None) -> np.ndarray:
-        """Jacobian of ``frame`` expressed in that frame (eq 16): ``blkdiag(R^T, R^T) J0``."""
-        Q, single = self._batch(q)
-        J = rotate_rows(*self.fkine_jacob0(Q, frame))
-        return J[0] if single else J
-
-    def fkine_jacob0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        """Pose and base-frame Jacobian of ``frame`` from one pass."""
-        f = self.frame_position(frame)
-        Q, single = self._batch(q)
-        L, P = self._walk(Q)
-        T, J = L[:, self.frame_segments[f]], self._jacobian(L, P, f)
-        return (T[0], J[0]) if single else (T, J)
+        L = self._num.poses(Q)
+        return L[:, 1:], self._num.joint_frames(L)
 
     def segment_poses(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
         """Base-frame poses of every segment, in :attr:`segments` order (Part 1 eqs 1-5, walked
@@ -496,9 +367,7 @@ class Tree(FrameMethods):
 
     def fkine_all(self, q: Any) -> np.ndarray:
         """Poses of every frame, in :attr:`frames` order: (F, 4, 4) or (N, F, 4, 4)."""
-        Q, single = self._batch(q)
-        T = self._walk(Q)[0][:, list(self.frame_segments)]
-        return T[0] if single else T
+        return self.fkine_jacob0_all(q)[0]
 
     def jacob0_all(self, q: Any) -> np.ndarray:
         """Base-frame Jacobians of every frame: (F, 6, n) or (N, F, 6, n)."""
@@ -507,36 +376,10 @@ class Tree(FrameMethods):
     def fkine_jacob0_all(self, q: Any) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`fkine_all` and :meth:`jacob0_all` from one pass."""
         Q, single = self._batch(q)
-        L, P = self._walk(Q)
-        T = L[:, list(self.frame_segments)]
-        J = np.stack([self._jacobian(L, P, f) for f in range(len(self.frames))], axis=1)
+        L = self._num.poses(Q)
+        T = L[:, [f + 1 for f in self.frame_segments]]
+        J = np.stack([self._num.jacobian(*self._num.columns(L, f), f) for f in self.frame_segments], axis=1)
         return (T[0], J[0]) if single else (T, J)
-
-    def jacob0_hessian0(self, q: Any, frame: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        """Base-frame Jacobian and Hessian of ``frame`` from one walk ((6, n), (n, 6, n)) or
-        batched; ``hessian0`` is its second part. ``H[i] = dJ0/dq_i``: per pair of slots a, b on the
-        path (b at or before a: ``(w_b x Jv_a ; w_b x w_a)``; b after a: ``(w_a x Jv_b ; 0)``;
-        Haviland and Corke, Maximising Manipulability During Resolved-Rate Motion Control, 2020,
-        eq 20), weighted by both slots' multipliers."""
-        f = self.frame_position(frame)
-        Q, single = self._batch(q)
-        L, P = self._walk(Q)
-        slots, Jv, Jw = self._slot_columns(L, P, f)
-        J = self._jacobian(L, P, f)
-        H = hessian_of_columns(Jv, Jw, [self.slots[k] for k in slots], self.n)
-        return (J[0], H[0]) if single else (J, H)
-
-    def _derivative(self, Q: np.ndarray, order: int, frame: Any) -> np.ndarray:
-        """Order ``order`` >= 3 of :meth:`derivative` from the slot columns of ``frame``'s path,
-        contracted onto the joints by the multipliers (the chain rule of a mimic slot, ``theta = m
-        q_j + c``; :func:`symkin.model.derivatives.path_derivative`)."""
-        f = self.frame_position(frame)
-        L, P = self._walk(Q)
-        slots, Jv, Jw = self._slot_columns(L, P, f)
-        A = np.zeros((len(slots), self.n))
-        for i, k in enumerate(slots):
-            A[i, self.slots[k].joint] = float(self.slots[k].multiplier)
-        return path_derivative(Jv, Jw, A, order)
 
 
 def as_tree(model: Any) -> Tree:
