@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from symkin.errors import GeometryError, MissingExtraError
+from symkin.model.ets import Axis
+from symkin.model.kinematics import et_matrix
 
 __all__ = ["MeshSource", "MESH_SOURCES", "locate", "source_frames"]
 
@@ -100,13 +102,6 @@ def locate(source: MeshSource) -> tuple[Path, dict[str, Path]]:
     return path, packages
 
 
-def _rz(angle: float) -> np.ndarray:
-    T = np.eye(4)
-    c, s = math.cos(angle), math.sin(angle)
-    T[:2, :2] = [[c, -s], [s, c]]
-    return T
-
-
 def on_ee(robot, placements: dict, source: MeshSource) -> dict:
     """``placements`` with the URDF links of ``source.ee_links`` moved from the last link's frame
     to the end-effector frame ``ee`` (the same body: a constant transform)."""
@@ -138,7 +133,7 @@ def source_frames(
         raise GeometryError(
             f"{source.label} moves {tree.n} joints to the links {list(source.links)}; {robot.name} has {n}"
         )
-    B = _rz(source.base_yaw)
+    B = et_matrix(Axis.Rz, source.base_yaw)
     q0 = np.zeros(n)
     L0 = robot.link_poses(q0)
     U0 = [B @ tree.fkine(q0, frame=ln) for ln in source.links]

@@ -42,7 +42,8 @@ be opposite ones: a capsule piercing a thin box through both of its large faces 
 deep, whatever its small motions, and ``n`` is one of the two faces' normals.
 
 Algorithms: segment-segment closest points after Ericson, Real-Time Collision Detection (2005),
-5.1.9; the box's exact signed distance field in box coordinates (``q = |x| - h``,
+5.1.9, written once for any array library (:class:`SegmentOps`: the CasADi and JAX/PyTorch
+distances run the same code); the box's exact signed distance field in box coordinates (``q = |x| - h``,
 ``sdf = |max(q, 0)| + min(max_j q_j, 0)``); capsule-box minimises the box SDF along the segment (a
 convex function of the segment parameter) by golden-section search with a fixed number of
 iterations (``GOLDEN_ITERS``; on a tie both ends of the bracket move in, so that a flat stretch of
@@ -57,13 +58,19 @@ bit for bit).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "SegmentOps",
     "segment_closest",
+    "segment_closest_with",
     "point_segment",
+    "point_segment_with",
+    "golden_min_with",
     "box_sdf",
     "sphere_sphere",
     "capsule_sphere",
@@ -143,39 +150,49 @@ def _normal(diff: Array) -> tuple[Array, Array]:
     return length, n
 
 
-def _point_segment(p: Array, a: Array, b: Array) -> Array:
+@dataclass(frozen=True)
+class SegmentOps:
+    """An array library's ``where(cond, a, b)`` (elementwise select), ``dot(u, v)`` (over the vector
+    axis: a scalar per point) and ``clamp01(x)`` (x clamped to [0, 1]): what the closest points on
+    segments (:func:`point_segment_with`, :func:`segment_closest_with`) need, so that NumPy (here),
+    CasADi (:mod:`symkin.emit.casadi.collision`) and JAX/PyTorch (:mod:`symkin.runtime.diff.distance`)
+    run one implementation. Every division is guarded by a ``where``, so no branch divides by zero
+    (finite derivatives through the branch not taken)."""
+
+    where: Callable[[Any, Any, Any], Any]
+    dot: Callable[[Any, Any], Any]
+    clamp01: Callable[[Any], Any]
+
+
+_NUMPY = SegmentOps(where=np.where, dot=_dot, clamp01=_clamp01)
+
+
+def point_segment_with(ops: SegmentOps, p: Any, a: Any, b: Any) -> Any:
+    """Parameter t in [0, 1] of the point of segment a-b closest to p (0 for a point segment), in
+    the array library of ``ops``."""
     ab = b - a
-    ap = p - a
-    l2 = _dot(ab, ab)
+    l2 = ops.dot(ab, ab)
     ok = l2 > SEG_EPS
-    return np.where(ok, _clamp01(_dot(ap, ab) / np.where(ok, l2, 1.0)), 0.0)
+    return ops.where(ok, ops.clamp01(ops.dot(p - a, ab) / ops.where(ok, l2, 1.0)), 0.0)
 
 
-def _segment_closest(a1: Array, b1: Array, a2: Array, b2: Array) -> tuple[Array, Array]:
-    d1 = b1 - a1
-    d2 = b2 - a2
-    r = a1 - a2
-    a = _dot(d1, d1)
-    e = _dot(d2, d2)
-    f = _dot(d2, r)
-    c = _dot(d1, r)
-    b = _dot(d1, d2)
-    ok1 = a > SEG_EPS
-    ok2 = e > SEG_EPS
-    a_s = np.where(ok1, a, 1.0)
-    e_s = np.where(ok2, e, 1.0)
+def segment_closest_with(ops: SegmentOps, a1: Any, b1: Any, a2: Any, b2: Any) -> tuple[Any, Any]:
+    """Parameters (s, t) of :func:`segment_closest` in the array library of ``ops``."""
+    where, dot, clamp01 = ops.where, ops.dot, ops.clamp01
+    d1, d2, r = b1 - a1, b2 - a2, a1 - a2
+    a, e, f, c, b = dot(d1, d1), dot(d2, d2), dot(d2, r), dot(d1, r), dot(d1, d2)
+    ok1, ok2 = a > SEG_EPS, e > SEG_EPS
+    a_s, e_s = where(ok1, a, 1.0), where(ok2, e, 1.0)
     # both segments proper (Ericson's general case)
     denom = a * e - b * b
     skew = denom > PAR_EPS * a * e
-    s_gen = np.where(skew, _clamp01((b * f - c * e) / np.where(skew, denom, 1.0)), 0.0)
+    s_gen = where(skew, clamp01((b * f - c * e) / where(skew, denom, 1.0)), 0.0)
     t_gen = (b * s_gen + f) / e_s
-    s_gen = np.where(t_gen < 0.0, _clamp01(-c / a_s), np.where(t_gen > 1.0, _clamp01((b - c) / a_s), s_gen))
-    t_gen = _clamp01(t_gen)
+    s_gen = where(t_gen < 0.0, clamp01(-c / a_s), where(t_gen > 1.0, clamp01((b - c) / a_s), s_gen))
+    t_gen = clamp01(t_gen)
     # segment 2 is a point: t = 0; segment 1 is a point: s = 0
-    s_pt2 = _clamp01(-c / a_s)
-    t_pt1 = _clamp01(f / e_s)
-    s = np.where(ok1, np.where(ok2, s_gen, s_pt2), 0.0)
-    t = np.where(ok2, np.where(ok1, t_gen, t_pt1), 0.0)
+    s = where(ok1, where(ok2, s_gen, clamp01(-c / a_s)), 0.0)
+    t = where(ok2, where(ok1, t_gen, clamp01(f / e_s)), 0.0)
     return s, t
 
 
@@ -222,39 +239,43 @@ def _box_sdf(p: Array, center: Array, h: Array, R: Array) -> tuple[Array, Array]
     return d, n
 
 
-def _golden_min(f: Callable[[Array], Array], shape: tuple) -> Array:
-    """argmin over t in [0, 1] of the convex ``f`` (vectorised): golden-section search with
-    GOLDEN_ITERS steps, then the better of the bracket's midpoint and the endpoints 0 and 1.
+def golden_min_with(
+    ops: SegmentOps, f: Callable[[Any], Any], lo: Any, hi: Any, pair: Callable[[Any, Any], Any] | None = None
+) -> Any:
+    """argmin over t in [0, 1] of the convex ``f`` (vectorised) in the array library of ``ops``:
+    golden-section search with GOLDEN_ITERS steps from ``lo`` and ``hi`` (zeros and ones of the
+    batch shape), then the better of the bracket's midpoint and the endpoints 0 and 1. ``pair(c,
+    d)`` gives each step's ``(f(c), f(d))`` (default two calls; NumPy stacks them into one).
 
     On a tie f(c) == f(d) a minimiser lies in [c, d] (convexity): both ends move in and both inner
     points are evaluated afresh, so a flat stretch of minima (a segment parallel to a face) ends
     in its interior rather than at a kink on its edge, where the normal would be the wrong face's.
     """
-    lo = np.zeros(shape)
-    hi = np.ones(shape)
+    where = ops.where
+    pair = pair or (lambda c, d: (f(c), f(d)))
+    zero, one = lo, hi
     c = hi - _INV_PHI * (hi - lo)
     d = lo + _INV_PHI * (hi - lo)
-    fc = f(c)
-    fd = f(d)
+    fc, fd = f(c), f(d)
     for _ in range(GOLDEN_ITERS):
         # fc < fd: hi = d, d = c, c = new; fd < fc: lo = c, c = d, d = new; tie: lo = c, hi = d, both new
         left = fc < fd
         right = fd < fc
-        lo = np.where(left, lo, c)
-        hi = np.where(right, hi, d)
+        lo = where(left, lo, c)
+        hi = where(right, hi, d)
         c_new = hi - _INV_PHI * (hi - lo)
         d_new = lo + _INV_PHI * (hi - lo)
-        fc_new, fd_new = f(np.stack([c_new, d_new]))
-        c, d = np.where(right, d, c_new), np.where(left, c, d_new)
-        fc, fd = np.where(right, fd, fc_new), np.where(left, fc, fd_new)
+        fc_new, fd_new = pair(c_new, d_new)
+        c, d = where(right, d, c_new), where(left, c, d_new)
+        fc, fd = where(right, fd, fc_new), where(left, fc, fd_new)
     t = 0.5 * (lo + hi)
     ft = f(t)
-    f0 = f(np.zeros(shape))
+    f0 = f(zero)
     take0 = f0 < ft
-    t = np.where(take0, 0.0, t)
-    ft = np.where(take0, f0, ft)
-    f1 = f(np.ones(shape))
-    return np.where(f1 < ft, 1.0, t)
+    t = where(take0, 0.0, t)
+    ft = where(take0, f0, ft)
+    f1 = f(one)
+    return where(f1 < ft, 1.0, t)
 
 
 # --- public functions --------------------------------------------------------------------------
@@ -266,7 +287,8 @@ def segment_closest(a1: ArrayLike, b1: ArrayLike, a2: ArrayLike, b2: ArrayLike) 
     parallel segments take ``s = 0`` and ``t`` its clamped projection (then ``s`` re-projected)."""
     A1, B1, A2, B2 = _vec(a1, "a1"), _vec(b1, "b1"), _vec(a2, "a2"), _vec(b2, "b2")
     shape = _batch_shape((A1, B1, A2, B2), (), ())
-    return _segment_closest(_bvec(A1, shape), _bvec(B1, shape), _bvec(A2, shape), _bvec(B2, shape))
+    A1, B1, A2, B2 = (_bvec(x, shape) for x in (A1, B1, A2, B2))
+    return segment_closest_with(_NUMPY, A1, B1, A2, B2)
 
 
 def point_segment(p: ArrayLike, a: ArrayLike, b: ArrayLike) -> Array:
@@ -274,7 +296,7 @@ def point_segment(p: ArrayLike, a: ArrayLike, b: ArrayLike) -> Array:
     (0 for a zero-length segment)."""
     P, A, B = _vec(p, "p"), _vec(a, "a"), _vec(b, "b")
     shape = _batch_shape((P, A, B), (), ())
-    return _point_segment(_bvec(P, shape), _bvec(A, shape), _bvec(B, shape))
+    return point_segment_with(_NUMPY, _bvec(P, shape), _bvec(A, shape), _bvec(B, shape))
 
 
 def box_sdf(p: ArrayLike, center: ArrayLike, h: ArrayLike, R: ArrayLike) -> tuple[Array, Array]:
@@ -303,7 +325,7 @@ def capsule_sphere(a1: ArrayLike, b1: ArrayLike, r1: ArrayLike, c2: ArrayLike, r
     C2, R2 = _vec(c2, "c2"), _scalar(r2, "r2")
     shape = _batch_shape((A1, B1, C2), (R1, R2), ())
     A1, B1, pb = _bvec(A1, shape), _bvec(B1, shape), _bvec(C2, shape).copy()
-    t = _point_segment(pb, A1, B1)
+    t = point_segment_with(_NUMPY, pb, A1, B1)
     pa = A1 + t[..., None] * (B1 - A1)
     length, n = _normal(pa - pb)
     return length - R1 - R2, n, pa, pb
@@ -317,7 +339,7 @@ def capsule_capsule(
     A2, B2, R2 = _vec(a2, "a2"), _vec(b2, "b2"), _scalar(r2, "r2")
     shape = _batch_shape((A1, B1, A2, B2), (R1, R2), ())
     A1, B1, A2, B2 = _bvec(A1, shape), _bvec(B1, shape), _bvec(A2, shape), _bvec(B2, shape)
-    s, t = _segment_closest(A1, B1, A2, B2)
+    s, t = segment_closest_with(_NUMPY, A1, B1, A2, B2)
     pa = A1 + s[..., None] * (B1 - A1)
     pb = A2 + t[..., None] * (B2 - A2)
     length, n = _normal(pa - pb)
@@ -353,7 +375,9 @@ def capsule_box(
     def sdf_at(t: Array) -> Array:
         return _box_sdf(A + t[..., None] * ab, Ctr, H, M)[0]
 
-    t = _golden_min(sdf_at, shape)
+    t = golden_min_with(
+        _NUMPY, sdf_at, np.zeros(shape), np.ones(shape), lambda c, d: sdf_at(np.stack([c, d]))
+    )
     pa = A + t[..., None] * ab
     sdf, n = _box_sdf(pa, Ctr, H, M)
     n = np.broadcast_to(n, shape + (3,)).copy()

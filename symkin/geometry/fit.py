@@ -14,33 +14,20 @@ from typing import Any
 
 import numpy as np
 
-from symkin.errors import GeometryError, MissingExtraError
+from symkin.errors import GeometryError
+from symkin.geometry.meshes import load_mesh
 from symkin.model.geometry import as_index
 
 __all__ = ["fit_spheres", "mesh_points"]
 
-_INSTALL = 'pip install "symkin[geometry]"'
-
-
-def _trimesh(what: str) -> Any:
-    try:
-        import trimesh
-    except ImportError:
-        raise MissingExtraError(f"{what} needs trimesh: {_INSTALL}") from None
-    return trimesh
-
 
 def _load(mesh_or_points: Any) -> Any:
-    """A mesh file path loaded with trimesh; anything else as given."""
+    """A mesh file path loaded with trimesh (:func:`symkin.geometry.meshes.load_mesh`); anything
+    else as given."""
     if not isinstance(mesh_or_points, (str, Path)):
         return mesh_or_points
-    trimesh = _trimesh(f"reading the mesh file {str(mesh_or_points)!r}")
-    try:
-        mesh = trimesh.load(str(mesh_or_points), force="mesh")
-        empty = len(np.asarray(mesh.vertices).reshape(-1, 3)) == 0
-    except Exception as exc:  # trimesh raises many kinds for unreadable files
-        raise GeometryError(f"cannot read mesh file {str(mesh_or_points)!r}: {exc}") from None
-    if empty:
+    mesh = load_mesh(mesh_or_points)
+    if len(np.asarray(mesh.vertices).reshape(-1, 3)) == 0:
         raise GeometryError(
             f"mesh file {str(mesh_or_points)!r} has no vertices (empty, or not a mesh trimesh reads)"
         )

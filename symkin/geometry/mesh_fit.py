@@ -25,7 +25,7 @@ import numpy as np
 from symkin.core.progress import bar
 from symkin.errors import GeometryError
 from symkin.geometry.cover import Cover, Surface, cover_spheres, outer_excess
-from symkin.geometry.meshes import MeshPart, link_placements, mesh_parts, warn_skipped
+from symkin.geometry.meshes import MeshPart, link_placements, mesh_parts, urdf_folder, warn_skipped
 from symkin.geometry.triangles import sample_surface
 from symkin.model.geometry import Geometry, Sphere
 from symkin.model.urdf import load_xml, read_graph
@@ -114,12 +114,6 @@ def fit_parts(
     return spheres, rows
 
 
-def _urdf_folder(path_or_xml: str | Path) -> Path:
-    text = str(path_or_xml)
-    is_file = isinstance(path_or_xml, Path) or not text.lstrip().lstrip("\ufeff").startswith("<")
-    return Path(text).parent if is_file else Path.cwd()
-
-
 def fit_urdf(
     path_or_xml: str | Path,
     model: Any = None,
@@ -140,7 +134,7 @@ def fit_urdf(
     graph = read_graph(path_or_xml)
     frames = urdf_link_frames(path_or_xml, model)
     placements, why = link_placements(graph, frames)
-    parts, skipped = mesh_parts(root, where, _urdf_folder(path_or_xml), placements, why, packages)
+    parts, skipped = mesh_parts(root, where, urdf_folder(path_or_xml), placements, why, packages)
     warn_skipped(skipped)
     if not parts:
         raise GeometryError(

@@ -24,17 +24,21 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from symkin.errors import GeometryError, MissingExtraError
+from symkin.errors import GeometryError, MissingExtraError, URDFError
 from symkin.model.transform import rpy_matrix
 from symkin.model.urdf import URDFGraph, joint_axis, joint_limits, joint_origin, xml_numbers
 
 __all__ = [
     "MeshPart",
     "Placement",
+    "load_mesh",
     "read_mesh",
     "resolve_mesh",
     "link_placements",
     "mesh_parts",
+    "mesh_triangles",
+    "shape_sizes",
+    "urdf_folder",
     "MAX_SHAPE_SIZE",
     "box_triangles",
 ]
@@ -89,11 +93,9 @@ def resolve_mesh(
     return p if p.is_absolute() else folder / p
 
 
-def read_mesh(path: str | Path, scale: Any = (1.0, 1.0, 1.0), what: str = "") -> np.ndarray:
-    """The triangles (F, 3, 3) of the mesh file ``path`` (any format trimesh reads), each vertex
-    multiplied by ``scale`` per axis. GeometryError naming the file (and ``what``, e.g. the link)
-    when it cannot be read, has no triangles or holds NaN/inf; MissingExtraError without trimesh.
-    (:func:`check_extent` bounds the size.)"""
+def load_mesh(path: str | Path, what: str = "") -> Any:
+    """The mesh file ``path`` (any format trimesh reads) as a trimesh mesh; GeometryError naming
+    the file (and ``what``, e.g. the link) when it cannot be read, MissingExtraError without trimesh."""
     where = f"{what}: " if what else ""
     try:
         import trimesh
@@ -101,16 +103,24 @@ def read_mesh(path: str | Path, scale: Any = (1.0, 1.0, 1.0), what: str = "") ->
         raise MissingExtraError(
             f"{where}reading the mesh file {str(path)!r} needs trimesh: {_INSTALL}"
         ) from None
-    s = np.asarray(scale, dtype=float).reshape(-1)
-    if s.shape != (3,) or not np.isfinite(s).all():
-        raise GeometryError(f"{where}mesh scale must be 3 finite numbers, got {scale!r}")
     try:
-        mesh = trimesh.load(str(path), force="mesh")
-        T = np.asarray(mesh.triangles, dtype=float).reshape(-1, 3, 3)
+        return trimesh.load(str(path), force="mesh")
     except Exception as exc:  # trimesh raises many kinds for unreadable files
         raise GeometryError(
             f"{where}cannot read mesh file {str(path)!r}: {type(exc).__name__}: {exc}"
         ) from None
+
+
+def read_mesh(path: str | Path, scale: Any = (1.0, 1.0, 1.0), what: str = "") -> np.ndarray:
+    """The triangles (F, 3, 3) of the mesh file ``path`` (:func:`load_mesh`), each vertex
+    multiplied by ``scale`` per axis. GeometryError naming the file (and ``what``, e.g. the link)
+    when it cannot be read, has no triangles or holds NaN/inf; MissingExtraError without trimesh.
+    (:func:`check_extent` bounds the size.)"""
+    where = f"{what}: " if what else ""
+    s = np.asarray(scale, dtype=float).reshape(-1)
+    if s.shape != (3,) or not np.isfinite(s).all():
+        raise GeometryError(f"{where}mesh scale must be 3 finite numbers, got {scale!r}")
+    T = np.asarray(load_mesh(path, what).triangles, dtype=float).reshape(-1, 3, 3)
     if len(T) == 0:
         raise GeometryError(f"{where}mesh file {str(path)!r} has no triangles (empty or not a mesh)")
     if not np.isfinite(T).all():
@@ -210,65 +220,66 @@ def mesh_parts(
                 skipped.append(f"{where}: {what} ({label}) skipped: {reason}")
                 continue
             if shape.tag == "box":
-                size = [
-                    float(v)
-                    for v in xml_numbers(shape.get("size"), 3, f"{what} box size", None, MAX_SHAPE_SIZE)
-                ]
-                if min(size) < 0:
-                    raise GeometryError(f"{where}: {what} has box size {size}; sizes must be >= 0")
+                size = shape_sizes(shape, "size", 3, f"{where}: {what} box size")
                 T, file = box_triangles(np.array(size) / 2), f"{lname} box {i}"
             else:
-                T, file, note = _mesh_triangles(shape, folder, packages, where, what)
+                T, file, note = mesh_triangles(shape, folder, packages, where, what)
                 if T is None:
                     skipped.append(note)
                     continue
-            o = cel.find("origin")
-            xyz = [
-                float(v)
-                for v in xml_numbers(
-                    o.get("xyz") if o is not None else None, 3, f"{what} origin xyz", "0 0 0"
-                )
-            ]
-            rpy = [
-                float(v)
-                for v in xml_numbers(
-                    o.get("rpy") if o is not None else None, 3, f"{what} origin rpy", "0 0 0"
-                )
-            ]
             place = placements[lname]
-            M = place.T @ rpy_matrix(xyz, rpy)
+            M = place.T @ rpy_matrix(*joint_origin(cel, what))
             tri = T @ M[:3, :3].T + M[:3, 3]
             parts.append(MeshPart(place.link, lname, file, tri, place.stroke))
     return parts, skipped
 
 
-def _mesh_triangles(
+def mesh_triangles(
     shape: ElementTree.Element, folder: Path, packages: Mapping[str, str | Path] | None, where: str, what: str
 ) -> tuple[np.ndarray | None, str, str]:
     """A ``<mesh>``'s triangles (scaled, in the collision element's frame) and file, or None and
-    the warning line saying why not."""
+    the warning line saying why not (not resolved, missing, unreadable); MissingExtraError without
+    trimesh, GeometryError for a bad scale or a mesh larger than :data:`MAX_SHAPE_SIZE`."""
     filename = shape.get("filename") or ""
     path = resolve_mesh(filename, folder, packages)
     if path is None:
-        return (
-            None,
-            "",
-            (
-                f"{where}: {what}: mesh {filename!r} skipped: its package:// path is not resolved (give the "
-                "package's folder)"
-            ),
-        )
+        why = "package:// paths are not resolved (no ROS package path; give packages={name: folder})"
+        return None, "", f"{where}: {what} is a mesh at {filename!r}; {why}: skipped"
     if not path.is_file():
         return None, "", f"{where}: {what}: mesh file {str(path)!r} does not exist: skipped"
-    scale = [
-        float(v) for v in xml_numbers(shape.get("scale"), 3, f"{what} mesh scale", "1 1 1", MAX_SHAPE_SIZE)
-    ]
+    scale = [1.0] * 3
+    if shape.get("scale"):
+        scale = shape_sizes(shape, "scale", 3, f"{where}: {what} mesh scale", signed=True)
     try:
         T = read_mesh(path, scale, f"{where}: {what}")
     except GeometryError as exc:
         return None, "", f"{exc}: skipped"
     check_extent(T, f"{where}: {what}: mesh file {str(path)!r} scaled by {scale}")
     return T, str(path), ""
+
+
+def shape_sizes(
+    shape: ElementTree.Element, attr: str, count: int, what: str, signed: bool = False
+) -> list[float]:
+    """``count`` sizes of a shape attribute: finite, at most :data:`MAX_SHAPE_SIZE` in size and
+    >= 0 (unless ``signed``: a mesh scale may mirror), else a GeometryError naming ``what`` (the
+    link and collision element)."""
+    try:
+        values = [float(v) for v in xml_numbers(shape.get(attr), count, what)]
+    except URDFError as exc:
+        raise GeometryError(str(exc)) from None
+    if max(abs(v) for v in values) > MAX_SHAPE_SIZE or (not signed and min(values) < 0):
+        sign = "" if signed else ">= 0 and "
+        raise GeometryError(f"{what} is {values}; collision sizes must be {sign}at most {MAX_SHAPE_SIZE:g} m")
+    return values
+
+
+def urdf_folder(path_or_xml: str | Path) -> Path:
+    """The folder relative mesh paths of a URDF start from: the file's, or the working folder for
+    XML text."""
+    text = str(path_or_xml)
+    is_file = isinstance(path_or_xml, Path) or not text.lstrip().lstrip("\ufeff").startswith("<")
+    return Path(text).parent if is_file else Path.cwd()
 
 
 def box_triangles(half_extents: Any) -> np.ndarray:

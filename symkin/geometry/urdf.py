@@ -45,8 +45,8 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from symkin.errors import GeometryError, URDFError
-from symkin.geometry.meshes import MAX_SHAPE_SIZE, check_extent, link_placements, read_mesh, resolve_mesh
+from symkin.errors import GeometryError, MissingExtraError
+from symkin.geometry.meshes import MAX_SHAPE_SIZE, link_placements, mesh_triangles, shape_sizes, urdf_folder
 from symkin.model.geometry import Capsule, Geometry, Sphere, as_index
 from symkin.model.transform import rpy_matrix
 from symkin.model.urdf import (
@@ -56,7 +56,6 @@ from symkin.model.urdf import (
     joint_origin,
     load_xml,
     read_graph,
-    xml_numbers,
 )
 
 __all__ = [
@@ -69,6 +68,7 @@ __all__ = [
     "MAX_SHAPE_SPHERES",
 ]
 
+_INSTALL = 'pip install "symkin[geometry]"'
 _Frame = tuple[str, np.ndarray]  # model link name, 4x4 transform model link frame -> URDF link frame
 
 
@@ -242,26 +242,6 @@ def box_spheres(half_extents: Any, max_spheres: int = 64) -> list[tuple[np.ndarr
     return [(c, radius) for c in grid]
 
 
-def _floats(
-    el: ElementTree.Element, attr: str, count: int, what: str, default: str | None = None
-) -> list[float]:
-    return [float(v) for v in xml_numbers(el.get(attr), count, what, default)]
-
-
-def _sized(shape: ElementTree.Element, attr: str, count: int, what: str, signed: bool = False) -> list[float]:
-    """``count`` sizes of a shape attribute: finite, at most :data:`MAX_SHAPE_SIZE` in size and
-    >= 0 (unless ``signed``: a mesh scale may mirror), else a GeometryError naming ``what`` (the
-    link and collision element)."""
-    try:
-        values = [float(v) for v in xml_numbers(shape.get(attr), count, what)]
-    except URDFError as exc:
-        raise GeometryError(str(exc)) from None
-    if max(abs(v) for v in values) > MAX_SHAPE_SIZE or (not signed and min(values) < 0):
-        sign = "" if signed else ">= 0 and "
-        raise GeometryError(f"{what} is {values}; collision sizes must be {sign}at most {MAX_SHAPE_SIZE:g} m")
-    return values
-
-
 def geometry_from_urdf(
     path_or_xml: str | Path,
     model: Any,
@@ -296,8 +276,7 @@ def urdf_geometry(
     root, where = load_xml(path_or_xml)
     graph = read_graph(path_or_xml)
     frames, why = _link_frames(graph, model)
-    is_file = isinstance(path_or_xml, Path) or not str(path_or_xml).lstrip().lstrip("\ufeff").startswith("<")
-    folder = Path(path_or_xml).parent if is_file else Path.cwd()
+    folder = urdf_folder(path_or_xml)
     shapes: list[Sphere | Capsule] = []
     counts = {"sphere": 0, "cylinder": 0, "capsule": 0, "box": 0, "mesh": 0}
     skipped: list[str] = []
@@ -317,10 +296,7 @@ def urdf_geometry(
         target, A = frames[lname]
         for i, cel in enumerate(collisions):
             what = f"link {lname!r} collision {cel.get('name') or i}"
-            o = cel.find("origin")
-            xyz = _floats(o, "xyz", 3, f"{what} origin xyz", "0 0 0") if o is not None else [0.0] * 3
-            rpy = _floats(o, "rpy", 3, f"{what} origin rpy", "0 0 0") if o is not None else [0.0] * 3
-            T = A @ rpy_matrix(xyz, rpy)
+            T = A @ rpy_matrix(*joint_origin(cel, what))
             g = cel.find("geometry")
             kids = list(g) if g is not None else []
             if not kids:
@@ -334,14 +310,14 @@ def urdf_geometry(
 
             try:
                 if tag == "sphere":
-                    (r,) = _sized(shape, "radius", 1, f"{where}: {what} sphere radius")
+                    (r,) = shape_sizes(shape, "radius", 1, f"{where}: {what} sphere radius")
                     shapes.append(Sphere(at((0, 0, 0)), r, target))
                 elif tag in ("cylinder", "capsule"):
-                    (r,) = _sized(shape, "radius", 1, f"{where}: {what} {tag} radius")
-                    (length,) = _sized(shape, "length", 1, f"{where}: {what} {tag} length")
+                    (r,) = shape_sizes(shape, "radius", 1, f"{where}: {what} {tag} radius")
+                    (length,) = shape_sizes(shape, "length", 1, f"{where}: {what} {tag} length")
                     shapes.append(Capsule(at((0, 0, -length / 2)), at((0, 0, length / 2)), r, target))
                 elif tag == "box":
-                    size = _sized(shape, "size", 3, f"{where}: {what} box size")
+                    size = shape_sizes(shape, "size", 3, f"{where}: {what} box size")
                     for c, r in box_spheres(np.array(size) / 2, max_box_spheres):
                         shapes.append(Sphere(at(c), r, target))
                 elif tag == "mesh":
@@ -374,47 +350,24 @@ def _mesh(
 ) -> list[tuple[np.ndarray, float]] | None:
     """Spheres fitted to a ``<mesh>`` (in the collision element's frame), or None with a warning
     naming the link and the file (not fitted, not resolved, missing, unreadable, empty)."""
-    filename = shape.get("filename") or ""
     if mesh_spheres <= 0:
         warnings.warn(
-            f"{where}: {what} is a mesh ({filename!r}): skipped; pass mesh_spheres > 0 (with trimesh "
-            'installed: pip install "symkin[geometry]") to fit spheres to it',
+            f"{where}: {what} is a mesh ({shape.get('filename') or ''!r}): skipped; pass mesh_spheres > 0 "
+            f"(with trimesh installed: {_INSTALL}) to fit spheres to it",
             stacklevel=3,
         )
-        return None
-    path = resolve_mesh(filename, folder, packages)
-    if path is None:
-        warnings.warn(
-            f"{where}: {what} is a mesh at {filename!r}; package:// paths are not resolved (no ROS "
-            "package path; give packages={name: folder}): skipped",
-            stacklevel=3,
-        )
-        return None
-    if not path.is_file():
-        warnings.warn(f"{where}: {what}: mesh file {str(path)!r} does not exist: skipped", stacklevel=3)
         return None
     try:
-        import trimesh
-    except ImportError:
-        warnings.warn(
-            f'{where}: {what} is a mesh; fitting spheres needs trimesh (pip install "symkin[geometry]"): '
-            "skipped",
-            stacklevel=3,
-        )
+        tri, _, note = mesh_triangles(shape, folder, packages, where, what)
+    except MissingExtraError:
+        tri, note = None, f"{where}: {what} is a mesh; fitting spheres needs trimesh ({_INSTALL}): skipped"
+    if tri is None:
+        warnings.warn(note, stacklevel=3)
         return None
+    import trimesh
+
     from symkin.geometry.fit import fit_spheres
 
-    scale = (
-        _sized(shape, "scale", 3, f"{where}: {what} mesh scale", signed=True)
-        if shape.get("scale")
-        else [1.0] * 3
-    )
-    try:
-        tri = read_mesh(path, scale, f"{where}: {what}")
-    except GeometryError as exc:
-        warnings.warn(f"{exc}: skipped", stacklevel=3)
-        return None
-    check_extent(tri, f"{where}: {what}: mesh file {str(path)!r} scaled by {scale}")
     mesh = trimesh.Trimesh(
         vertices=tri.reshape(-1, 3), faces=np.arange(3 * len(tri)).reshape(-1, 3), process=False
     )

@@ -37,6 +37,8 @@ from symkin.model.slots import Segment, Slot
 
 __all__ = ["NumericKinematics", "NumericFrames"]
 
+_EYE = np.eye(4)
+
 
 def _motion(joint: Any) -> np.ndarray:
     """(3, 4, 4) coefficients of a joint's transform on its weights (module docstring)."""
@@ -59,13 +61,13 @@ class NumericKinematics:
     """Pre-reduced numeric form of a tree's segments (build with :meth:`of`).
 
     Per segment k: ``up[k]`` its parent's place in :meth:`poses` (0 the base link), its slot
-    ``slot_of[k]`` (-1 when fixed), the constants
-    before (``A``) and after (``B``) its joint, the joint's axis index and sign (0 and 1 when
-    fixed), its coefficients ``K`` (S, 3, 4, 4), ``paths[k]`` the slots on its path, base first,
-    and ``weights[k]`` (m, n): slot i of the path moves joint j by ``[i, j]`` (``picks[k]``: the
-    joint of each slot when that is all the weights say, else None). Per slot: its segment's
-    ``up``, its joint, ``scale`` and ``shift`` (``x = scale q_j + shift``), kind, and its signed
-    axis and origin in its parent's link frame (``ut``, (s, 3, 2)).
+    ``slot_of[k]`` (-1 when fixed), the constants before (``A``) and after (``B``) its joint, the
+    joint's axis index and sign (0 and 1 when fixed), its coefficients ``K`` (S, 3, 4, 4),
+    ``paths[k]`` the slots on its path, base first, and ``weights[k]`` (m, n): slot i of the path
+    moves joint j by ``[i, j]`` (``picks[k]``: the joint of each slot when that is all the weights
+    say, else None). Per slot: its segment's coefficients (``moving``) and ``up``, its joint,
+    ``scale`` and ``shift`` (``x = scale q_j + shift``), kind, and its signed axis and origin in
+    its parent's link frame (``ut``, (s, 3, 2)).
     """
 
     n: int
@@ -74,6 +76,7 @@ class NumericKinematics:
     A: np.ndarray
     B: np.ndarray
     K: np.ndarray
+    moving: np.ndarray
     axis: tuple[int, ...]
     sign: tuple[float, ...]
     paths: tuple[np.ndarray, ...]
@@ -125,6 +128,7 @@ class NumericKinematics:
             A=np.array(A).reshape(-1, 4, 4),
             B=np.array(B).reshape(-1, 4, 4),
             K=np.array(K).reshape(-1, 3, 4, 4),
+            moving=np.array([K[s.segment] for s in slots]).reshape(-1, 3, 4, 4),
             axis=tuple(axis),
             sign=tuple(sign),
             paths=tuple(paths),
@@ -146,9 +150,9 @@ class NumericKinematics:
         W[..., 0] = np.where(self.revolute, np.cos(x), x)
         W[..., 1] = np.where(self.revolute, np.sin(x), 0.0)
         W[..., 2] = 1.0
-        M = np.einsum("Nsk,skij->Nsij", W, self.K[self.segment])  # the moving segments
+        M = np.einsum("Nsk,skij->Nsij", W, self.moving)
         L = np.empty((Q.shape[0], len(self.up) + 1, 4, 4))
-        L[:, 0] = np.eye(4)
+        L[:, 0] = _EYE
         for k, (p, i) in enumerate(zip(self.up, self.slot_of)):
             Sk = self.K[k, 2] if i < 0 else M[:, i]  # a fixed segment: its constants
             if p:

@@ -1,6 +1,7 @@
 """Orientation representations and the analytic forms of the Jacobian and the Hessian (numpy only).
 
-The Euler vector of a rotation (the orientation part of the pose error, Haviland and Corke,
+The unit quaternion of a rotation and back (:func:`quaternion`, :func:`quaternion_matrix`), the
+Euler vector of a rotation (the orientation part of the pose error, Haviland and Corke,
 Manipulator Differential Kinematics, Part 1, IEEE Robotics and Automation Magazine, 2023, eqs
 38-40), the orientation of a pose in roboticstoolbox-python's representations
 (:data:`REPRESENTATIONS`), the rate matrix ``A(gamma)^-1`` mapping angular velocity to their rates
@@ -23,6 +24,8 @@ from symkin.errors import ConfigurationError, ParameterError
 
 __all__ = [
     "NEAR_PI_L",
+    "quaternion",
+    "quaternion_matrix",
     "angle_axis",
     "REPRESENTATIONS",
     "representation_of",
@@ -32,6 +35,41 @@ __all__ = [
     "analytical_of",
     "analytical_hessian_of",
 ]
+
+
+# -- unit quaternions (w, x, y, z) --------------------------------------------------------------------
+def quaternion(R: Any) -> np.ndarray:
+    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (3, 3) (Shepperd's method)."""
+    R = np.asarray(R, dtype=float)
+    tr = float(np.trace(R))
+    i = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
+    if i == 0:
+        r = 2.0 * math.sqrt(1.0 + tr)
+        q = [r / 4, (R[2, 1] - R[1, 2]) / r, (R[0, 2] - R[2, 0]) / r, (R[1, 0] - R[0, 1]) / r]
+    elif i == 1:
+        r = 2.0 * math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 1e-300))
+        q = [(R[2, 1] - R[1, 2]) / r, r / 4, (R[0, 1] + R[1, 0]) / r, (R[0, 2] + R[2, 0]) / r]
+    elif i == 2:
+        r = 2.0 * math.sqrt(max(1.0 + R[1, 1] - R[0, 0] - R[2, 2], 1e-300))
+        q = [(R[0, 2] - R[2, 0]) / r, (R[0, 1] + R[1, 0]) / r, r / 4, (R[1, 2] + R[2, 1]) / r]
+    else:
+        r = 2.0 * math.sqrt(max(1.0 + R[2, 2] - R[0, 0] - R[1, 1], 1e-300))
+        q = [(R[1, 0] - R[0, 1]) / r, (R[0, 2] + R[2, 0]) / r, (R[1, 2] + R[2, 1]) / r, r / 4]
+    out = np.array(q) / np.linalg.norm(q)
+    return -out if out[0] < 0 else out
+
+
+def quaternion_matrix(q: Any) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of unit quaternions (..., 4) (w, x, y, z), used as given."""
+    w, x, y, z = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
 
 
 # -- the Euler vector of a rotation (the orientation part of the pose error) ------------------------

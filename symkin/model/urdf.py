@@ -200,8 +200,9 @@ URDF_FILE_BYTES = 64 * 2**20  # a URDF (or SRDF) file larger than this is refuse
 
 
 def joint_origin(jel: ElementTree.Element, what: str) -> tuple[list[Fraction], list[Fraction]]:
-    """``(xyz, rpy)`` of a joint's ``<origin>`` (zeros when absent), exact and within
-    +-:data:`MAX_URDF_VALUE`; ``what`` names the joint in messages. Shared by both readers."""
+    """``(xyz, rpy)`` of a joint's (or a collision element's) ``<origin>`` (zeros when absent),
+    exact and within +-:data:`MAX_URDF_VALUE`; ``what`` names the element in messages. Shared by
+    both readers and the collision readers (:mod:`symkin.geometry.urdf`, :mod:`symkin.geometry.meshes`)."""
     origin = jel.find("origin")
     attrs = {} if origin is None else origin.attrib
     xyz, rpy = (

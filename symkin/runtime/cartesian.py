@@ -19,46 +19,12 @@ import numpy as np
 from symkin.core.arrays import MAX_JOINT_VALUE, as_config, name_of, real_array
 from symkin.core.pose import as_pose, as_poses
 from symkin.errors import ParameterError
+from symkin.model.orientation import quaternion, quaternion_matrix
 from symkin.runtime.ik_problem import pose_error_of
 from symkin.runtime.servo import servo_gain
 from symkin.runtime.trajectory import _positive, _times, unit_trapezoidal
 
 __all__ = ["ctraj", "servo_path", "PathResult"]
-
-
-def _quaternion(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method, w >= 0 where it can)."""
-    tr = np.trace(R)
-    cands = np.array([tr, R[0, 0], R[1, 1], R[2, 2]])
-    i = int(np.argmax(cands))
-    if i == 0:
-        r = math.sqrt(1.0 + tr) * 2
-        q = [r / 4, (R[2, 1] - R[1, 2]) / r, (R[0, 2] - R[2, 0]) / r, (R[1, 0] - R[0, 1]) / r]
-    elif i == 1:
-        r = math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0)) * 2
-        q = [(R[2, 1] - R[1, 2]) / r, r / 4, (R[0, 1] + R[1, 0]) / r, (R[0, 2] + R[2, 0]) / r]
-    elif i == 2:
-        r = math.sqrt(max(1.0 + R[1, 1] - R[0, 0] - R[2, 2], 0.0)) * 2
-        q = [(R[0, 2] - R[2, 0]) / r, (R[0, 1] + R[1, 0]) / r, r / 4, (R[1, 2] + R[2, 1]) / r]
-    else:
-        r = math.sqrt(max(1.0 + R[2, 2] - R[0, 0] - R[1, 1], 0.0)) * 2
-        q = [(R[1, 0] - R[0, 1]) / r, (R[0, 2] + R[2, 0]) / r, (R[1, 2] + R[2, 1]) / r, r / 4]
-    q = np.array(q)
-    q /= np.linalg.norm(q)
-    return -q if q[0] < 0 else q
-
-
-def _rotations(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of unit quaternions (N, 4) (w, x, y, z)."""
-    w, x, y, z = q.T
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
 
 
 def _slerp(q0: np.ndarray, q1: np.ndarray, s: np.ndarray) -> np.ndarray:
@@ -99,7 +65,7 @@ def ctraj(T0: Any, T1: Any, t: Any = None, s: Any = None) -> np.ndarray:
     out = np.zeros((len(sv), 4, 4))
     out[:, 3, 3] = 1.0
     out[:, :3, 3] = (1 - sv)[:, None] * A[:3, 3] + sv[:, None] * B[:3, 3]
-    out[:, :3, :3] = _rotations(_slerp(_quaternion(A[:3, :3]), _quaternion(B[:3, :3]), sv))
+    out[:, :3, :3] = quaternion_matrix(_slerp(quaternion(A[:3, :3]), quaternion(B[:3, :3]), sv))
     out[sv == 0, :3, :3] = A[:3, :3]
     out[sv == 1, :3, :3] = B[:3, :3]
     return out

@@ -25,6 +25,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from symkin.errors import SymkinError
+from symkin.geometry.meshes import load_mesh, resolve_mesh
 from symkin.model.transform import rpy_matrix
 from symkin.view.scene import MeshPart, capsule_mesh
 
@@ -38,8 +39,6 @@ _INSTALL = 'pip install "symkin[geometry]"'
 def resolve_mesh_file(filename: str, folder: Path) -> Path | None:
     """The file a URDF ``<mesh filename>`` names (module docstring), or None for a ``package://``
     path no folder above ``folder`` resolves (:func:`symkin.geometry.meshes.resolve_mesh`)."""
-    from symkin.geometry.meshes import resolve_mesh
-
     return resolve_mesh(filename, folder)
 
 
@@ -118,13 +117,11 @@ def _shape(geometry: ElementTree.Element, folder: Path) -> tuple[np.ndarray, np.
         raise ValueError(f"{filename!r}: no folder named after its package above the URDF")
     if not path.is_file():
         raise ValueError(f"mesh file {str(path)!r} does not exist")
-    import trimesh
-
     try:
-        mesh = trimesh.load(str(path), force="mesh")
-        V, F = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
-    except Exception as exc:  # trimesh raises many kinds for unreadable files
-        raise ValueError(f"cannot read mesh file {str(path)!r}: {type(exc).__name__}: {exc}") from None
+        mesh = load_mesh(path)
+    except SymkinError as exc:
+        raise ValueError(str(exc)) from None
+    V, F = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
     if not len(F) or not np.isfinite(V).all():
         raise ValueError(f"mesh file {str(path)!r} has no triangles or NaN/inf vertices")
     V = V * _numbers(shape, "scale", 3, "1 1 1")

@@ -18,7 +18,6 @@ distance and witness points (:func:`symkin.geometry.reference.witnesses`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -29,6 +28,7 @@ from symkin.geometry.pairs import as_environment, as_tree, layout_of
 from symkin.geometry.reference import witnesses
 from symkin.model.differential import manipulability_one
 from symkin.model.kinematics import const_matrix
+from symkin.model.orientation import quaternion, quaternion_matrix
 
 __all__ = [
     "Scene",
@@ -290,37 +290,9 @@ def figure_size(state: ViewState) -> float:
     return max(float(np.ptp(points, axis=0).max()), 0.1) if len(points) else 0.1
 
 
-def quaternion(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (3, 3) (Shepperd's method)."""
-    R = np.asarray(R, dtype=float)
-    tr = float(np.trace(R))
-    i = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
-    if i == 0:
-        r = 2.0 * math.sqrt(1.0 + tr)
-        q = [r / 4, (R[2, 1] - R[1, 2]) / r, (R[0, 2] - R[2, 0]) / r, (R[1, 0] - R[0, 1]) / r]
-    elif i == 1:
-        r = 2.0 * math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 1e-300))
-        q = [(R[2, 1] - R[1, 2]) / r, r / 4, (R[0, 1] + R[1, 0]) / r, (R[0, 2] + R[2, 0]) / r]
-    elif i == 2:
-        r = 2.0 * math.sqrt(max(1.0 + R[1, 1] - R[0, 0] - R[2, 2], 1e-300))
-        q = [(R[0, 2] - R[2, 0]) / r, (R[0, 1] + R[1, 0]) / r, r / 4, (R[1, 2] + R[2, 1]) / r]
-    else:
-        r = 2.0 * math.sqrt(max(1.0 + R[2, 2] - R[0, 0] - R[1, 1], 1e-300))
-        q = [(R[1, 0] - R[0, 1]) / r, (R[0, 2] + R[2, 0]) / r, (R[1, 2] + R[2, 1]) / r, r / 4]
-    out = np.array(q) / np.linalg.norm(q)
-    return -out if out[0] < 0 else out
-
-
 def rotation(wxyz: Any) -> np.ndarray:
     """Rotation matrix (3, 3) of a quaternion (w, x, y, z) (normalised first)."""
-    w, x, y, z = np.asarray(wxyz, dtype=float) / np.linalg.norm(wxyz)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    return quaternion_matrix(np.asarray(wxyz, dtype=float) / np.linalg.norm(wxyz))
 
 
 def quaternion_z_to(d: np.ndarray) -> np.ndarray:

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import RobotError, WorkspaceError
+from symkin.model.kinematics import et_matrix
+from symkin.model.orientation import quaternion_matrix
 
 __all__ = [
     "VoxelGrid",
@@ -80,23 +82,7 @@ def so3_uniform(count: int, seed: int = 0) -> np.ndarray:
     a, b = np.sqrt(1.0 - u[:, 0]), np.sqrt(u[:, 0])
     x, y = a * np.sin(2 * np.pi * u[:, 1]), a * np.cos(2 * np.pi * u[:, 1])
     z, w = b * np.sin(2 * np.pi * u[:, 2]), b * np.cos(2 * np.pi * u[:, 2])
-    R = np.empty((count, 3, 3))
-    R[:, 0] = np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)), -1)
-    R[:, 1] = np.stack((2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)), -1)
-    R[:, 2] = np.stack((2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)), -1)
-    return R
-
-
-def _et_matrix(axis: Any, value: float) -> np.ndarray:
-    T = np.eye(4)
-    k = axis.index
-    if axis.is_rotation:
-        c, s = math.cos(value), math.sin(value)
-        i, j = [(1, 2), (2, 0), (0, 1)][k]
-        T[i, i], T[i, j], T[j, i], T[j, j] = c, -s, s, c
-    else:
-        T[k, 3] = value
-    return T
+    return quaternion_matrix(np.stack((w, x, y, z), -1))
 
 
 def reach_ball(robot: Any) -> tuple[np.ndarray, float]:
@@ -116,7 +102,7 @@ def reach_ball(robot: Any) -> tuple[np.ndarray, float]:
             joints.append(e)
             runs.append(np.eye(4))
         else:
-            runs[-1] = runs[-1] @ _et_matrix(e.axis, e.const.value)
+            runs[-1] = runs[-1] @ et_matrix(e.axis, e.const.value)
     if not joints:
         raise RobotError(f"robot {robot.name!r} has no joints: it has no workspace to map")
     T0, first = runs[0], joints[0]

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from symkin.emit.segments import SegmentOps, point_segment, segment_closest
-from symkin.geometry.distance import DIST_EPS, GOLDEN_ITERS
+from symkin.geometry.distance import DIST_EPS, golden_min_with
 from symkin.runtime.diff.ops import Ops
 
 __all__ = [
@@ -27,8 +27,6 @@ __all__ = [
     "sphere_box",
     "capsule_box",
 ]
-
-_INV_PHI = 0.6180339887498948482  # (sqrt(5) - 1) / 2
 
 
 def _dot(u: Any, v: Any) -> Any:
@@ -85,8 +83,8 @@ def sphere_box(ops: Ops, c: Any, r: Any, center: Any, h: Any, R: Any) -> Any:
 
 def capsule_box(ops: Ops, a: Any, b: Any, r: Any, center: Any, h: Any, R: Any) -> Any:
     """Capsule (a-b, r) against box (center, h, R): the box SDF minimised along the segment by
-    golden-section search (GOLDEN_ITERS steps, ties moving both ends in), then the endpoints, as
-    :func:`symkin.geometry.distance.capsule_box`."""
+    golden-section search (:func:`symkin.geometry.distance.golden_min_with`), then the endpoints,
+    as :func:`symkin.geometry.distance.capsule_box`."""
     xp = ops.xp
     A, B = ops.detach(a), ops.detach(b)
 
@@ -94,19 +92,5 @@ def capsule_box(ops: Ops, a: Any, b: Any, r: Any, center: Any, h: Any, R: Any) -
         return _box_sdf(ops, A + t[..., None] * (B - A), center, h, R)
 
     one = f(xp.zeros_like(A[..., 0])) * 0.0 + 1.0  # ones of the pair's batch shape
-    lo, hi = 0.0 * one, one
-    c, d = hi - _INV_PHI * (hi - lo), lo + _INV_PHI * (hi - lo)
-    fc, fd = f(c), f(d)
-    for _ in range(GOLDEN_ITERS):
-        left, right = fc < fd, fd < fc
-        lo = xp.where(left, lo, c)
-        hi = xp.where(right, hi, d)
-        c_new, d_new = hi - _INV_PHI * (hi - lo), lo + _INV_PHI * (hi - lo)
-        fc_new, fd_new = f(c_new), f(d_new)
-        c, d = xp.where(right, d, c_new), xp.where(left, c, d_new)
-        fc, fd = xp.where(right, fd, fc_new), xp.where(left, fc, fd_new)
-    t = 0.5 * (lo + hi)
-    ft, f0, f1 = f(t), f(0.0 * one), f(one)
-    t = xp.where(f0 < ft, 0.0, t)
-    t = xp.where(f1 < xp.where(f0 < ft, f0, ft), 1.0, t)
+    t = golden_min_with(_segment_ops(ops), f, 0.0 * one, one)
     return _box_sdf(ops, a + ops.detach(t)[..., None] * (b - a), center, h, R) - r
