@@ -1,5 +1,6 @@
 """Lower a derived closed form (:class:`symkin.symbolic.analytic_ik.AnalyticIK`) to C, NumPy or
-plain Python through the templates ``templates/{c,numpy,python}/analytic_ik*.j2``.
+plain Python through the templates ``templates/c/analytic_ik*.j2`` and ``templates/python/analytic_ik.py.j2``
+(both Python dialects).
 
 The body is a nest of blocks, one per step: the step's coefficients (CSE'd), then the angle, its
 cosine and sine (from the subproblem's own atan2/acos arguments, no extra trig calls), and, for a
@@ -8,8 +9,8 @@ two-branch step, a loop over the sign. Each leaf writes one candidate row into i
 saying whether a subproblem was clamped or singular (such rows are verified against the pose
 before they are returned).
 
-The C body (:func:`body_c`) has the same steps, slots and flags as the NumPy and Python bodies, with
-the trigonometry cut down where the exact coefficients allow it:
+One writer (:func:`body`) spells the body in each dialect; the C body has the same steps, slots and
+flags as the NumPy and Python bodies, with the trigonometry cut down where the exact coefficients allow it:
 
 - subproblem 4 with constant ``A, B``: ``b = atan2(A, B)``, its cosine, sine and ``1 / sqrt(A^2 + B^2)``
   are folded in at generation time (``sk_sp4k``); with ``C = 0`` identically, ``d = pi/2``
@@ -28,17 +29,18 @@ the trigonometry cut down where the exact coefficients allow it:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import sympy as sp
 
 from symkin.core.names import c_string, comment_safe, identifier
-from symkin.emit.ik_body import Out, cs_names, cse_lines, used_later
 from symkin.emit.printers import CPrinter, MathModulePrinter, NumPyPrinter
 from symkin.emit.templates import render
-from symkin.symbolic.analytic_ik import AnalyticIK, Step, given_symbols, pose_symbols
+from symkin.symbolic.analytic_ik import AnalyticIK, Step, cs_names, given_symbols, pose_symbols
 from symkin.symbolic.cse import floatify
 from symkin.symbolic.ik_geometry import is_zero, random_point, same_value, value_at
 
-__all__ = ["render_analytic", "ik_prefix", "BACKEND_DIALECT", "body_c", "branch_mirror", "step_mirror"]
+__all__ = ["render_analytic", "ik_prefix", "BACKEND_DIALECT", "body", "branch_mirror", "step_mirror"]
 
 BACKEND_DIALECT = {"c": "c", "numpy": "numpy", "casadi": "python"}
 
@@ -47,64 +49,33 @@ def ik_prefix(robot_name: str) -> str:
     return f"symkin_{identifier(robot_name)}_ik"
 
 
-def _body(plan: AnalyticIK, dialect: str) -> str:
-    """The NumPy or plain-Python body: every step in order, a loop per two-branch step."""
-    pr = NumPyPrinter() if dialect == "numpy" else MathModulePrinter()
-    out = Out([], 1)
-    later = used_later(plan)
-    flag = "0"
-    slot_terms: list[str] = []
-    bit = 0
-    for st, used in zip(plan.steps, later):
-        v = st.var
-        temps, values = cse_lines([e for _, e in st.exprs], f"{v}_x")
-        for sym, e in temps:
-            out.emit(f"{sym} = {pr.doprint(e)}")
-        args = [pr.doprint(e) for e in values]
-        free = (
-            "0.0"
-            if st.joint is None
-            else (f"qf[..., {st.joint}]" if dialect == "numpy" else f"qf[{st.joint}]")
-        )
-        cn, sn = cs_names(v)
-        need_cs = st.revolute and (cn in used or sn in used)
-        if st.kind in ("sp4", "quad"):
-            if st.kind == "sp4":
-                names = ", ".join(f"{v}_{x}" for x in ("b", "d", "cb", "sb", "cd", "sd", "f"))
-                out.emit(f"{names} = _sp4({args[0]}, {args[1]}, {args[2]}, {free})")
-            else:
-                out.emit(f"{v}_b, {v}_r, {v}_f = _quad({args[0]}, {args[1]})")
-            out.emit(f"for {v}_i in (0, 1):")
-            out.depth += 1
-            out.emit(f"{v}_sg = 1.0 - 2.0 * {v}_i")
-            if st.kind == "sp4":
-                out.emit(f"{v} = {v}_b + {v}_sg * {v}_d")
-                if need_cs:
-                    out.emit(f"{cn} = {v}_cb * {v}_cd - {v}_sg * {v}_sb * {v}_sd")
-                    out.emit(f"{sn} = {v}_sb * {v}_cd + {v}_sg * {v}_cb * {v}_sd")
-            else:
-                out.emit(f"{v} = -{v}_b + {v}_sg * {v}_r")
-            out.emit(f"fl_{v} = {flag} | {v}_f")
-            slot_terms.append(f"{v}_i")
-            bit += 1
-            flag = f"fl_{v}"
-        elif st.kind == "sp1":
-            out.emit(f"{v}, {cn}, {sn}, {v}_f = _sp1({args[0]}, {args[1]}, {free})")
-            out.emit(f"fl_{v} = {flag} | {v}_f")
-            flag = f"fl_{v}"
-        elif st.kind == "sum":
-            out.emit(f"{cn}, {sn} = {args[0]}, {args[1]}")
-        else:  # lin
-            out.emit(f"{v} = {args[0]}")
-            if need_cs:
-                fn = "np." if dialect == "numpy" else "math."
-                out.emit(f"{cn}, {sn} = {fn}cos({v}), {fn}sin({v})")
-    slot = " + ".join(f"{t} * {1 << (bit - 1 - b)}" for b, t in enumerate(slot_terms)) or "0"
-    out.emit(f"_put(Q, F, {slot}, {flag}, ({', '.join(plan.outputs)},))")
-    return "\n".join(out.lines)
+@dataclass
+class Out:
+    lines: list[str]
+    depth: int
+
+    def emit(self, text: str) -> None:
+        self.lines.append("    " * self.depth + text)
 
 
-# -- the C body --------------------------------------------------------------------------------
+def cse_lines(exprs: list[sp.Expr], prefix: str) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    flat = [floatify(e) for e in exprs]
+    repl, reduced = sp.cse(flat, symbols=sp.numbered_symbols(prefix), order="none")
+    return list(repl), list(reduced)
+
+
+def used_later(plan: AnalyticIK) -> list[set[str]]:
+    """Names of the symbols each step's successors use."""
+    used: list[set[str]] = []
+    acc: set[str] = set()
+    for st in reversed(plan.steps):
+        used.append(set(acc))
+        for _, e in st.exprs:
+            acc |= {str(s) for s in e.free_symbols}
+    return used[::-1]
+
+
+# -- mirrored branches (the C body) ------------------------------------------------------------
 
 Pattern = tuple[int, int]  # signs of (cos, sin) of the second branch relative to the first
 
@@ -206,113 +177,191 @@ def _region(steps: tuple[Step, ...], k: int) -> list[tuple[int, Pattern]]:
     return out
 
 
-def _sp4_call(st: Step, args: list[str], free: str, pr: CPrinter) -> str:
+# -- the body: one writer, the spelling per dialect ----------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Lang:
+    """How a dialect spells the body's statements; the steps, slots and flags are the same in all.
+    C keeps a subproblem's results in a struct ``v_`` that its helper fills (and opens a block when
+    the helper can fail), Python unpacks the tuple its helper returns into names ``v_<field>``."""
+
+    printer: type
+    free: str = "qf[{}]"  # the given value of joint {} (the angle of a singular subproblem)
+    trig: str = "math."  # the prefix of cos and sin
+    decl: str = "{} = {}"  # a new variable {} = {} (a double; in C a flag is an int)
+    field: str = "{}_{}"  # result {1} of the helper of step {0}
+    loop: str = "for {}_i in (0, 1):"  # over the two branches of step {0}
+    sign: str = "1.0 - 2.0 * {}_i"  # the branch's sign
+    c: bool = False  # blocks in braces, flags declared int
+
+
+_LANGS = {
+    "python": _Lang(MathModulePrinter),
+    "numpy": _Lang(NumPyPrinter, free="qf[..., {}]", trig="np."),
+    "c": _Lang(
+        CPrinter,
+        trig="",
+        decl="const double {} = {};",
+        field="{}_.{}",
+        loop="for (int {0}_i = 0; {0}_i < 2; ++{0}_i) {{",
+        sign="{}_i ? -1.0 : 1.0",
+        c=True,
+    ),
+}
+
+# what each subproblem helper returns (C: the members of its struct, in the order of the struct)
+_FIELDS = {
+    "sp4": ("b", "d", "cb", "sb", "cd", "sd", "flag"),
+    "quad": ("b", "r", "flag"),
+    "sp1": ("t", "c", "s", "flag"),
+}
+_STRUCT = {"sp4": "sk_sp4_t", "quad": "sk_quad_t", "sp1": "sk_ang_t"}
+
+
+def _coefficients(out: Out, lang: _Lang, st: Step) -> list[str]:
+    """The step's coefficients, CSE'd: the temporaries emitted; the printed arguments returned, then
+    the given value of the step's joint (what a singular subproblem takes as its angle)."""
+    pr = lang.printer()
+    temps, values = cse_lines([e for _, e in st.exprs], f"{st.var}_x")
+    for sym, e in temps:
+        out.emit(lang.decl.format(sym, pr.doprint(e)))
+    return [pr.doprint(e) for e in values] + [lang.free.format(st.joint) if st.joint is not None else "0.0"]
+
+
+def _call(out: Out, lang: _Lang, st: Step, args: list[str], need_cs: bool = True) -> None:
+    """Step ``st``'s subproblem helper (:func:`_helper`): C fills the struct ``v_``, inside
+    ``if (...) {`` for the two-branch steps (their helpers return 0 when there is no solution; the
+    caller closes the block); Python unpacks the tuple ``_<kind>`` returns."""
     v = st.var
-    e = dict(st.exprs)
-    A, B, C = e["A"], e["B"], e["C"]
-    if not (A.free_symbols | B.free_symbols):
-        r = sp.sqrt(A**2 + B**2)
-        if float(sp.N(r, 30)) > 1e-9:
-            ir, b = (float(sp.N(x, 30)) for x in (1 / r, sp.atan2(A, B)))
-            cb, sb = (float(sp.N(x, 30)) for x in (B / r, A / r))
-            return f"sk_sp4k({args[2]}, {ir!r}, {b!r}, {cb!r}, {sb!r}, &{v}_)"
-    if C == 0:
-        return f"sk_sp4z({args[0]}, {args[1]}, {free}, &{v}_)"
-    return f"sk_sp4({args[0]}, {args[1]}, {args[2]}, {free}, &{v}_)"
+    helper, args = _helper(st, args, lang.c, need_cs)
+    if lang.c:
+        out.emit(f"{_STRUCT[st.kind]} {v}_;")
+        call = f"sk_{helper}({', '.join(args)}, &{v}_)"
+        out.emit(f"{call};" if st.kind == "sp1" else f"if ({call}) {{")
+    else:
+        names = ", ".join(lang.field.format(v, x) for x in _FIELDS[st.kind])
+        out.emit(f"{names} = _{st.kind}({', '.join(args)})")
 
 
-def _free(st: Step) -> str:
-    return f"qf[{st.joint}]" if st.joint is not None else "0.0"
-
-
-def body_c(plan: AnalyticIK) -> str:
-    """The C statements of ``raw_`` between reading the pose and counting the candidates."""
-    pr = CPrinter()
+def body(plan: AnalyticIK, dialect: str) -> str:
+    """The statements of ``raw`` (NumPy, Python) or ``body_`` (C) between reading the pose and the
+    end: the pose the steps solve for when the arm's constant ends were moved to the target
+    (``plan.pose_map``), every step in order, a loop over the sign of each two-branch step, one leaf
+    per slot."""
+    lang = _LANGS[dialect]
+    c = lang.c
+    flag_decl = lang.decl.replace("double", "int")
     out = Out([], 1)
+    for sym, e in plan.pose_map:
+        out.emit(lang.decl.format(sym, lang.printer().doprint(floatify(e))))
     later = used_later(plan)
     steps = plan.steps
     flag = "0"
     slot_terms: list[str] = []
     deg_terms: list[str] = []
-    bit = 0
     closers = 0
     k = 0
     while k < len(steps):
         st, used = steps[k], later[k]
         v = st.var
-        temps, values = cse_lines([e for _, e in st.exprs], f"{v}_x")
-        for sym, e in temps:
-            out.emit(f"const double {sym} = {pr.doprint(e)};")
-        args = [pr.doprint(e) for e in values]
+        args = _coefficients(out, lang, st)
         cn, sn = cs_names(v)
         need_cs = st.revolute and (cn in used or sn in used)
+
+        def f(x: str, v: str = v) -> str:
+            return lang.field.format(v, x)
+
         if st.kind in ("sp4", "quad"):
-            region = _region(steps, k)
-            if st.kind == "sp4":
-                out.emit(f"sk_sp4_t {v}_;")
-                out.emit(f"if ({_sp4_call(st, args, _free(st), pr)}) {{")
-            else:
-                out.emit(f"sk_quad_t {v}_;")
-                out.emit(f"if (sk_quad({args[0]}, {args[1]}, &{v}_)) {{")
-            out.depth += 1
+            region = _region(steps, k) if c else []
+            _call(out, lang, st, args)
+            if c:
+                out.depth += 1
             if region:
                 out.emit(f"int {v}_mir = 0; /* the second branch mirrors the first */")
                 for m, _ in region:
                     out.emit(f"double {_store(steps[m], later[m])};")
-            out.emit(f"for (int {v}_i = 0; {v}_i < 2; ++{v}_i) {{")
+            out.emit(lang.loop.format(v))
             out.depth += 1
-            out.emit(f"const double {v}_sg = {v}_i ? -1.0 : 1.0;")
+            out.emit(lang.decl.format(f"{v}_sg", lang.sign.format(v)))
             if st.kind == "sp4":
-                out.emit(f"const double {v} = {v}_.b + {v}_sg * {v}_.d;")
+                out.emit(lang.decl.format(v, f"{f('b')} + {v}_sg * {f('d')}"))
                 if need_cs or region:
-                    out.emit(f"const double {cn} = {v}_.cb * {v}_.cd - {v}_sg * {v}_.sb * {v}_.sd;")
-                    out.emit(f"const double {sn} = {v}_.sb * {v}_.cd + {v}_sg * {v}_.cb * {v}_.sd;")
-                deg_terms.append(f"({v}_.sd <= SK_DUP)" if st.joint is not None else "1")
+                    out.emit(lang.decl.format(cn, f"{f('cb')} * {f('cd')} - {v}_sg * {f('sb')} * {f('sd')}"))
+                    out.emit(lang.decl.format(sn, f"{f('sb')} * {f('cd')} + {v}_sg * {f('cb')} * {f('sd')}"))
+                deg_terms.append(f"({f('sd')} <= SK_DUP)" if st.joint is not None else "1")
             else:
-                out.emit(f"const double {v} = -{v}_.b + {v}_sg * {v}_.r;")
-                deg_terms.append(f"({v}_.r <= SK_DUP)")
-            out.emit(f"const int fl_{v} = {flag} | {v}_.flag;")
+                out.emit(lang.decl.format(v, f"-{f('b')} + {v}_sg * {f('r')}"))
+                deg_terms.append(f"({f('r')} <= SK_DUP)")
+            out.emit(flag_decl.format(f"fl_{v}", f"{flag} | {f('flag')}"))
             flag = f"fl_{v}"
-            closers += 2
+            closers += 2 if c else 0
             slot_terms.append(f"{v}_i")
-            bit += 1
             if region:
-                flag = _emit_region(out, pr, steps, later, k, region, flag)
+                flag = _emit_region(out, lang, steps, later, k, region, flag)
                 k = region[-1][0] + 1
             else:
                 k += 1
             continue
         if st.kind == "sp1":
-            out.emit(f"sk_ang_t {v}_;")
-            out.emit(f"{'sk_sp1' if need_cs else 'sk_sp1a'}({args[0]}, {args[1]}, {_free(st)}, &{v}_);")
-            out.emit(f"const double {v} = {v}_.t;")
+            _call(out, lang, st, args, need_cs)
+            out.emit(lang.decl.format(v, f("t")))
             if need_cs:
-                out.emit(f"const double {cn} = {v}_.c, {sn} = {v}_.s;")
-            out.emit(f"const int fl_{v} = {flag} | {v}_.flag;")
+                out.emit(lang.decl.format(cn, f("c")))
+                out.emit(lang.decl.format(sn, f("s")))
+            out.emit(flag_decl.format(f"fl_{v}", f"{flag} | {f('flag')}"))
             flag = f"fl_{v}"
         elif st.kind == "sum":
-            out.emit(f"const double {cn} = {args[0]}, {sn} = {args[1]};")
+            out.emit(lang.decl.format(cn, args[0]))
+            out.emit(lang.decl.format(sn, args[1]))
         else:  # lin
-            out.emit(f"const double {v} = {args[0]};")
+            out.emit(lang.decl.format(v, args[0]))
             if need_cs:
-                out.emit(f"const double {cn} = cos({v}), {sn} = sin({v});")
+                out.emit(lang.decl.format(cn, f"{lang.trig}cos({v})"))
+                out.emit(lang.decl.format(sn, f"{lang.trig}sin({v})"))
         k += 1
-    nb = bit
+    # the leaf: the row into its slot; C: into the filter (sk_keep_, with the mask of the nearly
+    # degenerate two-branch steps) or into Q, F
+    nb = len(slot_terms)
     slot = " + ".join(f"{t} * {1 << (nb - 1 - b)}" for b, t in enumerate(slot_terms)) or "0"
-    deg = " | ".join(f"({t} << {nb - 1 - b})" for b, t in enumerate(deg_terms)) or "0"
     qs = ", ".join(plan.outputs)
-    out.emit(f"const double q_[NQ] = {{{qs}}};")
-    out.emit(f"const int slot_ = {slot};")
-    out.emit("if (x) {")
-    out.emit(f"    sk_keep_(x, slot_, {flag}, {deg}, q_);")
-    out.emit("} else {")
-    out.emit("    memcpy(Q + slot_ * NQ, q_, sizeof q_);")
-    out.emit(f"    F[slot_] = {flag};")
-    out.emit("}")
+    if not c:
+        out.emit(f"_put(Q, F, {slot}, {flag}, ({qs},))")
+    else:
+        deg = " | ".join(f"({t} << {nb - 1 - b})" for b, t in enumerate(deg_terms)) or "0"
+        out.emit(f"const double q_[NQ] = {{{qs}}};")
+        out.emit(f"const int slot_ = {slot};")
+        out.emit("if (x) {")
+        out.emit(f"    sk_keep_(x, slot_, {flag}, {deg}, q_);")
+        out.emit("} else {")
+        out.emit("    memcpy(Q + slot_ * NQ, q_, sizeof q_);")
+        out.emit(f"    F[slot_] = {flag};")
+        out.emit("}")
     for _ in range(closers):
         out.depth -= 1
         out.emit("}")
     return "\n".join(out.lines)
+
+
+def _helper(st: Step, args: list[str], c: bool, need_cs: bool) -> tuple[str, list[str]]:
+    """The subproblem helper of step ``st`` (without ``sk_`` or ``_``) and its arguments (``args``:
+    the step's values, then the given value). C only: subproblem 4 with constant ``A, B`` folded in
+    (``sk_sp4k``) or ``C = 0`` identically (``sk_sp4z``); subproblem 1 without cos and sin (``sk_sp1a``)."""
+    if st.kind == "quad":
+        return "quad", args[:2]
+    if st.kind == "sp1":
+        return ("sp1" if need_cs or not c else "sp1a"), args
+    e = dict(st.exprs)
+    A, B, C = e["A"], e["B"], e["C"]
+    if c and not (A.free_symbols | B.free_symbols):
+        r = sp.sqrt(A**2 + B**2)
+        if float(sp.N(r, 30)) > 1e-9:
+            ir, b = (float(sp.N(x, 30)) for x in (1 / r, sp.atan2(A, B)))
+            cb, sb = (float(sp.N(x, 30)) for x in (B / r, A / r))
+            return "sp4k", [args[2], repr(ir), repr(b), repr(cb), repr(sb)]
+    if c and C == 0:
+        return "sp4z", [args[0], args[1], args[3]]
+    return "sp4", args
 
 
 def _names(st: Step, used: set[str]) -> list[str]:
@@ -326,14 +375,14 @@ def _store(st: Step, used: set[str]) -> str:
 
 def _emit_region(
     out: Out,
-    pr: CPrinter,
+    lang: _Lang,
     steps: tuple[Step, ...],
     later: list[set[str]],
     k: int,
     region: list[tuple[int, Pattern]],
     flag: str,
 ) -> str:
-    """The mirrored subproblem-1 steps inside the branch loop of step k; returns the flag chain."""
+    """The mirrored subproblem-1 steps inside the branch loop of step k (C); returns the flag chain."""
     v = steps[k].var
     for m, _ in region:
         st = steps[m]
@@ -354,16 +403,10 @@ def _emit_region(
     out.depth += 1
     for m, _ in region:
         st = steps[m]
-        temps, values = cse_lines([e for _, e in st.exprs], f"{st.var}_x")
         out.emit("{")
         out.depth += 1
-        for sym, e in temps:
-            out.emit(f"const double {sym} = {pr.doprint(e)};")
-        args = [pr.doprint(e) for e in values]
         names = _names(st, later[m])
-        out.emit(f"sk_ang_t {st.var}_;")
-        call = "sk_sp1" if len(names) == 3 else "sk_sp1a"
-        out.emit(f"{call}({args[0]}, {args[1]}, {_free(st)}, &{st.var}_);")
+        _call(out, lang, st, _coefficients(out, lang, st), len(names) == 3)
         out.emit(f"{st.var} = {st.var}_.t, {st.var}_fl = {st.var}_.flag;")
         if len(names) == 3:
             out.emit(f"{names[1]} = {st.var}_.c, {names[2]} = {st.var}_.s;")
@@ -382,27 +425,6 @@ def _emit_region(
     return flag
 
 
-def _fk_code(plan: AnalyticIK, dialect: str) -> tuple[list[str], list[str]]:
-    """Straight-line code for the 3x4 pose of q (for verifying flagged candidates)."""
-    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else MathModulePrinter())
-    temps, values = cse_lines(list(plan.fk), "f")
-    lines = []
-    for sym, e in temps:
-        lines.append(
-            f"const double {sym} = {pr.doprint(e)};" if dialect == "c" else f"{sym} = {pr.doprint(e)}"
-        )
-    return lines, [pr.doprint(e) for e in values]
-
-
-def _pose_lines(plan: AnalyticIK, dialect: str) -> list[str]:
-    """The pose the steps solve for from the target as given, when the arm's constant ends were
-    moved to the target (``plan.pose_map``; no lines otherwise)."""
-    pr = CPrinter() if dialect == "c" else (NumPyPrinter() if dialect == "numpy" else MathModulePrinter())
-    decl = "const double " if dialect == "c" else ""
-    end = ";" if dialect == "c" else ""
-    return [f"    {decl}{sym} = {pr.doprint(floatify(e))}{end}" for sym, e in plan.pose_map]
-
-
 def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str) -> dict[str, str]:
     """The generated files of the closed form for ``backend`` ("c", "numpy" or "casadi", the last
     rendered as plain Python)."""
@@ -415,7 +437,9 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
     pose = [(str(R[i, j]), i * 4 + j) for i in range(3) for j in range(3)] + [
         (str(p[i]), i * 4 + 3) for i in range(3)
     ]
-    fk_lines, fk_values = _fk_code(plan, dialect)
+    lang = _LANGS[dialect]
+    pr = lang.printer()
+    fk_temps, fk_values = cse_lines(list(plan.fk), "f")  # the 3x4 pose of q, to verify flagged candidates
     joints = [(f"q{j}", f"c{j}", f"s{j}", plan.revolute[j]) for j in range(plan.n)]
     context = {
         "prefix": prefix,
@@ -424,11 +448,9 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         "check": plan.check,
         "revolute": [int(r) for r in plan.revolute],
         "pose": pose,
-        "body": "\n".join(
-            [*_pose_lines(plan, dialect), body_c(plan) if dialect == "c" else _body(plan, dialect)]
-        ),
-        "fk_lines": fk_lines,
-        "fk_values": fk_values,
+        "body": body(plan, dialect),
+        "fk_lines": [lang.decl.format(sym, pr.doprint(e)) for sym, e in fk_temps],
+        "fk_values": [pr.doprint(e) for e in fk_values],
         "joints": joints,
         "robot": identifier(name),
         "name_literal": c_string(name) if dialect == "c" else ascii(name),
@@ -449,4 +471,6 @@ def render_analytic(plan: AnalyticIK, robot: object, backend: str, command: str)
         files[f"{prefix}_pymodule.c"] = render("c/analytic_ik_module.c.j2", module=module, **context)
         return files
     module = f"{prefix}"
-    return {f"{module}.py": render(f"{dialect}/analytic_ik.py.j2", module=module, **context)}
+    return {
+        f"{module}.py": render("python/analytic_ik.py.j2", module=module, numpy=dialect == "numpy", **context)
+    }

@@ -20,6 +20,7 @@ from __future__ import annotations
 import bisect
 import functools
 import math
+from collections.abc import Callable
 from types import ModuleType
 from typing import Any
 
@@ -39,8 +40,7 @@ __all__ = [
     "ik_inputs",
     "check_weights",
     "invalid_input",
-    "nearest_pick",
-    "picks_result",
+    "nearest_each",
     "VERIFY_TOL",
     "DUPLICATE_TOL",
 ]
@@ -85,29 +85,29 @@ def invalid_input(what: str, value: Any, n: int) -> None:
     raise ConfigurationError(f"{what} must be {n} finite numbers; got {value!r}"[:300])
 
 
-Pick = tuple[np.ndarray, bool, float, str]  # one target's q, success, residual and reason
-
-
-def nearest_pick(
-    rows: np.ndarray, q0: np.ndarray | None, target: np.ndarray, fk: Any, tol: float
-) -> tuple[np.ndarray, bool, float, str | None]:
-    """The first (nearest) of the closed-form solutions ``rows`` (k, n) for ``target`` as (q,
-    success, residual, reason); with no rows ``q0`` (zeros without it), failed, and reason None
-    (the caller says why)."""
-    q = rows[0] if len(rows) else np.zeros(rows.shape[1]) if q0 is None else np.array(q0)
-    r = float(np.linalg.norm(pose_error_of(np.asarray(fk(q)), target)))
-    if not len(rows):
-        return q, False, r, None
-    success = r < tol
-    reason = "success" if success else f"closed-form solution has residual {r:.3g} >= tol {tol:g}"
-    return q, success, r, reason
-
-
-def picks_result(picks: list[Pick], single: bool, n: int) -> IKResult:
-    """The IKResult of the picks of one target (``single``) or of N targets (0 iterations and one
-    search each)."""
-    rows = [(q, success, 0, 1, r, reason) for q, success, r, reason in picks]
-    return IKResult(*rows[0]) if single else stacked(rows, n)
+def nearest_each(
+    T: np.ndarray,
+    single: bool,
+    Q0: np.ndarray | None,
+    n: int,
+    fk: Any,
+    tol: float,
+    solve: Callable[[int, np.ndarray | None], tuple[np.ndarray, Callable[[], str]]],
+) -> IKResult:
+    """The IKResult of the poses ``T`` (N, 4, 4) (one pose when ``single``; 0 iterations and one
+    search each): for pose i the first (nearest) of the closed-form solutions ``rows`` (k, n) that
+    ``solve(i, q0_i)`` returns, successful when its residual is below ``tol``; with no rows ``q0_i``
+    (zeros without q0), failed, with the reason ``why()`` of the pair returned."""
+    out = []
+    for i in range(len(T)):
+        q0 = None if Q0 is None else Q0[i]
+        rows, why = solve(i, q0)
+        q = rows[0] if len(rows) else np.zeros(n) if q0 is None else np.array(q0)
+        r = float(np.linalg.norm(pose_error_of(np.asarray(fk(q)), T[i])))
+        success = bool(len(rows)) and r < tol
+        reason = "success" if success else f"closed-form solution has residual {r:.3g} >= tol {tol:g}"
+        out.append((q, success, 0, 1, r, reason if len(rows) else why()))
+    return IKResult(*out[0]) if single else stacked(out, n)
 
 
 class AnalyticIK:
@@ -227,16 +227,13 @@ class AnalyticIK:
         """The solution nearest ``q0`` (weighted) as an :class:`IKResult`: ``success=False`` with a
         reason when the pose is out of reach or every solution is outside the joint limits."""
         T, single, Q0, w = ik_inputs(Tep, q0, weights, self.n, self.robot.name)
-        N = len(T)
         allq = self.ik_all(T, Q0, joint_limits, w)
-        fk = fkine or self.robot.fkine
-        picks: list[Pick] = []
-        for i in range(N):
-            rows = allq[i]
-            rows = rows[~np.isnan(rows[:, 0])] if rows.size else rows
-            q, success, r, reason = nearest_pick(rows, None if Q0 is None else Q0[i], T[i], fk, tol)
-            picks.append((q, success, r, reason or self._why(T[i], joint_limits)))
-        return picks_result(picks, single, self.n)
+
+        def solve(i: int, q0: np.ndarray | None) -> tuple[np.ndarray, Callable[[], str]]:
+            rows = allq[i][~np.isnan(allq[i][:, 0])] if allq[i].size else allq[i]
+            return rows, lambda: self._why(T[i], joint_limits)
+
+        return nearest_each(T, single, Q0, self.n, fkine or self.robot.fkine, tol, solve)
 
     def _why(self, T: np.ndarray, joint_limits: bool) -> str:
         if joint_limits:

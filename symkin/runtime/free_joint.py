@@ -22,6 +22,7 @@ branch). No sympy here.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -32,7 +33,7 @@ from symkin.errors import ConfigurationError, NoAnalyticIKError, SymkinError
 from symkin.model.ets import ET, ETS
 from symkin.model.kinematics import const_matrix
 from symkin.model.robot import Robot
-from symkin.runtime.analytic_ik import DUPLICATE_TOL, Pick, check_weights, nearest_pick, picks_result
+from symkin.runtime.analytic_ik import DUPLICATE_TOL, check_weights, ik_inputs, nearest_each
 from symkin.runtime.ik import IKResult, check_pose
 
 __all__ = ["FreeJointIK", "sub_robot", "free_joint_solver", "parse_free_joint", "FREE_SWEEP"]
@@ -247,24 +248,17 @@ class FreeJointIK:
         """The solution nearest ``q0`` (weighted) over the values as an :class:`IKResult`;
         ``success=False`` with a reason when no value gives a solution. Without ``values``: the
         :meth:`sweep`, then (with ``q0``) two finer sweeps of 17 values around the best one."""
-        T, single = check_pose(Tep)
-        N, n = len(T), self.robot.n
-        Q0 = None if q0 is None else as_rows(q0, n, N, single, self.robot.name, "q0")
-        weights = None if weights is None else check_weights(weights, n)
-        picks: list[Pick] = []
-        for i in range(N):
-            q0i = None if Q0 is None else Q0[i]
+        T, single, Q0, weights = ik_inputs(Tep, q0, weights, self.robot.n, self.robot.name)
+
+        def solve(i: int, q0i: np.ndarray | None) -> tuple[np.ndarray, Callable[[], str]]:
             v = self.sweep(q0i) if values is None else self.values(values)
             rows = self.ik_all(T[i], v, q0i, joint_limits, weights)
             if values is None and q0i is not None and len(rows):
                 rows = self._refine(T[i], rows, v, q0i, joint_limits, weights)
-            q, success, r, reason = nearest_pick(rows, q0i, T[i], self.robot.fkine, tol)
-            if reason is None:
-                reason = f"no closed-form solution for the {len(v)} value(s) of joint {self.joint} tried" + (
-                    " within the joint limits" if joint_limits else ""
-                )
-            picks.append((q, success, r, reason))
-        return picks_result(picks, single, n)
+            why = f"no closed-form solution for the {len(v)} value(s) of joint {self.joint} tried"
+            return rows, lambda: why + (" within the joint limits" if joint_limits else "")
+
+        return nearest_each(T, single, Q0, self.robot.n, self.robot.fkine, tol, solve)
 
 
 def _poses(T: Any) -> tuple[np.ndarray, bool]:

@@ -63,7 +63,7 @@ from symkin.symbolic.ik_geometry import (
     value_at,
 )
 
-__all__ = ["Step", "AnalyticIK", "derive_analytic", "pose_symbols", "given_symbols"]
+__all__ = ["Step", "AnalyticIK", "derive_analytic", "pose_symbols", "given_symbols", "cs_names"]
 
 
 @dataclass(frozen=True)
@@ -139,6 +139,12 @@ def given_symbols() -> tuple[sp.Matrix, sp.Matrix]:
     return R, p
 
 
+def cs_names(var: str) -> tuple[str, str]:
+    """The names of the cosine and sine of the angle ``var`` (``q3``: ``c3``, ``s3``; ``th``: ``cth``)."""
+    suffix = var[1:] if var.startswith("q") else var
+    return f"c{suffix}", f"s{suffix}"
+
+
 def _mat(v: Vec) -> sp.Matrix:
     return sp.Matrix(v)
 
@@ -204,8 +210,8 @@ class _Builder:
 
     def cos_sin(self, var: str) -> tuple[sp.Symbol, sp.Symbol]:
         if var not in self.cs:
-            suffix = var[1:] if var.startswith("q") else var
-            self.cs[var] = (sp.Symbol(f"c{suffix}", real=True), sp.Symbol(f"s{suffix}", real=True))
+            c, s = cs_names(var)
+            self.cs[var] = (sp.Symbol(c, real=True), sp.Symbol(s, real=True))
         return self.cs[var]
 
     def rot(self, h: Vec, var: str, sign: int = 1) -> sp.Matrix:
