@@ -6,7 +6,6 @@ restarts."""
 from __future__ import annotations
 
 import math
-import numbers
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -16,6 +15,7 @@ import numpy as np
 
 from symkin.core.arrays import as_batch, finite_number, name_of, per_joint, real_array, sample_bounds
 from symkin.core.pose import as_poses, pose_array
+from symkin.core.sizes import count
 from symkin.errors import ParameterError, PoseError
 from symkin.model.differential import NEAR_PI_L, angle_axis
 
@@ -177,27 +177,20 @@ class IKOptions:
             raise ParameterError(
                 f"NR without pinv needs a square Jacobian (6 joints), not {n}; use pinv=True or LM"
             )
-        try:
-            lam_a = np.broadcast_to(real_array(lam, "lam", ParameterError), (n,)).copy()
-        except ValueError:
-            raise ParameterError(f"lam must be a number or {n} numbers, got {lam!r}") from None
-        if not (np.isfinite(lam_a).all() and (lam_a >= 0).all()):
-            raise ParameterError(f"lam must be finite and >= 0, got {lam!r}")
+        lam_a = per_joint(lam, n, "lam")
         we_a = np.ones(6) if we is None else real_array(we, "we", ParameterError)
         if we_a.shape != (6,) or not np.isfinite(we_a).all() or (we_a < 0).any() or not (we_a > 0).any():
             raise ParameterError(f"we must be 6 finite weights >= 0, not all 0, got {we!r}")
-        ilimit, slimit = _count(ilimit, "ilimit"), _count(slimit, "slimit")
+        ilimit, slimit = (
+            count(ilimit, "ilimit", maximum=MAX_ITERATIONS),
+            count(slimit, "slimit", maximum=MAX_ITERATIONS),
+        )
         if ilimit * slimit > MAX_ITERATIONS:
             raise ParameterError(
                 f"ilimit * slimit = {ilimit * slimit} exceeds {MAX_ITERATIONS} iterations per target "
                 "(the iteration counters are 32-bit)"
             )
-        try:
-            tol_ok = float(tol) > 0 and math.isfinite(float(tol))
-        except (TypeError, ValueError):
-            tol_ok = False
-        if not tol_ok:
-            raise ParameterError(f"tol must be a positive number, got {tol!r}")
+        tol = finite_number(tol, "tol")
         if tol_on not in ("e", "E"):
             raise ParameterError(f"tol_on must be 'e' (|e|_We < tol) or 'E' (E < tol), not {tol_on!r}")
         qlim = np.asarray(kin.qlim, dtype=float)
@@ -238,15 +231,6 @@ def _qp_options(
         if joint_limits and not (rho[0] > rho[1]).all():
             raise ParameterError(f"rho_i ({rho_i}) must exceed rho_s ({rho_s}) for every joint")
     return slack_gain, manipulability, xi, rho[0], rho[1]
-
-
-def _count(value: Any, name: str) -> int:
-    """An iteration or search limit: an integer in 1 .. MAX_ITERATIONS, else ParameterError."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, float, np.floating)):
-        raise ParameterError(f"{name} must be a positive integer, got {value!r}")
-    if not (float(value).is_integer() and 1 <= value <= MAX_ITERATIONS):
-        raise ParameterError(f"{name} must be an integer from 1 to {MAX_ITERATIONS}, got {value!r}")
-    return int(value)
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
