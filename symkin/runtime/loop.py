@@ -13,13 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from symkin.core.arrays import MAX_JOINT_VALUE, as_config, name_of, real_array
+from symkin.core.arrays import MAX_JOINT_VALUE, as_config, name_of
 from symkin.core.pose import pose_array
 from symkin.errors import ConfigurationError, ParameterError, PoseError
 from symkin.runtime.control import MMC, StepInfo, rrmc_controller, servo_rrmc_step
 from symkin.runtime.ik import check_pose, pose_error_of
 from symkin.runtime.qrmc import QRMC
-from symkin.runtime.servo import servo_gain, servo_velocity
+from symkin.runtime.servo import check_threshold, servo_gain, servo_velocity, velocity_caps
 from symkin.runtime.task import task_kinematics
 
 __all__ = ["servo", "ServoResult", "SERVO_HALVINGS"]
@@ -172,9 +172,8 @@ def servo(
             raise PoseError(f"servo takes one target pose (4, 4), got shape {np.shape(Tep)}")
         T = T_all[0]
     k = [float(gain)] * 6 if type(gain) in (int, float) and 0 <= gain < math.inf else servo_gain(gain)
-    if not (isinstance(threshold, numbers.Real) and math.isfinite(threshold) and threshold >= 0):
-        raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
-    _check_cap(nu_max)
+    check_threshold(threshold)
+    velocity_caps(nu_max)  # checked before the loop starts
     step, name, cstep = _controller(kin, controller, lam, qd_max, joint_limits, axes, dt)
     guard = _collision_guard(getattr(step, "__self__", None), n)
     if guard is not None:
@@ -270,17 +269,6 @@ def _controller(
     raise ParameterError(
         f"controller must be 'mmc', 'rrmc', 'qrmc', an MMC or QRMC, or a callable, not {controller!r}"
     )
-
-
-def _check_cap(nu_max: Any) -> None:
-    """The checks of servo_velocity's nu_max, made before the loop starts."""
-    if nu_max is None:
-        return
-    cap = real_array(nu_max, "nu_max", ParameterError)
-    if cap.ndim != 0 and cap.shape != (2,):
-        raise ParameterError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
-    if not (cap > 0).all():
-        raise ParameterError(f"velocity caps must be positive, got {cap.tolist()}")
 
 
 def _progress(progress: bool, total: int, name: str) -> Any:

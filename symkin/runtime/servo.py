@@ -103,26 +103,40 @@ def servo_velocity(
     mixes m/s with rad/s (Excurse 1); a pair ``(v_max, omega_max)`` caps the translational and
     rotational parts separately, each keeping its direction. ``None`` (default) applies no cap.
     """
-    if not (isinstance(threshold, numbers.Real) and math.isfinite(threshold) and threshold >= 0):
-        raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
+    check_threshold(threshold)
     if float(np.abs(e).sum()) < threshold:
         return np.zeros(6), True
     nu = servo_gain(gain) * e
-    if nu_max is not None:
-        cap = real_array(nu_max, "nu_max", ParameterError)
-        if cap.ndim == 0:
-            _cap(nu, slice(0, 6), float(cap))
-        elif cap.shape == (2,):
-            _cap(nu, slice(0, 3), float(cap[0]))
-            _cap(nu, slice(3, 6), float(cap[1]))
-        else:
-            raise ParameterError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
+    for rows, limit in velocity_caps(nu_max):
+        _cap(nu, rows, limit)
     return nu, False
 
 
+def check_threshold(threshold: Any) -> None:
+    """ParameterError unless the arrival threshold is a finite number >= 0."""
+    if not (isinstance(threshold, numbers.Real) and math.isfinite(threshold) and threshold >= 0):
+        raise ParameterError(f"threshold must be a finite number >= 0, got {threshold!r}")
+
+
+def velocity_caps(nu_max: Any) -> list[tuple[slice, float]]:
+    """The caps of ``nu_max`` (eq 43) as (rows of nu, limit) pairs: none for None, all six rows for a
+    number, the translational and rotational rows for ``(v_max, omega_max)``; ParameterError for
+    another shape or a limit that is not positive."""
+    if nu_max is None:
+        return []
+    cap = real_array(nu_max, "nu_max", ParameterError)
+    if cap.ndim != 0 and cap.shape != (2,):
+        raise ParameterError(f"nu_max must be a number or (v_max, omega_max), got shape {cap.shape}")
+    if not (cap > 0).all():
+        raise ParameterError(f"velocity caps must be positive, got {cap.tolist()}")
+    return (
+        [(slice(0, 6), float(cap))]
+        if cap.ndim == 0
+        else [(slice(0, 3), float(cap[0])), (slice(3, 6), float(cap[1]))]
+    )
+
+
 def _cap(nu: np.ndarray, rows: slice, limit: float) -> None:
-    if not limit > 0:
-        raise ParameterError(f"velocity caps must be positive, got {limit}")
     s = 0.0
     for v in nu[rows].tolist():  # summed in order, as the C servo loop does
         s += v * v
