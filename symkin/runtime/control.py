@@ -21,15 +21,15 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import AXES_ROWS as _AXES
+from symkin.core.arrays import axes_rows as _axes
 from symkin.core.arrays import finite_number as _number
 from symkin.core.arrays import per_joint as _per_joint
 from symkin.core.arrays import real_array
 from symkin.errors import ParameterError
 from symkin.runtime.memo import bounded, per_object
 from symkin.runtime.mmc_qp import (
-    _AXES,
     MMCQP,
-    _axes,
     active_of,
     active_of_osqp,
     active_rows_of,

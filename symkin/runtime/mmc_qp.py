@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from symkin.errors import ParameterError
+from symkin.core.arrays import axes_rows as _axes
 
 __all__ = [
     "MMCQP",
@@ -36,15 +36,6 @@ __all__ = [
     "active_rows_of",
     "active_set_rows_solve",
 ]
-
-_AXES = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}
-
-
-def _axes(axes: str) -> slice:
-    try:
-        return _AXES[axes]
-    except (KeyError, TypeError):
-        raise ParameterError(f"axes must be one of {sorted(_AXES)}, not {axes!r}") from None
 
 
 def manipulability_jacobian(J: np.ndarray, H: np.ndarray, axes: str = "all") -> tuple[np.ndarray, float]:

@@ -39,12 +39,12 @@ from typing import Any
 
 import numpy as np
 
+from symkin.core.arrays import axes_rows as _axes
 from symkin.core.arrays import real_array
 from symkin.errors import ParameterError
 from symkin.model.differential import manipulability_one
 from symkin.runtime.control import _number, _speed_limits, scale_to_limits
 from symkin.runtime.memo import per_object
-from symkin.runtime.mmc_qp import _axes
 from symkin.runtime.step import CStep, StepInfo, step_nu, step_q
 
 __all__ = [
