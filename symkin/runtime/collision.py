@@ -21,6 +21,7 @@ import numpy as np
 from symkin.core.arrays import as_batch
 from symkin.core.names import identifier
 from symkin.core.pose import as_poses
+from symkin.core.sizes import count
 from symkin.errors import ParameterError
 from symkin.geometry.pairs import Layout, as_environment, layout_of
 from symkin.model.geometry import Environment
@@ -252,7 +253,7 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
     its last solution; iterations and searches count every round."""
     from symkin.runtime.ik_problem import IKResult
 
-    attempts = _attempts(attempts)
+    attempts = count(attempts, "collision_attempts")
     solver = collision_solver(kin, env, kwargs)
     if solver is not None:
         return solver.solve(Tep, q0=kwargs.get("q0"), seed=kwargs.get("seed"))
@@ -294,17 +295,6 @@ def collision_ik(kin: Any, Tep: Any, env: Any, attempts: int = 20, **kwargs: Any
 _AVOIDING: OrderedDict[tuple, tuple] = OrderedDict()  # (kin id, options, env id) -> (kin, env, solver)
 
 
-def _attempts(attempts: Any) -> int:
-    """``collision_attempts`` checked: a positive integer (ParameterError otherwise)."""
-    try:
-        value = int(attempts)
-    except (TypeError, ValueError):
-        raise ParameterError(f"collision_attempts must be a positive integer, got {attempts!r}") from None
-    if value < 1:
-        raise ParameterError(f"collision_attempts must be a positive integer, got {value}")
-    return value
-
-
 def collision_solver(
     kin: Any, env: Any, kwargs: dict[str, Any], attempts: Any = 20, rows: dict[str, Any] | None = None
 ) -> Any:
@@ -319,7 +309,7 @@ def collision_solver(
     from symkin.runtime.ik import IK_OPTIONS, _ik_defaults, _options
     from symkin.runtime.ik_c import CIKSolver, options_key
 
-    _attempts(attempts)
+    count(attempts, "collision_attempts")
     if getattr(kin, "backend", None) != "c" or len(getattr(kin, "frames", ())) != 1:  # one frame's kinematics
         return None
     if set(kwargs) - set(IK_OPTIONS) - {"q0", "seed"} or (rows is None and getattr(kin, "n", 99) > 12):

@@ -26,6 +26,7 @@ from symkin.core.arrays import axes_rows as _axes
 from symkin.core.arrays import finite_number as _number
 from symkin.core.arrays import per_joint as _per_joint
 from symkin.core.arrays import real_array
+from symkin.core.sizes import count
 from symkin.errors import ParameterError
 from symkin.runtime.memo import bounded, per_object
 from symkin.runtime.mmc_qp import (
@@ -360,13 +361,7 @@ class MMC(CStep):
         self.d_s_self = _number(d_s_self, "d_s_self", strict=False)
         if self._collision is not None and not self.d_i_self > self.d_s_self:
             raise ParameterError(f"d_i_self ({d_i_self}) must exceed d_s_self ({d_s_self})")
-        if (
-            isinstance(collision_rows, bool)
-            or not isinstance(collision_rows, (int, np.integer))
-            or collision_rows < 1
-        ):
-            raise ParameterError(f"collision_rows must be a positive integer, got {collision_rows!r}")
-        self.collision_rows = int(collision_rows)
+        self.collision_rows = count(collision_rows, "collision_rows")
         kin = task_kinematics(kin, frame)  # a chain itself, or one frame of a model
         self.kin = kin
         self.n = int(kin.n)
