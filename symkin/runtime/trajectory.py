@@ -143,7 +143,6 @@ class Trajectory:
 
 
 # -- input checks -----------------------------------------------------------------------------
-# -- input checks -----------------------------------------------------------------------------
 def _finite(x: Any, what: str) -> np.ndarray:
     a = real_array(x, what, ParameterError)
     if not np.isfinite(a).all():
@@ -163,15 +162,16 @@ def _endpoints(q0: Any, qf: Any, vector: bool) -> tuple[np.ndarray, np.ndarray, 
     return a, b, scalar
 
 
-def _boundary(v: Any, n: int, what: str) -> np.ndarray:
-    """A boundary velocity (or another value per axis): None (zero), a number for every axis, or (n,)."""
+def _boundary(v: Any, n: int, what: str, per: str = "axis") -> np.ndarray:
+    """A boundary velocity (or another value per axis, or ``per`` segment): None (zero), a number for
+    every one, or (n,)."""
     if v is None:
         return np.zeros(n)
     a = _finite(v, what)
     if a.ndim == 0:
         return np.full(n, float(a))
     if a.shape != (n,):
-        raise ParameterError(f"{what} must be a number or {n} numbers (one per axis), got shape {a.shape}")
+        raise ParameterError(f"{what} must be a number or {n} numbers (one per {per}), got shape {a.shape}")
     return a
 
 
@@ -455,24 +455,16 @@ def mstraj(
     if (qdmax is None) == (tsegment is None):
         raise ParameterError("give exactly one of qdmax (axis speeds) and tsegment (segment durations)")
     if qdmax is not None:
-        speed = _finite(qdmax, "qdmax")
-        speed = np.full(n, float(speed)) if speed.ndim == 0 else speed
-        if speed.shape != (n,) or not (speed > 0).all():
-            raise ParameterError(
-                f"qdmax must be a number or {n} numbers, all > 0, got {np.asarray(qdmax).tolist()}"
-            )
+        speed = _boundary(qdmax, n, "qdmax")
+        if not (speed > 0).all():
+            raise ParameterError(f"qdmax must be > 0, got {speed.tolist()}")
     else:
         seg_t = _finite(tsegment, "tsegment")
         if seg_t.shape != (ns,) or not (seg_t > 0).all():
             raise ParameterError(
                 f"tsegment must be {ns} durations > 0 (one per segment), got {seg_t.tolist()}"
             )
-    acc_t = _finite(tacc, "tacc")
-    acc_t = np.full(ns, float(acc_t)) if acc_t.ndim == 0 else acc_t
-    if acc_t.shape != (ns,):
-        raise ParameterError(
-            f"tacc must be a number or {ns} numbers (one per segment), got shape {acc_t.shape}"
-        )
+    acc_t = _boundary(_finite(tacc, "tacc"), ns, "tacc", "segment")  # _finite: tacc=None is an error
     if (acc_t < 0).any():
         raise ParameterError(f"tacc must be >= 0, got {acc_t.tolist()}")
     v_start, v_end = _boundary(qd0, n, "qd0"), _boundary(qdf, n, "qdf")
