@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from symkin.core.arrays import as_batch
+from symkin.core.arrays import as_batch, finite_number
 from symkin.core.names import identifier
 from symkin.core.pose import as_poses
 from symkin.core.sizes import count
@@ -162,12 +162,7 @@ def motion_valid(check: Any, q0: Any, q1: Any, n: int, resolution: float = 0.05)
     """Whether the straight joint-space motion q0 -> q1 is free of collision, checked at steps of at
     most ``resolution`` (rad or m, the largest joint change between checks), both ends included.
     ``check(Q)`` returns (N,) collision verdicts."""
-    try:
-        res = float(resolution)
-    except (TypeError, ValueError):
-        raise ParameterError(f"resolution must be a positive number, got {resolution!r}") from None
-    if not res > 0 or not np.isfinite(res):
-        raise ParameterError(f"resolution must be a positive number, got {resolution!r}")
+    res = finite_number(resolution, "resolution")
     a, _ = as_batch(q0, n, what="q0")
     b, _ = as_batch(q1, n, what="q1")
     if a.shape[0] != 1 or b.shape[0] != 1:
