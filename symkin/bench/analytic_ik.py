@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import best_of, cell, interleaved, optional
+from symkin.bench.common import best_of, cell, interleaved, optional, timed
 
 __all__ = ["run_analytic", "format_analytic", "sampled_solutions"]
 
@@ -103,9 +103,7 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
     from symkin.runtime.analytic_ik import compile_analytic
 
     robot = resolve_robot(name)
-    t = time.perf_counter()
-    generate_analytic(robot, "c")
-    t_derive = time.perf_counter() - t
+    t_derive = timed(lambda: generate_analytic(robot, "c"))[1]
     kin = symkin.compile(robot, "c")
     solver = compile_analytic(robot, "c")
     kin_np = compile_analytic(robot, "numpy")
@@ -117,17 +115,17 @@ def _measure(name: str, n: int, starts: int, seed: int) -> tuple[Any, dict[str, 
     one = [T[i] for i in range(n)]
     kin.ik_all(one[0], None, False)
     bot = _eaik_robot(robot)
-    timed = {
+    paths = {
         "c_batch_us": lambda: solver.ik_all(T, joint_limits=False),
         "c_one_us": lambda: _each(lambda x: kin.ik_all(x, None, False), one),
     }
     if bot is not None:
-        timed["eaik_one_us"] = lambda: _each(bot.calculate_IK, one)
+        paths["eaik_one_us"] = lambda: _each(bot.calculate_IK, one)
         if hasattr(bot, "calculate_IK_batched"):
-            timed["eaik_batch_us"] = lambda: bot.calculate_IK_batched(one, 1)
+            paths["eaik_batch_us"] = lambda: bot.calculate_IK_batched(one, 1)
     # the least process CPU time (time the shared machine gives to other jobs is not counted,
     # threads of a peer library are)
-    row.update({k: v / n * 1e6 for k, v in interleaved(timed, 5, time.process_time)[0].items()})
+    row.update({k: v / n * 1e6 for k, v in interleaved(paths, 5, time.process_time)[0].items()})
     m = min(n, 200)
     row["numpy_batch_us"] = (
         best_of(lambda: kin_np.ik_all(T[:m], joint_limits=False), 2, time.process_time) / m * 1e6

@@ -20,6 +20,7 @@ from unittest import mock
 
 __all__ = [
     "best_of",
+    "timed",
     "interleaved",
     "rows_per_s",
     "optional",
@@ -58,6 +59,12 @@ def interleaved(
 def best_of(f: Callable[[], Any], rounds: int = 3, clock: Callable[[], float] = time.thread_time) -> float:
     """The least ``clock`` time (s) of ``rounds`` calls of f (:func:`interleaved` with one path)."""
     return interleaved({None: f}, rounds, clock)[0][None]
+
+
+def timed(f: Callable[[], Any]) -> tuple[Any, float]:
+    """``(f(), wall seconds of that one call)``: a step timed once, as it runs (a compile, a map)."""
+    t0 = time.perf_counter()
+    return f(), time.perf_counter() - t0
 
 
 def rows_per_s(fn: Callable[[Any], Any], Q: Any, clock: Callable[[], float] = time.thread_time) -> float:

@@ -18,7 +18,6 @@ before it and between its joints, and with 2000 fixed links of quarter turns and
 from __future__ import annotations
 
 import tempfile
-import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.bench.common import figure, fresh_cache, optional
+from symkin.bench.common import figure, fresh_cache, optional, timed
 from symkin.bench.tree import erd_robots_dir, pinocchio_q
 
 __all__ = ["Chain", "find_chains", "run_sweep", "format_sweep", "plot_sweep", "synthetic_urdfs", "TOL"]
@@ -217,9 +216,7 @@ def run_sweep(
             "ok": False,
             "skipped": "symkin bench urdf needs example-robot-data: pip install 'symkin[compare]'",
         }
-    t_find = time.perf_counter()
-    chains, bad, found = find_chains(root)
-    t_find = time.perf_counter() - t_find
+    (chains, bad, found), t_find = timed(lambda: find_chains(root))
     chains = chains[:limit] if limit else chains
     pin_cache: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -263,13 +260,11 @@ def _one(
     T_ref, J_ref = model.fkine(Q), model.jacob0(Q)  # a Robot, or a Tree of the one frame
     fails = []
     for b in backends:
-        t0 = time.perf_counter()
         try:
-            kin = compile_model(model, b)
+            kin, ch.compile_s[b] = timed(lambda b=b: compile_model(model, b))
         except Exception as exc:  # noqa: BLE001 - a bench reports every failure and goes on
             fails.append(f"{b}: compile failed: {type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
             continue
-        ch.compile_s[b] = time.perf_counter() - t0
         T, J = kin.fkine(Q), kin.jacob0(Q)
         err = max(float(np.abs(T - T_ref).max()), float(np.abs(J - J_ref).max()))
         ch.error[b] = err

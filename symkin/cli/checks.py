@@ -43,27 +43,24 @@ def int_at_least(minimum: int) -> Any:
 at_least_1 = int_at_least(1)
 
 
-def non_negative_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
-    return value
+def _finite_float(ok: Any, bound: str) -> Any:
+    """An argparse type: a finite float for which ``ok(value)`` holds (``bound``: what it must be)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not (math.isfinite(value) and ok(value)):
+            raise argparse.ArgumentTypeError(f"must be {bound}, got {text!r}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
 
 
-def positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
-    return value
-
-
-positive_float.__name__ = "number"
+non_negative_float = _finite_float(lambda v: v >= 0, "a finite number >= 0")
+positive_float = _finite_float(lambda v: v > 0, "a positive finite number")
 
 
 def output_dir(path: str) -> Path:

@@ -67,6 +67,7 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from symkin.bench.common import timed
     from symkin.compiler.compile import generate, write_files
     from symkin.runtime.load import compile as compile_model
 
@@ -74,9 +75,7 @@ def run(args: argparse.Namespace) -> int:
     out = output_dir(args.output) if args.output else None
     check_cflags_for(args.backend)
     command, options = _command(args, model)
-    t0 = time.perf_counter()
-    files = generate(model, args.backend, command, **options)
-    t_gen = time.perf_counter() - t0
+    files, t_gen = timed(lambda: generate(model, args.backend, command, **options))
     if out is not None:
         paths = write_files(model, args.backend, files, out, command, options.get("prefix"), args.precision)
         manifest = paths.pop(len(files))  # the generated files, the manifest, the collision code
@@ -90,9 +89,8 @@ def run(args: argparse.Namespace) -> int:
         err = float_error(model, files)
         print(f"single-precision code against double on 100 random q: max |fkine| error {err['fkine']:.1e}, "
               f"max |jacob0| error {err['jacob0']:.1e}")  # fmt: skip
-    t1 = time.perf_counter()
-    kin = compile_model(model, backend=args.backend, strategy=args.strategy, derivatives=args.derivatives)
-    t_build = time.perf_counter() - t1
+    build = dict(strategy=args.strategy, derivatives=args.derivatives)
+    kin, t_build = timed(lambda: compile_model(model, backend=args.backend, **build))
     first = next(iter(files.values())).splitlines()
     ops = next((ln.split(":", 1)[1].strip() for ln in first[:8] if "Operations" in ln), "")
     print(_heading(model, kin.frames))

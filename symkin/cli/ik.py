@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from typing import Any
 
 import numpy as np
@@ -73,6 +72,7 @@ def add_parser(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from symkin.bench.common import timed
     from symkin.runtime.load import compile as compile_robot
 
     if args.collision and (args.all or args.method == "analytic"):
@@ -111,9 +111,7 @@ def run(args: argparse.Namespace) -> int:
     ):  # the solver's defaults unless given
         if getattr(args, name) is not None:
             kwargs[name] = getattr(args, name)
-    t = time.perf_counter()
-    res = kin.ik(Tep, **kwargs)
-    dt = time.perf_counter() - t
+    res, dt = timed(lambda: kin.ik(Tep, **kwargs))
     if not args.json:
         print(f"target:\n{common.fmt(Tep)}")
     return _report(
@@ -137,15 +135,14 @@ def _weights(text: str) -> np.ndarray:
 
 def _ik_analytic(args: argparse.Namespace, kin: Any, Tep: np.ndarray) -> int:
     """``symkin ik --all`` (every closed-form solution) or ``--method analytic`` (the nearest)."""
+    from symkin.bench.common import timed
+
     q0 = common.floats(args.q0, "--q0", kin.n) if args.q0 is not None else None
-    t = time.perf_counter()
     if not args.all:
         extra = {} if args.tol is None else {"tol": args.tol}
-        res = kin.ik(Tep, method="analytic", q0=q0, **extra)
-        dt = time.perf_counter() - t
+        res, dt = timed(lambda: kin.ik(Tep, method="analytic", q0=q0, **extra))
         return _report(args, res, dt, f"(closed form) in {dt * 1e3:.3f} ms")
-    sols = kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits)
-    dt = time.perf_counter() - t
+    sols, dt = timed(lambda: kin.ik_all(Tep, q0=q0, joint_limits=not args.no_limits))
     errors = [float(np.abs(kin.robot.fkine(q) - Tep).max()) for q in sols]
     if args.json:
         print(json.dumps({"solutions": sols.tolist(), "fk_error": errors, "seconds": dt}, indent=2))
