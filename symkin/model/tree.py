@@ -368,7 +368,9 @@ class Tree(NumericFrames):
 
     def fkine_all(self, q: Any) -> np.ndarray:
         """Poses of every frame, in :attr:`frames` order: (F, 4, 4) or (N, F, 4, 4)."""
-        return self.fkine_jacob0_all(q)[0]
+        Q, single = self._batch(q)
+        T = self._num.poses(Q)[:, [f + 1 for f in self.frame_segments]]
+        return T[0] if single else T
 
     def jacob0_all(self, q: Any) -> np.ndarray:
         """Base-frame Jacobians of every frame: (F, 6, n) or (N, F, 6, n)."""
