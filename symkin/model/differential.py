@@ -44,7 +44,6 @@ __all__ = [
     "FrameMethods",
     "frame_and_rows",
     "path_hessian",
-    "selection",
     "chain_hessian",
     "rotate_rows",
     "hessian_to_ee",
@@ -65,20 +64,14 @@ __all__ = [
 ]
 
 
-def selection(A: np.ndarray) -> np.ndarray | None:
-    """The joint each slot moves when weights ``A`` (s, n) only pick distinct joints with weight
-    1 (no mimic slot), else None."""
-    rows, cols = np.nonzero(A)
-    if len(rows) == A.shape[0] and (A[rows, cols] == 1.0).all() and len(set(cols)) == len(cols):
-        return cols
-    return None
-
-
-def path_hessian(Jv: np.ndarray, Jw: np.ndarray, A: np.ndarray) -> np.ndarray:
+def path_hessian(
+    Jv: np.ndarray, Jw: np.ndarray, A: np.ndarray, cols: Sequence[int] | None = None
+) -> np.ndarray:
     """Hessian (N, n, 6, n) of a frame from the geometric columns Jv, Jw (N, s, 3) of the s joint
     slots on its path (base first; Jw = 0 for a prismatic slot): per pair of slots a, b, b at or
     before a: ``dJ_a/dq_b = (w_b x Jv_a ; w_b x w_a)``, b after a: ``(w_a x Jv_b ; 0)`` (MMC paper
-    eq 20), contracted onto the joints by ``A`` (s, n): slot i moves joint j by ``A[i, j]``."""
+    eq 20), contracted onto the joints by ``A`` (s, n): slot i moves joint j by ``A[i, j]``.
+    ``cols``: the joint of each slot when that is all ``A`` says (no mimic slot), placed directly."""
     s = Jv.shape[1]
     X = cross(Jw[:, :, None, :], Jv[:, None, :, :])  # X[:, b, a] = w_b x v_a
     Y = cross(Jw[:, :, None, :], Jw[:, None, :, :])
@@ -86,7 +79,6 @@ def path_hessian(Jv: np.ndarray, Jw: np.ndarray, A: np.ndarray) -> np.ndarray:
     Hv = np.where(lower, X, np.swapaxes(X, 1, 2))
     Hw = np.where(lower, Y, 0.0)
     Hs = np.concatenate((Hv, Hw), axis=-1)  # (N, b, a, 6)
-    cols = selection(A)
     if cols is not None:  # slot i is joint cols[i]
         H = np.zeros((Hs.shape[0], A.shape[1], 6, A.shape[1]))
         H[np.ix_(range(Hs.shape[0]), cols, range(6), cols)] = np.swapaxes(Hs, 2, 3)
@@ -100,7 +92,7 @@ def chain_hessian(J: np.ndarray, order: Sequence[int]) -> np.ndarray:
     o = list(order)
     A = np.zeros((len(o), J.shape[-1]))
     A[range(len(o)), o] = 1.0
-    return path_hessian(np.swapaxes(J[:, :3, o], 1, 2), np.swapaxes(J[:, 3:, o], 1, 2), A)
+    return path_hessian(np.swapaxes(J[:, :3, o], 1, 2), np.swapaxes(J[:, 3:, o], 1, 2), A, o)
 
 
 def frame_and_rows(frame: Any, axes: Any, frames: Sequence[str] = ()) -> tuple[Any, slice]:

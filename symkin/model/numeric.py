@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from symkin.model.derivatives import path_derivative
-from symkin.model.differential import FrameMethods, path_hessian, rotate_rows, selection
+from symkin.model.differential import FrameMethods, path_hessian, rotate_rows
 from symkin.model.kinematics import ROT_SLICES, const_matrix, cross
 from symkin.model.slots import Segment, Slot
 
@@ -54,6 +54,15 @@ def _motion(joint: Any) -> np.ndarray:
     else:
         a[i, 3] = 1.0
     return np.stack((a, b, d))
+
+
+def _picks(W: np.ndarray) -> np.ndarray | None:
+    """The joint each slot moves when weights ``W`` (m, n) only pick distinct joints with weight
+    1 (no mimic slot), else None."""
+    rows, cols = np.nonzero(W)
+    if len(rows) == W.shape[0] and (W[rows, cols] == 1.0).all() and len(set(cols)) == len(cols):
+        return cols
+    return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,7 +142,7 @@ class NumericKinematics:
             sign=tuple(sign),
             paths=tuple(paths),
             weights=tuple(weights),
-            picks=tuple(selection(W) for W in weights),
+            picks=tuple(_picks(W) for W in weights),
             segment=np.array([s.segment for s in slots], dtype=int),
             slot_up=np.array([segments[s.segment].parent + 1 for s in slots], dtype=int),
             joint=joint,
@@ -250,7 +259,7 @@ class NumericFrames(FrameMethods):
         f = self._segment(frame)
         Q, single = self._batch(q)
         Jv, Jw = self._num.columns(self._num.poses(Q), f)
-        J, H = self._num.jacobian(Jv, Jw, f), path_hessian(Jv, Jw, self._num.weights[f])
+        J, H = self._num.jacobian(Jv, Jw, f), path_hessian(Jv, Jw, self._num.weights[f], self._num.picks[f])
         return (J[0], H[0]) if single else (J, H)
 
     def _derivative(self, Q: np.ndarray, order: int, frame: Any) -> np.ndarray:
