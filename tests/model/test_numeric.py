@@ -73,12 +73,16 @@ def _literal(items: list[tuple[str, float | None, int]], q: np.ndarray) -> tuple
     return T, links
 
 
+def _robot_at(chain: tuple[list, int], seed: int) -> tuple[list, Robot, np.ndarray]:
+    """The drawn chain's items, its Robot and a random configuration of it."""
+    items, n = chain
+    return items, Robot(ETS.parse(_text(items))), np.random.default_rng(seed).uniform(-3.0, 3.0, n)
+
+
 @FEW
 @given(chains(), st.integers(0, 2**32 - 1))
 def test_a_chains_poses_are_the_literal_product_of_its_transforms(chain, seed):
-    items, n = chain
-    robot = Robot(ETS.parse(_text(items)))
-    q = np.random.default_rng(seed).uniform(-3.0, 3.0, n)
+    items, robot, q = _robot_at(chain, seed)
     T, links = _literal(items, q)
     np.testing.assert_allclose(robot.fkine(q), T, atol=1e-12)
     np.testing.assert_allclose(robot.link_poses(q), np.array(links), atol=1e-12)
@@ -103,9 +107,8 @@ def _fd_jacobian(fkine, q: np.ndarray, h: float = 1e-6) -> np.ndarray:
 @FEW
 @given(chains(), st.integers(0, 2**32 - 1))
 def test_link_frame_jacobians_and_hessians_are_derivatives_of_the_poses(chain, seed):
-    items, n = chain
-    robot = Robot(ETS.parse(_text(items)))
-    q = np.random.default_rng(seed).uniform(-3.0, 3.0, n)
+    _, robot, q = _robot_at(chain, seed)
+    n = robot.n
     for k in (None, *range(n)):
         J = robot.jacob0(q, k)
         np.testing.assert_allclose(J, _fd_jacobian(lambda x, k=k: robot.fkine(x, k), q), atol=1e-7)
